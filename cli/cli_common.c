@@ -1,0 +1,75 @@
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rs_cli.h"
+
+int rs_cli_fail(const char *what, rs_status st, const rs_err *err)
+{
+    const char *detail = (err && err->msg[0]) ? err->msg : rs_strerror(st);
+    fprintf(stderr, "roadside: %s: %s\n", what, detail);
+    return st == RS_ERR_USAGE ? RS_EXIT_USAGE : RS_EXIT_FAIL;
+}
+
+int rs_cli_usage_error(const char *command, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fprintf(stderr, "roadside %s: ", command);
+    vfprintf(stderr, fmt, ap);
+    fprintf(stderr, "\nTry 'roadside %s --help'.\n", command);
+    va_end(ap);
+    return RS_EXIT_USAGE;
+}
+
+bool rs_cli_wants_help(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--")) return false;
+        if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) return true;
+    }
+    return false;
+}
+
+bool rs_cli_parse_double(const char *s, double *out)
+{
+    if (!s || !*s) return false;
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (*end != '\0' || errno == ERANGE || !isfinite(v)) return false;
+    *out = v;
+    return true;
+}
+
+bool rs_cli_parse_int(const char *s, long lo, long hi, long *out)
+{
+    if (!s || !*s) return false;
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (*end != '\0' || errno == ERANGE || v < lo || v > hi) return false;
+    *out = v;
+    return true;
+}
+
+bool rs_cli_parse_llh(const char *s, rs_llh *out)
+{
+    char buf[256];
+    if (!s || strlen(s) >= sizeof buf) return false;
+    strcpy(buf, s);
+    double v[3];
+    char *save = NULL, *tok = strtok_r(buf, ",", &save);
+    for (int i = 0; i < 3; i++) {
+        if (!tok || !rs_cli_parse_double(tok, &v[i])) return false;
+        tok = strtok_r(NULL, ",", &save);
+    }
+    if (tok) return false;
+    if (v[0] < -90 || v[0] > 90) return false;
+    out->lat_deg = v[0];
+    out->lon_deg = v[1];
+    out->h_m = v[2];
+    return true;
+}

@@ -1,0 +1,11 @@
+// PLACEHOLDER, replaced by the module's real command.
+#include "rs_cli.h"
+
+int rs_cli_bench(int argc, char **argv)
+{
+    (void)argc;
+    (void)argv;
+    fprintf(stderr, "roadside bench: under construction\n");
+    return RS_EXIT_FAIL;
+}
+

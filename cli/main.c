@@ -1,0 +1,68 @@
+// roadside -- git-style dispatcher: `roadside COMMAND [ARGS...]`.
+#include <stdio.h>
+#include <string.h>
+
+#include "rs_cli.h"
+
+#ifndef RS_VERSION
+#define RS_VERSION "unknown"
+#endif
+
+typedef struct {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+} command;
+
+static const command commands[] = {
+    {"site", rs_cli_site, "check, describe, initialise or simulate a site survey"},
+    {"geo", rs_cli_geo, "convert coordinates: geodetic, UTM/UPS, site ENU"},
+    {"calib", rs_cli_calib, "calibrate a site's cameras from its landmarks"},
+    {"locate", rs_cli_locate, "map pixels to ground points through a calibrated camera"},
+    {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
+    {"bench", rs_cli_bench, "benchmarks: run time against error"},
+};
+static const int Ncommands = (int)(sizeof commands / sizeof commands[0]);
+
+static void usage(FILE *out)
+{
+    fprintf(out,
+            "usage: roadside [--version] [--help] COMMAND [ARGS...]\n"
+            "\n"
+            "Turns fixed roadside traffic cameras into calibrated, metric sensors.\n"
+            "\n"
+            "Commands:\n");
+    for (int i = 0; i < Ncommands; i++) fprintf(out, "  %-8s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out,
+            "\n"
+            "'roadside COMMAND --help' describes one command. Conventions: docs/conventions.md.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return RS_EXIT_USAGE;
+    }
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+        if (argc > 2 && strcmp(cmd, "help") == 0) {
+            for (int i = 0; i < Ncommands; i++)
+                if (!strcmp(argv[2], commands[i].name)) {
+                    char help[] = "--help";
+                    char *av[] = {argv[2], help, NULL};
+                    return commands[i].run(2, av);
+                }
+        }
+        usage(stdout);
+        return RS_EXIT_OK;
+    }
+    if (!strcmp(cmd, "--version")) {
+        printf("roadside %s\n", RS_VERSION);
+        return RS_EXIT_OK;
+    }
+    for (int i = 0; i < Ncommands; i++)
+        if (!strcmp(cmd, commands[i].name)) return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "roadside: '%s' is not a roadside command. See 'roadside --help'.\n", cmd);
+    return RS_EXIT_USAGE;
+}

@@ -1,0 +1,38 @@
+// rs_cli.h -- the roadside command line: one function per subcommand, and the few helpers they
+// share. The cli only parses arguments, calls the libraries and prints; it owns exit codes.
+#pragma once
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "rs_geo.h"
+#include "rs_status.h"
+
+// Exit codes: 0 success, 1 the work failed (bad input, a check failed), 2 usage error.
+enum { RS_EXIT_OK = 0, RS_EXIT_FAIL = 1, RS_EXIT_USAGE = 2 };
+
+// Each subcommand gets argv with argv[0] = its own name ("geo", "site", ...).
+int rs_cli_geo(int argc, char **argv);
+int rs_cli_site(int argc, char **argv);
+int rs_cli_calib(int argc, char **argv);
+int rs_cli_locate(int argc, char **argv);
+int rs_cli_eval(int argc, char **argv);
+int rs_cli_bench(int argc, char **argv);
+
+// Prints "roadside: <what>: <detail or strerror>" on stderr and returns RS_EXIT_FAIL
+// (RS_EXIT_USAGE for RS_ERR_USAGE).
+int rs_cli_fail(const char *what, rs_status st, const rs_err *err);
+
+// Prints "roadside COMMAND: message" and "Try 'roadside COMMAND --help'." on stderr; returns
+// RS_EXIT_USAGE.
+int rs_cli_usage_error(const char *command, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+// True if argv holds -h or --help before any "--".
+bool rs_cli_wants_help(int argc, char **argv);
+
+// Parses "LAT,LON,H" (degrees, degrees, metres). False on any malformed or non-finite part, or a
+// latitude outside [-90, 90].
+bool rs_cli_parse_llh(const char *s, rs_llh *out);
+
+// Parses a finite double / an int in [lo, hi]; false if s is not entirely a number.
+bool rs_cli_parse_double(const char *s, double *out);
+bool rs_cli_parse_int(const char *s, long lo, long hi, long *out);
