@@ -1,2 +1,0 @@
-// PLACEHOLDER
-typedef int rs_placeholder_calib;
