@@ -1,23 +1,41 @@
 // rs_geo.h -- WGS84 geodetic <-> ECEF <-> site ENU, and UTM/UPS <-> geodetic, through
 // GeographicLib (C. F. F. Karney, "Transverse Mercator with an accuracy of a few nanometers",
-// J. Geodesy 85, 475-485 (2011); "Geodesics on an ellipsoid", J. Geodesy 87, 43-55 (2013)).
+// J. Geodesy 85, 475-485 (2011); "Geodesics on an ellipsoid of revolution", arXiv:1102.1215,
+// appendix B, for the geocentric inverse).
 //
 // Conventions (docs/conventions.md): geodetic points are llh = (lat_deg, lon_deg, h_m), h
 // ellipsoidal above WGS84; ECEF in metres; the site ENU frame is GeographicLib's LocalCartesian
 // at the site origin: x east, y north, z up along the ellipsoid normal, origin at the site
-// origin's (lat, lon, h). Arrays are row-major, one point per row.
+// origin's (lat, lon, h). Arrays are row-major, one point per row. Output longitudes are in
+// [-180, 180]; input longitudes may be any finite number of degrees.
 //
-// Accuracy: ECEF <-> geodetic and ENU <-> geodetic round trips are exact to within a few
-// nanometres anywhere within 5000 km of the surface (GeographicLib::Geocentric, whose inverse
-// is Vermeille's closed-form method made robust near the poles and the centre); tested against
-// PROJ's cct to 1 micrometre up to 20 km from the origin, at |lat| up to 89.9 degrees.
-// UTM/UPS: GeographicLib::UTMUPS (Krueger series to 6th order): error below 5 nm within the
-// standard UTM zone and +-3.9 degrees of longitude beyond it.
+// Accuracy:
+// - ECEF <-> geodetic (GeographicLib::Geocentric: the forward map is closed form; the inverse
+//   is Vermeille's closed-form method, made robust near the poles and the centre of the earth
+//   by Karney): GeographicLib states an error bounded by 7 nm for points within 5000 km of the
+//   surface of the WGS84 ellipsoid. Measured (tests/geo/test_geo_api.c): round trips
+//   llh -> ECEF -> llh within 2 nm near the surface and at the poles, and ECEF -> llh -> ECEF
+//   within 2 nm also inside 100 km of the centre of the earth.
+// - geodetic <-> ENU (GeographicLib::LocalCartesian: the geocentric conversion followed by a
+//   rotation): the same bound plus round-off of the rotation. Measured against PROJ's cct
+//   (tests/geo/test_geo_cct.py, 1400 points up to 20 km horizontally and +-1 km vertically
+//   from origins at latitudes 0 ... +-89.9 and longitudes up to +-180): largest difference
+//   4 nm for llh -> ENU and 0.1 um for ENU -> llh (the latter is the rounding of the printed
+//   degrees, 1e-12 deg ~ 0.1 um); the test tolerance is 1 um.
+// - UTM/UPS (GeographicLib::UTMUPS: Krueger's series to 6th order for UTM, exact polar
+//   stereographic for UPS): GeographicLib states about 5 nm, for UTM anywhere within 35 degrees
+//   of the central meridian. Measured against cct's +proj=utm / +proj=ups: see the test.
 //
-// All functions take N points and return RS_ERR_INVALID (with the row in the message) for a
-// non-finite input or a latitude outside [-90, 90]; outputs are then unspecified.
+// Errors: all functions return RS_OK, or RS_ERR_USAGE for a NULL array with N > 0 or N < 0, or
+// RS_ERR_INVALID for a non-finite input, a latitude outside [-90, 90], a zone out of range or
+// a UTM/UPS coordinate outside GeographicLib's allowed range, with a message naming the field
+// ("field 'lat': 91 is outside [-90, 90]") and, if N > 1, the row ("row 7: field 'lat': ...").
+// GeographicLib's exceptions are all caught: GeographicErr gives RS_ERR_INVALID with its
+// message, std::bad_alloc RS_ERR_NOMEM, anything else RS_ERR_EXTERNAL. On failure the outputs
+// are unspecified (rows before the failing one are converted). The functions are thread-safe.
 #pragma once
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "rs_status.h"
 
@@ -30,68 +48,99 @@ typedef struct {
     double lat_deg, lon_deg, h_m;
 } rs_llh;
 
+// Geodetic -> ECEF (closed form).
 rs_status rs_geo_llh_to_ecef(// out
-                             double *p_ecef_m,     // (N,3)
+                             double *p_ecef_m,     // (N,3) metres
                              // in
                              const double *llh,    // (N,3) lat_deg, lon_deg, h_m
                              int N, rs_err *err);
 
+// ECEF -> geodetic. Any finite point is accepted, including the centre of the earth (which
+// gives lat 90, lon 0, h = -b); of several solutions the one with the smallest |h| is returned.
 rs_status rs_geo_ecef_to_llh(// out
-                             double *llh,          // (N,3)
+                             double *llh,          // (N,3) lat_deg, lon_deg, h_m
                              // in
-                             const double *p_ecef_m, // (N,3)
+                             const double *p_ecef_m, // (N,3) metres
                              int N, rs_err *err);
 
+// Geodetic -> site ENU at `origin` (GeographicLib::LocalCartesian::Forward).
 rs_status rs_geo_llh_to_enu(// out
-                            double *p_enu_m,       // (N,3)
+                            double *p_enu_m,       // (N,3) east, north, up, metres
                             // in
-                            const rs_llh *origin,
-                            const double *llh,     // (N,3)
+                            const rs_llh *origin,  // the site origin
+                            const double *llh,     // (N,3) lat_deg, lon_deg, h_m
                             int N, rs_err *err);
 
+// Site ENU at `origin` -> geodetic (GeographicLib::LocalCartesian::Reverse).
 rs_status rs_geo_enu_to_llh(// out
-                            double *llh,           // (N,3)
+                            double *llh,           // (N,3) lat_deg, lon_deg, h_m
                             // in
-                            const rs_llh *origin,
-                            const double *p_enu_m, // (N,3)
+                            const rs_llh *origin,  // the site origin
+                            const double *p_enu_m, // (N,3) east, north, up, metres
                             int N, rs_err *err);
 
 // The rotation R_ecef_enu (row-major 3x3) whose columns are the east, north and up unit
 // vectors at `origin` in ECEF, and the origin in ECEF: p_ecef = R_ecef_enu p_enu + origin_ecef.
+// (GeographicLib::Geocentric::Forward with its rotation matrix.) The frame follows the given
+// longitude even at a pole: east = (-sin lon, cos lon, 0) always.
 rs_status rs_geo_enu_frame(// out
-                           double R_ecef_enu[9],
-                           double origin_ecef_m[3], // may be NULL
+                           double R_ecef_enu[9],    // (3,3) row-major
+                           double origin_ecef_m[3], // (3,) metres; may be NULL
                            // in
                            const rs_llh *origin, rs_err *err);
 
-// UTM/UPS. zone is 1..60 for UTM, 0 for UPS; north selects the hemisphere.
-// enh is (easting_m, northing_m, h_m) with the standard false easting/northing.
+// UTM/UPS -> geodetic. zone is 1..60 for UTM, 0 for UPS; north selects the hemisphere.
+// enh is (easting_m, northing_m, h_m) with the standard false easting/northing; h passes
+// through. Allowed ranges (GeographicLib's, 100 km wider than MGRS's): UTM easting
+// [0, 1000] km, northing [-9100, 9600] km (north) or [900, 19600] km (south); UPS easting and
+// northing [1200, 2800] km (north) or [700, 3300] km (south).
 rs_status rs_geo_utm_to_llh(// out
-                            double *llh,           // (N,3)
+                            double *llh,           // (N,3) lat_deg, lon_deg, h_m
                             // in
                             int zone, bool north,
-                            const double *enh,     // (N,3)
+                            const double *enh,     // (N,3) easting_m, northing_m, h_m
                             int N, rs_err *err);
 
-// Forward UTM/UPS in a given zone (zone < 0: each point's standard zone, which must then be
-// the same for all N points, and is returned through *zone_out, may be NULL).
+// Geodetic -> UTM/UPS. zone >= 0 (0 = UPS): project into that zone and hemisphere (a point of
+// the other hemisphere gets a northing continued across the equator), and *zone_out, *north_out
+// are zone, north. zone < 0: each point's standard zone and hemisphere, which must then be the
+// same for all N points, and are returned through *zone_out and *north_out (north is ignored).
 rs_status rs_geo_llh_to_utm(// out
-                            double *enh,           // (N,3)
+                            double *enh,           // (N,3) easting_m, northing_m, h_m
                             int *zone_out,         // may be NULL
                             bool *north_out,       // may be NULL
                             // in
                             int zone, bool north,
-                            const double *llh,     // (N,3)
+                            const double *llh,     // (N,3) lat_deg, lon_deg, h_m
                             int N, rs_err *err);
 
 // Meridian convergence of UTM/UPS at each point, in degrees: the angle, clockwise, from true
 // north to grid north. (A grid bearing b_grid becomes the true bearing b_grid + gamma.)
+// zone as for rs_geo_llh_to_utm (zone < 0: each point's own standard zone, which may differ
+// between points); the hemisphere does not change gamma, so north is ignored.
 rs_status rs_geo_utm_convergence_deg(// out
                                      double *gamma_deg, // (N,)
                                      // in
                                      int zone, bool north,
-                                     const double *llh, // (N,3)
+                                     const double *llh, // (N,3) lat_deg, lon_deg, h_m
                                      int N, rs_err *err);
+
+// Parses a UTM/UPS zone string as GeographicLib::UTMUPS::DecodeZone does: a UTM zone 1..60
+// followed by the hemisphere "n"/"s" or "north"/"south" (any case), e.g. "33N", "01s"; UPS is
+// the hemisphere alone ("n", "S", "north"). RS_ERR_INVALID for anything else.
+rs_status rs_geo_utm_zone_parse(// out
+                                int *zone,         // 1..60, or 0 for UPS
+                                bool *north,
+                                // in
+                                const char *s, rs_err *err);
+
+// Formats a zone as GeographicLib::UTMUPS::EncodeZone does ("33n", "1s", and "n"/"s" for UPS)
+// into buf (NUL-terminated; 4 bytes are enough). RS_ERR_INVALID for a zone outside 0..60,
+// RS_ERR_USAGE if buf is too small.
+rs_status rs_geo_utm_zone_format(// out
+                                 char *buf, size_t size,
+                                 // in
+                                 int zone, bool north, rs_err *err);
 
 #ifdef __cplusplus
 }
