@@ -1,2 +1,323 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_calib_init;
+// rs_calib_init.c -- initial camera pose: bearings, degeneracy checks, RANSAC over P3P scored
+// in pixels, non-minimal solve on the inliers. See rs_calib_init.h and
+// docs/calibration-init.md. The solvers themselves are OpenGV's and OpenCV's, behind the shims
+// rs_calib_opengv.h and rs_calib_opencv.h; this file holds the logic.
+#include "rs_calib_init.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <mrcal/poseutils.h>
+
+#include "rs_calib_opencv.h"
+#include "rs_calib_opengv.h"
+
+// Landmarks whose centred point cloud has s2/s1 below this are collinear: the rotation about
+// their line is undetermined.
+#define RS_INIT_COLLINEAR_RATIO 1e-3
+// Observations whose bearings all lie within this angle of each other sit in a tiny patch of
+// the image: the pose is not determined (0.2 deg is 3.5 px at f = 1000 px).
+#define RS_INIT_MIN_SPREAD_DEG 0.2
+// Two landmarks closer than this fraction of the cloud's RMS radius are the same landmark.
+#define RS_INIT_DUPLICATE_REL 1e-9
+// RANSAC stops once an outlier-free sample has been drawn with this probability.
+#define RS_INIT_CONFIDENCE 0.999
+// OpenGV's EPnP wants a few more points than the minimum.
+#define RS_INIT_EPNP_MIN 6
+// IPPE needs bearings clearly in front of the camera to form x/z, y/z.
+#define RS_INIT_IPPE_MIN_VZ 1e-6
+
+void rs_calib_init_options_default(rs_calib_init_options *opt)
+{
+    opt->ransac_threshold_px = 8.0;
+    opt->ransac_max_iterations = 500;
+    opt->seed = 1;
+    opt->planarity_ratio = 0.02;
+}
+
+// What the pixel scoring needs: the lens and the observations in the centred frame.
+typedef struct {
+    const mrcal_lensmodel_t *lensmodel;
+    const double *intrinsics;
+    const double *p_c;  // (N,3) landmarks minus their centroid
+    const double *q_px; // (N,2)
+} scorer;
+
+// rs_calib_opengv_score_fn: reprojection error in pixels through the lens model; +inf for
+// landmarks not in front of the camera (z_cam <= 0) or that do not project.
+static void pixel_errors(double *err_px, const double *Rt_cam_c, const int *indices,
+                         int Nindices, void *cookie)
+{
+    const scorer *s = cookie;
+    for (int k = 0; k < Nindices; k++) {
+        const int i = indices[k];
+        const mrcal_point3_t p = {.xyz = {s->p_c[3 * i], s->p_c[3 * i + 1], s->p_c[3 * i + 2]}};
+        mrcal_point3_t p_cam;
+        mrcal_point2_t q;
+        mrcal_transform_point_Rt(p_cam.xyz, NULL, NULL, Rt_cam_c, p.xyz);
+        err_px[k] = INFINITY;
+        if (!(p_cam.z > 0.0)) continue;
+        if (!mrcal_project(&q, NULL, NULL, &p_cam, 1, s->lensmodel, s->intrinsics)) continue;
+        const double e = hypot(q.x - s->q_px[2 * i], q.y - s->q_px[2 * i + 1]);
+        if (isfinite(e)) err_px[k] = e;
+    }
+}
+
+// RMS pixel error of the observations `indices` at the pose rt_cam_c (centred frame); +inf if
+// any of them is behind the camera. tmp is (Nindices,) scratch.
+static double rms_px_at(const double *rt_cam_c, const int *indices, int Nindices,
+                        const scorer *s, double *tmp)
+{
+    double Rt[12];
+    mrcal_Rt_from_rt(Rt, NULL, rt_cam_c);
+    pixel_errors(tmp, Rt, indices, Nindices, (void *)s);
+    double sum = 0.0;
+    for (int k = 0; k < Nindices; k++) sum += tmp[k] * tmp[k];
+    return Nindices > 0 ? sqrt(sum / Nindices) : INFINITY;
+}
+
+static double angle_deg(const double *a, const double *b)
+{
+    // atan2(|a x b|, a.b): accurate for tiny angles, unlike acos
+    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                         a[0] * b[1] - a[1] * b[0]};
+    return atan2(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]),
+                 a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * 180.0 / M_PI;
+}
+
+static rs_status check_arguments(const rs_calib_init_result *result,
+                                 const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
+                                 const double *p_enu_m, const double *q_px, int N,
+                                 const rs_calib_init_options *opt, rs_err *err)
+{
+    if (!result || !lensmodel || !intrinsics || N < 0 || (N > 0 && (!p_enu_m || !q_px)))
+        return rs_err_set(err, RS_ERR_USAGE,
+                          "rs_calib_init_pose: NULL result, lensmodel, intrinsics, p_enu_m or "
+                          "q_px, or N < 0 (N = %d)", N);
+    if (!(opt->ransac_threshold_px > 0.0) || !isfinite(opt->ransac_threshold_px))
+        return rs_err_set(err, RS_ERR_INVALID, "ransac_threshold_px: %g is not a positive pixel count",
+                          opt->ransac_threshold_px);
+    if (opt->ransac_max_iterations < 1)
+        return rs_err_set(err, RS_ERR_INVALID, "ransac_max_iterations: %d is not >= 1",
+                          opt->ransac_max_iterations);
+    if (!(opt->planarity_ratio >= 0.0 && opt->planarity_ratio < 1.0))
+        return rs_err_set(err, RS_ERR_INVALID, "planarity_ratio: %g is not in [0,1)",
+                          opt->planarity_ratio);
+    if (lensmodel->type == MRCAL_LENSMODEL_CAHVORE)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "lensmodel: mrcal cannot unproject through LENSMODEL_CAHVORE");
+    const int Nintrinsics = mrcal_lensmodel_num_params(lensmodel);
+    if (Nintrinsics <= 0)
+        return rs_err_set(err, RS_ERR_INVALID, "lensmodel: not a valid mrcal lens model (type %d)",
+                          (int)lensmodel->type);
+    for (int j = 0; j < Nintrinsics; j++)
+        if (!isfinite(intrinsics[j]))
+            return rs_err_set(err, RS_ERR_INVALID, "intrinsics[%d]: non-finite value %g", j,
+                              intrinsics[j]);
+    for (int i = 0; i < N; i++) {
+        const double *p = &p_enu_m[3 * i], *q = &q_px[2 * i];
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "p_enu_m[%d]: landmark %d has a non-finite coordinate (%g, %g, %g)",
+                              i, i, p[0], p[1], p[2]);
+        if (!isfinite(q[0]) || !isfinite(q[1]))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "q_px[%d]: observation %d has a non-finite pixel (%g, %g)", i, i,
+                              q[0], q[1]);
+    }
+    return RS_OK;
+}
+
+// Degeneracy checks on the usable observations. s: singular values of the centred landmarks.
+static rs_status check_geometry(const double *p_c, const double *v, const int *usable,
+                                int Nusable, const double *s, rs_err *err)
+{
+    // repeated landmarks
+    const double rms_radius = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] > 0.0
+                                  ? sqrt((s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) / Nusable)
+                                  : 0.0;
+    for (int a = 0; a < Nusable; a++)
+        for (int b = a + 1; b < Nusable; b++) {
+            const double *pa = &p_c[3 * usable[a]], *pb = &p_c[3 * usable[b]];
+            const double d = sqrt((pa[0] - pb[0]) * (pa[0] - pb[0]) +
+                                  (pa[1] - pb[1]) * (pa[1] - pb[1]) +
+                                  (pa[2] - pb[2]) * (pa[2] - pb[2]));
+            if (d <= RS_INIT_DUPLICATE_REL * rms_radius)
+                return rs_err_set(err, RS_ERR_DEGENERATE,
+                                  "p_enu_m[%d], p_enu_m[%d]: landmarks %d and %d are the same "
+                                  "point (%.3g m apart): a landmark is repeated",
+                                  usable[a], usable[b], usable[a], usable[b], d);
+        }
+    if (!(s[1] > RS_INIT_COLLINEAR_RATIO * s[0]))
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "p_enu_m: the %d usable landmarks are collinear (singular values of the "
+                          "centred points %.3g, %.3g, %.3g m: s2/s1 < %g): the rotation about "
+                          "their line is undetermined",
+                          Nusable, s[0], s[1], s[2], RS_INIT_COLLINEAR_RATIO);
+    double spread_deg = 0.0;
+    for (int a = 0; a < Nusable; a++)
+        for (int b = a + 1; b < Nusable; b++) {
+            const double t = angle_deg(&v[3 * usable[a]], &v[3 * usable[b]]);
+            if (t > spread_deg) spread_deg = t;
+        }
+    if (spread_deg < RS_INIT_MIN_SPREAD_DEG)
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "q_px: all %d usable observations lie in a tiny patch of the image "
+                          "(largest angle between their bearings %.3g deg < %g deg): the pose is "
+                          "undetermined",
+                          Nusable, spread_deg, RS_INIT_MIN_SPREAD_DEG);
+    return RS_OK;
+}
+
+// rt_cam_enu = rt_cam_c composed with the translation p_c = p_enu - centroid.
+static void uncentre(double *rt_cam_enu, const double *rt_cam_c, const double *centroid)
+{
+    const double rt_c_enu[6] = {0, 0, 0, -centroid[0], -centroid[1], -centroid[2]};
+    mrcal_compose_rt(rt_cam_enu, NULL, NULL, NULL, NULL, rt_cam_c, rt_c_enu);
+}
+
+// Non-minimal solve on the inliers `in`: IPPE if planar, else EPnP. On success fills rt_cam_c
+// and the method name and returns true; a refusal by the solver is not an error (the RANSAC
+// model stays), so it returns false.
+static bool nonminimal(double *rt_cam_c, const char **name, bool planar, const double *v,
+                       const double *p_c, const int *in, int Nin, double *xy, double *p_sel)
+{
+    if (planar) {
+        int n = 0;
+        for (int k = 0; k < Nin; k++) {
+            const double *vi = &v[3 * in[k]];
+            if (!(vi[2] > RS_INIT_IPPE_MIN_VZ)) continue;
+            xy[2 * n] = vi[0] / vi[2];
+            xy[2 * n + 1] = vi[1] / vi[2];
+            memcpy(&p_sel[3 * n], &p_c[3 * in[k]], 3 * sizeof(double));
+            n++;
+        }
+        *name = "opencv-ippe";
+        return n >= 4 && rs_calib_opencv_ippe(rt_cam_c, xy, p_sel, n, NULL) == RS_OK;
+    }
+    double Rt[12];
+    *name = "opengv-epnp";
+    if (Nin < RS_INIT_EPNP_MIN || rs_calib_opengv_epnp(Rt, v, p_c, in, Nin, NULL) != RS_OK)
+        return false;
+    mrcal_rt_from_Rt(rt_cam_c, NULL, Rt);
+    return true;
+}
+
+rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
+                             const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
+                             const double *p_enu_m, const double *q_px, int N,
+                             const rs_calib_init_options *opt, rs_err *err)
+{
+    rs_calib_init_options defaults;
+    if (!opt) {
+        rs_calib_init_options_default(&defaults);
+        opt = &defaults;
+    }
+    if (inlier)
+        for (int i = 0; i < N; i++) inlier[i] = false;
+    rs_status st = check_arguments(result, lensmodel, intrinsics, p_enu_m, q_px, N, opt, err);
+    if (st) return st;
+    memset(result, 0, sizeof(*result));
+
+    // One block of scratch: v (N,3), p_c (N,3), xy (N,2), p_sel (N,3), tmp (N,), usable (N,),
+    // in (N,), ransac_inlier (N,)
+    const size_t Nz = (size_t)(N > 0 ? N : 1);
+    double *v = malloc(Nz * (3 + 3 + 2 + 3 + 1) * sizeof(double) + Nz * (2 * sizeof(int) + sizeof(bool)));
+    if (!v) return rs_err_set(err, RS_ERR_NOMEM, "rs_calib_init_pose: out of memory (N = %d)", N);
+    double *p_c = v + 3 * Nz, *xy = p_c + 3 * Nz, *p_sel = xy + 2 * Nz, *tmp = p_sel + 3 * Nz;
+    int *usable = (int *)(tmp + Nz), *in = usable + Nz;
+    bool *is_in = (bool *)(in + Nz);
+
+    // 1. bearings
+    int Nusable = 0, Nunprojectable = 0;
+    for (int i = 0; i < N; i++) {
+        const mrcal_point2_t q = {.xy = {q_px[2 * i], q_px[2 * i + 1]}};
+        mrcal_point3_t vi;
+        if (mrcal_unproject(&vi, &q, 1, lensmodel, intrinsics)) {
+            const double norm = sqrt(vi.x * vi.x + vi.y * vi.y + vi.z * vi.z);
+            if (norm > 0.0 && isfinite(norm)) {
+                for (int j = 0; j < 3; j++) v[3 * i + j] = vi.xyz[j] / norm;
+                usable[Nusable++] = i;
+                continue;
+            }
+        }
+        v[3 * i] = v[3 * i + 1] = v[3 * i + 2] = NAN;
+        Nunprojectable++;
+    }
+    if (Nusable < 4) {
+        st = rs_err_set(err, RS_ERR_DEGENERATE,
+                        "q_px: only %d of %d observations are usable (need at least 4)%s", Nusable,
+                        N, Nunprojectable ? "; some pixels do not unproject through the lens model" : "");
+        goto done;
+    }
+
+    // 2. centre on the usable landmarks, check the geometry
+    double centroid[3] = {0, 0, 0};
+    for (int k = 0; k < Nusable; k++)
+        for (int j = 0; j < 3; j++) centroid[j] += p_enu_m[3 * usable[k] + j] / Nusable;
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < 3; j++) p_c[3 * i + j] = p_enu_m[3 * i + j] - centroid[j];
+    for (int k = 0; k < Nusable; k++) memcpy(&p_sel[3 * k], &p_c[3 * usable[k]], 3 * sizeof(double));
+    double s[3];
+    if ((st = rs_calib_opencv_singular_values3(s, p_sel, Nusable, err))) goto done;
+    if ((st = check_geometry(p_c, v, usable, Nusable, s, err))) goto done;
+    result->planar = s[2] < opt->planarity_ratio * s[1];
+
+    // 3. RANSAC over P3P, scored in pixels
+    const scorer sc = {lensmodel, intrinsics, p_c, q_px};
+    double Rt_cam_c[12];
+    int Niterations = 0, Nfallback = 0;
+    st = rs_calib_opengv_ransac_p3p(Rt_cam_c, is_in, &Niterations, &Nfallback, v, p_c, N, usable,
+                                    Nusable, RS_CALIB_OPENGV_P3P_KNEIP, opt->ransac_threshold_px,
+                                    opt->ransac_max_iterations, RS_INIT_CONFIDENCE, opt->seed,
+                                    pixel_errors, (void *)&sc, err);
+    int Nin = 0;
+    if (st == RS_OK)
+        for (int i = 0; i < N; i++)
+            if (is_in[i]) in[Nin++] = i;
+    if (st == RS_ERR_DEGENERATE || (st == RS_OK && Nin < 4)) {
+        st = rs_err_set(err, RS_ERR_DEGENERATE,
+                        "q_px: no pose puts 4 or more of the %d usable landmarks in front of the "
+                        "camera within %g px of their pixels (best: %d, after %d RANSAC "
+                        "iterations): landmarks behind the camera, or pixels not matching "
+                        "their landmarks",
+                        Nusable, opt->ransac_threshold_px, st == RS_OK ? Nin : 0, Niterations);
+        goto done;
+    }
+    if (st) goto done;
+    double rt_best[6];
+    mrcal_rt_from_Rt(rt_best, NULL, Rt_cam_c);
+    double rms_best = rms_px_at(rt_best, in, Nin, &sc, tmp);
+    snprintf(result->method, sizeof(result->method), "opengv-p3p-%s-ransac",
+             Nfallback ? "kneip+gao" : "kneip");
+
+    // 4. non-minimal solve on the inliers; keep whichever fits the inliers better
+    double rt_nm[6];
+    const char *name = "";
+    if (nonminimal(rt_nm, &name, result->planar, v, p_c, in, Nin, xy, p_sel)) {
+        const double rms_nm = rms_px_at(rt_nm, in, Nin, &sc, tmp);
+        if (rms_nm < rms_best) {
+            rms_best = rms_nm;
+            memcpy(rt_best, rt_nm, sizeof(rt_best));
+            const size_t len = strlen(result->method);
+            snprintf(result->method + len, sizeof(result->method) - len, " + %s", name);
+        }
+    }
+    if (!isfinite(rms_best)) { // cannot happen: RANSAC inliers are in front by construction
+        st = rs_err_set(err, RS_ERR_DEGENERATE,
+                        "q_px: the pose found puts some inliers behind the camera");
+        goto done;
+    }
+
+    uncentre(result->rt_cam_enu, rt_best, centroid);
+    result->Ninliers = Nin;
+    result->rms_px = rms_best;
+    if (inlier) memcpy(inlier, is_in, (size_t)N * sizeof(bool));
+    st = RS_OK;
+
+done:
+    free(v);
+    return st;
+}

@@ -1,1 +1,159 @@
-// PLACEHOLDER
+// rs_calib_opengv.cc -- shim over OpenGV's absolute-pose solvers; see rs_calib_opengv.h.
+//
+// Only the glue lives here: adapters, the seeded sampler, the pose layout conversion. The
+// pixel scoring is the caller's (rs_calib_init.c), through a callback.
+#include <cmath>
+#include <cstdint>
+#include <exception>
+#include <functional>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include <opengv/absolute_pose/CentralAbsoluteAdapter.hpp>
+#include <opengv/absolute_pose/methods.hpp>
+#include <opengv/sac/Ransac.hpp>
+#include <opengv/sac_problems/absolute_pose/AbsolutePoseSacProblem.hpp>
+
+extern "C" {
+#include "rs_calib_opengv.h"
+}
+
+namespace {
+
+using opengv::sac_problems::absolute_pose::AbsolutePoseSacProblem;
+
+// OpenGV's transformation_t is [R_ref_cam | c_ref] (camera orientation and position in the
+// reference frame). mrcal's Rt_cam_ref is the inverse, stored as (4,3): R_cam_ref then t.
+void model_to_Rt(double *Rt, const opengv::transformation_t &T)
+{
+    const Eigen::Matrix3d R_cam_ref = T.block<3, 3>(0, 0).transpose();
+    const Eigen::Vector3d t = -R_cam_ref * T.col(3);
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) Rt[3 * i + j] = R_cam_ref(i, j);
+        Rt[9 + i] = t(i);
+    }
+}
+
+struct Correspondences {
+    opengv::bearingVectors_t v;
+    opengv::points_t p;
+    Correspondences(const double *v_cam, const double *p_ref, int N)
+    {
+        v.reserve((size_t)N);
+        p.reserve((size_t)N);
+        for (int i = 0; i < N; i++) {
+            v.emplace_back(v_cam[3 * i], v_cam[3 * i + 1], v_cam[3 * i + 2]);
+            p.emplace_back(p_ref[3 * i], p_ref[3 * i + 1], p_ref[3 * i + 2]);
+        }
+    }
+};
+
+// OpenGV's P3P sample-consensus problem with three changes: the sampler is seeded from the
+// caller's seed, the distances are the caller's pixel errors, and a sample on which the chosen
+// P3P solver finds nothing is retried with the other one.
+class PixelP3pProblem : public AbsolutePoseSacProblem {
+public:
+    PixelP3pProblem(adapter_t &adapter, algorithm_t primary, const std::vector<int> &indices,
+                    uint64_t seed, rs_calib_opengv_score_fn *score, void *cookie)
+        : AbsolutePoseSacProblem(adapter, primary, indices, false),
+          fallback_(adapter, primary == KNEIP ? GAO : KNEIP, indices, false),
+          score_(score), cookie_(cookie)
+    {
+        std::seed_seq seq{(uint32_t)(seed & 0xffffffffu), (uint32_t)(seed >> 32)};
+        rng_alg_.seed(seq);
+        // OpenGV's generator binds a copy of rng_alg_: rebind it to the reseeded engine.
+        rng_gen_.reset(new std::function<int()>(std::bind(*rng_dist_, rng_alg_)));
+    }
+
+    bool computeModelCoefficients(const std::vector<int> &indices,
+                                  model_t &model) const override
+    {
+        if (AbsolutePoseSacProblem::computeModelCoefficients(indices, model) && model.allFinite())
+            return true;
+        ++Nfallback;
+        return fallback_.computeModelCoefficients(indices, model) && model.allFinite();
+    }
+
+    void getSelectedDistancesToModel(const model_t &model, const std::vector<int> &indices,
+                                     std::vector<double> &scores) const override
+    {
+        double Rt[12];
+        model_to_Rt(Rt, model);
+        const size_t n0 = scores.size();
+        scores.resize(n0 + indices.size());
+        score_(scores.data() + n0, Rt, indices.data(), (int)indices.size(), cookie_);
+    }
+
+    mutable int Nfallback = 0;
+
+private:
+    AbsolutePoseSacProblem fallback_;
+    rs_calib_opengv_score_fn *score_;
+    void *cookie_;
+};
+
+} // namespace
+
+extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier,
+                                                int *Niterations, int *Nfallback,
+                                                const double *v_cam, const double *p_ref, int N,
+                                                const int *usable, int Nusable,
+                                                rs_calib_opengv_p3p method, double threshold_px,
+                                                int max_iterations, double confidence,
+                                                uint64_t seed, rs_calib_opengv_score_fn *score,
+                                                void *cookie, rs_err *err)
+{
+    try {
+        Correspondences c(v_cam, p_ref, N);
+        opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
+        const std::vector<int> indices(usable, usable + Nusable);
+        auto problem = std::make_shared<PixelP3pProblem>(
+            adapter,
+            method == RS_CALIB_OPENGV_P3P_GAO ? AbsolutePoseSacProblem::GAO
+                                              : AbsolutePoseSacProblem::KNEIP,
+            indices, seed, score, cookie);
+        opengv::sac::Ransac<AbsolutePoseSacProblem> ransac(max_iterations, threshold_px,
+                                                           confidence);
+        ransac.sac_model_ = problem;
+        const bool ok = ransac.computeModel(0);
+        if (Niterations) *Niterations = ransac.iterations_;
+        if (Nfallback) *Nfallback = problem->Nfallback;
+        if (!ok || !ransac.model_coefficients_.allFinite())
+            return rs_err_set(err, RS_ERR_DEGENERATE,
+                              "P3P RANSAC: no sample of 4 observations gave a pose");
+        model_to_Rt(Rt_cam_ref, ransac.model_coefficients_);
+        for (int i = 0; i < N; i++) inlier[i] = false;
+        for (int i : ransac.inliers_)
+            if (i >= 0 && i < N) inlier[i] = true;
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV P3P RANSAC threw: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV P3P RANSAC threw an unknown exception");
+    }
+}
+
+extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_cam,
+                                          const double *p_ref, const int *indices, int Nindices,
+                                          rs_err *err)
+{
+    try {
+        // The adapter spans the highest index used; the others are never read.
+        int N = 0;
+        for (int k = 0; k < Nindices; k++)
+            if (indices[k] + 1 > N) N = indices[k] + 1;
+        Correspondences c(v_cam, p_ref, N);
+        opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
+        const opengv::transformation_t T =
+            opengv::absolute_pose::epnp(adapter, std::vector<int>(indices, indices + Nindices));
+        if (!T.allFinite())
+            return rs_err_set(err, RS_ERR_DEGENERATE, "EPnP: non-finite pose");
+        model_to_Rt(Rt_cam_ref, T);
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV EPnP threw: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV EPnP threw an unknown exception");
+    }
+}

@@ -1,0 +1,35 @@
+// rs_calib_opencv.h -- internal C interface to the OpenCV pieces of the pose solver (calib only).
+//
+// Thin shim: the C++ lives in rs_calib_opencv.cc; every exception is caught there and turned
+// into RS_ERR_EXTERNAL. Poses are mrcal rt (== OpenCV rvec, tvec): p_cam = R(r) p_ref + t.
+#pragma once
+#include "rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// Singular values of the (N,3) matrix p (the caller centres it), descending, by cv::SVD.
+rs_status rs_calib_opencv_singular_values3(// out
+                                           double *s,       // (3,)
+                                           // in
+                                           const double *p, // (N,3)
+                                           int N,           // >= 1
+                                           rs_err *err);    // may be NULL
+
+// Pose from N >= 4 coplanar landmarks by OpenCV's IPPE (Collins & Bartoli, "Infinitesimal
+// Plane-Based Pose Estimation", IJCV 2014) -- cv::solvePnP(SOLVEPNP_IPPE) with K = identity on
+// normalised image coordinates xy = (v_x/v_z, v_y/v_z) of bearings in front of the camera.
+// Returns RS_ERR_EXTERNAL when OpenCV refuses the input (e.g. points not coplanar enough) or
+// throws, RS_ERR_DEGENERATE when it returns no pose or a non-finite one.
+rs_status rs_calib_opencv_ippe(// out
+                               double *rt_cam_ref,   // (6,)
+                               // in
+                               const double *xy,     // (N,2) normalised image coordinates
+                               const double *p_ref,  // (N,3) coplanar landmarks, metres
+                               int N,
+                               rs_err *err);         // may be NULL
+
+#ifdef __cplusplus
+}
+#endif

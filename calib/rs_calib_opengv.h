@@ -1,0 +1,76 @@
+// rs_calib_opengv.h -- internal C interface to OpenGV's absolute-pose solvers (calib only).
+//
+// Thin shim: the C++ lives in rs_calib_opengv.cc; every exception is caught there and turned
+// into RS_ERR_EXTERNAL. Poses cross this boundary in mrcal's Rt layout: a (4,3) array whose
+// first 3 rows are R_cam_ref and whose last row is t, so that p_cam = R p_ref + t
+// (mrcal_transform_point_Rt, mrcal_rt_from_Rt). The reference frame is whatever frame p_ref is
+// given in; rs_calib_init.c passes landmarks centred on their centroid.
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+#include "rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// Per-observation error of a pose hypothesis, in pixels, computed by the caller (through the
+// lens model). err_px[k] belongs to observation indices[k]; +inf where the landmark is behind
+// the camera or does not project.
+typedef void rs_calib_opengv_score_fn(// out
+                                      double *err_px,          // (Nindices,)
+                                      // in
+                                      const double *Rt_cam_ref, // (4,3)
+                                      const int *indices,       // (Nindices,)
+                                      int Nindices,
+                                      void *cookie);
+
+typedef enum {
+    RS_CALIB_OPENGV_P3P_KNEIP = 0, // Kneip, Scaramuzza, Siegwart, CVPR 2011
+    RS_CALIB_OPENGV_P3P_GAO   = 1, // Gao, Hou, Tang, Cheng, PAMI 2003
+} rs_calib_opengv_p3p;
+
+// RANSAC (OpenGV's sac::Ransac) over OpenGV's P3P solver. Each sample has 4 observations: P3P
+// on the first 3, the 4th picks among the up to 4 solutions (OpenGV's AbsolutePoseSacProblem).
+// When the chosen solver finds no solution for a sample, the other P3P solver is tried on the
+// same sample (counted in *Nfallback). The hypotheses are scored by `score` in pixels: an
+// observation is an inlier when its error is < threshold_px. The sampler is OpenGV's, with its
+// std::mt19937 seeded from `seed`, so the result is a deterministic function of the input.
+// Adaptive stop when a sample free of outliers has been drawn with probability `confidence`.
+//
+// Returns RS_ERR_DEGENERATE if no sample gave any pose, RS_ERR_EXTERNAL if OpenGV threw.
+rs_status rs_calib_opengv_ransac_p3p(// out
+                                     double *Rt_cam_ref,   // (4,3) best hypothesis
+                                     bool *inlier,         // (N,) its inliers
+                                     int *Niterations,     // may be NULL
+                                     int *Nfallback,       // may be NULL
+                                     // in
+                                     const double *v_cam,  // (N,3) unit bearing vectors
+                                     const double *p_ref,  // (N,3) landmarks, metres
+                                     int N,
+                                     const int *usable,    // (Nusable,) indices to sample from
+                                     int Nusable,          // >= 4
+                                     rs_calib_opengv_p3p method,
+                                     double threshold_px,
+                                     int max_iterations,
+                                     double confidence,    // e.g. 0.999
+                                     uint64_t seed,
+                                     rs_calib_opengv_score_fn *score,
+                                     void *cookie,
+                                     rs_err *err);          // may be NULL
+
+// OpenGV's EPnP (Lepetit, Moreno-Noguer, Fua, IJCV 2009) on the observations `indices`
+// (Nindices >= 6 advised; non-coplanar landmarks).
+// Returns RS_ERR_DEGENERATE if the result is not finite, RS_ERR_EXTERNAL if OpenGV threw.
+rs_status rs_calib_opengv_epnp(// out
+                               double *Rt_cam_ref,    // (4,3)
+                               // in
+                               const double *v_cam,   // (N,3) unit bearing vectors
+                               const double *p_ref,   // (N,3) landmarks, metres
+                               const int *indices,    // (Nindices,)
+                               int Nindices,
+                               rs_err *err);          // may be NULL
+
+#ifdef __cplusplus
+}
+#endif
