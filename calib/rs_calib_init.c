@@ -277,13 +277,17 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
     if (st == RS_OK)
         for (int i = 0; i < N; i++)
             if (is_in[i]) in[Nin++] = i;
-    if (st == RS_ERR_DEGENERATE || (st == RS_OK && Nin < 4)) {
+    // A pose must be supported by a majority of the usable observations (and by 4 at least):
+    // a small consensus among many is as likely a coincidence as the truth.
+    const int Nneeded = Nusable / 2 + 1 > 4 ? Nusable / 2 + 1 : 4;
+    if (st == RS_ERR_DEGENERATE || (st == RS_OK && Nin < Nneeded)) {
         st = rs_err_set(err, RS_ERR_DEGENERATE,
-                        "q_px: no pose puts 4 or more of the %d usable landmarks in front of the "
+                        "q_px: no pose puts %d or more of the %d usable landmarks in front of the "
                         "camera within %g px of their pixels (best: %d, after %d RANSAC "
-                        "iterations): landmarks behind the camera, or pixels not matching "
-                        "their landmarks",
-                        Nusable, opt->ransac_threshold_px, st == RS_OK ? Nin : 0, Niterations);
+                        "iterations): landmarks behind the camera, or too many pixels not "
+                        "matching their landmarks",
+                        Nneeded, Nusable, opt->ransac_threshold_px, st == RS_OK ? Nin : 0,
+                        Niterations);
         goto done;
     }
     if (st) goto done;

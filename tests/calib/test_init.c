@@ -1,0 +1,289 @@
+// test_init.c -- rs_calib_init_pose against the truth of simulated pole cameras
+// (test_init_gen.h): noise-free recovery, noise + gross outliers, degenerate input, timing.
+// Fixed seeds; every failure prints its seed. The OpenCV solvePnPRansac comparison is in
+// test_init_opencv.cc.
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <mrcal/poseutils.h>
+
+#include "rs_calib_init.h"
+#include "test_init_gen.h"
+
+static int Nfail = 0;
+
+#define CHECK(cond, ...)                                                                       \
+    do {                                                                                       \
+        if (!(cond)) {                                                                         \
+            if (Nfail++ < 40) {                                                                \
+                fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                           \
+                fprintf(stderr, __VA_ARGS__);                                                  \
+                fprintf(stderr, "\n");                                                         \
+            }                                                                                  \
+        }                                                                                      \
+    } while (0)
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double percentile(double *x, int n, double pc)
+{
+    qsort(x, (size_t)n, sizeof(double), cmp_double);
+    return x[(int)fmin(n - 1, floor(pc / 100.0 * n))];
+}
+
+// 1. Noise-free: the truth comes back to 1e-6 (rotation in rad, position relative to range),
+// every observation an inlier, RMS ~ 0; 200 seeds x 3 lenses x planar/non-planar, N = 4..30.
+static void test_noise_free(void)
+{
+    double worst_rot = 0, worst_pos = 0;
+    int Ntrials = 0;
+    for (int lens = 0; lens < TG_NLENS; lens++)
+        for (int planar = 0; planar < 2; planar++)
+            for (uint64_t seed = 1; seed <= 200; seed++) {
+                const int N = 4 + (int)(seed % 27);
+                tg_problem pb;
+                if (!tg_make(&pb, seed, (tg_lens)lens, planar, N, 0.0, 0.0)) {
+                    CHECK(0, "noise-free seed %llu: generator failed", (unsigned long long)seed);
+                    continue;
+                }
+                rs_calib_init_result res;
+                bool inl[TG_NMAX];
+                rs_err err = {0};
+                const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics,
+                                                        pb.p_enu_m, pb.q_px, N, NULL, &err);
+                Ntrials++;
+                CHECK(st == RS_OK, "noise-free seed %llu %s planar=%d N=%d: status %d: %s",
+                      (unsigned long long)seed, tg_lens_name(lens), planar, N, st, err.msg);
+                if (st) continue;
+                const double rot = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu);
+                const double pos = tg_position_error_m(res.rt_cam_enu, pb.rt_cam_enu) / pb.range_m;
+                // NaN fails these comparisons
+                CHECK(rot < 1e-6 && pos < 1e-6 && res.rms_px < 1e-4 && res.Ninliers == N,
+                      "noise-free seed %llu %s planar=%d N=%d: rotation error %.3g rad, position "
+                      "error %.3g of range, rms %.3g px, %d/%d inliers, planar judged %d, %s",
+                      (unsigned long long)seed, tg_lens_name(lens), planar, N, rot, pos,
+                      res.rms_px, res.Ninliers, N, res.planar, res.method);
+                CHECK(!planar || res.planar, "noise-free seed %llu %s N=%d: planar set not judged planar",
+                      (unsigned long long)seed, tg_lens_name(lens), N);
+                if (!(rot <= worst_rot)) worst_rot = rot;
+                if (!(pos <= worst_pos)) worst_pos = pos;
+            }
+    printf("noise-free: %d trials, worst rotation error %.3g rad, worst position error %.3g of "
+           "range (tolerance 1e-6)\n", Ntrials, worst_rot, worst_pos);
+}
+
+// 2. 1 px noise + 30% gross outliers (moved >= 25 px), N = 20.
+// Outliers: >= 95% of them flagged as non-inliers over all trials.
+// Pose: judged in the image, where the refinement needs it -- e_model, the RMS over the
+// landmarks of the pixel displacement between the truth and the estimate. A maximum-
+// likelihood estimate from n inliers with sigma = 1 px has E[e_model^2] = 6 sigma^2 / n
+// (6 pose parameters), i.e. e_model ~ 0.65 px for n = 14. The initial pose is a linear
+// (EPnP/IPPE) or minimal (P3P) solution, not ML: we allow 8x that per trial (5 px, far inside
+// the refinement's basin of convergence, tens of pixels) and 2x it (1.3 px) for the median.
+static void test_outliers(void)
+{
+    enum { N = 20, TRIALS = 200 };
+    int Nout = 0, Nout_flagged = 0, Nin_true = 0, Nin_kept = 0;
+    static double emodel[TG_NLENS * 2 * TRIALS], rot[TG_NLENS * 2 * TRIALS], pos[TG_NLENS * 2 * TRIALS];
+    int n = 0;
+    for (int lens = 0; lens < TG_NLENS; lens++)
+        for (int planar = 0; planar < 2; planar++)
+            for (uint64_t seed = 1001; seed < 1001 + TRIALS; seed++) {
+                tg_problem pb;
+                if (!tg_make(&pb, seed, (tg_lens)lens, planar, N, 1.0, 0.3)) {
+                    CHECK(0, "outliers seed %llu: generator failed", (unsigned long long)seed);
+                    continue;
+                }
+                rs_calib_init_options opt;
+                rs_calib_init_options_default(&opt);
+                opt.seed = seed;
+                rs_calib_init_result res;
+                bool inl[TG_NMAX];
+                rs_err err = {0};
+                const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics,
+                                                        pb.p_enu_m, pb.q_px, N, &opt, &err);
+                CHECK(st == RS_OK, "outliers seed %llu %s planar=%d: status %d: %s",
+                      (unsigned long long)seed, tg_lens_name(lens), planar, st, err.msg);
+                if (st) continue;
+                for (int i = 0; i < N; i++) {
+                    if (pb.outlier[i]) {
+                        Nout++;
+                        Nout_flagged += !inl[i];
+                    } else {
+                        Nin_true++;
+                        Nin_kept += inl[i];
+                    }
+                }
+                emodel[n] = tg_model_error_px(&pb, res.rt_cam_enu, pb.rt_cam_enu);
+                rot[n] = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu) * 180 / M_PI;
+                pos[n] = tg_position_error_m(res.rt_cam_enu, pb.rt_cam_enu) / pb.range_m;
+                CHECK(emodel[n] < 5.0, "outliers seed %llu %s planar=%d: e_model %.3g px >= 5 px "
+                      "(rotation %.3g deg, position %.3g of range, %s)", (unsigned long long)seed,
+                      tg_lens_name(lens), planar, emodel[n], rot[n], pos[n], res.method);
+                n++;
+            }
+    const double recall = Nout ? (double)Nout_flagged / Nout : 0.0;
+    const double kept = Nin_true ? (double)Nin_kept / Nin_true : 0.0;
+    CHECK(recall >= 0.95, "outlier recall %.4f < 0.95 (%d of %d)", recall, Nout_flagged, Nout);
+    const double med = n ? percentile(emodel, n, 50) : INFINITY;
+    CHECK(med < 1.3, "median e_model %.3g px >= 1.3 px", med);
+    printf("outliers (N=%d, 1 px noise, 30%% gross): %d trials, outlier recall %.4f (%d/%d), good "
+           "points kept %.4f; e_model median %.3g px, 95%% %.3g px, max %.3g px; rotation error "
+           "median %.3g deg, 95%% %.3g deg; position error median %.3g, 95%% %.3g of range\n",
+           N, n, recall, Nout_flagged, Nout, kept, med, n ? percentile(emodel, n, 95) : 0,
+           n ? percentile(emodel, n, 100) : 0, n ? percentile(rot, n, 50) : 0,
+           n ? percentile(rot, n, 95) : 0, n ? percentile(pos, n, 50) : 0, n ? percentile(pos, n, 95) : 0);
+}
+
+static void expect_error(const char *what, rs_status want, const char *needle,
+                         const tg_problem *pb, const double *p, const double *q, int N)
+{
+    rs_calib_init_result res;
+    bool inl[TG_NMAX + 1];
+    rs_err err = {0};
+    const rs_status st = rs_calib_init_pose(&res, inl, &pb->lensmodel, pb->intrinsics, p, q, N,
+                                            NULL, &err);
+    CHECK(st == want && strstr(err.msg, needle), "%s: status %d (want %d), message '%s' (want "
+          "'%s')", what, st, want, err.msg, needle);
+    for (int i = 0; i < N && i < TG_NMAX; i++)
+        CHECK(!inl[i], "%s: observation %d flagged inlier on failure", what, i);
+    printf("degenerate %-22s -> %d: %s\n", what, st, err.msg);
+}
+
+// 3. Degenerate input: the right status and a message naming the cause, no crash.
+static void test_degenerate(void)
+{
+    tg_problem pb;
+    const uint64_t seed = 77;
+    if (!tg_make(&pb, seed, TG_PINHOLE, false, 12, 0.0, 0.0)) {
+        CHECK(0, "degenerate seed %llu: generator failed", (unsigned long long)seed);
+        return;
+    }
+    double p[3 * TG_NMAX], q[2 * TG_NMAX];
+
+    expect_error("3 points", RS_ERR_DEGENERATE, "need at least 4", &pb, pb.p_enu_m, pb.q_px, 3);
+    expect_error("0 points", RS_ERR_DEGENERATE, "need at least 4", &pb, NULL, NULL, 0);
+
+    memcpy(p, pb.p_enu_m, sizeof(p));
+    p[3 * 5 + 1] = NAN;
+    expect_error("NaN landmark", RS_ERR_INVALID, "p_enu_m[5]", &pb, p, pb.q_px, 12);
+    memcpy(q, pb.q_px, sizeof(q));
+    q[2 * 7] = INFINITY;
+    expect_error("inf pixel", RS_ERR_INVALID, "q_px[7]", &pb, pb.p_enu_m, q, 12);
+
+    // repeated landmark (same point, same pixel)
+    memcpy(p, pb.p_enu_m, sizeof(p));
+    memcpy(q, pb.q_px, sizeof(q));
+    memcpy(&p[3 * 9], &p[3 * 2], 3 * sizeof(double));
+    memcpy(&q[2 * 9], &q[2 * 2], 2 * sizeof(double));
+    expect_error("repeated landmark", RS_ERR_DEGENERATE, "same point", &pb, p, q, 12);
+
+    // collinear: all on the segment between landmarks 0 and 1, pixels through the truth pose
+    for (int i = 0; i < 12; i++) {
+        const double s = i / 11.0;
+        for (int k = 0; k < 3; k++)
+            p[3 * i + k] = pb.p_enu_m[k] + s * (pb.p_enu_m[3 + k] - pb.p_enu_m[k]);
+        mrcal_point3_t pc;
+        mrcal_transform_point_rt(pc.xyz, NULL, NULL, pb.rt_cam_enu, &p[3 * i]);
+        mrcal_project((mrcal_point2_t *)&q[2 * i], NULL, NULL, &pc, 1, &pb.lensmodel, pb.intrinsics);
+    }
+    expect_error("collinear", RS_ERR_DEGENERATE, "collinear", &pb, p, q, 12);
+
+    // tiny patch: the landmark cloud shrunk 1000x about landmark 0, seen through the truth pose
+    for (int i = 0; i < 12; i++) {
+        for (int k = 0; k < 3; k++)
+            p[3 * i + k] = pb.p_enu_m[k] + 1e-3 * (pb.p_enu_m[3 * i + k] - pb.p_enu_m[k]);
+        mrcal_point3_t pc;
+        mrcal_transform_point_rt(pc.xyz, NULL, NULL, pb.rt_cam_enu, &p[3 * i]);
+        mrcal_project((mrcal_point2_t *)&q[2 * i], NULL, NULL, &pc, 1, &pb.lensmodel, pb.intrinsics);
+    }
+    expect_error("tiny patch", RS_ERR_DEGENERATE, "tiny patch", &pb, p, q, 12);
+
+    // behind: a 3D cloud 20..80 m behind a pinhole camera; the pinhole formula mirrors it into
+    // the image. No rigid pose puts a non-planar cloud in front with these bearings.
+    tg_rng r;
+    tg_seed(&r, seed);
+    double rt_enu_cam[6];
+    mrcal_invert_rt(rt_enu_cam, NULL, NULL, pb.rt_cam_enu);
+    for (int i = 0; i < 12; i++) {
+        const double pc[3] = {tg_uniform(&r, -30, 30), tg_uniform(&r, -30, 30), tg_uniform(&r, -80, -20)};
+        mrcal_transform_point_rt(&p[3 * i], NULL, NULL, rt_enu_cam, pc);
+        q[2 * i] = pb.intrinsics[0] * pc[0] / pc[2] + pb.intrinsics[2];
+        q[2 * i + 1] = pb.intrinsics[1] * pc[1] / pc[2] + pb.intrinsics[3];
+    }
+    expect_error("behind the camera", RS_ERR_DEGENERATE, "in front of the camera", &pb, p, q, 12);
+
+    // an unsupported lens model and a bad option
+    tg_problem bad = pb;
+    bad.lensmodel.type = MRCAL_LENSMODEL_CAHVORE;
+    expect_error("CAHVORE", RS_ERR_UNSUPPORTED, "CAHVORE", &bad, pb.p_enu_m, pb.q_px, 12);
+    rs_calib_init_options opt;
+    rs_calib_init_options_default(&opt);
+    opt.ransac_threshold_px = NAN;
+    rs_calib_init_result res;
+    rs_err err = {0};
+    const rs_status st = rs_calib_init_pose(&res, NULL, &pb.lensmodel, pb.intrinsics, pb.p_enu_m,
+                                            pb.q_px, 12, &opt, &err);
+    CHECK(st == RS_ERR_INVALID && strstr(err.msg, "ransac_threshold_px"),
+          "NaN threshold: status %d, '%s'", st, err.msg);
+}
+
+// 4. Same input and seed, same answer, bit for bit.
+static void test_deterministic(void)
+{
+    tg_problem pb;
+    const uint64_t seed = 4242;
+    if (!tg_make(&pb, seed, TG_OPENCV8, true, 25, 1.0, 0.3)) {
+        CHECK(0, "deterministic seed %llu: generator failed", (unsigned long long)seed);
+        return;
+    }
+    rs_calib_init_result a, b;
+    bool ia[TG_NMAX], ib[TG_NMAX];
+    const rs_status sa = rs_calib_init_pose(&a, ia, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, pb.N, NULL, NULL);
+    const rs_status sb = rs_calib_init_pose(&b, ib, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, pb.N, NULL, NULL);
+    CHECK(sa == RS_OK && sb == RS_OK && !memcmp(a.rt_cam_enu, b.rt_cam_enu, sizeof(a.rt_cam_enu)) &&
+          !memcmp(ia, ib, (size_t)pb.N * sizeof(bool)),
+          "deterministic seed %llu: two identical calls differ", (unsigned long long)seed);
+}
+
+// 5. Time per call, 20 landmarks (printed, not asserted).
+static void time_calls(void)
+{
+    for (int outliers = 0; outliers < 2; outliers++)
+        for (int lens = 0; lens < TG_NLENS; lens++) {
+            enum { REPS = 100 };
+            tg_problem pb[8];
+            for (int k = 0; k < 8; k++)
+                if (!tg_make(&pb[k], 5000 + (uint64_t)k, (tg_lens)lens, true, 20, 1.0, outliers ? 0.3 : 0.0))
+                    return;
+            struct timespec t0, t1;
+            clock_gettime(CLOCK_MONOTONIC, &t0);
+            for (int rep = 0; rep < REPS; rep++) {
+                rs_calib_init_result res;
+                const tg_problem *b = &pb[rep % 8];
+                rs_calib_init_pose(&res, NULL, &b->lensmodel, b->intrinsics, b->p_enu_m, b->q_px, 20, NULL, NULL);
+            }
+            clock_gettime(CLOCK_MONOTONIC, &t1);
+            const double us = ((double)(t1.tv_sec - t0.tv_sec) * 1e9 + (double)(t1.tv_nsec - t0.tv_nsec)) / 1e3 / REPS;
+            printf("time per call, 20 landmarks, %s, %s: %.1f us\n", tg_lens_name(lens),
+                   outliers ? "1 px noise + 30% outliers" : "1 px noise", us);
+        }
+}
+
+int main(void)
+{
+    test_noise_free();
+    test_outliers();
+    test_degenerate();
+    test_deterministic();
+    time_calls();
+    if (Nfail) fprintf(stderr, "%d check(s) failed\n", Nfail);
+    return Nfail ? 1 : 0;
+}
