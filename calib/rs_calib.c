@@ -1,2 +1,674 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_calib;
+// rs_calib.c -- rs_calib_solve: initial pose, robust refinement, outliers, plain re-solve,
+// uncertainty; and the pose helpers (yaw/pitch/roll, camera position, ground intersection).
+// API and method: rs_calib.h; the Ceres part: rs_calib_refine_ceres.cc; docs/calibration.md.
+#include "rs_calib.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <mrcal/poseutils.h>
+
+#include "rs_calib_refine.h"
+
+#define DEG (180.0 / M_PI)
+
+void rs_calib_options_default(rs_calib_options *opt) {
+    memset(opt, 0, sizeof(*opt));
+    opt->refine = RS_CALIB_REFINE_NONE;
+    opt->robust_scale = 2.0;
+    opt->outlier_threshold = 3.717; // sqrt(chi2inv(0.999, 2)) = sqrt(13.8155)
+    rs_calib_init_options_default(&opt->init);
+    opt->max_iterations = 100;
+    opt->focal_prior_rel_sigma = 1.0;
+    opt->center_prior_sigma_px = 50.0;
+    opt->distortion_prior_sigma = 0.1;
+    opt->focal_search_min = 0.25;
+    opt->focal_search_max = 4.0;
+    opt->condition_warn = 1e4;
+}
+
+void rs_calib_result_free(rs_calib_result *result) {
+    if (!result) return;
+    free(result->intrinsics);
+    free(result->sigma_intrinsics);
+    free(result->covariance_intrinsics);
+    free(result->predicted_px);
+    free(result->residual_px);
+    free(result->normalised_residual);
+    free(result->inlier);
+    free(result->p_enu_refined_m);
+    memset(result, 0, sizeof(*result));
+}
+
+// ---------------------------------------------------------------- small 3x3 helpers (row-major)
+
+static void mat3_mul(double out[9], const double a[9], const double b[9]) {
+    double m[9];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            m[i * 3 + j] = a[i * 3] * b[j] + a[i * 3 + 1] * b[3 + j] + a[i * 3 + 2] * b[6 + j];
+    memcpy(out, m, sizeof(m));
+}
+static void mat3_transpose(double out[9], const double a[9]) {
+    double m[9];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) m[i * 3 + j] = a[j * 3 + i];
+    memcpy(out, m, sizeof(m));
+}
+static void rot_z(double R[9], double a) {
+    const double c = cos(a), s = sin(a);
+    const double m[9] = {c, -s, 0, s, c, 0, 0, 0, 1};
+    memcpy(R, m, sizeof(m));
+}
+static void rot_x(double R[9], double a) {
+    const double c = cos(a), s = sin(a);
+    const double m[9] = {1, 0, 0, 0, c, -s, 0, s, c};
+    memcpy(R, m, sizeof(m));
+}
+// A level camera looking north: columns x_cam -> east, y_cam -> down, z_cam -> north.
+static const double R_enu_cam0[9] = {1, 0, 0, 0, 0, 1, 0, -1, 0};
+
+// out (n,n) = J (n,m) C (m,m) J^T
+static void sandwich(double *out, const double *J, const double *C, int n, int m) {
+    for (int a = 0; a < n; a++)
+        for (int b = 0; b < n; b++) {
+            double s = 0.0;
+            for (int i = 0; i < m; i++)
+                for (int j = 0; j < m; j++) s += J[a * m + i] * C[i * m + j] * J[b * m + j];
+            out[a * n + b] = s;
+        }
+}
+
+// ---------------------------------------------------------------- pose helpers
+
+void rs_calib_position_from_rt(double position_enu_m[3], double *dpos_drt, const double rt_cam_enu[6]) {
+    double rt_enu_cam[6], dt_dr[9], dt_dt[9];
+    mrcal_invert_rt(rt_enu_cam, dt_dr, dt_dt, rt_cam_enu);
+    memcpy(position_enu_m, &rt_enu_cam[3], 3 * sizeof(double));
+    if (dpos_drt)
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                dpos_drt[i * 6 + j] = dt_dr[i * 3 + j];
+                dpos_drt[i * 6 + 3 + j] = dt_dt[i * 3 + j];
+            }
+}
+
+void rs_calib_ypr_from_rt(double ypr_deg[3], double position_enu_m[3], const double rt_cam_enu[6]) {
+    double R_cam_enu[9], R_enu_cam[9];
+    mrcal_R_from_r(R_cam_enu, NULL, rt_cam_enu);
+    mat3_transpose(R_enu_cam, R_cam_enu);
+    // optical axis in ENU = third column of R_enu_cam = (sin y cos p, cos y cos p, sin p)
+    const double fx = R_enu_cam[2], fy = R_enu_cam[5], fz = R_enu_cam[8];
+    const double h = hypot(fx, fy);
+    const double pitch = atan2(fz, h);
+    const double yaw = h > 1e-14 ? atan2(fx, fy) : 0.0;
+    // Rz(roll) = (Rz(-yaw) Rx(pitch) R0)^T R_enu_cam
+    double A[9], Rx[9], M[9];
+    rot_z(A, -yaw);
+    rot_x(Rx, pitch);
+    mat3_mul(A, A, Rx);
+    mat3_mul(A, A, R_enu_cam0);
+    mat3_transpose(A, A);
+    mat3_mul(M, A, R_enu_cam);
+    const double roll = atan2(M[3], M[0]);
+    double yaw_deg = yaw * DEG;
+    if (yaw_deg < 0.0) yaw_deg += 360.0;
+    if (yaw_deg >= 360.0) yaw_deg -= 360.0;
+    ypr_deg[0] = yaw_deg;
+    ypr_deg[1] = pitch * DEG;
+    ypr_deg[2] = roll * DEG;
+    if (position_enu_m) rs_calib_position_from_rt(position_enu_m, NULL, rt_cam_enu);
+}
+
+void rs_calib_rt_from_ypr(double rt_cam_enu[6], const double ypr_deg[3], const double position_enu_m[3]) {
+    double R[9], T[9];
+    rot_z(R, -ypr_deg[0] / DEG);
+    rot_x(T, ypr_deg[1] / DEG);
+    mat3_mul(R, R, T);
+    mat3_mul(R, R, R_enu_cam0);
+    rot_z(T, ypr_deg[2] / DEG);
+    mat3_mul(R, R, T); // R_enu_cam
+    mat3_transpose(R, R); // R_cam_enu
+    mrcal_r_from_R(rt_cam_enu, NULL, R);
+    for (int i = 0; i < 3; i++)
+        rt_cam_enu[3 + i] = -(R[i * 3] * position_enu_m[0] + R[i * 3 + 1] * position_enu_m[1] +
+                              R[i * 3 + 2] * position_enu_m[2]);
+}
+
+rs_status rs_calib_locate_ground(double p_enu_m[3], const mrcal_lensmodel_t *lensmodel,
+                                 const double *intrinsics, const double rt_cam_enu[6],
+                                 const double q_px[2], const double plane_normal_enu[3],
+                                 double plane_offset_m, rs_err *err) {
+    if (!p_enu_m || !lensmodel || !intrinsics || !rt_cam_enu || !q_px || !plane_normal_enu)
+        return rs_err_set(err, RS_ERR_INVALID, "rs_calib_locate_ground: NULL argument");
+    double nn = 0.0;
+    bool finite = isfinite(plane_offset_m) && isfinite(q_px[0]) && isfinite(q_px[1]);
+    for (int i = 0; i < 3; i++) {
+        nn += plane_normal_enu[i] * plane_normal_enu[i];
+        finite = finite && isfinite(plane_normal_enu[i]);
+    }
+    for (int i = 0; i < 6; i++) finite = finite && isfinite(rt_cam_enu[i]);
+    if (!finite) return rs_err_set(err, RS_ERR_INVALID, "rs_calib_locate_ground: non-finite input");
+    if (!(nn > 0.0)) return rs_err_set(err, RS_ERR_INVALID, "plane_normal_enu: zero vector");
+    nn = sqrt(nn);
+    double n[3];
+    for (int i = 0; i < 3; i++) n[i] = plane_normal_enu[i] / nn;
+    const double offset = plane_offset_m / nn;
+
+    mrcal_point2_t q = {.x = q_px[0], .y = q_px[1]};
+    mrcal_point3_t v;
+    if (!mrcal_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) ||
+        !isfinite(v.z))
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "pixel (%g, %g): mrcal cannot unproject it with this lens model",
+                          q_px[0], q_px[1]);
+    double R[9], C[3], d[3];
+    mrcal_R_from_r(R, NULL, rt_cam_enu);
+    rs_calib_position_from_rt(C, NULL, rt_cam_enu);
+    const double vn = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+    for (int i = 0; i < 3; i++) d[i] = (R[i] * v.x + R[3 + i] * v.y + R[6 + i] * v.z) / vn; // R^T v
+    const double nd = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+    const double nC = n[0] * C[0] + n[1] * C[1] + n[2] * C[2];
+    if (fabs(nd) < 1e-12)
+        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): its ray is parallel to the plane",
+                          q_px[0], q_px[1]);
+    const double lambda = (offset - nC) / nd;
+    if (!(lambda > 0.0))
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "pixel (%g, %g): the plane is behind the camera along its ray", q_px[0],
+                          q_px[1]);
+    double p[3];
+    for (int i = 0; i < 3; i++) p[i] = C[i] + lambda * d[i];
+
+    // Polish: mrcal_unproject() is iterative; a few Gauss-Newton steps on mrcal_project() within
+    // the plane (basis u, w) bring the reprojection error to the last bits.
+    double u[3], w[3];
+    {
+        const int k = fabs(n[0]) < 0.9 ? 0 : 1; // any axis not along n
+        double a[3] = {0, 0, 0};
+        a[k] = 1.0;
+        const double an = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+        for (int i = 0; i < 3; i++) u[i] = a[i] - an * n[i];
+        const double un = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int i = 0; i < 3; i++) u[i] /= un;
+        w[0] = n[1] * u[2] - n[2] * u[1];
+        w[1] = n[2] * u[0] - n[0] * u[2];
+        w[2] = n[0] * u[1] - n[1] * u[0];
+    }
+    for (int iter = 0; iter < 4; iter++) {
+        mrcal_point3_t pc, dq_dpc[2];
+        mrcal_point2_t qp;
+        double dpc_dp[9];
+        mrcal_transform_point_rt(pc.xyz, NULL, dpc_dp, rt_cam_enu, p);
+        if (!mrcal_project(&qp, dq_dpc, NULL, &pc, 1, lensmodel, intrinsics)) break;
+        const double e0 = qp.x - q.x, e1 = qp.y - q.y;
+        double J[4]; // (2,2): dq/d(a,b)
+        for (int r = 0; r < 2; r++) {
+            double g[3];
+            for (int j = 0; j < 3; j++)
+                g[j] = dq_dpc[r].xyz[0] * dpc_dp[j] + dq_dpc[r].xyz[1] * dpc_dp[3 + j] +
+                       dq_dpc[r].xyz[2] * dpc_dp[6 + j];
+            J[r * 2] = g[0] * u[0] + g[1] * u[1] + g[2] * u[2];
+            J[r * 2 + 1] = g[0] * w[0] + g[1] * w[1] + g[2] * w[2];
+        }
+        const double det = J[0] * J[3] - J[1] * J[2];
+        if (!(fabs(det) > 0.0)) break;
+        const double da = -(J[3] * e0 - J[1] * e1) / det, db = -(-J[2] * e0 + J[0] * e1) / det;
+        for (int i = 0; i < 3; i++) p[i] += da * u[i] + db * w[i];
+        if (fabs(e0) + fabs(e1) < 1e-13) break;
+    }
+    memcpy(p_enu_m, p, sizeof(p));
+    return RS_OK;
+}
+
+// ---------------------------------------------------------------- rs_calib_solve
+
+static void warn(rs_calib_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void warn(rs_calib_result *r, const char *fmt, ...) {
+    size_t len = strlen(r->warnings);
+    if (len + 3 >= sizeof(r->warnings)) return;
+    if (len) {
+        strcat(r->warnings, "; ");
+        len += 2;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->warnings + len, sizeof(r->warnings) - len, fmt, ap);
+    va_end(ap);
+}
+
+static bool all_finite(const double *x, int n) {
+    for (int i = 0; i < n; i++)
+        if (!isfinite(x[i])) return false;
+    return true;
+}
+
+static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
+                          rs_err *err) {
+    if (!pb->lensmodel || !pb->intrinsics)
+        return rs_err_set(err, RS_ERR_INVALID, "lensmodel/intrinsics: NULL");
+    if (pb->lensmodel->type == MRCAL_LENSMODEL_CAHVORE)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "lensmodel: CAHVORE has no projection gradients in mrcal; not supported");
+    if (Ni <= 0) return rs_err_set(err, RS_ERR_INVALID, "lensmodel: invalid");
+    if (!all_finite(pb->intrinsics, Ni))
+        return rs_err_set(err, RS_ERR_INVALID, "intrinsics: not finite");
+    if (opt->refine != RS_CALIB_REFINE_NONE) {
+        if (opt->refine & ~(unsigned)(RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER |
+                                      RS_CALIB_REFINE_DISTORTION))
+            return rs_err_set(err, RS_ERR_INVALID, "options: refine: unknown flags 0x%x", opt->refine);
+        if (!mrcal_lensmodel_metadata(pb->lensmodel).has_core)
+            return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                              "refine: this lens model has no (fx, fy, cx, cy) core");
+        if ((opt->refine & RS_CALIB_REFINE_FOCAL) && !(pb->intrinsics[0] > 0.0 && pb->intrinsics[1] > 0.0))
+            return rs_err_set(err, RS_ERR_INVALID, "intrinsics: focal lengths must be > 0");
+    }
+    if (!(opt->outlier_threshold > 0.0) || !isfinite(opt->robust_scale) ||
+        !(opt->focal_search_min > 0.0) || !(opt->focal_search_max >= opt->focal_search_min) ||
+        !(opt->focal_prior_rel_sigma >= 0.0) || !(opt->center_prior_sigma_px >= 0.0) ||
+        !(opt->distortion_prior_sigma >= 0.0))
+        return rs_err_set(err, RS_ERR_INVALID, "options: out of range");
+    if (pb->N < 0) return rs_err_set(err, RS_ERR_INVALID, "N: %d < 0", pb->N);
+    if (pb->N > 0 && (!pb->p_enu_m || !pb->q_px))
+        return rs_err_set(err, RS_ERR_INVALID, "p_enu_m/q_px: NULL");
+    for (int i = 0; i < pb->N; i++) {
+        if (!all_finite(&pb->p_enu_m[3 * i], 3))
+            return rs_err_set(err, RS_ERR_INVALID, "landmark %d: p_enu_m: not finite", i);
+        if (!all_finite(&pb->q_px[2 * i], 2))
+            return rs_err_set(err, RS_ERR_INVALID, "landmark %d: q_px: not finite", i);
+        if (pb->sigma_px && !(pb->sigma_px[i] > 0.0 && isfinite(pb->sigma_px[i])))
+            return rs_err_set(err, RS_ERR_INVALID, "landmark %d: sigma_px: must be finite and > 0", i);
+        if (pb->sigma_enu_m)
+            for (int k = 0; k < 3; k++)
+                if (!(pb->sigma_enu_m[3 * i + k] >= 0.0 && isfinite(pb->sigma_enu_m[3 * i + k])))
+                    return rs_err_set(err, RS_ERR_INVALID,
+                                      "landmark %d: sigma_enu_m[%d]: must be finite and >= 0", i, k);
+    }
+    if (pb->has_position_prior &&
+        (!all_finite(pb->prior_position_enu_m, 3) || !(pb->prior_sigma_m > 0.0 && isfinite(pb->prior_sigma_m))))
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "position prior: position must be finite and prior_sigma_m > 0");
+    if (pb->N < 4)
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "only %d landmarks: a pose needs at least 4 (6 unknowns, 2 per landmark, "
+                          "and one more to pick among the P3P solutions)", pb->N);
+    return RS_OK;
+}
+
+// Initial pose in the ENU frame. With focal refinement, a 1-D search over a focal scale s
+// (quarter-octave steps over [focal_search_min, focal_search_max]) runs rs_calib_init_pose()
+// at fx s, fy s and keeps the s with the smallest MSAC cost sum(min(e^2, T^2)) (T the RANSAC
+// threshold), estimated from the inliers' count and RMS; intrinsics receives the chosen scale.
+static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, double *scale_out,
+                              const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
+                              rs_err *err) {
+    const bool search = (opt->refine & RS_CALIB_REFINE_FOCAL) &&
+                        opt->focal_search_max > opt->focal_search_min;
+    *scale_out = 1.0;
+    if (!search)
+        return rs_calib_init_pose(init, NULL, pb->lensmodel, intrinsics, pb->p_enu_m, pb->q_px,
+                                  pb->N, &opt->init, err);
+    const double T = opt->init.ransac_threshold_px > 0.0 ? opt->init.ransac_threshold_px : 8.0;
+    const int K = 1 + (int)ceil(4.0 * log2(opt->focal_search_max / opt->focal_search_min));
+    double best = INFINITY;
+    rs_status last = RS_ERR_DEGENERATE;
+    rs_err e_last = {RS_OK, ""};
+    double *trial = malloc((size_t)Ni * sizeof(double));
+    if (!trial) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int k = 0; k < K; k++) {
+        const double s = opt->focal_search_min *
+                         pow(opt->focal_search_max / opt->focal_search_min, (double)k / (K - 1));
+        memcpy(trial, pb->intrinsics, (size_t)Ni * sizeof(double));
+        trial[0] *= s;
+        trial[1] *= s;
+        rs_calib_init_result r;
+        rs_err e = {RS_OK, ""};
+        const rs_status st = rs_calib_init_pose(&r, NULL, pb->lensmodel, trial, pb->p_enu_m,
+                                                pb->q_px, pb->N, &opt->init, &e);
+        if (st != RS_OK) {
+            last = st;
+            e_last = e;
+            if (st == RS_ERR_INVALID) break; // the input, not the scale, is at fault
+            continue;
+        }
+        const double cost = r.Ninliers * r.rms_px * r.rms_px + (pb->N - r.Ninliers) * T * T;
+        if (cost < best) {
+            best = cost;
+            *init = r;
+            *scale_out = s;
+        }
+    }
+    free(trial);
+    if (!isfinite(best)) {
+        if (err) *err = e_last;
+        return last;
+    }
+    intrinsics[0] = pb->intrinsics[0] * *scale_out;
+    intrinsics[1] = pb->intrinsics[1] * *scale_out;
+    return RS_OK;
+}
+
+// rt in the centred frame (p_c = p_enu - c) <-> ENU: t_enu = t_c - R c. J (6,6) = d rt_enu / d rt_c.
+static void rt_enu_from_centred(double rt_enu[6], double J[36], const double rt_c[6], const double c[3]) {
+    double Rc[3], dRc_dr[9];
+    mrcal_rotate_point_r(Rc, dRc_dr, NULL, rt_c, c);
+    double out[6];
+    for (int i = 0; i < 3; i++) {
+        out[i] = rt_c[i];
+        out[3 + i] = rt_c[3 + i] - Rc[i];
+    }
+    memcpy(rt_enu, out, sizeof(out));
+    if (J) {
+        memset(J, 0, 36 * sizeof(double));
+        for (int i = 0; i < 3; i++) {
+            J[i * 6 + i] = 1.0;
+            J[(3 + i) * 6 + 3 + i] = 1.0;
+            for (int j = 0; j < 3; j++) J[(3 + i) * 6 + j] = -dRc_dr[i * 3 + j];
+        }
+    }
+}
+static void rt_centred_from_enu(double rt_c[6], const double rt_enu[6], const double c[3]) {
+    double Rc[3];
+    mrcal_rotate_point_r(Rc, NULL, NULL, rt_enu, c);
+    for (int i = 0; i < 3; i++) {
+        rt_c[i] = rt_enu[i];
+        rt_c[3 + i] = rt_enu[3 + i] + Rc[i];
+    }
+}
+
+// sigma of yaw/pitch/roll: cov_r (3,3) propagated through d(ypr)/dr, by central differences of
+// rs_calib_ypr_from_rt() (step 1e-7 rad; yaw and roll differences wrapped to (-180, 180]).
+static void ypr_sigma(double sigma_deg[3], const double rt[6], const double cov_r[9]) {
+    double J[9];
+    const double h = 1e-7;
+    for (int j = 0; j < 3; j++) {
+        double rp[6], rm[6], yp[3], ym[3];
+        memcpy(rp, rt, sizeof(rp));
+        memcpy(rm, rt, sizeof(rm));
+        rp[j] += h;
+        rm[j] -= h;
+        rs_calib_ypr_from_rt(yp, NULL, rp);
+        rs_calib_ypr_from_rt(ym, NULL, rm);
+        for (int i = 0; i < 3; i++) {
+            double d = yp[i] - ym[i];
+            d = remainder(d, 360.0);
+            J[i * 3 + j] = d / (2.0 * h);
+        }
+    }
+    double C[9];
+    sandwich(C, J, cov_r, 3, 3);
+    for (int i = 0; i < 3; i++) sigma_deg[i] = sqrt(C[i * 3 + i]);
+}
+
+// Wilson-Hilferty approximation of the chi-square quantile with k dof at standard normal z.
+static double chi2_quantile(int k, double z) {
+    const double a = 2.0 / (9.0 * k);
+    const double b = 1.0 - a + z * sqrt(a);
+    return k * b * b * b;
+}
+
+static rs_status alloc_result(rs_calib_result *r, int N, int Ni) {
+    r->N = N;
+    r->Nintrinsics = Ni;
+    r->intrinsics = calloc((size_t)Ni, sizeof(double));
+    r->sigma_intrinsics = calloc((size_t)Ni, sizeof(double));
+    r->covariance_intrinsics = calloc((size_t)Ni * (size_t)Ni, sizeof(double));
+    r->predicted_px = calloc((size_t)N * 2, sizeof(double));
+    r->residual_px = calloc((size_t)N * 2, sizeof(double));
+    r->normalised_residual = calloc((size_t)N, sizeof(double));
+    r->inlier = calloc((size_t)N, sizeof(bool));
+    r->p_enu_refined_m = calloc((size_t)N * 3, sizeof(double));
+    if (!r->intrinsics || !r->sigma_intrinsics || !r->covariance_intrinsics || !r->predicted_px ||
+        !r->residual_px || !r->normalised_residual || !r->inlier || !r->p_enu_refined_m)
+        return RS_ERR_NOMEM;
+    return RS_OK;
+}
+
+typedef struct {
+    double *p_survey_c, *p_c, *cov, *block_chi2, *q_pred;
+    bool *use;
+} work_t;
+
+static void work_free(work_t *w) {
+    free(w->p_survey_c);
+    free(w->p_c);
+    free(w->cov);
+    free(w->block_chi2);
+    free(w->q_pred);
+    free(w->use);
+}
+
+static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *pb,
+                       const rs_calib_options *opt, int Ni, rs_err *err) {
+    const int N = pb->N;
+    rs_status st = validate(pb, opt, Ni, err);
+    if (st != RS_OK) return st;
+    if (alloc_result(res, N, Ni) != RS_OK) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    w->p_survey_c = malloc((size_t)N * 3 * sizeof(double));
+    w->p_c = malloc((size_t)N * 3 * sizeof(double));
+    w->cov = malloc((size_t)(6 + Ni) * (size_t)(6 + Ni) * sizeof(double));
+    w->block_chi2 = malloc((size_t)N * sizeof(double));
+    w->q_pred = malloc((size_t)N * 2 * sizeof(double));
+    w->use = malloc((size_t)N * sizeof(bool));
+    if (!w->p_survey_c || !w->p_c || !w->cov || !w->block_chi2 || !w->q_pred || !w->use)
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+
+    // centred frame
+    double c[3] = {0, 0, 0};
+    for (int i = 0; i < N; i++)
+        for (int k = 0; k < 3; k++) c[k] += pb->p_enu_m[3 * i + k] / N;
+    for (int i = 0; i < N; i++)
+        for (int k = 0; k < 3; k++) w->p_survey_c[3 * i + k] = pb->p_enu_m[3 * i + k] - c[k];
+    memcpy(w->p_c, w->p_survey_c, (size_t)N * 3 * sizeof(double));
+
+    // 1. initial pose
+    memcpy(res->intrinsics, pb->intrinsics, (size_t)Ni * sizeof(double));
+    rs_calib_init_result init;
+    double scale = 1.0;
+    st = initial_pose(&init, res->intrinsics, &scale, pb, opt, Ni, err);
+    if (st != RS_OK) {
+        rs_err_prefix(err, "initial pose");
+        return st;
+    }
+    double rt_c[6];
+    rt_centred_from_enu(rt_c, init.rt_cam_enu, c);
+
+    rs_calib_refine_problem rp = {
+        .N = N, .p_survey_c_m = w->p_survey_c, .sigma_enu_m = pb->sigma_enu_m, .q_px = pb->q_px,
+        .sigma_px = pb->sigma_px, .use = w->use, .lensmodel = pb->lensmodel,
+        .intrinsics_nominal = pb->intrinsics, .has_position_prior = pb->has_position_prior,
+        .prior_sigma_m = pb->prior_sigma_m};
+    for (int k = 0; k < 3; k++) rp.prior_position_c_m[k] = pb->prior_position_enu_m[k] - c[k];
+    rs_calib_refine_options ro = {.refine = opt->refine, .robust_scale = opt->robust_scale,
+                                  .max_iterations = opt->max_iterations,
+                                  .focal_prior_rel_sigma = opt->focal_prior_rel_sigma,
+                                  .center_prior_sigma_px = opt->center_prior_sigma_px,
+                                  .distortion_prior_sigma = opt->distortion_prior_sigma,
+                                  .covariance = false};
+    rs_calib_refine_summary sum;
+    for (int i = 0; i < N; i++) w->use[i] = true;
+    int Noutliers = 0;
+    char robust_desc[96] = "";
+
+    // 2. robust solve on every landmark, 3. outliers
+    if (opt->robust_scale > 0.0) {
+        st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL,
+                                 &rp, &ro, err);
+        if (st != RS_OK) {
+            rs_err_prefix(err, "robust refinement");
+            return st;
+        }
+        res->iterations += sum.iterations;
+        const double thr2 = opt->outlier_threshold * opt->outlier_threshold;
+        for (int i = 0; i < N; i++) {
+            w->use[i] = w->block_chi2[i] <= thr2;
+            if (!w->use[i]) {
+                Noutliers++;
+                memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
+            }
+        }
+        snprintf(robust_desc, sizeof(robust_desc), " + ceres-cauchy(%g) + outliers>%g sigma",
+                 opt->robust_scale, opt->outlier_threshold);
+    }
+    const int Ninl = N - Noutliers;
+    if (Ninl < 4)
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "only %d of %d landmarks agree with one pose (the rest are outliers "
+                          "beyond %g sigma): a pose needs at least 4",
+                          Ninl, N, opt->outlier_threshold);
+
+    // 4. plain weighted least squares on the inliers, with the covariance
+    ro.robust_scale = 0.0;
+    ro.covariance = true;
+    st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred,
+                             &rp, &ro, err);
+    if (st != RS_OK) {
+        rs_err_prefix(err, "refinement");
+        return st;
+    }
+    res->iterations += sum.iterations;
+
+    // landmarks in front of the camera
+    for (int i = 0; i < N; i++) {
+        if (!w->use[i]) continue;
+        double pc[3];
+        mrcal_transform_point_rt(pc, NULL, NULL, rt_c, &w->p_c[3 * i]);
+        if (!(pc[2] > 0.0))
+            return rs_err_set(err, RS_ERR_DEGENERATE,
+                              "landmark %d: behind the camera at the solution (z_cam = %.3g m)", i,
+                              pc[2]);
+    }
+
+    // 5. outputs in ENU
+    const int n = 6 + Ni;
+    double J[36], cov_c[36];
+    for (int a = 0; a < 6; a++)
+        for (int b = 0; b < 6; b++) cov_c[a * 6 + b] = w->cov[a * n + b];
+    rt_enu_from_centred(res->rt_cam_enu, J, rt_c, c);
+    sandwich(res->covariance_rt_cam_enu, J, cov_c, 6, 6);
+    for (int a = 0; a < Ni; a++) {
+        for (int b = 0; b < Ni; b++) res->covariance_intrinsics[a * Ni + b] = w->cov[(6 + a) * n + 6 + b];
+        res->sigma_intrinsics[a] = sqrt(fmax(0.0, res->covariance_intrinsics[a * Ni + a]));
+    }
+    double dpos_drt[18], cov_pos[9], C_c[3];
+    rs_calib_position_from_rt(C_c, dpos_drt, rt_c);
+    sandwich(cov_pos, dpos_drt, cov_c, 3, 6);
+    double cov_r[9];
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) cov_r[a * 3 + b] = cov_c[a * 6 + b];
+    rs_calib_ypr_from_rt(res->yaw_pitch_roll_deg, res->position_enu_m, res->rt_cam_enu);
+    ypr_sigma(res->sigma_yaw_pitch_roll_deg, rt_c, cov_r);
+    for (int k = 0; k < 3; k++) {
+        res->position_enu_m[k] = C_c[k] + c[k]; // the same point, without cancellation
+        res->sigma_position_enu_m[k] = sqrt(cov_pos[k * 3 + k]);
+    }
+    if (!all_finite(res->covariance_rt_cam_enu, 36) || !all_finite(res->sigma_position_enu_m, 3) ||
+        !all_finite(res->sigma_yaw_pitch_roll_deg, 3) || !all_finite(res->rt_cam_enu, 6))
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "the pose or its covariance is not finite: the landmarks do not "
+                          "determine the pose");
+
+    double sse = 0.0;
+    for (int i = 0; i < N; i++) {
+        res->inlier[i] = w->use[i];
+        for (int k = 0; k < 3; k++) res->p_enu_refined_m[3 * i + k] = w->p_c[3 * i + k] + c[k];
+        for (int k = 0; k < 2; k++) {
+            res->predicted_px[2 * i + k] = w->q_pred[2 * i + k];
+            res->residual_px[2 * i + k] = w->q_pred[2 * i + k] - pb->q_px[2 * i + k];
+        }
+        res->normalised_residual[i] = sqrt(w->block_chi2[i]);
+        if (w->use[i])
+            sse += res->residual_px[2 * i] * res->residual_px[2 * i] +
+                   res->residual_px[2 * i + 1] * res->residual_px[2 * i + 1];
+    }
+    res->Ninliers = Ninl;
+    res->rms_px = sqrt(sse / Ninl);
+    res->chi2 = sum.chi2;
+    res->dof = sum.Nresiduals - sum.Nfree;
+    res->variance_factor = res->dof > 0 ? sum.chi2 / res->dof : NAN;
+    res->condition_number = sum.condition_number;
+    char focal_desc[48] = "";
+    if (scale != 1.0) snprintf(focal_desc, sizeof(focal_desc), " + focal-search(x%.3g)", scale);
+    snprintf(res->method, sizeof(res->method), "%s%s%s + ceres-wls + covariance(absolute)",
+             init.method, focal_desc, robust_desc);
+
+    // 6. warnings in plain words
+    if (Noutliers > 0) {
+        char list[160] = "";
+        size_t len = 0;
+        for (int i = 0; i < N && len + 12 < sizeof(list); i++)
+            if (!w->use[i]) len += (size_t)snprintf(list + len, sizeof(list) - len, "%s%d", len ? "," : "", i);
+        warn(res, "%d of %d landmarks flagged as outliers and dropped (index %s)", Noutliers, N, list);
+    }
+    if (res->condition_number > opt->condition_warn)
+        warn(res,
+             "weak geometry: condition number %.3g > %.3g (landmarks nearly collinear, bunched "
+             "in a small part of the image, or too few): the pose is poorly determined, read "
+             "the sigmas",
+             res->condition_number, opt->condition_warn);
+    if (res->dof > 0) {
+        const double lo = chi2_quantile(res->dof, -2.576) / res->dof;
+        const double hi = chi2_quantile(res->dof, 2.576) / res->dof;
+        if (res->variance_factor > hi)
+            warn(res,
+                 "residuals larger than the stated sigmas allow (variance factor %.3g, 99%% "
+                 "bound %.3g): sigma_px or the survey sigmas are optimistic, or a mistake "
+                 "remains; the reported covariance is then too small",
+                 res->variance_factor, hi);
+        else if (res->variance_factor < lo)
+            warn(res,
+                 "residuals smaller than the stated sigmas suggest (variance factor %.3g, 99%% "
+                 "bound %.3g): the sigmas are pessimistic; the reported covariance is too large",
+                 res->variance_factor, lo);
+    } else {
+        warn(res, "no redundancy (dof %d): the fit cannot be checked against the sigmas", res->dof);
+    }
+    if (Ninl < 6)
+        warn(res, "only %d inlying landmarks: little redundancy to catch a further mistake", Ninl);
+    if (fabs(res->yaw_pitch_roll_deg[1]) > 89.0)
+        warn(res, "camera looks nearly straight %s: yaw and roll are ill-defined",
+             res->yaw_pitch_roll_deg[1] > 0 ? "up" : "down");
+    if (pb->width > 0 && pb->height > 0) {
+        double qmin[2] = {INFINITY, INFINITY}, qmax[2] = {-INFINITY, -INFINITY};
+        for (int i = 0; i < N; i++)
+            if (w->use[i])
+                for (int k = 0; k < 2; k++) {
+                    qmin[k] = fmin(qmin[k], pb->q_px[2 * i + k]);
+                    qmax[k] = fmax(qmax[k], pb->q_px[2 * i + k]);
+                }
+        const double area = (qmax[0] - qmin[0]) * (qmax[1] - qmin[1]);
+        if (area < 0.05 * pb->width * pb->height)
+            warn(res, "the inlying landmarks cover only %.1f%% of the image: the pose is "
+                      "sensitive to their errors", 100.0 * area / (pb->width * pb->height));
+    }
+    return RS_OK;
+}
+
+rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *problem,
+                         const rs_calib_options *opt_in, rs_err *err) {
+    if (!result || !problem)
+        return rs_err_set(err, RS_ERR_INVALID, "rs_calib_solve: NULL result or problem");
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    memset(result, 0, sizeof(*result));
+    rs_calib_options opt;
+    if (opt_in)
+        opt = *opt_in;
+    else
+        rs_calib_options_default(&opt);
+    const int Ni = problem->lensmodel ? mrcal_lensmodel_num_params(problem->lensmodel) : 0;
+    work_t w = {0};
+    const rs_status st = solve(result, &w, problem, &opt, Ni, err);
+    work_free(&w);
+    if (st != RS_OK) {
+        rs_calib_result_free(result);
+        return st;
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    result->time_us = (double)(t1.tv_sec - t0.tv_sec) * 1e6 + (double)(t1.tv_nsec - t0.tv_nsec) * 1e-3;
+    return RS_OK;
+}

@@ -1,1 +1,440 @@
-// PLACEHOLDER
+// rs_calib_refine_ceres.cc -- Ceres shim: the pose refinement with landmark priors (errors in
+// variables), optional intrinsics, and the covariance. Contract: rs_calib_refine.h.
+//
+// Jacobians are analytic (mrcal), not automatic or numeric: the landmark residual is
+// r = (q - q_obs)/sigma_px with q = mrcal_project(p_cam), p_cam = mrcal_transform_point_rt(rt, p),
+// so dr/drt = dq_dpcam dpcam_drt / sigma, dr/dp = dq_dpcam dpcam_dp / sigma and
+// dr/dintrinsics = dq_dintrinsics / sigma (mrcal 2.2 reports dq_dintrinsics densely, (2,Nintr)
+// per point; tests/calib/test_refine_jacobian.c checks the whole chain against differences).
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <ceres/ceres.h>
+
+extern "C" {
+#include <mrcal/poseutils.h>
+
+#include "rs_calib.h"
+#include "rs_calib_refine.h"
+}
+
+namespace {
+
+// The survey prior of one landmark axis with sigma 0 contributes nothing: the axis is held.
+double inv_or_zero(double sigma) { return sigma > 0.0 ? 1.0 / sigma : 0.0; }
+
+// One landmark seen by the camera: 2 pixel residuals + 3 survey-prior residuals, so that the
+// robust loss acts on the landmark as a whole (an outlier cannot hide by pulling its landmark).
+class LandmarkCost final : public ceres::CostFunction {
+  public:
+    LandmarkCost(const mrcal_lensmodel_t *lensmodel, int Nintrinsics, const double q_obs[2],
+                 double sigma_px, const double p_survey[3], const double sigma_m[3])
+        : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics), w_px_(1.0 / sigma_px) {
+        for (int k = 0; k < 2; k++) q_obs_[k] = q_obs[k];
+        for (int k = 0; k < 3; k++) {
+            p_survey_[k] = p_survey[k];
+            w_m_[k] = inv_or_zero(sigma_m ? sigma_m[k] : 0.0);
+        }
+        set_num_residuals(5);
+        mutable_parameter_block_sizes()->push_back(6);
+        mutable_parameter_block_sizes()->push_back(3);
+        mutable_parameter_block_sizes()->push_back(Nintrinsics);
+    }
+
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+        const double *rt = x[0], *p = x[1], *intrinsics = x[2];
+        const bool want_rt = jacobians && jacobians[0], want_p = jacobians && jacobians[1];
+        const bool want_i = jacobians && jacobians[2];
+        mrcal_point3_t p_cam;
+        double dpcam_drt[18], dpcam_dp[9];
+        mrcal_transform_point_rt(p_cam.xyz, want_rt ? dpcam_drt : nullptr,
+                                 want_p ? dpcam_dp : nullptr, rt, p);
+        mrcal_point2_t q;
+        mrcal_point3_t dq_dpcam[2];
+        std::vector<double> dq_di(want_i ? 2 * (size_t)Nintrinsics_ : 0);
+        if (!mrcal_project(&q, dq_dpcam, want_i ? dq_di.data() : nullptr, &p_cam, 1, lensmodel_,
+                           intrinsics))
+            return false;
+        residuals[0] = (q.x - q_obs_[0]) * w_px_;
+        residuals[1] = (q.y - q_obs_[1]) * w_px_;
+        for (int k = 0; k < 3; k++) residuals[2 + k] = (p[k] - p_survey_[k]) * w_m_[k];
+        if (!std::isfinite(residuals[0]) || !std::isfinite(residuals[1])) return false;
+
+        if (want_rt) {
+            double *J = jacobians[0]; // (5,6)
+            std::memset(J, 0, sizeof(double) * 30);
+            for (int a = 0; a < 2; a++)
+                for (int j = 0; j < 6; j++) {
+                    double s = 0.0;
+                    for (int k = 0; k < 3; k++) s += dq_dpcam[a].xyz[k] * dpcam_drt[k * 6 + j];
+                    J[a * 6 + j] = s * w_px_;
+                }
+        }
+        if (want_p) {
+            double *J = jacobians[1]; // (5,3)
+            std::memset(J, 0, sizeof(double) * 15);
+            for (int a = 0; a < 2; a++)
+                for (int j = 0; j < 3; j++) {
+                    double s = 0.0;
+                    for (int k = 0; k < 3; k++) s += dq_dpcam[a].xyz[k] * dpcam_dp[k * 3 + j];
+                    J[a * 3 + j] = s * w_px_;
+                }
+            for (int k = 0; k < 3; k++) J[(2 + k) * 3 + k] = w_m_[k];
+        }
+        if (want_i) {
+            double *J = jacobians[2]; // (5,Nintrinsics)
+            std::memset(J, 0, sizeof(double) * 5 * (size_t)Nintrinsics_);
+            for (int a = 0; a < 2; a++)
+                for (int j = 0; j < Nintrinsics_; j++)
+                    J[a * Nintrinsics_ + j] = dq_di[(size_t)a * Nintrinsics_ + j] * w_px_;
+        }
+        return true;
+    }
+
+  private:
+    const mrcal_lensmodel_t *lensmodel_;
+    int Nintrinsics_;
+    double w_px_;
+    double q_obs_[2], p_survey_[3], w_m_[3];
+};
+
+// Prior on the camera centre C = -R^T t (a surveyed pole): (C - C_prior)/sigma.
+class PositionPriorCost final : public ceres::SizedCostFunction<3, 6> {
+  public:
+    PositionPriorCost(const double C_prior[3], double sigma_m) : w_(1.0 / sigma_m) {
+        for (int k = 0; k < 3; k++) C_prior_[k] = C_prior[k];
+    }
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+        double J[18];
+        double C[3];
+        rs_calib_position_from_rt(C, (jacobians && jacobians[0]) ? J : nullptr, x[0]);
+        for (int k = 0; k < 3; k++) residuals[k] = (C[k] - C_prior_[k]) * w_;
+        if (jacobians && jacobians[0])
+            for (int k = 0; k < 18; k++) jacobians[0][k] = J[k] * w_;
+        return true;
+    }
+
+  private:
+    double C_prior_[3], w_;
+};
+
+// The refined intrinsics: x = x_start + B delta with B's orthonormal columns spanning the
+// refined directions (the focal direction (fx0, fy0, 0...)/|.|, unit vectors for the centre
+// and the distortion coefficients). A linear subspace, so Minus is exact: B^T (y - x).
+class SubspaceManifold final : public ceres::Manifold {
+  public:
+    SubspaceManifold(int n, std::vector<double> B_colmajor)
+        : n_(n), k_((int)(B_colmajor.size() / (size_t)n)), B_(std::move(B_colmajor)) {}
+    int AmbientSize() const override { return n_; }
+    int TangentSize() const override { return k_; }
+    bool Plus(const double *x, const double *delta, double *x_plus_delta) const override {
+        for (int i = 0; i < n_; i++) {
+            double s = x[i];
+            for (int j = 0; j < k_; j++) s += B(i, j) * delta[j];
+            x_plus_delta[i] = s;
+        }
+        return true;
+    }
+    bool PlusJacobian(const double *, double *jacobian) const override {
+        for (int i = 0; i < n_; i++)
+            for (int j = 0; j < k_; j++) jacobian[i * k_ + j] = B(i, j);
+        return true;
+    }
+    bool Minus(const double *y, const double *x, double *y_minus_x) const override {
+        for (int j = 0; j < k_; j++) {
+            double s = 0.0;
+            for (int i = 0; i < n_; i++) s += B(i, j) * (y[i] - x[i]);
+            y_minus_x[j] = s;
+        }
+        return true;
+    }
+    bool MinusJacobian(const double *, double *jacobian) const override {
+        for (int j = 0; j < k_; j++)
+            for (int i = 0; i < n_; i++) jacobian[j * n_ + i] = B(i, j);
+        return true;
+    }
+
+  private:
+    double B(int i, int j) const { return B_[(size_t)j * n_ + i]; }
+    int n_, k_;
+    std::vector<double> B_;
+};
+
+// Priors of the refined intrinsics about their nominal values, one residual per prior.
+class IntrinsicsPriorCost final : public ceres::CostFunction {
+  public:
+    // rows: (index into intrinsics, nominal, weight)
+    struct Row {
+        int index;
+        double nominal, weight;
+    };
+    IntrinsicsPriorCost(int Nintrinsics, std::vector<Row> rows)
+        : Nintrinsics_(Nintrinsics), rows_(std::move(rows)) {
+        set_num_residuals((int)rows_.size());
+        mutable_parameter_block_sizes()->push_back(Nintrinsics);
+    }
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+        for (size_t r = 0; r < rows_.size(); r++)
+            residuals[r] = (x[0][rows_[r].index] - rows_[r].nominal) * rows_[r].weight;
+        if (jacobians && jacobians[0]) {
+            std::memset(jacobians[0], 0, sizeof(double) * rows_.size() * (size_t)Nintrinsics_);
+            for (size_t r = 0; r < rows_.size(); r++)
+                jacobians[0][r * (size_t)Nintrinsics_ + (size_t)rows_[r].index] = rows_[r].weight;
+        }
+        return true;
+    }
+
+  private:
+    int Nintrinsics_;
+    std::vector<Row> rows_;
+};
+
+// Builds the subspace basis (column-major, Nintrinsics x k) and the prior rows.
+void intrinsics_subspace(std::vector<double> *B, std::vector<IntrinsicsPriorCost::Row> *rows,
+                         int Nintrinsics, const double *nominal, const rs_calib_refine_options *opt) {
+    auto unit = [&](int i) {
+        size_t c = B->size();
+        B->resize(c + (size_t)Nintrinsics, 0.0);
+        (*B)[c + (size_t)i] = 1.0;
+    };
+    if (opt->refine & RS_CALIB_REFINE_FOCAL) {
+        const double n = std::hypot(nominal[0], nominal[1]);
+        size_t c = B->size();
+        B->resize(c + (size_t)Nintrinsics, 0.0);
+        (*B)[c + 0] = nominal[0] / n;
+        (*B)[c + 1] = nominal[1] / n;
+        if (opt->focal_prior_rel_sigma > 0.0)
+            rows->push_back({0, nominal[0], 1.0 / (opt->focal_prior_rel_sigma * nominal[0])});
+    }
+    if (opt->refine & RS_CALIB_REFINE_CENTER)
+        for (int i = 2; i < 4; i++) {
+            unit(i);
+            if (opt->center_prior_sigma_px > 0.0)
+                rows->push_back({i, nominal[i], 1.0 / opt->center_prior_sigma_px});
+        }
+    if (opt->refine & RS_CALIB_REFINE_DISTORTION)
+        for (int i = 4; i < Nintrinsics; i++) {
+            unit(i);
+            if (opt->distortion_prior_sigma > 0.0)
+                rows->push_back({i, nominal[i], 1.0 / opt->distortion_prior_sigma});
+        }
+}
+
+// Condition number of the Jacobian with the landmarks eliminated: the Schur complement
+// S = A - B C^-1 B^T of J^T J (A: rt and intrinsics, C: landmarks), equilibrated to unit
+// diagonal; returns sqrt(lambda_max/lambda_min) of it (inf when singular).
+double reduced_condition(ceres::Problem *problem, const std::vector<double *> &head,
+                         const std::vector<double *> &landmarks) {
+    ceres::Problem::EvaluateOptions eo;
+    eo.parameter_blocks = head;
+    eo.parameter_blocks.insert(eo.parameter_blocks.end(), landmarks.begin(), landmarks.end());
+    eo.apply_loss_function = false;
+    ceres::CRSMatrix crs;
+    if (!problem->Evaluate(eo, nullptr, nullptr, nullptr, &crs)) return INFINITY;
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    for (int r = 0; r < crs.num_rows; r++)
+        for (int k = crs.rows[(size_t)r]; k < crs.rows[(size_t)r + 1]; k++)
+            J(r, crs.cols[(size_t)k]) = crs.values[(size_t)k];
+    int nh = 0;
+    for (double *b : head) nh += problem->ParameterBlockTangentSize(b);
+    const int nl = crs.num_cols - nh;
+    const Eigen::MatrixXd H = J.transpose() * J;
+    Eigen::MatrixXd S = H.topLeftCorner(nh, nh);
+    if (nl > 0) {
+        const Eigen::MatrixXd Bm = H.topRightCorner(nh, nl);
+        const Eigen::MatrixXd C = H.bottomRightCorner(nl, nl);
+        Eigen::LDLT<Eigen::MatrixXd> ldlt(C);
+        if (ldlt.info() != Eigen::Success) return INFINITY;
+        S -= Bm * ldlt.solve(Bm.transpose());
+    }
+    Eigen::VectorXd d = S.diagonal();
+    for (int i = 0; i < nh; i++) {
+        if (!(d(i) > 0.0)) return INFINITY;
+        d(i) = 1.0 / std::sqrt(d(i));
+    }
+    const Eigen::MatrixXd K = d.asDiagonal() * S * d.asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K, Eigen::EigenvaluesOnly);
+    if (es.info() != Eigen::Success) return INFINITY;
+    const double lmin = es.eigenvalues()(0), lmax = es.eigenvalues()(nh - 1);
+    if (!(lmin > 0.0) || !std::isfinite(lmax)) return INFINITY;
+    return std::sqrt(lmax / lmin);
+}
+
+// Beyond this condition number of the Jacobian the covariance is numerical noise.
+const double kConditionSingular = 1e7;
+
+rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_summary *summary,
+                 double *cov, double *block_chi2, double *q_pred,
+                 const rs_calib_refine_problem *pb, const rs_calib_refine_options *opt,
+                 rs_err *err) {
+    const int Ni = mrcal_lensmodel_num_params(pb->lensmodel);
+    if (Ni < 4 || pb->N < 0) return rs_err_set(err, RS_ERR_INVALID, "refine: bad sizes");
+    const bool refine_i = opt->refine != RS_CALIB_REFINE_NONE;
+
+    // Cost functions are owned here (the landmarks' also evaluate the unused ones at the end);
+    // declared before the problem so that they outlive it.
+    std::vector<std::unique_ptr<LandmarkCost>> costs((size_t)pb->N);
+    std::vector<std::unique_ptr<ceres::CostFunction>> priors;
+    ceres::Problem::Options po;
+    po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    po.loss_function_ownership = ceres::TAKE_OWNERSHIP;
+    po.manifold_ownership = ceres::TAKE_OWNERSHIP;
+    ceres::Problem problem(po);
+    std::vector<double *> landmarks;
+    int Nresiduals = 0, Nfree = 6;
+    problem.AddParameterBlock(rt, 6);
+    problem.AddParameterBlock(intrinsics, Ni);
+
+    for (int i = 0; i < pb->N; i++) {
+        const double *sig = pb->sigma_enu_m ? &pb->sigma_enu_m[3 * i] : nullptr;
+        costs[(size_t)i].reset(new LandmarkCost(pb->lensmodel, Ni, &pb->q_px[2 * i],
+                                                pb->sigma_px ? pb->sigma_px[i] : 1.0,
+                                                &pb->p_survey_c_m[3 * i], sig));
+        if (pb->use && !pb->use[i]) continue;
+        ceres::LossFunction *loss =
+            opt->robust_scale > 0.0 ? new ceres::CauchyLoss(opt->robust_scale) : nullptr;
+        problem.AddResidualBlock(costs[(size_t)i].get(), loss, rt, &p_c[3 * i], intrinsics);
+        Nresiduals += 2;
+        std::vector<int> held;
+        for (int k = 0; k < 3; k++) {
+            if (sig && sig[k] > 0.0) {
+                Nresiduals++;
+                Nfree++;
+            } else {
+                held.push_back(k);
+            }
+        }
+        if (held.size() == 3)
+            problem.SetParameterBlockConstant(&p_c[3 * i]);
+        else {
+            if (!held.empty()) problem.SetManifold(&p_c[3 * i], new ceres::SubsetManifold(3, held));
+            landmarks.push_back(&p_c[3 * i]);
+        }
+    }
+    if (pb->has_position_prior) {
+        priors.emplace_back(new PositionPriorCost(pb->prior_position_c_m, pb->prior_sigma_m));
+        problem.AddResidualBlock(priors.back().get(), nullptr, rt);
+        Nresiduals += 3;
+    }
+    if (refine_i) {
+        std::vector<double> B;
+        std::vector<IntrinsicsPriorCost::Row> rows;
+        intrinsics_subspace(&B, &rows, Ni, pb->intrinsics_nominal, opt);
+        Nfree += (int)(B.size() / (size_t)Ni);
+        problem.SetManifold(intrinsics, new SubspaceManifold(Ni, B));
+        if (!rows.empty()) {
+            Nresiduals += (int)rows.size();
+            priors.emplace_back(new IntrinsicsPriorCost(Ni, rows));
+            problem.AddResidualBlock(priors.back().get(), nullptr, intrinsics);
+        }
+    } else {
+        problem.SetParameterBlockConstant(intrinsics);
+    }
+
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_SCHUR;
+    so.max_num_iterations = opt->max_iterations > 0 ? opt->max_iterations : 100;
+    so.function_tolerance = 1e-12;
+    so.parameter_tolerance = 1e-12;
+    so.gradient_tolerance = 1e-14;
+    so.logging_type = ceres::SILENT;
+    so.minimizer_progress_to_stdout = false;
+    so.num_threads = 1;
+    ceres::Solver::Summary sum;
+    ceres::Solve(so, &problem, &sum);
+    summary->iterations = (int)sum.iterations.size();
+    summary->Nresiduals = Nresiduals;
+    summary->Nfree = Nfree;
+    summary->condition_number = NAN;
+    if (!sum.IsSolutionUsable() || sum.termination_type == ceres::NO_CONVERGENCE)
+        return rs_err_set(err, RS_ERR_NOCONVERGE, "refine: Ceres did not converge in %d iterations (%s)",
+                          summary->iterations, sum.message.c_str());
+
+    // Per-landmark statistics and the whitened chi2, loss not applied.
+    for (int i = 0; i < pb->N; i++) {
+        double r[5];
+        const double *x[3] = {rt, &p_c[3 * i], intrinsics};
+        if (!costs[(size_t)i]->Evaluate(x, r, nullptr)) {
+            if (pb->use && !pb->use[i]) { // an outlier that no longer projects: report it as such
+                if (block_chi2) block_chi2[i] = INFINITY;
+                if (q_pred) q_pred[2 * i] = q_pred[2 * i + 1] = NAN;
+                continue;
+            }
+            return rs_err_set(err, RS_ERR_DEGENERATE,
+                              "landmark %d: cannot be projected at the solution", i);
+        }
+        const double c2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3] + r[4] * r[4];
+        if (block_chi2) block_chi2[i] = c2;
+        if (q_pred) {
+            const double sig = pb->sigma_px ? pb->sigma_px[i] : 1.0;
+            q_pred[2 * i] = pb->q_px[2 * i] + r[0] * sig;
+            q_pred[2 * i + 1] = pb->q_px[2 * i + 1] + r[1] * sig;
+        }
+    }
+    {
+        ceres::Problem::EvaluateOptions eo;
+        eo.apply_loss_function = false;
+        double cost = 0.0;
+        problem.Evaluate(eo, &cost, nullptr, nullptr, nullptr);
+        summary->chi2 = 2.0 * cost; // includes the position and intrinsics priors
+    }
+    if (!opt->covariance) return RS_OK;
+
+    std::vector<double *> head{rt};
+    if (refine_i) head.push_back(intrinsics);
+    summary->condition_number = reduced_condition(&problem, head, landmarks);
+    if (!(summary->condition_number < kConditionSingular))
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "the landmarks do not determine the pose%s: the Jacobian is "
+                          "rank-deficient (condition number %.3g)",
+                          refine_i ? " and the refined intrinsics" : "",
+                          summary->condition_number);
+
+    ceres::Covariance::Options co;
+    co.algorithm_type = ceres::SPARSE_QR;
+    co.apply_loss_function = false;
+    ceres::Covariance covariance(co);
+    std::vector<std::pair<const double *, const double *>> pairs;
+    for (double *a : head)
+        for (double *b : head) pairs.emplace_back(a, b);
+    if (!covariance.Compute(pairs, &problem))
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "the covariance of the pose is rank-deficient: the landmarks do not "
+                          "determine it");
+    if (cov) {
+        const int n = 6 + Ni;
+        std::vector<const double *> blocks(head.begin(), head.end());
+        std::vector<double> c((size_t)(6 + (refine_i ? Ni : 0)) * (size_t)(6 + (refine_i ? Ni : 0)));
+        if (!covariance.GetCovarianceMatrix(blocks, c.data()))
+            return rs_err_set(err, RS_ERR_EXTERNAL, "Ceres: GetCovarianceMatrix failed");
+        const int m = 6 + (refine_i ? Ni : 0);
+        std::fill(cov, cov + (size_t)n * n, 0.0);
+        for (int a = 0; a < m; a++)
+            for (int b = 0; b < m; b++) cov[a * n + b] = c[(size_t)a * m + b];
+    }
+    return RS_OK;
+}
+
+} // namespace
+
+extern "C" rs_status rs_calib_refine_run(double rt_cam_c[6], double *intrinsics, double *p_c_m,
+                                         rs_calib_refine_summary *summary, double *cov,
+                                         double *block_chi2, double *q_pred_px,
+                                         const rs_calib_refine_problem *problem,
+                                         const rs_calib_refine_options *opt, rs_err *err) {
+    try {
+        return refine(rt_cam_c, intrinsics, p_c_m, summary, cov, block_chi2, q_pred_px, problem,
+                      opt, err);
+    } catch (const std::bad_alloc &) {
+        return rs_err_set(err, RS_ERR_NOMEM, "refine: out of memory");
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "refine: Ceres: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "refine: Ceres: unknown exception");
+    }
+}

@@ -1,0 +1,194 @@
+// rs_calib.h -- one camera's pose (and optionally intrinsics) from surveyed landmarks and their
+// clicked pixels, with an honest uncertainty. The public solver API of roadside.
+//
+// Purpose: given N landmarks surveyed in the site's ENU frame (each with its own survey sigma)
+// and the pixels where they are seen, return the camera's pose rt_cam_enu, its 6x6 covariance,
+// the camera position and yaw/pitch/roll with sigmas, the outliers, and plain-words warnings
+// when the geometry is weak. Works for any mrcal lens model with gradients (not CAHVORE).
+//
+// Method (docs/calibration.md has it end to end, with references):
+//   1. Initial pose: rs_calib_init_pose() (RANSAC over P3P, then EPnP or planar IPPE). When
+//      the focal length is refined, a 1-D search over a focal scale drives rs_calib_init_pose()
+//      and keeps the scale with the smallest robust reprojection cost.
+//   2. Ceres refinement (errors in variables): parameters are rt (6), every landmark's ENU
+//      position (3, held to its survey by a prior (p - p_survey)/sigma per axis; sigma 0 holds
+//      that axis exactly) and optionally a subset of the intrinsics (with priors). Residual
+//      (mrcal_project(transform_rt(p)) - q_obs) / sigma_px with analytic Jacobians from mrcal.
+//      Cauchy loss of scale opt->robust_scale on each landmark's normalised block (pixel +
+//      survey prior). All in coordinates centred on the landmarks' centroid.
+//   3. Outliers: a landmark whose block chi2 (2 dof) exceeds opt->outlier_threshold^2 is
+//      flagged and dropped; the inliers are re-solved WITHOUT the robust loss (plain weighted
+//      least squares).
+//   4. Covariance of rt (and the refined intrinsics) by ceres::Covariance with the landmarks
+//      marginalised, ABSOLUTE scaling (residuals are whitened by the stated sigmas); the
+//      a-posteriori variance factor chi2/dof is reported next to it.
+//
+// Conventions (docs/conventions.md): rt_cam_enu = mrcal Rodrigues r + translation t (metres),
+// p_cam = R(r) p_enu + t; camera x right, y down, z forward; pixel (0,0) is the centre of the
+// top-left pixel. yaw/pitch/roll in degrees: R_enu_cam = Rz(-yaw) Rx(pitch) R_enu_cam0 Rz(roll)
+// with R_enu_cam0 a level camera looking north; yaw in [0,360) clockwise from north, pitch
+// positive up, roll in (-180,180] positive clockwise seen from behind the camera.
+//
+// Accuracy: noise-free observations give the true pose to 1e-9 (relative); with noise the
+// reported covariance is consistent with the errors (tests/calib/test_solve_nees.c: mean NEES
+// of the 6-dof pose within [0.7,1.3] x 6 over 200+ trials).
+#pragma once
+#include <stdbool.h>
+#include <mrcal/mrcal.h>
+
+#include "rs_calib_init.h"
+#include "rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// Which intrinsics rs_calib_solve refines (OR of flags). Needs a lens model with a core
+// (fx, fy, cx, cy). FOCAL refines ONE focal scale: fx and fy move together, their ratio (the
+// pixel aspect) stays nominal, because one view of 10-30 landmarks cannot separate them.
+// CENTER refines (cx, cy). DISTORTION refines every intrinsic after the core.
+typedef enum {
+    RS_CALIB_REFINE_NONE       = 0,
+    RS_CALIB_REFINE_FOCAL      = 1,
+    RS_CALIB_REFINE_CENTER     = 2,
+    RS_CALIB_REFINE_DISTORTION = 4,
+} rs_calib_refine_flags;
+
+// One camera's observations.
+typedef struct {
+    int N;                              // number of landmarks observed by this camera
+    const double *p_enu_m;              // (N,3) surveyed landmark positions, site ENU, metres
+    const double *sigma_enu_m;          // (N,3) 1-sigma survey error of E, N, U, metres, >= 0;
+                                        //   0 holds that coordinate exactly; NULL: all exact
+    const double *q_px;                 // (N,2) observed pixels
+    const double *sigma_px;             // (N,) 1-sigma of each pixel coordinate, > 0; NULL: 1 px
+    const mrcal_lensmodel_t *lensmodel; // lens model; CAHVORE is not supported (no gradients)
+    const double *intrinsics;           // (Nintrinsics,) nominal intrinsics of lensmodel
+    int width, height;                  // image size, pixels (for warnings; may be 0: unknown)
+    bool has_position_prior;            // a surveyed camera position (a pole) is known
+    double prior_position_enu_m[3];     //   its ENU position, metres
+    double prior_sigma_m;               //   its isotropic 1-sigma, metres, > 0
+} rs_calib_problem;
+
+typedef struct {
+    unsigned refine;               // OR of rs_calib_refine_flags (default RS_CALIB_REFINE_NONE)
+    double robust_scale;           // Cauchy loss scale on each landmark's normalised residual
+                                   //   block (pixel + survey prior), in sigmas (default 2);
+                                   //   <= 0: no robust loss and no outlier rejection
+    double outlier_threshold;      // flag a landmark when sqrt(block chi2) > this, in sigmas
+                                   //   (default 3.717 = sqrt of the 99.9% chi-square 2 dof)
+    rs_calib_init_options init;    // options of the initial pose (rs_calib_init.h)
+    int max_iterations;            // Ceres iterations per solve (default 100)
+    double focal_prior_rel_sigma;  // prior on the focal scale about the nominal, relative
+                                   //   1-sigma (default 1.0: weak); 0: no prior
+    double center_prior_sigma_px;  // prior on (cx, cy) about nominal, px (default 50); 0: none
+    double distortion_prior_sigma; // prior on each distortion coefficient about nominal, in
+                                   //   its own unit (default 0.1); 0: none
+    double focal_search_min, focal_search_max; // range of the focal scale search (default
+                                   //   0.25, 4); min == max == 1 disables the search
+    double condition_warn;         // warn when the condition number exceeds this (default 1e4)
+} rs_calib_options;
+
+// Fills opt with the defaults above. opt must not be NULL.
+void rs_calib_options_default(rs_calib_options *opt);
+
+typedef struct {
+    double rt_cam_enu[6];            // the pose: maps ENU into the camera frame
+    double covariance_rt_cam_enu[36];// (6,6) row-major covariance of rt_cam_enu (r rad, t m)
+    int Nintrinsics;
+    double *intrinsics;              // (Nintrinsics,) final intrinsics (owned)
+    double *sigma_intrinsics;        // (Nintrinsics,) 1-sigma, 0 for those not refined (owned)
+    double *covariance_intrinsics;   // (Nintrinsics,Nintrinsics) row-major (owned)
+    double position_enu_m[3];        // camera centre in ENU, metres
+    double sigma_position_enu_m[3];  // its 1-sigma in E, N, U, metres
+    double yaw_pitch_roll_deg[3];    // orientation, degrees (conventions above)
+    double sigma_yaw_pitch_roll_deg[3]; // their 1-sigma, degrees
+    double rms_px;                   // RMS reprojection error of the inliers (pixel part), px
+    int Ninliers;
+    int N;                           // copy of problem->N: the length of the arrays below
+    double *predicted_px;            // (N,2) projection of each landmark (refined position for
+                                     //   inliers, surveyed for outliers) (owned)
+    double *residual_px;             // (N,2) predicted_px - q_px (owned)
+    double *normalised_residual;     // (N,) sqrt(block chi2) in sigmas, the outlier statistic
+                                     //   (owned)
+    bool *inlier;                    // (N,) (owned)
+    double *p_enu_refined_m;         // (N,3) landmark positions after the adjustment (owned)
+    double chi2;                     // sum of squared whitened residuals of the final solve
+    int dof;                         // residuals - free parameters of the final solve
+    double variance_factor;          // chi2/dof: ~1 when the stated sigmas are right
+    double condition_number;         // of the equilibrated Jacobian, landmarks eliminated
+    int iterations;                  // Ceres iterations, all solves together
+    double time_us;                  // wall time of rs_calib_solve, microseconds
+    char method[224];                // what was done, e.g. "opengv-p3p ... + ceres-cauchy(2)..."
+    char warnings[1024];             // plain-words warnings, "; "-separated; "" when none
+} rs_calib_result;
+
+// Solves one camera's pose (see the method above).
+//
+// Returns RS_OK with result filled (free it with rs_calib_result_free even on error: it is
+// always left either zeroed or filled). Errors, with the cause in err:
+//   RS_ERR_INVALID     non-finite input or sigma (the index and field are named), N < 0,
+//                      NULL arrays, bad options
+//   RS_ERR_UNSUPPORTED a lens model without gradients (CAHVORE) or intrinsics refinement on a
+//                      model without a core
+//   RS_ERR_DEGENERATE  fewer than 4 usable landmarks, collinear landmarks, all in a tiny image
+//                      patch, landmarks behind the camera, too many outliers, or a pose the
+//                      data cannot determine (rank-deficient covariance)
+//   RS_ERR_NOCONVERGE  Ceres did not converge
+//   RS_ERR_NOMEM, RS_ERR_EXTERNAL (a Ceres exception)
+rs_status rs_calib_solve(// out
+                         rs_calib_result *result,
+                         // in
+                         const rs_calib_problem *problem,
+                         const rs_calib_options *opt, // may be NULL: defaults
+                         rs_err *err);                // may be NULL
+
+// Frees the owned arrays of result and zeroes it. NULL-safe.
+void rs_calib_result_free(rs_calib_result *result);
+
+// ---- pose helpers (conventions above) ----
+
+// Camera position and yaw/pitch/roll from a pose. At pitch = +-90 deg (looking straight
+// up/down) yaw is undefined: yaw is then 0 and the whole turn goes into roll.
+// Accuracy: 1e-12 deg away from pitch = +-90 deg.
+void rs_calib_ypr_from_rt(// out
+                          double yaw_pitch_roll_deg[3],
+                          double position_enu_m[3],  // may be NULL
+                          // in
+                          const double rt_cam_enu[6]);
+
+// The pose of a camera at position_enu_m with the given yaw/pitch/roll (degrees).
+void rs_calib_rt_from_ypr(// out
+                          double rt_cam_enu[6],
+                          // in
+                          const double yaw_pitch_roll_deg[3],
+                          const double position_enu_m[3]);
+
+// Camera centre in ENU: -R(r)^T t. dpos_drt (3,6) row-major, may be NULL.
+void rs_calib_position_from_rt(// out
+                               double position_enu_m[3],
+                               double *dpos_drt,
+                               // in
+                               const double rt_cam_enu[6]);
+
+// Intersects the ray of pixel q_px (through the full lens model: mrcal_unproject, then Newton
+// steps on mrcal_project to polish) with the plane n . p = plane_offset_m.
+// plane_normal_enu need not be unit length; (0,0,1) with offset h is the level plane U = h.
+// Accuracy: the returned point projects back to q_px within 1e-9 px.
+// Errors: RS_ERR_INVALID (non-finite input, zero normal), RS_ERR_UNSUPPORTED (lens model
+// without unprojection), RS_ERR_DEGENERATE (ray parallel to the plane or the plane behind
+// the camera).
+rs_status rs_calib_locate_ground(// out
+                                 double p_enu_m[3],
+                                 // in
+                                 const mrcal_lensmodel_t *lensmodel,
+                                 const double *intrinsics,      // (Nintrinsics,)
+                                 const double rt_cam_enu[6],
+                                 const double q_px[2],
+                                 const double plane_normal_enu[3],
+                                 double plane_offset_m,
+                                 rs_err *err);                  // may be NULL
+
+#ifdef __cplusplus
+}
+#endif
