@@ -28,12 +28,13 @@
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
-#include <mrcal/mrcal.h>
 #include "rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+// mrcal.h has no extern "C" of its own
+#include <mrcal/mrcal.h>
 
 typedef struct {
     double ransac_threshold_px;    // inlier threshold on reprojection error, pixels (default 8)

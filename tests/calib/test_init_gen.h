@@ -7,11 +7,12 @@
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
-#include <mrcal/mrcal.h>
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+// mrcal.h has no extern "C" of its own
+#include <mrcal/mrcal.h>
 
 #define TG_NMAX 64
 
