@@ -1,2 +1,274 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_site_check;
+// rs_site_check.c -- diagnostics of a site folder, and the plausibility checks that need more
+// than one value at a time: positions (range, swapped lat/lon, radians, distance), observations
+// (inside the image, duplicates, enough per camera) and ids unique across the site.
+// The reader (rs_site.c) calls these while it reads; rs_site_check() runs the reader.
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rs_io.h"
+#include "rs_site_internal.h"
+
+// A camera needs at least this many landmarks picked: the fewest that determine a pose without
+// ambiguity (P3P has up to four solutions).
+enum { MIN_OBSERVATIONS = 4 };
+
+static char *dup_or_null(const char *s)
+{
+    return s ? strdup(s) : NULL;
+}
+
+void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status status,
+                   const char *file, int line, int feature, const char *feature_id,
+                   const char *field, const char *fmt, ...)
+{
+    rs_site_report *p = &r->pub;
+    if (p->N == r->cap) {
+        int cap = r->cap ? 2 * r->cap : 16;
+        rs_site_diag *grown = realloc(p->diags, (size_t)cap * sizeof *grown);
+        if (!grown) {
+            r->nomem = true;
+            return;
+        }
+        p->diags = grown;
+        r->cap = cap;
+    }
+    char msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+
+    rs_site_diag d = {
+        .severity = severity,
+        .status = severity == RS_SITE_ERROR ? status : RS_OK,
+        .file = strdup(file ? file : "?"),
+        .line = line,
+        .feature = feature,
+        .feature_id = dup_or_null(feature_id),
+        .field = dup_or_null(field),
+        .message = strdup(msg),
+    };
+    if (!d.file || !d.message || (feature_id && !d.feature_id) || (field && !d.field)) {
+        free(d.file);
+        free(d.feature_id);
+        free(d.field);
+        free(d.message);
+        r->nomem = true;
+        return;
+    }
+    p->diags[p->N++] = d;
+    if (severity == RS_SITE_ERROR) p->Nerrors++;
+    else p->Nwarnings++;
+}
+
+void rs_site_report_free(rs_site_report *report)
+{
+    if (!report) return;
+    for (int i = 0; i < report->N; i++) {
+        free(report->diags[i].file);
+        free(report->diags[i].feature_id);
+        free(report->diags[i].field);
+        free(report->diags[i].message);
+    }
+    free(report->diags);
+    free((rs_site__report *)report); // pub is the first member
+}
+
+int rs_site_diag_format(char *buf, size_t size, const rs_site_diag *d)
+{
+    char line[32] = "", feature[300] = "", field[300] = "";
+    if (d->line > 0) snprintf(line, sizeof line, ":%d", d->line);
+    if (d->feature >= 0) {
+        if (d->feature_id)
+            snprintf(feature, sizeof feature, " feature %d (id '%s'):", d->feature, d->feature_id);
+        else
+            snprintf(feature, sizeof feature, " feature %d:", d->feature);
+    }
+    if (d->field) snprintf(field, sizeof field, " %s:", d->field);
+    return snprintf(buf, size, "%s%s:%s%s %s%s", d->file, line, feature, field,
+                    d->severity == RS_SITE_WARNING ? "warning: " : "", d->message);
+}
+
+rs_status rs_site_check(rs_site_report **report, const char *dir, rs_err *err)
+{
+    *report = NULL;
+    rs_site__report *r = calloc(1, sizeof *r);
+    if (!r) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
+    rs_site *site = NULL;
+    rs_site__read(&site, r, dir);
+    rs_site_free(site);
+    if (!site || r->nomem) {
+        rs_site_report_free(&r->pub);
+        return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory while checking", dir);
+    }
+    *report = &r->pub;
+    return RS_OK;
+}
+
+// ---- positions ----
+
+// Distance of (lat, lon, h_ell) from the site origin; false if the point is not a valid
+// geodetic position.
+static bool distance_from_origin(double *d_m, double p_enu_m[3], const rs_site *site, double lat,
+                                 double lon, double h_ell)
+{
+    if (!(lat >= -90 && lat <= 90 && lon >= -180 && lon <= 180)) return false;
+    const double llh[3] = {lat, lon, h_ell};
+    if (rs_geo_llh_to_enu(p_enu_m, &site->origin, llh, 1, NULL) != RS_OK) return false;
+    *d_m = sqrt(p_enu_m[0] * p_enu_m[0] + p_enu_m[1] * p_enu_m[1] + p_enu_m[2] * p_enu_m[2]);
+    return isfinite(*d_m);
+}
+
+static void format_distance(char *buf, size_t size, double d_m)
+{
+    if (d_m >= 10000) snprintf(buf, size, "%.0f km", d_m / 1000);
+    else snprintf(buf, size, "%.1f m", d_m);
+}
+
+// How a corrected position should be written: as a GeoJSON triple or as lat/lon fields.
+static void format_position(char *buf, size_t size, bool geojson_order, double lat, double lon,
+                            double h)
+{
+    if (geojson_order) snprintf(buf, size, "[%.9f, %.9f, %.3f]", lon, lat, h);
+    else snprintf(buf, size, "lat %.9f, lon %.9f", lat, lon);
+}
+
+bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *r,
+                             const rs_site *site, bool origin_ok, const char *file, int feature,
+                             const char *feature_id, const char *field, bool geojson_order,
+                             const double given[3])
+{
+    const double lat = given[0], lon = given[1], h = given[2];
+    const double h_ell = h + site->geoid_undulation_m;
+    const double max_m = site->max_landmark_distance_m;
+    const bool lat_ok = lat >= -90 && lat <= 90, lon_ok = lon >= -180 && lon <= 180;
+
+    double d = NAN, p[3];
+    bool have_d = origin_ok && distance_from_origin(&d, p, site, lat, lon, h_ell);
+    if (have_d && d <= max_m) {
+        llh[0] = lat, llh[1] = lon, llh[2] = h_ell;
+        memcpy(p_enu_m, p, sizeof p);
+        return true;
+    }
+
+    char as_given[64] = "out of range", dist[32], fixed[128];
+    if (have_d) format_distance(as_given, sizeof as_given, d);
+
+    if (origin_ok) {
+        double ds, ps[3];
+        if (distance_from_origin(&ds, ps, site, lon, lat, h_ell) && ds <= max_m) {
+            format_distance(dist, sizeof dist, ds);
+            format_position(fixed, sizeof fixed, geojson_order, lon, lat, h);
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
+                          "looks like latitude and longitude are exchanged%s (as given: %s%s; "
+                          "exchanged: %s from the origin): should it be %s?",
+                          geojson_order ? " ([lat, lon] order; GeoJSON is [lon, lat, h])" : "",
+                          as_given, have_d ? " from the origin" : "", dist, fixed);
+            return false;
+        }
+        const double deg = 180.0 / M_PI;
+        double dr, pr[3];
+        if (distance_from_origin(&dr, pr, site, lat * deg, lon * deg, h_ell) && dr <= max_m) {
+            format_distance(dist, sizeof dist, dr);
+            format_position(fixed, sizeof fixed, geojson_order, lat * deg, lon * deg, h);
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
+                          "looks like radians (as given: %s%s; converted to degrees: %s from the "
+                          "origin): should it be %s?",
+                          as_given, have_d ? " from the origin" : "", dist, fixed);
+            return false;
+        }
+    }
+    if (!lat_ok) {
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
+                      "latitude %.9g is out of range [-90, 90]", lat);
+        return false;
+    }
+    if (!lon_ok) {
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
+                      "longitude %.9g is out of range [-180, 180]", lon);
+        return false;
+    }
+    if (!have_d) return false; // the origin is at fault, and reported as such
+    format_distance(dist, sizeof dist, d);
+    rs_site__diag(r, RS_SITE_WARNING, RS_OK, file, 0, feature, feature_id, field,
+                  "%s from the origin, farther than max_landmark_distance_m (%g m)", dist, max_m);
+    llh[0] = lat, llh[1] = lon, llh[2] = h_ell;
+    memcpy(p_enu_m, p, sizeof p);
+    return true;
+}
+
+// ---- observations ----
+
+bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam,
+                                const rs_site_observation *obs, const rs_site *site)
+{
+    const char *file = cam->observations_path;
+    bool ok = true;
+    if (cam->width > 0 && cam->height > 0) {
+        const char *axis[2] = {"u", "v"};
+        const int size[2] = {cam->width, cam->height};
+        for (int k = 0; k < 2; k++) {
+            if (obs->q_px[k] >= -0.5 && obs->q_px[k] <= size[k] - 0.5) continue;
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, axis[k],
+                          "%g is outside the image: valid %s in [-0.5, %.1f] (%s %d in %s)",
+                          obs->q_px[k], axis[k], size[k] - 0.5, k ? "height" : "width",
+                          size[k], cam->model_path);
+            ok = false;
+        }
+    }
+    for (int i = 0; i < cam->Nobservations; i++) {
+        if (cam->observations[i].ilandmark != obs->ilandmark) continue;
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "landmark",
+                      "'%s' is observed twice in this camera (first at line %d)",
+                      site->landmarks[obs->ilandmark].id, cam->observations[i].line);
+        ok = false;
+        break;
+    }
+    return ok;
+}
+
+void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam)
+{
+    if (cam->Nobservations >= MIN_OBSERVATIONS) return;
+    rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1, NULL, NULL,
+                  "camera '%s' has %d usable observation%s: it needs at least %d landmarks "
+                  "picked to be calibrated",
+                  cam->id, cam->Nobservations, cam->Nobservations == 1 ? "" : "s",
+                  MIN_OBSERVATIONS);
+}
+
+// ---- the whole site ----
+
+void rs_site__check_site(rs_site__report *r, const rs_site *site)
+{
+    char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson");
+    char *site_path = rs_io_join(site->dir, "site.json");
+    if (!landmarks_path || !site_path) {
+        r->nomem = true;
+        goto done;
+    }
+    for (int j = 1; j < site->Nlandmarks; j++)
+        for (int i = 0; i < j; i++) {
+            if (strcmp(site->landmarks[i].id, site->landmarks[j].id)) continue;
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, landmarks_path, 0,
+                          site->landmarks[j].feature, site->landmarks[j].id, "properties.id",
+                          "duplicate id (already used by feature %d)", site->landmarks[i].feature);
+            break;
+        }
+    for (int j = 1; j < site->Ncameras; j++)
+        for (int i = 0; i < j; i++) {
+            if (strcmp(site->cameras[i].id, site->cameras[j].id)) continue;
+            char field[64];
+            snprintf(field, sizeof field, "cameras[%d].id", j);
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, site_path, 0, -1, NULL, field,
+                          "duplicate camera id '%s' (already used by cameras[%d])",
+                          site->cameras[j].id, i);
+            break;
+        }
+done:
+    free(landmarks_path);
+    free(site_path);
+}

@@ -1,2 +1,257 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_site_init;
+// rs_site_init.c -- a skeleton site folder for a surveyor to fill in.
+//
+// The folder is built under a temporary name next to `dir` and renamed into place at the end,
+// so a failure never leaves a half-made site behind under the final name.
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+#include "rs_io.h"
+#include "rs_site.h"
+
+// The files and folders of a skeleton, relative to the site folder, in creation order.
+static const char *const skeleton_dirs[] = {"cameras", "observations", "backgrounds", "backgrounds/cam1"};
+static const char *const skeleton_files[] = {"site.json", "landmarks.geojson", "observations/cam1.csv",
+                                             "README.md"};
+enum { NDIRS = sizeof skeleton_dirs / sizeof skeleton_dirs[0],
+       NFILES = sizeof skeleton_files / sizeof skeleton_files[0] };
+
+static const char *const readme_format =
+    "# Site '%s': what to fill in\n"
+    "\n"
+    "This folder was made by `roadside site init`. It becomes a usable site once it has\n"
+    "landmarks, a lens model for every camera and at least 4 picked landmarks per camera.\n"
+    "`roadside site check %s` lists exactly what is still missing or wrong; it exits 0 only\n"
+    "when the site can be calibrated. The full format: docs/site-format.md.\n"
+    "\n"
+    "## 1. site.json\n"
+    "\n"
+    "- `origin`: the point the local east-north-up frame starts from, near the middle of the\n"
+    "  site, on the ground: latitude and longitude in decimal degrees (WGS84), height in metres.\n"
+    "- `heights`: `\"ellipsoidal\"` if your heights are above the WGS84 ellipsoid (raw GNSS), or\n"
+    "  `{\"orthometric\": N}` if they are above sea level / a national height datum, with N the\n"
+    "  geoid undulation at the site in metres (h_ellipsoidal = h_orthometric + N; e.g. about 47 m\n"
+    "  in Bavaria, 36 m in Paris). Every height in the site (origin, landmarks, camera\n"
+    "  positions) uses this one convention.\n"
+    "- `landmark_sigma_m`: the 1-sigma accuracy of your landmark coordinates, horizontal and\n"
+    "  vertical, in metres: about 0.02-0.05 for RTK GNSS, 0.1-0.3 for a good orthophoto or\n"
+    "  cadastral map, 0.5-1 for a web map. A landmark can override it with `sigma_h_m` and\n"
+    "  `sigma_v_m`. Too small a sigma makes the calibration over-confident.\n"
+    "- `cameras`: one entry per camera. `cam1` is an example: rename it (the id is free text),\n"
+    "  and point `model` and `observations` at its files. Optional: `backgrounds` (a folder of\n"
+    "  images of the empty scene), `position_prior` ({lat, lon, h, sigma_m}: the surveyed\n"
+    "  position of the camera, e.g. its pole) and `note`.\n"
+    "- Optional: `ground_plane` ({\"normal_enu\": [0, 0, 1], \"offset_m\": 0}: n . p = offset in\n"
+    "  ENU metres; default: the horizontal plane through the origin) and\n"
+    "  `max_landmark_distance_m` (default 1000: check warns about landmarks farther away).\n"
+    "\n"
+    "## 2. landmarks.geojson\n"
+    "\n"
+    "One GeoJSON Point feature per landmark:\n"
+    "\n"
+    "    {\"type\": \"Feature\",\n"
+    "     \"geometry\": {\"type\": \"Point\", \"coordinates\": [11.57512, 48.13706, 520.31]},\n"
+    "     \"properties\": {\"id\": \"L01\", \"kind\": \"lane-marking-corner\"}}\n"
+    "\n"
+    "- Coordinates are **[longitude, latitude, height]** (RFC 7946 order: longitude first!),\n"
+    "  decimal degrees (not degrees-minutes-seconds, not radians) and metres. `site check`\n"
+    "  recognises swapped latitude/longitude and radians and says what the point should be.\n"
+    "- `id`: a unique text, the name you use in the observation files.\n"
+    "- Pick points that are sharp in the image and on the ground: corners of lane markings,\n"
+    "  stop lines, zebra stripes, manhole covers, kerb corners, bases of poles. Not tops of\n"
+    "  poles or trees (they move, and their height is hard to survey).\n"
+    "- Spread them over the whole image and over a range of distances; 8-20 per camera is\n"
+    "  good, 4 is the minimum. Avoid having them all on one straight line.\n"
+    "\n"
+    "## 3. cameras/<id>.cameramodel (or .yaml / .json)\n"
+    "\n"
+    "The lens of each camera, with the image size of the frames you pick pixels in:\n"
+    "\n"
+    "- an mrcal model: calibrate with a chessboard using `mrcal-calibrate-cameras`\n"
+    "  (e.g. `--lensmodel LENSMODEL_OPENCV8`), or write one by hand for a known pinhole:\n"
+    "  `{'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': [fx, fy, cx, cy],\n"
+    "  'imagersize': [width, height], 'extrinsics': [0, 0, 0, 0, 0, 0]}`;\n"
+    "- or OpenCV intrinsics as written by `cv::FileStorage` (cv2.FileStorage) after\n"
+    "  `calibrateCamera`: fields `image_width`, `image_height`, `camera_matrix` (3x3) and\n"
+    "  `distortion_coefficients` (0, 4, 5, 8 or 12 values).\n"
+    "\n"
+    "## 4. observations/<id>.csv\n"
+    "\n"
+    "The pixel position of each landmark you can see, picked in a full-resolution frame:\n"
+    "\n"
+    "    landmark,u,v,sigma_px\n"
+    "    L01,812.5,604.0,\n"
+    "    L02,1190.25,655.5,2\n"
+    "\n"
+    "- `u` to the right, `v` down, in pixels; (0,0) is the CENTRE of the top-left pixel, so\n"
+    "  subtract 0.5 from coordinates of tools that put (0,0) at the pixel's corner.\n"
+    "- Decimal points, not commas. `sigma_px` (optional, default 1) is the pick uncertainty.\n"
+    "\n"
+    "## 5. backgrounds/<id>/\n"
+    "\n"
+    "Optional: images of the empty scene from that camera, for synthesising training data.\n";
+
+static rs_status write_site_json(const char *path, const char *name, const rs_llh *origin,
+                                 const double *geoid_undulation_m, rs_err *err)
+{
+    rs_status st = RS_OK;
+    char *text = NULL;
+    cJSON *root = cJSON_CreateObject(), *o = NULL, *cams, *cam;
+    bool ok = root && cJSON_AddStringToObject(root, "name", name) &&
+              (o = cJSON_AddObjectToObject(root, "origin")) &&
+              cJSON_AddNumberToObject(o, "lat", origin->lat_deg) &&
+              cJSON_AddNumberToObject(o, "lon", origin->lon_deg) &&
+              cJSON_AddNumberToObject(o, "h", origin->h_m);
+    if (ok && geoid_undulation_m)
+        ok = (o = cJSON_AddObjectToObject(root, "heights")) &&
+             cJSON_AddNumberToObject(o, "orthometric", *geoid_undulation_m);
+    else if (ok)
+        ok = cJSON_AddStringToObject(root, "heights", "ellipsoidal") != NULL;
+    ok = ok && (o = cJSON_AddObjectToObject(root, "landmark_sigma_m")) &&
+         cJSON_AddNumberToObject(o, "horizontal", 0.3) && cJSON_AddNumberToObject(o, "vertical", 0.5) &&
+         cJSON_AddNumberToObject(root, "max_landmark_distance_m", 1000) &&
+         (cams = cJSON_AddArrayToObject(root, "cameras")) && (cam = cJSON_CreateObject()) &&
+         cJSON_AddItemToArray(cams, cam) && cJSON_AddStringToObject(cam, "id", "cam1") &&
+         cJSON_AddStringToObject(cam, "model", "cameras/cam1.cameramodel") &&
+         cJSON_AddStringToObject(cam, "observations", "observations/cam1.csv") &&
+         cJSON_AddStringToObject(cam, "backgrounds", "backgrounds/cam1") &&
+         cJSON_AddStringToObject(cam, "note", "example camera: rename, add its model and picks (README.md)") &&
+         (text = cJSON_Print(root));
+    if (!ok) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    else {
+        size_t n = strlen(text);
+        text[n] = '\n'; // cJSON_Print ends without a newline; its buffer has room for the NUL
+        st = rs_io_write_file(path, text, n + 1, err);
+    }
+    cJSON_free(text);
+    cJSON_Delete(root);
+    return st;
+}
+
+// 0: `dir` does not exist or is an empty folder; else an error naming why it cannot be used.
+static rs_status check_target(const char *dir, bool *exists, rs_err *err)
+{
+    struct stat sb;
+    *exists = false;
+    if (stat(dir, &sb) != 0) {
+        if (errno == ENOENT) return RS_OK;
+        return rs_err_set(err, RS_ERR_IO, "%s: %s", dir, strerror(errno));
+    }
+    if (!S_ISDIR(sb.st_mode))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: exists and is not a folder: not overwriting it", dir);
+    DIR *d = opendir(dir);
+    if (!d) return rs_err_set(err, RS_ERR_IO, "%s: %s", dir, strerror(errno));
+    bool empty = true;
+    for (struct dirent *e; empty && (e = readdir(d));)
+        empty = !strcmp(e->d_name, ".") || !strcmp(e->d_name, "..");
+    closedir(d);
+    if (!empty)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: exists and is not empty: not overwriting it", dir);
+    *exists = true;
+    return RS_OK;
+}
+
+// Removes what a partial skeleton under `tmp` may hold (ignoring what is not there).
+static void remove_skeleton(const char *tmp)
+{
+    for (int i = NFILES - 1; i >= 0; i--) {
+        char *p = rs_io_join(tmp, skeleton_files[i]);
+        if (p) unlink(p);
+        free(p);
+    }
+    for (int i = NDIRS - 1; i >= 0; i--) {
+        char *p = rs_io_join(tmp, skeleton_dirs[i]);
+        if (p) rmdir(p);
+        free(p);
+    }
+    rmdir(tmp);
+}
+
+rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin,
+                       const double *geoid_undulation_m, rs_err *err)
+{
+    if (!(isfinite(origin->lat_deg) && isfinite(origin->lon_deg) && isfinite(origin->h_m)) ||
+        fabs(origin->lat_deg) > 90 || fabs(origin->lon_deg) > 180)
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "origin: (%g, %g, %g) is not lat in [-90, 90], lon in [-180, 180], finite h",
+                          origin->lat_deg, origin->lon_deg, origin->h_m);
+    if (geoid_undulation_m && !(fabs(*geoid_undulation_m) <= 120))
+        return rs_err_set(err, RS_ERR_INVALID, "heights.orthometric: %g m is not a geoid undulation",
+                          *geoid_undulation_m);
+    if (!name || !*name) return rs_err_set(err, RS_ERR_INVALID, "name: empty");
+    bool exists;
+    rs_status st = check_target(dir, &exists, err);
+    if (st != RS_OK) return st;
+
+    // Build under "<dir>.tmp.XXXXXX" in the same parent, then rename: rename(2) replaces an
+    // empty folder atomically.
+    size_t n = strlen(dir);
+    while (n > 1 && dir[n - 1] == '/') n--;
+    char *tmp = malloc(n + sizeof ".tmp.XXXXXX");
+    if (!tmp) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
+    memcpy(tmp, dir, n);
+    memcpy(tmp + n, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
+    char *slash = strrchr(tmp, '/');
+    if (slash && slash != tmp) {
+        *slash = '\0';
+        st = rs_io_mkdir_p(tmp, err);
+        *slash = '/';
+        if (st != RS_OK) {
+            free(tmp);
+            return st;
+        }
+    }
+    if (!mkdtemp(tmp)) {
+        st = rs_err_set(err, RS_ERR_IO, "%s: cannot create a temporary folder next to it: %s", dir,
+                        strerror(errno));
+        free(tmp);
+        return st;
+    }
+    mode_t mask = umask(0); // mkdtemp makes 0700; a site is an ordinary folder
+    umask(mask);
+    chmod(tmp, 0777 & ~mask);
+
+    char *path = NULL;
+    for (int i = 0; i < NDIRS && st == RS_OK; i++) {
+        path = rs_io_join(tmp, skeleton_dirs[i]);
+        st = path ? rs_io_mkdir_p(path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(path);
+    }
+    for (int i = 0; i < NFILES && st == RS_OK; i++) {
+        path = rs_io_join(tmp, skeleton_files[i]);
+        if (!path) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        if (i == 0) {
+            st = write_site_json(path, name, origin, geoid_undulation_m, err);
+        } else if (i == 1) {
+            static const char empty[] = "{\"type\": \"FeatureCollection\", \"features\": []}\n";
+            st = rs_io_write_file(path, empty, sizeof empty - 1, err);
+        } else if (i == 2) {
+            static const char header[] = "landmark,u,v,sigma_px\n";
+            st = rs_io_write_file(path, header, sizeof header - 1, err);
+        } else {
+            int len = snprintf(NULL, 0, readme_format, name, dir);
+            char *readme = len < 0 ? NULL : malloc((size_t)len + 1);
+            if (readme) snprintf(readme, (size_t)len + 1, readme_format, name, dir);
+            st = readme ? rs_io_write_file(path, readme, (size_t)len, err)
+                        : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            free(readme);
+        }
+        free(path);
+    }
+    if (st == RS_OK && rename(tmp, dir) != 0)
+        st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename %s into place: %s%s", dir, tmp, strerror(errno),
+                        exists ? " (did the folder stop being empty?)" : "");
+    if (st != RS_OK) remove_skeleton(tmp);
+    free(tmp);
+    return st;
+}
