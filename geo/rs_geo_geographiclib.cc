@@ -114,6 +114,34 @@ rs_status guarded(rs_err *err, Body body)
     return for_each_row(1, err, [&](int) { return body(); });
 }
 
+// Checks the arguments, then for each row i: checks in[i] (finite; for geodetic rows, whose
+// fields are llh_fields, also the latitude) and computes op(in[i], out[i]).
+template <class Op>
+rs_status map_rows(double *out, const double *in, int N, const char *const fields[3], rs_err *err, Op op)
+{
+    rs_status st = check_args(out, in, N, err);
+    if (st) return st;
+    return for_each_row(N, err, [&](int i) {
+        const double *p = in + 3 * i;
+        rs_status s = fields == llh_fields ? check_llh(p, N, i, err) : check_finite(p, fields, N, i, err);
+        if (s) return s;
+        op(p, out + 3 * i);
+        return RS_OK;
+    });
+}
+
+// Checks origin and runs op(the LocalCartesian frame at origin), catching exceptions.
+template <class Op>
+rs_status with_local_cartesian(const rs_llh *origin, rs_err *err, Op op)
+{
+    rs_status st = check_origin(origin, err);
+    if (st) return st;
+    return guarded(err, [&]() {
+        const LocalCartesian lc(origin->lat_deg, origin->lon_deg, origin->h_m);
+        return op(lc);
+    });
+}
+
 // The UTM/UPS forward projection of one row into `zone` (< 0: the standard zone), hemisphere
 // `north` when zone >= 0; returns the zone and hemisphere used.
 rs_status utm_forward(const double *llh, int zone, bool north, int N, int i, double enh[3],
@@ -145,69 +173,33 @@ extern "C" {
 
 rs_status rs_geo_llh_to_ecef(double *p_ecef_m, const double *llh, int N, rs_err *err)
 {
-    rs_status st = check_args(p_ecef_m, llh, N, err);
-    if (st) return st;
     const Geocentric &earth = Geocentric::WGS84();
-    return for_each_row(N, err, [&](int i) {
-        const double *p = llh + 3 * i;
-        rs_status s = check_llh(p, N, i, err);
-        if (s) return s;
-        double *q = p_ecef_m + 3 * i;
-        earth.Forward(p[0], p[1], p[2], q[0], q[1], q[2]);
-        return RS_OK;
-    });
+    return map_rows(p_ecef_m, llh, N, llh_fields, err,
+                    [&](const double *p, double *q) { earth.Forward(p[0], p[1], p[2], q[0], q[1], q[2]); });
 }
 
 rs_status rs_geo_ecef_to_llh(double *llh, const double *p_ecef_m, int N, rs_err *err)
 {
-    rs_status st = check_args(llh, p_ecef_m, N, err);
-    if (st) return st;
     const Geocentric &earth = Geocentric::WGS84();
-    return for_each_row(N, err, [&](int i) {
-        const double *p = p_ecef_m + 3 * i;
-        rs_status s = check_finite(p, ecef_fields, N, i, err);
-        if (s) return s;
-        double *q = llh + 3 * i;
-        earth.Reverse(p[0], p[1], p[2], q[0], q[1], q[2]);
-        return RS_OK;
-    });
+    return map_rows(llh, p_ecef_m, N, ecef_fields, err,
+                    [&](const double *p, double *q) { earth.Reverse(p[0], p[1], p[2], q[0], q[1], q[2]); });
 }
 
 rs_status rs_geo_llh_to_enu(double *p_enu_m, const rs_llh *origin, const double *llh, int N,
                             rs_err *err)
 {
-    rs_status st = check_args(p_enu_m, llh, N, err);
-    if (!st) st = check_origin(origin, err);
-    if (st) return st;
-    return guarded(err, [&]() {
-        const LocalCartesian lc(origin->lat_deg, origin->lon_deg, origin->h_m);
-        return for_each_row(N, err, [&](int i) {
-            const double *p = llh + 3 * i;
-            rs_status s = check_llh(p, N, i, err);
-            if (s) return s;
-            double *q = p_enu_m + 3 * i;
-            lc.Forward(p[0], p[1], p[2], q[0], q[1], q[2]);
-            return RS_OK;
-        });
+    return with_local_cartesian(origin, err, [&](const LocalCartesian &lc) {
+        return map_rows(p_enu_m, llh, N, llh_fields, err,
+                        [&](const double *p, double *q) { lc.Forward(p[0], p[1], p[2], q[0], q[1], q[2]); });
     });
 }
 
 rs_status rs_geo_enu_to_llh(double *llh, const rs_llh *origin, const double *p_enu_m, int N,
                             rs_err *err)
 {
-    rs_status st = check_args(llh, p_enu_m, N, err);
-    if (!st) st = check_origin(origin, err);
-    if (st) return st;
-    return guarded(err, [&]() {
-        const LocalCartesian lc(origin->lat_deg, origin->lon_deg, origin->h_m);
-        return for_each_row(N, err, [&](int i) {
-            const double *p = p_enu_m + 3 * i;
-            rs_status s = check_finite(p, enu_fields, N, i, err);
-            if (s) return s;
-            double *q = llh + 3 * i;
-            lc.Reverse(p[0], p[1], p[2], q[0], q[1], q[2]);
-            return RS_OK;
-        });
+    return with_local_cartesian(origin, err, [&](const LocalCartesian &lc) {
+        return map_rows(llh, p_enu_m, N, enu_fields, err,
+                        [&](const double *p, double *q) { lc.Reverse(p[0], p[1], p[2], q[0], q[1], q[2]); });
     });
 }
 
@@ -234,17 +226,11 @@ rs_status rs_geo_enu_frame(double R_ecef_enu[9], double origin_ecef_m[3], const 
 rs_status rs_geo_utm_to_llh(double *llh, int zone, bool north, const double *enh, int N,
                             rs_err *err)
 {
-    rs_status st = check_args(llh, enh, N, err);
-    if (!st) st = check_zone(zone, false, err);
+    rs_status st = check_zone(zone, false, err);
     if (st) return st;
-    return for_each_row(N, err, [&](int i) {
-        const double *p = enh + 3 * i;
-        rs_status s = check_finite(p, enh_fields, N, i, err);
-        if (s) return s;
-        double *q = llh + 3 * i;
+    return map_rows(llh, enh, N, enh_fields, err, [&](const double *p, double *q) {
         UTMUPS::Reverse(zone, north, p[0], p[1], q[0], q[1]);
         q[2] = p[2];
-        return RS_OK;
     });
 }
 
