@@ -156,3 +156,8 @@ def expect_line(out, pattern, what):
         if re.search(pattern, line):
             return line
     fail("no line matches %r (%s)" % (pattern, what), out)
+
+
+def load_json(path):
+    with open(path) as f:
+        return json.load(f)
