@@ -1,10 +1,139 @@
-// PLACEHOLDER, replaced by the simulator's command.
+// roadside site simulate -- writes a synthetic site with a known truth (calib/rs_simulate.h).
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
 #include "rs_cli.h"
+#include "rs_simulate.h"
+
+static const char *const CMD = "site simulate";
+
+static void usage(FILE *out, const rs_simulate_site_options *d)
+{
+    fprintf(out,
+            "usage: roadside site simulate DIR --seed N [options]\n"
+            "\n"
+            "Writes a synthetic site into DIR: a four-approach intersection (two roads of two 3.5 m\n"
+            "lanes each way, stop bars, crosswalks, lane marks, signs) watched by cameras on poles at\n"
+            "its corners (then beside the approaches), in the site format (site.json,\n"
+            "landmarks.geojson, cameras/, observations/), plus truth/ with the true poses,\n"
+            "lenses and landmark positions. The same seed and options give a byte-identical site.\n"
+            "\n"
+            "Options (defaults in brackets):\n"
+            "  --seed N                  random seed, 0 .. 2^53 (required)\n"
+            "  --cameras K               number of cameras, 1..16 [%d]\n"
+            "  --landmarks-per-camera M  about this many landmarks seen by each camera, 4..100 [%d]\n"
+            "  --lens MODEL              any mrcal lens model name [%s]; configured models in\n"
+            "                            full, e.g. LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=100\n"
+            "  --image WxH               image size in pixels [%dx%d]\n"
+            "  --hfov-deg D              horizontal field of view, degrees [%g]\n"
+            "  --pixel-sigma PX          pixel noise of the picks, pixels [%g]\n"
+            "  --survey-sigma H,V        survey noise of the landmarks, horizontal and vertical, m [%g,%g]\n"
+            "  --outliers FRACTION       share of picks replaced by a wrong pixel > 30 px away [%g]\n"
+            "  --focal-error FACTOR      nominal focal length in cameras/ = true one * FACTOR [%g]\n"
+            "  --pole-prior SIGMA_M      give each camera a position prior: its true position plus\n"
+            "                            N(0, SIGMA_M) noise per axis [none]\n"
+            "  --origin LAT,LON,H        site origin, degrees, degrees, m ellipsoidal [%g,%g,%g]\n"
+            "  --force                   replace DIR if it already holds a site\n"
+            "\n"
+            "DIR must not exist, be empty, or (with --force) hold a site. The site is built in a\n"
+            "hidden sibling folder and renamed into place, so a failure never leaves half a site.\n"
+            "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n",
+            d->Ncameras, d->landmarks_per_camera, d->lensmodel, d->width_px, d->height_px, d->hfov_deg,
+            d->pixel_sigma_px, d->survey_sigma_h_m, d->survey_sigma_v_m, d->outlier_fraction, d->focal_error,
+            d->origin.lat_deg, d->origin.lon_deg, d->origin.h_m);
+}
+
+// Parses "A<sep>B" into two numbers.
+static bool parse_pair(const char *s, char sep, double *a, double *b)
+{
+    const char *mid = strchr(s, sep);
+    if (!mid) return false;
+    char first[64];
+    size_t n = (size_t)(mid - s);
+    if (n == 0 || n >= sizeof first) return false;
+    memcpy(first, s, n);
+    first[n] = '\0';
+    return rs_cli_parse_double(first, a) && rs_cli_parse_double(mid + 1, b);
+}
 
 int rs_cli_site_simulate(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "roadside site simulate: under construction\n");
-    return RS_EXIT_FAIL;
+    rs_simulate_site_options o;
+    rs_simulate_site_options_default(&o);
+    if (rs_cli_wants_help(argc, argv)) {
+        usage(stdout, &o);
+        return RS_EXIT_OK;
+    }
+    const char *dir = NULL;
+    bool have_seed = false;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (strcmp(a, "--force") == 0) {
+            o.force = true;
+            continue;
+        }
+        if (strncmp(a, "--", 2) != 0 || strcmp(a, "--") == 0) {
+            if (strcmp(a, "--") == 0 && i + 1 < argc) a = argv[++i];
+            if (dir) return rs_cli_usage_error(CMD, "one folder only: '%s' and '%s'", dir, a);
+            dir = a;
+            continue;
+        }
+        if (i + 1 >= argc) return rs_cli_usage_error(CMD, "%s: needs a value", a);
+        const char *v = argv[++i];
+        long n;
+        double x, y;
+        if (strcmp(a, "--seed") == 0) {
+            if (!rs_cli_parse_int(v, 0, 9007199254740992L, &n))
+                return rs_cli_usage_error(CMD, "--seed: '%s' is not an integer in 0 .. 2^53", v);
+            o.seed = (uint64_t)n;
+            have_seed = true;
+        } else if (strcmp(a, "--cameras") == 0) {
+            if (!rs_cli_parse_int(v, 1, 16, &n)) return rs_cli_usage_error(CMD, "--cameras: '%s' is not in 1..16", v);
+            o.Ncameras = (int)n;
+        } else if (strcmp(a, "--landmarks-per-camera") == 0) {
+            if (!rs_cli_parse_int(v, 4, 100, &n))
+                return rs_cli_usage_error(CMD, "--landmarks-per-camera: '%s' is not in 4..100", v);
+            o.landmarks_per_camera = (int)n;
+        } else if (strcmp(a, "--lens") == 0) {
+            o.lensmodel = v;
+        } else if (strcmp(a, "--image") == 0) {
+            if (!parse_pair(v, 'x', &x, &y) || x != (int)x || y != (int)y)
+                return rs_cli_usage_error(CMD, "--image: '%s' is not WIDTHxHEIGHT in pixels", v);
+            o.width_px = (int)x;
+            o.height_px = (int)y;
+        } else if (strcmp(a, "--hfov-deg") == 0) {
+            if (!rs_cli_parse_double(v, &o.hfov_deg)) return rs_cli_usage_error(CMD, "--hfov-deg: '%s' is not a number", v);
+        } else if (strcmp(a, "--pixel-sigma") == 0) {
+            if (!rs_cli_parse_double(v, &o.pixel_sigma_px))
+                return rs_cli_usage_error(CMD, "--pixel-sigma: '%s' is not a number", v);
+        } else if (strcmp(a, "--survey-sigma") == 0) {
+            if (!parse_pair(v, ',', &o.survey_sigma_h_m, &o.survey_sigma_v_m))
+                return rs_cli_usage_error(CMD, "--survey-sigma: '%s' is not H,V in metres", v);
+        } else if (strcmp(a, "--outliers") == 0) {
+            if (!rs_cli_parse_double(v, &o.outlier_fraction))
+                return rs_cli_usage_error(CMD, "--outliers: '%s' is not a number", v);
+        } else if (strcmp(a, "--focal-error") == 0) {
+            if (!rs_cli_parse_double(v, &o.focal_error))
+                return rs_cli_usage_error(CMD, "--focal-error: '%s' is not a number", v);
+        } else if (strcmp(a, "--pole-prior") == 0) {
+            if (!rs_cli_parse_double(v, &o.pole_prior_sigma_m) || !(o.pole_prior_sigma_m > 0))
+                return rs_cli_usage_error(CMD, "--pole-prior: '%s' is not a positive number of metres", v);
+        } else if (strcmp(a, "--origin") == 0) {
+            if (!rs_cli_parse_llh(v, &o.origin))
+                return rs_cli_usage_error(CMD, "--origin: '%s' is not LAT,LON,H (degrees, degrees, metres)", v);
+        } else {
+            return rs_cli_usage_error(CMD, "unknown option '%s'", a);
+        }
+    }
+    if (!dir) return rs_cli_usage_error(CMD, "no site folder given");
+    if (!have_seed) return rs_cli_usage_error(CMD, "--seed is required (the same seed gives the same site)");
+    rs_err err = {0};
+    rs_status st = rs_simulate_site_options_check(&o, &err);
+    if (st) return rs_cli_usage_error(CMD, "%s", err.msg);
+    st = rs_simulate_site(dir, &o, &err);
+    if (st) return rs_cli_fail("site simulate", st, &err);
+    printf("wrote %s: %d cameras, seed %llu (synthetic; the truth is in %s/truth)\n", dir, o.Ncameras,
+           (unsigned long long)o.seed, dir);
+    return RS_EXIT_OK;
 }

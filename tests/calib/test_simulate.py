@@ -1,0 +1,262 @@
+#!/usr/bin/python3
+"""Tests of `roadside site simulate` against independent oracles.
+
+usage: test_simulate.py CHECK   with CHECK one of
+  determinism  same seed -> byte-identical folders; different seeds -> different folders
+  oracle       noise-free picks == mrcal's Python projection of truth/ (1e-6 px)
+  geodesy      noise-free survey: landmarks.geojson -> PROJ's cct -> truth ENU (1e-6 m)
+  visibility   every pick inside the image, every landmark in front of its camera, >= 4 picks
+  outliers     the share of outliers matches --outliers (binomial, 4 sigma)
+  options      bad options -> exit 2 with a message; an existing folder -> exit 1, untouched
+
+Runs with Debian's python3 (numpy, mrcal). Environment: ROADSIDE = the roadside binary.
+"""
+import csv
+import filecmp
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+ROADSIDE = os.environ.get("ROADSIDE", "roadside")
+SEED = 7
+failures = []
+
+
+def fail(msg):
+    failures.append(msg)
+    print(f"FAIL (seed {SEED}): {msg}", file=sys.stderr)
+
+
+def simulate(folder, *args, check=True):
+    cmd = [ROADSIDE, "site", "simulate", folder, *args]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if check and r.returncode != 0:
+        raise SystemExit(f"FAIL (seed {SEED}): {' '.join(cmd)} exited {r.returncode}: {r.stderr}")
+    return r
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def finite(*xs):
+    return all(math.isfinite(x) for x in xs)
+
+
+def tree(folder):
+    out = []
+    for root, _, files in os.walk(folder):
+        out += [os.path.relpath(os.path.join(root, f), folder) for f in files]
+    return sorted(out)
+
+
+def check_determinism(tmp):
+    a, b, c = (os.path.join(tmp, x) for x in "abc")
+    simulate(a, "--seed", str(SEED))
+    simulate(b, "--seed", str(SEED))
+    simulate(c, "--seed", str(SEED + 1))
+    files = tree(a)
+    if len(files) < 8:
+        fail(f"only {len(files)} files written: {files}")
+    if files != tree(b):
+        fail(f"same seed, different file lists: {files} vs {tree(b)}")
+    _, mismatch, errors = filecmp.cmpfiles(a, b, files, shallow=False)
+    if mismatch or errors:
+        fail(f"same seed, files differ: {mismatch + errors}")
+    _, mismatch, _ = filecmp.cmpfiles(a, c, files, shallow=False)
+    for must_differ in ("landmarks.geojson", "truth/truth.json", "observations/cam1.csv"):
+        if must_differ not in mismatch:
+            fail(f"seeds {SEED} and {SEED + 1} give the same {must_differ}")
+    print(f"determinism: {len(files)} files identical for seed {SEED}; {len(mismatch)} differ for seed {SEED + 1}")
+
+
+def truth_cameras(site):
+    import mrcal
+    with open(os.path.join(site, "site.json")) as f:
+        cams = [c["id"] for c in json.load(f)["cameras"]]
+    return {c: mrcal.cameramodel(os.path.join(site, "truth", f"{c}.cameramodel")) for c in cams}
+
+
+def truth_landmarks(site):
+    return {r["id"]: [float(r["e"]), float(r["n"]), float(r["u"])]
+            for r in read_csv(os.path.join(site, "truth", "landmarks_enu.csv"))}
+
+
+def check_oracle(tmp):
+    import mrcal
+    import numpy as np
+    worst, n = 0.0, 0
+    for lens in ("LENSMODEL_OPENCV8", "LENSMODEL_PINHOLE", "LENSMODEL_CAHVOR"):
+        site = os.path.join(tmp, lens)
+        simulate(site, "--seed", str(SEED), "--pixel-sigma", "0", "--outliers", "0", "--lens", lens,
+                 "--cameras", "5")
+        lm = truth_landmarks(site)
+        for cam, m in truth_cameras(site).items():
+            if m.intrinsics()[0] != lens:
+                fail(f"{lens}: {cam} has lens {m.intrinsics()[0]}")
+            for r in read_csv(os.path.join(site, "observations", f"{cam}.csv")):
+                p = np.array(lm[r["landmark"]])
+                q = mrcal.project(mrcal.transform_point_rt(m.extrinsics_rt_fromref(), p), *m.intrinsics())
+                got = np.array([float(r["u"]), float(r["v"])])
+                err = float(np.max(np.abs(q - got)))
+                n += 1
+                if not (err <= 1e-6):  # also catches NaN
+                    fail(f"{lens} {cam} {r['landmark']}: csv {got}, mrcal {q}, |d| {err:.3g} px > 1e-6")
+                worst = max(worst, err)
+    if n < 30:
+        fail(f"only {n} observations checked")
+    print(f"oracle: {n} noise-free picks agree with mrcal.project to {worst:.2e} px (tolerance 1e-6)")
+
+
+def check_geodesy(tmp):
+    site = os.path.join(tmp, "s")
+    origin = (47.3769, 8.5417, 408.0)
+    simulate(site, "--seed", str(SEED), "--survey-sigma", "0,0", "--origin", ",".join(map(str, origin)))
+    with open(os.path.join(site, "landmarks.geojson")) as f:
+        features = json.load(f)["features"]
+    truth = truth_landmarks(site)
+    lines = "".join(f"{ft['geometry']['coordinates'][0]!r} {ft['geometry']['coordinates'][1]!r} "
+                    f"{ft['geometry']['coordinates'][2]!r}\n" for ft in features)
+    pipeline = ("+proj=pipeline +step +proj=cart +ellps=WGS84 +step +proj=topocentric +ellps=WGS84 "
+                f"+lat_0={origin[0]} +lon_0={origin[1]} +h_0={origin[2]}")
+    r = subprocess.run(["cct", "-d", "9", *pipeline.split()], input=lines, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"FAIL: cct: {r.stderr}")
+    rows = [list(map(float, l.split()[:3])) for l in r.stdout.splitlines() if l.strip()]
+    if len(rows) != len(features) or len(features) != len(truth):
+        fail(f"{len(features)} features, {len(rows)} cct rows, {len(truth)} truth rows")
+    worst = 0.0
+    for ft, enu in zip(features, rows):
+        want = truth[ft["properties"]["id"]]
+        err = max(abs(a - b) for a, b in zip(enu, want))
+        if not (err <= 1e-6):
+            fail(f"{ft['properties']['id']}: cct gives {enu}, truth {want}: {err:.3g} m > 1e-6")
+        worst = max(worst, err)
+    print(f"geodesy: {len(rows)} landmarks map back through cct to {worst:.2e} m (tolerance 1e-6)")
+
+
+def check_visibility(tmp):
+    import mrcal
+    import numpy as np
+    n, ncams = 0, 0
+    for args in (["--cameras", "8"], ["--lens", "LENSMODEL_STEREOGRAPHIC", "--hfov-deg", "100", "--pixel-sigma", "5"],
+                 ["--image", "640x480", "--landmarks-per-camera", "6", "--outliers", "0.3"]):
+        site = os.path.join(tmp, "s%d" % ncams)
+        simulate(site, "--seed", str(SEED), *args)
+        lm = truth_landmarks(site)
+        for cam, m in truth_cameras(site).items():
+            ncams += 1
+            w, h = m.imagersize()
+            rows = read_csv(os.path.join(site, "observations", f"{cam}.csv"))
+            if len(rows) < 4:
+                fail(f"{args} {cam}: {len(rows)} observations < 4")
+            ids = [r["landmark"] for r in rows]
+            if len(set(ids)) != len(ids):
+                fail(f"{args} {cam}: a landmark is observed twice")
+            for r in rows:
+                u, v = float(r["u"]), float(r["v"])
+                if not (finite(u, v) and -0.5 <= u <= w - 0.5 and -0.5 <= v <= h - 0.5):
+                    fail(f"{args} {cam} {r['landmark']}: pixel ({u}, {v}) outside {w}x{h}")
+                p_cam = mrcal.transform_point_rt(m.extrinsics_rt_fromref(), np.array(lm[r["landmark"]]))
+                if not (p_cam[2] > 0):
+                    fail(f"{args} {cam} {r['landmark']}: behind the camera (z = {p_cam[2]})")
+                n += 1
+    print(f"visibility: {n} picks in {ncams} cameras inside the image and in front, >= 4 per camera")
+
+
+def check_outliers(tmp):
+    site = os.path.join(tmp, "s")
+    frac = 0.2
+    simulate(site, "--seed", str(SEED), "--cameras", "8", "--landmarks-per-camera", "30", "--outliers", str(frac))
+    import mrcal
+    import numpy as np
+    with open(os.path.join(site, "truth", "truth.json")) as f:
+        truth = json.load(f)
+    lm = truth_landmarks(site)
+    models = truth_cameras(site)
+    n, k = 0, 0
+    for cam in truth["cameras"]:
+        rows = {r["landmark"]: r for r in read_csv(os.path.join(site, "observations", f"{cam['id']}.csv"))}
+        n += len(rows)
+        k += len(cam["outliers"])
+        m = models[cam["id"]]
+        for lid, r in rows.items():
+            q = mrcal.project(mrcal.transform_point_rt(m.extrinsics_rt_fromref(), np.array(lm[lid])), *m.intrinsics())
+            d = float(np.hypot(*(q - [float(r["u"]), float(r["v"])])))
+            if lid in cam["outliers"] and not d > 30:
+                fail(f"{cam['id']} {lid}: outlier only {d:.1f} px from the truth")
+            if lid not in cam["outliers"] and not d < 8:  # 1 px noise: 8 sigma
+                fail(f"{cam['id']} {lid}: inlier {d:.1f} px from the truth")
+    tol = 4 * math.sqrt(n * frac * (1 - frac))
+    if not abs(k - n * frac) <= tol:
+        fail(f"{k} outliers in {n} picks, expected {n * frac:.1f} +- {tol:.1f}")
+    print(f"outliers: {k} of {n} picks ({k / n:.3f}), asked {frac}, tolerance +-{tol / n:.3f}")
+
+
+def check_options(tmp):
+    bad = [
+        ["--seed", "x"], ["--seed", "-1"], [], ["--cameras", "0"], ["--cameras", "17"], ["--lens", "LENSMODEL_FOO"],
+        ["--lens", "LENSMODEL_CAHVORE"], ["--image", "1920by1080"], ["--hfov-deg", "190"], ["--pixel-sigma", "-1"],
+        ["--survey-sigma", "0.3"], ["--outliers", "1.5"], ["--focal-error", "0"], ["--pole-prior", "-2"],
+        ["--origin", "95,11,500"], ["--landmarks-per-camera", "2"], ["--bogus", "1"], ["--seed"],
+    ]
+    for args in bad:
+        folder = os.path.join(tmp, "never")
+        full = args if args[:1] == ["--seed"] else ["--seed", "1", *args]
+        if args == []:
+            full = []
+        r = simulate(folder, *full, check=False)
+        if r.returncode != 2 or "roadside" not in r.stderr or len(r.stderr.strip()) < 20:
+            fail(f"{full}: exit {r.returncode} (want 2), stderr {r.stderr!r}")
+        if os.path.exists(folder):
+            fail(f"{full}: wrote {folder}")
+    r = simulate(os.path.join(tmp, "x"), "--seed", "1", "--lens", "LENSMODEL_FOO", check=False)
+    if "LENSMODEL_OPENCV8" not in r.stderr:
+        fail(f"unknown lens: the message does not list the known models: {r.stderr!r}")
+    # An existing, non-empty folder: exit 1, untouched, with and without --force.
+    busy = os.path.join(tmp, "busy")
+    os.mkdir(busy)
+    with open(os.path.join(busy, "mine.txt"), "w") as f:
+        f.write("precious\n")
+    for extra in ([], ["--force"]):
+        r = simulate(busy, "--seed", "1", *extra, check=False)
+        if r.returncode != 1 or not r.stderr.strip():
+            fail(f"non-empty folder {extra}: exit {r.returncode} (want 1), stderr {r.stderr!r}")
+        if tree(busy) != ["mine.txt"]:
+            fail(f"non-empty folder {extra}: now holds {tree(busy)}")
+    # An existing site: refused without --force, replaced with it.
+    site = os.path.join(tmp, "site")
+    simulate(site, "--seed", "1")
+    before = open(os.path.join(site, "landmarks.geojson")).read()
+    r = simulate(site, "--seed", "2", check=False)
+    if r.returncode != 1 or open(os.path.join(site, "landmarks.geojson")).read() != before:
+        fail(f"existing site without --force: exit {r.returncode}, or changed")
+    simulate(site, "--seed", "2", "--force")
+    if open(os.path.join(site, "landmarks.geojson")).read() == before:
+        fail("--force did not replace the site")
+    leftovers = [e for e in os.listdir(tmp) if e.startswith(".")]
+    if leftovers:
+        fail(f"temporary folders left behind: {leftovers}")
+    r = subprocess.run([ROADSIDE, "site", "simulate", "--help"], capture_output=True, text=True)
+    if r.returncode != 0 or "--pole-prior" not in r.stdout:
+        fail(f"--help: exit {r.returncode}")
+    print(f"options: {len(bad)} bad argument lists exit 2; existing folders exit 1 and stay untouched")
+
+
+def main():
+    checks = {name[len("check_"):]: f for name, f in globals().items() if name.startswith("check_")}
+    if len(sys.argv) != 2 or sys.argv[1] not in checks:
+        raise SystemExit(f"usage: {sys.argv[0]} {'|'.join(checks)}")
+    with tempfile.TemporaryDirectory(prefix="rs-simulate-") as tmp:
+        checks[sys.argv[1]](tmp)
+    if failures:
+        print(f"{len(failures)} failure(s), seed {SEED}", file=sys.stderr)
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
