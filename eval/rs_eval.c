@@ -1,0 +1,329 @@
+// rs_eval.c -- distance-threshold AP: max-dets, greedy nearest matching, all-point AP.
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rs_eval_internal.h"
+
+static const double default_thresholds_px[] = {2, 5, 10, 15, 20, 50};
+
+typedef struct {
+    double score;
+    size_t index;
+} scored;
+
+// Descending score; equal scores keep input order.
+static int cmp_scored(const void *a, const void *b)
+{
+    const scored *x = a, *y = b;
+    if (x->score != y->score) return x->score > y->score ? -1 : 1;
+    return (x->index > y->index) - (x->index < y->index);
+}
+
+// A detection kept by max-dets, filed under its image.
+typedef struct {
+    double u, v;  // its point, pixels
+    size_t rank;  // position in the evaluation order (descending score, then input order)
+    int category;
+} slot;
+
+// A ground truth or ignore region closer to a detection than the largest threshold.
+typedef struct {
+    double d2;  // squared distance, pixels^2
+    size_t gt;  // annotation index
+} candidate;
+
+// The detections kept by max-dets, grouped by image (images in order; within an image in
+// evaluation order), so that matching walks memory in order. Each has its candidates: the
+// annotations of its image closer than the largest threshold, nearest first (equal distances:
+// ground truths before ignore regions, then annotation order). Any threshold's nearest
+// unmatched candidate closer than the threshold is among them, and when they are all matched
+// the nearest one is at least the largest threshold away: a false positive at every threshold.
+typedef struct {
+    size_t Nkept;
+    size_t *begin;        // (Nimages+1) slots of image m: begin[m] .. begin[m+1]-1
+    slot *slots;          // (Nkept)
+    size_t *cand_begin;   // (Nkept+1) candidates of slot j: cand_begin[j] .. cand_begin[j+1]-1
+    candidate *cands;     // (cand_begin[Nkept])
+    unsigned char *outcome; // (Nkept) by rank, scratch
+    unsigned char *matched; // (Ngt) scratch
+    double *tp_precision;   // (Nkept) scratch
+} kept_dets;
+
+enum { OUT_OF_SCOPE, TRUE_POSITIVE, FALSE_POSITIVE, DROPPED };
+
+static void kept_free(kept_dets *k)
+{
+    free(k->begin);
+    free(k->slots);
+    free(k->cand_begin);
+    free(k->cands);
+    free(k->outcome);
+    free(k->matched);
+    free(k->tp_precision);
+}
+
+// Candidate order: nearer first; at equal distance a ground truth before an ignore region, then
+// the earlier annotation.
+static bool before(const rs_eval_data *d, const candidate *x, const candidate *y)
+{
+    if (x->d2 != y->d2) return x->d2 < y->d2;
+    if (d->gt_crowd[x->gt] != d->gt_crowd[y->gt]) return !d->gt_crowd[x->gt];
+    return x->gt < y->gt;
+}
+
+// Appends the candidates of detection e of image m to k->cands (insertion-sorted: lists are short).
+static bool add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_data *d, int m, const slot *e,
+                           double theta_max_px)
+{
+    const size_t first = *n;
+    for (size_t a = d->gt_begin[m]; a < d->gt_begin[m + 1]; a++) {
+        const double du = d->gt_q_px[2 * a] - e->u, dv = d->gt_q_px[2 * a + 1] - e->v;
+        const candidate c = {du * du + dv * dv, a};
+        if (!(sqrt(c.d2) < theta_max_px)) continue;
+        if (*n == *cap) {
+            size_t grown = *cap ? 2 * *cap : 1024;
+            candidate *p = realloc(k->cands, grown * sizeof *p);
+            if (!p) return false;
+            k->cands = p;
+            *cap = grown;
+        }
+        size_t j = (*n)++;
+        for (; j > first && before(d, &c, &k->cands[j - 1]); j--) k->cands[j] = k->cands[j - 1];
+        k->cands[j] = c;
+    }
+    return true;
+}
+
+static rs_status keep(kept_dets *k, const rs_eval_data *d, int max_dets, double theta_max_px, rs_err *err)
+{
+    size_t N = d->Ndets, M = (size_t)d->Nimages;
+    scored *s = malloc((N ? N : 1) * sizeof *s);
+    size_t *next = calloc(M + 1, sizeof *next);
+    k->begin = calloc(M + 1, sizeof *k->begin);
+    k->slots = malloc((N ? N : 1) * sizeof *k->slots);
+    k->cand_begin = malloc((N + 1) * sizeof *k->cand_begin);
+    k->outcome = malloc(N ? N : 1);
+    k->matched = malloc(d->Ngt ? d->Ngt : 1);
+    k->tp_precision = malloc((N ? N : 1) * sizeof *k->tp_precision);
+    if (!s || !next || !k->begin || !k->slots || !k->cand_begin || !k->outcome || !k->matched || !k->tp_precision)
+        goto nomem;
+    for (size_t i = 0; i < N; i++) s[i] = (scored){d->det_score[i], i};
+    qsort(s, N, sizeof *s, cmp_scored);
+    // max-dets: the first max_dets of each image in evaluation order
+    size_t n = 0;
+    for (size_t r = 0; r < N; r++) {
+        int m = d->det_image[s[r].index];
+        if (k->begin[m + 1] < (size_t)max_dets) {
+            k->begin[m + 1]++;
+            s[n++] = s[r];
+        }
+    }
+    k->Nkept = n;
+    for (size_t m = 0; m < M; m++) k->begin[m + 1] += k->begin[m];
+    memcpy(next, k->begin, (M + 1) * sizeof *next);
+    for (size_t r = 0; r < n; r++) {
+        size_t i = s[r].index;
+        k->slots[next[d->det_image[i]]++] = (slot){d->det_q_px[2 * i], d->det_q_px[2 * i + 1], r, d->det_category[i]};
+    }
+    size_t Ncands = 0, cap = 0;
+    for (size_t m = 0; m < M; m++)
+        for (size_t j = k->begin[m]; j < k->begin[m + 1]; j++) {
+            k->cand_begin[j] = Ncands;
+            if (!add_candidates(k, &Ncands, &cap, d, (int)m, &k->slots[j], theta_max_px)) goto nomem;
+        }
+    k->cand_begin[n] = Ncands;
+    free(s);
+    free(next);
+    return RS_OK;
+nomem:
+    free(s);
+    free(next);
+    return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+}
+
+// A scope: images of one group (group >= 0) and/or objects of one category (category >= 0).
+typedef struct {
+    int group, category;
+} scope;
+
+// Matches the detections of image m at threshold theta: fills k->outcome for them.
+static void match_image(kept_dets *k, const rs_eval_data *d, int m, int category, double theta_px)
+{
+    memset(k->matched + d->gt_begin[m], 0, d->gt_begin[m + 1] - d->gt_begin[m]);
+    for (size_t j = k->begin[m]; j < k->begin[m + 1]; j++) {
+        const slot *e = &k->slots[j];
+        if (category >= 0 && e->category != category) continue;
+        // the nearest candidate not matched yet (ignore regions never are)
+        unsigned char o = FALSE_POSITIVE;
+        for (size_t c = k->cand_begin[j]; c < k->cand_begin[j + 1]; c++) {
+            const size_t a = k->cands[c].gt;
+            if (k->matched[a] || (category >= 0 && d->gt_category[a] != category)) continue;
+            if (sqrt(k->cands[c].d2) < theta_px) {
+                if (d->gt_crowd[a]) o = DROPPED;
+                else {
+                    o = TRUE_POSITIVE;
+                    k->matched[a] = 1;
+                }
+            }
+            break;
+        }
+        k->outcome[e->rank] = o;
+    }
+}
+
+// Evaluates one scope.
+static void evaluate_scope(rs_eval_metrics *out, kept_dets *k, const rs_eval_data *d, const double *theta_px, int T,
+                           scope s)
+{
+    size_t num_gt = 0, num_det = 0;
+    for (int m = 0; m < d->Nimages; m++) {
+        if (s.group >= 0 && d->image_group[m] != s.group) continue;
+        for (size_t a = d->gt_begin[m]; a < d->gt_begin[m + 1]; a++)
+            num_gt += !d->gt_crowd[a] && (s.category < 0 || d->gt_category[a] == s.category);
+        for (size_t j = k->begin[m]; j < k->begin[m + 1]; j++)
+            num_det += s.category < 0 || k->slots[j].category == s.category;
+    }
+    out->num_gt = num_gt;
+    out->num_det = num_det;
+    double sum_ap = 0, sum_recall = 0;
+    for (int t = 0; t < T; t++) {
+        memset(k->outcome, OUT_OF_SCOPE, k->Nkept);
+        for (int m = 0; m < d->Nimages; m++)
+            if (s.group < 0 || d->image_group[m] == s.group) match_image(k, d, m, s.category, theta_px[t]);
+        // the precision-recall points in evaluation order; dropped detections make none
+        size_t tp = 0, fp = 0, dropped = 0;
+        for (size_t r = 0; r < k->Nkept; r++) {
+            switch (k->outcome[r]) {
+            case TRUE_POSITIVE:
+                tp++;
+                k->tp_precision[tp - 1] = (double)tp / (double)(tp + fp);
+                break;
+            case FALSE_POSITIVE: fp++; break;
+            case DROPPED: dropped++; break;
+            default: break;
+            }
+        }
+        out->num_dropped[t] = dropped;
+        if (num_gt == 0) {
+            out->ap[t] = out->recall[t] = NAN;
+            continue;
+        }
+        // all-point interpolation: every true positive adds 1/num_gt of recall at the highest
+        // precision reached at this recall or beyond
+        double ap = 0, best_p = 0;
+        for (size_t j = tp; j-- > 0;) {
+            if (k->tp_precision[j] > best_p) best_p = k->tp_precision[j];
+            ap += best_p;
+        }
+        out->ap[t] = ap / (double)num_gt;
+        out->recall[t] = (double)tp / (double)num_gt;
+        sum_ap += out->ap[t];
+        sum_recall += out->recall[t];
+    }
+    out->map = num_gt ? sum_ap / T : NAN;
+    out->ar = num_gt ? sum_recall / T : NAN;
+}
+
+static rs_status metrics_alloc(rs_eval_metrics *m, int T, const char *name)
+{
+    m->ap = malloc((size_t)T * sizeof *m->ap);
+    m->recall = malloc((size_t)T * sizeof *m->recall);
+    m->num_dropped = malloc((size_t)T * sizeof *m->num_dropped);
+    m->name = name ? strdup(name) : NULL;
+    return m->ap && m->recall && m->num_dropped && (!name || m->name) ? RS_OK : RS_ERR_NOMEM;
+}
+
+static void metrics_free(rs_eval_metrics *m)
+{
+    free(m->name);
+    free(m->ap);
+    free(m->recall);
+    free(m->num_dropped);
+}
+
+void rs_eval_result_free(rs_eval_result *r)
+{
+    if (!r) return;
+    free(r->thresholds_px);
+    metrics_free(&r->all);
+    for (int g = 0; r->groups && g < r->Ngroups; g++) metrics_free(&r->groups[g]);
+    free(r->groups);
+    for (int c = 0; r->classes && c < r->Nclasses; c++) metrics_free(&r->classes[c]);
+    free(r->classes);
+    free(r);
+}
+
+static rs_status check_options(const rs_eval_options *opt, const rs_eval_data *d, rs_err *err)
+{
+    if (opt->thresholds_px) {
+        if (opt->Nthresholds < 1 || opt->Nthresholds > RS_EVAL_MAX_THRESHOLDS)
+            return rs_err_set(err, RS_ERR_USAGE, "thresholds: need 1 to %d, not %d", RS_EVAL_MAX_THRESHOLDS,
+                              opt->Nthresholds);
+        for (int t = 0; t < opt->Nthresholds; t++) {
+            double x = opt->thresholds_px[t];
+            if (!isfinite(x) || x <= 0) return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g is not a positive number", x);
+            for (int u = 0; u < t; u++)
+                if (opt->thresholds_px[u] == x) return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g given twice", x);
+        }
+    }
+    if (opt->max_dets < 0) return rs_err_set(err, RS_ERR_USAGE, "max-dets: %d is not positive", opt->max_dets);
+    if (opt->by_group && !d->image_group)
+        return rs_err_set(err, RS_ERR_USAGE, "by: the data was loaded without a group key");
+    return RS_OK;
+}
+
+rs_status rs_eval_run(rs_eval_result **result, const rs_eval_data *d, const rs_eval_options *opt_in, rs_err *err)
+{
+    *result = NULL;
+    const rs_eval_options defaults = {0};
+    const rs_eval_options *opt = opt_in ? opt_in : &defaults;
+    rs_status st = check_options(opt, d, err);
+    if (st != RS_OK) return st;
+    const double *theta = opt->thresholds_px ? opt->thresholds_px : default_thresholds_px;
+    const int T = opt->thresholds_px ? opt->Nthresholds : (int)(sizeof default_thresholds_px / sizeof(double));
+
+    rs_eval_result *r = calloc(1, sizeof *r);
+    kept_dets k = {0};
+    if (!r) goto nomem;
+    r->Nthresholds = T;
+    r->max_dets = opt->max_dets ? opt->max_dets : 100;
+    if (!(r->thresholds_px = malloc((size_t)T * sizeof *theta))) goto nomem;
+    memcpy(r->thresholds_px, theta, (size_t)T * sizeof *theta);
+    double theta_max = 0;
+    for (int t = 0; t < T; t++) theta_max = fmax(theta_max, theta[t]);
+    if ((st = keep(&k, d, r->max_dets, theta_max, err))) goto fail;
+
+    if (metrics_alloc(&r->all, T, NULL)) goto nomem;
+    evaluate_scope(&r->all, &k, d, theta, T, (scope){-1, -1});
+    if (opt->by_group) {
+        if (!(r->groups = calloc((size_t)(d->Ngroups ? d->Ngroups : 1), sizeof *r->groups))) goto nomem;
+        for (int g = 0; g < d->Ngroups; g++, r->Ngroups++) {
+            if (metrics_alloc(&r->groups[g], T, d->group_names[g])) {
+                r->Ngroups++;
+                goto nomem;
+            }
+            evaluate_scope(&r->groups[g], &k, d, theta, T, (scope){g, -1});
+        }
+    }
+    if (opt->per_class) {
+        if (!(r->classes = calloc((size_t)(d->Ncategories ? d->Ncategories : 1), sizeof *r->classes))) goto nomem;
+        for (int c = 0; c < d->Ncategories; c++, r->Nclasses++) {
+            if (metrics_alloc(&r->classes[c], T, d->category_name[c])) {
+                r->Nclasses++;
+                goto nomem;
+            }
+            r->classes[c].category_id = d->category_id[c];
+            evaluate_scope(&r->classes[c], &k, d, theta, T, (scope){-1, c});
+        }
+    }
+    kept_free(&k);
+    *result = r;
+    return RS_OK;
+nomem:
+    st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+fail:
+    kept_free(&k);
+    rs_eval_result_free(r);
+    return st;
+}
