@@ -26,6 +26,8 @@
 #define RS_INIT_CONFIDENCE 0.999
 // OpenGV's EPnP wants a few more points than the minimum.
 #define RS_INIT_EPNP_MIN 6
+// Landmarks with s3/s2 below this are exactly coplanar (0.1 mm of relief across 100 m).
+#define RS_INIT_EXACTLY_PLANAR 1e-6
 // IPPE needs bearings clearly in front of the camera to form x/z, y/z.
 #define RS_INIT_IPPE_MIN_VZ 1e-6
 
@@ -178,27 +180,28 @@ static void uncentre(double *rt_cam_enu, const double *rt_cam_c, const double *c
     mrcal_compose_rt(rt_cam_enu, NULL, NULL, NULL, NULL, rt_cam_c, rt_c_enu);
 }
 
-// Non-minimal solve on the inliers `in`: IPPE if planar, else EPnP. On success fills rt_cam_c
-// and the method name and returns true; a refusal by the solver is not an error (the RANSAC
-// model stays), so it returns false.
-static bool nonminimal(double *rt_cam_c, const char **name, bool planar, const double *v,
-                       const double *p_c, const int *in, int Nin, double *xy, double *p_sel)
+// OpenCV's IPPE on the inliers `in` whose bearings are clearly in front (normalised image
+// coordinates x/z, y/z). xy (Nin,2) and p_sel (Nin,3) are scratch. False if the solver refuses.
+static bool solve_ippe(double *rt_cam_c, const double *v, const double *p_c, const int *in,
+                       int Nin, double *xy, double *p_sel)
 {
-    if (planar) {
-        int n = 0;
-        for (int k = 0; k < Nin; k++) {
-            const double *vi = &v[3 * in[k]];
-            if (!(vi[2] > RS_INIT_IPPE_MIN_VZ)) continue;
-            xy[2 * n] = vi[0] / vi[2];
-            xy[2 * n + 1] = vi[1] / vi[2];
-            memcpy(&p_sel[3 * n], &p_c[3 * in[k]], 3 * sizeof(double));
-            n++;
-        }
-        *name = "opencv-ippe";
-        return n >= 4 && rs_calib_opencv_ippe(rt_cam_c, xy, p_sel, n, NULL) == RS_OK;
+    int n = 0;
+    for (int k = 0; k < Nin; k++) {
+        const double *vi = &v[3 * in[k]];
+        if (!(vi[2] > RS_INIT_IPPE_MIN_VZ)) continue;
+        xy[2 * n] = vi[0] / vi[2];
+        xy[2 * n + 1] = vi[1] / vi[2];
+        memcpy(&p_sel[3 * n], &p_c[3 * in[k]], 3 * sizeof(double));
+        n++;
     }
+    return n >= 4 && rs_calib_opencv_ippe(rt_cam_c, xy, p_sel, n, NULL) == RS_OK;
+}
+
+// OpenGV's EPnP on the inliers `in`. False if there are too few or the solver fails.
+static bool solve_epnp(double *rt_cam_c, const double *v, const double *p_c, const int *in,
+                       int Nin)
+{
     double Rt[12];
-    *name = "opengv-epnp";
     if (Nin < RS_INIT_EPNP_MIN || rs_calib_opengv_epnp(Rt, v, p_c, in, Nin, NULL) != RS_OK)
         return false;
     mrcal_rt_from_Rt(rt_cam_c, NULL, Rt);
@@ -297,17 +300,28 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
     snprintf(result->method, sizeof(result->method), "opengv-p3p-%s-ransac",
              Nfallback ? "kneip+gao" : "kneip");
 
-    // 4. non-minimal solve on the inliers; keep whichever fits the inliers better
-    double rt_nm[6];
-    const char *name = "";
-    if (nonminimal(rt_nm, &name, result->planar, v, p_c, in, Nin, xy, p_sel)) {
-        const double rms_nm = rms_px_at(rt_nm, in, Nin, &sc, tmp);
-        if (rms_nm < rms_best) {
-            rms_best = rms_nm;
-            memcpy(rt_best, rt_nm, sizeof(rt_best));
-            const size_t len = strlen(result->method);
-            snprintf(result->method + len, sizeof(result->method) - len, " + %s", name);
+    // 4. non-minimal solves on the inliers; keep whichever fits the inliers best. IPPE is
+    // exact for coplanar landmarks but biased by any relief, EPnP the reverse: on landmarks
+    // judged planar both are tried, unless they are exactly coplanar (OpenGV's EPnP then
+    // prints to stderr, and could not win anyway).
+    const bool try_ippe = result->planar;
+    const bool try_epnp = !result->planar || s[2] > RS_INIT_EXACTLY_PLANAR * s[1];
+    const char *best_name = NULL;
+    for (int m = 0; m < 2; m++) {
+        double rt[6];
+        const bool ok = m == 0 ? try_ippe && solve_ippe(rt, v, p_c, in, Nin, xy, p_sel)
+                               : try_epnp && solve_epnp(rt, v, p_c, in, Nin);
+        if (!ok) continue;
+        const double rms = rms_px_at(rt, in, Nin, &sc, tmp);
+        if (rms < rms_best) {
+            rms_best = rms;
+            memcpy(rt_best, rt, sizeof(rt_best));
+            best_name = m == 0 ? "opencv-ippe" : "opengv-epnp";
         }
+    }
+    if (best_name) {
+        const size_t len = strlen(result->method);
+        snprintf(result->method + len, sizeof(result->method) - len, " + %s", best_name);
     }
     if (!isfinite(rms_best)) { // cannot happen: RANSAC inliers are in front by construction
         st = rs_err_set(err, RS_ERR_DEGENERATE,

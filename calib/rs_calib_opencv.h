@@ -30,6 +30,19 @@ rs_status rs_calib_opencv_ippe(// out
                                int N,
                                rs_err *err);         // may be NULL
 
+// Writes a camera in OpenCV's own YAML layout (cv::FileStorage), for users of cv::projectPoints:
+// image_width, image_height (int), camera_matrix (3x3 K from fx fy cx cy),
+// distortion_coefficients (1xNdistortion, OpenCV's order -- mrcal's LENSMODEL_OPENCVn order),
+// rvec, tvec (3x1: rt_cam_enu, mapping site ENU into the camera), and R_cam_enu (3x3).
+// Writes `path` directly: the caller makes it atomic (rs_io_atomic_*).
+// Returns RS_ERR_IO if the file cannot be written, RS_ERR_EXTERNAL if OpenCV throws.
+rs_status rs_calib_opencv_write_yaml(const char *path,
+                                     const double *intrinsics,  // (4 + Ndistortion,)
+                                     int Ndistortion,           // 0, 4, 5, 8, 12 or 14
+                                     const double *rt_cam_enu,  // (6,)
+                                     int width, int height,     // pixels
+                                     rs_err *err);              // may be NULL
+
 #ifdef __cplusplus
 }
 #endif

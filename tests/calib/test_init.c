@@ -15,6 +15,11 @@
 
 static int Nfail = 0;
 
+// The terrains: a flat road, a road with crown and kerbs (nearly planar), street furniture.
+enum { NTERRAIN = 3 };
+static const double terrain_relief_m[NTERRAIN] = {0.0, 0.3, 8.0};
+static const char *const terrain_name[NTERRAIN] = {"planar", "nearly-planar", "3d"};
+
 #define CHECK(cond, ...)                                                                       \
     do {                                                                                       \
         if (!(cond)) {                                                                         \
@@ -39,17 +44,18 @@ static double percentile(double *x, int n, double pc)
 }
 
 // 1. Noise-free: the truth comes back to 1e-6 (rotation in rad, position relative to range),
-// every observation an inlier, RMS ~ 0; 200 seeds x 3 lenses x planar/non-planar, N = 4..30.
+// every observation an inlier, RMS ~ 0; 200 seeds x 3 lenses x 3 terrains, N = 4..30.
 static void test_noise_free(void)
 {
     double worst_rot = 0, worst_pos = 0;
-    int Ntrials = 0;
+    int Ntrials = 0, Nnonminimal = 0;
     for (int lens = 0; lens < TG_NLENS; lens++)
-        for (int planar = 0; planar < 2; planar++)
+        for (int terrain = 0; terrain < NTERRAIN; terrain++)
             for (uint64_t seed = 1; seed <= 200; seed++) {
                 const int N = 4 + (int)(seed % 27);
+                const bool planar = terrain == 0;
                 tg_problem pb;
-                if (!tg_make(&pb, seed, (tg_lens)lens, planar, N, 0.0, 0.0)) {
+                if (!tg_make(&pb, seed, (tg_lens)lens, terrain_relief_m[terrain], N, 0.0, 0.0)) {
                     CHECK(0, "noise-free seed %llu: generator failed", (unsigned long long)seed);
                     continue;
                 }
@@ -59,16 +65,18 @@ static void test_noise_free(void)
                 const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics,
                                                         pb.p_enu_m, pb.q_px, N, NULL, &err);
                 Ntrials++;
-                CHECK(st == RS_OK, "noise-free seed %llu %s planar=%d N=%d: status %d: %s",
-                      (unsigned long long)seed, tg_lens_name(lens), planar, N, st, err.msg);
+                CHECK(st == RS_OK, "noise-free seed %llu %s %s N=%d: status %d: %s",
+                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], N, st,
+                      err.msg);
                 if (st) continue;
+                Nnonminimal += strstr(res.method, " + ") != NULL;
                 const double rot = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu);
                 const double pos = tg_position_error_m(res.rt_cam_enu, pb.rt_cam_enu) / pb.range_m;
                 // NaN fails these comparisons
                 CHECK(rot < 1e-6 && pos < 1e-6 && res.rms_px < 1e-4 && res.Ninliers == N,
-                      "noise-free seed %llu %s planar=%d N=%d: rotation error %.3g rad, position "
+                      "noise-free seed %llu %s %s N=%d: rotation error %.3g rad, position "
                       "error %.3g of range, rms %.3g px, %d/%d inliers, planar judged %d, %s",
-                      (unsigned long long)seed, tg_lens_name(lens), planar, N, rot, pos,
+                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], N, rot, pos,
                       res.rms_px, res.Ninliers, N, res.planar, res.method);
                 CHECK(!planar || res.planar, "noise-free seed %llu %s N=%d: planar set not judged planar",
                       (unsigned long long)seed, tg_lens_name(lens), N);
@@ -76,7 +84,8 @@ static void test_noise_free(void)
                 if (!(pos <= worst_pos)) worst_pos = pos;
             }
     printf("noise-free: %d trials, worst rotation error %.3g rad, worst position error %.3g of "
-           "range (tolerance 1e-6)\n", Ntrials, worst_rot, worst_pos);
+           "range (tolerance 1e-6); non-minimal pose kept in %d\n", Ntrials, worst_rot, worst_pos,
+           Nnonminimal);
 }
 
 // 2. 1 px noise + 30% gross outliers (moved >= 25 px), N = 20.
@@ -91,13 +100,14 @@ static void test_outliers(void)
 {
     enum { N = 20, TRIALS = 200 };
     int Nout = 0, Nout_flagged = 0, Nin_true = 0, Nin_kept = 0;
-    static double emodel[TG_NLENS * 2 * TRIALS], rot[TG_NLENS * 2 * TRIALS], pos[TG_NLENS * 2 * TRIALS];
-    int n = 0;
+    static double emodel[TG_NLENS * NTERRAIN * TRIALS], rot[TG_NLENS * NTERRAIN * TRIALS],
+        pos[TG_NLENS * NTERRAIN * TRIALS];
+    int n = 0, Nnonminimal = 0;
     for (int lens = 0; lens < TG_NLENS; lens++)
-        for (int planar = 0; planar < 2; planar++)
+        for (int terrain = 0; terrain < NTERRAIN; terrain++)
             for (uint64_t seed = 1001; seed < 1001 + TRIALS; seed++) {
                 tg_problem pb;
-                if (!tg_make(&pb, seed, (tg_lens)lens, planar, N, 1.0, 0.3)) {
+                if (!tg_make(&pb, seed, (tg_lens)lens, terrain_relief_m[terrain], N, 1.0, 0.3)) {
                     CHECK(0, "outliers seed %llu: generator failed", (unsigned long long)seed);
                     continue;
                 }
@@ -109,9 +119,10 @@ static void test_outliers(void)
                 rs_err err = {0};
                 const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics,
                                                         pb.p_enu_m, pb.q_px, N, &opt, &err);
-                CHECK(st == RS_OK, "outliers seed %llu %s planar=%d: status %d: %s",
-                      (unsigned long long)seed, tg_lens_name(lens), planar, st, err.msg);
+                CHECK(st == RS_OK, "outliers seed %llu %s %s: status %d: %s",
+                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], st, err.msg);
                 if (st) continue;
+                Nnonminimal += strstr(res.method, " + ") != NULL;
                 for (int i = 0; i < N; i++) {
                     if (pb.outlier[i]) {
                         Nout++;
@@ -124,9 +135,9 @@ static void test_outliers(void)
                 emodel[n] = tg_model_error_px(&pb, res.rt_cam_enu, pb.rt_cam_enu);
                 rot[n] = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu) * 180 / M_PI;
                 pos[n] = tg_position_error_m(res.rt_cam_enu, pb.rt_cam_enu) / pb.range_m;
-                CHECK(emodel[n] < 5.0, "outliers seed %llu %s planar=%d: e_model %.3g px >= 5 px "
+                CHECK(emodel[n] < 5.0, "outliers seed %llu %s %s: e_model %.3g px >= 5 px "
                       "(rotation %.3g deg, position %.3g of range, %s)", (unsigned long long)seed,
-                      tg_lens_name(lens), planar, emodel[n], rot[n], pos[n], res.method);
+                      tg_lens_name(lens), terrain_name[terrain], emodel[n], rot[n], pos[n], res.method);
                 n++;
             }
     const double recall = Nout ? (double)Nout_flagged / Nout : 0.0;
@@ -136,10 +147,12 @@ static void test_outliers(void)
     CHECK(med < 1.3, "median e_model %.3g px >= 1.3 px", med);
     printf("outliers (N=%d, 1 px noise, 30%% gross): %d trials, outlier recall %.4f (%d/%d), good "
            "points kept %.4f; e_model median %.3g px, 95%% %.3g px, max %.3g px; rotation error "
-           "median %.3g deg, 95%% %.3g deg; position error median %.3g, 95%% %.3g of range\n",
+           "median %.3g deg, 95%% %.3g deg; position error median %.3g, 95%% %.3g of range; "
+           "non-minimal pose kept in %d\n",
            N, n, recall, Nout_flagged, Nout, kept, med, n ? percentile(emodel, n, 95) : 0,
            n ? percentile(emodel, n, 100) : 0, n ? percentile(rot, n, 50) : 0,
-           n ? percentile(rot, n, 95) : 0, n ? percentile(pos, n, 50) : 0, n ? percentile(pos, n, 95) : 0);
+           n ? percentile(rot, n, 95) : 0, n ? percentile(pos, n, 50) : 0, n ? percentile(pos, n, 95) : 0,
+           Nnonminimal);
 }
 
 static void expect_error(const char *what, rs_status want, const char *needle,
@@ -162,7 +175,7 @@ static void test_degenerate(void)
 {
     tg_problem pb;
     const uint64_t seed = 77;
-    if (!tg_make(&pb, seed, TG_PINHOLE, false, 12, 0.0, 0.0)) {
+    if (!tg_make(&pb, seed, TG_PINHOLE, 8.0, 12, 0.0, 0.0)) {
         CHECK(0, "degenerate seed %llu: generator failed", (unsigned long long)seed);
         return;
     }
@@ -240,7 +253,7 @@ static void test_deterministic(void)
 {
     tg_problem pb;
     const uint64_t seed = 4242;
-    if (!tg_make(&pb, seed, TG_OPENCV8, true, 25, 1.0, 0.3)) {
+    if (!tg_make(&pb, seed, TG_OPENCV8, 0.0, 25, 1.0, 0.3)) {
         CHECK(0, "deterministic seed %llu: generator failed", (unsigned long long)seed);
         return;
     }
@@ -261,7 +274,7 @@ static void time_calls(void)
             enum { REPS = 100 };
             tg_problem pb[8];
             for (int k = 0; k < 8; k++)
-                if (!tg_make(&pb[k], 5000 + (uint64_t)k, (tg_lens)lens, true, 20, 1.0, outliers ? 0.3 : 0.0))
+                if (!tg_make(&pb[k], 5000 + (uint64_t)k, (tg_lens)lens, 0.0, 20, 1.0, outliers ? 0.3 : 0.0))
                     return;
             struct timespec t0, t1;
             clock_gettime(CLOCK_MONOTONIC, &t0);

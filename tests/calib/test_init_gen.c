@@ -95,7 +95,7 @@ static bool project(mrcal_point2_t *q, const tg_problem *pb, const double *rt, c
     return pc.z > 0 && mrcal_project(q, NULL, NULL, &pc, 1, &pb->lensmodel, pb->intrinsics);
 }
 
-bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, bool planar, int N, double noise_px,
+bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
              double outlier_fraction)
 {
     if (N < 0 || N > TG_NMAX) return false;
@@ -134,7 +134,7 @@ bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, bool planar, int N, do
                 v_enu[k] = R_enu_cam[3 * k] * v.x + R_enu_cam[3 * k + 1] * v.y + R_enu_cam[3 * k + 2] * v.z;
             const double nv = sqrt(v_enu[0] * v_enu[0] + v_enu[1] * v_enu[1] + v_enu[2] * v_enu[2]);
             if (!(v_enu[2] < -0.03 * nv)) continue; // at or above the horizon
-            const double u = planar ? 0.0 : tg_uniform(&r, 0.0, fmin(8.0, 0.6 * h));
+            const double u = relief_m > 0.0 ? tg_uniform(&r, 0.0, fmin(relief_m, 0.6 * h)) : 0.0;
             const double s = (z_road + u - c[2]) / v_enu[2];
             if (!(s * nv < 600.0)) continue;
             double *p = &pb->p_enu_m[3 * i];

@@ -1,7 +1,8 @@
 // test_init_gen.h -- a small simulated roadside camera for the initial-pose tests.
 //
 // A camera on a pole 5..100 m up, looking down at a road, sees N landmarks on the ground
-// (planar) or on the ground and on street furniture up to 8 m high (non-planar). Pixels are
+// (relief_m = 0: planar) or up to relief_m above it (street furniture: 8 m; a road's crown and
+// kerbs: 0.3 m, nearly planar). Pixels are
 // mrcal_project() of the landmarks through the truth pose, plus Gaussian noise, plus gross
 // outliers (moved >= 25 px, anywhere in the image). Everything follows docs/conventions.md.
 #pragma once
@@ -40,7 +41,7 @@ double tg_gauss(tg_rng *r);
 const char *tg_lens_name(tg_lens lens);
 
 // Fills pb. Returns false if no valid layout was found (never with sane arguments).
-bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, bool planar, int N, double noise_px,
+bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
              double outlier_fraction);
 
 // R_enu_cam from yaw/pitch/roll (degrees), docs/conventions.md.
