@@ -41,7 +41,7 @@ def det(image_id, u, v, score, category_id=1):
 
 
 def run(args, gt=None, dets=None, check=True):
-    """Runs `roadside eval GT DETS ARGS --json OUT` (GT/DETS dumped from Python objects, or passed
+    """Runs `roadside eval GT DETS --json OUT ARGS` (GT/DETS dumped from Python objects, or passed
     as raw text when str). Returns (exit code, parsed JSON or None, stdout, stderr)."""
     with tempfile.TemporaryDirectory() as tmp:
         paths = []
@@ -51,7 +51,7 @@ def run(args, gt=None, dets=None, check=True):
                 f.write(obj if isinstance(obj, str) else json.dumps(obj, indent=1))
             paths.append(p)
         out = os.path.join(tmp, "out.json")
-        r = subprocess.run([ROADSIDE, "eval", paths[0], paths[1], *args, "--json", out],
+        r = subprocess.run([ROADSIDE, "eval", paths[0], paths[1], "--json", out, *args],
                            capture_output=True, text=True)
         result = None
         if os.path.exists(out):
