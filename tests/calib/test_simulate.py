@@ -8,6 +8,7 @@ usage: test_simulate.py CHECK   with CHECK one of
   visibility   every pick inside the image, every landmark in front of its camera, >= 4 picks
   outliers     the share of outliers matches --outliers (binomial, 4 sigma)
   options      bad options -> exit 2 with a message; an existing folder -> exit 1, untouched
+  demo         sites/demo is exactly what `roadside site simulate sites/demo --seed 1` writes
 
 Runs with Debian's python3 (numpy, mrcal). Environment: ROADSIDE = the roadside binary.
 """
@@ -245,6 +246,31 @@ def check_options(tmp):
     if r.returncode != 0 or "--pole-prior" not in r.stdout:
         fail(f"--help: exit {r.returncode}")
     print(f"options: {len(bad)} bad argument lists exit 2; existing folders exit 1 and stay untouched")
+
+
+def check_demo(tmp):
+    demo = os.path.join(os.environ.get("ROADSIDE_SOURCE_ROOT", "."), "sites", "demo")
+    if not os.path.isfile(os.path.join(demo, "site.json")):
+        print(f"demo: {demo} not found: skipped")
+        sys.exit(77)
+    site = os.path.join(tmp, "demo")
+    simulate(site, "--seed", "1")
+    files = [f for f in tree(demo) if f != "README.md"]
+    if files != tree(site):
+        fail(f"sites/demo holds {files}, the simulator writes {tree(site)}")
+    _, mismatch, errors = filecmp.cmpfiles(demo, site, files, shallow=False)
+    if mismatch or errors:
+        fail(f"sites/demo is not what 'roadside site simulate sites/demo --seed 1' writes: {mismatch + errors} "
+             "differ (regenerate it)")
+    with open(os.path.join(demo, "README.md")) as f:
+        readme = f.read()
+    for must in ("SYNTHETIC", "roadside site simulate sites/demo --seed 1", "truth/"):
+        if must not in readme:
+            fail(f"sites/demo/README.md does not say {must!r}")
+    size = sum(os.path.getsize(os.path.join(demo, f)) for f in tree(demo))
+    if size >= 200_000:
+        fail(f"sites/demo is {size} bytes (limit 200 KB)")
+    print(f"demo: sites/demo is byte-identical to a fresh --seed 1 site ({len(files)} files, {size} bytes)")
 
 
 def main():
