@@ -299,20 +299,38 @@ static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *op
     return RS_OK;
 }
 
+// rs_calib_init_pose() with its pixel threshold doubled up to 4 times while it finds no
+// consensus: a survey sigma of 0.3 m on a landmark 12 m away is 30 px at f = 1200 px, so the
+// user's threshold (default 8 px) can be too tight for the near landmarks. *T_used receives the
+// threshold that worked. Invalid input is not retried.
+static rs_status init_escalating(rs_calib_init_result *init, double *T_used, const double *intrinsics,
+                                 const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err) {
+    rs_calib_init_options io = opt->init;
+    if (!(io.ransac_threshold_px > 0.0)) io.ransac_threshold_px = 8.0;
+    rs_status st = RS_ERR_DEGENERATE;
+    rs_err e = {RS_OK, ""};
+    for (int k = 0; k < 5; k++, io.ransac_threshold_px *= 2.0) {
+        st = rs_calib_init_pose(init, NULL, pb->lensmodel, intrinsics, pb->p_enu_m, pb->q_px,
+                                pb->N, &io, &e);
+        *T_used = io.ransac_threshold_px;
+        if (st != RS_ERR_DEGENERATE) break;
+    }
+    if (st != RS_OK && err) *err = e;
+    return st;
+}
+
 // Initial pose in the ENU frame. With focal refinement, a 1-D search over a focal scale s
-// (quarter-octave steps over [focal_search_min, focal_search_max]) runs rs_calib_init_pose()
-// at fx s, fy s and keeps the s with the smallest MSAC cost sum(min(e^2, T^2)) (T the RANSAC
-// threshold), estimated from the inliers' count and RMS; intrinsics receives the chosen scale.
+// (quarter-octave steps over [focal_search_min, focal_search_max]) runs the initial pose at
+// fx s, fy s and keeps the s with the smallest MSAC cost sum(min(e^2, T^2)) (T the threshold
+// used), estimated from the inliers' count and RMS; intrinsics receives the chosen scale.
 static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, double *scale_out,
                               const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
                               rs_err *err) {
     const bool search = (opt->refine & RS_CALIB_REFINE_FOCAL) &&
                         opt->focal_search_max > opt->focal_search_min;
+    double T;
     *scale_out = 1.0;
-    if (!search)
-        return rs_calib_init_pose(init, NULL, pb->lensmodel, intrinsics, pb->p_enu_m, pb->q_px,
-                                  pb->N, &opt->init, err);
-    const double T = opt->init.ransac_threshold_px > 0.0 ? opt->init.ransac_threshold_px : 8.0;
+    if (!search) return init_escalating(init, &T, intrinsics, pb, opt, err);
     const int K = 1 + (int)ceil(4.0 * log2(opt->focal_search_max / opt->focal_search_min));
     double best = INFINITY;
     rs_status last = RS_ERR_DEGENERATE;
@@ -327,12 +345,11 @@ static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, do
         trial[1] *= s;
         rs_calib_init_result r;
         rs_err e = {RS_OK, ""};
-        const rs_status st = rs_calib_init_pose(&r, NULL, pb->lensmodel, trial, pb->p_enu_m,
-                                                pb->q_px, pb->N, &opt->init, &e);
+        const rs_status st = init_escalating(&r, &T, trial, pb, opt, &e);
         if (st != RS_OK) {
             last = st;
             e_last = e;
-            if (st == RS_ERR_INVALID) break; // the input, not the scale, is at fault
+            if (st != RS_ERR_DEGENERATE) break; // the input, not the scale, is at fault
             continue;
         }
         const double cost = r.Ninliers * r.rms_px * r.rms_px + (pb->N - r.Ninliers) * T * T;
@@ -378,6 +395,31 @@ static void rt_centred_from_enu(double rt_c[6], const double rt_enu[6], const do
         rt_c[i] = rt_enu[i];
         rt_c[3 + i] = rt_enu[3 + i] + Rc[i];
     }
+}
+
+// Ceres moves r additively and may leave it beyond |r| = pi; the same rotation with
+// |r| <= pi (mrcal_r_from_R) is reported, the covariance carried through dr'/dr (chain of
+// mrcal's R_from_r and r_from_R gradients). cov_rt (6,6) in,out.
+static void normalise_r(double rt[6], double cov_rt[36]) {
+    const double th = sqrt(rt[0] * rt[0] + rt[1] * rt[1] + rt[2] * rt[2]);
+    if (th <= M_PI) return;
+    double R[9], dR_dr[27], r[3], dr_dR[27], J[9];
+    mrcal_R_from_r(R, dR_dr, rt);
+    mrcal_r_from_R(r, dr_dR, R);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double s = 0.0;
+            for (int k = 0; k < 9; k++) s += dr_dR[i * 9 + k] * dR_dr[k * 3 + j];
+            J[i * 3 + j] = s;
+        }
+    double J6[36] = {0}, out[36];
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) J6[i * 6 + j] = J[i * 3 + j];
+        J6[(3 + i) * 6 + 3 + i] = 1.0;
+    }
+    sandwich(out, J6, cov_rt, 6, 6);
+    memcpy(cov_rt, out, sizeof(out));
+    memcpy(rt, r, sizeof(r));
 }
 
 // sigma of yaw/pitch/roll: cov_r (3,3) propagated through d(ypr)/dr, by central differences of
@@ -488,7 +530,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
                                   .focal_prior_rel_sigma = opt->focal_prior_rel_sigma,
                                   .center_prior_sigma_px = opt->center_prior_sigma_px,
                                   .distortion_prior_sigma = opt->distortion_prior_sigma,
-                                  .covariance = false};
+                                  .covariance = false, .rough = true};
     rs_calib_refine_summary sum;
     for (int i = 0; i < N; i++) w->use[i] = true;
     int Noutliers = 0;
@@ -524,6 +566,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     // 4. plain weighted least squares on the inliers, with the covariance
     ro.robust_scale = 0.0;
     ro.covariance = true;
+    ro.rough = false;
     st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred,
                              &rp, &ro, err);
     if (st != RS_OK) {
@@ -548,6 +591,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     double J[36], cov_c[36];
     for (int a = 0; a < 6; a++)
         for (int b = 0; b < 6; b++) cov_c[a * 6 + b] = w->cov[a * n + b];
+    normalise_r(rt_c, cov_c);
     rt_enu_from_centred(res->rt_cam_enu, J, rt_c, c);
     sandwich(res->covariance_rt_cam_enu, J, cov_c, 6, 6);
     for (int a = 0; a < Ni; a++) {

@@ -47,6 +47,8 @@ typedef struct {
     double center_prior_sigma_px;     // 0: no prior
     double distortion_prior_sigma;    // 0: no prior
     bool covariance;                  // compute the covariance and the condition number
+    bool rough;                       // a first (robust) pass: looser tolerances, and reaching
+                                      //   max_iterations is not an error
 } rs_calib_refine_options;
 
 typedef struct {
@@ -78,6 +80,13 @@ rs_status rs_calib_refine_run(// in,out
                               const rs_calib_refine_problem *problem,
                               const rs_calib_refine_options *opt,
                               rs_err *err);
+
+// For tests: the worst relative disagreement, over every landmark residual block of problem
+// (use ignored) at the given point, between the analytic Jacobians (rt, landmark, all
+// intrinsics) and central differences of the same residuals (step 1e-6 max(1, |x|)).
+// Relative to the largest entry of that Jacobian row. Returns NAN if a residual fails.
+double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const double *intrinsics,
+                                      const double *p_c_m, const rs_calib_refine_problem *problem);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,180 @@
+// test_solve_gen.c -- see test_solve_gen.h.
+#include "test_solve_gen.h"
+
+#include <math.h>
+#include <string.h>
+
+#include <mrcal/poseutils.h>
+
+void gen_seed(gen_rng *g, uint64_t seed) { g->s = seed * 0x9E3779B97F4A7C15ull + 12345u; }
+
+static uint64_t next(gen_rng *g) { // splitmix64
+    uint64_t z = (g->s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+double gen_uniform(gen_rng *g, double a, double b) {
+    return a + (b - a) * ((double)(next(g) >> 11) * 0x1.0p-53);
+}
+double gen_normal(gen_rng *g) { // Box-Muller
+    double u1 = gen_uniform(g, 0, 1), u2 = gen_uniform(g, 0, 1);
+    if (u1 < 1e-300) u1 = 1e-300;
+    return sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
+}
+
+static void set_lens(gen_problem *g, gen_lens lens) {
+    g->width = 1920;
+    g->height = 1080;
+    const double core[4] = {1200.0, 1200.0, 959.5, 539.5};
+    memset(g->intrinsics, 0, sizeof(g->intrinsics));
+    memcpy(g->intrinsics, core, sizeof(core));
+    switch (lens) {
+    case GEN_PINHOLE: g->lensmodel.type = MRCAL_LENSMODEL_PINHOLE; break;
+    case GEN_OPENCV8: {
+        g->lensmodel.type = MRCAL_LENSMODEL_OPENCV8;
+        const double d[8] = {-0.21, 0.06, 0.0008, -0.0005, -0.01, 0.02, -0.005, 0.003};
+        memcpy(&g->intrinsics[4], d, sizeof(d));
+        break;
+    }
+    case GEN_CAHVOR: {
+        g->lensmodel.type = MRCAL_LENSMODEL_CAHVOR;
+        const double d[5] = {0.01, -0.02, 0.0, -0.03, 0.01}; // alpha, beta, r0, r1, r2
+        memcpy(&g->intrinsics[4], d, sizeof(d));
+        break;
+    }
+    }
+    g->Nintrinsics = mrcal_lensmodel_num_params(&g->lensmodel);
+}
+
+static bool project(double q[2], const gen_problem *g, const double p_enu[3]) {
+    mrcal_point3_t pc;
+    mrcal_point2_t qq;
+    mrcal_transform_point_rt(pc.xyz, NULL, NULL, g->rt_true, p_enu);
+    if (!(pc.z > 0.0)) return false;
+    if (!mrcal_project(&qq, NULL, NULL, &pc, 1, &g->lensmodel, g->intrinsics)) return false;
+    q[0] = qq.x;
+    q[1] = qq.y;
+    return isfinite(q[0]) && isfinite(q[1]);
+}
+
+bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_px, double sigma_m) {
+    memset(g, 0, sizeof(*g));
+    if (N > GEN_MAXN) return false;
+    set_lens(g, lens);
+    const double ground = gen_uniform(rng, -5.0, 40.0); // road height in the site frame
+    g->position_true[0] = gen_uniform(rng, 200.0, 600.0);
+    g->position_true[1] = gen_uniform(rng, -600.0, -200.0);
+    g->position_true[2] = ground + gen_uniform(rng, 6.0, 15.0);
+    const double ypr[3] = {gen_uniform(rng, 0.0, 360.0), gen_uniform(rng, -30.0, -8.0),
+                           gen_uniform(rng, -3.0, 3.0)};
+    rs_calib_rt_from_ypr(g->rt_true, ypr, g->position_true);
+    double Rt[12]; // rows 0-2: R_cam_enu; row 3: t
+    mrcal_Rt_from_rt(Rt, NULL, g->rt_true);
+    g->N = N;
+    double range_sum = 0.0;
+    for (int i = 0; i < N; i++) {
+        int tries = 0;
+        for (;; tries++) {
+            if (tries > 1000) return false;
+            mrcal_point2_t q = {.x = gen_uniform(rng, 0.03, 0.97) * g->width,
+                                .y = gen_uniform(rng, 0.03, 0.97) * g->height};
+            mrcal_point3_t v;
+            if (!mrcal_unproject(&v, &q, 1, &g->lensmodel, g->intrinsics)) continue;
+            double d[3]; // R^T v
+            for (int k = 0; k < 3; k++) d[k] = Rt[k] * v.x + Rt[3 + k] * v.y + Rt[6 + k] * v.z;
+            // 80% on the road (+-0.5 m relief), 20% on poles/signs up to 4 m
+            const double h = ground + (gen_uniform(rng, 0, 1) < 0.8 ? gen_uniform(rng, -0.5, 0.5)
+                                                                     : gen_uniform(rng, 0.5, 4.0));
+            if (d[2] > -1e-6) continue;
+            const double lambda = (h - g->position_true[2]) / d[2];
+            double *p = &g->p_true[3 * i];
+            for (int k = 0; k < 3; k++) p[k] = g->position_true[k] + lambda * d[k];
+            const double range = sqrt((p[0] - g->position_true[0]) * (p[0] - g->position_true[0]) +
+                                      (p[1] - g->position_true[1]) * (p[1] - g->position_true[1]) +
+                                      (p[2] - g->position_true[2]) * (p[2] - g->position_true[2]));
+            if (range < 12.0 || range > 150.0) continue;
+            if (!project(&g->q_true[2 * i], g, p)) continue;
+            range_sum += range;
+            break;
+        }
+        for (int k = 0; k < 3; k++) {
+            g->sigma_enu[3 * i + k] = sigma_m;
+            g->p_survey[3 * i + k] = g->p_true[3 * i + k] + sigma_m * gen_normal(rng);
+        }
+        g->sigma_px[i] = sigma_px > 0.0 ? sigma_px : 1.0;
+        for (int k = 0; k < 2; k++) g->q_obs[2 * i + k] = g->q_true[2 * i + k] + sigma_px * gen_normal(rng);
+    }
+    g->mean_range_m = range_sum / N;
+    return true;
+}
+
+void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout) {
+    for (int i = g->N - Nout; i < g->N; i++) {
+        const double a = gen_uniform(rng, 0, 2 * M_PI), r = gen_uniform(rng, 200.0, 500.0);
+        g->q_obs[2 * i] = g->q_true[2 * i] + r * cos(a);
+        g->q_obs[2 * i + 1] = g->q_true[2 * i + 1] + r * sin(a);
+        g->outlier[i] = true;
+    }
+}
+
+void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m) {
+    // new landmarks: copies of random existing ones moved along the road by 2-10 m
+    int added = 0;
+    for (int tries = 0; added < Nout && g->N < GEN_MAXN && tries < 1000; tries++) {
+        const int j = (int)gen_uniform(rng, 0, g->N - added);
+        const int i = g->N;
+        double *p = &g->p_true[3 * i];
+        memcpy(p, &g->p_true[3 * j], 3 * sizeof(double));
+        p[0] += gen_uniform(rng, -10, 10);
+        p[1] += gen_uniform(rng, -10, 10);
+        const double range = sqrt((p[0] - g->position_true[0]) * (p[0] - g->position_true[0]) +
+                                  (p[1] - g->position_true[1]) * (p[1] - g->position_true[1]) +
+                                  (p[2] - g->position_true[2]) * (p[2] - g->position_true[2]));
+        if (range < 12.0 || range > 150.0) continue;
+        if (!project(&g->q_true[2 * i], g, p)) continue;
+        if (g->q_true[2 * i] < 0 || g->q_true[2 * i] > g->width - 1 || g->q_true[2 * i + 1] < 0 ||
+            g->q_true[2 * i + 1] > g->height - 1)
+            continue; // in view: only a mistake about a visible landmark is a mistake
+        for (int k = 0; k < 3; k++) {
+            g->sigma_enu[3 * i + k] = sigma_m;
+            g->p_survey[3 * i + k] = p[k] + sigma_m * gen_normal(rng);
+        }
+        g->sigma_px[i] = g->sigma_px[0];
+        g->N++;
+        added++;
+        gen_add_outliers(g, rng, 1);
+    }
+}
+
+rs_calib_problem gen_view(const gen_problem *g, const double *intrinsics_nominal) {
+    rs_calib_problem pb = {.N = g->N, .p_enu_m = g->p_survey, .sigma_enu_m = g->sigma_enu,
+                           .q_px = g->q_obs, .sigma_px = g->sigma_px, .lensmodel = &g->lensmodel,
+                           .intrinsics = intrinsics_nominal ? intrinsics_nominal : g->intrinsics,
+                           .width = g->width, .height = g->height};
+    return pb;
+}
+
+double gen_nees(const double *e, const double *C, int n) {
+    double L[36 * 36];
+    if (n > 36) return NAN;
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j <= i; j++) {
+            double s = C[i * n + j];
+            for (int k = 0; k < j; k++) s -= L[i * n + k] * L[j * n + k];
+            if (i == j) {
+                if (!(s > 0.0)) return NAN;
+                L[i * n + i] = sqrt(s);
+            } else {
+                L[i * n + j] = s / L[j * n + j];
+            }
+        }
+    double y[36], nees = 0.0;
+    for (int i = 0; i < n; i++) {
+        double s = e[i];
+        for (int k = 0; k < i; k++) s -= L[i * n + k] * y[k];
+        y[i] = s / L[i * n + i];
+        nees += y[i] * y[i];
+    }
+    return nees;
+}

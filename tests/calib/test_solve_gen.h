@@ -1,0 +1,51 @@
+// test_solve_gen.h -- REFINE's own simulated roadside problems for the solver tests: a truth
+// pose, landmarks on a gently uneven road (some on poles), their exact pixels through mrcal,
+// pixel and survey noise, gross outliers. Deterministic from a seed.
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+#include <mrcal/mrcal.h>
+
+#include "rs_calib.h"
+
+#define GEN_MAXN 64
+
+typedef struct {
+    uint64_t s;
+} gen_rng;
+void gen_seed(gen_rng *g, uint64_t seed);
+double gen_uniform(gen_rng *g, double a, double b);
+double gen_normal(gen_rng *g);
+
+typedef enum { GEN_PINHOLE, GEN_OPENCV8, GEN_CAHVOR } gen_lens;
+
+typedef struct {
+    mrcal_lensmodel_t lensmodel;
+    int Nintrinsics;
+    double intrinsics[16];   // truth
+    int width, height;
+    double rt_true[6];
+    double position_true[3];
+    int N;
+    double p_true[GEN_MAXN * 3], p_survey[GEN_MAXN * 3], sigma_enu[GEN_MAXN * 3];
+    double q_true[GEN_MAXN * 2], q_obs[GEN_MAXN * 2], sigma_px[GEN_MAXN];
+    bool outlier[GEN_MAXN];
+    double mean_range_m;
+} gen_problem;
+
+// Fills g with N landmarks (<= GEN_MAXN) seen by a camera 6-15 m above a road some hundreds of
+// metres from the ENU origin, pitched down 8-30 deg, ranges 12-150 m. sigma_px and sigma_m are
+// the noise 1-sigmas (0: exact). Returns false if the scene could not be built.
+bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_px, double sigma_m);
+
+// Replaces the pixels of the last Nout landmarks by gross mistakes, 200-500 px away.
+void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout);
+
+// Appends Nout gross outliers (new landmarks 12-150 m away whose clicked pixel is 200-500 px off).
+void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m);
+
+// A problem view of g (pointers into g).
+rs_calib_problem gen_view(const gen_problem *g, const double *intrinsics_nominal);
+
+// e^T C^-1 e for a (n,n) symmetric positive-definite C (Cholesky); NAN if not positive definite.
+double gen_nees(const double *e, const double *C, int n);
