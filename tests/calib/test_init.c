@@ -33,6 +33,15 @@ static const char *const terrain_name[NTERRAIN] = {"planar", "nearly-planar", "3
         }                                                                                      \
     } while (0)
 
+// tg_make, or a failed check naming the test and seed.
+static bool make(tg_problem *pb, const char *what, uint64_t seed, tg_lens lens, double relief_m,
+                 int N, double noise_px, double outlier_fraction)
+{
+    const bool ok = tg_make(pb, seed, lens, relief_m, N, noise_px, outlier_fraction);
+    CHECK(ok, "%s seed %llu: generator failed", what, (unsigned long long)seed);
+    return ok;
+}
+
 static int cmp_double(const void *a, const void *b)
 {
     const double x = *(const double *)a, y = *(const double *)b;
@@ -57,10 +66,7 @@ static void test_noise_free(void)
                 const int N = 4 + (int)(seed % 27);
                 const bool planar = terrain == 0;
                 tg_problem pb;
-                if (!tg_make(&pb, seed, (tg_lens)lens, terrain_relief_m[terrain], N, 0.0, 0.0)) {
-                    CHECK(0, "noise-free seed %llu: generator failed", (unsigned long long)seed);
-                    continue;
-                }
+                if (!make(&pb, "noise-free", seed, (tg_lens)lens, terrain_relief_m[terrain], N, 0.0, 0.0)) continue;
                 rs_calib_init_result res;
                 bool inl[TG_NMAX];
                 rs_err err = {0};
@@ -109,18 +115,11 @@ static void test_outliers(void)
         for (int terrain = 0; terrain < NTERRAIN; terrain++)
             for (uint64_t seed = 1001; seed < 1001 + TRIALS; seed++) {
                 tg_problem pb;
-                if (!tg_make(&pb, seed, (tg_lens)lens, terrain_relief_m[terrain], N, 1.0, 0.3)) {
-                    CHECK(0, "outliers seed %llu: generator failed", (unsigned long long)seed);
-                    continue;
-                }
-                rs_calib_init_options opt;
-                rs_calib_init_options_default(&opt);
-                opt.seed = seed;
+                if (!make(&pb, "outliers", seed, (tg_lens)lens, terrain_relief_m[terrain], N, 1.0, 0.3)) continue;
                 rs_calib_init_result res;
                 bool inl[TG_NMAX];
                 rs_err err = {0};
-                const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics,
-                                                        pb.p_enu_m, pb.q_px, N, &opt, &err);
+                const rs_status st = tg_init_pose(&res, inl, &pb, seed, &err);
                 CHECK(st == RS_OK, "outliers seed %llu %s %s: status %d: %s",
                       (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], st, err.msg);
                 if (st) continue;
@@ -177,10 +176,7 @@ static void test_degenerate(void)
 {
     tg_problem pb;
     const uint64_t seed = 77;
-    if (!tg_make(&pb, seed, TG_PINHOLE, 8.0, 12, 0.0, 0.0)) {
-        CHECK(0, "degenerate seed %llu: generator failed", (unsigned long long)seed);
-        return;
-    }
+    if (!make(&pb, "degenerate", seed, TG_PINHOLE, 8.0, 12, 0.0, 0.0)) return;
     double p[3 * TG_NMAX], q[2 * TG_NMAX];
 
     expect_error("3 points", RS_ERR_DEGENERATE, "need at least 4", &pb, pb.p_enu_m, pb.q_px, 3);
@@ -255,10 +251,7 @@ static void test_deterministic(void)
 {
     tg_problem pb;
     const uint64_t seed = 4242;
-    if (!tg_make(&pb, seed, TG_OPENCV8, 0.0, 25, 1.0, 0.3)) {
-        CHECK(0, "deterministic seed %llu: generator failed", (unsigned long long)seed);
-        return;
-    }
+    if (!make(&pb, "deterministic", seed, TG_OPENCV8, 0.0, 25, 1.0, 0.3)) return;
     rs_calib_init_result a, b;
     bool ia[TG_NMAX], ib[TG_NMAX];
     const rs_status sa = rs_calib_init_pose(&a, ia, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, pb.N, NULL, NULL);

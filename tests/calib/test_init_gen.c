@@ -175,6 +175,16 @@ bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N
     return true;
 }
 
+rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem *pb,
+                       uint64_t seed, rs_err *err)
+{
+    rs_calib_init_options opt;
+    rs_calib_init_options_default(&opt);
+    opt.seed = seed;
+    return rs_calib_init_pose(res, inlier, &pb->lensmodel, pb->intrinsics, pb->p_enu_m, pb->q_px,
+                              pb->N, &opt, err);
+}
+
 double tg_rotation_error_rad(const double *rt_a, const double *rt_b)
 {
     const double rb_inv[3] = {-rt_b[0], -rt_b[1], -rt_b[2]};

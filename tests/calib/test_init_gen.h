@@ -9,6 +9,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "rs_calib_init.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -43,6 +45,10 @@ const char *tg_lens_name(tg_lens lens);
 // Fills pb. Returns false if no valid layout was found (never with sane arguments).
 bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
              double outlier_fraction);
+
+// rs_calib_init_pose() on pb with the default options and RANSAC seed `seed`.
+rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem *pb,
+                       uint64_t seed, rs_err *err);
 
 // R_enu_cam from yaw/pitch/roll (degrees), docs/conventions.md.
 void tg_R_enu_cam(double *R, double yaw_deg, double pitch_deg, double roll_deg);

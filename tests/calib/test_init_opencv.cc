@@ -22,7 +22,6 @@
 extern "C" {
 #include <mrcal/poseutils.h>
 
-#include "rs_calib_init.h"
 #include "test_init_gen.h"
 }
 
@@ -86,15 +85,11 @@ int main()
                     Nfail++;
                     continue;
                 }
-                rs_calib_init_options opt;
-                rs_calib_init_options_default(&opt);
-                opt.seed = seed;
                 rs_calib_init_result res;
                 bool inl[TG_NMAX];
                 rs_err err = {};
                 const auto t0 = std::chrono::steady_clock::now();
-                const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics,
-                                                        pb.p_enu_m, pb.q_px, N, &opt, &err);
+                const rs_status st = tg_init_pose(&res, inl, &pb, seed, &err);
                 const auto t1 = std::chrono::steady_clock::now();
                 double rt_cv[6];
                 std::vector<bool> inl_cv;
