@@ -111,23 +111,42 @@ def check_oracle(tmp):
     if n < 30:
         fail(f"only {n} observations checked")
     print(f"oracle: {n} noise-free picks agree with mrcal.project to {worst:.2e} px (tolerance 1e-6)")
+    # The nominal models in cameras/: the true intrinsics with fx, fy scaled by --focal-error,
+    # zero extrinsics, the same lens and image size.
+    site = os.path.join(tmp, "focal")
+    simulate(site, "--seed", str(SEED), "--focal-error", "1.05")
+    for cam, truth in truth_cameras(site).items():
+        nominal = mrcal.cameramodel(os.path.join(site, "cameras", f"{cam}.cameramodel"))
+        lt, it = truth.intrinsics()
+        ln, inn = nominal.intrinsics()
+        want = it.copy()
+        want[:2] *= 1.05
+        if ln != lt or not np.all(np.abs(inn - want) <= 1e-6) or np.any(nominal.extrinsics_rt_fromref() != 0) \
+                or list(nominal.imagersize()) != list(truth.imagersize()):
+            fail(f"focal error 1.05, {cam}: nominal {ln} {inn} {nominal.extrinsics_rt_fromref()}, true {lt} {it}")
+    print("oracle: nominal models = true intrinsics with fx, fy * 1.05 (1e-6), zero extrinsics")
+
+
+def cct_to_enu(origin, lonlath):
+    """PROJ's cct: WGS84 (lon, lat, h) rows -> ENU at origin (lat, lon, h)."""
+    pipeline = ("+proj=pipeline +step +proj=cart +ellps=WGS84 +step +proj=topocentric +ellps=WGS84 "
+                f"+lat_0={origin[0]!r} +lon_0={origin[1]!r} +h_0={origin[2]!r}")
+    lines = "".join(f"{a!r} {b!r} {c!r}\n" for a, b, c in lonlath)
+    r = subprocess.run(["cct", "-d", "9", *pipeline.split()], input=lines, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"FAIL: cct: {r.stderr}")
+    return [list(map(float, l.split()[:3])) for l in r.stdout.splitlines() if l.strip()]
 
 
 def check_geodesy(tmp):
     site = os.path.join(tmp, "s")
     origin = (47.3769, 8.5417, 408.0)
-    simulate(site, "--seed", str(SEED), "--survey-sigma", "0,0", "--origin", ",".join(map(str, origin)))
+    simulate(site, "--seed", str(SEED), "--survey-sigma", "0,0", "--origin", ",".join(map(str, origin)),
+             "--pole-prior", "0.001")
     with open(os.path.join(site, "landmarks.geojson")) as f:
         features = json.load(f)["features"]
     truth = truth_landmarks(site)
-    lines = "".join(f"{ft['geometry']['coordinates'][0]!r} {ft['geometry']['coordinates'][1]!r} "
-                    f"{ft['geometry']['coordinates'][2]!r}\n" for ft in features)
-    pipeline = ("+proj=pipeline +step +proj=cart +ellps=WGS84 +step +proj=topocentric +ellps=WGS84 "
-                f"+lat_0={origin[0]} +lon_0={origin[1]} +h_0={origin[2]}")
-    r = subprocess.run(["cct", "-d", "9", *pipeline.split()], input=lines, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise SystemExit(f"FAIL: cct: {r.stderr}")
-    rows = [list(map(float, l.split()[:3])) for l in r.stdout.splitlines() if l.strip()]
+    rows = cct_to_enu(origin, [ft["geometry"]["coordinates"] for ft in features])
     if len(rows) != len(features) or len(features) != len(truth):
         fail(f"{len(features)} features, {len(rows)} cct rows, {len(truth)} truth rows")
     worst = 0.0
@@ -138,6 +157,20 @@ def check_geodesy(tmp):
             fail(f"{ft['properties']['id']}: cct gives {enu}, truth {want}: {err:.3g} m > 1e-6")
         worst = max(worst, err)
     print(f"geodesy: {len(rows)} landmarks map back through cct to {worst:.2e} m (tolerance 1e-6)")
+    # Pole position priors: the true camera position plus N(0, 0.001 m) per axis.
+    with open(os.path.join(site, "site.json")) as f:
+        cams = json.load(f)["cameras"]
+    with open(os.path.join(site, "truth", "truth.json")) as f:
+        true_pos = {c["id"]: c["position_enu_m"] for c in json.load(f)["cameras"]}
+    priors = [c.get("position_prior", {}) for c in cams]
+    if not all(set(p) == {"lat", "lon", "h", "sigma_m"} and p["sigma_m"] == 0.001 for p in priors):
+        fail(f"position priors missing or malformed: {priors}")
+        return
+    enu = cct_to_enu(origin, [(p["lon"], p["lat"], p["h"]) for p in priors])
+    worst = max(math.dist(e, true_pos[c["id"]]) for e, c in zip(enu, cams))
+    if not worst < 0.001 * 6:
+        fail(f"pole priors {worst:.4f} m from the true camera positions (sigma 0.001 m per axis)")
+    print(f"geodesy: {len(cams)} pole priors within {worst * 1000:.2f} mm of the true positions (sigma 1 mm)")
 
 
 def check_visibility(tmp):

@@ -251,6 +251,15 @@ static void test_variants(void)
         rs_status st = rs_simulate_camera_problem(&P, &bad[i].o, &err);
         CHECK(st == RS_ERR_USAGE && P == NULL && strlen(err.msg) > 10, "%s: status %d, '%s'", bad[i].what, st, err.msg);
     }
+    // A camera that sees no ground within range: RS_ERR_DEGENERATE, nothing returned.
+    rs_simulate_camera_options o;
+    rs_simulate_camera_options_default(&o);
+    o.max_range_m = 2;
+    o.elevated_fraction = 0;
+    rs_simulate_problem *P = NULL;
+    rs_status st = rs_simulate_camera_problem(&P, &o, &err);
+    CHECK(st == RS_ERR_DEGENERATE && P == NULL && strstr(err.msg, "visible"), "no ground in range: %d '%s'", st,
+          err.msg);
     rs_simulate_problem_free(NULL);
     printf("variants: %zu lens models, planar problems; 6 bad option sets refused\n", sizeof lenses / sizeof lenses[0]);
 }
