@@ -1255,6 +1255,9 @@ static int target_state(const char *dir)
 
 static rs_status check_target(const char *dir, bool force, rs_err *err)
 {
+    struct stat sb;
+    if (stat(dir, &sb) != 0 && errno != ENOENT)
+        return rs_err_set(err, RS_ERR_IO, "%s: cannot use it: %s", dir, strerror(errno));
     switch (target_state(dir)) {
     case 0:
     case 1: return RS_OK;
@@ -1281,9 +1284,27 @@ static char *sibling_template(const char *dir, const char *tag)
     return t;
 }
 
+static rs_status simulate_site_into(const char *dir, const rs_simulate_site_options *o, rs_err *err);
+
 rs_status rs_simulate_site(const char *dir, const rs_simulate_site_options *o, rs_err *err)
 {
     if (!dir || !*dir) return rs_err_set(err, RS_ERR_USAGE, "no site folder given");
+    char *d = strdup(dir);
+    if (!d) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (size_t n = strlen(d); n > 1 && d[n - 1] == '/'; n--) d[n - 1] = '\0';
+    const char *base = strrchr(d, '/');
+    base = base ? base + 1 : d;
+    rs_status st;
+    if (!*base || !strcmp(base, ".") || !strcmp(base, ".."))
+        st = rs_err_set(err, RS_ERR_USAGE, "%s: name the site folder itself, not '.', '..' or '/'", dir);
+    else
+        st = simulate_site_into(d, o, err);
+    free(d);
+    return st;
+}
+
+static rs_status simulate_site_into(const char *dir, const rs_simulate_site_options *o, rs_err *err)
+{
     rs_status st = rs_simulate_site_options_check(o, err);
     if (st) return st;
     if ((st = check_target(dir, o->force, err))) return st;

@@ -133,7 +133,7 @@ int rs_cli_site_simulate(int argc, char **argv)
     if (st) return rs_cli_usage_error(CMD, "%s", err.msg);
     st = rs_simulate_site(dir, &o, &err);
     if (st) return rs_cli_fail("site simulate", st, &err);
-    printf("wrote %s: %d cameras, seed %llu (synthetic; the truth is in %s/truth)\n", dir, o.Ncameras,
-           (unsigned long long)o.seed, dir);
+    printf("wrote %s: a synthetic site of %d cameras, seed %llu; the true answer is in its truth/ folder\n", dir,
+           o.Ncameras, (unsigned long long)o.seed);
     return RS_EXIT_OK;
 }
