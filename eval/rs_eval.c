@@ -1,5 +1,6 @@
 // rs_eval.c -- distance-threshold AP: max-dets, greedy nearest matching, all-point AP.
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -7,17 +8,39 @@
 
 static const double default_thresholds_px[] = {2, 5, 10, 15, 20, 50};
 
+// A detection's place in the evaluation order: key ascending = score descending.
 typedef struct {
-    double score;
+    uint64_t key;
     size_t index;
 } scored;
 
-// Descending score; equal scores keep input order.
-static int cmp_scored(const void *a, const void *b)
+// The key of a finite score: its IEEE-754 bits made to sort as unsigned integers in descending
+// order of the score (-0 and +0 share one key, as they compare equal).
+static uint64_t descending_key(double score)
 {
-    const scored *x = a, *y = b;
-    if (x->score != y->score) return x->score > y->score ? -1 : 1;
-    return (x->index > y->index) - (x->index < y->index);
+    uint64_t u;
+    if (score == 0) score = 0; // -0 -> +0
+    memcpy(&u, &score, sizeof u);
+    u = (u >> 63) ? ~u : u | (UINT64_C(1) << 63); // ascending order of the score
+    return ~u;
+}
+
+// Stable LSD radix sort on key, 8 bits per pass, skipping the passes where every key has the same
+// digit: O(N) per pass, and a stable sort of entries in input order keeps ties in input order.
+// (qsort took 0.2 s of the 10^6-detection benchmark; this takes a few hundredths.)
+// tmp: (N) scratch. The result is in s.
+static void sort_scored(scored *s, scored *tmp, size_t N)
+{
+    for (int shift = 0; shift < 64; shift += 8) {
+        size_t count[257] = {0};
+        for (size_t i = 0; i < N; i++) count[((s[i].key >> shift) & 0xff) + 1]++;
+        bool trivial = false;
+        for (int b = 1; b <= 256; b++) trivial |= count[b] == N;
+        if (trivial) continue;
+        for (int b = 0; b < 256; b++) count[b + 1] += count[b];
+        for (size_t i = 0; i < N; i++) tmp[count[(s[i].key >> shift) & 0xff]++] = s[i];
+        memcpy(s, tmp, N * sizeof *s);
+    }
 }
 
 // A detection kept by max-dets, filed under its image.
@@ -98,7 +121,7 @@ static bool add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_d
 static rs_status keep(kept_dets *k, const rs_eval_data *d, int max_dets, double theta_max_px, rs_err *err)
 {
     size_t N = d->Ndets, M = (size_t)d->Nimages;
-    scored *s = malloc((N ? N : 1) * sizeof *s);
+    scored *s = malloc((N ? N : 1) * sizeof *s), *tmp = malloc((N ? N : 1) * sizeof *tmp);
     size_t *next = calloc(M + 1, sizeof *next);
     k->begin = calloc(M + 1, sizeof *k->begin);
     k->slots = malloc((N ? N : 1) * sizeof *k->slots);
@@ -106,10 +129,12 @@ static rs_status keep(kept_dets *k, const rs_eval_data *d, int max_dets, double 
     k->outcome = malloc(N ? N : 1);
     k->matched = malloc(d->Ngt ? d->Ngt : 1);
     k->tp_precision = malloc((N ? N : 1) * sizeof *k->tp_precision);
-    if (!s || !next || !k->begin || !k->slots || !k->cand_begin || !k->outcome || !k->matched || !k->tp_precision)
+    if (!s || !tmp || !next || !k->begin || !k->slots || !k->cand_begin || !k->outcome || !k->matched || !k->tp_precision)
         goto nomem;
-    for (size_t i = 0; i < N; i++) s[i] = (scored){d->det_score[i], i};
-    qsort(s, N, sizeof *s, cmp_scored);
+    for (size_t i = 0; i < N; i++) s[i] = (scored){descending_key(d->det_score[i]), i};
+    sort_scored(s, tmp, N);
+    free(tmp);
+    tmp = NULL;
     // max-dets: the first max_dets of each image in evaluation order
     size_t n = 0;
     for (size_t r = 0; r < N; r++) {
@@ -138,6 +163,7 @@ static rs_status keep(kept_dets *k, const rs_eval_data *d, int max_dets, double 
     return RS_OK;
 nomem:
     free(s);
+    free(tmp);
     free(next);
     return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
 }
