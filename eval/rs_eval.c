@@ -118,6 +118,8 @@ static bool add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_d
     return true;
 }
 
+// Puts the detections in evaluation order, applies max-dets, files the kept ones by image and
+// finds their candidates. On failure k holds what was allocated (kept_free).
 static rs_status keep(kept_dets *k, const rs_eval_data *d, int max_dets, double theta_max_px, rs_err *err)
 {
     size_t N = d->Ndets, M = (size_t)d->Nimages;
@@ -280,6 +282,20 @@ void rs_eval_result_free(rs_eval_result *r)
     free(r);
 }
 
+// Allocates and evaluates one row per group (groups) or per category (!groups), named by names.
+// *Nrows counts the rows allocated so far, for rs_eval_result_free after a failure.
+static rs_status evaluate_rows(rs_eval_metrics **rows, int *Nrows, int N, char *const *names, bool groups,
+                               kept_dets *k, const rs_eval_data *d, const double *theta_px, int T)
+{
+    if (!(*rows = calloc((size_t)(N ? N : 1), sizeof **rows))) return RS_ERR_NOMEM;
+    for (int i = 0; i < N; i++) {
+        ++*Nrows;
+        if (metrics_alloc(&(*rows)[i], T, names[i])) return RS_ERR_NOMEM;
+        evaluate_scope(&(*rows)[i], k, d, theta_px, T, groups ? (scope){i, -1} : (scope){-1, i});
+    }
+    return RS_OK;
+}
+
 static rs_status check_options(const rs_eval_options *opt, const rs_eval_data *d, rs_err *err)
 {
     if (opt->thresholds_px) {
@@ -322,26 +338,12 @@ rs_status rs_eval_run(rs_eval_result **result, const rs_eval_data *d, const rs_e
 
     if (metrics_alloc(&r->all, T, NULL)) goto nomem;
     evaluate_scope(&r->all, &k, d, theta, T, (scope){-1, -1});
-    if (opt->by_group) {
-        if (!(r->groups = calloc((size_t)(d->Ngroups ? d->Ngroups : 1), sizeof *r->groups))) goto nomem;
-        for (int g = 0; g < d->Ngroups; g++, r->Ngroups++) {
-            if (metrics_alloc(&r->groups[g], T, d->group_names[g])) {
-                r->Ngroups++;
-                goto nomem;
-            }
-            evaluate_scope(&r->groups[g], &k, d, theta, T, (scope){g, -1});
-        }
-    }
+    if (opt->by_group && evaluate_rows(&r->groups, &r->Ngroups, d->Ngroups, d->group_names, true, &k, d, theta, T))
+        goto nomem;
     if (opt->per_class) {
-        if (!(r->classes = calloc((size_t)(d->Ncategories ? d->Ncategories : 1), sizeof *r->classes))) goto nomem;
-        for (int c = 0; c < d->Ncategories; c++, r->Nclasses++) {
-            if (metrics_alloc(&r->classes[c], T, d->category_name[c])) {
-                r->Nclasses++;
-                goto nomem;
-            }
-            r->classes[c].category_id = d->category_id[c];
-            evaluate_scope(&r->classes[c], &k, d, theta, T, (scope){-1, c});
-        }
+        if (evaluate_rows(&r->classes, &r->Nclasses, d->Ncategories, d->category_name, false, &k, d, theta, T))
+            goto nomem;
+        for (int c = 0; c < d->Ncategories; c++) r->classes[c].category_id = d->category_id[c];
     }
     kept_free(&k);
     *result = r;

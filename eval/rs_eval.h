@@ -19,11 +19,14 @@
 //     at theta is the final recall; mAP and AR are the means over the thresholds. The matching
 //     follows nuScenes' centre-distance criterion (H. Caesar et al., CVPR 2020) in the image.
 //   - a scope without ground truth has AP, recall, mAP and AR = NaN (printed "null").
-// Accuracy: exact up to double rounding of the sums (relative 1e-15); tested against an
-// independent brute force to 1e-12 on hundreds of random datasets.
-// Cost: O(D log D) for the sort, plus O(T * sum over detections of the ground-truth count of
-// the detection's image) per scope for the matching (T thresholds, D detections); memory
-// O(D + G) besides the input text. 10^6 detections over 10^4 images: docs/benchmarks.md.
+// Accuracy: exact but for the rounding of the sums in double precision (relative error below
+// D x 1.1e-16 for D detections, typically far less); agrees with an independent brute force to
+// 1e-12 on hundreds of random datasets (tests/eval/test_eval_random.py).
+// Cost: O(D) for ordering the scores (stable radix sort), O(sum over detections of the
+// annotation count of the detection's image) for finding each detection's candidates (the
+// annotations closer than the largest threshold), then O(D + G) per threshold and scope
+// (D detections, G annotations); memory O(D + G) besides the input text, which is freed after
+// parsing. 10^6 detections over 10^4 images: about 1.6 s of CPU, docs/benchmarks.md.
 //
 // Ownership: every object returned through an out pointer belongs to the caller, freed with the
 // matching _free (which accepts NULL).
