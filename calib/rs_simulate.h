@@ -116,7 +116,8 @@ typedef struct {
     int Nlandmarks;            // landmarks to generate, all visible (default 12)
     double elevated_fraction;  // fraction above the ground (default 0.25); 0 = planar problem
     double elevated_min_m, elevated_max_m; // height range of those (default 2, 6)
-    double max_range_m;        // max horizontal distance camera -> landmark (default 80)
+    double max_range_m;        // max horizontal distance camera -> landmark (default 80); keep
+                               // it well above distance_m, or little ground is left to use
     double margin_px;          // landmarks project at least this far inside the image (20)
 
     double pixel_sigma_px;     // pixel noise (default 1)
