@@ -15,9 +15,14 @@
 // ambiguity (P3P has up to four solutions).
 enum { MIN_OBSERVATIONS = 4 };
 
-static char *dup_or_null(const char *s)
+// A copy safe to print on one line: control characters (from damaged or binary input quoted
+// in a message) become '?'.
+static char *dup_printable(const char *s)
 {
-    return s ? strdup(s) : NULL;
+    char *d = s ? strdup(s) : NULL;
+    for (char *p = d; p && *p; p++)
+        if ((unsigned char)*p < 0x20 || *p == 0x7f) *p = '?';
+    return d;
 }
 
 void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status status,
@@ -44,12 +49,12 @@ void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status stat
     rs_site_diag d = {
         .severity = severity,
         .status = severity == RS_SITE_ERROR ? status : RS_OK,
-        .file = strdup(file ? file : "?"),
+        .file = dup_printable(file ? file : "?"),
         .line = line,
         .feature = feature,
-        .feature_id = dup_or_null(feature_id),
-        .field = dup_or_null(field),
-        .message = strdup(msg),
+        .feature_id = dup_printable(feature_id),
+        .field = dup_printable(field),
+        .message = dup_printable(msg),
     };
     if (!d.file || !d.message || (feature_id && !d.feature_id) || (field && !d.field)) {
         free(d.file);

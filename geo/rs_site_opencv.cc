@@ -61,7 +61,9 @@ rs_status read_intrinsics(double K[9], double dist[14], int *Ndist, int *width, 
         if (!fs.open(path, cv::FileStorage::READ))
             return rs_err_set(err, RS_ERR_IO, "%s: cannot open as OpenCV FileStorage (YAML/JSON)", path);
     } catch (const cv::Exception &e) {
-        return rs_err_set(err, RS_ERR_PARSE, "%s: not valid OpenCV YAML/JSON: %s", path, e.msg.c_str());
+        return rs_err_set(err, RS_ERR_PARSE,
+                          "%s: not valid OpenCV YAML/JSON: %s (OpenCV's YAML starts with a line "
+                          "\"%%YAML:1.0\")", path, e.err.c_str());
     }
     rs_status st = read_size(width, fs["image_width"], path, "image_width", err);
     if (st == RS_OK) st = read_size(height, fs["image_height"], path, "image_height", err);
@@ -110,7 +112,7 @@ extern "C" rs_status rs_site_opencv_read_intrinsics(double K[9], double dist[14]
     try {
         return read_intrinsics(K, dist, Ndist, width, height, path, err);
     } catch (const cv::Exception &e) {
-        return rs_err_set(err, RS_ERR_PARSE, "%s: OpenCV could not read it: %s", path, e.msg.c_str());
+        return rs_err_set(err, RS_ERR_PARSE, "%s: OpenCV could not read it: %s", path, e.err.c_str());
     } catch (const std::bad_alloc &) {
         return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
     } catch (const std::exception &e) {

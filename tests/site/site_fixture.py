@@ -118,7 +118,9 @@ def roadside():
 
 
 def run(*args):
-    p = subprocess.run([roadside()] + list(args), capture_output=True, text=True)
+    p = subprocess.run([roadside()] + list(args), capture_output=True, text=True, errors="replace")
+    if "Sanitizer" in p.stderr or "runtime error:" in p.stderr:
+        fail("roadside %s: sanitizer report" % " ".join(args), p.stdout, p.stderr)
     return p.returncode, p.stdout, p.stderr
 
 
