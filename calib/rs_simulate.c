@@ -74,6 +74,11 @@ static double quantize(double x, double inv_quantum) { return round(x * inv_quan
 #define Q_MODEL 1e6 // .cameramodel precision (mrcal writes "%f")
 #define Q_ENU 1e4   // true landmark positions: 0.1 mm
 
+// The sigmas a site DECLARES are at least these (sites need sigmas > 0 to weight by), even when
+// the noise actually drawn is zero; the noise drawn is recorded in site.json's "simulated".
+#define DECLARED_SURVEY_SIGMA_MIN_M 1e-3
+#define DECLARED_PIXEL_SIGMA_MIN_PX 1e-2
+
 // ---------------------------------------------------------------------------------------------
 // small 3x3 algebra (row-major)
 
@@ -1041,8 +1046,8 @@ static rs_status write_site_json(const char *dir, const site_data *s, const rs_s
     cJSON_AddItemToObject(j, "origin", json_llh(o->origin.lat_deg, o->origin.lon_deg, o->origin.h_m));
     cJSON_AddStringToObject(j, "heights", "ellipsoidal");
     cJSON *ls = cJSON_AddObjectToObject(j, "landmark_sigma_m");
-    cJSON_AddNumberToObject(ls, "horizontal", o->survey_sigma_h_m);
-    cJSON_AddNumberToObject(ls, "vertical", o->survey_sigma_v_m);
+    cJSON_AddNumberToObject(ls, "horizontal", fmax(o->survey_sigma_h_m, DECLARED_SURVEY_SIGMA_MIN_M));
+    cJSON_AddNumberToObject(ls, "vertical", fmax(o->survey_sigma_v_m, DECLARED_SURVEY_SIGMA_MIN_M));
     cJSON *gp = cJSON_AddObjectToObject(j, "ground_plane");
     static const double up[3] = {0, 0, 1};
     cJSON_AddItemToObject(gp, "normal_enu", json_array(up, 3));
@@ -1213,7 +1218,8 @@ static rs_status write_site(const char *dir, const site_data *s, const rs_simula
         if ((st = write_cameramodel(dir, rel, c, s->nominal + (size_t)k * c->Nintrinsics, zero_rt, err))) return st;
         snprintf(rel, sizeof rel, "truth/%s.cameramodel", id);
         if ((st = write_cameramodel(dir, rel, c, c->intrinsics, c->rt_cam_enu, err))) return st;
-        if ((st = write_observations(dir, s, k, o->pixel_sigma_px, err))) return st;
+        if ((st = write_observations(dir, s, k, fmax(o->pixel_sigma_px, DECLARED_PIXEL_SIGMA_MIN_PX), err)))
+            return st;
     }
     return RS_OK;
 }

@@ -199,6 +199,8 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 // site.json, landmarks.geojson, cameras/<id>.cameramodel (NOMINAL intrinsics, zero
 // extrinsics), observations/<id>.csv, truth/<id>.cameramodel (true intrinsics and pose),
 // truth/landmarks_enu.csv, truth/truth.json.
+// The sigmas the site declares (site.json landmark_sigma_m, the csv's sigma_px) are the noise
+// levels drawn, but at least 1 mm and 0.01 px: a noise-free site still has weights to solve with.
 // The site is built in a temporary sibling folder and renamed into place when complete, so a
 // failure never leaves a half site. `dir` may not exist, or be an empty folder; a non-empty one
 // is replaced only with o->force, and only if it holds a site.json (a site folder), otherwise

@@ -36,6 +36,8 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "  --origin LAT,LON,H        site origin, degrees, degrees, m ellipsoidal [%g,%g,%g]\n"
             "  --force                   replace DIR if it already holds a site\n"
             "\n"
+            "With zero noise the site still declares sigmas of 1 mm and 0.01 px (a site needs\n"
+            "sigmas > 0); site.json's \"simulated\" records the noise actually drawn.\n"
             "DIR must not exist, be empty, or (with --force) hold a site. The site is built in a\n"
             "hidden sibling folder and renamed into place, so a failure never leaves half a site.\n"
             "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n",

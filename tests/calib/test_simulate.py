@@ -73,6 +73,21 @@ def check_determinism(tmp):
         if must_differ not in mismatch:
             fail(f"seeds {SEED} and {SEED + 1} give the same {must_differ}")
     print(f"determinism: {len(files)} files identical for seed {SEED}; {len(mismatch)} differ for seed {SEED + 1}")
+    # The sites pass the site checker (geo/rs_site), noise-free ones too.
+    d = os.path.join(tmp, "d")
+    simulate(d, "--seed", str(SEED), "--pixel-sigma", "0", "--survey-sigma", "0,0", "--outliers", "0",
+             "--pole-prior", "0.5", "--lens", "LENSMODEL_CAHVOR")
+    for site in (a, d):
+        r = subprocess.run([ROADSIDE, "site", "check", site], capture_output=True, text=True)
+        if r.returncode != 0:
+            fail(f"roadside site check {site}: exit {r.returncode}: {r.stdout}{r.stderr}")
+    with open(os.path.join(d, "site.json")) as f:
+        declared = json.load(f)["landmark_sigma_m"]
+    if declared != {"horizontal": 0.001, "vertical": 0.001}:
+        fail(f"noise-free site declares landmark_sigma_m {declared}, want 1 mm")
+    if {r["sigma_px"] for r in read_csv(os.path.join(d, "observations", "cam1.csv"))} != {"0.01"}:
+        fail("noise-free site: sigma_px is not 0.01")
+    print("determinism: simulated sites pass 'roadside site check', noise-free ones declare 1 mm and 0.01 px")
 
 
 def truth_cameras(site):
