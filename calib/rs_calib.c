@@ -28,7 +28,7 @@ void rs_calib_options_default(rs_calib_options *opt) {
     opt->distortion_prior_sigma = 0.1;
     opt->focal_search_min = 0.25;
     opt->focal_search_max = 4.0;
-    opt->condition_warn = 1e4;
+    opt->condition_warn = 100.0;
 }
 
 void rs_calib_result_free(rs_calib_result *result) {
