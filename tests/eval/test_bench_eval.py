@@ -59,6 +59,10 @@ def main():
         r = subprocess.run([ROADSIDE, *argv], capture_output=True, text=True)
         if r.returncode != code:
             failures.append(f"{' '.join(argv)}: exit {r.returncode}, expected {code}")
+    # `bench calib` is forwarded to its own command (cli/cmd_bench_calib.c), not refused here
+    r = subprocess.run([ROADSIDE, "bench", "calib", "--help"], capture_output=True, text=True)
+    if "unknown benchmark" in r.stderr:
+        failures.append("bench calib is not forwarded")
     for f in failures:
         print("FAIL", f, f"(seed {SEED})")
     print(f"{len(failures)} failures")

@@ -151,6 +151,16 @@ def main():
             if not ok:
                 failures += 1
                 print(f"FAIL {name}: {'.'.join(path)} = {got}, expected {want}")
+    # the printed table: a row per scope, '-' where there is no ground truth
+    _, _, out, _ = run(["--thresholds", "5", "--by", "condition", "--per-class"], by_gt, [det(1, 0, 0, .9)])
+    for needle in ("AP@5", "condition=rain", "condition=(missing)", "class 1 (1)"):
+        if needle not in out:
+            failures += 1
+            print(f"FAIL table lacks {needle!r}:\n{out}")
+    _, _, out, _ = run(["--thresholds", "5"], coco_gt([1], [], [{"id": 1}]), [det(1, 0, 0, .9)])
+    if " -" not in out.splitlines()[1]:
+        failures += 1
+        print(f"FAIL no ground truth is not printed as '-':\n{out}")
     print(f"{len(CASES)} cases, {failures} failures")
     return 1 if failures else 0
 
