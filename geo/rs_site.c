@@ -127,21 +127,35 @@ static void json_excerpt(char *buf, size_t size, const cJSON *item)
     cJSON_free(s);
 }
 
+// Looks up obj[key], writing its full name ("prefix.key") into field. A missing member is
+// reported if required ("missing (EXPECTED)"); returns NULL then.
+static const cJSON *member(reader *c, const cJSON *obj, const char *prefix, const char *key,
+                           bool required, const char *expected, char *field, size_t size)
+{
+    field_name(field, size, prefix, key);
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!it && required) ERR(c, RS_ERR_PARSE, field, "missing (%s)", expected);
+    return it;
+}
+
+// Reports a member of the wrong JSON type, quoting what was found.
+static void wrong_type(reader *c, const char *field, const cJSON *it, const char *expected)
+{
+    char got[64];
+    json_excerpt(got, sizeof got, it);
+    ERR(c, RS_ERR_PARSE, field, "not %s (%s)", expected, got);
+}
+
 // Reads obj[key] as a finite number. Reports a missing required field, a wrong type or a
 // non-finite value; returns false then (and for a missing optional field).
 static bool get_number(reader *c, const cJSON *obj, const char *prefix, const char *key,
                        bool required, double *out)
 {
-    char field[256], got[64];
-    field_name(field, sizeof field, prefix, key);
-    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (!it) {
-        if (required) ERR(c, RS_ERR_PARSE, field, "missing (a number)");
-        return false;
-    }
+    char field[256];
+    const cJSON *it = member(c, obj, prefix, key, required, "a number", field, sizeof field);
+    if (!it) return false;
     if (!cJSON_IsNumber(it)) {
-        json_excerpt(got, sizeof got, it);
-        ERR(c, RS_ERR_PARSE, field, "not a number (%s)", got);
+        wrong_type(c, field, it, "a number");
         return false;
     }
     if (!isfinite(it->valuedouble)) {
@@ -171,16 +185,11 @@ static bool get_positive(reader *c, const cJSON *obj, const char *prefix, const 
 static bool get_string(reader *c, const cJSON *obj, const char *prefix, const char *key,
                        bool required, const char **out)
 {
-    char field[256], got[64];
-    field_name(field, sizeof field, prefix, key);
-    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (!it) {
-        if (required) ERR(c, RS_ERR_PARSE, field, "missing (a string)");
-        return false;
-    }
+    char field[256];
+    const cJSON *it = member(c, obj, prefix, key, required, "a string", field, sizeof field);
+    if (!it) return false;
     if (!cJSON_IsString(it)) {
-        json_excerpt(got, sizeof got, it);
-        ERR(c, RS_ERR_PARSE, field, "not a string (%s): write it in double quotes", got);
+        wrong_type(c, field, it, "a string in double quotes");
         return false;
     }
     if (!it->valuestring[0]) {
@@ -196,13 +205,8 @@ static const cJSON *get_object(reader *c, const cJSON *obj, const char *prefix, 
                                bool required, const char *expected)
 {
     char field[256];
-    field_name(field, sizeof field, prefix, key);
-    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (!it) {
-        if (required) ERR(c, RS_ERR_PARSE, field, "missing (%s)", expected);
-        return NULL;
-    }
-    if (!cJSON_IsObject(it)) {
+    const cJSON *it = member(c, obj, prefix, key, required, expected, field, sizeof field);
+    if (it && !cJSON_IsObject(it)) {
         ERR(c, RS_ERR_PARSE, field, "not an object (expected %s)", expected);
         return NULL;
     }
