@@ -1,18 +1,297 @@
-// PLACEHOLDER, replaced by the module's real command.
+// roadside calib / roadside locate: parse arguments, call calib/, print.
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rs_calib.h"
+#include "rs_calib_site.h"
 #include "rs_cli.h"
+#include "rs_io.h"
+#include "rs_site.h"
+
+static const char calib_usage[] =
+    "usage: roadside calib SITE [-o OUT] [--camera ID]... [--refine WHAT] [--json]\n"
+    "\n"
+    "Calibrates the cameras of a site from its surveyed landmarks and their pixel picks:\n"
+    "RANSAC over P3P, a planar (IPPE) or EPnP solve, then a Ceres adjustment in which the\n"
+    "landmarks move within their survey sigmas, outliers are flagged and dropped, and the pose\n"
+    "covariance is reported (docs/calibration.md).\n"
+    "\n"
+    "For each camera it writes into OUT (default SITE/calib):\n"
+    "  <id>.cameramodel      mrcal model, extrinsics = rt_cam_enu (reference frame: site ENU)\n"
+    "  <id>.json             pose, covariance, sigmas, yaw/pitch/roll, residuals per landmark\n"
+    "  <id>.opencv.yaml      K, distortion, R, t (lens models with an OpenCV equivalent)\n"
+    "  <id>.homography.json  undistorted pixels <-> ground (E, N) on the site's ground plane\n"
+    "and prints a summary table.\n"
+    "\n"
+    "Options:\n"
+    "  -o, --output DIR   output folder (created if needed; default SITE/calib)\n"
+    "  --camera ID        calibrate only this camera (repeatable; default all)\n"
+    "  --refine WHAT      also refine intrinsics: focal, center, distortion, joined with '+'\n"
+    "                     (e.g. focal+center). focal refines one scale of fx and fy.\n"
+    "  --json             print the per-camera results as a JSON array instead of the table\n"
+    "  -h, --help         this text\n"
+    "\n"
+    "Exit status: 0 when every selected camera calibrated, 1 when any failed (the others are\n"
+    "still written), 2 on a usage error.\n";
+
+static const char locate_usage[] =
+    "usage: roadside locate SITE --camera ID [--calib DIR] [U V]\n"
+    "\n"
+    "Maps pixels to the point of the site's ground plane that each pixel's ray hits, through the\n"
+    "camera's full lens model (from DIR/<ID>.cameramodel, as written by 'roadside calib').\n"
+    "With U V on the command line, locates that pixel; otherwise reads lines 'u v' on standard\n"
+    "input (blank lines and lines starting with # are skipped). Pixel (0,0) is the centre of the\n"
+    "top-left pixel.\n"
+    "\n"
+    "Prints one line per pixel: 'e n u lat lon h' (ENU metres; degrees; ellipsoidal metres).\n"
+    "\n"
+    "Options:\n"
+    "  --camera ID    the camera (required)\n"
+    "  --calib DIR    calibration folder (default SITE/calib)\n"
+    "  -h, --help     this text\n"
+    "A negative U on the command line needs '--' before it: locate SITE --camera c -- -0.3 12\n"
+    "\n"
+    "Exit status: 0 when every pixel was located, 1 when any could not be (its line says why).\n";
+
+// "focal+center" -> flags; false on an unknown word
+static bool parse_refine(const char *s, unsigned *flags)
+{
+    char buf[128];
+    if (strlen(s) >= sizeof buf) return false;
+    strcpy(buf, s);
+    *flags = 0;
+    char *save = NULL;
+    for (char *w = strtok_r(buf, "+,", &save); w; w = strtok_r(NULL, "+,", &save)) {
+        if (!strcmp(w, "focal")) *flags |= RS_CALIB_REFINE_FOCAL;
+        else if (!strcmp(w, "center") || !strcmp(w, "centre")) *flags |= RS_CALIB_REFINE_CENTER;
+        else if (!strcmp(w, "distortion")) *flags |= RS_CALIB_REFINE_DISTORTION;
+        else if (!strcmp(w, "none")) continue;
+        else return false;
+    }
+    return true;
+}
+
+static void print_summary_header(void)
+{
+    printf("%-12s %5s %8s %8s %12s %10s %10s  %s\n", "camera", "used", "rejected", "rms_px",
+           "sigma_pos_m", "sigma_yaw", "var_factor", "warnings");
+}
+
+static void print_summary_row(const char *id, const rs_calib_result *r)
+{
+    const double *s = r->sigma_position_enu_m;
+    double sigma_pos = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    printf("%-12s %5d %8d %8.3f %12.3f %10.4f %10.3f  %s\n", id, r->Ninliers, r->N - r->Ninliers, r->rms_px,
+           sigma_pos, r->sigma_yaw_pitch_roll_deg[0], r->variance_factor, r->warnings[0] ? r->warnings : "-");
+}
 
 int rs_cli_calib(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "roadside calib: under construction\n");
-    return RS_EXIT_FAIL;
+    if (rs_cli_wants_help(argc, argv)) {
+        fputs(calib_usage, stdout);
+        return RS_EXIT_OK;
+    }
+    static const struct option longopts[] = {
+        {"output", required_argument, NULL, 'o'},
+        {"camera", required_argument, NULL, 'c'},
+        {"refine", required_argument, NULL, 'r'},
+        {"json", no_argument, NULL, 'j'},
+        {NULL, 0, NULL, 0},
+    };
+    const char *out_dir = NULL;
+    const char **only = calloc((size_t)argc, sizeof *only);
+    int Nonly = 0;
+    bool json = false;
+    rs_calib_options opt;
+    rs_calib_options_default(&opt);
+    optind = 1;
+    int c;
+    while ((c = getopt_long(argc, argv, "o:", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o': out_dir = optarg; break;
+        case 'c': only[Nonly++] = optarg; break;
+        case 'r':
+            if (!parse_refine(optarg, &opt.refine)) {
+                free(only);
+                return rs_cli_usage_error("calib", "--refine: '%s': expected focal, center or distortion, joined with '+'",
+                                          optarg);
+            }
+            break;
+        case 'j': json = true; break;
+        default: free(only); return rs_cli_usage_error("calib", "unknown option");
+        }
+    }
+    if (optind != argc - 1) {
+        free(only);
+        return rs_cli_usage_error("calib", "expected one SITE folder");
+    }
+    const char *site_dir = argv[optind];
+
+    rs_err err = {0};
+    rs_site *site = NULL;
+    rs_status st = rs_site_load(&site, site_dir, &err);
+    if (st) {
+        free(only);
+        fprintf(stderr, "roadside calib: %s\n(run 'roadside site check %s' for every problem)\n", err.msg, site_dir);
+        return RS_EXIT_FAIL;
+    }
+    for (int i = 0; i < Nonly; i++)
+        if (rs_site_find_camera(site, only[i]) < 0) {
+            fprintf(stderr, "roadside calib: --camera %s: no such camera in %s/site.json\n", only[i], site_dir);
+            free(only);
+            rs_site_free(site);
+            return RS_EXIT_USAGE;
+        }
+    char *default_out = out_dir ? NULL : rs_io_join(site_dir, "calib");
+    if (!out_dir) out_dir = default_out;
+    st = rs_io_mkdir_p(out_dir, &err);
+    if (st) {
+        free(only);
+        free(default_out);
+        rs_site_free(site);
+        return rs_cli_fail("calib", st, &err);
+    }
+
+    int failed = 0;
+    bool first = true;
+    if (json) printf("[\n");
+    else print_summary_header();
+    for (int icam = 0; icam < site->Ncameras; icam++) {
+        const char *id = site->cameras[icam].id;
+        bool selected = Nonly == 0;
+        for (int i = 0; i < Nonly; i++) selected |= !strcmp(only[i], id);
+        if (!selected) continue;
+
+        rs_calib_site_problem sp;
+        rs_calib_result r;
+        memset(&r, 0, sizeof r);
+        err.msg[0] = '\0';
+        st = rs_calib_site_problem_init(&sp, site, icam, &err);
+        if (st == RS_OK) st = rs_calib_solve(&r, &sp.problem, &opt, &err);
+        if (st == RS_OK) st = rs_calib_site_write(out_dir, site, icam, &r, &err);
+        if (st) {
+            failed++;
+            fprintf(stderr, "roadside calib: camera %s: %s\n", id, err.msg[0] ? err.msg : rs_strerror(st));
+        } else if (json) {
+            char *text = rs_calib_site_result_json(site, icam, &r);
+            if (text) printf("%s%s", first ? "" : ",\n", text);
+            free(text);
+            first = false;
+        } else {
+            print_summary_row(id, &r);
+        }
+        rs_calib_result_free(&r);
+        rs_calib_site_problem_free(&sp);
+    }
+    if (json) printf("\n]\n");
+    else printf("written to %s/\n", out_dir);
+    free(only);
+    free(default_out);
+    rs_site_free(site);
+    return failed ? RS_EXIT_FAIL : RS_EXIT_OK;
+}
+
+// One pixel -> one output line; false (and a message on stderr) when it cannot be located.
+static bool locate_one(const rs_site *site, const rs_calib_camera *cam, const double q[2], const char *where)
+{
+    double p[3], llh[3];
+    rs_err err = {0};
+    rs_status st = rs_calib_locate_ground(p, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, q,
+                                          site->ground_normal_enu, site->ground_offset_m, &err);
+    if (st == RS_OK) st = rs_geo_enu_to_llh(llh, &site->origin, p, 1, &err);
+    if (st) {
+        fprintf(stderr, "roadside locate: %s: pixel (%g, %g): %s\n", where, q[0], q[1],
+                err.msg[0] ? err.msg : rs_strerror(st));
+        return false;
+    }
+    printf("%.4f %.4f %.4f %.10f %.10f %.4f\n", p[0], p[1], p[2], llh[0], llh[1], llh[2]);
+    return true;
 }
 
 int rs_cli_locate(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "roadside locate: under construction\n");
-    return RS_EXIT_FAIL;
+    if (rs_cli_wants_help(argc, argv)) {
+        fputs(locate_usage, stdout);
+        return RS_EXIT_OK;
+    }
+    static const struct option longopts[] = {
+        {"camera", required_argument, NULL, 'c'},
+        {"calib", required_argument, NULL, 'd'},
+        {NULL, 0, NULL, 0},
+    };
+    const char *camera = NULL, *calib_dir = NULL;
+    optind = 1;
+    int c;
+    while ((c = getopt_long(argc, argv, "", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'c': camera = optarg; break;
+        case 'd': calib_dir = optarg; break;
+        default: return rs_cli_usage_error("locate", "unknown option (a negative U needs '--' before it)");
+        }
+    }
+    if (optind >= argc) return rs_cli_usage_error("locate", "expected a SITE folder");
+    const char *site_dir = argv[optind++];
+    if (!camera) return rs_cli_usage_error("locate", "--camera ID is required");
+    int npos = argc - optind;
+    double q[2];
+    if (npos != 0 && npos != 2) return rs_cli_usage_error("locate", "expected U V, or no pixel and lines on standard input");
+    if (npos == 2 && (!rs_cli_parse_double(argv[optind], &q[0]) || !rs_cli_parse_double(argv[optind + 1], &q[1])))
+        return rs_cli_usage_error("locate", "U V: '%s %s' is not a pair of finite numbers", argv[optind], argv[optind + 1]);
+
+    rs_err err = {0};
+    rs_site *site = NULL;
+    rs_status st = rs_site_load(&site, site_dir, &err);
+    if (st) return rs_cli_fail("locate", st, &err);
+    if (rs_site_find_camera(site, camera) < 0) {
+        fprintf(stderr, "roadside locate: --camera %s: no such camera in %s/site.json\n", camera, site_dir);
+        rs_site_free(site);
+        return RS_EXIT_USAGE;
+    }
+    char *default_dir = calib_dir ? NULL : rs_io_join(site_dir, "calib");
+    if (!calib_dir) calib_dir = default_dir;
+    char name[512];
+    snprintf(name, sizeof name, "%s.cameramodel", camera);
+    char *path = rs_io_join(calib_dir, name);
+    rs_calib_camera cam;
+    st = path ? rs_calib_camera_read(&cam, path, &err) : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
+    free(path);
+    free(default_dir);
+    if (st) {
+        rs_site_free(site);
+        return rs_cli_fail("locate", st, &err);
+    }
+
+    bool ok = true;
+    if (npos == 2) {
+        ok = locate_one(site, &cam, q, "argument");
+    } else {
+        char line[1024];
+        int lineno = 0;
+        while (fgets(line, sizeof line, stdin)) {
+            lineno++;
+            char *s = line;
+            while (*s == ' ' || *s == '\t') s++;
+            if (*s == '#' || *s == '\n' || *s == '\0') continue;
+            char where[64];
+            snprintf(where, sizeof where, "<stdin>:%d", lineno);
+            char *end;
+            errno = 0;
+            q[0] = strtod(s, &end);
+            char *end2;
+            q[1] = strtod(end, &end2);
+            while (*end2 == ' ' || *end2 == '\t' || *end2 == '\r' || *end2 == '\n') end2++;
+            if (end == s || end2 == end || *end2 != '\0' || !isfinite(q[0]) || !isfinite(q[1])) {
+                fprintf(stderr, "roadside locate: %s: expected 'u v' (two finite numbers)\n", where);
+                ok = false;
+                continue;
+            }
+            ok &= locate_one(site, &cam, q, where);
+        }
+    }
+    rs_calib_camera_free(&cam);
+    rs_site_free(site);
+    return ok ? RS_EXIT_OK : RS_EXIT_FAIL;
 }

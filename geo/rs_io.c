@@ -70,13 +70,26 @@ rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err)
     return RS_OK;
 }
 
+rs_status rs_io_atomic_release(rs_io_atomic *a, rs_err *err)
+{
+    if (!a->f) return RS_OK;
+    int bad = ferror(a->f);
+    if (fclose(a->f) != 0) bad = 1;
+    a->f = NULL;
+    if (bad) return rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(errno));
+    return RS_OK;
+}
+
 rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err)
 {
     rs_status st = RS_OK;
-    int bad = ferror(a->f) || fflush(a->f) != 0 || fsync(fileno(a->f)) != 0;
-    int saved = errno;
-    if (fclose(a->f) != 0 && !bad) { bad = 1; saved = errno; }
-    a->f = NULL;
+    int bad = 0, saved = 0;
+    if (a->f) {
+        bad = ferror(a->f) || fflush(a->f) != 0 || fsync(fileno(a->f)) != 0;
+        saved = errno;
+        if (fclose(a->f) != 0 && !bad) { bad = 1; saved = errno; }
+        a->f = NULL;
+    }
     if (bad) st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(saved));
     else if (rename(a->tmp_path, a->path) != 0)
         st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename into place: %s", a->path, strerror(errno));

@@ -31,6 +31,10 @@ rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err);
 // Flushes, fsyncs, closes and renames into place. Frees a's strings whatever the outcome; on
 // failure removes the temporary file.
 rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err);
+// Closes a->f (a->f becomes NULL) but keeps the temporary file, so that a library that writes
+// by file name (mrcal_write_cameramodel_file, cv::FileStorage, povray) can write a->tmp_path;
+// rs_io_atomic_commit() then renames it into place.
+rs_status rs_io_atomic_release(rs_io_atomic *a, rs_err *err);
 // Closes and removes the temporary file; frees a's strings. Accepts a zeroed or finished `a`.
 void rs_io_atomic_abort(rs_io_atomic *a);
 

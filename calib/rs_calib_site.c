@@ -1,0 +1,384 @@
+#include "rs_calib_site.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+#include <mrcal/poseutils.h>
+
+#include "rs_calib_opencv.h"
+#include "rs_geo.h"
+#include "rs_io.h"
+
+// ---------------------------------------------------------------- problem
+
+rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *site, int icam,
+                                     rs_err *err)
+{
+    memset(sp, 0, sizeof *sp);
+    if (!site || icam < 0 || icam >= site->Ncameras)
+        return rs_err_set(err, RS_ERR_USAGE, "camera index %d out of range", icam);
+    const rs_site_camera *cam = &site->cameras[icam];
+    int N = cam->Nobservations;
+    size_t n = N > 0 ? (size_t)N : 1;
+    sp->p_enu_m = malloc(n * 3 * sizeof(double));
+    sp->sigma_enu_m = malloc(n * 3 * sizeof(double));
+    sp->q_px = malloc(n * 2 * sizeof(double));
+    sp->sigma_px = malloc(n * sizeof(double));
+    if (!sp->p_enu_m || !sp->sigma_enu_m || !sp->q_px || !sp->sigma_px) {
+        rs_calib_site_problem_free(sp);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < N; i++) {
+        const rs_site_observation *o = &cam->observations[i];
+        const rs_site_landmark *l = &site->landmarks[o->ilandmark];
+        memcpy(&sp->p_enu_m[3 * i], l->p_enu_m, 3 * sizeof(double));
+        sp->sigma_enu_m[3 * i + 0] = l->sigma_h_m;
+        sp->sigma_enu_m[3 * i + 1] = l->sigma_h_m;
+        sp->sigma_enu_m[3 * i + 2] = l->sigma_v_m;
+        sp->q_px[2 * i + 0] = o->q_px[0];
+        sp->q_px[2 * i + 1] = o->q_px[1];
+        sp->sigma_px[i] = o->sigma_px;
+    }
+    rs_calib_problem *p = &sp->problem;
+    p->N = N;
+    p->p_enu_m = sp->p_enu_m;
+    p->sigma_enu_m = sp->sigma_enu_m;
+    p->q_px = sp->q_px;
+    p->sigma_px = sp->sigma_px;
+    p->lensmodel = &cam->lensmodel;
+    p->intrinsics = cam->intrinsics;
+    p->width = cam->width;
+    p->height = cam->height;
+    p->has_position_prior = cam->has_position_prior;
+    if (cam->has_position_prior) {
+        memcpy(p->prior_position_enu_m, cam->prior_p_enu_m, sizeof p->prior_position_enu_m);
+        p->prior_sigma_m = cam->prior_sigma_m;
+    }
+    return RS_OK;
+}
+
+void rs_calib_site_problem_free(rs_calib_site_problem *sp)
+{
+    if (!sp) return;
+    free(sp->p_enu_m);
+    free(sp->sigma_enu_m);
+    free(sp->q_px);
+    free(sp->sigma_px);
+    memset(sp, 0, sizeof *sp);
+}
+
+// ---------------------------------------------------------------- homography
+
+static void mat3_mul(double *C, const double *A, const double *B)
+{
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+}
+
+// Inverse of a 3x3 by the adjugate; false when singular relative to its scale.
+static bool mat3_inv(double *Ai, const double *A)
+{
+    double c[9] = {
+        A[4] * A[8] - A[5] * A[7], A[2] * A[7] - A[1] * A[8], A[1] * A[5] - A[2] * A[4],
+        A[5] * A[6] - A[3] * A[8], A[0] * A[8] - A[2] * A[6], A[2] * A[3] - A[0] * A[5],
+        A[3] * A[7] - A[4] * A[6], A[1] * A[6] - A[0] * A[7], A[0] * A[4] - A[1] * A[3],
+    };
+    double det = A[0] * c[0] + A[1] * c[3] + A[2] * c[6];
+    double scale = 0;
+    for (int i = 0; i < 9; i++) scale = fmax(scale, fabs(A[i]));
+    if (!isfinite(det) || fabs(det) <= 1e-14 * scale * scale * scale) return false;
+    for (int i = 0; i < 9; i++) Ai[i] = c[i] / det;
+    return true;
+}
+
+static void normalise_h(double *H)
+{
+    double s = H[8];
+    if (fabs(s) < 1e-12) return;
+    for (int i = 0; i < 9; i++) H[i] /= s;
+}
+
+rs_status rs_calib_ground_homography(double H_px_from_ground[9], double H_ground_from_px[9],
+                                     const double fxycxy[4], const double rt_cam_enu[6],
+                                     const double plane_normal_enu[3], double plane_offset_m,
+                                     rs_err *err)
+{
+    const double *n = plane_normal_enu;
+    double nn = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(nn > 0) || fabs(n[2]) < 1e-9 * nn)
+        return rs_err_set(err, RS_ERR_DEGENERATE, "ground plane: vertical or zero normal: no (E, N) parametrisation");
+    // p(E, N) = p0 + E a + N b on the plane
+    double a[3] = {1, 0, -n[0] / n[2]}, b[3] = {0, 1, -n[1] / n[2]}, p0[3] = {0, 0, plane_offset_m / n[2]};
+    double R[9];
+    mrcal_R_from_r(R, NULL, rt_cam_enu);
+    // M = [R a | R b | R p0 + t]: camera-frame point of (E, N, 1)
+    double M[9];
+    for (int i = 0; i < 3; i++) {
+        M[3 * i + 0] = R[3 * i] * a[0] + R[3 * i + 1] * a[1] + R[3 * i + 2] * a[2];
+        M[3 * i + 1] = R[3 * i] * b[0] + R[3 * i + 1] * b[1] + R[3 * i + 2] * b[2];
+        M[3 * i + 2] = R[3 * i] * p0[0] + R[3 * i + 1] * p0[1] + R[3 * i + 2] * p0[2] + rt_cam_enu[3 + i];
+    }
+    double K[9] = {fxycxy[0], 0, fxycxy[2], 0, fxycxy[1], fxycxy[3], 0, 0, 1};
+    double H[9], Hi[9];
+    mat3_mul(H, K, M);
+    if (!mat3_inv(Hi, H))
+        return rs_err_set(err, RS_ERR_DEGENERATE, "ground homography: singular (the camera lies in the ground plane)");
+    normalise_h(H);
+    normalise_h(Hi);
+    memcpy(H_px_from_ground, H, sizeof H);
+    memcpy(H_ground_from_px, Hi, sizeof Hi);
+    return RS_OK;
+}
+
+// ---------------------------------------------------------------- JSON
+
+static cJSON *json_array(const double *v, int n)
+{
+    return cJSON_CreateDoubleArray(v, n);
+}
+
+// (rows, cols) row-major as a list of rows
+static cJSON *json_matrix(const double *m, int rows, int cols)
+{
+    cJSON *a = cJSON_CreateArray();
+    if (!a) return NULL;
+    for (int i = 0; i < rows; i++) cJSON_AddItemToArray(a, cJSON_CreateDoubleArray(m + i * cols, cols));
+    return a;
+}
+
+static const char *lensmodel_name(char *buf, int size, const mrcal_lensmodel_t *m)
+{
+    if (!mrcal_lensmodel_name(buf, size, m)) snprintf(buf, (size_t)size, "(unnamed)");
+    return buf;
+}
+
+char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_result *r)
+{
+    const rs_site_camera *cam = &site->cameras[icam];
+    cJSON *root = cJSON_CreateObject();
+    if (!root) return NULL;
+    char name[256];
+    cJSON_AddStringToObject(root, "camera", cam->id);
+    cJSON_AddStringToObject(root, "site", site->name ? site->name : "");
+    cJSON_AddStringToObject(root, "lensmodel", lensmodel_name(name, sizeof name, &cam->lensmodel));
+    double size[2] = {cam->width, cam->height};
+    cJSON_AddItemToObject(root, "imagersize", json_array(size, 2));
+    cJSON_AddItemToObject(root, "intrinsics", json_array(r->intrinsics, r->Nintrinsics));
+    if (r->sigma_intrinsics)
+        cJSON_AddItemToObject(root, "sigma_intrinsics", json_array(r->sigma_intrinsics, r->Nintrinsics));
+    cJSON_AddItemToObject(root, "rt_cam_enu", json_array(r->rt_cam_enu, 6));
+    cJSON_AddItemToObject(root, "covariance_rt_cam_enu", json_matrix(r->covariance_rt_cam_enu, 6, 6));
+    cJSON_AddItemToObject(root, "position_enu_m", json_array(r->position_enu_m, 3));
+    double llh[3];
+    if (rs_geo_enu_to_llh(llh, &site->origin, r->position_enu_m, 1, NULL) == RS_OK)
+        cJSON_AddItemToObject(root, "position_llh", json_array(llh, 3));
+    else
+        cJSON_AddNullToObject(root, "position_llh");
+    cJSON_AddItemToObject(root, "yaw_pitch_roll_deg", json_array(r->yaw_pitch_roll_deg, 3));
+    cJSON_AddItemToObject(root, "sigma_position_enu_m", json_array(r->sigma_position_enu_m, 3));
+    cJSON_AddItemToObject(root, "sigma_yaw_pitch_roll_deg", json_array(r->sigma_yaw_pitch_roll_deg, 3));
+    cJSON_AddNumberToObject(root, "rms_px", r->rms_px);
+    cJSON_AddNumberToObject(root, "landmarks_used", r->Ninliers);
+    cJSON_AddNumberToObject(root, "landmarks_rejected", r->N - r->Ninliers);
+    cJSON_AddNumberToObject(root, "chi2", r->chi2);
+    cJSON_AddNumberToObject(root, "dof", r->dof);
+    cJSON_AddNumberToObject(root, "variance_factor", r->variance_factor);
+    cJSON_AddNumberToObject(root, "condition_number", r->condition_number);
+    cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
+    if (r->warnings[0]) {
+        char buf[sizeof r->warnings];
+        memcpy(buf, r->warnings, sizeof buf);
+        char *save = NULL;
+        for (char *w = strtok_r(buf, ";", &save); w; w = strtok_r(NULL, ";", &save)) {
+            while (*w == ' ') w++;
+            if (*w) cJSON_AddItemToArray(warnings, cJSON_CreateString(w));
+        }
+    }
+    cJSON *lms = cJSON_AddArrayToObject(root, "landmarks");
+    for (int i = 0; i < r->N && i < cam->Nobservations; i++) {
+        const rs_site_observation *o = &cam->observations[i];
+        cJSON *l = cJSON_CreateObject();
+        cJSON_AddStringToObject(l, "id", site->landmarks[o->ilandmark].id);
+        cJSON_AddItemToObject(l, "observed_px", json_array(o->q_px, 2));
+        cJSON_AddItemToObject(l, "predicted_px", json_array(&r->predicted_px[2 * i], 2));
+        cJSON_AddItemToObject(l, "residual_px", json_array(&r->residual_px[2 * i], 2));
+        cJSON_AddNumberToObject(l, "normalised_residual", r->normalised_residual[i]);
+        cJSON_AddBoolToObject(l, "inlier", r->inlier[i]);
+        cJSON_AddItemToObject(l, "p_enu_surveyed_m", json_array(site->landmarks[o->ilandmark].p_enu_m, 3));
+        cJSON_AddItemToObject(l, "p_enu_adjusted_m", json_array(&r->p_enu_refined_m[3 * i], 3));
+        cJSON_AddItemToArray(lms, l);
+    }
+    cJSON *solver = cJSON_AddObjectToObject(root, "solver");
+    cJSON_AddStringToObject(solver, "method", r->method);
+    cJSON_AddNumberToObject(solver, "iterations", r->iterations);
+    cJSON_AddNumberToObject(solver, "time_us", r->time_us);
+    char *text = cJSON_Print(root);
+    cJSON_Delete(root);
+    return text;
+}
+
+// ---------------------------------------------------------------- files
+
+static rs_status write_text(const char *out_dir, const char *id, const char *suffix, const char *text,
+                            rs_err *err)
+{
+    size_t n = strlen(id) + strlen(suffix) + 1;
+    char *name = malloc(n);
+    if (!name) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    snprintf(name, n, "%s%s", id, suffix);
+    char *path = rs_io_join(out_dir, name);
+    free(name);
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = rs_io_write_file(path, text, strlen(text), err);
+    free(path);
+    return st;
+}
+
+static rs_status write_cameramodel(const char *path, const rs_site_camera *cam, const rs_calib_result *r,
+                                   rs_err *err)
+{
+    mrcal_cameramodel_t *m = calloc(1, sizeof *m + (size_t)r->Nintrinsics * sizeof(double));
+    if (!m) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    memcpy(m->rt_cam_ref, r->rt_cam_enu, sizeof m->rt_cam_ref);
+    m->imagersize[0] = (unsigned)cam->width;
+    m->imagersize[1] = (unsigned)cam->height;
+    m->lensmodel = cam->lensmodel;
+    memcpy(m->intrinsics, r->intrinsics, (size_t)r->Nintrinsics * sizeof(double));
+    rs_io_atomic a;
+    rs_status st = rs_io_atomic_open(&a, path, err);
+    if (st == RS_OK) st = rs_io_atomic_release(&a, err);
+    if (st == RS_OK && !mrcal_write_cameramodel_file(a.tmp_path, m))
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: mrcal could not write the camera model", path);
+    if (st == RS_OK) st = rs_io_atomic_commit(&a, err);
+    else rs_io_atomic_abort(&a);
+    free(m);
+    return st;
+}
+
+static bool has_opencv_equivalent(const mrcal_lensmodel_t *m)
+{
+    switch (m->type) {
+    case MRCAL_LENSMODEL_PINHOLE:
+    case MRCAL_LENSMODEL_OPENCV4:
+    case MRCAL_LENSMODEL_OPENCV5:
+    case MRCAL_LENSMODEL_OPENCV8:
+    case MRCAL_LENSMODEL_OPENCV12:
+        return true;
+    default:
+        return false;
+    }
+}
+
+static rs_status write_homography(const char *path, const rs_site *site, const rs_site_camera *cam,
+                                  const rs_calib_result *r, rs_err *err)
+{
+    double H[9], Hi[9];
+    rs_status st = rs_calib_ground_homography(H, Hi, r->intrinsics, r->rt_cam_enu, site->ground_normal_enu,
+                                              site->ground_offset_m, err);
+    if (st) return rs_err_prefix(err, "%s", path);
+    cJSON *root = cJSON_CreateObject();
+    if (!root) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    cJSON_AddStringToObject(root, "camera", cam->id);
+    cJSON_AddStringToObject(root, "description",
+                            "H_ground_from_px maps undistorted pixels (u, v, 1) of the pinhole core "
+                            "(fx, fy, cx, cy; pixel (0,0) = centre of the top-left pixel) to ground "
+                            "(E, N, 1) in site ENU metres on the ground plane, up to scale; "
+                            "H_px_from_ground is its inverse");
+    cJSON_AddItemToObject(root, "pinhole_fxycxy", json_array(r->intrinsics, 4));
+    cJSON *plane = cJSON_AddObjectToObject(root, "ground_plane");
+    cJSON_AddItemToObject(plane, "normal_enu", json_array(site->ground_normal_enu, 3));
+    cJSON_AddNumberToObject(plane, "offset_m", site->ground_offset_m);
+    cJSON_AddItemToObject(root, "H_ground_from_px", json_matrix(Hi, 3, 3));
+    cJSON_AddItemToObject(root, "H_px_from_ground", json_matrix(H, 3, 3));
+    char *text = cJSON_Print(root);
+    cJSON_Delete(root);
+    if (!text) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = rs_io_write_file(path, text, strlen(text), err);
+    free(text);
+    return st;
+}
+
+rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *r,
+                              rs_err *err)
+{
+    const rs_site_camera *cam = &site->cameras[icam];
+    char name[1024];
+    rs_status st;
+
+    snprintf(name, sizeof name, "%s.cameramodel", cam->id);
+    char *path = rs_io_join(out_dir, name);
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = write_cameramodel(path, cam, r, err);
+    free(path);
+    if (st) return st;
+
+    char *json = rs_calib_site_result_json(site, icam, r);
+    if (!json) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = write_text(out_dir, cam->id, ".json", json, err);
+    free(json);
+    if (st) return st;
+
+    if (has_opencv_equivalent(&cam->lensmodel)) {
+        snprintf(name, sizeof name, "%s.opencv.yaml", cam->id);
+        path = rs_io_join(out_dir, name);
+        if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        rs_io_atomic a;
+        st = rs_io_atomic_open(&a, path, err);
+        if (st == RS_OK) st = rs_io_atomic_release(&a, err);
+        if (st == RS_OK)
+            st = rs_calib_opencv_write_yaml(a.tmp_path, r->intrinsics, r->Nintrinsics - 4, r->rt_cam_enu,
+                                            cam->width, cam->height, err);
+        if (st == RS_OK) st = rs_io_atomic_commit(&a, err);
+        else rs_io_atomic_abort(&a);
+        free(path);
+        if (st) return st;
+    }
+
+    snprintf(name, sizeof name, "%s.homography.json", cam->id);
+    path = rs_io_join(out_dir, name);
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = write_homography(path, site, cam, r, err);
+    free(path);
+    return st;
+}
+
+// ---------------------------------------------------------------- reading back
+
+rs_status rs_calib_camera_read(rs_calib_camera *out, const char *path, rs_err *err)
+{
+    memset(out, 0, sizeof *out);
+    FILE *f = fopen(path, "rb");
+    if (!f) return rs_err_set(err, RS_ERR_IO, "%s: cannot open (run 'roadside calib' first?)", path);
+    fclose(f);
+    mrcal_cameramodel_t *m = mrcal_read_cameramodel_file(path);
+    if (!m) return rs_err_set(err, RS_ERR_PARSE, "%s: not a valid mrcal .cameramodel", path);
+    int n = mrcal_lensmodel_num_params(&m->lensmodel);
+    out->intrinsics = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
+    if (!out->intrinsics) {
+        mrcal_free_cameramodel(&m);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    memcpy(out->intrinsics, m->intrinsics, (size_t)n * sizeof(double));
+    out->Nintrinsics = n;
+    out->lensmodel = m->lensmodel;
+    out->width = (int)m->imagersize[0];
+    out->height = (int)m->imagersize[1];
+    memcpy(out->rt_cam_enu, m->rt_cam_ref, sizeof out->rt_cam_enu);
+    mrcal_free_cameramodel(&m);
+    for (int i = 0; i < 6; i++)
+        if (!isfinite(out->rt_cam_enu[i])) {
+            rs_calib_camera_free(out);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: extrinsics: non-finite", path);
+        }
+    return RS_OK;
+}
+
+void rs_calib_camera_free(rs_calib_camera *cam)
+{
+    if (!cam) return;
+    free(cam->intrinsics);
+    memset(cam, 0, sizeof *cam);
+}

@@ -1,0 +1,88 @@
+// rs_calib_site.h -- calibrating the cameras of a site: from an rs_site camera to an
+// rs_calib_problem, the files `roadside calib` writes, and reading a calibrated camera back.
+//
+// Files written for camera <id> into the output folder (each atomically; docs/calibration.md
+// describes every field):
+//   <id>.cameramodel      mrcal .cameramodel: final intrinsics, extrinsics = rt_cam_enu (the
+//                         reference frame is the site ENU); readable by mrcal's own tools
+//   <id>.json             the result: pose, covariance, sigmas, yaw/pitch/roll, per-landmark
+//                         residuals and inlier flags, solver statistics
+//   <id>.opencv.yaml      K, distortion, R, t, image size (cv::FileStorage), written only when
+//                         the lens model has an OpenCV equivalent (PINHOLE, OPENCV4/5/8/12)
+//   <id>.homography.json  the 3x3 map H_ground_from_px from undistorted pixels (the pinhole
+//                         core fx, fy, cx, cy; no distortion) to ground (E, N) on the site's
+//                         ground plane, and its inverse H_px_from_ground
+#pragma once
+#include <stdbool.h>
+
+#include <mrcal/mrcal.h>
+
+#include "rs_calib.h"
+#include "rs_site.h"
+#include "rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// The arrays an rs_calib_problem points into, for one camera of a site.
+typedef struct {
+    rs_calib_problem problem; // points into the arrays below and into the site (camera's lens
+                              // model and intrinsics): valid while both live
+    double *p_enu_m;          // (N,3) owned
+    double *sigma_enu_m;      // (N,3) owned
+    double *q_px;             // (N,2) owned
+    double *sigma_px;         // (N,) owned
+} rs_calib_site_problem;
+
+// Builds camera icam's problem from the site: every observation, its landmark's surveyed ENU
+// position with (sigma_h, sigma_h, sigma_v), the pixel and its sigma, the lens model and
+// nominal intrinsics, the image size and the position prior if any.
+rs_status rs_calib_site_problem_init(// out
+                                     rs_calib_site_problem *sp,
+                                     // in
+                                     const rs_site *site, int icam, rs_err *err);
+void rs_calib_site_problem_free(rs_calib_site_problem *sp); // NULL-safe
+
+// Writes the four files of camera icam into out_dir (which must exist). The result must come
+// from rs_calib_site_problem_init(site, icam) + rs_calib_solve.
+rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam,
+                              const rs_calib_result *result, rs_err *err);
+
+// The result of one camera as JSON text (the content of <id>.json). Caller frees with free().
+// Returns NULL when out of memory.
+char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_result *result);
+
+// The homography between undistorted pixels and the ground plane n . p = offset (n_up != 0),
+// parametrised by (E, N): p = (E, N, (offset - n_e E - n_n N) / n_u).
+// out: H_px_from_ground, H_ground_from_px (3,3) row-major, each scaled so that [2][2] = 1 when
+//      that element is not ~0
+// in:  fxycxy: the pinhole core (fx, fy, cx, cy) of the intrinsics
+// Returns RS_ERR_DEGENERATE when the plane is vertical (n_u ~ 0) or the camera lies in it.
+rs_status rs_calib_ground_homography(// out
+                                     double H_px_from_ground[9], double H_ground_from_px[9],
+                                     // in
+                                     const double fxycxy[4], const double rt_cam_enu[6],
+                                     const double plane_normal_enu[3], double plane_offset_m,
+                                     rs_err *err);
+
+// A calibrated camera, read back from an mrcal .cameramodel.
+typedef struct {
+    mrcal_lensmodel_t lensmodel;
+    double *intrinsics;   // (Nintrinsics,) owned
+    int Nintrinsics;
+    int width, height;    // image size, pixels
+    double rt_cam_enu[6]; // the model's extrinsics (rt_cam_ref, the reference being site ENU)
+} rs_calib_camera;
+
+// Reads `path` (an mrcal .cameramodel written by `roadside calib` or any tool that puts the
+// site ENU frame in the reference). out is zeroed on failure; free with rs_calib_camera_free.
+rs_status rs_calib_camera_read(// out
+                               rs_calib_camera *out,
+                               // in
+                               const char *path, rs_err *err);
+void rs_calib_camera_free(rs_calib_camera *cam); // NULL-safe
+
+#ifdef __cplusplus
+}
+#endif
