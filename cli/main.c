@@ -19,6 +19,10 @@ static const command commands[] = {
     {"geo", rs_cli_geo, "convert coordinates: geodetic, UTM/UPS, site ENU"},
     {"calib", rs_cli_calib, "calibrate a site's cameras from its landmarks"},
     {"locate", rs_cli_locate, "map pixels to ground points through a calibrated camera"},
+    {"audit", rs_cli_audit, "audit calibrations: cross-validation, outliers, coverage, uncertainty"},
+    {"report", rs_cli_report, "a per-intersection calibration report (HTML and PDF)"},
+    {"scene", rs_cli_scene, "write a POV-Ray scene of vehicles seen by a calibrated camera"},
+    {"render", rs_cli_render, "render a scene with POV-Ray and write its labels"},
     {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
     {"bench", rs_cli_bench, "benchmarks: run time against error"},
 };

@@ -15,6 +15,10 @@ int rs_cli_geo(int argc, char **argv);
 int rs_cli_site(int argc, char **argv);
 int rs_cli_calib(int argc, char **argv);
 int rs_cli_locate(int argc, char **argv);
+int rs_cli_audit(int argc, char **argv);
+int rs_cli_report(int argc, char **argv);
+int rs_cli_scene(int argc, char **argv);
+int rs_cli_render(int argc, char **argv);
 int rs_cli_eval(int argc, char **argv);
 int rs_cli_bench(int argc, char **argv);
 // Sub-subcommands living in their own files: `roadside site simulate`, `roadside bench calib`.
