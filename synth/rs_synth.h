@@ -1,0 +1,46 @@
+// rs_synth.h -- types shared by the synthesis module: a vehicle placed in a site.
+//
+// Vehicle frame (docs/conventions.md, "Vehicles"): origin at the centre of the vehicle's
+// footprint on the ground, x_v forward, y_v left, z_v up, metres. The vehicle's bounding box is
+// x_v in [-length/2, length/2], y_v in [-width/2, width/2], z_v in [0, height].
+// Placement in the site ENU frame: the footprint centre at (e_m, n_m) on the site's ground plane
+// (its up coordinate is the ground plane's height there), the forward axis horizontal with
+// compass heading yaw_deg, clockwise from north: forward_enu = (sin yaw, cos yaw, 0),
+// left_enu = (-cos yaw, sin yaw, 0). (The ground is treated as level under one vehicle: a
+// sloped ground plane lifts each vehicle to its height at (e, n) without tilting it.)
+#pragma once
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// Vehicle classes of the procedural fleet (synth/rs_synth_fleet.h gives their dimension ranges).
+typedef enum {
+    RS_SYNTH_SEDAN = 0,
+    RS_SYNTH_HATCHBACK,
+    RS_SYNTH_SUV,
+    RS_SYNTH_PICKUP,
+    RS_SYNTH_VAN,
+    RS_SYNTH_BUS,
+    RS_SYNTH_BOX_TRUCK,
+    RS_SYNTH_ARTICULATED_TRUCK,
+    RS_SYNTH_NCLASSES,
+    RS_SYNTH_USER_MODEL = 100  // an OBJ mesh given by the user (model_path)
+} rs_synth_class;
+
+// One vehicle in a scene. Strings are borrowed (the caller owns them).
+typedef struct {
+    rs_synth_class cls;
+    const char *model_path;   // OBJ file when cls == RS_SYNTH_USER_MODEL, else NULL
+    const char *id;           // free-form label from the input (never trusted in scene text)
+    double e_m, n_m;          // footprint centre, site ENU, metres
+    double yaw_deg;           // compass heading of the forward axis, clockwise from north
+    double length_m, width_m, height_m; // bounding box; 0 = drawn from the class's ranges
+    double rgb[3];            // paint in linear [0,1]; negative = drawn from the colour mix
+    uint64_t variant;         // seeds the procedural shape and any drawn value
+} rs_synth_vehicle;
+
+#ifdef __cplusplus
+}
+#endif
