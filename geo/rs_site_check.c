@@ -141,6 +141,22 @@ static void format_position(char *buf, size_t size, bool geojson_order, double l
     else snprintf(buf, size, "lat %.9f, lon %.9f", lat, lon);
 }
 
+// Heights in two systems (an orthometric origin with ellipsoidal landmarks, or the other way
+// round) put points tens of metres above or below the ground. Warns when a point lies more than
+// HEIGHT_WARN_M above or below the origin and steeper than 1:2 from it.
+static void check_height(rs_site__report *r, const char *file, int feature, const char *feature_id,
+                         const char *field, const double p_enu_m[3])
+{
+    const double HEIGHT_WARN_M = 20;
+    double horizontal = hypot(p_enu_m[0], p_enu_m[1]);
+    if (fabs(p_enu_m[2]) <= HEIGHT_WARN_M || fabs(p_enu_m[2]) <= 0.5 * horizontal) return;
+    rs_site__diag(r, RS_SITE_WARNING, RS_OK, file, 0, feature, feature_id, field,
+                  "%.1f m %s the origin, %.1f m from it horizontally: if both are near the ground, "
+                  "are their heights in the same system (ellipsoidal vs orthometric: \"heights\" "
+                  "and its N)?",
+                  fabs(p_enu_m[2]), p_enu_m[2] > 0 ? "above" : "below", horizontal);
+}
+
 bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *r,
                              const rs_site *site, bool origin_ok, const char *file, int feature,
                              const char *feature_id, const char *field, bool geojson_order,
@@ -154,6 +170,7 @@ bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *
     double d = NAN, p[3];
     bool have_d = origin_ok && distance_from_origin(&d, p, site, lat, lon, h_ell);
     if (have_d && d <= max_m) {
+        check_height(r, file, feature, feature_id, field, p);
         llh[0] = lat, llh[1] = lon, llh[2] = h_ell;
         memcpy(p_enu_m, p, sizeof p);
         return true;

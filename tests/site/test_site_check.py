@@ -230,6 +230,14 @@ def d_too_far(s):
                (r"^0 errors, 1 warning$", "warning only")]
 
 
+def d_height_mismatch(s):
+    lon, lat, h = coords(s, 3)   # L03 is 15.8 m from the origin
+    set_feature(s, 3, lambda f: f["geometry"].update(coordinates=[lon, lat, h + 47.3]))
+    return 0, [(r"^SITE/landmarks\.geojson: feature 3 \(id 'L03'\): coordinates: warning: 47\.5 m above the "
+                r"origin, 15\.8 m from it horizontally: .*ellipsoidal vs orthometric", "height system"),
+               (r"^0 errors, 1 warning$", "warning only")]
+
+
 def d_decimal_comma_quoted(s):
     set_csv_line(s, "north", 6, 'L04,"812,5",604')
     return 1, [(r"^SITE/observations/north\.csv:6: u: not a number \('812,5'\)", "quoted decimal comma")]
