@@ -65,26 +65,10 @@ class LandmarkCost final : public ceres::CostFunction {
         for (int k = 0; k < 3; k++) residuals[2 + k] = (p[k] - p_survey_[k]) * w_m_[k];
         if (!std::isfinite(residuals[0]) || !std::isfinite(residuals[1])) return false;
 
-        if (want_rt) {
-            double *J = jacobians[0]; // (5,6)
-            std::memset(J, 0, sizeof(double) * 30);
-            for (int a = 0; a < 2; a++)
-                for (int j = 0; j < 6; j++) {
-                    double s = 0.0;
-                    for (int k = 0; k < 3; k++) s += dq_dpcam[a].xyz[k] * dpcam_drt[k * 6 + j];
-                    J[a * 6 + j] = s * w_px_;
-                }
-        }
+        if (want_rt) chain(jacobians[0], dq_dpcam, dpcam_drt, 6); // (5,6)
         if (want_p) {
-            double *J = jacobians[1]; // (5,3)
-            std::memset(J, 0, sizeof(double) * 15);
-            for (int a = 0; a < 2; a++)
-                for (int j = 0; j < 3; j++) {
-                    double s = 0.0;
-                    for (int k = 0; k < 3; k++) s += dq_dpcam[a].xyz[k] * dpcam_dp[k * 3 + j];
-                    J[a * 3 + j] = s * w_px_;
-                }
-            for (int k = 0; k < 3; k++) J[(2 + k) * 3 + k] = w_m_[k];
+            chain(jacobians[1], dq_dpcam, dpcam_dp, 3); // (5,3)
+            for (int k = 0; k < 3; k++) jacobians[1][(2 + k) * 3 + k] = w_m_[k];
         }
         if (want_i) {
             double *J = jacobians[2]; // (5,Nintrinsics)
@@ -97,6 +81,17 @@ class LandmarkCost final : public ceres::CostFunction {
     }
 
   private:
+    // J (5,n) = [dq_dpcam (2,3) . dpcam_dx (3,n) / sigma_px ; 0 (3,n)]
+    void chain(double *J, const mrcal_point3_t dq_dpcam[2], const double *dpcam_dx, int n) const {
+        std::memset(J, 0, sizeof(double) * 5 * (size_t)n);
+        for (int a = 0; a < 2; a++)
+            for (int j = 0; j < n; j++) {
+                double s = 0.0;
+                for (int k = 0; k < 3; k++) s += dq_dpcam[a].xyz[k] * dpcam_dx[k * n + j];
+                J[a * n + j] = s * w_px_;
+            }
+    }
+
     const mrcal_lensmodel_t *lensmodel_;
     int Nintrinsics_;
     double w_px_;

@@ -2,9 +2,45 @@
 #include "test_solve_gen.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <mrcal/poseutils.h>
+
+int gen_failures = 0;
+static FILE *caught;
+static int saved_stderr = -1;
+
+void gen_begin(void) {
+    setvbuf(stdout, NULL, _IOLBF, 0);
+    caught = tmpfile();
+    saved_stderr = dup(2);
+    if (!caught || saved_stderr < 0 || dup2(fileno(caught), 2) < 0) {
+        printf("FAIL: cannot capture stderr\n");
+        gen_failures++;
+    }
+}
+
+int gen_end(const char *seeds) {
+    fflush(stderr);
+    if (caught && saved_stderr >= 0) {
+        dup2(saved_stderr, 2);
+        rewind(caught);
+        char line[512];
+        while (fgets(line, sizeof(line), caught)) {
+            gen_failures++;
+            printf("FAIL: the library printed: %s", line);
+        }
+        fclose(caught);
+    }
+    if (gen_failures) {
+        printf("%d failure(s); seeds %s\n", gen_failures, seeds);
+        return 1;
+    }
+    printf("all passed\n");
+    return 0;
+}
 
 void gen_seed(gen_rng *g, uint64_t seed) { g->s = seed * 0x9E3779B97F4A7C15ull + 12345u; }
 

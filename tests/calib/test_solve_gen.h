@@ -10,6 +10,23 @@
 
 #define GEN_MAXN 64
 
+// ---- test bookkeeping shared by the REFINE tests ----
+extern int gen_failures;
+#define CHECK(cond, ...)                                                                          \
+    do {                                                                                          \
+        if (!(cond)) {                                                                            \
+            gen_failures++;                                                                       \
+            printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                                \
+            printf(__VA_ARGS__);                                                                  \
+            printf("\n");                                                                         \
+        }                                                                                         \
+    } while (0)
+// The library never prints: gen_begin() sends stderr to a temporary file, gen_end() restores it,
+// counts every line the library wrote there as a failure, prints the verdict (with `seeds`, a
+// description of the seeds used) and returns the exit code.
+void gen_begin(void);
+int gen_end(const char *seeds);
+
 typedef struct {
     uint64_t s;
 } gen_rng;
