@@ -1,0 +1,37 @@
+// test_refine_locate.c -- driver for test_refine_locate.py: prints, one JSON object per line,
+// pixels mapped to the ground by rs_calib_locate_ground() on simulated cameras (pinhole,
+// OPENCV8, CAHVOR; seed 900 + lens), for mrcal's Python module to check independently.
+#include <stdio.h>
+
+#include "rs_calib.h"
+#include "test_solve_gen.h"
+
+int main(void) {
+    for (int lens = 0; lens < 3; lens++) {
+        gen_rng rng;
+        gen_seed(&rng, 900 + (uint64_t)lens);
+        gen_problem g;
+        if (!gen_make(&g, &rng, (gen_lens)lens, 4, 0.0, 0.0)) return 1;
+        char name[64];
+        if (!mrcal_lensmodel_name(name, sizeof(name), &g.lensmodel)) return 1;
+        const double ground = g.p_true[2]; // a level plane through the first landmark
+        const double n[3] = {0, 0, 1};
+        for (int k = 0; k < 40; k++) {
+            // pixels in the lower two thirds of the image: below the horizon for these cameras
+            const double q[2] = {gen_uniform(&rng, 0, g.width - 1),
+                                 gen_uniform(&rng, g.height / 3.0, g.height - 1)};
+            double p[3];
+            rs_err err = {0};
+            const rs_status st = rs_calib_locate_ground(p, &g.lensmodel, g.intrinsics, g.rt_true, q,
+                                                        n, ground, &err);
+            printf("{\"model\": \"%s\", \"intrinsics\": [", name);
+            for (int i = 0; i < g.Nintrinsics; i++) printf("%s%.17g", i ? ", " : "", g.intrinsics[i]);
+            printf("], \"rt\": [");
+            for (int i = 0; i < 6; i++) printf("%s%.17g", i ? ", " : "", g.rt_true[i]);
+            printf("], \"q\": [%.17g, %.17g], \"offset\": %.17g, \"status\": %d", q[0], q[1], ground, (int)st);
+            if (st == RS_OK) printf(", \"p\": [%.17g, %.17g, %.17g]", p[0], p[1], p[2]);
+            printf("}\n");
+        }
+    }
+    return 0;
+}
