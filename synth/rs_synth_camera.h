@@ -1,0 +1,93 @@
+// rs_synth_camera.h -- the POV-Ray camera of a calibrated camera, and the pinhole canvas that
+// carries a distorted lens.
+//
+// POV-Ray's world in roadside is <x, y, z> = <east, up, north> (docs/conventions.md), left-handed
+// as POV-Ray is. The camera is written with explicit location, right, up and direction vectors
+// (never look_at or angle) so that an off-centre principal point and fx != fy are exact.
+//
+// Method (docs/povray.md derives it and tests/synth/test_pins.py checks it with the real povray):
+// POV-Ray 3.7's perspective camera shoots, for the pixel in column i (0..W-1, left to right) and
+// row j (0..H-1, top to bottom), without antialiasing, the ray
+//     D = direction + x_s right + y_s up,  x_s = (i + 0.5)/W - 0.5,  y_s = 0.5 - (j + 0.5)/H.
+// mrcal's pinhole pixel (u, v) = (i, j) (pixel (0,0) = centre of the top-left pixel) looks along
+// v_cam = ((u - cx)/fx, (v - cy)/fy, 1). Matching the two for every (i, j):
+//     right     = (W/fx)  x_cam
+//     up        = -(H/fy) y_cam
+//     direction = z_cam + ((W-1)/2 - cx)/fx x_cam + ((H-1)/2 - cy)/fy y_cam
+// where x_cam, y_cam, z_cam are the camera axes in ENU (the rows of R(r_cam_enu)), converted to
+// <e, u, n>; location = the camera centre -R^T t. Exact (to double rounding) for the pinhole core.
+#pragma once
+#include <stdio.h>
+
+#include <mrcal/mrcal.h>
+
+#include "rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// A POV-Ray perspective camera, vectors in POV-Ray's world <e, u, n>, metres.
+typedef struct {
+    double location[3];  // (3,) camera centre
+    double right[3];     // (3,) see above
+    double up[3];        // (3,)
+    double direction[3]; // (3,)
+    int width, height;   // image size the vectors were derived for, pixels
+} rs_synth_povcam;
+
+// ENU <-> POV-Ray world: p_pov = (e, u, n). In-place safe.
+void rs_synth_enu_to_pov(double p_pov[3], const double p_enu[3]);
+
+// The POV-Ray camera that renders exactly what the pinhole (fx, fy, cx, cy) at pose rt_cam_enu
+// sees in a width x height image.
+// out: *cam
+// in:  fxycxy (4,): fx, fy (> 0), cx, cy, pixels; width, height > 0; rt_cam_enu (6,)
+// Returns RS_ERR_INVALID for non-positive or non-finite focal lengths or sizes.
+rs_status rs_synth_povcam_init(// out
+                               rs_synth_povcam *cam,
+                               // in
+                               const double fxycxy[4], int width, int height,
+                               const double rt_cam_enu[6], rs_err *err);
+
+// Writes "camera { perspective location ... right ... up ... direction ... }" with 17 significant
+// digits. Returns RS_ERR_IO if the stream reports an error.
+rs_status rs_synth_povcam_write(FILE *f, const rs_synth_povcam *cam, rs_err *err);
+
+// The pinhole canvas that a distorted lens is rendered on before it is resampled into the lens.
+typedef struct {
+    double fxycxy[4];     // (4,) canvas pinhole: the lens's fx, fy times `scale`; its own cx, cy
+    int width, height;    // canvas size, pixels
+    double scale;         // canvas pixels per pinhole-core pixel (>= 1: supersampled)
+    int identity;         // 1 if the lens is LENSMODEL_PINHOLE and scale = 1: no resampling needed
+} rs_synth_canvas;
+
+// Chooses the canvas that covers every pixel of the real lens: unprojects (mrcal_unproject) the
+// border of the width x height image densely (every pixel along the four edges, plus the
+// centre) and takes the bounding box of their pinhole projections with a margin of 2 canvas
+// pixels. For LENSMODEL_PINHOLE with scale 1 the canvas is the camera itself (identity = 1).
+// Precondition: the lens maps the whole image to directions in front of the camera (z > 0)
+// within 80 degrees of the axis (RS_ERR_UNSUPPORTED otherwise: wide fisheyes need a cube map).
+// in:  lensmodel, intrinsics (Nintrinsics,), width, height: the real camera
+//      scale: canvas pixels per core pixel, >= 1 (1 is fine for the test suite; 2 gives sharper
+//      resampling)
+// Returns RS_ERR_UNSUPPORTED if the canvas would exceed 16384 pixels on a side.
+rs_status rs_synth_canvas_for_lens(// out
+                                   rs_synth_canvas *canvas,
+                                   // in
+                                   const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
+                                   int width, int height, double scale, rs_err *err);
+
+// The resampling map: for every pixel (u, v) of the real image, the canvas pixel that sees the
+// same direction: mrcal_unproject through the real lens, then the canvas pinhole. Coordinates
+// follow mrcal/OpenCV (pixel (0,0) = centre of the top-left pixel).
+// out: *map_xy, (height, width, 2) float, owned by the caller (free())
+rs_status rs_synth_canvas_map(// out
+                              float **map_xy,
+                              // in
+                              const rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
+                              const double *intrinsics, int width, int height, rs_err *err);
+
+#ifdef __cplusplus
+}
+#endif

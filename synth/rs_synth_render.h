@@ -1,0 +1,93 @@
+// rs_synth_render.h -- rendering a scene with the real POV-Ray: culling, region rendering,
+// compositing onto a background, the object-ID pass (`roadside render`).
+//
+// Steps (docs/povray.md):
+// 1. Frustum culling: each vehicle's bounding box is clipped to z_cam >= 0.05 m and projected
+//    through the canvas pinhole (rs_synth_camera.h); a vehicle whose projection misses the canvas
+//    is left out. With no vehicle left, povray is not run: the colour image is the background
+//    (or transparent) and the ID image is all 0.
+// 2. Region: povray renders only the canvas rectangle covered by the remaining vehicles' boxes
+//    (+ 2 px), with +SC/+EC/+SR/+ER; the rest of the canvas stays transparent.
+// 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
+//    (File_Gamma 1), no antialiasing unless asked; a distorted lens is resampled from the canvas
+//    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).
+// 4. Composite: out = fg + (1 - a) bg in linear light (straight alpha: fg = a * colour), the
+//    background decoded from sRGB and the result encoded to sRGB 8-bit.
+// 5. ID pass: no lights, flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
+//    per-pixel vehicle index 0 = background, k+1 = vehicle k (16-bit); resampled with
+//    nearest-neighbour into the real lens.
+// povray runs with its working directory and every read/write confined to the output folder:
+// a povray.conf there sets File_IO_Security (restricted) with only that folder in read/write
+// paths, and +L/-L library paths are not inherited. Its stderr goes to OUT/povray.log.
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+
+#include <mrcal/mrcal.h>
+
+#include "rs_status.h"
+#include "rs_synth.h"
+#include "rs_synth_opencv.h"
+#include "rs_synth_scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    const char *povray;          // executable; NULL: $ROADSIDE_POVRAY, else "povray" on PATH
+    const char *background_path; // image of the camera's size to composite onto; may be NULL
+    bool full_frame;             // no culling, no region: render the whole canvas (benchmarks)
+    bool keep_files;             // keep the .pov/.ini/.png intermediates in the output folder
+    int antialias;               // 0: none; n >= 2: +A0 +AM1 +R(n) on the colour pass only
+    double canvas_scale;         // distorted lenses: canvas pixels per core pixel (default 1)
+    rs_synth_scene_options scene; // sun, pins, ground (pass and include are set per pass)
+} rs_synth_render_options;
+
+void rs_synth_render_options_default(rs_synth_render_options *opt);
+
+// A rendered view. Images are in the real camera's size.
+typedef struct {
+    int width, height;
+    rs_synth_image rgba;     // (H, W, 4): the colour pass, linear light, straight alpha
+    rs_synth_image composite;// (H, W, 3) sRGB-encoded [0,1]: over the background (or black)
+    uint16_t *ids;           // (H, W) owned: 0 = background, k+1 = vehicle k
+    uint8_t *visible;        // (Nvehicles,) owned: 1 = survived culling (may still be hidden)
+    int Nvehicles;
+    int Nrendered;           // vehicles sent to povray (0: povray was not run)
+    int region[4];           // canvas rectangle rendered: x0, y0, x1, y1 inclusive (pixels);
+                             // all -1 when nothing was rendered
+    double seconds_povray;   // wall time spent in povray (both passes)
+} rs_synth_render_result;
+
+void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroes *r
+
+// Renders N vehicles seen by the camera into out_dir (created if missing). Writes
+//   out_dir/image.png  the composite (8-bit sRGB),  out_dir/rgba.png  the colour pass
+//   (16-bit linear RGBA, real lens),  out_dir/ids.png  the ID pass (16-bit grey, value k+1),
+// each atomically; with keep_files also the scene files and povray's own outputs.
+// in: lensmodel, intrinsics (Nintrinsics,), width, height, rt_cam_enu (6,): the calibrated
+//     camera; ground plane; vehicles (N,) with resolved dimensions; opt may be NULL (defaults)
+// Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
+// last line), RS_ERR_IO for the files.
+rs_status rs_synth_render(// out
+                          rs_synth_render_result *out,
+                          // in
+                          const char *out_dir, const mrcal_lensmodel_t *lensmodel,
+                          const double *intrinsics, int width, int height,
+                          const double rt_cam_enu[6], const double ground_normal_enu[3],
+                          double ground_offset_m, const rs_synth_vehicle *vehicles, int N,
+                          const rs_synth_render_options *opt, rs_err *err);
+
+// The canvas rectangle (x0, y0, x1, y1 inclusive, clipped to the canvas) covered by vehicle v's
+// bounding box clipped to z_cam >= near_m; returns false if it misses the canvas or lies behind.
+bool rs_synth_vehicle_rect(// out
+                           int rect[4],
+                           // in
+                           const double fxycxy[4],
+                           int width, int height, const double rt_cam_enu[6],
+                           const double corners_enu_m[8][3], double near_m);
+
+#ifdef __cplusplus
+}
+#endif

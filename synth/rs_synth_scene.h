@@ -1,0 +1,134 @@
+// rs_synth_scene.h -- POV-Ray scenes of vehicles seen by a calibrated camera: the vehicles file,
+// the sun, and the scene writer (`roadside scene`).
+//
+// A scene is self-contained: camera (rs_synth_camera.h), a sun (a parallel light from azimuth and
+// elevation) and sky light, the site's ground plane n . p_enu = offset, the vehicles and optional
+// pins, all in POV-Ray's world <e, u, n>. No #include, no file reads, no strings from input files
+// except as sanitised comments (only [A-Za-z0-9 _.:-] kept, everything else becomes '_'), so an
+// input can never inject a POV-Ray directive.
+//
+// Vehicles: each is declared once in its vehicle frame mapped to POV-Ray axes
+//     <x_pov, y_pov, z_pov> = <x_v (forward), z_v (up), y_v (left)>
+// (the same swap as ENU -> <e, u, n>, so handedness is preserved and nothing is mirrored) by
+// rs_synth_fleet_write_declare (synth/rs_synth_fleet.h), then placed with
+//     matrix < f_e, 0, f_n,   0, 1, 0,   l_e, 0, l_n,   c_e, c_u, c_n >
+// where f = (sin yaw, cos yaw) is forward, l = (-cos yaw, sin yaw) is left and c the footprint
+// centre on the ground plane (rs_synth.h).
+//
+// Passes: the colour pass (lit, textured) and the ID pass (no lights, every vehicle a flat
+// emissive colour encoding its index: value k+1 = R + 256 G in 8-bit units, written by povray with
+// File_Gamma 1 and no antialiasing, so that the values are exact).
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "rs_status.h"
+#include "rs_synth.h"
+#include "rs_synth_camera.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// ---- the vehicles file ----
+
+// A vehicles file read into memory. `v[i]`'s strings point into this list's storage.
+typedef struct {
+    rs_synth_vehicle *v; // (N,) owned
+    int N;
+    char **strings;      // owned: every string v[] points to
+    int Nstrings;
+} rs_synth_vehicle_list;
+
+// Class name <-> enum: "sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck",
+// "articulated_truck" (case-insensitive on input; '-' and ' ' accepted for '_').
+// rs_synth_class_from_name returns -1 for an unknown name.
+int rs_synth_class_from_name(const char *name);
+const char *rs_synth_class_name(rs_synth_class cls); // "user_model" for RS_SYNTH_USER_MODEL
+
+// Reads a vehicles file: a JSON list of objects
+//   {"class": "sedan" | "model": "path.obj", "e": m, "n": m, "yaw_deg": deg,
+//    "length": m, "width": m, "height": m,   (optional, > 0; default: drawn from the class)
+//    "colour": [r, g, b] linear in [0,1] or "#rrggbb" sRGB (optional; default: drawn),
+//    "variant": integer >= 0 (optional, default: the index), "id": string (optional)}
+// yaw_deg is the compass heading of the vehicle's forward axis, clockwise from north.
+// A relative "model" path is taken relative to the vehicles file's folder.
+// Errors name the file, the list index and the field: "FILE: [3].yaw_deg: not a number".
+rs_status rs_synth_vehicles_read(// out
+                                 rs_synth_vehicle_list *list,
+                                 // in
+                                 const char *path, rs_err *err);
+void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list); // NULL-safe
+
+// ---- the vehicle box ----
+
+// The 8 corners of vehicle v's bounding box in ENU, metres, on the ground plane
+// n . p = offset: corner k has x_v = +-L/2 (bit 0: +), y_v = +-W/2 (bit 1: +), z_v = 0 or H
+// (bit 2: H). Requires v's length/width/height > 0 (resolve drawn dimensions first).
+void rs_synth_vehicle_corners_enu(// out
+                                  double corners_enu_m[8][3],
+                                  // in
+                                  const rs_synth_vehicle *v, const double ground_normal_enu[3],
+                                  double ground_offset_m);
+
+// Up coordinate of the ground plane n . p = offset at (e, n). n[2] must be non-zero.
+double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_offset_m,
+                            double e_m, double n_m);
+
+// ---- the sun ----
+
+// Solar azimuth (clockwise from north, degrees) and elevation (above the horizon, degrees,
+// without refraction) at latitude/longitude (degrees) and UTC time (seconds since 1970).
+// Method: NOAA's solar position equations (Meeus, Astronomical Algorithms, ch. 25, low
+// precision). Accuracy ~0.02 degree for 1950..2100.
+void rs_synth_sun_position(// out
+                           double *azimuth_deg, double *elevation_deg,
+                           // in
+                           double lat_deg, double lon_deg, double unix_time_s);
+
+// Parses an ISO 8601 time "YYYY-MM-DDTHH:MM[:SS[.fff]]" followed by "Z" or "+HH:MM"/"-HH:MM"
+// (a zone is required). out: seconds since 1970 UTC. Returns RS_ERR_PARSE naming `field`.
+rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char *field,
+                                 rs_err *err);
+
+// ---- the scene ----
+
+typedef enum { RS_SYNTH_PASS_COLOUR = 0, RS_SYNTH_PASS_ID = 1 } rs_synth_pass;
+
+typedef struct {
+    rs_synth_pass pass;
+    bool ground_visible;        // colour pass: draw the ground (false: the ground is left out,
+                                // for compositing over a photograph)
+    double sun_azimuth_deg;     // sun direction (colour pass)
+    double sun_elevation_deg;
+    const double *pins_enu_m;   // (Npins,3) pin centres, may be NULL
+    int Npins;
+    double pin_radius_px;       // pins' radius in image pixels at their distance (default 3)
+    const uint8_t *include;     // (Nvehicles,) 0 = leave vehicle out (culled), may be NULL = all
+    bool boxes;                 // draw vehicles as plain boxes (no fleet meshes)
+} rs_synth_scene_options;
+
+// Defaults: colour pass, ground visible, sun at azimuth 135, elevation 45, no pins, radius 3 px.
+void rs_synth_scene_options_default(rs_synth_scene_options *opt);
+
+// Writes the .pov text of a scene to f.
+// in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
+//     (for sizing pins); ground plane; vehicles (N,) with resolved dimensions (> 0)
+// Returns RS_ERR_IO on a stream error, RS_ERR_INVALID for a vehicle without dimensions.
+rs_status rs_synth_scene_write(FILE *f,
+                               // in
+                               const rs_synth_povcam *cam, const double fxy[2],
+                               const double ground_normal_enu[3], double ground_offset_m,
+                               const rs_synth_vehicle *vehicles, int Nvehicles,
+                               const rs_synth_scene_options *opt, rs_err *err);
+
+// Writes the .ini matching a scene: Input_File_Name (the .pov's base name, same folder),
+// Width/Height, no antialiasing, Output_Alpha, File_Gamma 1 for the ID pass, and no file I/O
+// beyond the .pov's folder. Both files are written atomically.
+rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
+                                   const rs_synth_povcam *cam, rs_synth_pass pass, rs_err *err);
+
+#ifdef __cplusplus
+}
+#endif
