@@ -6,12 +6,14 @@
 
 #include "rs_cli.h"
 #include "rs_eval.h"
+#include "rs_site.h"
 
 static void usage(FILE *out)
 {
     fprintf(out,
             "usage: roadside eval GT.json DETS.json [--center-shift K] [--thresholds LIST]\n"
             "                     [--max-dets N] [--per-class] [--by KEY] [--json OUT]\n"
+            "                     [--site SITE --calib DIR [--camera-field KEY]]\n"
             "\n"
             "Average precision of vehicle detections judged by where they are: a detection is a\n"
             "true positive when its bottom-centre point lies closer than a pixel threshold to the\n"
@@ -28,6 +30,12 @@ static void usage(FILE *out)
             "  --per-class        also one row per category, matching only within it\n"
             "  --by KEY           also one row per value of the image field KEY (e.g. condition)\n"
             "  --json OUT         write the metrics as JSON to OUT\n"
+            "  --site SITE, --calib DIR\n"
+            "                     metric thresholds: map every point to the site's ground plane\n"
+            "                     through its image's camera (DIR/<camera>.cameramodel from\n"
+            "                     'roadside calib', full lens model); thresholds are then metres\n"
+            "                     (default 0.5,1,2,4: nuScenes' centre distances)\n"
+            "  --camera-field KEY the image field naming its camera (default camera)\n"
             "\n"
             "Prints AP at each threshold, mAP (mean AP over the thresholds) and AR (mean final\n"
             "recall); '-' (null in JSON) where there is no ground truth. The exact rules (ignore\n"
@@ -36,7 +44,7 @@ static void usage(FILE *out)
 }
 
 typedef struct {
-    const char *gt, *dets, *json, *by;
+    const char *gt, *dets, *json, *by, *site, *calib, *camera_field;
     double center_shift;
     double thresholds[RS_EVAL_MAX_THRESHOLDS];
     int Nthresholds; // 0: the default
@@ -62,12 +70,13 @@ static bool parse_list(const char *s, double *x, int *N)
 static int parse_args(int argc, char **argv, eval_args *a)
 {
     *a = (eval_args){0};
-    enum { O_SHIFT = 256, O_THRESHOLDS, O_MAXDETS, O_PERCLASS, O_BY, O_JSON };
+    enum { O_SHIFT = 256, O_THRESHOLDS, O_MAXDETS, O_PERCLASS, O_BY, O_JSON, O_SITE, O_CALIB, O_CAMFIELD };
     static const struct option options[] = {
         {"center-shift", required_argument, NULL, O_SHIFT}, {"thresholds", required_argument, NULL, O_THRESHOLDS},
         {"max-dets", required_argument, NULL, O_MAXDETS},   {"per-class", no_argument, NULL, O_PERCLASS},
         {"by", required_argument, NULL, O_BY},              {"json", required_argument, NULL, O_JSON},
-        {NULL, 0, NULL, 0}};
+        {"site", required_argument, NULL, O_SITE},          {"calib", required_argument, NULL, O_CALIB},
+        {"camera-field", required_argument, NULL, O_CAMFIELD}, {NULL, 0, NULL, 0}};
     opterr = 0;
     optind = 0; // glibc: full re-initialisation
     int c;
@@ -91,12 +100,18 @@ static int parse_args(int argc, char **argv, eval_args *a)
         case O_PERCLASS: a->per_class = true; break;
         case O_BY: a->by = optarg; break;
         case O_JSON: a->json = optarg; break;
+        case O_SITE: a->site = optarg; break;
+        case O_CALIB: a->calib = optarg; break;
+        case O_CAMFIELD: a->camera_field = optarg; break;
         case ':': return rs_cli_usage_error("eval", "%s needs a value", argv[optind - 1]);
         default: return rs_cli_usage_error("eval", "unknown option '%s'", argv[optind - 1]);
         }
     }
     if (argc - optind != 2)
         return rs_cli_usage_error("eval", "expected GT.json and DETS.json, got %d file argument(s)", argc - optind);
+    if (!a->site != !a->calib) return rs_cli_usage_error("eval", "--site and --calib go together");
+    if (a->camera_field && !a->site) return rs_cli_usage_error("eval", "--camera-field needs --site and --calib");
+    if (a->site && !a->camera_field) a->camera_field = "camera";
     a->gt = argv[optind];
     a->dets = argv[optind + 1];
     return RS_EXIT_OK;
@@ -131,7 +146,8 @@ static void print_table(const rs_eval_result *r, const char *by)
         snprintf(label, sizeof label, "class %s (%lld)", r->classes[c].name, r->classes[c].category_id);
         print_row(label, r, &r->classes[c]);
     }
-    printf("thresholds in pixels; max %d detections per image; '-': no ground truth\n", r->max_dets);
+    printf("thresholds in %s; max %d detections per image; '-': no ground truth\n",
+           r->metres ? "metres on the ground" : "pixels", r->max_dets);
 }
 
 int rs_cli_eval(int argc, char **argv)
@@ -146,9 +162,23 @@ int rs_cli_eval(int argc, char **argv)
     rs_err err = {0};
     rs_eval_data *data = NULL;
     rs_eval_result *result = NULL;
-    const rs_eval_load_options lo = {.center_shift = a.center_shift, .group_key = a.by};
+    const rs_eval_load_options lo = {.center_shift = a.center_shift, .group_key = a.by,
+                                     .camera_key = a.camera_field};
     rs_status st = rs_eval_load(&data, a.gt, a.dets, &lo, &err);
     if (st != RS_OK) return rs_cli_fail("eval", st, &err);
+    if (a.site) {
+        rs_site *site = NULL;
+        size_t missed = 0;
+        st = rs_site_load(&site, a.site, &err);
+        if (st == RS_OK) st = rs_eval_data_to_ground(data, site, a.calib, &missed, &err);
+        rs_site_free(site);
+        if (st != RS_OK) {
+            rs_eval_data_free(data);
+            return rs_cli_fail("eval", st, &err);
+        }
+        if (missed)
+            fprintf(stderr, "roadside eval: %zu point(s) whose ray misses the ground can match nothing\n", missed);
+    }
     const rs_eval_options opt = {.thresholds_px = a.Nthresholds ? a.thresholds : NULL,
                                  .Nthresholds = a.Nthresholds,
                                  .max_dets = a.max_dets,

@@ -322,13 +322,20 @@ rs_status rs_eval_run(rs_eval_result **result, const rs_eval_data *d, const rs_e
     const rs_eval_options *opt = opt_in ? opt_in : &defaults;
     rs_status st = check_options(opt, d, err);
     if (st != RS_OK) return st;
-    const double *theta = opt->thresholds_px ? opt->thresholds_px : default_thresholds_px;
-    const int T = opt->thresholds_px ? opt->Nthresholds : (int)(sizeof default_thresholds_px / sizeof(double));
+    // nuScenes' centre-distance thresholds for ground distances, the seed paper's for pixels
+    static const double default_thresholds_m[] = {0.5, 1, 2, 4};
+    const double *theta = opt->thresholds_px ? opt->thresholds_px
+                          : d->metres        ? default_thresholds_m
+                                             : default_thresholds_px;
+    const int T = opt->thresholds_px ? opt->Nthresholds
+                  : d->metres        ? (int)(sizeof default_thresholds_m / sizeof(double))
+                                     : (int)(sizeof default_thresholds_px / sizeof(double));
 
     rs_eval_result *r = calloc(1, sizeof *r);
     kept_dets k = {0};
     if (!r) goto nomem;
     r->Nthresholds = T;
+    r->metres = d->metres;
     r->max_dets = opt->max_dets ? opt->max_dets : 100;
     if (!(r->thresholds_px = malloc((size_t)T * sizeof *theta))) goto nomem;
     memcpy(r->thresholds_px, theta, (size_t)T * sizeof *theta);

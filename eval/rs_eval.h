@@ -34,6 +34,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "rs_site.h"
 #include "rs_status.h"
 
 #ifdef __cplusplus
@@ -46,6 +47,8 @@ typedef struct rs_eval_data rs_eval_data;
 typedef struct {
     double center_shift;   // K (unitless, fraction of the box height); 0 = the box centre
     const char *group_key; // image-level field to group by (`--by`), may be NULL
+    const char *camera_key; // image-level field naming each image's camera (for
+                           //   rs_eval_data_to_ground), may be NULL
 } rs_eval_load_options;
 
 // Reads a COCO ground-truth file and a COCO results file (a JSON list of {image_id,
@@ -71,6 +74,22 @@ rs_status rs_eval_parse(// out
                         rs_err *err);
 
 void rs_eval_data_free(rs_eval_data *data);
+
+// Metric evaluation: replaces every point (ground truths and detections, after the centre
+// shift) by its ground position (E, N) in metres, so that thresholds are then distances on the
+// ground. Each image's camera is named by the image field given as camera_key at load time;
+// calib_dir/<camera>.cameramodel (as written by `roadside calib`) gives the camera, the site
+// its ground plane. Each pixel's ray goes through the full lens model (rs_calib_locate_ground).
+// A point whose ray misses the ground (above the horizon, or a ray parallel to it) can match
+// nothing: such a detection is a false positive and such a ground truth stays unmatched.
+// Errors: RS_ERR_INVALID (data loaded without camera_key, an image without a camera),
+// RS_ERR_NOT_FOUND (a camera the site or calib_dir lacks), RS_ERR_IO / RS_ERR_PARSE (model).
+rs_status rs_eval_data_to_ground(// in,out
+                                 rs_eval_data *data,
+                                 // in
+                                 const rs_site *site, const char *calib_dir,
+                                 size_t *Nmissed, // may be NULL: points whose ray misses the ground
+                                 rs_err *err);
 
 // Counts: images, non-crowd ground truths, ignore regions, detections (before max-dets).
 void rs_eval_data_counts(const rs_eval_data *data, size_t *Nimages, size_t *Ngt, size_t *Ncrowd,
@@ -102,7 +121,8 @@ typedef struct {
 
 typedef struct {
     int Nthresholds;
-    double *thresholds_px;    // (Nthresholds)
+    double *thresholds_px;    // (Nthresholds) in pixels, or metres after rs_eval_data_to_ground
+    bool metres;              // the thresholds are ground distances in metres
     int max_dets;
     rs_eval_metrics all;      // class-agnostic, every image
     int Ngroups;
@@ -121,7 +141,7 @@ rs_status rs_eval_run(// out
 
 void rs_eval_result_free(rs_eval_result *result);
 
-// Writes the result as JSON (atomically): {"thresholds_px": [...], "max_dets": N, "AP": {"2":
+// Writes the result as JSON (atomically): {"thresholds_px": [...] (or "thresholds_m"), "max_dets": N, "AP": {"2":
 // ..., ...}, "mAP": ..., "AR": ..., "recall": {...}, "num_gt": ..., "num_det": ...,
 // "num_dropped": {...}, "groups": {VALUE: {...}}, "classes": {ID: {"name": ..., ...}}}. Keys of
 // the per-threshold objects are the thresholds printed with %.15g. NaN is written as null.

@@ -12,6 +12,8 @@ struct rs_eval_data {
     int *image_group;      // (Nimages) index into group_names; NULL without a group key
     int Ngroups;
     char **group_names;    // (Ngroups) first-appearance order
+    char **image_camera;   // (Nimages) camera of each image (camera_key), NULL without the key
+    bool metres;           // points were mapped to the ground (rs_eval_data_to_ground)
 
     int Ncategories;
     long long *category_id; // (Ncategories)

@@ -136,6 +136,7 @@ typedef struct {
     rs_eval_data *d;
     where w;
     const char *group_key;
+    const char *camera_key;
     size_t span[3][2]; // images, annotations, categories: [begin, end)
     bool has[3];
 
@@ -202,13 +203,22 @@ static rs_status gt_image(void *vctx, size_t index, const cJSON *o, size_t offse
     if ((st = get_id(&c->w, o, "id", &id, err))) return st;
     if (!grow(&d->image_id, &cap, n, sizeof *d->image_id) ||
         !grow(&c->image_at, &(size_t){c->cap_images}, n, sizeof *c->image_at) ||
-        !grow(&c->image_value, &(size_t){c->cap_images}, n, sizeof *c->image_value))
+        !grow(&c->image_value, &(size_t){c->cap_images}, n, sizeof *c->image_value) ||
+        (c->camera_key && !grow(&d->image_camera, &(size_t){c->cap_images}, n, sizeof *d->image_camera)))
         return nomem(&c->w, err);
     c->cap_images = cap;
     d->image_id[n] = id;
     c->image_at[n] = offset;
     c->image_value[n] = NULL;
+    if (c->camera_key) d->image_camera[n] = NULL;
     d->Nimages++;
+    if (c->camera_key) {
+        const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, c->camera_key);
+        if (!cJSON_IsString(v))
+            return bad(&c->w, err, RS_ERR_INVALID, "%s: missing or not a string (it names the image's camera)",
+                       c->camera_key);
+        if (!(d->image_camera[n] = strdup(v->valuestring))) return nomem(&c->w, err);
+    }
     return c->group_key ? group_value(&c->w, o, c->group_key, &c->image_value[n], err) : RS_OK;
 }
 
@@ -501,7 +511,8 @@ rs_status rs_eval_parse(rs_eval_data **data, const char *gt_text, size_t gt_len,
     if (!isfinite(K)) return rs_err_set(err, RS_ERR_USAGE, "center shift: not finite");
     rs_eval_data *d = calloc(1, sizeof *d);
     if (!d) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    gt_ctx g = {.d = d, .w = {.text = gt_text, .name = gt_name}, .group_key = opt ? opt->group_key : NULL};
+    gt_ctx g = {.d = d, .w = {.text = gt_text, .name = gt_name}, .group_key = opt ? opt->group_key : NULL,
+                .camera_key = opt ? opt->camera_key : NULL};
     rs_status st = load_gt(&g, gt_len, err);
     if (st == RS_OK) {
         det_ctx c = {.d = d, .image_map = g.image_map, .category_map = g.category_map, .K = K,
@@ -538,6 +549,9 @@ void rs_eval_data_free(rs_eval_data *d)
     if (!d) return;
     free(d->image_id);
     free(d->image_group);
+    if (d->image_camera)
+        for (int i = 0; i < d->Nimages; i++) free(d->image_camera[i]);
+    free(d->image_camera);
     for (int g = 0; g < d->Ngroups; g++) free(d->group_names[g]);
     free(d->group_names);
     free(d->category_id);

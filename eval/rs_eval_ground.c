@@ -1,0 +1,74 @@
+// rs_eval_ground.c -- metric thresholds: every point to the ground through its image's camera.
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rs_calib.h"
+#include "rs_calib_site.h"
+#include "rs_eval_internal.h"
+#include "rs_io.h"
+#include "rs_site.h"
+
+// Points whose rays miss the ground are parked far away, detections and ground truths on
+// opposite sides, so that they match nothing (the distance squared stays finite: 4e300).
+static const double MISSED_DET = 1e150, MISSED_GT = -1e150;
+
+// Replaces q (2,) by its ground (E, N), or by (missed, missed) when the ray misses the ground.
+static bool to_ground(double *q, const rs_calib_camera *cam, const rs_site *site, double missed)
+{
+    double p[3];
+    if (rs_calib_locate_ground(p, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, q, site->ground_normal_enu,
+                               site->ground_offset_m, NULL) != RS_OK) {
+        q[0] = q[1] = missed;
+        return false;
+    }
+    q[0] = p[0];
+    q[1] = p[1];
+    return true;
+}
+
+rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const char *calib_dir, size_t *Nmissed,
+                                 rs_err *err)
+{
+    if (Nmissed) *Nmissed = 0;
+    if (!d->image_camera)
+        return rs_err_set(err, RS_ERR_INVALID, "the ground truth was loaded without a camera field");
+    if (d->metres) return rs_err_set(err, RS_ERR_INVALID, "the points are on the ground already");
+    // one camera model per distinct camera name, loaded on first use
+    int *cam_of_image = malloc((size_t)(d->Nimages ? d->Nimages : 1) * sizeof *cam_of_image);
+    rs_calib_camera *cams = calloc((size_t)(site->Ncameras ? site->Ncameras : 1), sizeof *cams);
+    bool *loaded = calloc((size_t)(site->Ncameras ? site->Ncameras : 1), sizeof *loaded);
+    rs_status st = cam_of_image && cams && loaded ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; st == RS_OK && i < d->Nimages; i++) {
+        int c = rs_site_find_camera(site, d->image_camera[i]);
+        if (c < 0) {
+            st = rs_err_set(err, RS_ERR_NOT_FOUND, "image %lld: camera '%s' is not a camera of the site %s",
+                            d->image_id[i], d->image_camera[i], site->dir);
+            break;
+        }
+        cam_of_image[i] = c;
+        if (loaded[c]) continue;
+        char name[512];
+        snprintf(name, sizeof name, "%s.cameramodel", site->cameras[c].id);
+        char *path = rs_io_join(calib_dir, name);
+        st = path ? rs_calib_camera_read(&cams[c], path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(path);
+        loaded[c] = st == RS_OK;
+    }
+    size_t missed = 0;
+    if (st == RS_OK) {
+        for (int i = 0; i < d->Nimages; i++)
+            for (size_t a = d->gt_begin[i]; a < d->gt_begin[i + 1]; a++)
+                missed += !to_ground(&d->gt_q_px[2 * a], &cams[cam_of_image[i]], site, MISSED_GT);
+        for (size_t k = 0; k < d->Ndets; k++)
+            missed += !to_ground(&d->det_q_px[2 * k], &cams[cam_of_image[d->det_image[k]]], site, MISSED_DET);
+        d->metres = true;
+    }
+    if (cams)
+        for (int c = 0; c < site->Ncameras; c++) rs_calib_camera_free(&cams[c]);
+    free(cams);
+    free(loaded);
+    free(cam_of_image);
+    if (Nmissed) *Nmissed = missed;
+    return st;
+}
