@@ -67,7 +67,7 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 //   (16-bit linear RGBA, real lens),  out_dir/ids.png  the ID pass (16-bit grey, value k+1),
 // each atomically; with keep_files also the scene files and povray's own outputs.
 // in: lensmodel, intrinsics (Nintrinsics,), width, height, rt_cam_enu (6,): the calibrated
-//     camera; ground plane; vehicles (N,) with resolved dimensions; opt may be NULL (defaults)
+//     camera; ground plane; the prepared vehicles (rs_synth_scene.h); opt may be NULL (defaults)
 // Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
 // last line), RS_ERR_IO for the files.
 rs_status rs_synth_render(// out
@@ -76,7 +76,7 @@ rs_status rs_synth_render(// out
                           const char *out_dir, const mrcal_lensmodel_t *lensmodel,
                           const double *intrinsics, int width, int height,
                           const double rt_cam_enu[6], const double ground_normal_enu[3],
-                          double ground_offset_m, const rs_synth_vehicle *vehicles, int N,
+                          double ground_offset_m, const rs_synth_prepared *vehicles,
                           const rs_synth_render_options *opt, rs_err *err);
 
 // The canvas rectangle (x0, y0, x1, y1 inclusive, clipped to the canvas) covered by vehicle v's

@@ -7,13 +7,10 @@
 // except as sanitised comments (only [A-Za-z0-9 _.:-] kept, everything else becomes '_'), so an
 // input can never inject a POV-Ray directive.
 //
-// Vehicles: each is declared once in its vehicle frame mapped to POV-Ray axes
-//     <x_pov, y_pov, z_pov> = <x_v (forward), z_v (up), y_v (left)>
-// (the same swap as ENU -> <e, u, n>, so handedness is preserved and nothing is mirrored) by
-// rs_synth_fleet_write_declare (synth/rs_synth_fleet.h), then placed with
-//     matrix < f_e, 0, f_n,   0, 1, 0,   l_e, 0, l_n,   c_e, c_u, c_n >
-// where f = (sin yaw, cos yaw) is forward, l = (-cos yaw, sin yaw) is left and c the footprint
-// centre on the ground plane (rs_synth.h).
+// Vehicles: each procedural vehicle and each distinct user model is declared once by
+// rs_synth_fleet_write_declare (synth/rs_synth_fleet.h, POV-Ray axes of a vehicle at the ENU
+// origin facing north) and placed with rs_synth_fleet_write_placement (rotate by yaw about the
+// up axis, translate to the footprint centre on the ground plane).
 //
 // Passes: the colour pass (lit, textured) and the ID pass (no lights, every vehicle a flat
 // emissive colour encoding its index: value k+1 = R + 256 G in 8-bit units, written by povray with
@@ -26,6 +23,7 @@
 #include "rs_status.h"
 #include "rs_synth.h"
 #include "rs_synth_camera.h"
+#include "rs_synth_fleet.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -39,16 +37,13 @@ typedef struct {
     int N;
     char **strings;      // owned: every string v[] points to
     int Nstrings;
+    rs_synth_obj_spec *obj; // (N,) owned: user models' specs (obj[i].path == v[i].model_path)
 } rs_synth_vehicle_list;
 
-// Class name <-> enum: "sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck",
-// "articulated_truck" (case-insensitive on input; '-' and ' ' accepted for '_').
-// rs_synth_class_from_name returns -1 for an unknown name.
-int rs_synth_class_from_name(const char *name);
-const char *rs_synth_class_name(rs_synth_class cls); // "user_model" for RS_SYNTH_USER_MODEL
-
 // Reads a vehicles file: a JSON list of objects
-//   {"class": "sedan" | "model": "path.obj", "e": m, "n": m, "yaw_deg": deg,
+//   {"class": "sedan" (rs_synth_class_name) | "model": "path.obj" (with "scale": metres per
+//    unit, default 1, "forward": "+x".."-z", default "+x", "up", default "+z"),
+//    "e": m, "n": m, "yaw_deg": deg,
 //    "length": m, "width": m, "height": m,   (optional, > 0; default: drawn from the class)
 //    "colour": [r, g, b] linear in [0,1] or "#rrggbb" sRGB (optional; default: drawn),
 //    "variant": integer >= 0 (optional, default: the index), "id": string (optional)}
@@ -112,15 +107,36 @@ typedef struct {
 // Defaults: colour pass, ground visible, sun at azimuth 135, elevation 45, no pins, radius 3 px.
 void rs_synth_scene_options_default(rs_synth_scene_options *opt);
 
+// Vehicles ready for a scene: resolved (rs_synth_fleet_resolve), meshes built; a user model is
+// loaded once per distinct (path, scale, forward, up) and shared by its instances.
+typedef struct {
+    rs_synth_vehicle *v;   // (N,) owned copies, resolved: dimensions > 0 (a user model's from its
+                           // mesh bounds), paint set; strings still borrowed from the input
+    int N;
+    rs_synth_mesh *meshes; // (Nmeshes,) owned
+    int Nmeshes;
+    int *imesh;            // (N,) owned: the mesh of each vehicle
+} rs_synth_prepared;
+
+// in: vehicles (N,); obj (N,) user models' specs (entries of procedural vehicles ignored), may be
+//     NULL when there is no user model
+// Errors are the fleet's, prefixed with "vehicle K (id ...): " (id sanitised).
+rs_status rs_synth_prepare(// out
+                           rs_synth_prepared *out,
+                           // in
+                           const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N,
+                           rs_err *err);
+void rs_synth_prepared_free(rs_synth_prepared *p); // NULL-safe; zeroes *p
+
 // Writes the .pov text of a scene to f.
 // in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
-//     (for sizing pins); ground plane; vehicles (N,) with resolved dimensions (> 0)
-// Returns RS_ERR_IO on a stream error, RS_ERR_INVALID for a vehicle without dimensions.
+//     (for sizing pins); ground plane; the prepared vehicles
+// Returns RS_ERR_IO on a stream error.
 rs_status rs_synth_scene_write(FILE *f,
                                // in
                                const rs_synth_povcam *cam, const double fxy[2],
                                const double ground_normal_enu[3], double ground_offset_m,
-                               const rs_synth_vehicle *vehicles, int Nvehicles,
+                               const rs_synth_prepared *vehicles,
                                const rs_synth_scene_options *opt, rs_err *err);
 
 // Writes the .ini matching a scene: Input_File_Name (the .pov's base name, same folder),
