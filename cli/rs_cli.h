@@ -19,6 +19,7 @@ int rs_cli_audit(int argc, char **argv);
 int rs_cli_report(int argc, char **argv);
 int rs_cli_scene(int argc, char **argv);
 int rs_cli_render(int argc, char **argv);
+int rs_cli_traffic(int argc, char **argv);
 int rs_cli_eval(int argc, char **argv);
 int rs_cli_bench(int argc, char **argv);
 // Sub-subcommands living in their own files: `roadside site simulate`, `roadside bench calib`.
