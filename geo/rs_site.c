@@ -744,7 +744,7 @@ static bool read_csv_header(reader *c, int line, char **fields, int nfields, int
     return true;
 }
 
-// Suggests an id that differs only in case (the commonest mismatch), or "".
+// Suggests an id that differs only in case (the commonest mismatch), or NULL.
 static const char *similar_landmark(const rs_site *site, const char *id)
 {
     for (int i = 0; i < site->Nlandmarks; i++)

@@ -98,40 +98,47 @@ static const char *const readme_format =
     "\n"
     "Optional: images of the empty scene from that camera, for synthesising training data.\n";
 
+// site.json, laid out like docs/site-format.md. The values given are printed by cJSON (strings
+// escaped, numbers to the shortest text that reads back as the same double).
+static const char *const site_json_format =
+    "{\n"
+    "  \"name\": %s,\n"
+    "  \"origin\": {\"lat\": %s, \"lon\": %s, \"h\": %s},\n"
+    "  \"heights\": %s%s%s,\n"
+    "  \"landmark_sigma_m\": {\"horizontal\": 0.3, \"vertical\": 0.5},\n"
+    "  \"max_landmark_distance_m\": 1000,\n"
+    "  \"cameras\": [\n"
+    "    {\"id\": \"cam1\", \"model\": \"cameras/cam1.cameramodel\", \"observations\": \"observations/cam1.csv\",\n"
+    "     \"backgrounds\": \"backgrounds/cam1\",\n"
+    "     \"note\": \"example camera: rename it, add its model and its picks (README.md)\"}\n"
+    "  ]\n"
+    "}\n";
+
 static rs_status write_site_json(const char *path, const char *name, const rs_llh *origin,
                                  const double *geoid_undulation_m, rs_err *err)
 {
-    rs_status st = RS_OK;
+    cJSON *items[5] = {cJSON_CreateString(name), cJSON_CreateNumber(origin->lat_deg),
+                       cJSON_CreateNumber(origin->lon_deg), cJSON_CreateNumber(origin->h_m),
+                       cJSON_CreateNumber(geoid_undulation_m ? *geoid_undulation_m : 0)};
+    char *v[5] = {NULL};
+    bool ok = true;
+    for (int i = 0; i < 5; i++) ok = ok && items[i] && (v[i] = cJSON_PrintUnformatted(items[i]));
     char *text = NULL;
-    cJSON *root = cJSON_CreateObject(), *o = NULL, *cams, *cam;
-    bool ok = root && cJSON_AddStringToObject(root, "name", name) &&
-              (o = cJSON_AddObjectToObject(root, "origin")) &&
-              cJSON_AddNumberToObject(o, "lat", origin->lat_deg) &&
-              cJSON_AddNumberToObject(o, "lon", origin->lon_deg) &&
-              cJSON_AddNumberToObject(o, "h", origin->h_m);
-    if (ok && geoid_undulation_m)
-        ok = (o = cJSON_AddObjectToObject(root, "heights")) &&
-             cJSON_AddNumberToObject(o, "orthometric", *geoid_undulation_m);
-    else if (ok)
-        ok = cJSON_AddStringToObject(root, "heights", "ellipsoidal") != NULL;
-    ok = ok && (o = cJSON_AddObjectToObject(root, "landmark_sigma_m")) &&
-         cJSON_AddNumberToObject(o, "horizontal", 0.3) && cJSON_AddNumberToObject(o, "vertical", 0.5) &&
-         cJSON_AddNumberToObject(root, "max_landmark_distance_m", 1000) &&
-         (cams = cJSON_AddArrayToObject(root, "cameras")) && (cam = cJSON_CreateObject()) &&
-         cJSON_AddItemToArray(cams, cam) && cJSON_AddStringToObject(cam, "id", "cam1") &&
-         cJSON_AddStringToObject(cam, "model", "cameras/cam1.cameramodel") &&
-         cJSON_AddStringToObject(cam, "observations", "observations/cam1.csv") &&
-         cJSON_AddStringToObject(cam, "backgrounds", "backgrounds/cam1") &&
-         cJSON_AddStringToObject(cam, "note", "example camera: rename, add its model and picks (README.md)") &&
-         (text = cJSON_Print(root));
-    if (!ok) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-    else {
-        size_t n = strlen(text);
-        text[n] = '\n'; // cJSON_Print ends without a newline; its buffer has room for the NUL
-        st = rs_io_write_file(path, text, n + 1, err);
+    int len = -1;
+    if (ok) {
+        const char *h0 = geoid_undulation_m ? "{\"orthometric\": " : "\"ellipsoidal\"";
+        const char *h1 = geoid_undulation_m ? v[4] : "", *h2 = geoid_undulation_m ? "}" : "";
+        len = snprintf(NULL, 0, site_json_format, v[0], v[1], v[2], v[3], h0, h1, h2);
+        text = len < 0 ? NULL : malloc((size_t)len + 1);
+        if (text) snprintf(text, (size_t)len + 1, site_json_format, v[0], v[1], v[2], v[3], h0, h1, h2);
     }
-    cJSON_free(text);
-    cJSON_Delete(root);
+    rs_status st = text ? rs_io_write_file(path, text, (size_t)len, err)
+                        : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    free(text);
+    for (int i = 0; i < 5; i++) {
+        cJSON_free(v[i]);
+        cJSON_Delete(items[i]);
+    }
     return st;
 }
 
