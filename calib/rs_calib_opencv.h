@@ -43,6 +43,89 @@ rs_status rs_calib_opencv_write_yaml(const char *path,
                                      int width, int height,     // pixels
                                      rs_err *err);              // may be NULL
 
+// ---- pose solvers side by side (roadside bench calib, issue 5) ----
+// One calling convention for every OpenCV pose method the benchmark compares: landmarks and
+// pixels in, rt_cam_ref out, with the camera's K and OpenCV distortion (mrcal's
+// LENSMODEL_OPENCVn order) passed as OpenCV users pass them.
+typedef enum {
+    RS_CALIB_OPENCV_PNP_ITERATIVE = 0, // cv::SOLVEPNP_ITERATIVE (DLT/homography init + LM)
+    RS_CALIB_OPENCV_PNP_EPNP      = 1, // cv::SOLVEPNP_EPNP (Lepetit et al., IJCV 2009)
+    RS_CALIB_OPENCV_PNP_SQPNP     = 2, // cv::SOLVEPNP_SQPNP (Terzakis & Lourakis, ECCV 2020)
+    RS_CALIB_OPENCV_PNP_IPPE      = 3, // cv::SOLVEPNP_IPPE (coplanar landmarks only)
+    RS_CALIB_OPENCV_PNP_RANSAC    = 4, // cv::solvePnPRansac, ITERATIVE inside, 100 iterations,
+                                       //   confidence 0.99, threshold ransac_threshold_px
+} rs_calib_opencv_pnp_method;
+
+// Runs `method` on N landmarks; with refine_lm, then cv::solvePnPRefineLM (on the RANSAC
+// inliers for RS_CALIB_OPENCV_PNP_RANSAC). inlier (N,) may be NULL; else the RANSAC inliers
+// (all true for the other methods).
+// Returns RS_ERR_DEGENERATE when OpenCV finds no pose or a non-finite one, RS_ERR_EXTERNAL when
+// it throws (its message is kept: e.g. IPPE's "points are not coplanar"), RS_ERR_USAGE for a
+// bad Ndistortion. Never prints.
+rs_status rs_calib_opencv_pnp(// out
+                              double *rt_cam_ref,        // (6,)
+                              bool *inlier,              // (N,) may be NULL
+                              // in
+                              const double *p_ref,       // (N,3) landmarks, metres
+                              const double *q_px,        // (N,2) observed pixels
+                              int N,
+                              const double *intrinsics,  // (4 + Ndistortion,) fx fy cx cy k...
+                              int Ndistortion,           // 0, 4, 5, 8, 12 or 14
+                              rs_calib_opencv_pnp_method method,
+                              bool refine_lm,
+                              double ransac_threshold_px, // RANSAC only, pixels
+                              rs_err *err);              // may be NULL
+
+// ---- audits (roadside audit, issue 4) ----
+
+// Convex hull of N points by cv::convexHull (Sklansky), its area by cv::contourArea, and for
+// each of Nquery query points whether it lies inside or on the hull (cv::pointPolygonTest).
+// N < 3 gives area 0 and nothing inside. Coordinates in any unit; area in that unit squared.
+rs_status rs_calib_opencv_convex_hull(// out
+                                      double *area,
+                                      unsigned char *inside,  // (Nquery,) 1/0, may be NULL
+                                      // in
+                                      const double *xy,       // (N,2)
+                                      int N,
+                                      const double *query,    // (Nquery,2), may be NULL
+                                      int Nquery,
+                                      rs_err *err);           // may be NULL
+
+// Singular values s (descending) and right singular vectors Vt (3,3 row-major: row k is the
+// k-th principal direction) of the (N,3) matrix p (the caller centres it), by cv::SVD.
+rs_status rs_calib_opencv_principal_axes3(// out
+                                          double *s,       // (3,)
+                                          double *Vt,      // (3,3)
+                                          // in
+                                          const double *p, // (N,3)
+                                          int N,           // >= 1
+                                          rs_err *err);    // may be NULL
+
+// An OpenCV-style calibration file read by cv::FileStorage (.yaml/.yml/.json): the camera
+// matrix under "camera_matrix" or "K" (3,3), distortion under "distortion_coefficients", "D" or
+// "dist" (0, 4, 5, 8, 12 or 14 values; absent: none), the rotation as "R" / "R_cam_enu" (3,3)
+// or "rvec" / "r" (3), the translation "tvec" / "t" (3), optionally "P" (3,4),
+// "image_width", "image_height". Matrices may be OpenCV matrices or nested number lists.
+typedef struct {
+    double K[9];
+    double dist[14];
+    int Ndist;
+    int width, height;      // 0 when absent
+    int has_R;              // R (3,3) given; R_nearest and rvec are its nearest rotation
+    double R[9];            // as given, row-major
+    double rvec[3];         // Rodrigues vector of the rotation (given, or from R_nearest)
+    double t[3];
+    int has_P;
+    double P[12];           // (3,4) row-major
+} rs_calib_opencv_calibration;
+
+// Returns RS_ERR_IO (cannot open), RS_ERR_PARSE (malformed, of the wrong shape or type),
+// RS_ERR_INVALID (no pose, non-finite values, R with det <= 0), with "PATH: FIELD: what".
+rs_status rs_calib_opencv_read_calibration(// out
+                                           rs_calib_opencv_calibration *cal,
+                                           // in
+                                           const char *path, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

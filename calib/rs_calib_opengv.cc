@@ -157,3 +157,66 @@ extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_ca
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV EPnP threw an unknown exception");
     }
 }
+
+extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_cam,
+                                          const double *p_ref, int N,
+                                          rs_calib_opengv_pose_method method,
+                                          double threshold_rad, int max_iterations, rs_err *err)
+{
+    static const char *const names[] = {"P3P Kneip RANSAC", "P3P Gao RANSAC", "EPnP", "UPnP",
+                                        "EPnP + optimize_nonlinear"};
+    const char *name = (unsigned)method < 5 ? names[method] : "?";
+    try {
+        if (N < 4 || (unsigned)method >= 5)
+            return rs_err_set(err, RS_ERR_USAGE, "OpenGV %s: N = %d (needs >= 4)", name, N);
+        Correspondences c(v_cam, p_ref, N);
+        opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
+        opengv::transformation_t T;
+        if (method == RS_CALIB_OPENGV_POSE_P3P_KNEIP_RANSAC ||
+            method == RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC) {
+            auto problem = std::make_shared<AbsolutePoseSacProblem>(
+                adapter,
+                method == RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC ? AbsolutePoseSacProblem::GAO
+                                                              : AbsolutePoseSacProblem::KNEIP,
+                false);
+            opengv::sac::Ransac<AbsolutePoseSacProblem> ransac(max_iterations,
+                                                               1.0 - std::cos(threshold_rad), 0.99);
+            ransac.sac_model_ = problem;
+            if (!ransac.computeModel(0))
+                return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: no sample gave a pose", name);
+            T = ransac.model_coefficients_;
+        } else if (method == RS_CALIB_OPENGV_POSE_UPNP) {
+            const opengv::transformations_t Ts = opengv::absolute_pose::upnp(adapter);
+            double best = INFINITY;
+            for (const opengv::transformation_t &Ti : Ts) {
+                if (!Ti.allFinite()) continue;
+                double e = 0.0;
+                for (int i = 0; i < N; i++) {
+                    const Eigen::Vector3d d =
+                        (Ti.block<3, 3>(0, 0).transpose() * (c.p[(size_t)i] - Ti.col(3))).normalized();
+                    e += 1.0 - d.dot(c.v[(size_t)i]);
+                }
+                if (e < best) {
+                    best = e;
+                    T = Ti;
+                }
+            }
+            if (!(best < INFINITY))
+                return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: no finite solution", name);
+        } else {
+            T = opengv::absolute_pose::epnp(adapter);
+            if (method == RS_CALIB_OPENGV_POSE_EPNP_NONLINEAR && T.allFinite()) {
+                adapter.sett(T.col(3));
+                adapter.setR(T.block<3, 3>(0, 0));
+                T = opengv::absolute_pose::optimize_nonlinear(adapter);
+            }
+        }
+        if (!T.allFinite()) return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: non-finite pose", name);
+        model_to_Rt(Rt_cam_ref, T);
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV %s threw: %s", name, e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV %s threw an unknown exception", name);
+    }
+}

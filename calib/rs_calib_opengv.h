@@ -71,6 +71,34 @@ rs_status rs_calib_opengv_epnp(// out
                                int Nindices,
                                rs_err *err);          // may be NULL
 
+// ---- pose solvers side by side (roadside bench calib, issue 5) ----
+// One calling convention for the OpenGV methods the benchmark compares, used as OpenGV's own
+// examples use them: stock sample-consensus problem (angular threshold, OpenGV's fixed seed).
+typedef enum {
+    RS_CALIB_OPENGV_POSE_P3P_KNEIP_RANSAC = 0, // sac::Ransac over P3P Kneip (no refinement)
+    RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC   = 1, // sac::Ransac over P3P Gao (no refinement)
+    RS_CALIB_OPENGV_POSE_EPNP             = 2, // epnp() on all observations
+    RS_CALIB_OPENGV_POSE_UPNP             = 3, // upnp() (Kneip, Li, Seo, ECCV 2014): of its
+                                               //   solutions, the one with the least angular error
+    RS_CALIB_OPENGV_POSE_EPNP_NONLINEAR   = 4, // epnp(), then optimize_nonlinear() (Levenberg-
+                                               //   Marquardt on the angular residuals)
+} rs_calib_opengv_pose_method;
+
+// Pose from N bearing/landmark pairs by `method`. threshold_rad: the RANSAC inlier angle (as
+// OpenGV wants it: 1 - cos(threshold_rad)); ignored by the others. max_iterations: RANSAC.
+// Returns RS_ERR_DEGENERATE for no pose or a non-finite one, RS_ERR_EXTERNAL if OpenGV threw,
+// RS_ERR_USAGE for N < 4 or an unknown method. Never prints.
+rs_status rs_calib_opengv_pose(// out
+                               double *Rt_cam_ref,    // (4,3)
+                               // in
+                               const double *v_cam,   // (N,3) unit bearing vectors
+                               const double *p_ref,   // (N,3) landmarks, metres
+                               int N,
+                               rs_calib_opengv_pose_method method,
+                               double threshold_rad,
+                               int max_iterations,
+                               rs_err *err);          // may be NULL
+
 #ifdef __cplusplus
 }
 #endif
