@@ -62,10 +62,11 @@ typedef struct {
     rs_calib_options calib;    // options of every solve: the full one and leave-one-out
                                //   (default rs_calib_options_default)
     double max_rms_px;         // the camera FAILS when the inliers' RMS exceeds this (default 2)
-    double max_loo_px;         // ... when an inlier's leave-one-out pixel error exceeds this
-                               //   (default 6)
-    double max_loo_m;          // ... when an inlier's leave-one-out ground error exceeds this,
-                               //   metres (default 2)
+    double max_loo_px;         // ... when the RMS of the inliers' leave-one-out pixel errors
+                               //   exceeds this (default 50: with 0.3 m survey sigmas at 25 m
+                               //   the left-out landmark's own survey error is ~20 px)
+    double max_loo_m;          // ... when the MEDIAN of the inliers' leave-one-out ground
+                               //   errors exceeds this, metres (default 2.5)
     double detection_sigma_px; // detection noise of a located vehicle, px per axis (default 1)
     double range_m;            // horizontal distance from the camera up to which the ground
                                //   counts as seen (map, ground coverage), metres (default 100)
@@ -88,6 +89,10 @@ typedef struct {
     bool loo_ok;                 // the re-solve without it succeeded (else loo_* are NaN)
     double loo_predicted_px[2];  // its SURVEYED position projected with the re-solved pose
     double loo_error_px;         // |loo_predicted_px - observed|, px
+    double loo_normalised;       // loo_predicted_px - observed in sigmas: sqrt(d^T S^-1 d) with
+                                 //   S = its pixel sigma^2 I + the propagated survey sigmas of
+                                 //   the landmark + the re-solved pose covariance (2 dof; flagged
+                                 //   when > calib.outlier_threshold)
     double loo_ground_error_m;   // distance from its surveyed position to where its observed
                                  //   pixel's ray (re-solved pose) meets the plane with the
                                  //   site's ground normal through it, metres

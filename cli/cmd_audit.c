@@ -1,10 +1,225 @@
-// PLACEHOLDER, replaced by the module's real command.
+// roadside audit: parse arguments, call calib/rs_audit.h, print.
+#include <getopt.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "rs_audit.h"
 #include "rs_cli.h"
+#include "rs_io.h"
+#include "rs_site.h"
+
+static const char audit_usage[] =
+    "usage: roadside audit SITE [--calib PATH] [--against OBS] [--camera ID]... [-o OUT] [--json]\n"
+    "\n"
+    "Says whether each camera's calibration can be trusted (docs/audit.md). Per camera it solves\n"
+    "the pose from the site's landmarks and picks, then reports:\n"
+    "  - leave-one-out: each landmark left out in turn, the pose re-solved from the others, its\n"
+    "    predicted pixel error and its ground error in metres;\n"
+    "  - normalised residuals and outlier flags with their reasons, and each landmark's influence\n"
+    "    (how far leaving it out moves the camera, metres and degrees);\n"
+    "  - coverage: image share inside the landmarks' hull, ground share they span within range;\n"
+    "  - degeneracy warnings in plain words; a ground uncertainty map (1-sigma metres per cell);\n"
+    "  - with --against: whether the camera has moved since its picks were made (chi-square test\n"
+    "    on the re-picked pixels) and the estimated rotation and shift;\n"
+    "  - with --calib: the audit of a calibration made elsewhere: its reprojection errors against\n"
+    "    the site's picks and whether its parts (K, R, t, P) agree.\n"
+    "Writes OUT/<id>.audit.json per camera and prints a summary.\n"
+    "\n"
+    "Options:\n"
+    "  --calib PATH           a calibration to audit: a file (mrcal .cameramodel, or OpenCV-style\n"
+    "                         .yaml/.yml/.json with K, distortion, R or rvec, t, optional P) or a\n"
+    "                         folder holding <id>.cameramodel / <id>.opencv.yaml / <id>.yaml /\n"
+    "                         <id>.yml / <id>.json per camera\n"
+    "  --against OBS          new picks \"landmark,u,v[,sigma_px]\": a CSV file (needs --camera\n"
+    "                         unless the site has one camera) or a folder of <id>.csv\n"
+    "  --camera ID            audit only this camera (repeatable; default all)\n"
+    "  -o, --output DIR       where <id>.audit.json go (created; default SITE/calib)\n"
+    "  --json                 print the audits as a JSON array instead of the summary\n"
+    "  --max-rms-px X         fail when the RMS reprojection error exceeds X px (default 2)\n"
+    "  --max-loo-px X         fail when the RMS leave-one-out pixel error exceeds X px\n"
+    "                         (default 50)\n"
+    "  --max-loo-m X          fail when the median leave-one-out ground error exceeds X m\n"
+    "                         (default 2.5)\n"
+    "  --detection-sigma-px X detection noise for the uncertainty map, px (default 1)\n"
+    "  --range-m X            ground range for the map and coverage, m (default 100)\n"
+    "  --cell-m X             map cell size, m (default 1)\n"
+    "  --alpha X              significance of the moved-camera test (default 0.001)\n"
+    "  --consistency-px X     largest tolerated P vs K[R|t] difference, px (default 0.5)\n"
+    "  -h, --help             this text\n"
+    "\n"
+    "Exit status: 0 when every selected camera passes, 1 when any fails a threshold, has moved,\n"
+    "has an inconsistent calibration or cannot be audited, 2 on a usage error.\n";
+
+static bool is_dir(const char *path)
+{
+    struct stat sb;
+    return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
+}
+
+static void print_row(const char *id, const rs_audit_result *r)
+{
+    char moved[16] = "-";
+    if (r->has_against) snprintf(moved, sizeof moved, "%s", r->against.moved ? "MOVED" : "no");
+    printf("%-12s %5d %7.3f %8.3f %8.2f %8.2f %6.0f%% %6.0f%% %6s  %s\n", id, r->solve.Ninliers, r->solve.rms_px,
+           r->loo_rms_px, r->loo_median_m, r->loo_max_m, 100 * r->image_hull_share, 100 * r->ground_hull_share,
+           moved, r->pass ? "pass" : "FAIL");
+}
+
+static void print_details(const char *id, const rs_audit_result *r)
+{
+    if (r->failures[0]) printf("  %s fails: %s\n", id, r->failures);
+    if (r->warnings[0]) printf("  %s warnings: %s\n", id, r->warnings);
+    for (int i = 0; i < r->N; i++)
+        if (r->landmarks[i].reason[0]) printf("  %s landmark #%d: %s\n", id, i, r->landmarks[i].reason);
+    if (r->has_against) printf("  %s against: %s\n", id, r->against.message);
+    if (r->has_external)
+        printf("  %s external: RMS %.3f px, max %.3f px, %.3f deg and %.3f m from the site's solve; %s\n", id,
+               r->external.rms_px, r->external.max_px, r->external.rotation_deg, r->external.shift_m,
+               r->external.consistent ? "its parts agree" : r->external.consistency);
+}
 
 int rs_cli_audit(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "roadside audit: under construction\n");
-    return RS_EXIT_FAIL;
+    if (rs_cli_wants_help(argc, argv)) {
+        fputs(audit_usage, stdout);
+        return RS_EXIT_OK;
+    }
+    enum { O_CALIB = 256, O_AGAINST, O_CAMERA, O_JSON, O_DOUBLE };
+    static const struct option longopts[] = {
+        {"calib", required_argument, NULL, O_CALIB},
+        {"against", required_argument, NULL, O_AGAINST},
+        {"camera", required_argument, NULL, O_CAMERA},
+        {"output", required_argument, NULL, 'o'},
+        {"json", no_argument, NULL, O_JSON},
+        {"max-rms-px", required_argument, NULL, O_DOUBLE + 0},
+        {"max-loo-px", required_argument, NULL, O_DOUBLE + 1},
+        {"max-loo-m", required_argument, NULL, O_DOUBLE + 2},
+        {"detection-sigma-px", required_argument, NULL, O_DOUBLE + 3},
+        {"range-m", required_argument, NULL, O_DOUBLE + 4},
+        {"cell-m", required_argument, NULL, O_DOUBLE + 5},
+        {"alpha", required_argument, NULL, O_DOUBLE + 6},
+        {"consistency-px", required_argument, NULL, O_DOUBLE + 7},
+        {NULL, 0, NULL, 0},
+    };
+    rs_audit_options opt;
+    rs_audit_options_default(&opt);
+    double *dst[] = {&opt.max_rms_px, &opt.max_loo_px, &opt.max_loo_m, &opt.detection_sigma_px,
+                     &opt.range_m,    &opt.cell_m,     &opt.alpha,     &opt.consistency_px};
+    const char *calib = NULL, *against = NULL, *out_dir = NULL;
+    const char **only = calloc((size_t)argc, sizeof *only);
+    int Nonly = 0;
+    bool json = false;
+    optind = 1;
+    int c, option_index = 0;
+    while ((c = getopt_long(argc, argv, "o:", longopts, &option_index)) != -1) {
+        if (c >= O_DOUBLE && c < O_DOUBLE + 8) {
+            double v;
+            if (!rs_cli_parse_double(optarg, &v) || !(v > 0) || (c == O_DOUBLE + 6 && !(v < 1))) {
+                free(only);
+                return rs_cli_usage_error("audit", "--%s: '%s': expected a number > 0%s", longopts[option_index].name,
+                                          optarg, c == O_DOUBLE + 6 ? " and < 1" : "");
+            }
+            *dst[c - O_DOUBLE] = v;
+            continue;
+        }
+        switch (c) {
+        case O_CALIB: calib = optarg; break;
+        case O_AGAINST: against = optarg; break;
+        case O_CAMERA: only[Nonly++] = optarg; break;
+        case 'o': out_dir = optarg; break;
+        case O_JSON: json = true; break;
+        default: free(only); return rs_cli_usage_error("audit", "unknown option");
+        }
+    }
+    if (optind != argc - 1) {
+        free(only);
+        return rs_cli_usage_error("audit", "expected one SITE folder");
+    }
+    if (opt.range_m / opt.cell_m > 4000) {
+        free(only);
+        return rs_cli_usage_error("audit", "--range-m / --cell-m = %g: at most 4000 cells across",
+                                  opt.range_m / opt.cell_m);
+    }
+    const char *site_dir = argv[optind];
+    rs_err err = {0};
+    rs_site *site = NULL;
+    rs_status st = rs_site_load(&site, site_dir, &err);
+    if (st) {
+        free(only);
+        fprintf(stderr, "roadside audit: %s\n(run 'roadside site check %s' for every problem)\n", err.msg, site_dir);
+        return RS_EXIT_FAIL;
+    }
+    int usage = 0;
+    for (int i = 0; i < Nonly && !usage; i++)
+        if (rs_site_find_camera(site, only[i]) < 0)
+            usage = rs_cli_usage_error("audit", "--camera %s: no such camera in %s/site.json", only[i], site_dir);
+    int Nselected = Nonly ? Nonly : site->Ncameras;
+    bool against_dir = against && is_dir(against);
+    if (!usage && against && !against_dir && Nselected != 1)
+        usage = rs_cli_usage_error("audit", "--against %s is one file: say which camera with --camera ID", against);
+    bool calib_dir = calib && is_dir(calib);
+    if (!usage && calib && !calib_dir && Nselected != 1)
+        usage = rs_cli_usage_error("audit", "--calib %s is one file: say which camera with --camera ID", calib);
+    char *default_out = out_dir ? NULL : rs_io_join(site_dir, "calib");
+    if (!out_dir) out_dir = default_out;
+    if (!usage && (st = rs_io_mkdir_p(out_dir, &err))) usage = rs_cli_fail("audit", st, &err);
+    if (usage) {
+        free(only);
+        free(default_out);
+        rs_site_free(site);
+        return usage;
+    }
+
+    int failed = 0;
+    bool first = true;
+    if (json) printf("[\n");
+    else
+        printf("%-12s %5s %7s %8s %8s %8s %7s %7s %6s  %s\n", "camera", "used", "rms_px", "loo_px", "loo_med_m",
+               "loo_max_m", "image", "ground", "moved", "verdict");
+    for (int icam = 0; icam < site->Ncameras; icam++) {
+        const char *id = site->cameras[icam].id;
+        bool selected = Nonly == 0;
+        for (int i = 0; i < Nonly; i++) selected |= !strcmp(only[i], id);
+        if (!selected) continue;
+        char *obs = NULL;
+        if (against_dir) {
+            char name[512];
+            snprintf(name, sizeof name, "%s.csv", id);
+            obs = rs_io_join(against, name);
+            struct stat sb;
+            if (obs && stat(obs, &sb) != 0) {
+                free(obs); // this camera was not re-picked
+                obs = NULL;
+            }
+        }
+        rs_audit_result r;
+        err.msg[0] = '\0';
+        st = rs_audit_site_camera(&r, site, icam, calib, against_dir ? obs : against, &opt, &err);
+        if (st == RS_OK) st = rs_audit_site_write(out_dir, site, icam, &r, &opt, &err);
+        free(obs);
+        if (st) {
+            failed++;
+            fprintf(stderr, "roadside audit: camera %s: %s\n", id, err.msg[0] ? err.msg : rs_strerror(st));
+        } else {
+            failed += !r.pass;
+            if (json) {
+                char *text = rs_audit_result_json(site, icam, &r, &opt);
+                if (text) printf("%s%s", first ? "" : ",\n", text);
+                free(text);
+                first = false;
+            } else {
+                print_row(id, &r);
+                print_details(id, &r);
+            }
+        }
+        rs_audit_result_free(&r);
+    }
+    if (json) printf("\n]\n");
+    else printf("written to %s/<camera>.audit.json\n", out_dir);
+    free(only);
+    free(default_out);
+    rs_site_free(site);
+    return failed ? RS_EXIT_FAIL : RS_EXIT_OK;
 }
