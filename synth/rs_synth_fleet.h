@@ -80,6 +80,13 @@ rs_status rs_synth_fleet_resolve(// out
                                  // in
                                  const rs_synth_vehicle *in, rs_err *err);
 
+// A random procedural vehicle: the class drawn from the traffic mix of docs/fleet.md, then
+// resolved (rs_synth_fleet_resolve) with variant = seed; position and yaw are 0. Deterministic.
+rs_status rs_synth_fleet_random(// out
+                                rs_synth_vehicle *out,
+                                // in
+                                uint64_t seed, rs_err *err);
+
 // Builds the procedural mesh of a RESOLVED vehicle (rs_synth_fleet_resolve): a body lofted from
 // a class side profile and plan shape (shape details drawn from v->variant), wheels, glazing,
 // lights. The mesh's bounds equal x in [-L/2, L/2], y in [-W/2, W/2], z in [0, H] to 1e-9 m;
