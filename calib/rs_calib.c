@@ -319,10 +319,31 @@ static rs_status init_escalating(rs_calib_init_result *init, double *T_used, con
     return st;
 }
 
+// MSAC cost (Torr & Zisserman 2000) of a pose over ALL landmarks: sum_i min(e_i^2, T^2), e_i the
+// reprojection error in pixels through the given intrinsics; a landmark behind the camera or
+// that does not project costs T^2.
+static double msac_cost(const double rt_cam_enu[6], const double *intrinsics,
+                        const rs_calib_problem *pb, double T) {
+    double cost = 0.0;
+    for (int i = 0; i < pb->N; i++) {
+        mrcal_point3_t pc;
+        mrcal_point2_t q;
+        mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt_cam_enu, &pb->p_enu_m[3 * i]);
+        double e2 = T * T;
+        if (pc.z > 0.0 && mrcal_project(&q, NULL, NULL, &pc, 1, pb->lensmodel, intrinsics)) {
+            const double dx = q.x - pb->q_px[2 * i], dy = q.y - pb->q_px[2 * i + 1];
+            if (dx * dx + dy * dy < e2) e2 = dx * dx + dy * dy;
+        }
+        cost += e2;
+    }
+    return cost;
+}
+
 // Initial pose in the ENU frame. With focal refinement, a 1-D search over a focal scale s
 // (quarter-octave steps over [focal_search_min, focal_search_max]) runs the initial pose at
-// fx s, fy s and keeps the s with the smallest MSAC cost sum(min(e^2, T^2)) (T the threshold
-// used), estimated from the inliers' count and RMS; intrinsics receives the chosen scale.
+// fx s, fy s and keeps the s whose pose has the smallest MSAC cost over all landmarks, with
+// one truncation for every s: T = 4 x the RANSAC threshold (32 px by default), so that poses
+// found at different escalated thresholds compare fairly. intrinsics receives the chosen scale.
 static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, double *scale_out,
                               const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
                               rs_err *err) {
@@ -332,6 +353,7 @@ static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, do
     *scale_out = 1.0;
     if (!search) return init_escalating(init, &T, intrinsics, pb, opt, err);
     const int K = 1 + (int)ceil(4.0 * log2(opt->focal_search_max / opt->focal_search_min));
+    const double T_score = 4.0 * (opt->init.ransac_threshold_px > 0.0 ? opt->init.ransac_threshold_px : 8.0);
     double best = INFINITY;
     rs_status last = RS_ERR_DEGENERATE;
     rs_err e_last = {RS_OK, ""};
@@ -352,7 +374,7 @@ static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, do
             if (st != RS_ERR_DEGENERATE) break; // the input, not the scale, is at fault
             continue;
         }
-        const double cost = r.Ninliers * r.rms_px * r.rms_px + (pb->N - r.Ninliers) * T * T;
+        const double cost = msac_cost(r.rt_cam_enu, trial, pb, T_score);
         if (cost < best) {
             best = cost;
             *init = r;

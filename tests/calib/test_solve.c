@@ -127,11 +127,12 @@ static void test_locate_ground(void) {
     printf("locate_ground: worst error %.3g m\n", worst);
 }
 
-// --refine focal from x2 and x0.5: within 4 of its reported sigmas (1 px, 0.3 m noise).
+// --refine focal from x2 and x0.5 (on the search grid) and x1.3, x0.63 (off it): within 4 of
+// its reported sigmas (1 px, 0.3 m noise).
 static void test_focal(void) {
-    const double factors[] = {2.0, 0.5};
+    const double factors[] = {2.0, 0.5, 1.3, 0.63};
     for (int lens = 0; lens < 3; lens++)
-        for (int fi = 0; fi < 2; fi++)
+        for (int fi = 0; fi < 4; fi++)
             for (uint64_t seed = 100; seed < 103; seed++) {
                 gen_rng rng;
                 gen_seed(&rng, seed);
