@@ -696,6 +696,7 @@ typedef struct {
     bool *outlier;         // (Ncameras, Ncand)
     int Nobservations, Noutliers;
     double road_azimuth_deg;
+    double R_road[4];      // road frame -> ENU (2x2 row-major), for lanes.geojson
 } site_data;
 
 static void site_data_free(site_data *s)
@@ -840,6 +841,7 @@ static rs_status simulate_site_data(site_data *s, const rs_simulate_site_options
     double theta = uniform_in(&rng, -30.0, 30.0) * DEG;
     double R_road[4] = {cos(theta), -sin(theta), sin(theta), cos(theta)};
     s->road_azimuth_deg = fmod(90.0 - theta / DEG + 360.0, 180.0);
+    memcpy(s->R_road, R_road, sizeof R_road);
     if ((st = build_intersection(&s->cand, &rng, R_road, err))) return st;
     int Nc = s->cand.N;
 
@@ -1102,6 +1104,132 @@ static rs_status write_landmarks_geojson(const char *dir, const site_data *s, rs
     return st;
 }
 
+// ---- lanes.geojson: the intersection's lanes (docs/site-format.md, "lanes.geojson") ----
+//
+// Right-hand traffic. Per approach a (A1..A4, outward directions +x, +y, -x, -y of the road
+// frame): inbound lanes in1 (inner, s = 1.75 m) and in2 (outer, s = 5.25 m) from 60 m out to the
+// stop bar at 13.5 m, outbound lanes out1/out2 (s = -1.75, -5.25 m) from 13.5 m to 60 m, and the
+// junction lanes that join them: straight on from in1/in2 to out1/out2 of the opposite approach,
+// left from in1 to out1 of the approach on the left, right from in2 to out2 of the approach on
+// the right; each a cubic Bezier between the two lane ends, tangent to both, in 8 pieces.
+
+#define LANE_FAR_M 60.0
+#define LANE_STOP_M 13.5
+#define LANE_SPEED_MPS 13.89 // 50 km/h
+#define TURN_SPEED_MPS 8.33  // 30 km/h
+
+// Road-frame point of (along, s) on approach a.
+static void approach_point(double p[2], int a, double along, double s)
+{
+    static const double dirs[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
+    double dx = dirs[a][0], dy = dirs[a][1];
+    p[0] = along * dx - s * dy;
+    p[1] = along * dy + s * dx;
+}
+
+static void lane_id(char *buf, size_t n, int a, bool in, int k)
+{
+    snprintf(buf, n, "A%d_%s%d", a % 10 + 1, in ? "in" : "out", k % 10);
+}
+
+// Appends one lane Feature; pts_road (Npts, 2) in the road frame.
+static rs_status add_lane(cJSON *features, const site_data *s, const rs_simulate_site_options *o, const char *id,
+                          const char *kind, double speed_mps, const double (*pts_road)[2], int Npts,
+                          const char *const *next, int Nnext, rs_err *err)
+{
+    double enu[9][3], llh[9][3];
+    for (int i = 0; i < Npts; i++) {
+        enu[i][0] = quantize(s->R_road[0] * pts_road[i][0] + s->R_road[1] * pts_road[i][1], Q_ENU);
+        enu[i][1] = quantize(s->R_road[2] * pts_road[i][0] + s->R_road[3] * pts_road[i][1], Q_ENU);
+        enu[i][2] = 0.0;
+    }
+    rs_status st = rs_geo_enu_to_llh(&llh[0][0], &o->origin, &enu[0][0], Npts, err);
+    if (st) return st;
+    cJSON *f = cJSON_CreateObject();
+    cJSON_AddItemToArray(features, f);
+    cJSON_AddStringToObject(f, "type", "Feature");
+    cJSON *g = cJSON_AddObjectToObject(f, "geometry");
+    cJSON_AddStringToObject(g, "type", "LineString");
+    cJSON *c = cJSON_AddArrayToObject(g, "coordinates");
+    for (int i = 0; i < Npts; i++) {
+        double lonlat[2] = {llh[i][1], llh[i][0]};
+        cJSON_AddItemToArray(c, json_array(lonlat, 2));
+    }
+    cJSON *p = cJSON_AddObjectToObject(f, "properties");
+    cJSON_AddStringToObject(p, "id", id);
+    cJSON_AddStringToObject(p, "kind", kind);
+    cJSON_AddNumberToObject(p, "width_m", LANE_M);
+    cJSON_AddStringToObject(p, "direction", "forward");
+    cJSON_AddNumberToObject(p, "speed_mps", speed_mps);
+    cJSON *nx = cJSON_AddArrayToObject(p, "next");
+    for (int i = 0; i < Nnext; i++) cJSON_AddItemToArray(nx, cJSON_CreateString(next[i]));
+    return RS_OK;
+}
+
+static rs_status write_lanes_geojson(const char *dir, const site_data *s, const rs_simulate_site_options *o,
+                                     rs_err *err)
+{
+    cJSON *j = cJSON_CreateObject();
+    cJSON_AddStringToObject(j, "type", "FeatureCollection");
+    cJSON *features = cJSON_AddArrayToObject(j, "features");
+    rs_status st = RS_OK;
+    for (int a = 0; a < 4 && !st; a++)
+        for (int k = 1; k <= 2 && !st; k++) {
+            double s_in = LANE_M * (k - 0.5);
+            char id[16], nid[2][48], jid[16];
+            const char *next[3];
+            double pts[9][2];
+            // The manoeuvres of inbound lane k: straight on, then left (k = 1) or right (k = 2).
+            int to[2] = {(a + 2) % 4, k == 1 ? (a + 3) % 4 : (a + 1) % 4};
+            const char *how[2] = {"straight", k == 1 ? "left" : "right"};
+            lane_id(id, sizeof id, a, true, k);
+            for (int m = 0; m < 2; m++) {
+                lane_id(jid, sizeof jid, to[m], false, k);
+                snprintf(nid[m], sizeof nid[m], "%s_%s_%s", id, how[m], jid);
+                next[m] = nid[m];
+            }
+            approach_point(pts[0], a, LANE_FAR_M, s_in);
+            approach_point(pts[1], a, LANE_STOP_M, s_in);
+            if ((st = add_lane(features, s, o, id, "approach", LANE_SPEED_MPS, (const double(*)[2])pts, 2, next, 2,
+                               err)))
+                break;
+            for (int m = 0; m < 2 && !st; m++) {
+                // Cubic Bezier from the stop bar of (a, k) to the start of outbound lane k of to[m].
+                double p0[2], p3[2], d0[2], d3[2], q[2];
+                approach_point(p0, a, LANE_STOP_M, s_in);
+                approach_point(p3, to[m], LANE_STOP_M, -s_in);
+                approach_point(q, a, LANE_STOP_M - 1.0, s_in);
+                d0[0] = q[0] - p0[0], d0[1] = q[1] - p0[1];          // unit inbound direction
+                approach_point(q, to[m], LANE_STOP_M + 1.0, -s_in);
+                d3[0] = q[0] - p3[0], d3[1] = q[1] - p3[1];          // unit outbound direction
+                double L = hypot(p3[0] - p0[0], p3[1] - p0[1]) / 3.0;
+                double p1[2] = {p0[0] + L * d0[0], p0[1] + L * d0[1]};
+                double p2[2] = {p3[0] - L * d3[0], p3[1] - L * d3[1]};
+                for (int i = 0; i <= 8; i++) {
+                    double t = i / 8.0, u = 1 - t;
+                    for (int c = 0; c < 2; c++)
+                        pts[i][c] = u * u * u * p0[c] + 3 * u * u * t * p1[c] + 3 * u * t * t * p2[c] + t * t * t * p3[c];
+                }
+                lane_id(jid, sizeof jid, to[m], false, k);
+                const char *jn[1] = {jid};
+                st = add_lane(features, s, o, nid[m], "junction", m == 0 ? LANE_SPEED_MPS : TURN_SPEED_MPS,
+                              (const double(*)[2])pts, 9, jn, 1, err);
+            }
+        }
+    for (int a = 0; a < 4 && !st; a++)
+        for (int k = 1; k <= 2 && !st; k++) {
+            char id[16];
+            double pts[2][2];
+            lane_id(id, sizeof id, a, false, k);
+            approach_point(pts[0], a, LANE_STOP_M, -LANE_M * (k - 0.5));
+            approach_point(pts[1], a, LANE_FAR_M, -LANE_M * (k - 0.5));
+            st = add_lane(features, s, o, id, "exit", LANE_SPEED_MPS, (const double(*)[2])pts, 2, NULL, 0, err);
+        }
+    if (!st) st = write_json(dir, "lanes.geojson", j, err);
+    cJSON_Delete(j);
+    return st;
+}
+
 static rs_status write_observations(const char *dir, const site_data *s, int k, double sigma_px, rs_err *err)
 {
     char id[16], rel[64];
@@ -1207,6 +1335,7 @@ static rs_status write_site(const char *dir, const site_data *s, const rs_simula
         if (st) return st;
     }
     if ((st = write_site_json(dir, s, o, err)) || (st = write_landmarks_geojson(dir, s, err)) ||
+        (st = write_lanes_geojson(dir, s, o, err)) ||
         (st = write_truth_landmarks(dir, s, err)) || (st = write_truth_json(dir, s, o, err)))
         return st;
     static const double zero_rt[6] = {0};

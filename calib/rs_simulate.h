@@ -8,8 +8,9 @@
 //                                 positions and their picked (noisy, partly wrong) pixels.
 //                                 Every knob a benchmark may sweep is an option.
 //   rs_simulate_site()            a complete site folder (site.json, landmarks.geojson,
-//                                 cameras/, observations/) plus a truth/ folder: a four-approach
-//                                 intersection watched by cameras on poles at its corners.
+//                                 lanes.geojson, cameras/, observations/) plus a truth/ folder:
+//                                 a four-approach intersection watched by cameras on poles at
+//                                 its corners.
 //
 // Method: points are projected with mrcal_project() through the TRUE lens model and pose; the
 // picked pixel is that projection plus isotropic Gaussian noise (redrawn until it lies inside
@@ -196,7 +197,8 @@ void rs_simulate_site_options_default(rs_simulate_site_options *o);
 rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_err *err);
 
 // Writes a simulated site into the folder `dir` (the layout is in sites/demo/README.md):
-// site.json, landmarks.geojson, cameras/<id>.cameramodel (NOMINAL intrinsics, zero
+// site.json, landmarks.geojson, lanes.geojson (the intersection's 32 lanes, exact: no survey
+// noise; docs/site-format.md "lanes.geojson"), cameras/<id>.cameramodel (NOMINAL intrinsics, zero
 // extrinsics), observations/<id>.csv, truth/<id>.cameramodel (true intrinsics and pose),
 // truth/landmarks_enu.csv, truth/truth.json.
 // The sigmas the site declares (site.json landmark_sigma_m, the csv's sigma_px) are the noise
