@@ -166,6 +166,44 @@ static void test_focal(void) {
             }
 }
 
+// --refine focal+center (and +distortion): nominal focal 10% long, centre 20 px and 15 px off,
+// distortion 20% off: the focal length and the centre within 4 reported sigmas.
+static void test_focal_center(void) {
+    for (int lens = 0; lens < 3; lens++)
+        for (int mode = 0; mode < 2; mode++)
+            for (uint64_t seed = 3000; seed < 3004; seed++) {
+                gen_rng rng;
+                gen_seed(&rng, seed);
+                gen_problem g;
+                CHECK(gen_make(&g, &rng, (gen_lens)lens, 25, 1.0, 0.1), "generator");
+                double nominal[16];
+                memcpy(nominal, g.intrinsics, sizeof(nominal));
+                nominal[0] *= 1.1;
+                nominal[1] *= 1.1;
+                nominal[2] += 20;
+                nominal[3] -= 15;
+                if (mode == 1)
+                    for (int k = 4; k < g.Nintrinsics; k++) nominal[k] *= 1.2;
+                rs_calib_problem pb = gen_view(&g, nominal);
+                rs_calib_options opt;
+                rs_calib_options_default(&opt);
+                opt.refine = RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER |
+                             (mode ? RS_CALIB_REFINE_DISTORTION : 0);
+                rs_calib_result res;
+                rs_err err = {0};
+                rs_status st = rs_calib_solve(&res, &pb, &opt, &err);
+                CHECK(st == RS_OK, "%s mode %d seed %llu: %s", lens_name[lens], mode,
+                      (unsigned long long)seed, err.msg);
+                for (int k = 0; k < 4 && st == RS_OK; k++) {
+                    const double z = (res.intrinsics[k] - g.intrinsics[k]) / res.sigma_intrinsics[k];
+                    CHECK(res.sigma_intrinsics[k] > 0 && fabs(z) < 4, "%s mode %d seed %llu: intrinsic %d "
+                          "%.3f truth %.3f sigma %.3f", lens_name[lens], mode, (unsigned long long)seed,
+                          k, res.intrinsics[k], g.intrinsics[k], res.sigma_intrinsics[k]);
+                }
+                rs_calib_result_free(&res);
+            }
+}
+
 // A tight prior on the camera position: the solution follows it and its sigma shrinks.
 static void test_position_prior(void) {
     for (uint64_t seed = 200; seed < 205; seed++) {
@@ -351,6 +389,7 @@ int main(void) {
     test_gradients();
     test_position_prior();
     test_focal();
+    test_focal_center();
     test_degenerate();
-    return gen_end("1-10 (6-7 for locate_ground), 77, 100-102, 200-204, 300, 400-402");
+    return gen_end("1-10 (6-7 for locate_ground), 77, 100-102, 3000-3003, 200-204, 300, 400-402");
 }
