@@ -693,6 +693,10 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     } else {
         warn(res, "no redundancy (dof %d): the fit cannot be checked against the sigmas", res->dof);
     }
+    if ((opt->refine & RS_CALIB_REFINE_FOCAL) && res->sigma_intrinsics[0] > 0.05 * res->intrinsics[0])
+        warn(res, "the focal length is poorly determined (sigma %.1f%%): the landmarks' depth "
+                  "range or their spread in the image is too small to separate it from the distance",
+             100.0 * res->sigma_intrinsics[0] / res->intrinsics[0]);
     if (Ninl < 6)
         warn(res, "only %d inlying landmarks: little redundancy to catch a further mistake", Ninl);
     if (fabs(res->yaw_pitch_roll_deg[1]) > 89.0)
