@@ -1,10 +1,116 @@
-// PLACEHOLDER, replaced by the module's real command.
+// roadside report: parse arguments, call rs_report_write, print where the report is.
+#include <getopt.h>
+#include <stdlib.h>
+#include <string.h>
+
 #include "rs_cli.h"
+#include "rs_io.h"
+#include "rs_report.h"
+#include "rs_site.h"
+
+static const char report_usage[] =
+    "usage: roadside report SITE [--calib DIR] -o DIR [options]\n"
+    "\n"
+    "Writes the calibration report of a site, for an engineer to send on: DIR/report.html (one\n"
+    "self-contained file: figures embedded, no external resource) and DIR/report.pdf (the same\n"
+    "content). It reads the cameras' <id>.cameramodel and <id>.json written by 'roadside calib'\n"
+    "and audits every camera (leave-one-out, coverage, ground uncertainty map, warnings).\n"
+    "\n"
+    "Per camera: its image (first PNG of its backgrounds folder, else a neutral canvas) with the\n"
+    "picks, the reprojected landmarks and magnified residual vectors, the ground grid and lane\n"
+    "lines (SITE/lanes.geojson, optional) drawn through the lens model; a top-down map with the\n"
+    "1-sigma ground localisation error as a colour scale with labelled contours; tables of the\n"
+    "pose with sigmas, residuals and leave-one-out figures; the audit's warnings in words. The\n"
+    "first page has a summary table and a map of the whole site (docs/report.md).\n"
+    "\n"
+    "Options:\n"
+    "  -o, --output DIR      output folder (created if needed; required)\n"
+    "  --calib DIR           calibration folder (default SITE/calib)\n"
+    "  --range M             ground shown within M metres of each camera (default 100)\n"
+    "  --grid M              ground grid spacing in the images, metres (default range/10)\n"
+    "  --detection-px S      detection noise of the uncertainty map, px (default 1)\n"
+    "  --cell M              uncertainty map cell size, metres (default 1)\n"
+    "  --width PX            width of the HTML figures, pixels (default 1000)\n"
+    "  --no-audit            skip the audit (no leave-one-out, no uncertainty map)\n"
+    "  -h, --help            this text\n"
+    "\n"
+    "Exit status: 0 when the report was written, 1 when it could not be (nothing is left\n"
+    "half-written), 2 on a usage error. A camera failing the audit's thresholds is reported in\n"
+    "the report and on stdout, and does not change the exit status (see 'roadside audit').\n";
 
 int rs_cli_report(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "roadside report: under construction\n");
-    return RS_EXIT_FAIL;
+    if (rs_cli_wants_help(argc, argv)) {
+        fputs(report_usage, stdout);
+        return RS_EXIT_OK;
+    }
+    static const struct option longopts[] = {
+        {"output", required_argument, NULL, 'o'},       {"calib", required_argument, NULL, 'c'},
+        {"range", required_argument, NULL, 'r'},        {"grid", required_argument, NULL, 'g'},
+        {"detection-px", required_argument, NULL, 'd'}, {"cell", required_argument, NULL, 'l'},
+        {"width", required_argument, NULL, 'w'},        {"no-audit", no_argument, NULL, 'n'},
+        {NULL, 0, NULL, 0},
+    };
+    rs_report_options opt;
+    rs_report_options_default(&opt);
+    const char *out_dir = NULL;
+    optind = 1;
+    int c;
+    long width = 0;
+    double x = 0;
+    while ((c = getopt_long(argc, argv, "o:", longopts, NULL)) != -1) {
+        switch (c) {
+        case 'o': out_dir = optarg; break;
+        case 'c': opt.calib_dir = optarg; break;
+        case 'r':
+            if (!rs_cli_parse_double(optarg, &x) || !(x > 0))
+                return rs_cli_usage_error("report", "--range: '%s': expected a positive number of metres", optarg);
+            opt.range_m = opt.audit_options.range_m = x;
+            break;
+        case 'g':
+            if (!rs_cli_parse_double(optarg, &x) || !(x > 0))
+                return rs_cli_usage_error("report", "--grid: '%s': expected a positive number of metres", optarg);
+            opt.grid_m = x;
+            break;
+        case 'd':
+            if (!rs_cli_parse_double(optarg, &x) || !(x > 0))
+                return rs_cli_usage_error("report", "--detection-px: '%s': expected a positive number of pixels",
+                                          optarg);
+            opt.audit_options.detection_sigma_px = x;
+            break;
+        case 'l':
+            if (!rs_cli_parse_double(optarg, &x) || !(x > 0))
+                return rs_cli_usage_error("report", "--cell: '%s': expected a positive number of metres", optarg);
+            opt.audit_options.cell_m = x;
+            break;
+        case 'w':
+            if (!rs_cli_parse_int(optarg, 200, 10000, &width))
+                return rs_cli_usage_error("report", "--width: '%s': expected pixels in [200, 10000]", optarg);
+            opt.figure_width_px = (int)width;
+            break;
+        case 'n': opt.audit = false; break;
+        default: return rs_cli_usage_error("report", "unknown option");
+        }
+    }
+    if (optind != argc - 1) return rs_cli_usage_error("report", "expected one SITE folder");
+    if (!out_dir) return rs_cli_usage_error("report", "-o DIR is required");
+    const char *site_dir = argv[optind];
+
+    rs_err err = {0};
+    rs_site *site = NULL;
+    rs_status st = rs_site_load(&site, site_dir, &err);
+    if (st) {
+        fprintf(stderr, "roadside report: %s\n(run 'roadside site check %s' for every problem)\n", err.msg, site_dir);
+        return RS_EXIT_FAIL;
+    }
+    rs_report_summary sum;
+    st = rs_report_write(&sum, out_dir, site, &opt, &err);
+    rs_site_free(site);
+    if (st) return rs_cli_fail("report", st, &err);
+    printf("report of %d camera%s, %d figures", sum.Ncameras, sum.Ncameras == 1 ? "" : "s", sum.Nfigures);
+    if (sum.Naudit_fail) printf("; %d camera%s FAIL the audit", sum.Naudit_fail, sum.Naudit_fail == 1 ? "" : "s");
+    if (sum.Naudit_failed) printf("; the audit could not run for %d camera%s", sum.Naudit_failed,
+                                  sum.Naudit_failed == 1 ? "" : "s");
+    printf("\n  %s/report.html\n  %s/report.pdf\n", out_dir, out_dir);
+    return RS_EXIT_OK;
 }
