@@ -1,1 +1,151 @@
-// PLACEHOLDER
+// rs_synth_opencv.cc -- OpenCV shim: image files and resampling (rs_synth_opencv.h).
+// Every OpenCV exception is caught here and returned as an rs_status.
+extern "C" {
+#include "rs_synth_opencv.h"
+
+#include "rs_io.h"
+}
+
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace {
+
+int cv_type(int channels) { return CV_MAKETYPE(CV_32F, channels); }
+
+// A cv::Mat header over an rs_synth_image (no copy).
+cv::Mat wrap(const rs_synth_image *img)
+{
+    return cv::Mat(img->height, img->width, cv_type(img->channels), img->data);
+}
+
+// File extension including the dot ("" when none), for cv::imencode.
+std::string extension(const char *path)
+{
+    const char *slash = std::strrchr(path, '/');
+    const char *dot = std::strrchr(path, '.');
+    if (!dot || (slash && dot < slash))
+        return "";
+    return dot;
+}
+
+} // namespace
+
+extern "C" rs_status rs_synth_image_alloc(rs_synth_image *img, int width, int height,
+                                          int channels, rs_err *err)
+{
+    *img = rs_synth_image{};
+    if (width <= 0 || height <= 0 || (channels != 1 && channels != 3 && channels != 4))
+        return rs_err_set(err, RS_ERR_INVALID, "image: bad size %dx%dx%d", width, height,
+                          channels);
+    img->data = static_cast<float *>(
+        std::calloc(static_cast<size_t>(width) * height * channels, sizeof(float)));
+    if (!img->data)
+        return rs_err_set(err, RS_ERR_NOMEM, "image %dx%d: out of memory", width, height);
+    img->width = width;
+    img->height = height;
+    img->channels = channels;
+    return RS_OK;
+}
+
+extern "C" void rs_synth_image_free(rs_synth_image *img)
+{
+    if (!img)
+        return;
+    std::free(img->data);
+    *img = rs_synth_image{};
+}
+
+extern "C" rs_status rs_synth_image_read(rs_synth_image *img, const char *path, rs_err *err)
+{
+    *img = rs_synth_image{};
+    try {
+        cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
+        if (m.empty())
+            return rs_err_set(err, RS_ERR_IO, "%s: cannot read the image (missing, or not an "
+                                              "image OpenCV can decode)", path);
+        double unit;
+        switch (m.depth()) {
+        case CV_8U: unit = 255.0; break;
+        case CV_16U: unit = 65535.0; break;
+        case CV_32F: unit = 1.0; break;
+        default:
+            return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: unsupported pixel depth", path);
+        }
+        const int channels = m.channels();
+        if (channels == 3)
+            cv::cvtColor(m, m, cv::COLOR_BGR2RGB);
+        else if (channels == 4)
+            cv::cvtColor(m, m, cv::COLOR_BGRA2RGBA);
+        else if (channels != 1)
+            return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: %d channels", path, channels);
+        rs_status st = rs_synth_image_alloc(img, m.cols, m.rows, channels, err);
+        if (st)
+            return st;
+        cv::Mat out = wrap(img);
+        m.convertTo(out, cv_type(channels), 1.0 / unit);
+        return RS_OK;
+    } catch (const std::exception &e) {
+        rs_synth_image_free(img);
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: %s", path, e.what());
+    } catch (...) {
+        rs_synth_image_free(img);
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: unknown exception", path);
+    }
+}
+
+extern "C" rs_status rs_synth_image_write(const char *path, const rs_synth_image *img, int bits,
+                                          rs_err *err)
+{
+    if (bits != 8 && bits != 16)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: bits must be 8 or 16 (got %d)", path, bits);
+    try {
+        cv::Mat m = wrap(img), q;
+        const double unit = bits == 8 ? 255.0 : 65535.0;
+        m.convertTo(q, CV_MAKETYPE(bits == 8 ? CV_8U : CV_16U, img->channels), unit);
+        if (img->channels == 3)
+            cv::cvtColor(q, q, cv::COLOR_RGB2BGR);
+        else if (img->channels == 4)
+            cv::cvtColor(q, q, cv::COLOR_RGBA2BGRA);
+        std::vector<unsigned char> buf;
+        if (!cv::imencode(extension(path), q, buf))
+            return rs_err_set(err, RS_ERR_IO, "%s: OpenCV cannot encode this format", path);
+        return rs_io_write_file(path, buf.data(), buf.size(), err);
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: %s", path, e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: unknown exception", path);
+    }
+}
+
+extern "C" rs_status rs_synth_remap(rs_synth_image *dst, const rs_synth_image *src,
+                                    const float *map_xy, int width, int height, int interpolation,
+                                    rs_err *err)
+{
+    *dst = rs_synth_image{};
+    if (interpolation != cv::INTER_NEAREST && interpolation != cv::INTER_LINEAR &&
+        interpolation != cv::INTER_CUBIC)
+        return rs_err_set(err, RS_ERR_INVALID, "remap: interpolation %d", interpolation);
+    rs_status st = rs_synth_image_alloc(dst, width, height, src->channels, err);
+    if (st)
+        return st;
+    try {
+        cv::Mat map(height, width, CV_32FC2, const_cast<float *>(map_xy));
+        cv::Mat out = wrap(dst);
+        cv::remap(wrap(src), out, map, cv::noArray(), interpolation, cv::BORDER_CONSTANT,
+                  cv::Scalar::all(0));
+        return RS_OK;
+    } catch (const std::exception &e) {
+        rs_synth_image_free(dst);
+        return rs_err_set(err, RS_ERR_EXTERNAL, "remap: OpenCV: %s", e.what());
+    } catch (...) {
+        rs_synth_image_free(dst);
+        return rs_err_set(err, RS_ERR_EXTERNAL, "remap: OpenCV: unknown exception");
+    }
+}

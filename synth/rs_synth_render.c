@@ -1,2 +1,497 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_synth_render;
+// rs_synth_render.c -- running povray on a scene: culling, region, colour and ID passes,
+// resampling into the real lens, compositing (rs_synth_render.h, docs/povray.md).
+#include "rs_synth_render.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <mrcal/poseutils.h>
+
+#include "rs_io.h"
+
+void rs_synth_render_options_default(rs_synth_render_options *opt)
+{
+    memset(opt, 0, sizeof(*opt));
+    opt->canvas_scale = 1;
+    rs_synth_scene_options_default(&opt->scene);
+}
+
+void rs_synth_render_result_free(rs_synth_render_result *r)
+{
+    if (!r)
+        return;
+    rs_synth_image_free(&r->rgba);
+    rs_synth_image_free(&r->composite);
+    free(r->ids);
+    free(r->visible);
+    memset(r, 0, sizeof(*r));
+}
+
+// ---- culling ----
+
+bool rs_synth_vehicle_rect(int rect[4], const double fxycxy[4], int width, int height,
+                           const double rt_cam_enu[6], const double corners_enu_m[8][3],
+                           double near_m)
+{
+    double p[8][3];
+    for (int k = 0; k < 8; k++)
+        mrcal_transform_point_rt(p[k], NULL, NULL, rt_cam_enu, corners_enu_m[k]);
+    // The box clipped to z >= near is the convex hull of its corners in front and of the
+    // crossings of its 12 edges with the plane z = near: their projections bound its image.
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    int Nin = 0;
+    for (int a = 0; a < 8; a++) {
+        for (int b = a; b < 8; b++) {
+            const int diff = a ^ b;
+            double q[3];
+            if (a == b) {
+                if (!(p[a][2] >= near_m))
+                    continue;
+                memcpy(q, p[a], sizeof(q));
+            } else if (diff == 1 || diff == 2 || diff == 4) {
+                const double za = p[a][2] - near_m, zb = p[b][2] - near_m;
+                if (!((za < 0 && zb > 0) || (za > 0 && zb < 0)))
+                    continue;
+                const double t = za / (za - zb);
+                for (int k = 0; k < 3; k++)
+                    q[k] = p[a][k] + t * (p[b][k] - p[a][k]);
+                q[2] = near_m;
+            } else {
+                continue;
+            }
+            const double u = fxycxy[0] * q[0] / q[2] + fxycxy[2],
+                         v = fxycxy[1] * q[1] / q[2] + fxycxy[3];
+            lo[0] = fmin(lo[0], u), hi[0] = fmax(hi[0], u);
+            lo[1] = fmin(lo[1], v), hi[1] = fmax(hi[1], v);
+            Nin++;
+        }
+    }
+    if (Nin == 0 || hi[0] < -0.5 || hi[1] < -0.5 || lo[0] > width - 0.5 || lo[1] > height - 0.5)
+        return false;
+    // Pixel k covers [k - 0.5, k + 0.5]; one pixel of margin on each side.
+    rect[0] = (int)fmax(0, floor(lo[0] + 0.5) - 1);
+    rect[1] = (int)fmax(0, floor(lo[1] + 0.5) - 1);
+    rect[2] = (int)fmin(width - 1, floor(hi[0] + 0.5) + 1);
+    rect[3] = (int)fmin(height - 1, floor(hi[1] + 0.5) + 1);
+    return true;
+}
+
+// ---- running povray ----
+
+// Writes OUT/.povray/3.7/povray.conf: file I/O restricted to the output folder. povray is run
+// with HOME = OUT so that this is the user configuration it reads.
+static rs_status write_povray_conf(const char *out_dir, rs_err *err)
+{
+    char *conf_dir = rs_io_join(out_dir, ".povray/3.7");
+    char *conf = conf_dir ? rs_io_join(conf_dir, "povray.conf") : NULL;
+    rs_status st = RS_OK;
+    if (!conf) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    static const char text[] = "; Written by roadside render: povray may read and write only "
+                               "this folder (and nothing runs in a shell).\n"
+                               "[File I/O Security]\nrestricted\n"
+                               "[Shellout Security]\nforbidden\n"
+                               "[Permitted Paths]\nread+write = .\n";
+    if (!(st = rs_io_mkdir_p(conf_dir, err)))
+        st = rs_io_write_file(conf, text, sizeof(text) - 1, err);
+done:
+    free(conf_dir);
+    free(conf);
+    return st;
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+// Runs `povray INI [region]` in out_dir with HOME = out_dir, output to out_dir/povray.log.
+static rs_status run_povray(const char *povray, const char *out_dir, const char *ini,
+                            const int region[4], int width, int height, double *seconds,
+                            rs_err *err)
+{
+    char sc[32], ec[32], sr[32], er[32];
+    // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
+    // fraction (the whole width), so the region starts at fraction 0.0 in that case and ends at
+    // least at column/row 2.
+    snprintf(sc, sizeof(sc), region[0] == 0 ? "+SC0.0" : "+SC%d", region[0] + 1);
+    snprintf(sr, sizeof(sr), region[1] == 0 ? "+SR0.0" : "+SR%d", region[1] + 1);
+    snprintf(ec, sizeof(ec), "+EC%d", region[2] + 1 < 2 ? (width > 1 ? 2 : 1) : region[2] + 1);
+    snprintf(er, sizeof(er), "+ER%d", region[3] + 1 < 2 ? (height > 1 ? 2 : 1) : region[3] + 1);
+    char *log = rs_io_join(out_dir, "povray.log");
+    if (!log)
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    const double t0 = now_s();
+    pid_t pid = fork();
+    if (pid < 0) {
+        free(log);
+        return rs_err_set(err, RS_ERR_EXTERNAL, "fork: %s", strerror(errno));
+    }
+    if (pid == 0) {
+        int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0644);
+        if (fd < 0 || chdir(out_dir) != 0 || setenv("HOME", ".", 1) != 0)
+            _exit(126);
+        // HOME must be absolute for povray's %HOME%: the folder we are now in
+        char cwd[4096];
+        if (!getcwd(cwd, sizeof(cwd)) || setenv("HOME", cwd, 1) != 0)
+            _exit(126);
+        unsetenv("POVINC");
+        unsetenv("POVINI");
+        dup2(fd, 1);
+        dup2(fd, 2);
+        close(fd);
+        execlp(povray, povray, ini, sc, ec, sr, er, "+WT1", (char *)NULL);
+        _exit(127);
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
+        ;
+    *seconds += now_s() - t0;
+    rs_status st = RS_OK;
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        char *text = NULL;
+        char last[256] = "";
+        if (rs_io_read_file(&text, NULL, log, NULL) == RS_OK) {
+            // last non-empty line
+            size_t n = strlen(text);
+            while (n > 0 && (text[n - 1] == '\n' || text[n - 1] == '\r'))
+                text[--n] = 0;
+            const char *nl = strrchr(text, '\n');
+            snprintf(last, sizeof(last), "%s", nl ? nl + 1 : text);
+        }
+        free(text);
+        if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+            st = rs_err_set(err, RS_ERR_EXTERNAL,
+                            "cannot run \"%s\": is POV-Ray 3.7 installed (Debian package "
+                            "povray)? Set ROADSIDE_POVRAY to its path",
+                            povray);
+        else
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "povray failed on %s/%s (exit %d): %s (see %s)",
+                            out_dir, ini, WIFEXITED(status) ? WEXITSTATUS(status) : -1, last,
+                            log);
+    }
+    free(log);
+    return st;
+}
+
+// ---- images ----
+
+static double srgb_decode(double c)
+{
+    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+static double srgb_encode(double c)
+{
+    c = c < 0 ? 0 : (c > 1 ? 1 : c);
+    return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1 / 2.4) - 0.055;
+}
+
+// Zeroes (transparent) everything outside the rendered rectangle: povray leaves it opaque black.
+static void mask_outside(rs_synth_image *img, const int region[4])
+{
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++)
+            if (x < region[0] || x > region[2] || y < region[1] || y > region[3])
+                memset(&img->data[((size_t)y * img->width + x) * img->channels], 0,
+                       sizeof(float) * (size_t)img->channels);
+}
+
+// Renders one pass: writes NAME.pov + NAME.ini in out_dir, runs povray, reads NAME.png.
+static rs_status render_pass(rs_synth_image *img, const char *out_dir, const char *name,
+                             const char *povray, const rs_synth_povcam *cam, const double fxy[2],
+                             const double ground_normal_enu[3], double ground_offset_m,
+                             const rs_synth_prepared *vehicles,
+                             const rs_synth_scene_options *sopt, int antialias,
+                             const int region[4], double *seconds, rs_err *err)
+{
+    char file[64];
+    char *pov = NULL, *ini = NULL, *png = NULL;
+    rs_io_atomic a = {0};
+    rs_status st = RS_OK;
+    snprintf(file, sizeof(file), "%s.pov", name);
+    pov = rs_io_join(out_dir, file);
+    snprintf(file, sizeof(file), "%s.ini", name);
+    ini = rs_io_join(out_dir, file);
+    snprintf(file, sizeof(file), "%s.png", name);
+    png = rs_io_join(out_dir, file);
+    if (!pov || !ini || !png) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if ((st = rs_io_atomic_open(&a, pov, err)))
+        goto done;
+    if ((st = rs_synth_scene_write(a.f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles,
+                                   sopt, err))) {
+        rs_io_atomic_abort(&a);
+        goto done;
+    }
+    if ((st = rs_io_atomic_commit(&a, err)) ||
+        (st = rs_synth_scene_write_ini(ini, pov, cam, sopt->pass, err)))
+        goto done;
+    if (antialias >= 2) {
+        // Antialiasing for the colour pass: appended to the .ini (non-adaptive, no jitter)
+        FILE *f = fopen(ini, "a");
+        if (!f) {
+            st = rs_err_set(err, RS_ERR_IO, "%s: %s", ini, strerror(errno));
+            goto done;
+        }
+        fprintf(f, "Antialias=On\nSampling_Method=1\nAntialias_Threshold=0.0\n"
+                   "Antialias_Depth=%d\n",
+                antialias > 9 ? 9 : antialias);
+        fclose(f);
+    }
+    snprintf(file, sizeof(file), "%s.ini", name);
+    if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err)))
+        goto done;
+    if ((st = rs_synth_image_read(img, png, err)))
+        goto done;
+    if (img->width != cam->width || img->height != cam->height) {
+        rs_synth_image_free(img);
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
+                        img->width, img->height, cam->width, cam->height);
+        goto done;
+    }
+    mask_outside(img, region);
+done:
+    free(pov);
+    free(ini);
+    free(png);
+    return st;
+}
+
+// Removes the intermediates of a render (scene files, povray outputs, the conf).
+static void remove_intermediates(const char *out_dir)
+{
+    static const char *const names[] = {
+        "pass_colour.pov", "pass_colour.ini", "pass_colour.png", "pass_ids.pov", "pass_ids.ini",
+        "pass_ids.png",    ".povray/3.7/povray.conf", ".povray/3.7", ".povray", "povray.log"};
+    for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
+        char *p = rs_io_join(out_dir, names[i]);
+        if (p)
+            (void)remove(p); // a missing file, or a folder someone else used: left as it is
+        free(p);
+    }
+}
+
+// Resamples the canvas passes into the real lens: colour through premultiplied linear
+// interpolation, IDs nearest-neighbour.
+static rs_status to_lens(rs_synth_image *rgba, rs_synth_image *ids, const float *map, int width,
+                         int height, rs_err *err)
+{
+    const size_t Nc = (size_t)rgba->width * rgba->height;
+    for (size_t i = 0; i < Nc; i++)
+        for (int k = 0; k < 3; k++)
+            rgba->data[4 * i + k] *= rgba->data[4 * i + 3];
+    rs_synth_image out_rgba = {0}, out_ids = {0};
+    rs_status st = rs_synth_remap(&out_rgba, rgba, map, width, height, 1, err);
+    if (!st)
+        st = rs_synth_remap(&out_ids, ids, map, width, height, 0, err);
+    if (st) {
+        rs_synth_image_free(&out_rgba);
+        return st;
+    }
+    const size_t N = (size_t)width * height;
+    for (size_t i = 0; i < N; i++) {
+        const float a = out_rgba.data[4 * i + 3];
+        for (int k = 0; k < 3; k++)
+            out_rgba.data[4 * i + k] = a > 0 ? out_rgba.data[4 * i + k] / a : 0;
+    }
+    rs_synth_image_free(rgba);
+    rs_synth_image_free(ids);
+    *rgba = out_rgba;
+    *ids = out_ids;
+    return RS_OK;
+}
+
+// Decodes the ID pass (R + 256 G in 8-bit units) into out->ids; values above N become 0.
+static void decode_ids(rs_synth_render_result *out, const rs_synth_image *ids, int N)
+{
+    const size_t Npx = (size_t)out->width * out->height;
+    for (size_t i = 0; i < Npx; i++) {
+        const float *px = &ids->data[i * (size_t)ids->channels];
+        const long v = lroundf(px[0] * 255.0f) + 256 * lroundf(px[1] * 255.0f);
+        out->ids[i] = (uint16_t)(v >= 0 && v <= N ? v : 0);
+    }
+}
+
+// out->composite = rgba over the background (or black), in linear light, sRGB-encoded.
+static void composite(rs_synth_render_result *out, const rs_synth_image *bg)
+{
+    const size_t Npx = (size_t)out->width * out->height;
+    for (size_t i = 0; i < Npx; i++) {
+        const float *c = &out->rgba.data[4 * i];
+        for (int k = 0; k < 3; k++) {
+            const double b = bg ? srgb_decode(bg->data[i * bg->channels +
+                                                       (bg->channels >= 3 ? k : 0)])
+                                : 0;
+            out->composite.data[3 * i + k] =
+                (float)srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
+        }
+    }
+}
+
+static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out,
+                               rs_err *err)
+{
+    rs_synth_image ids = {0};
+    rs_status st = rs_synth_image_alloc(&ids, out->width, out->height, 1, err);
+    if (st)
+        return st;
+    const size_t Npx = (size_t)out->width * out->height;
+    for (size_t i = 0; i < Npx; i++)
+        ids.data[i] = out->ids[i] / 65535.0f;
+    const char *names[3] = {"image.png", "rgba.png", "ids.png"};
+    const rs_synth_image *imgs[3] = {&out->composite, &out->rgba, &ids};
+    const int bits[3] = {8, 16, 16};
+    for (int k = 0; k < 3 && !st; k++) {
+        char *p = rs_io_join(out_dir, names[k]);
+        st = p ? rs_synth_image_write(p, imgs[k], bits[k], err)
+               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(p);
+    }
+    rs_synth_image_free(&ids);
+    return st;
+}
+
+rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
+                          const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width,
+                          int height, const double rt_cam_enu[6],
+                          const double ground_normal_enu[3], double ground_offset_m,
+                          const rs_synth_prepared *vehicles, const rs_synth_render_options *opt_in,
+                          rs_err *err)
+{
+    memset(out, 0, sizeof(*out));
+    rs_synth_render_options opt;
+    if (opt_in)
+        opt = *opt_in;
+    else
+        rs_synth_render_options_default(&opt);
+    const char *povray = opt.povray ? opt.povray : getenv("ROADSIDE_POVRAY");
+    if (!povray || !*povray)
+        povray = "povray";
+    const int N = vehicles->N;
+    rs_synth_canvas canvas;
+    rs_synth_povcam cam;
+    rs_synth_image bg = {0}, rgba = {0}, idimg = {0};
+    uint8_t *include = NULL;
+    float *map = NULL;
+    rs_status st;
+    if ((st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
+                                       opt.canvas_scale > 1 ? opt.canvas_scale : 1, err)) ||
+        (st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
+                                   err)))
+        return st;
+    if (opt.background_path) {
+        if ((st = rs_synth_image_read(&bg, opt.background_path, err)))
+            return st;
+        if (bg.width != width || bg.height != height) {
+            rs_synth_image_free(&bg);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: the background is %dx%d, the camera %dx%d",
+                              opt.background_path, bg.width, bg.height, width, height);
+        }
+    }
+    out->width = width;
+    out->height = height;
+    out->Nvehicles = N;
+    out->ids = calloc((size_t)width * height, sizeof(uint16_t));
+    out->visible = calloc((size_t)(N > 0 ? N : 1), 1);
+    include = calloc((size_t)(N > 0 ? N : 1), 1);
+    if (!out->ids || !out->visible || !include) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if ((st = rs_synth_image_alloc(&out->composite, width, height, 3, err)))
+        goto done;
+    // 1-2. Culling and the region
+    int region[4] = {canvas.width, canvas.height, -1, -1};
+    for (int i = 0; i < N; i++) {
+        double corners[8][3];
+        int rect[4];
+        rs_synth_vehicle_corners_enu(corners, &vehicles->v[i], ground_normal_enu,
+                                     ground_offset_m);
+        const bool in = rs_synth_vehicle_rect(rect, canvas.fxycxy, canvas.width, canvas.height,
+                                              rt_cam_enu, corners, 0.05);
+        include[i] = opt.full_frame || in;
+        out->visible[i] = include[i];
+        if (!in)
+            continue;
+        out->Nrendered++;
+        region[0] = rect[0] < region[0] ? rect[0] : region[0];
+        region[1] = rect[1] < region[1] ? rect[1] : region[1];
+        region[2] = rect[2] > region[2] ? rect[2] : region[2];
+        region[3] = rect[3] > region[3] ? rect[3] : region[3];
+    }
+    // Pins are part of the picture too: they widen the region to the whole canvas.
+    if (opt.full_frame || opt.scene.Npins > 0) {
+        region[0] = region[1] = 0;
+        region[2] = canvas.width - 1;
+        region[3] = canvas.height - 1;
+    }
+    if (opt.full_frame)
+        out->Nrendered = N;
+    const bool run = out->Nrendered > 0 || opt.scene.Npins > 0;
+    if (!run) {
+        for (int k = 0; k < 4; k++)
+            out->region[k] = -1;
+        if ((st = rs_synth_image_alloc(&out->rgba, width, height, 4, err)))
+            goto done;
+    } else {
+        memcpy(out->region, region, sizeof(region));
+        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_povray_conf(out_dir, err)))
+            goto done;
+        rs_synth_scene_options sopt = opt.scene;
+        sopt.include = include;
+        sopt.pass = RS_SYNTH_PASS_COLOUR;
+        sopt.ground_visible = opt.background_path ? false : opt.scene.ground_visible;
+        if ((st = render_pass(&rgba, out_dir, "pass_colour", povray, &cam, canvas.fxycxy,
+                              ground_normal_enu, ground_offset_m, vehicles, &sopt, opt.antialias,
+                              region, &out->seconds_povray, err)))
+            goto done;
+        if (out->Nrendered > 0) {
+            sopt.pass = RS_SYNTH_PASS_ID;
+            sopt.Npins = 0;
+            if ((st = render_pass(&idimg, out_dir, "pass_ids", povray, &cam, canvas.fxycxy,
+                                  ground_normal_enu, ground_offset_m, vehicles, &sopt, 0, region,
+                                  &out->seconds_povray, err)))
+                goto done;
+        } else if ((st = rs_synth_image_alloc(&idimg, canvas.width, canvas.height, 3, err))) {
+            goto done;
+        }
+        // 3. Into the real lens
+        if (!canvas.identity) {
+            if ((st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics, width, height,
+                                          err)) ||
+                (st = to_lens(&rgba, &idimg, map, width, height, err)))
+                goto done;
+        }
+        out->rgba = rgba;
+        rgba = (rs_synth_image){0};
+        decode_ids(out, &idimg, N);
+    }
+    // 4. Composite
+    composite(out, opt.background_path ? &bg : NULL);
+    if ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))
+        goto done;
+done:
+    if (!opt.keep_files)
+        remove_intermediates(out_dir);
+    rs_synth_image_free(&bg);
+    rs_synth_image_free(&rgba);
+    rs_synth_image_free(&idimg);
+    free(include);
+    free(map);
+    if (st)
+        rs_synth_render_result_free(out);
+    return st;
+}

@@ -24,6 +24,7 @@
 #include "rs_synth.h"
 #include "rs_synth_camera.h"
 #include "rs_synth_fleet.h"
+#include "rs_synth_sun.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -73,14 +74,7 @@ double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_off
 
 // ---- the sun ----
 
-// Solar azimuth (clockwise from north, degrees) and elevation (above the horizon, degrees,
-// without refraction) at latitude/longitude (degrees) and UTC time (seconds since 1970).
-// Method: NOAA's solar position equations (Meeus, Astronomical Algorithms, ch. 25, low
-// precision). Accuracy ~0.02 degree for 1950..2100.
-void rs_synth_sun_position(// out
-                           double *azimuth_deg, double *elevation_deg,
-                           // in
-                           double lat_deg, double lon_deg, double unix_time_s);
+// The sun from a place and a time: rs_synth_sun_position (synth/rs_synth_sun.h).
 
 // Parses an ISO 8601 time "YYYY-MM-DDTHH:MM[:SS[.fff]]" followed by "Z" or "+HH:MM"/"-HH:MM"
 // (a zone is required). out: seconds since 1970 UTC. Returns RS_ERR_PARSE naming `field`.
