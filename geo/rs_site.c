@@ -64,22 +64,25 @@ static char *join_checked(reader *c, const char *dir, const char *rel)
 
 // ---- files and JSON ----
 
-// Reads one file of the site (c->file). `why` says what the file is for, in the message about a
-// missing file. Returns the malloc'ed contents, or NULL after reporting the problem.
-static char *read_site_file(reader *c, const char *why)
+// Reports a missing file, or a folder, at c->file; `why` says what the file is for. True if
+// there is a file.
+static bool site_file_exists(reader *c, const char *why)
 {
     struct stat sb;
-    if (stat(c->file, &sb) != 0) {
-        ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
-        return NULL;
-    }
-    if (S_ISDIR(sb.st_mode)) {
-        ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
-        return NULL;
-    }
+    if (stat(c->file, &sb) != 0) ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
+    else if (S_ISDIR(sb.st_mode)) ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
+    else return true;
+    return false;
+}
+
+// Reads one file of the site (c->file). Returns the malloc'ed, NUL-terminated contents (and
+// their length, which may be NULL), or NULL after reporting the problem.
+static char *read_site_file(reader *c, const char *why, size_t *len)
+{
+    if (!site_file_exists(c, why)) return NULL;
     char *text = NULL;
     rs_err e = {0};
-    if (rs_io_read_file(&text, NULL, c->file, &e) != RS_OK) {
+    if (rs_io_read_file(&text, len, c->file, &e) != RS_OK) {
         ERR(c, e.status, NULL, "cannot read: %s", e.msg);
         return NULL;
     }
@@ -108,6 +111,19 @@ static cJSON *parse_json(reader *c, const char *text)
     if (n) ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d, near '%s'", column, near);
     else ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d: unexpected end of file", column);
     return NULL;
+}
+
+// Reads and parses the JSON file `name` of the site folder, reporting what is wrong with it.
+// c->file is *path (owned by the caller, free() it and reset c->file) until the caller is done.
+static cJSON *read_json_file(reader *c, char **path, const char *name, const char *why)
+{
+    *path = join_checked(c, c->site->dir, name);
+    if (!*path) return NULL;
+    c->file = *path;
+    char *text = read_site_file(c, why, NULL);
+    cJSON *root = text ? parse_json(c, text) : NULL;
+    free(text);
+    return root;
 }
 
 // "prefix.key" (or "key") into buf.
@@ -340,12 +356,8 @@ static void read_camera_entry(reader *c, const cJSON *item, int i)
 static void read_site_json(reader *c)
 {
     rs_site *site = c->site;
-    char *path = join_checked(c, site->dir, "site.json");
-    if (!path) return;
-    c->file = path;
-    char *text = read_site_file(c, "every site has one; 'roadside site init' writes a skeleton");
-    cJSON *root = text ? parse_json(c, text) : NULL;
-    free(text);
+    char *path = NULL;
+    cJSON *root = read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton");
     if (!root) goto done;
     if (!cJSON_IsObject(root)) {
         ERR(c, RS_ERR_PARSE, NULL, "the top level must be an object {\"name\": ..., \"origin\": ...}");
@@ -489,12 +501,9 @@ done:
 static void read_landmarks(reader *c)
 {
     rs_site *site = c->site;
-    char *path = join_checked(c, site->dir, "landmarks.geojson");
-    if (!path) return;
-    c->file = path;
-    char *text = read_site_file(c, "the surveyed landmarks; 'roadside site init' writes an empty one");
-    cJSON *root = text ? parse_json(c, text) : NULL;
-    free(text);
+    char *path = NULL;
+    cJSON *root = read_json_file(c, &path, "landmarks.geojson",
+                                 "the surveyed landmarks; 'roadside site init' writes an empty one");
     if (!root) goto done;
     const char *type;
     const cJSON *features = cJSON_GetObjectItemCaseSensitive(root, "features");
@@ -578,11 +587,11 @@ static bool has_extension(const char *path, const char *ext)
 // closed (found by tests/site/test_site_fuzz.py under AddressSanitizer), so such files are refused
 // before mrcal sees them; everything else is left to mrcal. Returns NULL if the text may be
 // handed to mrcal, else what is wrong (and *line where).
-static const char *cameramodel_precheck(const char *text, size_t len, size_t file_size, int *line)
+static const char *cameramodel_precheck(const char *text, size_t len, int *line)
 {
     *line = 0;
     if (len == 0) return "the file is empty";
-    if (len != file_size) return "the file contains a NUL byte";
+    if (strlen(text) != len) return "the file contains a NUL byte";
     char quote = 0;
     int quote_line = 0, l = 1;
     bool comment = false;
@@ -603,15 +612,7 @@ static void read_camera_model(reader *c, rs_site_camera *cam, int i)
     char why[160];
     snprintf(why, sizeof why, "named by cameras[%d].model in site.json", i);
     c->file = cam->model_path;
-    struct stat sb;
-    if (stat(cam->model_path, &sb) != 0) {
-        ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
-        goto done;
-    }
-    if (S_ISDIR(sb.st_mode)) {
-        ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
-        goto done;
-    }
+    if (!site_file_exists(c, why)) goto done;
     if (has_extension(cam->model_path, "yaml") || has_extension(cam->model_path, "yml") ||
         has_extension(cam->model_path, "json")) {
         double K[9], dist[14];
@@ -627,11 +628,11 @@ static void read_camera_model(reader *c, rs_site_camera *cam, int i)
         else opencv_to_mrcal(c, cam, K, dist, Ndist);
         goto done;
     }
-    char *text = read_site_file(c, why);
+    size_t len = 0;
+    char *text = read_site_file(c, why, &len);
     if (!text) goto done;
-    size_t len = strlen(text);
     int line = 0;
-    const char *bad = cameramodel_precheck(text, len, (size_t)sb.st_size, &line);
+    const char *bad = cameramodel_precheck(text, len, &line);
     if (bad) {
         ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
         free(text);
@@ -794,7 +795,7 @@ static void read_observations(reader *c, rs_site_camera *cam, int i)
     char why[160];
     snprintf(why, sizeof why, "named by cameras[%d].observations in site.json", i);
     c->file = cam->observations_path;
-    char *text = read_site_file(c, why);
+    char *text = read_site_file(c, why, NULL);
     if (!text) goto done;
     char *p = text;
     if (!strncmp(p, "\xEF\xBB\xBF", 3)) p += 3; // UTF-8 byte order mark
