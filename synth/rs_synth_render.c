@@ -432,15 +432,17 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         region[2] = rect[2] > region[2] ? rect[2] : region[2];
         region[3] = rect[3] > region[3] ? rect[3] : region[3];
     }
-    // Pins are part of the picture too: they widen the region to the whole canvas.
-    if (opt.full_frame || opt.scene.Npins > 0) {
+    // Pins, and the ground when there is no background to composite onto, are part of the
+    // picture too: they widen the region to the whole canvas.
+    const bool ground_drawn = !opt.background_path && opt.scene.ground_visible;
+    if (opt.full_frame || opt.scene.Npins > 0 || ground_drawn) {
         region[0] = region[1] = 0;
         region[2] = canvas.width - 1;
         region[3] = canvas.height - 1;
     }
     if (opt.full_frame)
         out->Nrendered = N;
-    const bool run = out->Nrendered > 0 || opt.scene.Npins > 0;
+    const bool run = out->Nrendered > 0 || opt.scene.Npins > 0 || ground_drawn;
     if (!run) {
         for (int k = 0; k < 4; k++)
             out->region[k] = -1;

@@ -4,10 +4,12 @@
 // Steps (docs/povray.md):
 // 1. Frustum culling: each vehicle's bounding box is clipped to z_cam >= 0.05 m and projected
 //    through the canvas pinhole (rs_synth_camera.h); a vehicle whose projection misses the canvas
-//    is left out. With no vehicle left, povray is not run: the colour image is the background
-//    (or transparent) and the ID image is all 0.
+//    is left out. With no vehicle left (and no pins), povray is not run when compositing onto a
+//    background: the image is the background and the ID image is all 0. Limitation: a culled
+//    vehicle's shadow or reflection, which could fall into the view, is lost.
 // 2. Region: povray renders only the canvas rectangle covered by the remaining vehicles' boxes
-//    (+ 2 px), with +SC/+EC/+SR/+ER; the rest of the canvas stays transparent.
+//    (+ 1 px), with +SC/+EC/+SR/+ER; the rest of the canvas stays transparent. Pins, or the
+//    ground drawn when there is no background, make the region the whole canvas.
 // 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
 //    (File_Gamma 1), no antialiasing unless asked; a distorted lens is resampled from the canvas
 //    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).

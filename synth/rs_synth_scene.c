@@ -462,7 +462,7 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
     const bool id_pass = opt.pass == RS_SYNTH_PASS_ID;
     rs_status st;
     fprintf(f, "// Written by roadside (%s pass). POV-Ray world <x, y, z> = <east, up, north>,\n"
-               "// metres (docs/conventions.md, docs/povray.md). Self-contained: no #include.\n"
+               "// metres (docs/conventions.md, docs/povray.md). Self-contained: no include files.\n"
                "#version 3.7;\n"
                "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
             id_pass ? "object-ID" : "colour");

@@ -33,15 +33,18 @@ def run(args, expect=0):
     return p
 
 
-def scaled_camera(calib_dir, cam_id, width, pinhole, fy_over_fx=1.0, dcx=0.0, dcy=0.0):
+def scaled_camera(calib_dir, cam_id, width, pinhole, fy_over_fx=1.0, dcx=0.0, dcy=0.0,
+                  height=None):
     """Writes calib_dir/cam_id.cameramodel: the demo truth camera scaled to `width` pixels,
-    pinhole core only (pinhole=True) or with its OPENCV8 distortion; returns the model."""
+    pinhole core only (pinhole=True) or with its OPENCV8 distortion; returns the model.
+    `height` crops or extends the image symmetrically (default: the same aspect)."""
     import mrcal
     m = mrcal.cameramodel(os.path.join(DEMO, "truth", cam_id + ".cameramodel"))
     lens, intr = m.intrinsics()
     W0, H0 = m.imagersize()
     s = width / W0
-    H = int(round(H0 * s))
+    H = int(round(H0 * s)) if height is None else height
+    dcy += (H - H0 * s) / 2
     intr = np.array(intr, dtype=float)
     intr[0] *= s
     intr[1] *= s * fy_over_fx
@@ -83,3 +86,39 @@ def scene_spheres(pov_path):
         c.append((x, z, y))  # <e, u, n> -> (e, n, u)
         r.append(rad)
     return np.array(c).reshape(-1, 3), np.array(r)
+
+
+def ground_vehicles(model, N, seed, v_range=(0.45, 0.95)):
+    """N vehicles of all classes standing on the ground plane up = 0 where random pixels of the
+    model's image look (u uniform over the width, v in v_range of the height)."""
+    import mrcal
+    rng = np.random.default_rng(seed)
+    lens, intr = model.intrinsics()
+    W, H = model.imagersize()
+    rt_enu_cam = mrcal.invert_rt(model.extrinsics_rt_fromref())
+    classes = ["sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck",
+               "articulated_truck"]
+    out = []
+    for i in range(N):
+        q = np.array([rng.uniform(0.05, 0.95) * W, rng.uniform(*v_range) * H])
+        d = mrcal.rotate_point_r(rt_enu_cam[:3], mrcal.unproject(q, lens, intr))
+        c = rt_enu_cam[3:]
+        p = c - c[2] / d[2] * d
+        out.append({"class": classes[i % len(classes)], "e": float(p[0]), "n": float(p[1]),
+                    "yaw_deg": float(rng.uniform(0, 360)), "id": "v%d" % i})
+    return out
+
+
+def box_corners_enu(v, L, W, H):
+    """(8,3) corners of a vehicle's box on the ground up = 0 (rs_synth.h's frame)."""
+    y = np.radians(v["yaw_deg"])
+    f = np.array([np.sin(y), np.cos(y), 0.0])
+    l = np.array([-np.cos(y), np.sin(y), 0.0])
+    c = np.array([v["e"], v["n"], 0.0])
+    return np.array([c + sx * L / 2 * f + sy * W / 2 * l + np.array([0, 0, z])
+                     for z in (0, H) for sy in (-1, 1) for sx in (-1, 1)])
+
+
+def shutil_which_povray():
+    import shutil
+    return shutil.which(os.environ.get("ROADSIDE_POVRAY", "povray"))
