@@ -337,8 +337,6 @@ static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *
     char *w = r->warnings;
     size_t ws = sizeof r->warnings;
     if (s->warnings[0]) append(w, ws, "%s", s->warnings);
-    if (Nin < 6)
-        append(w, ws, "only %d landmarks are used: little redundancy to catch a wrong pick or survey point", Nin);
     if (isfinite(r->condition_number) && r->condition_number > opt->calib.condition_warn)
         append(w, ws, "condition number %.0f: the pose is poorly determined by these landmarks (well-spread "
                       "scenes give 1.5-10)", r->condition_number);
@@ -761,6 +759,9 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
         append(f, fs, "the external calibration is inconsistent: %s", r->external.consistency);
     if (r->has_external && !(r->external.rms_px <= opt->max_rms_px))
         append(f, fs, "the external calibration's RMS %.2f px > %g px", r->external.rms_px, opt->max_rms_px);
+    if (opt->leave_one_out && r->loo_count == 0)
+        append(f, fs, "no leave-one-out re-solve succeeded (too few landmarks): the calibration cannot be "
+               "cross-checked");
     r->pass = f[0] == '\0';
     return RS_OK;
 }

@@ -67,12 +67,15 @@ static void print_row(const char *id, const rs_audit_result *r)
            moved, r->pass ? "pass" : "FAIL");
 }
 
-static void print_details(const char *id, const rs_audit_result *r)
+static void print_details(const rs_site *site, int icam, const rs_audit_result *r)
 {
+    const char *id = site->cameras[icam].id;
     if (r->failures[0]) printf("  %s fails: %s\n", id, r->failures);
     if (r->warnings[0]) printf("  %s warnings: %s\n", id, r->warnings);
     for (int i = 0; i < r->N; i++)
-        if (r->landmarks[i].reason[0]) printf("  %s landmark #%d: %s\n", id, i, r->landmarks[i].reason);
+        if (r->landmarks[i].reason[0])
+            printf("  %s landmark %s: %s\n", id, site->landmarks[site->cameras[icam].observations[i].ilandmark].id,
+                   r->landmarks[i].reason);
     if (r->has_against) printf("  %s against: %s\n", id, r->against.message);
     if (r->has_external)
         printf("  %s external: RMS %.3f px, max %.3f px, %.3f deg and %.3f m from the site's solve; %s\n", id,
@@ -211,7 +214,7 @@ int rs_cli_audit(int argc, char **argv)
                 first = false;
             } else {
                 print_row(id, &r);
-                print_details(id, &r);
+                print_details(site, icam, &r);
             }
         }
         rs_audit_result_free(&r);
