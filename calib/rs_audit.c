@@ -387,6 +387,55 @@ static double loo_sigmas(const mrcal_lensmodel_t *lm, const double *intrinsics, 
     return sqrt((S[3] * d[0] * d[0] - (S[1] + S[2]) * d[0] * d[1] + S[0] * d[1] * d[1]) / det);
 }
 
+// ---- sub-problems (leave-one-out, new picks) ----
+
+// Some of a problem's landmarks, in arrays of its own.
+typedef struct {
+    rs_calib_problem pb;   // points into buf
+    double *buf;           // owned
+    int *index;            // (pb.N,) owned: the landmark's index in the original problem
+} subset;
+
+static rs_status subset_alloc(subset *s, int N, rs_err *err)
+{
+    memset(s, 0, sizeof *s);
+    s->buf = malloc((size_t)(N > 0 ? N : 1) * 9 * sizeof *s->buf);
+    s->index = malloc((size_t)(N > 0 ? N : 1) * sizeof *s->index);
+    if (!s->buf || !s->index) return rs_err_set(err, RS_ERR_NOMEM, "audit: out of memory");
+    return RS_OK;
+}
+
+static void subset_free(subset *s)
+{
+    free(s->buf);
+    free(s->index);
+}
+
+// The landmarks of `from` except `skip` (-1: none) and those whose pixel in q_px is NaN, with
+// the pixels q_px, sigma_px (NULL: from's own).
+static void subset_fill(subset *s, const rs_calib_problem *from, int skip, const double *q_px,
+                        const double *sigma_px)
+{
+    const int N = from->N;
+    double *p = s->buf, *sp = p + 3 * N, *q = sp + 3 * N, *sq = q + 2 * N;
+    if (!q_px) q_px = from->q_px, sigma_px = from->sigma_px;
+    int k = 0;
+    for (int i = 0; i < N; i++) {
+        if (i == skip || !isfinite(q_px[2 * i]) || !isfinite(q_px[2 * i + 1])) continue;
+        memcpy(&p[3 * k], &from->p_enu_m[3 * i], 3 * sizeof(double));
+        for (int c = 0; c < 3; c++) sp[3 * k + c] = from->sigma_enu_m ? from->sigma_enu_m[3 * i + c] : 0;
+        memcpy(&q[2 * k], &q_px[2 * i], 2 * sizeof(double));
+        sq[k] = sigma_px ? sigma_px[i] : 1;
+        s->index[k++] = i;
+    }
+    s->pb = *from;
+    s->pb.N = k;
+    s->pb.p_enu_m = p;
+    s->pb.sigma_enu_m = sp;
+    s->pb.q_px = q;
+    s->pb.sigma_px = sq;
+}
+
 // ---- leave-one-out ----
 
 static int cmp_double(const void *a, const void *b)
@@ -399,28 +448,17 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
                                const rs_audit_options *opt, rs_err *err)
 {
     const int N = pb->N;
-    double *buf = malloc((size_t)(N > 0 ? N : 1) * 9 * sizeof *buf);
-    if (!buf) return rs_err_set(err, RS_ERR_NOMEM, "leave-one-out: out of memory");
-    double *p = buf, *sp = p + 3 * N, *q = sp + 3 * N, *sq = q + 2 * N;
+    subset sub;
+    rs_status sst = subset_alloc(&sub, N, err);
+    if (sst) {
+        subset_free(&sub);
+        return sst;
+    }
     for (int i = 0; i < N; i++) {
         rs_audit_landmark *L = &r->landmarks[i];
-        int k = 0;
-        for (int j = 0; j < N; j++) {
-            if (j == i) continue;
-            memcpy(&p[3 * k], &pb->p_enu_m[3 * j], 3 * sizeof(double));
-            for (int a = 0; a < 3; a++) sp[3 * k + a] = pb->sigma_enu_m ? pb->sigma_enu_m[3 * j + a] : 0;
-            memcpy(&q[2 * k], &pb->q_px[2 * j], 2 * sizeof(double));
-            sq[k] = pb->sigma_px ? pb->sigma_px[j] : 1;
-            k++;
-        }
-        rs_calib_problem sub = *pb;
-        sub.N = N - 1;
-        sub.p_enu_m = p;
-        sub.sigma_enu_m = sp;
-        sub.q_px = q;
-        sub.sigma_px = sq;
+        subset_fill(&sub, pb, i, NULL, NULL);
         rs_calib_result lr;
-        rs_status st = rs_calib_solve(&lr, &sub, &opt->calib, NULL);
+        rs_status st = rs_calib_solve(&lr, &sub.pb, &opt->calib, NULL);
         const double *pi = &pb->p_enu_m[3 * i], *qi = &pb->q_px[2 * i];
         double g[3];
         L->loo_ok = st == RS_OK && project_enu(L->loo_predicted_px, pb->lensmodel, lr.intrinsics, lr.rt_cam_enu, pi) &&
@@ -440,7 +478,7 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
         }
         rs_calib_result_free(&lr);
     }
-    free(buf);
+    subset_free(&sub);
 
     // summary over the inliers
     double *m = malloc((size_t)(N > 0 ? N : 1) * sizeof *m);
@@ -517,36 +555,17 @@ static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, co
 {
     rs_audit_against *a = &r->against;
     const int N = pb->N;
-    int *idx = malloc((size_t)(N > 0 ? N : 1) * sizeof *idx);
-    double *buf = malloc((size_t)(N > 0 ? N : 1) * 9 * sizeof *buf);
-    rs_status st = RS_OK;
-    if (!idx || !buf) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "against: out of memory");
-        goto done;
-    }
-    double *p = buf, *sp = p + 3 * N, *q = sp + 3 * N, *sq = q + 2 * N;
-    int k = 0;
-    for (int i = 0; i < N; i++) {
-        if (!isfinite(q_new[2 * i]) || !isfinite(q_new[2 * i + 1])) continue;
-        double s = s_new ? s_new[i] : 1;
-        if (!(s > 0 && isfinite(s))) {
-            st = rs_err_set(err, RS_ERR_INVALID, "new picks: landmark %d: sigma_px = %g: must be > 0", i, s);
-            goto done;
-        }
-        memcpy(&p[3 * k], &pb->p_enu_m[3 * i], 3 * sizeof(double));
-        for (int c = 0; c < 3; c++) sp[3 * k + c] = pb->sigma_enu_m ? pb->sigma_enu_m[3 * i + c] : 0;
-        memcpy(&q[2 * k], &q_new[2 * i], 2 * sizeof(double));
-        sq[k] = s;
-        idx[k++] = i;
-    }
-    rs_calib_problem sub = *pb;
-    sub.N = k;
-    sub.p_enu_m = p;
-    sub.sigma_enu_m = sp;
-    sub.q_px = q;
-    sub.sigma_px = sq;
+    for (int i = 0; i < N; i++)
+        if (isfinite(q_new[2 * i]) && s_new && !(s_new[i] > 0 && isfinite(s_new[i])))
+            return rs_err_set(err, RS_ERR_INVALID, "new picks: landmark %d: sigma_px = %g: must be > 0", i, s_new[i]);
+    subset sub;
+    rs_status st = subset_alloc(&sub, N, err);
+    if (st) goto done;
+    subset_fill(&sub, pb, -1, q_new, s_new);
+    const int k = sub.pb.N, *idx = sub.index;
+    const double *q = sub.pb.q_px, *sq = sub.pb.sigma_px;
     rs_calib_result nr;
-    st = rs_calib_solve(&nr, &sub, &opt->calib, err);
+    st = rs_calib_solve(&nr, &sub.pb, &opt->calib, err);
     if (st) {
         rs_err_prefix(err, "the new picks");
         rs_calib_result_free(&nr);
@@ -591,8 +610,7 @@ static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, co
              a->rotation_deg, a->shift_m);
     r->has_against = true;
 done:
-    free(idx);
-    free(buf);
+    subset_free(&sub);
     return st;
 }
 

@@ -285,62 +285,23 @@ static cJSON *sentences(const char *text)
     return a;
 }
 
-char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result *r, const rs_audit_options *opt)
+// Adds name: number members from a table.
+typedef struct {
+    const char *name;
+    double value;
+} named_number;
+
+static void add_numbers(cJSON *o, const named_number *v, size_t n)
 {
-    rs_audit_options defaults;
-    if (!opt) {
-        rs_audit_options_default(&defaults);
-        opt = &defaults;
-    }
-    const rs_site_camera *cam = &site->cameras[icam];
-    const rs_calib_result *s = &r->solve;
-    cJSON *root = cJSON_CreateObject();
-    if (!root) return NULL;
-    cJSON_AddStringToObject(root, "camera", cam->id);
-    cJSON_AddStringToObject(root, "site", site->name ? site->name : "");
-    cJSON_AddBoolToObject(root, "pass", r->pass);
-    cJSON_AddItemToObject(root, "failures", sentences(r->failures));
-    cJSON_AddItemToObject(root, "warnings", sentences(r->warnings));
-    cJSON *th = cJSON_AddObjectToObject(root, "thresholds");
-    cJSON_AddNumberToObject(th, "max_rms_px", opt->max_rms_px);
-    cJSON_AddNumberToObject(th, "max_loo_px", opt->max_loo_px);
-    cJSON_AddNumberToObject(th, "max_loo_m", opt->max_loo_m);
-    cJSON_AddNumberToObject(th, "outlier_threshold", opt->calib.outlier_threshold);
-    cJSON_AddNumberToObject(th, "alpha", opt->alpha);
-    cJSON_AddNumberToObject(th, "consistency_px", opt->consistency_px);
+    for (size_t i = 0; i < n; i++) cJSON_AddNumberToObject(o, v[i].name, v[i].value);
+}
+#define ADD_NUMBERS(o, ...) \
+    add_numbers((o), (const named_number[]){__VA_ARGS__}, sizeof((const named_number[]){__VA_ARGS__}) / sizeof(named_number))
 
-    cJSON *sol = cJSON_AddObjectToObject(root, "solve");
-    cJSON_AddItemToObject(sol, "rt_cam_enu", num_array(s->rt_cam_enu, 6));
-    cJSON_AddItemToObject(sol, "position_enu_m", num_array(s->position_enu_m, 3));
-    cJSON_AddItemToObject(sol, "sigma_position_enu_m", num_array(s->sigma_position_enu_m, 3));
-    cJSON_AddItemToObject(sol, "yaw_pitch_roll_deg", num_array(s->yaw_pitch_roll_deg, 3));
-    cJSON_AddItemToObject(sol, "sigma_yaw_pitch_roll_deg", num_array(s->sigma_yaw_pitch_roll_deg, 3));
-    cJSON_AddNumberToObject(sol, "rms_px", s->rms_px);
-    cJSON_AddNumberToObject(sol, "landmarks_used", s->Ninliers);
-    cJSON_AddNumberToObject(sol, "landmarks_rejected", s->N - s->Ninliers);
-    cJSON_AddNumberToObject(sol, "variance_factor", s->variance_factor);
-
-    cJSON *loo = cJSON_AddObjectToObject(root, "leave_one_out");
-    cJSON_AddNumberToObject(loo, "count", r->loo_count);
-    cJSON_AddNumberToObject(loo, "rms_px", r->loo_rms_px);
-    cJSON_AddNumberToObject(loo, "max_px", r->loo_max_px);
-    cJSON_AddNumberToObject(loo, "median_m", r->loo_median_m);
-    cJSON_AddNumberToObject(loo, "max_m", r->loo_max_m);
-
-    cJSON *cov = cJSON_AddObjectToObject(root, "coverage");
-    cJSON_AddNumberToObject(cov, "image_hull_share", r->image_hull_share);
-    cJSON_AddNumberToObject(cov, "ground_seen_m2", r->ground_seen_m2);
-    cJSON_AddNumberToObject(cov, "ground_hull_share", r->ground_hull_share);
-    cJSON_AddNumberToObject(cov, "range_m", opt->range_m);
-
-    cJSON *deg = cJSON_AddObjectToObject(root, "degeneracy");
-    cJSON_AddNumberToObject(deg, "condition_number", r->condition_number);
-    cJSON_AddNumberToObject(deg, "collinearity", r->collinearity);
-    cJSON_AddNumberToObject(deg, "planarity", r->planarity);
-    cJSON_AddNumberToObject(deg, "head_on_deg", r->head_on_deg);
-
+static void add_landmarks(cJSON *root, const rs_site *site, const rs_site_camera *cam, const rs_audit_result *r)
+{
     cJSON *lms = cJSON_AddArrayToObject(root, "landmarks");
-    for (int i = 0; i < r->N; i++) {
+    for (int i = 0; lms && i < r->N; i++) {
         const rs_audit_landmark *L = &r->landmarks[i];
         const rs_site_observation *o = &cam->observations[i];
         cJSON *l = cJSON_CreateObject();
@@ -352,40 +313,68 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
         cJSON_AddStringToObject(l, "reason", L->reason);
         cJSON_AddBoolToObject(l, "loo_ok", L->loo_ok);
         cJSON_AddItemToObject(l, "loo_predicted_px", num_array(L->loo_predicted_px, 2));
-        cJSON_AddNumberToObject(l, "loo_error_px", L->loo_error_px);
-        cJSON_AddNumberToObject(l, "loo_normalised", L->loo_normalised);
-        cJSON_AddNumberToObject(l, "loo_ground_error_m", L->loo_ground_error_m);
-        cJSON_AddNumberToObject(l, "influence_m", L->influence_m);
-        cJSON_AddNumberToObject(l, "influence_deg", L->influence_deg);
-        if (r->has_external) cJSON_AddItemToObject(l, "external_residual_px", num_array(&r->external.residual_px[2 * i], 2));
+        ADD_NUMBERS(l, {"loo_error_px", L->loo_error_px}, {"loo_normalised", L->loo_normalised},
+                    {"loo_ground_error_m", L->loo_ground_error_m}, {"influence_m", L->influence_m},
+                    {"influence_deg", L->influence_deg});
+        if (r->has_external)
+            cJSON_AddItemToObject(l, "external_residual_px", num_array(&r->external.residual_px[2 * i], 2));
         cJSON_AddItemToArray(lms, l);
     }
+}
 
-    if (r->map.sigma_m) {
-        const rs_audit_map *m = &r->map;
-        cJSON *jm = cJSON_AddObjectToObject(root, "uncertainty_map");
-        cJSON_AddNumberToObject(jm, "e0_m", m->e0_m);
-        cJSON_AddNumberToObject(jm, "n0_m", m->n0_m);
-        cJSON_AddNumberToObject(jm, "cell_m", m->cell_m);
-        cJSON_AddNumberToObject(jm, "nx", m->nx);
-        cJSON_AddNumberToObject(jm, "ny", m->ny);
-        cJSON_AddNumberToObject(jm, "detection_sigma_px", m->detection_sigma_px);
-        cJSON_AddNumberToObject(jm, "range_m", m->range_m);
-        cJSON_AddItemToObject(jm, "camera_en_m", num_array(m->camera_en_m, 2));
-        cJSON *rows = cJSON_AddArrayToObject(jm, "sigma_m");
-        for (int iy = 0; iy < m->ny; iy++) cJSON_AddItemToArray(rows, num_array(&m->sigma_m[iy * m->nx], m->nx));
+static void add_map(cJSON *root, const rs_audit_map *m)
+{
+    cJSON *jm = cJSON_AddObjectToObject(root, "uncertainty_map");
+    ADD_NUMBERS(jm, {"e0_m", m->e0_m}, {"n0_m", m->n0_m}, {"cell_m", m->cell_m}, {"nx", m->nx}, {"ny", m->ny},
+                {"detection_sigma_px", m->detection_sigma_px}, {"range_m", m->range_m});
+    cJSON_AddItemToObject(jm, "camera_en_m", num_array(m->camera_en_m, 2));
+    cJSON *rows = cJSON_AddArrayToObject(jm, "sigma_m");
+    for (int iy = 0; rows && iy < m->ny; iy++) cJSON_AddItemToArray(rows, num_array(&m->sigma_m[iy * m->nx], m->nx));
+}
+
+char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result *r, const rs_audit_options *opt)
+{
+    rs_audit_options defaults;
+    if (!opt) {
+        rs_audit_options_default(&defaults);
+        opt = &defaults;
     }
+    const rs_site_camera *cam = &site->cameras[icam];
+    // the solve: the same object as `roadside calib`'s <id>.json
+    char *solve_text = rs_calib_site_result_json(site, icam, &r->solve);
+    cJSON *solve = solve_text ? cJSON_Parse(solve_text) : NULL;
+    free(solve_text);
+    cJSON *root = cJSON_CreateObject();
+    if (!root || !solve) {
+        cJSON_Delete(root);
+        cJSON_Delete(solve);
+        return NULL;
+    }
+    cJSON_AddStringToObject(root, "camera", cam->id);
+    cJSON_AddStringToObject(root, "site", site->name ? site->name : "");
+    cJSON_AddBoolToObject(root, "pass", r->pass);
+    cJSON_AddItemToObject(root, "failures", sentences(r->failures));
+    cJSON_AddItemToObject(root, "warnings", sentences(r->warnings));
+    ADD_NUMBERS(cJSON_AddObjectToObject(root, "thresholds"), {"max_rms_px", opt->max_rms_px},
+                {"max_loo_px", opt->max_loo_px}, {"max_loo_m", opt->max_loo_m},
+                {"outlier_threshold", opt->calib.outlier_threshold}, {"alpha", opt->alpha},
+                {"consistency_px", opt->consistency_px});
+    cJSON_AddItemToObject(root, "solve", solve);
+    ADD_NUMBERS(cJSON_AddObjectToObject(root, "leave_one_out"), {"count", r->loo_count}, {"rms_px", r->loo_rms_px},
+                {"max_px", r->loo_max_px}, {"median_m", r->loo_median_m}, {"max_m", r->loo_max_m});
+    ADD_NUMBERS(cJSON_AddObjectToObject(root, "coverage"), {"image_hull_share", r->image_hull_share},
+                {"ground_seen_m2", r->ground_seen_m2}, {"ground_hull_share", r->ground_hull_share},
+                {"range_m", opt->range_m});
+    ADD_NUMBERS(cJSON_AddObjectToObject(root, "degeneracy"), {"condition_number", r->condition_number},
+                {"collinearity", r->collinearity}, {"planarity", r->planarity}, {"head_on_deg", r->head_on_deg});
+    add_landmarks(root, site, cam, r);
+    if (r->map.sigma_m) add_map(root, &r->map);
     if (r->has_against) {
         const rs_audit_against *a = &r->against;
         cJSON *ja = cJSON_AddObjectToObject(root, "against");
         cJSON_AddBoolToObject(ja, "moved", a->moved);
-        cJSON_AddNumberToObject(ja, "landmarks", a->M);
-        cJSON_AddNumberToObject(ja, "chi2", a->chi2);
-        cJSON_AddNumberToObject(ja, "dof", a->dof);
-        cJSON_AddNumberToObject(ja, "p_value", a->p_value);
-        cJSON_AddNumberToObject(ja, "rms_shift_px", a->rms_shift_px);
-        cJSON_AddNumberToObject(ja, "rotation_deg", a->rotation_deg);
-        cJSON_AddNumberToObject(ja, "shift_m", a->shift_m);
+        ADD_NUMBERS(ja, {"landmarks", a->M}, {"chi2", a->chi2}, {"dof", a->dof}, {"p_value", a->p_value},
+                    {"rms_shift_px", a->rms_shift_px}, {"rotation_deg", a->rotation_deg}, {"shift_m", a->shift_m});
         cJSON_AddItemToObject(ja, "dyaw_pitch_roll_deg", num_array(a->dyaw_pitch_roll_deg, 3));
         cJSON_AddItemToObject(ja, "shift_enu_m", num_array(a->shift_enu_m, 3));
         cJSON_AddItemToObject(ja, "rt_cam_enu_new", num_array(a->rt_cam_enu_new, 6));
@@ -396,13 +385,9 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
         cJSON *jx = cJSON_AddObjectToObject(root, "external");
         cJSON_AddBoolToObject(jx, "consistent", x->consistent);
         cJSON_AddItemToObject(jx, "inconsistencies", sentences(x->consistency));
-        cJSON_AddNumberToObject(jx, "rms_px", x->rms_px);
-        cJSON_AddNumberToObject(jx, "max_px", x->max_px);
-        cJSON_AddNumberToObject(jx, "rotation_vs_site_deg", x->rotation_deg);
-        cJSON_AddNumberToObject(jx, "shift_vs_site_m", x->shift_m);
-        cJSON_AddNumberToObject(jx, "R_orthonormality", x->R_orthonormality);
-        cJSON_AddNumberToObject(jx, "P_max_px", x->P_max_px);
-        cJSON_AddNumberToObject(jx, "P_scale", x->P_scale);
+        ADD_NUMBERS(jx, {"rms_px", x->rms_px}, {"max_px", x->max_px}, {"rotation_vs_site_deg", x->rotation_deg},
+                    {"shift_vs_site_m", x->shift_m}, {"R_orthonormality", x->R_orthonormality},
+                    {"P_max_px", x->P_max_px}, {"P_scale", x->P_scale});
     }
     char *text = cJSON_Print(root);
     cJSON_Delete(root);
