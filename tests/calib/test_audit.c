@@ -141,16 +141,33 @@ static rs_simulate_problem *simulate(unsigned long long seed, int N, double outl
 
 static const double up[3] = {0, 0, 1};
 
+// A simulated camera problem (landmark sigmas as simulated, 1 px picks) and default options.
+typedef struct {
+    rs_simulate_problem *sp;
+    double sig_enu[3 * 64], sig_px[64];
+    rs_calib_problem pb;
+    rs_audit_options opt;
+} fixture;
+
+static bool fixture_make(fixture *f, unsigned long long seed, int N, double outliers, double s_h, double s_v)
+{
+    f->sp = simulate(seed, N, outliers, s_h, s_v);
+    if (!f->sp) return false;
+    f->pb = view(f->sp, f->sig_enu, f->sig_px, s_h, s_v, 1);
+    rs_audit_options_default(&f->opt);
+    return true;
+}
+
 // ---- 1. leave-one-out vs brute force ----
 
 static void test_leave_one_out(unsigned long long seed)
 {
-    rs_simulate_problem *sp = simulate(seed, 14, 0.08, 0.05, 0.08);
-    if (!sp) return;
-    double sig_enu[3 * 64], sig_px[64];
-    rs_calib_problem pb = view(sp, sig_enu, sig_px, 0.05, 0.08, 1);
-    rs_audit_options opt;
-    rs_audit_options_default(&opt);
+    fixture f;
+    if (!fixture_make(&f, seed, 14, 0.08, 0.05, 0.08)) return;
+    rs_simulate_problem *sp = f.sp;
+    rs_calib_problem pb = f.pb;
+    const double *sig_enu = f.sig_enu, *sig_px = f.sig_px;
+    rs_audit_options opt = f.opt;
     opt.map = false;
     rs_audit_result r;
     rs_err err = {0};
@@ -250,12 +267,11 @@ static bool cholesky6(double L[36], const double C[36])
 
 static void test_map(unsigned long long seed)
 {
-    rs_simulate_problem *sp = simulate(seed, 12, 0, 0.3, 0.5);
-    if (!sp) return;
-    double sig_enu[3 * 64], sig_px[64];
-    rs_calib_problem pb = view(sp, sig_enu, sig_px, 0.3, 0.5, 1);
-    rs_audit_options opt;
-    rs_audit_options_default(&opt);
+    fixture f;
+    if (!fixture_make(&f, seed, 12, 0, 0.3, 0.5)) return;
+    rs_simulate_problem *sp = f.sp;
+    rs_calib_problem pb = f.pb;
+    rs_audit_options opt = f.opt;
     opt.leave_one_out = false;
     opt.range_m = 60;
     opt.cell_m = 2;
@@ -362,12 +378,12 @@ static void new_picks(double *q_new, const rs_simulate_problem *sp, double turn_
 
 static void test_moved(unsigned long long seed)
 {
-    rs_simulate_problem *sp = simulate(seed, 12, 0, 0.3, 0.5);
-    if (!sp) return;
-    double sig_enu[3 * 64], sig_px[64], q_new[128];
-    rs_calib_problem pb = view(sp, sig_enu, sig_px, 0.3, 0.5, 1);
-    rs_audit_options opt;
-    rs_audit_options_default(&opt);
+    fixture f;
+    if (!fixture_make(&f, seed, 12, 0, 0.3, 0.5)) return;
+    rs_simulate_problem *sp = f.sp;
+    rs_calib_problem pb = f.pb;
+    double q_new[128];
+    rs_audit_options opt = f.opt;
     opt.leave_one_out = false;
     opt.map = false;
     rs_simulate_rng rng;
@@ -416,12 +432,12 @@ static void test_moved(unsigned long long seed)
 
 static void test_errors(void)
 {
-    rs_simulate_problem *sp = simulate(5, 8, 0, 0.1, 0.1);
-    if (!sp) return;
-    double sig_enu[3 * 64], sig_px[64], q_new[128];
-    rs_calib_problem pb = view(sp, sig_enu, sig_px, 0.1, 0.1, 1);
-    rs_audit_options opt;
-    rs_audit_options_default(&opt);
+    fixture f;
+    if (!fixture_make(&f, 5, 8, 0, 0.1, 0.1)) return;
+    rs_simulate_problem *sp = f.sp;
+    rs_calib_problem pb = f.pb;
+    double q_new[128];
+    rs_audit_options opt = f.opt;
     opt.leave_one_out = false;
     opt.map = false;
     rs_audit_result r;
