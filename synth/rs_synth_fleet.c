@@ -66,24 +66,26 @@ static double uniform_in(rs_simulate_rng *rng, const double range[2]) {
     return range[0] + (range[1] - range[0]) * rs_simulate_rng_uniform(rng);
 }
 
-// Paint colours and their shares. Shares after Axalta's Global Automotive Color Popularity
-// Report 2022 (white 35 %, black 18 %, grey 15 %, silver 9 %, blue 7 %, red 7 %, beige/brown 5 %,
-// green 2 %, other 2 %), rounded; the RGB values are our estimates (sRGB, converted to linear).
+// Paint colours and their shares. Shares from Axalta's 2022 Global Automotive Color Popularity
+// Report (press release of 15 Dec 2022: white 34 %, black 21 %, grey 19 %, blue 8 %, red 5 %,
+// green 1 %; white, black, grey and silver together 82 %, hence silver 8 %); the remaining 4 %
+// split between beige/brown (3 %) and yellow/orange (1 %) is our estimate, and so are the RGB
+// values (sRGB, converted to linear) and their jitter.
 typedef struct {
     double share;
     double srgb[3];  // [0,1]
     double jitter;   // +- per channel, sRGB
 } paint;
 static const paint paints[] = {
-    {0.35, {0.93, 0.93, 0.92}, 0.03}, // white
-    {0.18, {0.05, 0.05, 0.06}, 0.02}, // black
-    {0.15, {0.42, 0.43, 0.45}, 0.08}, // grey
-    {0.09, {0.72, 0.73, 0.75}, 0.04}, // silver
-    {0.07, {0.10, 0.22, 0.50}, 0.06}, // blue
-    {0.07, {0.62, 0.06, 0.07}, 0.06}, // red
-    {0.05, {0.55, 0.45, 0.33}, 0.06}, // beige / brown
-    {0.02, {0.12, 0.32, 0.18}, 0.05}, // green
-    {0.02, {0.85, 0.70, 0.10}, 0.06}, // yellow / orange / other
+    {0.34, {0.93, 0.93, 0.92}, 0.03}, // white
+    {0.21, {0.05, 0.05, 0.06}, 0.02}, // black
+    {0.19, {0.42, 0.43, 0.45}, 0.08}, // grey
+    {0.08, {0.72, 0.73, 0.75}, 0.04}, // silver
+    {0.08, {0.10, 0.22, 0.50}, 0.06}, // blue
+    {0.05, {0.62, 0.06, 0.07}, 0.06}, // red
+    {0.03, {0.55, 0.45, 0.33}, 0.06}, // beige / brown
+    {0.01, {0.12, 0.32, 0.18}, 0.05}, // green
+    {0.01, {0.85, 0.70, 0.10}, 0.06}, // yellow / orange
 };
 
 static double srgb_to_linear(double c) {

@@ -205,7 +205,7 @@ static void test_resolve_and_colours(void) {
     rs_err err = {0};
     CHECK(rs_synth_fleet_resolve(&a, &in, &err) == RS_ERR_INVALID && strstr(err.msg, "height"),
           "negative height: %s", err.msg);
-    // Colour shares: white, black, grey, silver dominate (seeded, 20000 draws, +-1.5 %).
+    // Colour shares (Axalta 2022): white 34 %, black 21 % (seeded, 20000 draws, +-1.5 %).
     int white = 0, black = 0, n = 20000;
     for (int s = 0; s < n; s++) {
         rs_synth_vehicle r;
@@ -214,9 +214,9 @@ static void test_resolve_and_colours(void) {
         white += m > 0.7;
         black += m < 0.02;
     }
-    CHECK(fabs(white / (double)n - 0.35) < 0.015, "white share %.3f, want 0.35 (seeds 1000000+)",
+    CHECK(fabs(white / (double)n - 0.34) < 0.015, "white share %.3f, want 0.34 (seeds 1000000+)",
           white / (double)n);
-    CHECK(fabs(black / (double)n - 0.18) < 0.015, "black share %.3f, want 0.18 (seeds 1000000+)",
+    CHECK(fabs(black / (double)n - 0.21) < 0.015, "black share %.3f, want 0.21 (seeds 1000000+)",
           black / (double)n);
     printf("colours: white %.3f black %.3f of %d\n", white / (double)n, black / (double)n, n);
     rs_synth_class c;
