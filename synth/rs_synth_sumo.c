@@ -1,2 +1,775 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_synth_sumo;
+// rs_synth_sumo.c -- SUMO networks from lanes, flows, running sumo, FCD output. See
+// rs_synth_sumo.h and docs/traffic.md.
+#define _XOPEN_SOURCE 700 // nftw()
+#include "rs_synth_sumo.h"
+
+#include <errno.h>
+#include <expat.h>
+#include <fcntl.h>
+#include <ftw.h>
+#include <math.h>
+#include <spawn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "rs_io.h"
+#include "rs_simulate.h"
+
+extern char **environ;
+
+#define DEG (3.14159265358979323846 / 180.0)
+
+void rs_synth_sumo_options_default(rs_synth_sumo_options *opt)
+{
+    memset(opt, 0, sizeof *opt);
+    opt->duration_s = 300.0;
+    opt->warmup_s = 60.0;
+    opt->period_s = 1.0;
+    opt->flow_vph = 200.0;
+    rs_synth_class_mix_default(&opt->mix);
+    opt->sumo = "sumo";
+    opt->netconvert = "netconvert";
+}
+
+void rs_synth_sumo_frames_free(rs_synth_sumo_frames *frames)
+{
+    if (!frames) return;
+    for (int i = 0; i < frames->N; i++) free(frames->frame[i].v);
+    free(frames->frame);
+    frames->frame = NULL;
+    frames->N = 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// XML reading (expat): a file streamed through a start-element callback
+
+typedef struct {
+    XML_Parser p;
+    const char *path;
+    rs_status st;
+    rs_err *err;
+} xml_ctx;
+
+static const char *attr(const XML_Char **a, const char *name)
+{
+    for (int i = 0; a[i]; i += 2)
+        if (!strcmp(a[i], name)) return a[i + 1];
+    return NULL;
+}
+
+// Stops the parser with an error naming the file and the current line.
+static void xml_fail(xml_ctx *c, rs_status st, const char *field, const char *what, const char *value)
+{
+    if (c->st) return;
+    c->st = rs_err_set(c->err, st, "%s:%lu: %s: %s%s%s%s", c->path, (unsigned long)XML_GetCurrentLineNumber(c->p),
+                       field, value ? "'" : "", value ? value : "", value ? "' " : "", what);
+    XML_StopParser(c->p, XML_FALSE);
+}
+
+static bool attr_double(xml_ctx *c, const XML_Char **a, const char *elem, const char *name, double *out)
+{
+    const char *s = attr(a, name);
+    char field[64];
+    snprintf(field, sizeof field, "%s.%s", elem, name);
+    if (!s) {
+        xml_fail(c, RS_ERR_PARSE, field, "missing", NULL);
+        return false;
+    }
+    char *end;
+    errno = 0;
+    *out = strtod(s, &end);
+    if (end == s || *end || errno || !isfinite(*out)) {
+        xml_fail(c, RS_ERR_PARSE, field, "is not a number", s);
+        return false;
+    }
+    return true;
+}
+
+// Streams `path` through parser c->p (whose user data and handlers the caller has set).
+static rs_status xml_parse_file(xml_ctx *c)
+{
+    FILE *f = fopen(c->path, "rb");
+    if (!f) return rs_err_set(c->err, RS_ERR_IO, "%s: cannot open: %s", c->path, strerror(errno));
+    char buf[65536];
+    for (bool done = false; !done && !c->st;) {
+        size_t n = fread(buf, 1, sizeof buf, f);
+        done = n < sizeof buf;
+        if (done && ferror(f)) {
+            c->st = rs_err_set(c->err, RS_ERR_IO, "%s: read error", c->path);
+            break;
+        }
+        if (XML_Parse(c->p, buf, (int)n, done) == XML_STATUS_ERROR && !c->st)
+            c->st = rs_err_set(c->err, RS_ERR_PARSE, "%s:%lu: %s", c->path,
+                               (unsigned long)XML_GetCurrentLineNumber(c->p), XML_ErrorString(XML_GetErrorCode(c->p)));
+    }
+    fclose(f);
+    return c->st;
+}
+
+// ---------------------------------------------------------------------------------------------
+// net.xml <location>
+
+typedef struct {
+    xml_ctx x;
+    rs_synth_sumo_location *loc;
+    bool found;
+} location_ctx;
+
+static void XMLCALL location_start(void *ud, const XML_Char *name, const XML_Char **a)
+{
+    location_ctx *c = ud;
+    if (c->found || c->x.st || strcmp(name, "location")) return;
+    c->found = true;
+    const char *off = attr(a, "netOffset"), *proj = attr(a, "projParameter");
+    if (!off || sscanf(off, "%lf,%lf", &c->loc->net_offset_m[0], &c->loc->net_offset_m[1]) != 2)
+        return xml_fail(&c->x, RS_ERR_PARSE, "location.netOffset", "is not X,Y", off);
+    const char *z = proj ? strstr(proj, "+zone=") : NULL;
+    if (!proj || !strstr(proj, "+proj=utm") || !z)
+        return xml_fail(&c->x, RS_ERR_UNSUPPORTED, "location.projParameter",
+                        "is not a UTM projection (build the network with netconvert --proj.utm)", proj);
+    c->loc->zone = atoi(z + 6);
+    if (c->loc->zone < 1 || c->loc->zone > 60)
+        return xml_fail(&c->x, RS_ERR_PARSE, "location.projParameter", "has no UTM zone 1..60", proj);
+    c->loc->north = strstr(proj, "+south") == NULL;
+}
+
+rs_status rs_synth_sumo_read_location(rs_synth_sumo_location *loc, const char *net_path, rs_err *err)
+{
+    location_ctx c = {{XML_ParserCreate(NULL), net_path, RS_OK, err}, loc, false};
+    if (!c.x.p) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    XML_SetUserData(c.x.p, &c);
+    XML_SetStartElementHandler(c.x.p, location_start);
+    rs_status st = xml_parse_file(&c.x);
+    XML_ParserFree(c.x.p);
+    if (!st && !c.found) st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no <location> element", net_path);
+    return st;
+}
+
+// ---------------------------------------------------------------------------------------------
+// FCD
+
+typedef struct {
+    xml_ctx x;
+    rs_synth_sumo_frames *out;
+    int cap;     // frames allocated
+    int vcap;    // vehicles allocated in the current frame
+    bool geo;
+    const rs_synth_sumo_location *loc;
+    const rs_llh *origin;
+    const rs_synth_sumo_vtype *types;
+    int Ntypes;
+} fcd_ctx;
+
+static uint64_t hash_id(const char *s)
+{
+    uint64_t h = 1469598103934665603ULL; // FNV-1a
+    for (; *s; s++) h = (h ^ (unsigned char)*s) * 1099511628211ULL;
+    return h >> 11;
+}
+
+static void fcd_vehicle(fcd_ctx *c, const XML_Char **a)
+{
+    if (c->out->N == 0) return xml_fail(&c->x, RS_ERR_PARSE, "vehicle", "outside a <timestep>", NULL);
+    double x, y, angle, speed = 0;
+    if (!attr_double(&c->x, a, "vehicle", "x", &x) || !attr_double(&c->x, a, "vehicle", "y", &y) ||
+        !attr_double(&c->x, a, "vehicle", "angle", &angle))
+        return;
+    if (attr(a, "speed") && !attr_double(&c->x, a, "vehicle", "speed", &speed)) return;
+    const char *id = attr(a, "id"), *type = attr(a, "type"), *lane = attr(a, "lane");
+    if (!id) return xml_fail(&c->x, RS_ERR_PARSE, "vehicle.id", "missing", NULL);
+    if (!type) return xml_fail(&c->x, RS_ERR_PARSE, "vehicle.type", "missing", NULL);
+    const rs_synth_sumo_vtype *t = NULL;
+    for (int i = 0; i < c->Ntypes && !t; i++)
+        if (!strcmp(c->types[i].id, type)) t = &c->types[i];
+    if (!t) return xml_fail(&c->x, RS_ERR_NOT_FOUND, "vehicle.type", "is not a known vType", type);
+
+    // Front bumper in geodetic coordinates.
+    double llh[3] = {y, x, c->origin->h_m};
+    rs_err e2;
+    if (!c->geo) {
+        double enh[3] = {x - c->loc->net_offset_m[0], y - c->loc->net_offset_m[1], c->origin->h_m};
+        if (rs_geo_utm_to_llh(llh, c->loc->zone, c->loc->north, enh, 1, &e2))
+            return xml_fail(&c->x, RS_ERR_INVALID, "vehicle.x", e2.msg, NULL);
+    }
+    double gamma, front[3];
+    if (rs_geo_utm_convergence_deg(&gamma, c->loc->zone, c->loc->north, llh, 1, &e2) ||
+        rs_geo_llh_to_enu(front, c->origin, llh, 1, &e2))
+        return xml_fail(&c->x, RS_ERR_INVALID, c->geo ? "vehicle.x/y (lon/lat)" : "vehicle.x/y", e2.msg, NULL);
+    double b = fmod(angle + gamma + 720.0, 360.0);
+
+    rs_synth_sumo_frame *fr = &c->out->frame[c->out->N - 1];
+    if (fr->N == c->vcap) {
+        int cap = c->vcap ? 2 * c->vcap : 32;
+        rs_synth_traffic_vehicle *g = realloc(fr->v, sizeof *g * (size_t)cap);
+        if (!g) return xml_fail(&c->x, RS_ERR_NOMEM, "vehicle", "out of memory", NULL);
+        fr->v = g;
+        c->vcap = cap;
+    }
+    rs_synth_traffic_vehicle *v = &fr->v[fr->N++];
+    memset(v, 0, sizeof *v);
+    v->cls = t->cls;
+    v->length_m = t->length_m;
+    v->width_m = t->width_m;
+    v->height_m = t->height_m;
+    v->yaw_deg = b;
+    v->e_m = front[0] - 0.5 * t->length_m * sin(b * DEG);
+    v->n_m = front[1] - 0.5 * t->length_m * cos(b * DEG);
+    v->speed_mps = speed;
+    v->variant = hash_id(id);
+    v->lane = -1;
+    int k, used = 0;
+    if (lane && sscanf(lane, "e%d_0%n", &k, &used) == 1 && used == (int)strlen(lane)) v->lane = k;
+    snprintf(v->id, sizeof v->id, "%s", id);
+}
+
+static void XMLCALL fcd_start(void *ud, const XML_Char *name, const XML_Char **a)
+{
+    fcd_ctx *c = ud;
+    if (c->x.st) return;
+    if (!strcmp(name, "timestep")) {
+        double t;
+        if (!attr_double(&c->x, a, "timestep", "time", &t)) return;
+        if (c->out->N == c->cap) {
+            int cap = c->cap ? 2 * c->cap : 64;
+            rs_synth_sumo_frame *g = realloc(c->out->frame, sizeof *g * (size_t)cap);
+            if (!g) return xml_fail(&c->x, RS_ERR_NOMEM, "timestep", "out of memory", NULL);
+            c->out->frame = g;
+            c->cap = cap;
+        }
+        c->out->frame[c->out->N++] = (rs_synth_sumo_frame){t, NULL, 0};
+        c->vcap = 0;
+    } else if (!strcmp(name, "vehicle")) {
+        fcd_vehicle(c, a);
+    }
+}
+
+rs_status rs_synth_sumo_read_fcd(rs_synth_sumo_frames *frames, const char *fcd_path, bool geo,
+                                 const rs_synth_sumo_location *loc, const rs_llh *origin,
+                                 const rs_synth_sumo_vtype *types, int Ntypes, rs_err *err)
+{
+    frames->frame = NULL;
+    frames->N = 0;
+    fcd_ctx c = {{XML_ParserCreate(NULL), fcd_path, RS_OK, err}, frames, 0, 0, geo, loc, origin, types, Ntypes};
+    if (!c.x.p) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    XML_SetUserData(c.x.p, &c);
+    XML_SetStartElementHandler(c.x.p, fcd_start);
+    rs_status st = xml_parse_file(&c.x);
+    XML_ParserFree(c.x.p);
+    if (st) rs_synth_sumo_frames_free(frames);
+    return st;
+}
+
+// ---------------------------------------------------------------------------------------------
+// running programs
+
+// Runs argv[0] (looked up on PATH) with stdout and stderr appended to log_path; no shell.
+static rs_status run_program(char *const argv[], const char *log_path, rs_err *err)
+{
+    posix_spawn_file_actions_t fa;
+    if (posix_spawn_file_actions_init(&fa)) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    posix_spawn_file_actions_addopen(&fa, 1, log_path, O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    // The environment, with SUMO_HOME=/usr/share/sumo added when unset (SUMO reads its data
+    // from there; with validation off it needs nothing from the network).
+    size_t ne = 0;
+    while (environ[ne]) ne++;
+    char **env = malloc(sizeof *env * (ne + 2));
+    if (!env) {
+        posix_spawn_file_actions_destroy(&fa);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    memcpy(env, environ, sizeof *env * ne);
+    static char sumo_home[] = "SUMO_HOME=/usr/share/sumo";
+    if (!getenv("SUMO_HOME")) env[ne++] = sumo_home;
+    env[ne] = NULL;
+    pid_t pid;
+    int rc = posix_spawnp(&pid, argv[0], &fa, NULL, argv, env);
+    posix_spawn_file_actions_destroy(&fa);
+    free(env);
+    if (rc == ENOENT)
+        return rs_err_set(err, RS_ERR_NOT_FOUND,
+                          "%s: not found on PATH (SUMO is needed for --sumo: on Debian, apt install sumo)", argv[0]);
+    if (rc) return rs_err_set(err, RS_ERR_EXTERNAL, "%s: cannot run: %s", argv[0], strerror(rc));
+    int status;
+    while (waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR) return rs_err_set(err, RS_ERR_EXTERNAL, "%s: waitpid: %s", argv[0], strerror(errno));
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return RS_OK;
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+        return rs_err_set(err, RS_ERR_NOT_FOUND, "%s: not found on PATH (on Debian, apt install sumo)", argv[0]);
+    // The last non-empty line of the log says why.
+    char last[512] = "";
+    FILE *f = fopen(log_path, "r");
+    if (f) {
+        char line[512];
+        while (fgets(line, sizeof line, f))
+            if (line[0] != '\n') snprintf(last, sizeof last, "%s", line);
+        fclose(f);
+    }
+    last[strcspn(last, "\n")] = '\0';
+    return rs_err_set(err, RS_ERR_EXTERNAL, "%s failed (%s %d); see %s: %s", argv[0],
+                      WIFEXITED(status) ? "exit status" : "signal",
+                      WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status), log_path, last);
+}
+
+// ---------------------------------------------------------------------------------------------
+// the network from the lanes
+
+static bool is_junction(const rs_synth_lane *l) { return l->kind && !strcmp(l->kind, "junction"); }
+
+static int uf_find(int *parent, int i)
+{
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+}
+
+static void uf_join(int *parent, int a, int b)
+{
+    a = uf_find(parent, a), b = uf_find(parent, b);
+    if (a != b) parent[b < a ? a : b] = b < a ? b : a;
+}
+
+typedef struct {
+    int from, to; // lane (edge) indices
+} connection;
+
+typedef struct {
+    int *parent;       // (2 Nlanes,) union-find over lane ends: 2K start, 2K+1 end
+    connection *con;
+    int Ncon, capcon;
+    int Nedges;
+} network;
+
+static bool add_connection(network *n, int from, int to)
+{
+    for (int i = 0; i < n->Ncon; i++)
+        if (n->con[i].from == from && n->con[i].to == to) return true;
+    if (n->Ncon == n->capcon) {
+        int cap = n->capcon ? 2 * n->capcon : 64;
+        connection *g = realloc(n->con, sizeof *g * (size_t)cap);
+        if (!g) return false;
+        n->con = g;
+        n->capcon = cap;
+    }
+    n->con[n->Ncon++] = (connection){from, to};
+    return true;
+}
+
+// Connects edge `from` to every non-junction lane reached from lane j through junction lanes.
+static bool connect_through(network *n, const rs_synth_lanes *lanes, int from, int j, int depth)
+{
+    if (depth > 8) return true;
+    if (!is_junction(&lanes->lane[j])) {
+        uf_join(n->parent, 2 * from + 1, 2 * j);
+        return add_connection(n, from, j);
+    }
+    for (int k = 0; k < lanes->lane[j].Nnext; k++)
+        if (!connect_through(n, lanes, from, lanes->lane[j].next[k], depth + 1)) return false;
+    return true;
+}
+
+static rs_status enu_to_lonlat(double lonlat[2], const rs_llh *origin, const double p_enu[2], rs_err *err)
+{
+    double enu[3] = {p_enu[0], p_enu[1], 0}, llh[3];
+    rs_status st = rs_geo_enu_to_llh(llh, origin, enu, 1, err);
+    lonlat[0] = llh[1];
+    lonlat[1] = llh[0];
+    return st;
+}
+
+static rs_status write_network_files(const char *dir, const rs_synth_lanes *lanes, const rs_llh *origin, network *n,
+                                     rs_err *err)
+{
+    int L = lanes->N;
+    n->parent = malloc(sizeof *n->parent * 2 * (size_t)L);
+    if (!n->parent) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < 2 * L; i++) n->parent[i] = i;
+    for (int i = 0; i < L; i++) {
+        if (is_junction(&lanes->lane[i])) continue;
+        n->Nedges++;
+        for (int k = 0; k < lanes->lane[i].Nnext; k++)
+            if (!connect_through(n, lanes, i, lanes->lane[i].next[k], 0))
+                return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    if (n->Nedges == 0) return rs_err_set(err, RS_ERR_INVALID, "lanes: every lane is a junction lane: no edges");
+
+    rs_status st;
+    rs_io_atomic a = {0};
+    char *path = rs_io_join(dir, "nodes.nod.xml");
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = rs_io_atomic_open(&a, path, err);
+    free(path);
+    if (st) return st;
+    fprintf(a.f, "<nodes>\n");
+    for (int r = 0; r < 2 * L && !st; r++) {
+        if (is_junction(&lanes->lane[r / 2]) || uf_find(n->parent, r) != r) continue;
+        // The node at the mean of its lane ends; a traffic light where 3 or more edges enter.
+        double p[2] = {0, 0};
+        int m = 0, in = 0;
+        for (int q = 0; q < 2 * L; q++) {
+            const rs_synth_lane *l = &lanes->lane[q / 2];
+            if (is_junction(l) || uf_find(n->parent, q) != r) continue;
+            const double *e = l->p_enu_m[q % 2 ? l->Npoints - 1 : 0];
+            p[0] += e[0], p[1] += e[1], m++;
+            in += q % 2;
+        }
+        p[0] /= m, p[1] /= m;
+        double ll[2];
+        if ((st = enu_to_lonlat(ll, origin, p, err))) break;
+        fprintf(a.f, "  <node id=\"n%d\" x=\"%.9f\" y=\"%.9f\" type=\"%s\"/>\n", r, ll[0], ll[1],
+                in >= 3 ? "traffic_light" : "priority");
+    }
+    fprintf(a.f, "</nodes>\n");
+    if (st) {
+        rs_io_atomic_abort(&a);
+        return st;
+    }
+    if ((st = rs_io_atomic_commit(&a, err))) return st;
+
+    path = rs_io_join(dir, "edges.edg.xml");
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = rs_io_atomic_open(&a, path, err);
+    free(path);
+    if (st) return st;
+    fprintf(a.f, "<edges>\n");
+    for (int i = 0; i < L && !st; i++) {
+        const rs_synth_lane *l = &lanes->lane[i];
+        if (is_junction(l)) continue;
+        fprintf(a.f, "  <edge id=\"e%d\" from=\"n%d\" to=\"n%d\" numLanes=\"1\" speed=\"%.3f\" width=\"%.3f\" "
+                     "spreadType=\"center\" shape=\"",
+                i, uf_find(n->parent, 2 * i), uf_find(n->parent, 2 * i + 1),
+                isfinite(l->speed_mps) ? l->speed_mps : 13.89, l->width_m);
+        for (int k = 0; k < l->Npoints && !st; k++) {
+            double ll[2];
+            st = enu_to_lonlat(ll, origin, l->p_enu_m[k], err);
+            fprintf(a.f, "%s%.9f,%.9f", k ? " " : "", ll[0], ll[1]);
+        }
+        fprintf(a.f, "\"/>\n");
+    }
+    fprintf(a.f, "</edges>\n");
+    if (st) {
+        rs_io_atomic_abort(&a);
+        return st;
+    }
+    if ((st = rs_io_atomic_commit(&a, err))) return st;
+
+    path = rs_io_join(dir, "connections.con.xml");
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = rs_io_atomic_open(&a, path, err);
+    free(path);
+    if (st) return st;
+    fprintf(a.f, "<connections>\n");
+    for (int i = 0; i < n->Ncon; i++)
+        fprintf(a.f, "  <connection from=\"e%d\" to=\"e%d\" fromLane=\"0\" toLane=\"0\"/>\n", n->con[i].from,
+                n->con[i].to);
+    fprintf(a.f, "</connections>\n");
+    return rs_io_atomic_commit(&a, err);
+}
+
+// ---------------------------------------------------------------------------------------------
+// routes: vTypes and flows
+
+static const char *vclass_of(rs_synth_class c)
+{
+    switch (c) {
+    case RS_SYNTH_VAN: return "delivery";
+    case RS_SYNTH_BUS: return "bus";
+    case RS_SYNTH_BOX_TRUCK: return "truck";
+    case RS_SYNTH_ARTICULATED_TRUCK: return "trailer";
+    default: return "passenger";
+    }
+}
+
+// Three sizes per class with a weight > 0: dimensions at 1/6, 1/2 and 5/6 of each range, the
+// order of the three quantiles shuffled per dimension by the seed.
+static int make_vtypes(rs_synth_sumo_vtype *t, double *prob, const rs_synth_class_mix *mix, uint64_t seed)
+{
+    rs_simulate_rng rng;
+    rs_simulate_rng_seed(&rng, seed ^ 0x5u);
+    double total = 0;
+    for (int c = 0; c < RS_SYNTH_NCLASSES; c++) total += mix->weight[c];
+    int n = 0;
+    for (int c = 0; c < RS_SYNTH_NCLASSES; c++) {
+        if (!(mix->weight[c] > 0)) continue;
+        double r[3][2];
+        rs_synth_traffic_class_range(r, (rs_synth_class)c);
+        int perm[3][3];
+        for (int d = 0; d < 3; d++) {
+            int p[3] = {0, 1, 2};
+            for (int k = 2; k > 0; k--) {
+                int j = (int)(rs_simulate_rng_uniform(&rng) * (k + 1)), tmp = p[k];
+                p[k] = p[j], p[j] = tmp;
+            }
+            memcpy(perm[d], p, sizeof p);
+        }
+        for (int k = 0; k < 3; k++, n++) {
+            snprintf(t[n].id, sizeof t[n].id, "%s_%d", rs_synth_traffic_class_name((rs_synth_class)c), k + 1);
+            t[n].cls = (rs_synth_class)c;
+            double *dim[3] = {&t[n].length_m, &t[n].width_m, &t[n].height_m};
+            for (int d = 0; d < 3; d++) *dim[d] = r[d][0] + (r[d][1] - r[d][0]) * (1 + 2 * perm[d][k]) / 6.0;
+            prob[n] = mix->weight[c] / total / 3.0;
+        }
+    }
+    return n;
+}
+
+// Appends every path of connections from edge e to an edge without successors.
+static bool write_paths(FILE *f, const network *n, int *path, int depth, int *Nroutes)
+{
+    int e = path[depth - 1];
+    bool any = false;
+    for (int i = 0; i < n->Ncon; i++) {
+        if (n->con[i].from != e) continue;
+        bool loop = false;
+        for (int k = 0; k < depth; k++) loop |= path[k] == n->con[i].to;
+        if (loop || depth >= 32) continue;
+        any = true;
+        path[depth] = n->con[i].to;
+        if (!write_paths(f, n, path, depth + 1, Nroutes)) return false;
+    }
+    if (!any && depth > 1) {
+        fprintf(f, "  <route id=\"r%d\" edges=\"", (*Nroutes)++);
+        for (int k = 0; k < depth; k++) fprintf(f, "%se%d", k ? " " : "", path[k]);
+        fprintf(f, "\"/>\n");
+    }
+    return *Nroutes < 4096;
+}
+
+static rs_status write_routes(const char *dir, const rs_synth_lanes *lanes, const network *n, const char *const *osm_from,
+                              const char *const *osm_to, int Nosm, const rs_synth_sumo_vtype *t, const double *prob,
+                              int Nt, const rs_synth_sumo_options *o, rs_err *err)
+{
+    char *path = rs_io_join(dir, "routes.rou.xml");
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_io_atomic a;
+    rs_status st = rs_io_atomic_open(&a, path, err);
+    free(path);
+    if (st) return st;
+    fprintf(a.f, "<routes>\n  <vTypeDistribution id=\"mix\">\n");
+    for (int i = 0; i < Nt; i++)
+        fprintf(a.f,
+                "    <vType id=\"%s\" vClass=\"%s\" length=\"%.4f\" width=\"%.4f\" height=\"%.4f\" minGap=\"2.0\" "
+                "probability=\"%.6f\"/>\n",
+                t[i].id, vclass_of(t[i].cls), t[i].length_m, t[i].width_m, t[i].height_m, prob[i]);
+    fprintf(a.f, "  </vTypeDistribution>\n");
+    int Nroutes = 0;
+    if (lanes) {
+        int *pathbuf = malloc(sizeof *pathbuf * 33);
+        if (!pathbuf) {
+            rs_io_atomic_abort(&a);
+            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        }
+        for (int e = 0; e < lanes->N; e++) {
+            if (is_junction(&lanes->lane[e])) continue;
+            bool has_pred = false;
+            for (int i = 0; i < n->Ncon; i++) has_pred |= n->con[i].to == e;
+            if (has_pred) continue;
+            pathbuf[0] = e;
+            write_paths(a.f, n, pathbuf, 1, &Nroutes);
+        }
+        free(pathbuf);
+        for (int r = 0; r < Nroutes; r++)
+            fprintf(a.f,
+                    "  <flow id=\"m%d\" type=\"mix\" route=\"r%d\" begin=\"0\" end=\"%.3f\" vehsPerHour=\"%.3f\" "
+                    "departLane=\"best\" departSpeed=\"max\"/>\n",
+                    r, r, o->duration_s, o->flow_vph);
+    } else {
+        for (int r = 0; r < Nosm; r++, Nroutes++)
+            fprintf(a.f,
+                    "  <flow id=\"m%d\" type=\"mix\" from=\"%s\" to=\"%s\" begin=\"0\" end=\"%.3f\" vehsPerHour=\"%.3f\" "
+                    "departLane=\"best\" departSpeed=\"max\"/>\n",
+                    r, osm_from[r], osm_to[r], o->duration_s, o->flow_vph);
+    }
+    fprintf(a.f, "</routes>\n");
+    if (Nroutes == 0) {
+        rs_io_atomic_abort(&a);
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "lanes: no manoeuvre: no path of lanes (through `next`) from an entry to an exit");
+    }
+    return rs_io_atomic_commit(&a, err);
+}
+
+// ---------------------------------------------------------------------------------------------
+// OpenStreetMap networks: flows between dead ends of the built network
+
+typedef struct {
+    xml_ctx x;
+    char **id, **from, **to;
+    int N, cap;
+} edges_ctx;
+
+static char *xml_id(const char *s)
+{
+    // Edge ids are written back into a routes file as attributes: keep only characters that need
+    // no escaping and that SUMO allows in ids; others fail the copy (NULL).
+    for (const char *p = s; *p; p++)
+        if (strchr("<>&\"' \t\n\r", *p)) return NULL;
+    return strdup(s);
+}
+
+static void XMLCALL edges_start(void *ud, const XML_Char *name, const XML_Char **a)
+{
+    edges_ctx *c = ud;
+    if (c->x.st || strcmp(name, "edge") || attr(a, "function")) return;
+    const char *id = attr(a, "id"), *from = attr(a, "from"), *to = attr(a, "to");
+    if (!id || !from || !to) return;
+    if (c->N == c->cap) {
+        int cap = c->cap ? 2 * c->cap : 256;
+        char **i2 = realloc(c->id, sizeof *i2 * (size_t)cap);
+        if (i2) c->id = i2;
+        char **f2 = realloc(c->from, sizeof *f2 * (size_t)cap);
+        if (f2) c->from = f2;
+        char **t2 = realloc(c->to, sizeof *t2 * (size_t)cap);
+        if (t2) c->to = t2;
+        if (!i2 || !f2 || !t2) return xml_fail(&c->x, RS_ERR_NOMEM, "edge", "out of memory", NULL);
+        c->cap = cap;
+    }
+    char *i = xml_id(id), *f = strdup(from), *t = strdup(to);
+    if (!i || !f || !t) {
+        free(i), free(f), free(t);
+        return;
+    }
+    c->id[c->N] = i, c->from[c->N] = f, c->to[c->N] = t;
+    c->N++;
+}
+
+static void edges_free(edges_ctx *c)
+{
+    for (int i = 0; i < c->N; i++) free(c->id[i]), free(c->from[i]), free(c->to[i]);
+    free(c->id), free(c->from), free(c->to);
+}
+
+// Entry edges: their from-node has no other edge entering it than from their own to-node; exit
+// edges likewise. Pairs (entry, exit) not between the same two nodes, at most 64.
+static rs_status osm_pairs(edges_ctx *c, const char ***from, const char ***to, int *N, rs_err *err)
+{
+    int cap = 64;
+    *from = malloc(sizeof **from * (size_t)cap);
+    *to = malloc(sizeof **to * (size_t)cap);
+    *N = 0;
+    if (!*from || !*to) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < c->N && *N < cap; i++) {
+        bool entry = true;
+        for (int k = 0; k < c->N && entry; k++)
+            entry = !(strcmp(c->to[k], c->from[i]) == 0 && strcmp(c->from[k], c->to[i]) != 0);
+        if (!entry) continue;
+        for (int j = 0; j < c->N && *N < cap; j++) {
+            if (j == i || !strcmp(c->to[j], c->from[i])) continue;
+            bool exit = true;
+            for (int k = 0; k < c->N && exit; k++)
+                exit = !(strcmp(c->from[k], c->to[j]) == 0 && strcmp(c->to[k], c->from[j]) != 0);
+            if (!exit) continue;
+            (*from)[*N] = c->id[i];
+            (*to)[*N] = c->id[j];
+            (*N)++;
+        }
+    }
+    if (*N == 0) return rs_err_set(err, RS_ERR_INVALID, "the OpenStreetMap network has no pair of dead-end edges to drive between");
+    return RS_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// the run
+
+static int remove_entry(const char *path, const struct stat *sb, int type, struct FTW *ftw)
+{
+    (void)sb, (void)type, (void)ftw;
+    return remove(path);
+}
+
+static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_synth_lanes *lanes,
+                        const rs_llh *origin, const rs_synth_sumo_options *o, rs_err *err)
+{
+    char *net = rs_io_join(dir, "net.net.xml"), *nod = rs_io_join(dir, "nodes.nod.xml"),
+         *edg = rs_io_join(dir, "edges.edg.xml"), *con = rs_io_join(dir, "connections.con.xml"),
+         *rou = rs_io_join(dir, "routes.rou.xml"), *fcd = rs_io_join(dir, "fcd.xml"), *log = rs_io_join(dir, "sumo.log");
+    network n = {0};
+    edges_ctx ec = {{0}, NULL, NULL, NULL, 0, 0};
+    const char **osm_from = NULL, **osm_to = NULL;
+    int Nosm = 0;
+    rs_synth_sumo_vtype types[3 * RS_SYNTH_NCLASSES];
+    double prob[3 * RS_SYNTH_NCLASSES];
+    rs_status st = RS_OK;
+    if (!net || !nod || !edg || !con || !rou || !fcd || !log) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    remove(log);
+    if (o->osm_path) {
+        char *argv[] = {(char *)o->netconvert, "--osm-files", (char *)o->osm_path, "--proj.utm", "true",
+                        "--xml-validation", "never", "--no-turnarounds", "true", "--output-file", net, NULL};
+        if ((st = run_program(argv, log, err))) goto done;
+        ec.x = (xml_ctx){XML_ParserCreate(NULL), net, RS_OK, err};
+        if (!ec.x.p) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            goto done;
+        }
+        XML_SetUserData(ec.x.p, &ec);
+        XML_SetStartElementHandler(ec.x.p, edges_start);
+        st = xml_parse_file(&ec.x);
+        XML_ParserFree(ec.x.p);
+        if (st || (st = osm_pairs(&ec, &osm_from, &osm_to, &Nosm, err))) goto done;
+    } else {
+        if ((st = write_network_files(dir, lanes, origin, &n, err))) goto done;
+        char *argv[] = {(char *)o->netconvert, "--node-files", nod, "--edge-files", edg, "--connection-files", con,
+                        "--proj.utm", "true", "--xml-validation", "never", "--no-turnarounds", "true",
+                        "--output-file", net, NULL};
+        if ((st = run_program(argv, log, err))) goto done;
+    }
+    int Nt = make_vtypes(types, prob, &o->mix, o->seed);
+    if ((st = write_routes(dir, o->osm_path ? NULL : lanes, &n, osm_from, osm_to, Nosm, types, prob, Nt, o, err)))
+        goto done;
+    char seed[32], end[32], begin[32], period[32];
+    snprintf(seed, sizeof seed, "%llu", (unsigned long long)(o->seed % 2147483647ULL));
+    snprintf(end, sizeof end, "%.3f", o->duration_s);
+    snprintf(begin, sizeof begin, "%.3f", o->warmup_s);
+    snprintf(period, sizeof period, "%.3f", o->period_s);
+    char *argv[] = {(char *)o->sumo, "--net-file", net, "--route-files", rou, "--seed", seed, "--begin", "0",
+                    "--end", end, "--fcd-output", fcd, "--fcd-output.geo", "true", "--device.fcd.period", period,
+                    "--device.fcd.begin", begin, "--xml-validation", "never", "--xml-validation.net", "never",
+                    "--no-step-log", "true", "--duration-log.disable", "true", NULL};
+    if ((st = run_program(argv, log, err))) goto done;
+    rs_synth_sumo_location loc;
+    if ((st = rs_synth_sumo_read_location(&loc, net, err))) goto done;
+    st = rs_synth_sumo_read_fcd(frames, fcd, true, &loc, origin, types, Nt, err);
+done:
+    free(net), free(nod), free(edg), free(con), free(rou), free(fcd), free(log);
+    free(n.parent), free(n.con);
+    edges_free(&ec);
+    free(osm_from), free(osm_to);
+    return st;
+}
+
+rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames, const rs_synth_lanes *lanes, const rs_llh *origin,
+                            const rs_synth_sumo_options *o, rs_err *err)
+{
+    frames->frame = NULL;
+    frames->N = 0;
+    if (!(o->duration_s > 0 && o->duration_s <= 86400) || !(o->warmup_s >= 0 && o->warmup_s < o->duration_s) ||
+        !(o->period_s > 0) || !(o->flow_vph > 0 && o->flow_vph <= 10000))
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "sumo options: need 0 < duration <= 86400 s, 0 <= warm-up < duration, period > 0, "
+                          "0 < flow <= 10000 vehicles/hour");
+    if (!o->osm_path && (!lanes || lanes->N == 0)) return rs_err_set(err, RS_ERR_INVALID, "no lanes and no OSM file");
+    rs_status st;
+    if (o->work_dir) {
+        if ((st = rs_io_mkdir_p(o->work_dir, err))) return st;
+        return run_in(o->work_dir, frames, lanes, origin, o, err);
+    }
+    const char *tmp = getenv("TMPDIR");
+    char *dir = rs_io_join(tmp && *tmp ? tmp : "/tmp", "roadside-sumo.XXXXXX");
+    if (!dir) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!mkdtemp(dir)) {
+        st = rs_err_set(err, RS_ERR_IO, "%s: cannot create a temporary folder: %s", dir, strerror(errno));
+        free(dir);
+        return st;
+    }
+    st = run_in(dir, frames, lanes, origin, o, err);
+    nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+    free(dir);
+    return st;
+}

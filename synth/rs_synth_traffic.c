@@ -1,2 +1,569 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_synth_traffic;
+// rs_synth_traffic.c -- lanes, built-in traffic, domain randomisation, the vehicles file.
+// See rs_synth_traffic.h and docs/traffic.md.
+#include "rs_synth_traffic.h"
+
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rs_io.h"
+#include "rs_simulate.h"
+
+#define DEG (3.14159265358979323846 / 180.0)
+
+// ---------------------------------------------------------------------------------------------
+// classes
+
+// Names as in the vehicles file; dimension ranges [min, max] per class (length, width, height,
+// metres), realistic spans around SUMO's vType defaults (passenger 5 x 1.8 x 1.5, truck
+// 7.1 x 2.4 x 2.4, bus 12 x 2.5 x 3.4) and typical European models; docs/traffic.md.
+static const struct {
+    const char *name;
+    double lwh[3][2];
+} class_table[RS_SYNTH_NCLASSES] = {
+    [RS_SYNTH_SEDAN] = {"sedan", {{4.4, 5.0}, {1.75, 1.90}, {1.40, 1.50}}},
+    [RS_SYNTH_HATCHBACK] = {"hatchback", {{3.7, 4.4}, {1.65, 1.80}, {1.42, 1.55}}},
+    [RS_SYNTH_SUV] = {"suv", {{4.2, 4.95}, {1.78, 2.00}, {1.60, 1.80}}},
+    [RS_SYNTH_PICKUP] = {"pickup", {{5.2, 5.9}, {1.85, 2.05}, {1.75, 1.95}}},
+    [RS_SYNTH_VAN] = {"van", {{4.8, 6.0}, {1.90, 2.05}, {1.90, 2.60}}},
+    [RS_SYNTH_BUS] = {"bus", {{10.5, 13.5}, {2.50, 2.55}, {3.00, 3.40}}},
+    [RS_SYNTH_BOX_TRUCK] = {"box_truck", {{6.5, 8.5}, {2.30, 2.50}, {2.90, 3.60}}},
+    [RS_SYNTH_ARTICULATED_TRUCK] = {"articulated_truck", {{14.0, 16.5}, {2.50, 2.55}, {3.60, 4.00}}},
+};
+
+const char *rs_synth_traffic_class_name(rs_synth_class cls)
+{
+    return (cls >= 0 && cls < RS_SYNTH_NCLASSES) ? class_table[cls].name : NULL;
+}
+
+bool rs_synth_traffic_class_range(double lwh_range[3][2], rs_synth_class cls)
+{
+    if (cls < 0 || cls >= RS_SYNTH_NCLASSES) return false;
+    memcpy(lwh_range, class_table[cls].lwh, sizeof class_table[cls].lwh);
+    return true;
+}
+
+void rs_synth_class_mix_default(rs_synth_class_mix *mix)
+{
+    static const double w[RS_SYNTH_NCLASSES] = {0.24, 0.22, 0.30, 0.03, 0.10, 0.02, 0.06, 0.03};
+    memcpy(mix->weight, w, sizeof w);
+}
+
+rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs_err *err)
+{
+    rs_synth_class_mix m = {{0}};
+    double total = 0;
+    const char *p = text ? text : "";
+    for (int item = 1;; item++) {
+        const char *end = strchr(p, ',');
+        size_t n = end ? (size_t)(end - p) : strlen(p);
+        const char *eq = memchr(p, '=', n);
+        if (!eq) return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d '%.*s': expected CLASS=WEIGHT", item, (int)n, p);
+        int c = -1;
+        for (int k = 0; k < RS_SYNTH_NCLASSES; k++)
+            if (strlen(class_table[k].name) == (size_t)(eq - p) && !strncmp(class_table[k].name, p, (size_t)(eq - p)))
+                c = k;
+        if (c < 0)
+            return rs_err_set(err, RS_ERR_USAGE,
+                              "--mix: item %d: unknown class '%.*s' (sedan, hatchback, suv, pickup, van, bus, "
+                              "box_truck, articulated_truck)",
+                              item, (int)(eq - p), p);
+        char num[64];
+        size_t nn = n - (size_t)(eq + 1 - p);
+        if (nn == 0 || nn >= sizeof num)
+            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: no weight for '%s'", item, class_table[c].name);
+        memcpy(num, eq + 1, nn);
+        num[nn] = '\0';
+        char *stop;
+        errno = 0;
+        double w = strtod(num, &stop);
+        if (*stop || errno || !isfinite(w) || w < 0)
+            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: weight '%s' of '%s' is not a number >= 0", item,
+                              num, class_table[c].name);
+        m.weight[c] = w;
+        total += w;
+        if (!end) break;
+        p = end + 1;
+    }
+    if (!(total > 0)) return rs_err_set(err, RS_ERR_USAGE, "--mix: all weights are 0");
+    *mix = m;
+    return RS_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// lanes
+
+void rs_synth_lanes_free(rs_synth_lanes *lanes)
+{
+    if (!lanes) return;
+    for (int i = 0; i < lanes->N; i++) {
+        free(lanes->lane[i].id);
+        free(lanes->lane[i].kind);
+        free(lanes->lane[i].p_enu_m);
+        free(lanes->lane[i].next);
+    }
+    free(lanes->lane);
+    lanes->lane = NULL;
+    lanes->N = 0;
+}
+
+double rs_synth_lane_length_m(const rs_synth_lane *lane)
+{
+    double L = 0;
+    for (int i = 1; i < lane->Npoints; i++)
+        L += hypot(lane->p_enu_m[i][0] - lane->p_enu_m[i - 1][0], lane->p_enu_m[i][1] - lane->p_enu_m[i - 1][1]);
+    return L;
+}
+
+static double heading_of(double de, double dn)
+{
+    double h = atan2(de, dn) / DEG;
+    if (h < 0) h += 360.0;
+    return h >= 360.0 ? h - 360.0 : h;
+}
+
+void rs_synth_lane_point(double p_enu_m[2], double *heading_deg, const rs_synth_lane *lane, double s_m)
+{
+    if (s_m < 0) s_m = 0;
+    int i = 1;
+    double seg = 0;
+    for (; i < lane->Npoints; i++) {
+        seg = hypot(lane->p_enu_m[i][0] - lane->p_enu_m[i - 1][0], lane->p_enu_m[i][1] - lane->p_enu_m[i - 1][1]);
+        if (s_m <= seg || i == lane->Npoints - 1) break;
+        s_m -= seg;
+    }
+    const double *a = lane->p_enu_m[i - 1], *b = lane->p_enu_m[i];
+    double t = seg > 0 ? fmin(1.0, s_m / seg) : 0;
+    p_enu_m[0] = a[0] + t * (b[0] - a[0]);
+    p_enu_m[1] = a[1] + t * (b[1] - a[1]);
+    if (heading_deg) *heading_deg = heading_of(b[0] - a[0], b[1] - a[1]);
+}
+
+double rs_synth_lane_distance_m(double *heading_deg, const rs_synth_lane *lane, const double p_enu_m[2])
+{
+    double best = INFINITY, h = NAN;
+    for (int i = 1; i < lane->Npoints; i++) {
+        const double *a = lane->p_enu_m[i - 1], *b = lane->p_enu_m[i];
+        double de = b[0] - a[0], dn = b[1] - a[1], L2 = de * de + dn * dn;
+        double t = L2 > 0 ? ((p_enu_m[0] - a[0]) * de + (p_enu_m[1] - a[1]) * dn) / L2 : 0;
+        t = fmax(0.0, fmin(1.0, t));
+        double d = hypot(p_enu_m[0] - a[0] - t * de, p_enu_m[1] - a[1] - t * dn);
+        if (d < best) best = d, h = heading_of(de, dn);
+    }
+    if (heading_deg) *heading_deg = h;
+    return best;
+}
+
+// Reads feature i's properties and geometry into lane (ENU at origin).
+static rs_status read_lane(rs_synth_lane *lane, const cJSON *f, int i, const char *path, const rs_llh *origin,
+                           rs_err *err)
+{
+    lane->feature = i;
+    lane->speed_mps = NAN;
+    const cJSON *props = cJSON_GetObjectItemCaseSensitive(f, "properties");
+    const cJSON *id = cJSON_GetObjectItemCaseSensitive(props, "id");
+    if (!cJSON_IsString(id) || !*id->valuestring)
+        return rs_err_set(err, RS_ERR_PARSE, "%s: feature %d: properties.id: missing or not a non-empty string", path, i);
+    if (!(lane->id = strdup(id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+#define LANE_FAIL(code, field, ...)                                                                                  \
+    rs_err_set(err, code, "%s: feature %d (id '%s'): " field ": " __VA_ARGS__)
+    const cJSON *w = cJSON_GetObjectItemCaseSensitive(props, "width_m");
+    if (!cJSON_IsNumber(w)) return LANE_FAIL(RS_ERR_PARSE, "properties.width_m", "missing or not a number", path, i, lane->id);
+    lane->width_m = w->valuedouble;
+    if (!(lane->width_m > 0) || !isfinite(lane->width_m))
+        return LANE_FAIL(RS_ERR_INVALID, "properties.width_m", "%g: must be > 0", path, i, lane->id, lane->width_m);
+    const cJSON *d = cJSON_GetObjectItemCaseSensitive(props, "direction");
+    if (d && !cJSON_IsNull(d)) {
+        if (cJSON_IsString(d) && !strcmp(d->valuestring, "forward"))
+            lane->direction = RS_SYNTH_LANE_FORWARD;
+        else if (cJSON_IsString(d) && !strcmp(d->valuestring, "both"))
+            lane->direction = RS_SYNTH_LANE_BOTH;
+        else
+            return LANE_FAIL(RS_ERR_INVALID, "properties.direction", "must be \"forward\" or \"both\"", path, i,
+                             lane->id);
+    }
+    const cJSON *sp = cJSON_GetObjectItemCaseSensitive(props, "speed_mps");
+    if (sp && !cJSON_IsNull(sp)) {
+        if (!cJSON_IsNumber(sp) || !(sp->valuedouble > 0) || !isfinite(sp->valuedouble))
+            return LANE_FAIL(RS_ERR_INVALID, "properties.speed_mps", "must be a number > 0", path, i, lane->id);
+        lane->speed_mps = sp->valuedouble;
+    }
+    const cJSON *kind = cJSON_GetObjectItemCaseSensitive(props, "kind");
+    if (cJSON_IsString(kind) && !(lane->kind = strdup(kind->valuestring)))
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    const cJSON *g = cJSON_GetObjectItemCaseSensitive(f, "geometry");
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(g, "type");
+    if (!cJSON_IsString(type) || strcmp(type->valuestring, "LineString"))
+        return LANE_FAIL(RS_ERR_PARSE, "geometry.type", "not a LineString", path, i, lane->id);
+    const cJSON *coords = cJSON_GetObjectItemCaseSensitive(g, "coordinates");
+    int n = cJSON_GetArraySize(coords);
+    if (!cJSON_IsArray(coords) || n < 2)
+        return LANE_FAIL(RS_ERR_INVALID, "geometry.coordinates", "fewer than 2 points", path, i, lane->id);
+    double *llh = malloc(sizeof *llh * 3 * (size_t)n), *enu = malloc(sizeof *enu * 3 * (size_t)n);
+    lane->p_enu_m = malloc(sizeof *lane->p_enu_m * (size_t)n);
+    rs_status st = RS_OK;
+    if (!llh || !enu || !lane->p_enu_m) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    int k = 0;
+    for (const cJSON *c = coords->child; c; c = c->next, k++) {
+        int m = cJSON_GetArraySize(c);
+        const cJSON *lon = cJSON_GetArrayItem(c, 0), *lat = cJSON_GetArrayItem(c, 1);
+        if (!cJSON_IsArray(c) || m < 2 || m > 3 || !cJSON_IsNumber(lon) || !cJSON_IsNumber(lat)) {
+            st = rs_err_set(err, RS_ERR_PARSE, "%s: feature %d (id '%s'): geometry.coordinates[%d]: not [lon, lat]",
+                            path, i, lane->id, k);
+            goto done;
+        }
+        llh[3 * k] = lat->valuedouble;
+        llh[3 * k + 1] = lon->valuedouble;
+        llh[3 * k + 2] = origin->h_m;
+    }
+    if ((st = rs_geo_llh_to_enu(enu, origin, llh, n, err))) {
+        rs_err_prefix(err, "%s: feature %d (id '%s'): geometry.coordinates", path, i, lane->id);
+        goto done;
+    }
+    lane->Npoints = 0;
+    for (k = 0; k < n; k++) {
+        if (hypot(enu[3 * k], enu[3 * k + 1]) > 1e5) {
+            st = rs_err_set(err, RS_ERR_INVALID,
+                            "%s: feature %d (id '%s'): geometry.coordinates[%d]: %.0f m from the site origin "
+                            "(longitude first: [lon, lat])",
+                            path, i, lane->id, k, hypot(enu[3 * k], enu[3 * k + 1]));
+            goto done;
+        }
+        int q = lane->Npoints;
+        if (q > 0 && hypot(enu[3 * k] - lane->p_enu_m[q - 1][0], enu[3 * k + 1] - lane->p_enu_m[q - 1][1]) < 1e-3)
+            continue; // repeated point
+        lane->p_enu_m[q][0] = enu[3 * k];
+        lane->p_enu_m[q][1] = enu[3 * k + 1];
+        lane->Npoints++;
+    }
+    if (lane->Npoints < 2)
+        st = LANE_FAIL(RS_ERR_INVALID, "geometry.coordinates", "fewer than 2 distinct points", path, i, lane->id);
+done:
+    free(llh);
+    free(enu);
+    return st;
+}
+
+static int find_lane(const rs_synth_lanes *lanes, const char *id)
+{
+    for (int i = 0; i < lanes->N; i++)
+        if (!strcmp(lanes->lane[i].id, id)) return i;
+    return -1;
+}
+
+// Resolves every lane's "next" ids into indices.
+static rs_status resolve_next(rs_synth_lanes *lanes, const cJSON *features, const char *path, rs_err *err)
+{
+    int i = 0;
+    for (const cJSON *f = features->child; f; f = f->next, i++) {
+        rs_synth_lane *lane = &lanes->lane[i];
+        const cJSON *next = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(f, "properties"), "next");
+        if (!next || cJSON_IsNull(next)) continue;
+        if (!cJSON_IsArray(next)) return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
+        int n = cJSON_GetArraySize(next);
+        if (n == 0) continue;
+        if (!(lane->next = malloc(sizeof *lane->next * (size_t)n))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        for (const cJSON *x = next->child; x; x = x->next) {
+            if (!cJSON_IsString(x)) return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
+            int j = find_lane(lanes, x->valuestring);
+            if (j < 0)
+                return LANE_FAIL(RS_ERR_NOT_FOUND, "properties.next", "'%s' is not a lane of this file", path, i,
+                                 lane->id, x->valuestring);
+            lane->next[lane->Nnext++] = j;
+        }
+    }
+    return RS_OK;
+}
+#undef LANE_FAIL
+
+rs_status rs_synth_lanes_read(rs_synth_lanes *lanes, const char *path, const rs_llh *origin, rs_err *err)
+{
+    lanes->lane = NULL;
+    lanes->N = 0;
+    char *text = NULL;
+    rs_status st = rs_io_read_file(&text, NULL, path, err);
+    if (st) return st;
+    cJSON *j = cJSON_Parse(text);
+    free(text);
+    if (!j) return rs_err_set(err, RS_ERR_PARSE, "%s: not valid JSON", path);
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(j, "type");
+    const cJSON *features = cJSON_GetObjectItemCaseSensitive(j, "features");
+    if (!cJSON_IsString(type) || strcmp(type->valuestring, "FeatureCollection") || !cJSON_IsArray(features)) {
+        st = rs_err_set(err, RS_ERR_PARSE, "%s: type: not a GeoJSON FeatureCollection with features", path);
+        goto done;
+    }
+    int n = cJSON_GetArraySize(features);
+    if (n == 0) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: features: no lanes", path);
+        goto done;
+    }
+    if (!(lanes->lane = calloc((size_t)n, sizeof *lanes->lane))) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    int i = 0;
+    for (const cJSON *f = features->child; f; f = f->next, i++) {
+        lanes->N = i + 1;
+        if ((st = read_lane(&lanes->lane[i], f, i, path, origin, err))) goto done;
+        int dup = find_lane(lanes, lanes->lane[i].id);
+        if (dup < i) {
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: feature %d: properties.id: '%s' is also feature %d's id", path, i,
+                            lanes->lane[i].id, dup);
+            goto done;
+        }
+    }
+    st = resolve_next(lanes, features, path, err);
+done:
+    cJSON_Delete(j);
+    if (st) rs_synth_lanes_free(lanes);
+    return st;
+}
+
+// ---------------------------------------------------------------------------------------------
+// built-in traffic
+
+void rs_synth_traffic_options_default(rs_synth_traffic_options *opt)
+{
+    memset(opt, 0, sizeof *opt);
+    rs_synth_class_mix_default(&opt->mix);
+    opt->s0_m = 2.0;
+    opt->headway_s = 1.5;
+    opt->headway_jitter = 0.5;
+    opt->speed_fraction[0] = 0.0;
+    opt->speed_fraction[1] = 1.0;
+}
+
+static double uniform(rs_simulate_rng *rng, double lo, double hi) { return lo + (hi - lo) * rs_simulate_rng_uniform(rng); }
+
+static rs_synth_class draw_class(rs_simulate_rng *rng, const rs_synth_class_mix *mix)
+{
+    double total = 0;
+    for (int k = 0; k < RS_SYNTH_NCLASSES; k++) total += mix->weight[k];
+    double u = rs_simulate_rng_uniform(rng) * total;
+    int last = 0;
+    for (int k = 0; k < RS_SYNTH_NCLASSES; k++) {
+        if (mix->weight[k] <= 0) continue;
+        last = k;
+        if (u < mix->weight[k]) return (rs_synth_class)k;
+        u -= mix->weight[k];
+    }
+    return (rs_synth_class)last;
+}
+
+static rs_status traffic_options_check(const rs_synth_traffic_options *o, rs_err *err)
+{
+    double total = 0;
+    for (int k = 0; k < RS_SYNTH_NCLASSES; k++) {
+        if (!(o->mix.weight[k] >= 0) || !isfinite(o->mix.weight[k]))
+            return rs_err_set(err, RS_ERR_INVALID, "mix: weight of %s must be a number >= 0", class_table[k].name);
+        total += o->mix.weight[k];
+    }
+    if (!(total > 0)) return rs_err_set(err, RS_ERR_INVALID, "mix: all weights are 0");
+    if (o->count < 0) return rs_err_set(err, RS_ERR_INVALID, "count: %d is negative", o->count);
+    if (!(o->s0_m >= 0 && o->s0_m < 100)) return rs_err_set(err, RS_ERR_INVALID, "s0_m: must be in [0, 100) m");
+    if (!(o->headway_s >= 0 && o->headway_s < 100))
+        return rs_err_set(err, RS_ERR_INVALID, "headway_s: must be in [0, 100) s");
+    if (!(o->headway_jitter >= 0 && o->headway_jitter <= 1))
+        return rs_err_set(err, RS_ERR_INVALID, "headway_jitter: must be in [0, 1]");
+    if (!(o->speed_fraction[0] >= 0 && o->speed_fraction[1] >= o->speed_fraction[0] && o->speed_fraction[1] <= 2))
+        return rs_err_set(err, RS_ERR_INVALID, "speed_fraction: need 0 <= a <= b <= 2");
+    return RS_OK;
+}
+
+rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, const rs_synth_lanes *lanes,
+                                 const rs_synth_traffic_options *opt, rs_err *err)
+{
+    *vehicles = NULL;
+    *N = 0;
+    rs_status st = traffic_options_check(opt, err);
+    if (st) return st;
+    rs_simulate_rng rng;
+    rs_simulate_rng_seed(&rng, opt->seed);
+    rs_synth_traffic_vehicle *v = NULL;
+    int n = 0, cap = 0;
+    for (int i = 0; i < lanes->N; i++) {
+        const rs_synth_lane *lane = &lanes->lane[i];
+        // Each lane draws from its own stream, so that one lane's vehicles do not depend on the
+        // lanes before it.
+        rs_simulate_rng lr;
+        rs_simulate_rng_seed(&lr, rs_simulate_rng_u64(&rng));
+        if (!opt->junction_lanes && lane->kind && !strcmp(lane->kind, "junction")) continue;
+        double L = rs_synth_lane_length_m(lane);
+        double vmax = isfinite(lane->speed_mps) ? lane->speed_mps : 13.89;
+        bool reverse = lane->direction == RS_SYNTH_LANE_BOTH && rs_simulate_rng_uniform(&lr) < 0.5;
+        // Downstream end of the free road before the first vehicle: a gap as if a leader stood
+        // just beyond the lane's end.
+        double front = L; // arc length of the next vehicle's front bumper, in travel direction
+        bool first = true;
+        for (;;) {
+            rs_synth_traffic_vehicle x = {0};
+            x.cls = draw_class(&lr, &opt->mix);
+            const double(*r)[2] = class_table[x.cls].lwh;
+            x.length_m = uniform(&lr, r[0][0], r[0][1]);
+            x.width_m = uniform(&lr, r[1][0], r[1][1]);
+            x.height_m = uniform(&lr, r[2][0], r[2][1]);
+            x.speed_mps = vmax * uniform(&lr, opt->speed_fraction[0], opt->speed_fraction[1]);
+            x.variant = rs_simulate_rng_u64(&lr) >> 11; // 53 bits: exact as a JSON number
+            double gap = opt->s0_m + x.speed_mps * opt->headway_s *
+                                         uniform(&lr, 1.0 - opt->headway_jitter, 1.0 + opt->headway_jitter);
+            if (first) gap *= rs_simulate_rng_uniform(&lr); // the lane's end is no leader
+            first = false;
+            front -= gap;
+            double rear = front - x.length_m;
+            if (rear < 0) break;
+            double s_centre = 0.5 * (front + rear), p[2], h;
+            // In travel direction; a reversed "both" lane runs from its last vertex.
+            rs_synth_lane_point(p, &h, lane, reverse ? L - s_centre : s_centre);
+            x.e_m = p[0];
+            x.n_m = p[1];
+            x.yaw_deg = reverse ? fmod(h + 180.0, 360.0) : h;
+            x.lane = i;
+            front = rear;
+            if (n == cap) {
+                int c2 = cap ? 2 * cap : 64;
+                rs_synth_traffic_vehicle *g = realloc(v, sizeof *g * (size_t)c2);
+                if (!g) {
+                    free(v);
+                    return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+                }
+                v = g;
+                cap = c2;
+            }
+            v[n++] = x;
+        }
+    }
+    // A uniformly drawn subset of `count` (selection sampling keeps the order).
+    if (opt->count > 0 && n > opt->count) {
+        int kept = 0;
+        for (int i = 0; i < n && kept < opt->count; i++)
+            if (rs_simulate_rng_uniform(&rng) * (n - i) < opt->count - kept) v[kept++] = v[i];
+        n = kept;
+    }
+    for (int i = 0; i < n; i++) snprintf(v[i].id, sizeof v[i].id, "v%d", i + 1);
+    *vehicles = v;
+    *N = n;
+    return RS_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// domain randomisation
+
+void rs_synth_randomise_options_default(rs_synth_randomise_options *opt)
+{
+    opt->seed = 0;
+    opt->sigma_along_m = sqrt(0.5);
+    opt->sigma_across_m = sqrt(0.5);
+    opt->yaw_range_deg = 5.0;
+    opt->tries = 20;
+}
+
+// Footprint corners (4, 2) in ENU, counter-clockwise seen from above.
+static void footprint(double c[4][2], const rs_synth_traffic_vehicle *v)
+{
+    double f[2] = {sin(v->yaw_deg * DEG), cos(v->yaw_deg * DEG)}, l[2] = {-f[1], f[0]};
+    static const double sx[4] = {1, -1, -1, 1}, sy[4] = {-1, -1, 1, 1};
+    for (int k = 0; k < 4; k++)
+        for (int a = 0; a < 2; a++)
+            c[k][a] = (a ? v->n_m : v->e_m) + sx[k] * 0.5 * v->length_m * f[a] + sy[k] * 0.5 * v->width_m * l[a];
+}
+
+bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_synth_traffic_vehicle *b)
+{
+    double ca[4][2], cb[4][2];
+    footprint(ca, a);
+    footprint(cb, b);
+    const double(*rect[2])[2] = {ca, cb};
+    // Separating axis theorem: two convex polygons are disjoint iff their projections onto one
+    // of their edge normals are disjoint. A rectangle has two distinct edge normals.
+    for (int r = 0; r < 2; r++)
+        for (int e = 0; e < 2; e++) {
+            const double *p = rect[r][e], *q = rect[r][e + 1];
+            double ax = -(q[1] - p[1]), ay = q[0] - p[0];
+            double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+            for (int s = 0; s < 2; s++)
+                for (int k = 0; k < 4; k++) {
+                    double t = rect[s][k][0] * ax + rect[s][k][1] * ay;
+                    lo[s] = fmin(lo[s], t);
+                    hi[s] = fmax(hi[s], t);
+                }
+            if (hi[0] <= lo[1] || hi[1] <= lo[0]) return false;
+        }
+    return true;
+}
+
+rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N, const rs_synth_randomise_options *opt,
+                                     rs_err *err)
+{
+    if (!(opt->sigma_along_m >= 0 && opt->sigma_across_m >= 0 && opt->yaw_range_deg >= 0 &&
+          opt->yaw_range_deg <= 180 && isfinite(opt->sigma_along_m) && isfinite(opt->sigma_across_m)))
+        return rs_err_set(err, RS_ERR_INVALID, "randomisation: sigmas must be >= 0 and the yaw range in [0, 180]");
+    if (opt->tries < 1) return rs_err_set(err, RS_ERR_INVALID, "randomisation: tries must be >= 1");
+    rs_simulate_rng rng;
+    rs_simulate_rng_seed(&rng, opt->seed);
+    int kept = 0;
+    for (int i = 0; i < *N; i++) {
+        const rs_synth_traffic_vehicle x0 = vehicles[i];
+        double f[2] = {sin(x0.yaw_deg * DEG), cos(x0.yaw_deg * DEG)};
+        bool ok = false;
+        rs_synth_traffic_vehicle x = x0;
+        for (int t = 0; t < opt->tries && !ok; t++) {
+            double da = opt->sigma_along_m * rs_simulate_rng_normal(&rng);
+            double dc = opt->sigma_across_m * rs_simulate_rng_normal(&rng); // to the left
+            double dy = uniform(&rng, -opt->yaw_range_deg, opt->yaw_range_deg);
+            x = x0;
+            x.e_m += da * f[0] - dc * f[1];
+            x.n_m += da * f[1] + dc * f[0];
+            x.yaw_deg = fmod(x0.yaw_deg + dy + 360.0, 360.0);
+            ok = true;
+            for (int j = 0; j < kept && ok; j++) ok = !rs_synth_footprints_overlap(&x, &vehicles[j]);
+        }
+        if (ok) vehicles[kept++] = x;
+    }
+    *N = kept;
+    return RS_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// output
+
+static double round_to(double x, double q) { return round(x / q) * q + 0.0; }
+
+rs_status rs_synth_traffic_write_json(const char *path, const rs_synth_traffic_vehicle *vehicles, int N, rs_err *err)
+{
+    cJSON *j = cJSON_CreateArray();
+    if (!j) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < N; i++) {
+        const rs_synth_traffic_vehicle *v = &vehicles[i];
+        const char *name = rs_synth_traffic_class_name(v->cls);
+        if (!name) {
+            cJSON_Delete(j);
+            return rs_err_set(err, RS_ERR_INVALID, "vehicle %d: unknown class %d", i, (int)v->cls);
+        }
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddItemToArray(j, o);
+        cJSON_AddStringToObject(o, "id", v->id);
+        cJSON_AddStringToObject(o, "class", name);
+        cJSON_AddNumberToObject(o, "e", round_to(v->e_m, 1e-4));
+        cJSON_AddNumberToObject(o, "n", round_to(v->n_m, 1e-4));
+        cJSON_AddNumberToObject(o, "yaw_deg", round_to(v->yaw_deg, 1e-4));
+        cJSON_AddNumberToObject(o, "length", round_to(v->length_m, 1e-4));
+        cJSON_AddNumberToObject(o, "width", round_to(v->width_m, 1e-4));
+        cJSON_AddNumberToObject(o, "height", round_to(v->height_m, 1e-4));
+        cJSON_AddNumberToObject(o, "variant", (double)v->variant);
+        cJSON_AddNumberToObject(o, "speed_mps", round_to(v->speed_mps, 1e-4));
+    }
+    char *text = cJSON_Print(j);
+    cJSON_Delete(j);
+    if (!text) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    size_t n = strlen(text);
+    text[n] = '\n';
+    rs_status st = rs_io_write_file(path, text, n + 1, err);
+    free(text);
+    return st;
+}

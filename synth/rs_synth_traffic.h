@@ -1,0 +1,193 @@
+// rs_synth_traffic.h -- traffic for synthetic scenes: a site's lanes (lanes.geojson), vehicles
+// placed along them (the built-in traffic, no SUMO needed), domain randomisation of any
+// vehicles (built-in or from SUMO, synth/rs_synth_sumo.h) with no two footprints overlapping,
+// and the vehicles file that `roadside scene` reads. docs/traffic.md describes the models.
+//
+// Frames: lanes and vehicles are in the site ENU frame (east, north; metres), vehicles as in
+// synth/rs_synth.h: footprint centre (e_m, n_m) and yaw_deg, the compass heading of the forward
+// axis, clockwise from north.
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "rs_geo.h"
+#include "rs_status.h"
+#include "rs_synth.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// ---- lanes ----
+
+typedef enum {
+    RS_SYNTH_LANE_FORWARD = 0, // vehicles travel in vertex order
+    RS_SYNTH_LANE_BOTH         // either way (a single-track road)
+} rs_synth_lane_direction;
+
+// One lane: a LineString of lanes.geojson in the site ENU frame.
+typedef struct {
+    char *id;              // owned; unique
+    char *kind;            // owned, may be NULL ("approach", "exit", "junction", ...)
+    double width_m;        // > 0
+    rs_synth_lane_direction direction;
+    double speed_mps;      // speed limit, > 0; NaN when the file gives none
+    double (*p_enu_m)[2];  // (Npoints, 2) owned: east, north, metres
+    int Npoints;           // >= 2; consecutive points at least 1 mm apart
+    int *next;             // (Nnext,) owned: indices of the lanes this one continues into
+    int Nnext;
+    int feature;           // index in the file's "features"
+} rs_synth_lane;
+
+typedef struct {
+    rs_synth_lane *lane;   // (N,) owned
+    int N;
+} rs_synth_lanes;
+
+// Reads lanes.geojson: a FeatureCollection of LineString features, coordinates [lon, lat] or
+// [lon, lat, h] (RFC 7946 order, WGS84 degrees; h is ignored: lanes lie on the ground plane),
+// properties: id (string, unique), width_m (> 0), direction ("forward" | "both", default
+// "forward"), optional speed_mps (> 0), optional kind (string), optional next (list of lane
+// ids). Converted to ENU at `origin` with rs_geo_llh_to_enu (the site's origin).
+// Errors name the file, the feature and the field:
+//   "SITE/lanes.geojson: feature 3 (id 'A1_in1'): properties.width_m: must be > 0"
+// RS_ERR_IO (unreadable), RS_ERR_PARSE (not JSON, wrong types), RS_ERR_INVALID (out of range,
+// duplicate id, fewer than 2 distinct points, a point more than 100 km from the origin),
+// RS_ERR_NOT_FOUND (a `next` id that is no lane), RS_ERR_NOMEM.
+// out: *lanes (owned; rs_synth_lanes_free). On failure *lanes is empty.
+rs_status rs_synth_lanes_read(// out
+                              rs_synth_lanes *lanes,
+                              // in
+                              const char *path, const rs_llh *origin, rs_err *err);
+void rs_synth_lanes_free(rs_synth_lanes *lanes); // NULL-safe; leaves *lanes empty
+
+// Length of a lane's polyline, metres.
+double rs_synth_lane_length_m(const rs_synth_lane *lane);
+
+// The point at arc length s (clamped to [0, length]) along a lane and the compass heading of the
+// segment it lies on (clockwise from north, degrees, [0, 360)), in the lane's vertex order.
+// out: p_enu_m (2,); heading_deg may be NULL
+void rs_synth_lane_point(double p_enu_m[2], double *heading_deg,
+                         // in
+                         const rs_synth_lane *lane, double s_m);
+
+// Distance from a point to the nearest point of a lane's polyline, metres; *heading_deg (may be
+// NULL) receives the heading of the nearest segment in vertex order.
+double rs_synth_lane_distance_m(double *heading_deg,
+                                // in
+                                const rs_synth_lane *lane, const double p_enu_m[2]);
+
+// ---- vehicles ----
+
+// A vehicle of generated traffic (built-in or SUMO). The placement follows synth/rs_synth.h.
+typedef struct {
+    rs_synth_class cls;
+    double e_m, n_m;        // footprint centre, site ENU, metres
+    double yaw_deg;         // heading, clockwise from north, [0, 360)
+    double length_m, width_m, height_m; // bounding box, > 0
+    double speed_mps;       // speed (built-in: the one its gap was drawn for; SUMO: FCD speed)
+    int lane;               // index of the lane it was placed on, -1 if unknown (SUMO)
+    uint64_t variant;       // seeds the fleet's shape and paint (rs_synth_vehicle.variant)
+    char id[48];            // "v12" (built-in) or SUMO's vehicle id (truncated, as given)
+} rs_synth_traffic_vehicle;
+
+// Class mix: relative weights of the classes (any non-negative numbers, at least one > 0).
+typedef struct {
+    double weight[RS_SYNTH_NCLASSES];
+} rs_synth_class_mix;
+
+// The default mix (docs/traffic.md, "Class mix", gives the reasoning): sedan 0.24,
+// hatchback 0.22, suv 0.30, pickup 0.03, van 0.10, bus 0.02, box_truck 0.06,
+// articulated_truck 0.03.
+void rs_synth_class_mix_default(rs_synth_class_mix *mix);
+
+// Parses "class=weight,class=weight,...": the classes named get these weights, the others 0.
+// RS_ERR_USAGE naming the item at fault (unknown class, bad or negative weight, all zero).
+rs_status rs_synth_class_mix_parse(// out
+                                   rs_synth_class_mix *mix,
+                                   // in
+                                   const char *text, rs_err *err);
+
+// Class names ("sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck",
+// "articulated_truck"), the names of the vehicles file; NULL for an unknown class.
+const char *rs_synth_traffic_class_name(rs_synth_class cls);
+
+// Dimension ranges of a class, metres: [min, max] of length, width, height, the ranges the fleet
+// draws from (docs/traffic.md lists them with SUMO's defaults for reference).
+// out: lwh_range (3,2). Returns false for an unknown class.
+bool rs_synth_traffic_class_range(double lwh_range[3][2], rs_synth_class cls);
+
+// The built-in traffic model.
+typedef struct {
+    uint64_t seed;
+    int count;              // keep at most this many vehicles (a random subset); 0 = all that fit
+    rs_synth_class_mix mix;
+    double s0_m;            // standstill gap, bumper to bumper (default 2.0 m)
+    double headway_s;       // time headway T (default 1.5 s)
+    double headway_jitter;  // the gap's v*T part is scaled by U(1 - j, 1 + j) (default 0.5)
+    double speed_fraction[2]; // each vehicle's speed: U(a, b) x the lane's speed limit
+                              // (default [0, 1]; 13.89 m/s when the lane gives none)
+    bool junction_lanes;    // also fill lanes whose kind is "junction" (default false: their
+                            // vehicles would cross; SUMO handles junctions)
+} rs_synth_traffic_options;
+
+void rs_synth_traffic_options_default(rs_synth_traffic_options *opt);
+
+// Places vehicles along the lanes: on each lane, walking upstream from its end, the first
+// vehicle's front bumper at a gap drawn as below from the end, then each next vehicle's front
+// at its leader's rear minus the gap s0 + v T u (v its speed, u ~ U(1 - j, 1 + j)): the
+// time-headway (constant time gap) spacing of car-following models (Treiber, Hennecke and
+// Helbing, "Congested traffic states in empirical observations and microscopic simulations",
+// Phys. Rev. E 62, 2000: s0 = 2 m, T = 1.5 s). A vehicle lies wholly on its lane (centre, yaw
+// from the polyline at the centre's arc length); "both" lanes get a random direction per lane.
+// Class from the mix, dimensions uniform in the class's ranges, variant from the seed.
+// With count > 0, a uniformly drawn subset of count vehicles is kept (in placement order).
+// out: *vehicles (N,) owned (free()), *N. Returns RS_ERR_INVALID for bad options, RS_ERR_NOMEM.
+rs_status rs_synth_traffic_place(// out
+                                 rs_synth_traffic_vehicle **vehicles, int *N,
+                                 // in
+                                 const rs_synth_lanes *lanes, const rs_synth_traffic_options *opt,
+                                 rs_err *err);
+
+// ---- domain randomisation ----
+
+typedef struct {
+    uint64_t seed;
+    double sigma_along_m;   // normal offset along the vehicle's heading (default sqrt(0.5) m)
+    double sigma_across_m;  // normal offset across it (default sqrt(0.5) m)
+    double yaw_range_deg;   // heading offset uniform in [-r, r] (default 5 degrees)
+    int tries;              // draws per vehicle before it is dropped (default 20)
+} rs_synth_randomise_options;
+
+void rs_synth_randomise_options_default(rs_synth_randomise_options *opt);
+
+// Domain randomisation: each vehicle, in order, is moved by a normal offset along and across
+// its heading and turned by a uniform heading offset, drawn again (up to `tries` times) while
+// its footprint overlaps one of the vehicles already kept; a vehicle that still overlaps is
+// dropped. (The seed paper's "variance of 0.5 m" is read as a variance of 0.5 m^2, sigma =
+// 0.707 m; docs/traffic.md.) The kept vehicles are compacted to the front in their order.
+// in,out: vehicles (N,), *N (the number kept)
+rs_status rs_synth_traffic_randomise(// in,out
+                                     rs_synth_traffic_vehicle *vehicles, int *N,
+                                     // in
+                                     const rs_synth_randomise_options *opt, rs_err *err);
+
+// Whether the footprints (oriented rectangles length x width at (e, n), yaw) of two vehicles
+// overlap: separating axis theorem over the four edge normals; rectangles that only touch do
+// not overlap.
+bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_synth_traffic_vehicle *b);
+
+// ---- output ----
+
+// Writes the vehicles file `roadside scene` reads (synth/rs_synth_scene.h,
+// rs_synth_vehicles_read): a JSON list of {"id", "class", "e", "n", "yaw_deg", "length",
+// "width", "height", "variant", "speed_mps"}, lengths to 1e-4 m, angles to 1e-4 degree. Written
+// atomically (geo/rs_io.h).
+rs_status rs_synth_traffic_write_json(const char *path,
+                                      // in
+                                      const rs_synth_traffic_vehicle *vehicles, int N,
+                                      rs_err *err);
+
+#ifdef __cplusplus
+}
+#endif
