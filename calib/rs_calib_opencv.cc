@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <initializer_list>
@@ -12,6 +13,7 @@
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 extern "C" {
@@ -208,6 +210,33 @@ extern "C" rs_status rs_calib_opencv_principal_axes3(double *s, double *Vt, cons
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV SVD threw: %s", e.what());
     } catch (...) {
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV SVD threw an unknown exception");
+    }
+}
+
+// ---- images (roadside report) ----
+
+extern "C" rs_status rs_calib_opencv_read_image_bgra(unsigned char **bgra, int *width, int *height,
+                                                     const char *path, rs_err *err)
+{
+    *bgra = NULL;
+    *width = *height = 0;
+    try {
+        cv::Mat img = cv::imread(path, cv::IMREAD_COLOR);
+        if (img.empty()) return rs_err_set(err, RS_ERR_PARSE, "%s: not an image OpenCV can read", path);
+        cv::Mat out;
+        cv::cvtColor(img, out, cv::COLOR_BGR2BGRA);
+        size_t row = (size_t)out.cols * 4;
+        unsigned char *d = static_cast<unsigned char *>(std::malloc(row * (size_t)out.rows));
+        if (!d) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+        for (int y = 0; y < out.rows; y++) memcpy(d + row * (size_t)y, out.ptr<unsigned char>(y), row);
+        *bgra = d;
+        *width = out.cols;
+        *height = out.rows;
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV imread threw: %s", path, e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV imread threw an unknown exception", path);
     }
 }
 

@@ -126,6 +126,18 @@ rs_status rs_calib_opencv_read_calibration(// out
                                            // in
                                            const char *path, rs_err *err);
 
+// ---- images (roadside report) ----
+
+// Reads an image file (JPEG, or anything cv::imread decodes) as 8-bit B, G, R, A bytes per
+// pixel, rows top to bottom without padding: the byte layout of cairo's CAIRO_FORMAT_ARGB32 on
+// little-endian machines (alpha 255). *bgra is malloc'ed (caller frees); NULL on failure.
+// Returns RS_ERR_PARSE (not a readable image), RS_ERR_NOMEM, RS_ERR_EXTERNAL (OpenCV threw).
+rs_status rs_calib_opencv_read_image_bgra(// out
+                                          unsigned char **bgra, // (height,width,4)
+                                          int *width, int *height,
+                                          // in
+                                          const char *path, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

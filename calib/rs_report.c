@@ -12,6 +12,7 @@
 
 #include <cJSON.h>
 
+#include "rs_calib_opencv.h"
 #include "rs_calib_site.h"
 #include "rs_io.h"
 #include "rs_report_doc.h"
@@ -277,8 +278,48 @@ static bool has_ext(const char *name, const char *ext)
     return n > e && !strcasecmp(name + n - e, ext);
 }
 
-// The first PNG (by name) in the camera's backgrounds folder: explicit "backgrounds" of the
-// site's camera, else SITE/backgrounds/<id>/. No folder or no PNG: RS_OK with no image.
+static bool is_image_name(const char *name)
+{
+    return has_ext(name, ".png") || has_ext(name, ".jpg") || has_ext(name, ".jpeg");
+}
+
+// An image file as a cairo surface: PNG through cairo, JPEG through OpenCV (cv::imread).
+static rs_status read_image(cairo_surface_t **out, const char *path, rs_err *err)
+{
+    *out = NULL;
+    if (has_ext(path, ".png")) {
+        cairo_surface_t *img = cairo_image_surface_create_from_png(path);
+        if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS) {
+            rs_status st = rs_err_set(err, RS_ERR_PARSE, "%s: not a readable PNG image (%s)", path,
+                                      cairo_status_to_string(cairo_surface_status(img)));
+            cairo_surface_destroy(img);
+            return st;
+        }
+        *out = img;
+        return RS_OK;
+    }
+    unsigned char *bgra = NULL;
+    int w = 0, h = 0;
+    rs_status st = rs_calib_opencv_read_image_bgra(&bgra, &w, &h, path, err);
+    if (st) return st;
+    cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, w, h);
+    if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS) {
+        free(bgra);
+        cairo_surface_destroy(img);
+        return rs_err_set(err, RS_ERR_NOMEM, "%s: %d x %d px: no memory for the image", path, w, h);
+    }
+    cairo_surface_flush(img);
+    unsigned char *data = cairo_image_surface_get_data(img);
+    int stride = cairo_image_surface_get_stride(img);
+    for (int y = 0; y < h; y++) memcpy(data + (size_t)y * (size_t)stride, bgra + (size_t)y * 4 * (size_t)w, 4 * (size_t)w);
+    cairo_surface_mark_dirty(img);
+    free(bgra);
+    *out = img;
+    return RS_OK;
+}
+
+// The first image (PNG or JPEG, by name) in the camera's backgrounds folder: the site camera's
+// "backgrounds", else SITE/backgrounds/<id>/. No folder or no image: RS_OK with no image.
 static rs_status read_background(rs_report_camera *cam, const rs_site *site, rs_err *err)
 {
     const rs_site_camera *sc = &site->cameras[cam->icam];
@@ -301,7 +342,7 @@ static rs_status read_background(rs_report_camera *cam, const rs_site *site, rs_
     struct dirent *e;
     rs_status st = RS_OK;
     while ((e = readdir(d)) && !st) {
-        if (e->d_name[0] == '.' || !has_ext(e->d_name, ".png")) continue;
+        if (e->d_name[0] == '.' || !is_image_name(e->d_name)) continue;
         char **nn = realloc(names, (size_t)(n + 1) * sizeof *nn);
         if (!nn || !(nn[n] = strdup(e->d_name))) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
         if (nn) names = nn;
@@ -317,15 +358,7 @@ static rs_status read_background(rs_report_camera *cam, const rs_site *site, rs_
     free(names);
     free(dir);
     if (st || !cam->background_path) return st;
-    cairo_surface_t *img = cairo_image_surface_create_from_png(cam->background_path);
-    if (cairo_surface_status(img) != CAIRO_STATUS_SUCCESS) {
-        st = rs_err_set(err, RS_ERR_PARSE, "%s: not a readable PNG image (%s)", cam->background_path,
-                        cairo_status_to_string(cairo_surface_status(img)));
-        cairo_surface_destroy(img);
-        return st;
-    }
-    cam->background = img;
-    return RS_OK;
+    return read_image(&cam->background, cam->background_path, err);
 }
 
 // ---- loading ----
@@ -553,11 +586,6 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
                          "span %.0f%% of the %.0f m2 of ground the camera sees within %g m.",
                          a->loo_count, a->loo_rms_px, a->loo_max_px, a->loo_median_m, a->loo_max_m,
                          100 * a->image_hull_share, 100 * a->ground_hull_share, a->ground_seen_m2, rep->range_m);
-        if (a->has_external)
-            rs_doc_paragraph(doc, false,
-                             "The calibration file agrees with a fresh solve from the site's picks to %.4f deg and "
-                             "%.4f m; through it the surveyed landmarks reproject with RMS %.3f px (worst %.3f px).",
-                             a->external.rotation_deg, a->external.shift_m, a->external.rms_px, a->external.max_px);
     }
 
     rs_doc_heading(doc, 3, "Verdict and warnings for %s", id);
@@ -570,10 +598,6 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
     for (int i = 0; i < cam->Nwarnings; i++, Nw++) rs_doc_paragraph(doc, true, "Calibration: %s", cam->warnings[i]);
     if (a && a->warnings[0]) {
         doc_warning_list(doc, "Audit: ", a->warnings);
-        Nw++;
-    }
-    if (a && a->has_external && !a->external.consistent) {
-        rs_doc_paragraph(doc, true, "Calibration file: %s", a->external.consistency);
         Nw++;
     }
     if (!Nw) rs_doc_paragraph(doc, false, "No warnings.");

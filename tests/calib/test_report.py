@@ -4,8 +4,8 @@
 Modes (one meson test each):
   html      the HTML is self-contained (no script, no link, no external URL, every image a PNG
             data URI), has 1 + 2 per camera figures, each a valid non-blank PNG of the size its
-            <img> says; a background PNG put in backgrounds/cam1/ shows through in cam1's
-            image; the ground grid drawn in cam1's image lies where mrcal's Python projects the
+            <img> says; a background PNG put in backgrounds/cam1/ (and a JPEG in cam2/) shows
+            through in that camera's image; the ground grid drawn in cam1's image lies where mrcal's Python projects the
             grid's crossings through out/cam1.cameramodel (oracle; >= 90% of the visible
             crossings within 1.5 px of a grid-coloured pixel)
   escape    a site name and a camera note holding markup come out escaped, never as markup
@@ -66,6 +66,9 @@ def make_site(tmp, background=False, name=None, note=None, lanes=None):
         img[:, :] = (40, 90, 160)  # BGR: a brown-orange, unlike any overlay colour
         cv2.imwrite(os.path.join(site, "backgrounds", "cam1", "a.png"), img)
         cv2.imwrite(os.path.join(site, "backgrounds", "cam1", "b.png"), img * 0)  # not the first
+        os.makedirs(os.path.join(site, "backgrounds", "cam2"), exist_ok=True)
+        img[:, :] = (150, 60, 30)  # a dark blue, as a JPEG (read through OpenCV)
+        cv2.imwrite(os.path.join(site, "backgrounds", "cam2", "view.JPG"), img)
     return site
 
 
@@ -151,6 +154,9 @@ def mode_html(tmp):
     close = np.all(np.abs(cam1.reshape(-1, 3).astype(float) - bg) <= 3, axis=1).mean()
     check(close > 0.5, f"background a.png fills most of cam1's image ({100 * close:.0f}% of pixels)")
     check("a.png" in text and "b.png" not in text, "the first background by name is used and named")
+    cam2 = imgs[3]  # site map, cam1 image, cam1 map, cam2 image
+    close = np.all(np.abs(cam2.reshape(-1, 3).astype(float) - (150, 60, 30)) <= 6, axis=1).mean()
+    check(close > 0.5, f"JPEG background view.JPG fills most of cam2's image ({100 * close:.0f}% of pixels)")
 
     # ground grid vs mrcal's Python projection of the grid crossings (grid 5 m, range 100 m)
     model = mrcal.cameramodel(os.path.join(calib, "cam1.cameramodel"))
