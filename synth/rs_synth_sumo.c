@@ -672,6 +672,37 @@ static rs_status osm_pairs(edges_ctx *c, const char ***from, const char ***to, i
     return RS_OK;
 }
 
+// Road types for netconvert's OSM import (Debian's sumo package does not ship SUMO's
+// data/typemap): the car-carrying highway values, lanes per direction and speed limits of
+// urban defaults; pedestrians and bicycles are not simulated.
+static rs_status write_osm_types(const char *path, rs_err *err)
+{
+    static const struct {
+        const char *highway;
+        int priority, lanes;
+        double speed_mps;
+        bool oneway;
+    } types[] = {
+        {"motorway", 14, 2, 33.33, true},  {"motorway_link", 9, 1, 22.22, true}, {"trunk", 13, 2, 27.78, false},
+        {"trunk_link", 8, 1, 22.22, false}, {"primary", 12, 2, 13.89, false},   {"primary_link", 7, 1, 13.89, false},
+        {"secondary", 11, 1, 13.89, false}, {"secondary_link", 6, 1, 13.89, false}, {"tertiary", 10, 1, 13.89, false},
+        {"tertiary_link", 5, 1, 13.89, false}, {"unclassified", 5, 1, 13.89, false}, {"residential", 4, 1, 8.33, false},
+        {"living_street", 3, 1, 2.78, false}, {"service", 2, 1, 5.56, false},
+    };
+    rs_io_atomic a;
+    rs_status st = rs_io_atomic_open(&a, path, err);
+    if (st) return st;
+    fprintf(a.f, "<types>\n");
+    for (size_t i = 0; i < sizeof types / sizeof *types; i++)
+        fprintf(a.f,
+                "  <type id=\"highway.%s\" priority=\"%d\" numLanes=\"%d\" speed=\"%.2f\" oneway=\"%s\" "
+                "disallow=\"pedestrian bicycle\"/>\n",
+                types[i].highway, types[i].priority, types[i].lanes, types[i].speed_mps,
+                types[i].oneway ? "true" : "false");
+    fprintf(a.f, "</types>\n");
+    return rs_io_atomic_commit(&a, err);
+}
+
 // ---------------------------------------------------------------------------------------------
 // the run
 
@@ -686,7 +717,8 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
 {
     char *net = rs_io_join(dir, "net.net.xml"), *nod = rs_io_join(dir, "nodes.nod.xml"),
          *edg = rs_io_join(dir, "edges.edg.xml"), *con = rs_io_join(dir, "connections.con.xml"),
-         *rou = rs_io_join(dir, "routes.rou.xml"), *fcd = rs_io_join(dir, "fcd.xml"), *log = rs_io_join(dir, "sumo.log");
+         *rou = rs_io_join(dir, "routes.rou.xml"), *fcd = rs_io_join(dir, "fcd.xml"), *log = rs_io_join(dir, "sumo.log"),
+         *typ = rs_io_join(dir, "osm.typ.xml");
     network n = {0};
     edges_ctx ec = {{0}, NULL, NULL, NULL, 0, 0};
     const char **osm_from = NULL, **osm_to = NULL;
@@ -694,14 +726,16 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
     rs_synth_sumo_vtype types[3 * RS_SYNTH_NCLASSES];
     double prob[3 * RS_SYNTH_NCLASSES];
     rs_status st = RS_OK;
-    if (!net || !nod || !edg || !con || !rou || !fcd || !log) {
+    if (!net || !nod || !edg || !con || !rou || !fcd || !log || !typ) {
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
     remove(log);
     if (o->osm_path) {
-        char *argv[] = {(char *)o->netconvert, "--osm-files", (char *)o->osm_path, "--proj.utm", "true",
-                        "--xml-validation", "never", "--no-turnarounds", "true", "--output-file", net, NULL};
+        if ((st = write_osm_types(typ, err))) goto done;
+        char *argv[] = {(char *)o->netconvert, "--osm-files", (char *)o->osm_path, "--type-files", typ,
+                        "--proj.utm", "true", "--xml-validation", "never", "--no-turnarounds", "true",
+                        "--output-file", net, NULL};
         if ((st = run_program(argv, log, err))) goto done;
         ec.x = (xml_ctx){XML_ParserCreate(NULL), net, RS_OK, err};
         if (!ec.x.p) {
@@ -737,7 +771,7 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
     if ((st = rs_synth_sumo_read_location(&loc, net, err))) goto done;
     st = rs_synth_sumo_read_fcd(frames, fcd, true, &loc, origin, types, Nt, err);
 done:
-    free(net), free(nod), free(edg), free(con), free(rou), free(fcd), free(log);
+    free(net), free(nod), free(edg), free(con), free(rou), free(fcd), free(log), free(typ);
     free(n.parent), free(n.con);
     edges_free(&ec);
     free(osm_from), free(osm_to);

@@ -10,7 +10,8 @@
      lies within a lane width of a lane polyline (lanes in ENU by cct), moving vehicles within 1 m
      of an approach or exit lane and wholly beyond the stop bars head along it within 3 deg; the same seed gives the same frames;
      with randomisation no two footprints overlap (raster brute force).
-  3. Missing programs: a clear error, exit 1, nothing written.
+  3. --osm with a hand-written OpenStreetMap crossing: vehicles on the two ways.
+  4. Missing programs: a clear error, exit 1, nothing written.
 Exit 77 when sumo or netconvert is not installed (parts 1 and 3 still run first).
 Usage: test_traffic_sumo.py TEST_TRAFFIC_API"""
 import json, math, os, shutil, subprocess, sys, tempfile
@@ -127,6 +128,38 @@ def real_sumo(tmp):
             check(not pairs, "%s: footprints overlap: %s" % (f["file"], sorted(pairs)[:5]))
 
 
+OSM = '''<?xml version="1.0" encoding="UTF-8"?>
+<osm version="0.6" generator="test_traffic_sumo.py">
+  <node id="1" lat="48.1374" lon="11.5755" version="1"/>
+  <node id="2" lat="48.1384" lon="11.5755" version="1"/>
+  <node id="3" lat="48.1364" lon="11.5755" version="1"/>
+  <node id="4" lat="48.1374" lon="11.5770" version="1"/>
+  <node id="5" lat="48.1374" lon="11.5740" version="1"/>
+  <way id="10" version="1"><nd ref="3"/><nd ref="1"/><nd ref="2"/><tag k="highway" v="secondary"/></way>
+  <way id="11" version="1"><nd ref="5"/><nd ref="1"/><nd ref="4"/><tag k="highway" v="residential"/></way>
+</osm>
+'''
+
+
+def osm(tmp):
+    """--osm: a hand-written OpenStreetMap crossing of a north-south and an east-west way through
+    node 1; every vehicle within 6 m of one of the two ways' axes (ENU by cct)."""
+    path = os.path.join(tmp, "cross.osm")
+    open(path, "w").write(OSM)
+    out = os.path.join(tmp, "osm")
+    r = run(["traffic", DEMO, "--sumo", "--osm", path, "--no-randomise", "--seed", "1", "--duration", "120",
+             "--warmup", "30", "--period", "10", "-o", out])
+    check(r.returncode == 0, "traffic --sumo --osm: exit %d: %s" % (r.returncode, r.stderr))
+    if r.returncode:
+        return
+    vs = [v for f in json.load(open(os.path.join(out, "frames.json")))
+          for v in json.load(open(os.path.join(out, f["file"])))]
+    (e0, n0), = llh_to_enu(site_origin(DEMO), [(11.5755, 48.1374)])
+    worst = max([min(abs(v["e"] - e0), abs(v["n"] - n0)) for v in vs] or [math.inf])
+    print("OSM: %d vehicle states; max distance to the ways' axes %.2f m" % (len(vs), worst))
+    check(len(vs) >= 20 and worst < 6.0, "OSM vehicles: %d, max distance %.2f m" % (len(vs), worst))
+
+
 def main():
     api = sys.argv[1]
     tmp = tempfile.mkdtemp(prefix="test_traffic_sumo.")
@@ -143,6 +176,7 @@ def main():
             print("SKIP: sumo or netconvert not installed")
             return 1 if fails else 77
         real_sumo(tmp)
+        osm(tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     if fails:
