@@ -491,8 +491,8 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
         snprintf(bg, sizeof bg, "no background image, neutral canvas");
     rs_doc_figure(doc, rs_report_draw_camera, cam, (double)cam->model.height / cam->model.width,
                   "%s, %d x %d px, %s: picks (green circles; red crosses for outliers), landmarks reprojected "
-                  "through the calibration (blue dots), residual vectors magnified %g times (pink; the scale bar "
-                  "gives their length in pixels), ground grid every %g m and lane lines projected through the "
+                  "through the calibration (blue dots), inlier residual vectors magnified %g times (pink; the scale "
+                  "bar gives their length in pixels) and outlier residuals at true size (dashed red), ground grid every %g m and lane lines projected through the "
                   "calibrated lens model.",
                   id, cam->model.width, cam->model.height, bg, cam->magnification, rep->grid_m);
 

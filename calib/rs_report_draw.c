@@ -316,7 +316,7 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
 
     // lanes: edges solid, junction connectors thin and dashed
     for (int pass = 0; pass < 2; pass++) {
-        cairo_set_source_rgba(cr, 1, 0.8, 0, pass ? 0.7 : 0.95);
+        cairo_set_source_rgba(cr, 1, 0.8, 0, pass ? 0.5 : 0.95);
         cairo_set_line_width(cr, fmax(w / (pass ? 1000 : 450), pass ? 0.4 : 0.8));
         double dash = w / 150;
         cairo_set_dash(cr, &dash, pass, 0);
@@ -333,12 +333,19 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
     for (int i = 0; i < cam->N; i++) {
         const rs_report_landmark *l = &cam->landmarks[i];
         double x = (l->observed_px[0] + 0.5) * s, y = (l->observed_px[1] + 0.5) * s;
-        double m = cam->magnification;
+        // inliers: residual magnified; outliers: true length, dashed red (they are large)
+        double m = l->inlier ? cam->magnification : 1, dash = lw * 4;
         cairo_set_line_width(cr, lw * 1.5);
-        cairo_set_source_rgb(cr, 1, 0.2, 0.6);
+        if (l->inlier)
+            cairo_set_source_rgb(cr, 1, 0.2, 0.6);
+        else {
+            cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
+            cairo_set_dash(cr, &dash, 1, 0);
+        }
         cairo_move_to(cr, x, y);
         cairo_line_to(cr, x + m * l->residual_px[0] * s, y + m * l->residual_px[1] * s);
         cairo_stroke(cr);
+        cairo_set_dash(cr, NULL, 0, 0);
         cairo_set_line_width(cr, lw);
         if (l->inlier) {
             cairo_set_source_rgb(cr, 0.1, 0.75, 0.1);
@@ -363,13 +370,13 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
     double bar_px = nice_ceil(0.08 * W / cam->magnification); // residual px whose bar is ~8% of W
     int rows = rep->lanes.Nlines ? 7 : 6;
     cairo_set_source_rgba(cr, 1, 1, 1, 0.82);
-    cairo_rectangle(cr, lx, ly, fs * 17, lh * rows + fs * 0.6);
+    cairo_rectangle(cr, lx, ly, fs * 20, lh * rows + fs * 0.6);
     cairo_fill(cr);
     double y = ly + lh;
     legend_row(cr, lx + fs * 0.4, y, fs, 0, "pick (inlier)"), y += lh;
-    legend_row(cr, lx + fs * 0.4, y, fs, 1, "pick (outlier)"), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, 1, "pick (outlier), residual true size"), y += lh;
     legend_row(cr, lx + fs * 0.4, y, fs, 2, "reprojected landmark"), y += lh;
-    snprintf(buf, sizeof buf, "residual x%g", cam->magnification);
+    snprintf(buf, sizeof buf, "inlier residual x%g", cam->magnification);
     legend_row(cr, lx + fs * 0.4, y, fs, 3, buf), y += lh;
     snprintf(buf, sizeof buf, "ground grid, %g m", g);
     legend_row(cr, lx + fs * 0.4, y, fs, 4, buf), y += lh;
@@ -657,7 +664,7 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
             extent_add(ext, p[0], p[1]);
         }
     double cbar_w = map ? fs * 7 : 0; // room on the right for the colour bar
-    map_view v = map_fit(ext[0], ext[1], ext[2], ext[3], w - cbar_w, h, fs * 2.5);
+    map_view v = map_fit(ext[0], ext[1], ext[2], ext[3], w - cbar_w, h, fs * 4); // room for the furniture
 
     cairo_set_source_rgb(cr, 0.97, 0.97, 0.96);
     cairo_paint(cr);
