@@ -363,8 +363,10 @@ static void read_site_json(reader *c)
         ERR(c, RS_ERR_PARSE, NULL, "the top level must be an object {\"name\": ..., \"origin\": ...}");
         goto done;
     }
+    // "simulated": how `roadside site simulate` made the site (free-form, for people and tools)
     static const char *const known[] = {"name", "origin", "heights", "landmark_sigma_m",
-                                        "ground_plane", "max_landmark_distance_m", "cameras", NULL};
+                                        "ground_plane", "max_landmark_distance_m", "cameras",
+                                        "simulated", NULL};
     warn_unknown_keys(c, root, NULL, known);
 
     const char *name;
