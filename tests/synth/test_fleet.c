@@ -9,17 +9,7 @@
 #include <string.h>
 
 #include "rs_synth_fleet.h"
-
-static int failures = 0;
-#define CHECK(cond, ...)                                                                           \
-    do {                                                                                           \
-        if (!(cond)) {                                                                             \
-            failures++;                                                                            \
-            fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                   \
-            fprintf(stderr, __VA_ARGS__);                                                          \
-            fprintf(stderr, "\n");                                                                 \
-        }                                                                                          \
-    } while (0)
+#include "test_fleet_check.h"
 
 // Parses every "vertex_vectors { N, <a, b, c>, ... }" of a POV-Ray text and returns the bounds
 // of the vertices mapped back to the vehicle frame (x_v = z_pov, y_v = -x_pov, z_v = y_pov).

@@ -92,35 +92,35 @@ int main(int argc, char **argv) {
     fprintf(a.f, "[\n");
     for (int k = 0; k < N; k++) {
         const rs_synth_label *L = &labels[k];
-        fprintf(a.f, "{\"index\": %d, \"in_image\": %d, ", L->index, L->in_image);
-        nums(a.f, "center_enu_m", L->center_enu_m, 3);
-        fprintf(a.f, ", ");
-        nums(a.f, "dims_m", L->dims_m, 3);
-        fprintf(a.f, ", ");
-        nums(a.f, "corners_px", &L->corners_px[0][0], 16);
-        fprintf(a.f, ", ");
-        nums(a.f, "body_box_full", L->body_box_full_px, 4);
-        fprintf(a.f, ", ");
-        nums(a.f, "body_box", L->body_box_px, 4);
-        fprintf(a.f, ", ");
-        nums(a.f, "footprint_box_full", L->footprint_box_full_px, 4);
-        fprintf(a.f, ", ");
-        nums(a.f, "footprint_box", L->footprint_box_px, 4);
-        fprintf(a.f, ", ");
-        nums(a.f, "footprint_center", L->footprint_center_px, 2);
-        fprintf(a.f, ", ");
-        nums(a.f, "bottom_center", L->bottom_center_px, 2);
-        fprintf(a.f, ", ");
-        nums(a.f, "bottom_center_cam_m", L->bottom_center_cam_m, 3);
-        fprintf(a.f, ", \"truncation\": ");
-        num(a.f, L->truncation);
-        fprintf(a.f, ", \"rotation_y\": ");
-        num(a.f, L->rotation_y_rad);
-        fprintf(a.f, ", \"visible_px\": %ld, \"full_px\": %ld, \"visibility\": ", L->visible_px,
-                L->full_px);
-        num(a.f, L->visibility);
-        fprintf(a.f, ", ");
-        nums(a.f, "visible_box", L->visible_box_px, 4);
+        fprintf(a.f, "{\"index\": %d, \"in_image\": %d", L->index, L->in_image);
+        const struct {
+            const char *key;
+            const double *x;
+            int n;
+        } fields[] = {
+            {"center_enu_m", L->center_enu_m, 3},
+            {"dims_m", L->dims_m, 3},
+            {"corners_px", &L->corners_px[0][0], 16},
+            {"body_box_full", L->body_box_full_px, 4},
+            {"body_box", L->body_box_px, 4},
+            {"footprint_box_full", L->footprint_box_full_px, 4},
+            {"footprint_box", L->footprint_box_px, 4},
+            {"footprint_center", L->footprint_center_px, 2},
+            {"bottom_center", L->bottom_center_px, 2},
+            {"bottom_center_cam_m", L->bottom_center_cam_m, 3},
+            {"truncation", &L->truncation, 1},
+            {"rotation_y", &L->rotation_y_rad, 1},
+            {"visibility", &L->visibility, 1},
+            {"visible_box", L->visible_box_px, 4},
+        };
+        for (size_t i = 0; i < sizeof fields / sizeof fields[0]; i++) {
+            fprintf(a.f, ", ");
+            if (fields[i].n == 1) {
+                fprintf(a.f, "\"%s\": ", fields[i].key);
+                num(a.f, fields[i].x[0]);
+            } else nums(a.f, fields[i].key, fields[i].x, fields[i].n);
+        }
+        fprintf(a.f, ", \"visible_px\": %ld, \"full_px\": %ld", L->visible_px, L->full_px);
         fprintf(a.f, "}%s\n", k + 1 < N ? "," : "");
     }
     fprintf(a.f, "]\n");

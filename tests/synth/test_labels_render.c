@@ -21,17 +21,7 @@
 #include "rs_synth_labels.h"
 #include "rs_synth_render.h"
 #include "rs_synth_scene.h"
-
-static int failures = 0;
-#define CHECK(cond, ...)                                                                           \
-    do {                                                                                           \
-        if (!(cond)) {                                                                             \
-            failures++;                                                                            \
-            fprintf(stderr, "FAIL %s:%d: ", __FILE__, __LINE__);                                   \
-            fprintf(stderr, __VA_ARGS__);                                                          \
-            fprintf(stderr, "\n");                                                                 \
-        }                                                                                          \
-    } while (0)
+#include "test_fleet_check.h"
 
 // A camera 8 m up looking north (yaw 10), 20 degrees down: rows of R_cam_enu for yaw y, pitch p
 // (docs/conventions.md with roll 0): x_cam = (cos y, -sin y, 0),
