@@ -121,7 +121,8 @@ static cJSON *read_json_file(reader *c, char **path, const char *name, const cha
     if (!*path) return NULL;
     c->file = *path;
     char *text = read_site_file(c, why, NULL);
-    cJSON *root = text ? parse_json(c, text) : NULL;
+    const char *json = text && !strncmp(text, "\xEF\xBB\xBF", 3) ? text + 3 : text; // UTF-8 BOM
+    cJSON *root = json ? parse_json(c, json) : NULL;
     free(text);
     return root;
 }
@@ -739,9 +740,11 @@ static bool read_csv_header(reader *c, int line, char **fields, int nfields, int
     }
     for (int k = 0; k < COL_SIGMA; k++)
         if (col[k] < 0) {
+            bool other_separator = nfields == 1 && strpbrk(fields[0], ";\t");
             ERR_AT(c, RS_ERR_PARSE, line, "header",
                    "no column '%s': the first line must be the header landmark,u,v (and optionally "
-                   ",sigma_px)", column_names[k]);
+                   ",sigma_px)%s", column_names[k],
+                   other_separator ? "; separate the fields with commas, not semicolons or tabs" : "");
             return false;
         }
     return true;

@@ -258,6 +258,26 @@ def d_missing_header(s):
     return 1, [(r"^SITE/observations/north\.csv:1: header: no column 'landmark'", "no header")]
 
 
+def d_semicolons(s):
+    p = os.path.join(s, "observations", "north.csv")
+    with open(p) as f:
+        text = f.read()
+    with open(p, "w") as f:
+        f.write(text.replace(",", ";"))
+    return 1, [(r"^SITE/observations/north\.csv:1: header: no column 'landmark'.*commas, not semicolons", "separator")]
+
+
+def d_bom_crlf(s):
+    # a UTF-8 byte-order mark and CRLF line ends (Windows editors) are accepted everywhere
+    for name in ("site.json", "landmarks.geojson", "observations/south.csv"):
+        p = os.path.join(s, name)
+        with open(p) as f:
+            text = f.read()
+        with open(p, "wb") as f:
+            f.write(b"\xef\xbb\xbf" + text.replace("\n", "\r\n").encode())
+    return 0, [(r"^0 errors, 0 warnings$", "clean")]
+
+
 def d_bad_sigma_px(s):
     set_csv_line(s, "south", 3, "L04,100,100,0")
     return 1, [(r"^SITE/observations/south\.csv:3: sigma_px: 0 must be > 0", "sigma_px")]
