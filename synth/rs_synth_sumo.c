@@ -372,6 +372,24 @@ static bool connect_through(network *n, const rs_synth_lanes *lanes, int from, i
     return true;
 }
 
+// Opens dir/name for atomic writing.
+static rs_status atomic_open_in(rs_io_atomic *a, const char *dir, const char *name, rs_err *err)
+{
+    char *path = rs_io_join(dir, name);
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = rs_io_atomic_open(a, path, err);
+    free(path);
+    return st;
+}
+
+// Commits a file written without error, else removes it; returns the first error.
+static rs_status atomic_finish(rs_io_atomic *a, rs_status st, rs_err *err)
+{
+    if (!st) return rs_io_atomic_commit(a, err);
+    rs_io_atomic_abort(a);
+    return st;
+}
+
 static rs_status enu_to_lonlat(double lonlat[2], const rs_llh *origin, const double p_enu[2], rs_err *err)
 {
     double enu[3] = {p_enu[0], p_enu[1], 0}, llh[3];
@@ -399,11 +417,7 @@ static rs_status write_network_files(const char *dir, const rs_synth_lanes *lane
 
     rs_status st;
     rs_io_atomic a = {0};
-    char *path = rs_io_join(dir, "nodes.nod.xml");
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    st = rs_io_atomic_open(&a, path, err);
-    free(path);
-    if (st) return st;
+    if ((st = atomic_open_in(&a, dir, "nodes.nod.xml", err))) return st;
     fprintf(a.f, "<nodes>\n");
     for (int r = 0; r < 2 * L && !st; r++) {
         if (is_junction(&lanes->lane[r / 2]) || uf_find(n->parent, r) != r) continue;
@@ -424,17 +438,9 @@ static rs_status write_network_files(const char *dir, const rs_synth_lanes *lane
                 in >= 3 ? "traffic_light" : "priority");
     }
     fprintf(a.f, "</nodes>\n");
-    if (st) {
-        rs_io_atomic_abort(&a);
-        return st;
-    }
-    if ((st = rs_io_atomic_commit(&a, err))) return st;
+    if ((st = atomic_finish(&a, st, err))) return st;
 
-    path = rs_io_join(dir, "edges.edg.xml");
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    st = rs_io_atomic_open(&a, path, err);
-    free(path);
-    if (st) return st;
+    if ((st = atomic_open_in(&a, dir, "edges.edg.xml", err))) return st;
     fprintf(a.f, "<edges>\n");
     for (int i = 0; i < L && !st; i++) {
         const rs_synth_lane *l = &lanes->lane[i];
@@ -451,17 +457,9 @@ static rs_status write_network_files(const char *dir, const rs_synth_lanes *lane
         fprintf(a.f, "\"/>\n");
     }
     fprintf(a.f, "</edges>\n");
-    if (st) {
-        rs_io_atomic_abort(&a);
-        return st;
-    }
-    if ((st = rs_io_atomic_commit(&a, err))) return st;
+    if ((st = atomic_finish(&a, st, err))) return st;
 
-    path = rs_io_join(dir, "connections.con.xml");
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    st = rs_io_atomic_open(&a, path, err);
-    free(path);
-    if (st) return st;
+    if ((st = atomic_open_in(&a, dir, "connections.con.xml", err))) return st;
     fprintf(a.f, "<connections>\n");
     for (int i = 0; i < n->Ncon; i++)
         fprintf(a.f, "  <connection from=\"e%d\" to=\"e%d\" fromLane=\"0\" toLane=\"0\"/>\n", n->con[i].from,
@@ -543,11 +541,8 @@ static rs_status write_routes(const char *dir, const rs_synth_lanes *lanes, cons
                               const char *const *osm_to, int Nosm, const rs_synth_sumo_vtype *t, const double *prob,
                               int Nt, const rs_synth_sumo_options *o, rs_err *err)
 {
-    char *path = rs_io_join(dir, "routes.rou.xml");
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     rs_io_atomic a;
-    rs_status st = rs_io_atomic_open(&a, path, err);
-    free(path);
+    rs_status st = atomic_open_in(&a, dir, "routes.rou.xml", err);
     if (st) return st;
     fprintf(a.f, "<routes>\n  <vTypeDistribution id=\"mix\">\n");
     for (int i = 0; i < Nt; i++)
@@ -585,12 +580,10 @@ static rs_status write_routes(const char *dir, const rs_synth_lanes *lanes, cons
                     r, osm_from[r], osm_to[r], o->duration_s, o->flow_vph);
     }
     fprintf(a.f, "</routes>\n");
-    if (Nroutes == 0) {
-        rs_io_atomic_abort(&a);
-        return rs_err_set(err, RS_ERR_INVALID,
-                          "lanes: no manoeuvre: no path of lanes (through `next`) from an entry to an exit");
-    }
-    return rs_io_atomic_commit(&a, err);
+    if (Nroutes == 0)
+        st = rs_err_set(err, RS_ERR_INVALID,
+                        "lanes: no manoeuvre: no path of lanes (through `next`) from an entry to an exit");
+    return atomic_finish(&a, st, err);
 }
 
 // ---------------------------------------------------------------------------------------------
