@@ -147,6 +147,13 @@ static void test_fleet(void) {
         rs_synth_mesh_free(&m2);
         char what[64];
         snprintf(what, sizeof what, "seed %d (%s)", s, rs_synth_class_name(v.cls));
+        double mlo[3], mhi[3]; // in memory: exact (1e-9 m)
+        rs_synth_mesh_bounds(mlo, mhi, &m);
+        CHECK(fabs(mlo[0] + v.length_m / 2) < 1e-9 && fabs(mhi[0] - v.length_m / 2) < 1e-9 &&
+                  fabs(mlo[1] + v.width_m / 2) < 1e-9 && fabs(mhi[1] - v.width_m / 2) < 1e-9 &&
+                  fabs(mlo[2]) < 1e-9 && fabs(mhi[2] - v.height_m) < 1e-9,
+              "%s: mesh bounds [%g %g %g] [%g %g %g] are not the box", what, mlo[0], mlo[1],
+              mlo[2], mhi[0], mhi[1], mhi[2]);
         check_closed_outward(&m, what);
         int parts_seen[RS_SYNTH_NPARTS] = {0};
         for (int t = 0; t < m.Ntri; t++) parts_seen[m.part[t]] = 1;

@@ -357,6 +357,17 @@ def main():
                                                               l["visibility"])
                                       for k, l in enumerate(labels)))
 
+    # an ID value naming a vehicle that does not exist is an error, and nothing is written
+    bad = ids.copy()
+    bad[5, 7] = len(occl) + 1
+    badfile = os.path.join(tmp, "bad_ids.u16")
+    bad.astype("<u2").tofile(badfile)
+    badout = os.path.join(tmp, "bad")
+    os.makedirs(badout)
+    r = subprocess.run([dump, model, ofile, badout, badfile], capture_output=True, text=True)
+    check(r.returncode != 0 and "pixel (7, 5) holds 7, but there are 6 vehicles" in r.stderr
+          and os.listdir(badout) == [], f"bad ID image: rc {r.returncode}, {r.stderr}")
+
     # ---- writers: COCO (YOLOX layout), YOLO, KITTI; bbox choice and min visibility
     with open(os.path.join(out, "annotations", "instances_val2017.json")) as f:
         coco = json.load(f)
