@@ -151,9 +151,10 @@ static void clip_to_image(double out[4], const double b[4], int W, int H) {
 
 // ---------------------------------------------------------------- rasterising (full_px)
 
+// A mask over the pixel window [x0, x1] x [y0, y1] (inclusive, inside the image).
 typedef struct {
-    uint8_t *mask; // (H, W)
-    int W, H;
+    uint8_t *mask; // (y1 - y0 + 1, x1 - x0 + 1)
+    int x0, y0, x1, y1;
 } raster;
 
 // Marks the pixel centres inside the 2D triangle (inclusive edges).
@@ -161,10 +162,10 @@ static void raster_triangle(raster *r, const double a[2], const double b[2], con
     double area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
     if (!isfinite(area) || area == 0) return;
     double s = area > 0 ? 1 : -1;
-    int i0 = (int)fmax(0, ceil(fmin(a[0], fmin(b[0], c[0])))),
-        i1 = (int)fmin(r->W - 1, floor(fmax(a[0], fmax(b[0], c[0]))));
-    int j0 = (int)fmax(0, ceil(fmin(a[1], fmin(b[1], c[1])))),
-        j1 = (int)fmin(r->H - 1, floor(fmax(a[1], fmax(b[1], c[1]))));
+    int i0 = (int)fmax(r->x0, ceil(fmin(a[0], fmin(b[0], c[0])))),
+        i1 = (int)fmin(r->x1, floor(fmax(a[0], fmax(b[0], c[0]))));
+    int j0 = (int)fmax(r->y0, ceil(fmin(a[1], fmin(b[1], c[1])))),
+        j1 = (int)fmin(r->y1, floor(fmax(a[1], fmax(b[1], c[1]))));
     const double *P[3] = {a, b, c};
     for (int j = j0; j <= j1; j++)
         for (int i = i0; i <= i1; i++) {
@@ -174,7 +175,7 @@ static void raster_triangle(raster *r, const double a[2], const double b[2], con
                 double w = (q[0] - p[0]) * (j - p[1]) - (q[1] - p[1]) * (i - p[0]);
                 inside = s * w >= 0;
             }
-            if (inside) r->mask[(size_t)j * r->W + i] = 1;
+            if (inside) r->mask[(size_t)(j - r->y0) * (r->x1 - r->x0 + 1) + (i - r->x0)] = 1;
         }
 }
 
@@ -196,12 +197,16 @@ static const int box_faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
                                     {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
 
 // Pixels the vehicle covers alone: its mesh's triangles (or the box's faces) rasterised at
-// pixel centres, each triangle with straight edges between its projected corners.
+// pixel centres, each triangle with straight edges between its projected corners, within its
+// body box (in the image) plus a 2 px margin for the chords of a distorting lens.
 static rs_status full_pixels(long *count, const projector *pr, const rs_synth_vehicle *v,
                              double up_m, const rs_synth_mesh *mesh, const double corners[8][3],
-                             rs_err *err) {
-    raster r = {calloc((size_t)pr->cam->width * pr->cam->height, 1), pr->cam->width,
-                pr->cam->height};
+                             const double body_box_px[4], rs_err *err) {
+    raster r = {NULL, (int)fmax(0, floor(body_box_px[0]) - 2), (int)fmax(0, floor(body_box_px[1]) - 2),
+                (int)fmin(pr->cam->width - 1, ceil(body_box_px[2]) + 2),
+                (int)fmin(pr->cam->height - 1, ceil(body_box_px[3]) + 2)};
+    size_t size = (size_t)(r.x1 - r.x0 + 1) * (size_t)(r.y1 - r.y0 + 1);
+    r.mask = calloc(size, 1);
     if (!r.mask) return rs_err_set(err, RS_ERR_NOMEM, "labels: out of memory");
     rs_status st = RS_OK;
     if (mesh && mesh->Ntri > 0) {
@@ -224,7 +229,7 @@ static rs_status full_pixels(long *count, const projector *pr, const rs_synth_ve
                 st = raster_triangle3(&r, pr, tri, err);
             }
     long n = 0;
-    for (size_t i = 0; i < (size_t)r.W * r.H; i++) n += r.mask[i];
+    for (size_t i = 0; i < size; i++) n += r.mask[i];
     free(r.mask);
     *count = n;
     return st;
@@ -302,7 +307,8 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
     L->visible_px = L->full_px = -1;
     L->visibility = NAN;
     box_nan(L->visible_box_px);
-    if (with_ids && L->in_image) return full_pixels(&L->full_px, pr, v, up_m, mesh, corners, err);
+    if (with_ids && L->in_image)
+        return full_pixels(&L->full_px, pr, v, up_m, mesh, corners, L->body_box_px, err);
     if (with_ids) L->full_px = 0;
     return RS_OK;
 }
