@@ -88,7 +88,7 @@ def scene_spheres(pov_path):
     return np.array(c).reshape(-1, 3), np.array(r)
 
 
-def ground_vehicles(model, N, seed, v_range=(0.45, 0.95)):
+def ground_vehicles(model, N, seed, v_range=(0.45, 0.95), u_range=(0.05, 0.95)):
     """N vehicles of all classes standing on the ground plane up = 0 where random pixels of the
     model's image look (u uniform over the width, v in v_range of the height)."""
     import mrcal
@@ -100,7 +100,7 @@ def ground_vehicles(model, N, seed, v_range=(0.45, 0.95)):
                "articulated_truck"]
     out = []
     for i in range(N):
-        q = np.array([rng.uniform(0.05, 0.95) * W, rng.uniform(*v_range) * H])
+        q = np.array([rng.uniform(*u_range) * W, rng.uniform(*v_range) * H])
         d = mrcal.rotate_point_r(rt_enu_cam[:3], mrcal.unproject(q, lens, intr))
         c = rt_enu_cam[3:]
         p = c - c[2] / d[2] * d
