@@ -58,6 +58,7 @@ static void usage(FILE *out)
 typedef struct {
     const char *site_dir, *out, *lanes_path;
     bool sumo, randomise;
+    const char *builtin_option, *sumo_option; // the last option given of each kind
     rs_synth_traffic_options traffic;
     rs_synth_randomise_options rnd;
     rs_synth_sumo_options so;
@@ -73,6 +74,7 @@ static int parse_args(traffic_args *t, int argc, char **argv)
         }
         if (!strcmp(a, "--junction-lanes")) {
             t->traffic.junction_lanes = true;
+            t->builtin_option = a;
             continue;
         }
         if (!strcmp(a, "--no-randomise")) {
@@ -89,6 +91,10 @@ static int parse_args(traffic_args *t, int argc, char **argv)
         const char *v = argv[++i];
         long n;
         double x;
+        if (!strcmp(a, "--count") || !strcmp(a, "--min-gap") || !strcmp(a, "--headway")) t->builtin_option = a;
+        if (!strcmp(a, "--osm") || !strcmp(a, "--keep") || !strcmp(a, "--duration") || !strcmp(a, "--warmup") ||
+            !strcmp(a, "--period") || !strcmp(a, "--flow"))
+            t->sumo_option = a;
         if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
             t->out = v;
         } else if (!strcmp(a, "--lanes")) {
@@ -140,8 +146,9 @@ static int parse_args(traffic_args *t, int argc, char **argv)
     }
     if (!t->site_dir) return rs_cli_usage_error(CMD, "no site folder given");
     if (!t->out) return rs_cli_usage_error(CMD, "no output given (-o OUT)");
-    if (!t->sumo && (t->so.osm_path || t->so.work_dir))
-        return rs_cli_usage_error(CMD, "--osm and --keep need --sumo");
+    if (!t->sumo && t->sumo_option) return rs_cli_usage_error(CMD, "%s needs --sumo", t->sumo_option);
+    if (t->sumo && t->builtin_option)
+        return rs_cli_usage_error(CMD, "%s is for the built-in traffic, not with --sumo", t->builtin_option);
     if (t->sumo && !(t->so.warmup_s < t->so.duration_s && t->so.period_s > 0 && t->so.flow_vph > 0))
         return rs_cli_usage_error(CMD, "--sumo: need --warmup < --duration, --period > 0, --flow > 0");
     return RS_EXIT_OK;

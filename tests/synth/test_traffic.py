@@ -110,7 +110,8 @@ def main():
         traffic(tmp, "again.json", "--seed", "1", "--junction-lanes")
         check(open(os.path.join(tmp, "again.json")).read() == open(os.path.join(tmp, "r1.json")).read(),
               "the same seed gave a different file")
-        for args in (["--mix", "car=1"], ["--count", "0"], ["--sigma", "-1"], ["--bogus"], []):
+        for args in (["--mix", "car=1"], ["--count", "0"], ["--sigma", "-1"], ["--bogus"], [], ["--duration", "5"],
+                     ["--sumo", "--count", "5"]):
             out = os.path.join(tmp, "bad.json")
             r = run(["traffic", DEMO] + (["-o", out] if args else []) + args)
             check(r.returncode == 2 and not os.path.exists(out) and "usage" not in r.stdout,
