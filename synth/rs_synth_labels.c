@@ -510,6 +510,10 @@ rs_status rs_synth_labels_write_coco(const char *dir, const char *split,
     if (adir) path = rs_io_join(adir, name);
     if (!path) st = rs_err_set(err, RS_ERR_NOMEM, "COCO: out of memory");
     if (!st) st = rs_io_mkdir_p(adir, err);
+    char *idir = st ? NULL : rs_io_join(dir, split); // the image folder YOLOX expects
+    if (!st && !idir) st = rs_err_set(err, RS_ERR_NOMEM, "COCO: out of memory");
+    if (!st) st = rs_io_mkdir_p(idir, err);
+    free(idir);
     if (!st) st = rs_io_write_file(path, text, strlen(text), err);
     free(text);
     free(adir);

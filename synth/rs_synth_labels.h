@@ -109,8 +109,8 @@ int rs_synth_label_kept(double box[4], const rs_synth_label *label,
 // for the 8 classes, and annotations {id, image_id, category_id, bbox, area (of bbox), iscrowd 0,
 // bottom_center, footprint_center, footprint_bbox, body_bbox, body_bbox_full, truncation,
 // corners_px, box3d {center_enu_m, dimensions_m, yaw_deg}, vehicle_index, vehicle_id,
-// visible_pixels, full_pixels, visibility, visible_bbox} (docs/labels.md). The images themselves
-// belong in DIR/<split>/ (the caller puts them there).
+// visible_pixels, full_pixels, visibility, visible_bbox} (docs/labels.md). The image folder
+// DIR/<split>/ is created; the caller puts the images there.
 // in: split: [A-Za-z0-9_-]+ (e.g. "train2017"); opt may be NULL (defaults).
 rs_status rs_synth_labels_write_coco(const char *dir, const char *split,
                                      const rs_synth_label_image *images, int Nimages,

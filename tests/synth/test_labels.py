@@ -372,6 +372,7 @@ def main():
     with open(os.path.join(out, "annotations", "instances_val2017.json")) as f:
         coco = json.load(f)
     check(set(coco) >= {"images", "annotations", "categories"}, "COCO keys")
+    check(os.path.isdir(os.path.join(out, "val2017")), "COCO: no image folder val2017/")
     im = coco["images"][0]
     check(im["width"] == W and im["height"] == H and im["file_name"] == "frame_000001.png"
           and im["id"] == 1, f"COCO image {im}")
