@@ -260,6 +260,10 @@ def main():
                   close(got[~np.isnan(got)], qc[~np.isnan(qc)], 1e-9),
                   f"{lens} vehicle {k}: corners")
             bc_cam = to_cam(to_enu(v, np.zeros(3)))[0]
+            f_cam = mrcal.R_from_r(RT[:3]) @ vehicle_axes(v["yaw"])[0]
+            check(close(lab["bottom_center_cam_m"], bc_cam, 1e-9) and
+                  abs(lab["rotation_y"] - np.arctan2(-f_cam[2], f_cam[0])) < 1e-12,
+                  f"{lens} vehicle {k}: KITTI location / rotation_y")
             if bc_cam[2] >= ZMIN:
                 check(close(lab["bottom_center"], mrcal.project(bc_cam, *LENSES[lens]), 1e-9),
                       f"{lens} vehicle {k}: bottom_center")
