@@ -4,9 +4,11 @@
 // pixel scoring is the caller's (rs_calib_init.c), through a callback.
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <memory>
+#include <new>
 #include <random>
 #include <vector>
 
@@ -91,6 +93,28 @@ private:
     AbsolutePoseSacProblem fallback_;
     rs_calib_opengv_score_fn *score_;
     void *cookie_;
+};
+
+// The solutions of OpenGV's upnp(), a vector allocated inside libopengv with plain malloc
+// (glibc's 16-byte alignment is Eigen's default). Under AddressSanitizer, Eigen switches THIS
+// translation unit to its hand-made aligned allocator (Eigen/src/Core/util/Memory.h defines no
+// EIGEN_MALLOC_ALREADY_ALIGNED with __SANITIZE_ADDRESS__), whose free() would not match; so
+// there the buffer goes back to free() directly. Elsewhere the vector is destroyed as usual.
+struct UpnpSolutions {
+    alignas(opengv::transformations_t) unsigned char raw[sizeof(opengv::transformations_t)];
+    opengv::transformations_t &Ts;
+    explicit UpnpSolutions(const opengv::absolute_pose::AbsoluteAdapterBase &adapter)
+        : Ts(*new (raw) opengv::transformations_t(opengv::absolute_pose::upnp(adapter))) {}
+    ~UpnpSolutions()
+    {
+#if defined(__SANITIZE_ADDRESS__)
+        std::free(Ts.data());
+#else
+        Ts.~vector();
+#endif
+    }
+    UpnpSolutions(const UpnpSolutions &) = delete;
+    UpnpSolutions &operator=(const UpnpSolutions &) = delete;
 };
 
 } // namespace
@@ -186,7 +210,8 @@ extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_ca
                 return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: no sample gave a pose", name);
             T = ransac.model_coefficients_;
         } else if (method == RS_CALIB_OPENGV_POSE_UPNP) {
-            const opengv::transformations_t Ts = opengv::absolute_pose::upnp(adapter);
+            UpnpSolutions sol(adapter);
+            const opengv::transformations_t &Ts = sol.Ts;
             double best = INFINITY;
             for (const opengv::transformation_t &Ti : Ts) {
                 if (!Ti.allFinite()) continue;
