@@ -227,47 +227,29 @@ static void draw_marker_cross(cairo_t *cr, double x, double y, double r)
     cairo_line_to(cr, x + r, y - r);
 }
 
-// One legend row: a sample drawn by `kind` and its text.
-static void legend_row(cairo_t *cr, double x, double y, double fs, int kind, const char *text)
+typedef enum { LEGEND_CIRCLE, LEGEND_CROSS, LEGEND_DOT, LEGEND_LINE } legend_shape;
+
+// One legend row: a sample (shape, colour, line width lw_fs * fs) and its text.
+static void legend_row(cairo_t *cr, double x, double y, double fs, legend_shape shape, double r, double g, double b,
+                       double lw_fs, const char *text)
 {
+    double cx = x + fs * 0.6, cy = y - fs * 0.35;
     cairo_save(cr);
-    cairo_set_line_width(cr, fs * 0.15);
-    switch (kind) {
-    case 0: // inlier pick
-        cairo_set_source_rgb(cr, 0.1, 0.75, 0.1);
-        draw_marker_circle(cr, x + fs * 0.6, y - fs * 0.35, fs * 0.4);
-        cairo_stroke(cr);
-        break;
-    case 1: // outlier pick
-        cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
-        draw_marker_cross(cr, x + fs * 0.6, y - fs * 0.35, fs * 0.4);
-        cairo_stroke(cr);
-        break;
-    case 2: // reprojection
-        cairo_set_source_rgb(cr, 0.1, 0.3, 1);
-        draw_marker_circle(cr, x + fs * 0.6, y - fs * 0.35, fs * 0.2);
-        cairo_fill(cr);
-        break;
-    case 3: // residual
-        cairo_set_source_rgb(cr, 1, 0.2, 0.6);
-        cairo_move_to(cr, x, y - fs * 0.35);
-        cairo_line_to(cr, x + fs * 1.2, y - fs * 0.35);
-        cairo_stroke(cr);
-        break;
-    case 4: // grid
-        cairo_set_source_rgb(cr, 0.2, 0.7, 0.9);
-        cairo_move_to(cr, x, y - fs * 0.35);
-        cairo_line_to(cr, x + fs * 1.2, y - fs * 0.35);
-        cairo_stroke(cr);
-        break;
-    default: // lanes
-        cairo_set_source_rgb(cr, 1, 0.8, 0);
-        cairo_set_line_width(cr, fs * 0.25);
-        cairo_move_to(cr, x, y - fs * 0.35);
-        cairo_line_to(cr, x + fs * 1.2, y - fs * 0.35);
-        cairo_stroke(cr);
+    cairo_set_source_rgb(cr, r, g, b);
+    cairo_set_line_width(cr, fs * lw_fs);
+    switch (shape) {
+    case LEGEND_CIRCLE: draw_marker_circle(cr, cx, cy, fs * 0.4); break;
+    case LEGEND_CROSS: draw_marker_cross(cr, cx, cy, fs * 0.4); break;
+    case LEGEND_DOT: draw_marker_circle(cr, cx, cy, fs * 0.2); break;
+    case LEGEND_LINE:
+        cairo_move_to(cr, x, cy);
+        cairo_line_to(cr, x + fs * 1.2, cy);
         break;
     }
+    if (shape == LEGEND_DOT)
+        cairo_fill(cr);
+    else
+        cairo_stroke(cr);
     cairo_restore(cr);
     cairo_set_source_rgb(cr, 0, 0, 0);
     cairo_move_to(cr, x + fs * 1.6, y);
@@ -373,14 +355,14 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
     cairo_rectangle(cr, lx, ly, fs * 20, lh * rows + fs * 0.6);
     cairo_fill(cr);
     double y = ly + lh;
-    legend_row(cr, lx + fs * 0.4, y, fs, 0, "pick (inlier)"), y += lh;
-    legend_row(cr, lx + fs * 0.4, y, fs, 1, "pick (outlier), residual true size"), y += lh;
-    legend_row(cr, lx + fs * 0.4, y, fs, 2, "reprojected landmark"), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_CIRCLE, 0.1, 0.75, 0.1, 0.15, "pick (inlier)"), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_CROSS, 0.9, 0.1, 0.1, 0.15, "pick (outlier), residual true size"), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_DOT, 0.1, 0.3, 1, 0.15, "reprojected landmark"), y += lh;
     snprintf(buf, sizeof buf, "inlier residual x%g", cam->magnification);
-    legend_row(cr, lx + fs * 0.4, y, fs, 3, buf), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_LINE, 1, 0.2, 0.6, 0.15, buf), y += lh;
     snprintf(buf, sizeof buf, "ground grid, %g m", g);
-    legend_row(cr, lx + fs * 0.4, y, fs, 4, buf), y += lh;
-    if (rep->lanes.Nlines) legend_row(cr, lx + fs * 0.4, y, fs, 5, "lane lines"), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_LINE, 0.2, 0.7, 0.9, 0.15, buf), y += lh;
+    if (rep->lanes.Nlines) legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_LINE, 1, 0.8, 0, 0.25, "lane lines"), y += lh;
     // scale bar
     double bx = lx + fs * 0.4, by = y - fs * 0.3, blen = bar_px * cam->magnification * s;
     cairo_set_source_rgb(cr, 1, 0.2, 0.6);
