@@ -456,7 +456,8 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         sopt.include = include;
         sopt.pass = RS_SYNTH_PASS_COLOUR;
         sopt.ground_visible = opt.background_path ? false : opt.scene.ground_visible;
-        if ((st = render_pass(&rgba, out_dir, "pass_colour", povray, &cam, canvas.fxycxy,
+        // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
+        if ((st = render_pass(&rgba, out_dir, "pass_colour", povray, &cam, intrinsics,
                               ground_normal_enu, ground_offset_m, vehicles, &sopt, opt.antialias,
                               region, &out->seconds_povray, err)))
             goto done;

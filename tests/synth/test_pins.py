@@ -80,7 +80,7 @@ def main():
     u.need_povray()
     with tempfile.TemporaryDirectory() as tmp:
         check(tmp, "pinhole", True, 0.05, 0.15, ["--antialias", os.environ.get("AA", "3")])
-        check(tmp, "opencv8", False, 0.15, None, ["--canvas-scale", "2", "--antialias", "3"])
+        check(tmp, "opencv8", False, 0.15, None, ["--canvas-scale", os.environ.get("SCALE", "2"), "--antialias", "3"])
     print("PASS")
 
 
