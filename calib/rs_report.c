@@ -470,11 +470,17 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
         rs_doc_cell(doc, "%.3f", cam->sigma_yaw_pitch_roll_deg[0]);
         rs_doc_cell(doc, "%s", verdict(cam));
     }
+    char colour[400] = "";
+    if (rep->best_map.sigma_m)
+        snprintf(colour, sizeof colour, "; colour: the 1-sigma horizontal error in metres of a vehicle located on "
+                 "the ground by the best camera seeing it (pose covariance plus %g px detection noise), with "
+                 "labelled contours", rep->detection_sigma_px);
     rs_doc_figure(doc, rs_report_draw_site_map, rep, 0.8,
                   "Site map, north up, in the local east-north-up frame: cameras (discs, with a line along the "
-                  "heading), the ground each camera sees within %g m (dashed outline, tinted), surveyed "
-                  "landmarks (dots)%s.",
-                  rep->range_m, rep->lanes.Nlines ? " and lane lines (yellow)" : "");
+                  "heading), the ground each camera sees within %g m (dashed outline%s), surveyed "
+                  "landmarks (dots)%s%s.",
+                  rep->range_m, rep->best_map.sigma_m ? "" : ", tinted",
+                  rep->lanes.Nlines ? " and lane lines (yellow)" : "", colour);
 }
 
 static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_report_camera *cam)
@@ -639,6 +645,7 @@ rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const
         cam->colour = c;
         st = camera_load(cam, site, calib_dir, &opt, err);
     }
+    if (!st && !rs_report_best_map(&rep)) st = rs_err_set(err, RS_ERR_NOMEM, "report: out of memory");
     if (!st) {
         doc_site(&doc, &rep, calib_dir);
         for (int c = 0; c < rep.Ncameras; c++) doc_camera(&doc, &rep, &rep.cameras[c]);
@@ -662,6 +669,7 @@ rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const
     free(rep.lanes.start);
     free(rep.lanes.p_enu_m);
     free(rep.lanes.junction);
+    free(rep.best_map.sigma_m);
     free(html_path);
     free(pdf_path);
     free(default_calib);

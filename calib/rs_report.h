@@ -9,7 +9,8 @@
 //   out_dir/report.pdf   A4, the same headings, tables and figures drawn with cairo's PDF
 //                        surface (figures as vectors)
 // Content: a site summary table and a top-down ENU map of the site (cameras, their fields of
-// view on the ground cut at range_m, landmarks, lanes); then per camera
+// view on the ground cut at range_m, landmarks, lanes, and the smallest 1-sigma ground error
+// over the cameras' uncertainty maps as a colour scale with labelled contours); then per camera
 //   - its image (the first PNG/JPEG in the camera's backgrounds folder, else a neutral canvas)
 //     with the picks, the reprojected landmarks and the residual vectors magnified (the factor
 //     written, with a scale bar in pixels), and the ground grid and lane lines projected

@@ -630,6 +630,81 @@ static double map_p90(const rs_audit_map *map)
     return hi;
 }
 
+// The map's colour field (one image pixel per cell, painted at the cells' place) and its
+// contours at 1/5 .. 4/5 of vmax.
+static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, double vmax, double fs)
+{
+    cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, map->nx, map->ny);
+    cairo_surface_flush(img);
+    unsigned char *data = cairo_image_surface_get_data(img);
+    int stride = cairo_image_surface_get_stride(img);
+    for (int iy = 0; iy < map->ny && data; iy++)
+        for (int ix = 0; ix < map->nx; ix++) {
+            double sv = map->sigma_m[iy * map->nx + ix], rgb[3];
+            uint32_t px = 0;
+            if (isfinite(sv)) {
+                viridis(sv / vmax, rgb);
+                px = 0xff000000u | (uint32_t)(rgb[0] * 255 + 0.5) << 16 | (uint32_t)(rgb[1] * 255 + 0.5) << 8 |
+                     (uint32_t)(rgb[2] * 255 + 0.5);
+            }
+            // image row 0 is the NORTHERNMOST row of cells
+            memcpy(data + (size_t)(map->ny - 1 - iy) * (size_t)stride + 4 * (size_t)ix, &px, 4);
+        }
+    cairo_surface_mark_dirty(img);
+    double x0, y0;
+    map_xy(v, map->e0_m - map->cell_m / 2, map->n0_m + (map->ny - 0.5) * map->cell_m, &x0, &y0);
+    cairo_save(cr);
+    cairo_translate(cr, x0, y0);
+    cairo_scale(cr, v->k * map->cell_m, v->k * map->cell_m);
+    cairo_set_source_surface(cr, img, 0, 0);
+    cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_NEAREST);
+    cairo_paint_with_alpha(cr, 0.85);
+    cairo_restore(cr);
+    cairo_surface_destroy(img);
+    for (int k = 1; k <= 4; k++) map_contour(cr, v, map, vmax * k / 5, fs);
+}
+
+// The colour bar in the strip [w - cbar_w, w] on the right.
+static void map_colourbar(cairo_t *cr, double w, double h, double cbar_w, double fs, double vmax,
+                          double detection_sigma_px)
+{
+    double bx = w - cbar_w + fs * 1.2, by = fs * 5, bw = fs * 1.2, bh = h - fs * 10;
+    for (int i = 0; i < 100; i++) {
+        double rgb[3];
+        viridis((i + 0.5) / 100, rgb);
+        cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
+        cairo_rectangle(cr, bx, by + bh * (1 - (i + 1) / 100.0), bw, bh / 100 + 0.5);
+        cairo_fill(cr);
+    }
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    cairo_set_line_width(cr, fs * 0.08);
+    cairo_rectangle(cr, bx, by, bw, bh);
+    cairo_stroke(cr);
+    font(cr, fs * 0.8, false);
+    char buf[32];
+    for (int k = 0; k <= 5; k++) {
+        double y = by + bh * (1 - k / 5.0);
+        cairo_move_to(cr, bx + bw, y);
+        cairo_line_to(cr, bx + bw + fs * 0.3, y);
+        cairo_stroke(cr);
+        snprintf(buf, sizeof buf, k == 5 ? ">=%g" : "%g", vmax * k / 5);
+        cairo_move_to(cr, bx + bw + fs * 0.45, y + fs * 0.3);
+        cairo_show_text(cr, buf);
+    }
+    font(cr, fs * 0.8, true);
+    static const char *title[3] = {"1-sigma", "ground", "error, m"};
+    for (int k = 0; k < 3; k++) {
+        cairo_move_to(cr, w - fs * 0.4 - text_w(cr, title[k]), by - fs * (3.4 - k));
+        cairo_show_text(cr, title[k]);
+    }
+    font(cr, fs * 0.7, false);
+    snprintf(buf, sizeof buf, "(%g px", detection_sigma_px);
+    cairo_move_to(cr, w - fs * 0.4 - text_w(cr, buf), by + bh + fs * 1.2);
+    cairo_show_text(cr, buf);
+    cairo_move_to(cr, w - fs * 0.4 - text_w(cr, "detection)"), by + bh + fs * 2.1);
+    cairo_show_text(cr, "detection)");
+}
+
 void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
 {
     const rs_report_camera *cam = ctx;
@@ -650,83 +725,16 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
 
     cairo_set_source_rgb(cr, 0.97, 0.97, 0.96);
     cairo_paint(cr);
-
-    double vmax = 0;
-    if (map) {
-        vmax = nice_ceil(fmax(map_p90(map), 1e-3));
-        // the colour field as an image, one pixel per cell, painted at the cells' place
-        cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, map->nx, map->ny);
-        cairo_surface_flush(img);
-        unsigned char *data = cairo_image_surface_get_data(img);
-        int stride = cairo_image_surface_get_stride(img);
-        for (int iy = 0; iy < map->ny && data; iy++)
-            for (int ix = 0; ix < map->nx; ix++) {
-                double sv = map->sigma_m[iy * map->nx + ix], rgb[3];
-                uint32_t px = 0;
-                if (isfinite(sv)) {
-                    viridis(sv / vmax, rgb);
-                    px = 0xff000000u | (uint32_t)(rgb[0] * 255 + 0.5) << 16 | (uint32_t)(rgb[1] * 255 + 0.5) << 8 |
-                         (uint32_t)(rgb[2] * 255 + 0.5);
-                }
-                // image row 0 is the NORTHERNMOST row of cells
-                memcpy(data + (size_t)(map->ny - 1 - iy) * (size_t)stride + 4 * (size_t)ix, &px, 4);
-            }
-        cairo_surface_mark_dirty(img);
-        double x0, y0;
-        map_xy(&v, map->e0_m - map->cell_m / 2, map->n0_m + (map->ny - 0.5) * map->cell_m, &x0, &y0);
-        cairo_save(cr);
-        cairo_translate(cr, x0, y0);
-        cairo_scale(cr, v.k * map->cell_m, v.k * map->cell_m);
-        cairo_set_source_surface(cr, img, 0, 0);
-        cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_NEAREST);
-        cairo_paint_with_alpha(cr, 0.85);
-        cairo_restore(cr);
-        cairo_surface_destroy(img);
-        for (int k = 1; k <= 4; k++) map_contour(cr, &v, map, vmax * k / 5, fs);
-    }
+    double vmax = map ? nice_ceil(fmax(map_p90(map), 1e-3)) : 0;
+    if (map) map_field(cr, &v, map, vmax, fs);
     map_lanes(cr, &v, &rep->lanes, fs * 0.15);
     map_fov(cr, &v, cam, map ? 0 : 0.15, fs * 0.12);
     map_landmarks(cr, &v, rep, cam, fs, true);
     map_camera(cr, &v, cam, fs);
     map_furniture(cr, &v, w - cbar_w, h, fs);
-
-    if (map) { // colour bar on the right
-        double bx = w - cbar_w + fs * 1.2, by = fs * 5, bw = fs * 1.2, bh = h - fs * 10;
-        for (int i = 0; i < 100; i++) {
-            double rgb[3];
-            viridis((i + 0.5) / 100, rgb);
-            cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
-            cairo_rectangle(cr, bx, by + bh * (1 - (i + 1) / 100.0), bw, bh / 100 + 0.5);
-            cairo_fill(cr);
-        }
-        cairo_set_source_rgb(cr, 0, 0, 0);
-        cairo_set_line_width(cr, fs * 0.08);
-        cairo_rectangle(cr, bx, by, bw, bh);
-        cairo_stroke(cr);
-        font(cr, fs * 0.8, false);
-        char buf[32];
-        for (int k = 0; k <= 5; k++) {
-            double y = by + bh * (1 - k / 5.0);
-            cairo_move_to(cr, bx + bw, y);
-            cairo_line_to(cr, bx + bw + fs * 0.3, y);
-            cairo_stroke(cr);
-            snprintf(buf, sizeof buf, k == 5 ? ">=%g" : "%g", vmax * k / 5);
-            cairo_move_to(cr, bx + bw + fs * 0.45, y + fs * 0.3);
-            cairo_show_text(cr, buf);
-        }
-        font(cr, fs * 0.8, true);
-        static const char *title[3] = {"1-sigma", "ground", "error, m"};
-        for (int k = 0; k < 3; k++) {
-            cairo_move_to(cr, w - fs * 0.4 - text_w(cr, title[k]), by - fs * (3.4 - k));
-            cairo_show_text(cr, title[k]);
-        }
-        font(cr, fs * 0.7, false);
-        snprintf(buf, sizeof buf, "(%g px", map->detection_sigma_px);
-        cairo_move_to(cr, w - fs * 0.4 - text_w(cr, buf), by + bh + fs * 1.2);
-        cairo_show_text(cr, buf);
-        cairo_move_to(cr, w - fs * 0.4 - text_w(cr, "detection)"), by + bh + fs * 2.1);
-        cairo_show_text(cr, "detection)");
-    } else {
+    if (map)
+        map_colourbar(cr, w, h, cbar_w, fs, vmax, map->detection_sigma_px);
+    else {
         font(cr, fs, false);
         cairo_set_source_rgb(cr, 0.5, 0.1, 0.1);
         cairo_move_to(cr, fs, fs * 1.5);
@@ -748,27 +756,35 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     if (!isfinite(ext[0])) ext[0] = ext[2] = -10, ext[1] = ext[3] = 10;
     // show the fields of view around the landmarks, not all the way to range_m
     double pad = fmax(10, 0.35 * fmax(ext[1] - ext[0], ext[3] - ext[2]));
-    map_view v = map_fit(ext[0] - pad, ext[1] + pad, ext[2] - pad, ext[3] + pad, w, h, fs * 2);
+    const rs_audit_map *best = rep->best_map.sigma_m ? &rep->best_map : NULL;
+    double cbar_w = best ? fs * 7 : 0; // room on the right for the colour bar
+    double wmap = w - cbar_w;
+    map_view v = map_fit(ext[0] - pad, ext[1] + pad, ext[2] - pad, ext[3] + pad, wmap, h, fs * 2);
 
     cairo_set_source_rgb(cr, 0.97, 0.97, 0.96);
     cairo_paint(cr);
+    cairo_save(cr);
+    cairo_rectangle(cr, 0, 0, wmap, h);
+    cairo_clip(cr);
+    double vmax = best ? nice_ceil(fmax(map_p90(best), 1e-3)) : 0;
+    if (best) map_field(cr, &v, best, vmax, fs);
     // a light ENU graticule
     double step = nice_ceil(0.12 * w / v.k);
     cairo_set_source_rgb(cr, 0.85, 0.85, 0.85);
     cairo_set_line_width(cr, fs * 0.05);
     font(cr, fs * 0.7, false);
-    for (double e = ceil(-v.ox / v.k / step) * step; v.ox + v.k * e < w; e += step) {
+    for (double e = ceil(-v.ox / v.k / step) * step; v.ox + v.k * e < wmap; e += step) {
         cairo_move_to(cr, v.ox + v.k * e, 0);
         cairo_line_to(cr, v.ox + v.k * e, h);
     }
     for (double n = ceil((v.oy - h) / v.k / step) * step; v.oy - v.k * n > 0; n += step) {
         cairo_move_to(cr, 0, v.oy - v.k * n);
-        cairo_line_to(cr, w, v.oy - v.k * n);
+        cairo_line_to(cr, wmap, v.oy - v.k * n);
     }
     cairo_stroke(cr);
     cairo_set_source_rgb(cr, 0.5, 0.5, 0.5);
     char buf[64];
-    for (double e = ceil(-v.ox / v.k / step) * step; v.ox + v.k * e < w; e += step) {
+    for (double e = ceil(-v.ox / v.k / step) * step; v.ox + v.k * e < wmap; e += step) {
         snprintf(buf, sizeof buf, "E %g", e);
         cairo_move_to(cr, v.ox + v.k * e + fs * 0.2, h - fs * 2.6);
         cairo_show_text(cr, buf);
@@ -779,11 +795,11 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
         cairo_show_text(cr, buf);
     }
 
-    for (int c = 0; c < rep->Ncameras; c++) map_fov(cr, &v, &rep->cameras[c], 0.12, fs * 0.1);
+    for (int c = 0; c < rep->Ncameras; c++) map_fov(cr, &v, &rep->cameras[c], best ? 0 : 0.12, fs * 0.1);
     map_lanes(cr, &v, &rep->lanes, fs * 0.15);
     map_landmarks(cr, &v, rep, NULL, fs, site->Nlandmarks <= 80);
     for (int c = 0; c < rep->Ncameras; c++) map_camera(cr, &v, &rep->cameras[c], fs);
-    map_furniture(cr, &v, w, h, fs);
+    map_furniture(cr, &v, wmap, h, fs);
     // origin
     double x, y;
     map_xy(&v, 0, 0, &x, &y);
@@ -793,4 +809,48 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     cairo_stroke(cr);
     font(cr, fs * 0.75, false);
     label(cr, x + fs * 0.5, y + fs * 1.1, "origin", 0.6);
+    cairo_restore(cr);
+    if (best) map_colourbar(cr, w, h, cbar_w, fs, vmax, best->detection_sigma_px);
+}
+
+bool rs_report_best_map(struct rs_report_ctx *rep)
+{
+    rs_audit_map *b = &rep->best_map;
+    memset(b, 0, sizeof *b);
+    double e0 = INFINITY, e1 = -INFINITY, n0 = INFINITY, n1 = -INFINITY, cell = 0;
+    for (int c = 0; c < rep->Ncameras; c++) {
+        const rs_report_camera *cam = &rep->cameras[c];
+        if (!cam->has_audit || !cam->audit.map.sigma_m) continue;
+        const rs_audit_map *m = &cam->audit.map;
+        if (cell == 0 || m->cell_m < cell) cell = m->cell_m;
+        e0 = fmin(e0, m->e0_m), n0 = fmin(n0, m->n0_m);
+        e1 = fmax(e1, m->e0_m + (m->nx - 1) * m->cell_m), n1 = fmax(n1, m->n0_m + (m->ny - 1) * m->cell_m);
+        b->detection_sigma_px = m->detection_sigma_px;
+        b->range_m = m->range_m;
+    }
+    if (!(cell > 0)) return true;
+    int nx = (int)ceil((e1 - e0) / cell) + 1, ny = (int)ceil((n1 - n0) / cell) + 1;
+    if (nx > 4000 || ny > 4000) { // keep the figure's image reasonable: coarser cells
+        double f = fmax(nx, ny) / 4000.0;
+        cell *= f;
+        nx = (int)ceil((e1 - e0) / cell) + 1, ny = (int)ceil((n1 - n0) / cell) + 1;
+    }
+    b->sigma_m = malloc((size_t)nx * (size_t)ny * sizeof *b->sigma_m);
+    if (!b->sigma_m) return false;
+    b->e0_m = e0, b->n0_m = n0, b->cell_m = cell, b->nx = nx, b->ny = ny;
+    for (int iy = 0; iy < ny; iy++)
+        for (int ix = 0; ix < nx; ix++) {
+            double e = e0 + ix * cell, n = n0 + iy * cell, best = NAN;
+            for (int c = 0; c < rep->Ncameras; c++) {
+                const rs_report_camera *cam = &rep->cameras[c];
+                if (!cam->has_audit || !cam->audit.map.sigma_m) continue;
+                const rs_audit_map *m = &cam->audit.map;
+                long jx = lround((e - m->e0_m) / m->cell_m), jy = lround((n - m->n0_m) / m->cell_m);
+                if (jx < 0 || jy < 0 || jx >= m->nx || jy >= m->ny) continue;
+                double sv = m->sigma_m[jy * m->nx + jx];
+                if (isfinite(sv) && !(sv >= best)) best = sv;
+            }
+            b->sigma_m[iy * nx + ix] = best;
+        }
+    return true;
 }

@@ -77,7 +77,14 @@ struct rs_report_ctx {
     double grid_m;                   // ground grid spacing, metres
     double range_m;                  // field of view on the ground cut at this distance
     double detection_sigma_px;       // detection noise of the uncertainty maps, px
+    rs_audit_map best_map;           // the smallest 1-sigma of the cameras' maps at each cell
+                                     //   (owned; sigma_m NULL when no camera has a map)
 };
+
+// Fills rep->best_map from the cameras' audit maps: a grid of the cameras' cell size spanning
+// all their maps, each cell the smallest sigma over the maps (nearest cell) that see it, NaN
+// where none does. Leaves it zeroed when no camera has a map. False when out of memory.
+bool rs_report_best_map(struct rs_report_ctx *rep);
 
 // The camera's image (background or neutral canvas) with the ground grid, lanes, observed and
 // reprojected landmarks and magnified residual vectors. ctx: const rs_report_camera *.
