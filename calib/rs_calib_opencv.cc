@@ -131,7 +131,10 @@ extern "C" rs_status rs_calib_opencv_pnp(double *rt_cam_ref, bool *inlier, const
             for (int i = 0; i < N; i++) inliers.push_back(i);
         }
         if (!ok || rvec.total() != 3 || tvec.total() != 3)
-            return rs_err_set(err, RS_ERR_DEGENERATE, "OpenCV %s found no pose", name);
+            return rs_err_set(err, RS_ERR_DEGENERATE, "OpenCV %s found no pose%s", name,
+                              method == RS_CALIB_OPENCV_PNP_IPPE
+                                  ? " (IPPE needs exactly coplanar landmarks)"
+                                  : "");
         rvec.convertTo(rvec, CV_64F);
         tvec.convertTo(tvec, CV_64F);
         if (refine_lm) {
