@@ -1,16 +1,20 @@
 // roadside render: parse arguments, render through synth/ with the real POV-Ray, print.
+#include <ctype.h>
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "rs_cli.h"
 #include "rs_cli_synth.h"
+#include "rs_io.h"
+#include "rs_synth_labels.h"
 #include "rs_synth_render.h"
 
 static const char render_usage[] =
     "usage: roadside render SITE --calib DIR --camera ID --vehicles FILE -o OUTDIR\n"
     "                       [--background IMAGE] [--pins] [--sun AZ,EL | --time ISO8601]\n"
     "                       [--full-frame] [--antialias N] [--canvas-scale S] [--keep]\n"
+    "                       [--labels [--split NAME] [--bbox KIND] [--min-visibility V]]\n"
     "\n"
     "Renders vehicles seen by a calibrated camera with POV-Ray 3.7 (docs/povray.md):\n"
     "vehicles that cannot appear are culled (povray is not run when none is left), only the\n"
@@ -30,13 +34,70 @@ static const char render_usage[] =
     "  --antialias N        N x N supersampling of the colour pass (default off)\n"
     "  --canvas-scale S     distorted lenses: canvas pixels per pixel, >= 1 (default 1)\n"
     "  --keep               keep the scene files, povray's outputs and log in OUTDIR\n"
+    "  --labels             also write the labels of this image (docs/labels.md), computed\n"
+    "                       through mrcal with visibility from the ID pass: COCO in YOLOX's\n"
+    "                       layout (OUTDIR/annotations/instances_SPLIT.json, the image copied\n"
+    "                       to OUTDIR/SPLIT/image.png), YOLO (OUTDIR/labels/SPLIT/image.txt)\n"
+    "                       and KITTI (OUTDIR/label_2/image.txt)\n"
+    "  --split NAME         COCO/YOLO split name (default train2017)\n"
+    "  --bbox KIND          the box written as bbox: footprint (default), body, visible\n"
+    "  --min-visibility V   drop vehicles less visible than V in [0, 1] (default 0)\n"
     "  $ROADSIDE_POVRAY     the povray executable (default: povray on PATH)\n"
     "  -h, --help           this text\n"
     "\n"
     "Prints one line: vehicles, rendered, region, seconds in povray.\n"
     "Exit status: 0 rendered, 1 failed (a clear message if povray is missing), 2 usage error.\n";
 
-enum { OPT_BACKGROUND = 2000, OPT_FULL, OPT_AA, OPT_SCALE, OPT_KEEP };
+enum { OPT_BACKGROUND = 2000, OPT_FULL, OPT_AA, OPT_SCALE, OPT_KEEP, OPT_LABELS, OPT_SPLIT,
+       OPT_BBOX, OPT_MINVIS };
+
+// Labels of the rendered image (rs_synth_labels.h): COCO, YOLO and KITTI into out_dir, the
+// composite copied into out_dir/<split>/image.png.
+static rs_status write_labels(const rs_cli_synth *s, const rs_synth_render_result *r,
+                              const char *split, const rs_synth_label_options *lopt, rs_err *err)
+{
+    const int N = s->prepared.N;
+    const size_t n = (size_t)(N > 0 ? N : 1);
+    double *up = malloc(n * sizeof(double));
+    rs_synth_mesh *meshes = malloc(n * sizeof(rs_synth_mesh));
+    const char **ids = malloc(n * sizeof(char *));
+    rs_synth_label *labels = NULL;
+    char *folder = NULL, *image = NULL;
+    rs_status st = RS_OK;
+    if (!up || !meshes || !ids) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    for (int i = 0; i < N; i++) {
+        const rs_synth_vehicle *v = &s->prepared.v[i];
+        up[i] = rs_synth_ground_up_m(s->site->ground_normal_enu, s->site->ground_offset_m, v->e_m,
+                                     v->n_m);
+        meshes[i] = s->prepared.meshes[s->prepared.imesh[i]]; // shallow: borrowed arrays
+        ids[i] = v->id ? v->id : "";
+    }
+    if ((st = rs_synth_labels_compute(&labels, &s->camera, s->prepared.v, up, N, meshes, r->ids,
+                                      err)))
+        goto done;
+    const rs_synth_label_image img = {.file_name = "image.png", .width = r->width,
+                                      .height = r->height, .labels = labels, .Nlabels = N,
+                                      .vehicle_ids = ids};
+    if ((st = rs_synth_labels_write_coco(s->output, split, &img, 1, lopt, err)) ||
+        (st = rs_synth_labels_write_yolo(s->output, split, &img, 1, lopt, err)) ||
+        (st = rs_synth_labels_write_kitti(s->output, &img, 1, lopt, err)))
+        goto done;
+    folder = rs_io_join(s->output, split);
+    image = folder ? rs_io_join(folder, "image.png") : NULL;
+    st = image ? rs_synth_image_write(image, &r->composite, 8, err)
+               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+done:
+    free(up);
+    free(meshes);
+    free(ids);
+    free(labels);
+    free(folder);
+    free(image);
+    return st;
+}
 
 int rs_cli_render(int argc, char **argv)
 {
@@ -51,12 +112,20 @@ int rs_cli_render(int argc, char **argv)
         {"antialias", required_argument, NULL, OPT_AA},
         {"canvas-scale", required_argument, NULL, OPT_SCALE},
         {"keep", no_argument, NULL, OPT_KEEP},
+        {"labels", no_argument, NULL, OPT_LABELS},
+        {"split", required_argument, NULL, OPT_SPLIT},
+        {"bbox", required_argument, NULL, OPT_BBOX},
+        {"min-visibility", required_argument, NULL, OPT_MINVIS},
         {NULL, 0, NULL, 0}};
     rs_cli_synth s = {0};
     rs_synth_render_options ropt;
     rs_synth_render_options_default(&ropt);
     int c, rc;
     long aa;
+    bool labels = false;
+    const char *split = "train2017";
+    rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
+    rs_err perr = {0};
     optind = 1;
     opterr = 0;
     while ((c = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
@@ -64,6 +133,24 @@ int rs_cli_render(int argc, char **argv)
         case OPT_BACKGROUND: ropt.background_path = optarg; continue;
         case OPT_FULL: ropt.full_frame = true; continue;
         case OPT_KEEP: ropt.keep_files = true; continue;
+        case OPT_LABELS: labels = true; continue;
+        case OPT_SPLIT:
+            for (const char *p = optarg; *p; p++)
+                if (!(isalnum((unsigned char)*p) || *p == '_' || *p == '-'))
+                    return rs_cli_usage_error("render", "--split: use only [A-Za-z0-9_-]");
+            if (!*optarg)
+                return rs_cli_usage_error("render", "--split: empty");
+            split = optarg;
+            continue;
+        case OPT_BBOX:
+            if (rs_synth_bbox_kind_parse(&lopt.bbox, optarg, &perr))
+                return rs_cli_usage_error("render", "--bbox: %s", perr.msg);
+            continue;
+        case OPT_MINVIS:
+            if (!rs_cli_parse_double(optarg, &lopt.min_visibility) || lopt.min_visibility < 0 ||
+                lopt.min_visibility > 1)
+                return rs_cli_usage_error("render", "--min-visibility: expected a number in [0, 1]");
+            continue;
         case OPT_AA:
             if (!rs_cli_parse_int(optarg, 0, 9, &aa) || aa == 1)
                 return rs_cli_usage_error("render", "--antialias: expected 0 or 2..9");
@@ -97,6 +184,8 @@ int rs_cli_render(int argc, char **argv)
                                    s.camera.width, s.camera.height, s.camera.rt_cam_enu,
                                    s.site->ground_normal_enu, s.site->ground_offset_m,
                                    &s.prepared, &ropt, &err);
+    if (st == RS_OK && labels)
+        st = write_labels(&s, &r, split, &lopt, &err);
     if (st) {
         rc = rs_cli_fail("render", st, &err);
     } else {
