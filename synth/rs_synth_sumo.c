@@ -18,6 +18,7 @@
 
 #include "rs_io.h"
 #include "rs_simulate.h"
+#include "rs_synth_fleet.h"
 
 extern char **environ;
 
@@ -493,8 +494,9 @@ static int make_vtypes(rs_synth_sumo_vtype *t, double *prob, const rs_synth_clas
     int n = 0;
     for (int c = 0; c < RS_SYNTH_NCLASSES; c++) {
         if (!(mix->weight[c] > 0)) continue;
-        double r[3][2];
-        rs_synth_traffic_class_range(r, (rs_synth_class)c);
+        rs_synth_class_range cr;
+        rs_synth_class_range_get(&cr, (rs_synth_class)c, NULL);
+        const double *r[3] = {cr.length_m, cr.width_m, cr.height_m};
         int perm[3][3];
         for (int d = 0; d < 3; d++) {
             int p[3] = {0, 1, 2};
@@ -505,7 +507,7 @@ static int make_vtypes(rs_synth_sumo_vtype *t, double *prob, const rs_synth_clas
             memcpy(perm[d], p, sizeof p);
         }
         for (int k = 0; k < 3; k++, n++) {
-            snprintf(t[n].id, sizeof t[n].id, "%s_%d", rs_synth_traffic_class_name((rs_synth_class)c), k + 1);
+            snprintf(t[n].id, sizeof t[n].id, "%s_%d", rs_synth_class_name((rs_synth_class)c), k + 1);
             t[n].cls = (rs_synth_class)c;
             double *dim[3] = {&t[n].length_m, &t[n].width_m, &t[n].height_m};
             for (int d = 0; d < 3; d++) *dim[d] = r[d][0] + (r[d][1] - r[d][0]) * (1 + 2 * perm[d][k]) / 6.0;

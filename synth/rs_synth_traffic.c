@@ -11,40 +11,12 @@
 
 #include "rs_io.h"
 #include "rs_simulate.h"
+#include "rs_synth_fleet.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
 // ---------------------------------------------------------------------------------------------
 // classes
-
-// Names as in the vehicles file; dimension ranges [min, max] per class (length, width, height,
-// metres), realistic spans around SUMO's vType defaults (passenger 5 x 1.8 x 1.5, truck
-// 7.1 x 2.4 x 2.4, bus 12 x 2.5 x 3.4) and typical European models; docs/traffic.md.
-static const struct {
-    const char *name;
-    double lwh[3][2];
-} class_table[RS_SYNTH_NCLASSES] = {
-    [RS_SYNTH_SEDAN] = {"sedan", {{4.4, 5.0}, {1.75, 1.90}, {1.40, 1.50}}},
-    [RS_SYNTH_HATCHBACK] = {"hatchback", {{3.7, 4.4}, {1.65, 1.80}, {1.42, 1.55}}},
-    [RS_SYNTH_SUV] = {"suv", {{4.2, 4.95}, {1.78, 2.00}, {1.60, 1.80}}},
-    [RS_SYNTH_PICKUP] = {"pickup", {{5.2, 5.9}, {1.85, 2.05}, {1.75, 1.95}}},
-    [RS_SYNTH_VAN] = {"van", {{4.8, 6.0}, {1.90, 2.05}, {1.90, 2.60}}},
-    [RS_SYNTH_BUS] = {"bus", {{10.5, 13.5}, {2.50, 2.55}, {3.00, 3.40}}},
-    [RS_SYNTH_BOX_TRUCK] = {"box_truck", {{6.5, 8.5}, {2.30, 2.50}, {2.90, 3.60}}},
-    [RS_SYNTH_ARTICULATED_TRUCK] = {"articulated_truck", {{14.0, 16.5}, {2.50, 2.55}, {3.60, 4.00}}},
-};
-
-const char *rs_synth_traffic_class_name(rs_synth_class cls)
-{
-    return (cls >= 0 && cls < RS_SYNTH_NCLASSES) ? class_table[cls].name : NULL;
-}
-
-bool rs_synth_traffic_class_range(double lwh_range[3][2], rs_synth_class cls)
-{
-    if (cls < 0 || cls >= RS_SYNTH_NCLASSES) return false;
-    memcpy(lwh_range, class_table[cls].lwh, sizeof class_table[cls].lwh);
-    return true;
-}
 
 void rs_synth_class_mix_default(rs_synth_class_mix *mix)
 {
@@ -62,19 +34,18 @@ rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs
         size_t n = end ? (size_t)(end - p) : strlen(p);
         const char *eq = memchr(p, '=', n);
         if (!eq) return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d '%.*s': expected CLASS=WEIGHT", item, (int)n, p);
-        int c = -1;
-        for (int k = 0; k < RS_SYNTH_NCLASSES; k++)
-            if (strlen(class_table[k].name) == (size_t)(eq - p) && !strncmp(class_table[k].name, p, (size_t)(eq - p)))
-                c = k;
-        if (c < 0)
+        char name[32];
+        rs_synth_class c;
+        size_t nl = (size_t)(eq - p);
+        if (nl >= sizeof name || (memcpy(name, p, nl), name[nl] = '\0', rs_synth_class_from_name(&c, name, NULL)))
             return rs_err_set(err, RS_ERR_USAGE,
                               "--mix: item %d: unknown class '%.*s' (sedan, hatchback, suv, pickup, van, bus, "
                               "box_truck, articulated_truck)",
-                              item, (int)(eq - p), p);
+                              item, (int)nl, p);
         char num[64];
         size_t nn = n - (size_t)(eq + 1 - p);
         if (nn == 0 || nn >= sizeof num)
-            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: no weight for '%s'", item, class_table[c].name);
+            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: no weight for '%s'", item, name);
         memcpy(num, eq + 1, nn);
         num[nn] = '\0';
         char *stop;
@@ -82,7 +53,7 @@ rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs
         double w = strtod(num, &stop);
         if (*stop || errno || !isfinite(w) || w < 0)
             return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: weight '%s' of '%s' is not a number >= 0", item,
-                              num, class_table[c].name);
+                              num, name);
         m.weight[c] = w;
         total += w;
         if (!end) break;
@@ -361,7 +332,8 @@ static rs_status traffic_options_check(const rs_synth_traffic_options *o, rs_err
     double total = 0;
     for (int k = 0; k < RS_SYNTH_NCLASSES; k++) {
         if (!(o->mix.weight[k] >= 0) || !isfinite(o->mix.weight[k]))
-            return rs_err_set(err, RS_ERR_INVALID, "mix: weight of %s must be a number >= 0", class_table[k].name);
+            return rs_err_set(err, RS_ERR_INVALID, "mix: weight of %s must be a number >= 0",
+                              rs_synth_class_name((rs_synth_class)k));
         total += o->mix.weight[k];
     }
     if (!(total > 0)) return rs_err_set(err, RS_ERR_INVALID, "mix: all weights are 0");
@@ -404,10 +376,11 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
         for (;;) {
             rs_synth_traffic_vehicle x = {0};
             x.cls = draw_class(&lr, &opt->mix);
-            const double(*r)[2] = class_table[x.cls].lwh;
-            x.length_m = uniform(&lr, r[0][0], r[0][1]);
-            x.width_m = uniform(&lr, r[1][0], r[1][1]);
-            x.height_m = uniform(&lr, r[2][0], r[2][1]);
+            rs_synth_class_range r;
+            rs_synth_class_range_get(&r, x.cls, NULL); // a class of the mix: always valid
+            x.length_m = uniform(&lr, r.length_m[0], r.length_m[1]);
+            x.width_m = uniform(&lr, r.width_m[0], r.width_m[1]);
+            x.height_m = uniform(&lr, r.height_m[0], r.height_m[1]);
             x.speed_mps = vmax * uniform(&lr, opt->speed_fraction[0], opt->speed_fraction[1]);
             x.variant = rs_simulate_rng_u64(&lr) >> 11; // 53 bits: exact as a JSON number
             double gap = opt->s0_m + x.speed_mps * opt->headway_s *
@@ -540,7 +513,7 @@ rs_status rs_synth_traffic_write_json(const char *path, const rs_synth_traffic_v
     if (!j) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (int i = 0; i < N; i++) {
         const rs_synth_traffic_vehicle *v = &vehicles[i];
-        const char *name = rs_synth_traffic_class_name(v->cls);
+        const char *name = v->cls < RS_SYNTH_NCLASSES ? rs_synth_class_name(v->cls) : NULL;
         if (!name) {
             cJSON_Delete(j);
             return rs_err_set(err, RS_ERR_INVALID, "vehicle %d: unknown class %d", i, (int)v->cls);

@@ -92,6 +92,8 @@ typedef struct {
 } rs_synth_traffic_vehicle;
 
 // Class mix: relative weights of the classes (any non-negative numbers, at least one > 0).
+// Class names and dimension ranges are the fleet's (synth/rs_synth_fleet.h:
+// rs_synth_class_name, rs_synth_class_range_get).
 typedef struct {
     double weight[RS_SYNTH_NCLASSES];
 } rs_synth_class_mix;
@@ -107,15 +109,6 @@ rs_status rs_synth_class_mix_parse(// out
                                    rs_synth_class_mix *mix,
                                    // in
                                    const char *text, rs_err *err);
-
-// Class names ("sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck",
-// "articulated_truck"), the names of the vehicles file; NULL for an unknown class.
-const char *rs_synth_traffic_class_name(rs_synth_class cls);
-
-// Dimension ranges of a class, metres: [min, max] of length, width, height, the ranges the fleet
-// draws from (docs/traffic.md lists them with SUMO's defaults for reference).
-// out: lwh_range (3,2). Returns false for an unknown class.
-bool rs_synth_traffic_class_range(double lwh_range[3][2], rs_synth_class cls);
 
 // The built-in traffic model.
 typedef struct {
@@ -140,7 +133,8 @@ void rs_synth_traffic_options_default(rs_synth_traffic_options *opt);
 // Helbing, "Congested traffic states in empirical observations and microscopic simulations",
 // Phys. Rev. E 62, 2000: s0 = 2 m, T = 1.5 s). A vehicle lies wholly on its lane (centre, yaw
 // from the polyline at the centre's arc length); "both" lanes get a random direction per lane.
-// Class from the mix, dimensions uniform in the class's ranges, variant from the seed.
+// Class from the mix, dimensions uniform in the class's ranges (rs_synth_class_range_get),
+// variant from the seed.
 // With count > 0, a uniformly drawn subset of count vehicles is kept (in placement order).
 // out: *vehicles (N,) owned (free()), *N. Returns RS_ERR_INVALID for bad options, RS_ERR_NOMEM.
 rs_status rs_synth_traffic_place(// out
