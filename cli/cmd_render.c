@@ -170,13 +170,8 @@ int rs_cli_render(int argc, char **argv)
                 return rc > 0 ? rc : rs_cli_usage_error("render", "unexpected option");
         }
     }
-    if (optind + 1 != argc)
-        return rs_cli_usage_error("render", "expected one SITE folder");
-    s.site_dir = argv[optind];
-    if ((rc = rs_cli_synth_load(&s, "render")) != RS_EXIT_OK) {
-        rs_cli_synth_free(&s);
+    if ((rc = rs_cli_synth_load(&s, "render", argc, argv, optind)) != RS_EXIT_OK)
         return rc;
-    }
     ropt.scene = s.scene;
     rs_err err = {0};
     rs_synth_render_result r;

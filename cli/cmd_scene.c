@@ -75,10 +75,8 @@ void rs_cli_synth_free(rs_cli_synth *s)
     s->pins_enu_m = NULL;
 }
 
-int rs_cli_synth_load(rs_cli_synth *s, const char *command)
+static int synth_load(rs_cli_synth *s, const char *command)
 {
-    if (!s->site_dir)
-        return rs_cli_usage_error(command, "missing SITE");
     if (!s->calib_dir || !s->camera_id || !s->vehicles_path || !s->output)
         return rs_cli_usage_error(command, "--calib, --camera, --vehicles and -o are required");
     if (s->has_sun && s->time_iso)
@@ -130,6 +128,17 @@ int rs_cli_synth_load(rs_cli_synth *s, const char *command)
     return RS_EXIT_OK;
 }
 
+int rs_cli_synth_load(rs_cli_synth *s, const char *command, int argc, char **argv, int optind)
+{
+    if (optind + 1 != argc)
+        return rs_cli_usage_error(command, "expected one SITE folder");
+    s->site_dir = argv[optind];
+    const int rc = synth_load(s, command);
+    if (rc != RS_EXIT_OK)
+        rs_cli_synth_free(s);
+    return rc;
+}
+
 int rs_cli_scene(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -148,13 +157,8 @@ int rs_cli_scene(int argc, char **argv)
         if ((rc = rs_cli_synth_option(&s, "scene", c, optarg)) != 0)
             return rc > 0 ? rc : rs_cli_usage_error("scene", "unexpected option");
     }
-    if (optind + 1 != argc)
-        return rs_cli_usage_error("scene", "expected one SITE folder");
-    s.site_dir = argv[optind];
-    if ((rc = rs_cli_synth_load(&s, "scene")) != RS_EXIT_OK) {
-        rs_cli_synth_free(&s);
+    if ((rc = rs_cli_synth_load(&s, "scene", argc, argv, optind)) != RS_EXIT_OK)
         return rc;
-    }
     rs_err err = {0};
     rs_synth_povcam cam;
     rs_status st = RS_OK;

@@ -41,7 +41,8 @@ enum { RS_CLI_SYNTH_CALIB = 1000, RS_CLI_SYNTH_CAMERA, RS_CLI_SYNTH_VEHICLES, RS
         {"time", required_argument, NULL, RS_CLI_SYNTH_TIME},                                    \
         {"output", required_argument, NULL, 'o'}, {"help", no_argument, NULL, 'h'}
 
-// Checks the required options, then loads everything. Returns an exit code (RS_EXIT_OK on
-// success; messages printed).
-int rs_cli_synth_load(rs_cli_synth *s, const char *command);
+// Takes the one positional argument (SITE) left after option parsing (argv[optind..]), checks
+// the required options, then loads everything. Returns an exit code (RS_EXIT_OK on success;
+// messages printed; on failure *s is freed).
+int rs_cli_synth_load(rs_cli_synth *s, const char *command, int argc, char **argv, int optind);
 void rs_cli_synth_free(rs_cli_synth *s); // NULL-safe

@@ -122,3 +122,12 @@ def box_corners_enu(v, L, W, H):
 def shutil_which_povray():
     import shutil
     return shutil.which(os.environ.get("ROADSIDE_POVRAY", "povray"))
+
+
+def small_pinhole(tmp, width=320, height=200):
+    """The demo's cam1 as a small pinhole in tmp/calib: (calib_dir, model, W, H, lens, intr)."""
+    calib = os.path.join(tmp, "calib")
+    model = scaled_camera(calib, "cam1", width, True, height=height)
+    W, H = model.imagersize()
+    lens, intr = model.intrinsics()
+    return calib, model, W, H, lens, intr

@@ -33,10 +33,7 @@ def main():
     import cv2
     import mrcal
     with tempfile.TemporaryDirectory() as tmp:
-        calib = os.path.join(tmp, "calib")
-        model = u.scaled_camera(calib, "cam1", 320, True, height=200)
-        W, H = model.imagersize()
-        lens, intr = model.intrinsics()
+        calib, model, W, H, lens, intr = u.small_pinhole(tmp)
         vs = u.ground_vehicles(model, 6, SEED, v_range=(0.5, 0.9))
         for v in vs:
             v["length"], v["width"], v["height"] = DIMS

@@ -20,10 +20,7 @@ def main():
     u.need_povray()
     import mrcal
     with tempfile.TemporaryDirectory() as tmp:
-        calib = os.path.join(tmp, "calib")
-        model = u.scaled_camera(calib, "cam1", 320, True, height=200)
-        W, H = model.imagersize()
-        lens, intr = model.intrinsics()
+        calib, model, W, H, lens, intr = u.small_pinhole(tmp)
         rt_enu_cam = mrcal.invert_rt(model.extrinsics_rt_fromref())
         c = rt_enu_cam[3:]
 
