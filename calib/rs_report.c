@@ -654,7 +654,10 @@ rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const
     char title[512];
     snprintf(title, sizeof title, "roadside report: %s", site->name);
     if (!st) st = rs_doc_write_html(&doc, title, opt.figure_width_px, html_path, err);
-    if (!st) st = rs_doc_write_pdf(&doc, title, pdf_path, err);
+    if (!st) {
+        st = rs_doc_write_pdf(&doc, title, pdf_path, err);
+        if (st) remove(html_path); // no HTML without its PDF: the two are one report
+    }
     if (!st && summary) {
         summary->Ncameras = rep.Ncameras;
         summary->Nfigures = doc.Nfigures;

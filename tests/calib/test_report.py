@@ -5,7 +5,8 @@ Modes (one meson test each):
   html      the HTML is self-contained (no script, no link, no external URL, every image a PNG
             data URI), has 1 + 2 per camera figures, each a valid non-blank PNG of the size its
             <img> says; a background PNG put in backgrounds/cam1/ (and a JPEG in cam2/) shows
-            through in that camera's image; the ground grid drawn in cam1's image lies where mrcal's Python projects the
+            through in that camera's image; cam1's residual vectors run along <id>.json's
+            residuals times the magnification the caption states; the ground grid drawn in cam1's image lies where mrcal's Python projects the
             grid's crossings through out/cam1.cameramodel (oracle; >= 90% of the visible
             crossings within 1.5 px of a grid-coloured pixel)
   escape    a site name and a camera note holding markup come out escaped, never as markup
@@ -164,6 +165,26 @@ def mode_html(tmp):
     close = np.all(np.abs(cam2.reshape(-1, 3).astype(float) - (150, 60, 30)) <= 6, axis=1).mean()
     check(close > 0.5, f"JPEG background view.JPG fills most of cam2's image ({100 * close:.0f}% of pixels)")
 
+    # residual vectors: magnified by the factor the caption states, in the direction of
+    # <id>.json's residual (oracle: the calibration's own numbers)
+    m = re.search(r"inlier residual vectors magnified (\d+(?:\.\d+)?) times", p.imgs[1]["alt"])
+    check(m, "cam1's caption states the magnification")
+    mag = float(m.group(1)) if m else 1.0
+    lms = json.load(open(os.path.join(calib, "cam1.json")))["landmarks"]
+    pink = np.all(np.abs(cam1.astype(float) - (0.6 * 255, 0.2 * 255, 255)) < 40, axis=2)  # BGR of (1, 0.2, 0.6)
+    n_long = n_hit = 0
+    for l in lms:
+        r = np.array(l["residual_px"]) * mag
+        if not l["inlier"] or np.linalg.norm(r) < 25:
+            continue
+        n_long += 1
+        x, y = np.array(l["observed_px"]) + 0.5 + 0.7 * r  # 70% along the vector, past the marker
+        x0, y0 = int(np.floor(x)), int(np.floor(y))
+        n_hit += bool(pink[max(y0 - 1, 0):y0 + 2, max(x0 - 1, 0):x0 + 2].any())
+    print(f"magnification x{mag:g}: {n_hit}/{n_long} long residual vectors found along their direction")
+    check(n_long >= 3 and n_hit == n_long, f"residual vectors drawn x{mag:g} along <id>.json's residuals "
+          f"({n_hit}/{n_long})")
+
     # ground grid vs mrcal's Python projection of the grid crossings (grid 5 m, range 100 m)
     model = mrcal.cameramodel(os.path.join(calib, "cam1.cameramodel"))
     rt = model.extrinsics_rt_fromref()
@@ -177,10 +198,10 @@ def mode_html(tmp):
     pc = mrcal.transform_point_rt(rt, pts)
     q = mrcal.project(pc, lens, intr)
     # crossings inside the image, in front, not too far off-axis, clear of the legend box
-    # (top-left 20% x 25%) and of the landmark markers/labels (40 px)
+    # (top-left 28% x 26%) and of the landmark markers/labels (40 px)
     obs = np.array([l["observed_px"] for l in json.load(open(os.path.join(calib, "cam1.json")))["landmarks"]])
     ok = (pc[:, 2] > 1) & (q[:, 0] > 5) & (q[:, 0] < W - 6) & (q[:, 1] > 5) & (q[:, 1] < H - 40)
-    ok &= ~((q[:, 0] < 0.2 * W) & (q[:, 1] < 0.25 * H))
+    ok &= ~((q[:, 0] < 0.28 * W) & (q[:, 1] < 0.26 * H))
     ok &= np.min(np.linalg.norm(q[:, None, :] - obs[None, :, :], axis=2), axis=1) > 40
     # and really seen: far off-axis points fold back into the image through the distortion
     # polynomial; keep those whose pixel unprojects back along their own ray
