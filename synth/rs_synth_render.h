@@ -18,9 +18,11 @@
 // 5. ID pass: no lights, flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
 //    per-pixel vehicle index 0 = background, k+1 = vehicle k (16-bit); resampled with
 //    nearest-neighbour into the real lens.
-// povray runs with its working directory and every read/write confined to the output folder:
-// a povray.conf there sets File_IO_Security (restricted) with only that folder in read/write
-// paths, and +L/-L library paths are not inherited. Its stderr goes to OUT/povray.log.
+// povray runs in the output folder with HOME set to it, where a povray.conf sets File I/O
+// Security "restricted" with only that folder permitted (POVINC/POVINI unset). Measured caveat
+// (docs/povray.md): Debian's povray 3.7.0.10 did not enforce it against #fopen in a test, so the
+// real guarantee is that roadside's scenes contain no file operations. Its output goes to
+// OUT/povray.log.
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
