@@ -23,6 +23,7 @@ static const command commands[] = {
     {"report", rs_cli_report, "a per-intersection calibration report (HTML and PDF)"},
     {"scene", rs_cli_scene, "write a POV-Ray scene of vehicles seen by a calibrated camera"},
     {"render", rs_cli_render, "render a scene with POV-Ray and write its labels"},
+    {"background", rs_cli_background, "background images of a camera: temporal median of video or frames"},
     {"traffic", rs_cli_traffic, "vehicle placements for a site: built-in lanes or SUMO"},
     {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
     {"bench", rs_cli_bench, "benchmarks: run time against error"},

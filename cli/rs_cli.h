@@ -19,6 +19,9 @@ int rs_cli_audit(int argc, char **argv);
 int rs_cli_report(int argc, char **argv);
 int rs_cli_scene(int argc, char **argv);
 int rs_cli_render(int argc, char **argv);
+int rs_cli_background(int argc, char **argv);
+// `roadside site render-backgrounds`, living with `roadside background` in cmd_background.c
+int rs_cli_site_render_backgrounds(int argc, char **argv);
 int rs_cli_traffic(int argc, char **argv);
 int rs_cli_eval(int argc, char **argv);
 int rs_cli_bench(int argc, char **argv);
