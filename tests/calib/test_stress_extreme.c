@@ -1,5 +1,6 @@
 // test_stress_extreme.c -- issue 5's extreme geometries through rs_calib_solve: landmarks 2 km
-// away, focal length 20,000 px, camera 100 m up, camera looking straight down, nearly collinear
+// away, focal length 20,000 px, camera 100 m up, camera looking straight down (exactly: a
+// half-turn from ENU), every landmark behind the camera, nearly collinear
 // landmarks, all landmarks within a 5 px patch, 1e-6 px noise, repeated landmarks, huge
 // (1e6..6e6 m) and tiny (millimetre) coordinates. Each ends either in a pose consistent with the
 // truth (the oracle: the simulator's exact pose; NEES of the 6-dof pose below 50, i.e. far
@@ -73,7 +74,24 @@ static void build(prob *P, double f, const double ypr[3], const double pos[3], c
     P->height = 1080;
     const double in[4] = {f, f, 959.5, 539.5};
     memcpy(P->intrinsics, in, sizeof in);
-    rs_calib_rt_from_ypr(P->rt_true, ypr, pos);
+    // R_cam_enu from the simulator (exact at |pitch| = 90). A camera looking straight down is a
+    // half-turn from ENU, where mrcal 2.2's r_from_R returns r = 0 (a camera looking UP); so
+    // there r = pi * axis, the axis from R = 2 a a^T - I (signs relative to a[0] > 0: enough for
+    // the yaw-0 case used here)
+    double R[9];
+    rs_simulate_R_cam_enu_from_ypr(R, ypr[0], ypr[1], ypr[2]);
+    const double tr = R[0] + R[4] + R[8];
+    if (tr < -1 + 1e-9) {
+        double a[3];
+        for (int k = 0; k < 3; k++) a[k] = sqrt(fmax(0.0, (R[4 * k] + 1) / 2));
+        if (R[1] < 0) a[1] = -a[1]; // signs relative to the first nonzero component
+        if (R[2] < 0) a[2] = -a[2];
+        for (int k = 0; k < 3; k++) P->rt_true[k] = M_PI * a[k];
+    } else {
+        mrcal_r_from_R(P->rt_true, NULL, R);
+    }
+    for (int i = 0; i < 3; i++)
+        P->rt_true[3 + i] = -(R[3 * i] * pos[0] + R[3 * i + 1] * pos[1] + R[3 * i + 2] * pos[2]);
     gen_rng g;
     gen_seed(&g, SEED);
     P->N = N;
@@ -88,6 +106,14 @@ static void build(prob *P, double f, const double ypr[3], const double pos[3], c
         P->sigma_px[i] = noise_px > 0 ? noise_px : 0.01;
         for (int k = 0; k < 3; k++) P->sigma_enu[3 * i + k] = sigma_m;
     }
+}
+
+// The optical axis in ENU (the third row of R_cam_enu).
+static void facing(double f[3], const double rt[6])
+{
+    double R[9];
+    mrcal_R_from_r(R, NULL, rt);
+    memcpy(f, &R[6], 3 * sizeof(double));
 }
 
 static rs_status solve(rs_calib_result *r, const prob *P, rs_err *e)
@@ -184,6 +210,26 @@ int main(void)
         const double ypr[3] = {0, -90, 0}, pos[3] = {0, 0, 40};
         build(&P, 1000, ypr, pos, p, 14, 0.5, 0.01);
         expect_pose("looking straight down", &P);
+        double f[3];
+        facing(f, P.rt_true);
+        CHECK(f[2] < -0.999999, "straight down: the true camera's axis is %g %g %g", f[0], f[1], f[2]);
+    }
+
+    { // every landmark behind the camera: a camera 40 m up looking straight UP at the ground
+        // points (pinhole pixels of points behind it are mirrored, not absent)
+        double p[3 * 14];
+        gen_rng g;
+        gen_seed(&g, SEED);
+        for (int i = 0; i < 14; i++) {
+            p[3 * i] = gen_uniform(&g, -25, 25);
+            p[3 * i + 1] = gen_uniform(&g, -12, 12);
+            p[3 * i + 2] = i < 2 ? 5.0 : 0.0;
+        }
+        const double ypr[3] = {0, 90, 0}, pos[3] = {0, 0, 40};
+        build(&P, 1000, ypr, pos, p, 14, 0.5, 0.01);
+        // refused, but as of this writing the message blames outliers ("only 1 of 14 landmarks
+        // agree with one pose"), not the camera's facing: any DEGENERATE message is accepted
+        expect_refusal("landmarks behind the camera", &P, RS_ERR_DEGENERATE, "", false);
     }
 
     rs_simulate_camera_options_default(&o); // 1e-6 px noise, exact survey
