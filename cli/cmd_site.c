@@ -14,6 +14,7 @@ static void usage(FILE *out)
             "       roadside site describe [--landmarks] SITE\n"
             "       roadside site init NAME --origin LAT,LON,H [--orthometric N] [--name TEXT]\n"
             "       roadside site simulate ...   (see 'roadside site simulate --help')\n"
+            "       roadside site render-backgrounds ...   (see its --help)\n"
             "\n"
             "A site is a folder: site.json, landmarks.geojson, cameras/<id>.cameramodel,\n"
             "observations/<id>.csv, backgrounds/<id>/ (format: docs/site-format.md).\n"
@@ -37,6 +38,7 @@ static void usage(FILE *out)
             "                                metres (h_ell = h + N); default: ellipsoidal\n"
             "            --name TEXT         the site's name (default: the folder's last part)\n"
             "  simulate  makes a synthetic site with known cameras (see its --help).\n"
+            "  render-backgrounds  ray-traces synthetic backgrounds of the site's ground.\n"
             "\n"
             "Exit status: 0 ok, 1 failure, 2 usage error.\n");
 }
@@ -205,6 +207,7 @@ int rs_cli_site(int argc, char **argv)
     }
     const char *sub = argv[1];
     if (!strcmp(sub, "simulate")) return rs_cli_site_simulate(argc - 1, argv + 1);
+    if (!strcmp(sub, "render-backgrounds")) return rs_cli_site_render_backgrounds(argc - 1, argv + 1);
     if (!strcmp(sub, "-h") || !strcmp(sub, "--help") || rs_cli_wants_help(argc - 1, argv + 1)) {
         usage(stdout);
         return RS_EXIT_OK;
@@ -212,5 +215,5 @@ int rs_cli_site(int argc, char **argv)
     if (!strcmp(sub, "check")) return cmd_check(argc - 1, argv + 1);
     if (!strcmp(sub, "describe")) return cmd_describe(argc - 1, argv + 1);
     if (!strcmp(sub, "init")) return cmd_init(argc - 1, argv + 1);
-    return rs_cli_usage_error("site", "unknown subcommand '%s': check, describe, init or simulate", sub);
+    return rs_cli_usage_error("site", "unknown subcommand '%s': check, describe, init, simulate or render-backgrounds", sub);
 }
