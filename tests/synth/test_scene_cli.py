@@ -15,10 +15,37 @@ EVIL = ['a"b', '#declare Evil = 1;', 'x\n#include "/etc/passwd"\n', '}} sphere {
         '//\n#fopen F "/tmp/owned" write', '\\" #end']
 
 
+def check_camera(text, model):
+    """POV-Ray's ray through the centre of pixel (i, j) (docs/povray.md: x_s = (i+0.5)/W - 0.5,
+    y_s = 0.5 - (j+0.5)/H, D + x_s R + y_s U), taken back to ENU and projected by mrcal, must
+    land on (i, j): 1e-9 px over a grid including the corners."""
+    import mrcal
+    import numpy as np
+    vec = {}
+    for name in ("location", "right", "up", "direction"):
+        m = re.search(name + r"\s+<([^>]*)>", text)
+        x, y, z = map(float, m.group(1).split(","))
+        vec[name] = np.array([x, z, y])  # <e, u, n> -> ENU
+    W, H = model.imagersize()
+    lens, intr = model.intrinsics()
+    i, j = np.meshgrid(np.linspace(0, W - 1, 9), np.linspace(0, H - 1, 7))
+    xs = (i + 0.5) / W - 0.5
+    ys = 0.5 - (j + 0.5) / H
+    d = vec["direction"] + xs[..., None] * vec["right"] + ys[..., None] * vec["up"]
+    p = vec["location"] + 50 * d
+    q = mrcal.project(mrcal.transform_point_rt(model.extrinsics_rt_fromref(), p), lens, intr)
+    err = np.abs(q - np.stack((i, j), axis=-1)).max()
+    print("POV-Ray camera rays vs mrcal.project: max %.2e px (fx %.3f fy %.3f cx %.3f cy %.3f)"
+          % (err, *intr[:4]))
+    if not np.isfinite(err) or err > 1e-9:
+        u.fail("POV-Ray camera rays miss their pixels by %.3g px" % err)
+
+
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         calib = os.path.join(tmp, "calib")
-        model = u.scaled_camera(calib, "cam1", 160, True, height=100)
+        model = u.scaled_camera(calib, "cam1", 160, True, height=100, fy_over_fx=0.93, dcx=-6.2,
+                                dcy=3.7)
         vs = u.ground_vehicles(model, 6, 3)
         for v, evil in zip(vs, EVIL):
             v["id"] = evil
@@ -44,6 +71,8 @@ def main():
             u.fail("the .ini does not carry the exact size:\n" + ini)
         if "look_at" in text or "angle" in text:
             u.fail("the camera must use explicit vectors only")
+        import mrcal
+        check_camera(text, mrcal.cameramodel(os.path.join(calib, "cam1.cameramodel")))
         # povray parses and renders it (the evil ids must not break parsing either)
         if u.shutil_which_povray():
             os.makedirs(os.path.join(tmp, ".povray", "3.7"), exist_ok=True)
