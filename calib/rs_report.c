@@ -396,6 +396,9 @@ static rs_status camera_load(rs_report_camera *cam, const rs_site *site, const c
             fclose(f);
     }
     if (!st) st = rs_calib_camera_read(&cam->model, model_path, err);
+    if (!st && (cam->model.width < 1 || cam->model.height < 1))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: imagersize: %d x %d: the report needs the image size", model_path,
+                        cam->model.width, cam->model.height);
     if (!st) st = read_result_json(cam, site, json_path, err);
     if (!st && !rs_report_camera_geometry(cam)) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", id);
     if (!st) st = read_background(cam, site, err);

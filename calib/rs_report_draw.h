@@ -100,8 +100,8 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
 void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx);
 
 // Fills cam->max_tan, cam->fov_en_m/Nfov (ground seen within range_m of the camera's (E, N),
-// on the site's ground plane) and cam->magnification (a 1-2-5 number making the median inlier
-// residual ~1.5% of the image width). Returns false when out of memory.
+// on the site's ground plane) and cam->magnification (1, 2, 2.5 or 5 times a power of ten,
+// >= 1, making the median inlier residual ~1.5% of the image width). Returns false when out of memory.
 bool rs_report_camera_geometry(rs_report_camera *cam);
 
 #ifdef __cplusplus
