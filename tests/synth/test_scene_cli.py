@@ -86,6 +86,21 @@ def main():
                                                                   r.stderr[-2000:]))
             if os.path.exists("/tmp/owned"):
                 u.fail("the scene wrote a file")
+        # a user model used twice is declared once and instanced
+        with open(os.path.join(tmp, "box.obj"), "w") as f:
+            f.write("v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nv 0 0 1\nv 2 0 1\nv 2 1 1\nv 0 1 1\n"
+                    "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n")
+        two = [{"model": "box.obj", "scale": 2, "e": v["e"], "n": v["n"], "yaw_deg": 10 * k,
+                "id": "m%d" % k} for k, v in enumerate(vs[:2])] + vs[2:3]
+        u.write_json(os.path.join(tmp, "two.json"), two)
+        pov2 = os.path.join(tmp, "two.pov")
+        u.run(["scene", u.DEMO, "--calib", calib, "--camera", "cam1", "--vehicles",
+               os.path.join(tmp, "two.json"), "-o", pov2])
+        text2 = open(pov2).read()
+        decl = re.findall(r"#declare (RS_MESH_[0-9]+)", text2)
+        uses = re.findall(r"object \{ (RS_MESH_[0-9]+)", text2)
+        if len(decl) != 2 or len(uses) != 3 or uses[0] != uses[1]:
+            u.fail("OBJ model twice + 1 procedural: declared %s, used %s" % (decl, uses))
         # bad inputs: exit 1, a message naming file, index and field, nothing written
         bad_cases = [
             ([{"class": "sedan", "e": 1, "n": 2}], "[0].yaw_deg"),
