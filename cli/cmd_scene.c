@@ -187,7 +187,7 @@ int rs_cli_scene(int argc, char **argv)
         rs_io_atomic_abort(&a);
         goto done;
     }
-    if ((st = rs_synth_scene_write_ini(ini, s.output, &cam, RS_SYNTH_PASS_COLOUR, &err))) {
+    if ((st = rs_synth_scene_write_ini(ini, s.output, &cam, RS_SYNTH_PASS_COLOUR, 0, &err))) {
         rs_io_atomic_abort(&a);
         goto done;
     }

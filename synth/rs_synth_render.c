@@ -237,20 +237,8 @@ static rs_status render_pass(rs_synth_image *img, const char *out_dir, const cha
         goto done;
     }
     if ((st = rs_io_atomic_commit(&a, err)) ||
-        (st = rs_synth_scene_write_ini(ini, pov, cam, sopt->pass, err)))
+        (st = rs_synth_scene_write_ini(ini, pov, cam, sopt->pass, antialias, err)))
         goto done;
-    if (antialias >= 2) {
-        // Antialiasing for the colour pass: appended to the .ini (non-adaptive, no jitter)
-        FILE *f = fopen(ini, "a");
-        if (!f) {
-            st = rs_err_set(err, RS_ERR_IO, "%s: %s", ini, strerror(errno));
-            goto done;
-        }
-        fprintf(f, "Antialias=On\nSampling_Method=1\nAntialias_Threshold=0.0\n"
-                   "Antialias_Depth=%d\n",
-                antialias > 9 ? 9 : antialias);
-        fclose(f);
-    }
     snprintf(file, sizeof(file), "%s.ini", name);
     if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err)))
         goto done;

@@ -550,7 +550,8 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
 }
 
 rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
-                                   const rs_synth_povcam *cam, rs_synth_pass pass, rs_err *err)
+                                   const rs_synth_povcam *cam, rs_synth_pass pass, int antialias,
+                                   rs_err *err)
 {
     const char *base = strrchr(pov_path, '/');
     base = base ? base + 1 : pov_path;
@@ -563,6 +564,9 @@ rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
         if (!(isalnum((unsigned char)*c) || *c == '_' || *c == '.' || *c == '-'))
             return rs_err_set(err, RS_ERR_INVALID,
                               "%s: the scene's file name may only use [A-Za-z0-9_.-]", pov_path);
+    char ini_base[256];
+    sanitise(ini_base, sizeof(ini_base),
+             strrchr(ini_path, '/') ? strrchr(ini_path, '/') + 1 : ini_path);
     char text[8192];
     const bool id_pass = pass == RS_SYNTH_PASS_ID;
     const int len = snprintf(
@@ -572,9 +576,14 @@ rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
         "Input_File_Name=%s\nOutput_File_Name=%s.png\nOutput_File_Type=N\n"
         "Width=%d\nHeight=%d\nAntialias=Off\nJitter=Off\nOutput_Alpha=%s\nBits_Per_Color=%d\n"
         "File_Gamma=1.0\nDisplay=Off\nPause_When_Done=Off\nVerbose=Off\n",
-        base, id_pass ? "object-ID" : "colour", strrchr(ini_path, '/') ? strrchr(ini_path, '/') + 1 : ini_path,
-        base, out_name, cam->width, cam->height, id_pass ? "Off" : "On", id_pass ? 8 : 16);
+        base, id_pass ? "object-ID" : "colour", ini_base, base, out_name, cam->width, cam->height, id_pass ? "Off" : "On", id_pass ? 8 : 16);
     if (len < 0 || (size_t)len >= sizeof(text))
         return rs_err_set(err, RS_ERR_INVALID, "%s: name too long", ini_path);
-    return rs_io_write_file(ini_path, text, (size_t)len, err);
+    int total = len;
+    if (antialias >= 2 && !id_pass)
+        total += snprintf(text + len, sizeof(text) - (size_t)len,
+                          "Antialias=On\nSampling_Method=1\nAntialias_Threshold=0.0\n"
+                          "Antialias_Depth=%d\n",
+                          antialias > 9 ? 9 : antialias);
+    return rs_io_write_file(ini_path, text, (size_t)total, err);
 }

@@ -133,11 +133,14 @@ rs_status rs_synth_scene_write(FILE *f,
                                const rs_synth_prepared *vehicles,
                                const rs_synth_scene_options *opt, rs_err *err);
 
-// Writes the .ini matching a scene: Input_File_Name (the .pov's base name, same folder),
-// Width/Height, no antialiasing, Output_Alpha, File_Gamma 1 for the ID pass, and no file I/O
-// beyond the .pov's folder. Both files are written atomically.
+// Writes the .ini matching a scene, atomically: Input_File_Name (the .pov's base name, same
+// folder; it may only use [A-Za-z0-9_.-]), Output_File_Name (the same with .png), Width/Height,
+// File_Gamma 1 (linear output), 16-bit RGBA for the colour pass, 8-bit RGB for the ID pass.
+// antialias: 0 none; n >= 2: n x n non-adaptive supersampling without jitter (+A0 +AM1 +Rn,
+// colour pass only).
 rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
-                                   const rs_synth_povcam *cam, rs_synth_pass pass, rs_err *err);
+                                   const rs_synth_povcam *cam, rs_synth_pass pass, int antialias,
+                                   rs_err *err);
 
 #ifdef __cplusplus
 }
