@@ -119,6 +119,55 @@ void rs_doc_free(rs_doc *doc)
     memset(doc, 0, sizeof *doc);
 }
 
+// ---- text ----
+
+// Length of the valid UTF-8 sequence starting at s (1..4), 0 when s does not start one.
+static int utf8_len(const unsigned char *s)
+{
+    int n = s[0] < 0x80 ? 1 : (s[0] & 0xE0) == 0xC0 ? 2 : (s[0] & 0xF0) == 0xE0 ? 3 : (s[0] & 0xF8) == 0xF0 ? 4 : 0;
+    if (n == 2 && s[0] < 0xC2) return 0; // overlong
+    for (int k = 1; k < n; k++)
+        if ((s[k] & 0xC0) != 0x80) return 0;
+    if (n == 3 && ((s[0] == 0xE0 && s[1] < 0xA0) || (s[0] == 0xED && s[1] >= 0xA0))) return 0; // overlong, surrogate
+    if (n == 4 && ((s[0] == 0xF0 && s[1] < 0x90) || s[0] > 0xF4 || (s[0] == 0xF4 && s[1] >= 0x90))) return 0;
+    return n;
+}
+
+// A copy of s with every byte that does not start a valid UTF-8 sequence replaced by '?'.
+// Returns NULL when out of memory.
+static char *utf8_clean(const char *s)
+{
+    size_t n = strlen(s);
+    char *d = malloc(n + 1);
+    if (!d) return NULL;
+    for (size_t i = 0; i < n;) {
+        int k = utf8_len((const unsigned char *)s + i);
+        if (k == 0) {
+            d[i++] = '?';
+            continue;
+        }
+        memcpy(d + i, s + i, (size_t)k);
+        i += (size_t)k;
+    }
+    d[n] = 0;
+    return d;
+}
+
+void rs_doc_show_text(cairo_t *cr, const char *s)
+{
+    char *c = utf8_clean(s);
+    if (c) cairo_show_text(cr, c);
+    free(c);
+}
+
+void rs_doc_text_extents(cairo_t *cr, const char *s, cairo_text_extents_t *e)
+{
+    char *c = utf8_clean(s);
+    memset(e, 0, sizeof *e);
+    if (c) cairo_text_extents(cr, c, e);
+    free(c);
+}
+
 // ---- PNG in memory ----
 
 typedef struct {
@@ -177,7 +226,12 @@ static void membuf_escaped(membuf *m, const char *s)
         case '"': membuf_str(m, "&quot;"); break;
         case '\'': membuf_str(m, "&#39;"); break;
         default:
-            if (c >= 0x20 || c == '\t' || c == '\n') membuf_add(m, s, 1);
+            if (c >= 0x80) { // a whole UTF-8 sequence, or '?' for a byte that does not start one
+                int k = utf8_len((const unsigned char *)s);
+                membuf_add(m, k ? s : "?", k ? (size_t)k : 1);
+                s += k ? k - 1 : 0;
+            } else if (c >= 0x20 || c == '\t' || c == '\n')
+                membuf_add(m, s, 1);
         }
     }
 }
@@ -326,7 +380,7 @@ static void pdf_font(cairo_t *cr, double size, bool bold, bool italic)
 static double text_width(cairo_t *cr, const char *s)
 {
     cairo_text_extents_t e;
-    cairo_text_extents(cr, s, &e);
+    rs_doc_text_extents(cr, s, &e);
     return e.x_advance;
 }
 
@@ -338,9 +392,9 @@ static void pdf_footer(pdf_state *p)
     char buf[64];
     snprintf(buf, sizeof buf, "page %d", p->page);
     cairo_move_to(cr, page_w - margin - text_width(cr, buf), page_h - margin / 2);
-    cairo_show_text(cr, buf);
+    rs_doc_show_text(cr, buf);
     cairo_move_to(cr, margin, page_h - margin / 2);
-    cairo_show_text(cr, p->title);
+    rs_doc_show_text(cr, p->title);
 }
 
 static void pdf_new_page(pdf_state *p)
@@ -385,7 +439,7 @@ static void pdf_text(pdf_state *p, const char *text, double size, bool bold, boo
         pdf_font(cr, size, bold, italic);
         cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
         cairo_move_to(cr, margin + indent, p->y + size);
-        cairo_show_text(cr, line);
+        rs_doc_show_text(cr, line);
         p->y += lh;
         s += best;
         while (*s == ' ') s++;
@@ -393,25 +447,23 @@ static void pdf_text(pdf_state *p, const char *text, double size, bool bold, boo
     free(line);
 }
 
-// Cell text cut to width w with "..." when too long.
+// Cell text cut to width w with "..." when too long (at a UTF-8 character boundary).
 static void pdf_cell(cairo_t *cr, const char *s, double x, double y, double w, bool right)
 {
     char buf[256];
-    snprintf(buf, sizeof buf, "%s", s);
-    size_t n = strlen(buf);
-    while (n > 0 && text_width(cr, buf) > w) {
+    size_t len = strlen(s), n = len < sizeof buf - 4 ? len : sizeof buf - 4;
+    bool cut = n < len;
+    for (;;) {
+        while (n > 0 && ((unsigned char)s[n] & 0xC0) == 0x80) n--;
+        memcpy(buf, s, n);
+        strcpy(buf + n, cut ? "..." : "");
+        if (n == 0 || text_width(cr, buf) <= w) break;
         n--;
-        if (n >= 3) {
-            buf[n - 3] = 0;
-            strcat(buf, "...");
-        } else
-            buf[n] = 0;
-        n = strlen(buf);
-        if (n <= 3) break;
+        cut = true;
     }
     double tw = text_width(cr, buf);
     cairo_move_to(cr, right ? x + w - tw : x, y);
-    cairo_show_text(cr, buf);
+    rs_doc_show_text(cr, buf);
 }
 
 static void pdf_table(pdf_state *p, const rs_doc_block *b)
@@ -512,7 +564,9 @@ rs_status rs_doc_write_pdf(const rs_doc *doc, const char *title, const char *pat
     if (st) return st;
     pdf_sink sink = {&a, false};
     cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(pdf_write_cb, &sink, page_w, page_h);
-    cairo_pdf_surface_set_metadata(surface, CAIRO_PDF_METADATA_TITLE, title);
+    char *clean_title = utf8_clean(title);
+    if (clean_title) cairo_pdf_surface_set_metadata(surface, CAIRO_PDF_METADATA_TITLE, clean_title);
+    free(clean_title);
     cairo_pdf_surface_set_metadata(surface, CAIRO_PDF_METADATA_CREATOR, "roadside report");
     cairo_t *cr = cairo_create(surface);
     pdf_state p = {cr, margin, 1, title};

@@ -63,6 +63,12 @@ rs_status rs_doc_write_html(const rs_doc *doc, const char *title, int figure_wid
 // their header repeated.
 rs_status rs_doc_write_pdf(const rs_doc *doc, const char *title, const char *path, rs_err *err);
 
+// cairo_show_text / cairo_text_extents on text that may not be valid UTF-8 (site files are not
+// checked for it): each byte that does not start a valid UTF-8 sequence is shown as '?'.
+// Without this a single bad byte puts the cairo context, and so the whole PDF, in error.
+void rs_doc_show_text(cairo_t *cr, const char *s);
+void rs_doc_text_extents(cairo_t *cr, const char *s, cairo_text_extents_t *e);
+
 // A cairo surface rendered as PNG into memory. *png is malloc'ed (caller frees).
 rs_status rs_doc_png(unsigned char **png, size_t *len, cairo_surface_t *surface, rs_err *err);
 

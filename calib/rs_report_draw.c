@@ -1,5 +1,6 @@
 // rs_report_draw.c -- the report's figures (see rs_report_draw.h).
 #include "rs_report_draw.h"
+#include "rs_report_doc.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -59,7 +60,7 @@ static void font(cairo_t *cr, double size, bool bold)
 static void label(cairo_t *cr, double x, double y, const char *s, double box_alpha)
 {
     cairo_text_extents_t e;
-    cairo_text_extents(cr, s, &e);
+    rs_doc_text_extents(cr, s, &e);
     double pad = 0.25 * e.height + 1;
     cairo_save(cr);
     if (box_alpha > 0) {
@@ -69,13 +70,13 @@ static void label(cairo_t *cr, double x, double y, const char *s, double box_alp
     }
     cairo_restore(cr);
     cairo_move_to(cr, x, y);
-    cairo_show_text(cr, s);
+    rs_doc_show_text(cr, s);
 }
 
 static double text_w(cairo_t *cr, const char *s)
 {
     cairo_text_extents_t e;
-    cairo_text_extents(cr, s, &e);
+    rs_doc_text_extents(cr, s, &e);
     return e.x_advance;
 }
 
@@ -253,7 +254,7 @@ static void legend_row(cairo_t *cr, double x, double y, double fs, legend_shape 
     cairo_restore(cr);
     cairo_set_source_rgb(cr, 0, 0, 0);
     cairo_move_to(cr, x + fs * 1.6, y);
-    cairo_show_text(cr, text);
+    rs_doc_show_text(cr, text);
 }
 
 void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
@@ -377,7 +378,7 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
     snprintf(buf, sizeof buf, "%g px", bar_px);
     cairo_set_source_rgb(cr, 0, 0, 0);
     cairo_move_to(cr, bx + blen + fs * 0.4, by + fs * 0.35);
-    cairo_show_text(cr, buf);
+    rs_doc_show_text(cr, buf);
 
     if (!cam->background) {
         font(cr, fs, false);
@@ -385,7 +386,7 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
         snprintf(buf, sizeof buf, "no background image: neutral canvas, %d x %d px", cam->model.width,
                  cam->model.height);
         cairo_move_to(cr, W * s - text_w(cr, buf) - fs * 0.6, H * s - fs * 0.6);
-        cairo_show_text(cr, buf);
+        rs_doc_show_text(cr, buf);
     }
     cairo_restore(cr);
 }
@@ -510,7 +511,7 @@ static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, do
     snprintf(buf, sizeof buf, "%g m", len_m);
     font(cr, fs, false);
     cairo_move_to(cr, x + len + fs * 0.4, y);
-    cairo_show_text(cr, buf);
+    rs_doc_show_text(cr, buf);
 
     double nx = fs * 1.6, ny = fs * 1.2;
     cairo_move_to(cr, nx, ny);
@@ -521,7 +522,7 @@ static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, do
     cairo_fill(cr);
     font(cr, fs, true);
     cairo_move_to(cr, nx - fs * 0.35, ny + fs * 3.3);
-    cairo_show_text(cr, "N");
+    rs_doc_show_text(cr, "N");
 }
 
 // Landmarks of the site: observed by `cam` (if not NULL) drawn as inlier / outlier, the rest
@@ -554,7 +555,7 @@ static void map_landmarks(cairo_t *cr, const map_view *v, const struct rs_report
             font(cr, fs * 0.7, false);
             cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
             cairo_move_to(cr, x + fs * 0.35, y - fs * 0.35);
-            cairo_show_text(cr, site->landmarks[i].id);
+            rs_doc_show_text(cr, site->landmarks[i].id);
         }
     }
 }
@@ -689,20 +690,20 @@ static void map_colourbar(cairo_t *cr, double w, double h, double cbar_w, double
         cairo_stroke(cr);
         snprintf(buf, sizeof buf, k == 5 ? ">=%g" : "%g", vmax * k / 5);
         cairo_move_to(cr, bx + bw + fs * 0.45, y + fs * 0.3);
-        cairo_show_text(cr, buf);
+        rs_doc_show_text(cr, buf);
     }
     font(cr, fs * 0.8, true);
     static const char *title[3] = {"1-sigma", "ground", "error, m"};
     for (int k = 0; k < 3; k++) {
         cairo_move_to(cr, w - fs * 0.4 - text_w(cr, title[k]), by - fs * (3.4 - k));
-        cairo_show_text(cr, title[k]);
+        rs_doc_show_text(cr, title[k]);
     }
     font(cr, fs * 0.7, false);
     snprintf(buf, sizeof buf, "(%g px", detection_sigma_px);
     cairo_move_to(cr, w - fs * 0.4 - text_w(cr, buf), by + bh + fs * 1.2);
-    cairo_show_text(cr, buf);
+    rs_doc_show_text(cr, buf);
     cairo_move_to(cr, w - fs * 0.4 - text_w(cr, "detection)"), by + bh + fs * 2.1);
-    cairo_show_text(cr, "detection)");
+    rs_doc_show_text(cr, "detection)");
 }
 
 void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
@@ -738,7 +739,7 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
         font(cr, fs, false);
         cairo_set_source_rgb(cr, 0.5, 0.1, 0.1);
         cairo_move_to(cr, fs, fs * 1.5);
-        cairo_show_text(cr, "no uncertainty map (the audit did not run: see below)");
+        rs_doc_show_text(cr, "no uncertainty map (the audit did not run: see below)");
     }
 }
 
@@ -787,12 +788,12 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     for (double e = ceil(-v.ox / v.k / step) * step; v.ox + v.k * e < wmap; e += step) {
         snprintf(buf, sizeof buf, "E %g", e);
         cairo_move_to(cr, v.ox + v.k * e + fs * 0.2, h - fs * 2.6);
-        cairo_show_text(cr, buf);
+        rs_doc_show_text(cr, buf);
     }
     for (double n = ceil((v.oy - h) / v.k / step) * step; v.oy - v.k * n > 0; n += step) {
         snprintf(buf, sizeof buf, "N %g", n);
         cairo_move_to(cr, fs * 0.2, v.oy - v.k * n - fs * 0.2);
-        cairo_show_text(cr, buf);
+        rs_doc_show_text(cr, buf);
     }
 
     for (int c = 0; c < rep->Ncameras; c++) map_fov(cr, &v, &rep->cameras[c], best ? 0 : 0.12, fs * 0.1);

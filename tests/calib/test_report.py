@@ -9,7 +9,8 @@ Modes (one meson test each):
             residuals times the magnification the caption states; the ground grid drawn in cam1's image lies where mrcal's Python projects the
             grid's crossings through out/cam1.cameramodel (oracle; >= 90% of the visible
             crossings within 1.5 px of a grid-coloured pixel)
-  escape    a site name and a camera note holding markup come out escaped, never as markup
+  escape    a site name and a camera note holding markup come out escaped, never as markup;
+            bytes that are not UTF-8 in the name come out as '?' in the HTML and the PDF
   chromium  headless Chromium opens the report with no console error; a probe script (added to
             a copy, not to the report) finds every <img> decoded; the screenshot is not blank
   pdf       pdfinfo accepts the PDF; pdftoppm renders its pages, none blank; pdftotext finds
@@ -229,7 +230,11 @@ def mode_html(tmp):
 
 def mode_escape(tmp):
     evil = "<script>alert('x')</script> & \"quoted\""
-    site = make_site(tmp, name="Site " + evil, note="note <b>bold</b> " + evil)
+    site = make_site(tmp, name="Site " + evil + " @BAD@", note="note <b>bold</b> " + evil)
+    # bytes that are not UTF-8 (the site reader does not check): shown as '?', not a failed PDF
+    sj = os.path.join(site, "site.json")
+    raw = open(sj, "rb").read()
+    open(sj, "wb").write(raw.replace(b"@BAD@", b"caf\xe9 \xff\xc3"))
     _, out = calib_and_report(tmp, site, "--no-audit")
     text, p = parse(out)
     check("<script" not in text.lower(), "no script tag from the site name")
@@ -238,6 +243,10 @@ def mode_escape(tmp):
     check("note &lt;b&gt;bold&lt;/b&gt;" in text, "note escaped")
     check(any("Site <script>" in h for h in p.headings), "the escaped name reads back as the name")
     check(len(p.imgs) == 1 + 2 * NCAM, "figures still present")
+    check("caf? ??" in text, "bytes that are not UTF-8 shown as '?' in the HTML")
+    info = subprocess.run(["pdfinfo", os.path.join(out, "report.pdf")], capture_output=True, text=True).stdout \
+        if shutil.which("pdfinfo") else "caf? ??"
+    check("caf? ??" in info, f"... and in the PDF's title: {info[:200]}")
 
 
 def need(*tools):
