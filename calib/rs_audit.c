@@ -343,7 +343,7 @@ static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *
     if (r->collinearity < 0.1)
         append(w, ws, "the landmarks lie nearly on a line (spread across it only %.0f%% of that along it): the "
                       "rotation about that line is weakly determined", 100 * r->collinearity);
-    if (r->image_hull_share < 0.15)
+    if (r->image_hull_share < 0.15 && !strstr(s->warnings, "of the image")) // the solver's is at 5%
         append(w, ws, "the landmarks cover only %.0f%% of the image: they are clustered, and errors grow away "
                       "from them", 100 * r->image_hull_share);
     if (r->planarity < 0.05 && r->head_on_deg < 25)

@@ -9,7 +9,8 @@
 //   3. the moved-camera test: a camera turned by 0.5 deg is found moved in every draw, with the
 //      rotation estimated within 0.1 deg; an unmoved camera's false alarm rate over 300 noise
 //      draws is binomially consistent with alpha = 0.05;
-//   4. bad input: options, NaN picks, too few new picks.
+//   4. bad input: options, NaN picks, too few new picks;
+//   5. degeneracy words and the image coverage on a hand-made problem whose hull is known.
 // Fixed seeds, printed on failure.
 #include <math.h>
 #include <stdio.h>
@@ -461,6 +462,58 @@ static void test_errors(void)
     rs_simulate_problem_free(sp);
 }
 
+// ---- 5. degeneracy words and image coverage ----
+
+// A pinhole camera 20 m up looking almost straight down at 12 ground landmarks picked on a
+// 300 x 100 px grid: planar landmarks seen head-on, clustered in 3.75% of the image (the hull
+// of the picks is that rectangle exactly).
+static void test_degeneracy(void)
+{
+    current_seed = 0;
+    mrcal_lensmodel_t lm = {.type = MRCAL_LENSMODEL_PINHOLE};
+    const double intrinsics[4] = {800, 800, 499.5, 399.5};
+    const double ypr[3] = {10, -85, 0}, pos[3] = {0, 0, 20};
+    double rt[6], p[12 * 3], q[12 * 2], s3[12 * 3], s1[12];
+    rs_calib_rt_from_ypr(rt, ypr, pos);
+    int N = 0;
+    for (int iu = 0; iu < 4; iu++)
+        for (int iv = 0; iv < 3; iv++, N++) {
+            q[2 * N] = 300 + 100 * iu;
+            q[2 * N + 1] = 300 + 50 * iv;
+            CHECK(rs_calib_locate_ground(&p[3 * N], &lm, intrinsics, rt, &q[2 * N], up, 0, NULL) == RS_OK,
+                  "locate %d", N);
+            s3[3 * N] = s3[3 * N + 1] = s3[3 * N + 2] = 0.01;
+            s1[N] = 1;
+        }
+    rs_calib_problem pb = {.N = N, .p_enu_m = p, .sigma_enu_m = s3, .q_px = q, .sigma_px = s1, .lensmodel = &lm,
+                           .intrinsics = intrinsics, .width = 1000, .height = 800};
+    rs_audit_options opt;
+    rs_audit_options_default(&opt);
+    opt.cell_m = 0.5;
+    opt.range_m = 30;
+    rs_audit_result r;
+    rs_err err = {0};
+    rs_status st = rs_audit_camera(&r, &pb, up, 0, NULL, NULL, NULL, &opt, &err);
+    CHECK(st == RS_OK, "audit: %s", err.msg);
+    if (st == RS_OK) {
+        CHECK(fabs(r.image_hull_share - 0.0375) < 1e-6, "image hull share %.9f, expected 0.0375", r.image_hull_share);
+        CHECK(r.planarity < 1e-6, "planarity %g", r.planarity);
+        // oracle: the landmarks lie on the level ground, so the plane normal is vertical
+        double c[3] = {0, 0, 0};
+        for (int i = 0; i < N; i++)
+            for (int k = 0; k < 3; k++) c[k] += p[3 * i + k] / N;
+        double d[3] = {c[0] - pos[0], c[1] - pos[1], c[2] - pos[2]};
+        double head_on = acos(fabs(d[2]) / sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])) * 180 / M_PI;
+        CHECK(fabs(r.head_on_deg - head_on) < 1e-6, "head-on angle %.9f deg, expected %.9f", r.head_on_deg, head_on);
+        CHECK(strstr(r.warnings, "of the image") && strstr(r.warnings, "head-on"), "warnings '%s'", r.warnings);
+        CHECK(r.collinearity > 0.2, "collinearity %g", r.collinearity);
+        CHECK(!strstr(r.warnings, "line"), "collinear warning on a 2-D grid: '%s'", r.warnings);
+        printf("degeneracy: image share %.4f, planarity %.1e, head-on %.2f deg, warnings: %s\n", r.image_hull_share,
+               r.planarity, r.head_on_deg, r.warnings);
+    }
+    rs_audit_result_free(&r);
+}
+
 int main(void)
 {
     test_leave_one_out(11);
@@ -468,6 +521,7 @@ int main(void)
     test_map(21);
     test_moved(31);
     test_errors();
+    test_degeneracy();
     if (Nfail) printf("%d check(s) FAILED\n", Nfail);
     else printf("all audit checks passed\n");
     return Nfail ? 1 : 0;
