@@ -58,6 +58,7 @@ def main():
     out = os.path.join(tmp, "out")
     r = run("audit", site, "-o", out)
     check(r.returncode in (0, 1), f"audit: exit {r.returncode}: {r.stderr}")
+    check(r.stderr == "", f"audit printed on stderr (the library must not print): {r.stderr[:300]}")
     for cam in ("cam1", "cam2"):
         path = os.path.join(out, cam + ".audit.json")
         check(os.path.exists(path), f"{path} missing")
