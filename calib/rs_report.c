@@ -628,6 +628,7 @@ rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const
         return rs_err_set(err, RS_ERR_INVALID, "report options: range_m > 0, finite grid_m and figure_width_px in "
                           "[200, 10000] expected");
     if (site->Ncameras < 1) return rs_err_set(err, RS_ERR_INVALID, "%s: the site has no camera", site->dir);
+    opt.audit_options.range_m = opt.range_m; // one range for the figures and the maps
 
     struct rs_report_ctx rep = {.site = site, .range_m = opt.range_m};
     rep.grid_m = opt.grid_m > 0 ? opt.grid_m : opt.range_m / 10;

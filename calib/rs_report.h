@@ -49,7 +49,8 @@ typedef struct {
     int figure_width_px;     // width of the HTML's PNG figures (default 1000, >= 200)
     bool audit;              // run the audit for leave-one-out figures, the uncertainty map
                              //   and the warnings (default true)
-    rs_audit_options audit_options; // (default rs_audit_options_default, range_m as above)
+    rs_audit_options audit_options; // (default rs_audit_options_default); its range_m is
+                             //   replaced by range_m above
 } rs_report_options;
 
 // Fills opt with the defaults above. opt must not be NULL.
