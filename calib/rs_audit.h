@@ -44,7 +44,9 @@
 // the centre of the top-left pixel; ground grid rows go north, columns east.
 //
 // Cost: one full solve plus N leave-one-out solves (~1 ms each for 20 landmarks), plus the map
-// (about 10 us per visible cell).
+// (one projection and one rs_calib_locate_ground per cell within range). Measured: `roadside
+// audit sites/demo` (4 cameras, 11-14 landmarks, 1 m cells to 100 m) 0.3 s wall on an idle
+// 2-core machine, 1.8 s while other jobs ran; with --range-m 10 1.0 s under the same load.
 #pragma once
 #include <stdbool.h>
 
@@ -219,9 +221,11 @@ typedef struct {
 //       external: a calibration made elsewhere; may be NULL. When given, its intrinsics replace
 //         the problem's nominal ones in every solve, and its pose is the stored pose of the
 //         moved-camera test (else the full solve's pose is).
-// Errors: those of rs_calib_solve for the full solve (RS_ERR_DEGENERATE, ...), RS_ERR_INVALID
-// (bad options, a sigma_new_px <= 0, an external calibration whose lens model differs in image
-// size), RS_ERR_NOMEM. A failing leave-one-out re-solve is not an error (loo_ok false).
+// Errors: those of rs_calib_solve for the full solve (RS_ERR_DEGENERATE, ...) and for the
+// solve of the new picks (prefixed "the new picks"), RS_ERR_INVALID (bad options, a vertical
+// ground plane, a sigma_new_px <= 0), RS_ERR_DEGENERATE (fewer than 3 landmarks usable in both
+// the old and the new picks), RS_ERR_NOMEM. A failing leave-one-out re-solve is not an error
+// (loo_ok false); an external calibration whose image size differs is reported as inconsistent.
 rs_status rs_audit_camera(// out
                           rs_audit_result *result,
                           // in
