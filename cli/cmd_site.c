@@ -3,9 +3,12 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "rs_cli.h"
+#include "rs_io.h"
 #include "rs_site.h"
+#include "rs_synth_traffic.h"
 
 static void usage(FILE *out)
 {
@@ -22,7 +25,8 @@ static void usage(FILE *out)
             "  check     reads every file of SITE and prints one line per problem,\n"
             "            \"FILE[:LINE]: [feature F (id 'ID'): ]FIELD: what\", then\n"
             "            \"N errors, M warnings\". Exit status 0 when the site is usable (warnings\n"
-            "            alone do not fail), 1 when it has errors.\n"
+            "            alone do not fail), 1 when it has errors. An optional lanes.geojson is read\n"
+            "            too once the rest is free of errors (its first problem is one error).\n"
             "  describe  loads SITE and summarises it: name, origin, heights, landmarks and their\n"
             "            ENU extent, and per camera the lens model, image size, observations,\n"
             "            position prior and the extent and distance of the landmarks it sees.\n"
@@ -55,9 +59,28 @@ static int cmd_check(int argc, char **argv)
         rs_site_diag_format(line, sizeof line, &report->diags[i]);
         printf("%s\n", line);
     }
-    printf("%d error%s, %d warning%s\n", report->Nerrors, report->Nerrors == 1 ? "" : "s",
-           report->Nwarnings, report->Nwarnings == 1 ? "" : "s");
-    int rc = report->Nerrors ? RS_EXIT_FAIL : RS_EXIT_OK;
+    // lanes.geojson, if present, once the site itself loads (its origin places the lanes): the
+    // first problem of the lanes file as one more error.
+    int Nerrors = report->Nerrors;
+    char *lanes_path = rs_io_join(argv[1], "lanes.geojson");
+    if (lanes_path && access(lanes_path, F_OK) == 0 && Nerrors == 0) {
+        rs_site *site = NULL;
+        if (rs_site_load(&site, argv[1], NULL) == RS_OK) {
+            rs_synth_lanes lanes;
+            rs_err lerr = {0};
+            if (rs_synth_lanes_read(&lanes, lanes_path, &site->origin, &lerr) != RS_OK) {
+                printf("%s\n", lerr.msg);
+                Nerrors++;
+            } else {
+                rs_synth_lanes_free(&lanes);
+            }
+            rs_site_free(site);
+        }
+    }
+    free(lanes_path);
+    printf("%d error%s, %d warning%s\n", Nerrors, Nerrors == 1 ? "" : "s", report->Nwarnings,
+           report->Nwarnings == 1 ? "" : "s");
+    int rc = Nerrors ? RS_EXIT_FAIL : RS_EXIT_OK;
     rs_site_report_free(report);
     return rc;
 }

@@ -8,7 +8,8 @@ lanes converted to ENU by PROJ's cct, footprints rasterised by brute force.
      from the unrandomised placement (matched by id) have sigma ~ sqrt(0.5) m along and across
      (0.6 .. 0.82) and yaw offsets within [-5, 5] deg.
   3. --mix bus=1: only buses; --count 7: 7 vehicles; the same seed gives the same file;
-     bad arguments and a bad lanes file fail cleanly (exit 2 / 1, nothing written).
+     bad arguments and a bad lanes file fail cleanly (exit 2 / 1, nothing written);
+     `roadside site check` reports a bad lanes.geojson.
 Usage: test_traffic.py TEST_TRAFFIC_API"""
 import json, math, os, shutil, subprocess, sys, tempfile
 
@@ -133,6 +134,18 @@ def main():
         api = subprocess.run([sys.argv[1], "lanes", badp] + ["%.12f" % x for x in site_origin(DEMO)],
                              capture_output=True, text=True)
         check(api.returncode == 1 and "'nope' is not a lane" in api.stdout, "unknown next id: %s" % api.stdout)
+        # roadside site check reads lanes.geojson too
+        r = run(["site", "check", DEMO])
+        check(r.returncode == 0, "site check of the demo: %s" % r.stdout)
+        site2 = os.path.join(tmp, "site")
+        shutil.copytree(DEMO, site2)
+        bad = json.load(open(os.path.join(DEMO, "lanes.geojson")))
+        bad["features"][2]["geometry"]["coordinates"] = bad["features"][2]["geometry"]["coordinates"][:1]
+        json.dump(bad, open(os.path.join(site2, "lanes.geojson"), "w"))
+        r = run(["site", "check", site2])
+        check(r.returncode == 1 and "lanes.geojson: feature 2" in r.stdout and "1 error" in r.stdout,
+              "site check with a bad lanes.geojson: exit %d: %s" % (r.returncode, r.stdout))
+        print("site check:", r.stdout.strip().replace("\n", " | "))
         r = run(["traffic", "--help"])
         check(r.returncode == 0 and r.stdout.startswith("usage: roadside traffic"), "--help")
     finally:
