@@ -14,19 +14,10 @@
   4. Missing programs: a clear error, exit 1, nothing written.
 Exit 77 when sumo or netconvert is not installed (parts 1 and 3 still run first).
 Usage: test_traffic_sumo.py TEST_TRAFFIC_API"""
-import json, math, os, shutil, subprocess, sys, tempfile
+import json, math, os, shutil, subprocess, sys
 
 sys.path.insert(0, os.path.dirname(__file__))
 from traffic_common import *
-
-fails = []
-
-
-def check(cond, msg):
-    if not cond:
-        fails.append(msg)
-        print("FAIL:", msg)
-
 
 def cct(args, rows):
     text = "".join(" ".join("%.12f" % x for x in r) + " 0\n" for r in rows)
@@ -160,30 +151,22 @@ def osm(tmp):
     check(len(vs) >= 20 and worst < 6.0, "OSM vehicles: %d, max distance %.2f m" % (len(vs), worst))
 
 
-def main():
+def body(tmp):
     api = sys.argv[1]
-    tmp = tempfile.mkdtemp(prefix="test_traffic_sumo.")
-    try:
-        fixture(api, tmp)
-        # missing programs
-        out = os.path.join(tmp, "nosumo")
-        env = dict(os.environ, PATH=os.path.join(tmp, "empty"))
-        r = subprocess.run([ROADSIDE, "traffic", DEMO, "--sumo", "-o", out], capture_output=True, text=True, env=env)
-        check(r.returncode == 1 and "not found" in r.stderr and not os.path.exists(out),
-              "missing sumo: exit %d: %s" % (r.returncode, r.stderr.strip()))
-        print("missing programs:", r.stderr.strip())
-        if not shutil.which("sumo") or not shutil.which("netconvert"):
-            print("SKIP: sumo or netconvert not installed")
-            return 1 if fails else 77
-        real_sumo(tmp)
-        osm(tmp)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    if fails:
-        print("FAIL: %d checks" % len(fails))
-        return 1
-    return 0
+    fixture(api, tmp)
+    # missing programs
+    out = os.path.join(tmp, "nosumo")
+    env = dict(os.environ, PATH=os.path.join(tmp, "empty"))
+    r = subprocess.run([ROADSIDE, "traffic", DEMO, "--sumo", "-o", out], capture_output=True, text=True, env=env)
+    check(r.returncode == 1 and "not found" in r.stderr and not os.path.exists(out),
+          "missing sumo: exit %d: %s" % (r.returncode, r.stderr.strip()))
+    print("missing programs:", r.stderr.strip())
+    if not shutil.which("sumo") or not shutil.which("netconvert"):
+        print("SKIP: sumo or netconvert not installed")
+        return 77
+    real_sumo(tmp)
+    osm(tmp)
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(run_test(body, "test_traffic_sumo."))

@@ -1,6 +1,6 @@
 """Shared by the traffic tests: the demo site's origin, lanes in ENU through PROJ's cct (an
 oracle independent of GeographicLib), footprints, and a brute-force raster overlap check."""
-import json, math, os, shutil, subprocess, sys
+import json, math, os, shutil, subprocess, sys, tempfile
 
 ROOT = os.environ.get("ROADSIDE_SOURCE_ROOT", os.path.join(os.path.dirname(__file__), "..", ".."))
 ROADSIDE = os.environ.get("ROADSIDE", "roadside")
@@ -81,3 +81,27 @@ def run(args, **kw):
 def finite_vehicles(vs):
     keys = ["e", "n", "yaw_deg", "length", "width", "height"]
     return all(all(isinstance(v[k], (int, float)) and math.isfinite(v[k]) for k in keys) for v in vs)
+
+
+FAILS = []
+
+
+def check(cond, msg):
+    """Records a failed check (the test goes on, to report every failure)."""
+    if not cond:
+        FAILS.append(msg)
+        print("FAIL:", msg)
+
+
+def run_test(body, prefix):
+    """Runs body(tmp) in a fresh temporary folder (removed afterwards); the exit status is 1 if a
+    check failed, else body's return value (None = 0; 77 = skipped)."""
+    tmp = tempfile.mkdtemp(prefix=prefix)
+    try:
+        rc = body(tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    if FAILS:
+        print("FAIL: %d checks" % len(FAILS))
+        return 1
+    return rc or 0
