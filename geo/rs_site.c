@@ -322,7 +322,7 @@ static void read_camera_entry(reader *c, const cJSON *item, int i)
         return;
     }
     static const char *const known[] = {"id", "model", "observations", "backgrounds",
-                                        "position_prior", "note", NULL};
+                                        "background_images", "position_prior", "note", NULL};
     warn_unknown_keys(c, item, prefix, known);
     const char *s;
     cam->id = dup_checked(c, get_string(c, item, prefix, "id", true, &s) ? s : prefix);

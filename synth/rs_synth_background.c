@@ -1,2 +1,568 @@
-// PLACEHOLDER
-typedef int rs_placeholder_rs_synth_background;
+// rs_synth_background.c -- temporal-median backgrounds, digital-twin backgrounds and their tags
+// in site.json (rs_synth_background.h, docs/backgrounds.md).
+#include "rs_synth_background.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+#include "rs_io.h"
+#include "rs_synth_camera.h"
+#include "rs_synth_opencv.h"
+#include "rs_synth_scene.h"
+#include "rs_synth_sun.h"
+#include "rs_synth_traffic.h"
+
+// ---- temporal median ----
+
+size_t rs_synth_median_bytes_bound(int width, int height, int max_frames)
+{
+    return ((size_t)max_frames + 3) * (size_t)width * (size_t)height * 3;
+}
+
+void rs_synth_median_free(rs_synth_median *m)
+{
+    if (!m)
+        return;
+    free(m->rgb);
+    memset(m, 0, sizeof(*m));
+}
+
+// The k-th smallest of a[0..n-1] (Hoare's selection; a is reordered).
+static unsigned char select_kth(unsigned char *a, int n, int k)
+{
+    int lo = 0, hi = n - 1;
+    while (lo < hi) {
+        const unsigned char pivot = a[(lo + hi) / 2];
+        int i = lo, j = hi;
+        while (i <= j) {
+            while (a[i] < pivot) i++;
+            while (a[j] > pivot) j--;
+            if (i <= j) {
+                const unsigned char t = a[i];
+                a[i++] = a[j];
+                a[j--] = t;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            break;
+    }
+    return a[k];
+}
+
+rs_status rs_synth_background_median(rs_synth_median *out, const char *const *inputs, int Ninputs,
+                                     int max_frames, rs_err *err)
+{
+    memset(out, 0, sizeof(*out));
+    if (max_frames < 3 || max_frames > 255)
+        return rs_err_set(err, RS_ERR_USAGE, "max_frames: %d is not in [3, 255]", max_frames);
+    unsigned char *buf = NULL; // (max_frames, H, W, 3)
+    size_t frame_bytes = 0;
+    int n = 0, stride = 1, width = 0, height = 0;
+    long index = 0;
+    rs_status st = RS_OK;
+    for (int in = 0; in < Ninputs && !st; in++) {
+        rs_synth_frames *fr = NULL;
+        if ((st = rs_synth_frames_open(&fr, inputs[in], err)))
+            break;
+        for (;;) {
+            const unsigned char *rgb;
+            int w, h, got;
+            if ((st = rs_synth_frames_next(fr, &rgb, &w, &h, &got, err)) || !got)
+                break;
+            if (!buf) {
+                width = w;
+                height = h;
+                frame_bytes = (size_t)w * h * 3;
+                if (!(buf = malloc(frame_bytes * (size_t)max_frames))) {
+                    st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory for %d frames of %dx%d",
+                                    inputs[in], max_frames, w, h);
+                    break;
+                }
+            } else if (w != width || h != height) {
+                st = rs_err_set(err, RS_ERR_INVALID,
+                                "%s: frame %ld is %dx%d, the first frame was %dx%d", inputs[in],
+                                index, w, h, width, height);
+                break;
+            }
+            if (index % stride == 0) {
+                if (n == max_frames) {
+                    // full: keep buffer positions 0, 2, 4, ... and double the stride
+                    int k = 0;
+                    for (int i = 0; i < n; i += 2, k++)
+                        if (k != i)
+                            memcpy(buf + k * frame_bytes, buf + i * frame_bytes, frame_bytes);
+                    n = k;
+                    stride *= 2;
+                }
+                if (index % stride == 0)
+                    memcpy(buf + (size_t)n++ * frame_bytes, rgb, frame_bytes);
+            }
+            index++;
+        }
+        rs_synth_frames_close(fr);
+    }
+    if (!st && n == 0)
+        st = rs_err_set(err, RS_ERR_DEGENERATE, "no frame could be read from the %d input(s)",
+                        Ninputs);
+    if (!st && !(out->rgb = malloc(frame_bytes)))
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (st) {
+        free(buf);
+        memset(out, 0, sizeof(*out));
+        return st;
+    }
+    unsigned char v[255];
+    const int k = (n - 1) / 2;
+    for (size_t p = 0; p < frame_bytes; p++) {
+        for (int i = 0; i < n; i++)
+            v[i] = buf[(size_t)i * frame_bytes + p];
+        out->rgb[p] = select_kth(v, n, k);
+    }
+    free(buf);
+    out->width = width;
+    out->height = height;
+    out->Nframes_read = index;
+    out->Nframes_used = n;
+    out->stride = stride;
+    out->bytes_bound = rs_synth_median_bytes_bound(width, height, max_frames);
+    return RS_OK;
+}
+
+// ---- tags and site.json ----
+
+const char *const rs_synth_background_conditions[] = {"sunny", "cloudy", "rain", "snow", "night",
+                                                      NULL};
+
+static bool is_safe_name(const char *s, size_t max)
+{
+    if (!s || !*s || *s == '.' || strlen(s) > max)
+        return false;
+    for (; *s; s++)
+        if (!isalnum((unsigned char)*s) && *s != '_' && *s != '.' && *s != '-')
+            return false;
+    return true;
+}
+
+rs_status rs_synth_background_tags_check(const rs_synth_background_tags *t, rs_err *err)
+{
+    if (!is_safe_name(t->name, 100))
+        return rs_err_set(err, RS_ERR_USAGE,
+                          "name: '%s' must be 1..100 characters of [A-Za-z0-9_.-], not starting "
+                          "with '.'",
+                          t->name ? t->name : "");
+    if (t->time_iso) {
+        double unix_s;
+        rs_status st = rs_synth_parse_iso8601(&unix_s, t->time_iso, "tag time", err);
+        if (st)
+            return st;
+    }
+    if (t->conditions) {
+        bool ok = false;
+        for (int i = 0; rs_synth_background_conditions[i]; i++)
+            ok = ok || !strcmp(t->conditions, rs_synth_background_conditions[i]);
+        if (!ok)
+            return rs_err_set(err, RS_ERR_USAGE,
+                              "tag conditions: '%s' is not one of sunny, cloudy, rain, snow, night",
+                              t->conditions);
+    }
+    return RS_OK;
+}
+
+rs_status rs_synth_background_tag_parse(rs_synth_background_tags *t, const char **keys,
+                                        const char **values, char *kv, rs_err *err)
+{
+    char *eq = strchr(kv, '=');
+    if (!eq || eq == kv)
+        return rs_err_set(err, RS_ERR_USAGE, "tag '%s': expected key=value", kv);
+    *eq = 0;
+    const char *key = kv, *value = eq + 1;
+    if (!strcmp(key, "time"))
+        t->time_iso = value;
+    else if (!strcmp(key, "conditions"))
+        t->conditions = value;
+    else if (!strcmp(key, "synthetic") || !is_safe_name(key, 64)) {
+        *eq = '=';
+        return rs_err_set(err, RS_ERR_USAGE,
+                          "tag '%s': the key must be [A-Za-z0-9_.-]+ and not 'synthetic'", kv);
+    } else {
+        keys[t->Ntags] = key;
+        values[t->Ntags] = value;
+        t->Ntags++;
+        t->keys = keys;
+        t->values = values;
+    }
+    return RS_OK;
+}
+
+char *rs_synth_background_path(const char *site_dir, const char *camera_id, const char *name)
+{
+    const size_t n = strlen(site_dir) + strlen(camera_id) + strlen(name) + 32;
+    char *p = malloc(n);
+    if (p)
+        snprintf(p, n, "%s/backgrounds/%s/%s.png", site_dir, camera_id, name);
+    return p;
+}
+
+rs_status rs_synth_background_record(const char *site_dir, const char *camera_id,
+                                     const rs_synth_background_tags *t, const void *source_cjson,
+                                     rs_err *err)
+{
+    char *path = rs_io_join(site_dir, "site.json"), *text = NULL, *printed = NULL;
+    cJSON *root = NULL;
+    rs_status st = RS_OK;
+    if (!path)
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if ((st = rs_io_read_file(&text, NULL, path, err)))
+        goto done;
+    const char *json = text;
+    if (!strncmp(json, "\xEF\xBB\xBF", 3))
+        json += 3;
+    if (!(root = cJSON_Parse(json))) {
+        st = rs_err_set(err, RS_ERR_PARSE, "%s: not valid JSON", path);
+        goto done;
+    }
+    cJSON *cams = cJSON_GetObjectItemCaseSensitive(root, "cameras"), *cam = NULL, *it;
+    cJSON_ArrayForEach(it, cams)
+    {
+        const cJSON *id = cJSON_GetObjectItemCaseSensitive(it, "id");
+        if (cJSON_IsString(id) && !strcmp(id->valuestring, camera_id))
+            cam = it;
+    }
+    if (!cam || !cJSON_IsObject(cam)) {
+        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: cameras: no camera with id '%s'", path,
+                        camera_id);
+        goto done;
+    }
+    char rel[512];
+    snprintf(rel, sizeof(rel), "backgrounds/%s", camera_id);
+    if (!cJSON_GetObjectItemCaseSensitive(cam, "backgrounds"))
+        cJSON_AddStringToObject(cam, "backgrounds", rel);
+    cJSON *list = cJSON_GetObjectItemCaseSensitive(cam, "background_images");
+    if (!list)
+        list = cJSON_AddArrayToObject(cam, "background_images");
+    if (!cJSON_IsArray(list)) {
+        st = rs_err_set(err, RS_ERR_PARSE, "%s: cameras[id %s].background_images: not a list",
+                        path, camera_id);
+        goto done;
+    }
+    cJSON *e = cJSON_CreateObject(), *tags = cJSON_CreateObject();
+    if (!e || !tags) {
+        cJSON_Delete(e);
+        cJSON_Delete(tags);
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    snprintf(rel, sizeof(rel), "backgrounds/%s/%s.png", camera_id, t->name);
+    cJSON_AddStringToObject(e, "name", t->name);
+    cJSON_AddStringToObject(e, "file", rel);
+    cJSON_AddBoolToObject(e, "synthetic", t->synthetic);
+    if (t->time_iso)
+        cJSON_AddStringToObject(tags, "time", t->time_iso);
+    if (t->conditions)
+        cJSON_AddStringToObject(tags, "conditions", t->conditions);
+    for (int i = 0; i < t->Ntags; i++) {
+        cJSON_DeleteItemFromObjectCaseSensitive(tags, t->keys[i]);
+        cJSON_AddStringToObject(tags, t->keys[i], t->values[i]);
+    }
+    cJSON_AddItemToObject(e, "tags", tags);
+    if (source_cjson)
+        cJSON_AddItemToObject(e, "source", cJSON_Duplicate((const cJSON *)source_cjson, true));
+    // replace an entry of the same name, else append
+    int i = 0, found = -1;
+    cJSON_ArrayForEach(it, list)
+    {
+        const cJSON *nm = cJSON_GetObjectItemCaseSensitive(it, "name");
+        if (cJSON_IsString(nm) && !strcmp(nm->valuestring, t->name))
+            found = i;
+        i++;
+    }
+    if (found >= 0)
+        cJSON_ReplaceItemInArray(list, found, e);
+    else
+        cJSON_AddItemToArray(list, e);
+    if (!(printed = cJSON_Print(root))) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    const size_t len = strlen(printed);
+    printed[len] = 0;
+    char *with_nl = realloc(printed, len + 2);
+    if (!with_nl) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    printed = with_nl;
+    printed[len] = '\n';
+    st = rs_io_write_file(path, printed, len + 1, err);
+done:
+    cJSON_Delete(root);
+    free(printed);
+    free(text);
+    free(path);
+    return st;
+}
+
+// ---- digital-twin backgrounds ----
+
+void rs_synth_twin_options_default(rs_synth_twin_options *opt)
+{
+    memset(opt, 0, sizeof(*opt));
+    opt->marking_width_m = 0.15;
+    opt->canvas_scale = 1.0;
+}
+
+// Weather appearance: sky light, sun strength, asphalt colour/finish, marking brightness.
+typedef struct {
+    const char *name;
+    double sky_light, sun, sky_rgb[3], asphalt, asphalt_reflection, marking;
+} weather_look;
+
+static const weather_look looks[] = {
+    {"sunny", 0.35, 1.0, {0.45, 0.62, 0.95}, 0.10, 0.0, 0.80},
+    {"cloudy", 0.80, 0.0, {0.70, 0.72, 0.75}, 0.10, 0.0, 0.80},
+    {"rain", 0.55, 0.0, {0.55, 0.57, 0.60}, 0.06, 0.15, 0.65},
+    {"snow", 0.80, 0.0, {0.80, 0.81, 0.83}, 0.75, 0.0, 0.85},
+    {"night", 0.03, 0.0, {0.01, 0.01, 0.02}, 0.10, 0.0, 0.80},
+};
+
+static void write_pov_point(FILE *f, double e, double n, double up)
+{
+    fprintf(f, "<%.9g, %.9g, %.9g>", e, up, n);
+}
+
+// One lane-edge marking along a polyline offset sideways by `offset_m` (left positive), as flat
+// triangles 5 mm above the ground.
+static void write_marking(FILE *f, const rs_synth_lane *lane, double offset_m, double half_w,
+                          const rs_site *site)
+{
+    for (int i = 0; i + 1 < lane->Npoints; i++) {
+        const double *a = lane->p_enu_m[i], *b = lane->p_enu_m[i + 1];
+        const double de = b[0] - a[0], dn = b[1] - a[1], len = hypot(de, dn);
+        if (len < 1e-6)
+            continue;
+        const double le = -dn / len, ln = de / len; // left normal
+        double q[4][2];
+        for (int k = 0; k < 4; k++) {
+            const double *p = k < 2 ? a : b;
+            const double s = offset_m + ((k == 0 || k == 3) ? -half_w : half_w);
+            q[k][0] = p[0] + s * le;
+            q[k][1] = p[1] + s * ln;
+        }
+        double up[4];
+        for (int k = 0; k < 4; k++)
+            up[k] = rs_synth_ground_up_m(site->ground_normal_enu, site->ground_offset_m, q[k][0],
+                                         q[k][1]) +
+                    0.005;
+        for (int t = 0; t < 2; t++) {
+            const int idx[2][3] = {{0, 1, 2}, {0, 2, 3}};
+            fprintf(f, "  triangle { ");
+            for (int k = 0; k < 3; k++) {
+                const int j = idx[t][k];
+                write_pov_point(f, q[j][0], q[j][1], up[j]);
+                fprintf(f, k < 2 ? ", " : " }\n");
+            }
+        }
+    }
+}
+
+static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *cam,
+                                  const rs_site *site, const rs_synth_lanes *lanes,
+                                  const weather_look *look, double sun_az, double sun_el,
+                                  double marking_width_m, rs_err *err)
+{
+    rs_io_atomic a = {0};
+    rs_status st = rs_io_atomic_open(&a, pov_path, err);
+    if (st)
+        return st;
+    FILE *f = a.f;
+    fprintf(f, "// Written by roadside site render-backgrounds: a digital-twin ground (%s).\n"
+               "// POV-Ray world <x, y, z> = <east, up, north>, metres. No include files.\n"
+               "#version 3.7;\n"
+               "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
+            look->name);
+    if ((st = rs_synth_povcam_write(f, cam, err))) {
+        rs_io_atomic_abort(&a);
+        return st;
+    }
+    fprintf(f, "background { rgb <%.4g, %.4g, %.4g> }\n", look->sky_rgb[0], look->sky_rgb[1],
+            look->sky_rgb[2]);
+    const double d2r = M_PI / 180.0, az = sun_az * d2r, el = sun_el * d2r;
+    if (look->sun > 0 && sun_el > 0) {
+        fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg\nlight_source { ", sun_az, sun_el);
+        write_pov_point(f, 1e6 * sin(az) * cos(el), 1e6 * cos(az) * cos(el), 1e6 * sin(el));
+        fprintf(f, " color rgb <1.0, 0.97, 0.92> parallel point_at <0, 0, 0> }\n");
+    }
+    fprintf(f, "light_source { <0, 1e6, 0> color rgb %.4g parallel point_at <0, 0, 0> shadowless }\n",
+            look->sky_light);
+    const double *nrm = site->ground_normal_enu;
+    const double nn = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+    fprintf(f,
+            "plane { <%.17g, %.17g, %.17g>, %.17g\n"
+            "  texture { pigment { granite color_map { [0 rgb %.4g] [1 rgb %.4g] } scale 0.05 }\n"
+            "            finish { ambient 0 diffuse 0.8 reflection %.3g } } }\n",
+            nrm[0] / nn, nrm[2] / nn, nrm[1] / nn, site->ground_offset_m / nn,
+            look->asphalt * 0.8, look->asphalt * 1.2, look->asphalt_reflection);
+    if (lanes && lanes->N > 0) {
+        fprintf(f, "// lane-edge markings (%d lanes)\nmesh {\n", lanes->N);
+        for (int i = 0; i < lanes->N; i++) {
+            const double hw = 0.5 * lanes->lane[i].width_m;
+            write_marking(f, &lanes->lane[i], hw, 0.5 * marking_width_m, site);
+            write_marking(f, &lanes->lane[i], -hw, 0.5 * marking_width_m, site);
+        }
+        fprintf(f, "  texture { pigment { rgb %.4g } finish { ambient 0 diffuse 0.8 } }\n}\n",
+                look->marking);
+    }
+    if (ferror(f)) {
+        rs_io_atomic_abort(&a);
+        return rs_err_set(err, RS_ERR_IO, "%s: write error", pov_path);
+    }
+    return rs_io_atomic_commit(&a, err);
+}
+
+// Runs `povray +I<pov> +O<png> +W +H ...` in work_dir; output to work_dir/povray.log.
+static rs_status run_twin_povray(const char *povray, const char *work_dir, int width, int height,
+                                 int antialias, rs_err *err)
+{
+    char w[32], h[32], aa[32];
+    snprintf(w, sizeof(w), "+W%d", width);
+    snprintf(h, sizeof(h), "+H%d", height);
+    if (antialias >= 2)
+        snprintf(aa, sizeof(aa), "+R%d", antialias > 9 ? 9 : antialias);
+    else
+        snprintf(aa, sizeof(aa), "-A");
+    pid_t pid = fork();
+    if (pid < 0)
+        return rs_err_set(err, RS_ERR_EXTERNAL, "fork: %s", strerror(errno));
+    if (pid == 0) {
+        if (chdir(work_dir) != 0)
+            _exit(126);
+        int fd = open("povray.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd < 0)
+            _exit(126);
+        unsetenv("POVINC");
+        unsetenv("POVINI");
+        dup2(fd, 1);
+        dup2(fd, 2);
+        close(fd);
+        execlp(povray, povray, "+Itwin.pov", "+Otwin.png", w, h, "-D", "+FN8",
+               "File_Gamma=sRGB", antialias >= 2 ? "+A0.1" : "-A", aa, "+WT1", (char *)NULL);
+        _exit(127);
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
+        ;
+    if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+        return rs_err_set(err, RS_ERR_EXTERNAL,
+                          "cannot run \"%s\": is POV-Ray 3.7 installed (Debian package povray)? "
+                          "Set ROADSIDE_POVRAY to its path",
+                          povray);
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        return rs_err_set(err, RS_ERR_EXTERNAL, "povray failed (exit %d): see %s/povray.log",
+                          WIFEXITED(status) ? WEXITSTATUS(status) : -1, work_dir);
+    return RS_OK;
+}
+
+rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_elevation_deg,
+                                          const char **conditions_out, const char *out_png,
+                                          const char *work_dir, const rs_site *site,
+                                          const char *lanes_path,
+                                          const mrcal_lensmodel_t *lensmodel,
+                                          const double *intrinsics, int width, int height,
+                                          const double rt_cam_enu[6], double unix_time_s,
+                                          const char *weather, const rs_synth_twin_options *opt,
+                                          rs_err *err)
+{
+    rs_synth_twin_options o;
+    if (opt)
+        o = *opt;
+    else
+        rs_synth_twin_options_default(&o);
+    const char *povray = o.povray ? o.povray : getenv("ROADSIDE_POVRAY");
+    if (!povray || !*povray)
+        povray = "povray";
+    const weather_look *look = NULL;
+    for (size_t i = 0; i < sizeof(looks) / sizeof(looks[0]); i++)
+        if (weather && !strcmp(weather, looks[i].name))
+            look = &looks[i];
+    if (!look)
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "weather: '%s' is not one of sunny, cloudy, rain, snow, night",
+                          weather ? weather : "");
+    double az, el;
+    rs_status st = rs_synth_sun_position_checked(&az, &el, site->origin.lat_deg,
+                                                 site->origin.lon_deg, unix_time_s, err);
+    if (st)
+        return st;
+    if (el < -6.0)
+        look = &looks[4]; // night
+    if (sun_azimuth_deg)
+        *sun_azimuth_deg = az;
+    if (sun_elevation_deg)
+        *sun_elevation_deg = el;
+    if (conditions_out)
+        *conditions_out = look->name;
+
+    rs_synth_lanes lanes = {0};
+    rs_synth_canvas canvas;
+    rs_synth_povcam cam;
+    rs_synth_image img = {0}, lens = {0};
+    float *map = NULL;
+    char *pov = rs_io_join(work_dir, "twin.pov"), *png = rs_io_join(work_dir, "twin.png"),
+         *log = rs_io_join(work_dir, "povray.log");
+    if (!pov || !png || !log) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if (lanes_path && (st = rs_synth_lanes_read(&lanes, lanes_path, &site->origin, err)))
+        goto done;
+    if ((st = rs_io_mkdir_p(work_dir, err)) ||
+        (st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
+                                       o.canvas_scale >= 1 ? o.canvas_scale : 1, err)) ||
+        (st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
+                                   err)) ||
+        (st = write_twin_scene(pov, &cam, site, &lanes, look, az, el, o.marking_width_m, err)) ||
+        (st = run_twin_povray(povray, work_dir, canvas.width, canvas.height, o.antialias, err)) ||
+        (st = rs_synth_image_read(&img, png, err)))
+        goto done;
+    if (img.width != canvas.width || img.height != canvas.height) {
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
+                        img.width, img.height, canvas.width, canvas.height);
+        goto done;
+    }
+    if (canvas.identity) {
+        st = rs_synth_image_write(out_png, &img, 8, err);
+    } else {
+        if ((st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics, width, height, err)) ||
+            (st = rs_synth_remap(&lens, &img, map, width, height, 1, err)))
+            goto done;
+        st = rs_synth_image_write(out_png, &lens, 8, err);
+    }
+    if (!st) {
+        remove(pov);
+        remove(png);
+        remove(log);
+    }
+done:
+    rs_synth_lanes_free(&lanes);
+    rs_synth_image_free(&img);
+    rs_synth_image_free(&lens);
+    free(map);
+    free(pov);
+    free(png);
+    free(log);
+    return st;
+}

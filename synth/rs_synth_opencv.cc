@@ -149,3 +149,179 @@ extern "C" rs_status rs_synth_remap(rs_synth_image *dst, const rs_synth_image *s
         return rs_err_set(err, RS_ERR_EXTERNAL, "remap: OpenCV: unknown exception");
     }
 }
+
+// ---- backgrounds and appearance ----
+// Owned by the backgrounds helper (synth/rs_synth_background.h, rs_synth_appearance.h).
+
+#include <cmath>
+#include <new>
+
+#include <opencv2/videoio.hpp>
+
+struct rs_synth_frames {
+    std::string path;
+    bool still;      // an image file: one frame
+    bool done;
+    cv::VideoCapture cap;
+    cv::Mat rgb;     // the current frame, 8-bit RGB, continuous
+};
+
+namespace {
+
+// Runs f(), turning every exception into RS_ERR_EXTERNAL naming `what`.
+template <class F> rs_status guarded(const char *what, rs_err *err, F f)
+{
+    try {
+        return f();
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: %s", what, e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: unknown exception", what);
+    }
+}
+
+// Any 8/16-bit or float, 1/3/4-channel BGR(A) frame to continuous 8-bit RGB.
+void to_rgb8(const cv::Mat &in, cv::Mat &out)
+{
+    cv::Mat m = in;
+    if (m.depth() == CV_16U)
+        m.convertTo(m, CV_8U, 1.0 / 257.0);
+    else if (m.depth() != CV_8U)
+        m.convertTo(m, CV_8U, 255.0);
+    if (m.channels() == 1)
+        cv::cvtColor(m, out, cv::COLOR_GRAY2RGB);
+    else if (m.channels() == 4)
+        cv::cvtColor(m, out, cv::COLOR_BGRA2RGB);
+    else
+        cv::cvtColor(m, out, cv::COLOR_BGR2RGB);
+    if (!out.isContinuous())
+        out = out.clone();
+}
+
+} // namespace
+
+extern "C" rs_status rs_synth_frames_open(rs_synth_frames **frames, const char *path, rs_err *err)
+{
+    *frames = nullptr;
+    rs_synth_frames *f = new (std::nothrow) rs_synth_frames;
+    if (!f)
+        return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    rs_status st = guarded(path, err, [&]() -> rs_status {
+        f->path = path;
+        f->done = false;
+        f->still = cv::haveImageReader(path);
+        if (!f->still && !f->cap.open(path))
+            return rs_err_set(err, RS_ERR_IO, "%s: cannot open as an image or a video", path);
+        return RS_OK;
+    });
+    if (st) {
+        delete f;
+        return st;
+    }
+    *frames = f;
+    return RS_OK;
+}
+
+extern "C" rs_status rs_synth_frames_next(rs_synth_frames *f, const unsigned char **rgb,
+                                          int *width, int *height, int *got, rs_err *err)
+{
+    *rgb = nullptr;
+    *got = 0;
+    *width = *height = 0;
+    if (f->done)
+        return RS_OK;
+    return guarded(f->path.c_str(), err, [&]() -> rs_status {
+        cv::Mat raw;
+        if (f->still) {
+            raw = cv::imread(f->path, cv::IMREAD_UNCHANGED);
+            f->done = true;
+            if (raw.empty())
+                return rs_err_set(err, RS_ERR_IO, "%s: cannot read the image", f->path.c_str());
+        } else if (!f->cap.read(raw) || raw.empty()) {
+            f->done = true;
+            return RS_OK;
+        }
+        to_rgb8(raw, f->rgb);
+        *rgb = f->rgb.ptr<unsigned char>(0);
+        *width = f->rgb.cols;
+        *height = f->rgb.rows;
+        *got = 1;
+        return RS_OK;
+    });
+}
+
+extern "C" void rs_synth_frames_close(rs_synth_frames *frames)
+{
+    try {
+        delete frames;
+    } catch (...) {
+    }
+}
+
+extern "C" rs_status rs_synth_image_filter(rs_synth_image *dst, const rs_synth_image *src,
+                                           const double *kernel, int kw, int kh, rs_err *err)
+{
+    *dst = rs_synth_image{};
+    rs_status st = rs_synth_image_alloc(dst, src->width, src->height, src->channels, err);
+    if (st)
+        return st;
+    st = guarded("filter", err, [&]() -> rs_status {
+        cv::Mat k(kh, kw, CV_64F, const_cast<double *>(kernel));
+        cv::Mat out = wrap(dst);
+        cv::filter2D(wrap(src), out, CV_32F, k, cv::Point(-1, -1), 0, cv::BORDER_REFLECT_101);
+        return RS_OK;
+    });
+    if (st)
+        rs_synth_image_free(dst);
+    return st;
+}
+
+extern "C" rs_status rs_synth_image_blur(rs_synth_image *dst, const rs_synth_image *src,
+                                         double sigma_px, rs_err *err)
+{
+    *dst = rs_synth_image{};
+    rs_status st = rs_synth_image_alloc(dst, src->width, src->height, src->channels, err);
+    if (st)
+        return st;
+    st = guarded("blur", err, [&]() -> rs_status {
+        cv::Mat out = wrap(dst);
+        if (!(sigma_px > 0)) {
+            wrap(src).copyTo(out);
+            return RS_OK;
+        }
+        int k = 2 * (int)std::ceil(4.0 * sigma_px) + 1;
+        cv::GaussianBlur(wrap(src), out, cv::Size(k, k), sigma_px, sigma_px,
+                         cv::BORDER_REFLECT_101);
+        return RS_OK;
+    });
+    if (st)
+        rs_synth_image_free(dst);
+    return st;
+}
+
+extern "C" rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst, const rs_synth_image *src,
+                                                   int quality, rs_err *err)
+{
+    *dst = rs_synth_image{};
+    if (src->channels != 3 || quality < 1 || quality > 100)
+        return rs_err_set(err, RS_ERR_INVALID, "jpeg: needs RGB and quality 1..100 (got %d, %d)",
+                          src->channels, quality);
+    rs_status st = rs_synth_image_alloc(dst, src->width, src->height, 3, err);
+    if (st)
+        return st;
+    st = guarded("jpeg", err, [&]() -> rs_status {
+        cv::Mat bgr8;
+        wrap(src).convertTo(bgr8, CV_8U, 255.0);
+        cv::cvtColor(bgr8, bgr8, cv::COLOR_RGB2BGR);
+        std::vector<unsigned char> buf;
+        cv::imencode(".jpg", bgr8, buf, {cv::IMWRITE_JPEG_QUALITY, quality});
+        cv::Mat dec = cv::imdecode(buf, cv::IMREAD_COLOR);
+        cv::cvtColor(dec, dec, cv::COLOR_BGR2RGB);
+        cv::Mat out = wrap(dst);
+        dec.convertTo(out, CV_32F, 1.0 / 255.0);
+        return RS_OK;
+    });
+    if (st)
+        rs_synth_image_free(dst);
+    return st;
+}

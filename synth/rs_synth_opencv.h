@@ -37,6 +37,39 @@ rs_status rs_synth_remap(rs_synth_image *dst,
                          const rs_synth_image *src, const float *map_xy, int width, int height,
                          int interpolation, rs_err *err);
 
+// ---- backgrounds and appearance ----
+// Owned by the backgrounds helper (synth/rs_synth_background.h, rs_synth_appearance.h).
+
+// A stream of 8-bit RGB frames from one input: an image file (one frame; any format
+// cv::haveImageReader accepts) or a video (cv::VideoCapture, frame by frame). Opaque; at most
+// one decoded frame is held at a time.
+typedef struct rs_synth_frames rs_synth_frames;
+// out: *frames (rs_synth_frames_close). Returns RS_ERR_IO when the file cannot be opened.
+rs_status rs_synth_frames_open(rs_synth_frames **frames, const char *path, rs_err *err);
+// The next frame: *rgb points to (height, width, 3) bytes owned by `frames`, valid until the next
+// call; *got = 0 at the end of the stream (then *rgb is NULL).
+rs_status rs_synth_frames_next(rs_synth_frames *frames,
+                               // out
+                               const unsigned char **rgb, int *width, int *height, int *got,
+                               rs_err *err);
+void rs_synth_frames_close(rs_synth_frames *frames); // NULL-safe
+// Convolution with a (kh, kw) kernel, row-major, anchor at its centre (cv::filter2D, border
+// reflected about the edge pixel: BORDER_REFLECT_101). out: *dst allocated like src.
+rs_status rs_synth_image_filter(rs_synth_image *dst,
+                                // in
+                                const rs_synth_image *src, const double *kernel, int kw, int kh,
+                                rs_err *err);
+// Gaussian blur of standard deviation sigma_px (> 0) (cv::GaussianBlur, kernel 2 ceil(4 sigma)+1,
+// BORDER_REFLECT_101). sigma_px <= 0 copies. out: *dst allocated like src.
+rs_status rs_synth_image_blur(rs_synth_image *dst,
+                              // in
+                              const rs_synth_image *src, double sigma_px, rs_err *err);
+// JPEG round trip of an RGB image at `quality` (1..100, libjpeg through cv::imencode/imdecode),
+// the [0,1] values taken as 8-bit codes. out: *dst (H, W, 3) allocated.
+rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst,
+                                        // in
+                                        const rs_synth_image *src, int quality, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,140 @@
+// rs_synth_background.h -- backgrounds of a camera's view: the temporal median of video frames or
+// of an image sequence (`roadside background`), digital-twin backgrounds ray-traced from the
+// site's lanes (`roadside site render-backgrounds`), and their tags in site.json
+// (docs/backgrounds.md).
+//
+// Tags: every background has a name (its file backgrounds/<camera>/<name>.png), a time (ISO 8601
+// with a zone, rs_synth_parse_iso8601), conditions (one of rs_synth_background_conditions), a
+// `synthetic` flag, and free key=value tags. They are recorded in site.json, in the camera's
+// "background_images" list (docs/site-format.md); the camera's "backgrounds" folder is set to
+// "backgrounds/<camera>" if it was absent. Everything else in site.json is kept as it was.
+#pragma once
+#include <stdbool.h>
+#include <stddef.h>
+#include <mrcal/mrcal.h>
+#include "rs_site.h"
+#include "rs_status.h"
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// ---- temporal median ----
+
+// A background by temporal median, streaming with bounded memory.
+//
+// Method: the frames of all inputs, in order, are decimated into a buffer of at most
+// `max_frames` frames (8-bit RGB): frame i is kept when i is a multiple of the stride s (first
+// s = 1); when the buffer is full the frames at odd buffer positions are dropped and s doubles.
+// So the buffer always holds frames evenly spaced over the whole input (every s-th frame, between
+// max_frames/2 and max_frames of them), whatever its length, and nothing else grows with the
+// input. The result is, per pixel and channel, the exact lower median (order statistic
+// floor((n-1)/2)) of the n kept frames. With n <= max_frames all frames are used and the median
+// is exact; a value seen in more than half of the kept frames is returned exactly.
+//
+// Memory bound: (max_frames + 3) x width x height x 3 bytes (the buffer, one decoded frame in
+// OpenCV's BGR and RGB, the result): 174 MB for 1920 x 1080 with max_frames = 25, 29 MB for
+// 720 x 480.
+typedef struct {
+    int width, height;
+    unsigned char *rgb;   // (height, width, 3) owned (free()): the median
+    long Nframes_read;    // frames decoded from all inputs
+    int Nframes_used;     // frames the median was taken over
+    int stride;           // every stride-th frame was used
+    size_t bytes_bound;   // the memory bound above for this size and max_frames
+} rs_synth_median;
+
+// out: *out (rs_synth_median_free)
+// in:  inputs (Ninputs,): image files (one frame each) and/or videos (cv::VideoCapture);
+//      max_frames in [3, 255]
+// Returns RS_ERR_IO for an unreadable input, RS_ERR_INVALID when frame sizes differ (naming the
+// input), RS_ERR_DEGENERATE when no frame was read, RS_ERR_NOMEM.
+rs_status rs_synth_background_median(// out
+                                     rs_synth_median *out,
+                                     // in
+                                     const char *const *inputs, int Ninputs, int max_frames,
+                                     rs_err *err);
+void rs_synth_median_free(rs_synth_median *m); // NULL-safe; zeroes *m
+// The memory bound of rs_synth_background_median, bytes.
+size_t rs_synth_median_bytes_bound(int width, int height, int max_frames);
+
+// ---- tags and site.json ----
+
+// The recognised conditions, NULL-terminated: "sunny", "cloudy", "rain", "snow", "night".
+extern const char *const rs_synth_background_conditions[];
+
+typedef struct {
+    const char *name;       // file stem: [A-Za-z0-9_.-], not starting with '.', <= 100 chars
+    const char *time_iso;   // ISO 8601 with zone, may be NULL
+    const char *conditions; // one of rs_synth_background_conditions, may be NULL
+    bool synthetic;         // rendered, not photographed
+    const char *const *keys;   // (Ntags,) further free tags (not "time"/"conditions"/"synthetic")
+    const char *const *values; // (Ntags,)
+    int Ntags;
+} rs_synth_background_tags;
+
+// Parses "key=value" into tags: "time" and "conditions" go to their fields (validated), other
+// keys ([A-Za-z0-9_.-]+) to keys/values (pointing into `kv`'s storage; kv is modified: the '=' is
+// replaced by NUL). The caller provides keys/values arrays with room for one more tag.
+// Returns RS_ERR_USAGE naming the tag when it is malformed.
+rs_status rs_synth_background_tag_parse(rs_synth_background_tags *tags,
+                                        // in,out
+                                        const char **keys, const char **values, char *kv,
+                                        rs_err *err);
+// Checks a name, a time and conditions (RS_ERR_USAGE / RS_ERR_PARSE naming the field).
+rs_status rs_synth_background_tags_check(const rs_synth_background_tags *tags, rs_err *err);
+
+// The path "SITE/backgrounds/<camera>/<name>.png" (malloc'ed, caller frees; NULL on no memory).
+char *rs_synth_background_path(const char *site_dir, const char *camera_id, const char *name);
+
+// Records a background in SITE/site.json: the camera's "background_images" gets (or has
+// replaced, same name) the entry
+//   {"name": ..., "file": "backgrounds/<camera>/<name>.png", "synthetic": bool,
+//    "tags": {"time": ..., "conditions": ..., key: value ...}, "source": <source>}
+// site.json is read with cJSON, modified and written atomically (rs_io_write_file).
+// in: source: a cJSON object describing how the image was made, may be NULL; it is copied.
+// Returns RS_ERR_IO / RS_ERR_PARSE for site.json, RS_ERR_NOT_FOUND for an unknown camera.
+rs_status rs_synth_background_record(const char *site_dir, const char *camera_id,
+                                     const rs_synth_background_tags *tags, const void *source_cjson,
+                                     rs_err *err);
+
+// ---- digital-twin backgrounds ----
+
+// The weathers of a rendered background: "sunny", "cloudy", "rain", "snow" (conditions tag), and
+// "night" is chosen automatically when the sun is below -6 degrees (civil twilight).
+typedef struct {
+    const char *povray;   // executable; NULL: $ROADSIDE_POVRAY, else "povray"
+    double marking_width_m;   // lane-edge marking width (default 0.15 m)
+    double canvas_scale;      // distorted lenses: canvas pixels per core pixel (default 1)
+    int antialias;            // 0 none, n >= 2: +A0.1 +AM2 +R(n) (default 0)
+} rs_synth_twin_options;
+void rs_synth_twin_options_default(rs_synth_twin_options *opt);
+
+// Ray-traces the site's ground seen by a calibrated camera: an asphalt plane (the site's ground
+// plane), white lane-edge markings (both edges of every lane of lanes.geojson, marking_width_m
+// wide), a sky, and the sun at the azimuth/elevation rs_synth_sun_position gives for the site's
+// origin and the time. Weather changes the sky light, the sun (none when cloudy, rain or at
+// night), the asphalt (darker and glossier in rain, white with faint markings in snow).
+// Writes the 8-bit sRGB image to out_png atomically (a distorted lens is rendered on a pinhole
+// canvas and resampled with mrcal's projection, rs_synth_camera.h). Temporary scene files go to
+// work_dir (created if missing) and are removed.
+// in: site (loaded), lanes_path (lanes.geojson; may be NULL: no markings), camera: lensmodel,
+//     intrinsics (Nintrinsics,), width, height, rt_cam_enu (6,); unix_time_s; weather (one of
+//     sunny/cloudy/rain/snow; "night" also accepted); opt may be NULL
+// out: *sun_azimuth_deg, *sun_elevation_deg (may be NULL); *conditions_out: the conditions tag
+//      the image shows (static string; weather, or "night")
+// Returns RS_ERR_EXTERNAL when povray is missing or fails, RS_ERR_INVALID for a bad weather.
+rs_status rs_synth_background_render_twin(// out
+                                          double *sun_azimuth_deg, double *sun_elevation_deg,
+                                          const char **conditions_out,
+                                          // in
+                                          const char *out_png, const char *work_dir,
+                                          const rs_site *site, const char *lanes_path,
+                                          const mrcal_lensmodel_t *lensmodel,
+                                          const double *intrinsics, int width, int height,
+                                          const double rt_cam_enu[6], double unix_time_s,
+                                          const char *weather, const rs_synth_twin_options *opt,
+                                          rs_err *err);
+
+#ifdef __cplusplus
+}
+#endif
