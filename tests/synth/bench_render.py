@@ -24,6 +24,7 @@ def timed(args):
 
 
 def main():
+    u.need_povray()
     import cv2
     N = int(sys.argv[1]) if len(sys.argv) > 1 else 10
     repeats = int(sys.argv[2]) if len(sys.argv) > 2 else 3
@@ -48,6 +49,13 @@ def main():
                 tr.append(t)
                 t, wf = timed(base + ["-o", os.path.join(tmp, "f%d" % k), "--full-frame"])
                 tf.append(t)
+            # the render composited and its ID pass holds the vehicles (the suite's check)
+            img = u.read_png(os.path.join(tmp, "r0", "image.png"))
+            ids = u.read_png(os.path.join(tmp, "r0", "ids.png"))
+            seen = len(set(np.unique(ids).tolist()) - {0})
+            if img.shape != (H, W, 3) or seen < N // 3:
+                u.fail("%s %s: image %s, %d of %d vehicles in the ID pass"
+                       % (lens, placement, img.shape, seen, N))
             region = "%sx%s" % (int(wr[7]) - int(wr[5]) + 1, int(wr[8]) - int(wr[6]) + 1)
             print("%-8s %-9s %4d %10.3f %10.3f %8.2f %14s %7s/%-6s" % (
                 lens, placement, N, np.median(tr), np.median(tf), np.median(tf) / np.median(tr), region,
