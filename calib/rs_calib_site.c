@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include <cjson/cJSON.h>
+#include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
 #include "rs_calib_opencv.h"
@@ -133,6 +134,31 @@ rs_status rs_calib_ground_homography(double H_px_from_ground[9], double H_ground
     return RS_OK;
 }
 
+// ---------------------------------------------------------------- surveyed reprojection
+
+double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_calib_result *r, double *q_px)
+{
+    const rs_site_camera *cam = &site->cameras[icam];
+    double sum = 0;
+    int n = 0;
+    for (int i = 0; i < r->N && i < cam->Nobservations; i++) {
+        const rs_site_observation *o = &cam->observations[i];
+        double p_cam[3], q[2] = {NAN, NAN};
+        mrcal_transform_point_rt(p_cam, NULL, NULL, r->rt_cam_enu, site->landmarks[o->ilandmark].p_enu_m);
+        if (!mrcal_project((mrcal_point2_t *)q, NULL, NULL, (const mrcal_point3_t *)p_cam, 1, &cam->lensmodel,
+                           r->intrinsics))
+            q[0] = q[1] = NAN;
+        if (q_px) {
+            q_px[2 * i] = q[0];
+            q_px[2 * i + 1] = q[1];
+        }
+        if (!r->inlier[i] || !isfinite(q[0]) || !isfinite(q[1])) continue;
+        sum += (q[0] - o->q_px[0]) * (q[0] - o->q_px[0]) + (q[1] - o->q_px[1]) * (q[1] - o->q_px[1]);
+        n++;
+    }
+    return n ? sqrt(sum / n) : NAN;
+}
+
 // ---------------------------------------------------------------- JSON
 
 static cJSON *json_array(const double *v, int n)
@@ -181,6 +207,10 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     cJSON_AddItemToObject(root, "sigma_position_enu_m", json_array(r->sigma_position_enu_m, 3));
     cJSON_AddItemToObject(root, "sigma_yaw_pitch_roll_deg", json_array(r->sigma_yaw_pitch_roll_deg, 3));
     cJSON_AddNumberToObject(root, "rms_px", r->rms_px);
+    double *q_surveyed = malloc((size_t)(r->N > 0 ? r->N : 1) * 2 * sizeof(double));
+    double rms_surveyed = rs_calib_site_rms_surveyed_px(site, icam, r, q_surveyed);
+    if (isfinite(rms_surveyed)) cJSON_AddNumberToObject(root, "rms_px_surveyed", rms_surveyed);
+    else cJSON_AddNullToObject(root, "rms_px_surveyed");
     cJSON_AddNumberToObject(root, "landmarks_used", r->Ninliers);
     cJSON_AddNumberToObject(root, "landmarks_rejected", r->N - r->Ninliers);
     cJSON_AddNumberToObject(root, "chi2", r->chi2);
@@ -205,12 +235,15 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
         cJSON_AddItemToObject(l, "observed_px", json_array(o->q_px, 2));
         cJSON_AddItemToObject(l, "predicted_px", json_array(&r->predicted_px[2 * i], 2));
         cJSON_AddItemToObject(l, "residual_px", json_array(&r->residual_px[2 * i], 2));
+        if (q_surveyed && isfinite(q_surveyed[2 * i]))
+            cJSON_AddItemToObject(l, "predicted_surveyed_px", json_array(&q_surveyed[2 * i], 2));
         cJSON_AddNumberToObject(l, "normalised_residual", r->normalised_residual[i]);
         cJSON_AddBoolToObject(l, "inlier", r->inlier[i]);
         cJSON_AddItemToObject(l, "p_enu_surveyed_m", json_array(site->landmarks[o->ilandmark].p_enu_m, 3));
         cJSON_AddItemToObject(l, "p_enu_adjusted_m", json_array(&r->p_enu_refined_m[3 * i], 3));
         cJSON_AddItemToArray(lms, l);
     }
+    free(q_surveyed);
     cJSON *solver = cJSON_AddObjectToObject(root, "solver");
     cJSON_AddStringToObject(solver, "method", r->method);
     cJSON_AddNumberToObject(solver, "iterations", r->iterations);

@@ -49,6 +49,14 @@ void rs_calib_site_problem_free(rs_calib_site_problem *sp); // NULL-safe
 rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam,
                               const rs_calib_result *result, rs_err *err);
 
+// RMS reprojection error, in pixels, of the inliers' SURVEYED landmark positions through the
+// solved pose and intrinsics: what a tool that trusts the survey (OpenCV's solvePnP, a
+// homography) would call its reprojection error. (The result's rms_px is smaller: there the
+// landmarks have moved within their survey sigmas.) q_px (N,2) receives every observation's
+// projection (NaN where it fails); may be NULL. Returns NaN when no inlier projects.
+double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_calib_result *result,
+                                     double *q_px); // (N,2) may be NULL
+
 // The result of one camera as JSON text (the content of <id>.json). Caller frees with free().
 // Returns NULL when out of memory.
 char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_result *result);
