@@ -87,7 +87,7 @@ static int synth_load(rs_cli_synth *s, const char *command)
     if (s->time_iso && (st = rs_synth_parse_iso8601(&t_s, s->time_iso, "--time", &err)))
         return rs_cli_usage_error(command, "%s", err.msg);
     if ((st = rs_site_load(&s->site, s->site_dir, &err)))
-        return rs_cli_fail(s->site_dir, st, &err);
+        return rs_cli_fail(command, st, &err);
     if (rs_site_find_camera(s->site, s->camera_id) < 0)
         return rs_cli_usage_error(command, "--camera: no camera \"%s\" in %s", s->camera_id,
                                   s->site_dir);
@@ -98,15 +98,15 @@ static int synth_load(rs_cli_synth *s, const char *command)
         return rs_cli_fail("out of memory", RS_ERR_NOMEM, NULL);
     st = rs_calib_camera_read(&s->camera, model, &err);
     if (st) {
-        int rc = rs_cli_fail(model, st, &err);
+        int rc = rs_cli_fail(command, st, &err);
         free(model);
         return rc;
     }
     free(model);
     if ((st = rs_synth_vehicles_read(&s->list, s->vehicles_path, &err)))
-        return rs_cli_fail(s->vehicles_path, st, &err);
+        return rs_cli_fail(command, st, &err);
     if ((st = rs_synth_prepare(&s->prepared, s->list.v, s->list.obj, s->list.N, &err)))
-        return rs_cli_fail(s->vehicles_path, st, &err);
+        return rs_cli_fail(command, st, &err);
     rs_synth_scene_options_default(&s->scene);
     if (s->has_sun) {
         s->scene.sun_azimuth_deg = s->sun_az_deg;
