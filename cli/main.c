@@ -25,6 +25,7 @@ static const command commands[] = {
     {"render", rs_cli_render, "render a scene with POV-Ray and write its labels"},
     {"background", rs_cli_background, "background images of a camera: temporal median of video or frames"},
     {"traffic", rs_cli_traffic, "vehicle placements for a site: built-in lanes or SUMO"},
+    {"synth", rs_cli_synth, "synthesise a labelled dataset: sharded, resumable, deterministic"},
     {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
     {"bench", rs_cli_bench, "benchmarks: run time against error"},
 };

@@ -23,6 +23,7 @@ int rs_cli_background(int argc, char **argv);
 // `roadside site render-backgrounds`, living with `roadside background` in cmd_background.c
 int rs_cli_site_render_backgrounds(int argc, char **argv);
 int rs_cli_traffic(int argc, char **argv);
+int rs_cli_synth(int argc, char **argv);
 int rs_cli_eval(int argc, char **argv);
 int rs_cli_bench(int argc, char **argv);
 // Sub-subcommands living in their own files: `roadside site simulate`, `roadside bench calib`.

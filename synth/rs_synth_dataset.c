@@ -1,0 +1,2 @@
+// PLACEHOLDER
+typedef int rs_placeholder_rs_synth_dataset;
