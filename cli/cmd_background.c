@@ -16,6 +16,7 @@
 #include "rs_synth_background.h"
 #include "rs_synth_opencv.h"
 #include "rs_synth_scene.h"
+#include "rs_synth_sun.h"
 
 enum { MAX_TAGS = 64 };
 
@@ -226,6 +227,10 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
             double az, el;
             const char *cond;
             char name[128], tmp[4200];
+            double el0;
+            rs_synth_sun_position(&az, &el0, site->origin.lat_deg, site->origin.lon_deg, unix_s);
+            if (w > 0 && el0 < -6.0)
+                continue; // night whatever the weather: one image per time (rendered at w = 0)
             // render under a temporary name first: the conditions (night?) decide the final name
             snprintf(tmp, sizeof(tmp), "%s/render.png", work);
             if ((st = rs_synth_background_render_twin(&az, &el, &cond, tmp, work, site, lanes,

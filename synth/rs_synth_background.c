@@ -419,6 +419,8 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
     if (lanes && lanes->N > 0) {
         fprintf(f, "// lane-edge markings (%d lanes)\nmesh {\n", lanes->N);
         for (int i = 0; i < lanes->N; i++) {
+            if (lanes->lane[i].kind && !strcmp(lanes->lane[i].kind, "junction"))
+                continue; // paths across the junction carry no edge markings
             const double hw = 0.5 * lanes->lane[i].width_m;
             write_marking(f, &lanes->lane[i], hw, 0.5 * marking_width_m, site);
             write_marking(f, &lanes->lane[i], -hw, 0.5 * marking_width_m, site);

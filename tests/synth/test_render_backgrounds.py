@@ -1,0 +1,142 @@
+# roadside site render-backgrounds with the real POV-Ray at 480x270: the lane-edge markings of
+# the site's lanes appear where mrcal projects them (bright pixels at the projected marking
+# centres, dark asphalt at the lane centres), for a pinhole and an OPENCV8 camera; the images are
+# recorded in site.json as synthetic with time and conditions tags, the site still checks clean,
+# and a time with the sun below -6 degrees gives one "night" image whatever the weathers.
+import json
+import os
+import shutil
+import sys
+import tempfile
+
+import cv2
+import mrcal
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(__file__))
+from synth_test_util import DEMO, fail, need_povray, run, scaled_camera  # noqa: E402
+
+WGS84_A, WGS84_F = 6378137.0, 1 / 298.257223563
+
+
+def ecef(lat, lon, h):
+    """Geodetic (degrees, metres) to ECEF (independent of roadside's GeographicLib code)."""
+    e2 = WGS84_F * (2 - WGS84_F)
+    la, lo = np.radians(lat), np.radians(lon)
+    n = WGS84_A / np.sqrt(1 - e2 * np.sin(la) ** 2)
+    return np.array([(n + h) * np.cos(la) * np.cos(lo), (n + h) * np.cos(la) * np.sin(lo),
+                     (n * (1 - e2) + h) * np.sin(la)])
+
+
+def enu(lat0, lon0, h0, lat, lon, h):
+    la, lo = np.radians(lat0), np.radians(lon0)
+    R = np.array([[-np.sin(lo), np.cos(lo), 0],
+                  [-np.sin(la) * np.cos(lo), -np.sin(la) * np.sin(lo), np.cos(la)],
+                  [np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)]])
+    return R @ (ecef(lat, lon, h) - ecef(lat0, lon0, h0))
+
+
+def lane_samples(site):
+    """(marking points, lane-centre points) in ENU, every 0.5 m along non-junction lanes."""
+    s = json.load(open(os.path.join(site, "site.json")))
+    o = s["origin"]
+    marks, centres = [], []
+    for f in json.load(open(os.path.join(site, "lanes.geojson")))["features"]:
+        pr = f["properties"]
+        if pr.get("kind") == "junction":
+            continue
+        pts = np.array([enu(o["lat"], o["lon"], o["h"], c[1], c[0], o["h"])[:2]
+                        for c in f["geometry"]["coordinates"]])
+        for a, b in zip(pts[:-1], pts[1:]):
+            d = b - a
+            L = np.linalg.norm(d)
+            left = np.array([-d[1], d[0]]) / L
+            for t in np.arange(0.25, L - 0.25, 0.5):
+                p = a + d * t / L
+                centres.append(p)
+                marks += [p + left * pr["width_m"] / 2, p - left * pr["width_m"] / 2]
+    z = lambda P: np.hstack([np.array(P), np.zeros((len(P), 1))])  # noqa: E731
+    return z(marks), z(centres)
+
+
+def check_image(path, model, marks, centres, label):
+    img = cv2.imread(path, cv2.IMREAD_GRAYSCALE).astype(float)
+    W, H = model.imagersize()
+    if img.shape != (H, W):
+        fail("%s: %s, expected %dx%d" % (path, img.shape, W, H))
+
+    def values(P, fn):
+        q = mrcal.project(mrcal.transform_point_rt(model.extrinsics_rt_fromref(), P),
+                          *model.intrinsics())
+        pc = mrcal.transform_point_rt(model.extrinsics_rt_fromref(), P)
+        r = np.linalg.norm(pc, axis=1)
+        ok = (pc[:, 2] > 0) & (r < 35) & (q[:, 0] > 3) & (q[:, 0] < W - 4) & (q[:, 1] > 3) & \
+            (q[:, 1] < H - 4)
+        # a distortion polynomial folds points far outside the view back into the image: keep
+        # only points whose pixel unprojects to their own direction
+        back = mrcal.unproject(q, *model.intrinsics(), normalize=True)
+        ok &= np.sum(back * pc / r[:, None], axis=1) > np.cos(1e-3)
+        out = []
+        for u, v in np.round(q[ok]).astype(int):
+            out.append(fn(img[v - 1:v + 2, u - 1:u + 2]))
+        return np.array(out)
+
+    asphalt = np.median(img)
+    vm = values(marks, np.max)
+    vc = values(centres, np.max)
+    bright = np.mean(vm > asphalt + 60)
+    dark = np.mean(vc < asphalt + 30)
+    print("%s: asphalt median %.0f; %d marking samples, %.1f%% bright (> +60); %d lane-centre "
+          "samples, %.1f%% dark (< +30)" % (label, asphalt, len(vm), 100 * bright, len(vc),
+                                             100 * dark))
+    if len(vm) < 50 or len(vc) < 30:
+        fail("%s: too few samples in view" % label)
+    if not (bright >= 0.95 and dark >= 0.90):
+        fail("%s: markings not where mrcal projects them" % label)
+
+
+def main():
+    need_povray()
+    with tempfile.TemporaryDirectory() as tmp:
+        site = os.path.join(tmp, "site")
+        shutil.copytree(DEMO, site, ignore=shutil.ignore_patterns("truth"))
+        calib = os.path.join(tmp, "calib")
+        models = {"cam1": scaled_camera(calib, "cam1", 480, True),
+                  "cam3": scaled_camera(calib, "cam3", 480, False)}
+        marks, centres = lane_samples(site)
+        for cam, m in models.items():
+            p = run(["site", "render-backgrounds", site, "--calib", calib, "--camera", cam,
+                     "--times", "2024-06-21T10:00:00Z,2024-06-21T22:00:00+00:00",
+                     "--weather", "sunny,cloudy"])
+            print(p.stdout.strip())
+            path = os.path.join(site, "backgrounds", cam, "twin_20240621T1000Z_sunny.png")
+            check_image(path, m, marks, centres, "%s (%s) sunny" % (cam, m.intrinsics()[0]))
+            names = sorted(os.listdir(os.path.join(site, "backgrounds", cam)))
+            want = ["twin_20240621T1000Z_cloudy.png", "twin_20240621T1000Z_sunny.png",
+                    "twin_20240621T2200Z_night.png"]
+            if names != want:
+                fail("%s: backgrounds %s, expected %s" % (cam, names, want))
+        s = json.load(open(os.path.join(site, "site.json")))
+        for c in s["cameras"]:
+            if c["id"] not in models:
+                if "background_images" in c:
+                    fail("camera %s got backgrounds" % c["id"])
+                continue
+            e = {b["name"]: b for b in c["background_images"]}
+            b = e["twin_20240621T1000Z_sunny"]
+            if not (b["synthetic"] is True and b["tags"]["conditions"] == "sunny"
+                    and b["tags"]["time"] == "2024-06-21T10:00:00Z"
+                    and e["twin_20240621T2200Z_night"]["tags"]["conditions"] == "night"
+                    and len(e) == 3):
+                fail("site.json entry: %s" % json.dumps(c["background_images"]))
+        p = run(["site", "check", site])
+        if "0 errors, 0 warnings" not in p.stdout + p.stderr:
+            fail("site check: %s %s" % (p.stdout, p.stderr))
+        run(["site", "render-backgrounds", site, "--calib", calib, "--weather", "fog"], expect=2)
+        run(["site", "render-backgrounds", site], expect=2)
+        run(["site", "render-backgrounds", site, "--calib", calib, "--camera", "cam1",
+             "--times", "2024-06-21T10:00"], expect=1)
+    print("OK")
+
+
+main()
