@@ -22,7 +22,7 @@ void rs_calib_options_default(rs_calib_options *opt) {
     opt->robust_scale = 2.0;
     opt->outlier_threshold = 3.717; // sqrt(chi2inv(0.999, 2)) = sqrt(13.8155)
     rs_calib_init_options_default(&opt->init);
-    opt->max_iterations = 100;
+    opt->max_iterations = 500;
     opt->focal_prior_rel_sigma = 1.0;
     opt->center_prior_sigma_px = 50.0;
     opt->distortion_prior_sigma = 0.1;

@@ -78,7 +78,8 @@ typedef struct {
     double outlier_threshold;      // flag a landmark when sqrt(block chi2) > this, in sigmas
                                    //   (default 3.717 = sqrt of the 99.9% chi-square 2 dof)
     rs_calib_init_options init;    // options of the initial pose (rs_calib_init.h)
-    int max_iterations;            // Ceres iterations per solve (default 100)
+    int max_iterations;            // Ceres iterations per solve (default 500; a well-posed
+                                   //   problem needs 5-20, narrow valleys a few hundred)
     double focal_prior_rel_sigma;  // prior on the focal scale about the nominal, relative
                                    //   1-sigma (default 1.0: weak); 0: no prior
     double center_prior_sigma_px;  // prior on (cx, cy) about nominal, px (default 50); 0: none

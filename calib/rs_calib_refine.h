@@ -56,6 +56,8 @@ typedef struct {
     int Nresiduals, Nfree;    // counts of the solve; dof = Nresiduals - Nfree
     int iterations;
     double condition_number;  // equilibrated Jacobian, landmarks eliminated (NAN: not computed)
+    bool covariance_by_ceres; // true: ceres::Covariance; false: the landmark-eliminated QR
+                              //   (Jacobian column norms spanning more than 1e7, see the .cc)
 } rs_calib_refine_summary;
 
 // Runs one solve from the given starting point.

@@ -220,12 +220,19 @@ void intrinsics_subspace(std::vector<double> *B, std::vector<IntrinsicsPriorCost
         }
 }
 
-// Condition number of the Jacobian with the landmarks eliminated: the Schur complement
-// S = A - sum_i B_i C_i^-1 B_i^T of J^T J (A: rt and intrinsics, C_i: landmark i, at most 3x3,
-// positive definite thanks to its survey prior), equilibrated to unit diagonal; returns
-// sqrt(lambda_max/lambda_min) of it (inf when singular).
+// Condition number of the Jacobian with the landmarks eliminated, computed without forming
+// normal equations (pixel sigmas of 1e-3 px against survey sigmas of metres make J^T J lose
+// every digit): the rows of each landmark's residual block are projected onto the orthogonal
+// complement of that landmark's columns (Householder QR of its (rows x <=3) block), the
+// projected head columns of all landmarks (and the rows without a landmark) are stacked, their
+// columns scaled to unit norm, and sigma_max/sigma_min of that matrix is returned (inf when
+// singular). Equilibration makes the number independent of units (radians against metres).
+// Also returns the covariance of the head in its tangent space, (Rd^T Rd)^-1 from the SVD of
+// the equilibrated Rd, in *cov_tangent (may be NULL), and the ratio of the largest to the
+// smallest column norm of the whole Jacobian in *column_range (may be NULL).
 double reduced_condition(ceres::Problem *problem, const std::vector<double *> &head,
-                         const std::vector<double *> &landmarks) {
+                         const std::vector<double *> &landmarks, Eigen::MatrixXd *cov_tangent,
+                         double *column_range) {
     ceres::Problem::EvaluateOptions eo;
     eo.parameter_blocks = head;
     eo.parameter_blocks.insert(eo.parameter_blocks.end(), landmarks.begin(), landmarks.end());
@@ -238,33 +245,86 @@ double reduced_condition(ceres::Problem *problem, const std::vector<double *> &h
             J(r, crs.cols[(size_t)k]) = crs.values[(size_t)k];
     int nh = 0;
     for (double *b : head) nh += problem->ParameterBlockTangentSize(b);
-    const auto Jh = J.leftCols(nh);
-    Eigen::MatrixXd S = Jh.transpose() * Jh;
+
+    // the landmark owning each row (-1: none), by its columns
+    std::vector<int> first_col, size;
     int col = nh;
     for (double *b : landmarks) {
-        const int n = problem->ParameterBlockTangentSize(b);
-        const auto Ji = J.middleCols(col, n);
-        const Eigen::MatrixXd Bi = Jh.transpose() * Ji;
-        Eigen::LDLT<Eigen::MatrixXd> ldlt(Ji.transpose() * Ji);
-        if (ldlt.info() != Eigen::Success) return INFINITY;
-        S -= Bi * ldlt.solve(Bi.transpose());
-        col += n;
+        first_col.push_back(col);
+        size.push_back(problem->ParameterBlockTangentSize(b));
+        col += size.back();
     }
-    Eigen::VectorXd d = S.diagonal();
-    for (int i = 0; i < nh; i++) {
-        if (!(d(i) > 0.0)) return INFINITY;
-        d(i) = 1.0 / std::sqrt(d(i));
+    std::vector<std::vector<int>> rows_of(landmarks.size());
+    std::vector<int> free_rows;
+    for (int r = 0; r < J.rows(); r++) {
+        int owner = -1;
+        for (size_t l = 0; l < landmarks.size() && owner < 0; l++)
+            if (J.row(r).segment(first_col[l], size[l]).squaredNorm() > 0.0) owner = (int)l;
+        if (owner < 0)
+            free_rows.push_back(r);
+        else
+            rows_of[(size_t)owner].push_back(r);
     }
-    const Eigen::MatrixXd K = d.asDiagonal() * S * d.asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(K, Eigen::EigenvaluesOnly);
-    if (es.info() != Eigen::Success) return INFINITY;
-    const double lmin = es.eigenvalues()(0), lmax = es.eigenvalues()(nh - 1);
-    if (!(lmin > 0.0) || !std::isfinite(lmax)) return INFINITY;
-    return std::sqrt(lmax / lmin);
+    std::vector<Eigen::MatrixXd> pieces;
+    int m = (int)free_rows.size();
+    {
+        Eigen::MatrixXd F(free_rows.size(), nh);
+        for (size_t k = 0; k < free_rows.size(); k++) F.row((Eigen::Index)k) = J.row(free_rows[k]).head(nh);
+        pieces.push_back(F);
+    }
+    for (size_t l = 0; l < landmarks.size(); l++) {
+        const int nr = (int)rows_of[l].size(), nl = size[l];
+        if (nr <= nl) continue; // nothing left once the landmark is solved for
+        Eigen::MatrixXd Jl(nr, nl), Jh(nr, nh);
+        for (int k = 0; k < nr; k++) {
+            Jl.row(k) = J.row(rows_of[l][(size_t)k]).segment(first_col[l], nl);
+            Jh.row(k) = J.row(rows_of[l][(size_t)k]).head(nh);
+        }
+        Eigen::HouseholderQR<Eigen::MatrixXd> qr(Jl);
+        const Eigen::MatrixXd QtJh = qr.householderQ().transpose() * Jh;
+        pieces.push_back(QtJh.bottomRows(nr - nl));
+        m += nr - nl;
+    }
+    Eigen::MatrixXd Rd(m, nh);
+    int row = 0;
+    for (const Eigen::MatrixXd &p : pieces) {
+        Rd.middleRows(row, p.rows()) = p;
+        row += (int)p.rows();
+    }
+    if (column_range) {
+        double cmax = 0.0, cmin = INFINITY;
+        for (int j = 0; j < J.cols(); j++) {
+            cmax = std::fmax(cmax, J.col(j).norm());
+            cmin = std::fmin(cmin, J.col(j).norm());
+        }
+        *column_range = cmax / cmin;
+    }
+    if (m < nh) return INFINITY;
+    Eigen::VectorXd scale(nh);
+    for (int j = 0; j < nh; j++) {
+        const double n = Rd.col(j).norm();
+        if (!(n > 0.0) || !std::isfinite(n)) return INFINITY;
+        Rd.col(j) /= n;
+        scale(j) = 1.0 / n;
+    }
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(Rd, Eigen::ComputeThinV);
+    const auto &sv = svd.singularValues();
+    const double smax = sv(0), smin = sv(nh - 1);
+    if (!(smin > 0.0) || !std::isfinite(smax)) return INFINITY;
+    if (cov_tangent) {
+        const Eigen::MatrixXd W = svd.matrixV() * sv.cwiseInverse().asDiagonal();
+        *cov_tangent = scale.asDiagonal() * (W * W.transpose()) * scale.asDiagonal();
+    }
+    return smax / smin;
 }
 
 // Beyond this condition number of the Jacobian the covariance is numerical noise.
 const double kConditionSingular = 1e7;
+// Beyond this ratio of the largest to the smallest column norm of the Jacobian, SuiteSparseQR's
+// rank test inside ceres::Covariance (tolerance relative to the largest column) declares
+// well-determined problems rank-deficient (pixel sigmas of 1e-3 px against survey sigmas of
+// metres); the covariance then comes from the landmark-eliminated, equilibrated QR instead.
+const double kColumnRangeCeres = 1e7;
 
 rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_summary *summary,
                  double *cov, double *block_chi2, double *q_pred,
@@ -335,7 +395,11 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     }
 
     ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_SCHUR;
+    // DENSE_QR, not DENSE_SCHUR: with pixel sigmas far below the survey sigmas (1e-3 px against
+    // metres) the Schur complement's Cholesky factorisation fails and Ceres logs every failed
+    // step to stderr through glog; QR forms no normal equations. About 3x slower with free
+    // landmarks (tests/calib/test_stress_random found it).
+    so.linear_solver_type = ceres::DENSE_QR;
     so.max_num_iterations = opt->max_iterations > 0 ? opt->max_iterations : 100;
     // tight: noise-free data must give the truth to 1e-9; a rough pass only needs the basin
     so.function_tolerance = opt->rough ? 1e-6 : 1e-12;
@@ -386,32 +450,49 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
 
     std::vector<double *> head{rt};
     if (refine_i) head.push_back(intrinsics);
-    summary->condition_number = reduced_condition(&problem, head, landmarks);
+    Eigen::MatrixXd cov_tangent;
+    double column_range = 1.0;
+    summary->condition_number = reduced_condition(&problem, head, landmarks, &cov_tangent, &column_range);
     if (!(summary->condition_number < kConditionSingular))
         return rs_err_set(err, RS_ERR_DEGENERATE,
                           "the landmarks do not determine the pose%s: the Jacobian is "
                           "rank-deficient (condition number %.3g)",
                           refine_i ? " and the refined intrinsics" : "",
                           summary->condition_number);
-
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::SPARSE_QR;
-    co.apply_loss_function = false;
-    ceres::Covariance covariance(co);
-    std::vector<std::pair<const double *, const double *>> pairs;
-    for (double *a : head)
-        for (double *b : head) pairs.emplace_back(a, b);
-    if (!covariance.Compute(pairs, &problem))
-        return rs_err_set(err, RS_ERR_DEGENERATE,
-                          "the covariance of the pose is rank-deficient: the landmarks do not "
-                          "determine it");
-    if (cov) {
-        const int n = 6 + Ni;
+    const int n = 6 + Ni, m = 6 + (refine_i ? Ni : 0);
+    std::vector<double> c((size_t)m * (size_t)m);
+    summary->covariance_by_ceres = column_range < kColumnRangeCeres;
+    if (summary->covariance_by_ceres) {
+        ceres::Covariance::Options co;
+        co.algorithm_type = ceres::SPARSE_QR;
+        co.apply_loss_function = false;
+        ceres::Covariance covariance(co);
+        std::vector<std::pair<const double *, const double *>> pairs;
+        for (double *a : head)
+            for (double *b : head) pairs.emplace_back(a, b);
+        if (!covariance.Compute(pairs, &problem))
+            return rs_err_set(err, RS_ERR_DEGENERATE,
+                              "the covariance of the pose is rank-deficient: the landmarks do not "
+                              "determine it");
         std::vector<const double *> blocks(head.begin(), head.end());
-        std::vector<double> c((size_t)(6 + (refine_i ? Ni : 0)) * (size_t)(6 + (refine_i ? Ni : 0)));
         if (!covariance.GetCovarianceMatrix(blocks, c.data()))
             return rs_err_set(err, RS_ERR_EXTERNAL, "Ceres: GetCovarianceMatrix failed");
-        const int m = 6 + (refine_i ? Ni : 0);
+    } else {
+        // the landmark-eliminated QR's covariance, tangent -> ambient for the intrinsics
+        Eigen::MatrixXd P = Eigen::MatrixXd::Zero(m, cov_tangent.rows());
+        P.topLeftCorner(6, 6).setIdentity();
+        if (refine_i) {
+            const ceres::Manifold *mf = problem.GetManifold(intrinsics);
+            const int k = mf->TangentSize();
+            Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Bm(Ni, k);
+            mf->PlusJacobian(intrinsics, Bm.data());
+            P.block(6, 6, Ni, k) = Bm;
+        }
+        const Eigen::MatrixXd C = P * cov_tangent * P.transpose();
+        for (int a = 0; a < m; a++)
+            for (int b = 0; b < m; b++) c[(size_t)a * m + b] = C(a, b);
+    }
+    if (cov) {
         std::fill(cov, cov + (size_t)n * n, 0.0);
         for (int a = 0; a < m; a++)
             for (int b = 0; b < m; b++) cov[a * n + b] = c[(size_t)a * m + b];
