@@ -53,7 +53,7 @@ enum { OPT_BACKGROUND = 2000, OPT_FULL, OPT_AA, OPT_SCALE, OPT_KEEP, OPT_LABELS,
 
 // Labels of the rendered image (rs_synth_labels.h): COCO, YOLO and KITTI into out_dir, the
 // composite copied into out_dir/<split>/image.png.
-static rs_status write_labels(const rs_cli_synth *s, const rs_synth_render_result *r,
+static rs_status write_labels(const rs_cli_synth_args *s, const rs_synth_render_result *r,
                               const char *split, const rs_synth_label_options *lopt, rs_err *err)
 {
     const int N = s->prepared.N;
@@ -117,7 +117,7 @@ int rs_cli_render(int argc, char **argv)
         {"bbox", required_argument, NULL, OPT_BBOX},
         {"min-visibility", required_argument, NULL, OPT_MINVIS},
         {NULL, 0, NULL, 0}};
-    rs_cli_synth s = {0};
+    rs_cli_synth_args s = {0};
     rs_synth_render_options ropt;
     rs_synth_render_options_default(&ropt);
     int c, rc;

@@ -35,7 +35,7 @@ static const char scene_usage[] =
     "\n"
     "Exit status: 0 written, 1 failed (nothing written), 2 usage error.\n";
 
-int rs_cli_synth_option(rs_cli_synth *s, const char *command, int opt, const char *arg)
+int rs_cli_synth_option(rs_cli_synth_args *s, const char *command, int opt, const char *arg)
 {
     switch (opt) {
     case RS_CLI_SYNTH_CALIB: s->calib_dir = arg; return 0;
@@ -62,7 +62,7 @@ int rs_cli_synth_option(rs_cli_synth *s, const char *command, int opt, const cha
     }
 }
 
-void rs_cli_synth_free(rs_cli_synth *s)
+void rs_cli_synth_free(rs_cli_synth_args *s)
 {
     if (!s)
         return;
@@ -75,7 +75,7 @@ void rs_cli_synth_free(rs_cli_synth *s)
     s->pins_enu_m = NULL;
 }
 
-static int synth_load(rs_cli_synth *s, const char *command)
+static int synth_load(rs_cli_synth_args *s, const char *command)
 {
     if (!s->calib_dir || !s->camera_id || !s->vehicles_path || !s->output)
         return rs_cli_usage_error(command, "--calib, --camera, --vehicles and -o are required");
@@ -128,7 +128,7 @@ static int synth_load(rs_cli_synth *s, const char *command)
     return RS_EXIT_OK;
 }
 
-int rs_cli_synth_load(rs_cli_synth *s, const char *command, int argc, char **argv, int optind)
+int rs_cli_synth_load(rs_cli_synth_args *s, const char *command, int argc, char **argv, int optind)
 {
     if (optind + 1 != argc)
         return rs_cli_usage_error(command, "expected one SITE folder");
@@ -146,7 +146,7 @@ int rs_cli_scene(int argc, char **argv)
         return RS_EXIT_OK;
     }
     static const struct option longopts[] = {RS_CLI_SYNTH_LONGOPTS, {NULL, 0, NULL, 0}};
-    rs_cli_synth s = {0};
+    rs_cli_synth_args s = {0};
     int c, rc;
     optind = 1;
     opterr = 0;

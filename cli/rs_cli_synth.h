@@ -23,11 +23,11 @@ typedef struct {
     double *pins_enu_m; // (Npins,3) owned
     int Npins;
     rs_synth_scene_options scene; // sun and pins filled in
-} rs_cli_synth;
+} rs_cli_synth_args;
 
 // Handles option `opt` (a getopt_long value of the shared table below) with argument `arg`.
 // Returns 0 when handled, RS_EXIT_USAGE after printing a usage error, -1 when not shared.
-int rs_cli_synth_option(rs_cli_synth *s, const char *command, int opt, const char *arg);
+int rs_cli_synth_option(rs_cli_synth_args *s, const char *command, int opt, const char *arg);
 
 // getopt_long values of the shared options.
 enum { RS_CLI_SYNTH_CALIB = 1000, RS_CLI_SYNTH_CAMERA, RS_CLI_SYNTH_VEHICLES, RS_CLI_SYNTH_PINS,
@@ -44,5 +44,5 @@ enum { RS_CLI_SYNTH_CALIB = 1000, RS_CLI_SYNTH_CAMERA, RS_CLI_SYNTH_VEHICLES, RS
 // Takes the one positional argument (SITE) left after option parsing (argv[optind..]), checks
 // the required options, then loads everything. Returns an exit code (RS_EXIT_OK on success;
 // messages printed; on failure *s is freed).
-int rs_cli_synth_load(rs_cli_synth *s, const char *command, int argc, char **argv, int optind);
-void rs_cli_synth_free(rs_cli_synth *s); // NULL-safe
+int rs_cli_synth_load(rs_cli_synth_args *s, const char *command, int argc, char **argv, int optind);
+void rs_cli_synth_free(rs_cli_synth_args *s); // NULL-safe
