@@ -85,7 +85,9 @@ BAD = [
     ("center shift not a number", GT, DETS, ["--center-shift", "nan"], 2, ["--center-shift: 'nan'"]),
     ("unknown option", GT, DETS, ["--frobnicate"], 2, ["unknown option '--frobnicate'"]),
     ("option without value", GT, DETS, ["--by"], 2, ["--by needs a value"]),
-    ("calibration not available yet", GT, DETS, ["--calib", "sites/x"], 2, ["unknown option '--calib'"]),
+    ("calib without site", GT, DETS, ["--calib", "sites/x"], 2, ["--site and --calib go together"]),
+    ("site without calib", GT, DETS, ["--site", "sites/x"], 2, ["--site and --calib go together"]),
+    ("camera field alone", GT, DETS, ["--camera-field", "cam"], 2, ["--camera-field needs --site and --calib"]),
 ]
 
 
