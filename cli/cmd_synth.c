@@ -13,7 +13,7 @@
 static const char synth_usage[] =
     "usage: roadside synth SITE --calib DIR --count N -o DATASET [--seed S]\n"
     "                      [--backgrounds TAG=VALUE]... [--shard I/N] [--camera ID]...\n"
-    "                      [--size WxH] [--vehicles N] [--split NAME]\n"
+    "                      [--size WxH] [--vehicles N] [--split NAME] [--no-shadows]\n"
     "       roadside synth merge DATASET... -o OUT\n"
     "\n"
     "Synthesises a labelled dataset (docs/synth.md): image k (0 <= k < N) is seen by camera\n"
@@ -21,7 +21,9 @@ static const char synth_usage[] =
     "(site.json background_images; without any, a neutral grey ground rendered by POV-Ray:\n"
     "make backgrounds first with `roadside site render-backgrounds` or `roadside background`),\n"
     "with the built-in traffic on SITE/lanes.geojson and domain randomisation, the sun from\n"
-    "the background's time tag, rendered with POV-Ray and labelled through mrcal. Image k\n"
+    "the background's time tag, rendered with POV-Ray, shadows cast onto the background by\n"
+    "differential rendering, the vehicles matched to the background's exposure, noise, blur\n"
+    "and JPEG quality, and labelled through mrcal. Image k\n"
     "depends only on (seed, k): reruns and shard splits give identical files. A rerun skips\n"
     "finished images. Writes DATASET/<split>/*.png, DATASET/annotations/instances_<split>.json\n"
     "(COCO, YOLOX's layout), DATASET/labels/<split>/*.txt (YOLO), DATASET/label_2/*.txt (KITTI).\n"
@@ -38,6 +40,8 @@ static const char synth_usage[] =
     "  --size WxH             output size (the camera's intrinsics scaled; same aspect)\n"
     "  --vehicles N           at most N vehicles of traffic per image (default 10)\n"
     "  --split NAME           COCO split (default train2017)\n"
+    "  --no-shadows           no differential-rendering shadows (over a background in sun,\n"
+    "                         two more povray passes of the ground make each vehicle's shadow)\n"
     "  $ROADSIDE_POVRAY       the povray executable (default: povray on PATH)\n"
     "  -h, --help             this text\n"
     "\n"
@@ -46,7 +50,7 @@ static const char synth_usage[] =
     "Exit status: 0 done, 1 failed, 2 usage error.\n";
 
 enum { OPT_CALIB = 1000, OPT_COUNT, OPT_SEED, OPT_BG, OPT_SHARD, OPT_CAMERA, OPT_SIZE,
-       OPT_VEHICLES, OPT_SPLIT };
+       OPT_VEHICLES, OPT_SPLIT, OPT_NO_SHADOWS };
 
 typedef struct {
     double t0;
@@ -136,6 +140,7 @@ int rs_cli_synth(int argc, char **argv)
         {"size", required_argument, NULL, OPT_SIZE},
         {"vehicles", required_argument, NULL, OPT_VEHICLES},
         {"split", required_argument, NULL, OPT_SPLIT},
+        {"no-shadows", no_argument, NULL, OPT_NO_SHADOWS},
         {"output", required_argument, NULL, 'o'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -201,6 +206,7 @@ int rs_cli_synth(int argc, char **argv)
             break;
         }
         case OPT_CAMERA: cams[opt.Ncameras++] = optarg; break;
+        case OPT_NO_SHADOWS: opt.shadows = false; break;
         case OPT_SIZE: {
             int used = 0;
             if (sscanf(optarg, "%dx%d%n", &opt.width, &opt.height, &used) != 2 ||

@@ -20,6 +20,7 @@
 #include "rs_calib_site.h"
 #include "rs_io.h"
 #include "rs_site.h"
+#include "rs_synth_appearance.h"
 #include "rs_synth_labels.h"
 #include "rs_synth_render.h"
 #include "rs_synth_scene.h"
@@ -32,6 +33,7 @@ void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
     opt->shard_count = 1;
     opt->vehicles = 10;
     opt->split = "train2017";
+    opt->shadows = true;
 }
 
 uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k)
@@ -74,6 +76,7 @@ static void remove_tree(const char *path)
 typedef struct {
     char *file;        // owned: absolute/joined path
     char *time_iso;    // owned, may be NULL
+    bool overcast;     // conditions cloudy, rain, snow or night: no sun pass, no cast shadow
 } background;
 
 typedef struct {
@@ -133,6 +136,8 @@ static rs_status read_backgrounds(camera *c, const char *site_dir, const cJSON *
             b->file = rs_io_join(site_dir, file->valuestring);
             const char *t = tag_value(e, "time");
             b->time_iso = t ? strdup(t) : NULL;
+            const char *cond = tag_value(e, "conditions");
+            b->overcast = cond && strcmp(cond, "sunny") != 0;
             if (!b->file || (t && !b->time_iso))
                 return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         }
@@ -198,6 +203,112 @@ done:
     return st;
 }
 
+typedef struct {
+    const rs_synth_dataset_options *opt;
+    rs_site *site;
+    rs_synth_lanes lanes;
+    camera *cams;
+    int Ncams;
+    char *split_dir, *parts_dir, *work_root;
+} dataset;
+
+// ---- shadows and appearance over a background ----
+
+// Differential rendering (Debevec, "Rendering synthetic objects into real scenes", SIGGRAPH
+// 1998): the ground with the vehicles (with_v) and the ground alone (ground) rendered under the
+// same sun and sky; on background pixels (id 0) the background in linear light is multiplied by
+// with_v / ground (clamped to [0, 1]: only shadows, no added light).
+static void shade_background(rs_synth_image *bg_lin, const rs_synth_image *with_v,
+                             const rs_synth_image *ground, const uint16_t *ids)
+{
+    const size_t n = (size_t)bg_lin->width * (size_t)bg_lin->height;
+    for (size_t i = 0; i < n; i++) {
+        if (ids[i] != 0 || ground->data[4 * i + 3] <= 0)
+            continue;
+        for (int c = 0; c < 3; c++) {
+            const double g = ground->data[4 * i + c], w = with_v->data[4 * i + c];
+            double ratio = g > 1e-6 ? w / g : 1;
+            ratio = ratio < 0 ? 0 : ratio > 1 ? 1 : ratio;
+            bg_lin->data[3 * i + c] = (float)(bg_lin->data[3 * i + c] * ratio);
+        }
+    }
+}
+
+// Renders the two ground passes of differential rendering into work/<sub>.
+static rs_status ground_passes(rs_synth_render_result *with_v, rs_synth_render_result *ground,
+                               const dataset *d, const camera *c, const char *work,
+                               const rs_synth_prepared *prepared,
+                               const rs_synth_render_options *ropt, double *seconds_povray,
+                               rs_err *err)
+{
+    rs_synth_render_options g = *ropt;
+    g.background_path = NULL;
+    g.scene.ground_visible = true;
+    const rs_synth_prepared none = {0};
+    const rs_calib_camera *cam = &c->cam;
+    char *wa = rs_io_join(work, "shadow_with"), *wb = rs_io_join(work, "shadow_ground");
+    rs_status st = (!wa || !wb) ? rs_err_set(err, RS_ERR_NOMEM, "out of memory") : RS_OK;
+    if (!st)
+        st = rs_synth_render(with_v, wa, &cam->lensmodel, cam->intrinsics, cam->width,
+                             cam->height, cam->rt_cam_enu, d->site->ground_normal_enu,
+                             d->site->ground_offset_m, prepared, &g, err);
+    if (!st)
+        st = rs_synth_render(ground, wb, &cam->lensmodel, cam->intrinsics, cam->width,
+                             cam->height, cam->rt_cam_enu, d->site->ground_normal_enu,
+                             d->site->ground_offset_m, &none, &g, err);
+    if (!st)
+        *seconds_povray += with_v->seconds_povray + ground->seconds_povray;
+    free(wa);
+    free(wb);
+    return st;
+}
+
+// The composite over a background: shadows (when given), the vehicle layer matched to the
+// background (rs_synth_appearance.h; skipped when the background gives no estimate), straight
+// alpha over the background in linear light, sRGB, the background's JPEG quality.
+// in,out: r (its composite replaced); in: shadow passes may be NULL
+static rs_status composite(rs_synth_render_result *r, const char *bg_path,
+                           const rs_synth_render_result *with_v,
+                           const rs_synth_render_result *ground, uint64_t seed, rs_err *err)
+{
+    rs_synth_image bg = {0};
+    rs_synth_appearance app;
+    const bool matched = rs_synth_appearance_estimate(&app, bg_path, NULL, NULL) == RS_OK;
+    rs_status st = rs_synth_image_read(&bg, bg_path, err);
+    if (!st && (bg.width != r->width || bg.height != r->height || bg.channels < 3))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: not an RGB image of %dx%d", bg_path, r->width,
+                        r->height);
+    if (st)
+        goto done;
+    const size_t n = (size_t)r->width * (size_t)r->height;
+    rs_synth_image lin = {0};
+    if ((st = rs_synth_image_alloc(&lin, r->width, r->height, 3, err)))
+        goto done;
+    for (size_t i = 0; i < n; i++)
+        for (int c = 0; c < 3; c++)
+            lin.data[3 * i + c] = (float)rs_synth_srgb_decode(bg.data[(size_t)bg.channels * i + c]);
+    if (with_v && ground)
+        shade_background(&lin, &with_v->rgba, &ground->rgba, r->ids);
+    if (matched && (st = rs_synth_appearance_apply(&r->rgba, &app, 0.6, seed, err))) {
+        rs_synth_image_free(&lin);
+        goto done;
+    }
+    for (size_t i = 0; i < n; i++) {
+        const double a = r->rgba.data[4 * i + 3];
+        for (int c = 0; c < 3; c++) {
+            const double v = a * r->rgba.data[4 * i + c] + (1 - a) * lin.data[3 * i + c];
+            r->composite.data[3 * i + c] =
+                (float)rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
+        }
+    }
+    rs_synth_image_free(&lin);
+    if (matched)
+        st = rs_synth_appearance_jpeg(&r->composite, &app, err);
+done:
+    rs_synth_image_free(&bg);
+    return st;
+}
+
 // ---- the random stream of one image ----
 
 static uint64_t rng_next(uint64_t *s)
@@ -211,14 +322,6 @@ static uint64_t rng_next(uint64_t *s)
 
 // ---- one image ----
 
-typedef struct {
-    const rs_synth_dataset_options *opt;
-    rs_site *site;
-    rs_synth_lanes lanes;
-    camera *cams;
-    int Ncams;
-    char *split_dir, *parts_dir, *work_root;
-} dataset;
 
 static void stem_of(char *stem, size_t n, int k, const char *camera_id)
 {
@@ -239,7 +342,8 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     rs_synth_traffic_vehicle *tv = NULL;
     rs_synth_vehicle *v = NULL;
     rs_synth_prepared prepared = {0};
-    rs_synth_render_result r = {0};
+    rs_synth_render_result r = {0}, sh_with = {0}, sh_ground = {0};
+    const background *b = NULL;
     rs_synth_label *labels = NULL;
     double *up = NULL;
     rs_synth_mesh *meshes = NULL;
@@ -259,7 +363,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     ropt.povray = opt->povray;
     const uint64_t r_bg = rng_next(&rng);
     if (c->Nbg > 0) {
-        const background *b = &c->bg[r_bg % (uint64_t)c->Nbg];
+        b = &c->bg[r_bg % (uint64_t)c->Nbg];
         bg_path = rs_io_join(work, "background.png");
         if (!bg_path) {
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
@@ -278,8 +382,6 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         ropt.scene.ground_visible = true; // neutral grey ground rendered by POV-Ray
         *grey = true;
     }
-    if (!(ropt.scene.sun_elevation_deg > 0)) // night: POV-Ray's sky light only, sun overhead dim
-        ropt.scene.sun_elevation_deg = 5;
 
     rs_synth_traffic_options topt;
     rs_synth_traffic_options_default(&topt);
@@ -317,6 +419,17 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
                               d->site->ground_offset_m, &prepared, &ropt, err)))
         goto done;
     *seconds_povray += r.seconds_povray;
+    const uint64_t r_look = rng_next(&rng);
+    if (b) {
+        const bool shadows = opt->shadows && !b->overcast && r.Nrendered > 0 &&
+                             ropt.scene.sun_elevation_deg > 0;
+        if (shadows && (st = ground_passes(&sh_with, &sh_ground, d, c, work, &prepared, &ropt,
+                                           seconds_povray, err)))
+            goto done;
+        if ((st = composite(&r, bg_path, shadows ? &sh_with : NULL,
+                            shadows ? &sh_ground : NULL, r_look, err)))
+            goto done;
+    }
     for (int i = 0; i < N; i++) {
         up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m,
                                      prepared.v[i].e_m, prepared.v[i].n_m);
@@ -363,6 +476,8 @@ done:
     free(labels);
     rs_synth_prepared_free(&prepared);
     rs_synth_render_result_free(&r);
+    rs_synth_render_result_free(&sh_with);
+    rs_synth_render_result_free(&sh_ground);
     return st;
 }
 

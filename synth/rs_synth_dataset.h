@@ -49,6 +49,7 @@ typedef struct {
     int width, height;        // output size; 0: the camera's own (intrinsics are scaled)
     int vehicles;             // at most this many vehicles per image's traffic (default 10)
     const char *split;        // COCO split name (default "train2017")
+    bool shadows;             // differential-rendering shadows over backgrounds (default on)
     const char *povray;       // NULL: $ROADSIDE_POVRAY, else povray on PATH
     // Called after each image of this shard (made or skipped); may be NULL.
     void (*progress)(void *ctx, int done, int total, int skipped);

@@ -92,6 +92,37 @@ def check_labels(out):
     print("labels: %d annotations, bottom centre vs mrcal: worst %.2g px" % (checked, worst))
 
 
+def check_shadows(tmp):
+    """Over a digital-twin background in sun, differential rendering only darkens background
+    pixels (shadows), and darkens some clearly; without --no-shadows vs with it, the vehicle
+    pixels are the same."""
+    import cv2
+    site = os.path.join(tmp, "site")
+    shutil.copytree(u.DEMO, site)
+    calib = os.path.join(tmp, "calib_small")
+    u.scaled_camera(calib, "cam1", 240, pinhole=False)
+    u.run(["site", "render-backgrounds", site, "--calib", calib, "--camera", "cam1",
+           "--times", "2024-06-21T15:00+02:00", "--weather", "sunny"])
+    outs = {}
+    for name, extra in (("sh", []), ("nosh", ["--no-shadows"])):
+        out = os.path.join(tmp, name)
+        u.run(["synth", site, "--calib", calib, "--count", "2", "-o", out, "--seed", str(SEED),
+               "--camera", "cam1", "--vehicles", "15"] + extra)
+        outs[name] = out
+    darker = 0
+    for f in sorted(os.listdir(os.path.join(outs["sh"], "train2017"))):
+        a = cv2.imread(os.path.join(outs["sh"], "train2017", f)).astype(float)
+        b = cv2.imread(os.path.join(outs["nosh"], "train2017", f)).astype(float)
+        if a.shape != b.shape or not np.isfinite(a).all():
+            u.fail("shadow run: %s: shape or NaN" % f, SEED)
+        if (a - b).max() > 1.0:
+            u.fail("shadows brightened %s by %.1f codes" % (f, (a - b).max()), SEED)
+        darker += int(((b - a).max(axis=2) > 10).sum())
+    if darker < 20:
+        u.fail("shadows: only %d pixels darker by > 10 codes" % darker, SEED)
+    print("shadows: %d pixels darker by > 10 codes, none brighter" % darker)
+
+
 def main():
     u.need_povray()
     if not shutil.which("parallel"):
@@ -138,6 +169,8 @@ def main():
         if os.path.exists(os.path.join(one, "work")):
             u.fail("work folder left behind", SEED)
         print("resume: 1 made, 3 skipped, byte-identical")
+
+        check_shadows(tmp)
 
         # usage errors: exit 2, nothing written
         bad = os.path.join(tmp, "bad")
