@@ -127,6 +127,12 @@ int rs_cli_background(int argc, char **argv)
         rc = rs_cli_fail(site_dir, st, &err);
         goto done;
     }
+    if (!rs_synth_background_name_ok(camera)) {
+        rc = rs_cli_fail(CMD, RS_ERR_INVALID,
+                         &(rs_err){RS_ERR_INVALID, "--camera: the id cannot be a folder name "
+                                                   "([A-Za-z0-9_.-], not starting with '.')"});
+        goto done;
+    }
     if (rs_site_find_camera(site, camera) < 0) {
         rc = rs_cli_fail(CMD, RS_ERR_NOT_FOUND,
                          &(rs_err){RS_ERR_NOT_FOUND, "--camera: the site has no such camera"});
@@ -374,7 +380,13 @@ int rs_cli_site_render_backgrounds(int argc, char **argv)
     if (camera && rs_site_find_camera(site, camera) < 0)
         rc = rs_cli_usage_error(CMD, "--camera: the site has no camera '%s'", camera);
     for (int c = 0; c < site->Ncameras && rc == RS_EXIT_OK; c++)
-        if (!camera || !strcmp(camera, site->cameras[c].id))
+        if (camera && strcmp(camera, site->cameras[c].id))
+            continue;
+        else if (!rs_synth_background_name_ok(site->cameras[c].id))
+            rc = rs_cli_fail(CMD, RS_ERR_INVALID,
+                             &(rs_err){RS_ERR_INVALID, "camera id cannot be a folder name "
+                                                       "([A-Za-z0-9_.-], not starting with '.')"});
+        else
             rc = render_camera(site_dir, site, calib, site->cameras[c].id, lanes, times, Ntimes,
                                weathers, Nweathers, &opt);
     free(lanes);

@@ -157,9 +157,14 @@ static bool is_safe_name(const char *s, size_t max)
     return true;
 }
 
+bool rs_synth_background_name_ok(const char *s)
+{
+    return is_safe_name(s, 100);
+}
+
 rs_status rs_synth_background_tags_check(const rs_synth_background_tags *t, rs_err *err)
 {
-    if (!is_safe_name(t->name, 100))
+    if (!rs_synth_background_name_ok(t->name))
         return rs_err_set(err, RS_ERR_USAGE,
                           "name: '%s' must be 1..100 characters of [A-Za-z0-9_.-], not starting "
                           "with '.'",

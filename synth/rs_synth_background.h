@@ -83,6 +83,10 @@ rs_status rs_synth_background_tag_parse(rs_synth_background_tags *tags,
 // Checks a name, a time and conditions (RS_ERR_USAGE / RS_ERR_PARSE naming the field).
 rs_status rs_synth_background_tags_check(const rs_synth_background_tags *tags, rs_err *err);
 
+// True if s can be a file or folder name here: 1..100 characters of [A-Za-z0-9_.-], not starting
+// with '.' (camera ids used as folder names are checked with it too).
+bool rs_synth_background_name_ok(const char *s);
+
 // The path "SITE/backgrounds/<camera>/<name>.png" (malloc'ed, caller frees; NULL on no memory).
 char *rs_synth_background_path(const char *site_dir, const char *camera_id, const char *name);
 

@@ -156,6 +156,7 @@ extern "C" rs_status rs_synth_remap(rs_synth_image *dst, const rs_synth_image *s
 #include <cmath>
 #include <new>
 
+#include <opencv2/dnn.hpp>
 #include <opencv2/videoio.hpp>
 
 struct rs_synth_frames {
@@ -258,17 +259,21 @@ extern "C" void rs_synth_frames_close(rs_synth_frames *frames)
     }
 }
 
-extern "C" rs_status rs_synth_image_filter(rs_synth_image *dst, const rs_synth_image *src,
-                                           const double *kernel, int kw, int kh, rs_err *err)
+namespace {
+
+// Allocates *dst like src and fills it with f(out) (a cv::Mat over *dst) under guarded();
+// *dst is freed and zeroed on failure.
+template <class F>
+rs_status into_new(rs_synth_image *dst, const rs_synth_image *src, const char *what, rs_err *err,
+                   F f)
 {
     *dst = rs_synth_image{};
     rs_status st = rs_synth_image_alloc(dst, src->width, src->height, src->channels, err);
     if (st)
         return st;
-    st = guarded("filter", err, [&]() -> rs_status {
-        cv::Mat k(kh, kw, CV_64F, const_cast<double *>(kernel));
+    st = guarded(what, err, [&]() -> rs_status {
         cv::Mat out = wrap(dst);
-        cv::filter2D(wrap(src), out, CV_32F, k, cv::Point(-1, -1), 0, cv::BORDER_REFLECT_101);
+        f(out);
         return RS_OK;
     });
     if (st)
@@ -276,27 +281,29 @@ extern "C" rs_status rs_synth_image_filter(rs_synth_image *dst, const rs_synth_i
     return st;
 }
 
+} // namespace
+
+extern "C" rs_status rs_synth_image_filter(rs_synth_image *dst, const rs_synth_image *src,
+                                           const double *kernel, int kw, int kh, rs_err *err)
+{
+    return into_new(dst, src, "filter", err, [&](cv::Mat &out) {
+        cv::Mat k(kh, kw, CV_64F, const_cast<double *>(kernel));
+        cv::filter2D(wrap(src), out, CV_32F, k, cv::Point(-1, -1), 0, cv::BORDER_REFLECT_101);
+    });
+}
+
 extern "C" rs_status rs_synth_image_blur(rs_synth_image *dst, const rs_synth_image *src,
                                          double sigma_px, rs_err *err)
 {
-    *dst = rs_synth_image{};
-    rs_status st = rs_synth_image_alloc(dst, src->width, src->height, src->channels, err);
-    if (st)
-        return st;
-    st = guarded("blur", err, [&]() -> rs_status {
-        cv::Mat out = wrap(dst);
+    return into_new(dst, src, "blur", err, [&](cv::Mat &out) {
         if (!(sigma_px > 0)) {
             wrap(src).copyTo(out);
-            return RS_OK;
+            return;
         }
-        int k = 2 * (int)std::ceil(4.0 * sigma_px) + 1;
+        const int k = 2 * (int)std::ceil(4.0 * sigma_px) + 1;
         cv::GaussianBlur(wrap(src), out, cv::Size(k, k), sigma_px, sigma_px,
                          cv::BORDER_REFLECT_101);
-        return RS_OK;
     });
-    if (st)
-        rs_synth_image_free(dst);
-    return st;
 }
 
 extern "C" rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst, const rs_synth_image *src,
@@ -306,10 +313,7 @@ extern "C" rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst, const rs
     if (src->channels != 3 || quality < 1 || quality > 100)
         return rs_err_set(err, RS_ERR_INVALID, "jpeg: needs RGB and quality 1..100 (got %d, %d)",
                           src->channels, quality);
-    rs_status st = rs_synth_image_alloc(dst, src->width, src->height, 3, err);
-    if (st)
-        return st;
-    st = guarded("jpeg", err, [&]() -> rs_status {
+    return into_new(dst, src, "jpeg", err, [&](cv::Mat &out) {
         cv::Mat bgr8;
         wrap(src).convertTo(bgr8, CV_8U, 255.0);
         cv::cvtColor(bgr8, bgr8, cv::COLOR_RGB2BGR);
@@ -317,8 +321,40 @@ extern "C" rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst, const rs
         cv::imencode(".jpg", bgr8, buf, {cv::IMWRITE_JPEG_QUALITY, quality});
         cv::Mat dec = cv::imdecode(buf, cv::IMREAD_COLOR);
         cv::cvtColor(dec, dec, cv::COLOR_BGR2RGB);
-        cv::Mat out = wrap(dst);
         dec.convertTo(out, CV_32F, 1.0 / 255.0);
+    });
+}
+
+extern "C" rs_status rs_synth_dnn_translate(rs_synth_image *dst, const char *onnx_path,
+                                            const rs_synth_image *src, rs_err *err)
+{
+    *dst = rs_synth_image{};
+    if (src->channels != 3)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: the input must be RGB (has %d channels)",
+                          onnx_path, src->channels);
+    const int H = src->height, W = src->width;
+    rs_status st = guarded(onnx_path, err, [&]() -> rs_status {
+        cv::dnn::Net net = cv::dnn::readNetFromONNX(onnx_path);
+        if (net.empty())
+            return rs_err_set(err, RS_ERR_IO, "%s: cannot read the ONNX model", onnx_path);
+        cv::Mat scaled;
+        wrap(src).convertTo(scaled, CV_32F, 2.0, -1.0);
+        // HWC RGB -> NCHW, no channel swap, no resize
+        net.setInput(cv::dnn::blobFromImage(scaled, 1.0, cv::Size(), cv::Scalar(), false, false,
+                                            CV_32F));
+        cv::Mat y = net.forward();
+        if (y.dims != 4 || y.size[0] != 1 || y.size[1] != 3 || y.size[2] != H || y.size[3] != W)
+            return rs_err_set(err, RS_ERR_INVALID, "%s: the output is not 1 x 3 x %d x %d",
+                              onnx_path, H, W);
+        rs_status s = rs_synth_image_alloc(dst, W, H, 3, err);
+        if (s)
+            return s;
+        const float *p = y.ptr<float>();
+        for (int c = 0; c < 3; c++)
+            for (int i = 0; i < H * W; i++) {
+                const float v = 0.5f * (p[(size_t)c * H * W + i] + 1.0f);
+                dst->data[(size_t)i * 3 + c] = v < 0 ? 0 : v > 1 ? 1 : v;
+            }
         return RS_OK;
     });
     if (st)

@@ -69,6 +69,15 @@ rs_status rs_synth_image_blur(rs_synth_image *dst,
 rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst,
                                         // in
                                         const rs_synth_image *src, int quality, rs_err *err);
+// Runs an ONNX image-translation model (e.g. a CUT/CycleGAN generator) through OpenCV's DNN
+// module (cv::dnn::readNetFromONNX, CPU): input 1 x 3 x H x W float, RGB, values mapped from
+// [0,1] to [-1,1] (x 2 - 1, the convention of those generators); output 1 x 3 x H x W mapped
+// back ((y + 1) / 2) and clamped to [0,1]. The model is loaded on every call.
+// out: *dst (H, W, 3) allocated; in: src RGB (H, W, 3)
+// Returns RS_ERR_IO / RS_ERR_EXTERNAL (model unreadable or failing), RS_ERR_INVALID (shapes).
+rs_status rs_synth_dnn_translate(rs_synth_image *dst,
+                                 // in
+                                 const char *onnx_path, const rs_synth_image *src, rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -1,7 +1,8 @@
 # Appearance estimators (synth/rs_synth_appearance.h) against known synthetic truths, made here
 # with numpy/OpenCV: noise sigma added to a flat image; Gaussian blur of a known sigma on step
 # edges; per-channel linear gains; JPEG quality written by OpenCV (libjpeg); and the application
-# to a vehicle layer: the layer's blur and noise then match the background's.
+# to a vehicle layer: the layer's blur and noise then match the background's; an ONNX model made
+# with python3-onnx run through OpenCV's DNN module.
 import os
 import subprocess
 import sys
@@ -108,6 +109,34 @@ def main():
         check("applied: noise in sRGB units", dump("noise", f("inner.png"))[0], 0.02, 0.002)
         for c, gc in enumerate((1.5, 1.0, 0.5)):
             check("applied: mean linear colour[%d]" % c, inner[:, :, c].mean(), 0.2 * gc, 0.004)
+        # ONNX translation through OpenCV's DNN: a tiny affine model y = 0.5 x + 0.25 (on the
+        # [-1,1] scale) made here with python3-onnx; expected output 0.5 v + 0.375 on [0,1]
+        try:
+            import onnx
+            from onnx import TensorProto, helper
+        except ImportError:
+            onnx = None
+            print("note: python3-onnx missing: the ONNX model path is not tested")
+        if onnx is not None:
+            Hh, Ww = 32, 48
+            x = helper.make_tensor_value_info("x", TensorProto.FLOAT, [1, 3, Hh, Ww])
+            y = helper.make_tensor_value_info("y", TensorProto.FLOAT, [1, 3, Hh, Ww])
+            a = helper.make_tensor("a", TensorProto.FLOAT, [1], [0.5])
+            b = helper.make_tensor("b", TensorProto.FLOAT, [1], [0.25])
+            g = helper.make_graph([helper.make_node("Mul", ["x", "a"], ["t"]),
+                                   helper.make_node("Add", ["t", "b"], ["y"])],
+                                  "affine", [x], [y], [a, b])
+            model = helper.make_model(g, opset_imports=[helper.make_opsetid("", 11)])
+            model.ir_version = 7
+            onnx.checker.check_model(model)
+            onnx.save(model, f("affine.onnx"))
+            src = rng.uniform(0, 1, (Hh, Ww, 3))
+            src[:, :, 0] *= 0.5  # channels differ, so a channel swap would show
+            write16(f("in.png"), src)
+            dump("onnx", f("affine.onnx"), f("in.png"), f("onnx_out.png"))
+            got = cv2.imread(f("onnx_out.png"), cv2.IMREAD_UNCHANGED)[:, :, ::-1] / 65535.0
+            want = 0.5 * np.round(src * 65535) / 65535 + 0.375
+            check("onnx affine model: max |error|", np.abs(got - want).max(), 0, 2e-5)
     if not ok:
         print("FAIL (seed %d)" % SEED)
         sys.exit(1)

@@ -3,6 +3,7 @@
 // known truth).
 //   test_appearance_dump noise FILE | blur FILE | gain FILE [REF] | jpeg FILE
 //   test_appearance_dump apply IN_RGBA OUT_RGBA g0 g1 g2 noise blur layer_blur seed
+//   test_appearance_dump onnx MODEL IN_RGB OUT_RGB
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,6 +29,17 @@ int main(int argc, char **argv)
             return fail(&err);
         printf("%d %d\n", q, exact);
         return 0;
+    }
+    if (!strcmp(what, "onnx") && argc == 5) { // onnx MODEL IN OUT
+        rs_synth_image out = {0};
+        int rc = rs_synth_image_read(&img, argv[3], &err) ||
+                         rs_synth_dnn_translate(&out, argv[2], &img, &err) ||
+                         rs_synth_image_write(argv[4], &out, 16, &err)
+                     ? fail(&err)
+                     : 0;
+        rs_synth_image_free(&img);
+        rs_synth_image_free(&out);
+        return rc;
     }
     if (rs_synth_image_read(&img, argv[2], &err))
         return fail(&err);
