@@ -13,6 +13,14 @@
 #include <memory>
 #include <vector>
 
+// The prebuilt libceres.a shares Eigen's inline functions with this file (one definition
+// each, picked by the linker). Under ASan, __SANITIZE_ADDRESS__ makes Eigen switch to its own
+// aligned allocator, so a matrix allocated by one copy was freed by the other (ASan:
+// bad-free in ceres::CovarianceImpl). glibc's x86-64 malloc is 16-byte aligned, which is what
+// Eigen assumes without ASan: keep that assumption in every build.
+#ifndef EIGEN_MALLOC_ALREADY_ALIGNED
+#define EIGEN_MALLOC_ALREADY_ALIGNED 1
+#endif
 #include <Eigen/Dense>
 #include <ceres/ceres.h>
 
