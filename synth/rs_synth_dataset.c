@@ -77,6 +77,10 @@ typedef struct {
     char *file;        // owned: absolute/joined path
     char *time_iso;    // owned, may be NULL
     bool overcast;     // conditions cloudy, rain, snow or night: no sun pass, no cast shadow
+    // cache, filled at first use: the image at the output size, its appearance
+    rs_synth_image fitted;
+    rs_synth_appearance app;
+    bool app_ok;       // the appearance could be estimated
 } background;
 
 typedef struct {
@@ -170,17 +174,20 @@ static rs_status scale_camera(rs_calib_camera *cam, int width, int height, const
     return RS_OK;
 }
 
-// Resamples a background into the camera's size if it differs (linear), writing `path`.
-static rs_status background_fit(const char *src_path, const char *path, int width, int height,
-                                rs_err *err)
+// The background at the camera's size (linear resampling when it differs) and its appearance
+// (rs_synth_appearance_estimate on the original file: noise, blur, JPEG quality are the
+// camera's), computed at first use and kept.
+static rs_status background_fit(background *b, int width, int height, rs_err *err)
 {
-    rs_synth_image src = {0}, dst = {0};
+    if (b->fitted.data)
+        return RS_OK;
+    rs_synth_image src = {0};
     float *map = NULL;
-    rs_status st = rs_synth_image_read(&src, src_path, err);
+    rs_status st = rs_synth_image_read(&src, b->file, err);
     if (st)
         return st;
-    if (src.width == width && src.height == height) {
-        st = rs_synth_image_write(path, &src, 8, err);
+    if (src.channels < 3) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: not an RGB image", b->file);
         goto done;
     }
     map = malloc(sizeof(float) * 2 * (size_t)width * (size_t)height);
@@ -194,12 +201,12 @@ static rs_status background_fit(const char *src_path, const char *path, int widt
             map[2 * ((size_t)v * width + u) + 0] = (float)((u + 0.5) * sx - 0.5);
             map[2 * ((size_t)v * width + u) + 1] = (float)((v + 0.5) * sy - 0.5);
         }
-    if (!(st = rs_synth_remap(&dst, &src, map, width, height, 1, err)))
-        st = rs_synth_image_write(path, &dst, 8, err);
+    if ((st = rs_synth_remap(&b->fitted, &src, map, width, height, 1, err)))
+        goto done;
+    b->app_ok = rs_synth_appearance_estimate(&b->app, b->file, NULL, NULL) == RS_OK;
 done:
     free(map);
     rs_synth_image_free(&src);
-    rs_synth_image_free(&dst);
     return st;
 }
 
@@ -267,19 +274,14 @@ static rs_status ground_passes(rs_synth_render_result *with_v, rs_synth_render_r
 // background (rs_synth_appearance.h; skipped when the background gives no estimate), straight
 // alpha over the background in linear light, sRGB, the background's JPEG quality.
 // in,out: r (its composite replaced); in: shadow passes may be NULL
-static rs_status composite(rs_synth_render_result *r, const char *bg_path,
+static rs_status composite(rs_synth_render_result *r, const background *b,
                            const rs_synth_render_result *with_v,
                            const rs_synth_render_result *ground, uint64_t seed, rs_err *err)
 {
-    rs_synth_image bg = {0};
-    rs_synth_appearance app;
-    const bool matched = rs_synth_appearance_estimate(&app, bg_path, NULL, NULL) == RS_OK;
-    rs_status st = rs_synth_image_read(&bg, bg_path, err);
-    if (!st && (bg.width != r->width || bg.height != r->height || bg.channels < 3))
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: not an RGB image of %dx%d", bg_path, r->width,
-                        r->height);
-    if (st)
-        goto done;
+    const rs_synth_image bg = b->fitted;
+    const rs_synth_appearance app = b->app;
+    const bool matched = b->app_ok;
+    rs_status st = RS_OK;
     const size_t n = (size_t)r->width * (size_t)r->height;
     rs_synth_image lin = {0};
     if ((st = rs_synth_image_alloc(&lin, r->width, r->height, 3, err)))
@@ -305,7 +307,6 @@ static rs_status composite(rs_synth_render_result *r, const char *bg_path,
     if (matched)
         st = rs_synth_appearance_jpeg(&r->composite, &app, err);
 done:
-    rs_synth_image_free(&bg);
     return st;
 }
 
@@ -363,13 +364,15 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     ropt.povray = opt->povray;
     const uint64_t r_bg = rng_next(&rng);
     if (c->Nbg > 0) {
-        b = &c->bg[r_bg % (uint64_t)c->Nbg];
+        background *bm = &c->bg[r_bg % (uint64_t)c->Nbg];
+        b = bm;
         bg_path = rs_io_join(work, "background.png");
         if (!bg_path) {
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             goto done;
         }
-        if ((st = background_fit(b->file, bg_path, c->cam.width, c->cam.height, err)))
+        if ((st = background_fit(bm, c->cam.width, c->cam.height, err)) ||
+            (st = rs_synth_image_write(bg_path, &bm->fitted, 8, err)))
             goto done;
         ropt.background_path = bg_path;
         ropt.scene.ground_visible = false;
@@ -426,7 +429,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         if (shadows && (st = ground_passes(&sh_with, &sh_ground, d, c, work, &prepared, &ropt,
                                            seconds_povray, err)))
             goto done;
-        if ((st = composite(&r, bg_path, shadows ? &sh_with : NULL,
+        if ((st = composite(&r, b, shadows ? &sh_with : NULL,
                             shadows ? &sh_ground : NULL, r_look, err)))
             goto done;
     }
@@ -609,6 +612,7 @@ static void dataset_free(dataset *d)
         for (int b = 0; b < d->cams[i].Nbg; b++) {
             free(d->cams[i].bg[b].file);
             free(d->cams[i].bg[b].time_iso);
+            rs_synth_image_free(&d->cams[i].bg[b].fitted);
         }
         free(d->cams[i].bg);
     }
