@@ -153,7 +153,9 @@ extern "C" rs_status rs_synth_remap(rs_synth_image *dst, const rs_synth_image *s
 // ---- backgrounds and appearance ----
 // Owned by the backgrounds helper (synth/rs_synth_background.h, rs_synth_appearance.h).
 
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <new>
 
 #include <opencv2/dnn.hpp>
@@ -210,8 +212,14 @@ extern "C" rs_status rs_synth_frames_open(rs_synth_frames **frames, const char *
     rs_status st = guarded(path, err, [&]() -> rs_status {
         f->path = path;
         f->done = false;
+        // checked first: OpenCV would print warnings about a missing file (the library never
+        // prints); videos through FFmpeg only, without the GStreamer fallback's messages
+        if (FILE *probe = std::fopen(path, "rb"))
+            std::fclose(probe);
+        else
+            return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, std::strerror(errno));
         f->still = cv::haveImageReader(path);
-        if (!f->still && !f->cap.open(path))
+        if (!f->still && !f->cap.open(path, cv::CAP_FFMPEG))
             return rs_err_set(err, RS_ERR_IO, "%s: cannot open as an image or a video", path);
         return RS_OK;
     });
