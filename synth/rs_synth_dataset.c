@@ -36,13 +36,18 @@ void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
     opt->shadows = true;
 }
 
-uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k)
+// splitmix64's output function (Steele, Lea, Flood, "Fast splittable pseudorandom number
+// generators", OOPSLA 2014).
+static uint64_t mix64(uint64_t z)
 {
-    // splitmix64 (Steele, Lea, Flood, "Fast splittable pseudorandom number generators", 2014)
-    uint64_t z = seed + 0x9e3779b97f4a7c15ULL * ((uint64_t)k + 1);
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
     z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
     return z ^ (z >> 31);
+}
+
+uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k)
+{
+    return mix64(seed + 0x9e3779b97f4a7c15ULL * ((uint64_t)k + 1));
 }
 
 static double now_s(void)
@@ -315,10 +320,7 @@ done:
 static uint64_t rng_next(uint64_t *s)
 {
     *s += 0x9e3779b97f4a7c15ULL;
-    uint64_t z = *s;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
+    return mix64(*s);
 }
 
 // ---- one image ----
