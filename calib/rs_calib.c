@@ -2,6 +2,7 @@
 // uncertainty; and the pose helpers (yaw/pitch/roll, camera position, ground intersection).
 // API and method: rs_calib.h; the Ceres part: rs_calib_refine_ceres.cc; docs/calibration.md.
 #include "rs_calib.h"
+#include "rs_calib_opencv.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -133,7 +134,7 @@ void rs_calib_rt_from_ypr(double rt_cam_enu[6], const double ypr_deg[3], const d
     rot_z(T, ypr_deg[2] / DEG);
     mat3_mul(R, R, T); // R_enu_cam
     mat3_transpose(R, R); // R_cam_enu
-    mrcal_r_from_R(rt_cam_enu, NULL, R);
+    rs_calib_r_from_R(rt_cam_enu, R); // not mrcal's alone: wrong at a half-turn (looking down)
     for (int i = 0; i < 3; i++)
         rt_cam_enu[3 + i] = -(R[i * 3] * position_enu_m[0] + R[i * 3 + 1] * position_enu_m[1] +
                               R[i * 3 + 2] * position_enu_m[2]);

@@ -11,12 +11,15 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 extern "C" {
+#include <mrcal/poseutils.h>
+
 #include "rs_calib_opencv.h"
 }
 
@@ -361,4 +364,20 @@ extern "C" rs_status rs_calib_opencv_read_calibration(rs_calib_opencv_calibratio
     } catch (...) {
         return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV threw an unknown exception", path);
     }
+}
+
+extern "C" void rs_calib_r_from_R(double r[3], const double R[9])
+{
+    mrcal_r_from_R(r, nullptr, R);
+    double back[9];
+    mrcal_R_from_r(back, nullptr, r);
+    double worst = 0;
+    for (int i = 0; i < 9; i++) worst = std::max(worst, std::fabs(back[i] - R[i]));
+    if (worst <= 1e-12) return;
+    // Eigen's AngleAxis goes through a quaternion (Shepperd's method): accurate at and near a
+    // half-turn, where both mrcal's and OpenCV's Rodrigues lose it. Eigen does not throw.
+    const Eigen::Matrix3d M = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(R);
+    const Eigen::AngleAxisd aa(M);
+    const Eigen::Vector3d v = aa.axis() * aa.angle();
+    for (int i = 0; i < 3; i++) r[i] = v(i);
 }

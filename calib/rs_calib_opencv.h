@@ -141,3 +141,20 @@ rs_status rs_calib_opencv_read_image_bgra(// out
 #ifdef __cplusplus
 }
 #endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// Rodrigues vector of a rotation matrix, correct for every rotation. mrcal 2.2's r_from_R
+// returns r = 0 for a half-turn (e.g. diag(1,-1,-1): a camera looking straight down) and is
+// wrong by pi within ~1e-6 rad of it (OpenCV's cv::Rodrigues snaps such rotations to exactly
+// pi: 1e-6 off). So mrcal's answer is checked by turning it back into a matrix (max element
+// difference 1e-12), and where it fails Eigen's AngleAxisd (through a quaternion) gives r.
+// Accuracy: 1e-12 in the matrix, every rotation (tests/calib/test_r_from_R_halfturn.c).
+// in: R (3,3) row-major rotation; out: r (3,) radians.
+void rs_calib_r_from_R(double r[3], const double R[9]);
+
+#ifdef __cplusplus
+}
+#endif

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <exception>
 #include <functional>
+#include <iostream>
 #include <memory>
 #include <new>
 #include <random>
@@ -24,6 +25,27 @@ extern "C" {
 namespace {
 
 using opengv::sac_problems::absolute_pose::AbsolutePoseSacProblem;
+
+// OpenGV writes to std::cout / std::cerr from inside its solvers (EPnP's "God damnit, A is
+// singular" on flat or degenerate input). The library never prints: while one of these guards
+// lives, both streams write nowhere. (Not thread-safe: the streams are global. roadside calls
+// OpenGV from one thread at a time.)
+class QuietStreams {
+  public:
+    QuietStreams() : out_(std::cout.rdbuf(nullptr)), err_(std::cerr.rdbuf(nullptr)) {}
+    ~QuietStreams()
+    {
+        std::cout.rdbuf(out_);
+        std::cerr.rdbuf(err_);
+        std::cout.clear();
+        std::cerr.clear();
+    }
+    QuietStreams(const QuietStreams &) = delete;
+    QuietStreams &operator=(const QuietStreams &) = delete;
+
+  private:
+    std::streambuf *out_, *err_;
+};
 
 // OpenGV's transformation_t is [R_ref_cam | c_ref] (camera orientation and position in the
 // reference frame). mrcal's Rt_cam_ref is the inverse, stored as (4,3): R_cam_ref then t.
@@ -128,6 +150,7 @@ extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier
                                                 uint64_t seed, rs_calib_opengv_score_fn *score,
                                                 void *cookie, rs_err *err)
 {
+    QuietStreams quiet;
     try {
         Correspondences c(v_cam, p_ref, N);
         opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
@@ -162,6 +185,7 @@ extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_ca
                                           const double *p_ref, const int *indices, int Nindices,
                                           rs_err *err)
 {
+    QuietStreams quiet;
     try {
         // The adapter spans the highest index used; the others are never read.
         int N = 0;
@@ -190,6 +214,7 @@ extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_ca
     static const char *const names[] = {"P3P Kneip RANSAC", "P3P Gao RANSAC", "EPnP", "UPnP",
                                         "EPnP + optimize_nonlinear"};
     const char *name = (unsigned)method < 5 ? names[method] : "?";
+    QuietStreams quiet;
     try {
         if (N < 4 || (unsigned)method >= 5)
             return rs_err_set(err, RS_ERR_USAGE, "OpenGV %s: N = %d (needs >= 4)", name, N);

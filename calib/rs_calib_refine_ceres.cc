@@ -23,6 +23,7 @@
 #endif
 #include <Eigen/Dense>
 #include <ceres/ceres.h>
+#include <glog/logging.h>
 
 extern "C" {
 #include <mrcal/poseutils.h>
@@ -32,6 +33,21 @@ extern "C" {
 }
 
 namespace {
+
+// Ceres reports some conditions (a linear solver failure on an extreme problem, a covariance
+// it cannot compute) through glog at WARNING/ERROR, whatever Solver::Options::logging_type
+// says, and glog writes those to stderr. The library never prints: while one of these guards
+// lives, glog keeps only FATAL messages (which abort anyway), then the level is restored.
+class QuietGlog {
+  public:
+    QuietGlog() : saved_(FLAGS_minloglevel) { FLAGS_minloglevel = google::GLOG_FATAL; }
+    ~QuietGlog() { FLAGS_minloglevel = saved_; }
+    QuietGlog(const QuietGlog &) = delete;
+    QuietGlog &operator=(const QuietGlog &) = delete;
+
+  private:
+    int saved_;
+};
 
 // The survey prior of one landmark axis with sigma 0 contributes nothing: the axis is held.
 double inv_or_zero(double sigma) { return sigma > 0.0 ? 1.0 / sigma : 0.0; }
@@ -513,6 +529,7 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
 extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const double *intrinsics,
                                                  const double *p_c_m,
                                                  const rs_calib_refine_problem *pb) {
+    QuietGlog quiet;
     try {
         const int Ni = mrcal_lensmodel_num_params(pb->lensmodel);
         double worst = 0.0;
@@ -557,6 +574,7 @@ extern "C" rs_status rs_calib_refine_run(double rt_cam_c[6], double *intrinsics,
                                          double *block_chi2, double *q_pred_px,
                                          const rs_calib_refine_problem *problem,
                                          const rs_calib_refine_options *opt, rs_err *err) {
+    QuietGlog quiet;
     try {
         return refine(rt_cam_c, intrinsics, p_c_m, summary, cov, block_chi2, q_pred_px, problem,
                       opt, err);

@@ -1,6 +1,7 @@
 // rs_simulate.c -- synthetic camera problems and sites with a known truth (rs_simulate.h).
 #define _XOPEN_SOURCE 700 // nftw()
 #include "rs_simulate.h"
+#include "rs_calib_opencv.h"
 
 #include <cjson/cJSON.h>
 #include <dirent.h>
@@ -311,7 +312,7 @@ static void camera_look_at(sim_camera *c, const double p_cam[3], const double ta
     double R[9];
     rs_simulate_R_cam_enu_from_ypr(R, yaw, pitch, roll_deg);
     double *rt = c->rt_cam_enu;
-    mrcal_r_from_R(rt, NULL, R);
+    rs_calib_r_from_R(rt, R);
     for (int i = 0; i < 3; i++) rt[i] = quantize(rt[i], Q_MODEL);
     mrcal_R_from_r(c->R_cam_enu, NULL, rt);
     mrcal_rotate_point_R(rt + 3, NULL, NULL, c->R_cam_enu, p_cam);
