@@ -92,6 +92,32 @@ def check_labels(out):
     print("labels: %d annotations, bottom centre vs mrcal: worst %.2g px" % (checked, worst))
 
 
+def check_interrupted(tmp, calib, ref):
+    """A run killed (SIGKILL) part-way leaves only complete files; a rerun completes it into the
+    same dataset as an uninterrupted run."""
+    import time
+    out = os.path.join(tmp, "killed")
+    args = [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "-o", out,
+            "--seed", str(SEED), "--camera", "cam1", "--camera", "cam3", "--size",
+            "%dx%d" % (W, H), "--vehicles", "12"]
+    for delay in (1.0, 2.5):
+        p = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        time.sleep(delay)
+        p.kill()
+        p.wait()
+        for root, _, files in os.walk(out):
+            for f in files:
+                if ".tmp" in f or f.startswith("."):
+                    continue  # temporary names: never taken for outputs
+                path = os.path.join(root, f)
+                if f.endswith(".json") and "work" not in root:
+                    json.load(open(path))  # complete JSON or an exception
+    p = u.run(args[1:])
+    same_files(out, ref, "run killed twice then rerun")
+    print("interrupted: killed at 1.0 s and 2.5 s, rerun: byte-identical (%s)"
+          % p.stdout.splitlines()[0])
+
+
 def check_shadows(tmp):
     """Over a digital-twin background in sun, differential rendering only darkens background
     pixels (shadows), and darkens some clearly; without --no-shadows vs with it, the vehicle
@@ -170,6 +196,7 @@ def main():
             u.fail("work folder left behind", SEED)
         print("resume: 1 made, 3 skipped, byte-identical")
 
+        check_interrupted(tmp, calib, ref)
         check_shadows(tmp)
 
         # usage errors: exit 2, nothing written
