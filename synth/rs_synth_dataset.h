@@ -15,6 +15,11 @@
 //               `vehicles` of them) then domain randomisation (rs_synth_traffic_randomise)
 //   render      rs_synth_render (culling, region, alpha, composite, ID pass), labels through
 //               mrcal (rs_synth_labels_compute)
+//   shadows     over a sunny (or untagged) background with the sun up: differential rendering
+//               (the ground with and without the vehicles, two more colour passes; the
+//               background times their ratio on non-vehicle pixels; docs/synth.md)
+//   appearance  the vehicle layer matched to the background (rs_synth_appearance.h: gains,
+//               blur, noise, JPEG quality), estimated once per background per process
 // Layout of DATASET (YOLOX's COCO layout plus YOLO and KITTI, docs/labels.md):
 //   <split>/<stem>.png                    the composite, stem = "%06d_<camera>" (k first, so
 //                                         names sort in index order)
