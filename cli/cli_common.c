@@ -24,6 +24,25 @@ int rs_cli_usage_error(const char *command, const char *fmt, ...)
     return RS_EXIT_USAGE;
 }
 
+rs_site *rs_cli_load_site(const char *command, const char *dir)
+{
+    rs_err err = {0};
+    rs_site *site = NULL;
+    rs_status st = rs_site_load(&site, dir, &err);
+    if (st == RS_OK) return site;
+    fprintf(stderr, "roadside %s: %s\n(run 'roadside site check %s' for every problem)\n", command,
+            err.msg[0] ? err.msg : rs_strerror(st), dir);
+    return NULL;
+}
+
+int rs_cli_check_cameras(const char *command, const rs_site *site, const char *const *ids, int N)
+{
+    for (int i = 0; i < N; i++)
+        if (rs_site_find_camera(site, ids[i]) < 0)
+            return rs_cli_usage_error(command, "--camera %s: no such camera in %s/site.json", ids[i], site->dir);
+    return RS_EXIT_OK;
+}
+
 bool rs_cli_wants_help(int argc, char **argv)
 {
     for (int i = 1; i < argc; i++) {

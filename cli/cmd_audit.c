@@ -147,17 +147,13 @@ int rs_cli_audit(int argc, char **argv)
     }
     const char *site_dir = argv[optind];
     rs_err err = {0};
-    rs_site *site = NULL;
-    rs_status st = rs_site_load(&site, site_dir, &err);
-    if (st) {
+    rs_status st = RS_OK;
+    rs_site *site = rs_cli_load_site("audit", site_dir);
+    if (!site) {
         free(only);
-        fprintf(stderr, "roadside audit: %s\n(run 'roadside site check %s' for every problem)\n", err.msg, site_dir);
         return RS_EXIT_FAIL;
     }
-    int usage = 0;
-    for (int i = 0; i < Nonly && !usage; i++)
-        if (rs_site_find_camera(site, only[i]) < 0)
-            usage = rs_cli_usage_error("audit", "--camera %s: no such camera in %s/site.json", only[i], site_dir);
+    int usage = rs_cli_check_cameras("audit", site, only, Nonly);
     int Nselected = Nonly ? Nonly : site->Ncameras;
     bool against_dir = against && is_dir(against);
     if (!usage && against && !against_dir && Nselected != 1)

@@ -108,6 +108,7 @@ int rs_cli_calib(int argc, char **argv)
     };
     const char *out_dir = NULL;
     const char **only = calloc((size_t)argc, sizeof *only);
+    if (!only) return rs_cli_fail("calib", RS_ERR_NOMEM, NULL);
     int Nonly = 0;
     bool json = false;
     rs_calib_options opt;
@@ -136,23 +137,16 @@ int rs_cli_calib(int argc, char **argv)
     const char *site_dir = argv[optind];
 
     rs_err err = {0};
-    rs_site *site = NULL;
-    rs_status st = rs_site_load(&site, site_dir, &err);
-    if (st) {
+    rs_site *site = rs_cli_load_site("calib", site_dir);
+    int usage = site ? rs_cli_check_cameras("calib", site, only, Nonly) : RS_EXIT_FAIL;
+    if (usage) {
         free(only);
-        fprintf(stderr, "roadside calib: %s\n(run 'roadside site check %s' for every problem)\n", err.msg, site_dir);
-        return RS_EXIT_FAIL;
+        rs_site_free(site);
+        return usage;
     }
-    for (int i = 0; i < Nonly; i++)
-        if (rs_site_find_camera(site, only[i]) < 0) {
-            fprintf(stderr, "roadside calib: --camera %s: no such camera in %s/site.json\n", only[i], site_dir);
-            free(only);
-            rs_site_free(site);
-            return RS_EXIT_USAGE;
-        }
     char *default_out = out_dir ? NULL : rs_io_join(site_dir, "calib");
     if (!out_dir) out_dir = default_out;
-    st = rs_io_mkdir_p(out_dir, &err);
+    rs_status st = rs_io_mkdir_p(out_dir, &err);
     if (st) {
         free(only);
         free(default_out);
@@ -247,13 +241,13 @@ int rs_cli_locate(int argc, char **argv)
         return rs_cli_usage_error("locate", "U V: '%s %s' is not a pair of finite numbers", argv[optind], argv[optind + 1]);
 
     rs_err err = {0};
-    rs_site *site = NULL;
-    rs_status st = rs_site_load(&site, site_dir, &err);
-    if (st) return rs_cli_fail("locate", st, &err);
-    if (rs_site_find_camera(site, camera) < 0) {
-        fprintf(stderr, "roadside locate: --camera %s: no such camera in %s/site.json\n", camera, site_dir);
+    rs_site *site = rs_cli_load_site("locate", site_dir);
+    if (!site) return RS_EXIT_FAIL;
+    const char *ids[1] = {camera};
+    int usage = rs_cli_check_cameras("locate", site, ids, 1);
+    if (usage) {
         rs_site_free(site);
-        return RS_EXIT_USAGE;
+        return usage;
     }
     char *default_dir = calib_dir ? NULL : rs_io_join(site_dir, "calib");
     if (!calib_dir) calib_dir = default_dir;
@@ -261,7 +255,7 @@ int rs_cli_locate(int argc, char **argv)
     snprintf(name, sizeof name, "%s.cameramodel", camera);
     char *path = rs_io_join(calib_dir, name);
     rs_calib_camera cam;
-    st = path ? rs_calib_camera_read(&cam, path, &err) : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = path ? rs_calib_camera_read(&cam, path, &err) : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
     free(path);
     free(default_dir);
     if (st) {

@@ -5,6 +5,7 @@
 #include <stdio.h>
 
 #include "rs_geo.h"
+#include "rs_site.h"
 #include "rs_status.h"
 
 // Exit codes: 0 success, 1 the work failed (bad input, a check failed), 2 usage error.
@@ -37,6 +38,15 @@ int rs_cli_fail(const char *what, rs_status st, const rs_err *err);
 // Prints "roadside COMMAND: message" and "Try 'roadside COMMAND --help'." on stderr; returns
 // RS_EXIT_USAGE.
 int rs_cli_usage_error(const char *command, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+// Loads the site folder `dir` for `command`. On failure prints "roadside COMMAND: <the first
+// problem>" and the hint to run 'roadside site check' (which lists them all), and returns NULL.
+// The caller frees the site with rs_site_free.
+rs_site *rs_cli_load_site(const char *command, const char *dir);
+
+// Checks that every id names a camera of the site; prints a usage error for the first that does
+// not and returns RS_EXIT_USAGE, else RS_EXIT_OK.
+int rs_cli_check_cameras(const char *command, const rs_site *site, const char *const *ids, int N);
 
 // True if argv holds -h or --help before any "--".
 bool rs_cli_wants_help(int argc, char **argv);
