@@ -3,21 +3,18 @@
 #include "rs_synth_background.h"
 
 #include <ctype.h>
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cjson/cJSON.h>
 
 #include "rs_io.h"
 #include "rs_synth_camera.h"
 #include "rs_synth_opencv.h"
+#include "rs_synth_render.h"
 #include "rs_synth_scene.h"
 #include "rs_synth_sun.h"
 #include "rs_synth_traffic.h"
@@ -440,7 +437,7 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
     return rs_io_atomic_commit(&a, err);
 }
 
-// Runs `povray +I<pov> +O<png> +W +H ...` in work_dir; output to work_dir/povray.log.
+// Runs `povray +Itwin.pov +Otwin.png +W +H ...` in work_dir (rs_synth_povray_run).
 static rs_status run_twin_povray(const char *povray, const char *work_dir, int width, int height,
                                  int antialias, rs_err *err)
 {
@@ -451,36 +448,9 @@ static rs_status run_twin_povray(const char *povray, const char *work_dir, int w
         snprintf(aa, sizeof(aa), "+R%d", antialias > 9 ? 9 : antialias);
     else
         snprintf(aa, sizeof(aa), "-A");
-    pid_t pid = fork();
-    if (pid < 0)
-        return rs_err_set(err, RS_ERR_EXTERNAL, "fork: %s", strerror(errno));
-    if (pid == 0) {
-        if (chdir(work_dir) != 0)
-            _exit(126);
-        int fd = open("povray.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fd < 0)
-            _exit(126);
-        unsetenv("POVINC");
-        unsetenv("POVINI");
-        dup2(fd, 1);
-        dup2(fd, 2);
-        close(fd);
-        execlp(povray, povray, "+Itwin.pov", "+Otwin.png", w, h, "-D", "+FN8",
-               "File_Gamma=sRGB", antialias >= 2 ? "+A0.1" : "-A", aa, "+WT1", (char *)NULL);
-        _exit(127);
-    }
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
-        ;
-    if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
-        return rs_err_set(err, RS_ERR_EXTERNAL,
-                          "cannot run \"%s\": is POV-Ray 3.7 installed (Debian package povray)? "
-                          "Set ROADSIDE_POVRAY to its path",
-                          povray);
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        return rs_err_set(err, RS_ERR_EXTERNAL, "povray failed (exit %d): see %s/povray.log",
-                          WIFEXITED(status) ? WEXITSTATUS(status) : -1, work_dir);
-    return RS_OK;
+    const char *args[] = {"+Itwin.pov", "+Otwin.png", w, h, "-D", "+FN8", "File_Gamma=sRGB",
+                          antialias >= 2 ? "+A0.1" : "-A", aa, "+WT1"};
+    return rs_synth_povray_run(povray, work_dir, args, (int)(sizeof(args) / sizeof(args[0])), NULL, err);
 }
 
 rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_elevation_deg,

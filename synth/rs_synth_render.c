@@ -116,20 +116,17 @@ static double now_s(void)
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-// Runs `povray INI [region]` in out_dir with HOME = out_dir, output to out_dir/povray.log.
-static rs_status run_povray(const char *povray, const char *out_dir, const char *ini,
-                            const int region[4], int width, int height, double *seconds,
-                            rs_err *err)
+rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args, int Nargs,
+                              double *seconds, rs_err *err)
 {
-    char sc[32], ec[32], sr[32], er[32];
-    // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
-    // fraction (the whole width), so the region starts at fraction 0.0 in that case and ends at
-    // least at column/row 2.
-    snprintf(sc, sizeof(sc), region[0] == 0 ? "+SC0.0" : "+SC%d", region[0] + 1);
-    snprintf(sr, sizeof(sr), region[1] == 0 ? "+SR0.0" : "+SR%d", region[1] + 1);
-    snprintf(ec, sizeof(ec), "+EC%d", region[2] + 1 < 2 ? (width > 1 ? 2 : 1) : region[2] + 1);
-    snprintf(er, sizeof(er), "+ER%d", region[3] + 1 < 2 ? (height > 1 ? 2 : 1) : region[3] + 1);
-    char *log = rs_io_join(out_dir, "povray.log");
+    const char *argv[32];
+    if (Nargs < 0 || Nargs > 30)
+        return rs_err_set(err, RS_ERR_USAGE, "povray: %d arguments (at most 30)", Nargs);
+    argv[0] = povray;
+    for (int i = 0; i < Nargs; i++)
+        argv[1 + i] = args[i];
+    argv[1 + Nargs] = NULL;
+    char *log = rs_io_join(dir, "povray.log");
     if (!log)
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     const double t0 = now_s();
@@ -140,7 +137,7 @@ static rs_status run_povray(const char *povray, const char *out_dir, const char 
     }
     if (pid == 0) {
         int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0644);
-        if (fd < 0 || chdir(out_dir) != 0 || setenv("HOME", ".", 1) != 0)
+        if (fd < 0 || chdir(dir) != 0)
             _exit(126);
         // HOME must be absolute for povray's %HOME%: the folder we are now in
         char cwd[4096];
@@ -151,13 +148,14 @@ static rs_status run_povray(const char *povray, const char *out_dir, const char 
         dup2(fd, 1);
         dup2(fd, 2);
         close(fd);
-        execlp(povray, povray, ini, sc, ec, sr, er, "+WT1", (char *)NULL);
+        execvp(povray, (char *const *)argv);
         _exit(127);
     }
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
         ;
-    *seconds += now_s() - t0;
+    if (seconds)
+        *seconds += now_s() - t0;
     rs_status st = RS_OK;
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         char *text = NULL;
@@ -177,12 +175,28 @@ static rs_status run_povray(const char *povray, const char *out_dir, const char 
                             "povray)? Set ROADSIDE_POVRAY to its path",
                             povray);
         else
-            st = rs_err_set(err, RS_ERR_EXTERNAL, "povray failed on %s/%s (exit %d): %s (see %s)",
-                            out_dir, ini, WIFEXITED(status) ? WEXITSTATUS(status) : -1, last,
-                            log);
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "povray failed in %s (exit %d): %s (see %s)", dir,
+                            WIFEXITED(status) ? WEXITSTATUS(status) : -1, last, log);
     }
     free(log);
     return st;
+}
+
+// Runs `povray INI region` in out_dir (rs_synth_povray_run).
+static rs_status run_povray(const char *povray, const char *out_dir, const char *ini,
+                            const int region[4], int width, int height, double *seconds,
+                            rs_err *err)
+{
+    char sc[32], ec[32], sr[32], er[32];
+    // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
+    // fraction (the whole width), so the region starts at fraction 0.0 in that case and ends at
+    // least at column/row 2.
+    snprintf(sc, sizeof(sc), region[0] == 0 ? "+SC0.0" : "+SC%d", region[0] + 1);
+    snprintf(sr, sizeof(sr), region[1] == 0 ? "+SR0.0" : "+SR%d", region[1] + 1);
+    snprintf(ec, sizeof(ec), "+EC%d", region[2] + 1 < 2 ? (width > 1 ? 2 : 1) : region[2] + 1);
+    snprintf(er, sizeof(er), "+ER%d", region[3] + 1 < 2 ? (height > 1 ? 2 : 1) : region[3] + 1);
+    const char *args[] = {ini, sc, ec, sr, er, "+WT1"};
+    return rs_synth_povray_run(povray, out_dir, args, 6, seconds, err);
 }
 
 // ---- images ----

@@ -74,6 +74,16 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 //     camera; ground plane; the prepared vehicles (rs_synth_scene.h); opt may be NULL (defaults)
 // Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
 // last line), RS_ERR_IO for the files.
+// Runs the real POV-Ray: `povray ARGS...` (no shell) in folder `dir`, with HOME = dir (so that
+// dir/.povray/3.7/povray.conf, if written, is the configuration it reads) and POVINC/POVINI
+// unset; its output is appended to dir/povray.log. seconds (may be NULL) accumulates the wall
+// time. Errors: RS_ERR_EXTERNAL "cannot run" when the program is missing (exit 127), else the
+// exit status and the log's last line.
+rs_status rs_synth_povray_run(const char *povray, const char *dir,
+                              const char *const *args, int Nargs, // (Nargs,) at most 30
+                              double *seconds,                    // may be NULL
+                              rs_err *err);
+
 rs_status rs_synth_render(// out
                           rs_synth_render_result *out,
                           // in
