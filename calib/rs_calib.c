@@ -30,6 +30,7 @@ void rs_calib_options_default(rs_calib_options *opt) {
     opt->focal_search_min = 0.25;
     opt->focal_search_max = 4.0;
     opt->condition_warn = 100.0;
+    opt->sigma_rotation_warn_deg = 2.0;
 }
 
 void rs_calib_result_free(rs_calib_result *result) {
@@ -308,6 +309,7 @@ static rs_status init_escalating(rs_calib_init_result *init, double *T_used, con
                                  const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err) {
     rs_calib_init_options io = opt->init;
     if (!(io.ransac_threshold_px > 0.0)) io.ransac_threshold_px = 8.0;
+    io.sigma_enu_m = pb->sigma_enu_m;
     rs_status st = RS_ERR_DEGENERATE;
     rs_err e = {RS_OK, ""};
     for (int k = 0; k < 5; k++, io.ransac_threshold_px *= 2.0) {
@@ -677,6 +679,14 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
              "in a small part of the image, or too few): the pose is poorly determined, read "
              "the sigmas",
              res->condition_number, opt->condition_warn);
+    const double *sy = res->sigma_yaw_pitch_roll_deg;
+    const double sigma_rot_deg = fmax(sy[0], fmax(sy[1], sy[2]));
+    if (opt->sigma_rotation_warn_deg > 0 && sigma_rot_deg > opt->sigma_rotation_warn_deg)
+        warn(res,
+             "the pose is poorly determined: yaw/pitch/roll sigmas %.2g, %.2g, %.2g deg (> %g): "
+             "the covariance, a first-order approximation, understates errors this large (add "
+             "landmarks spread over the image, or survey them more accurately)",
+             sy[0], sy[1], sy[2], opt->sigma_rotation_warn_deg);
     if (res->dof > 0) {
         const double lo = chi2_quantile(res->dof, -2.576) / res->dof;
         const double hi = chi2_quantile(res->dof, 2.576) / res->dof;

@@ -89,6 +89,9 @@ typedef struct {
                                    //   0.25, 4); min == max == 1 disables the search
     double condition_warn;         // warn when the condition number exceeds this (default 100;
                                    //   well-spread road scenes give 1.5-10)
+    double sigma_rotation_warn_deg;// warn when a yaw/pitch/roll sigma exceeds this (default 2):
+                                   //   the covariance is a first-order approximation, and the stress run
+                                   //   (issue 3) found poses this loose more than 10 sigmas off
 } rs_calib_options;
 
 // Fills opt with the defaults above. opt must not be NULL.

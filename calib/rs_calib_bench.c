@@ -174,8 +174,11 @@ static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, r
     if (bm->lib == LIB_ROADSIDE) {
         if (bm->variant == 1) {
             rs_calib_init_result ir;
+            rs_calib_init_options io;
+            rs_calib_init_options_default(&io);
+            io.sigma_enu_m = T->sigma_enu; // as rs_calib_solve passes them
             const rs_status st = rs_calib_init_pose(&ir, NULL, &P->lensmodel, P->intrinsics,
-                                                    P->p_enu_survey_m, P->q_px, P->Npoints, NULL, err);
+                                                    P->p_enu_survey_m, P->q_px, P->Npoints, &io, err);
             if (st == RS_OK) memcpy(rt, ir.rt_cam_enu, sizeof ir.rt_cam_enu);
             return st;
         }
@@ -713,6 +716,29 @@ static double mahalanobis2(const double *C, const double *d)
     return m2;
 }
 
+// d = r_est - r_true in the chart of r_est (where the covariance is stated), with r_true written
+// as whichever of its two Rodrigues vectors (angle theta about u, or theta - 2 pi about u) is
+// nearer: near a half-turn the same rotation has r and nearly -r, and a plain difference of the
+// vectors would call a perfect estimate wrong.
+static void rotation_difference(double d[3], const double r_est[3], const double r_true[3])
+{
+    const double th = sqrt(r_true[0] * r_true[0] + r_true[1] * r_true[1] + r_true[2] * r_true[2]);
+    double best = INFINITY;
+    for (int alt = 0; alt < 2; alt++) {
+        if (alt && !(th > 0)) break;
+        const double s = alt ? 1.0 - 2.0 * M_PI / th : 1.0;
+        double e[3], n2 = 0;
+        for (int k = 0; k < 3; k++) {
+            e[k] = r_est[k] - s * r_true[k];
+            n2 += e[k] * e[k];
+        }
+        if (n2 < best) {
+            best = n2;
+            memcpy(d, e, sizeof e);
+        }
+    }
+}
+
 static void stress_bad(rs_calib_bench_stress_summary *S, uint64_t seed, const char *what, double v)
 {
     if (S->first_bad[0]) return;
@@ -776,7 +802,8 @@ static void stress_one(rs_calib_bench_stress_summary *S, uint64_t seed)
         }
         if (isfinite(r.condition_number)) S->cond_max = fmax(S->cond_max, r.condition_number);
         double d[6];
-        for (int k = 0; k < 6; k++) d[k] = r.rt_cam_enu[k] - P->rt_cam_enu[k];
+        rotation_difference(d, r.rt_cam_enu, P->rt_cam_enu);
+        for (int k = 3; k < 6; k++) d[k] = r.rt_cam_enu[k] - P->rt_cam_enu[k];
         const double m2 = mahalanobis2(r.covariance_rt_cam_enu, d);
         if (!flagged && !r.warnings[0] && !(m2 <= 100.0)) {
             S->Nbad++;

@@ -37,6 +37,8 @@ void rs_calib_init_options_default(rs_calib_init_options *opt)
     opt->ransac_max_iterations = 500;
     opt->seed = 1;
     opt->planarity_ratio = 0.02;
+    opt->sigma_enu_m = NULL;
+    opt->survey_sigmas = 3.0;
 }
 
 // What the pixel scoring needs: the lens and the observations in the centred frame.
@@ -45,10 +47,16 @@ typedef struct {
     const double *intrinsics;
     const double *p_c;  // (N,3) landmarks minus their centroid
     const double *q_px; // (N,2)
+    // Survey noise in the inlier test (rs_calib_init_options): when ks_px (N,) is not NULL,
+    // errors are scaled by T / sqrt(T^2 + (ks_px[i] / z_i)^2), so that comparing them with T is
+    // the per-landmark test. ks_px[i] = k f s_i, pixel metres.
+    const double *ks_px;
+    double T_px;
 } scorer;
 
-// rs_calib_opengv_score_fn: reprojection error in pixels through the lens model; +inf for
-// landmarks not in front of the camera (z_cam <= 0) or that do not project.
+// rs_calib_opengv_score_fn: reprojection error in pixels through the lens model (scaled by
+// the survey noise when s->ks_px is set); +inf for landmarks not in front of the camera
+// (z_cam <= 0) or that do not project.
 static void pixel_errors(double *err_px, const double *Rt_cam_c, const int *indices,
                          int Nindices, void *cookie)
 {
@@ -62,7 +70,11 @@ static void pixel_errors(double *err_px, const double *Rt_cam_c, const int *indi
         err_px[k] = INFINITY;
         if (!(p_cam.z > 0.0)) continue;
         if (!mrcal_project(&q, NULL, NULL, &p_cam, 1, s->lensmodel, s->intrinsics)) continue;
-        const double e = hypot(q.x - s->q_px[2 * i], q.y - s->q_px[2 * i + 1]);
+        double e = hypot(q.x - s->q_px[2 * i], q.y - s->q_px[2 * i + 1]);
+        if (s->ks_px) {
+            const double a = s->ks_px[i] / p_cam.z;
+            e *= s->T_px / sqrt(s->T_px * s->T_px + a * a);
+        }
         if (isfinite(e)) err_px[k] = e;
     }
 }
@@ -104,6 +116,15 @@ static rs_status check_arguments(const rs_calib_init_result *result,
     if (opt->ransac_max_iterations < 1)
         return rs_err_set(err, RS_ERR_INVALID, "ransac_max_iterations: %d is not >= 1",
                           opt->ransac_max_iterations);
+    if (!(opt->survey_sigmas >= 0.0) || !isfinite(opt->survey_sigmas))
+        return rs_err_set(err, RS_ERR_INVALID, "survey_sigmas: %g is not a finite number >= 0",
+                          opt->survey_sigmas);
+    if (opt->sigma_enu_m)
+        for (int i = 0; i < 3 * N; i++)
+            if (!(opt->sigma_enu_m[i] >= 0.0) || !isfinite(opt->sigma_enu_m[i]))
+                return rs_err_set(err, RS_ERR_INVALID,
+                                  "sigma_enu_m[%d]: landmark %d's survey sigma %g is not a finite "
+                                  "number >= 0", i / 3, i / 3, opt->sigma_enu_m[i]);
     if (!(opt->planarity_ratio >= 0.0 && opt->planarity_ratio < 1.0))
         return rs_err_set(err, RS_ERR_INVALID, "planarity_ratio: %g is not in [0,1)",
                           opt->planarity_ratio);
@@ -224,13 +245,14 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
     if (st) return st;
     memset(result, 0, sizeof(*result));
 
-    // One block of scratch: v (N,3), p_c (N,3), xy (N,2), p_sel (N,3), tmp (N,), usable (N,),
-    // in (N,), ransac_inlier (N,)
+    // One block of scratch: v (N,3), p_c (N,3), xy (N,2), p_sel (N,3), tmp (N,), ks (N,),
+    // usable (N,), in (N,), ransac_inlier (N,)
     const size_t Nz = (size_t)(N > 0 ? N : 1);
-    double *v = malloc(Nz * (3 + 3 + 2 + 3 + 1) * sizeof(double) + Nz * (2 * sizeof(int) + sizeof(bool)));
+    double *v = malloc(Nz * (3 + 3 + 2 + 3 + 1 + 1) * sizeof(double) + Nz * (2 * sizeof(int) + sizeof(bool)));
     if (!v) return rs_err_set(err, RS_ERR_NOMEM, "rs_calib_init_pose: out of memory (N = %d)", N);
     double *p_c = v + 3 * Nz, *xy = p_c + 3 * Nz, *p_sel = xy + 2 * Nz, *tmp = p_sel + 3 * Nz;
-    int *usable = (int *)(tmp + Nz), *in = usable + Nz;
+    double *ks = tmp + Nz;
+    int *usable = (int *)(ks + Nz), *in = usable + Nz;
     bool *is_in = (bool *)(in + Nz);
 
     // 1. bearings
@@ -269,13 +291,24 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
     result->planar = s[2] < opt->planarity_ratio * s[1];
 
     // 3. RANSAC over P3P, scored in pixels
-    const scorer sc = {lensmodel, intrinsics, p_c, q_px};
+    const scorer sc = {lensmodel, intrinsics, p_c, q_px, NULL, opt->ransac_threshold_px};
+    scorer sc_ransac = sc;
+    const mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(lensmodel);
+    if (opt->sigma_enu_m && opt->survey_sigmas > 0.0 && meta.has_core) {
+        const double f = intrinsics[0] > intrinsics[1] ? intrinsics[0] : intrinsics[1];
+        for (int i = 0; i < N; i++) {
+            const double *si = &opt->sigma_enu_m[3 * i];
+            const double smax = fmax(si[0], fmax(si[1], si[2]));
+            ks[i] = opt->survey_sigmas * fabs(f) * smax;
+        }
+        sc_ransac.ks_px = ks;
+    }
     double Rt_cam_c[12];
     int Niterations = 0, Nfallback = 0;
     st = rs_calib_opengv_ransac_p3p(Rt_cam_c, is_in, &Niterations, &Nfallback, v, p_c, N, usable,
                                     Nusable, RS_CALIB_OPENGV_P3P_KNEIP, opt->ransac_threshold_px,
                                     opt->ransac_max_iterations, RS_INIT_CONFIDENCE, opt->seed,
-                                    pixel_errors, (void *)&sc, err);
+                                    pixel_errors, (void *)&sc_ransac, err);
     int Nin = 0;
     if (st == RS_OK)
         for (int i = 0; i < N; i++)
@@ -286,10 +319,12 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
     if (st == RS_ERR_DEGENERATE || (st == RS_OK && Nin < Nneeded)) {
         st = rs_err_set(err, RS_ERR_DEGENERATE,
                         "q_px: no pose puts %d or more of the %d usable landmarks in front of the "
-                        "camera within %g px of their pixels (best: %d, after %d RANSAC "
+                        "camera within %g px of their pixels%s (best: %d, after %d RANSAC "
                         "iterations): landmarks behind the camera, or too many pixels not "
                         "matching their landmarks",
-                        Nneeded, Nusable, opt->ransac_threshold_px, st == RS_OK ? Nin : 0,
+                        Nneeded, Nusable, opt->ransac_threshold_px,
+                        sc_ransac.ks_px ? " (widened by their survey sigmas)" : "",
+                        st == RS_OK ? Nin : 0,
                         Niterations);
         goto done;
     }

@@ -48,6 +48,13 @@ typedef struct {
     int    ransac_max_iterations;  // default 500 (adaptive stop at 99.9% confidence)
     uint64_t seed;                 // RANSAC sampling seed (default 1)
     double planarity_ratio;        // planar if s3/s2 of the centred landmarks' SVD < this (default 0.02)
+    // Survey noise in the inlier test: landmark i is an inlier of a hypothesis when its
+    // reprojection error is below sqrt(T^2 + (k f s_i / z_i)^2) px, T = ransac_threshold_px,
+    // k = survey_sigmas, f = the larger focal length of the lens core, s_i = the largest of
+    // landmark i's three survey sigmas and z_i its depth under that hypothesis: a near landmark
+    // surveyed to 0.3 m is off by tens of pixels without being an outlier.
+    const double *sigma_enu_m;     // (N,3) survey 1-sigma of E, N, U, metres; NULL: exact
+    double survey_sigmas;          // k above (default 3)
 } rs_calib_init_options;
 
 // Fills opt with the defaults above. opt must not be NULL.

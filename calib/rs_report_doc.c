@@ -411,15 +411,26 @@ static void pdf_need(pdf_state *p, double height)
     if (p->y + height > page_h - margin && p->y > margin) pdf_new_page(p);
 }
 
-// Word-wrapped text across the page width; returns nothing, advances p->y.
+// Word-wrapped text across the page width: draws it and advances p->y, or with draw false only
+// returns the height it would take (no page break counted).
+static double pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic,
+                           double indent, bool draw);
+
 static void pdf_text(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent)
 {
+    pdf_text_run(p, text, size, bold, italic, indent, true);
+}
+
+static double pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic,
+                           double indent, bool draw)
+{
+    double height = 0;
     cairo_t *cr = p->cr;
     pdf_font(cr, size, bold, italic);
     double lh = size * 1.35, maxw = page_w - 2 * margin - 2 * indent;
     size_t n = strlen(text);
     char *line = malloc(n + 1);
-    if (!line) return;
+    if (!line) return 0;
     const char *s = text;
     while (*s) {
         // take words while they fit
@@ -435,16 +446,31 @@ static void pdf_text(pdf_state *p, const char *text, double size, bool bold, boo
         }
         memcpy(line, s, best);
         line[best] = 0;
-        pdf_need(p, lh);
-        pdf_font(cr, size, bold, italic);
-        cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
-        cairo_move_to(cr, margin + indent, p->y + size);
-        rs_doc_show_text(cr, line);
-        p->y += lh;
+        if (draw) {
+            pdf_need(p, lh);
+            pdf_font(cr, size, bold, italic);
+            cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+            cairo_move_to(cr, margin + indent, p->y + size);
+            rs_doc_show_text(cr, line);
+            p->y += lh;
+        }
+        height += lh;
         s += best;
         while (*s == ' ') s++;
     }
     free(line);
+    return height;
+}
+
+// Height of the paragraphs that follow heading block i up to the next heading, table or figure
+// (a heading's short run of text, e.g. a camera's warnings), as pdf_write draws them.
+static double pdf_run_height(pdf_state *p, const rs_doc *doc, int i)
+{
+    double h = 0;
+    for (int k = i + 1; k < doc->N && doc->blocks[k].kind == RS_DOC_PARAGRAPH; k++)
+        h += pdf_text_run(p, doc->blocks[k].text, PDF_BODY_PT, false, false,
+                          doc->blocks[k].warning ? 8 : 0, false) + 4;
+    return h;
 }
 
 // Cell text cut to width w with "..." when too long (at a UTF-8 character boundary).
@@ -576,7 +602,10 @@ rs_status rs_doc_write_pdf(const rs_doc *doc, const char *title, const char *pat
         case RS_DOC_HEADING: {
             double size = b->level == 1 ? 18 : b->level == 2 ? 14 : 11;
             if (b->level == 2 && p.y > margin) pdf_new_page(&p); // one camera per page
-            pdf_need(&p, 3 * size);
+            // Keep a heading with its text: the whole run when it takes at most half a page
+            // (no page left with a line or two), else the first lines.
+            const double run = pdf_run_height(&p, doc, i);
+            pdf_need(&p, 1.7 * size + (run <= 0.5 * (page_h - 2 * margin) ? run : 2 * size));
             p.y += size * 0.4;
             pdf_text(&p, b->text, size, true, false, 0);
             p.y += size * 0.3;

@@ -2,8 +2,12 @@
 // k uses SEED + k) through rs_calib_solve. Every returned pose must be finite with a positive
 // covariance diagonal, every error must name its cause, every condition number beyond the bound
 // (100, rs_calib_options.condition_warn) must come with a warning, and the library must not
-// print. Confident wrong poses (more than 10 reported sigmas off, no warning) are counted and
-// held below 0.5% of the poses (they are the solver's business, issue 3; see the report).
+// print. Confident wrong poses (more than 10 reported sigmas off, with no warning) are held to
+// at most 1 in 10,000 poses: none in CI's 3000. The rotation error is taken in the estimate's
+// Rodrigues chart with the truth's nearer representation (a half-turn has two), and poses whose
+// yaw/pitch/roll sigma exceeds 2 deg carry a warning (the first-order covariance understates
+// errors that large): with both, 1 of 20,000 problems (seed 20261122..) remained, a camera 4 m
+// up seeing landmarks 1.4-4.4 km away surveyed to 1.1 m, 13.8 sigmas off.
 // usage: test_stress_random COUNT SEED
 #include <stdio.h>
 #include <stdlib.h>
@@ -33,7 +37,7 @@ int main(int argc, char **argv)
     CHECK(S.Nnonfinite == 0, "%d poses with a NaN/inf or a non-positive variance", S.Nnonfinite);
     CHECK(S.Nunnamed == 0, "%d errors without a message", S.Nunnamed);
     CHECK(S.Nunflagged == 0, "%d condition numbers beyond the bound without a warning", S.Nunflagged);
-    CHECK(S.Nbad * 200 <= S.Nok, "%d confident wrong poses of %d (> 0.5%%)", S.Nbad, S.Nok);
+    CHECK(S.Nbad * 10000 <= S.Nok, "%d confident wrong poses of %d (> 1 in 10,000)", S.Nbad, S.Nok);
     int Nerr = 0;
     for (int c = 0; c < 16; c++) Nerr += S.Nerror[c];
     CHECK(S.Nok + Nerr == S.Ngenerated, "results %d + errors %d != problems %d", S.Nok, Nerr, S.Ngenerated);
