@@ -14,6 +14,7 @@ static const char render_usage[] =
     "usage: roadside render SITE --calib DIR --camera ID --vehicles FILE -o OUTDIR\n"
     "                       [--background IMAGE] [--pins] [--sun AZ,EL | --time ISO8601]\n"
     "                       [--full-frame] [--antialias N] [--canvas-scale S] [--keep]\n"
+    "                       [--shadows [--overcast]] [--separate-processes]\n"
     "                       [--labels [--split NAME] [--bbox KIND] [--min-visibility V]]\n"
     "\n"
     "Renders vehicles seen by a calibrated camera with POV-Ray 3.7 (docs/povray.md):\n"
@@ -34,6 +35,12 @@ static const char render_usage[] =
     "  --antialias N        N x N supersampling of the colour pass (default off)\n"
     "  --canvas-scale S     distorted lenses: canvas pixels per pixel, >= 1 (default 1)\n"
     "  --keep               keep the scene files, povray's outputs and log in OUTDIR\n"
+    "  --shadows            also the shadow pass (differential rendering, docs/synth.md):\n"
+    "                       the background is shaded by the vehicles' sun and sky shadows;\n"
+    "                       writes OUTDIR/shadow.png (16-bit lit fraction, 1 = open ground)\n"
+    "  --overcast           no sun: the sky alone (its soft shadow under each vehicle)\n"
+    "  --separate-processes one povray process per pass (default: the passes are the\n"
+    "                       frames of one process, which starts once)\n"
     "  --labels             also write the labels of this image (docs/labels.md), computed\n"
     "                       through mrcal with visibility from the ID pass: COCO in YOLOX's\n"
     "                       layout (OUTDIR/annotations/instances_SPLIT.json, the image copied\n"
@@ -49,7 +56,7 @@ static const char render_usage[] =
     "Exit status: 0 rendered, 1 failed (a clear message if povray is missing), 2 usage error.\n";
 
 enum { OPT_BACKGROUND = 2000, OPT_FULL, OPT_AA, OPT_SCALE, OPT_KEEP, OPT_LABELS, OPT_SPLIT,
-       OPT_BBOX, OPT_MINVIS };
+       OPT_BBOX, OPT_MINVIS, OPT_SHADOWS, OPT_OVERCAST, OPT_SEPARATE };
 
 // Labels of the rendered image (rs_synth_labels.h): COCO, YOLO and KITTI into out_dir, the
 // composite copied into out_dir/<split>/image.png.
@@ -112,6 +119,9 @@ int rs_cli_render(int argc, char **argv)
         {"antialias", required_argument, NULL, OPT_AA},
         {"canvas-scale", required_argument, NULL, OPT_SCALE},
         {"keep", no_argument, NULL, OPT_KEEP},
+        {"shadows", no_argument, NULL, OPT_SHADOWS},
+        {"overcast", no_argument, NULL, OPT_OVERCAST},
+        {"separate-processes", no_argument, NULL, OPT_SEPARATE},
         {"labels", no_argument, NULL, OPT_LABELS},
         {"split", required_argument, NULL, OPT_SPLIT},
         {"bbox", required_argument, NULL, OPT_BBOX},
@@ -122,7 +132,7 @@ int rs_cli_render(int argc, char **argv)
     rs_synth_render_options_default(&ropt);
     int c, rc;
     long aa;
-    bool labels = false;
+    bool labels = false, overcast = false;
     const char *split = "train2017";
     rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
     rs_err perr = {0};
@@ -133,6 +143,9 @@ int rs_cli_render(int argc, char **argv)
         case OPT_BACKGROUND: ropt.background_path = optarg; continue;
         case OPT_FULL: ropt.full_frame = true; continue;
         case OPT_KEEP: ropt.keep_files = true; continue;
+        case OPT_SHADOWS: ropt.shadow = true; continue;
+        case OPT_OVERCAST: overcast = true; continue;
+        case OPT_SEPARATE: ropt.separate_processes = true; continue;
         case OPT_LABELS: labels = true; continue;
         case OPT_SPLIT:
             for (const char *p = optarg; *p; p++)
@@ -173,6 +186,7 @@ int rs_cli_render(int argc, char **argv)
     if ((rc = rs_cli_synth_load(&s, "render", argc, argv, optind)) != RS_EXIT_OK)
         return rc;
     ropt.scene = s.scene;
+    ropt.scene.overcast = overcast;
     rs_err err = {0};
     rs_synth_render_result r;
     rs_status st = rs_synth_render(&r, s.output, &s.camera.lensmodel, s.camera.intrinsics,
@@ -184,9 +198,9 @@ int rs_cli_render(int argc, char **argv)
     if (st) {
         rc = rs_cli_fail("render", st, &err);
     } else {
-        printf("vehicles %d rendered %d region %d %d %d %d povray_s %.3f -> %s\n", r.Nvehicles,
-               r.Nrendered, r.region[0], r.region[1], r.region[2], r.region[3],
-               r.seconds_povray, s.output);
+        printf("vehicles %d rendered %d region %d %d %d %d povray_s %.3f passes %d processes %d -> %s\n",
+               r.Nvehicles, r.Nrendered, r.region[0], r.region[1], r.region[2], r.region[3],
+               r.seconds_povray, r.Npasses, r.Npovray, s.output);
         rc = RS_EXIT_OK;
     }
     rs_synth_render_result_free(&r);

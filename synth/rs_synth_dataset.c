@@ -81,9 +81,11 @@ static void remove_tree(const char *path)
 typedef struct {
     char *file;        // owned: absolute/joined path
     char *time_iso;    // owned, may be NULL
-    bool overcast;     // conditions cloudy, rain, snow or night: no sun pass, no cast shadow
+    bool overcast;     // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
+    bool night;        // conditions night: no shadow at all
     // cache, filled at first use: the image at the output size, its appearance
     rs_synth_image fitted;
+    rs_synth_image linear; // fitted, decoded from sRGB to linear light
     rs_synth_appearance app;
     bool app_ok;       // the appearance could be estimated
 } background;
@@ -93,6 +95,10 @@ typedef struct {
     rs_calib_camera cam;  // at the output size
     background *bg;       // (Nbg,) owned: the backgrounds passing the filters
     int Nbg;
+    // cache, filled at first use: the POV-Ray canvas of the lens and its resampling map
+    bool have_canvas;
+    rs_synth_canvas canvas;
+    float *canvas_map;    // owned; NULL when the canvas is the lens itself
 } camera;
 
 static const char *tag_value(const cJSON *entry, const char *key)
@@ -147,6 +153,7 @@ static rs_status read_backgrounds(camera *c, const char *site_dir, const cJSON *
             b->time_iso = t ? strdup(t) : NULL;
             const char *cond = tag_value(e, "conditions");
             b->overcast = cond && strcmp(cond, "sunny") != 0;
+            b->night = cond && strcmp(cond, "night") == 0;
             if (!b->file || (t && !b->time_iso))
                 return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         }
@@ -206,8 +213,13 @@ static rs_status background_fit(background *b, int width, int height, rs_err *er
             map[2 * ((size_t)v * width + u) + 0] = (float)((u + 0.5) * sx - 0.5);
             map[2 * ((size_t)v * width + u) + 1] = (float)((v + 0.5) * sy - 0.5);
         }
-    if ((st = rs_synth_remap(&b->fitted, &src, map, width, height, 1, err)))
+    if ((st = rs_synth_remap(&b->fitted, &src, map, width, height, 1, err)) ||
+        (st = rs_synth_image_alloc(&b->linear, width, height, 3, err)))
         goto done;
+    for (size_t i = 0; i < (size_t)width * height; i++)
+        for (int c = 0; c < 3; c++)
+            b->linear.data[3 * i + c] =
+                (float)rs_synth_srgb_decode(b->fitted.data[(size_t)b->fitted.channels * i + c]);
     b->app_ok = rs_synth_appearance_estimate(&b->app, b->file, NULL, NULL) == RS_OK;
 done:
     free(map);
@@ -227,63 +239,28 @@ typedef struct {
 // ---- shadows and appearance over a background ----
 
 // Differential rendering (Debevec, "Rendering synthetic objects into real scenes", SIGGRAPH
-// 1998): the ground with the vehicles (with_v) and the ground alone (ground) rendered under the
-// same sun and sky; on background pixels (id 0) the background in linear light is multiplied by
-// with_v / ground (clamped to [0, 1]: only shadows, no added light).
-static void shade_background(rs_synth_image *bg_lin, const rs_synth_image *with_v,
-                             const rs_synth_image *ground, const uint16_t *ids)
+// 1998): the ground with the vehicles and the ground alone, under the same sun and sky; their
+// ratio is the render's shadow pass (rs_synth_render_result.shadow: the ground alone, lit by
+// parallel lights, is uniform and needs no pass). On background pixels (id 0) the background
+// in linear light is multiplied by it (in [0, 1]: only shadows, no added light).
+static void shade_background(rs_synth_image *bg_lin, const float *shadow, const uint16_t *ids)
 {
     const size_t n = (size_t)bg_lin->width * (size_t)bg_lin->height;
     for (size_t i = 0; i < n; i++) {
-        if (ids[i] != 0 || ground->data[4 * i + 3] <= 0)
+        if (ids[i] != 0 || shadow[i] >= 1)
             continue;
-        for (int c = 0; c < 3; c++) {
-            const double g = ground->data[4 * i + c], w = with_v->data[4 * i + c];
-            double ratio = g > 1e-6 ? w / g : 1;
-            ratio = ratio < 0 ? 0 : ratio > 1 ? 1 : ratio;
-            bg_lin->data[3 * i + c] = (float)(bg_lin->data[3 * i + c] * ratio);
-        }
+        for (int c = 0; c < 3; c++)
+            bg_lin->data[3 * i + c] *= shadow[i];
     }
-}
-
-// Renders the two ground passes of differential rendering into work/<sub>.
-static rs_status ground_passes(rs_synth_render_result *with_v, rs_synth_render_result *ground,
-                               const dataset *d, const camera *c, const char *work,
-                               const rs_synth_prepared *prepared,
-                               const rs_synth_render_options *ropt, double *seconds_povray,
-                               rs_err *err)
-{
-    rs_synth_render_options g = *ropt;
-    g.background_path = NULL;
-    g.scene.ground_visible = true;
-    const rs_synth_prepared none = {0};
-    const rs_calib_camera *cam = &c->cam;
-    char *wa = rs_io_join(work, "shadow_with"), *wb = rs_io_join(work, "shadow_ground");
-    rs_status st = (!wa || !wb) ? rs_err_set(err, RS_ERR_NOMEM, "out of memory") : RS_OK;
-    if (!st)
-        st = rs_synth_render(with_v, wa, &cam->lensmodel, cam->intrinsics, cam->width,
-                             cam->height, cam->rt_cam_enu, d->site->ground_normal_enu,
-                             d->site->ground_offset_m, prepared, &g, err);
-    if (!st)
-        st = rs_synth_render(ground, wb, &cam->lensmodel, cam->intrinsics, cam->width,
-                             cam->height, cam->rt_cam_enu, d->site->ground_normal_enu,
-                             d->site->ground_offset_m, &none, &g, err);
-    if (!st)
-        *seconds_povray += with_v->seconds_povray + ground->seconds_povray;
-    free(wa);
-    free(wb);
-    return st;
 }
 
 // The composite over a background: shadows (when given), the vehicle layer matched to the
 // background (rs_synth_appearance.h; skipped when the background gives no estimate), straight
 // alpha over the background in linear light, sRGB, the background's JPEG quality.
 // in,out: r (its composite replaced); in: shadow passes may be NULL
-static rs_status composite(rs_synth_render_result *r, const background *b,
-                           const rs_synth_render_result *with_v,
-                           const rs_synth_render_result *ground, uint64_t seed, rs_err *err)
+static rs_status composite(rs_synth_render_result *r, const background *b, uint64_t seed,
+                           rs_err *err)
 {
-    const rs_synth_image bg = b->fitted;
     const rs_synth_appearance app = b->app;
     const bool matched = b->app_ok;
     rs_status st = RS_OK;
@@ -291,11 +268,9 @@ static rs_status composite(rs_synth_render_result *r, const background *b,
     rs_synth_image lin = {0};
     if ((st = rs_synth_image_alloc(&lin, r->width, r->height, 3, err)))
         goto done;
-    for (size_t i = 0; i < n; i++)
-        for (int c = 0; c < 3; c++)
-            lin.data[3 * i + c] = (float)rs_synth_srgb_decode(bg.data[(size_t)bg.channels * i + c]);
-    if (with_v && ground)
-        shade_background(&lin, &with_v->rgba, &ground->rgba, r->ids);
+    memcpy(lin.data, b->linear.data, sizeof(float) * 3 * n);
+    if (r->shadow)
+        shade_background(&lin, r->shadow, r->ids);
     if (matched && (st = rs_synth_appearance_apply(&r->rgba, &app, 0.6, seed, err))) {
         rs_synth_image_free(&lin);
         goto done;
@@ -341,11 +316,11 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     const rs_synth_dataset_options *opt = d->opt;
     uint64_t rng = rs_synth_dataset_image_seed(opt->seed, k);
     char name[600];
-    char *work = NULL, *bg_path = NULL, *part_tmp = NULL, *part = NULL, *image = NULL;
+    char *work = NULL, *part_tmp = NULL, *part = NULL, *image = NULL;
     rs_synth_traffic_vehicle *tv = NULL;
     rs_synth_vehicle *v = NULL;
     rs_synth_prepared prepared = {0};
-    rs_synth_render_result r = {0}, sh_with = {0}, sh_ground = {0};
+    rs_synth_render_result r = {0};
     const background *b = NULL;
     rs_synth_label *labels = NULL;
     double *up = NULL;
@@ -364,20 +339,30 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     rs_synth_render_options ropt;
     rs_synth_render_options_default(&ropt);
     ropt.povray = opt->povray;
+    ropt.write_files = false; // the dataset composites and writes the image itself
+    if (!c->have_canvas) {
+        const rs_calib_camera *cc = &c->cam;
+        if ((st = rs_synth_canvas_for_lens(&c->canvas, &cc->lensmodel, cc->intrinsics, cc->width,
+                                           cc->height, 1, err)) ||
+            (!c->canvas.identity &&
+             (st = rs_synth_canvas_map(&c->canvas_map, &c->canvas, &cc->lensmodel,
+                                       cc->intrinsics, cc->width, cc->height, err))))
+            goto done;
+        c->have_canvas = true;
+    }
+    ropt.canvas = &c->canvas;
+    ropt.canvas_map = c->canvas_map;
+    ropt.separate_processes = opt->separate_processes;
     const uint64_t r_bg = rng_next(&rng);
     if (c->Nbg > 0) {
         background *bm = &c->bg[r_bg % (uint64_t)c->Nbg];
         b = bm;
-        bg_path = rs_io_join(work, "background.png");
-        if (!bg_path) {
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if ((st = background_fit(bm, c->cam.width, c->cam.height, err)))
             goto done;
-        }
-        if ((st = background_fit(bm, c->cam.width, c->cam.height, err)) ||
-            (st = rs_synth_image_write(bg_path, &bm->fitted, 8, err)))
-            goto done;
-        ropt.background_path = bg_path;
+        // the vehicles alone over transparency; composite() puts them onto the background
         ropt.scene.ground_visible = false;
+        ropt.scene.overcast = b->overcast;
+        ropt.shadow = opt->shadows && !b->night;
         double t_s;
         if (b->time_iso && rs_synth_parse_iso8601(&t_s, b->time_iso, "time", NULL) == RS_OK)
             rs_synth_sun_position(&ropt.scene.sun_azimuth_deg, &ropt.scene.sun_elevation_deg,
@@ -425,16 +410,8 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         goto done;
     *seconds_povray += r.seconds_povray;
     const uint64_t r_look = rng_next(&rng);
-    if (b) {
-        const bool shadows = opt->shadows && !b->overcast && r.Nrendered > 0 &&
-                             ropt.scene.sun_elevation_deg > 0;
-        if (shadows && (st = ground_passes(&sh_with, &sh_ground, d, c, work, &prepared, &ropt,
-                                           seconds_povray, err)))
-            goto done;
-        if ((st = composite(&r, b, shadows ? &sh_with : NULL,
-                            shadows ? &sh_ground : NULL, r_look, err)))
-            goto done;
-    }
+    if (b && (st = composite(&r, b, r_look, err)))
+        goto done;
     for (int i = 0; i < N; i++) {
         up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m,
                                      prepared.v[i].e_m, prepared.v[i].n_m);
@@ -469,7 +446,6 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     remove_tree(work);
 done:
     free(work);
-    free(bg_path);
     free(part_tmp);
     free(part);
     free(image);
@@ -481,8 +457,6 @@ done:
     free(labels);
     rs_synth_prepared_free(&prepared);
     rs_synth_render_result_free(&r);
-    rs_synth_render_result_free(&sh_with);
-    rs_synth_render_result_free(&sh_ground);
     return st;
 }
 
@@ -615,8 +589,10 @@ static void dataset_free(dataset *d)
             free(d->cams[i].bg[b].file);
             free(d->cams[i].bg[b].time_iso);
             rs_synth_image_free(&d->cams[i].bg[b].fitted);
+            rs_synth_image_free(&d->cams[i].bg[b].linear);
         }
         free(d->cams[i].bg);
+        free(d->cams[i].canvas_map);
     }
     free(d->cams);
     rs_synth_lanes_free(&d->lanes);

@@ -15,9 +15,12 @@
 //               `vehicles` of them) then domain randomisation (rs_synth_traffic_randomise)
 //   render      rs_synth_render (culling, region, alpha, composite, ID pass), labels through
 //               mrcal (rs_synth_labels_compute)
-//   shadows     over a sunny (or untagged) background with the sun up: differential rendering
-//               (the ground with and without the vehicles, two more colour passes; the
-//               background times their ratio on non-vehicle pixels; docs/synth.md)
+//   shadows     over any background but a night one: differential rendering (the ground with
+//               and without the vehicles under the same sun and sky, as one shadow pass of
+//               the render, rs_synth_scene.h; the background times their ratio on non-vehicle
+//               pixels; docs/synth.md): the sun's shadow when sunny (or untagged) with the
+//               sun up, the sky's soft shadow under and beside each vehicle always
+//   povray      one process per image, the colour, ID and shadow passes as its frames
 //   appearance  the vehicle layer matched to the background (rs_synth_appearance.h: gains,
 //               blur, noise, JPEG quality), estimated once per background per process
 // Layout of DATASET (YOLOX's COCO layout plus YOLO and KITTI, docs/labels.md):
@@ -55,6 +58,7 @@ typedef struct {
     int vehicles;             // at most this many vehicles per image's traffic (default 10)
     const char *split;        // COCO split name (default "train2017")
     bool shadows;             // differential-rendering shadows over backgrounds (default on)
+    bool separate_processes;  // one povray process per pass (benchmarks; default off)
     const char *povray;       // NULL: $ROADSIDE_POVRAY, else povray on PATH
     // Called after each image of this shard (made or skipped); may be NULL.
     void (*progress)(void *ctx, int done, int total, int skipped);

@@ -20,6 +20,7 @@ void rs_synth_render_options_default(rs_synth_render_options *opt)
 {
     memset(opt, 0, sizeof(*opt));
     opt->canvas_scale = 1;
+    opt->write_files = true;
     rs_synth_scene_options_default(&opt->scene);
 }
 
@@ -31,6 +32,7 @@ void rs_synth_render_result_free(rs_synth_render_result *r)
     rs_synth_image_free(&r->composite);
     free(r->ids);
     free(r->visible);
+    free(r->shadow);
     memset(r, 0, sizeof(*r));
 }
 
@@ -272,12 +274,124 @@ done:
     return st;
 }
 
+// Renders several passes as the frames of one povray process: NAME.pov (rs_synth_scene_write_frames),
+// NAME.ini, then reads NAME1.png .. NAMEn.png into imgs[0..n-1].
+static rs_status render_frames(rs_synth_image *imgs, const char *out_dir, const char *name,
+                               const char *povray, const rs_synth_povcam *cam, const double fxy[2],
+                               const double ground_normal_enu[3], double ground_offset_m,
+                               const rs_synth_prepared *vehicles,
+                               const rs_synth_scene_options *passes, int Npasses,
+                               const int region[4], double *seconds, rs_err *err)
+{
+    char file[64];
+    char *pov = NULL, *ini = NULL;
+    rs_io_atomic a = {0};
+    rs_status st = RS_OK;
+    snprintf(file, sizeof(file), "%s.pov", name);
+    pov = rs_io_join(out_dir, file);
+    snprintf(file, sizeof(file), "%s.ini", name);
+    ini = rs_io_join(out_dir, file);
+    if (!pov || !ini) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if ((st = rs_io_atomic_open(&a, pov, err)))
+        goto done;
+    if ((st = rs_synth_scene_write_frames(a.f, cam, fxy, ground_normal_enu, ground_offset_m,
+                                          vehicles, passes, Npasses, err))) {
+        rs_io_atomic_abort(&a);
+        goto done;
+    }
+    if ((st = rs_io_atomic_commit(&a, err)) ||
+        (st = rs_synth_scene_write_ini_frames(ini, pov, cam, Npasses, 0, err)))
+        goto done;
+    snprintf(file, sizeof(file), "%s.ini", name);
+    if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err)))
+        goto done;
+    for (int k = 0; k < Npasses && !st; k++) {
+        snprintf(file, sizeof(file), "%s%d.png", name, k + 1);
+        char *png = rs_io_join(out_dir, file);
+        if (!png) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        if ((st = rs_synth_image_read(&imgs[k], png, err)) == RS_OK &&
+            (imgs[k].width != cam->width || imgs[k].height != cam->height))
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
+                            imgs[k].width, imgs[k].height, cam->width, cam->height);
+        else if (!st)
+            mask_outside(&imgs[k], region);
+        free(png);
+    }
+done:
+    free(pov);
+    free(ini);
+    return st;
+}
+
+// Widens rect (x0, y0, x1, y1; empty when x1 < x0) by the canvas rectangle of vehicle v's
+// shadows: its bottom corners and its top corners projected onto the ground along each light
+// higher than 3 deg above the ground.
+static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int height,
+                             const double rt_cam_enu[6], const double corners[8][3],
+                             const double ground_normal_enu[3], double ground_offset_m,
+                             const rs_synth_light *lights, int Nlights)
+{
+    const double *g = ground_normal_enu;
+    const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    for (int j = 0; j < Nlights; j++) {
+        const double *d = lights[j].dir_enu;
+        const double nd = (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn;
+        if (!(nd > 0.05))
+            continue;
+        double pts[8][3];
+        for (int k = 0; k < 4; k++) {
+            memcpy(pts[k], corners[k], sizeof(pts[k]));
+            const double *p = corners[4 + k];
+            const double t = ((g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) / gn - ground_offset_m / gn) / nd;
+            for (int c = 0; c < 3; c++)
+                pts[4 + k][c] = p[c] - t * d[c];
+        }
+        int r[4];
+        if (!rs_synth_vehicle_rect(r, fxycxy, width, height, rt_cam_enu,
+                                   (const double(*)[3])pts, 0.05))
+            continue;
+        if (rect[2] < rect[0]) {
+            memcpy(rect, r, sizeof(r));
+            continue;
+        }
+        rect[0] = r[0] < rect[0] ? r[0] : rect[0];
+        rect[1] = r[1] < rect[1] ? r[1] : rect[1];
+        rect[2] = r[2] > rect[2] ? r[2] : rect[2];
+        rect[3] = r[3] > rect[3] ? r[3] : rect[3];
+    }
+}
+
+// The shadow frame (canvas, RGBA, white ground) as the lit fraction: value / unlit, clamped to
+// [0, 1]; 1 where nothing was rendered (transparent).
+static rs_status shadow_fraction(rs_synth_image *frac, const rs_synth_image *pass, double unlit,
+                                 rs_err *err)
+{
+    rs_status st = rs_synth_image_alloc(frac, pass->width, pass->height, 1, err);
+    if (st)
+        return st;
+    const size_t n = (size_t)pass->width * pass->height;
+    for (size_t i = 0; i < n; i++) {
+        const float *px = &pass->data[(size_t)pass->channels * i];
+        double v = pass->channels >= 4 && px[3] <= 0 ? 1.0 : (unlit > 0 ? px[0] / unlit : 1.0);
+        frac->data[i] = (float)(v < 0 ? 0 : v > 1 ? 1 : v);
+    }
+    return RS_OK;
+}
+
 // Removes the intermediates of a render (scene files, povray outputs, the conf).
 static void remove_intermediates(const char *out_dir)
 {
     static const char *const names[] = {
         "pass_colour.pov", "pass_colour.ini", "pass_colour.png", "pass_ids.pov", "pass_ids.ini",
-        "pass_ids.png",    ".povray/3.7/povray.conf", ".povray/3.7", ".povray", "povray.log"};
+        "pass_ids.png",    "pass_shadow.pov", "pass_shadow.ini", "pass_shadow.png",
+        "passes.pov",      "passes.ini",      "passes1.png",     "passes2.png",
+        "passes3.png",     ".povray/3.7/povray.conf", ".povray/3.7", ".povray", "povray.log"};
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
         char *p = rs_io_join(out_dir, names[i]);
         if (p)
@@ -334,9 +448,10 @@ static void composite(rs_synth_render_result *out, const rs_synth_image *bg)
     for (size_t i = 0; i < Npx; i++) {
         const float *c = &out->rgba.data[4 * i];
         for (int k = 0; k < 3; k++) {
-            const double b = bg ? srgb_decode(bg->data[i * bg->channels +
-                                                       (bg->channels >= 3 ? k : 0)])
-                                : 0;
+            double b = bg ? srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)])
+                          : 0;
+            if (out->shadow && out->ids[i] == 0)
+                b *= out->shadow[i];
             out->composite.data[3 * i + k] =
                 (float)srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
         }
@@ -359,6 +474,14 @@ static rs_status write_outputs(const char *out_dir, const rs_synth_render_result
     for (int k = 0; k < 3 && !st; k++) {
         char *p = rs_io_join(out_dir, names[k]);
         st = p ? rs_synth_image_write(p, imgs[k], bits[k], err)
+               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(p);
+    }
+    if (!st && out->shadow) {
+        const rs_synth_image sh = {.width = out->width, .height = out->height, .channels = 1,
+                                   .data = out->shadow};
+        char *p = rs_io_join(out_dir, "shadow.png");
+        st = p ? rs_synth_image_write(p, &sh, 16, err)
                : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(p);
     }
@@ -389,9 +512,12 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
     uint8_t *include = NULL;
     float *map = NULL;
     rs_status st;
-    if ((st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
-                                       opt.canvas_scale > 1 ? opt.canvas_scale : 1, err)) ||
-        (st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
+    if (opt.canvas)
+        canvas = *opt.canvas;
+    else if ((st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
+                                            opt.canvas_scale > 1 ? opt.canvas_scale : 1, err)))
+        return st;
+    if ((st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
                                    err)))
         return st;
     if (opt.background_path) {
@@ -416,6 +542,8 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
     if ((st = rs_synth_image_alloc(&out->composite, width, height, 3, err)))
         goto done;
     // 1-2. Culling and the region
+    rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
+    const int Nlights = rs_synth_scene_lights(lights, &opt.scene);
     int region[4] = {canvas.width, canvas.height, -1, -1};
     for (int i = 0; i < N; i++) {
         double corners[8][3];
@@ -429,6 +557,10 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         if (!in)
             continue;
         out->Nrendered++;
+        if (opt.shadow)
+            widen_by_shadows(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
+                             (const double(*)[3])corners, ground_normal_enu, ground_offset_m,
+                             lights, Nlights);
         region[0] = rect[0] < region[0] ? rect[0] : region[0];
         region[1] = rect[1] < region[1] ? rect[1] : region[1];
         region[2] = rect[2] > region[2] ? rect[2] : region[2];
@@ -454,39 +586,101 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         memcpy(out->region, region, sizeof(region));
         if ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_povray_conf(out_dir, err)))
             goto done;
-        rs_synth_scene_options sopt = opt.scene;
-        sopt.include = include;
-        sopt.pass = RS_SYNTH_PASS_COLOUR;
-        sopt.ground_visible = opt.background_path ? false : opt.scene.ground_visible;
-        // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
-        if ((st = render_pass(&rgba, out_dir, "pass_colour", povray, &cam, intrinsics,
-                              ground_normal_enu, ground_offset_m, vehicles, &sopt, opt.antialias,
-                              region, &out->seconds_povray, err)))
-            goto done;
+        // The passes: colour; ID and shadow when vehicles are rendered.
+        rs_synth_scene_options passes[3];
+        int Npasses = 0, i_id = -1, i_shadow = -1;
+        passes[Npasses] = opt.scene;
+        passes[Npasses].include = include;
+        passes[Npasses].pass = RS_SYNTH_PASS_COLOUR;
+        passes[Npasses].ground_visible = opt.background_path ? false : opt.scene.ground_visible;
+        Npasses++;
         if (out->Nrendered > 0) {
-            sopt.pass = RS_SYNTH_PASS_ID;
-            sopt.Npins = 0;
-            if ((st = render_pass(&idimg, out_dir, "pass_ids", povray, &cam, canvas.fxycxy,
-                                  ground_normal_enu, ground_offset_m, vehicles, &sopt, 0, region,
-                                  &out->seconds_povray, err)))
-                goto done;
-        } else if ((st = rs_synth_image_alloc(&idimg, canvas.width, canvas.height, 3, err))) {
+            passes[Npasses] = passes[0];
+            passes[Npasses].pass = RS_SYNTH_PASS_ID;
+            passes[Npasses].Npins = 0;
+            i_id = Npasses++;
+            if (opt.shadow) {
+                passes[Npasses] = passes[i_id];
+                passes[Npasses].pass = RS_SYNTH_PASS_SHADOW;
+                i_shadow = Npasses++;
+            }
+        }
+        rs_synth_image imgs[3] = {{0}};
+        // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
+        const bool colour_alone = opt.separate_processes || opt.antialias >= 2;
+        if (Npasses == 1 || colour_alone) {
+            st = render_pass(&imgs[0], out_dir, "pass_colour", povray, &cam, intrinsics,
+                             ground_normal_enu, ground_offset_m, vehicles, &passes[0],
+                             opt.antialias, region, &out->seconds_povray, err);
+            out->Npovray++;
+            if (!st && Npasses > 1 && opt.separate_processes) {
+                static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
+                for (int k = 1; k < Npasses && !st; k++, out->Npovray++)
+                    st = render_pass(&imgs[k], out_dir, names[passes[k].pass], povray, &cam,
+                                     intrinsics, ground_normal_enu, ground_offset_m, vehicles,
+                                     &passes[k], 0, region, &out->seconds_povray, err);
+            } else if (!st && Npasses == 2) {
+                st = render_pass(&imgs[1], out_dir, "pass_ids", povray, &cam, intrinsics,
+                                 ground_normal_enu, ground_offset_m, vehicles, &passes[1], 0,
+                                 region, &out->seconds_povray, err);
+                out->Npovray++;
+            } else if (!st && Npasses == 3) {
+                st = render_frames(&imgs[1], out_dir, "passes", povray, &cam, intrinsics,
+                                   ground_normal_enu, ground_offset_m, vehicles, &passes[1], 2,
+                                   region, &out->seconds_povray, err);
+                out->Npovray++;
+            }
+        } else {
+            st = render_frames(imgs, out_dir, "passes", povray, &cam, intrinsics,
+                               ground_normal_enu, ground_offset_m, vehicles, passes, Npasses,
+                               region, &out->seconds_povray, err);
+            out->Npovray++;
+        }
+        out->Npasses = Npasses;
+        rgba = imgs[0];
+        if (i_id >= 0)
+            idimg = imgs[1];
+        rs_synth_image frac = {0};
+        if (!st && i_shadow >= 0)
+            st = shadow_fraction(&frac, &imgs[i_shadow],
+                                 rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu),
+                                 err);
+        if (i_shadow >= 0)
+            rs_synth_image_free(&imgs[i_shadow]);
+        if (st) {
+            rs_synth_image_free(&frac);
             goto done;
         }
+        if (i_id < 0 && (st = rs_synth_image_alloc(&idimg, canvas.width, canvas.height, 3, err)))
+            goto done;
         // 3. Into the real lens
         if (!canvas.identity) {
-            if ((st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics, width, height,
-                                          err)) ||
-                (st = to_lens(&rgba, &idimg, map, width, height, err)))
+            if ((!opt.canvas_map && (st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics,
+                                                              width, height, err))) ||
+                (st = to_lens(&rgba, &idimg, opt.canvas_map ? opt.canvas_map : map, width,
+                              height, err))) {
+                rs_synth_image_free(&frac);
                 goto done;
+            }
+            if (frac.data) {
+                rs_synth_image lens = {0};
+                st = rs_synth_remap(&lens, &frac, opt.canvas_map ? opt.canvas_map : map, width,
+                                    height, 1, err);
+                rs_synth_image_free(&frac);
+                frac = lens;
+                if (st)
+                    goto done;
+            }
         }
+        out->shadow = frac.data; // owned by out now
         out->rgba = rgba;
         rgba = (rs_synth_image){0};
         decode_ids(out, &idimg, N);
     }
     // 4. Composite
     composite(out, opt.background_path ? &bg : NULL);
-    if ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))
+    if (opt.write_files &&
+        ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err))))
         goto done;
 done:
     if (!opt.keep_files)

@@ -9,7 +9,13 @@
 //    vehicle's shadow or reflection, which could fall into the view, is lost.
 // 2. Region: povray renders only the canvas rectangle covered by the remaining vehicles' boxes
 //    (+ 1 px), with +SC/+EC/+SR/+ER; the rest of the canvas stays transparent. Pins, or the
-//    ground drawn when there is no background, make the region the whole canvas.
+//    ground drawn when there is no background, make the region the whole canvas. With the
+//    shadow pass the region also covers each vehicle's shadows: its box's top corners
+//    projected onto the ground along every light of the pass.
+// 2b. Processes: the passes (colour, ID, shadow) are the frames of ONE povray process unless
+//    separate_processes is set or the colour pass is antialiased (then it runs alone). Each
+//    povray process spends about 0.35 s waiting between its threads besides its work
+//    (docs/povray.md), each further frame about 0.3 s.
 // 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
 //    (File_Gamma 1), no antialiasing unless asked; a distorted lens is resampled from the canvas
 //    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).
@@ -45,6 +51,15 @@ typedef struct {
     bool keep_files;             // keep the .pov/.ini/.png intermediates in the output folder
     int antialias;               // 0: none; n >= 2: +A0 +AM1 +R(n) on the colour pass only
     double canvas_scale;         // distorted lenses: canvas pixels per core pixel (default 1)
+    const rs_synth_canvas *canvas; // precomputed for this lens, size and canvas_scale
+    const float *canvas_map;       //   (rs_synth_canvas_for_lens, rs_synth_canvas_map; both
+                                   //   borrowed): a caller rendering many images of one camera
+                                   //   computes them once; NULL: computed here
+    bool shadow;                 // also the shadow pass (rs_synth_scene.h): out->shadow
+    bool write_files;            // write image.png, rgba.png, ids.png (default true)
+    bool separate_processes;     // one povray process per pass (default false: the passes
+                                 // are frames of one process; antialias forces the colour
+                                 // pass into a process of its own)
     rs_synth_scene_options scene; // sun, pins, ground (pass and include are set per pass)
 } rs_synth_render_options;
 
@@ -61,14 +76,20 @@ typedef struct {
     int Nrendered;           // vehicles sent to povray (0: povray was not run)
     int region[4];           // canvas rectangle rendered: x0, y0, x1, y1 inclusive (pixels);
                              // all -1 when nothing was rendered
-    double seconds_povray;   // wall time spent in povray (both passes)
+    float *shadow;           // (H, W) owned, when the shadow pass ran (else NULL): the fraction
+                             // of the ground's light reaching each pixel, 1 in the open
+    double seconds_povray;   // wall time spent in povray (every pass)
+    int Npovray;             // povray processes run
+    int Npasses;             // passes rendered
 } rs_synth_render_result;
 
 void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroes *r
 
 // Renders N vehicles seen by the camera into out_dir (created if missing). Writes
-//   out_dir/image.png  the composite (8-bit sRGB),  out_dir/rgba.png  the colour pass
+//   out_dir/image.png  the composite (8-bit sRGB; with the shadow pass the background is
+//   shaded by it on non-vehicle pixels),  out_dir/rgba.png  the colour pass
 //   (16-bit linear RGBA, real lens),  out_dir/ids.png  the ID pass (16-bit grey, value k+1),
+//   out_dir/shadow.png  with the shadow pass, the lit fraction (16-bit grey, 1 = open ground),
 // each atomically; with keep_files also the scene files and povray's own outputs.
 // in: lensmodel, intrinsics (Nintrinsics,), width, height, rt_cam_enu (6,): the calibrated
 //     camera; ground plane; the prepared vehicles (rs_synth_scene.h); opt may be NULL (defaults)

@@ -449,50 +449,101 @@ static void write_pins(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
     }
 }
 
-rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
-                               const double ground_normal_enu[3], double ground_offset_m,
-                               const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *opt_in, rs_err *err)
+int rs_synth_scene_lights(rs_synth_light *lights, const rs_synth_scene_options *opt)
 {
-    rs_synth_scene_options opt;
-    if (opt_in)
-        opt = *opt_in;
-    else
-        rs_synth_scene_options_default(&opt);
-    const bool id_pass = opt.pass == RS_SYNTH_PASS_ID;
-    rs_status st;
-    fprintf(f, "// Written by roadside (%s pass). POV-Ray world <x, y, z> = <east, up, north>,\n"
+    const double d2r = M_PI / 180.0;
+    int n = 0;
+    if (opt->sun_elevation_deg > 0 && !opt->overcast) {
+        const double az = opt->sun_azimuth_deg * d2r, el = opt->sun_elevation_deg * d2r;
+        lights[n++] = (rs_synth_light){{sin(az) * cos(el), cos(az) * cos(el), sin(el)}, 1.0};
+    }
+    const double sky = opt->overcast ? RS_SYNTH_SKY_OVERCAST : RS_SYNTH_SKY_CLEAR;
+    // band shares of a uniform sky's irradiance on the ground: sin^2 of the band's edges
+    const double edge = sin(40.0 * d2r) * sin(40.0 * d2r);
+    const double zenith_deg[2] = {0, 60}, share[2] = {edge, 1.0 - edge};
+    const int count[2] = {1, 6};
+    for (int b = 0; b < 2; b++)
+        for (int k = 0; k < count[b]; k++) {
+            const double z = zenith_deg[b] * d2r, az = 60.0 * k * d2r;
+            lights[n++] = (rs_synth_light){{sin(az) * sin(z), cos(az) * sin(z), cos(z)},
+                                           sky * share[b] / count[b] / cos(z)};
+        }
+    return n;
+}
+
+double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights,
+                                   const double ground_normal_enu[3])
+{
+    const double *g = ground_normal_enu;
+    const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    double sum = 0;
+    for (int j = 0; j < Nlights; j++) {
+        const double *d = lights[j].dir_enu;
+        const double c = (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn;
+        sum += lights[j].irradiance * (c > 0 ? c : 0);
+    }
+    return sum;
+}
+
+static void write_head(FILE *f, const char *what)
+{
+    fprintf(f, "// Written by roadside (%s). POV-Ray world <x, y, z> = <east, up, north>,\n"
                "// metres (docs/conventions.md, docs/povray.md). Self-contained: no include files.\n"
                "#version 3.7;\n"
                "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
-            id_pass ? "object-ID" : "colour");
+            what);
+}
+
+static const char *pass_name(rs_synth_pass pass)
+{
+    return pass == RS_SYNTH_PASS_ID ? "object-ID" : pass == RS_SYNTH_PASS_SHADOW ? "shadow" : "colour";
+}
+
+// Everything of one pass after the head: camera, lights, ground, meshes, vehicles, pins.
+static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
+                            const double ground_normal_enu[3], double ground_offset_m,
+                            const rs_synth_prepared *vehicles, const rs_synth_scene_options *o,
+                            rs_err *err)
+{
+    const rs_synth_scene_options opt = *o;
+    const bool id_pass = opt.pass == RS_SYNTH_PASS_ID;
+    const bool shadow_pass = opt.pass == RS_SYNTH_PASS_SHADOW;
+    rs_status st;
     if ((st = rs_synth_povcam_write(f, cam, err)))
         return st;
     fprintf(f, "background { rgbt <0, 0, 0, 1> }\n");
     if (!id_pass) {
-        const double d2r = M_PI / 180.0, az = opt.sun_azimuth_deg * d2r,
-                     el = opt.sun_elevation_deg * d2r;
-        const double sun_enu[3] = {1e6 * sin(az) * cos(el), 1e6 * cos(az) * cos(el),
-                                   1e6 * sin(el)};
-        fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg\n", opt.sun_azimuth_deg,
-                opt.sun_elevation_deg);
-        if (opt.sun_elevation_deg > 0) {
+        rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
+        const int Nlights = rs_synth_scene_lights(lights, &opt);
+        const int first_sky = Nlights - RS_SYNTH_SKY_LIGHTS;
+        fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg%s; then the sky (%d lights%s)\n",
+                opt.sun_azimuth_deg, opt.sun_elevation_deg,
+                first_sky ? "" : opt.overcast ? " (overcast: no sun)" : " (below the horizon)",
+                RS_SYNTH_SKY_LIGHTS, shadow_pass ? ", casting shadows" : ", shadowless");
+        for (int j = 0; j < Nlights; j++) {
+            double p[3];
+            for (int k = 0; k < 3; k++)
+                p[k] = 1e6 * lights[j].dir_enu[k];
             fprintf(f, "light_source { ");
-            write_vec_enu(f, sun_enu);
-            fprintf(f, " color rgb <1.0, 0.97, 0.92> parallel point_at <0, 0, 0> }\n");
+            write_vec_enu(f, p);
+            if (j < first_sky && !shadow_pass) // the sun, in colour
+                fprintf(f, " color rgb <1.0, 0.97, 0.92> parallel point_at <0, 0, 0> }\n");
+            else
+                fprintf(f, " color rgb %.9g parallel point_at <0, 0, 0>%s }\n",
+                        lights[j].irradiance, j >= first_sky && !shadow_pass ? " shadowless" : "");
         }
-        fprintf(f, "// sky: a soft shadowless light from above\n"
-                   "light_source { <0, 1e6, 0> color rgb 0.35 parallel point_at <0, 0, 0> "
-                   "shadowless }\n");
     }
     // The ground: grey in the colour pass (left out of the image when compositing), an
-    // occluder of value 0 in the ID pass.
+    // occluder of value 0 in the ID pass, white in the shadow pass.
     const double n_pov[3] = {ground_normal_enu[0], ground_normal_enu[2], ground_normal_enu[1]};
     const double nn = sqrt(n_pov[0] * n_pov[0] + n_pov[1] * n_pov[1] + n_pov[2] * n_pov[2]);
     fprintf(f, "plane { <%.17g, %.17g, %.17g>, %.17g\n", n_pov[0] / nn, n_pov[1] / nn,
             n_pov[2] / nn, ground_offset_m / nn);
     if (id_pass)
         fprintf(f, "  texture { pigment { rgb 0 } finish { emission 0 ambient 0 diffuse 0 } }\n");
+    else if (shadow_pass)
+        fprintf(f, "  texture { pigment { rgb 1 } finish { emission 0 ambient 0 diffuse 1 "
+                   "brilliance 1 specular 0 } }\n");
     else
         fprintf(f, "  texture { pigment { rgb 0.18 } finish { ambient 0 diffuse 0.8 } }%s\n",
                 opt.ground_visible ? "" : " no_image");
@@ -509,7 +560,8 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
             }
         if (first < 0)
             continue;
-        const bool textured = !id_pass && vehicles->v[first].cls != RS_SYNTH_USER_MODEL;
+        const bool textured = opt.pass == RS_SYNTH_PASS_COLOUR &&
+                              vehicles->v[first].cls != RS_SYNTH_USER_MODEL;
         char name[32];
         snprintf(name, sizeof(name), "RS_MESH_%d", m);
         if ((st = rs_synth_fleet_write_declare(f, name, &vehicles->meshes[m],
@@ -535,6 +587,8 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
             fprintf(f, "\n  ");
             write_id_texture(f, (unsigned)i + 1u);
             fprintf(f, " no_shadow");
+        } else if (shadow_pass) {
+            fprintf(f, " no_image no_reflection");
         } else if (v->cls == RS_SYNTH_USER_MODEL) {
             fprintf(f, "\n  texture { pigment { rgb <%.6f, %.6f, %.6f> } finish { ambient 0 "
                        "diffuse 0.7 specular 0.3 roughness 0.02 } }",
@@ -542,8 +596,55 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
         }
         fprintf(f, " }\n");
     }
-    if (!id_pass && opt.Npins > 0)
+    if (opt.pass == RS_SYNTH_PASS_COLOUR && opt.Npins > 0)
         write_pins(f, cam, fxy, &opt);
+    return RS_OK;
+}
+
+rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
+                               const double ground_normal_enu[3], double ground_offset_m,
+                               const rs_synth_prepared *vehicles,
+                               const rs_synth_scene_options *opt_in, rs_err *err)
+{
+    rs_synth_scene_options opt;
+    if (opt_in)
+        opt = *opt_in;
+    else
+        rs_synth_scene_options_default(&opt);
+    char what[32];
+    snprintf(what, sizeof(what), "%s pass", pass_name(opt.pass));
+    write_head(f, what);
+    rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &opt, err);
+    if (!st && ferror(f))
+        st = rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
+    return st;
+}
+
+rs_status rs_synth_scene_write_frames(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
+                                      const double ground_normal_enu[3], double ground_offset_m,
+                                      const rs_synth_prepared *vehicles,
+                                      const rs_synth_scene_options *passes, int Npasses,
+                                      rs_err *err)
+{
+    if (Npasses < 1 || Npasses > 9)
+        return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_frames: %d passes (1..9)",
+                          Npasses);
+    char what[96] = "passes as frames:";
+    for (int k = 0; k < Npasses; k++) {
+        const size_t len = strlen(what);
+        snprintf(what + len, sizeof(what) - len, " %d %s", k + 1, pass_name(passes[k].pass));
+    }
+    write_head(f, what);
+    fprintf(f, "#switch (frame_number)\n");
+    for (int k = 0; k < Npasses; k++) {
+        fprintf(f, "#case (%d) // %s pass\n", k + 1, pass_name(passes[k].pass));
+        rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles,
+                                  &passes[k], err);
+        if (st)
+            return st;
+        fprintf(f, "#break\n");
+    }
+    fprintf(f, "#end\n");
     if (ferror(f))
         return rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
     return RS_OK;
@@ -586,4 +687,42 @@ rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
                           "Antialias_Depth=%d\n",
                           antialias > 9 ? 9 : antialias);
     return rs_io_write_file(ini_path, text, (size_t)total, err);
+}
+
+rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_path,
+                                          const rs_synth_povcam *cam, int Nframes, int antialias,
+                                          rs_err *err)
+{
+    if (Nframes < 1 || Nframes > 9)
+        return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_ini_frames: %d frames (1..9)",
+                          Nframes);
+    const char *base = strrchr(pov_path, '/');
+    base = base ? base + 1 : pov_path;
+    for (const char *c = base; *c; c++)
+        if (!(isalnum((unsigned char)*c) || *c == '_' || *c == '.' || *c == '-'))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "%s: the scene's file name may only use [A-Za-z0-9_.-]", pov_path);
+    char out_name[256];
+    snprintf(out_name, sizeof(out_name), "%s", base);
+    char *dot = strrchr(out_name, '.');
+    if (dot)
+        *dot = 0;
+    char text[4096];
+    int len = snprintf(text, sizeof(text),
+                       "; Written by roadside: renders the %d frames of %s (one pass each) at the\n"
+                       "; camera's exact size, as %s1.png .. %s%d.png.\n"
+                       "Input_File_Name=%s\nOutput_File_Name=%s.png\nOutput_File_Type=N\n"
+                       "Width=%d\nHeight=%d\nAntialias=Off\nJitter=Off\nOutput_Alpha=On\n"
+                       "Bits_Per_Color=16\nFile_Gamma=1.0\nDisplay=Off\nPause_When_Done=Off\n"
+                       "Verbose=Off\nInitial_Frame=1\nFinal_Frame=%d\nCyclic_Animation=Off\n",
+                       Nframes, base, out_name, out_name, Nframes, base, out_name, cam->width,
+                       cam->height, Nframes);
+    if (len < 0 || (size_t)len >= sizeof(text))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: name too long", ini_path);
+    if (antialias >= 2)
+        len += snprintf(text + len, sizeof(text) - (size_t)len,
+                        "Antialias=On\nSampling_Method=1\nAntialias_Threshold=0.0\n"
+                        "Antialias_Depth=%d\n",
+                        antialias > 9 ? 9 : antialias);
+    return rs_io_write_file(ini_path, text, (size_t)len, err);
 }

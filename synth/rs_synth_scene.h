@@ -83,7 +83,36 @@ rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char 
 
 // ---- the scene ----
 
-typedef enum { RS_SYNTH_PASS_COLOUR = 0, RS_SYNTH_PASS_ID = 1 } rs_synth_pass;
+// RS_SYNTH_PASS_SHADOW: what differential rendering needs, as a single pass: the ground white
+// (pigment 1, diffuse 1, no ambient), the vehicles invisible (no_image) but casting shadows,
+// lit by the lights of rs_synth_scene_shadow_lights (the sun unless overcast or below the
+// horizon, and a sky of parallel lights that cast shadows too). A pixel's value divided by
+// rs_synth_scene_shadow_unlit() is the fraction of the ground's light reaching that pixel:
+// 1 in the open, sky/(sun+sky) in a sun shadow, less under and beside a vehicle (the soft
+// sky-light shadow). The ground alone needs no pass: lit by parallel lights, it is uniform.
+typedef enum {
+    RS_SYNTH_PASS_COLOUR = 0,
+    RS_SYNTH_PASS_ID = 1,
+    RS_SYNTH_PASS_SHADOW = 2
+} rs_synth_pass;
+
+// The sky: RS_SYNTH_SKY_LIGHTS parallel lights standing for a uniform sky, the hemisphere cut
+// into two bands of zenith angle, 0-40 and 40-90 deg, which give sin^2(40 deg) = 0.413 and
+// 0.587 of a uniform sky's irradiance on the ground: one light at the zenith and 6 at zenith
+// 60 deg (azimuths 0, 60, ..; near the band's cosine-weighted mean zenith angle, 61 deg). In
+// the colour pass they are shadowless (soft light on every face of a vehicle); in the shadow
+// pass they cast shadows. (13 lights in three bands, the lowest at 15 deg elevation, cost
+// 1.9 x the shadow pass's trace time and widen its region by shadows 3.7 x a vehicle's height;
+// the difference on the ground is a few percent of the light, docs/synth.md.)
+#define RS_SYNTH_SKY_LIGHTS 7
+// The sky's irradiance on the ground relative to a sun at the zenith (1): clear and overcast.
+#define RS_SYNTH_SKY_CLEAR 0.35
+#define RS_SYNTH_SKY_OVERCAST 1.0
+
+typedef struct {
+    double dir_enu[3]; // unit vector from the ground towards the light
+    double irradiance; // on a surface facing the light (POV-Ray's light colour, grey)
+} rs_synth_light;
 
 typedef struct {
     rs_synth_pass pass;
@@ -96,7 +125,20 @@ typedef struct {
     double pin_radius_px;       // pins' radius in image pixels at their distance (default 3)
     const uint8_t *include;     // (Nvehicles,) 0 = leave vehicle out (culled), may be NULL = all
     bool boxes;                 // draw vehicles as plain boxes (no fleet meshes)
+    bool overcast;              // no sun: the sky alone, RS_SYNTH_SKY_OVERCAST (colour and
+                                // shadow passes)
 } rs_synth_scene_options;
+
+// The lights of the colour and shadow passes: the sun (irradiance 1, when its elevation is
+// above 0 and the sky is not overcast) first, then the RS_SYNTH_SKY_LIGHTS sky lights scaled
+// to RS_SYNTH_SKY_CLEAR (or RS_SYNTH_SKY_OVERCAST) on horizontal ground. out: lights
+// (RS_SYNTH_SKY_LIGHTS + 1,); returns how many were written.
+int rs_synth_scene_lights(rs_synth_light *lights, const rs_synth_scene_options *opt);
+
+// What the shadow pass shows on open ground, nothing in the way: sum of irradiance *
+// max(0, n . dir) over the lights, n the unit ground normal (ENU, any length given).
+double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights,
+                                   const double ground_normal_enu[3]);
 
 // Defaults: colour pass, ground visible, sun at azimuth 135, elevation 45, no pins, radius 3 px.
 void rs_synth_scene_options_default(rs_synth_scene_options *opt);
@@ -126,6 +168,18 @@ void rs_synth_prepared_free(rs_synth_prepared *p); // NULL-safe; zeroes *p
 // in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
 //     (for sizing pins); ground plane; the prepared vehicles
 // Returns RS_ERR_IO on a stream error.
+// Several passes in one file, for one povray process rendering them as the frames of an
+// animation (+KFI1 +KFF<Nframes>; rs_synth_scene_write_ini_frames): `#switch (frame_number)`,
+// frame k + 1 being passes[k]. Each frame re-parses the file, but povray starts once (its
+// start-up and shut-down cost about 0.35 s of waiting, measured in docs/povray.md).
+rs_status rs_synth_scene_write_frames(FILE *f,
+                                      // in
+                                      const rs_synth_povcam *cam, const double fxy[2],
+                                      const double ground_normal_enu[3], double ground_offset_m,
+                                      const rs_synth_prepared *vehicles,
+                                      const rs_synth_scene_options *passes, int Npasses,
+                                      rs_err *err);
+
 rs_status rs_synth_scene_write(FILE *f,
                                // in
                                const rs_synth_povcam *cam, const double fxy[2],
@@ -141,6 +195,14 @@ rs_status rs_synth_scene_write(FILE *f,
 rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
                                    const rs_synth_povcam *cam, rs_synth_pass pass, int antialias,
                                    rs_err *err);
+
+// The .ini of a file of Nframes passes (rs_synth_scene_write_frames): 16-bit RGBA with
+// File_Gamma 1 for every frame (ID values stay exact: 257 x the 8-bit value), frames 1..Nframes
+// written as <name>1.png, <name>2.png, ... (Nframes <= 9). antialias as above applies to
+// every frame: give it only to a colour pass alone.
+rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_path,
+                                          const rs_synth_povcam *cam, int Nframes, int antialias,
+                                          rs_err *err);
 
 #ifdef __cplusplus
 }
