@@ -1356,15 +1356,6 @@ static rs_status write_site(const char *dir, const site_data *s, const rs_simula
 
 // ---- the folder: built aside, renamed into place ----
 
-static int remove_entry(const char *path, const struct stat *sb, int type, struct FTW *ftw)
-{
-    (void)sb;
-    (void)type;
-    (void)ftw;
-    return remove(path);
-}
-
-static void remove_tree(const char *path) { nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS); }
 
 // 0: does not exist; 1: empty folder; 2: a site folder (non-empty, holds site.json);
 // 3: anything else (a file, a non-empty folder that is not a site).
@@ -1497,9 +1488,9 @@ static rs_status simulate_site_into(const char *dir, const rs_simulate_site_opti
     }
     free(tmp);
     tmp = NULL;
-    if (old) remove_tree(old);
+    if (old) rs_io_remove_tree(old);
 done:
-    if (tmp) remove_tree(tmp);
+    if (tmp) rs_io_remove_tree(tmp);
     free(tmp);
     free(old);
     free(parent);

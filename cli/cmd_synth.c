@@ -14,6 +14,7 @@ static const char synth_usage[] =
     "usage: roadside synth SITE --calib DIR --count N -o DATASET [--seed S]\n"
     "                      [--backgrounds TAG=VALUE]... [--shard I/N] [--camera ID]...\n"
     "                      [--size WxH] [--vehicles N] [--split NAME] [--no-shadows]\n"
+    "                      [--jobs J] [--separate-processes]\n"
     "       roadside synth merge DATASET... -o OUT\n"
     "\n"
     "Synthesises a labelled dataset (docs/synth.md): image k (0 <= k < N) is seen by camera\n"
@@ -40,8 +41,13 @@ static const char synth_usage[] =
     "  --size WxH             output size (the camera's intrinsics scaled; same aspect)\n"
     "  --vehicles N           at most N vehicles of traffic per image (default 10)\n"
     "  --split NAME           COCO split (default train2017)\n"
-    "  --no-shadows           no differential-rendering shadows (over a background in sun,\n"
-    "                         two more povray passes of the ground make each vehicle's shadow)\n"
+    "  --no-shadows           no differential-rendering shadows (the shadow pass: the sun's\n"
+    "                         shadow and the sky's soft one of each vehicle on the background)\n"
+    "  --jobs J               images made at once, in J worker processes (default: 4 per\n"
+    "                         core: povray spends much of its time waiting on itself,\n"
+    "                         docs/benchmarks.md)\n"
+    "  --separate-processes   one povray process per pass (for benchmarks; default: the\n"
+    "                         passes of an image are the frames of one povray process)\n"
     "  $ROADSIDE_POVRAY       the povray executable (default: povray on PATH)\n"
     "  -h, --help             this text\n"
     "\n"
@@ -50,7 +56,7 @@ static const char synth_usage[] =
     "Exit status: 0 done, 1 failed, 2 usage error.\n";
 
 enum { OPT_CALIB = 1000, OPT_COUNT, OPT_SEED, OPT_BG, OPT_SHARD, OPT_CAMERA, OPT_SIZE,
-       OPT_VEHICLES, OPT_SPLIT, OPT_NO_SHADOWS };
+       OPT_VEHICLES, OPT_SPLIT, OPT_NO_SHADOWS, OPT_JOBS, OPT_SEPARATE };
 
 typedef struct {
     double t0;
@@ -141,11 +147,15 @@ int rs_cli_synth(int argc, char **argv)
         {"vehicles", required_argument, NULL, OPT_VEHICLES},
         {"split", required_argument, NULL, OPT_SPLIT},
         {"no-shadows", no_argument, NULL, OPT_NO_SHADOWS},
+        {"jobs", required_argument, NULL, OPT_JOBS},
+        {"separate-processes", no_argument, NULL, OPT_SEPARATE},
         {"output", required_argument, NULL, 'o'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
     rs_synth_dataset_options opt;
     rs_synth_dataset_options_default(&opt);
+    const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    opt.jobs = cores > 0 ? (int)(4 * (cores < 8 ? cores : 8)) : 4;
     const size_t n = (size_t)argc + 1;
     const char **cams = calloc(n, sizeof(char *)), **keys = calloc(n, sizeof(char *)),
                **values = calloc(n, sizeof(char *));
@@ -216,6 +226,12 @@ int rs_cli_synth(int argc, char **argv)
                                         optarg);
             break;
         }
+        case OPT_JOBS:
+            if (!rs_cli_parse_int(optarg, 1, 256, &l))
+                rc = rs_cli_usage_error("synth", "--jobs: expected an integer in [1, 256]");
+            opt.jobs = (int)l;
+            break;
+        case OPT_SEPARATE: opt.separate_processes = true; break;
         case OPT_VEHICLES:
             if (!rs_cli_parse_int(optarg, 0, 10000, &l))
                 rc = rs_cli_usage_error("synth", "--vehicles: expected an integer >= 0");

@@ -1,6 +1,8 @@
+#define _XOPEN_SOURCE 700 // nftw()
 #include "rs_io.h"
 
 #include <errno.h>
+#include <ftw.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -157,4 +159,18 @@ char *rs_io_join(const char *dir, const char *rel)
     out[nd] = '/';
     memcpy(out + nd + 1, rel, nr + 1);
     return out;
+}
+
+static int remove_entry(const char *path, const struct stat *sb, int type, struct FTW *ftw)
+{
+    (void)sb;
+    (void)type;
+    (void)ftw;
+    (void)remove(path);
+    return 0; // go on with the rest
+}
+
+void rs_io_remove_tree(const char *path)
+{
+    nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 }

@@ -48,6 +48,10 @@ rs_status rs_io_mkdir_p(const char *path, rs_err *err);
 // or NULL when out of memory. An absolute `rel` is returned as a copy of itself.
 char *rs_io_join(const char *dir, const char *rel);
 
+// Removes path and everything under it (files, folders, links themselves), best effort: what
+// cannot be removed is left. A missing path is not an error.
+void rs_io_remove_tree(const char *path);
+
 #ifdef __cplusplus
 }
 #endif

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -63,18 +64,6 @@ static bool file_exists(const char *path)
     return stat(path, &st) == 0;
 }
 
-static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
-{
-    (void)sb;
-    (void)flag;
-    (void)ftw;
-    return remove(path);
-}
-
-static void remove_tree(const char *path)
-{
-    nftw(path, rm_entry, 16, FTW_DEPTH | FTW_PHYS);
-}
 
 // ---- one camera, one background ----
 
@@ -332,7 +321,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     work = rs_io_join(d->work_root, stem);
     if (!work)
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    remove_tree(work); // a previous, interrupted attempt
+    rs_io_remove_tree(work); // a previous, interrupted attempt
     if ((st = rs_io_mkdir_p(work, err)))
         goto done;
 
@@ -353,6 +342,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     ropt.canvas = &c->canvas;
     ropt.canvas_map = c->canvas_map;
     ropt.separate_processes = opt->separate_processes;
+    ropt.full_frame = opt->full_frame;
     const uint64_t r_bg = rng_next(&rng);
     if (c->Nbg > 0) {
         background *bm = &c->bg[r_bg % (uint64_t)c->Nbg];
@@ -376,7 +366,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     rs_synth_traffic_options topt;
     rs_synth_traffic_options_default(&topt);
     topt.seed = rng_next(&rng);
-    topt.count = opt->vehicles;
+    topt.count = 0; // every vehicle that fits; the camera's view picks among them below
     if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err)))
         goto done;
     rs_synth_randomise_options xopt;
@@ -393,14 +383,40 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
+    // The vehicles the camera sees (their box meets the image), at most opt->vehicles of them,
+    // a uniformly drawn subset kept in placement order: the traffic of the whole site would
+    // leave most images nearly empty.
+    int Nseen = 0;
     for (int i = 0; i < N; i++) {
-        v[i] = (rs_synth_vehicle){.cls = tv[i].cls, .id = tv[i].id, .e_m = tv[i].e_m,
-                                  .n_m = tv[i].n_m, .yaw_deg = tv[i].yaw_deg,
-                                  .length_m = tv[i].length_m, .width_m = tv[i].width_m,
-                                  .height_m = tv[i].height_m, .rgb = {-1, -1, -1},
-                                  .variant = tv[i].variant};
-        ids[i] = tv[i].id;
+        const rs_synth_vehicle vi = {.cls = tv[i].cls, .id = tv[i].id, .e_m = tv[i].e_m,
+                                     .n_m = tv[i].n_m, .yaw_deg = tv[i].yaw_deg,
+                                     .length_m = tv[i].length_m, .width_m = tv[i].width_m,
+                                     .height_m = tv[i].height_m, .rgb = {-1, -1, -1},
+                                     .variant = tv[i].variant};
+        double corners[8][3];
+        int rect[4];
+        rs_synth_vehicle_corners_enu(corners, &vi, d->site->ground_normal_enu,
+                                     d->site->ground_offset_m);
+        if (rs_synth_vehicle_rect(rect, c->canvas.fxycxy, c->canvas.width, c->canvas.height,
+                                  c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05))
+            v[Nseen++] = vi;
     }
+    const uint64_t r_pick = rng_next(&rng);
+    if (Nseen > opt->vehicles) {
+        // selection sampling (Knuth, TAOCP vol. 2, Algorithm S): keep each with probability
+        // (still needed) / (still left), in order
+        uint64_t s_pick = r_pick;
+        int kept = 0;
+        for (int i = 0; i < Nseen && kept < opt->vehicles; i++) {
+            const double u01 = (double)(rng_next(&s_pick) >> 11) * 0x1.0p-53;
+            if (u01 * (Nseen - i) < opt->vehicles - kept)
+                v[kept++] = v[i];
+        }
+        Nseen = kept;
+    }
+    N = Nseen;
+    for (int i = 0; i < N; i++)
+        ids[i] = v[i].id;
     if ((st = rs_synth_prepare(&prepared, v, NULL, N, err)))
         goto done;
     const rs_calib_camera *cam = &c->cam;
@@ -443,7 +459,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
         goto done;
     }
-    remove_tree(work);
+    rs_io_remove_tree(work);
 done:
     free(work);
     free(part_tmp);
@@ -690,6 +706,131 @@ static rs_status assemble(const dataset *d, int *Nanns, rs_err *err)
     return st;
 }
 
+// ---- the images of a shard: in this process, or in forked workers ----
+
+// What a worker tells the parent after each image, in one write (atomic: < PIPE_BUF).
+typedef struct {
+    char kind;              // 'm' made, 'g' made over the grey ground, 's' skipped, 'e' error
+    int status;             // rs_status of an error
+    double seconds_povray;  // of this image
+    char msg[400];          // an error's message
+} worker_report;
+
+// Makes the images at positions j, j + J, .. of the shard. With fd >= 0 (a worker) each image
+// is reported through fd, else counted in *sum with the progress callback called.
+static rs_status run_images(dataset *d, rs_synth_dataset_summary *sum, int j, int J, int fd,
+                            rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    rs_status st = RS_OK;
+    char name[400];
+    int pos = 0;
+    for (int k = opt->shard_index; k < opt->count && !st; k += opt->shard_count, pos++) {
+        if (pos % J != j)
+            continue;
+        camera *c = &d->cams[k % d->Ncams];
+        char stem[300];
+        stem_of(stem, sizeof(stem), k, c->id);
+        snprintf(name, sizeof(name), "%s.json", stem);
+        char *part = rs_io_join(d->parts_dir, name);
+        if (!part) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        worker_report rep = {.kind = 's'};
+        if (!file_exists(part)) {
+            bool grey = false;
+            st = make_image(d, k, stem, c, &grey, &rep.seconds_povray, err);
+            rep.kind = st ? 'e' : grey ? 'g' : 'm';
+        }
+        free(part);
+        if (fd >= 0) {
+            if (st) {
+                rep.status = st;
+                snprintf(rep.msg, sizeof(rep.msg), "%.399s", err ? err->msg : "");
+            }
+            if (write(fd, &rep, sizeof(rep)) != (ssize_t)sizeof(rep))
+                return RS_ERR_IO; // the parent is gone
+            continue;
+        }
+        if (st)
+            break;
+        sum->Nskipped += rep.kind == 's';
+        sum->Nmade += rep.kind != 's';
+        sum->Ngrey += rep.kind == 'g';
+        sum->seconds_povray += rep.seconds_povray;
+        if (opt->progress)
+            opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages,
+                          sum->Nskipped);
+    }
+    return st;
+}
+
+// opt->jobs forked workers, each running run_images on its share and reporting through a
+// pipe; the parent counts, calls the progress callback, and returns the first error (the
+// other workers go on to the end of their share: finished images are kept either way).
+static rs_status run_workers(dataset *d, rs_synth_dataset_summary *sum, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    const int J = opt->jobs < sum->Nimages ? opt->jobs : sum->Nimages;
+    int fds[2];
+    if (pipe(fds) != 0)
+        return rs_err_set(err, RS_ERR_IO, "synth: pipe: %s", strerror(errno));
+    pid_t *pids = calloc((size_t)J, sizeof(pid_t));
+    if (!pids) {
+        close(fds[0]);
+        close(fds[1]);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    rs_status st = RS_OK;
+    int started = 0;
+    fflush(NULL);
+    for (int j = 0; j < J; j++, started++) {
+        pids[j] = fork();
+        if (pids[j] < 0) {
+            st = rs_err_set(err, RS_ERR_IO, "synth: fork: %s", strerror(errno));
+            break;
+        }
+        if (pids[j] == 0) {
+            close(fds[0]);
+            rs_err e = {RS_OK, ""};
+            const rs_status ws = run_images(d, sum, j, J, fds[1], &e);
+            _exit(ws ? 1 : 0);
+        }
+    }
+    close(fds[1]);
+    worker_report rep;
+    bool failed = false;
+    while (read(fds[0], &rep, sizeof(rep)) == (ssize_t)sizeof(rep)) {
+        if (rep.kind == 'e') {
+            if (!failed) {
+                rep.msg[sizeof(rep.msg) - 1] = 0;
+                st = rs_err_set(err, (rs_status)rep.status, "%s", rep.msg);
+                failed = true; // the other workers finish their share (resumable work)
+            }
+            continue;
+        }
+        sum->Nskipped += rep.kind == 's';
+        sum->Nmade += rep.kind != 's';
+        sum->Ngrey += rep.kind == 'g';
+        sum->seconds_povray += rep.seconds_povray;
+        if (!failed && opt->progress)
+            opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages,
+                          sum->Nskipped);
+    }
+    close(fds[0]);
+    for (int j = 0; j < started; j++) {
+        int ws = 0;
+        while (waitpid(pids[j], &ws, 0) < 0 && errno == EINTR) {}
+        if (!st && !(WIFEXITED(ws) && WEXITSTATUS(ws) == 0))
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "synth: worker %d of %d ended with %s %d", j,
+                            J, WIFSIGNALED(ws) ? "signal" : "status",
+                            WIFSIGNALED(ws) ? WTERMSIG(ws) : WEXITSTATUS(ws));
+    }
+    free(pids);
+    return st;
+}
+
 rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
                                const rs_synth_dataset_options *opt, rs_err *err)
 {
@@ -724,29 +865,8 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
         goto done;
     for (int k = opt->shard_index; k < opt->count; k += opt->shard_count)
         sum.Nimages++;
-    for (int k = opt->shard_index; k < opt->count && !st; k += opt->shard_count) {
-        camera *c = &d.cams[k % d.Ncams];
-        char stem[300];
-        stem_of(stem, sizeof(stem), k, c->id);
-        snprintf(name, sizeof(name), "%s.json", stem);
-        char *part = rs_io_join(d.parts_dir, name);
-        if (!part) {
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            break;
-        }
-        if (file_exists(part)) {
-            sum.Nskipped++;
-        } else {
-            bool grey = false;
-            st = make_image(&d, k, stem, c, &grey, &sum.seconds_povray, err);
-            sum.Nmade += !st;
-            sum.Ngrey += !st && grey;
-        }
-        free(part);
-        if (!st && opt->progress)
-            opt->progress(opt->progress_ctx, sum.Nmade + sum.Nskipped, sum.Nimages,
-                          sum.Nskipped);
-    }
+    st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err)
+                                          : run_images(&d, &sum, 0, 1, -1, err);
     if (!st) {
         st = assemble(&d, &sum.Nannotations, err);
         rmdir(d.work_root); // empty when every image finished

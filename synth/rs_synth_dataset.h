@@ -59,6 +59,11 @@ typedef struct {
     const char *split;        // COCO split name (default "train2017")
     bool shadows;             // differential-rendering shadows over backgrounds (default on)
     bool separate_processes;  // one povray process per pass (benchmarks; default off)
+    bool full_frame;          // no culling, no region: povray renders the whole image
+                              // (benchmarks; default off)
+    int jobs;                 // worker processes (default 1): worker j makes the images at
+                              // positions j, j + jobs, .. of this shard; povray spends much of
+                              // its time waiting on itself, so jobs > cores pays (bench synth)
     const char *povray;       // NULL: $ROADSIDE_POVRAY, else povray on PATH
     // Called after each image of this shard (made or skipped); may be NULL.
     void (*progress)(void *ctx, int done, int total, int skipped);
@@ -76,7 +81,9 @@ typedef struct {
     double seconds_povray;
 } rs_synth_dataset_summary;
 
-// Makes (or completes) this shard's images, then assembles DATASET's COCO file from every
+// Makes (or completes) this shard's images (with jobs > 1 in forked workers, each reporting
+// every image through a pipe; after a worker's error the others finish their share),
+// then assembles DATASET's COCO file from every
 // finished image in DATASET. Returns RS_ERR_USAGE / RS_ERR_INVALID for bad options (an unknown
 // camera, an output size of another aspect than the camera's by more than 1 %, no lanes),
 // RS_ERR_EXTERNAL when povray fails, RS_ERR_IO / RS_ERR_PARSE for the files.

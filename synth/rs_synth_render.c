@@ -15,6 +15,7 @@
 #include <mrcal/poseutils.h>
 
 #include "rs_io.h"
+#include "rs_synth_appearance.h"
 
 void rs_synth_render_options_default(rs_synth_render_options *opt)
 {
@@ -203,15 +204,6 @@ static rs_status run_povray(const char *povray, const char *out_dir, const char 
 
 // ---- images ----
 
-static double srgb_decode(double c)
-{
-    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
-}
-static double srgb_encode(double c)
-{
-    c = c < 0 ? 0 : (c > 1 ? 1 : c);
-    return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1 / 2.4) - 0.055;
-}
 
 // Zeroes (transparent) everything outside the rendered rectangle: povray leaves it opaque black.
 static void mask_outside(rs_synth_image *img, const int region[4])
@@ -448,12 +440,12 @@ static void composite(rs_synth_render_result *out, const rs_synth_image *bg)
     for (size_t i = 0; i < Npx; i++) {
         const float *c = &out->rgba.data[4 * i];
         for (int k = 0; k < 3; k++) {
-            double b = bg ? srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)])
+            double b = bg ? rs_synth_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)])
                           : 0;
             if (out->shadow && out->ids[i] == 0)
                 b *= out->shadow[i];
             out->composite.data[3 * i + k] =
-                (float)srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
+                (float)rs_synth_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
         }
     }
 }

@@ -701,12 +701,6 @@ static rs_status write_osm_types(const char *path, rs_err *err)
 // ---------------------------------------------------------------------------------------------
 // the run
 
-static int remove_entry(const char *path, const struct stat *sb, int type, struct FTW *ftw)
-{
-    (void)sb, (void)type, (void)ftw;
-    return remove(path);
-}
-
 static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_synth_lanes *lanes,
                         const rs_llh *origin, const rs_synth_sumo_options *o, rs_err *err)
 {
@@ -798,7 +792,7 @@ rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames, const rs_synth_lanes *
         return st;
     }
     st = run_in(dir, frames, lanes, origin, o, err);
-    nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+    rs_io_remove_tree(dir);
     free(dir);
     return st;
 }

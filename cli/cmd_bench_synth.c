@@ -1,0 +1,155 @@
+// roadside bench synth -- the time of `roadside synth` with each saving turned off in turn
+// (synth/rs_synth_bench.h). Parses, calls the library, prints.
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "rs_cli.h"
+#include "rs_io.h"
+#include "rs_synth_bench.h"
+
+static const char bench_synth_usage[] =
+    "usage: roadside bench synth SITE --calib DIR [--count N] [--size WxH] [--vehicles N]\n"
+    "                            [--jobs J] [--seed S] [--csv FILE] [--dir DIR] [--quick]\n"
+    "\n"
+    "Times `roadside synth` on SITE (its backgrounds: make them first with `roadside site\n"
+    "render-backgrounds`) with every saving, then with each saving turned off in turn, on the\n"
+    "same images: all (every saving), jobs=1 (one image at a time), separate (one povray\n"
+    "process per pass instead of the passes as frames of one), full-frame (no culling, no\n"
+    "region rendering), no-shadows (the shadow pass skipped). Prints a table: wall and CPU\n"
+    "seconds per image (CPU of roadside, its workers and povray), vehicles per image, and\n"
+    "the time 4 cameras x 1000 images would take at that rate.\n"
+    "\n"
+    "  --calib DIR   calibrated <camera>.cameramodel files\n"
+    "  --count N     images per variant (default 48; --quick: 8)\n"
+    "  --size WxH    output size (default 720x405: 720 wide at the demo's 16:9)\n"
+    "  --vehicles N  at most N vehicles per image, among those the camera sees (default 10)\n"
+    "  --jobs J      workers of every variant but jobs=1 (default: 4 per core)\n"
+    "  --seed S      seed (default 1)\n"
+    "  --csv FILE    write the table as CSV (atomically)\n"
+    "  --dir DIR     scratch folder (default: a new folder under $TMPDIR or /tmp, removed)\n"
+    "  --quick       8 images, variants all and jobs=1 only (for the test suite)\n"
+    "\n"
+    "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/benchmarks.md.\n";
+
+enum { O_CALIB = 3000, O_COUNT, O_SIZE, O_VEHICLES, O_JOBS, O_SEED, O_CSV, O_DIR, O_QUICK };
+
+int rs_cli_bench_synth(int argc, char **argv)
+{
+    if (rs_cli_wants_help(argc, argv)) {
+        fputs(bench_synth_usage, stdout);
+        return RS_EXIT_OK;
+    }
+    static const struct option longopts[] = {
+        {"calib", required_argument, NULL, O_CALIB}, {"count", required_argument, NULL, O_COUNT},
+        {"size", required_argument, NULL, O_SIZE},   {"vehicles", required_argument, NULL, O_VEHICLES},
+        {"jobs", required_argument, NULL, O_JOBS},   {"seed", required_argument, NULL, O_SEED},
+        {"csv", required_argument, NULL, O_CSV},     {"dir", required_argument, NULL, O_DIR},
+        {"quick", no_argument, NULL, O_QUICK},       {NULL, 0, NULL, 0}};
+    rs_synth_dataset_options o;
+    rs_synth_dataset_options_default(&o);
+    o.width = 720;
+    o.height = 405;
+    o.seed = 1;
+    const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int J = cores > 0 ? (int)(4 * (cores < 8 ? cores : 8)) : 4, count = -1;
+    bool quick = false;
+    const char *csv = NULL, *dir = NULL;
+    long l;
+    int c;
+    optind = 1;
+    opterr = 0;
+    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+        switch (c) {
+        case O_CALIB: o.calib_dir = optarg; break;
+        case O_COUNT:
+            if (!rs_cli_parse_int(optarg, 1, 1000000, &l))
+                return rs_cli_usage_error("bench synth", "--count: expected an integer >= 1");
+            count = (int)l;
+            break;
+        case O_SIZE: {
+            int used = 0;
+            if (sscanf(optarg, "%dx%d%n", &o.width, &o.height, &used) != 2 || optarg[used] ||
+                o.width < 8 || o.height < 8 || o.width > 20000 || o.height > 20000)
+                return rs_cli_usage_error("bench synth", "--size: expected WxH (8..20000), got \"%s\"",
+                                          optarg);
+            break;
+        }
+        case O_VEHICLES:
+            if (!rs_cli_parse_int(optarg, 0, 10000, &l))
+                return rs_cli_usage_error("bench synth", "--vehicles: expected an integer >= 0");
+            o.vehicles = (int)l;
+            break;
+        case O_JOBS:
+            if (!rs_cli_parse_int(optarg, 1, 256, &l))
+                return rs_cli_usage_error("bench synth", "--jobs: expected an integer in [1, 256]");
+            J = (int)l;
+            break;
+        case O_SEED:
+            if (!rs_cli_parse_int(optarg, 0, 1000000000, &l))
+                return rs_cli_usage_error("bench synth", "--seed: expected an integer >= 0");
+            o.seed = (uint64_t)l;
+            break;
+        case O_CSV: csv = optarg; break;
+        case O_DIR: dir = optarg; break;
+        case O_QUICK: quick = true; break;
+        default:
+            return rs_cli_usage_error("bench synth", "unknown option or missing value: %s",
+                                      argv[optind - 1]);
+        }
+    }
+    if (optind != argc - 1)
+        return rs_cli_usage_error("bench synth", "expected one SITE folder");
+    if (!o.calib_dir)
+        return rs_cli_usage_error("bench synth", "--calib DIR is required");
+    o.site_dir = argv[optind];
+    o.count = count > 0 ? count : quick ? 8 : 48;
+
+    char tmpl[4096];
+    char *scratch = NULL;
+    if (!dir) {
+        const char *t = getenv("TMPDIR");
+        snprintf(tmpl, sizeof(tmpl), "%s/roadside-bench-synth-XXXXXX", t && *t ? t : "/tmp");
+        if (!mkdtemp(tmpl)) {
+            perror("roadside: bench synth: mkdtemp");
+            return RS_EXIT_FAIL;
+        }
+        scratch = tmpl;
+    }
+    rs_synth_bench_row rows[RS_SYNTH_BENCH_VARIANTS];
+    rs_synth_bench_variants(rows, J);
+    const int Nrows = quick ? 2 : RS_SYNTH_BENCH_VARIANTS;
+    printf("roadside bench synth: %s, %d images of %dx%d per variant, at most %d vehicles each, "
+           "seed %llu, %ld cores\n",
+           o.site_dir, o.count, o.width, o.height, o.vehicles, (unsigned long long)o.seed, cores);
+    fflush(stdout);
+    rs_err err = {0};
+    rs_status st = rs_synth_bench_run(rows, Nrows, &o, dir ? dir : scratch, &err);
+    if (scratch)
+        rs_io_remove_tree(scratch);
+    if (st)
+        return rs_cli_fail("bench synth", st, &err);
+    printf("\n%-11s %4s %6s %8s %8s %9s %10s %10s %12s  %s\n", "variant", "jobs", "images", "veh/img",
+           "wall_s", "s/image", "cpu_s/img", "4x1000_min", "povray_s/img", "what");
+    char text[8192];
+    int n = snprintf(text, sizeof(text), "variant,jobs,images,vehicles_per_image,wall_s,"
+                                         "s_per_image,cpu_s_per_image,povray_s_per_image\n");
+    for (int k = 0; k < Nrows; k++) {
+        const rs_synth_bench_row *r = &rows[k];
+        const double per = r->wall_s / (r->Nimages > 0 ? r->Nimages : 1);
+        const double vpi = (double)r->Nannotations / (r->Nimages > 0 ? r->Nimages : 1);
+        printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f  %s\n", r->name, r->jobs,
+               r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
+               4000 * per / 60, r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->what);
+        if (n < (int)sizeof(text))
+            n += snprintf(text + n, sizeof(text) - (size_t)n, "%s,%d,%d,%.3f,%.3f,%.4f,%.4f,%.4f\n",
+                          r->name, r->jobs, r->Nimages, vpi, r->wall_s, per,
+                          r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
+                          r->povray_s / (r->Nimages > 0 ? r->Nimages : 1));
+    }
+    if (csv && (st = rs_io_write_file(csv, text, (size_t)n, &err)))
+        return rs_cli_fail("bench synth", st, &err);
+    return RS_EXIT_OK;
+}
