@@ -501,7 +501,12 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     summary->covariance_by_ceres = column_range < kColumnRangeCeres;
     if (summary->covariance_by_ceres) {
         ceres::Covariance::Options co;
+        // Eigen's sparse QR rather than SuiteSparseQR: for these small problems SuiteSparse's
+        // set-up dominated (20 landmarks: 0.29 of 1.0 ms per calibration, 0.18 with Eigen's;
+        // DENSE_SVD took 1.2 ms more). Where the Jacobian's columns span more than
+        // kColumnRangeCeres, the landmark-eliminated QR below is used instead, as before.
         co.algorithm_type = ceres::SPARSE_QR;
+        co.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
         co.apply_loss_function = false;
         ceres::Covariance covariance(co);
         std::vector<std::pair<const double *, const double *>> pairs;
