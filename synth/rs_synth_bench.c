@@ -13,14 +13,16 @@ void rs_synth_bench_variants(rs_synth_bench_row *rows, int J)
 {
     static const struct {
         const char *name, *what;
-        bool one_job, separate, full_frame, no_shadows;
+        bool one_job, separate, full_frame, no_shadows, full_detail;
     } v[RS_SYNTH_BENCH_VARIANTS] = {
-        {"all", "every saving", false, false, false, false},
-        {"jobs=1", "one image at a time", true, false, false, false},
-        {"separate", "one povray process per pass", false, true, false, false},
+        {"all", "every saving", false, false, false, false, false},
+        {"jobs=1", "one image at a time", true, false, false, false, false},
+        {"separate", "one povray process per pass", false, true, false, false, false},
         {"full-frame", "no culling, no region: the whole image rendered", false, false, true,
-         false},
-        {"no-shadows", "the shadow pass skipped", false, false, false, true},
+         false, false},
+        {"no-shadows", "the shadow pass skipped", false, false, false, true, false},
+        {"full-detail", "every vehicle's mesh in full detail (no coarse meshes)", false, false,
+         false, false, true},
     };
     for (int k = 0; k < RS_SYNTH_BENCH_VARIANTS; k++) {
         memset(&rows[k], 0, sizeof(rows[k]));
@@ -30,6 +32,7 @@ void rs_synth_bench_variants(rs_synth_bench_row *rows, int J)
         rows[k].separate_processes = v[k].separate;
         rows[k].full_frame = v[k].full_frame;
         rows[k].shadows = !v[k].no_shadows;
+        rows[k].full_detail = v[k].full_detail;
     }
 }
 
@@ -69,6 +72,8 @@ rs_status rs_synth_bench_run(rs_synth_bench_row *rows, int Nrows,
         o.separate_processes = r->separate_processes;
         o.full_frame = r->full_frame;
         o.shadows = r->shadows;
+        if (r->full_detail)
+            o.coarse_below_px = 0;
         o.shard_index = 0;
         o.shard_count = 1;
         o.progress = NULL;

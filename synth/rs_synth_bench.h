@@ -5,7 +5,8 @@
 // Variants (rs_synth_bench_variants): "all" (every saving: region rendering, the passes as the
 // frames of one povray process, the shadow pass replacing two ground passes, J workers),
 // "jobs=1" (one image at a time), "separate" (one povray process per pass), "full-frame" (no
-// culling, no region), "no-shadows" (the shadow pass skipped: its cost). Every variant makes
+// culling, no region), "no-shadows" (the shadow pass skipped: its cost), "full-detail" (no
+// coarse meshes for vehicles under 40 px). Every variant makes
 // the same images (same seed, count, size) into a folder of its own, removed afterwards.
 #pragma once
 #include <stdbool.h>
@@ -22,7 +23,7 @@ typedef struct {
     char name[32];
     char what[96];
     int jobs;
-    bool separate_processes, full_frame, shadows;
+    bool separate_processes, full_frame, shadows, full_detail;
     // figures
     int Nimages, Nannotations;
     double wall_s;    // the whole run: loading, images, assembling the COCO file
@@ -30,7 +31,7 @@ typedef struct {
     double povray_s;  // wall time inside povray, summed over the images
 } rs_synth_bench_row;
 
-#define RS_SYNTH_BENCH_VARIANTS 5
+#define RS_SYNTH_BENCH_VARIANTS 6
 
 // Fills rows (RS_SYNTH_BENCH_VARIANTS,) with the variants above; J: the workers of every
 // variant but "jobs=1".

@@ -35,6 +35,7 @@ void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
     opt->vehicles = 10;
     opt->split = "train2017";
     opt->shadows = true;
+    opt->coarse_below_px = 40;
 }
 
 // splitmix64's output function (Steele, Lea, Flood, "Fast splittable pseudorandom number
@@ -315,6 +316,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     double *up = NULL;
     rs_synth_mesh *meshes = NULL;
     const char **ids = NULL;
+    uint8_t *coarse = NULL; // (N,) vehicle i gets the coarse mesh
     int N = 0;
     rs_status st;
 
@@ -379,7 +381,8 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     up = malloc(n * sizeof(double));
     meshes = malloc(n * sizeof(rs_synth_mesh));
     ids = malloc(n * sizeof(char *));
-    if (!v || !up || !meshes || !ids) {
+    coarse = calloc(n, 1);
+    if (!v || !up || !meshes || !ids || !coarse) {
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
@@ -398,8 +401,10 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         rs_synth_vehicle_corners_enu(corners, &vi, d->site->ground_normal_enu,
                                      d->site->ground_offset_m);
         if (rs_synth_vehicle_rect(rect, c->canvas.fxycxy, c->canvas.width, c->canvas.height,
-                                  c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05))
+                                  c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
+            coarse[Nseen] = rect[3] - rect[1] + 1 < opt->coarse_below_px;
             v[Nseen++] = vi;
+        }
     }
     const uint64_t r_pick = rng_next(&rng);
     if (Nseen > opt->vehicles) {
@@ -409,15 +414,17 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         int kept = 0;
         for (int i = 0; i < Nseen && kept < opt->vehicles; i++) {
             const double u01 = (double)(rng_next(&s_pick) >> 11) * 0x1.0p-53;
-            if (u01 * (Nseen - i) < opt->vehicles - kept)
+            if (u01 * (Nseen - i) < opt->vehicles - kept) {
+                coarse[kept] = coarse[i];
                 v[kept++] = v[i];
+            }
         }
         Nseen = kept;
     }
     N = Nseen;
     for (int i = 0; i < N; i++)
         ids[i] = v[i].id;
-    if ((st = rs_synth_prepare(&prepared, v, NULL, N, err)))
+    if ((st = rs_synth_prepare_lod(&prepared, v, NULL, N, coarse, err)))
         goto done;
     const rs_calib_camera *cam = &c->cam;
     if ((st = rs_synth_render(&r, work, &cam->lensmodel, cam->intrinsics, cam->width, cam->height,
@@ -470,6 +477,7 @@ done:
     free(up);
     free(meshes);
     free(ids);
+    free(coarse);
     free(labels);
     rs_synth_prepared_free(&prepared);
     rs_synth_render_result_free(&r);

@@ -61,6 +61,9 @@ typedef struct {
     bool separate_processes;  // one povray process per pass (benchmarks; default off)
     bool full_frame;          // no culling, no region: povray renders the whole image
                               // (benchmarks; default off)
+    int coarse_below_px;      // a vehicle whose box is fewer pixels tall than this in the image
+                              // gets the coarse mesh (rs_synth_fleet_build_lod; default 40;
+                              // 0: every vehicle in full detail)
     int jobs;                 // worker processes (default 1): worker j makes the images at
                               // positions j, j + jobs, .. of this shard; povray spends much of
                               // its time waiting on itself, so jobs > cores pays (bench synth)

@@ -165,6 +165,7 @@ typedef struct {
     rs_synth_mesh m;
     int cap_v, cap_t;
     int failed;
+    int nseg, nwheel; // uniform stations along a body, sides of a wheel (level of detail)
 } builder;
 
 void rs_synth_mesh_free(rs_synth_mesh *mesh) {
@@ -273,6 +274,7 @@ typedef struct {
 
 #define NSEC 10
 #define NSEG 56
+#define NSEG_COARSE 8 // level of detail for vehicles a few pixels tall (rs_synth_fleet_build_lod)
 
 static void section(double y[NSEC], double z[NSEC], const body_spec *s, double t, int *greenhouse) {
     double H = s->height, ztop = H * profile_at(&s->prof, t);
@@ -326,7 +328,7 @@ static void add_body(builder *b, const body_spec *s) {
     // Stations: uniform, plus the profile's control points (so the roof line is exact).
     double ts[NSEG + 1 + MAXPROF];
     int n = 0;
-    for (int i = 0; i <= NSEG; i++) ts[n++] = (double)i / NSEG;
+    for (int i = 0; i <= b->nseg; i++) ts[n++] = (double)i / b->nseg;
     for (int i = 0; i < s->prof.n; i++) {
         int dup = 0;
         for (int j = 0; j < n; j++) dup |= fabs(ts[j] - s->prof.t[i]) < 1e-4;
@@ -391,11 +393,13 @@ static void add_body(builder *b, const body_spec *s) {
 // A wheel: a cylinder along y, tread and inner face TYRE, outer face a TYRE ring round a RIM
 // disc. It touches the ground (a vertex at z = 0) and its outer face is at y_outer.
 #define NWHEEL 24
+#define NWHEEL_COARSE 8
 static void add_wheel(builder *b, double x, double y_outer, double y_inner, double r) {
     int flip = y_outer < 0; // mirror image: reverse the winding
     int out[NWHEEL], in[NWHEEL], ring[NWHEEL];
-    for (int k = 0; k < NWHEEL; k++) {
-        double a = -M_PI / 2 + 2 * M_PI * k / NWHEEL;
+    const int nw = b->nwheel;
+    for (int k = 0; k < nw; k++) {
+        double a = -M_PI / 2 + 2 * M_PI * k / nw;
         double dx = r * cos(a), dz = r * sin(a);
         if (k == 0) dx = 0, dz = -r; // exactly on the ground
         out[k] = add_v(b, x + dx, y_outer, r + dz);
@@ -403,8 +407,8 @@ static void add_wheel(builder *b, double x, double y_outer, double y_inner, doub
         ring[k] = add_v(b, x + 0.62 * dx, y_outer, r + 0.62 * dz);
     }
     int co = add_v(b, x, y_outer, r), ci = add_v(b, x, y_inner, r);
-    for (int k = 0; k < NWHEEL; k++) {
-        int k1 = (k + 1) % NWHEEL;
+    for (int k = 0; k < nw; k++) {
+        int k1 = (k + 1) % nw;
         // With y_outer > 0 (left side) the outer face looks to +y; increasing k turns from
         // -z towards +x, which seen from +y is clockwise, so the outer face uses (k1, k).
         add_q(b, in[k], out[k], out[k1], in[k1], RS_SYNTH_PART_TYRE, flip);
@@ -461,6 +465,11 @@ static body_spec car_body(double L, double W, double H, double clearance, double
 }
 
 rs_status rs_synth_fleet_build(rs_synth_mesh *mesh, const rs_synth_vehicle *v, rs_err *err) {
+    return rs_synth_fleet_build_lod(mesh, v, false, err);
+}
+
+rs_status rs_synth_fleet_build_lod(rs_synth_mesh *mesh, const rs_synth_vehicle *v, bool coarse,
+                                   rs_err *err) {
     memset(mesh, 0, sizeof *mesh);
     if ((int)v->cls < 0 || v->cls >= RS_SYNTH_NCLASSES)
         return rs_err_set(err, RS_ERR_INVALID, "class: %d is not a procedural class", (int)v->cls);
@@ -470,7 +479,7 @@ rs_status rs_synth_fleet_build(rs_synth_mesh *mesh, const rs_synth_vehicle *v, r
                           "dimensions: %g x %g x %g m not resolved (rs_synth_fleet_resolve)", L, W,
                           H);
     rs_simulate_rng rng = stream(v->variant, STREAM_SHAPE);
-    builder b = {0};
+    builder b = {.nseg = coarse ? NSEG_COARSE : NSEG, .nwheel = coarse ? NWHEEL_COARSE : NWHEEL};
     double r, tw;
     switch (v->cls) {
     case RS_SYNTH_SEDAN:

@@ -12,6 +12,7 @@
 // (rs_synth_fleet_write_placement): POV-Ray's rotate about y by +a maps north (0,0,1) to
 // (sin a, 0, cos a), i.e. a compass heading a clockwise from north, as yaw_deg is defined.
 #pragma once
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -97,6 +98,16 @@ rs_status rs_synth_fleet_build(// out
                                rs_synth_mesh *mesh,
                                // in
                                const rs_synth_vehicle *v, rs_err *err);
+
+// The same at a level of detail: coarse = 8 uniform stations along each body instead of 56
+// (the side profile's control points are always stations, so the roof line and the bounds stay
+// exact) and octagonal wheels instead of 24-gons, for vehicles a few pixels tall: about a
+// fifth of the triangles, so a fifth of the scene text POV-Ray parses for that vehicle
+// (docs/fleet.md, `roadside bench synth`).
+rs_status rs_synth_fleet_build_lod(// out
+                                   rs_synth_mesh *mesh,
+                                   // in
+                                   const rs_synth_vehicle *v, bool coarse, rs_err *err);
 
 // How an OBJ user model is declared: scale and which OBJ axes point forward and up.
 typedef struct {

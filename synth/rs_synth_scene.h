@@ -164,6 +164,14 @@ rs_status rs_synth_prepare(// out
                            rs_err *err);
 void rs_synth_prepared_free(rs_synth_prepared *p); // NULL-safe; zeroes *p
 
+// The same, with procedural vehicle i built coarse when coarse[i] (rs_synth_fleet_build_lod);
+// coarse may be NULL (every vehicle in full detail).
+rs_status rs_synth_prepare_lod(// out
+                               rs_synth_prepared *out,
+                               // in
+                               const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj,
+                               int N, const uint8_t *coarse, rs_err *err);
+
 // Writes the .pov text of a scene to f.
 // in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
 //     (for sizing pins); ground plane; the prepared vehicles

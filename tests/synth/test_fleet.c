@@ -121,7 +121,7 @@ static void test_fleet(void) {
     enum { N = 400 };
     unsigned long long hashes[N];
     int per_class[RS_SYNTH_NCLASSES] = {0};
-    double worst = 0;
+    double worst = 0, tri_full = 0, tri_coarse = 0;
     for (int s = 0; s < N; s++) {
         rs_synth_vehicle v;
         rs_err err = {0};
@@ -176,6 +176,27 @@ static void test_fleet(void) {
             }
             free(text);
         }
+        // the coarse level of detail: the same box exactly, closed and outward, every part,
+        // at most a third of the triangles
+        rs_synth_mesh mc;
+        CHECK(rs_synth_fleet_build_lod(&mc, &v, true, &err) == RS_OK, "seed %d: coarse: %s", s,
+              err.msg);
+        double clo[3], chi[3];
+        rs_synth_mesh_bounds(clo, chi, &mc);
+        CHECK(fabs(clo[0] + v.length_m / 2) < 1e-9 && fabs(chi[0] - v.length_m / 2) < 1e-9 &&
+                  fabs(clo[1] + v.width_m / 2) < 1e-9 && fabs(chi[1] - v.width_m / 2) < 1e-9 &&
+                  fabs(clo[2]) < 1e-9 && fabs(chi[2] - v.height_m) < 1e-9,
+              "%s: coarse mesh bounds [%g %g %g] [%g %g %g] are not the box", what, clo[0],
+              clo[1], clo[2], chi[0], chi[1], chi[2]);
+        check_closed_outward(&mc, what);
+        int coarse_parts[RS_SYNTH_NPARTS] = {0};
+        for (int t = 0; t < mc.Ntri; t++) coarse_parts[mc.part[t]] = 1;
+        CHECK(memcmp(coarse_parts, parts_seen, sizeof parts_seen) == 0,
+              "%s: the coarse mesh has other parts", what);
+        CHECK(3 * mc.Ntri <= m.Ntri, "%s: coarse %d triangles vs %d", what, mc.Ntri, m.Ntri);
+        tri_full += m.Ntri;
+        tri_coarse += mc.Ntri;
+        rs_synth_mesh_free(&mc);
         hashes[s] = hash_mesh(&m, v.rgb);
         rs_synth_mesh_free(&m);
     }
@@ -185,7 +206,8 @@ static void test_fleet(void) {
     CHECK(distinct == N, "%d distinct variants of %d", distinct, N);
     for (int c = 0; c < RS_SYNTH_NCLASSES; c++)
         CHECK(per_class[c] >= 10, "class %s drawn %d times", rs_synth_class_name(c), per_class[c]);
-    printf("fleet: %d vehicles, %d distinct, worst mesh2 box error %.2g m\n", N, distinct, worst);
+    printf("fleet: %d vehicles, %d distinct, worst mesh2 box error %.2g m; coarse meshes: "
+           "%.1f%% of the triangles\n", N, distinct, worst, 100.0 * tri_coarse / tri_full);
 }
 
 static void test_resolve_and_colours(void) {
