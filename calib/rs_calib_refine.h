@@ -49,6 +49,13 @@ typedef struct {
     bool covariance;                  // compute the covariance and the condition number
     bool rough;                       // a first (robust) pass: looser tolerances, and reaching
                                       //   max_iterations is not an error
+    bool marginal;                    // landmarks held at their surveyed positions, each one's
+                                      //   pixel residual whitened by its covariance
+                                      //   sigma_px^2 I + J_p S J_p^T (S its survey variances,
+                                      //   J_p = dq/dp at the STARTING pose): to first order the
+                                      //   same pose and the same block chi2 as the joint solve,
+                                      //   with 6 (+ intrinsics) parameters instead of 3 more per
+                                      //   landmark. For a rough pass; no covariance.
 } rs_calib_refine_options;
 
 typedef struct {

@@ -123,6 +123,90 @@ class LandmarkCost final : public ceres::CostFunction {
     double q_obs_[2], p_survey_[3], w_m_[3];
 };
 
+// A landmark at its surveyed position, its survey sigmas folded into the pixel residual:
+// r (2) = W (q(rt, p_survey) - q_obs), W = L^-1 with L L^T = sigma_px^2 I + J_p S J_p^T computed
+// once, at the pose given to the constructor (rs_calib_refine_options.marginal).
+class MarginalCost final : public ceres::CostFunction {
+  public:
+    MarginalCost(const mrcal_lensmodel_t *lensmodel, int Nintrinsics, const double q_obs[2],
+                 double sigma_px, const double p_survey[3], const double sigma_m[3],
+                 const double rt0[6], const double *intrinsics0)
+        : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics) {
+        for (int k = 0; k < 2; k++) q_obs_[k] = q_obs[k];
+        for (int k = 0; k < 3; k++) p_survey_[k] = p_survey[k];
+        mrcal_point3_t p_cam;
+        double dpcam_dp[9];
+        mrcal_transform_point_rt(p_cam.xyz, nullptr, dpcam_dp, rt0, p_survey);
+        mrcal_point2_t q;
+        mrcal_point3_t dq_dpcam[2];
+        double C[3] = {sigma_px * sigma_px, 0.0, sigma_px * sigma_px}; // C00, C01, C11
+        if (sigma_m && mrcal_project(&q, dq_dpcam, nullptr, &p_cam, 1, lensmodel, intrinsics0)) {
+            double Jp[2][3];
+            for (int a = 0; a < 2; a++)
+                for (int k = 0; k < 3; k++) {
+                    Jp[a][k] = 0.0;
+                    for (int m = 0; m < 3; m++) Jp[a][k] += dq_dpcam[a].xyz[m] * dpcam_dp[m * 3 + k];
+                }
+            for (int k = 0; k < 3; k++) {
+                const double v = sigma_m[k] * sigma_m[k];
+                C[0] += Jp[0][k] * Jp[0][k] * v;
+                C[1] += Jp[0][k] * Jp[1][k] * v;
+                C[2] += Jp[1][k] * Jp[1][k] * v;
+            }
+        }
+        const double a = std::sqrt(C[0]), b = C[1] / a, c = std::sqrt(C[2] - b * b);
+        W_[0] = 1.0 / a;
+        W_[1] = 0.0;
+        W_[2] = -b / (a * c);
+        W_[3] = 1.0 / c;
+        set_num_residuals(2);
+        mutable_parameter_block_sizes()->push_back(6);
+        mutable_parameter_block_sizes()->push_back(Nintrinsics);
+    }
+
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+        const double *rt = x[0], *intrinsics = x[1];
+        const bool want_rt = jacobians && jacobians[0], want_i = jacobians && jacobians[1];
+        mrcal_point3_t p_cam;
+        double dpcam_drt[18];
+        mrcal_transform_point_rt(p_cam.xyz, want_rt ? dpcam_drt : nullptr, nullptr, rt, p_survey_);
+        mrcal_point2_t q;
+        mrcal_point3_t dq_dpcam[2];
+        std::vector<double> dq_di(want_i ? 2 * (size_t)Nintrinsics_ : 0);
+        if (!mrcal_project(&q, dq_dpcam, want_i ? dq_di.data() : nullptr, &p_cam, 1, lensmodel_,
+                           intrinsics))
+            return false;
+        const double e[2] = {q.x - q_obs_[0], q.y - q_obs_[1]};
+        residuals[0] = W_[0] * e[0] + W_[1] * e[1];
+        residuals[1] = W_[2] * e[0] + W_[3] * e[1];
+        if (!std::isfinite(residuals[0]) || !std::isfinite(residuals[1])) return false;
+        if (want_rt) {
+            double dq[2][6];
+            for (int a = 0; a < 2; a++)
+                for (int j = 0; j < 6; j++) {
+                    dq[a][j] = 0.0;
+                    for (int k = 0; k < 3; k++) dq[a][j] += dq_dpcam[a].xyz[k] * dpcam_drt[k * 6 + j];
+                }
+            for (int j = 0; j < 6; j++) {
+                jacobians[0][j] = W_[0] * dq[0][j] + W_[1] * dq[1][j];
+                jacobians[0][6 + j] = W_[2] * dq[0][j] + W_[3] * dq[1][j];
+            }
+        }
+        if (want_i)
+            for (int j = 0; j < Nintrinsics_; j++) {
+                const double d0 = dq_di[(size_t)j], d1 = dq_di[(size_t)Nintrinsics_ + j];
+                jacobians[1][j] = W_[0] * d0 + W_[1] * d1;
+                jacobians[1][Nintrinsics_ + j] = W_[2] * d0 + W_[3] * d1;
+            }
+        return true;
+    }
+
+  private:
+    const mrcal_lensmodel_t *lensmodel_;
+    int Nintrinsics_;
+    double q_obs_[2], p_survey_[3], W_[4];
+};
+
 // Prior on the camera centre C = -R^T t (a surveyed pole): (C - C_prior)/sigma.
 class PositionPriorCost final : public ceres::SizedCostFunction<3, 6> {
   public:
@@ -350,6 +434,10 @@ const double kConditionSingular = 1e7;
 // well-determined problems rank-deficient (pixel sigmas of 1e-3 px against survey sigmas of
 // metres); the covariance then comes from the landmark-eliminated, equilibrated QR instead.
 const double kColumnRangeCeres = 1e7;
+// Up to this many free parameters ceres::Covariance factors with Eigen's sparse QR, beyond it
+// with SuiteSparseQR (roadside bench calib: 20 landmarks, 66 parameters, faster with Eigen;
+// 50 landmarks, 156, and more, faster with SuiteSparse).
+const int kEigenCovarianceMax = 100;
 
 rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_summary *summary,
                  double *cov, double *block_chi2, double *q_pred,
@@ -361,7 +449,10 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
 
     // Cost functions are owned here (the landmarks' also evaluate the unused ones at the end);
     // declared before the problem so that they outlive it.
+    if (opt->marginal && opt->covariance)
+        return rs_err_set(err, RS_ERR_USAGE, "refine: a marginal pass gives no covariance");
     std::vector<std::unique_ptr<LandmarkCost>> costs((size_t)pb->N);
+    std::vector<std::unique_ptr<MarginalCost>> mcosts(opt->marginal ? (size_t)pb->N : 0);
     std::vector<std::unique_ptr<ceres::CostFunction>> priors;
     ceres::Problem::Options po;
     po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -378,9 +469,18 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
         costs[(size_t)i].reset(new LandmarkCost(pb->lensmodel, Ni, &pb->q_px[2 * i],
                                                 pb->sigma_px ? pb->sigma_px[i] : 1.0,
                                                 &pb->p_survey_c_m[3 * i], sig));
+        if (opt->marginal)
+            mcosts[(size_t)i].reset(new MarginalCost(pb->lensmodel, Ni, &pb->q_px[2 * i],
+                                                     pb->sigma_px ? pb->sigma_px[i] : 1.0,
+                                                     &pb->p_survey_c_m[3 * i], sig, rt, intrinsics));
         if (pb->use && !pb->use[i]) continue;
         ceres::LossFunction *loss =
             opt->robust_scale > 0.0 ? new ceres::CauchyLoss(opt->robust_scale) : nullptr;
+        if (opt->marginal) {
+            problem.AddResidualBlock(mcosts[(size_t)i].get(), loss, rt, intrinsics);
+            Nresiduals += 2;
+            continue;
+        }
         problem.AddResidualBlock(costs[(size_t)i].get(), loss, rt, &p_c[3 * i], intrinsics);
         Nresiduals += 2;
         std::vector<int> held;
@@ -457,9 +557,12 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
 
     // Per-landmark statistics and the whitened chi2, loss not applied.
     for (int i = 0; i < pb->N; i++) {
-        double r[5];
+        double r[5] = {0, 0, 0, 0, 0};
         const double *x[3] = {rt, &p_c[3 * i], intrinsics};
-        if (!costs[(size_t)i]->Evaluate(x, r, nullptr)) {
+        const double *xm[2] = {rt, intrinsics};
+        const bool ok = opt->marginal ? mcosts[(size_t)i]->Evaluate(xm, r, nullptr)
+                                      : costs[(size_t)i]->Evaluate(x, r, nullptr);
+        if (!ok) {
             if (pb->use && !pb->use[i]) { // an outlier that no longer projects: report it as such
                 if (block_chi2) block_chi2[i] = INFINITY;
                 if (q_pred) q_pred[2 * i] = q_pred[2 * i + 1] = NAN;
@@ -470,7 +573,14 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
         }
         const double c2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3] + r[4] * r[4];
         if (block_chi2) block_chi2[i] = c2;
-        if (q_pred) {
+        if (q_pred && opt->marginal) { // the surveyed position projected
+            mrcal_point3_t pc;
+            mrcal_point2_t q = {.xy = {NAN, NAN}};
+            mrcal_transform_point_rt(pc.xyz, nullptr, nullptr, rt, &pb->p_survey_c_m[3 * i]);
+            mrcal_project(&q, nullptr, nullptr, &pc, 1, pb->lensmodel, intrinsics);
+            q_pred[2 * i] = q.x;
+            q_pred[2 * i + 1] = q.y;
+        } else if (q_pred) {
             const double sig = pb->sigma_px ? pb->sigma_px[i] : 1.0;
             q_pred[2 * i] = pb->q_px[2 * i] + r[0] * sig;
             q_pred[2 * i + 1] = pb->q_px[2 * i + 1] + r[1] * sig;
@@ -501,12 +611,14 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     summary->covariance_by_ceres = column_range < kColumnRangeCeres;
     if (summary->covariance_by_ceres) {
         ceres::Covariance::Options co;
-        // Eigen's sparse QR rather than SuiteSparseQR: for these small problems SuiteSparse's
-        // set-up dominated (20 landmarks: 0.29 of 1.0 ms per calibration, 0.18 with Eigen's;
-        // DENSE_SVD took 1.2 ms more). Where the Jacobian's columns span more than
-        // kColumnRangeCeres, the landmark-eliminated QR below is used instead, as before.
+        // Eigen's sparse QR for small problems, SuiteSparseQR for large ones: SuiteSparse's
+        // set-up dominated small ones (20 landmarks: 0.29 of 1.0 ms per calibration, 0.18 with
+        // Eigen's; DENSE_SVD took 1.2 ms more), Eigen's fill-in large ones (200 landmarks:
+        // 25 ms against 7 ms). Where the Jacobian's columns span more than kColumnRangeCeres,
+        // the landmark-eliminated QR below is used instead, as before.
         co.algorithm_type = ceres::SPARSE_QR;
-        co.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
+        co.sparse_linear_algebra_library_type =
+            Nfree <= kEigenCovarianceMax ? ceres::EIGEN_SPARSE : ceres::SUITE_SPARSE;
         co.apply_loss_function = false;
         ceres::Covariance covariance(co);
         std::vector<std::pair<const double *, const double *>> pairs;

@@ -10,6 +10,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -793,6 +795,7 @@ static rs_status run_workers(dataset *d, rs_synth_dataset_summary *sum, rs_err *
     rs_status st = RS_OK;
     int started = 0;
     fflush(NULL);
+    const pid_t parent = getpid();
     for (int j = 0; j < J; j++, started++) {
         pids[j] = fork();
         if (pids[j] < 0) {
@@ -800,6 +803,10 @@ static rs_status run_workers(dataset *d, rs_synth_dataset_summary *sum, rs_err *
             break;
         }
         if (pids[j] == 0) {
+            // a worker dies with the parent: a killed `roadside synth` leaves nothing running
+            // that could race a rerun on the same images
+            if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent)
+                _exit(1);
             close(fds[0]);
             rs_err e = {RS_OK, ""};
             const rs_status ws = run_images(d, sum, j, J, fds[1], &e);

@@ -7,6 +7,8 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -133,12 +135,16 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
     if (!log)
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     const double t0 = now_s();
+    const pid_t parent = getpid();
     pid_t pid = fork();
     if (pid < 0) {
         free(log);
         return rs_err_set(err, RS_ERR_EXTERNAL, "fork: %s", strerror(errno));
     }
     if (pid == 0) {
+        // povray dies with us (a killed roadside leaves no povray running; kept across exec)
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent)
+            _exit(126);
         int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0644);
         if (fd < 0 || chdir(dir) != 0)
             _exit(126);
@@ -215,64 +221,15 @@ static void mask_outside(rs_synth_image *img, const int region[4])
                        sizeof(float) * (size_t)img->channels);
 }
 
-// Renders one pass: writes NAME.pov + NAME.ini in out_dir, runs povray, reads NAME.png.
-static rs_status render_pass(rs_synth_image *img, const char *out_dir, const char *name,
-                             const char *povray, const rs_synth_povcam *cam, const double fxy[2],
-                             const double ground_normal_enu[3], double ground_offset_m,
-                             const rs_synth_prepared *vehicles,
-                             const rs_synth_scene_options *sopt, int antialias,
-                             const int region[4], double *seconds, rs_err *err)
-{
-    char file[64];
-    char *pov = NULL, *ini = NULL, *png = NULL;
-    rs_io_atomic a = {0};
-    rs_status st = RS_OK;
-    snprintf(file, sizeof(file), "%s.pov", name);
-    pov = rs_io_join(out_dir, file);
-    snprintf(file, sizeof(file), "%s.ini", name);
-    ini = rs_io_join(out_dir, file);
-    snprintf(file, sizeof(file), "%s.png", name);
-    png = rs_io_join(out_dir, file);
-    if (!pov || !ini || !png) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    if ((st = rs_io_atomic_open(&a, pov, err)))
-        goto done;
-    if ((st = rs_synth_scene_write(a.f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles,
-                                   sopt, err))) {
-        rs_io_atomic_abort(&a);
-        goto done;
-    }
-    if ((st = rs_io_atomic_commit(&a, err)) ||
-        (st = rs_synth_scene_write_ini(ini, pov, cam, sopt->pass, antialias, err)))
-        goto done;
-    snprintf(file, sizeof(file), "%s.ini", name);
-    if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err)))
-        goto done;
-    if ((st = rs_synth_image_read(img, png, err)))
-        goto done;
-    if (img->width != cam->width || img->height != cam->height) {
-        rs_synth_image_free(img);
-        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
-                        img->width, img->height, cam->width, cam->height);
-        goto done;
-    }
-    mask_outside(img, region);
-done:
-    free(pov);
-    free(ini);
-    free(png);
-    return st;
-}
-
-// Renders several passes as the frames of one povray process: NAME.pov (rs_synth_scene_write_frames),
-// NAME.ini, then reads NAME1.png .. NAMEn.png into imgs[0..n-1].
-static rs_status render_frames(rs_synth_image *imgs, const char *out_dir, const char *name,
+// Renders passes[0..Npasses-1] with ONE povray process: writes NAME.pov and NAME.ini in
+// out_dir, runs povray, reads its images into imgs[0..Npasses-1]: NAME.png for a single pass
+// (rs_synth_scene_write, antialias as given), else the frames NAME1.png .. NAMEn.png
+// (rs_synth_scene_write_frames; no antialiasing, which would blend the IDs).
+static rs_status render_passes(rs_synth_image *imgs, const char *out_dir, const char *name,
                                const char *povray, const rs_synth_povcam *cam, const double fxy[2],
                                const double ground_normal_enu[3], double ground_offset_m,
                                const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *passes, int Npasses,
+                               const rs_synth_scene_options *passes, int Npasses, int antialias,
                                const int region[4], double *seconds, rs_err *err)
 {
     char file[64];
@@ -289,19 +246,28 @@ static rs_status render_frames(rs_synth_image *imgs, const char *out_dir, const 
     }
     if ((st = rs_io_atomic_open(&a, pov, err)))
         goto done;
-    if ((st = rs_synth_scene_write_frames(a.f, cam, fxy, ground_normal_enu, ground_offset_m,
-                                          vehicles, passes, Npasses, err))) {
+    st = Npasses == 1 ? rs_synth_scene_write(a.f, cam, fxy, ground_normal_enu, ground_offset_m,
+                                             vehicles, &passes[0], err)
+                      : rs_synth_scene_write_frames(a.f, cam, fxy, ground_normal_enu,
+                                                    ground_offset_m, vehicles, passes, Npasses,
+                                                    err);
+    if (st) {
         rs_io_atomic_abort(&a);
         goto done;
     }
     if ((st = rs_io_atomic_commit(&a, err)) ||
-        (st = rs_synth_scene_write_ini_frames(ini, pov, cam, Npasses, 0, err)))
+        (st = Npasses == 1
+                  ? rs_synth_scene_write_ini(ini, pov, cam, passes[0].pass, antialias, err)
+                  : rs_synth_scene_write_ini_frames(ini, pov, cam, Npasses, 0, err)))
         goto done;
     snprintf(file, sizeof(file), "%s.ini", name);
     if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err)))
         goto done;
     for (int k = 0; k < Npasses && !st; k++) {
-        snprintf(file, sizeof(file), "%s%d.png", name, k + 1);
+        if (Npasses == 1)
+            snprintf(file, sizeof(file), "%s.png", name);
+        else
+            snprintf(file, sizeof(file), "%s%d.png", name, k + 1);
         char *png = rs_io_join(out_dir, file);
         if (!png) {
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
@@ -599,34 +565,19 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         }
         rs_synth_image imgs[3] = {{0}};
         // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
-        const bool colour_alone = opt.separate_processes || opt.antialias >= 2;
-        if (Npasses == 1 || colour_alone) {
-            st = render_pass(&imgs[0], out_dir, "pass_colour", povray, &cam, intrinsics,
-                             ground_normal_enu, ground_offset_m, vehicles, &passes[0],
-                             opt.antialias, region, &out->seconds_povray, err);
-            out->Npovray++;
-            if (!st && Npasses > 1 && opt.separate_processes) {
-                static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
-                for (int k = 1; k < Npasses && !st; k++, out->Npovray++)
-                    st = render_pass(&imgs[k], out_dir, names[passes[k].pass], povray, &cam,
-                                     intrinsics, ground_normal_enu, ground_offset_m, vehicles,
-                                     &passes[k], 0, region, &out->seconds_povray, err);
-            } else if (!st && Npasses == 2) {
-                st = render_pass(&imgs[1], out_dir, "pass_ids", povray, &cam, intrinsics,
-                                 ground_normal_enu, ground_offset_m, vehicles, &passes[1], 0,
-                                 region, &out->seconds_povray, err);
-                out->Npovray++;
-            } else if (!st && Npasses == 3) {
-                st = render_frames(&imgs[1], out_dir, "passes", povray, &cam, intrinsics,
-                                   ground_normal_enu, ground_offset_m, vehicles, &passes[1], 2,
-                                   region, &out->seconds_povray, err);
-                out->Npovray++;
-            }
-        } else {
-            st = render_frames(imgs, out_dir, "passes", povray, &cam, intrinsics,
-                               ground_normal_enu, ground_offset_m, vehicles, passes, Npasses,
-                               region, &out->seconds_povray, err);
-            out->Npovray++;
+        const bool colour_alone = opt.antialias >= 2;
+        // Processes: [first, first + count) of the passes each; one for all of them unless
+        // separate or antialiased (then the colour pass alone first).
+        static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
+        for (int first = 0; first < Npasses && !st; out->Npovray++) {
+            const int count = opt.separate_processes || (first == 0 && colour_alone)
+                                  ? 1 : Npasses - first;
+            st = render_passes(&imgs[first], out_dir,
+                               count == 1 ? names[passes[first].pass] : "passes", povray, &cam,
+                               intrinsics, ground_normal_enu, ground_offset_m, vehicles,
+                               &passes[first], count, first == 0 ? opt.antialias : 0, region,
+                               &out->seconds_povray, err);
+            first += count;
         }
         out->Npasses = Npasses;
         rgba = imgs[0];
