@@ -6,7 +6,7 @@
 // at most 1 in 10,000 poses: none in CI's 3000. The rotation error is taken in the estimate's
 // Rodrigues chart with the truth's nearer representation (a half-turn has two), and poses whose
 // yaw/pitch/roll sigma exceeds 2 deg carry a warning (the first-order covariance understates
-// errors that large): with both, 0 of 18,305 poses of 20,000 problems (seed 20261122..).
+// errors that large): with both, 0 of 18,332 poses of 20,000 problems (seed 20261122..).
 // usage: test_stress_random COUNT SEED
 #include <stdio.h>
 #include <stdlib.h>
