@@ -55,6 +55,16 @@ double inv_or_zero(double sigma) { return sigma > 0.0 ? 1.0 / sigma : 0.0; }
 
 // One landmark seen by the camera: 2 pixel residuals + 3 survey-prior residuals, so that the
 // robust loss acts on the landmark as a whole (an outlier cannot hide by pulling its landmark).
+// out (2,n) = dq/dp_cam (2,3) . dp_cam/dx (3,n): the chain rule through the camera frame.
+void chain_dq(double *out, const mrcal_point3_t dq_dpcam[2], const double *dpcam_dx, int n) {
+    for (int a = 0; a < 2; a++)
+        for (int j = 0; j < n; j++) {
+            double s = 0.0;
+            for (int k = 0; k < 3; k++) s += dq_dpcam[a].xyz[k] * dpcam_dx[k * n + j];
+            out[a * n + j] = s;
+        }
+}
+
 class LandmarkCost final : public ceres::CostFunction {
   public:
     LandmarkCost(const mrcal_lensmodel_t *lensmodel, int Nintrinsics, const double q_obs[2],
@@ -109,12 +119,8 @@ class LandmarkCost final : public ceres::CostFunction {
     // J (5,n) = [dq_dpcam (2,3) . dpcam_dx (3,n) / sigma_px ; 0 (3,n)]
     void chain(double *J, const mrcal_point3_t dq_dpcam[2], const double *dpcam_dx, int n) const {
         std::memset(J, 0, sizeof(double) * 5 * (size_t)n);
-        for (int a = 0; a < 2; a++)
-            for (int j = 0; j < n; j++) {
-                double s = 0.0;
-                for (int k = 0; k < 3; k++) s += dq_dpcam[a].xyz[k] * dpcam_dx[k * n + j];
-                J[a * n + j] = s * w_px_;
-            }
+        chain_dq(J, dq_dpcam, dpcam_dx, n);
+        for (int j = 0; j < 2 * n; j++) J[j] *= w_px_;
     }
 
     const mrcal_lensmodel_t *lensmodel_;
@@ -142,11 +148,7 @@ class MarginalCost final : public ceres::CostFunction {
         double C[3] = {sigma_px * sigma_px, 0.0, sigma_px * sigma_px}; // C00, C01, C11
         if (sigma_m && mrcal_project(&q, dq_dpcam, nullptr, &p_cam, 1, lensmodel, intrinsics0)) {
             double Jp[2][3];
-            for (int a = 0; a < 2; a++)
-                for (int k = 0; k < 3; k++) {
-                    Jp[a][k] = 0.0;
-                    for (int m = 0; m < 3; m++) Jp[a][k] += dq_dpcam[a].xyz[m] * dpcam_dp[m * 3 + k];
-                }
+            chain_dq(&Jp[0][0], dq_dpcam, dpcam_dp, 3);
             for (int k = 0; k < 3; k++) {
                 const double v = sigma_m[k] * sigma_m[k];
                 C[0] += Jp[0][k] * Jp[0][k] * v;
@@ -182,11 +184,7 @@ class MarginalCost final : public ceres::CostFunction {
         if (!std::isfinite(residuals[0]) || !std::isfinite(residuals[1])) return false;
         if (want_rt) {
             double dq[2][6];
-            for (int a = 0; a < 2; a++)
-                for (int j = 0; j < 6; j++) {
-                    dq[a][j] = 0.0;
-                    for (int k = 0; k < 3; k++) dq[a][j] += dq_dpcam[a].xyz[k] * dpcam_drt[k * 6 + j];
-                }
+            chain_dq(&dq[0][0], dq_dpcam, dpcam_drt, 6);
             for (int j = 0; j < 6; j++) {
                 jacobians[0][j] = W_[0] * dq[0][j] + W_[1] * dq[1][j];
                 jacobians[0][6 + j] = W_[2] * dq[0][j] + W_[3] * dq[1][j];
