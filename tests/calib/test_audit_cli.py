@@ -17,26 +17,15 @@ A simulated two-camera site (`roadside site simulate`, fixed seed) is audited:
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
 
 import cv2
 import numpy as np
 
-ROADSIDE = os.environ["ROADSIDE"]
 SEED = 13
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
-
-
-def run(*args):
-    return subprocess.run([ROADSIDE, *args], capture_output=True, text=True, timeout=300)
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
+from rs_check import check, failures, run  # noqa: E402
 
 
 def write_yaml(path, entries):

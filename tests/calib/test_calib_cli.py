@@ -25,19 +25,9 @@ import cv2
 import mrcal
 import numpy as np
 
-ROADSIDE = os.environ["ROADSIDE"]
 SEED = 7
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
-
-
-def run(*args, stdin=None):
-    return subprocess.run([ROADSIDE, *args], input=stdin, capture_output=True, text=True, timeout=300)
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
+from rs_check import check, failures, run  # noqa: E402
 
 
 def cct_enu_to_llh(origin, p):

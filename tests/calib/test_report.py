@@ -33,17 +33,13 @@ import cv2
 import mrcal
 import numpy as np
 
-ROADSIDE = os.environ["ROADSIDE"]
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
+import rs_check  # noqa: E402
+from rs_check import check, failures  # noqa: E402
+
 SOURCE = os.environ["ROADSIDE_SOURCE_ROOT"]
 SEED = 1  # sites/demo is `roadside site simulate --seed 1`
 NCAM = 4
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
 
 
 # fontconfig (under cairo's text) keeps its state for the process' life: suppressed for the
@@ -53,7 +49,7 @@ ENV = dict(os.environ, LSAN_OPTIONS="suppressions=" + os.path.join(os.path.dirna
 
 
 def run(*args):
-    return subprocess.run([ROADSIDE, *args], capture_output=True, text=True, timeout=300, env=ENV)
+    return rs_check.run(*args, env=ENV)
 
 
 def make_site(tmp, background=False, name=None, note=None, lanes=None):

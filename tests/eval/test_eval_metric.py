@@ -13,26 +13,15 @@ import json
 import math
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 
 import mrcal
 import numpy as np
 
-ROADSIDE = os.environ["ROADSIDE"]
 SEED = 11
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
-
-
-def run(*args):
-    return subprocess.run([ROADSIDE, *args], capture_output=True, text=True, timeout=120)
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
+from rs_check import check, failures, run  # noqa: E402
 
 
 def main():

@@ -1,0 +1,28 @@
+"""What the Python tests of several suites share: the roadside executable under test
+($ROADSIDE, set by meson), a list of failed checks, and running roadside.
+
+    sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
+    from rs_check import ROADSIDE, check, failures, run
+
+A test calls check(cond, what) for every assertion (a failure is printed and kept, the test
+goes on to the end) and exits non-zero when `failures` is not empty.
+"""
+import os
+import subprocess
+
+ROADSIDE = os.environ["ROADSIDE"]
+failures = []
+
+
+def check(cond, what):
+    """Records `what` as a failure (and prints it) unless cond holds; returns cond."""
+    if not cond:
+        failures.append(what)
+        print("FAIL:", what)
+    return cond
+
+
+def run(*args, stdin=None, env=None, timeout=300):
+    """roadside ARGS..., text in and out captured; stdin: text for its standard input."""
+    return subprocess.run([ROADSIDE, *args], input=stdin, capture_output=True, text=True,
+                          timeout=timeout, env=env)
