@@ -1,8 +1,8 @@
 // rs_calib.c -- rs_calib_solve: initial pose, robust refinement, outliers, plain re-solve,
 // uncertainty; and the pose helpers (yaw/pitch/roll, camera position, ground intersection).
 // API and method: rs_calib.h; the Ceres part: rs_calib_refine_ceres.cc; docs/calibration.md.
-#include "rs_calib.h"
-#include "rs_calib_opencv.h"
+#include "calib/rs_calib.h"
+#include "core/rs_pose.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -13,7 +13,7 @@
 
 #include <mrcal/poseutils.h>
 
-#include "rs_calib_refine.h"
+#include "calib/internal/rs_calib_refine.h"
 
 #define DEG (180.0 / M_PI)
 
@@ -46,33 +46,15 @@ void rs_calib_result_free(rs_calib_result *result) {
     memset(result, 0, sizeof(*result));
 }
 
-// ---------------------------------------------------------------- small 3x3 helpers (row-major)
+rs_camera rs_calib_result_camera(const rs_camera *nominal, const rs_calib_result *result) {
+    rs_camera c = *nominal;
+    c.intrinsics = result->intrinsics;
+    c.Nintrinsics = result->Nintrinsics;
+    memcpy(c.rt_cam_enu, result->rt_cam_enu, sizeof c.rt_cam_enu);
+    return c;
+}
 
-static void mat3_mul(double out[9], const double a[9], const double b[9]) {
-    double m[9];
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            m[i * 3 + j] = a[i * 3] * b[j] + a[i * 3 + 1] * b[3 + j] + a[i * 3 + 2] * b[6 + j];
-    memcpy(out, m, sizeof(m));
-}
-static void mat3_transpose(double out[9], const double a[9]) {
-    double m[9];
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) m[i * 3 + j] = a[j * 3 + i];
-    memcpy(out, m, sizeof(m));
-}
-static void rot_z(double R[9], double a) {
-    const double c = cos(a), s = sin(a);
-    const double m[9] = {c, -s, 0, s, c, 0, 0, 0, 1};
-    memcpy(R, m, sizeof(m));
-}
-static void rot_x(double R[9], double a) {
-    const double c = cos(a), s = sin(a);
-    const double m[9] = {1, 0, 0, 0, c, -s, 0, s, c};
-    memcpy(R, m, sizeof(m));
-}
-// A level camera looking north: columns x_cam -> east, y_cam -> down, z_cam -> north.
-static const double R_enu_cam0[9] = {1, 0, 0, 0, 0, 1, 0, -1, 0};
+// ---------------------------------------------------------------- small helpers
 
 // out (n,n) = J (n,m) C (m,m) J^T
 static void sandwich(double *out, const double *J, const double *C, int n, int m) {
@@ -83,148 +65,6 @@ static void sandwich(double *out, const double *J, const double *C, int n, int m
                 for (int j = 0; j < m; j++) s += J[a * m + i] * C[i * m + j] * J[b * m + j];
             out[a * n + b] = s;
         }
-}
-
-// ---------------------------------------------------------------- pose helpers
-
-void rs_calib_position_from_rt(double position_enu_m[3], double *dpos_drt, const double rt_cam_enu[6]) {
-    double rt_enu_cam[6], dt_dr[9], dt_dt[9];
-    mrcal_invert_rt(rt_enu_cam, dt_dr, dt_dt, rt_cam_enu);
-    memcpy(position_enu_m, &rt_enu_cam[3], 3 * sizeof(double));
-    if (dpos_drt)
-        for (int i = 0; i < 3; i++)
-            for (int j = 0; j < 3; j++) {
-                dpos_drt[i * 6 + j] = dt_dr[i * 3 + j];
-                dpos_drt[i * 6 + 3 + j] = dt_dt[i * 3 + j];
-            }
-}
-
-void rs_calib_ypr_from_rt(double ypr_deg[3], double position_enu_m[3], const double rt_cam_enu[6]) {
-    double R_cam_enu[9], R_enu_cam[9];
-    mrcal_R_from_r(R_cam_enu, NULL, rt_cam_enu);
-    mat3_transpose(R_enu_cam, R_cam_enu);
-    // optical axis in ENU = third column of R_enu_cam = (sin y cos p, cos y cos p, sin p)
-    const double fx = R_enu_cam[2], fy = R_enu_cam[5], fz = R_enu_cam[8];
-    const double h = hypot(fx, fy);
-    const double pitch = atan2(fz, h);
-    const double yaw = h > 1e-14 ? atan2(fx, fy) : 0.0;
-    // Rz(roll) = (Rz(-yaw) Rx(pitch) R0)^T R_enu_cam
-    double A[9], Rx[9], M[9];
-    rot_z(A, -yaw);
-    rot_x(Rx, pitch);
-    mat3_mul(A, A, Rx);
-    mat3_mul(A, A, R_enu_cam0);
-    mat3_transpose(A, A);
-    mat3_mul(M, A, R_enu_cam);
-    const double roll = atan2(M[3], M[0]);
-    double yaw_deg = yaw * DEG;
-    if (yaw_deg < 0.0) yaw_deg += 360.0;
-    if (yaw_deg >= 360.0) yaw_deg -= 360.0;
-    ypr_deg[0] = yaw_deg;
-    ypr_deg[1] = pitch * DEG;
-    ypr_deg[2] = roll * DEG;
-    if (position_enu_m) rs_calib_position_from_rt(position_enu_m, NULL, rt_cam_enu);
-}
-
-void rs_calib_rt_from_ypr(double rt_cam_enu[6], const double ypr_deg[3], const double position_enu_m[3]) {
-    double R[9], T[9];
-    rot_z(R, -ypr_deg[0] / DEG);
-    rot_x(T, ypr_deg[1] / DEG);
-    mat3_mul(R, R, T);
-    mat3_mul(R, R, R_enu_cam0);
-    rot_z(T, ypr_deg[2] / DEG);
-    mat3_mul(R, R, T); // R_enu_cam
-    mat3_transpose(R, R); // R_cam_enu
-    rs_calib_r_from_R(rt_cam_enu, R); // not mrcal's alone: wrong at a half-turn (looking down)
-    for (int i = 0; i < 3; i++)
-        rt_cam_enu[3 + i] = -(R[i * 3] * position_enu_m[0] + R[i * 3 + 1] * position_enu_m[1] +
-                              R[i * 3 + 2] * position_enu_m[2]);
-}
-
-rs_status rs_calib_locate_ground(double p_enu_m[3], const mrcal_lensmodel_t *lensmodel,
-                                 const double *intrinsics, const double rt_cam_enu[6],
-                                 const double q_px[2], const double plane_normal_enu[3],
-                                 double plane_offset_m, rs_err *err) {
-    if (!p_enu_m || !lensmodel || !intrinsics || !rt_cam_enu || !q_px || !plane_normal_enu)
-        return rs_err_set(err, RS_ERR_INVALID, "rs_calib_locate_ground: NULL argument");
-    double nn = 0.0;
-    bool finite = isfinite(plane_offset_m) && isfinite(q_px[0]) && isfinite(q_px[1]);
-    for (int i = 0; i < 3; i++) {
-        nn += plane_normal_enu[i] * plane_normal_enu[i];
-        finite = finite && isfinite(plane_normal_enu[i]);
-    }
-    for (int i = 0; i < 6; i++) finite = finite && isfinite(rt_cam_enu[i]);
-    if (!finite) return rs_err_set(err, RS_ERR_INVALID, "rs_calib_locate_ground: non-finite input");
-    if (!(nn > 0.0)) return rs_err_set(err, RS_ERR_INVALID, "plane_normal_enu: zero vector");
-    nn = sqrt(nn);
-    double n[3];
-    for (int i = 0; i < 3; i++) n[i] = plane_normal_enu[i] / nn;
-    const double offset = plane_offset_m / nn;
-
-    mrcal_point2_t q = {.x = q_px[0], .y = q_px[1]};
-    mrcal_point3_t v;
-    if (!mrcal_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) ||
-        !isfinite(v.z))
-        return rs_err_set(err, RS_ERR_UNSUPPORTED,
-                          "pixel (%g, %g): mrcal cannot unproject it with this lens model",
-                          q_px[0], q_px[1]);
-    double R[9], C[3], d[3];
-    mrcal_R_from_r(R, NULL, rt_cam_enu);
-    rs_calib_position_from_rt(C, NULL, rt_cam_enu);
-    const double vn = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-    for (int i = 0; i < 3; i++) d[i] = (R[i] * v.x + R[3 + i] * v.y + R[6 + i] * v.z) / vn; // R^T v
-    const double nd = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
-    const double nC = n[0] * C[0] + n[1] * C[1] + n[2] * C[2];
-    if (fabs(nd) < 1e-12)
-        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): its ray is parallel to the plane",
-                          q_px[0], q_px[1]);
-    const double lambda = (offset - nC) / nd;
-    if (!(lambda > 0.0))
-        return rs_err_set(err, RS_ERR_DEGENERATE,
-                          "pixel (%g, %g): the plane is behind the camera along its ray", q_px[0],
-                          q_px[1]);
-    double p[3];
-    for (int i = 0; i < 3; i++) p[i] = C[i] + lambda * d[i];
-
-    // Polish: mrcal_unproject() is iterative; a few Gauss-Newton steps on mrcal_project() within
-    // the plane (basis u, w) bring the reprojection error to the last bits.
-    double u[3], w[3];
-    {
-        const int k = fabs(n[0]) < 0.9 ? 0 : 1; // any axis not along n
-        double a[3] = {0, 0, 0};
-        a[k] = 1.0;
-        const double an = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
-        for (int i = 0; i < 3; i++) u[i] = a[i] - an * n[i];
-        const double un = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-        for (int i = 0; i < 3; i++) u[i] /= un;
-        w[0] = n[1] * u[2] - n[2] * u[1];
-        w[1] = n[2] * u[0] - n[0] * u[2];
-        w[2] = n[0] * u[1] - n[1] * u[0];
-    }
-    for (int iter = 0; iter < 4; iter++) {
-        mrcal_point3_t pc, dq_dpc[2];
-        mrcal_point2_t qp;
-        double dpc_dp[9];
-        mrcal_transform_point_rt(pc.xyz, NULL, dpc_dp, rt_cam_enu, p);
-        if (!mrcal_project(&qp, dq_dpc, NULL, &pc, 1, lensmodel, intrinsics)) break;
-        const double e0 = qp.x - q.x, e1 = qp.y - q.y;
-        double J[4]; // (2,2): dq/d(a,b)
-        for (int r = 0; r < 2; r++) {
-            double g[3];
-            for (int j = 0; j < 3; j++)
-                g[j] = dq_dpc[r].xyz[0] * dpc_dp[j] + dq_dpc[r].xyz[1] * dpc_dp[3 + j] +
-                       dq_dpc[r].xyz[2] * dpc_dp[6 + j];
-            J[r * 2] = g[0] * u[0] + g[1] * u[1] + g[2] * u[2];
-            J[r * 2 + 1] = g[0] * w[0] + g[1] * w[1] + g[2] * w[2];
-        }
-        const double det = J[0] * J[3] - J[1] * J[2];
-        if (!(fabs(det) > 0.0)) break;
-        const double da = -(J[3] * e0 - J[1] * e1) / det, db = -(-J[2] * e0 + J[0] * e1) / det;
-        for (int i = 0; i < 3; i++) p[i] += da * u[i] + db * w[i];
-        if (fabs(e0) + fabs(e1) < 1e-13) break;
-    }
-    memcpy(p_enu_m, p, sizeof(p));
-    return RS_OK;
 }
 
 // ---------------------------------------------------------------- rs_calib_solve
@@ -251,22 +91,22 @@ static bool all_finite(const double *x, int n) {
 
 static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
                           rs_err *err) {
-    if (!pb->lensmodel || !pb->intrinsics)
+    if (!pb->camera || !pb->camera->intrinsics)
         return rs_err_set(err, RS_ERR_INVALID, "lensmodel/intrinsics: NULL");
-    if (pb->lensmodel->type == MRCAL_LENSMODEL_CAHVORE)
+    if ((&pb->camera->lensmodel)->type == MRCAL_LENSMODEL_CAHVORE)
         return rs_err_set(err, RS_ERR_UNSUPPORTED,
                           "lensmodel: CAHVORE has no projection gradients in mrcal; not supported");
     if (Ni <= 0) return rs_err_set(err, RS_ERR_INVALID, "lensmodel: invalid");
-    if (!all_finite(pb->intrinsics, Ni))
+    if (!all_finite(pb->camera->intrinsics, Ni))
         return rs_err_set(err, RS_ERR_INVALID, "intrinsics: not finite");
     if (opt->refine != RS_CALIB_REFINE_NONE) {
         if (opt->refine & ~(unsigned)(RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER |
                                       RS_CALIB_REFINE_DISTORTION))
             return rs_err_set(err, RS_ERR_INVALID, "options: refine: unknown flags 0x%x", opt->refine);
-        if (!mrcal_lensmodel_metadata(pb->lensmodel).has_core)
+        if (!mrcal_lensmodel_metadata((&pb->camera->lensmodel)).has_core)
             return rs_err_set(err, RS_ERR_UNSUPPORTED,
                               "refine: this lens model has no (fx, fy, cx, cy) core");
-        if ((opt->refine & RS_CALIB_REFINE_FOCAL) && !(pb->intrinsics[0] > 0.0 && pb->intrinsics[1] > 0.0))
+        if ((opt->refine & RS_CALIB_REFINE_FOCAL) && !(pb->camera->intrinsics[0] > 0.0 && pb->camera->intrinsics[1] > 0.0))
             return rs_err_set(err, RS_ERR_INVALID, "intrinsics: focal lengths must be > 0");
     }
     if (!(opt->outlier_threshold > 0.0) || !isfinite(opt->robust_scale) ||
@@ -313,7 +153,7 @@ static rs_status init_escalating(rs_calib_init_result *init, double *T_used, con
     rs_status st = RS_ERR_DEGENERATE;
     rs_err e = {RS_OK, ""};
     for (int k = 0; k < 5; k++, io.ransac_threshold_px *= 2.0) {
-        st = rs_calib_init_pose(init, NULL, pb->lensmodel, intrinsics, pb->p_enu_m, pb->q_px,
+        st = rs_calib_init_pose(init, NULL, (&pb->camera->lensmodel), intrinsics, pb->p_enu_m, pb->q_px,
                                 pb->N, &io, &e);
         *T_used = io.ransac_threshold_px;
         if (st != RS_ERR_DEGENERATE) break;
@@ -333,7 +173,7 @@ static double msac_cost(const double rt_cam_enu[6], const double *intrinsics,
         mrcal_point2_t q;
         mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt_cam_enu, &pb->p_enu_m[3 * i]);
         double e2 = T * T;
-        if (pc.z > 0.0 && mrcal_project(&q, NULL, NULL, &pc, 1, pb->lensmodel, intrinsics)) {
+        if (pc.z > 0.0 && mrcal_project(&q, NULL, NULL, &pc, 1, (&pb->camera->lensmodel), intrinsics)) {
             const double dx = q.x - pb->q_px[2 * i], dy = q.y - pb->q_px[2 * i + 1];
             if (dx * dx + dy * dy < e2) e2 = dx * dx + dy * dy;
         }
@@ -365,7 +205,7 @@ static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, do
     for (int k = 0; k < K; k++) {
         const double s = opt->focal_search_min *
                          pow(opt->focal_search_max / opt->focal_search_min, (double)k / (K - 1));
-        memcpy(trial, pb->intrinsics, (size_t)Ni * sizeof(double));
+        memcpy(trial, pb->camera->intrinsics, (size_t)Ni * sizeof(double));
         trial[0] *= s;
         trial[1] *= s;
         rs_calib_init_result r;
@@ -389,8 +229,8 @@ static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, do
         if (err) *err = e_last;
         return last;
     }
-    intrinsics[0] = pb->intrinsics[0] * *scale_out;
-    intrinsics[1] = pb->intrinsics[1] * *scale_out;
+    intrinsics[0] = pb->camera->intrinsics[0] * *scale_out;
+    intrinsics[1] = pb->camera->intrinsics[1] * *scale_out;
     return RS_OK;
 }
 
@@ -448,7 +288,7 @@ static void normalise_r(double rt[6], double cov_rt[36]) {
 }
 
 // sigma of yaw/pitch/roll: cov_r (3,3) propagated through d(ypr)/dr, by central differences of
-// rs_calib_ypr_from_rt() (step 1e-7 rad; yaw and roll differences wrapped to (-180, 180]).
+// rs_pose_ypr_from_rt() (step 1e-7 rad; yaw and roll differences wrapped to (-180, 180]).
 static void ypr_sigma(double sigma_deg[3], const double rt[6], const double cov_r[9]) {
     double J[9];
     const double h = 1e-7;
@@ -458,8 +298,8 @@ static void ypr_sigma(double sigma_deg[3], const double rt[6], const double cov_
         memcpy(rm, rt, sizeof(rm));
         rp[j] += h;
         rm[j] -= h;
-        rs_calib_ypr_from_rt(yp, NULL, rp);
-        rs_calib_ypr_from_rt(ym, NULL, rm);
+        rs_pose_ypr_from_rt(yp, NULL, rp);
+        rs_pose_ypr_from_rt(ym, NULL, rm);
         for (int i = 0; i < 3; i++) {
             double d = yp[i] - ym[i];
             d = remainder(d, 360.0);
@@ -533,7 +373,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     memcpy(w->p_c, w->p_survey_c, (size_t)N * 3 * sizeof(double));
 
     // 1. initial pose
-    memcpy(res->intrinsics, pb->intrinsics, (size_t)Ni * sizeof(double));
+    memcpy(res->intrinsics, pb->camera->intrinsics, (size_t)Ni * sizeof(double));
     rs_calib_init_result init;
     double scale = 1.0;
     st = initial_pose(&init, res->intrinsics, &scale, pb, opt, Ni, err);
@@ -546,8 +386,8 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
 
     rs_calib_refine_problem rp = {
         .N = N, .p_survey_c_m = w->p_survey_c, .sigma_enu_m = pb->sigma_enu_m, .q_px = pb->q_px,
-        .sigma_px = pb->sigma_px, .use = w->use, .lensmodel = pb->lensmodel,
-        .intrinsics_nominal = pb->intrinsics, .has_position_prior = pb->has_position_prior,
+        .sigma_px = pb->sigma_px, .use = w->use, .lensmodel = (&pb->camera->lensmodel),
+        .intrinsics_nominal = pb->camera->intrinsics, .has_position_prior = pb->has_position_prior,
         .prior_sigma_m = pb->prior_sigma_m};
     for (int k = 0; k < 3; k++) rp.prior_position_c_m[k] = pb->prior_position_enu_m[k] - c[k];
     rs_calib_refine_options ro = {.refine = opt->refine, .robust_scale = opt->robust_scale,
@@ -632,12 +472,12 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
         res->sigma_intrinsics[a] = sqrt(fmax(0.0, res->covariance_intrinsics[a * Ni + a]));
     }
     double dpos_drt[18], cov_pos[9], C_c[3];
-    rs_calib_position_from_rt(C_c, dpos_drt, rt_c);
+    rs_pose_position_from_rt(C_c, dpos_drt, rt_c);
     sandwich(cov_pos, dpos_drt, cov_c, 3, 6);
     double cov_r[9];
     for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++) cov_r[a * 3 + b] = cov_c[a * 6 + b];
-    rs_calib_ypr_from_rt(res->yaw_pitch_roll_deg, res->position_enu_m, res->rt_cam_enu);
+    rs_pose_ypr_from_rt(res->yaw_pitch_roll_deg, res->position_enu_m, res->rt_cam_enu);
     ypr_sigma(res->sigma_yaw_pitch_roll_deg, rt_c, cov_r);
     for (int k = 0; k < 3; k++) {
         res->position_enu_m[k] = C_c[k] + c[k]; // the same point, without cancellation
@@ -721,7 +561,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     if (fabs(res->yaw_pitch_roll_deg[1]) > 89.0)
         warn(res, "camera looks nearly straight %s: yaw and roll are ill-defined",
              res->yaw_pitch_roll_deg[1] > 0 ? "up" : "down");
-    if (pb->width > 0 && pb->height > 0) {
+    if (pb->camera->width > 0 && pb->camera->height > 0) {
         double qmin[2] = {INFINITY, INFINITY}, qmax[2] = {-INFINITY, -INFINITY};
         for (int i = 0; i < N; i++)
             if (w->use[i])
@@ -730,9 +570,9 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
                     qmax[k] = fmax(qmax[k], pb->q_px[2 * i + k]);
                 }
         const double area = (qmax[0] - qmin[0]) * (qmax[1] - qmin[1]);
-        if (area < 0.05 * pb->width * pb->height)
+        if (area < 0.05 * pb->camera->width * pb->camera->height)
             warn(res, "the inlying landmarks cover only %.1f%% of the image: the pose is "
-                      "sensitive to their errors", 100.0 * area / (pb->width * pb->height));
+                      "sensitive to their errors", 100.0 * area / (pb->camera->width * pb->camera->height));
     }
     return RS_OK;
 }
@@ -749,7 +589,7 @@ rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *proble
         opt = *opt_in;
     else
         rs_calib_options_default(&opt);
-    const int Ni = problem->lensmodel ? mrcal_lensmodel_num_params(problem->lensmodel) : 0;
+    const int Ni = problem->camera ? mrcal_lensmodel_num_params(&problem->camera->lensmodel) : 0;
     work_t w = {0};
     const rs_status st = solve(result, &w, problem, &opt, Ni, err);
     work_free(&w);

@@ -36,8 +36,10 @@
 #include <stdbool.h>
 #include <mrcal/mrcal.h>
 
-#include "rs_calib_init.h"
-#include "rs_status.h"
+#include "core/rs_camera.h"
+
+#include "calib/rs_calib_init.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -62,9 +64,10 @@ typedef struct {
                                         //   0 holds that coordinate exactly; NULL: all exact
     const double *q_px;                 // (N,2) observed pixels
     const double *sigma_px;             // (N,) 1-sigma of each pixel coordinate, > 0; NULL: 1 px
-    const mrcal_lensmodel_t *lensmodel; // lens model; CAHVORE is not supported (no gradients)
-    const double *intrinsics;           // (Nintrinsics,) nominal intrinsics of lensmodel
-    int width, height;                  // image size, pixels (for warnings; may be 0: unknown)
+    const rs_camera *camera;            // the lens model (CAHVORE is not supported: no
+                                        //   gradients), its NOMINAL intrinsics and the image
+                                        //   size (for warnings; may be 0: unknown); its pose is
+                                        //   not used
     bool has_position_prior;            // a surveyed camera position (a pole) is known
     double prior_position_enu_m[3];     //   its ENU position, metres
     double prior_sigma_m;               //   its isotropic 1-sigma, metres, > 0
@@ -151,48 +154,13 @@ rs_status rs_calib_solve(// out
 // Frees the owned arrays of result and zeroes it. NULL-safe.
 void rs_calib_result_free(rs_calib_result *result);
 
-// ---- pose helpers (conventions above) ----
+// The calibrated camera: `nominal`'s lens model and image size with the result's intrinsics
+// and pose. A view, not a copy: its intrinsics belong to the result (never rs_camera_free it);
+// valid while the result lives.
+rs_camera rs_calib_result_camera(const rs_camera *nominal, const rs_calib_result *result);
 
-// Camera position and yaw/pitch/roll from a pose. At pitch = +-90 deg (looking straight
-// up/down) yaw is undefined: yaw is then 0 and the whole turn goes into roll.
-// Accuracy: 1e-12 deg away from pitch = +-90 deg.
-void rs_calib_ypr_from_rt(// out
-                          double yaw_pitch_roll_deg[3],
-                          double position_enu_m[3],  // may be NULL
-                          // in
-                          const double rt_cam_enu[6]);
-
-// The pose of a camera at position_enu_m with the given yaw/pitch/roll (degrees).
-void rs_calib_rt_from_ypr(// out
-                          double rt_cam_enu[6],
-                          // in
-                          const double yaw_pitch_roll_deg[3],
-                          const double position_enu_m[3]);
-
-// Camera centre in ENU: -R(r)^T t. dpos_drt (3,6) row-major, may be NULL.
-void rs_calib_position_from_rt(// out
-                               double position_enu_m[3],
-                               double *dpos_drt,
-                               // in
-                               const double rt_cam_enu[6]);
-
-// Intersects the ray of pixel q_px (through the full lens model: mrcal_unproject, then Newton
-// steps on mrcal_project to polish) with the plane n . p = plane_offset_m.
-// plane_normal_enu need not be unit length; (0,0,1) with offset h is the level plane U = h.
-// Accuracy: the returned point projects back to q_px within 1e-9 px.
-// Errors: RS_ERR_INVALID (non-finite input, zero normal), RS_ERR_UNSUPPORTED (lens model
-// without unprojection), RS_ERR_DEGENERATE (ray parallel to the plane or the plane behind
-// the camera).
-rs_status rs_calib_locate_ground(// out
-                                 double p_enu_m[3],
-                                 // in
-                                 const mrcal_lensmodel_t *lensmodel,
-                                 const double *intrinsics,      // (Nintrinsics,)
-                                 const double rt_cam_enu[6],
-                                 const double q_px[2],
-                                 const double plane_normal_enu[3],
-                                 double plane_offset_m,
-                                 rs_err *err);                  // may be NULL
+// Pose helpers (yaw/pitch/roll, camera position, r_from_R) are core/rs_pose.h; ground location
+// through a camera is core/rs_camera.h.
 
 #ifdef __cplusplus
 }

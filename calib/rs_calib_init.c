@@ -2,7 +2,7 @@
 // in pixels, non-minimal solve on the inliers. See rs_calib_init.h and
 // docs/calibration-init.md. The solvers themselves are OpenGV's and OpenCV's, behind the shims
 // rs_calib_opengv.h and rs_calib_opencv.h; this file holds the logic.
-#include "rs_calib_init.h"
+#include "calib/rs_calib_init.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -11,8 +11,8 @@
 
 #include <mrcal/poseutils.h>
 
-#include "rs_calib_opencv.h"
-#include "rs_calib_opengv.h"
+#include "calib/internal/rs_calib_opencv.h"
+#include "calib/rs_calib_opengv.h"
 
 // Landmarks whose centred point cloud has s2/s1 below this are collinear: the rotation about
 // their line is undetermined.

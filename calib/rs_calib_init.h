@@ -35,7 +35,7 @@
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
-#include "rs_status.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -19,7 +19,7 @@
 #include <opengv/sac_problems/absolute_pose/AbsolutePoseSacProblem.hpp>
 
 extern "C" {
-#include "rs_calib_opengv.h"
+#include "calib/rs_calib_opengv.h"
 }
 
 namespace {

@@ -29,8 +29,9 @@
 extern "C" {
 #include <mrcal/poseutils.h>
 
-#include "rs_calib.h"
-#include "rs_calib_refine.h"
+#include "calib/rs_calib.h"
+#include "calib/internal/rs_calib_refine.h"
+#include "core/rs_pose.h"
 }
 
 namespace {
@@ -214,7 +215,7 @@ class PositionPriorCost final : public ceres::SizedCostFunction<3, 6> {
     bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
         double J[18];
         double C[3];
-        rs_calib_position_from_rt(C, (jacobians && jacobians[0]) ? J : nullptr, x[0]);
+        rs_pose_position_from_rt(C, (jacobians && jacobians[0]) ? J : nullptr, x[0]);
         for (int k = 0; k < 3; k++) residuals[k] = (C[k] - C_prior_[k]) * w_;
         if (jacobians && jacobians[0])
             for (int k = 0; k < 18; k++) jacobians[0][k] = J[k] * w_;

@@ -1,4 +1,4 @@
-#include "rs_calib_site.h"
+#include "calib/rs_calib_site.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -8,9 +8,9 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "rs_calib_opencv.h"
-#include "rs_geo.h"
-#include "rs_io.h"
+#include "core/rs_camera.h"
+#include "geo/rs_geo.h"
+#include "core/rs_io.h"
 
 // ---------------------------------------------------------------- problem
 
@@ -48,10 +48,7 @@ rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *s
     p->sigma_enu_m = sp->sigma_enu_m;
     p->q_px = sp->q_px;
     p->sigma_px = sp->sigma_px;
-    p->lensmodel = &cam->lensmodel;
-    p->intrinsics = cam->intrinsics;
-    p->width = cam->width;
-    p->height = cam->height;
+    p->camera = &cam->camera;
     p->has_position_prior = cam->has_position_prior;
     if (cam->has_position_prior) {
         memcpy(p->prior_position_enu_m, cam->prior_p_enu_m, sizeof p->prior_position_enu_m);
@@ -145,7 +142,7 @@ double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_cal
         const rs_site_observation *o = &cam->observations[i];
         double p_cam[3], q[2] = {NAN, NAN};
         mrcal_transform_point_rt(p_cam, NULL, NULL, r->rt_cam_enu, site->landmarks[o->ilandmark].p_enu_m);
-        if (!mrcal_project((mrcal_point2_t *)q, NULL, NULL, (const mrcal_point3_t *)p_cam, 1, &cam->lensmodel,
+        if (!mrcal_project((mrcal_point2_t *)q, NULL, NULL, (const mrcal_point3_t *)p_cam, 1, &cam->camera.lensmodel,
                            r->intrinsics))
             q[0] = q[1] = NAN;
         if (q_px) {
@@ -189,8 +186,8 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     char name[256];
     cJSON_AddStringToObject(root, "camera", cam->id);
     cJSON_AddStringToObject(root, "site", site->name ? site->name : "");
-    cJSON_AddStringToObject(root, "lensmodel", lensmodel_name(name, sizeof name, &cam->lensmodel));
-    double size[2] = {cam->width, cam->height};
+    cJSON_AddStringToObject(root, "lensmodel", lensmodel_name(name, sizeof name, &cam->camera.lensmodel));
+    double size[2] = {cam->camera.width, cam->camera.height};
     cJSON_AddItemToObject(root, "imagersize", json_array(size, 2));
     cJSON_AddItemToObject(root, "intrinsics", json_array(r->intrinsics, r->Nintrinsics));
     if (r->sigma_intrinsics)
@@ -270,41 +267,6 @@ static rs_status write_text(const char *out_dir, const char *id, const char *suf
     return st;
 }
 
-static rs_status write_cameramodel(const char *path, const rs_site_camera *cam, const rs_calib_result *r,
-                                   rs_err *err)
-{
-    mrcal_cameramodel_t *m = calloc(1, sizeof *m + (size_t)r->Nintrinsics * sizeof(double));
-    if (!m) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    memcpy(m->rt_cam_ref, r->rt_cam_enu, sizeof m->rt_cam_ref);
-    m->imagersize[0] = (unsigned)cam->width;
-    m->imagersize[1] = (unsigned)cam->height;
-    m->lensmodel = cam->lensmodel;
-    memcpy(m->intrinsics, r->intrinsics, (size_t)r->Nintrinsics * sizeof(double));
-    rs_io_atomic a;
-    rs_status st = rs_io_atomic_open(&a, path, err);
-    if (st == RS_OK) st = rs_io_atomic_release(&a, err);
-    if (st == RS_OK && !mrcal_write_cameramodel_file(a.tmp_path, m))
-        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: mrcal could not write the camera model", path);
-    if (st == RS_OK) st = rs_io_atomic_commit(&a, err);
-    else rs_io_atomic_abort(&a);
-    free(m);
-    return st;
-}
-
-static bool has_opencv_equivalent(const mrcal_lensmodel_t *m)
-{
-    switch (m->type) {
-    case MRCAL_LENSMODEL_PINHOLE:
-    case MRCAL_LENSMODEL_OPENCV4:
-    case MRCAL_LENSMODEL_OPENCV5:
-    case MRCAL_LENSMODEL_OPENCV8:
-    case MRCAL_LENSMODEL_OPENCV12:
-        return true;
-    default:
-        return false;
-    }
-}
-
 static rs_status write_homography(const char *path, const rs_site *site, const rs_site_camera *cam,
                                   const rs_calib_result *r, rs_err *err)
 {
@@ -334,6 +296,7 @@ static rs_status write_homography(const char *path, const rs_site *site, const r
     return st;
 }
 
+
 rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *r,
                               rs_err *err)
 {
@@ -344,7 +307,8 @@ rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam
     snprintf(name, sizeof name, "%s.cameramodel", cam->id);
     char *path = rs_io_join(out_dir, name);
     if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    st = write_cameramodel(path, cam, r, err);
+    const rs_camera calibrated = rs_calib_result_camera(&cam->camera, r);
+    st = rs_camera_write_cameramodel(&calibrated, path, err);
     free(path);
     if (st) return st;
 
@@ -354,18 +318,11 @@ rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam
     free(json);
     if (st) return st;
 
-    if (has_opencv_equivalent(&cam->lensmodel)) {
+    if (rs_camera_has_opencv_equivalent(&calibrated)) {
         snprintf(name, sizeof name, "%s.opencv.yaml", cam->id);
         path = rs_io_join(out_dir, name);
         if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        rs_io_atomic a;
-        st = rs_io_atomic_open(&a, path, err);
-        if (st == RS_OK) st = rs_io_atomic_release(&a, err);
-        if (st == RS_OK)
-            st = rs_calib_opencv_write_yaml(a.tmp_path, r->intrinsics, r->Nintrinsics - 4, r->rt_cam_enu,
-                                            cam->width, cam->height, err);
-        if (st == RS_OK) st = rs_io_atomic_commit(&a, err);
-        else rs_io_atomic_abort(&a);
+        st = rs_camera_write_opencv_yaml(&calibrated, path, err);
         free(path);
         if (st) return st;
     }
@@ -376,42 +333,4 @@ rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam
     st = write_homography(path, site, cam, r, err);
     free(path);
     return st;
-}
-
-// ---------------------------------------------------------------- reading back
-
-rs_status rs_calib_camera_read(rs_calib_camera *out, const char *path, rs_err *err)
-{
-    memset(out, 0, sizeof *out);
-    FILE *f = fopen(path, "rb");
-    if (!f) return rs_err_set(err, RS_ERR_IO, "%s: cannot open (run 'roadside calib' first?)", path);
-    fclose(f);
-    mrcal_cameramodel_t *m = mrcal_read_cameramodel_file(path);
-    if (!m) return rs_err_set(err, RS_ERR_PARSE, "%s: not a valid mrcal .cameramodel", path);
-    int n = mrcal_lensmodel_num_params(&m->lensmodel);
-    out->intrinsics = malloc((size_t)(n > 0 ? n : 1) * sizeof(double));
-    if (!out->intrinsics) {
-        mrcal_free_cameramodel(&m);
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    }
-    memcpy(out->intrinsics, m->intrinsics, (size_t)n * sizeof(double));
-    out->Nintrinsics = n;
-    out->lensmodel = m->lensmodel;
-    out->width = (int)m->imagersize[0];
-    out->height = (int)m->imagersize[1];
-    memcpy(out->rt_cam_enu, m->rt_cam_ref, sizeof out->rt_cam_enu);
-    mrcal_free_cameramodel(&m);
-    for (int i = 0; i < 6; i++)
-        if (!isfinite(out->rt_cam_enu[i])) {
-            rs_calib_camera_free(out);
-            return rs_err_set(err, RS_ERR_INVALID, "%s: extrinsics: non-finite", path);
-        }
-    return RS_OK;
-}
-
-void rs_calib_camera_free(rs_calib_camera *cam)
-{
-    if (!cam) return;
-    free(cam->intrinsics);
-    memset(cam, 0, sizeof *cam);
 }

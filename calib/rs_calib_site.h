@@ -17,9 +17,9 @@
 
 #include <mrcal/mrcal.h>
 
-#include "rs_calib.h"
-#include "rs_site.h"
-#include "rs_status.h"
+#include "calib/rs_calib.h"
+#include "geo/rs_site.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -73,23 +73,6 @@ rs_status rs_calib_ground_homography(// out
                                      const double fxycxy[4], const double rt_cam_enu[6],
                                      const double plane_normal_enu[3], double plane_offset_m,
                                      rs_err *err);
-
-// A calibrated camera, read back from an mrcal .cameramodel.
-typedef struct {
-    mrcal_lensmodel_t lensmodel;
-    double *intrinsics;   // (Nintrinsics,) owned
-    int Nintrinsics;
-    int width, height;    // image size, pixels
-    double rt_cam_enu[6]; // the model's extrinsics (rt_cam_ref, the reference being site ENU)
-} rs_calib_camera;
-
-// Reads `path` (an mrcal .cameramodel written by `roadside calib` or any tool that puts the
-// site ENU frame in the reference). out is zeroed on failure; free with rs_calib_camera_free.
-rs_status rs_calib_camera_read(// out
-                               rs_calib_camera *out,
-                               // in
-                               const char *path, rs_err *err);
-void rs_calib_camera_free(rs_calib_camera *cam); // NULL-safe
 
 #ifdef __cplusplus
 }

@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
+#include "cli/rs_cli.h"
 
 int rs_cli_fail(const char *what, rs_status st, const rs_err *err)
 {

@@ -5,10 +5,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "rs_audit.h"
-#include "rs_cli.h"
-#include "rs_io.h"
-#include "rs_site.h"
+#include "audit/rs_audit.h"
+#include "cli/rs_cli.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
 
 static const char audit_usage[] =
     "usage: roadside audit SITE [--calib PATH] [--against OBS] [--camera ID]... [-o OUT] [--json]\n"

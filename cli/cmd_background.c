@@ -9,14 +9,14 @@
 
 #include <cjson/cJSON.h>
 
-#include "rs_calib_site.h"
-#include "rs_cli.h"
-#include "rs_io.h"
-#include "rs_site.h"
-#include "rs_synth_background.h"
-#include "rs_synth_opencv.h"
-#include "rs_synth_scene.h"
-#include "rs_synth_sun.h"
+#include "calib/rs_calib_site.h"
+#include "cli/rs_cli.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
+#include "synth/rs_synth_background.h"
+#include "synth/rs_synth_opencv.h"
+#include "synth/rs_synth_scene.h"
+#include "synth/rs_synth_sun.h"
 
 enum { MAX_TAGS = 64 };
 
@@ -118,7 +118,7 @@ int rs_cli_background(int argc, char **argv)
     }
     rs_site *site = NULL;
     rs_synth_median med = {0};
-    rs_synth_image img = {0};
+    rs_image img = {0};
     char *path = NULL, *dir = NULL;
     cJSON *source = NULL;
     rs_status st;
@@ -144,13 +144,11 @@ int rs_cli_background(int argc, char **argv)
         goto done;
     }
     const double seconds = (double)clock() / CLOCKS_PER_SEC - t0;
-    if (med.width != site->cameras[rs_site_find_camera(site, camera)].width ||
-        med.height != site->cameras[rs_site_find_camera(site, camera)].height)
-        fprintf(stderr, "roadside background: warning: frames are %dx%d, camera %s is %dx%d\n",
-                med.width, med.height, camera,
-                site->cameras[rs_site_find_camera(site, camera)].width,
-                site->cameras[rs_site_find_camera(site, camera)].height);
-    if ((st = rs_synth_image_alloc(&img, med.width, med.height, 3, &err))) {
+    const rs_camera *nominal = &site->cameras[rs_site_find_camera(site, camera)].camera;
+    if (med.width != nominal->width || med.height != nominal->height)
+        fprintf(stderr, "roadside background: warning: frames are %dx%d, camera %s is %dx%d\n", med.width,
+                med.height, camera, nominal->width, nominal->height);
+    if ((st = rs_image_alloc(&img, med.width, med.height, 3, &err))) {
         rc = rs_cli_fail(CMD, st, &err);
         goto done;
     }
@@ -171,7 +169,7 @@ int rs_cli_background(int argc, char **argv)
     cJSON_AddNumberToObject(source, "frames_read", (double)med.Nframes_read);
     cJSON_AddNumberToObject(source, "frames_used", med.Nframes_used);
     cJSON_AddNumberToObject(source, "stride", med.stride);
-    if ((st = rs_io_mkdir_p(dir, &err)) || (st = rs_synth_image_write(path, &img, 8, &err)) ||
+    if ((st = rs_io_mkdir_p(dir, &err)) || (st = rs_image_write(path, &img, 8, &err)) ||
         (st = rs_synth_background_record(site_dir, camera, &tags, source, &err))) {
         rc = rs_cli_fail(CMD, st, &err);
         goto done;
@@ -185,7 +183,7 @@ done:
     cJSON_Delete(source);
     free(path);
     free(dir);
-    rs_synth_image_free(&img);
+    rs_image_free(&img);
     rs_synth_median_free(&med);
     rs_site_free(site);
     free(inputs);
@@ -212,9 +210,9 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
     char model[4096], work[4096];
     snprintf(model, sizeof(model), "%s/%s.cameramodel", calib_dir, cam_id);
     snprintf(work, sizeof(work), "%s/backgrounds/%s/.twin-work", site_dir, cam_id);
-    rs_calib_camera cam = {0};
+    rs_camera cam = {0};
     rs_err err = {0};
-    rs_status st = rs_calib_camera_read(&cam, model, &err);
+    rs_status st = rs_camera_read(&cam, NULL, model, &err);
     if (st)
         return rs_cli_fail(WHAT, st, &err);
     int rc = RS_EXIT_OK;
@@ -284,7 +282,7 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
         remove(log);
         rmdir(work);
     }
-    rs_calib_camera_free(&cam);
+    rs_camera_free(&cam);
     return rc;
 }
 

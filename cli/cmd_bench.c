@@ -7,9 +7,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "rs_cli.h"
-#include "rs_eval.h"
-#include "rs_io.h"
+#include "cli/rs_cli.h"
+#include "eval/rs_eval.h"
+#include "core/rs_io.h"
+#include "bench/rs_bench_eval.h"
 
 static void usage(FILE *out)
 {
@@ -109,7 +110,7 @@ static rs_status bench_eval_run(bench_eval_figures *f, const bench_eval_args *a,
                                 const char *dets_path, rs_err *err)
 {
     double t0 = now_s();
-    rs_status st = rs_eval_write_synthetic(gt_path, dets_path, (int)a->images, a->dets, (unsigned long)a->seed, err);
+    rs_status st = rs_bench_eval_write_data(gt_path, dets_path, (int)a->images, a->dets, (uint64_t)a->seed, err);
     if (st != RS_OK) return st;
     f->generate_s = now_s() - t0;
     f->rss_before = peak_rss_bytes();

@@ -7,8 +7,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "rs_calib_bench.h"
-#include "rs_cli.h"
+#include "bench/rs_bench_calib.h"
+#include "cli/rs_cli.h"
 
 static void usage(FILE *out)
 {
@@ -46,14 +46,14 @@ static void progress(int done, int total, void *cookie)
     if (done == total) fputc('\n', stderr);
 }
 
-static void print_table(const rs_calib_bench_row *rows, int Nrows)
+static void print_table(const rs_bench_calib_row *rows, int Nrows)
 {
     printf("%-15s %-19s %5s %7s %9s %9s %10s %10s %10s %9s %9s %7s %7s  %s\n", "config", "method", "fail",
            "med_us", "p90_us", "rot_deg", "pos_m", "ground_m", "crb_rot", "crb_pos", "rot/crb", "pos/crb",
            "cond", "first failure");
     const char *last = "";
     for (int i = 0; i < Nrows; i++) {
-        const rs_calib_bench_row *r = &rows[i];
+        const rs_bench_calib_row *r = &rows[i];
         if (strcmp(last, r->config)) printf("\n");
         last = r->config;
         char fail[16];
@@ -75,9 +75,9 @@ static int run_stress(long N, bool have_seed, uint64_t seed)
     }
     printf("stress: %ld problems, seed %" PRIu64 " (problem k uses seed + k)\n", N, seed);
     fflush(stdout);
-    rs_calib_bench_stress_summary S;
+    rs_bench_calib_stress_summary S;
     rs_err err = {0};
-    const rs_status st = rs_calib_bench_stress(&S, (int)N, seed, &err);
+    const rs_status st = rs_bench_calib_stress(&S, (int)N, seed, &err);
     if (st != RS_OK) return rs_cli_fail("bench calib --stress", st, &err);
     printf("generated %d, poses %d, flagged (condition number > 100) %d, largest condition number %.3g\n",
            S.Ngenerated, S.Nok, S.Nflagged, S.cond_max);
@@ -100,8 +100,8 @@ int rs_cli_bench_calib(int argc, char **argv)
         {"plot", required_argument, 0, 'p'},   {"quick", no_argument, 0, 'q'},
         {"seed", required_argument, 0, 's'},   {"stress", required_argument, 0, 'S'},
         {0, 0, 0, 0}};
-    rs_calib_bench_options o;
-    rs_calib_bench_options_default(&o);
+    rs_bench_calib_options o;
+    rs_bench_calib_options_default(&o);
     const char *csv = NULL, *plot = NULL;
     long trials = -1, stress = 0, seed = 1;
     bool have_seed = false;
@@ -135,17 +135,17 @@ int rs_cli_bench_calib(int argc, char **argv)
 
     o.trials = trials > 0 ? (int)trials : o.quick ? 3 : o.trials;
     o.seed = (uint64_t)seed;
-    rs_calib_bench_row *rows = NULL;
+    rs_bench_calib_row *rows = NULL;
     int Nrows = 0;
     rs_err err = {0};
-    rs_status st = rs_calib_bench_run(&rows, &Nrows, &o, isatty(2) ? progress : NULL, NULL, &err);
+    rs_status st = rs_bench_calib_run(&rows, &Nrows, &o, isatty(2) ? progress : NULL, NULL, &err);
     if (st != RS_OK) return rs_cli_fail("bench calib", st, &err);
     printf("roadside bench calib: %d trials per configuration, seed %ld; times are thread CPU us; errors RMS;\n"
            "crb = Cramer-Rao bound (RMS); fail = no pose or rotation > 5 deg or position > 20%% of the range\n\n",
            o.trials, seed);
     print_table(rows, Nrows);
-    if (csv && st == RS_OK) st = rs_calib_bench_write_csv(csv, rows, Nrows, &err);
-    if (plot && st == RS_OK) st = rs_calib_bench_plot(plot, rows, Nrows, &err);
+    if (csv && st == RS_OK) st = rs_bench_calib_write_csv(csv, rows, Nrows, &err);
+    if (plot && st == RS_OK) st = rs_bench_calib_plot(plot, rows, Nrows, &err);
     free(rows);
     if (st != RS_OK) return rs_cli_fail("bench calib", st, &err);
     return RS_EXIT_OK;

@@ -6,9 +6,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "rs_cli.h"
-#include "rs_io.h"
-#include "rs_synth_bench.h"
+#include "cli/rs_cli.h"
+#include "core/rs_io.h"
+#include "bench/rs_bench_synth.h"
 
 static const char bench_synth_usage[] =
     "usage: roadside bench synth SITE --calib DIR [--count N] [--size WxH] [--vehicles N]\n"
@@ -119,15 +119,15 @@ int rs_cli_bench_synth(int argc, char **argv)
         }
         scratch = tmpl;
     }
-    rs_synth_bench_row rows[RS_SYNTH_BENCH_VARIANTS];
-    rs_synth_bench_variants(rows, J);
+    rs_bench_synth_row rows[RS_SYNTH_BENCH_VARIANTS];
+    rs_bench_synth_variants(rows, J);
     const int Nrows = quick ? 2 : RS_SYNTH_BENCH_VARIANTS;
     printf("roadside bench synth: %s, %d images of %dx%d per variant, at most %d vehicles each, "
            "seed %llu, %ld cores\n",
            o.site_dir, o.count, o.width, o.height, o.vehicles, (unsigned long long)o.seed, cores);
     fflush(stdout);
     rs_err err = {0};
-    rs_status st = rs_synth_bench_run(rows, Nrows, &o, dir ? dir : scratch, &err);
+    rs_status st = rs_bench_synth_run(rows, Nrows, &o, dir ? dir : scratch, &err);
     if (scratch)
         rs_io_remove_tree(scratch);
     if (st)
@@ -138,7 +138,7 @@ int rs_cli_bench_synth(int argc, char **argv)
     int n = snprintf(text, sizeof(text), "variant,jobs,images,vehicles_per_image,wall_s,"
                                          "s_per_image,cpu_s_per_image,povray_s_per_image\n");
     for (int k = 0; k < Nrows; k++) {
-        const rs_synth_bench_row *r = &rows[k];
+        const rs_bench_synth_row *r = &rows[k];
         const double per = r->wall_s / (r->Nimages > 0 ? r->Nimages : 1);
         const double vpi = (double)r->Nannotations / (r->Nimages > 0 ? r->Nimages : 1);
         printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f  %s\n", r->name, r->jobs,

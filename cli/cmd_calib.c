@@ -5,11 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_calib.h"
-#include "rs_calib_site.h"
-#include "rs_cli.h"
-#include "rs_io.h"
-#include "rs_site.h"
+#include "calib/rs_calib.h"
+#include "calib/rs_calib_site.h"
+#include "cli/rs_cli.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
 
 static const char calib_usage[] =
     "usage: roadside calib SITE [-o OUT] [--camera ID]... [--refine WHAT] [--json]\n"
@@ -194,12 +194,11 @@ int rs_cli_calib(int argc, char **argv)
 }
 
 // One pixel -> one output line; false (and a message on stderr) when it cannot be located.
-static bool locate_one(const rs_site *site, const rs_calib_camera *cam, const double q[2], const char *where)
+static bool locate_one(const rs_site *site, const rs_camera *cam, const double q[2], const char *where)
 {
     double p[3], llh[3];
     rs_err err = {0};
-    rs_status st = rs_calib_locate_ground(p, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, q,
-                                          site->ground_normal_enu, site->ground_offset_m, &err);
+    rs_status st = rs_camera_locate_ground(p, cam, q, site->ground_normal_enu, site->ground_offset_m, &err);
     if (st == RS_OK) st = rs_geo_enu_to_llh(llh, &site->origin, p, 1, &err);
     if (st) {
         fprintf(stderr, "roadside locate: %s: pixel (%g, %g): %s\n", where, q[0], q[1],
@@ -254,8 +253,8 @@ int rs_cli_locate(int argc, char **argv)
     char name[512];
     snprintf(name, sizeof name, "%s.cameramodel", camera);
     char *path = rs_io_join(calib_dir, name);
-    rs_calib_camera cam;
-    rs_status st = path ? rs_calib_camera_read(&cam, path, &err) : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
+    rs_camera cam;
+    rs_status st = path ? rs_camera_read(&cam, NULL, path, &err) : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
     free(path);
     free(default_dir);
     if (st) {
@@ -290,7 +289,7 @@ int rs_cli_locate(int argc, char **argv)
             ok &= locate_one(site, &cam, q, where);
         }
     }
-    rs_calib_camera_free(&cam);
+    rs_camera_free(&cam);
     rs_site_free(site);
     return ok ? RS_EXIT_OK : RS_EXIT_FAIL;
 }

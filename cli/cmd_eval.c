@@ -4,9 +4,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
-#include "rs_eval.h"
-#include "rs_site.h"
+#include "cli/rs_cli.h"
+#include "eval/rs_eval.h"
+#include "geo/rs_site.h"
 
 static void usage(FILE *out)
 {
@@ -132,7 +132,7 @@ static void print_table(const rs_eval_result *r, const char *by)
     printf("%-24s %8s %9s", "scope", "num_gt", "num_det");
     for (int t = 0; t < r->Nthresholds; t++) {
         char h[32];
-        snprintf(h, sizeof h, "AP@%g", r->thresholds_px[t]);
+        snprintf(h, sizeof h, "AP@%g", r->thresholds[t]);
         printf(" %7s", h);
     }
     printf(" %7s %7s\n", "mAP", "AR");
@@ -179,7 +179,7 @@ int rs_cli_eval(int argc, char **argv)
         if (missed)
             fprintf(stderr, "roadside eval: %zu point(s) whose ray misses the ground can match nothing\n", missed);
     }
-    const rs_eval_options opt = {.thresholds_px = a.Nthresholds ? a.thresholds : NULL,
+    const rs_eval_options opt = {.thresholds = a.Nthresholds ? a.thresholds : NULL,
                                  .Nthresholds = a.Nthresholds,
                                  .max_dets = a.max_dets,
                                  .per_class = a.per_class,

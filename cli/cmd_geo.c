@@ -2,7 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
+#include "cli/rs_cli.h"
 
 static void usage(FILE *out)
 {

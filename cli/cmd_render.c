@@ -4,11 +4,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
-#include "rs_cli_synth.h"
-#include "rs_io.h"
-#include "rs_synth_labels.h"
-#include "rs_synth_render.h"
+#include "cli/rs_cli.h"
+#include "cli/rs_cli_synth.h"
+#include "core/rs_io.h"
+#include "synth/rs_synth_labels.h"
+#include "synth/rs_synth_render.h"
 
 static const char render_usage[] =
     "usage: roadside render SITE --calib DIR --camera ID --vehicles FILE -o OUTDIR\n"
@@ -94,7 +94,7 @@ static rs_status write_labels(const rs_cli_synth_args *s, const rs_synth_render_
         goto done;
     folder = rs_io_join(s->output, split);
     image = folder ? rs_io_join(folder, "image.png") : NULL;
-    st = image ? rs_synth_image_write(image, &r->composite, 8, err)
+    st = image ? rs_image_write(image, &r->composite, 8, err)
                : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
 done:
     free(up);

@@ -3,10 +3,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
-#include "rs_io.h"
-#include "rs_report.h"
-#include "rs_site.h"
+#include "cli/rs_cli.h"
+#include "core/rs_io.h"
+#include "report/rs_report.h"
+#include "geo/rs_site.h"
 
 static const char report_usage[] =
     "usage: roadside report SITE [--calib DIR] -o DIR [options]\n"

@@ -5,10 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
-#include "rs_cli_synth.h"
-#include "rs_io.h"
-#include "rs_synth_camera.h"
+#include "cli/rs_cli.h"
+#include "cli/rs_cli_synth.h"
+#include "core/rs_io.h"
+#include "synth/rs_synth_camera.h"
 
 static const char scene_usage[] =
     "usage: roadside scene SITE --calib DIR --camera ID --vehicles FILE -o OUT.pov\n"
@@ -68,7 +68,7 @@ void rs_cli_synth_free(rs_cli_synth_args *s)
         return;
     rs_synth_prepared_free(&s->prepared);
     rs_synth_vehicle_list_free(&s->list);
-    rs_calib_camera_free(&s->camera);
+    rs_camera_free(&s->camera);
     rs_site_free(s->site);
     free(s->pins_enu_m);
     s->site = NULL;
@@ -96,7 +96,7 @@ static int synth_load(rs_cli_synth_args *s, const char *command)
     char *model = rs_io_join(s->calib_dir, name);
     if (!model)
         return rs_cli_fail("out of memory", RS_ERR_NOMEM, NULL);
-    st = rs_calib_camera_read(&s->camera, model, &err);
+    st = rs_camera_read(&s->camera, NULL, model, &err);
     if (st) {
         int rc = rs_cli_fail(command, st, &err);
         free(model);

@@ -5,10 +5,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "rs_cli.h"
-#include "rs_io.h"
-#include "rs_site.h"
-#include "rs_synth_traffic.h"
+#include "cli/rs_cli.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
+#include "synth/rs_synth_traffic.h"
 
 static void usage(FILE *out)
 {
@@ -66,13 +66,13 @@ static int cmd_check(int argc, char **argv)
     if (lanes_path && access(lanes_path, F_OK) == 0 && Nerrors == 0) {
         rs_site *site = NULL;
         if (rs_site_load(&site, argv[1], NULL) == RS_OK) {
-            rs_synth_lanes lanes;
+            rs_lanes lanes;
             rs_err lerr = {0};
-            if (rs_synth_lanes_read(&lanes, lanes_path, &site->origin, &lerr) != RS_OK) {
+            if (rs_lanes_read(&lanes, lanes_path, site, &lerr) != RS_OK) {
                 printf("%s\n", lerr.msg);
                 Nerrors++;
             } else {
-                rs_synth_lanes_free(&lanes);
+                rs_lanes_free(&lanes);
             }
             rs_site_free(site);
         }
@@ -98,13 +98,13 @@ static void describe_camera(const rs_site *site, int icam)
 {
     const rs_site_camera *cam = &site->cameras[icam];
     char lensmodel[128];
-    if (!mrcal_lensmodel_name(lensmodel, sizeof lensmodel, &cam->lensmodel))
-        snprintf(lensmodel, sizeof lensmodel, "%s", mrcal_lensmodel_name_unconfigured(&cam->lensmodel));
+    if (!mrcal_lensmodel_name(lensmodel, sizeof lensmodel, &cam->camera.lensmodel))
+        snprintf(lensmodel, sizeof lensmodel, "%s", mrcal_lensmodel_name_unconfigured(&cam->camera.lensmodel));
     printf("  camera '%s'%s%s\n", cam->id, cam->note ? ": " : "", cam->note ? cam->note : "");
     printf("    model: %s\n", cam->model_path);
-    printf("    lens model: %s, image %d x %d px\n", lensmodel, cam->width, cam->height);
+    printf("    lens model: %s, image %d x %d px\n", lensmodel, cam->camera.width, cam->camera.height);
     printf("    intrinsics:");
-    for (int i = 0; i < cam->Nintrinsics; i++) printf(" %.12g", cam->intrinsics[i]);
+    for (int i = 0; i < cam->camera.Nintrinsics; i++) printf(" %.12g", cam->camera.intrinsics[i]);
     printf("\n");
     double sigma_lo = INFINITY, sigma_hi = 0;
     for (int i = 0; i < cam->Nobservations; i++) {

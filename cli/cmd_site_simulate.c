@@ -3,8 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
-#include "rs_simulate.h"
+#include "cli/rs_cli.h"
+#include "sim/rs_simulate.h"
 
 static const char *const CMD = "site simulate";
 

@@ -7,8 +7,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "rs_cli.h"
-#include "rs_synth_dataset.h"
+#include "cli/rs_cli.h"
+#include "synth/rs_synth_dataset.h"
 
 static const char synth_usage[] =
     "usage: roadside synth SITE --calib DIR --count N -o DATASET [--seed S]\n"

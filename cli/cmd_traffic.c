@@ -5,11 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_cli.h"
-#include "rs_io.h"
-#include "rs_site.h"
-#include "rs_synth_sumo.h"
-#include "rs_synth_traffic.h"
+#include "cli/rs_cli.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
+#include "synth/rs_synth_sumo.h"
+#include "synth/rs_synth_traffic.h"
 
 static const char *const CMD = "traffic";
 
@@ -214,7 +214,7 @@ int rs_cli_traffic(int argc, char **argv)
     rs_status st = rs_site_load(&site, t.site_dir, &err);
     if (st) return rs_cli_fail(t.site_dir, st, &err);
     char *lanes_path = t.lanes_path ? strdup(t.lanes_path) : rs_io_join(t.site_dir, "lanes.geojson");
-    rs_synth_lanes lanes = {0};
+    rs_lanes lanes = {0};
     rs_synth_traffic_vehicle *v = NULL;
     rs_synth_sumo_frames frames = {0};
     int N = 0;
@@ -223,7 +223,7 @@ int rs_cli_traffic(int argc, char **argv)
         st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if (!t.so.osm_path && (st = rs_synth_lanes_read(&lanes, lanes_path, &site->origin, &err))) goto done;
+    if (!t.so.osm_path && (st = rs_lanes_read(&lanes, lanes_path, site, &err))) goto done;
     if (t.sumo) {
         what = "traffic --sumo";
         if ((st = rs_synth_sumo_run(&frames, &lanes, &site->origin, &t.so, &err))) goto done;
@@ -243,7 +243,7 @@ done:
     free(lanes_path);
     free(v);
     rs_synth_sumo_frames_free(&frames);
-    rs_synth_lanes_free(&lanes);
+    rs_lanes_free(&lanes);
     rs_site_free(site);
     return st ? rs_cli_fail(what, st, &err) : RS_EXIT_OK;
 }

@@ -2,7 +2,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "rs_cli.h"
+#include "cli/rs_cli.h"
 
 #ifndef RS_VERSION
 #define RS_VERSION "unknown"

@@ -4,9 +4,9 @@
 #pragma once
 #include <stdbool.h>
 
-#include "rs_calib_site.h"
-#include "rs_site.h"
-#include "rs_synth_scene.h"
+#include "calib/rs_calib_site.h"
+#include "geo/rs_site.h"
+#include "synth/rs_synth_scene.h"
 
 typedef struct {
     // options
@@ -17,7 +17,7 @@ typedef struct {
     const char *time_iso;
     // loaded
     rs_site *site;
-    rs_calib_camera camera;
+    rs_camera camera;
     rs_synth_vehicle_list list;
     rs_synth_prepared prepared;
     double *pins_enu_m; // (Npins,3) owned

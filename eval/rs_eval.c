@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_eval_internal.h"
+#include "eval/internal/rs_eval_internal.h"
 
 static const double default_thresholds_px[] = {2, 5, 10, 15, 20, 50};
 
@@ -101,7 +101,7 @@ static bool add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_d
 {
     const size_t first = *n;
     for (size_t a = d->gt_begin[m]; a < d->gt_begin[m + 1]; a++) {
-        const double du = d->gt_q_px[2 * a] - e->u, dv = d->gt_q_px[2 * a + 1] - e->v;
+        const double du = d->gt_point[2 * a] - e->u, dv = d->gt_point[2 * a + 1] - e->v;
         const candidate c = {du * du + dv * dv, a};
         if (!(sqrt(c.d2) < theta_max_px)) continue;
         if (*n == *cap) {
@@ -151,7 +151,7 @@ static rs_status keep(kept_dets *k, const rs_eval_data *d, int max_dets, double 
     memcpy(next, k->begin, (M + 1) * sizeof *next);
     for (size_t r = 0; r < n; r++) {
         size_t i = s[r].index;
-        k->slots[next[d->det_image[i]]++] = (slot){d->det_q_px[2 * i], d->det_q_px[2 * i + 1], r, d->det_category[i]};
+        k->slots[next[d->det_image[i]]++] = (slot){d->det_point[2 * i], d->det_point[2 * i + 1], r, d->det_category[i]};
     }
     size_t Ncands = 0, cap = 0;
     for (size_t m = 0; m < M; m++)
@@ -273,7 +273,7 @@ static void metrics_free(rs_eval_metrics *m)
 void rs_eval_result_free(rs_eval_result *r)
 {
     if (!r) return;
-    free(r->thresholds_px);
+    free(r->thresholds);
     metrics_free(&r->all);
     for (int g = 0; r->groups && g < r->Ngroups; g++) metrics_free(&r->groups[g]);
     free(r->groups);
@@ -298,15 +298,15 @@ static rs_status evaluate_rows(rs_eval_metrics **rows, int *Nrows, int N, char *
 
 static rs_status check_options(const rs_eval_options *opt, const rs_eval_data *d, rs_err *err)
 {
-    if (opt->thresholds_px) {
+    if (opt->thresholds) {
         if (opt->Nthresholds < 1 || opt->Nthresholds > RS_EVAL_MAX_THRESHOLDS)
             return rs_err_set(err, RS_ERR_USAGE, "thresholds: need 1 to %d, not %d", RS_EVAL_MAX_THRESHOLDS,
                               opt->Nthresholds);
         for (int t = 0; t < opt->Nthresholds; t++) {
-            double x = opt->thresholds_px[t];
+            double x = opt->thresholds[t];
             if (!isfinite(x) || x <= 0) return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g is not a positive number", x);
             for (int u = 0; u < t; u++)
-                if (opt->thresholds_px[u] == x) return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g given twice", x);
+                if (opt->thresholds[u] == x) return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g given twice", x);
         }
     }
     if (opt->max_dets < 0) return rs_err_set(err, RS_ERR_USAGE, "max-dets: %d is not positive", opt->max_dets);
@@ -324,10 +324,10 @@ rs_status rs_eval_run(rs_eval_result **result, const rs_eval_data *d, const rs_e
     if (st != RS_OK) return st;
     // nuScenes' centre-distance thresholds for ground distances, the seed paper's for pixels
     static const double default_thresholds_m[] = {0.5, 1, 2, 4};
-    const double *theta = opt->thresholds_px ? opt->thresholds_px
+    const double *theta = opt->thresholds ? opt->thresholds
                           : d->metres        ? default_thresholds_m
                                              : default_thresholds_px;
-    const int T = opt->thresholds_px ? opt->Nthresholds
+    const int T = opt->thresholds ? opt->Nthresholds
                   : d->metres        ? (int)(sizeof default_thresholds_m / sizeof(double))
                                      : (int)(sizeof default_thresholds_px / sizeof(double));
 
@@ -337,8 +337,8 @@ rs_status rs_eval_run(rs_eval_result **result, const rs_eval_data *d, const rs_e
     r->Nthresholds = T;
     r->metres = d->metres;
     r->max_dets = opt->max_dets ? opt->max_dets : 100;
-    if (!(r->thresholds_px = malloc((size_t)T * sizeof *theta))) goto nomem;
-    memcpy(r->thresholds_px, theta, (size_t)T * sizeof *theta);
+    if (!(r->thresholds = malloc((size_t)T * sizeof *theta))) goto nomem;
+    memcpy(r->thresholds, theta, (size_t)T * sizeof *theta);
     double theta_max = 0;
     for (int t = 0; t < T; t++) theta_max = fmax(theta_max, theta[t]);
     if ((st = keep(&k, d, r->max_dets, theta_max, err))) goto fail;

@@ -34,8 +34,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "rs_site.h"
-#include "rs_status.h"
+#include "geo/rs_site.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -79,7 +79,7 @@ void rs_eval_data_free(rs_eval_data *data);
 // shift) by its ground position (E, N) in metres, so that thresholds are then distances on the
 // ground. Each image's camera is named by the image field given as camera_key at load time;
 // calib_dir/<camera>.cameramodel (as written by `roadside calib`) gives the camera, the site
-// its ground plane. Each pixel's ray goes through the full lens model (rs_calib_locate_ground).
+// its ground plane. Each pixel's ray goes through the full lens model (rs_camera_locate_ground).
 // A point whose ray misses the ground (above the horizon, or a ray parallel to it) can match
 // nothing: such a detection is a false positive and such a ground truth stays unmatched.
 // Errors: RS_ERR_INVALID (data loaded without camera_key, an image without a camera),
@@ -100,8 +100,9 @@ size_t rs_eval_data_bytes(const rs_eval_data *data);
 #define RS_EVAL_MAX_THRESHOLDS 64
 
 typedef struct {
-    const double *thresholds_px; // (Nthresholds) > 0, finite, distinct; NULL: 2,5,10,15,20,50
-    int Nthresholds;             // 1..RS_EVAL_MAX_THRESHOLDS (ignored when thresholds_px NULL)
+    const double *thresholds; // (Nthresholds) > 0, finite, distinct: pixels, or metres for data
+                              //   on the ground (rs_eval_data_to_ground); NULL: 2,5,10,15,20,50
+    int Nthresholds;          // 1..RS_EVAL_MAX_THRESHOLDS (ignored when thresholds NULL)
     int max_dets;                // per image, >= 1 (0 selects the default, 100)
     bool per_class;              // also one row per category
     bool by_group;               // also one row per value of the load-time group_key
@@ -121,7 +122,8 @@ typedef struct {
 
 typedef struct {
     int Nthresholds;
-    double *thresholds_px;    // (Nthresholds) in pixels, or metres after rs_eval_data_to_ground
+    double *thresholds;       // (Nthresholds) in pixels, or metres (`metres`) after
+                              //   rs_eval_data_to_ground
     bool metres;              // the thresholds are ground distances in metres
     int max_dets;
     rs_eval_metrics all;      // class-agnostic, every image
@@ -141,7 +143,7 @@ rs_status rs_eval_run(// out
 
 void rs_eval_result_free(rs_eval_result *result);
 
-// Writes the result as JSON (atomically): {"thresholds_px": [...] (or "thresholds_m"), "max_dets": N, "AP": {"2":
+// Writes the result as JSON (atomically): {"thresholds": [...] (or "thresholds_m"), "max_dets": N, "AP": {"2":
 // ..., ...}, "mAP": ..., "AR": ..., "recall": {...}, "num_gt": ..., "num_det": ...,
 // "num_dropped": {...}, "groups": {VALUE: {...}}, "classes": {ID: {"name": ..., ...}}}. Keys of
 // the per-threshold objects are the thresholds printed with %.15g. NaN is written as null.
@@ -149,13 +151,6 @@ rs_status rs_eval_result_write_json(const rs_eval_result *result, const char *pa
 
 // The same JSON as a malloc'ed string (caller frees), or NULL when out of memory.
 char *rs_eval_result_json(const rs_eval_result *result);
-
-// A synthetic dataset for benchmarks: Nimages images of 1920x1080 with about Ndets / Nimages /
-// 4 vehicles each (3 categories, image field "condition" in normal/rain/night, one ignore region
-// in every 20th image), and Ndets detections: a noisy detection (+-6 px) of most vehicles, the
-// rest spread at random. Writes gt_path and dets_path atomically. Deterministic in seed.
-rs_status rs_eval_write_synthetic(const char *gt_path, const char *dets_path, int Nimages,
-                                  long Ndets, unsigned long seed, rs_err *err);
 
 #ifdef __cplusplus
 }

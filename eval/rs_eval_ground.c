@@ -3,22 +3,20 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_calib.h"
-#include "rs_calib_site.h"
-#include "rs_eval_internal.h"
-#include "rs_io.h"
-#include "rs_site.h"
+#include "core/rs_camera.h"
+#include "eval/internal/rs_eval_internal.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
 
 // Points whose rays miss the ground are parked far away, detections and ground truths on
 // opposite sides, so that they match nothing (the distance squared stays finite: 4e300).
 static const double MISSED_DET = 1e150, MISSED_GT = -1e150;
 
 // Replaces q (2,) by its ground (E, N), or by (missed, missed) when the ray misses the ground.
-static bool to_ground(double *q, const rs_calib_camera *cam, const rs_site *site, double missed)
+static bool to_ground(double *q, const rs_camera *cam, const rs_site *site, double missed)
 {
     double p[3];
-    if (rs_calib_locate_ground(p, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, q, site->ground_normal_enu,
-                               site->ground_offset_m, NULL) != RS_OK) {
+    if (rs_camera_locate_ground(p, cam, q, site->ground_normal_enu, site->ground_offset_m, NULL) != RS_OK) {
         q[0] = q[1] = missed;
         return false;
     }
@@ -36,7 +34,7 @@ rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const cha
     if (d->metres) return rs_err_set(err, RS_ERR_INVALID, "the points are on the ground already");
     // one camera model per distinct camera name, loaded on first use
     int *cam_of_image = malloc((size_t)(d->Nimages ? d->Nimages : 1) * sizeof *cam_of_image);
-    rs_calib_camera *cams = calloc((size_t)(site->Ncameras ? site->Ncameras : 1), sizeof *cams);
+    rs_camera *cams = calloc((size_t)(site->Ncameras ? site->Ncameras : 1), sizeof *cams);
     bool *loaded = calloc((size_t)(site->Ncameras ? site->Ncameras : 1), sizeof *loaded);
     rs_status st = cam_of_image && cams && loaded ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (int i = 0; st == RS_OK && i < d->Nimages; i++) {
@@ -51,7 +49,7 @@ rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const cha
         char name[512];
         snprintf(name, sizeof name, "%s.cameramodel", site->cameras[c].id);
         char *path = rs_io_join(calib_dir, name);
-        st = path ? rs_calib_camera_read(&cams[c], path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        st = path ? rs_camera_read(&cams[c], NULL, path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(path);
         loaded[c] = st == RS_OK;
     }
@@ -59,13 +57,13 @@ rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const cha
     if (st == RS_OK) {
         for (int i = 0; i < d->Nimages; i++)
             for (size_t a = d->gt_begin[i]; a < d->gt_begin[i + 1]; a++)
-                missed += !to_ground(&d->gt_q_px[2 * a], &cams[cam_of_image[i]], site, MISSED_GT);
+                missed += !to_ground(&d->gt_point[2 * a], &cams[cam_of_image[i]], site, MISSED_GT);
         for (size_t k = 0; k < d->Ndets; k++)
-            missed += !to_ground(&d->det_q_px[2 * k], &cams[cam_of_image[d->det_image[k]]], site, MISSED_DET);
+            missed += !to_ground(&d->det_point[2 * k], &cams[cam_of_image[d->det_image[k]]], site, MISSED_DET);
         d->metres = true;
     }
     if (cams)
-        for (int c = 0; c < site->Ncameras; c++) rs_calib_camera_free(&cams[c]);
+        for (int c = 0; c < site->Ncameras; c++) rs_camera_free(&cams[c]);
     free(cams);
     free(loaded);
     free(cam_of_image);

@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_eval_internal.h"
+#include "eval/internal/rs_eval_internal.h"
 
 int rs_eval_json_line(const char *text, size_t offset)
 {

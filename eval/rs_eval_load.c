@@ -8,8 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_eval_internal.h"
-#include "rs_io.h"
+#include "eval/internal/rs_eval_internal.h"
+#include "core/rs_io.h"
 
 // ---- small helpers ----
 
@@ -381,11 +381,11 @@ static rs_status gather_annotations(gt_ctx *c, rs_err *err)
     rs_eval_data *d = c->d;
     size_t G = d->Ngt ? d->Ngt : 1;
     d->gt_begin = calloc((size_t)d->Nimages + 1, sizeof *d->gt_begin);
-    d->gt_q_px = malloc(2 * G * sizeof *d->gt_q_px);
+    d->gt_point = malloc(2 * G * sizeof *d->gt_point);
     d->gt_category = malloc(G * sizeof *d->gt_category);
     d->gt_crowd = malloc(G);
     size_t *next = malloc(((size_t)d->Nimages + 1) * sizeof *next);
-    if (!d->gt_begin || !d->gt_q_px || !d->gt_category || !d->gt_crowd || !next) {
+    if (!d->gt_begin || !d->gt_point || !d->gt_category || !d->gt_crowd || !next) {
         free(next);
         return nomem(&c->w, err);
     }
@@ -394,8 +394,8 @@ static rs_status gather_annotations(gt_ctx *c, rs_err *err)
     memcpy(next, d->gt_begin, ((size_t)d->Nimages + 1) * sizeof *next);
     for (size_t a = 0; a < d->Ngt; a++) {
         size_t k = next[c->ann_image[a]]++;
-        d->gt_q_px[2 * k] = c->ann_q[2 * a];
-        d->gt_q_px[2 * k + 1] = c->ann_q[2 * a + 1];
+        d->gt_point[2 * k] = c->ann_q[2 * a];
+        d->gt_point[2 * k + 1] = c->ann_q[2 * a + 1];
         d->gt_category[k] = c->ann_category[a];
         d->gt_crowd[k] = c->ann_crowd[a];
     }
@@ -485,14 +485,14 @@ static rs_status det_entry(void *vctx, size_t index, const cJSON *o, size_t offs
     if (category < 0)
         return bad(&c->w, err, RS_ERR_NOT_FOUND, "category_id %lld not in the ground truth", category_id);
     size_t n = d->Ndets, cap = c->cap;
-    if (!grow(&d->det_q_px, &cap, n, 2 * sizeof *d->det_q_px) ||
+    if (!grow(&d->det_point, &cap, n, 2 * sizeof *d->det_point) ||
         !grow(&d->det_score, &(size_t){c->cap}, n, sizeof *d->det_score) ||
         !grow(&d->det_image, &(size_t){c->cap}, n, sizeof *d->det_image) ||
         !grow(&d->det_category, &(size_t){c->cap}, n, sizeof *d->det_category))
         return nomem(&c->w, err);
     c->cap = cap;
-    d->det_q_px[2 * n] = q[0];
-    d->det_q_px[2 * n + 1] = q[1];
+    d->det_point[2 * n] = q[0];
+    d->det_point[2 * n + 1] = q[1];
     d->det_score[n] = score->valuedouble;
     d->det_image[n] = image;
     d->det_category[n] = category;
@@ -558,10 +558,10 @@ void rs_eval_data_free(rs_eval_data *d)
     for (int k = 0; k < d->Ncategories; k++) free(d->category_name[k]);
     free(d->category_name);
     free(d->gt_begin);
-    free(d->gt_q_px);
+    free(d->gt_point);
     free(d->gt_category);
     free(d->gt_crowd);
-    free(d->det_q_px);
+    free(d->det_point);
     free(d->det_score);
     free(d->det_image);
     free(d->det_category);

@@ -5,8 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_eval.h"
-#include "rs_io.h"
+#include "eval/rs_eval.h"
+#include "core/rs_io.h"
 
 // A number, or null for NaN. Returns false when out of memory.
 static bool add_number(cJSON *o, const char *key, double x)
@@ -22,7 +22,7 @@ static bool add_per_threshold(cJSON *o, const char *key, const rs_eval_result *r
     if (!m) return false;
     for (int t = 0; t < r->Nthresholds; t++) {
         char name[32];
-        snprintf(name, sizeof name, "%.15g", r->thresholds_px[t]);
+        snprintf(name, sizeof name, "%.15g", r->thresholds[t]);
         if (!add_number(m, name, x ? x[t] : (double)n[t])) return false;
     }
     return true;
@@ -39,7 +39,7 @@ static bool add_metrics(cJSON *o, const rs_eval_result *r, const rs_eval_metrics
 char *rs_eval_result_json(const rs_eval_result *r)
 {
     cJSON *o = cJSON_CreateObject();
-    bool ok = o && cJSON_AddItemToObject(o, r->metres ? "thresholds_m" : "thresholds_px", cJSON_CreateDoubleArray(r->thresholds_px, r->Nthresholds)) &&
+    bool ok = o && cJSON_AddItemToObject(o, r->metres ? "thresholds_m" : "thresholds", cJSON_CreateDoubleArray(r->thresholds, r->Nthresholds)) &&
               add_number(o, "max_dets", r->max_dets) && add_metrics(o, r, &r->all);
     if (ok && r->groups) {
         cJSON *g = cJSON_AddObjectToObject(o, "groups");

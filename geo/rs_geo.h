@@ -40,7 +40,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "rs_status.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {

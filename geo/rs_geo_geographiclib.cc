@@ -14,7 +14,7 @@
 #include <vector>
 
 extern "C" {
-#include "rs_geo.h"
+#include "geo/rs_geo.h"
 }
 
 using GeographicLib::Geocentric;

@@ -12,9 +12,8 @@
 
 #include <cjson/cJSON.h>
 
-#include "rs_io.h"
-#include "rs_site_internal.h"
-#include "rs_site_opencv.h"
+#include "core/rs_io.h"
+#include "geo/internal/rs_site_internal.h"
 
 enum { DEFAULT_MAX_LANDMARK_DISTANCE_M = 1000 };
 static const double DEFAULT_SIGMA_PX = 1.0;
@@ -533,53 +532,6 @@ done:
 
 // ---- camera models ----
 
-// Converts OpenCV intrinsics (K, distortion coefficients) to the mrcal model with the same
-// projection: mrcal's LENSMODEL_OPENCVn intrinsics are fx fy cx cy followed by OpenCV's
-// coefficients in OpenCV's order (k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4; mrcal docs, "Lens
-// models"). With no or all-zero coefficients: LENSMODEL_PINHOLE.
-static void opencv_to_mrcal(reader *c, rs_site_camera *cam, const double K[9], const double *dist,
-                            int Ndist)
-{
-    if (K[3] != 0 || K[6] != 0 || K[7] != 0 || K[8] != 1) {
-        ERR(c, RS_ERR_INVALID, "camera_matrix", "not of the form [fx 0 cx; 0 fy cy; 0 0 1]");
-        return;
-    }
-    if (!(K[0] > 0 && K[4] > 0)) {
-        ERR(c, RS_ERR_INVALID, "camera_matrix", "fx = %g, fy = %g: both must be > 0", K[0], K[4]);
-        return;
-    }
-    if (K[1] != 0) {
-        ERR(c, RS_ERR_UNSUPPORTED, "camera_matrix", "skew %g: mrcal lens models have no skew term", K[1]);
-        return;
-    }
-    if (Ndist == 14) {
-        if (dist[12] != 0 || dist[13] != 0) {
-            ERR(c, RS_ERR_UNSUPPORTED, "distortion_coefficients",
-                "14 values with a tilted sensor (tauX = %g, tauY = %g): mrcal has no equivalent model",
-                dist[12], dist[13]);
-            return;
-        }
-        Ndist = 12; // zero tilt: exactly the 12-coefficient model
-    }
-    bool any = false;
-    for (int i = 0; i < Ndist; i++) any = any || dist[i] != 0;
-    if (!any) Ndist = 0;
-    cam->lensmodel.type = Ndist == 0 ? MRCAL_LENSMODEL_PINHOLE
-                        : Ndist == 4 ? MRCAL_LENSMODEL_OPENCV4
-                        : Ndist == 5 ? MRCAL_LENSMODEL_OPENCV5
-                        : Ndist == 8 ? MRCAL_LENSMODEL_OPENCV8
-                                     : MRCAL_LENSMODEL_OPENCV12;
-    cam->Nintrinsics = mrcal_lensmodel_num_params(&cam->lensmodel);
-    cam->intrinsics = malloc((size_t)cam->Nintrinsics * sizeof(double));
-    if (!cam->intrinsics) {
-        c->r->nomem = true;
-        return;
-    }
-    const double core[4] = {K[0], K[4], K[2], K[5]};
-    memcpy(cam->intrinsics, core, sizeof core);
-    memcpy(cam->intrinsics + 4, dist, (size_t)Ndist * sizeof(double));
-}
-
 static bool has_extension(const char *path, const char *ext)
 {
     const char *dot = strrchr(path, '.');
@@ -610,25 +562,30 @@ static const char *cameramodel_precheck(const char *text, size_t len, int *line)
     return "a quoted string that is never closed";
 }
 
+// Reports a failed core camera read as a diagnostic: its message is "PATH: FIELD: what", and
+// the diagnostic names the file already.
+static void camera_error(reader *c, const rs_site_camera *cam, const rs_err *e)
+{
+    if (e->status == RS_ERR_NOMEM) c->r->nomem = true;
+    size_t n = strlen(cam->model_path);
+    const char *what = strncmp(e->msg, cam->model_path, n) ? e->msg : e->msg + n + (e->msg[n] == ':' ? 2 : 0);
+    ERR(c, e->status, NULL, "%s", what);
+}
+
 static void read_camera_model(reader *c, rs_site_camera *cam, int i)
 {
     char why[160];
     snprintf(why, sizeof why, "named by cameras[%d].model in site.json", i);
     c->file = cam->model_path;
     if (!site_file_exists(c, why)) goto done;
+    rs_err e = {0};
     if (has_extension(cam->model_path, "yaml") || has_extension(cam->model_path, "yml") ||
         has_extension(cam->model_path, "json")) {
-        double K[9], dist[14];
-        int Ndist = 0;
-        rs_err e = {0};
-        rs_status st = rs_site_opencv_read_intrinsics(K, dist, &Ndist, &cam->width, &cam->height,
-                                                      cam->model_path, &e);
-        if (st == RS_ERR_NOMEM) c->r->nomem = true;
-        // e.msg starts with the path, which the diagnostic names already
-        size_t n = strlen(cam->model_path);
-        const char *what = strncmp(e.msg, cam->model_path, n) ? e.msg : e.msg + n + (e.msg[n] == ':' ? 2 : 0);
-        if (st != RS_OK) ERR(c, st, NULL, "%s", what);
-        else opencv_to_mrcal(c, cam, K, dist, Ndist);
+        if (rs_camera_read(&cam->camera, NULL, cam->model_path, &e)) camera_error(c, cam, &e);
+        else if (cam->camera.width == 0 || cam->camera.height == 0) {
+            ERR(c, RS_ERR_PARSE, cam->camera.width == 0 ? "image_width" : "image_height", "missing");
+            rs_camera_free(&cam->camera);
+        }
         goto done;
     }
     size_t len = 0;
@@ -636,41 +593,11 @@ static void read_camera_model(reader *c, rs_site_camera *cam, int i)
     if (!text) goto done;
     int line = 0;
     const char *bad = cameramodel_precheck(text, len, &line);
-    if (bad) {
-        ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
-        free(text);
-        goto done;
-    }
-    mrcal_cameramodel_t *m = mrcal_read_cameramodel_string(text, (int)len);
+    if (bad) ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
+    else if (rs_camera_read_cameramodel_text(&cam->camera, text, len, cam->model_path, &e)) camera_error(c, cam, &e);
+    else memset(cam->camera.rt_cam_enu, 0, sizeof cam->camera.rt_cam_enu); // intrinsics only
     free(text);
-    if (!m) {
-        ERR(c, RS_ERR_PARSE, NULL,
-            "not a valid mrcal .cameramodel (mrcal's reader prints the reason on stderr; it needs "
-            "lensmodel, intrinsics, imagersize and extrinsics)");
-        goto done;
-    }
-    int n = mrcal_lensmodel_num_params(&m->lensmodel);
-    bool finite = true;
-    for (int k = 0; k < n; k++) finite = finite && isfinite(m->intrinsics[k]);
-    if (m->imagersize[0] < 1 || m->imagersize[1] < 1 || m->imagersize[0] > 1000000 ||
-        m->imagersize[1] > 1000000) {
-        ERR(c, RS_ERR_INVALID, "imagersize", "%u x %u is not an image size", m->imagersize[0], m->imagersize[1]);
-    } else if (!finite) {
-        ERR(c, RS_ERR_INVALID, "intrinsics", "not all finite");
-    } else if (mrcal_lensmodel_metadata(&m->lensmodel).has_core && !(m->intrinsics[0] > 0 && m->intrinsics[1] > 0)) {
-        ERR(c, RS_ERR_INVALID, "intrinsics", "fx = %g, fy = %g: both must be > 0", m->intrinsics[0], m->intrinsics[1]);
-    } else {
-        cam->lensmodel = m->lensmodel;
-        cam->Nintrinsics = n;
-        cam->width = (int)m->imagersize[0];
-        cam->height = (int)m->imagersize[1];
-        cam->intrinsics = malloc((size_t)n * sizeof(double));
-        if (cam->intrinsics) memcpy(cam->intrinsics, m->intrinsics, (size_t)n * sizeof(double));
-        else c->r->nomem = true;
-    }
-    mrcal_free_cameramodel(&m);
 done:
-    if (!cam->intrinsics) cam->width = cam->height = 0; // no usable model: no bounds check
     c->file = NULL;
 }
 
@@ -913,7 +840,7 @@ void rs_site_free(rs_site *site)
         free(cam->observations_path);
         free(cam->backgrounds_path);
         free(cam->note);
-        free(cam->intrinsics);
+        rs_camera_free(&cam->camera);
         free(cam->observations);
     }
     free(site->cameras);

@@ -33,10 +33,9 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include <mrcal/mrcal.h>
-
-#include "rs_geo.h"
-#include "rs_status.h"
+#include "core/rs_camera.h"
+#include "core/rs_status.h"
+#include "geo/rs_geo.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -69,10 +68,9 @@ typedef struct {
     char *backgrounds_path;         // owned; may be NULL (no "backgrounds" given)
     char *note;                     // owned; may be NULL
 
-    mrcal_lensmodel_t lensmodel;    // mrcal lens model (OpenCV files are converted)
-    double *intrinsics;             // owned, (Nintrinsics,): fx fy cx cy, then the distortions
-    int Nintrinsics;                // mrcal_lensmodel_num_params(&lensmodel)
-    int width, height;              // image size, pixels
+    rs_camera camera;               // owned: the nominal lens model, intrinsics and image size
+                                    //   (OpenCV files are converted); pose zero. Zeroed (no
+                                    //   intrinsics, size 0 x 0) when the model file is unusable
 
     rs_site_observation *observations; // owned, (Nobservations,)
     int Nobservations;

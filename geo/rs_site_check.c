@@ -8,8 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_io.h"
-#include "rs_site_internal.h"
+#include "core/rs_io.h"
+#include "geo/internal/rs_site_internal.h"
 
 // A camera needs at least this many landmarks picked: the fewest that determine a pose without
 // ambiguity (P3P has up to four solutions).
@@ -229,9 +229,9 @@ bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam,
 {
     const char *file = cam->observations_path;
     bool ok = true;
-    if (cam->width > 0 && cam->height > 0) {
+    if (cam->camera.width > 0 && cam->camera.height > 0) {
         const char *axis[2] = {"u", "v"};
-        const int size[2] = {cam->width, cam->height};
+        const int size[2] = {cam->camera.width, cam->camera.height};
         for (int k = 0; k < 2; k++) {
             if (obs->q_px[k] >= -0.5 && obs->q_px[k] <= size[k] - 0.5) continue;
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, axis[k],

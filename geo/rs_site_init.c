@@ -13,8 +13,8 @@
 
 #include <cjson/cJSON.h>
 
-#include "rs_io.h"
-#include "rs_site.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
 
 // The files and folders of a skeleton, relative to the site folder, in creation order.
 static const char *const skeleton_dirs[] = {"cameras", "observations", "backgrounds", "backgrounds/cam1"};

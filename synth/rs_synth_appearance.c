@@ -1,6 +1,6 @@
 // rs_synth_appearance.c -- exposure, white balance, noise, blur and JPEG quality of a background,
 // applied to a rendered vehicle layer (rs_synth_appearance.h, docs/appearance.md).
-#include "rs_synth_appearance.h"
+#include "synth/rs_synth_appearance.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -9,8 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_io.h"
-#include "rs_simulate.h"
+#include "core/rs_io.h"
+#include "core/rs_rng.h"
 
 static double srgb_decode_formula(double v)
 {
@@ -101,20 +101,20 @@ static double median_f(float *v, size_t n)
     return 0.5 * (lower + upper);
 }
 
-rs_status rs_synth_estimate_noise(double *sigma, const rs_synth_image *img, rs_err *err)
+rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *err)
 {
     static const double M[9] = {1, -2, 1, -2, 4, -2, 1, -2, 1};
     *sigma = NAN;
     const int W = img->width, H = img->height, C = img->channels < 4 ? img->channels : 3;
     if (W < 3 || H < 3)
         return rs_err_set(err, RS_ERR_DEGENERATE, "noise: image smaller than 3x3");
-    rs_synth_image f = {0};
+    rs_image f = {0};
     rs_status st = rs_synth_image_filter(&f, img, M, 3, 3, err);
     if (st)
         return st;
     float *v = malloc(sizeof(float) * (size_t)(W - 2) * (H - 2) * C);
     if (!v) {
-        rs_synth_image_free(&f);
+        rs_image_free(&f);
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     }
     size_t n = 0;
@@ -124,14 +124,14 @@ rs_status rs_synth_estimate_noise(double *sigma, const rs_synth_image *img, rs_e
                 v[n++] = fabsf(f.data[((size_t)y * W + x) * img->channels + c]);
     *sigma = 1.482602218505602 * median_f(v, n) / 6.0;
     free(v);
-    rs_synth_image_free(&f);
+    rs_image_free(&f);
     return RS_OK;
 }
 
 // Luma (mean of the first three channels, or the only one) as a 1-channel image.
-static rs_status luma(rs_synth_image *out, const rs_synth_image *img, rs_err *err)
+static rs_status luma(rs_image *out, const rs_image *img, rs_err *err)
 {
-    rs_status st = rs_synth_image_alloc(out, img->width, img->height, 1, err);
+    rs_status st = rs_image_alloc(out, img->width, img->height, 1, err);
     if (st)
         return st;
     const int C = img->channels, Cm = C >= 3 ? 3 : 1;
@@ -145,14 +145,14 @@ static rs_status luma(rs_synth_image *out, const rs_synth_image *img, rs_err *er
 }
 
 // Gradient magnitude by central differences (kernel [-1/2, 0, 1/2] in x and y).
-static rs_status gradient(rs_synth_image *mag, const rs_synth_image *g, rs_err *err)
+static rs_status gradient(rs_image *mag, const rs_image *g, rs_err *err)
 {
     static const double kx[3] = {-0.5, 0, 0.5};
-    rs_synth_image gx = {0}, gy = {0};
+    rs_image gx = {0}, gy = {0};
     rs_status st;
     if ((st = rs_synth_image_filter(&gx, g, kx, 3, 1, err)) ||
         (st = rs_synth_image_filter(&gy, g, kx, 1, 3, err)) ||
-        (st = rs_synth_image_alloc(mag, g->width, g->height, 1, err)))
+        (st = rs_image_alloc(mag, g->width, g->height, 1, err)))
         goto done;
     for (size_t p = 0; p < (size_t)g->width * g->height; p++)
         mag->data[p] = hypotf(gx.data[p], gy.data[p]);
@@ -161,17 +161,17 @@ static rs_status gradient(rs_synth_image *mag, const rs_synth_image *g, rs_err *
         if (fabsf(gy.data[p]) > fabsf(gx.data[p]))
             mag->data[p] = -mag->data[p];
 done:
-    rs_synth_image_free(&gx);
-    rs_synth_image_free(&gy);
+    rs_image_free(&gx);
+    rs_image_free(&gy);
     return st;
 }
 
-rs_status rs_synth_estimate_blur(double *sigma_px, const rs_synth_image *img, rs_err *err)
+rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *err)
 {
     const double sr = 2.0;
     *sigma_px = NAN;
     const int W = img->width, H = img->height;
-    rs_synth_image g = {0}, gb = {0}, m = {0}, mb = {0};
+    rs_image g = {0}, gb = {0}, m = {0}, mb = {0};
     float *sel = NULL, *est = NULL;
     rs_status st;
     if ((st = luma(&g, img, err)) || (st = rs_synth_image_blur(&gb, &g, sr, err)) ||
@@ -212,15 +212,15 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_synth_image *img, rs
 done:
     free(sel);
     free(est);
-    rs_synth_image_free(&g);
-    rs_synth_image_free(&gb);
-    rs_synth_image_free(&m);
-    rs_synth_image_free(&mb);
+    rs_image_free(&g);
+    rs_image_free(&gb);
+    rs_image_free(&m);
+    rs_image_free(&mb);
     return st;
 }
 
-rs_status rs_synth_estimate_gain(double gain[3], const rs_synth_image *t,
-                                 const rs_synth_image *ref, const uint8_t *mask, rs_err *err)
+rs_status rs_synth_estimate_gain(double gain[3], const rs_image *t,
+                                 const rs_image *ref, const uint8_t *mask, rs_err *err)
 {
     gain[0] = gain[1] = gain[2] = NAN;
     if (t->channels < 3 || (ref && (ref->channels < 3 || ref->width != t->width ||
@@ -341,23 +341,23 @@ rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact, const char *p
 // ---- all together ----
 
 rs_status rs_synth_appearance_estimate(rs_synth_appearance *out, const char *background_path,
-                                       const rs_synth_image *reference, rs_err *err)
+                                       const rs_image *reference, rs_err *err)
 {
     memset(out, 0, sizeof(*out));
-    rs_synth_image bg = {0};
+    rs_image bg = {0};
     int exact;
     rs_status st;
-    if ((st = rs_synth_image_read(&bg, background_path, err)) ||
+    if ((st = rs_image_read(&bg, background_path, err)) ||
         (st = rs_synth_estimate_gain(out->gain, &bg, reference, NULL, err)) ||
         (st = rs_synth_estimate_noise(&out->noise_sigma, &bg, err)) ||
         (st = rs_synth_estimate_blur(&out->blur_sigma_px, &bg, err)) ||
         (st = rs_synth_estimate_jpeg_quality(&out->jpeg_quality, &exact, background_path, err)))
         rs_err_prefix(err, "%s", background_path);
-    rs_synth_image_free(&bg);
+    rs_image_free(&bg);
     return st;
 }
 
-rs_status rs_synth_appearance_apply(rs_synth_image *img, const rs_synth_appearance *a,
+rs_status rs_synth_appearance_apply(rs_image *img, const rs_synth_appearance *a,
                                     double layer_blur_sigma_px, uint64_t seed, rs_err *err)
 {
     if (img->channels != 4)
@@ -372,15 +372,15 @@ rs_status rs_synth_appearance_apply(rs_synth_image *img, const rs_synth_appearan
     const double s2 = a->blur_sigma_px * a->blur_sigma_px - layer_blur_sigma_px *
                                                                 layer_blur_sigma_px;
     if (s2 > 1e-6) {
-        rs_synth_image b = {0};
+        rs_image b = {0};
         rs_status st = rs_synth_image_blur(&b, img, sqrt(s2), err);
         if (st)
             return st;
         memcpy(d, b.data, sizeof(float) * 4 * N);
-        rs_synth_image_free(&b);
+        rs_image_free(&b);
     }
-    rs_simulate_rng rng;
-    rs_simulate_rng_seed(&rng, seed);
+    rs_rng rng;
+    rs_rng_seed(&rng, seed);
     for (size_t p = 0; p < N; p++) {
         const float al = d[4 * p + 3];
         for (int c = 0; c < 3; c++) {
@@ -391,7 +391,7 @@ rs_status rs_synth_appearance_apply(rs_synth_image *img, const rs_synth_appearan
                 const double slope = (rs_synth_srgb_decode(fmin(1, e + h)) -
                                       rs_synth_srgb_decode(fmax(0, e - h))) /
                                      (fmin(1, e + h) - fmax(0, e - h));
-                v += (float)(a->noise_sigma * slope * rs_simulate_rng_normal(&rng));
+                v += (float)(a->noise_sigma * slope * rs_rng_normal(&rng));
             }
             d[4 * p + c] = v < 0 ? 0 : v;
         }
@@ -399,16 +399,16 @@ rs_status rs_synth_appearance_apply(rs_synth_image *img, const rs_synth_appearan
     return RS_OK;
 }
 
-rs_status rs_synth_appearance_jpeg(rs_synth_image *srgb, const rs_synth_appearance *a,
+rs_status rs_synth_appearance_jpeg(rs_image *srgb, const rs_synth_appearance *a,
                                    rs_err *err)
 {
     if (a->jpeg_quality <= 0)
         return RS_OK;
-    rs_synth_image out = {0};
+    rs_image out = {0};
     rs_status st = rs_synth_image_jpeg_roundtrip(&out, srgb, a->jpeg_quality, err);
     if (st)
         return st;
-    rs_synth_image_free(srgb);
+    rs_image_free(srgb);
     *srgb = out;
     return RS_OK;
 }

@@ -2,13 +2,13 @@
 // camera of its background: exposure and white balance, sensor noise, blur, JPEG quality
 // (the seed paper's "reality enhancement", done classically; docs/appearance.md).
 //
-// Images are rs_synth_image (synth/rs_synth_opencv.h): floats in [0,1]. "sRGB" images hold the
+// Images are rs_image (synth/rs_synth_opencv.h): floats in [0,1]. "sRGB" images hold the
 // stored (gamma-encoded) values of a photograph; "linear" ones linear light (IEC 61966-2-1
 // transfer function). Filters go through OpenCV (rs_synth_image_filter / _blur).
 #pragma once
 #include <stdint.h>
-#include "rs_status.h"
-#include "rs_synth_opencv.h"
+#include "core/rs_status.h"
+#include "synth/rs_synth_opencv.h"
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -27,7 +27,7 @@ double rs_synth_srgb_encode(double v);
 // channel's interior pixels), so that edges and texture (a minority of pixels) do not count.
 // Accuracy: within 3% on a flat image with sigma in [0.005, 0.05] (tests/synth/test_appearance.py);
 // texture covering most pixels biases it upwards.
-rs_status rs_synth_estimate_noise(double *sigma, const rs_synth_image *img, rs_err *err);
+rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *err);
 
 // Blur: the standard deviation (pixels) of a Gaussian blur of the image's edges.
 // Method: re-blur gradient ratio (S. Zhuo, T. Sim, "Defocus map estimation from a single image",
@@ -39,7 +39,7 @@ rs_status rs_synth_estimate_noise(double *sigma, const rs_synth_image *img, rs_e
 // the luma (mean of the channels). Accuracy: within 0.2 px for sigma in [1, 3] on step edges
 // spaced > 8 sigma apart (tests); a perfectly sharp step reads about 0.6 px (pixel sampling).
 // Returns RS_ERR_DEGENERATE when the image has fewer than 20 edge pixels.
-rs_status rs_synth_estimate_blur(double *sigma_px, const rs_synth_image *img, rs_err *err);
+rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *err);
 
 // Exposure and white balance: per-channel linear gains g_c with target ~ g_c reference,
 // g_c = mean(target_c) / mean(reference_c) in linear light over the pixels where neither image
@@ -51,7 +51,7 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_synth_image *img, rs
 // Returns RS_ERR_DEGENERATE with fewer than 100 usable pixels, RS_ERR_INVALID for size mismatch.
 rs_status rs_synth_estimate_gain(double gain[3],
                                  // in
-                                 const rs_synth_image *target, const rs_synth_image *reference,
+                                 const rs_image *target, const rs_image *reference,
                                  const uint8_t *mask, rs_err *err);
 
 // JPEG quality of a file: its quantisation tables (DQT segments) compared with the IJG (libjpeg)
@@ -79,7 +79,7 @@ typedef struct {
 rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
                                        // in
                                        const char *background_path,
-                                       const rs_synth_image *reference, rs_err *err);
+                                       const rs_image *reference, rs_err *err);
 
 // Applies an appearance to a rendered vehicle layer (linear light, straight alpha, (H,W,4)), in
 // place: colour x gain; then a Gaussian blur of sqrt(max(0, blur^2 - layer_blur^2)) px on the
@@ -89,13 +89,13 @@ rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
 // `seed` (deterministic). JPEG quality is applied to the composite: rs_synth_appearance_jpeg.
 // in: layer_blur_sigma_px: the layer's own blur (e.g. rs_synth_estimate_blur of its alpha)
 rs_status rs_synth_appearance_apply(// in,out
-                                    rs_synth_image *rgba_linear,
+                                    rs_image *rgba_linear,
                                     // in
                                     const rs_synth_appearance *a, double layer_blur_sigma_px,
                                     uint64_t seed, rs_err *err);
 
 // JPEG round trip of an sRGB composite at a->jpeg_quality (nothing when 0), in place.
-rs_status rs_synth_appearance_jpeg(rs_synth_image *srgb, const rs_synth_appearance *a,
+rs_status rs_synth_appearance_jpeg(rs_image *srgb, const rs_synth_appearance *a,
                                    rs_err *err);
 
 #ifdef __cplusplus

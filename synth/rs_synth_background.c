@@ -1,6 +1,6 @@
 // rs_synth_background.c -- temporal-median backgrounds, digital-twin backgrounds and their tags
 // in site.json (rs_synth_background.h, docs/backgrounds.md).
-#include "rs_synth_background.h"
+#include "synth/rs_synth_background.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -11,13 +11,13 @@
 
 #include <cjson/cJSON.h>
 
-#include "rs_io.h"
-#include "rs_synth_camera.h"
-#include "rs_synth_opencv.h"
-#include "rs_synth_render.h"
-#include "rs_synth_scene.h"
-#include "rs_synth_sun.h"
-#include "rs_synth_traffic.h"
+#include "core/rs_io.h"
+#include "synth/rs_synth_camera.h"
+#include "synth/rs_synth_opencv.h"
+#include "synth/rs_synth_render.h"
+#include "synth/rs_synth_scene.h"
+#include "synth/rs_synth_sun.h"
+#include "synth/rs_synth_traffic.h"
 
 // ---- temporal median ----
 
@@ -348,7 +348,7 @@ static void write_pov_point(FILE *f, double e, double n, double up)
 
 // One lane-edge marking along a polyline offset sideways by `offset_m` (left positive), as flat
 // triangles 5 mm above the ground.
-static void write_marking(FILE *f, const rs_synth_lane *lane, double offset_m, double half_w,
+static void write_marking(FILE *f, const rs_lane *lane, double offset_m, double half_w,
                           const rs_site *site)
 {
     for (int i = 0; i + 1 < lane->Npoints; i++) {
@@ -382,7 +382,7 @@ static void write_marking(FILE *f, const rs_synth_lane *lane, double offset_m, d
 }
 
 static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *cam,
-                                  const rs_site *site, const rs_synth_lanes *lanes,
+                                  const rs_site *site, const rs_lanes *lanes,
                                   const weather_look *look, double sun_az, double sun_el,
                                   double marking_width_m, rs_err *err)
 {
@@ -493,10 +493,10 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
     if (conditions_out)
         *conditions_out = look->name;
 
-    rs_synth_lanes lanes = {0};
+    rs_lanes lanes = {0};
     rs_synth_canvas canvas;
     rs_synth_povcam cam;
-    rs_synth_image img = {0}, lens = {0};
+    rs_image img = {0}, lens = {0};
     float *map = NULL;
     char *pov = rs_io_join(work_dir, "twin.pov"), *png = rs_io_join(work_dir, "twin.png"),
          *log = rs_io_join(work_dir, "povray.log");
@@ -504,7 +504,7 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if (lanes_path && (st = rs_synth_lanes_read(&lanes, lanes_path, &site->origin, err)))
+    if (lanes_path && (st = rs_lanes_read(&lanes, lanes_path, site, err)))
         goto done;
     if ((st = rs_io_mkdir_p(work_dir, err)) ||
         (st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
@@ -513,7 +513,7 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
                                    err)) ||
         (st = write_twin_scene(pov, &cam, site, &lanes, look, az, el, o.marking_width_m, err)) ||
         (st = run_twin_povray(povray, work_dir, canvas.width, canvas.height, o.antialias, err)) ||
-        (st = rs_synth_image_read(&img, png, err)))
+        (st = rs_image_read(&img, png, err)))
         goto done;
     if (img.width != canvas.width || img.height != canvas.height) {
         st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
@@ -521,12 +521,12 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
         goto done;
     }
     if (canvas.identity) {
-        st = rs_synth_image_write(out_png, &img, 8, err);
+        st = rs_image_write(out_png, &img, 8, err);
     } else {
         if ((st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics, width, height, err)) ||
             (st = rs_synth_remap(&lens, &img, map, width, height, 1, err)))
             goto done;
-        st = rs_synth_image_write(out_png, &lens, 8, err);
+        st = rs_image_write(out_png, &lens, 8, err);
     }
     if (!st) {
         remove(pov);
@@ -534,9 +534,9 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
         remove(log);
     }
 done:
-    rs_synth_lanes_free(&lanes);
-    rs_synth_image_free(&img);
-    rs_synth_image_free(&lens);
+    rs_lanes_free(&lanes);
+    rs_image_free(&img);
+    rs_image_free(&lens);
     free(map);
     free(pov);
     free(png);

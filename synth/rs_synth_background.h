@@ -12,8 +12,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <mrcal/mrcal.h>
-#include "rs_site.h"
-#include "rs_status.h"
+#include "geo/rs_site.h"
+#include "core/rs_status.h"
 #ifdef __cplusplus
 extern "C" {
 #endif

@@ -1,6 +1,6 @@
 // rs_synth_camera.c -- the POV-Ray camera of a calibrated camera; the pinhole canvas of a
 // distorted lens. See rs_synth_camera.h and docs/povray.md.
-#include "rs_synth_camera.h"
+#include "synth/rs_synth_camera.h"
 
 #include <math.h>
 #include <stdlib.h>

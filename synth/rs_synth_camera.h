@@ -21,7 +21,7 @@
 
 #include <mrcal/mrcal.h>
 
-#include "rs_status.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {

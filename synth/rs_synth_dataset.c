@@ -1,7 +1,7 @@
 // rs_synth_dataset.c -- `roadside synth`: the per-image pipeline, shards, resume, merge.
 #define _POSIX_C_SOURCE 200809L
 #define _XOPEN_SOURCE 700
-#include "rs_synth_dataset.h"
+#include "synth/rs_synth_dataset.h"
 
 #include <errno.h>
 #include <dirent.h>
@@ -20,14 +20,14 @@
 #include <cJSON.h>
 #include <mrcal/mrcal.h>
 
-#include "rs_calib_site.h"
-#include "rs_io.h"
-#include "rs_site.h"
-#include "rs_synth_appearance.h"
-#include "rs_synth_labels.h"
-#include "rs_synth_render.h"
-#include "rs_synth_scene.h"
-#include "rs_synth_traffic.h"
+#include "core/rs_camera.h"
+#include "core/rs_io.h"
+#include "geo/rs_site.h"
+#include "synth/rs_synth_appearance.h"
+#include "synth/rs_synth_labels.h"
+#include "synth/rs_synth_render.h"
+#include "synth/rs_synth_scene.h"
+#include "synth/rs_synth_traffic.h"
 
 void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
 {
@@ -76,15 +76,15 @@ typedef struct {
     bool overcast;     // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
     bool night;        // conditions night: no shadow at all
     // cache, filled at first use: the image at the output size, its appearance
-    rs_synth_image fitted;
-    rs_synth_image linear; // fitted, decoded from sRGB to linear light
+    rs_image fitted;
+    rs_image linear; // fitted, decoded from sRGB to linear light
     rs_synth_appearance app;
     bool app_ok;       // the appearance could be estimated
 } background;
 
 typedef struct {
     const char *id;
-    rs_calib_camera cam;  // at the output size
+    rs_camera cam;  // at the output size
     background *bg;       // (Nbg,) owned: the backgrounds passing the filters
     int Nbg;
     // cache, filled at first use: the POV-Ray canvas of the lens and its resampling map
@@ -155,7 +155,7 @@ static rs_status read_backgrounds(camera *c, const char *site_dir, const cJSON *
 
 // Scales a camera to width x height: fx, fy, cx, cy with the pixel-centre origin
 // (c' = (c + 0.5) s - 0.5); distortion untouched (it acts on normalised coordinates).
-static rs_status scale_camera(rs_calib_camera *cam, int width, int height, const char *id,
+static rs_status scale_camera(rs_camera *cam, int width, int height, const char *id,
                               rs_err *err)
 {
     if (width <= 0 || (width == cam->width && height == cam->height))
@@ -185,9 +185,9 @@ static rs_status background_fit(background *b, int width, int height, rs_err *er
 {
     if (b->fitted.data)
         return RS_OK;
-    rs_synth_image src = {0};
+    rs_image src = {0};
     float *map = NULL;
-    rs_status st = rs_synth_image_read(&src, b->file, err);
+    rs_status st = rs_image_read(&src, b->file, err);
     if (st)
         return st;
     if (src.channels < 3) {
@@ -206,7 +206,7 @@ static rs_status background_fit(background *b, int width, int height, rs_err *er
             map[2 * ((size_t)v * width + u) + 1] = (float)((v + 0.5) * sy - 0.5);
         }
     if ((st = rs_synth_remap(&b->fitted, &src, map, width, height, 1, err)) ||
-        (st = rs_synth_image_alloc(&b->linear, width, height, 3, err)))
+        (st = rs_image_alloc(&b->linear, width, height, 3, err)))
         goto done;
     for (size_t i = 0; i < (size_t)width * height; i++)
         for (int c = 0; c < 3; c++)
@@ -215,14 +215,14 @@ static rs_status background_fit(background *b, int width, int height, rs_err *er
     b->app_ok = rs_synth_appearance_estimate(&b->app, b->file, NULL, NULL) == RS_OK;
 done:
     free(map);
-    rs_synth_image_free(&src);
+    rs_image_free(&src);
     return st;
 }
 
 typedef struct {
     const rs_synth_dataset_options *opt;
     rs_site *site;
-    rs_synth_lanes lanes;
+    rs_lanes lanes;
     camera *cams;
     int Ncams;
     char *split_dir, *parts_dir, *work_root;
@@ -235,7 +235,7 @@ typedef struct {
 // ratio is the render's shadow pass (rs_synth_render_result.shadow: the ground alone, lit by
 // parallel lights, is uniform and needs no pass). On background pixels (id 0) the background
 // in linear light is multiplied by it (in [0, 1]: only shadows, no added light).
-static void shade_background(rs_synth_image *bg_lin, const float *shadow, const uint16_t *ids)
+static void shade_background(rs_image *bg_lin, const float *shadow, const uint16_t *ids)
 {
     const size_t n = (size_t)bg_lin->width * (size_t)bg_lin->height;
     for (size_t i = 0; i < n; i++) {
@@ -257,14 +257,14 @@ static rs_status composite(rs_synth_render_result *r, const background *b, uint6
     const bool matched = b->app_ok;
     rs_status st = RS_OK;
     const size_t n = (size_t)r->width * (size_t)r->height;
-    rs_synth_image lin = {0};
-    if ((st = rs_synth_image_alloc(&lin, r->width, r->height, 3, err)))
+    rs_image lin = {0};
+    if ((st = rs_image_alloc(&lin, r->width, r->height, 3, err)))
         goto done;
     memcpy(lin.data, b->linear.data, sizeof(float) * 3 * n);
     if (r->shadow)
         shade_background(&lin, r->shadow, r->ids);
     if (matched && (st = rs_synth_appearance_apply(&r->rgba, &app, 0.6, seed, err))) {
-        rs_synth_image_free(&lin);
+        rs_image_free(&lin);
         goto done;
     }
     for (size_t i = 0; i < n; i++) {
@@ -275,7 +275,7 @@ static rs_status composite(rs_synth_render_result *r, const background *b, uint6
                 (float)rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
         }
     }
-    rs_synth_image_free(&lin);
+    rs_image_free(&lin);
     if (matched)
         st = rs_synth_appearance_jpeg(&r->composite, &app, err);
 done:
@@ -334,7 +334,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     ropt.povray = opt->povray;
     ropt.write_files = false; // the dataset composites and writes the image itself
     if (!c->have_canvas) {
-        const rs_calib_camera *cc = &c->cam;
+        const rs_camera *cc = &c->cam;
         if ((st = rs_synth_canvas_for_lens(&c->canvas, &cc->lensmodel, cc->intrinsics, cc->width,
                                            cc->height, 1, err)) ||
             (!c->canvas.identity &&
@@ -428,7 +428,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
         ids[i] = v[i].id;
     if ((st = rs_synth_prepare_lod(&prepared, v, NULL, N, coarse, err)))
         goto done;
-    const rs_calib_camera *cam = &c->cam;
+    const rs_camera *cam = &c->cam;
     if ((st = rs_synth_render(&r, work, &cam->lensmodel, cam->intrinsics, cam->width, cam->height,
                               cam->rt_cam_enu, d->site->ground_normal_enu,
                               d->site->ground_offset_m, &prepared, &ropt, err)))
@@ -461,7 +461,7 @@ static rs_status make_image(dataset *d, int k, const char *stem, camera *c, bool
     }
     if ((st = rs_synth_labels_write_yolo(opt->out_dir, opt->split, &img, 1, &lopt, err)) ||
         (st = rs_synth_labels_write_kitti(opt->out_dir, &img, 1, &lopt, err)) ||
-        (st = rs_synth_image_write(image, &r.composite, 8, err)) ||
+        (st = rs_image_write(image, &r.composite, 8, err)) ||
         (st = rs_synth_labels_write_coco(work, opt->split, &img, 1, &lopt, err)))
         goto done;
     if (rename(part_tmp, part) != 0) {
@@ -610,18 +610,18 @@ static rs_status coco_write(coco_acc *a, const char *path, int *Nimages, int *Na
 static void dataset_free(dataset *d)
 {
     for (int i = 0; i < d->Ncams; i++) {
-        rs_calib_camera_free(&d->cams[i].cam);
+        rs_camera_free(&d->cams[i].cam);
         for (int b = 0; b < d->cams[i].Nbg; b++) {
             free(d->cams[i].bg[b].file);
             free(d->cams[i].bg[b].time_iso);
-            rs_synth_image_free(&d->cams[i].bg[b].fitted);
-            rs_synth_image_free(&d->cams[i].bg[b].linear);
+            rs_image_free(&d->cams[i].bg[b].fitted);
+            rs_image_free(&d->cams[i].bg[b].linear);
         }
         free(d->cams[i].bg);
         free(d->cams[i].canvas_map);
     }
     free(d->cams);
-    rs_synth_lanes_free(&d->lanes);
+    rs_lanes_free(&d->lanes);
     rs_site_free(d->site);
     free(d->split_dir);
     free(d->parts_dir);
@@ -644,7 +644,7 @@ static rs_status dataset_load(dataset *d, rs_err *err)
                         "lanes (docs/traffic.md)", path);
         goto done;
     }
-    if ((st = rs_synth_lanes_read(&d->lanes, path, &d->site->origin, err)))
+    if ((st = rs_lanes_read(&d->lanes, path, d->site, err)))
         goto done;
     free(path);
     path = rs_io_join(opt->site_dir, "site.json");
@@ -674,7 +674,7 @@ static rs_status dataset_load(dataset *d, rs_err *err)
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             goto done;
         }
-        if ((st = rs_calib_camera_read(&c->cam, path, err)) ||
+        if ((st = rs_camera_read(&c->cam, NULL, path, err)) ||
             (st = scale_camera(&c->cam, opt->width, opt->height, id, err)) ||
             (st = read_backgrounds(c, opt->site_dir, site_json, opt, err)))
             goto done;

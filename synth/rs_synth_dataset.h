@@ -36,7 +36,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "rs_status.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {

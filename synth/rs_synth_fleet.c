@@ -1,13 +1,13 @@
 // rs_synth_fleet.c -- procedural vehicles (lofted bodies, wheels, glazing, lights), class ranges
 // and colours, POV-Ray mesh2 declarations. docs/fleet.md explains the shapes and the sources.
-#include "rs_synth_fleet.h"
+#include "synth/rs_synth_fleet.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_io.h"
-#include "rs_simulate.h"
+#include "core/rs_io.h"
+#include "core/rs_rng.h"
 
 // ---------------------------------------------------------------- classes and ranges
 
@@ -56,14 +56,14 @@ rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls
 // Independent streams per drawn quantity, so that giving one value never changes the others.
 enum { STREAM_LENGTH = 1, STREAM_WIDTH, STREAM_HEIGHT, STREAM_COLOUR, STREAM_SHAPE, STREAM_CLASS };
 
-static rs_simulate_rng stream(uint64_t variant, int which) {
-    rs_simulate_rng rng;
-    rs_simulate_rng_seed(&rng, variant * 0x9E3779B97F4A7C15ull + (uint64_t)which * 0xD1B54A32D192ED03ull);
+static rs_rng stream(uint64_t variant, int which) {
+    rs_rng rng;
+    rs_rng_seed(&rng, variant * 0x9E3779B97F4A7C15ull + (uint64_t)which * 0xD1B54A32D192ED03ull);
     return rng;
 }
 
-static double uniform_in(rs_simulate_rng *rng, const double range[2]) {
-    return range[0] + (range[1] - range[0]) * rs_simulate_rng_uniform(rng);
+static double uniform_in(rs_rng *rng, const double range[2]) {
+    return range[0] + (range[1] - range[0]) * rs_rng_uniform(rng);
 }
 
 // Paint colours and their shares. Shares from Axalta's 2022 Global Automotive Color Popularity
@@ -94,8 +94,8 @@ static double srgb_to_linear(double c) {
 }
 
 static void draw_paint(double rgb[3], uint64_t variant) {
-    rs_simulate_rng rng = stream(variant, STREAM_COLOUR);
-    double u = rs_simulate_rng_uniform(&rng), acc = 0;
+    rs_rng rng = stream(variant, STREAM_COLOUR);
+    double u = rs_rng_uniform(&rng), acc = 0;
     size_t n = sizeof paints / sizeof paints[0], k = n - 1;
     for (size_t i = 0; i < n; i++) {
         acc += paints[i].share;
@@ -104,9 +104,9 @@ static void draw_paint(double rgb[3], uint64_t variant) {
             break;
         }
     }
-    double d = (2 * rs_simulate_rng_uniform(&rng) - 1) * paints[k].jitter; // brightness
+    double d = (2 * rs_rng_uniform(&rng) - 1) * paints[k].jitter; // brightness
     for (int c = 0; c < 3; c++) {
-        double e = (2 * rs_simulate_rng_uniform(&rng) - 1) * paints[k].jitter * 0.3; // hue
+        double e = (2 * rs_rng_uniform(&rng) - 1) * paints[k].jitter * 0.3; // hue
         rgb[c] = srgb_to_linear(paints[k].srgb[c] + d + e);
     }
 }
@@ -129,7 +129,7 @@ rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *
         const double *ranges[3] = {r->length_m, r->width_m, r->height_m};
         for (int i = 0; i < 3; i++)
             if (*dims[i] == 0) {
-                rs_simulate_rng rng = stream(v.variant, STREAM_LENGTH + i);
+                rs_rng rng = stream(v.variant, STREAM_LENGTH + i);
                 *dims[i] = uniform_in(&rng, ranges[i]);
             }
     }
@@ -143,8 +143,8 @@ rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *
 }
 
 rs_status rs_synth_fleet_random(rs_synth_vehicle *out, uint64_t seed, rs_err *err) {
-    rs_simulate_rng rng = stream(seed, STREAM_CLASS);
-    double u = rs_simulate_rng_uniform(&rng), acc = 0;
+    rs_rng rng = stream(seed, STREAM_CLASS);
+    double u = rs_rng_uniform(&rng), acc = 0;
     rs_synth_vehicle v = {0};
     v.cls = RS_SYNTH_NCLASSES - 1;
     for (int i = 0; i < RS_SYNTH_NCLASSES; i++) {
@@ -425,19 +425,19 @@ static void add_wheel_pair(builder *b, double x, double half_width, double tyre_
 
 // Jitters a profile (variant-driven): t by +-dt, z by +-dz, keeping order, roof points (z = 1)
 // fixed at 1 so the height stays exact.
-static void jitter_profile(profile *p, rs_simulate_rng *rng, double dt, double dz) {
+static void jitter_profile(profile *p, rs_rng *rng, double dt, double dz) {
     for (int i = 0; i < p->n; i++) {
         if (i > 0 && i < p->n - 1) {
-            double t = p->t[i] + dt * (2 * rs_simulate_rng_uniform(rng) - 1);
+            double t = p->t[i] + dt * (2 * rs_rng_uniform(rng) - 1);
             double lo = p->t[i - 1] + 0.005, hi = p->t[i + 1] - 0.005;
             p->t[i] = t < lo ? lo : t > hi ? hi : t;
         }
-        if (p->z[i] < 1) p->z[i] = fmin(0.97, p->z[i] + dz * (2 * rs_simulate_rng_uniform(rng) - 1));
+        if (p->z[i] < 1) p->z[i] = fmin(0.97, p->z[i] + dz * (2 * rs_rng_uniform(rng) - 1));
     }
 }
 
-static double jit(rs_simulate_rng *rng, double x, double d) {
-    return x + d * (2 * rs_simulate_rng_uniform(rng) - 1);
+static double jit(rs_rng *rng, double x, double d) {
+    return x + d * (2 * rs_rng_uniform(rng) - 1);
 }
 
 static profile make_profile(int n, const double tz[][2]) {
@@ -478,7 +478,7 @@ rs_status rs_synth_fleet_build_lod(rs_synth_mesh *mesh, const rs_synth_vehicle *
         return rs_err_set(err, RS_ERR_INVALID,
                           "dimensions: %g x %g x %g m not resolved (rs_synth_fleet_resolve)", L, W,
                           H);
-    rs_simulate_rng rng = stream(v->variant, STREAM_SHAPE);
+    rs_rng rng = stream(v->variant, STREAM_SHAPE);
     builder b = {.nseg = coarse ? NSEG_COARSE : NSEG, .nwheel = coarse ? NWHEEL_COARSE : NWHEEL};
     double r, tw;
     switch (v->cls) {

@@ -16,8 +16,8 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "rs_status.h"
-#include "rs_synth.h"
+#include "core/rs_status.h"
+#include "synth/rs_synth.h"
 
 #ifdef __cplusplus
 extern "C" {

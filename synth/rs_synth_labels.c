@@ -1,6 +1,6 @@
 // rs_synth_labels.c -- per-vehicle labels through mrcal's projection, and the COCO / YOLO /
 // KITTI writers. docs/labels.md defines the fields; rs_synth_labels.h states the method.
-#include "rs_synth_labels.h"
+#include "synth/rs_synth_labels.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -9,7 +9,7 @@
 #include <cjson/cJSON.h>
 #include <mrcal/mrcal.h>
 
-#include "rs_io.h"
+#include "core/rs_io.h"
 
 #define EDGE_SAMPLES 64
 #define MAXPOLY 16
@@ -24,11 +24,11 @@ typedef struct {
 } clip_planes;
 
 typedef struct {
-    const rs_calib_camera *cam;
+    const rs_camera *cam;
     clip_planes planes;
 } projector;
 
-static rs_status projector_init(projector *pr, const rs_calib_camera *cam, rs_err *err) {
+static rs_status projector_init(projector *pr, const rs_camera *cam, rs_err *err) {
     pr->cam = cam;
     clip_planes *c = &pr->planes;
     c->N = 1;
@@ -131,7 +131,7 @@ static rs_status grow_by_polygon(double box[4], const projector *pr, const doubl
     return RS_OK;
 }
 
-static void to_cam(double p_cam[3], const rs_calib_camera *cam, const rs_synth_vehicle *v,
+static void to_cam(double p_cam[3], const rs_camera *cam, const rs_synth_vehicle *v,
                    double up_m, const double p_v[3]) {
     double p_enu[3];
     rs_synth_vehicle_to_enu(p_enu, v, up_m, p_v);
@@ -240,7 +240,7 @@ static rs_status full_pixels(long *count, const projector *pr, const rs_synth_ve
 static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synth_vehicle *v,
                            int k, double up_m, const rs_synth_mesh *mesh, int with_ids,
                            rs_err *err) {
-    const rs_calib_camera *cam = pr->cam;
+    const rs_camera *cam = pr->cam;
     double Lm = v->length_m, Wm = v->width_m, Hm = v->height_m;
     if (!(Lm > 0 && Wm > 0 && Hm > 0 && isfinite(Lm + Wm + Hm) && isfinite(up_m) &&
           isfinite(v->e_m) && isfinite(v->n_m) && isfinite(v->yaw_deg)))
@@ -313,7 +313,7 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
     return RS_OK;
 }
 
-rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_calib_camera *cam,
+rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam,
                                   const rs_synth_vehicle *vehicles, const double *up_m,
                                   int Nvehicles, const rs_synth_mesh *meshes,
                                   const uint16_t *id_image, rs_err *err) {

@@ -19,10 +19,10 @@
 #pragma once
 #include <stdint.h>
 
-#include "rs_calib_site.h"
-#include "rs_status.h"
-#include "rs_synth.h"
-#include "rs_synth_fleet.h"
+#include "core/rs_camera.h"
+#include "core/rs_status.h"
+#include "synth/rs_synth.h"
+#include "synth/rs_synth_fleet.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -71,7 +71,7 @@ typedef struct {
 rs_status rs_synth_labels_compute(// out
                                   rs_synth_label **labels,
                                   // in
-                                  const rs_calib_camera *cam, const rs_synth_vehicle *vehicles,
+                                  const rs_camera *cam, const rs_synth_vehicle *vehicles,
                                   const double *up_m, int Nvehicles, const rs_synth_mesh *meshes,
                                   const uint16_t *id_image, rs_err *err);
 

@@ -1,9 +1,9 @@
 // rs_synth_opencv.cc -- OpenCV shim: image files and resampling (rs_synth_opencv.h).
 // Every OpenCV exception is caught here and returned as an rs_status.
 extern "C" {
-#include "rs_synth_opencv.h"
+#include "synth/rs_synth_opencv.h"
 
-#include "rs_io.h"
+#include "core/rs_io.h"
 }
 
 #include <cstdlib>
@@ -19,120 +19,23 @@ namespace {
 
 int cv_type(int channels) { return CV_MAKETYPE(CV_32F, channels); }
 
-// A cv::Mat header over an rs_synth_image (no copy).
-cv::Mat wrap(const rs_synth_image *img)
+// A cv::Mat header over an rs_image (no copy).
+cv::Mat wrap(const rs_image *img)
 {
     return cv::Mat(img->height, img->width, cv_type(img->channels), img->data);
 }
 
-// File extension including the dot ("" when none), for cv::imencode.
-std::string extension(const char *path)
-{
-    const char *slash = std::strrchr(path, '/');
-    const char *dot = std::strrchr(path, '.');
-    if (!dot || (slash && dot < slash))
-        return "";
-    return dot;
-}
-
 } // namespace
 
-extern "C" rs_status rs_synth_image_alloc(rs_synth_image *img, int width, int height,
-                                          int channels, rs_err *err)
-{
-    *img = rs_synth_image{};
-    if (width <= 0 || height <= 0 || (channels != 1 && channels != 3 && channels != 4))
-        return rs_err_set(err, RS_ERR_INVALID, "image: bad size %dx%dx%d", width, height,
-                          channels);
-    img->data = static_cast<float *>(
-        std::calloc(static_cast<size_t>(width) * height * channels, sizeof(float)));
-    if (!img->data)
-        return rs_err_set(err, RS_ERR_NOMEM, "image %dx%d: out of memory", width, height);
-    img->width = width;
-    img->height = height;
-    img->channels = channels;
-    return RS_OK;
-}
-
-extern "C" void rs_synth_image_free(rs_synth_image *img)
-{
-    if (!img)
-        return;
-    std::free(img->data);
-    *img = rs_synth_image{};
-}
-
-extern "C" rs_status rs_synth_image_read(rs_synth_image *img, const char *path, rs_err *err)
-{
-    *img = rs_synth_image{};
-    try {
-        cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
-        if (m.empty())
-            return rs_err_set(err, RS_ERR_IO, "%s: cannot read the image (missing, or not an "
-                                              "image OpenCV can decode)", path);
-        double unit;
-        switch (m.depth()) {
-        case CV_8U: unit = 255.0; break;
-        case CV_16U: unit = 65535.0; break;
-        case CV_32F: unit = 1.0; break;
-        default:
-            return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: unsupported pixel depth", path);
-        }
-        const int channels = m.channels();
-        if (channels == 3)
-            cv::cvtColor(m, m, cv::COLOR_BGR2RGB);
-        else if (channels == 4)
-            cv::cvtColor(m, m, cv::COLOR_BGRA2RGBA);
-        else if (channels != 1)
-            return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: %d channels", path, channels);
-        rs_status st = rs_synth_image_alloc(img, m.cols, m.rows, channels, err);
-        if (st)
-            return st;
-        cv::Mat out = wrap(img);
-        m.convertTo(out, cv_type(channels), 1.0 / unit);
-        return RS_OK;
-    } catch (const std::exception &e) {
-        rs_synth_image_free(img);
-        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: %s", path, e.what());
-    } catch (...) {
-        rs_synth_image_free(img);
-        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: unknown exception", path);
-    }
-}
-
-extern "C" rs_status rs_synth_image_write(const char *path, const rs_synth_image *img, int bits,
-                                          rs_err *err)
-{
-    if (bits != 8 && bits != 16)
-        return rs_err_set(err, RS_ERR_INVALID, "%s: bits must be 8 or 16 (got %d)", path, bits);
-    try {
-        cv::Mat m = wrap(img), q;
-        const double unit = bits == 8 ? 255.0 : 65535.0;
-        m.convertTo(q, CV_MAKETYPE(bits == 8 ? CV_8U : CV_16U, img->channels), unit);
-        if (img->channels == 3)
-            cv::cvtColor(q, q, cv::COLOR_RGB2BGR);
-        else if (img->channels == 4)
-            cv::cvtColor(q, q, cv::COLOR_RGBA2BGRA);
-        std::vector<unsigned char> buf;
-        if (!cv::imencode(extension(path), q, buf))
-            return rs_err_set(err, RS_ERR_IO, "%s: OpenCV cannot encode this format", path);
-        return rs_io_write_file(path, buf.data(), buf.size(), err);
-    } catch (const std::exception &e) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: %s", path, e.what());
-    } catch (...) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: unknown exception", path);
-    }
-}
-
-extern "C" rs_status rs_synth_remap(rs_synth_image *dst, const rs_synth_image *src,
+extern "C" rs_status rs_synth_remap(rs_image *dst, const rs_image *src,
                                     const float *map_xy, int width, int height, int interpolation,
                                     rs_err *err)
 {
-    *dst = rs_synth_image{};
+    *dst = rs_image{};
     if (interpolation != cv::INTER_NEAREST && interpolation != cv::INTER_LINEAR &&
         interpolation != cv::INTER_CUBIC)
         return rs_err_set(err, RS_ERR_INVALID, "remap: interpolation %d", interpolation);
-    rs_status st = rs_synth_image_alloc(dst, width, height, src->channels, err);
+    rs_status st = rs_image_alloc(dst, width, height, src->channels, err);
     if (st)
         return st;
     try {
@@ -142,10 +45,10 @@ extern "C" rs_status rs_synth_remap(rs_synth_image *dst, const rs_synth_image *s
                   cv::Scalar::all(0));
         return RS_OK;
     } catch (const std::exception &e) {
-        rs_synth_image_free(dst);
+        rs_image_free(dst);
         return rs_err_set(err, RS_ERR_EXTERNAL, "remap: OpenCV: %s", e.what());
     } catch (...) {
-        rs_synth_image_free(dst);
+        rs_image_free(dst);
         return rs_err_set(err, RS_ERR_EXTERNAL, "remap: OpenCV: unknown exception");
     }
 }
@@ -272,11 +175,11 @@ namespace {
 // Allocates *dst like src and fills it with f(out) (a cv::Mat over *dst) under guarded();
 // *dst is freed and zeroed on failure.
 template <class F>
-rs_status into_new(rs_synth_image *dst, const rs_synth_image *src, const char *what, rs_err *err,
+rs_status into_new(rs_image *dst, const rs_image *src, const char *what, rs_err *err,
                    F f)
 {
-    *dst = rs_synth_image{};
-    rs_status st = rs_synth_image_alloc(dst, src->width, src->height, src->channels, err);
+    *dst = rs_image{};
+    rs_status st = rs_image_alloc(dst, src->width, src->height, src->channels, err);
     if (st)
         return st;
     st = guarded(what, err, [&]() -> rs_status {
@@ -285,13 +188,13 @@ rs_status into_new(rs_synth_image *dst, const rs_synth_image *src, const char *w
         return RS_OK;
     });
     if (st)
-        rs_synth_image_free(dst);
+        rs_image_free(dst);
     return st;
 }
 
 } // namespace
 
-extern "C" rs_status rs_synth_image_filter(rs_synth_image *dst, const rs_synth_image *src,
+extern "C" rs_status rs_synth_image_filter(rs_image *dst, const rs_image *src,
                                            const double *kernel, int kw, int kh, rs_err *err)
 {
     return into_new(dst, src, "filter", err, [&](cv::Mat &out) {
@@ -300,7 +203,7 @@ extern "C" rs_status rs_synth_image_filter(rs_synth_image *dst, const rs_synth_i
     });
 }
 
-extern "C" rs_status rs_synth_image_blur(rs_synth_image *dst, const rs_synth_image *src,
+extern "C" rs_status rs_synth_image_blur(rs_image *dst, const rs_image *src,
                                          double sigma_px, rs_err *err)
 {
     return into_new(dst, src, "blur", err, [&](cv::Mat &out) {
@@ -314,10 +217,10 @@ extern "C" rs_status rs_synth_image_blur(rs_synth_image *dst, const rs_synth_ima
     });
 }
 
-extern "C" rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst, const rs_synth_image *src,
+extern "C" rs_status rs_synth_image_jpeg_roundtrip(rs_image *dst, const rs_image *src,
                                                    int quality, rs_err *err)
 {
-    *dst = rs_synth_image{};
+    *dst = rs_image{};
     if (src->channels != 3 || quality < 1 || quality > 100)
         return rs_err_set(err, RS_ERR_INVALID, "jpeg: needs RGB and quality 1..100 (got %d, %d)",
                           src->channels, quality);
@@ -333,10 +236,10 @@ extern "C" rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst, const rs
     });
 }
 
-extern "C" rs_status rs_synth_dnn_translate(rs_synth_image *dst, const char *onnx_path,
-                                            const rs_synth_image *src, rs_err *err)
+extern "C" rs_status rs_synth_dnn_translate(rs_image *dst, const char *onnx_path,
+                                            const rs_image *src, rs_err *err)
 {
-    *dst = rs_synth_image{};
+    *dst = rs_image{};
     if (src->channels != 3)
         return rs_err_set(err, RS_ERR_INVALID, "%s: the input must be RGB (has %d channels)",
                           onnx_path, src->channels);
@@ -354,7 +257,7 @@ extern "C" rs_status rs_synth_dnn_translate(rs_synth_image *dst, const char *onn
         if (y.dims != 4 || y.size[0] != 1 || y.size[1] != 3 || y.size[2] != H || y.size[3] != W)
             return rs_err_set(err, RS_ERR_INVALID, "%s: the output is not 1 x 3 x %d x %d",
                               onnx_path, H, W);
-        rs_status s = rs_synth_image_alloc(dst, W, H, 3, err);
+        rs_status s = rs_image_alloc(dst, W, H, 3, err);
         if (s)
             return s;
         const float *p = y.ptr<float>();
@@ -366,6 +269,6 @@ extern "C" rs_status rs_synth_dnn_translate(rs_synth_image *dst, const char *onn
         return RS_OK;
     });
     if (st)
-        rs_synth_image_free(dst);
+        rs_image_free(dst);
     return st;
 }

@@ -1,40 +1,22 @@
-// rs_synth_opencv.h -- the OpenCV shim of the synthesis module: image files and resampling.
-//
-// Images are float (H, W, C) row-major, channels RGB / RGBA / single, values as stored in the
-// file normalised to [0, 1] (8-bit /255, 16-bit /65535; no gamma conversion). Every OpenCV
-// exception is caught and returned as an rs_status.
+// rs_synth_opencv.h -- the OpenCV shim of the synthesis module: resampling, video frames,
+// filters, JPEG round trips, ONNX image translation. Images are core's rs_image (core/rs_image.h,
+// which also reads and writes image files). Every OpenCV exception is caught and returned as an
+// rs_status.
 #pragma once
-#include "rs_status.h"
+#include "core/rs_image.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-typedef struct {
-    int width, height, channels; // channels: 1, 3 (RGB) or 4 (RGBA)
-    float *data;                 // (height, width, channels) owned; free with rs_synth_image_free
-} rs_synth_image;
-
-// Allocates a zeroed image. Returns RS_ERR_NOMEM / RS_ERR_INVALID (bad sizes).
-rs_status rs_synth_image_alloc(rs_synth_image *img, int width, int height, int channels,
-                               rs_err *err);
-void rs_synth_image_free(rs_synth_image *img); // NULL-safe; zeroes *img
-
-// Reads PNG/JPEG/... (cv::imread, IMREAD_UNCHANGED); greyscale stays 1 channel, BGR(A) becomes
-// RGB(A). Returns RS_ERR_IO when the file is missing or unreadable.
-rs_status rs_synth_image_read(rs_synth_image *img, const char *path, rs_err *err);
-
-// Writes an image with 8 or 16 bits per channel (values rounded, clamped to [0,1]), atomically
-// (temporary name in the same folder, then rename). The format follows the extension (.png).
-rs_status rs_synth_image_write(const char *path, const rs_synth_image *img, int bits, rs_err *err);
-
 // Resamples `src` through map_xy (dst pixel (u,v) takes src at map_xy[v][u], OpenCV's remap
 // convention, pixel (0,0) = centre of the top-left pixel). interpolation: 0 nearest, 1 linear,
 // 3 cubic (OpenCV's INTER_*). Outside src: zero (transparent for RGBA).
 // out: *dst, allocated (width, height, src->channels); in: map_xy (height, width, 2)
-rs_status rs_synth_remap(rs_synth_image *dst,
+rs_status rs_synth_remap(rs_image *dst,
                          // in
-                         const rs_synth_image *src, const float *map_xy, int width, int height,
+                         const rs_image *src, const float *map_xy, int width, int height,
                          int interpolation, rs_err *err);
 
 // ---- backgrounds and appearance ----
@@ -55,29 +37,29 @@ rs_status rs_synth_frames_next(rs_synth_frames *frames,
 void rs_synth_frames_close(rs_synth_frames *frames); // NULL-safe
 // Convolution with a (kh, kw) kernel, row-major, anchor at its centre (cv::filter2D, border
 // reflected about the edge pixel: BORDER_REFLECT_101). out: *dst allocated like src.
-rs_status rs_synth_image_filter(rs_synth_image *dst,
+rs_status rs_synth_image_filter(rs_image *dst,
                                 // in
-                                const rs_synth_image *src, const double *kernel, int kw, int kh,
+                                const rs_image *src, const double *kernel, int kw, int kh,
                                 rs_err *err);
 // Gaussian blur of standard deviation sigma_px (> 0) (cv::GaussianBlur, kernel 2 ceil(4 sigma)+1,
 // BORDER_REFLECT_101). sigma_px <= 0 copies. out: *dst allocated like src.
-rs_status rs_synth_image_blur(rs_synth_image *dst,
+rs_status rs_synth_image_blur(rs_image *dst,
                               // in
-                              const rs_synth_image *src, double sigma_px, rs_err *err);
+                              const rs_image *src, double sigma_px, rs_err *err);
 // JPEG round trip of an RGB image at `quality` (1..100, libjpeg through cv::imencode/imdecode),
 // the [0,1] values taken as 8-bit codes. out: *dst (H, W, 3) allocated.
-rs_status rs_synth_image_jpeg_roundtrip(rs_synth_image *dst,
+rs_status rs_synth_image_jpeg_roundtrip(rs_image *dst,
                                         // in
-                                        const rs_synth_image *src, int quality, rs_err *err);
+                                        const rs_image *src, int quality, rs_err *err);
 // Runs an ONNX image-translation model (e.g. a CUT/CycleGAN generator) through OpenCV's DNN
 // module (cv::dnn::readNetFromONNX, CPU): input 1 x 3 x H x W float, RGB, values mapped from
 // [0,1] to [-1,1] (x 2 - 1, the convention of those generators); output 1 x 3 x H x W mapped
 // back ((y + 1) / 2) and clamped to [0,1]. The model is loaded on every call.
 // out: *dst (H, W, 3) allocated; in: src RGB (H, W, 3)
 // Returns RS_ERR_IO / RS_ERR_EXTERNAL (model unreadable or failing), RS_ERR_INVALID (shapes).
-rs_status rs_synth_dnn_translate(rs_synth_image *dst,
+rs_status rs_synth_dnn_translate(rs_image *dst,
                                  // in
-                                 const char *onnx_path, const rs_synth_image *src, rs_err *err);
+                                 const char *onnx_path, const rs_image *src, rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,6 @@
 // rs_synth_render.c -- running povray on a scene: culling, region, colour and ID passes,
 // resampling into the real lens, compositing (rs_synth_render.h, docs/povray.md).
-#include "rs_synth_render.h"
+#include "synth/rs_synth_render.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -16,8 +16,8 @@
 
 #include <mrcal/poseutils.h>
 
-#include "rs_io.h"
-#include "rs_synth_appearance.h"
+#include "core/rs_io.h"
+#include "synth/rs_synth_appearance.h"
 
 void rs_synth_render_options_default(rs_synth_render_options *opt)
 {
@@ -31,8 +31,8 @@ void rs_synth_render_result_free(rs_synth_render_result *r)
 {
     if (!r)
         return;
-    rs_synth_image_free(&r->rgba);
-    rs_synth_image_free(&r->composite);
+    rs_image_free(&r->rgba);
+    rs_image_free(&r->composite);
     free(r->ids);
     free(r->visible);
     free(r->shadow);
@@ -212,7 +212,7 @@ static rs_status run_povray(const char *povray, const char *out_dir, const char 
 
 
 // Zeroes (transparent) everything outside the rendered rectangle: povray leaves it opaque black.
-static void mask_outside(rs_synth_image *img, const int region[4])
+static void mask_outside(rs_image *img, const int region[4])
 {
     for (int y = 0; y < img->height; y++)
         for (int x = 0; x < img->width; x++)
@@ -225,7 +225,7 @@ static void mask_outside(rs_synth_image *img, const int region[4])
 // out_dir, runs povray, reads its images into imgs[0..Npasses-1]: NAME.png for a single pass
 // (rs_synth_scene_write, antialias as given), else the frames NAME1.png .. NAMEn.png
 // (rs_synth_scene_write_frames; no antialiasing, which would blend the IDs).
-static rs_status render_passes(rs_synth_image *imgs, const char *out_dir, const char *name,
+static rs_status render_passes(rs_image *imgs, const char *out_dir, const char *name,
                                const char *povray, const rs_synth_povcam *cam, const double fxy[2],
                                const double ground_normal_enu[3], double ground_offset_m,
                                const rs_synth_prepared *vehicles,
@@ -273,7 +273,7 @@ static rs_status render_passes(rs_synth_image *imgs, const char *out_dir, const 
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             break;
         }
-        if ((st = rs_synth_image_read(&imgs[k], png, err)) == RS_OK &&
+        if ((st = rs_image_read(&imgs[k], png, err)) == RS_OK &&
             (imgs[k].width != cam->width || imgs[k].height != cam->height))
             st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
                             imgs[k].width, imgs[k].height, cam->width, cam->height);
@@ -327,10 +327,10 @@ static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int
 
 // The shadow frame (canvas, RGBA, white ground) as the lit fraction: value / unlit, clamped to
 // [0, 1]; 1 where nothing was rendered (transparent).
-static rs_status shadow_fraction(rs_synth_image *frac, const rs_synth_image *pass, double unlit,
+static rs_status shadow_fraction(rs_image *frac, const rs_image *pass, double unlit,
                                  rs_err *err)
 {
-    rs_status st = rs_synth_image_alloc(frac, pass->width, pass->height, 1, err);
+    rs_status st = rs_image_alloc(frac, pass->width, pass->height, 1, err);
     if (st)
         return st;
     const size_t n = (size_t)pass->width * pass->height;
@@ -360,19 +360,19 @@ static void remove_intermediates(const char *out_dir)
 
 // Resamples the canvas passes into the real lens: colour through premultiplied linear
 // interpolation, IDs nearest-neighbour.
-static rs_status to_lens(rs_synth_image *rgba, rs_synth_image *ids, const float *map, int width,
+static rs_status to_lens(rs_image *rgba, rs_image *ids, const float *map, int width,
                          int height, rs_err *err)
 {
     const size_t Nc = (size_t)rgba->width * rgba->height;
     for (size_t i = 0; i < Nc; i++)
         for (int k = 0; k < 3; k++)
             rgba->data[4 * i + k] *= rgba->data[4 * i + 3];
-    rs_synth_image out_rgba = {0}, out_ids = {0};
+    rs_image out_rgba = {0}, out_ids = {0};
     rs_status st = rs_synth_remap(&out_rgba, rgba, map, width, height, 1, err);
     if (!st)
         st = rs_synth_remap(&out_ids, ids, map, width, height, 0, err);
     if (st) {
-        rs_synth_image_free(&out_rgba);
+        rs_image_free(&out_rgba);
         return st;
     }
     const size_t N = (size_t)width * height;
@@ -381,15 +381,15 @@ static rs_status to_lens(rs_synth_image *rgba, rs_synth_image *ids, const float 
         for (int k = 0; k < 3; k++)
             out_rgba.data[4 * i + k] = a > 0 ? out_rgba.data[4 * i + k] / a : 0;
     }
-    rs_synth_image_free(rgba);
-    rs_synth_image_free(ids);
+    rs_image_free(rgba);
+    rs_image_free(ids);
     *rgba = out_rgba;
     *ids = out_ids;
     return RS_OK;
 }
 
 // Decodes the ID pass (R + 256 G in 8-bit units) into out->ids; values above N become 0.
-static void decode_ids(rs_synth_render_result *out, const rs_synth_image *ids, int N)
+static void decode_ids(rs_synth_render_result *out, const rs_image *ids, int N)
 {
     const size_t Npx = (size_t)out->width * out->height;
     for (size_t i = 0; i < Npx; i++) {
@@ -400,7 +400,7 @@ static void decode_ids(rs_synth_render_result *out, const rs_synth_image *ids, i
 }
 
 // out->composite = rgba over the background (or black), in linear light, sRGB-encoded.
-static void composite(rs_synth_render_result *out, const rs_synth_image *bg)
+static void composite(rs_synth_render_result *out, const rs_image *bg)
 {
     const size_t Npx = (size_t)out->width * out->height;
     for (size_t i = 0; i < Npx; i++) {
@@ -419,31 +419,31 @@ static void composite(rs_synth_render_result *out, const rs_synth_image *bg)
 static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out,
                                rs_err *err)
 {
-    rs_synth_image ids = {0};
-    rs_status st = rs_synth_image_alloc(&ids, out->width, out->height, 1, err);
+    rs_image ids = {0};
+    rs_status st = rs_image_alloc(&ids, out->width, out->height, 1, err);
     if (st)
         return st;
     const size_t Npx = (size_t)out->width * out->height;
     for (size_t i = 0; i < Npx; i++)
         ids.data[i] = out->ids[i] / 65535.0f;
     const char *names[3] = {"image.png", "rgba.png", "ids.png"};
-    const rs_synth_image *imgs[3] = {&out->composite, &out->rgba, &ids};
+    const rs_image *imgs[3] = {&out->composite, &out->rgba, &ids};
     const int bits[3] = {8, 16, 16};
     for (int k = 0; k < 3 && !st; k++) {
         char *p = rs_io_join(out_dir, names[k]);
-        st = p ? rs_synth_image_write(p, imgs[k], bits[k], err)
+        st = p ? rs_image_write(p, imgs[k], bits[k], err)
                : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(p);
     }
     if (!st && out->shadow) {
-        const rs_synth_image sh = {.width = out->width, .height = out->height, .channels = 1,
+        const rs_image sh = {.width = out->width, .height = out->height, .channels = 1,
                                    .data = out->shadow};
         char *p = rs_io_join(out_dir, "shadow.png");
-        st = p ? rs_synth_image_write(p, &sh, 16, err)
+        st = p ? rs_image_write(p, &sh, 16, err)
                : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(p);
     }
-    rs_synth_image_free(&ids);
+    rs_image_free(&ids);
     return st;
 }
 
@@ -466,7 +466,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
     const int N = vehicles->N;
     rs_synth_canvas canvas;
     rs_synth_povcam cam;
-    rs_synth_image bg = {0}, rgba = {0}, idimg = {0};
+    rs_image bg = {0}, rgba = {0}, idimg = {0};
     uint8_t *include = NULL;
     float *map = NULL;
     rs_status st;
@@ -479,10 +479,10 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
                                    err)))
         return st;
     if (opt.background_path) {
-        if ((st = rs_synth_image_read(&bg, opt.background_path, err)))
+        if ((st = rs_image_read(&bg, opt.background_path, err)))
             return st;
         if (bg.width != width || bg.height != height) {
-            rs_synth_image_free(&bg);
+            rs_image_free(&bg);
             return rs_err_set(err, RS_ERR_INVALID, "%s: the background is %dx%d, the camera %dx%d",
                               opt.background_path, bg.width, bg.height, width, height);
         }
@@ -497,7 +497,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if ((st = rs_synth_image_alloc(&out->composite, width, height, 3, err)))
+    if ((st = rs_image_alloc(&out->composite, width, height, 3, err)))
         goto done;
     // 1-2. Culling and the region
     rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
@@ -538,7 +538,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
     if (!run) {
         for (int k = 0; k < 4; k++)
             out->region[k] = -1;
-        if ((st = rs_synth_image_alloc(&out->rgba, width, height, 4, err)))
+        if ((st = rs_image_alloc(&out->rgba, width, height, 4, err)))
             goto done;
     } else {
         memcpy(out->region, region, sizeof(region));
@@ -563,7 +563,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
                 i_shadow = Npasses++;
             }
         }
-        rs_synth_image imgs[3] = {{0}};
+        rs_image imgs[3] = {{0}};
         // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
         const bool colour_alone = opt.antialias >= 2;
         // Processes: [first, first + count) of the passes each; one for all of them unless
@@ -583,18 +583,18 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         rgba = imgs[0];
         if (i_id >= 0)
             idimg = imgs[1];
-        rs_synth_image frac = {0};
+        rs_image frac = {0};
         if (!st && i_shadow >= 0)
             st = shadow_fraction(&frac, &imgs[i_shadow],
                                  rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu),
                                  err);
         if (i_shadow >= 0)
-            rs_synth_image_free(&imgs[i_shadow]);
+            rs_image_free(&imgs[i_shadow]);
         if (st) {
-            rs_synth_image_free(&frac);
+            rs_image_free(&frac);
             goto done;
         }
-        if (i_id < 0 && (st = rs_synth_image_alloc(&idimg, canvas.width, canvas.height, 3, err)))
+        if (i_id < 0 && (st = rs_image_alloc(&idimg, canvas.width, canvas.height, 3, err)))
             goto done;
         // 3. Into the real lens
         if (!canvas.identity) {
@@ -602,14 +602,14 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
                                                               width, height, err))) ||
                 (st = to_lens(&rgba, &idimg, opt.canvas_map ? opt.canvas_map : map, width,
                               height, err))) {
-                rs_synth_image_free(&frac);
+                rs_image_free(&frac);
                 goto done;
             }
             if (frac.data) {
-                rs_synth_image lens = {0};
+                rs_image lens = {0};
                 st = rs_synth_remap(&lens, &frac, opt.canvas_map ? opt.canvas_map : map, width,
                                     height, 1, err);
-                rs_synth_image_free(&frac);
+                rs_image_free(&frac);
                 frac = lens;
                 if (st)
                     goto done;
@@ -617,7 +617,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
         }
         out->shadow = frac.data; // owned by out now
         out->rgba = rgba;
-        rgba = (rs_synth_image){0};
+        rgba = (rs_image){0};
         decode_ids(out, &idimg, N);
     }
     // 4. Composite
@@ -628,9 +628,9 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
 done:
     if (!opt.keep_files)
         remove_intermediates(out_dir);
-    rs_synth_image_free(&bg);
-    rs_synth_image_free(&rgba);
-    rs_synth_image_free(&idimg);
+    rs_image_free(&bg);
+    rs_image_free(&rgba);
+    rs_image_free(&idimg);
     free(include);
     free(map);
     if (st)

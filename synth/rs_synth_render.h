@@ -35,10 +35,10 @@
 
 #include <mrcal/mrcal.h>
 
-#include "rs_status.h"
-#include "rs_synth.h"
-#include "rs_synth_opencv.h"
-#include "rs_synth_scene.h"
+#include "core/rs_status.h"
+#include "synth/rs_synth.h"
+#include "synth/rs_synth_opencv.h"
+#include "synth/rs_synth_scene.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -68,8 +68,8 @@ void rs_synth_render_options_default(rs_synth_render_options *opt);
 // A rendered view. Images are in the real camera's size.
 typedef struct {
     int width, height;
-    rs_synth_image rgba;     // (H, W, 4): the colour pass, linear light, straight alpha
-    rs_synth_image composite;// (H, W, 3) sRGB-encoded [0,1]: over the background (or black)
+    rs_image rgba;     // (H, W, 4): the colour pass, linear light, straight alpha
+    rs_image composite;// (H, W, 3) sRGB-encoded [0,1]: over the background (or black)
     uint16_t *ids;           // (H, W) owned: 0 = background, k+1 = vehicle k
     uint8_t *visible;        // (Nvehicles,) owned: 1 = survived culling (may still be hidden)
     int Nvehicles;

@@ -1,6 +1,6 @@
 // rs_synth_scene.c -- the vehicles file, the sun, and the POV-Ray scene writer
 // (rs_synth_scene.h, docs/povray.md).
-#include "rs_synth_scene.h"
+#include "synth/rs_synth_scene.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -9,7 +9,7 @@
 
 #include <cjson/cJSON.h>
 
-#include "rs_io.h"
+#include "core/rs_io.h"
 
 // ---- strings ----
 

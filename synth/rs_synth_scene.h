@@ -20,11 +20,11 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "rs_status.h"
-#include "rs_synth.h"
-#include "rs_synth_camera.h"
-#include "rs_synth_fleet.h"
-#include "rs_synth_sun.h"
+#include "core/rs_status.h"
+#include "synth/rs_synth.h"
+#include "synth/rs_synth_camera.h"
+#include "synth/rs_synth_fleet.h"
+#include "synth/rs_synth_sun.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,7 +1,7 @@
 // rs_synth_sumo.c -- SUMO networks from lanes, flows, running sumo, FCD output. See
 // rs_synth_sumo.h and docs/traffic.md.
 #define _XOPEN_SOURCE 700 // nftw()
-#include "rs_synth_sumo.h"
+#include "synth/rs_synth_sumo.h"
 
 #include <errno.h>
 #include <expat.h>
@@ -16,9 +16,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "rs_io.h"
-#include "rs_simulate.h"
-#include "rs_synth_fleet.h"
+#include "core/rs_io.h"
+#include "synth/rs_synth_fleet.h"
+#include "core/rs_rng.h"
 
 extern char **environ;
 
@@ -320,7 +320,7 @@ static rs_status run_program(char *const argv[], const char *log_path, rs_err *e
 // ---------------------------------------------------------------------------------------------
 // the network from the lanes
 
-static bool is_junction(const rs_synth_lane *l) { return l->kind && !strcmp(l->kind, "junction"); }
+static bool is_junction(const rs_lane *l) { return l->kind && !strcmp(l->kind, "junction"); }
 
 static int uf_find(int *parent, int i)
 {
@@ -361,7 +361,7 @@ static bool add_connection(network *n, int from, int to)
 }
 
 // Connects edge `from` to every non-junction lane reached from lane j through junction lanes.
-static bool connect_through(network *n, const rs_synth_lanes *lanes, int from, int j, int depth)
+static bool connect_through(network *n, const rs_lanes *lanes, int from, int j, int depth)
 {
     if (depth > 8) return true;
     if (!is_junction(&lanes->lane[j])) {
@@ -400,7 +400,7 @@ static rs_status enu_to_lonlat(double lonlat[2], const rs_llh *origin, const dou
     return st;
 }
 
-static rs_status write_network_files(const char *dir, const rs_synth_lanes *lanes, const rs_llh *origin, network *n,
+static rs_status write_network_files(const char *dir, const rs_lanes *lanes, const rs_llh *origin, network *n,
                                      rs_err *err)
 {
     int L = lanes->N;
@@ -426,7 +426,7 @@ static rs_status write_network_files(const char *dir, const rs_synth_lanes *lane
         double p[2] = {0, 0};
         int m = 0, in = 0;
         for (int q = 0; q < 2 * L; q++) {
-            const rs_synth_lane *l = &lanes->lane[q / 2];
+            const rs_lane *l = &lanes->lane[q / 2];
             if (is_junction(l) || uf_find(n->parent, q) != r) continue;
             const double *e = l->p_enu_m[q % 2 ? l->Npoints - 1 : 0];
             p[0] += e[0], p[1] += e[1], m++;
@@ -444,7 +444,7 @@ static rs_status write_network_files(const char *dir, const rs_synth_lanes *lane
     if ((st = atomic_open_in(&a, dir, "edges.edg.xml", err))) return st;
     fprintf(a.f, "<edges>\n");
     for (int i = 0; i < L && !st; i++) {
-        const rs_synth_lane *l = &lanes->lane[i];
+        const rs_lane *l = &lanes->lane[i];
         if (is_junction(l)) continue;
         fprintf(a.f, "  <edge id=\"e%d\" from=\"n%d\" to=\"n%d\" numLanes=\"1\" speed=\"%.3f\" width=\"%.3f\" "
                      "spreadType=\"center\" shape=\"",
@@ -487,8 +487,8 @@ static const char *vclass_of(rs_synth_class c)
 // order of the three quantiles shuffled per dimension by the seed.
 static int make_vtypes(rs_synth_sumo_vtype *t, double *prob, const rs_synth_class_mix *mix, uint64_t seed)
 {
-    rs_simulate_rng rng;
-    rs_simulate_rng_seed(&rng, seed ^ 0x5u);
+    rs_rng rng;
+    rs_rng_seed(&rng, seed ^ 0x5u);
     double total = 0;
     for (int c = 0; c < RS_SYNTH_NCLASSES; c++) total += mix->weight[c];
     int n = 0;
@@ -501,7 +501,7 @@ static int make_vtypes(rs_synth_sumo_vtype *t, double *prob, const rs_synth_clas
         for (int d = 0; d < 3; d++) {
             int p[3] = {0, 1, 2};
             for (int k = 2; k > 0; k--) {
-                int j = (int)(rs_simulate_rng_uniform(&rng) * (k + 1)), tmp = p[k];
+                int j = (int)(rs_rng_uniform(&rng) * (k + 1)), tmp = p[k];
                 p[k] = p[j], p[j] = tmp;
             }
             memcpy(perm[d], p, sizeof p);
@@ -539,7 +539,7 @@ static bool write_paths(FILE *f, const network *n, int *path, int depth, int *Nr
     return *Nroutes < 4096;
 }
 
-static rs_status write_routes(const char *dir, const rs_synth_lanes *lanes, const network *n, const char *const *osm_from,
+static rs_status write_routes(const char *dir, const rs_lanes *lanes, const network *n, const char *const *osm_from,
                               const char *const *osm_to, int Nosm, const rs_synth_sumo_vtype *t, const double *prob,
                               int Nt, const rs_synth_sumo_options *o, rs_err *err)
 {
@@ -701,7 +701,7 @@ static rs_status write_osm_types(const char *path, rs_err *err)
 // ---------------------------------------------------------------------------------------------
 // the run
 
-static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_synth_lanes *lanes,
+static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_lanes *lanes,
                         const rs_llh *origin, const rs_synth_sumo_options *o, rs_err *err)
 {
     char *net = rs_io_join(dir, "net.net.xml"), *nod = rs_io_join(dir, "nodes.nod.xml"),
@@ -767,7 +767,7 @@ done:
     return st;
 }
 
-rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames, const rs_synth_lanes *lanes, const rs_llh *origin,
+rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames, const rs_lanes *lanes, const rs_llh *origin,
                             const rs_synth_sumo_options *o, rs_err *err)
 {
     frames->frame = NULL;

@@ -22,9 +22,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "rs_geo.h"
-#include "rs_status.h"
-#include "rs_synth_traffic.h"
+#include "geo/rs_geo.h"
+#include "core/rs_status.h"
+#include "synth/rs_synth_traffic.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -114,7 +114,7 @@ void rs_synth_sumo_options_default(rs_synth_sumo_options *opt);
 rs_status rs_synth_sumo_run(// out
                             rs_synth_sumo_frames *frames,
                             // in
-                            const rs_synth_lanes *lanes, const rs_llh *origin,
+                            const rs_lanes *lanes, const rs_llh *origin,
                             const rs_synth_sumo_options *opt, rs_err *err);
 
 #ifdef __cplusplus

@@ -1,5 +1,5 @@
 // rs_synth_sun.c -- solar azimuth and elevation (NOAA / Meeus); see rs_synth_sun.h.
-#include "rs_synth_sun.h"
+#include "synth/rs_synth_sun.h"
 
 #include <math.h>
 

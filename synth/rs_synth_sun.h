@@ -20,7 +20,7 @@
 // docs/conventions.md); it is undefined (returned as computed, any value) with the sun within
 // 1e-9 degree of the zenith or at a pole.
 #pragma once
-#include "rs_status.h"
+#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {

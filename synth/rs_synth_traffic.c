@@ -1,6 +1,6 @@
 // rs_synth_traffic.c -- lanes, built-in traffic, domain randomisation, the vehicles file.
 // See rs_synth_traffic.h and docs/traffic.md.
-#include "rs_synth_traffic.h"
+#include "synth/rs_synth_traffic.h"
 
 #include <cjson/cJSON.h>
 #include <errno.h>
@@ -9,9 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_io.h"
-#include "rs_simulate.h"
-#include "rs_synth_fleet.h"
+#include "core/rs_io.h"
+#include "synth/rs_synth_fleet.h"
+#include "core/rs_rng.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -65,238 +65,6 @@ rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs
 }
 
 // ---------------------------------------------------------------------------------------------
-// lanes
-
-void rs_synth_lanes_free(rs_synth_lanes *lanes)
-{
-    if (!lanes) return;
-    for (int i = 0; i < lanes->N; i++) {
-        free(lanes->lane[i].id);
-        free(lanes->lane[i].kind);
-        free(lanes->lane[i].p_enu_m);
-        free(lanes->lane[i].next);
-    }
-    free(lanes->lane);
-    lanes->lane = NULL;
-    lanes->N = 0;
-}
-
-double rs_synth_lane_length_m(const rs_synth_lane *lane)
-{
-    double L = 0;
-    for (int i = 1; i < lane->Npoints; i++)
-        L += hypot(lane->p_enu_m[i][0] - lane->p_enu_m[i - 1][0], lane->p_enu_m[i][1] - lane->p_enu_m[i - 1][1]);
-    return L;
-}
-
-static double heading_of(double de, double dn)
-{
-    double h = atan2(de, dn) / DEG;
-    if (h < 0) h += 360.0;
-    return h >= 360.0 ? h - 360.0 : h;
-}
-
-void rs_synth_lane_point(double p_enu_m[2], double *heading_deg, const rs_synth_lane *lane, double s_m)
-{
-    if (s_m < 0) s_m = 0;
-    int i = 1;
-    double seg = 0;
-    for (; i < lane->Npoints; i++) {
-        seg = hypot(lane->p_enu_m[i][0] - lane->p_enu_m[i - 1][0], lane->p_enu_m[i][1] - lane->p_enu_m[i - 1][1]);
-        if (s_m <= seg || i == lane->Npoints - 1) break;
-        s_m -= seg;
-    }
-    const double *a = lane->p_enu_m[i - 1], *b = lane->p_enu_m[i];
-    double t = seg > 0 ? fmin(1.0, s_m / seg) : 0;
-    p_enu_m[0] = a[0] + t * (b[0] - a[0]);
-    p_enu_m[1] = a[1] + t * (b[1] - a[1]);
-    if (heading_deg) *heading_deg = heading_of(b[0] - a[0], b[1] - a[1]);
-}
-
-double rs_synth_lane_distance_m(double *heading_deg, const rs_synth_lane *lane, const double p_enu_m[2])
-{
-    double best = INFINITY, h = NAN;
-    for (int i = 1; i < lane->Npoints; i++) {
-        const double *a = lane->p_enu_m[i - 1], *b = lane->p_enu_m[i];
-        double de = b[0] - a[0], dn = b[1] - a[1], L2 = de * de + dn * dn;
-        double t = L2 > 0 ? ((p_enu_m[0] - a[0]) * de + (p_enu_m[1] - a[1]) * dn) / L2 : 0;
-        t = fmax(0.0, fmin(1.0, t));
-        double d = hypot(p_enu_m[0] - a[0] - t * de, p_enu_m[1] - a[1] - t * dn);
-        if (d < best) best = d, h = heading_of(de, dn);
-    }
-    if (heading_deg) *heading_deg = h;
-    return best;
-}
-
-// Reads feature i's properties and geometry into lane (ENU at origin).
-static rs_status read_lane(rs_synth_lane *lane, const cJSON *f, int i, const char *path, const rs_llh *origin,
-                           rs_err *err)
-{
-    lane->feature = i;
-    lane->speed_mps = NAN;
-    const cJSON *props = cJSON_GetObjectItemCaseSensitive(f, "properties");
-    const cJSON *id = cJSON_GetObjectItemCaseSensitive(props, "id");
-    if (!cJSON_IsString(id) || !*id->valuestring)
-        return rs_err_set(err, RS_ERR_PARSE, "%s: feature %d: properties.id: missing or not a non-empty string", path, i);
-    if (!(lane->id = strdup(id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-#define LANE_FAIL(code, field, ...)                                                                                  \
-    rs_err_set(err, code, "%s: feature %d (id '%s'): " field ": " __VA_ARGS__)
-    const cJSON *w = cJSON_GetObjectItemCaseSensitive(props, "width_m");
-    if (!cJSON_IsNumber(w)) return LANE_FAIL(RS_ERR_PARSE, "properties.width_m", "missing or not a number", path, i, lane->id);
-    lane->width_m = w->valuedouble;
-    if (!(lane->width_m > 0) || !isfinite(lane->width_m))
-        return LANE_FAIL(RS_ERR_INVALID, "properties.width_m", "%g: must be > 0", path, i, lane->id, lane->width_m);
-    const cJSON *d = cJSON_GetObjectItemCaseSensitive(props, "direction");
-    if (d && !cJSON_IsNull(d)) {
-        if (cJSON_IsString(d) && !strcmp(d->valuestring, "forward"))
-            lane->direction = RS_SYNTH_LANE_FORWARD;
-        else if (cJSON_IsString(d) && !strcmp(d->valuestring, "both"))
-            lane->direction = RS_SYNTH_LANE_BOTH;
-        else
-            return LANE_FAIL(RS_ERR_INVALID, "properties.direction", "must be \"forward\" or \"both\"", path, i,
-                             lane->id);
-    }
-    const cJSON *sp = cJSON_GetObjectItemCaseSensitive(props, "speed_mps");
-    if (sp && !cJSON_IsNull(sp)) {
-        if (!cJSON_IsNumber(sp) || !(sp->valuedouble > 0) || !isfinite(sp->valuedouble))
-            return LANE_FAIL(RS_ERR_INVALID, "properties.speed_mps", "must be a number > 0", path, i, lane->id);
-        lane->speed_mps = sp->valuedouble;
-    }
-    const cJSON *kind = cJSON_GetObjectItemCaseSensitive(props, "kind");
-    if (cJSON_IsString(kind) && !(lane->kind = strdup(kind->valuestring)))
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    const cJSON *g = cJSON_GetObjectItemCaseSensitive(f, "geometry");
-    const cJSON *type = cJSON_GetObjectItemCaseSensitive(g, "type");
-    if (!cJSON_IsString(type) || strcmp(type->valuestring, "LineString"))
-        return LANE_FAIL(RS_ERR_PARSE, "geometry.type", "not a LineString", path, i, lane->id);
-    const cJSON *coords = cJSON_GetObjectItemCaseSensitive(g, "coordinates");
-    int n = cJSON_GetArraySize(coords);
-    if (!cJSON_IsArray(coords) || n < 2)
-        return LANE_FAIL(RS_ERR_INVALID, "geometry.coordinates", "fewer than 2 points", path, i, lane->id);
-    double *llh = malloc(sizeof *llh * 3 * (size_t)n), *enu = malloc(sizeof *enu * 3 * (size_t)n);
-    lane->p_enu_m = malloc(sizeof *lane->p_enu_m * (size_t)n);
-    rs_status st = RS_OK;
-    if (!llh || !enu || !lane->p_enu_m) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    int k = 0;
-    for (const cJSON *c = coords->child; c; c = c->next, k++) {
-        int m = cJSON_GetArraySize(c);
-        const cJSON *lon = cJSON_GetArrayItem(c, 0), *lat = cJSON_GetArrayItem(c, 1);
-        if (!cJSON_IsArray(c) || m < 2 || m > 3 || !cJSON_IsNumber(lon) || !cJSON_IsNumber(lat)) {
-            st = rs_err_set(err, RS_ERR_PARSE, "%s: feature %d (id '%s'): geometry.coordinates[%d]: not [lon, lat]",
-                            path, i, lane->id, k);
-            goto done;
-        }
-        llh[3 * k] = lat->valuedouble;
-        llh[3 * k + 1] = lon->valuedouble;
-        llh[3 * k + 2] = origin->h_m;
-    }
-    if ((st = rs_geo_llh_to_enu(enu, origin, llh, n, err))) {
-        rs_err_prefix(err, "%s: feature %d (id '%s'): geometry.coordinates", path, i, lane->id);
-        goto done;
-    }
-    lane->Npoints = 0;
-    for (k = 0; k < n; k++) {
-        if (hypot(enu[3 * k], enu[3 * k + 1]) > 1e5) {
-            st = rs_err_set(err, RS_ERR_INVALID,
-                            "%s: feature %d (id '%s'): geometry.coordinates[%d]: %.0f m from the site origin "
-                            "(longitude first: [lon, lat])",
-                            path, i, lane->id, k, hypot(enu[3 * k], enu[3 * k + 1]));
-            goto done;
-        }
-        int q = lane->Npoints;
-        if (q > 0 && hypot(enu[3 * k] - lane->p_enu_m[q - 1][0], enu[3 * k + 1] - lane->p_enu_m[q - 1][1]) < 1e-3)
-            continue; // repeated point
-        lane->p_enu_m[q][0] = enu[3 * k];
-        lane->p_enu_m[q][1] = enu[3 * k + 1];
-        lane->Npoints++;
-    }
-    if (lane->Npoints < 2)
-        st = LANE_FAIL(RS_ERR_INVALID, "geometry.coordinates", "fewer than 2 distinct points", path, i, lane->id);
-done:
-    free(llh);
-    free(enu);
-    return st;
-}
-
-static int find_lane(const rs_synth_lanes *lanes, const char *id)
-{
-    for (int i = 0; i < lanes->N; i++)
-        if (!strcmp(lanes->lane[i].id, id)) return i;
-    return -1;
-}
-
-// Resolves every lane's "next" ids into indices.
-static rs_status resolve_next(rs_synth_lanes *lanes, const cJSON *features, const char *path, rs_err *err)
-{
-    int i = 0;
-    for (const cJSON *f = features->child; f; f = f->next, i++) {
-        rs_synth_lane *lane = &lanes->lane[i];
-        const cJSON *next = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(f, "properties"), "next");
-        if (!next || cJSON_IsNull(next)) continue;
-        if (!cJSON_IsArray(next)) return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
-        int n = cJSON_GetArraySize(next);
-        if (n == 0) continue;
-        if (!(lane->next = malloc(sizeof *lane->next * (size_t)n))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        for (const cJSON *x = next->child; x; x = x->next) {
-            if (!cJSON_IsString(x)) return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
-            int j = find_lane(lanes, x->valuestring);
-            if (j < 0)
-                return LANE_FAIL(RS_ERR_NOT_FOUND, "properties.next", "'%s' is not a lane of this file", path, i,
-                                 lane->id, x->valuestring);
-            lane->next[lane->Nnext++] = j;
-        }
-    }
-    return RS_OK;
-}
-#undef LANE_FAIL
-
-rs_status rs_synth_lanes_read(rs_synth_lanes *lanes, const char *path, const rs_llh *origin, rs_err *err)
-{
-    lanes->lane = NULL;
-    lanes->N = 0;
-    char *text = NULL;
-    rs_status st = rs_io_read_file(&text, NULL, path, err);
-    if (st) return st;
-    cJSON *j = cJSON_Parse(text);
-    free(text);
-    if (!j) return rs_err_set(err, RS_ERR_PARSE, "%s: not valid JSON", path);
-    const cJSON *type = cJSON_GetObjectItemCaseSensitive(j, "type");
-    const cJSON *features = cJSON_GetObjectItemCaseSensitive(j, "features");
-    if (!cJSON_IsString(type) || strcmp(type->valuestring, "FeatureCollection") || !cJSON_IsArray(features)) {
-        st = rs_err_set(err, RS_ERR_PARSE, "%s: type: not a GeoJSON FeatureCollection with features", path);
-        goto done;
-    }
-    int n = cJSON_GetArraySize(features);
-    if (n == 0) {
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: features: no lanes", path);
-        goto done;
-    }
-    if (!(lanes->lane = calloc((size_t)n, sizeof *lanes->lane))) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    int i = 0;
-    for (const cJSON *f = features->child; f; f = f->next, i++) {
-        lanes->N = i + 1;
-        if ((st = read_lane(&lanes->lane[i], f, i, path, origin, err))) goto done;
-        int dup = find_lane(lanes, lanes->lane[i].id);
-        if (dup < i) {
-            st = rs_err_set(err, RS_ERR_INVALID, "%s: feature %d: properties.id: '%s' is also feature %d's id", path, i,
-                            lanes->lane[i].id, dup);
-            goto done;
-        }
-    }
-    st = resolve_next(lanes, features, path, err);
-done:
-    cJSON_Delete(j);
-    if (st) rs_synth_lanes_free(lanes);
-    return st;
-}
-
-// ---------------------------------------------------------------------------------------------
 // built-in traffic
 
 void rs_synth_traffic_options_default(rs_synth_traffic_options *opt)
@@ -310,13 +78,13 @@ void rs_synth_traffic_options_default(rs_synth_traffic_options *opt)
     opt->speed_fraction[1] = 1.0;
 }
 
-static double uniform(rs_simulate_rng *rng, double lo, double hi) { return lo + (hi - lo) * rs_simulate_rng_uniform(rng); }
+static double uniform(rs_rng *rng, double lo, double hi) { return lo + (hi - lo) * rs_rng_uniform(rng); }
 
-static rs_synth_class draw_class(rs_simulate_rng *rng, const rs_synth_class_mix *mix)
+static rs_synth_class draw_class(rs_rng *rng, const rs_synth_class_mix *mix)
 {
     double total = 0;
     for (int k = 0; k < RS_SYNTH_NCLASSES; k++) total += mix->weight[k];
-    double u = rs_simulate_rng_uniform(rng) * total;
+    double u = rs_rng_uniform(rng) * total;
     int last = 0;
     for (int k = 0; k < RS_SYNTH_NCLASSES; k++) {
         if (mix->weight[k] <= 0) continue;
@@ -348,27 +116,27 @@ static rs_status traffic_options_check(const rs_synth_traffic_options *o, rs_err
     return RS_OK;
 }
 
-rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, const rs_synth_lanes *lanes,
+rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, const rs_lanes *lanes,
                                  const rs_synth_traffic_options *opt, rs_err *err)
 {
     *vehicles = NULL;
     *N = 0;
     rs_status st = traffic_options_check(opt, err);
     if (st) return st;
-    rs_simulate_rng rng;
-    rs_simulate_rng_seed(&rng, opt->seed);
+    rs_rng rng;
+    rs_rng_seed(&rng, opt->seed);
     rs_synth_traffic_vehicle *v = NULL;
     int n = 0, cap = 0;
     for (int i = 0; i < lanes->N; i++) {
-        const rs_synth_lane *lane = &lanes->lane[i];
+        const rs_lane *lane = &lanes->lane[i];
         // Each lane draws from its own stream, so that one lane's vehicles do not depend on the
         // lanes before it.
-        rs_simulate_rng lr;
-        rs_simulate_rng_seed(&lr, rs_simulate_rng_u64(&rng));
+        rs_rng lr;
+        rs_rng_seed(&lr, rs_rng_u64(&rng));
         if (!opt->junction_lanes && lane->kind && !strcmp(lane->kind, "junction")) continue;
-        double L = rs_synth_lane_length_m(lane);
+        double L = rs_lane_length_m(lane);
         double vmax = isfinite(lane->speed_mps) ? lane->speed_mps : 13.89;
-        bool reverse = lane->direction == RS_SYNTH_LANE_BOTH && rs_simulate_rng_uniform(&lr) < 0.5;
+        bool reverse = lane->direction == RS_LANE_BOTH && rs_rng_uniform(&lr) < 0.5;
         // Downstream end of the free road before the first vehicle: a gap as if a leader stood
         // just beyond the lane's end.
         double front = L; // arc length of the next vehicle's front bumper, in travel direction
@@ -382,17 +150,17 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
             x.width_m = uniform(&lr, r.width_m[0], r.width_m[1]);
             x.height_m = uniform(&lr, r.height_m[0], r.height_m[1]);
             x.speed_mps = vmax * uniform(&lr, opt->speed_fraction[0], opt->speed_fraction[1]);
-            x.variant = rs_simulate_rng_u64(&lr) >> 11; // 53 bits: exact as a JSON number
+            x.variant = rs_rng_u64(&lr) >> 11; // 53 bits: exact as a JSON number
             double gap = opt->s0_m + x.speed_mps * opt->headway_s *
                                          uniform(&lr, 1.0 - opt->headway_jitter, 1.0 + opt->headway_jitter);
-            if (first) gap *= rs_simulate_rng_uniform(&lr); // the lane's end is no leader
+            if (first) gap *= rs_rng_uniform(&lr); // the lane's end is no leader
             first = false;
             front -= gap;
             double rear = front - x.length_m;
             if (rear < 0) break;
             double s_centre = 0.5 * (front + rear), p[2], h;
             // In travel direction; a reversed "both" lane runs from its last vertex.
-            rs_synth_lane_point(p, &h, lane, reverse ? L - s_centre : s_centre);
+            rs_lane_point(p, &h, lane, reverse ? L - s_centre : s_centre);
             x.e_m = p[0];
             x.n_m = p[1];
             x.yaw_deg = reverse ? fmod(h + 180.0, 360.0) : h;
@@ -415,7 +183,7 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
     if (opt->count > 0 && n > opt->count) {
         int kept = 0;
         for (int i = 0; i < n && kept < opt->count; i++)
-            if (rs_simulate_rng_uniform(&rng) * (n - i) < opt->count - kept) v[kept++] = v[i];
+            if (rs_rng_uniform(&rng) * (n - i) < opt->count - kept) v[kept++] = v[i];
         n = kept;
     }
     for (int i = 0; i < n; i++) snprintf(v[i].id, sizeof v[i].id, "v%d", i + 1);
@@ -477,8 +245,8 @@ rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N,
           opt->yaw_range_deg <= 180 && isfinite(opt->sigma_along_m) && isfinite(opt->sigma_across_m)))
         return rs_err_set(err, RS_ERR_INVALID, "randomisation: sigmas must be >= 0 and the yaw range in [0, 180]");
     if (opt->tries < 1) return rs_err_set(err, RS_ERR_INVALID, "randomisation: tries must be >= 1");
-    rs_simulate_rng rng;
-    rs_simulate_rng_seed(&rng, opt->seed);
+    rs_rng rng;
+    rs_rng_seed(&rng, opt->seed);
     int kept = 0;
     for (int i = 0; i < *N; i++) {
         const rs_synth_traffic_vehicle x0 = vehicles[i];
@@ -486,8 +254,8 @@ rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N,
         bool ok = false;
         rs_synth_traffic_vehicle x = x0;
         for (int t = 0; t < opt->tries && !ok; t++) {
-            double da = opt->sigma_along_m * rs_simulate_rng_normal(&rng);
-            double dc = opt->sigma_across_m * rs_simulate_rng_normal(&rng); // to the left
+            double da = opt->sigma_along_m * rs_rng_normal(&rng);
+            double dc = opt->sigma_across_m * rs_rng_normal(&rng); // to the left
             double dy = uniform(&rng, -opt->yaw_range_deg, opt->yaw_range_deg);
             x = x0;
             x.e_m += da * f[0] - dc * f[1];

@@ -10,72 +10,14 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "rs_geo.h"
-#include "rs_status.h"
-#include "rs_synth.h"
+#include "geo/rs_geo.h"
+#include "geo/rs_lanes.h"
+#include "core/rs_status.h"
+#include "synth/rs_synth.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-// ---- lanes ----
-
-typedef enum {
-    RS_SYNTH_LANE_FORWARD = 0, // vehicles travel in vertex order
-    RS_SYNTH_LANE_BOTH         // either way (a single-track road)
-} rs_synth_lane_direction;
-
-// One lane: a LineString of lanes.geojson in the site ENU frame.
-typedef struct {
-    char *id;              // owned; unique
-    char *kind;            // owned, may be NULL ("approach", "exit", "junction", ...)
-    double width_m;        // > 0
-    rs_synth_lane_direction direction;
-    double speed_mps;      // speed limit, > 0; NaN when the file gives none
-    double (*p_enu_m)[2];  // (Npoints, 2) owned: east, north, metres
-    int Npoints;           // >= 2; consecutive points at least 1 mm apart
-    int *next;             // (Nnext,) owned: indices of the lanes this one continues into
-    int Nnext;
-    int feature;           // index in the file's "features"
-} rs_synth_lane;
-
-typedef struct {
-    rs_synth_lane *lane;   // (N,) owned
-    int N;
-} rs_synth_lanes;
-
-// Reads lanes.geojson: a FeatureCollection of LineString features, coordinates [lon, lat] or
-// [lon, lat, h] (RFC 7946 order, WGS84 degrees; h is ignored: lanes lie on the ground plane),
-// properties: id (string, unique), width_m (> 0), direction ("forward" | "both", default
-// "forward"), optional speed_mps (> 0), optional kind (string), optional next (list of lane
-// ids). Converted to ENU at `origin` with rs_geo_llh_to_enu (the site's origin).
-// Errors name the file, the feature and the field:
-//   "SITE/lanes.geojson: feature 3 (id 'A1_in1'): properties.width_m: must be > 0"
-// RS_ERR_IO (unreadable), RS_ERR_PARSE (not JSON, wrong types), RS_ERR_INVALID (out of range,
-// duplicate id, fewer than 2 distinct points, a point more than 100 km from the origin),
-// RS_ERR_NOT_FOUND (a `next` id that is no lane), RS_ERR_NOMEM.
-// out: *lanes (owned; rs_synth_lanes_free). On failure *lanes is empty.
-rs_status rs_synth_lanes_read(// out
-                              rs_synth_lanes *lanes,
-                              // in
-                              const char *path, const rs_llh *origin, rs_err *err);
-void rs_synth_lanes_free(rs_synth_lanes *lanes); // NULL-safe; leaves *lanes empty
-
-// Length of a lane's polyline, metres.
-double rs_synth_lane_length_m(const rs_synth_lane *lane);
-
-// The point at arc length s (clamped to [0, length]) along a lane and the compass heading of the
-// segment it lies on (clockwise from north, degrees, [0, 360)), in the lane's vertex order.
-// out: p_enu_m (2,); heading_deg may be NULL
-void rs_synth_lane_point(double p_enu_m[2], double *heading_deg,
-                         // in
-                         const rs_synth_lane *lane, double s_m);
-
-// Distance from a point to the nearest point of a lane's polyline, metres; *heading_deg (may be
-// NULL) receives the heading of the nearest segment in vertex order.
-double rs_synth_lane_distance_m(double *heading_deg,
-                                // in
-                                const rs_synth_lane *lane, const double p_enu_m[2]);
 
 // ---- vehicles ----
 
@@ -140,7 +82,7 @@ void rs_synth_traffic_options_default(rs_synth_traffic_options *opt);
 rs_status rs_synth_traffic_place(// out
                                  rs_synth_traffic_vehicle **vehicles, int *N,
                                  // in
-                                 const rs_synth_lanes *lanes, const rs_synth_traffic_options *opt,
+                                 const rs_lanes *lanes, const rs_synth_traffic_options *opt,
                                  rs_err *err);
 
 // ---- domain randomisation ----

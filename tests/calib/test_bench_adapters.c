@@ -1,4 +1,4 @@
-// test_bench_adapters.c -- the benchmark's thin adapters over OpenCV (rs_calib_opencv_pnp) and
+// test_bench_adapters.c -- the benchmark's thin adapters over OpenCV (rs_bench_opencv_pnp) and
 // OpenGV (rs_calib_opengv_pose): on noise-free simulated problems (exact mrcal projections of
 // the simulator's true pose: the oracle) every method recovers the true pose; refusals come back
 // as errors with a message, never as a throw or a print. Seed fixed, printed on failure.
@@ -9,11 +9,12 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "rs_calib.h"
-#include "rs_calib_opencv.h"
-#include "rs_calib_opengv.h"
-#include "rs_simulate.h"
+#include "calib/rs_calib.h"
+#include "bench/rs_bench_opencv.h"
+#include "calib/rs_calib_opengv.h"
+#include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
+#include "core/rs_pose.h"
 
 #define SEED 21
 
@@ -35,9 +36,9 @@ static void check_pose(const char *name, rs_status st, const rs_err *e, const do
     CHECK(st == RS_OK, "%s: %s: %s", name, rs_strerror(st), e->msg);
     if (st != RS_OK) return;
     double C[3], r_err[3];
-    const double r_inv[3] = {-s->rt_cam_enu[0], -s->rt_cam_enu[1], -s->rt_cam_enu[2]};
+    const double r_inv[3] = {-s->camera.rt_cam_enu[0], -s->camera.rt_cam_enu[1], -s->camera.rt_cam_enu[2]};
     mrcal_compose_r(r_err, NULL, NULL, rt, r_inv);
-    rs_calib_position_from_rt(C, NULL, rt);
+    rs_pose_position_from_rt(C, NULL, rt);
     const double drot = sqrt(r_err[0] * r_err[0] + r_err[1] * r_err[1] + r_err[2] * r_err[2]) * 180 / M_PI;
     const double dpos = hypot(hypot(C[0] - s->p_cam_enu_m[0], C[1] - s->p_cam_enu_m[1]), C[2] - s->p_cam_enu_m[2]);
     printf("%-22s rotation error %.3g deg, position error %.3g m\n", name, drot, dpos);
@@ -51,28 +52,28 @@ int main(void)
     if (!s3d || !s2d) return gen_end("21");
     static const struct {
         const char *name;
-        rs_calib_opencv_pnp_method m;
+        rs_bench_opencv_pnp_method m;
         bool lm, planar;
         double tol;
     } cv[] = {
-        {"cv-iterative", RS_CALIB_OPENCV_PNP_ITERATIVE, false, false, 1e-6},
-        {"cv-iterative+lm", RS_CALIB_OPENCV_PNP_ITERATIVE, true, false, 1e-6},
-        {"cv-epnp", RS_CALIB_OPENCV_PNP_EPNP, false, false, 1e-3},
-        {"cv-epnp+lm", RS_CALIB_OPENCV_PNP_EPNP, true, false, 1e-6},
-        {"cv-sqpnp", RS_CALIB_OPENCV_PNP_SQPNP, false, false, 1e-5},
-        {"cv-sqpnp+lm", RS_CALIB_OPENCV_PNP_SQPNP, true, false, 1e-6},
-        {"cv-ippe (planar)", RS_CALIB_OPENCV_PNP_IPPE, false, true, 1e-6},
-        {"cv-ippe+lm (planar)", RS_CALIB_OPENCV_PNP_IPPE, true, true, 1e-6},
-        {"cv-ransac", RS_CALIB_OPENCV_PNP_RANSAC, false, false, 1e-6},
-        {"cv-ransac+lm", RS_CALIB_OPENCV_PNP_RANSAC, true, false, 1e-6},
+        {"cv-iterative", RS_BENCH_OPENCV_PNP_ITERATIVE, false, false, 1e-6},
+        {"cv-iterative+lm", RS_BENCH_OPENCV_PNP_ITERATIVE, true, false, 1e-6},
+        {"cv-epnp", RS_BENCH_OPENCV_PNP_EPNP, false, false, 1e-3},
+        {"cv-epnp+lm", RS_BENCH_OPENCV_PNP_EPNP, true, false, 1e-6},
+        {"cv-sqpnp", RS_BENCH_OPENCV_PNP_SQPNP, false, false, 1e-5},
+        {"cv-sqpnp+lm", RS_BENCH_OPENCV_PNP_SQPNP, true, false, 1e-6},
+        {"cv-ippe (planar)", RS_BENCH_OPENCV_PNP_IPPE, false, true, 1e-6},
+        {"cv-ippe+lm (planar)", RS_BENCH_OPENCV_PNP_IPPE, true, true, 1e-6},
+        {"cv-ransac", RS_BENCH_OPENCV_PNP_RANSAC, false, false, 1e-6},
+        {"cv-ransac+lm", RS_BENCH_OPENCV_PNP_RANSAC, true, false, 1e-6},
     };
     for (size_t i = 0; i < sizeof cv / sizeof *cv; i++) {
         const rs_simulate_problem *s = cv[i].planar ? s2d : s3d;
         double rt[6];
         bool inlier[20];
         rs_err e = {0};
-        const rs_status st = rs_calib_opencv_pnp(rt, inlier, s->p_enu_true_m, s->q_true_px, s->Npoints,
-                                                 s->intrinsics, s->Nintrinsics - 4, cv[i].m, cv[i].lm, 8.0, &e);
+        const rs_status st = rs_bench_opencv_pnp(rt, inlier, s->p_enu_true_m, s->q_true_px, s->Npoints,
+                                                 s->camera.intrinsics, s->camera.Nintrinsics - 4, cv[i].m, cv[i].lm, 8.0, &e);
         check_pose(cv[i].name, st, &e, rt, s, cv[i].tol);
         int Nin = 0;
         for (int k = 0; k < s->Npoints; k++) Nin += inlier[k];
@@ -81,7 +82,7 @@ int main(void)
 
     double v[3 * 20];
     CHECK(mrcal_unproject((mrcal_point3_t *)v, (const mrcal_point2_t *)s3d->q_true_px, s3d->Npoints,
-                          &s3d->lensmodel, s3d->intrinsics), "mrcal_unproject");
+                          &s3d->camera.lensmodel, s3d->camera.intrinsics), "mrcal_unproject");
     for (int i = 0; i < s3d->Npoints; i++) {
         const double n = sqrt(v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]);
         for (int k = 0; k < 3; k++) v[3 * i + k] /= n;
@@ -108,16 +109,16 @@ int main(void)
     // refusals: IPPE on landmarks that are not coplanar, OpenGV with 3 points, bad distortion
     double rt[6], Rt[12];
     rs_err e = {0};
-    rs_status st = rs_calib_opencv_pnp(rt, NULL, s3d->p_enu_true_m, s3d->q_true_px, s3d->Npoints, s3d->intrinsics,
-                                       s3d->Nintrinsics - 4, RS_CALIB_OPENCV_PNP_IPPE, false, 8.0, &e);
+    rs_status st = rs_bench_opencv_pnp(rt, NULL, s3d->p_enu_true_m, s3d->q_true_px, s3d->Npoints, s3d->camera.intrinsics,
+                                       s3d->camera.Nintrinsics - 4, RS_BENCH_OPENCV_PNP_IPPE, false, 8.0, &e);
     printf("IPPE, 3-D landmarks: %s: %s\n", rs_strerror(st), e.msg);
     CHECK(st == RS_ERR_EXTERNAL || st == RS_ERR_DEGENERATE, "IPPE on 3-D landmarks: %s", rs_strerror(st));
     CHECK(st == RS_OK || strlen(e.msg) > 10, "IPPE refusal without a message");
     e.msg[0] = 0;
     st = rs_calib_opengv_pose(Rt, v, s3d->p_enu_true_m, 3, RS_CALIB_OPENGV_POSE_EPNP, 0.005, 500, &e);
     CHECK(st == RS_ERR_USAGE && strstr(e.msg, "N = 3"), "OpenGV with 3 points: %s '%s'", rs_strerror(st), e.msg);
-    st = rs_calib_opencv_pnp(rt, NULL, s3d->p_enu_true_m, s3d->q_true_px, s3d->Npoints, s3d->intrinsics, -1,
-                             RS_CALIB_OPENCV_PNP_EPNP, false, 8.0, &e);
+    st = rs_bench_opencv_pnp(rt, NULL, s3d->p_enu_true_m, s3d->q_true_px, s3d->Npoints, s3d->camera.intrinsics, -1,
+                             RS_BENCH_OPENCV_PNP_EPNP, false, 8.0, &e);
     CHECK(st == RS_ERR_USAGE, "Ndistortion -1: %s", rs_strerror(st));
     rs_simulate_problem_free(s3d);
     rs_simulate_problem_free(s2d);

@@ -12,8 +12,8 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "rs_calib.h"
-#include "rs_simulate.h"
+#include "calib/rs_calib.h"
+#include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
 
 // Inverts the (n,n) matrix A in place by Gauss-Jordan with partial pivoting; false if singular.
@@ -50,7 +50,7 @@ static void project(double q[2], const rs_simulate_problem *s, const double rt[6
 {
     mrcal_point3_t pc;
     mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt, p);
-    mrcal_project((mrcal_point2_t *)q, NULL, NULL, &pc, 1, &s->lensmodel, s->intrinsics);
+    mrcal_project((mrcal_point2_t *)q, NULL, NULL, &pc, 1, &s->camera.lensmodel, s->camera.intrinsics);
 }
 
 // Brute-force marginal covariance of rt at the truth.
@@ -64,7 +64,7 @@ static bool brute_crb(double cov[36], const rs_simulate_problem *s, double sigma
             double rt[6], pp[3], qa[2], qb[2];
             const double h = j < 3 ? 1e-6 : 1e-5;
             for (int sgn = 0; sgn < 2; sgn++) {
-                memcpy(rt, s->rt_cam_enu, sizeof rt);
+                memcpy(rt, s->camera.rt_cam_enu, sizeof rt);
                 memcpy(pp, p, sizeof pp);
                 const double d = sgn ? -h : h;
                 if (j < 6) rt[j] += d;
@@ -120,9 +120,7 @@ int main(void)
             for (int k = 0; k < 3; k++) sig_enu[3 * i + k] = sigma_m;
         }
         const rs_calib_problem cp = {.N = s->Npoints, .p_enu_m = s->p_enu_true_m, .sigma_enu_m = sig_enu,
-                                     .q_px = s->q_true_px, .sigma_px = sig_px, .lensmodel = &s->lensmodel,
-                                     .intrinsics = s->intrinsics, .width = (int)s->imagersize[0],
-                                     .height = (int)s->imagersize[1]};
+                                     .q_px = s->q_true_px, .sigma_px = sig_px, .camera = &s->camera};
         rs_calib_options opt;
         rs_calib_options_default(&opt);
         opt.robust_scale = 0;

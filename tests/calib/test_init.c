@@ -12,7 +12,7 @@
 
 #include <mrcal/poseutils.h>
 
-#include "rs_calib_init.h"
+#include "calib/rs_calib_init.h"
 #include "test_init_gen.h"
 
 static int Nfail = 0;

@@ -9,7 +9,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "rs_calib_init.h"
+#include "calib/rs_calib_init.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -3,7 +3,7 @@
 // OPENCV8, CAHVOR; seed 900 + lens), for mrcal's Python module to check independently.
 #include <stdio.h>
 
-#include "rs_calib.h"
+#include "calib/rs_calib.h"
 #include "test_solve_gen.h"
 
 int main(void) {
@@ -22,8 +22,8 @@ int main(void) {
                                  gen_uniform(&rng, g.height / 3.0, g.height - 1)};
             double p[3];
             rs_err err = {0};
-            const rs_status st = rs_calib_locate_ground(p, &g.lensmodel, g.intrinsics, g.rt_true, q,
-                                                        n, ground, &err);
+            const rs_camera cam = gen_camera(&g, g.rt_true);
+            const rs_status st = rs_camera_locate_ground(p, &cam, q, n, ground, &err);
             printf("{\"model\": \"%s\", \"intrinsics\": [", name);
             for (int i = 0; i < g.Nintrinsics; i++) printf("%s%.17g", i ? ", " : "", g.intrinsics[i]);
             printf("], \"rt\": [");

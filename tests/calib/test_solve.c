@@ -10,9 +10,10 @@
 
 #include <mrcal/poseutils.h>
 
-#include "rs_calib.h"
-#include "rs_calib_refine.h"
+#include "calib/rs_calib.h"
+#include "calib/internal/rs_calib_refine.h"
 #include "test_solve_gen.h"
+#include "core/rs_pose.h"
 
 
 static const char *lens_name[] = {"PINHOLE", "OPENCV8", "CAHVOR"};
@@ -61,41 +62,6 @@ static void test_noise_free(void) {
     printf("noise-free: worst |dr| %.3g rad, worst |dC|/range %.3g\n", worst_r, worst_c);
 }
 
-// yaw/pitch/roll: the optical axis is (sin y cos p, cos y cos p, sin p); roll turns x_cam
-// towards y_cam; round trip.
-static void test_ypr(void) {
-    gen_rng rng;
-    gen_seed(&rng, 77);
-    double worst = 0;
-    for (int k = 0; k < 1000; k++) {
-        const double ypr[3] = {gen_uniform(&rng, 0, 360), gen_uniform(&rng, -85, 85),
-                               gen_uniform(&rng, -170, 170)};
-        const double C[3] = {gen_uniform(&rng, -500, 500), gen_uniform(&rng, -500, 500),
-                             gen_uniform(&rng, 0, 50)};
-        double rt[6], back[3], Cb[3], R[9];
-        rs_calib_rt_from_ypr(rt, ypr, C);
-        rs_calib_ypr_from_rt(back, Cb, rt);
-        mrcal_R_from_r(R, NULL, rt);
-        const double y = ypr[0] * M_PI / 180, p = ypr[1] * M_PI / 180, r = ypr[2] * M_PI / 180;
-        const double f[3] = {sin(y) * cos(p), cos(y) * cos(p), sin(p)};
-        // z_cam in ENU is row 2 of R_cam_enu
-        double e = norm3(&R[6], f);
-        // the level right vector (cos y, -sin y, 0) turned by roll towards the down vector
-        const double right0[3] = {cos(y), -sin(y), 0};
-        const double down0[3] = {sin(y) * sin(p), cos(y) * sin(p), -cos(p)};
-        double xcam[3];
-        for (int i = 0; i < 3; i++) xcam[i] = cos(r) * right0[i] + sin(r) * down0[i];
-        e = fmax(e, norm3(&R[0], xcam));
-        double dy = fabs(remainder(back[0] - ypr[0], 360.0)), dp = fabs(back[1] - ypr[1]),
-               dro = fabs(remainder(back[2] - ypr[2], 360.0));
-        worst = fmax(worst, fmax(fmax(dy, dp), dro));
-        CHECK(e < 1e-12 && dy < 1e-9 && dp < 1e-9 && dro < 1e-9 && norm3(C, Cb) < 1e-9,
-              "ypr (%g %g %g): axis err %g, back (%g %g %g)", ypr[0], ypr[1], ypr[2], e, back[0],
-              back[1], back[2]);
-    }
-    printf("ypr round trip: worst %.3g deg\n", worst);
-}
-
 // A ground pixel maps back to its ground point (OPENCV8, CAHVOR).
 static void test_locate_ground(void) {
     double worst = 0;
@@ -108,8 +74,8 @@ static void test_locate_ground(void) {
             const double n[3] = {0, 0, 2.0}; // not unit on purpose
             double p[3];
             rs_err err = {0};
-            rs_status st = rs_calib_locate_ground(p, &g.lensmodel, g.intrinsics, g.rt_true,
-                                                  &g.q_true[2 * i], n, 2.0 * g.p_true[3 * i + 2], &err);
+            const rs_camera cam = gen_camera(&g, g.rt_true);
+            rs_status st = rs_camera_locate_ground(p, &cam, &g.q_true[2 * i], n, 2.0 * g.p_true[3 * i + 2], &err);
             CHECK(st == RS_OK, "%s landmark %d: %s", lens_name[lens], i, err.msg);
             const double e = norm3(p, &g.p_true[3 * i]);
             worst = fmax(worst, e);
@@ -118,10 +84,10 @@ static void test_locate_ground(void) {
         // a pixel above the horizon never meets the ground
         const double n[3] = {0, 0, 1}, q_sky[2] = {959.5, 0.0};
         double p[3], rt_up[6], ypr[3] = {10, 20, 0};
-        rs_calib_rt_from_ypr(rt_up, ypr, g.position_true);
+        rs_pose_rt_from_ypr(rt_up, ypr, g.position_true);
         rs_err err = {0};
-        CHECK(rs_calib_locate_ground(p, &g.lensmodel, g.intrinsics, rt_up, q_sky, n,
-                                     g.position_true[2] - 10, &err) == RS_ERR_DEGENERATE,
+        const rs_camera cam_up = gen_camera(&g, rt_up);
+        CHECK(rs_camera_locate_ground(p, &cam_up, q_sky, n, g.position_true[2] - 10, &err) == RS_ERR_DEGENERATE,
               "sky pixel: %s", err.msg);
     }
     printf("locate_ground: worst error %.3g m\n", worst);
@@ -328,9 +294,10 @@ static void test_degenerate(void) {
     pb = gen_view(&h, NULL);
     mrcal_lensmodel_t cahvore = {.type = MRCAL_LENSMODEL_CAHVORE};
     cahvore.LENSMODEL_CAHVORE__config.linearity = 1.0;
-    pb.lensmodel = &cahvore;
     double intr[12] = {1200, 1200, 959.5, 539.5, 0, 0, 0, 0, 0, 0, 0, 0};
-    pb.intrinsics = intr;
+    const rs_camera cam_cahvore = {.lensmodel = cahvore, .intrinsics = intr, .Nintrinsics = 12, .width = h.width,
+                                   .height = h.height};
+    pb.camera = &cam_cahvore;
     expect_fail("CAHVORE", &pb, RS_ERR_UNSUPPORTED, "CAHVORE");
 }
 
@@ -363,7 +330,7 @@ static void test_gradients(void) {
         CHECK(worst < 1e-6, "%s: analytic vs numeric Jacobian: %g", lens_name[lens], worst);
 
         double C[3];
-        rs_calib_position_from_rt(C, NULL, rt_c);
+        rs_pose_position_from_rt(C, NULL, rt_c);
         memcpy(rp.prior_position_c_m, C, sizeof(C));
         rs_calib_refine_options ro = {.refine = RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER |
                                                 RS_CALIB_REFINE_DISTORTION,
@@ -383,7 +350,6 @@ static void test_gradients(void) {
 
 int main(void) {
     gen_begin();
-    test_ypr();
     test_noise_free();
     test_locate_ground();
     test_gradients();

@@ -1,5 +1,6 @@
 // test_solve_gen.c -- see test_solve_gen.h.
 #include "test_solve_gen.h"
+#include "core/rs_pose.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -104,7 +105,7 @@ bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_p
     g->position_true[2] = ground + gen_uniform(rng, 6.0, 15.0);
     const double ypr[3] = {gen_uniform(rng, 0.0, 360.0), gen_uniform(rng, -30.0, -8.0),
                            gen_uniform(rng, -3.0, 3.0)};
-    rs_calib_rt_from_ypr(g->rt_true, ypr, g->position_true);
+    rs_pose_rt_from_ypr(g->rt_true, ypr, g->position_true);
     double Rt[12]; // rows 0-2: R_cam_enu; row 3: t
     mrcal_Rt_from_rt(Rt, NULL, g->rt_true);
     g->N = N;
@@ -183,11 +184,18 @@ void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m)
     }
 }
 
-rs_calib_problem gen_view(const gen_problem *g, const double *intrinsics_nominal) {
+rs_camera gen_camera(const gen_problem *g, const double rt[6]) {
+    rs_camera c = {.lensmodel = g->lensmodel, .intrinsics = (double *)g->intrinsics,
+                   .Nintrinsics = g->Nintrinsics, .width = g->width, .height = g->height};
+    memcpy(c.rt_cam_enu, rt, sizeof c.rt_cam_enu);
+    return c;
+}
+
+rs_calib_problem gen_view(gen_problem *g, const double *intrinsics_nominal) {
+    g->nominal = gen_camera(g, g->rt_true);
+    if (intrinsics_nominal) g->nominal.intrinsics = (double *)intrinsics_nominal;
     rs_calib_problem pb = {.N = g->N, .p_enu_m = g->p_survey, .sigma_enu_m = g->sigma_enu,
-                           .q_px = g->q_obs, .sigma_px = g->sigma_px, .lensmodel = &g->lensmodel,
-                           .intrinsics = intrinsics_nominal ? intrinsics_nominal : g->intrinsics,
-                           .width = g->width, .height = g->height};
+                           .q_px = g->q_obs, .sigma_px = g->sigma_px, .camera = &g->nominal};
     return pb;
 }
 

@@ -6,7 +6,8 @@
 #include <stdint.h>
 #include <mrcal/mrcal.h>
 
-#include "rs_calib.h"
+#include "calib/rs_calib.h"
+#include "core/rs_camera.h"
 
 #define GEN_MAXN 64
 
@@ -48,6 +49,7 @@ typedef struct {
     double q_true[GEN_MAXN * 2], q_obs[GEN_MAXN * 2], sigma_px[GEN_MAXN];
     bool outlier[GEN_MAXN];
     double mean_range_m;
+    rs_camera nominal;       // set by gen_view: the camera the problem points to
 } gen_problem;
 
 // Fills g with N landmarks (<= GEN_MAXN) seen by a camera 6-15 m above a road some hundreds of
@@ -61,8 +63,12 @@ void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout);
 // Appends Nout gross outliers (new landmarks 12-150 m away whose clicked pixel is 200-500 px off).
 void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m);
 
-// A problem view of g (pointers into g).
-rs_calib_problem gen_view(const gen_problem *g, const double *intrinsics_nominal);
+// A problem view of g (pointers into g; g->nominal is its camera, with intrinsics_nominal or,
+// when NULL, the true intrinsics).
+rs_calib_problem gen_view(gen_problem *g, const double *intrinsics_nominal);
+
+// The camera of g (true lens and intrinsics) at pose rt (a view into g).
+rs_camera gen_camera(const gen_problem *g, const double rt[6]);
 
 // e^T C^-1 e for a (n,n) symmetric positive-definite C (Cholesky); NAN if not positive definite.
 double gen_nees(const double *e, const double *C, int n);

@@ -13,8 +13,9 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "rs_calib.h"
+#include "calib/rs_calib.h"
 #include "test_solve_gen.h"
+#include "core/rs_pose.h"
 
 #define NTRIALS 240
 
@@ -76,7 +77,7 @@ int main(void) {
         vf_sum += res.variance_factor;
         {   // each reported sigma alone: position E, N, U and yaw, pitch, roll
             double ypr_true[3];
-            rs_calib_ypr_from_rt(ypr_true, NULL, g.rt_true);
+            rs_pose_ypr_from_rt(ypr_true, NULL, g.rt_true);
             for (int k = 0; k < 3; k++) {
                 const double zp = (res.position_enu_m[k] - g.position_true[k]) / res.sigma_position_enu_m[k];
                 const double za = remainder(res.yaw_pitch_roll_deg[k] - ypr_true[k], 360.0) /

@@ -19,12 +19,13 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "rs_calib.h"
-#include "rs_calib_opencv.h"
-#include "rs_geo.h"
-#include "rs_io.h"
-#include "rs_simulate.h"
+#include "calib/rs_calib.h"
+#include "bench/rs_bench_opencv.h"
+#include "geo/rs_geo.h"
+#include "core/rs_io.h"
+#include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
+#include "core/rs_pose.h"
 
 #define SEED 11
 #define NL 20
@@ -32,7 +33,7 @@
 static double position_error(const double rt[6], const double C_true[3])
 {
     double C[3];
-    rs_calib_position_from_rt(C, NULL, rt);
+    rs_pose_position_from_rt(C, NULL, rt);
     return hypot(hypot(C[0] - C_true[0], C[1] - C_true[1]), C[2] - C_true[2]);
 }
 
@@ -53,8 +54,8 @@ static double jtj_condition(const double rt[6], const double *p, const rs_simula
             mrcal_point2_t qa, qb;
             mrcal_transform_point_rt(a.xyz, NULL, NULL, rp, &p[3 * i]);
             mrcal_transform_point_rt(b.xyz, NULL, NULL, rm, &p[3 * i]);
-            mrcal_project(&qa, NULL, NULL, &a, 1, &s->lensmodel, s->intrinsics);
-            mrcal_project(&qb, NULL, NULL, &b, 1, &s->lensmodel, s->intrinsics);
+            mrcal_project(&qa, NULL, NULL, &a, 1, &s->camera.lensmodel, s->camera.intrinsics);
+            mrcal_project(&qb, NULL, NULL, &b, 1, &s->camera.lensmodel, s->camera.intrinsics);
             J[2 * i][j] = (qa.x - qb.x) / (2 * h);
             J[2 * i + 1][j] = (qa.y - qb.y) / (2 * h);
         }
@@ -137,7 +138,7 @@ int main(void)
     }
     // the true pose in ECEF: R_cam_ecef = R_cam_enu R_ecef_enu^T, t = -R_cam_ecef C_ecef
     double R_cam_enu[9], Rt_cam_ecef[12], rt_cam_ecef[6];
-    mrcal_R_from_r(R_cam_enu, NULL, s->rt_cam_enu);
+    mrcal_R_from_r(R_cam_enu, NULL, s->camera.rt_cam_enu);
     for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++) {
             Rt_cam_ecef[3 * a + b] = 0;
@@ -151,12 +152,12 @@ int main(void)
 
     // 1. OpenCV, both routes
     double rt[6];
-    rs_status st = rs_calib_opencv_pnp(rt, NULL, s->p_enu_true_m, s->q_true_px, NL, s->intrinsics,
-                                       s->Nintrinsics - 4, RS_CALIB_OPENCV_PNP_ITERATIVE, true, 8, &e);
+    rs_status st = rs_bench_opencv_pnp(rt, NULL, s->p_enu_true_m, s->q_true_px, NL, s->camera.intrinsics,
+                                       s->camera.Nintrinsics - 4, RS_BENCH_OPENCV_PNP_ITERATIVE, true, 8, &e);
     CHECK(st == RS_OK, "OpenCV in ENU: %s", e.msg);
     const double err_enu = st == RS_OK ? position_error(rt, C_enu) : NAN;
-    st = rs_calib_opencv_pnp(rt, NULL, p_ecef, s->q_true_px, NL, s->intrinsics, s->Nintrinsics - 4,
-                             RS_CALIB_OPENCV_PNP_ITERATIVE, true, 8, &e);
+    st = rs_bench_opencv_pnp(rt, NULL, p_ecef, s->q_true_px, NL, s->camera.intrinsics, s->camera.Nintrinsics - 4,
+                             RS_BENCH_OPENCV_PNP_ITERATIVE, true, 8, &e);
     const double err_ecef = st == RS_OK ? position_error(rt, C_ecef) : INFINITY;
     printf("OpenCV solvePnP ITERATIVE + RefineLM, noise-free: position error %.3g m in ENU, %.3g m in ECEF%s%s\n",
            err_enu, err_ecef, st == RS_OK ? "" : " -- failed: ", st == RS_OK ? "" : e.msg);
@@ -165,7 +166,7 @@ int main(void)
           err_enu);
 
     // 2. the conditioning at the truth
-    const double k_enu = jtj_condition(s->rt_cam_enu, s->p_enu_true_m, s);
+    const double k_enu = jtj_condition(s->camera.rt_cam_enu, s->p_enu_true_m, s);
     const double k_ecef = jtj_condition(rt_cam_ecef, p_ecef, s);
     printf("condition number of J^T J (rt, unscaled): %.3g in ENU, %.3g in ECEF (ratio %.3g)\n", k_enu, k_ecef,
            k_ecef / k_enu);
@@ -175,8 +176,7 @@ int main(void)
     double sig_px[NL];
     for (int i = 0; i < NL; i++) sig_px[i] = 0.01;
     const rs_calib_problem cp = {.N = NL, .p_enu_m = p_ecef, .q_px = s->q_true_px, .sigma_px = sig_px,
-                                 .lensmodel = &s->lensmodel, .intrinsics = s->intrinsics,
-                                 .width = (int)s->imagersize[0], .height = (int)s->imagersize[1]};
+                                 .camera = &s->camera};
     rs_calib_result r;
     st = rs_calib_solve(&r, &cp, NULL, &e);
     CHECK(st == RS_OK, "roadside with ECEF coordinates: %s", e.msg);

@@ -13,9 +13,10 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "rs_calib.h"
-#include "rs_simulate.h"
+#include "calib/rs_calib.h"
+#include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
+#include "core/rs_pose.h"
 
 #define SEED 5
 
@@ -32,8 +33,8 @@ typedef struct {
 static void from_sim(prob *P, const rs_simulate_problem *s, double sigma_px, double sigma_m)
 {
     memset(P, 0, sizeof *P);
-    P->lens = s->lensmodel;
-    memcpy(P->intrinsics, s->intrinsics, sizeof(double) * (size_t)s->Nintrinsics);
+    P->lens = s->camera.lensmodel;
+    memcpy(P->intrinsics, s->camera.intrinsics, sizeof(double) * (size_t)s->camera.Nintrinsics);
     P->N = s->Npoints;
     memcpy(P->p, s->p_enu_survey_m, sizeof(double) * 3 * (size_t)P->N);
     memcpy(P->q, s->q_px, sizeof(double) * 2 * (size_t)P->N);
@@ -41,9 +42,9 @@ static void from_sim(prob *P, const rs_simulate_problem *s, double sigma_px, dou
         P->sigma_px[i] = sigma_px;
         for (int k = 0; k < 3; k++) P->sigma_enu[3 * i + k] = sigma_m;
     }
-    memcpy(P->rt_true, s->rt_cam_enu, sizeof P->rt_true);
-    P->width = (int)s->imagersize[0];
-    P->height = (int)s->imagersize[1];
+    memcpy(P->rt_true, s->camera.rt_cam_enu, sizeof P->rt_true);
+    P->width = (int)s->camera.width;
+    P->height = (int)s->camera.height;
 }
 
 static bool simulate(prob *P, rs_simulate_camera_options *o, double sigma_px, double sigma_m)
@@ -79,7 +80,7 @@ static void build(prob *P, double f, const double ypr[3], const double pos[3], c
     // there r = pi * axis, the axis from R = 2 a a^T - I (signs relative to a[0] > 0: enough for
     // the yaw-0 case used here)
     double R[9];
-    rs_simulate_R_cam_enu_from_ypr(R, ypr[0], ypr[1], ypr[2]);
+    rs_pose_R_from_ypr(R, ypr);
     const double tr = R[0] + R[4] + R[8];
     if (tr < -1 + 1e-9) {
         double a[3];
@@ -118,9 +119,11 @@ static void facing(double f[3], const double rt[6])
 
 static rs_status solve(rs_calib_result *r, const prob *P, rs_err *e)
 {
+    const rs_camera cam = {.lensmodel = P->lens, .intrinsics = (double *)P->intrinsics,
+                           .Nintrinsics = mrcal_lensmodel_num_params(&P->lens), .width = P->width,
+                           .height = P->height};
     const rs_calib_problem cp = {.N = P->N, .p_enu_m = P->p, .sigma_enu_m = P->sigma_enu, .q_px = P->q,
-                                 .sigma_px = P->sigma_px, .lensmodel = &P->lens, .intrinsics = P->intrinsics,
-                                 .width = P->width, .height = P->height};
+                                 .sigma_px = P->sigma_px, .camera = &cam};
     return rs_calib_solve(r, &cp, NULL, e);
 }
 
@@ -146,7 +149,7 @@ static double expect_pose(const char *name, const prob *P)
         double d[6], C[3];
         for (int k = 0; k < 6; k++) d[k] = r.rt_cam_enu[k] - P->rt_true[k];
         const double nees = gen_nees(d, r.covariance_rt_cam_enu, 6);
-        rs_calib_position_from_rt(C, NULL, P->rt_true);
+        rs_pose_position_from_rt(C, NULL, P->rt_true);
         dpos = hypot(hypot(r.position_enu_m[0] - C[0], r.position_enu_m[1] - C[1]), r.position_enu_m[2] - C[2]);
         printf("%-28s pose: position error %.3g m (sigma %.3g m), NEES %.3g, condition %.3g%s%s\n", name,
                dpos, sqrt(r.sigma_position_enu_m[0] * r.sigma_position_enu_m[0] +

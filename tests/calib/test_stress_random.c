@@ -11,7 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "rs_calib_bench.h"
+#include "bench/rs_bench_calib.h"
 #include "test_solve_gen.h"
 
 int main(int argc, char **argv)
@@ -21,9 +21,9 @@ int main(int argc, char **argv)
     char seeds[64];
     snprintf(seeds, sizeof seeds, "%llu..%llu", seed, seed + (unsigned long long)count - 1);
     gen_begin();
-    rs_calib_bench_stress_summary S;
+    rs_bench_calib_stress_summary S;
     rs_err err = {0};
-    CHECK(rs_calib_bench_stress(&S, count, seed, &err) == RS_OK, "%s", err.msg);
+    CHECK(rs_bench_calib_stress(&S, count, seed, &err) == RS_OK, "%s", err.msg);
     printf("%d problems (seed %s): generated %d, poses %d, flagged %d (largest condition number %.3g)\n",
            S.Nproblems, seeds, S.Ngenerated, S.Nok, S.Nflagged, S.cond_max);
     for (int c = 1; c < 16; c++)

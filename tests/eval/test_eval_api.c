@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_eval.h"
+#include "eval/rs_eval.h"
 
 static int failures = 0;
 
@@ -68,7 +68,7 @@ int main(void)
     st = rs_eval_run(&r, data, NULL, &err);
     check(st == RS_OK && r && r->Nthresholds == 6 && r->max_dets == 100, "run with defaults");
     if (st == RS_OK) {
-        check(r->thresholds_px[0] == 2 && r->thresholds_px[5] == 50, "default thresholds");
+        check(r->thresholds[0] == 2 && r->thresholds[5] == 50, "default thresholds");
         check_near(r->all.ap[0], 0.5, "AP@2");
         check_near(r->all.recall[0], 0.5, "recall@2");
         for (int t = 1; t < 6; t++) check_near(r->all.ap[t], 5.0 / 6.0, "AP@5..50");
@@ -84,7 +84,7 @@ int main(void)
 
     // Rows, one threshold, max-dets 2: kept .9 TP and .8 FP -> AP 1/2 at 5.
     const double theta[1] = {5};
-    rs_eval_options opt = {.thresholds_px = theta, .Nthresholds = 1, .max_dets = 2, .per_class = true, .by_group = true};
+    rs_eval_options opt = {.thresholds = theta, .Nthresholds = 1, .max_dets = 2, .per_class = true, .by_group = true};
     st = rs_eval_run(&r, data, &opt, &err);
     check(st == RS_OK && r->Ngroups == 1 && r->Nclasses == 1, "rows");
     if (st == RS_OK) {
@@ -99,9 +99,9 @@ int main(void)
 
     // Option errors.
     const double twice[2] = {5, 5}, negative[1] = {-1};
-    opt = (rs_eval_options){.thresholds_px = twice, .Nthresholds = 2};
+    opt = (rs_eval_options){.thresholds = twice, .Nthresholds = 2};
     check(rs_eval_run(&r, data, &opt, &err) == RS_ERR_USAGE && r == NULL && strstr(err.msg, "twice"), "repeated threshold");
-    opt = (rs_eval_options){.thresholds_px = negative, .Nthresholds = 1};
+    opt = (rs_eval_options){.thresholds = negative, .Nthresholds = 1};
     check(rs_eval_run(&r, data, &opt, &err) == RS_ERR_USAGE, "negative threshold");
     opt = (rs_eval_options){.max_dets = -1};
     check(rs_eval_run(&r, data, &opt, &err) == RS_ERR_USAGE, "negative max-dets");

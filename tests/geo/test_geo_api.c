@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_geo.h"
+#include "geo/rs_geo.h"
 
 enum { SEED = 20261122 };
 static int failures = 0;

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_synth_appearance.h"
+#include "synth/rs_synth_appearance.h"
 
 static int fail(const rs_err *err)
 {
@@ -19,7 +19,7 @@ static int fail(const rs_err *err)
 int main(int argc, char **argv)
 {
     rs_err err = {0};
-    rs_synth_image img = {0}, ref = {0};
+    rs_image img = {0}, ref = {0};
     if (argc < 3)
         return 2;
     const char *what = argv[1];
@@ -31,17 +31,17 @@ int main(int argc, char **argv)
         return 0;
     }
     if (!strcmp(what, "onnx") && argc == 5) { // onnx MODEL IN OUT
-        rs_synth_image out = {0};
-        int rc = rs_synth_image_read(&img, argv[3], &err) ||
+        rs_image out = {0};
+        int rc = rs_image_read(&img, argv[3], &err) ||
                          rs_synth_dnn_translate(&out, argv[2], &img, &err) ||
-                         rs_synth_image_write(argv[4], &out, 16, &err)
+                         rs_image_write(argv[4], &out, 16, &err)
                      ? fail(&err)
                      : 0;
-        rs_synth_image_free(&img);
-        rs_synth_image_free(&out);
+        rs_image_free(&img);
+        rs_image_free(&out);
         return rc;
     }
-    if (rs_synth_image_read(&img, argv[2], &err))
+    if (rs_image_read(&img, argv[2], &err))
         return fail(&err);
     int rc = 0;
     if (!strcmp(what, "noise") || !strcmp(what, "blur")) {
@@ -53,7 +53,7 @@ int main(int argc, char **argv)
             printf("%.9g\n", s);
     } else if (!strcmp(what, "gain")) {
         double g[3];
-        if (argc > 3 && rs_synth_image_read(&ref, argv[3], &err))
+        if (argc > 3 && rs_image_read(&ref, argv[3], &err))
             rc = fail(&err);
         else if (rs_synth_estimate_gain(g, &img, argc > 3 ? &ref : NULL, NULL, &err))
             rc = fail(&err);
@@ -64,11 +64,11 @@ int main(int argc, char **argv)
                                  atof(argv[7]), atof(argv[8]), 0};
         if (rs_synth_appearance_apply(&img, &a, atof(argv[9]), strtoull(argv[10], NULL, 10),
                                       &err) ||
-            rs_synth_image_write(argv[3], &img, 16, &err))
+            rs_image_write(argv[3], &img, 16, &err))
             rc = fail(&err);
     } else
         rc = 2;
-    rs_synth_image_free(&img);
-    rs_synth_image_free(&ref);
+    rs_image_free(&img);
+    rs_image_free(&ref);
     return rc;
 }

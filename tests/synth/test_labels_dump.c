@@ -11,8 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_io.h"
-#include "rs_synth_labels.h"
+#include "core/rs_io.h"
+#include "synth/rs_synth_labels.h"
 
 static void num(FILE *f, double x) {
     if (isfinite(x)) fprintf(f, "%.17g", x);
@@ -39,8 +39,8 @@ int main(int argc, char **argv) {
         return 2;
     }
     rs_err err = {0};
-    rs_calib_camera cam;
-    if (rs_calib_camera_read(&cam, argv[1], &err)) return fail("camera", &err);
+    rs_camera cam;
+    if (rs_camera_read(&cam, NULL, argv[1], &err)) return fail("camera", &err);
     FILE *vf = fopen(argv[2], "r");
     if (!vf) return 1;
     rs_synth_vehicle v[256];
@@ -134,6 +134,6 @@ int main(int argc, char **argv) {
     free(labels);
     free(id_image);
     for (int k = 0; with_mesh && k < N; k++) rs_synth_mesh_free(&meshes[k]);
-    rs_calib_camera_free(&cam);
+    rs_camera_free(&cam);
     return 0;
 }

@@ -18,9 +18,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "rs_synth_labels.h"
-#include "rs_synth_render.h"
-#include "rs_synth_scene.h"
+#include "synth/rs_synth_labels.h"
+#include "synth/rs_synth_render.h"
+#include "synth/rs_synth_scene.h"
 #include "test_fleet_check.h"
 
 // A camera 8 m up looking north (yaw 10), 20 degrees down: rows of R_cam_enu for yaw y, pitch p
@@ -38,7 +38,7 @@ static void camera_pose(double rt[6], double yaw_deg, double pitch_deg, const do
 
 static int run(const char *outdir, const char *lens_name, int opencv8) {
     double intr[12] = {400, 402, 161.5, 118.5, -0.08, 0.03, 2e-4, -1e-4, 0, 0, 0, 0};
-    rs_calib_camera cam = {0};
+    rs_camera cam = {0};
     cam.lensmodel.type = opencv8 ? MRCAL_LENSMODEL_OPENCV8 : MRCAL_LENSMODEL_PINHOLE;
     cam.intrinsics = intr;
     cam.Nintrinsics = opencv8 ? 12 : 4;

@@ -13,9 +13,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rs_simulate.h"
-#include "rs_synth_sumo.h"
-#include "rs_synth_traffic.h"
+#include "sim/rs_simulate.h"
+#include "synth/rs_synth_sumo.h"
+#include "synth/rs_synth_traffic.h"
+#include "core/rs_rng.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -31,20 +32,20 @@ static int inside(const rs_synth_traffic_vehicle *v, double e, double n, double 
 static int test_sat(void)
 {
     const uint64_t seed = 11;
-    rs_simulate_rng rng;
-    rs_simulate_rng_seed(&rng, seed);
+    rs_rng rng;
+    rs_rng_seed(&rng, seed);
     const double h = 0.02;
     int fails = 0, Noverlap = 0, Nambiguous = 0;
     for (int t = 0; t < 20000; t++) {
         rs_synth_traffic_vehicle a = {0}, b = {0};
-        a.length_m = 1 + 5 * rs_simulate_rng_uniform(&rng);
-        a.width_m = 0.5 + 2 * rs_simulate_rng_uniform(&rng);
-        a.yaw_deg = 360 * rs_simulate_rng_uniform(&rng);
-        b.length_m = 1 + 5 * rs_simulate_rng_uniform(&rng);
-        b.width_m = 0.5 + 2 * rs_simulate_rng_uniform(&rng);
-        b.yaw_deg = 360 * rs_simulate_rng_uniform(&rng);
-        b.e_m = -6 + 12 * rs_simulate_rng_uniform(&rng);
-        b.n_m = -6 + 12 * rs_simulate_rng_uniform(&rng);
+        a.length_m = 1 + 5 * rs_rng_uniform(&rng);
+        a.width_m = 0.5 + 2 * rs_rng_uniform(&rng);
+        a.yaw_deg = 360 * rs_rng_uniform(&rng);
+        b.length_m = 1 + 5 * rs_rng_uniform(&rng);
+        b.width_m = 0.5 + 2 * rs_rng_uniform(&rng);
+        b.yaw_deg = 360 * rs_rng_uniform(&rng);
+        b.e_m = -6 + 12 * rs_rng_uniform(&rng);
+        b.n_m = -6 + 12 * rs_rng_uniform(&rng);
         bool sat = rs_synth_footprints_overlap(&a, &b);
         if (sat != rs_synth_footprints_overlap(&b, &a)) {
             fprintf(stderr, "pair %d: not symmetric\n", t);
@@ -119,15 +120,17 @@ int main(int argc, char **argv)
         return 0;
     }
     if (argc == 6 && !strcmp(argv[1], "lanes")) {
-        rs_llh origin = {atof(argv[3]), atof(argv[4]), atof(argv[5])};
-        rs_synth_lanes lanes;
+        // a site of its own: the origin given, ellipsoidal heights, the level ground plane U = 0
+        rs_site site = {.origin = {atof(argv[3]), atof(argv[4]), atof(argv[5])},
+                        .ground_normal_enu = {0, 0, 1}};
+        rs_lanes lanes;
         rs_err err;
-        if (rs_synth_lanes_read(&lanes, argv[2], &origin, &err)) {
+        if (rs_lanes_read(&lanes, argv[2], &site, &err)) {
             printf("%s\n", err.msg);
             return 1;
         }
         printf("OK %d\n", lanes.N);
-        rs_synth_lanes_free(&lanes);
+        rs_lanes_free(&lanes);
         return 0;
     }
     fprintf(stderr, "usage: test_traffic_api sat | fcd ... | lanes ...\n");

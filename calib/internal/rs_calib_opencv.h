@@ -1,0 +1,41 @@
+// rs_calib_opencv.h -- the OpenCV shim of the pose solver (calib/rs_calib_opencv.cc): the
+// planarity test's singular values and IPPE. Internal to calib.
+//
+// Every exception is caught there and turned into RS_ERR_EXTERNAL. Poses are mrcal rt (== OpenCV
+// rvec, tvec): p_cam = R(r) p_ref + t.
+#pragma once
+#include "core/rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+rs_status rs_calib_opencv_singular_values3(// out
+                                           double *s,       // (3,)
+                                           // in
+                                           const double *p, // (N,3)
+                                           int N,           // >= 1
+                                           rs_err *err);    // may be NULL
+
+// Pose from N >= 4 coplanar landmarks by OpenCV's IPPE (Collins & Bartoli, "Infinitesimal
+// Plane-Based Pose Estimation", IJCV 2014) -- cv::solvePnP(SOLVEPNP_IPPE) with K = identity on
+// normalised image coordinates xy = (v_x/v_z, v_y/v_z) of bearings in front of the camera.
+// Returns RS_ERR_EXTERNAL when OpenCV refuses the input (e.g. points not coplanar enough) or
+// throws, RS_ERR_DEGENERATE when it returns no pose or a non-finite one.
+rs_status rs_calib_opencv_ippe(// out
+                               double *rt_cam_ref,   // (6,)
+                               // in
+                               const double *xy,     // (N,2) normalised image coordinates
+                               const double *p_ref,  // (N,3) coplanar landmarks, metres
+                               int N,
+                               rs_err *err);         // may be NULL
+
+// Writes a camera in OpenCV's own YAML layout (cv::FileStorage), for users of cv::projectPoints:
+// image_width, image_height (int), camera_matrix (3x3 K from fx fy cx cy),
+// distortion_coefficients (1xNdistortion, OpenCV's order -- mrcal's LENSMODEL_OPENCVn order),
+// rvec, tvec (3x1: rt_cam_enu, mapping site ENU into the camera), and R_cam_enu (3x3).
+// Writes `path` directly: the caller makes it atomic (rs_io_atomic_*).
+// Returns RS_ERR_IO if the file cannot be written, RS_ERR_EXTERNAL if OpenCV throws.
+#ifdef __cplusplus
+}
+#endif

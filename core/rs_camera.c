@@ -1,0 +1,307 @@
+// rs_camera.c -- the camera type, its files (mrcal .cameramodel, OpenCV YAML), projection and
+// ground location. See rs_camera.h.
+#include "core/rs_camera.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include <mrcal/poseutils.h>
+
+#include "core/internal/rs_opencv.h"
+#include "core/rs_io.h"
+#include "core/rs_pose.h"
+
+#define MAX_IMAGE_SIDE_PX 1000000
+
+void rs_camera_free(rs_camera *cam) {
+    if (!cam) return;
+    free(cam->intrinsics);
+    memset(cam, 0, sizeof *cam);
+}
+
+rs_status rs_camera_init(rs_camera *cam, const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
+                         int width, int height, rs_err *err) {
+    memset(cam, 0, sizeof *cam);
+    const int n = mrcal_lensmodel_num_params(lensmodel);
+    if (n <= 0) return rs_err_set(err, RS_ERR_INVALID, "lensmodel: not a lens model mrcal knows");
+    cam->intrinsics = malloc((size_t)n * sizeof(double));
+    if (!cam->intrinsics) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    memcpy(cam->intrinsics, intrinsics, (size_t)n * sizeof(double));
+    cam->lensmodel = *lensmodel;
+    cam->Nintrinsics = n;
+    cam->width = width;
+    cam->height = height;
+    return RS_OK;
+}
+
+rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err) {
+    rs_status st = rs_camera_init(out, &in->lensmodel, in->intrinsics, in->width, in->height, err);
+    if (st == RS_OK) memcpy(out->rt_cam_enu, in->rt_cam_enu, sizeof out->rt_cam_enu);
+    return st;
+}
+
+rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err) {
+    if (cam->width < 0 || cam->height < 0 || cam->width > MAX_IMAGE_SIDE_PX || cam->height > MAX_IMAGE_SIDE_PX)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: imagersize: %d x %d is not an image size", path, cam->width,
+                          cam->height);
+    for (int k = 0; k < cam->Nintrinsics; k++)
+        if (!isfinite(cam->intrinsics[k]))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: intrinsics: not all finite", path);
+    if (mrcal_lensmodel_metadata(&cam->lensmodel).has_core && !(cam->intrinsics[0] > 0 && cam->intrinsics[1] > 0))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: intrinsics: fx = %g, fy = %g: both must be > 0", path,
+                          cam->intrinsics[0], cam->intrinsics[1]);
+    for (int i = 0; i < 6; i++)
+        if (!isfinite(cam->rt_cam_enu[i]))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: extrinsics: non-finite", path);
+    return RS_OK;
+}
+
+// mrcal's model (flexible array) -> rs_camera, checked.
+static rs_status from_mrcal(rs_camera *cam, const mrcal_cameramodel_t *m, const char *path, rs_err *err) {
+    if (m->imagersize[0] < 1 || m->imagersize[1] < 1 || m->imagersize[0] > MAX_IMAGE_SIDE_PX ||
+        m->imagersize[1] > MAX_IMAGE_SIDE_PX)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: imagersize: %u x %u is not an image size", path, m->imagersize[0],
+                          m->imagersize[1]);
+    rs_status st = rs_camera_init(cam, &m->lensmodel, m->intrinsics, (int)m->imagersize[0], (int)m->imagersize[1], err);
+    if (st) return st;
+    memcpy(cam->rt_cam_enu, m->rt_cam_ref, sizeof cam->rt_cam_enu);
+    if ((st = rs_camera_check(cam, path, err))) rs_camera_free(cam);
+    return st;
+}
+
+rs_status rs_camera_read_cameramodel_text(rs_camera *cam, const char *text, size_t len, const char *path,
+                                          rs_err *err) {
+    memset(cam, 0, sizeof *cam);
+    if (len > (size_t)0x7fffffff) return rs_err_set(err, RS_ERR_INVALID, "%s: too large for a .cameramodel", path);
+    mrcal_cameramodel_t *m = mrcal_read_cameramodel_string(text, (int)len);
+    if (!m)
+        return rs_err_set(err, RS_ERR_PARSE,
+                          "%s: not a valid mrcal .cameramodel (mrcal's reader prints the reason on stderr; it "
+                          "needs lensmodel, intrinsics, imagersize and extrinsics)",
+                          path);
+    rs_status st = from_mrcal(cam, m, path, err);
+    mrcal_free_cameramodel(&m);
+    return st;
+}
+
+// OpenCV K and distortion -> the mrcal model with the same projection (LENSMODEL_OPENCVn keeps
+// OpenCV's coefficient order; no coefficients, or all zero: LENSMODEL_PINHOLE).
+static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_camera_opencv_file *f,
+                             const char *path, rs_err *err) {
+    const double *K = f->K;
+    if (K[3] != 0 || K[6] != 0 || K[7] != 0 || K[8] != 1)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: camera_matrix: not of the form [fx 0 cx; 0 fy cy; 0 0 1]", path);
+    if (!(K[0] > 0 && K[4] > 0))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: camera_matrix: fx = %g, fy = %g: both must be > 0", path, K[0],
+                          K[4]);
+    if (K[1] != 0)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: camera_matrix: skew %g: mrcal lens models have no skew term",
+                          path, K[1]);
+    int Nd = f->Ndist;
+    if (Nd == 14) {
+        if (f->dist[12] != 0 || f->dist[13] != 0)
+            return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                              "%s: distortion_coefficients: 14 values with a tilted sensor (tauX = %g, tauY = %g): "
+                              "mrcal has no equivalent model",
+                              path, f->dist[12], f->dist[13]);
+        Nd = 12; // zero tilt: exactly the 12-coefficient model
+    }
+    bool any = false;
+    for (int i = 0; i < Nd; i++) any = any || f->dist[i] != 0;
+    if (!any) Nd = 0;
+    if (f->has_rotation != f->has_t)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: %s: missing, a pose needs both the rotation and the translation",
+                          path, f->has_rotation ? "tvec (or t)" : "R (or rvec)");
+    const mrcal_lensmodel_t lm = {.type = Nd == 0   ? MRCAL_LENSMODEL_PINHOLE
+                                          : Nd == 4 ? MRCAL_LENSMODEL_OPENCV4
+                                          : Nd == 5 ? MRCAL_LENSMODEL_OPENCV5
+                                          : Nd == 8 ? MRCAL_LENSMODEL_OPENCV8
+                                                    : MRCAL_LENSMODEL_OPENCV12};
+    double intrinsics[16] = {K[0], K[4], K[2], K[5]};
+    memcpy(intrinsics + 4, f->dist, (size_t)Nd * sizeof(double));
+    rs_status st = rs_camera_init(cam, &lm, intrinsics, f->width, f->height, err);
+    if (st) return st;
+    if (f->has_rotation) {
+        memcpy(cam->rt_cam_enu, f->rvec, 3 * sizeof(double));
+        memcpy(cam->rt_cam_enu + 3, f->t, 3 * sizeof(double));
+    }
+    if (extra) {
+        extra->has_pose = f->has_rotation;
+        extra->has_R = f->has_R;
+        memcpy(extra->R_cam_enu, f->R, sizeof extra->R_cam_enu);
+        extra->has_P = f->has_P;
+        memcpy(extra->P, f->P, sizeof extra->P);
+    }
+    return RS_OK;
+}
+
+static bool has_extension(const char *path, const char *ext) {
+    const char *dot = strrchr(path, '.');
+    return dot && !strcasecmp(dot + 1, ext);
+}
+
+rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *path, rs_err *err) {
+    memset(cam, 0, sizeof *cam);
+    if (extra) memset(extra, 0, sizeof *extra);
+    rs_status st;
+    if (has_extension(path, "yaml") || has_extension(path, "yml") || has_extension(path, "json")) {
+        rs_camera_opencv_file f;
+        st = rs_camera_opencv_read(&f, path, err);
+        if (st == RS_OK) st = from_opencv(cam, extra, &f, path, err);
+    } else {
+        char *text = NULL;
+        size_t len = 0;
+        st = rs_io_read_file(&text, &len, path, err);
+        if (st == RS_OK) st = rs_camera_read_cameramodel_text(cam, text, len, path, err);
+        free(text);
+    }
+    if (st) rs_camera_free(cam);
+    return st;
+}
+
+rs_status rs_camera_write_cameramodel(const rs_camera *cam, const char *path, rs_err *err) {
+    mrcal_cameramodel_t *m = calloc(1, sizeof *m + (size_t)cam->Nintrinsics * sizeof(double));
+    if (!m) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    memcpy(m->rt_cam_ref, cam->rt_cam_enu, sizeof m->rt_cam_ref);
+    m->imagersize[0] = (unsigned)cam->width;
+    m->imagersize[1] = (unsigned)cam->height;
+    m->lensmodel = cam->lensmodel;
+    memcpy(m->intrinsics, cam->intrinsics, (size_t)cam->Nintrinsics * sizeof(double));
+    // mrcal writes by file name only: it writes the temporary file, which is then committed
+    // (fsync'ed and renamed into place) like any other output.
+    rs_io_atomic a;
+    rs_status st = rs_io_atomic_open(&a, path, err);
+    if (st == RS_OK) st = rs_io_atomic_release(&a, err);
+    if (st == RS_OK && !mrcal_write_cameramodel_file(a.tmp_path, m))
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: mrcal could not write the camera model", path);
+    if (st == RS_OK) st = rs_io_atomic_commit(&a, err);
+    else rs_io_atomic_abort(&a);
+    free(m);
+    return st;
+}
+
+bool rs_camera_has_opencv_equivalent(const rs_camera *cam) {
+    switch (cam->lensmodel.type) {
+    case MRCAL_LENSMODEL_PINHOLE:
+    case MRCAL_LENSMODEL_OPENCV4:
+    case MRCAL_LENSMODEL_OPENCV5:
+    case MRCAL_LENSMODEL_OPENCV8:
+    case MRCAL_LENSMODEL_OPENCV12: return true;
+    default: return false;
+    }
+}
+
+rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs_err *err) {
+    if (!rs_camera_has_opencv_equivalent(cam))
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: lens model %s has no OpenCV equivalent", path,
+                          mrcal_lensmodel_name_unconfigured(&cam->lensmodel));
+    char *text = NULL;
+    rs_status st = rs_camera_opencv_yaml_text(&text, cam->intrinsics, cam->Nintrinsics - 4, cam->rt_cam_enu,
+                                              cam->width, cam->height, err);
+    if (st == RS_OK) st = rs_io_write_file(path, text, strlen(text), err);
+    free(text);
+    return st;
+}
+
+int rs_camera_project(double *q_px, const rs_camera *cam, const double *p_enu_m, int N) {
+    int n = 0;
+    for (int i = 0; i < N; i++) {
+        mrcal_point3_t pc;
+        mrcal_point2_t q;
+        mrcal_transform_point_rt(pc.xyz, NULL, NULL, cam->rt_cam_enu, &p_enu_m[3 * i]);
+        const bool ok = pc.z > 0 && mrcal_project(&q, NULL, NULL, &pc, 1, &cam->lensmodel, cam->intrinsics) &&
+                        isfinite(q.x) && isfinite(q.y);
+        q_px[2 * i] = ok ? q.x : NAN;
+        q_px[2 * i + 1] = ok ? q.y : NAN;
+        n += ok;
+    }
+    return n;
+}
+
+rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const double q_px[2],
+                                  const double plane_normal_enu[3], double plane_offset_m, rs_err *err) {
+    if (!p_enu_m || !cam || !cam->intrinsics || !q_px || !plane_normal_enu)
+        return rs_err_set(err, RS_ERR_INVALID, "rs_camera_locate_ground: NULL argument");
+    const mrcal_lensmodel_t *lensmodel = &cam->lensmodel;
+    const double *intrinsics = cam->intrinsics, *rt_cam_enu = cam->rt_cam_enu;
+    double nn = 0.0;
+    bool finite = isfinite(plane_offset_m) && isfinite(q_px[0]) && isfinite(q_px[1]);
+    for (int i = 0; i < 3; i++) {
+        nn += plane_normal_enu[i] * plane_normal_enu[i];
+        finite = finite && isfinite(plane_normal_enu[i]);
+    }
+    for (int i = 0; i < 6; i++) finite = finite && isfinite(rt_cam_enu[i]);
+    if (!finite) return rs_err_set(err, RS_ERR_INVALID, "rs_camera_locate_ground: non-finite input");
+    if (!(nn > 0.0)) return rs_err_set(err, RS_ERR_INVALID, "plane_normal_enu: zero vector");
+    nn = sqrt(nn);
+    double n[3];
+    for (int i = 0; i < 3; i++) n[i] = plane_normal_enu[i] / nn;
+    const double offset = plane_offset_m / nn;
+
+    mrcal_point2_t q = {.x = q_px[0], .y = q_px[1]};
+    mrcal_point3_t v;
+    if (!mrcal_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) ||
+        !isfinite(v.z))
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "pixel (%g, %g): mrcal cannot unproject it with this lens model",
+                          q_px[0], q_px[1]);
+    double R[9], C[3], d[3];
+    mrcal_R_from_r(R, NULL, rt_cam_enu);
+    rs_pose_position_from_rt(C, NULL, rt_cam_enu);
+    const double vn = sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+    for (int i = 0; i < 3; i++) d[i] = (R[i] * v.x + R[3 + i] * v.y + R[6 + i] * v.z) / vn; // R^T v
+    const double nd = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
+    const double nC = n[0] * C[0] + n[1] * C[1] + n[2] * C[2];
+    if (fabs(nd) < 1e-12)
+        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): its ray is parallel to the plane",
+                          q_px[0], q_px[1]);
+    const double lambda = (offset - nC) / nd;
+    if (!(lambda > 0.0))
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "pixel (%g, %g): the plane is behind the camera along its ray", q_px[0],
+                          q_px[1]);
+    double p[3];
+    for (int i = 0; i < 3; i++) p[i] = C[i] + lambda * d[i];
+
+    // Polish: mrcal_unproject() is iterative; a few Gauss-Newton steps on mrcal_project() within
+    // the plane (basis u, w) bring the reprojection error to the last bits.
+    double u[3], w[3];
+    {
+        const int k = fabs(n[0]) < 0.9 ? 0 : 1; // any axis not along n
+        double a[3] = {0, 0, 0};
+        a[k] = 1.0;
+        const double an = a[0] * n[0] + a[1] * n[1] + a[2] * n[2];
+        for (int i = 0; i < 3; i++) u[i] = a[i] - an * n[i];
+        const double un = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int i = 0; i < 3; i++) u[i] /= un;
+        w[0] = n[1] * u[2] - n[2] * u[1];
+        w[1] = n[2] * u[0] - n[0] * u[2];
+        w[2] = n[0] * u[1] - n[1] * u[0];
+    }
+    for (int iter = 0; iter < 4; iter++) {
+        mrcal_point3_t pc, dq_dpc[2];
+        mrcal_point2_t qp;
+        double dpc_dp[9];
+        mrcal_transform_point_rt(pc.xyz, NULL, dpc_dp, rt_cam_enu, p);
+        if (!mrcal_project(&qp, dq_dpc, NULL, &pc, 1, lensmodel, intrinsics)) break;
+        const double e0 = qp.x - q.x, e1 = qp.y - q.y;
+        double J[4]; // (2,2): dq/d(a,b)
+        for (int r = 0; r < 2; r++) {
+            double g[3];
+            for (int j = 0; j < 3; j++)
+                g[j] = dq_dpc[r].xyz[0] * dpc_dp[j] + dq_dpc[r].xyz[1] * dpc_dp[3 + j] +
+                       dq_dpc[r].xyz[2] * dpc_dp[6 + j];
+            J[r * 2] = g[0] * u[0] + g[1] * u[1] + g[2] * u[2];
+            J[r * 2 + 1] = g[0] * w[0] + g[1] * w[1] + g[2] * w[2];
+        }
+        const double det = J[0] * J[3] - J[1] * J[2];
+        if (!(fabs(det) > 0.0)) break;
+        const double da = -(J[3] * e0 - J[1] * e1) / det, db = -(-J[2] * e0 + J[0] * e1) / det;
+        for (int i = 0; i < 3; i++) p[i] += da * u[i] + db * w[i];
+        if (fabs(e0) + fabs(e1) < 1e-13) break;
+    }
+    memcpy(p_enu_m, p, sizeof(p));
+    return RS_OK;
+}

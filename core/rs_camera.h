@@ -1,0 +1,133 @@
+// rs_camera.h -- roadside's one camera type: an mrcal lens model, its intrinsics, the image size
+// and the pose in the site frame. Every module uses it: the site's nominal cameras, the
+// solver's problem, calibrated cameras read back, the simulator's true cameras, labels, eval.
+//
+// It is mrcal's mrcal_cameramodel_t (rt_cam_ref, imagersize, lensmodel, intrinsics) with the
+// intrinsics held by pointer rather than as a flexible array, so that a camera can sit inside
+// other structs and be copied by value as a view; the reference frame is always the site ENU
+// frame, hence rt_cam_enu. .cameramodel files are read and written by mrcal itself; OpenCV-style
+// YAML/JSON by cv::FileStorage (core/rs_camera_opencv.cc). This file owns both formats: no
+// other module reads or writes them.
+//
+// Conventions (docs/conventions.md): rt_cam_enu = mrcal Rodrigues r + translation t (metres),
+// p_cam = R(r) p_enu + t; camera x right, y down, z forward; pixel (0,0) is the centre of the
+// top-left pixel. OpenCV's K [fx 0 cx; 0 fy cy; 0 0 1] and distortion (k1 k2 p1 p2 [k3 [k4 k5
+// k6 [s1 s2 s3 s4]]]) are mrcal's LENSMODEL_OPENCVn with the same coefficient order; no
+// distortion (or all zero) is LENSMODEL_PINHOLE.
+#pragma once
+#include <stdbool.h>
+#include <stddef.h>
+
+#include <mrcal/mrcal.h>
+
+#include "core/rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    mrcal_lensmodel_t lensmodel;
+    double *intrinsics;    // (Nintrinsics,) owned
+    int Nintrinsics;       // mrcal_lensmodel_num_params(&lensmodel)
+    int width, height;     // image size, pixels (0 x 0 only for an OpenCV file that gives none)
+    double rt_cam_enu[6];  // the pose: maps site ENU into the camera (zero: no pose known)
+} rs_camera;
+
+// What an OpenCV-style file may carry beyond the camera (rs_camera_read with extra != NULL).
+typedef struct {
+    bool has_pose;         // a rotation (R or rvec) and a translation (t or tvec) were given
+    bool has_R;            // the rotation was given as a matrix R (or R_cam_enu)
+    double R_cam_enu[9];   // as given, row-major (the camera's pose uses its nearest rotation)
+    bool has_P;            // a projection matrix was given
+    double P[12];          // (3,4) row-major, as given
+} rs_camera_extra;
+
+// Frees the intrinsics and zeroes the camera. Accepts NULL.
+void rs_camera_free(rs_camera *cam);
+
+// Makes *cam a camera of the given lens, a copy of `intrinsics` ((Nintrinsics,) of lensmodel),
+// the image size and a zero pose. *cam is zeroed first (its old contents are not freed).
+// Returns RS_ERR_INVALID for a lens model mrcal does not know, RS_ERR_NOMEM.
+rs_status rs_camera_init(// out
+                         rs_camera *cam,
+                         // in
+                         const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
+                         int width, int height, rs_err *err);
+
+// A deep copy of `in` into *out (zeroed first). RS_ERR_NOMEM.
+rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err);
+
+// Reads a camera file: an mrcal .cameramodel (by mrcal; extrinsics = rt_cam_enu), or, for a
+// name ending in .yaml, .yml or .json, an OpenCV-style file read by cv::FileStorage:
+// image_width, image_height; camera_matrix or K (3,3); distortion_coefficients, D or dist (0, 4,
+// 5, 8, 12 or 14 values; absent or empty: none); optionally the pose as R or R_cam_enu (3,3; its
+// nearest rotation is used) or rvec or r (3), with tvec or t (3); optionally P (3,4). Matrices
+// may be OpenCV matrices ({rows, cols, dt, data} / !!opencv-matrix) or nested number lists.
+// out:  *cam (zeroed on failure); *extra (may be NULL): what else an OpenCV file said (all false
+//       for a .cameramodel)
+// Every value is checked: finite intrinsics, fx, fy > 0, an image size of 1..10^6 pixels when
+// given (a .cameramodel always gives one), no skew, no tilted sensor.
+// Errors, as "PATH: FIELD: what": RS_ERR_IO (cannot open), RS_ERR_PARSE (malformed, a field of
+// the wrong type), RS_ERR_INVALID (a wrong count, non-finite or out-of-range value, R with
+// det <= 0, only one of rotation and translation), RS_ERR_UNSUPPORTED (skew, tilted sensor: no
+// mrcal equivalent), RS_ERR_NOMEM.
+rs_status rs_camera_read(// out
+                         rs_camera *cam, rs_camera_extra *extra,
+                         // in
+                         const char *path, rs_err *err);
+
+// An mrcal .cameramodel held in memory (text, len bytes; it need not be NUL-terminated), checked
+// as rs_camera_read does. `path` names it in messages.
+rs_status rs_camera_read_cameramodel_text(// out
+                                          rs_camera *cam,
+                                          // in
+                                          const char *text, size_t len, const char *path,
+                                          rs_err *err);
+
+// Checks a camera's values (the checks of rs_camera_read). Errors as "PATH: FIELD: what".
+rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err);
+
+// Writes an mrcal .cameramodel atomically (temporary name, then rename). Needs width, height > 0.
+// Returns RS_ERR_IO, RS_ERR_EXTERNAL (mrcal could not write it), RS_ERR_NOMEM.
+rs_status rs_camera_write_cameramodel(const rs_camera *cam, const char *path, rs_err *err);
+
+// True when the lens model has an OpenCV equivalent (PINHOLE, OPENCV4/5/8/12).
+bool rs_camera_has_opencv_equivalent(const rs_camera *cam);
+
+// Writes the camera in OpenCV's own YAML layout (cv::FileStorage), atomically, for users of
+// cv::projectPoints: image_width, image_height, camera_matrix (3x3), distortion_coefficients
+// (1xN, OpenCV's order; a pinhole gets 5 zeros), rvec, tvec (3x1: rt_cam_enu, mapping site ENU
+// into the camera) and R_cam_enu (3x3). RS_ERR_UNSUPPORTED when the lens has no OpenCV
+// equivalent; RS_ERR_IO, RS_ERR_EXTERNAL (OpenCV threw).
+rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs_err *err);
+
+// Projects N points of the site ENU frame through the camera (mrcal_transform_point_rt, then
+// mrcal_project). q_px (N,2); a point mrcal cannot project gets NaN. Returns the number of
+// points projected (finite results in front of the camera, z > 0).
+int rs_camera_project(// out
+                      double *q_px,          // (N,2)
+                      // in
+                      const rs_camera *cam,
+                      const double *p_enu_m, // (N,3)
+                      int N);
+
+// Intersects the ray of pixel q_px (through the full lens model: mrcal_unproject, then
+// Gauss-Newton steps on mrcal_project to polish) with the plane n . p = plane_offset_m.
+// plane_normal_enu need not be unit length; (0,0,1) with offset h is the level plane U = h.
+// Accuracy: the returned point projects back to q_px within 1e-9 px.
+// Errors: RS_ERR_INVALID (non-finite input, zero normal), RS_ERR_UNSUPPORTED (lens model
+// without unprojection), RS_ERR_DEGENERATE (ray parallel to the plane or the plane behind
+// the camera).
+rs_status rs_camera_locate_ground(// out
+                                  double p_enu_m[3],
+                                  // in
+                                  const rs_camera *cam,
+                                  const double q_px[2],
+                                  const double plane_normal_enu[3],
+                                  double plane_offset_m,
+                                  rs_err *err); // may be NULL
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,176 @@
+#define _XOPEN_SOURCE 700 // nftw()
+#include "core/rs_io.h"
+
+#include <errno.h>
+#include <ftw.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+rs_status rs_io_read_file(char **data, size_t *len, const char *path, rs_err *err)
+{
+    *data = NULL;
+    if (len) *len = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    rs_status st = RS_OK;
+    if (!buf) { st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path); goto done; }
+    for (;;) {
+        if (cap - n < 2) {
+            char *grown = realloc(buf, cap * 2);
+            if (!grown) { st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path); goto done; }
+            buf = grown;
+            cap *= 2;
+        }
+        size_t got = fread(buf + n, 1, cap - n - 1, f);
+        n += got;
+        if (got == 0) break;
+    }
+    if (ferror(f)) { st = rs_err_set(err, RS_ERR_IO, "%s: read error: %s", path, strerror(errno)); goto done; }
+    buf[n] = '\0';
+done:
+    fclose(f);
+    if (st != RS_OK) { free(buf); return st; }
+    *data = buf;
+    if (len) *len = n;
+    return RS_OK;
+}
+
+rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err)
+{
+    memset(a, 0, sizeof *a);
+    size_t n = strlen(path);
+    a->path = strdup(path);
+    a->tmp_path = malloc(n + sizeof ".tmp.XXXXXX");
+    if (!a->path || !a->tmp_path) {
+        rs_io_atomic_abort(a);
+        return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    }
+    memcpy(a->tmp_path, path, n);
+    memcpy(a->tmp_path + n, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
+    int fd = mkstemp(a->tmp_path);
+    if (fd < 0) {
+        rs_status st = rs_err_set(err, RS_ERR_IO, "%s: cannot create: %s", path, strerror(errno));
+        free(a->tmp_path);
+        a->tmp_path = NULL;
+        rs_io_atomic_abort(a);
+        return st;
+    }
+    // mkstemp makes 0600; outputs are ordinary files.
+    mode_t mask = umask(0);
+    umask(mask);
+    fchmod(fd, 0666 & ~mask);
+    a->f = fdopen(fd, "wb");
+    if (!a->f) {
+        close(fd);
+        rs_io_atomic_abort(a);
+        return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    }
+    return RS_OK;
+}
+
+rs_status rs_io_atomic_release(rs_io_atomic *a, rs_err *err)
+{
+    if (!a->f) return RS_OK;
+    int bad = ferror(a->f);
+    if (fclose(a->f) != 0) bad = 1;
+    a->f = NULL;
+    if (bad) return rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(errno));
+    return RS_OK;
+}
+
+rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err)
+{
+    rs_status st = RS_OK;
+    int bad = 0, saved = 0;
+    if (a->f) {
+        bad = ferror(a->f) || fflush(a->f) != 0 || fsync(fileno(a->f)) != 0;
+        saved = errno;
+        if (fclose(a->f) != 0 && !bad) { bad = 1; saved = errno; }
+        a->f = NULL;
+    }
+    if (bad) st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(saved));
+    else if (rename(a->tmp_path, a->path) != 0)
+        st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename into place: %s", a->path, strerror(errno));
+    if (st != RS_OK) remove(a->tmp_path);
+    free(a->tmp_path);
+    free(a->path);
+    a->tmp_path = a->path = NULL;
+    return st;
+}
+
+void rs_io_atomic_abort(rs_io_atomic *a)
+{
+    if (!a) return;
+    if (a->f) fclose(a->f);
+    if (a->tmp_path) remove(a->tmp_path);
+    free(a->tmp_path);
+    free(a->path);
+    memset(a, 0, sizeof *a);
+}
+
+rs_status rs_io_write_file(const char *path, const void *data, size_t len, rs_err *err)
+{
+    rs_io_atomic a;
+    rs_status st = rs_io_atomic_open(&a, path, err);
+    if (st) return st;
+    if (fwrite(data, 1, len, a.f) != len) {
+        rs_io_atomic_abort(&a);
+        return rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+    }
+    return rs_io_atomic_commit(&a, err);
+}
+
+rs_status rs_io_mkdir_p(const char *path, rs_err *err)
+{
+    char *p = strdup(path);
+    if (!p) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (char *s = p + 1;; s++) {
+        if (*s == '/' || *s == '\0') {
+            char c = *s;
+            *s = '\0';
+            if (mkdir(p, 0777) != 0 && errno != EEXIST) {
+                rs_status st = rs_err_set(err, RS_ERR_IO, "%s: cannot create folder: %s", p, strerror(errno));
+                free(p);
+                return st;
+            }
+            *s = c;
+            if (c == '\0') break;
+        }
+    }
+    free(p);
+    struct stat sb;
+    if (stat(path, &sb) != 0 || !S_ISDIR(sb.st_mode))
+        return rs_err_set(err, RS_ERR_IO, "%s: exists and is not a folder", path);
+    return RS_OK;
+}
+
+char *rs_io_join(const char *dir, const char *rel)
+{
+    if (rel[0] == '/' || !dir || !dir[0]) return strdup(rel);
+    size_t nd = strlen(dir), nr = strlen(rel);
+    while (nd > 1 && dir[nd - 1] == '/') nd--;
+    char *out = malloc(nd + 1 + nr + 1);
+    if (!out) return NULL;
+    memcpy(out, dir, nd);
+    out[nd] = '/';
+    memcpy(out + nd + 1, rel, nr + 1);
+    return out;
+}
+
+static int remove_entry(const char *path, const struct stat *sb, int type, struct FTW *ftw)
+{
+    (void)sb;
+    (void)type;
+    (void)ftw;
+    (void)remove(path);
+    return 0; // go on with the rest
+}
+
+void rs_io_remove_tree(const char *path)
+{
+    nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+}

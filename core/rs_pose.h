@@ -1,0 +1,76 @@
+// rs_pose.h -- roadside's one pose toolkit: 3x3 rotations, yaw/pitch/roll, camera position,
+// and a Rodrigues vector that is right at a half-turn. mrcal's poseutils does the rest
+// (mrcal_R_from_r, mrcal_transform_point_rt, mrcal_invert_rt, mrcal_compose_rt): call it
+// directly; what is here is what mrcal lacks or gets wrong.
+//
+// Conventions (docs/conventions.md): matrices are row-major 3x3; rt_cam_enu = mrcal Rodrigues r
+// + translation t (metres), p_cam = R(r) p_enu + t; camera x right, y down, z forward.
+// yaw/pitch/roll in degrees: R_enu_cam = Rz(-yaw) Rx(pitch) R_enu_cam0 Rz(roll), with
+// R_enu_cam0 a level camera looking north; yaw in [0, 360) clockwise from north, pitch in
+// [-90, 90] positive up, roll in (-180, 180] positive clockwise seen from behind the camera.
+// At pitch = +-90 (looking straight up or down) yaw is undefined: yaw is then 0 and the whole
+// turn goes into roll.
+//
+// Accuracy: yaw/pitch/roll -> R -> yaw/pitch/roll within 1e-12 deg away from |pitch| = 90
+// (tests/core/test_pose.c); rs_pose_r_from_R within 1e-12 in the matrix for every rotation,
+// half-turns included (tests/calib/test_r_from_R_halfturn.c).
+#pragma once
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// out = a b (3x3). out may alias a or b.
+void rs_pose_mat3_mul(double out[9], const double a[9], const double b[9]);
+// out = a^T (3x3). out may alias a.
+void rs_pose_mat3_transpose(double out[9], const double a[9]);
+// Rotations about x and z by `angle_rad` (right-handed): Rx = [1 0 0; 0 c -s; 0 s c],
+// Rz = [c -s 0; s c 0; 0 0 1].
+void rs_pose_Rx(double R[9], double angle_rad);
+void rs_pose_Rz(double R[9], double angle_rad);
+
+// R_cam_enu (maps ENU vectors into the camera frame) from yaw, pitch, roll in degrees.
+void rs_pose_R_from_ypr(// out
+                        double R_cam_enu[9],
+                        // in
+                        const double yaw_pitch_roll_deg[3]);
+
+// yaw, pitch, roll in degrees (ranges above) of a rotation R_cam_enu.
+void rs_pose_ypr_from_R(// out
+                        double yaw_pitch_roll_deg[3],
+                        // in
+                        const double R_cam_enu[9]);
+
+// Camera position and yaw/pitch/roll of a pose.
+void rs_pose_ypr_from_rt(// out
+                         double yaw_pitch_roll_deg[3],
+                         double position_enu_m[3], // may be NULL
+                         // in
+                         const double rt_cam_enu[6]);
+
+// The pose of a camera at position_enu_m with the given yaw/pitch/roll (degrees).
+void rs_pose_rt_from_ypr(// out
+                         double rt_cam_enu[6],
+                         // in
+                         const double yaw_pitch_roll_deg[3],
+                         const double position_enu_m[3]);
+
+// Camera centre in ENU: -R(r)^T t.
+void rs_pose_position_from_rt(// out
+                              double position_enu_m[3],
+                              double *dpos_drt, // (3,6) row-major, may be NULL
+                              // in
+                              const double rt_cam_enu[6]);
+
+// Rodrigues vector of a rotation matrix, correct for every rotation. mrcal 2.2's r_from_R
+// returns r = 0 for a half-turn (e.g. diag(1,-1,-1): a camera looking straight down) and is
+// wrong by pi within ~1e-6 rad of it (OpenCV's cv::Rodrigues snaps such rotations to exactly
+// pi: 1e-6 off). So mrcal's answer is checked by turning it back into a matrix (max element
+// difference 1e-12), and where it fails Eigen's AngleAxisd (through a quaternion) gives r
+// (core/rs_pose_eigen.cc).
+// in: R (3,3) row-major rotation; out: r (3,) radians.
+void rs_pose_r_from_R(double r[3], const double R[9]);
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,86 @@
+// rs_report.h -- the per-intersection calibration report (`roadside report`): one
+// self-contained HTML file and the same content as a PDF, for an engineer to send to a city.
+//
+// Purpose: from a site (rs_site_load) and the files `roadside calib` wrote for its cameras
+// (<id>.cameramodel and <id>.json in calib_dir), write
+//   out_dir/report.html  one file, no external resource: figures are base64 PNG data URIs,
+//                        the CSS is inline, there is no script; every string read from an
+//                        input file is HTML-escaped
+//   out_dir/report.pdf   A4, the same headings, tables and figures drawn with cairo's PDF
+//                        surface (figures as vectors)
+// Content: a site summary table and a top-down ENU map of the site (cameras, their fields of
+// view on the ground cut at range_m, landmarks, lanes, and the smallest 1-sigma ground error
+// over the cameras' uncertainty maps as a colour scale with labelled contours); then per camera
+//   - its image (the first PNG/JPEG in the camera's backgrounds folder, else a neutral canvas)
+//     with the picks, the reprojected landmarks and the residual vectors magnified (the factor
+//     written, with a scale bar in pixels), and the ground grid and lane lines projected
+//     through the calibrated camera (mrcal_project, full lens model);
+//   - the pose (ENU, lat/lon/h, yaw/pitch/roll) with 1-sigma, RMS, variance factor, condition;
+//   - per-landmark residuals and leave-one-out figures (rs_audit_site_camera);
+//   - a top-down map of the ground the camera sees with the 1-sigma ground localisation error
+//     (rs_audit_map) as a colour scale with labelled contours;
+//   - coverage, the audit's verdict and every warning in plain words.
+// Lanes: an optional SITE/lanes.geojson, a FeatureCollection of LineString / MultiLineString
+// features with [lon, lat] or [lon, lat, h] positions (h in the site's declared heights; without
+// h the line lies on the site's ground plane).
+//
+// Conventions: docs/conventions.md (site ENU, rt_cam_enu, pixel (0,0) = centre of the top-left
+// pixel, yaw/pitch/roll). docs/report.md describes the report section by section.
+//
+// Cost: the audit (a full solve, one leave-one-out solve per landmark and the map, ~0.5 s per
+// camera at the default 1 m cells over 100 m), plus ~0.2 s per camera of drawing.
+#pragma once
+#include <stdbool.h>
+
+#include "audit/rs_audit.h"
+#include "geo/rs_site.h"
+#include "core/rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    const char *calib_dir;   // folder with <id>.cameramodel and <id>.json; NULL: SITE/calib
+    double range_m;          // ground shown within this horizontal distance of each camera,
+                             //   metres (default 100; also the audit's range_m)
+    double grid_m;           // ground grid spacing drawn into the images, metres; <= 0:
+                             //   automatic (a 1-2-5 number near range_m / 10; default 0)
+    int figure_width_px;     // width of the HTML's PNG figures (default 1000, >= 200)
+    bool audit;              // run the audit for leave-one-out figures, the uncertainty map
+                             //   and the warnings (default true)
+    rs_audit_options audit_options; // (default rs_audit_options_default); its range_m is
+                             //   replaced by range_m above
+} rs_report_options;
+
+// Fills opt with the defaults above. opt must not be NULL.
+void rs_report_options_default(rs_report_options *opt);
+
+// What was written.
+typedef struct {
+    int Ncameras;        // cameras in the report
+    int Nfigures;        // figures in each of the two files (1 + 2 per camera)
+    int Naudit_failed;   // cameras whose audit could not run (their sections say why)
+    int Naudit_fail;     // cameras whose audit ran and found a threshold exceeded
+} rs_report_summary;
+
+// Writes out_dir/report.html and out_dir/report.pdf (out_dir is created if needed; both files
+// atomically, so a failure leaves no partial report).
+//
+// out:  summary (may be NULL)
+// in:   out_dir; site (rs_site_load); opt (may be NULL: defaults)
+// Errors: RS_ERR_IO / RS_ERR_NOT_FOUND (a camera's <id>.json or <id>.cameramodel missing: run
+// `roadside calib` first), RS_ERR_PARSE / RS_ERR_INVALID (a malformed calibration file, lanes
+// file or background image, naming the file and field), RS_ERR_INVALID (bad options),
+// RS_ERR_NOMEM, RS_ERR_EXTERNAL (cairo). An audit that fails for a camera is not an error: the
+// report says so in that camera's section.
+rs_status rs_report_write(// out
+                          rs_report_summary *summary,
+                          // in
+                          const char *out_dir, const rs_site *site,
+                          const rs_report_options *opt, // may be NULL
+                          rs_err *err);                 // may be NULL
+
+#ifdef __cplusplus
+}
+#endif

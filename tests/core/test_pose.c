@@ -1,0 +1,157 @@
+// test_pose.c -- core/rs_pose.h against closed forms (docs/conventions.md): the optical axis of
+// yaw/pitch/roll is (sin y cos p, cos y cos p, sin p), roll turns x_cam towards the down vector;
+// R -> ypr -> R and rt -> ypr -> rt round trips; the convention at pitch = +-90 deg; the camera
+// position -R^T t and its Jacobian against central differences. Fixed seeds, printed on failure.
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <mrcal/poseutils.h>
+
+#include "core/rs_pose.h"
+#include "core/rs_rng.h"
+
+static int Nfail;
+static unsigned long long current_seed;
+#define CHECK(cond, ...)                                                                           \
+    do {                                                                                           \
+        if (!(cond)) {                                                                             \
+            Nfail++;                                                                               \
+            printf("FAIL %s:%d (seed %llu): ", __FILE__, __LINE__, current_seed);                  \
+            printf(__VA_ARGS__);                                                                   \
+            printf("\n");                                                                          \
+        }                                                                                          \
+    } while (0)
+
+static double dist3(const double *a, const double *b) {
+    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+// Random yaw/pitch/roll away from the poles: the closed-form axes and both round trips.
+static void test_ypr_round_trip(void) {
+    current_seed = 77;
+    rs_rng rng;
+    rs_rng_seed(&rng, current_seed);
+    double worst = 0;
+    for (int k = 0; k < 2000; k++) {
+        const double ypr[3] = {rs_rng_uniform_in(&rng, 0, 360), rs_rng_uniform_in(&rng, -89, 89),
+                               rs_rng_uniform_in(&rng, -179, 179)};
+        const double C[3] = {rs_rng_uniform_in(&rng, -500, 500), rs_rng_uniform_in(&rng, -500, 500),
+                             rs_rng_uniform_in(&rng, 0, 50)};
+        double R[9], Rr[9], rt[6], back[3], back_rt[3], Cb[3];
+        rs_pose_R_from_ypr(R, ypr);
+        const double y = ypr[0] * M_PI / 180, p = ypr[1] * M_PI / 180, r = ypr[2] * M_PI / 180;
+        const double f[3] = {sin(y) * cos(p), cos(y) * cos(p), sin(p)};
+        const double right0[3] = {cos(y), -sin(y), 0}, down0[3] = {sin(y) * sin(p), cos(y) * sin(p), -cos(p)};
+        double xcam[3];
+        for (int i = 0; i < 3; i++) xcam[i] = cos(r) * right0[i] + sin(r) * down0[i];
+        const double e_axes = fmax(dist3(&R[6], f), dist3(&R[0], xcam)); // rows z_cam, x_cam
+        rs_pose_ypr_from_R(back, R);
+        rs_pose_rt_from_ypr(rt, ypr, C);
+        mrcal_R_from_r(Rr, NULL, rt);
+        double e_R = 0;
+        for (int i = 0; i < 9; i++) e_R = fmax(e_R, fabs(Rr[i] - R[i]));
+        rs_pose_ypr_from_rt(back_rt, Cb, rt);
+        double d = 0;
+        for (int i = 0; i < 3; i++) {
+            const double a = i == 1 ? back[i] - ypr[i] : remainder(back[i] - ypr[i], 360.0);
+            const double b = i == 1 ? back_rt[i] - ypr[i] : remainder(back_rt[i] - ypr[i], 360.0);
+            d = fmax(d, fmax(fabs(a), fabs(b)));
+        }
+        worst = fmax(worst, d);
+        CHECK(e_axes < 1e-12 && e_R < 1e-12 && d < 1e-9 && dist3(C, Cb) < 1e-9 && back[0] >= 0 && back[0] < 360 &&
+                  back[2] > -180 && back[2] <= 180,
+              "ypr (%.12g %.12g %.12g): axes %g, R(r) %g, back (%.12g %.12g %.12g), C err %g", ypr[0], ypr[1],
+              ypr[2], e_axes, e_R, back[0], back[1], back[2], dist3(C, Cb));
+    }
+    printf("ypr round trip, 2000 poses: worst %.3g deg (tolerance 1e-9)\n", worst);
+}
+
+// At pitch = +-90 yaw is undefined: yaw 0, the whole turn in roll, the same rotation back.
+static void test_ypr_poles(void) {
+    current_seed = 0;
+    for (int s = -1; s <= 1; s += 2)
+        for (int k = 0; k < 12; k++) {
+            const double ypr[3] = {30.0 * k, 90.0 * s, 17.0};
+            double R[9], back[3], R2[9];
+            rs_pose_R_from_ypr(R, ypr);
+            rs_pose_ypr_from_R(back, R);
+            rs_pose_R_from_ypr(R2, back);
+            double e = 0;
+            for (int i = 0; i < 9; i++) e = fmax(e, fabs(R2[i] - R[i]));
+            CHECK(back[0] == 0 && fabs(back[1] - 90.0 * s) < 1e-9 && e < 1e-12,
+                  "pole ypr (%g %g %g) -> (%.12g %.12g %.12g), R error %g", ypr[0], ypr[1], ypr[2], back[0], back[1],
+                  back[2], e);
+        }
+}
+
+// Camera position and its Jacobian against central differences.
+static void test_position(void) {
+    current_seed = 5;
+    rs_rng rng;
+    rs_rng_seed(&rng, current_seed);
+    double worst = 0;
+    for (int k = 0; k < 200; k++) {
+        double rt[6];
+        for (int i = 0; i < 3; i++) rt[i] = rs_rng_uniform_in(&rng, -2, 2);
+        for (int i = 3; i < 6; i++) rt[i] = rs_rng_uniform_in(&rng, -100, 100);
+        double C[3], J[18], R[9];
+        rs_pose_position_from_rt(C, J, rt);
+        mrcal_R_from_r(R, NULL, rt);
+        double Cc[3]; // -R^T t by hand
+        for (int i = 0; i < 3; i++) Cc[i] = -(R[i] * rt[3] + R[3 + i] * rt[4] + R[6 + i] * rt[5]);
+        CHECK(dist3(C, Cc) < 1e-9, "position %g off", dist3(C, Cc));
+        for (int j = 0; j < 6; j++) {
+            double a[6], b[6], Ca[3], Cb[3];
+            memcpy(a, rt, sizeof a);
+            memcpy(b, rt, sizeof b);
+            a[j] += 1e-6;
+            b[j] -= 1e-6;
+            rs_pose_position_from_rt(Ca, NULL, a);
+            rs_pose_position_from_rt(Cb, NULL, b);
+            for (int i = 0; i < 3; i++) {
+                const double num = (Ca[i] - Cb[i]) / 2e-6, rel = fabs(num - J[6 * i + j]) / fmax(1, fabs(num));
+                worst = fmax(worst, rel);
+            }
+        }
+    }
+    CHECK(worst < 1e-6, "dpos/drt vs central differences: %g", worst);
+    printf("position Jacobian vs central differences: worst relative %.3g (tolerance 1e-6)\n", worst);
+}
+
+// The 3x3 helpers against brute force, aliasing included.
+static void test_mat3(void) {
+    current_seed = 9;
+    rs_rng rng;
+    rs_rng_seed(&rng, current_seed);
+    double a[9], b[9], c[9], ref[9], t[9];
+    for (int i = 0; i < 9; i++) a[i] = rs_rng_normal(&rng), b[i] = rs_rng_normal(&rng);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            ref[3 * i + j] = 0;
+            for (int k = 0; k < 3; k++) ref[3 * i + j] += a[3 * i + k] * b[3 * k + j];
+        }
+    rs_pose_mat3_mul(c, a, b);
+    memcpy(t, a, sizeof t);
+    rs_pose_mat3_mul(t, t, b); // aliasing the output with an input
+    double e = 0;
+    for (int i = 0; i < 9; i++) e = fmax(e, fmax(fabs(c[i] - ref[i]), fabs(t[i] - ref[i])));
+    memcpy(t, a, sizeof t);
+    rs_pose_mat3_transpose(t, t);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) e = fmax(e, fabs(t[3 * i + j] - a[3 * j + i]));
+    CHECK(e < 1e-15, "mat3 helpers off by %g", e);
+}
+
+int main(void) {
+    test_ypr_round_trip();
+    test_ypr_poles();
+    test_position();
+    test_mat3();
+    if (Nfail) {
+        printf("test_pose: %d check(s) failed\n", Nfail);
+        return 1;
+    }
+    printf("test_pose: all checks passed\n");
+    return 0;
+}

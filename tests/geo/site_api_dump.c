@@ -1,0 +1,57 @@
+// site_api_dump SITE -- loads SITE through the C API (rs_site_load) and prints what the test
+// driver test_site_api.py asserts on, one "key value" per line: the status and its message,
+// the counts, every observation, the lookups, the extents. Exits 0 whenever it ran.
+#include <math.h>
+#include <stdio.h>
+
+#include "geo/rs_site.h"
+
+int main(int argc, char **argv)
+{
+    if (argc != 2) {
+        fprintf(stderr, "usage: site_api_dump SITE\n");
+        return 2;
+    }
+    rs_site_free(NULL); // accepts NULL
+    rs_site_report_free(NULL);
+    rs_site *site = (rs_site *)1;
+    rs_err err = {0};
+    rs_status st = rs_site_load(&site, argv[1], &err);
+    printf("status %d %s\n", (int)st, rs_strerror(st));
+    printf("message %s\n", err.msg);
+    if (st != RS_OK) {
+        printf("site_is_null %d\n", site == NULL);
+        return 0;
+    }
+    printf("landmarks %d\ncameras %d\n", site->Nlandmarks, site->Ncameras);
+    for (int i = 0; i < site->Ncameras; i++) {
+        const rs_site_camera *c = &site->cameras[i];
+        printf("camera %s %d %d %d %d %d\n", c->id, (int)c->camera.lensmodel.type, c->camera.Nintrinsics, c->camera.width,
+               c->camera.height, c->has_position_prior);
+        for (int j = 0; j < c->Nobservations; j++) {
+            const rs_site_observation *o = &c->observations[j];
+            printf("obs %s %s %.17g %.17g %.17g %d\n", c->id, site->landmarks[o->ilandmark].id,
+                   o->q_px[0], o->q_px[1], o->sigma_px, o->line);
+        }
+    }
+    printf("find_camera_south %d\nfind_camera_nope %d\n", rs_site_find_camera(site, "south"),
+           rs_site_find_camera(site, "nope"));
+    printf("find_landmark_L05 %d\nfind_landmark_l05 %d\n", rs_site_find_landmark(site, "L05"),
+           rs_site_find_landmark(site, "l05"));
+    double lo[3], hi[3], dmin, dmax;
+    int n = rs_site_landmark_extent(lo, hi, &dmin, &dmax, site, -1);
+    printf("extent %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", n, lo[0], lo[1], lo[2], hi[0],
+           hi[1], hi[2], dmin, dmax);
+    n = rs_site_landmark_extent(NULL, NULL, NULL, &dmax, site, 1);
+    printf("extent_south %d %.17g\n", n, dmax);
+    printf("ground %.17g %.17g %.17g %.17g\n", site->ground_normal_enu[0], site->ground_normal_enu[1],
+           site->ground_normal_enu[2], site->ground_offset_m);
+    for (int i = 0; i < site->Nlandmarks; i++) {
+        const rs_site_landmark *l = &site->landmarks[i];
+        printf("landmark %s %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %s\n", l->id, l->feature,
+               l->llh.lat_deg, l->llh.lon_deg, l->llh.h_m, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2],
+               l->sigma_h_m, l->kind ? l->kind : "-");
+    }
+    rs_site_free(site);
+    return 0;
+}
