@@ -27,7 +27,7 @@
 //   with C_rt the 6x6 pose covariance of rs_calib_solve and sigma_det the detection noise (px,
 //   per axis). The map holds sqrt(trace Cov(g)) = sqrt(sigma_E^2 + sigma_N^2), the 1-sigma
 //   horizontal radial error (first-order; tests/calib/test_audit.c checks it against a Monte
-//   Carlo run of rs_calib_locate_ground with poses drawn from C_rt: within 10%).
+//   Carlo run of rs_camera_locate_ground with poses drawn from C_rt: within 10%).
 //   Moved camera (--against): new picks q_new of the landmarks against the picks q_old the
 //   calibration was made from. If the camera did not move, q_new - q_old ~ N(0, (s_old^2 +
 //   s_new^2) I) per landmark -- independent of the survey errors, which both picks share. The
@@ -44,7 +44,7 @@
 // the centre of the top-left pixel; ground grid rows go north, columns east.
 //
 // Cost: one full solve plus N leave-one-out solves (~1 ms each for 20 landmarks), plus the map
-// (one projection and one rs_calib_locate_ground per cell within range). Measured: `roadside
+// (one projection and one rs_camera_locate_ground per cell within range). Measured: `roadside
 // audit sites/demo` (4 cameras, 11-14 landmarks, 1 m cells to 100 m) 0.3 s wall on an idle
 // 2-core machine, 1.8 s while other jobs ran; with --range-m 10 1.0 s under the same load.
 #pragma once

@@ -11,6 +11,7 @@
 #include "core/rs_camera.h"
 #include "geo/rs_geo.h"
 #include "core/rs_io.h"
+#include "core/rs_pose.h"
 
 // ---------------------------------------------------------------- problem
 
@@ -69,13 +70,6 @@ void rs_calib_site_problem_free(rs_calib_site_problem *sp)
 
 // ---------------------------------------------------------------- homography
 
-static void mat3_mul(double *C, const double *A, const double *B)
-{
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            C[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
-}
-
 // Inverse of a 3x3 by the adjugate; false when singular relative to its scale.
 static bool mat3_inv(double *Ai, const double *A)
 {
@@ -121,7 +115,7 @@ rs_status rs_calib_ground_homography(double H_px_from_ground[9], double H_ground
     }
     double K[9] = {fxycxy[0], 0, fxycxy[2], 0, fxycxy[1], fxycxy[3], 0, 0, 1};
     double H[9], Hi[9];
-    mat3_mul(H, K, M);
+    rs_pose_mat3_mul(H, K, M);
     if (!mat3_inv(Hi, H))
         return rs_err_set(err, RS_ERR_DEGENERATE, "ground homography: singular (the camera lies in the ground plane)");
     normalise_h(H);

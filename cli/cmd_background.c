@@ -9,7 +9,7 @@
 
 #include <cjson/cJSON.h>
 
-#include "calib/rs_calib_site.h"
+#include "core/rs_camera.h"
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
 #include "geo/rs_site.h"

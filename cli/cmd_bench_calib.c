@@ -1,5 +1,5 @@
 // roadside bench calib -- pose solvers side by side against the Cramer-Rao bound (issue 5);
-// the numerical stress run. The work is in calib/rs_calib_bench.h; this file parses and prints.
+// the numerical stress run. The work is in bench/rs_bench_calib.h; this file parses and prints.
 #include <getopt.h>
 #include <inttypes.h>
 #include <stdlib.h>

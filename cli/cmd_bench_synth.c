@@ -1,5 +1,5 @@
 // roadside bench synth -- the time of `roadside synth` with each saving turned off in turn
-// (synth/rs_synth_bench.h). Parses, calls the library, prints.
+// (bench/rs_bench_synth.h). Parses, calls the library, prints.
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>

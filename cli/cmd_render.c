@@ -58,54 +58,6 @@ static const char render_usage[] =
 enum { OPT_BACKGROUND = 2000, OPT_FULL, OPT_AA, OPT_SCALE, OPT_KEEP, OPT_LABELS, OPT_SPLIT,
        OPT_BBOX, OPT_MINVIS, OPT_SHADOWS, OPT_OVERCAST, OPT_SEPARATE };
 
-// Labels of the rendered image (rs_synth_labels.h): COCO, YOLO and KITTI into out_dir, the
-// composite copied into out_dir/<split>/image.png.
-static rs_status write_labels(const rs_cli_synth_args *s, const rs_synth_render_result *r,
-                              const char *split, const rs_synth_label_options *lopt, rs_err *err)
-{
-    const int N = s->prepared.N;
-    const size_t n = (size_t)(N > 0 ? N : 1);
-    double *up = malloc(n * sizeof(double));
-    rs_synth_mesh *meshes = malloc(n * sizeof(rs_synth_mesh));
-    const char **ids = malloc(n * sizeof(char *));
-    rs_synth_label *labels = NULL;
-    char *folder = NULL, *image = NULL;
-    rs_status st = RS_OK;
-    if (!up || !meshes || !ids) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    for (int i = 0; i < N; i++) {
-        const rs_synth_vehicle *v = &s->prepared.v[i];
-        up[i] = rs_synth_ground_up_m(s->site->ground_normal_enu, s->site->ground_offset_m, v->e_m,
-                                     v->n_m);
-        meshes[i] = s->prepared.meshes[s->prepared.imesh[i]]; // shallow: borrowed arrays
-        ids[i] = v->id ? v->id : "";
-    }
-    if ((st = rs_synth_labels_compute(&labels, &s->camera, s->prepared.v, up, N, meshes, r->ids,
-                                      err)))
-        goto done;
-    const rs_synth_label_image img = {.file_name = "image.png", .width = r->width,
-                                      .height = r->height, .labels = labels, .Nlabels = N,
-                                      .vehicle_ids = ids};
-    if ((st = rs_synth_labels_write_coco(s->output, split, &img, 1, lopt, err)) ||
-        (st = rs_synth_labels_write_yolo(s->output, split, &img, 1, lopt, err)) ||
-        (st = rs_synth_labels_write_kitti(s->output, &img, 1, lopt, err)))
-        goto done;
-    folder = rs_io_join(s->output, split);
-    image = folder ? rs_io_join(folder, "image.png") : NULL;
-    st = image ? rs_image_write(image, &r->composite, 8, err)
-               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-done:
-    free(up);
-    free(meshes);
-    free(ids);
-    free(labels);
-    free(folder);
-    free(image);
-    return st;
-}
-
 int rs_cli_render(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -194,7 +146,8 @@ int rs_cli_render(int argc, char **argv)
                                    s.site->ground_normal_enu, s.site->ground_offset_m,
                                    &s.prepared, &ropt, &err);
     if (st == RS_OK && labels)
-        st = write_labels(&s, &r, split, &lopt, &err);
+        st = rs_synth_render_write_labels(s.output, &r, split, &lopt, &s.camera, s.site->ground_normal_enu,
+                                          s.site->ground_offset_m, &s.prepared, &err);
     if (st) {
         rc = rs_cli_fail("render", st, &err);
     } else {

@@ -154,47 +154,6 @@ static int parse_args(traffic_args *t, int argc, char **argv)
     return RS_EXIT_OK;
 }
 
-// Writes OUT/frame_NNNNNN.json per frame and OUT/frames.json.
-static rs_status write_frames(const char *dir, rs_synth_sumo_frames *fr, const rs_synth_randomise_options *rnd,
-                              bool randomise, int *Nvehicles, rs_err *err)
-{
-    rs_status st = rs_io_mkdir_p(dir, err);
-    if (st) return st;
-    char *index = rs_io_join(dir, "frames.json");
-    if (!index) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    rs_io_atomic a;
-    st = rs_io_atomic_open(&a, index, err);
-    free(index);
-    if (st) return st;
-    fprintf(a.f, "[\n");
-    *Nvehicles = 0;
-    for (int i = 0; i < fr->N && !st; i++) {
-        rs_synth_sumo_frame *f = &fr->frame[i];
-        rs_synth_randomise_options r = *rnd;
-        r.seed += (uint64_t)i;
-        if (!randomise) r.sigma_along_m = r.sigma_across_m = r.yaw_range_deg = 0;
-        if ((st = rs_synth_traffic_randomise(f->v, &f->N, &r, err))) break;
-        char name[32];
-        snprintf(name, sizeof name, "frame_%06d.json", i);
-        char *path = rs_io_join(dir, name);
-        if (!path) {
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            break;
-        }
-        st = rs_synth_traffic_write_json(path, f->v, f->N, err);
-        free(path);
-        fprintf(a.f, "  {\"file\": \"%s\", \"time_s\": %.3f, \"vehicles\": %d}%s\n", name, f->time_s, f->N,
-                i + 1 < fr->N ? "," : "");
-        *Nvehicles += f->N;
-    }
-    fprintf(a.f, "]\n");
-    if (st) {
-        rs_io_atomic_abort(&a);
-        return st;
-    }
-    return rs_io_atomic_commit(&a, err);
-}
-
 int rs_cli_traffic(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -227,7 +186,7 @@ int rs_cli_traffic(int argc, char **argv)
     if (t.sumo) {
         what = "traffic --sumo";
         if ((st = rs_synth_sumo_run(&frames, &lanes, &site->origin, &t.so, &err))) goto done;
-        if ((st = write_frames(t.out, &frames, &t.rnd, t.randomise, &N, &err))) goto done;
+        if ((st = rs_synth_sumo_frames_write(t.out, &frames, &t.rnd, t.randomise, &N, &err))) goto done;
         printf("wrote %s: %d frames from SUMO (seed %llu), %d vehicles in all; index %s/frames.json\n", t.out,
                frames.N, (unsigned long long)t.so.seed, N, t.out);
     } else {

@@ -4,7 +4,7 @@
 #pragma once
 #include <stdbool.h>
 
-#include "calib/rs_calib_site.h"
+#include "core/rs_camera.h"
 #include "geo/rs_site.h"
 #include "synth/rs_synth_scene.h"
 

@@ -637,3 +637,50 @@ done:
         rs_synth_render_result_free(out);
     return st;
 }
+
+rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_render_result *r, const char *split,
+                                       const rs_synth_label_options *lopt, const rs_camera *cam,
+                                       const double ground_normal_enu[3], double ground_offset_m,
+                                       const rs_synth_prepared *prepared, rs_err *err)
+{
+    const int N = prepared->N;
+    const size_t n = (size_t)(N > 0 ? N : 1);
+    double *up = malloc(n * sizeof(double));
+    rs_synth_mesh *meshes = malloc(n * sizeof(rs_synth_mesh));
+    const char **ids = malloc(n * sizeof(char *));
+    rs_synth_label *labels = NULL;
+    char *folder = NULL, *image = NULL;
+    rs_status st = RS_OK;
+    if (!up || !meshes || !ids) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    for (int i = 0; i < N; i++) {
+        const rs_synth_vehicle *v = &prepared->v[i];
+        up[i] = rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, v->e_m, v->n_m);
+        meshes[i] = prepared->meshes[prepared->imesh[i]]; // shallow: borrowed arrays
+        ids[i] = v->id ? v->id : "";
+    }
+    if ((st = rs_synth_labels_compute(&labels, cam, prepared->v, up, N, meshes, r->ids,
+                                      err)))
+        goto done;
+    const rs_synth_label_image img = {.file_name = "image.png", .width = r->width,
+                                      .height = r->height, .labels = labels, .Nlabels = N,
+                                      .vehicle_ids = ids};
+    if ((st = rs_synth_labels_write_coco(out_dir, split, &img, 1, lopt, err)) ||
+        (st = rs_synth_labels_write_yolo(out_dir, split, &img, 1, lopt, err)) ||
+        (st = rs_synth_labels_write_kitti(out_dir, &img, 1, lopt, err)))
+        goto done;
+    folder = rs_io_join(out_dir, split);
+    image = folder ? rs_io_join(folder, "image.png") : NULL;
+    st = image ? rs_image_write(image, &r->composite, 8, err)
+               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+done:
+    free(up);
+    free(meshes);
+    free(ids);
+    free(labels);
+    free(folder);
+    free(image);
+    return st;
+}

@@ -35,8 +35,10 @@
 
 #include <mrcal/mrcal.h>
 
+#include "core/rs_camera.h"
 #include "core/rs_status.h"
 #include "synth/rs_synth.h"
+#include "synth/rs_synth_labels.h"
 #include "synth/rs_synth_opencv.h"
 #include "synth/rs_synth_scene.h"
 
@@ -122,6 +124,17 @@ bool rs_synth_vehicle_rect(// out
                            const double fxycxy[4],
                            int width, int height, const double rt_cam_enu[6],
                            const double corners_enu_m[8][3], double near_m);
+
+// The labels of a rendered image (synth/rs_synth_labels.h): every prepared vehicle's label
+// computed through `cam` with its visibility from r->ids, written as COCO and YOLO under
+// out_dir/<split> and KITTI under out_dir, and the composite copied to
+// out_dir/<split>/image.png. Each file is written atomically. `roadside render --labels`.
+rs_status rs_synth_render_write_labels(// in
+                                       const char *out_dir, const rs_synth_render_result *r,
+                                       const char *split, const rs_synth_label_options *lopt,
+                                       const rs_camera *cam, const double ground_normal_enu[3],
+                                       double ground_offset_m, const rs_synth_prepared *prepared,
+                                       rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -796,3 +796,43 @@ rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames, const rs_lanes *lanes,
     free(dir);
     return st;
 }
+
+rs_status rs_synth_sumo_frames_write(const char *dir, rs_synth_sumo_frames *fr, const rs_synth_randomise_options *rnd,
+                              bool randomise, int *Nvehicles, rs_err *err)
+{
+    rs_status st = rs_io_mkdir_p(dir, err);
+    if (st) return st;
+    char *index = rs_io_join(dir, "frames.json");
+    if (!index) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_io_atomic a;
+    st = rs_io_atomic_open(&a, index, err);
+    free(index);
+    if (st) return st;
+    fprintf(a.f, "[\n");
+    *Nvehicles = 0;
+    for (int i = 0; i < fr->N && !st; i++) {
+        rs_synth_sumo_frame *f = &fr->frame[i];
+        rs_synth_randomise_options r = *rnd;
+        r.seed += (uint64_t)i;
+        if (!randomise) r.sigma_along_m = r.sigma_across_m = r.yaw_range_deg = 0;
+        if ((st = rs_synth_traffic_randomise(f->v, &f->N, &r, err))) break;
+        char name[32];
+        snprintf(name, sizeof name, "frame_%06d.json", i);
+        char *path = rs_io_join(dir, name);
+        if (!path) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        st = rs_synth_traffic_write_json(path, f->v, f->N, err);
+        free(path);
+        fprintf(a.f, "  {\"file\": \"%s\", \"time_s\": %.3f, \"vehicles\": %d}%s\n", name, f->time_s, f->N,
+                i + 1 < fr->N ? "," : "");
+        *Nvehicles += f->N;
+    }
+    fprintf(a.f, "]\n");
+    if (st) {
+        rs_io_atomic_abort(&a);
+        return st;
+    }
+    return rs_io_atomic_commit(&a, err);
+}

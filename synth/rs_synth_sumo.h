@@ -117,6 +117,21 @@ rs_status rs_synth_sumo_run(// out
                             const rs_lanes *lanes, const rs_llh *origin,
                             const rs_synth_sumo_options *opt, rs_err *err);
 
+// Writes the frames of a SUMO run as `roadside traffic --sumo` does: dir/frame_NNNNNN.json per
+// frame (rs_synth_traffic_write_json), each frame's vehicles first randomised
+// (rs_synth_traffic_randomise with seed rnd->seed + frame index; with randomise false only the
+// overlaps are resolved: no noise), and the index dir/frames.json ({file, time_s, vehicles} per
+// frame). Every file is written atomically; dir is created. *Nvehicles: the vehicles written.
+// The frames' vehicles are changed in place (randomised).
+rs_status rs_synth_sumo_frames_write(// in
+                                     const char *dir,
+                                     // in,out
+                                     rs_synth_sumo_frames *fr,
+                                     // in
+                                     const rs_synth_randomise_options *rnd, bool randomise,
+                                     // out
+                                     int *Nvehicles, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

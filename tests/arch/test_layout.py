@@ -19,7 +19,7 @@ MAY_INCLUDE = {
     "report": ["core", "geo", "calib", "audit"],
     "eval": ["core", "geo"],
     "synth": ["core", "geo"],
-    "bench": ["core", "geo", "calib", "sim", "eval", "synth"],
+    "bench": ["core", "geo", "calib", "sim", "eval", "synth", "report"],
     "cli": ["core", "geo", "calib", "sim", "audit", "report", "eval", "synth", "bench"],
 }
 # libraries a module's link line must not carry (what it never calls)

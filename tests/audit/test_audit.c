@@ -4,7 +4,7 @@
 //      located by mrcal_unproject + a ray/plane intersection, rotations compared by a textbook
 //      Rodrigues formula;
 //   2. the ground uncertainty map against a Monte Carlo run (poses drawn from the covariance by
-//      a Cholesky factor, detection noise added, located with rs_calib_locate_ground, spread
+//      a Cholesky factor, detection noise added, located with rs_camera_locate_ground, spread
 //      taken) within 10% at three cells (near, middle, far);
 //   3. the moved-camera test: a camera turned by 0.5 deg is found moved in every draw, with the
 //      rotation estimated within 0.1 deg; an unmoved camera's false alarm rate over 300 noise
@@ -24,19 +24,9 @@
 #include "sim/rs_simulate.h"
 #include "core/rs_pose.h"
 #include "core/rs_rng.h"
+#include "tests/common/rs_test.h"
 
-static int Nfail = 0;
-static unsigned long long current_seed = 0;
 
-#define CHECK(cond, ...)                                                                   \
-    do {                                                                                   \
-        if (!(cond)) {                                                                     \
-            Nfail++;                                                                       \
-            printf("FAIL %s:%d (seed %llu): %s: ", __FILE__, __LINE__, current_seed, #cond); \
-            printf(__VA_ARGS__);                                                           \
-            printf("\n");                                                                  \
-        }                                                                                  \
-    } while (0)
 
 // ---- oracles ----
 
@@ -124,7 +114,7 @@ static rs_calib_problem view(const rs_simulate_problem *sp, double *sigma_enu, d
 
 static rs_simulate_problem *simulate(unsigned long long seed, int N, double outliers, double s_h, double s_v)
 {
-    current_seed = seed;
+    rs_test_seed = seed;
     rs_simulate_camera_options o;
     rs_simulate_camera_options_default(&o);
     o.seed = seed;
@@ -471,7 +461,7 @@ static void test_errors(void)
 // of the picks is that rectangle exactly).
 static void test_degeneracy(void)
 {
-    current_seed = 0;
+    rs_test_seed = 0;
     double intrinsics[4] = {800, 800, 499.5, 399.5};
     const rs_camera cam = {.lensmodel = {.type = MRCAL_LENSMODEL_PINHOLE}, .intrinsics = intrinsics,
                            .Nintrinsics = 4, .width = 1000, .height = 800};
@@ -525,7 +515,5 @@ int main(void)
     test_moved(31);
     test_errors();
     test_degeneracy();
-    if (Nfail) printf("%d check(s) FAILED\n", Nfail);
-    else printf("all audit checks passed\n");
-    return Nfail ? 1 : 0;
+    return rs_test_end("test_audit");
 }

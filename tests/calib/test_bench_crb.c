@@ -1,5 +1,5 @@
 // test_bench_crb.c -- the Cramer-Rao bound that `roadside bench calib` reports is
-// rs_calib_solve's covariance on the noise-free version of a trial (rs_calib_bench.h). This test
+// rs_calib_solve's covariance on the noise-free version of a trial (bench/rs_bench_calib.h). This test
 // checks that construction against brute force: the inverse Fisher information of the
 // errors-in-variables model, built here from central differences of mrcal_project (pixel
 // residuals / sigma_px, survey priors / sigma_m), the landmarks marginalised by a Schur

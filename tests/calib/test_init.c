@@ -14,24 +14,14 @@
 
 #include "calib/rs_calib_init.h"
 #include "test_init_gen.h"
+#include "tests/common/rs_test.h"
 
-static int Nfail = 0;
 
 // The terrains: a flat road, a road with crown and kerbs (nearly planar), street furniture.
 enum { NTERRAIN = 3 };
 static const double terrain_relief_m[NTERRAIN] = {0.0, 0.3, 8.0};
 static const char *const terrain_name[NTERRAIN] = {"planar", "nearly-planar", "3d"};
 
-#define CHECK(cond, ...)                                                                       \
-    do {                                                                                       \
-        if (!(cond)) {                                                                         \
-            if (Nfail++ < 40) {                                                                \
-                printf("FAIL %s:%d: ", __FILE__, __LINE__);                                    \
-                printf(__VA_ARGS__);                                                           \
-                printf("\n");                                                                  \
-            }                                                                                  \
-        }                                                                                      \
-    } while (0)
 
 // tg_make, or a failed check naming the test and seed.
 static bool make(tg_problem *pb, const char *what, uint64_t seed, tg_lens lens, double relief_m,
@@ -313,6 +303,5 @@ int main(void)
         CHECK(0, "the library printed %ld bytes to stderr, starting with: %s", Nprinted, buf);
     }
     fclose(captured);
-    if (Nfail) printf("%d check(s) failed\n", Nfail);
-    return Nfail ? 1 : 0;
+    return rs_test_end("test_init");
 }

@@ -1,5 +1,5 @@
 // test_refine_locate.c -- driver for test_refine_locate.py: prints, one JSON object per line,
-// pixels mapped to the ground by rs_calib_locate_ground() on simulated cameras (pinhole,
+// pixels mapped to the ground by rs_camera_locate_ground() on simulated cameras (pinhole,
 // OPENCV8, CAHVOR; seed 900 + lens), for mrcal's Python module to check independently.
 #include <stdio.h>
 

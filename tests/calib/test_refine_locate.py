@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""rs_calib_locate_ground against mrcal's Python module (an independent oracle).
+"""rs_camera_locate_ground against mrcal's Python module (an independent oracle).
 
 Runs the driver test_refine_locate (argv[1]); for every pixel it mapped to the level plane
 U = offset, checks with mrcal.transform_point_rt + mrcal.project that the point projects back

@@ -1,7 +1,7 @@
 // test_solve.c -- rs_calib_solve and the pose helpers on REFINE's simulated problems
 // (test_solve_gen.c): noise-free recovery for three lens models, focal refinement from x2 and
 // x0.5, the camera position prior, degenerate inputs, yaw/pitch/roll against the closed form
-// of docs/conventions.md, rs_calib_locate_ground, and the analytic Jacobians against Ceres'
+// of docs/conventions.md, rs_camera_locate_ground, and the analytic Jacobians against Ceres'
 // finite differences. Fixed seeds, printed on failure.
 #include <math.h>
 #include <stdio.h>

@@ -10,18 +10,8 @@
 
 #include "core/rs_pose.h"
 #include "core/rs_rng.h"
+#include "tests/common/rs_test.h"
 
-static int Nfail;
-static unsigned long long current_seed;
-#define CHECK(cond, ...)                                                                           \
-    do {                                                                                           \
-        if (!(cond)) {                                                                             \
-            Nfail++;                                                                               \
-            printf("FAIL %s:%d (seed %llu): ", __FILE__, __LINE__, current_seed);                  \
-            printf(__VA_ARGS__);                                                                   \
-            printf("\n");                                                                          \
-        }                                                                                          \
-    } while (0)
 
 static double dist3(const double *a, const double *b) {
     return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
@@ -29,9 +19,9 @@ static double dist3(const double *a, const double *b) {
 
 // Random yaw/pitch/roll away from the poles: the closed-form axes and both round trips.
 static void test_ypr_round_trip(void) {
-    current_seed = 77;
+    rs_test_seed = 77;
     rs_rng rng;
-    rs_rng_seed(&rng, current_seed);
+    rs_rng_seed(&rng, rs_test_seed);
     double worst = 0;
     for (int k = 0; k < 2000; k++) {
         const double ypr[3] = {rs_rng_uniform_in(&rng, 0, 360), rs_rng_uniform_in(&rng, -89, 89),
@@ -69,7 +59,7 @@ static void test_ypr_round_trip(void) {
 
 // At pitch = +-90 yaw is undefined: yaw 0, the whole turn in roll, the same rotation back.
 static void test_ypr_poles(void) {
-    current_seed = 0;
+    rs_test_seed = 0;
     for (int s = -1; s <= 1; s += 2)
         for (int k = 0; k < 12; k++) {
             const double ypr[3] = {30.0 * k, 90.0 * s, 17.0};
@@ -87,9 +77,9 @@ static void test_ypr_poles(void) {
 
 // Camera position and its Jacobian against central differences.
 static void test_position(void) {
-    current_seed = 5;
+    rs_test_seed = 5;
     rs_rng rng;
-    rs_rng_seed(&rng, current_seed);
+    rs_rng_seed(&rng, rs_test_seed);
     double worst = 0;
     for (int k = 0; k < 200; k++) {
         double rt[6];
@@ -121,9 +111,9 @@ static void test_position(void) {
 
 // The 3x3 helpers against brute force, aliasing included.
 static void test_mat3(void) {
-    current_seed = 9;
+    rs_test_seed = 9;
     rs_rng rng;
-    rs_rng_seed(&rng, current_seed);
+    rs_rng_seed(&rng, rs_test_seed);
     double a[9], b[9], c[9], ref[9], t[9];
     for (int i = 0; i < 9; i++) a[i] = rs_rng_normal(&rng), b[i] = rs_rng_normal(&rng);
     for (int i = 0; i < 3; i++)
@@ -148,10 +138,5 @@ int main(void) {
     test_ypr_poles();
     test_position();
     test_mat3();
-    if (Nfail) {
-        printf("test_pose: %d check(s) failed\n", Nfail);
-        return 1;
-    }
-    printf("test_pose: all checks passed\n");
-    return 0;
+    return rs_test_end("test_pose");
 }

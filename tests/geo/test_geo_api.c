@@ -9,19 +9,10 @@
 #include <string.h>
 
 #include "geo/rs_geo.h"
+#include "tests/common/rs_test.h"
 
 enum { SEED = 20261122 };
-static int failures = 0;
 
-#define CHECK(cond, ...)                                                                           \
-    do {                                                                                           \
-        if (!(cond)) {                                                                             \
-            failures++;                                                                            \
-            printf("FAIL (seed %d) %s:%d: ", SEED, __FILE__, __LINE__);                            \
-            printf(__VA_ARGS__);                                                                   \
-            printf("\n");                                                                          \
-        }                                                                                          \
-    } while (0)
 
 static const double deg = M_PI / 180;
 static const double a_m = 6378137.0, f_wgs84 = 1 / 298.257223563;
@@ -257,11 +248,11 @@ static void test_errors(void)
 int main(void)
 {
     srand48(SEED);
+    rs_test_seed = SEED;
     test_llh_ecef();
     test_centre();
     test_enu_frame();
     test_convergence();
     test_errors();
-    if (failures) printf("%d failures (seed %d)\n", failures, SEED);
-    return failures ? 1 : 0;
+    return rs_test_end("test_geo_api");
 }

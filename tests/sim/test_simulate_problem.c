@@ -10,19 +10,9 @@
 #include "sim/rs_simulate.h"
 #include "core/rs_rng.h"
 #include "core/rs_pose.h"
+#include "tests/common/rs_test.h"
 
-static int Nfail = 0;
-static unsigned long long current_seed = 0;
 
-#define CHECK(cond, ...)                                                                   \
-    do {                                                                                   \
-        if (!(cond)) {                                                                     \
-            Nfail++;                                                                       \
-            fprintf(stderr, "FAIL %s:%d (seed %llu): ", __FILE__, __LINE__, current_seed); \
-            fprintf(stderr, __VA_ARGS__);                                                  \
-            fprintf(stderr, "\n");                                                         \
-        }                                                                                  \
-    } while (0)
 
 // p_cam = R(r) p + t with the textbook Rodrigues formula.
 static void oracle_transform(double out[3], const double rt[6], const double p[3])
@@ -46,7 +36,7 @@ static void test_geometry(void)
     o.pixel_sigma_px = 0;
     o.outlier_fraction = 0;
     o.Nlandmarks = 40;
-    o.seed = current_seed = 11;
+    o.seed = rs_test_seed = 11;
     rs_simulate_problem *P = NULL;
     rs_err err = {0};
     rs_status st = rs_simulate_camera_problem(&P, &o, &err);
@@ -103,7 +93,7 @@ static void test_noise(void)
     o.Nlandmarks = 2000;
     o.outlier_fraction = 0.1;
     o.pixel_sigma_px = 1.5;
-    o.seed = current_seed = 5;
+    o.seed = rs_test_seed = 5;
     rs_simulate_problem *P = NULL;
     rs_err err = {0};
     CHECK(rs_simulate_camera_problem(&P, &o, &err) == RS_OK, "%s", err.msg);
@@ -167,7 +157,7 @@ static void test_variants(void)
         o.elevated_fraction = 0;
         o.camera_height_m = 5 + 3 * (double)i;
         o.distance_m = 3 + 5 * (double)i;
-        o.seed = current_seed = 100 + i;
+        o.seed = rs_test_seed = 100 + i;
         rs_simulate_problem *P = NULL;
         rs_status st = rs_simulate_camera_problem(&P, &o, &err);
         CHECK(st == RS_OK, "%s: %s", lenses[i], err.msg);
@@ -222,9 +212,5 @@ int main(void)
     test_geometry();
     test_noise();
     test_variants();
-    if (Nfail) {
-        fprintf(stderr, "%d check(s) failed\n", Nfail);
-        return 1;
-    }
-    return 0;
+    return rs_test_end("test_simulate_problem");
 }
