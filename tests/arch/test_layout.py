@@ -8,6 +8,9 @@ import os
 import re
 import sys
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+from rs_check import check, finish  # noqa: E402
+
 MODULES = ["core", "geo", "calib", "sim", "audit", "report", "eval", "synth", "bench", "cli"]
 # module -> the modules whose public headers it may include (besides its own)
 MAY_INCLUDE = {
@@ -34,13 +37,6 @@ LINK_PROBE = {"eval": "test_eval_api", "synth": "test_srgb", "geo": "test_geo_ap
 MAX_LINES = 800
 SIZE_REASON = "Longer than 800 lines because"
 
-failures = []
-
-
-def check(cond, msg):
-    if not cond:
-        failures.append(msg)
-        print("FAIL", msg)
 
 
 def sources(root, module):
@@ -69,6 +65,8 @@ def main():
                 if target != module:
                     check(target in MAY_INCLUDE[module], f"{rel}: {module}/ may not include {target}/ (\"{inc}\")")
                     check("internal" not in parts[1:-1], f"{rel}: includes another module's internal header \"{inc}\"")
+            if "<cairo" in text:
+                check(module == "report", f"{rel}: includes cairo; the report is the only cairo user")
             lines = text.count("\n")
             if lines > MAX_LINES:
                 check(SIZE_REASON in text, f"{rel}: {lines} lines and no stated reason ('{SIZE_REASON} ...')")
@@ -98,10 +96,7 @@ def main():
             check(not re.search(r"[-/]l?%s\b|lib%s[^ ]*\.(so|a)" % (lib, lib), block),
                   f"{module}: {exe} links {lib}, which {module}/ never calls")
         print(f"{module}: {exe} links none of {', '.join(MUST_NOT_LINK[module])}")
-    if failures:
-        print(f"test_layout: {len(failures)} failure(s)")
-        sys.exit(1)
-    print("test_layout: all checks passed")
+    finish("test_layout")
 
 
 if __name__ == "__main__":

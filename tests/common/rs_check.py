@@ -5,10 +5,12 @@
     from rs_check import ROADSIDE, check, failures, run
 
 A test calls check(cond, what) for every assertion (a failure is printed and kept, the test
-goes on to the end) and exits non-zero when `failures` is not empty.
+goes on to the end) and ends with finish(name), which prints the verdict and exits non-zero when
+`failures` is not empty.
 """
 import os
 import subprocess
+import sys
 
 ROADSIDE = os.environ["ROADSIDE"]
 failures = []
@@ -26,3 +28,12 @@ def run(*args, stdin=None, env=None, timeout=300):
     """roadside ARGS..., text in and out captured; stdin: text for its standard input."""
     return subprocess.run([ROADSIDE, *args], input=stdin, capture_output=True, text=True,
                           timeout=timeout, env=env)
+
+
+def finish(name):
+    """Prints the verdict of test `name` and exits: 1 when a check failed, else 0."""
+    if failures:
+        print(f"{name}: {len(failures)} check(s) failed")
+        sys.exit(1)
+    print(f"{name}: all checks passed")
+    sys.exit(0)

@@ -21,13 +21,9 @@ import cv2
 import mrcal
 import numpy as np
 
-failures = []
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+from rs_check import check, finish  # noqa: E402
 
-
-def check(cond, msg):
-    if not cond:
-        failures.append(msg)
-        print("FAIL", msg)
 
 
 def run(*args, stdin=None):
@@ -167,10 +163,7 @@ def main():
     msg, rc = read(os.path.join(tmp, "missing.cameramodel"))
     check(rc == 1 and "missing.cameramodel" in msg, f"missing file: {msg}")
 
-    if failures:
-        print(f"test_camera: {len(failures)} failure(s)")
-        sys.exit(1)
-    print("test_camera: all checks passed")
+    finish("test_camera")
 
 
 if __name__ == "__main__":

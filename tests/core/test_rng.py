@@ -5,7 +5,11 @@ draws exactly, the Box-Muller normals to 1e-15; seed derivation; and the moments
 draws (uniform mean, normal mean and variance, 5 standard errors)."""
 import math
 import subprocess
+import os
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
+from rs_check import check, finish  # noqa: E402
 
 M = (1 << 64) - 1
 GAMMA = 0x9E3779B97F4A7C15
@@ -45,13 +49,6 @@ class Xoshiro:
         return (self.u64() >> 11) * 2.0 ** -53
 
 
-failures = []
-
-
-def check(cond, msg):
-    if not cond:
-        failures.append(msg)
-        print("FAIL", msg)
 
 
 def main():
@@ -91,10 +88,7 @@ def main():
     check(abs(mz) < 5 / math.sqrt(n), f"normal mean {mz}")
     check(abs(vz - 1) < 5 * math.sqrt(2.0 / n), f"normal variance {vz}")
     print(f"200000 draws: uniform mean {mu:.5f}, normal mean {mz:.5f}, variance {vz:.5f}")
-    if failures:
-        print(f"test_rng: {len(failures)} failure(s)")
-        sys.exit(1)
-    print("test_rng: all checks passed")
+    finish("test_rng")
 
 
 if __name__ == "__main__":
