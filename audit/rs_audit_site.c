@@ -18,12 +18,6 @@
 
 // ---- external calibration files ----
 
-static bool ends_with(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && !strcasecmp(s + n - m, suffix);
-}
-
 void rs_audit_calibration_free(rs_audit_calibration *cal)
 {
     if (!cal) return;
@@ -36,7 +30,7 @@ rs_status rs_audit_calibration_read(rs_audit_calibration *out, const char *path,
 {
     memset(out, 0, sizeof *out);
     rs_status st = rs_camera_read(&out->camera, &out->extra, path, err);
-    if (st == RS_OK && !ends_with(path, ".cameramodel") && !out->extra.has_pose)
+    if (st == RS_OK && !rs_io_has_extension(path, "cameramodel") && !out->extra.has_pose)
         st = rs_err_set(err, RS_ERR_INVALID, "%s: R (or rvec) and tvec (or t): missing, the pose is needed", path);
     if (st == RS_OK && !(out->path = strdup(path))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (st) rs_audit_calibration_free(out);

@@ -137,16 +137,11 @@ static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_ca
     return RS_OK;
 }
 
-static bool has_extension(const char *path, const char *ext) {
-    const char *dot = strrchr(path, '.');
-    return dot && !strcasecmp(dot + 1, ext);
-}
-
 rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *path, rs_err *err) {
     memset(cam, 0, sizeof *cam);
     if (extra) memset(extra, 0, sizeof *extra);
     rs_status st;
-    if (has_extension(path, "yaml") || has_extension(path, "yml") || has_extension(path, "json")) {
+    if (rs_io_has_extension(path, "yaml") || rs_io_has_extension(path, "yml") || rs_io_has_extension(path, "json")) {
         rs_camera_opencv_file f;
         st = rs_camera_opencv_read(&f, path, err);
         if (st == RS_OK) st = from_opencv(cam, extra, &f, path, err);

@@ -5,6 +5,7 @@
 #include <ftw.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -173,4 +174,10 @@ static int remove_entry(const char *path, const struct stat *sb, int type, struc
 void rs_io_remove_tree(const char *path)
 {
     nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+}
+
+bool rs_io_has_extension(const char *path, const char *ext)
+{
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    return dot && dot > path && (!slash || dot > slash + 1) && !strcasecmp(dot + 1, ext);
 }

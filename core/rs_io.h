@@ -3,6 +3,7 @@
 // An output is never visible under its final name until it is complete: a crash, a full disk or
 // an error mid-way leaves at most a "<path>.tmp.XXXXXX" file, never a half-written "<path>".
 #pragma once
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdio.h>
 
@@ -47,6 +48,10 @@ rs_status rs_io_mkdir_p(const char *path, rs_err *err);
 // Joins a folder and a relative path with one '/': returns a malloc'ed string (caller frees),
 // or NULL when out of memory. An absolute `rel` is returned as a copy of itself.
 char *rs_io_join(const char *dir, const char *rel);
+
+// True when `path` ends in "." followed by `ext` (no dot, compared without case): ("a/b.YML",
+// "yml") is true, ("a.yml/b", "yml") and ("yml", "yml") are false.
+bool rs_io_has_extension(const char *path, const char *ext);
 
 // Removes path and everything under it (files, folders, links themselves), best effort: what
 // cannot be removed is left. A missing path is not an error.

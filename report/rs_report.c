@@ -273,15 +273,9 @@ static int cmp_str(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-static bool has_ext(const char *name, const char *ext)
-{
-    size_t n = strlen(name), e = strlen(ext);
-    return n > e && !strcasecmp(name + n - e, ext);
-}
-
 static bool is_image_name(const char *name)
 {
-    return has_ext(name, ".png") || has_ext(name, ".jpg") || has_ext(name, ".jpeg");
+    return rs_io_has_extension(name, "png") || rs_io_has_extension(name, "jpg") || rs_io_has_extension(name, "jpeg");
 }
 
 // An image file as a cairo surface: PNG through cairo, JPEG through OpenCV (cv::imread).
