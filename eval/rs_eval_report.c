@@ -39,7 +39,7 @@ static bool add_metrics(cJSON *o, const rs_eval_result *r, const rs_eval_metrics
 char *rs_eval_result_json(const rs_eval_result *r)
 {
     cJSON *o = cJSON_CreateObject();
-    bool ok = o && cJSON_AddItemToObject(o, r->metres ? "thresholds_m" : "thresholds", cJSON_CreateDoubleArray(r->thresholds, r->Nthresholds)) &&
+    bool ok = o && cJSON_AddItemToObject(o, r->metres ? "thresholds_m" : "thresholds_px", cJSON_CreateDoubleArray(r->thresholds, r->Nthresholds)) &&
               add_number(o, "max_dets", r->max_dets) && add_metrics(o, r, &r->all);
     if (ok && r->groups) {
         cJSON *g = cJSON_AddObjectToObject(o, "groups");
