@@ -328,3 +328,119 @@ rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam
     free(path);
     return st;
 }
+
+// ---------------------------------------------------------------- reading <id>.json back
+
+static rs_status json_numbers(double *out, int n, const cJSON *obj, const char *name, const char *path, rs_err *err)
+{
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(obj, name);
+    if (!cJSON_IsArray(a) || cJSON_GetArraySize(a) != n)
+        return rs_err_set(err, RS_ERR_PARSE, "%s: %s: expected an array of %d numbers", path, name, n);
+    int i = 0;
+    const cJSON *x;
+    cJSON_ArrayForEach(x, a)
+    {
+        if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
+            return rs_err_set(err, RS_ERR_PARSE, "%s: %s[%d]: not a finite number", path, name, i);
+        out[i++] = x->valuedouble;
+    }
+    return RS_OK;
+}
+
+static rs_status json_number(double *out, const cJSON *obj, const char *name, const char *path, rs_err *err)
+{
+    const cJSON *x = cJSON_GetObjectItemCaseSensitive(obj, name);
+    if (!cJSON_IsNumber(x)) return rs_err_set(err, RS_ERR_PARSE, "%s: %s: expected a number", path, name);
+    *out = x->valuedouble;
+    return RS_OK;
+}
+
+static rs_status read_warnings(rs_calib_site_result *r, const cJSON *root, const char *path, rs_err *err)
+{
+    const cJSON *warnings = cJSON_GetObjectItemCaseSensitive(root, "warnings");
+    if (!cJSON_IsArray(warnings)) return rs_err_set(err, RS_ERR_PARSE, "%s: warnings: expected an array", path);
+    r->warnings = calloc((size_t)cJSON_GetArraySize(warnings) + 1, sizeof *r->warnings);
+    if (!r->warnings) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    const cJSON *w;
+    cJSON_ArrayForEach(w, warnings)
+    {
+        if (!cJSON_IsString(w))
+            return rs_err_set(err, RS_ERR_PARSE, "%s: warnings[%d]: expected a string", path, r->Nwarnings);
+        if (!(r->warnings[r->Nwarnings++] = strdup(w->valuestring)))
+            return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    }
+    return RS_OK;
+}
+
+static rs_status read_landmarks(rs_calib_site_result *r, const cJSON *root, const char *path, rs_err *err)
+{
+    const cJSON *lms = cJSON_GetObjectItemCaseSensitive(root, "landmarks");
+    if (!cJSON_IsArray(lms)) return rs_err_set(err, RS_ERR_PARSE, "%s: landmarks: expected an array", path);
+    r->landmarks = calloc((size_t)cJSON_GetArraySize(lms) + 1, sizeof *r->landmarks);
+    if (!r->landmarks) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    const cJSON *l;
+    cJSON_ArrayForEach(l, lms)
+    {
+        rs_calib_site_landmark *m = &r->landmarks[r->N];
+        char field[64];
+        snprintf(field, sizeof field, "landmarks[%d]", r->N);
+        const cJSON *id = cJSON_GetObjectItemCaseSensitive(l, "id");
+        const cJSON *inl = cJSON_GetObjectItemCaseSensitive(l, "inlier");
+        if (!cJSON_IsString(id) || !cJSON_IsBool(inl))
+            return rs_err_set(err, RS_ERR_PARSE, "%s: %s: expected a string id and a boolean inlier", path, field);
+        if (!(m->id = strdup(id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+        r->N++;
+        m->inlier = cJSON_IsTrue(inl);
+        rs_status st = json_numbers(m->observed_px, 2, l, "observed_px", path, err);
+        if (!st) st = json_numbers(m->predicted_px, 2, l, "predicted_px", path, err);
+        if (!st) st = json_numbers(m->residual_px, 2, l, "residual_px", path, err);
+        if (!st) st = json_number(&m->normalised_residual, l, "normalised_residual", path, err);
+        if (st) return rs_err_prefix(err, "%s", field);
+    }
+    return RS_OK;
+}
+
+rs_status rs_calib_site_result_read(rs_calib_site_result *r, const char *path, rs_err *err)
+{
+    memset(r, 0, sizeof *r);
+    char *text = NULL;
+    rs_status st = rs_io_read_file(&text, NULL, path, err);
+    if (st) return st;
+    cJSON *root = cJSON_Parse(text);
+    free(text);
+    if (!cJSON_IsObject(root)) {
+        cJSON_Delete(root);
+        return rs_err_set(err, RS_ERR_PARSE, "%s: not a JSON object (run 'roadside calib' again?)", path);
+    }
+    double used = 0, rejected = 0;
+    if (!st) st = json_numbers(r->position_enu_m, 3, root, "position_enu_m", path, err);
+    if (!st) st = json_numbers(r->sigma_position_enu_m, 3, root, "sigma_position_enu_m", path, err);
+    if (!st) st = json_numbers(r->position_llh, 3, root, "position_llh", path, err);
+    if (!st) st = json_numbers(r->yaw_pitch_roll_deg, 3, root, "yaw_pitch_roll_deg", path, err);
+    if (!st) st = json_numbers(r->sigma_yaw_pitch_roll_deg, 3, root, "sigma_yaw_pitch_roll_deg", path, err);
+    if (!st) st = json_number(&r->rms_px, root, "rms_px", path, err);
+    if (!st) st = json_number(&r->variance_factor, root, "variance_factor", path, err);
+    if (!st) st = json_number(&r->condition_number, root, "condition_number", path, err);
+    if (!st) st = json_number(&used, root, "landmarks_used", path, err);
+    if (!st) st = json_number(&rejected, root, "landmarks_rejected", path, err);
+    r->Nused = (int)used;
+    r->Nrejected = (int)rejected;
+    const cJSON *lm = cJSON_GetObjectItemCaseSensitive(root, "lensmodel");
+    if (!st && !cJSON_IsString(lm)) st = rs_err_set(err, RS_ERR_PARSE, "%s: lensmodel: expected a string", path);
+    if (!st && !(r->lensmodel = strdup(lm->valuestring))) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    if (!st) st = read_warnings(r, root, path, err);
+    if (!st) st = read_landmarks(r, root, path, err);
+    cJSON_Delete(root);
+    return st;
+}
+
+void rs_calib_site_result_free(rs_calib_site_result *r)
+{
+    if (!r) return;
+    for (int i = 0; i < r->N; i++) free(r->landmarks[i].id);
+    free(r->landmarks);
+    for (int i = 0; i < r->Nwarnings; i++) free(r->warnings[i]);
+    free(r->warnings);
+    free(r->lensmodel);
+    memset(r, 0, sizeof *r);
+}

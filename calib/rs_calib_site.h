@@ -74,6 +74,42 @@ rs_status rs_calib_ground_homography(// out
                                      const double plane_normal_enu[3], double plane_offset_m,
                                      rs_err *err);
 
+// ---- reading <id>.json back (the report reads calibrations through this) ----
+
+// One landmark of a calibration result file.
+typedef struct {
+    char *id;                    // owned
+    bool inlier;
+    double observed_px[2];       // the pick
+    double predicted_px[2];      // the landmark's projection (refined position for inliers)
+    double residual_px[2];       // predicted - observed
+    double normalised_residual;  // sqrt(block chi2), sigmas
+} rs_calib_site_landmark;
+
+// What <id>.json (rs_calib_site_write) says, read back: the pose summary, the solver's figures,
+// the landmarks and the warnings. The fields are those of rs_calib_result with the same names.
+typedef struct {
+    double position_enu_m[3], sigma_position_enu_m[3]; // metres
+    double position_llh[3];                            // lat_deg, lon_deg, h_m (ellipsoidal)
+    double yaw_pitch_roll_deg[3], sigma_yaw_pitch_roll_deg[3];
+    double rms_px, variance_factor, condition_number;
+    int Nused, Nrejected;        // landmarks used, rejected as outliers
+    char *lensmodel;             // owned: the mrcal lens model name
+    int N;
+    rs_calib_site_landmark *landmarks; // (N,) owned
+    int Nwarnings;
+    char **warnings;             // (Nwarnings,) owned strings
+} rs_calib_site_result;
+
+// Reads a calibration result file. *out is zeroed first; free it with rs_calib_site_result_free
+// whatever the outcome. Errors: RS_ERR_IO (unreadable), RS_ERR_PARSE (not JSON, a field missing
+// or of the wrong type: "PATH: FIELD: what"), RS_ERR_NOMEM.
+rs_status rs_calib_site_result_read(// out
+                                    rs_calib_site_result *out,
+                                    // in
+                                    const char *path, rs_err *err);
+void rs_calib_site_result_free(rs_calib_site_result *r); // NULL-safe; zeroes *r
+
 #ifdef __cplusplus
 }
 #endif

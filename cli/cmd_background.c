@@ -119,7 +119,7 @@ int rs_cli_background(int argc, char **argv)
     rs_site *site = NULL;
     rs_synth_median med = {0};
     rs_image img = {0};
-    char *path = NULL, *dir = NULL;
+    char *path = NULL, *dir = NULL, *source_json = NULL;
     cJSON *source = NULL;
     rs_status st;
     const double t0 = (double)clock() / CLOCKS_PER_SEC;
@@ -169,8 +169,12 @@ int rs_cli_background(int argc, char **argv)
     cJSON_AddNumberToObject(source, "frames_read", (double)med.Nframes_read);
     cJSON_AddNumberToObject(source, "frames_used", med.Nframes_used);
     cJSON_AddNumberToObject(source, "stride", med.stride);
+    if (!(source_json = cJSON_PrintUnformatted(source))) {
+        rc = rs_cli_fail(CMD, RS_ERR_NOMEM, NULL);
+        goto done;
+    }
     if ((st = rs_io_mkdir_p(dir, &err)) || (st = rs_image_write(path, &img, 8, &err)) ||
-        (st = rs_synth_background_record(site_dir, camera, &tags, source, &err))) {
+        (st = rs_synth_background_record(site_dir, camera, &tags, source_json, &err))) {
         rc = rs_cli_fail(CMD, st, &err);
         goto done;
     }
@@ -181,6 +185,7 @@ int rs_cli_background(int argc, char **argv)
     printf("recorded in %s/site.json (camera %s, name %s)\n", site_dir, camera, tags.name);
 done:
     cJSON_Delete(source);
+    cJSON_free(source_json);
     free(path);
     free(dir);
     rs_image_free(&img);
@@ -260,12 +265,13 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
                 cJSON_AddStringToObject(source, "method", "digital twin (POV-Ray)");
                 cJSON_AddStringToObject(source, "calibration", model);
             }
-            if (!path || !source) {
+            char *source_json = source ? cJSON_PrintUnformatted(source) : NULL;
+            if (!path || !source_json) {
                 st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
             } else if (rename(tmp, path) != 0) {
                 st = rs_err_set(&err, RS_ERR_IO, "%s: cannot rename to %s", tmp, path);
             } else {
-                st = rs_synth_background_record(site_dir, cam_id, &tags, source, &err);
+                st = rs_synth_background_record(site_dir, cam_id, &tags, source_json, &err);
             }
             if (st)
                 rc = rs_cli_fail(WHAT, st, &err);
@@ -273,6 +279,7 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
                 printf("%s: %s (sun azimuth %.2f, elevation %.2f deg, %s)\n", cam_id, path, az, el,
                        cond);
             cJSON_Delete(source);
+            cJSON_free(source_json);
             free(path);
         }
     }

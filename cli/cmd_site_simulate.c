@@ -1,4 +1,4 @@
-// roadside site simulate -- writes a synthetic site with a known truth (calib/rs_simulate.h).
+// roadside site simulate -- writes a synthetic site with a known truth (sim/rs_simulate.h).
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,5 @@
-// rs_lanes.c -- lanes.geojson: the reader and a lane's geometry. See rs_lanes.h.
+// rs_lanes.c -- lanes.geojson: the reader, the writer and a lane's geometry. See rs_lanes.h.
+// Calls the geodesy (rs_geo.h) and, to write, the JSON layouts of rs_site_write.c.
 #include "geo/rs_lanes.h"
 
 #include <cjson/cJSON.h>
@@ -8,6 +9,7 @@
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "geo/internal/rs_site_json.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -252,3 +254,77 @@ done:
     return st;
 }
 
+// ---- writing ----
+
+// One lane as a GeoJSON LineString feature into *out (owned by the caller).
+static rs_status lane_feature(cJSON **out, const rs_lanes *lanes, int i, const rs_llh *origin, double N,
+                              bool with_height, const char *path, rs_err *err)
+{
+    const rs_lane *lane = &lanes->lane[i];
+    *out = NULL;
+    if (!lane->id) return rs_err_set(err, RS_ERR_INVALID, "%s: lane %d: id missing", path, i);
+    for (int k = 0; k < lane->Nnext; k++)
+        if (lane->next[k] < 0 || lane->next[k] >= lanes->N || !lanes->lane[lane->next[k]].id)
+            return rs_err_set(err, RS_ERR_INVALID, "%s: lane '%s': next[%d] = %d is not a lane", path, lane->id,
+                              k, lane->next[k]);
+    double(*llh)[3] = malloc(sizeof *llh * (size_t)(lane->Npoints > 0 ? lane->Npoints : 1));
+    if (!llh) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = lane->Npoints > 0 ? rs_geo_enu_to_llh(&llh[0][0], origin, &lane->p_enu_m[0][0], lane->Npoints, err)
+                                     : RS_OK;
+    if (st) {
+        free(llh);
+        rs_err_prefix(err, "%s: lane '%s'", path, lane->id);
+        return st;
+    }
+    cJSON *f = cJSON_CreateObject(), *g = NULL, *c = NULL, *p = NULL, *nx = NULL;
+    bool ok = f && cJSON_AddStringToObject(f, "type", "Feature") && (g = cJSON_AddObjectToObject(f, "geometry")) &&
+              cJSON_AddStringToObject(g, "type", "LineString") && (c = cJSON_AddArrayToObject(g, "coordinates"));
+    for (int k = 0; ok && k < lane->Npoints; k++) {
+        const double lonlath[3] = {llh[k][1], llh[k][0], llh[k][2] - N};
+        cJSON *xy = rs_site__numbers(lonlath, with_height ? 3 : 2);
+        ok = xy && cJSON_AddItemToArray(c, xy);
+        if (!ok) cJSON_Delete(xy);
+    }
+    free(llh);
+    ok = ok && (p = cJSON_AddObjectToObject(f, "properties")) && cJSON_AddStringToObject(p, "id", lane->id);
+    if (ok && lane->kind) ok = cJSON_AddStringToObject(p, "kind", lane->kind);
+    ok = ok && rs_site__add_number(p, "width_m", lane->width_m) &&
+         cJSON_AddStringToObject(p, "direction", lane->direction == RS_LANE_BOTH ? "both" : "forward");
+    if (ok && !isnan(lane->speed_mps)) ok = rs_site__add_number(p, "speed_mps", lane->speed_mps);
+    ok = ok && (nx = cJSON_AddArrayToObject(p, "next"));
+    for (int k = 0; ok && k < lane->Nnext; k++) {
+        cJSON *id = cJSON_CreateString(lanes->lane[lane->next[k]].id);
+        ok = id && cJSON_AddItemToArray(nx, id);
+        if (!ok) cJSON_Delete(id);
+    }
+    if (ok) {
+        *out = f;
+        return RS_OK;
+    }
+    cJSON_Delete(f);
+    return rs_err_set(err, RS_ERR_INVALID, "%s: lane '%s': a number is not finite (or out of memory)", path,
+                      lane->id);
+}
+
+rs_status rs_lanes_write(const char *path, const rs_lanes *lanes, const rs_llh *origin,
+                         double geoid_undulation_m, bool with_height, rs_site_layout layout, rs_err *err)
+{
+    cJSON *j = cJSON_CreateObject(), *features = NULL;
+    if (!j || !cJSON_AddStringToObject(j, "type", "FeatureCollection") ||
+        !(features = cJSON_AddArrayToObject(j, "features"))) {
+        cJSON_Delete(j);
+        return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    }
+    rs_status st = RS_OK;
+    for (int i = 0; i < lanes->N && !st; i++) {
+        cJSON *f = NULL;
+        st = lane_feature(&f, lanes, i, origin, geoid_undulation_m, with_height, path, err);
+        if (!st && !cJSON_AddItemToArray(features, f)) {
+            cJSON_Delete(f);
+            st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+        }
+    }
+    if (!st) st = rs_site__write_json(path, j, layout, err);
+    cJSON_Delete(j);
+    return st;
+}

@@ -1,5 +1,5 @@
 // rs_lanes.h -- the site's traffic lanes, lanes.geojson (docs/site-format.md "lanes.geojson"):
-// the one reader of the format, used by `site check`, the report's drawings, the built-in
+// the one reader and the one writer of the format, used by `site check`, the report's drawings, the built-in
 // traffic, SUMO's network and the digital-twin backgrounds; and the geometry of a lane's centre
 // line.
 //
@@ -10,6 +10,7 @@
 
 #include "core/rs_status.h"
 #include "geo/rs_site.h"
+#include "geo/rs_site_write.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -59,6 +60,23 @@ rs_status rs_lanes_read(// out
                         // in
                         const char *path, const rs_site *site, rs_err *err);
 void rs_lanes_free(rs_lanes *lanes); // NULL-safe; leaves *lanes empty
+
+// Writes lanes.geojson (the format rs_lanes_read reads), atomically (rs_io_write_file): one
+// LineString feature per lane in order, properties id, kind (when not NULL), width_m,
+// direction ("forward" | "both"), speed_mps (when not NaN), next (the ids of lanes[next[i]];
+// always written, [] for none). Points are converted from the site ENU frame to WGS84 with
+// rs_geo_enu_to_llh at `origin` and written [lon, lat] -- the reader then puts them on the
+// site's ground plane, and their up coordinate is not written -- or, with_height, as
+// [lon, lat, h] with h = h_ell - geoid_undulation_m (the site's declared heights).
+// in: lanes: every field but `feature` (ignored); origin: the site origin, ellipsoidal height;
+//     geoid_undulation_m: N of the site's "heights" (0 for ellipsoidal); layout:
+//     geo/rs_site_write.h
+// Returns RS_ERR_INVALID (no id, a `next` out of range, a non-finite number), the status of
+// rs_geo_enu_to_llh, RS_ERR_IO, RS_ERR_NOMEM.
+rs_status rs_lanes_write(// in
+                         const char *path, const rs_lanes *lanes, const rs_llh *origin,
+                         double geoid_undulation_m, bool with_height, rs_site_layout layout,
+                         rs_err *err);
 
 // Length of a lane's polyline, metres.
 double rs_lane_length_m(const rs_lane *lane);

@@ -4,7 +4,8 @@
 //
 //   site.json                  name; origin {lat, lon, h}; heights ("ellipsoidal" or
 //                              {"orthometric": N_m}); landmark_sigma_m {horizontal, vertical};
-//                              optional ground_plane, max_landmark_distance_m; cameras[]
+//                              optional ground_plane, max_landmark_distance_m; cameras[] (each
+//                              with its files, optional prior, note and background_images)
 //   landmarks.geojson          FeatureCollection of Point features [lon, lat, h] (RFC 7946
 //                              order); properties: id (unique string), optional sigma_h_m,
 //                              sigma_v_m, kind, note
@@ -26,6 +27,9 @@
 // there is no error-severity diagnostic (warnings are allowed), so a site that loads is exactly
 // a site that `roadside site check` passes. Which problems are errors and which are warnings is
 // listed in docs/site-format.md ("What site check reports").
+//
+// The reader is geo/rs_site_read.c (and the files it calls, geo/internal/rs_site_internal.h);
+// the writers are geo/rs_site_write.h. No other module reads or writes these files.
 //
 // Accuracy: landmark and prior ENU coordinates are those of rs_geo_llh_to_enu (nanometres);
 // no rounding happens in between (JSON numbers are read as doubles).
@@ -61,12 +65,34 @@ typedef struct {
     int line;           // line number in the observations CSV (from 1), for messages
 } rs_site_observation;
 
+// One tag of a background image: key = value, both text.
+typedef struct {
+    char *key;          // owned
+    char *value;        // owned; a JSON boolean reads as "true" / "false"
+} rs_site_tag;
+
+// A background image of a camera's empty scene: one entry of the camera's "background_images"
+// in site.json (docs/backgrounds.md), as `roadside background` and `roadside site
+// render-backgrounds` record it (rs_site_record_background, geo/rs_site_write.h).
+typedef struct {
+    char *name;         // owned; may be NULL (the entry gives none)
+    char *file;         // owned; as written in site.json, relative to the site folder
+    char *path;         // owned; `file` joined to the site folder
+    bool synthetic;     // rendered, not photographed (default false)
+    rs_site_tag *tags;  // owned, (Ntags,) in file order: "time" (ISO 8601 with a zone),
+    int Ntags;          //   "conditions" (sunny, cloudy, rain, snow, night) and free tags;
+                        //   tags that are neither text nor boolean are skipped (a warning)
+} rs_site_background;
+
 typedef struct {
     char *id;                       // owned; unique within the site
     char *model_path;               // owned; path of the intrinsics file (site folder joined)
     char *observations_path;        // owned; path of the observations CSV
     char *backgrounds_path;         // owned; may be NULL (no "backgrounds" given)
     char *note;                     // owned; may be NULL
+
+    rs_site_background *background_images; // owned, (Nbackground_images,) in site.json order
+    int Nbackground_images;
 
     rs_camera camera;               // owned: the nominal lens model, intrinsics and image size
                                     //   (OpenCV files are converted); pose zero. Zeroed (no
@@ -120,6 +146,12 @@ void rs_site_free(rs_site *site);
 // Index of the camera / landmark with this id, or -1 if there is none. Linear search.
 int rs_site_find_camera(const rs_site *site, const char *id);
 int rs_site_find_landmark(const rs_site *site, const char *id);
+
+// The value a background has for `key`: its tag `key` if it has one, else its own "name",
+// "file" (as written in site.json) or "synthetic" ("true" / "false"); NULL if none of these.
+// What `roadside synth --backgrounds KEY=VALUE` matches. The pointer is the background's own
+// (or a static string); valid while the site is.
+const char *rs_site_background_tag(const rs_site_background *bg, const char *key);
 
 // Axis-aligned ENU extent and the range of distances from the origin of a set of landmarks:
 // all of them (icam < 0) or those observed by camera icam.
@@ -178,6 +210,9 @@ int rs_site_diag_format(// out
                         const rs_site_diag *diag);
 
 // ---- creating ----
+//
+// Writing a site's files from C structs (site.json, landmarks.geojson, observation CSVs) and
+// recording a background in site.json: geo/rs_site_write.h; lanes.geojson: geo/rs_lanes.h.
 
 // Creates a skeleton site folder `dir`: site.json (with the given name, origin and heights, and
 // one example camera "cam1" to rename), an empty landmarks.geojson FeatureCollection, cameras/,

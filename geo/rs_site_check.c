@@ -1,9 +1,9 @@
-// rs_site_check.c -- diagnostics of a site folder, and the plausibility checks that need more
-// than one value at a time: positions (range, swapped lat/lon, radians, distance), observations
-// (inside the image, duplicates, enough per camera) and ids unique across the site.
-// The reader (rs_site.c) calls these while it reads; rs_site_check() runs the reader.
+// rs_site_check.c -- the plausibility checks of a site that need more than one value at a
+// time: positions (range, swapped lat/lon, radians, distance, heights), observations (inside the
+// image, duplicates, enough per camera) and ids unique across the site. They only check and
+// report: the reader (rs_site_read.c, rs_site_read_camera.c) calls them while it reads; they
+// call rs_site_report.c (rs_site__diag) and the geodesy (rs_geo_llh_to_enu), nothing else.
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,104 +14,6 @@
 // A camera needs at least this many landmarks picked: the fewest that determine a pose without
 // ambiguity (P3P has up to four solutions).
 enum { MIN_OBSERVATIONS = 4 };
-
-// A copy safe to print on one line: control characters (from damaged or binary input quoted
-// in a message) become '?'.
-static char *dup_printable(const char *s)
-{
-    char *d = s ? strdup(s) : NULL;
-    for (char *p = d; p && *p; p++)
-        if ((unsigned char)*p < 0x20 || *p == 0x7f) *p = '?';
-    return d;
-}
-
-void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status status,
-                   const char *file, int line, int feature, const char *feature_id,
-                   const char *field, const char *fmt, ...)
-{
-    rs_site_report *p = &r->pub;
-    if (p->N == r->cap) {
-        int cap = r->cap ? 2 * r->cap : 16;
-        rs_site_diag *grown = realloc(p->diags, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            r->nomem = true;
-            return;
-        }
-        p->diags = grown;
-        r->cap = cap;
-    }
-    char msg[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-
-    rs_site_diag d = {
-        .severity = severity,
-        .status = severity == RS_SITE_ERROR ? status : RS_OK,
-        .file = dup_printable(file ? file : "?"),
-        .line = line,
-        .feature = feature,
-        .feature_id = dup_printable(feature_id),
-        .field = dup_printable(field),
-        .message = dup_printable(msg),
-    };
-    if (!d.file || !d.message || (feature_id && !d.feature_id) || (field && !d.field)) {
-        free(d.file);
-        free(d.feature_id);
-        free(d.field);
-        free(d.message);
-        r->nomem = true;
-        return;
-    }
-    p->diags[p->N++] = d;
-    if (severity == RS_SITE_ERROR) p->Nerrors++;
-    else p->Nwarnings++;
-}
-
-void rs_site_report_free(rs_site_report *report)
-{
-    if (!report) return;
-    for (int i = 0; i < report->N; i++) {
-        free(report->diags[i].file);
-        free(report->diags[i].feature_id);
-        free(report->diags[i].field);
-        free(report->diags[i].message);
-    }
-    free(report->diags);
-    free((rs_site__report *)report); // pub is the first member
-}
-
-int rs_site_diag_format(char *buf, size_t size, const rs_site_diag *d)
-{
-    char line[32] = "", feature[300] = "", field[300] = "";
-    if (d->line > 0) snprintf(line, sizeof line, ":%d", d->line);
-    if (d->feature >= 0) {
-        if (d->feature_id)
-            snprintf(feature, sizeof feature, " feature %d (id '%s'):", d->feature, d->feature_id);
-        else
-            snprintf(feature, sizeof feature, " feature %d:", d->feature);
-    }
-    if (d->field) snprintf(field, sizeof field, " %s:", d->field);
-    return snprintf(buf, size, "%s%s:%s%s %s%s", d->file, line, feature, field,
-                    d->severity == RS_SITE_WARNING ? "warning: " : "", d->message);
-}
-
-rs_status rs_site_check(rs_site_report **report, const char *dir, rs_err *err)
-{
-    *report = NULL;
-    rs_site__report *r = calloc(1, sizeof *r);
-    if (!r) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
-    rs_site *site = NULL;
-    rs_site__read(&site, r, dir);
-    rs_site_free(site);
-    if (!site || r->nomem) {
-        rs_site_report_free(&r->pub);
-        return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory while checking", dir);
-    }
-    *report = &r->pub;
-    return RS_OK;
-}
 
 // ---- positions ----
 

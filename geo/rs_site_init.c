@@ -1,4 +1,6 @@
-// rs_site_init.c -- a skeleton site folder for a surveyor to fill in.
+// rs_site_init.c -- a skeleton site folder for a surveyor to fill in (rs_site_init, geo/rs_site.h):
+// its folders and README here, its site.json, landmarks.geojson and header-only observations
+// through geo's writer (rs_site_write.c), in the hand layout. Calls rs_site_write.c and core/.
 //
 // The folder is built under a temporary name next to `dir` and renamed into place at the end,
 // so a failure never leaves a half-made site behind under the final name.
@@ -11,10 +13,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <cjson/cJSON.h>
-
 #include "core/rs_io.h"
 #include "geo/rs_site.h"
+#include "geo/rs_site_write.h"
 
 // The files and folders of a skeleton, relative to the site folder, in creation order.
 static const char *const skeleton_dirs[] = {"cameras", "observations", "backgrounds", "backgrounds/cam1"};
@@ -98,47 +99,45 @@ static const char *const readme_format =
     "\n"
     "Optional: images of the empty scene from that camera, for synthesising training data.\n";
 
-// site.json, laid out like docs/site-format.md. The values given are printed by cJSON (strings
-// escaped, numbers to the shortest text that reads back as the same double).
-static const char *const site_json_format =
-    "{\n"
-    "  \"name\": %s,\n"
-    "  \"origin\": {\"lat\": %s, \"lon\": %s, \"h\": %s},\n"
-    "  \"heights\": %s%s%s,\n"
-    "  \"landmark_sigma_m\": {\"horizontal\": 0.3, \"vertical\": 0.5},\n"
-    "  \"max_landmark_distance_m\": 1000,\n"
-    "  \"cameras\": [\n"
-    "    {\"id\": \"cam1\", \"model\": \"cameras/cam1.cameramodel\", \"observations\": \"observations/cam1.csv\",\n"
-    "     \"backgrounds\": \"backgrounds/cam1\",\n"
-    "     \"note\": \"example camera: rename it, add its model and its picks (README.md)\"}\n"
-    "  ]\n"
-    "}\n";
+// The example camera of the skeleton.
+static const rs_site_spec_camera example_camera = {
+    .id = "cam1",
+    .model = "cameras/cam1.cameramodel",
+    .observations = "observations/cam1.csv",
+    .backgrounds = "backgrounds/cam1",
+    .note = "example camera: rename it, add its model and its picks (README.md)",
+};
 
-static rs_status write_site_json(const char *path, const char *name, const rs_llh *origin,
-                                 const double *geoid_undulation_m, rs_err *err)
+// The files of the skeleton (skeleton_files, in that order) into the folder `tmp`; `dir` is
+// the name the README gives the folder.
+static rs_status write_skeleton(const char *tmp, const char *dir, const char *name,
+                                const rs_llh *origin, const double *geoid_undulation_m,
+                                rs_err *err)
 {
-    cJSON *items[5] = {cJSON_CreateString(name), cJSON_CreateNumber(origin->lat_deg),
-                       cJSON_CreateNumber(origin->lon_deg), cJSON_CreateNumber(origin->h_m),
-                       cJSON_CreateNumber(geoid_undulation_m ? *geoid_undulation_m : 0)};
-    char *v[5] = {NULL};
-    bool ok = true;
-    for (int i = 0; i < 5; i++) ok = ok && items[i] && (v[i] = cJSON_PrintUnformatted(items[i]));
-    char *text = NULL;
-    int len = -1;
-    if (ok) {
-        const char *h0 = geoid_undulation_m ? "{\"orthometric\": " : "\"ellipsoidal\"";
-        const char *h1 = geoid_undulation_m ? v[4] : "", *h2 = geoid_undulation_m ? "}" : "";
-        len = snprintf(NULL, 0, site_json_format, v[0], v[1], v[2], v[3], h0, h1, h2);
-        text = len < 0 ? NULL : malloc((size_t)len + 1);
-        if (text) snprintf(text, (size_t)len + 1, site_json_format, v[0], v[1], v[2], v[3], h0, h1, h2);
+    const rs_site_spec spec = {
+        .name = name,
+        .origin = *origin,
+        .geoid_undulation_m = geoid_undulation_m,
+        .landmark_sigma_h_m = 0.3,
+        .landmark_sigma_v_m = 0.5,
+        .max_landmark_distance_m = 1000,
+        .cameras = &example_camera,
+        .Ncameras = 1,
+    };
+    rs_status st = rs_site_write_json(tmp, &spec, RS_SITE_LAYOUT_HAND, err);
+    if (st == RS_OK) st = rs_site_write_landmarks(tmp, NULL, 0, 0, RS_SITE_LAYOUT_HAND, err);
+    char *obs = rs_io_join(tmp, example_camera.observations), *readme = rs_io_join(tmp, "README.md");
+    if (st == RS_OK && (!obs || !readme)) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (st == RS_OK) st = rs_site_write_observations(obs, NULL, 0, NULL, err);
+    if (st == RS_OK) {
+        int len = snprintf(NULL, 0, readme_format, name, dir);
+        char *text = len < 0 ? NULL : malloc((size_t)len + 1);
+        if (text) snprintf(text, (size_t)len + 1, readme_format, name, dir);
+        st = text ? rs_io_write_file(readme, text, (size_t)len, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(text);
     }
-    rs_status st = text ? rs_io_write_file(path, text, (size_t)len, err)
-                        : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-    free(text);
-    for (int i = 0; i < 5; i++) {
-        cJSON_free(v[i]);
-        cJSON_Delete(items[i]);
-    }
+    free(obs);
+    free(readme);
     return st;
 }
 
@@ -231,30 +230,7 @@ rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin,
         st = path ? rs_io_mkdir_p(path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(path);
     }
-    for (int i = 0; i < NFILES && st == RS_OK; i++) {
-        path = rs_io_join(tmp, skeleton_files[i]);
-        if (!path) {
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            break;
-        }
-        if (i == 0) {
-            st = write_site_json(path, name, origin, geoid_undulation_m, err);
-        } else if (i == 1) {
-            static const char empty[] = "{\"type\": \"FeatureCollection\", \"features\": []}\n";
-            st = rs_io_write_file(path, empty, sizeof empty - 1, err);
-        } else if (i == 2) {
-            static const char header[] = "landmark,u,v,sigma_px\n";
-            st = rs_io_write_file(path, header, sizeof header - 1, err);
-        } else {
-            int len = snprintf(NULL, 0, readme_format, name, dir);
-            char *readme = len < 0 ? NULL : malloc((size_t)len + 1);
-            if (readme) snprintf(readme, (size_t)len + 1, readme_format, name, dir);
-            st = readme ? rs_io_write_file(path, readme, (size_t)len, err)
-                        : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            free(readme);
-        }
-        free(path);
-    }
+    if (st == RS_OK) st = write_skeleton(tmp, dir, name, origin, geoid_undulation_m, err);
     if (st == RS_OK && rename(tmp, dir) != 0)
         st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename %s into place: %s%s", dir, tmp, strerror(errno),
                         exists ? " (did the folder stop being empty?)" : "");

@@ -168,7 +168,8 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 // site.json, landmarks.geojson, lanes.geojson (the intersection's 32 lanes, exact: no survey
 // noise; docs/site-format.md "lanes.geojson"), cameras/<id>.cameramodel (NOMINAL intrinsics, zero
 // extrinsics), observations/<id>.csv, truth/<id>.cameramodel (true intrinsics and pose),
-// truth/landmarks_enu.csv, truth/truth.json.
+// truth/landmarks_enu.csv, truth/truth.json. The site's own files are written by geo
+// (geo/rs_site_write.h, rs_lanes_write), the camera models by core (rs_camera.h).
 // The sigmas the site declares (site.json landmark_sigma_m, the csv's sigma_px) are the noise
 // levels drawn, but at least 1 mm and 0.01 px: a noise-free site still has weights to solve with.
 // The site is built in a temporary sibling folder and renamed into place when complete, so a

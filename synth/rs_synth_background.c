@@ -1,5 +1,6 @@
 // rs_synth_background.c -- temporal-median backgrounds, digital-twin backgrounds and their tags
-// in site.json (rs_synth_background.h, docs/backgrounds.md).
+// (rs_synth_background.h, docs/backgrounds.md); site.json is read and written by geo
+// (rs_site_record_background), never here.
 #include "synth/rs_synth_background.h"
 
 #include <ctype.h>
@@ -9,9 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <cjson/cJSON.h>
-
 #include "core/rs_io.h"
+#include "geo/rs_site_write.h"
 #include "synth/rs_synth_camera.h"
 #include "synth/rs_synth_opencv.h"
 #include "synth/rs_synth_render.h"
@@ -212,109 +212,36 @@ rs_status rs_synth_background_tag_parse(rs_synth_background_tags *t, const char 
 
 char *rs_synth_background_path(const char *site_dir, const char *camera_id, const char *name)
 {
-    const size_t n = strlen(site_dir) + strlen(camera_id) + strlen(name) + 32;
-    char *p = malloc(n);
-    if (p)
-        snprintf(p, n, "%s/backgrounds/%s/%s.png", site_dir, camera_id, name);
+    char *rel = rs_site_background_file(camera_id, name);
+    char *p = rel ? rs_io_join(site_dir, rel) : NULL;
+    free(rel);
     return p;
 }
 
 rs_status rs_synth_background_record(const char *site_dir, const char *camera_id,
-                                     const rs_synth_background_tags *t, const void *source_cjson,
+                                     const rs_synth_background_tags *t, const char *source_json,
                                      rs_err *err)
 {
-    char *path = rs_io_join(site_dir, "site.json"), *text = NULL, *printed = NULL;
-    cJSON *root = NULL;
-    rs_status st = RS_OK;
-    if (!path)
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    if ((st = rs_io_read_file(&text, NULL, path, err)))
-        goto done;
-    const char *json = text;
-    if (!strncmp(json, "\xEF\xBB\xBF", 3))
-        json += 3;
-    if (!(root = cJSON_Parse(json))) {
-        st = rs_err_set(err, RS_ERR_PARSE, "%s: not valid JSON", path);
-        goto done;
-    }
-    cJSON *cams = cJSON_GetObjectItemCaseSensitive(root, "cameras"), *cam = NULL, *it;
-    cJSON_ArrayForEach(it, cams)
-    {
-        const cJSON *id = cJSON_GetObjectItemCaseSensitive(it, "id");
-        if (cJSON_IsString(id) && !strcmp(id->valuestring, camera_id))
-            cam = it;
-    }
-    if (!cam || !cJSON_IsObject(cam)) {
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: cameras: no camera with id '%s'", path,
-                        camera_id);
-        goto done;
-    }
-    char rel[512];
-    snprintf(rel, sizeof(rel), "backgrounds/%s", camera_id);
-    if (!cJSON_GetObjectItemCaseSensitive(cam, "backgrounds"))
-        cJSON_AddStringToObject(cam, "backgrounds", rel);
-    cJSON *list = cJSON_GetObjectItemCaseSensitive(cam, "background_images");
-    if (!list)
-        list = cJSON_AddArrayToObject(cam, "background_images");
-    if (!cJSON_IsArray(list)) {
-        st = rs_err_set(err, RS_ERR_PARSE, "%s: cameras[id %s].background_images: not a list",
-                        path, camera_id);
-        goto done;
-    }
-    cJSON *e = cJSON_CreateObject(), *tags = cJSON_CreateObject();
-    if (!e || !tags) {
-        cJSON_Delete(e);
-        cJSON_Delete(tags);
+    // time and conditions first, then the free tags in the order given
+    const char **keys = malloc(sizeof(char *) * (size_t)(t->Ntags + 2));
+    const char **values = malloc(sizeof(char *) * (size_t)(t->Ntags + 2));
+    int n = 0;
+    rs_status st;
+    if (!keys || !values) {
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    snprintf(rel, sizeof(rel), "backgrounds/%s/%s.png", camera_id, t->name);
-    cJSON_AddStringToObject(e, "name", t->name);
-    cJSON_AddStringToObject(e, "file", rel);
-    cJSON_AddBoolToObject(e, "synthetic", t->synthetic);
     if (t->time_iso)
-        cJSON_AddStringToObject(tags, "time", t->time_iso);
+        keys[n] = "time", values[n++] = t->time_iso;
     if (t->conditions)
-        cJSON_AddStringToObject(tags, "conditions", t->conditions);
-    for (int i = 0; i < t->Ntags; i++) {
-        cJSON_DeleteItemFromObjectCaseSensitive(tags, t->keys[i]);
-        cJSON_AddStringToObject(tags, t->keys[i], t->values[i]);
-    }
-    cJSON_AddItemToObject(e, "tags", tags);
-    if (source_cjson)
-        cJSON_AddItemToObject(e, "source", cJSON_Duplicate((const cJSON *)source_cjson, true));
-    // replace an entry of the same name, else append
-    int i = 0, found = -1;
-    cJSON_ArrayForEach(it, list)
-    {
-        const cJSON *nm = cJSON_GetObjectItemCaseSensitive(it, "name");
-        if (cJSON_IsString(nm) && !strcmp(nm->valuestring, t->name))
-            found = i;
-        i++;
-    }
-    if (found >= 0)
-        cJSON_ReplaceItemInArray(list, found, e);
-    else
-        cJSON_AddItemToArray(list, e);
-    if (!(printed = cJSON_Print(root))) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    const size_t len = strlen(printed);
-    printed[len] = 0;
-    char *with_nl = realloc(printed, len + 2);
-    if (!with_nl) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    printed = with_nl;
-    printed[len] = '\n';
-    st = rs_io_write_file(path, printed, len + 1, err);
+        keys[n] = "conditions", values[n++] = t->conditions;
+    for (int i = 0; i < t->Ntags; i++)
+        keys[n] = t->keys[i], values[n++] = t->values[i];
+    st = rs_site_record_background(site_dir, camera_id, t->name, t->synthetic, keys, values, n,
+                                   source_json, err);
 done:
-    cJSON_Delete(root);
-    free(printed);
-    free(text);
-    free(path);
+    free(keys);
+    free(values);
     return st;
 }
 

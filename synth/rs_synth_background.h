@@ -6,8 +6,10 @@
 // Tags: every background has a name (its file backgrounds/<camera>/<name>.png), a time (ISO 8601
 // with a zone, rs_synth_parse_iso8601), conditions (one of rs_synth_background_conditions), a
 // `synthetic` flag, and free key=value tags. They are recorded in site.json, in the camera's
-// "background_images" list (docs/site-format.md); the camera's "backgrounds" folder is set to
-// "backgrounds/<camera>" if it was absent. Everything else in site.json is kept as it was.
+// "background_images" list (docs/site-format.md), by geo (rs_site_record_background); the
+// camera's "backgrounds" folder is set to "backgrounds/<camera>" if it was absent. Everything
+// else in site.json is kept as it was. The site loader reads them back (rs_site_background,
+// geo/rs_site.h).
 #pragma once
 #include <stdbool.h>
 #include <stddef.h>
@@ -90,16 +92,18 @@ bool rs_synth_background_name_ok(const char *s);
 // The path "SITE/backgrounds/<camera>/<name>.png" (malloc'ed, caller frees; NULL on no memory).
 char *rs_synth_background_path(const char *site_dir, const char *camera_id, const char *name);
 
-// Records a background in SITE/site.json: the camera's "background_images" gets (or has
-// replaced, same name) the entry
+// Records a background in SITE/site.json through geo (rs_site_record_background,
+// geo/rs_site_write.h): the camera's "background_images" gets (or has replaced, same name) the
+// entry
 //   {"name": ..., "file": "backgrounds/<camera>/<name>.png", "synthetic": bool,
 //    "tags": {"time": ..., "conditions": ..., key: value ...}, "source": <source>}
-// site.json is read with cJSON, modified and written atomically (rs_io_write_file).
-// in: source: a cJSON object describing how the image was made, may be NULL; it is copied.
+// and site.json is rewritten atomically. The tags are taken as given (check them first with
+// rs_synth_background_tags_check).
+// in: source_json: how the image was made, a JSON object as text; may be NULL.
 // Returns RS_ERR_IO / RS_ERR_PARSE for site.json, RS_ERR_NOT_FOUND for an unknown camera.
 rs_status rs_synth_background_record(const char *site_dir, const char *camera_id,
-                                     const rs_synth_background_tags *tags, const void *source_cjson,
-                                     rs_err *err);
+                                     const rs_synth_background_tags *tags,
+                                     const char *source_json, rs_err *err);
 
 // ---- digital-twin backgrounds ----
 

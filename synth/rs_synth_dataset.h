@@ -6,7 +6,8 @@
 //   randomness  one stream seeded by splitmix64(seed, k) only, so an image does not depend on
 //               which shard or which run made it: reruns and shard splits give identical files
 //   background  drawn uniformly among the camera's tagged backgrounds (site.json
-//               "background_images", docs/site-format.md) that match every TAG=VALUE filter;
+//               "background_images" as geo reads them: rs_site_camera.background_images,
+//               rs_site_background_tag) that match every TAG=VALUE filter;
 //               with none, a neutral grey ground is rendered by POV-Ray instead (the
 //               site's ground plane, lit by the default sun)
 //   sun         from the background's "time" tag and the site's origin (rs_synth_sun.h), else
@@ -30,7 +31,7 @@
 //   parts/<stem>.json                     the image's own COCO file: written LAST, atomically;
 //                                         its presence marks the image finished (resume)
 //   annotations/instances_<split>.json    assembled at the end from every parts/ file present
-// Each file is written atomically (geo/rs_io.h), so an interrupted run leaves finished images
+// Each file is written atomically (core/rs_io.h), so an interrupted run leaves finished images
 // and no half-written file; the per-image work folder work/<stem>/ is removed once done.
 #pragma once
 #include <stdbool.h>

@@ -1,9 +1,20 @@
-// rs_site_internal.h -- what rs_site.c (the reader) and rs_site_check.c (diagnostics and
-// plausibility checks) share. Not installed, not for other modules: use rs_site.h.
+// rs_site_internal.h -- what the files of geo's site reader share. Not installed, not for other
+// modules: use geo/rs_site.h.
+//
+// The reader is layered, every call going down (never back up):
+//
+//   rs_site_read.c         rs_site_load, rs_site_check; site.json and landmarks.geojson
+//     rs_site_read_camera.c  each camera's model file and observations CSV
+//       rs_site_check.c        plausibility checks that need more than one value
+//         rs_site_report.c       the report: diagnostics, and reading a site file into it
+//   rs_site.c              the site in memory: free, lookups (called by the above, calls none)
 #pragma once
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "geo/rs_site.h"
+
+// ---- the report (rs_site_report.c) ----
 
 // The report as it is being built. `pub` comes first: a rs_site_report* handed out is a pointer
 // to this struct.
@@ -20,15 +31,38 @@ void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status stat
                    const char *field, const char *fmt, ...)
     __attribute__((format(printf, 9, 10)));
 
-// The one reader behind rs_site_load and rs_site_check: reads every file of the site folder it
-// can, fills *site with everything that could be read (landmarks whose position is unusable get
-// NaN coordinates) and reports every problem into r. *site is NULL only when out of memory.
-void rs_site__read(// out
-                   rs_site **site,
-                   // in,out
-                   rs_site__report *r,
-                   // in
-                   const char *dir);
+// The state of one read: where diagnostics go, and what is being read (for messages).
+typedef struct {
+    rs_site__report *r;
+    rs_site *site;
+    const char *file;   // the file being read
+    int feature;        // the GeoJSON feature being read, or -1
+    const char *fid;    // its id, may be NULL
+    bool origin_ok;     // site.json gave a valid origin and heights: positions can be checked
+    bool landmarks_ok;  // landmarks.geojson was read: observations can be matched to landmarks
+} rs_site__reader;
+
+// A diagnostic at what c is reading (c->file, c->feature, c->fid), at `line` (0: none).
+void rs_site__say(rs_site__reader *c, rs_site_severity severity, rs_status status, int line,
+                  const char *field, const char *fmt, ...) __attribute__((format(printf, 6, 7)));
+#define ERR(c, status, field, ...) rs_site__say(c, RS_SITE_ERROR, status, 0, field, __VA_ARGS__)
+#define ERR_AT(c, status, line, field, ...) rs_site__say(c, RS_SITE_ERROR, status, line, field, __VA_ARGS__)
+#define WARN(c, field, ...) rs_site__say(c, RS_SITE_WARNING, RS_OK, 0, field, __VA_ARGS__)
+#define WARN_AT(c, line, field, ...) rs_site__say(c, RS_SITE_WARNING, RS_OK, line, field, __VA_ARGS__)
+
+// strdup and rs_io_join that set c->r->nomem when out of memory. NULL in -> NULL out (dup).
+char *rs_site__dup(rs_site__reader *c, const char *s);
+char *rs_site__join(rs_site__reader *c, const char *dir, const char *rel);
+
+// Reports a missing file, or a folder, at c->file; `why` says what the file is for. True if
+// there is a file.
+bool rs_site__file_exists(rs_site__reader *c, const char *why);
+
+// Reads the site file c->file (`why` as above). Returns the malloc'ed, NUL-terminated contents
+// (and their length; len may be NULL), or NULL after reporting what is wrong.
+char *rs_site__read_file(rs_site__reader *c, const char *why, size_t *len);
+
+// ---- checks (rs_site_check.c) ----
 
 // Plausibility of a geodetic position given in a site file. given = (lat_deg, lon_deg, h_m)
 // as written (h in the site's declared heights). Reports out-of-range latitude/longitude, a
@@ -59,3 +93,12 @@ void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam);
 
 // Checks across the whole site once everything is read: duplicate landmark and camera ids.
 void rs_site__check_site(rs_site__report *r, const rs_site *site);
+
+// ---- camera files (rs_site_read_camera.c) ----
+
+// Reads camera i's model file (cam->model_path) into cam->camera, reporting what is wrong.
+void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i);
+
+// Reads camera i's observations CSV (cam->observations_path) into cam->observations, matching
+// landmark ids against c->site's landmarks (when c->landmarks_ok) and checking each pick.
+void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i);

@@ -313,6 +313,38 @@ def d_duplicate_camera_id(s):
                 "camera id")]
 
 
+def d_bad_background_images(s):
+    # entries geo cannot use are errors; a tag of another type is skipped with a warning
+    def bad(j):
+        j["cameras"][0]["background_images"] = [
+            {"name": "ok", "file": "backgrounds/north/ok.png", "tags": {"time": "2024-06-21T12:00:00Z", "n": 3}},
+            {"name": "nofile"},
+            "notanobject",
+            {"file": "backgrounds/north/x.png", "synthetic": "yes", "extra": 1},
+        ]
+        j["cameras"][1]["background_images"] = {"file": "x.png"}
+    set_site(s, bad)
+    return 1, [(r"^SITE/site\.json: cameras\[0\]\.background_images\[0\]\.tags\.n: warning: not text or a boolean, ignored",
+                "numeric tag"),
+               (r"^SITE/site\.json: cameras\[0\]\.background_images\[1\]\.file: missing \(a string\)", "no file"),
+               (r"^SITE/site\.json: cameras\[0\]\.background_images\[2\]: not an object", "not an object"),
+               (r"^SITE/site\.json: cameras\[0\]\.background_images\[3\]\.extra: warning: unknown field", "unknown"),
+               (r"^SITE/site\.json: cameras\[0\]\.background_images\[3\]\.synthetic: not true or false", "synthetic"),
+               (r"^SITE/site\.json: cameras\[1\]\.background_images: not a list \[\.\.\.\]", "not a list"),
+               (r"^4 errors, 2 warnings$", "summary")]
+
+
+def d_background_images(s):
+    # what `roadside background` records loads clean
+    def good(j):
+        j["cameras"][0]["background_images"] = [
+            {"name": "m", "file": "backgrounds/north/m.png", "synthetic": False,
+             "tags": {"time": "2024-06-21T12:00:00Z", "conditions": "sunny", "wet": True},
+             "source": {"method": "temporal median", "inputs": ["a.mp4"], "frames_read": 10}}]
+    set_site(s, good)
+    return 0, [(r"^0 errors, 0 warnings$", "clean")]
+
+
 def d_bad_cameramodel(s):
     with open(os.path.join(s, "cameras", "south.cameramodel"), "w") as f:
         f.write("{'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': [1, 2, 3]}\n")

@@ -1,0 +1,604 @@
+// rs_site_read.c -- the one reader of a site folder, behind both rs_site_load and
+// rs_site_check (geo/rs_site.h): reads site.json (with each camera's background_images) and
+// landmarks.geojson here, each camera's model and observations through rs_site_read_camera.c,
+// and reports every problem on the way; it only reads and reports. Calls rs_site_read_camera.c,
+// rs_site_check.c (positions, the whole site), rs_site_report.c and rs_site.c (rs_site_free);
+// nothing calls back into it (the layers: geo/internal/rs_site_internal.h).
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <cjson/cJSON.h>
+
+#include "geo/internal/rs_site_internal.h"
+
+enum { DEFAULT_MAX_LANDMARK_DISTANCE_M = 1000 };
+
+// ---- JSON ----
+
+// Parses JSON text; reports a syntax error with its line and column.
+static cJSON *parse_json(rs_site__reader *c, const char *text)
+{
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
+    if (root) return root;
+    if (!c->r->nomem && !*text) {
+        ERR(c, RS_ERR_PARSE, NULL, "invalid JSON: the file is empty");
+        return NULL;
+    }
+    int line = 1, column = 1;
+    for (const char *p = text; end && p < end && *p; p++) {
+        if (*p == '\n') line++, column = 1;
+        else column++;
+    }
+    char near[32] = "";
+    int n = 0;
+    for (const char *p = end; p && *p && n < 20; p++) near[n++] = (*p == '\n' || *p == '\r' || *p == '\t') ? ' ' : *p;
+    near[n] = '\0';
+    if (n) ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d, near '%s'", column, near);
+    else ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d: unexpected end of file", column);
+    return NULL;
+}
+
+// Reads and parses the JSON file `name` of the site folder, reporting what is wrong with it.
+// c->file is *path (owned by the caller, free() it and reset c->file) until the caller is done.
+static cJSON *read_json_file(rs_site__reader *c, char **path, const char *name, const char *why)
+{
+    *path = rs_site__join(c, c->site->dir, name);
+    if (!*path) return NULL;
+    c->file = *path;
+    char *text = rs_site__read_file(c, why, NULL);
+    const char *json = text && !strncmp(text, "\xEF\xBB\xBF", 3) ? text + 3 : text; // UTF-8 BOM
+    cJSON *root = json ? parse_json(c, json) : NULL;
+    free(text);
+    return root;
+}
+
+// "prefix.key" (or "key") into buf.
+static const char *field_name(char *buf, size_t size, const char *prefix, const char *key)
+{
+    if (prefix) snprintf(buf, size, "%s.%s", prefix, key);
+    else snprintf(buf, size, "%s", key);
+    return buf;
+}
+
+// A short rendering of a JSON value for messages: the value itself, truncated.
+static void json_excerpt(char *buf, size_t size, const cJSON *item)
+{
+    char *s = cJSON_PrintUnformatted(item);
+    snprintf(buf, size, "%s", s ? s : "?");
+    if (s && strlen(s) >= size && size > 4) strcpy(buf + size - 4, "...");
+    cJSON_free(s);
+}
+
+// Looks up obj[key], writing its full name ("prefix.key") into field. A missing member is
+// reported if required ("missing (EXPECTED)"); returns NULL then.
+static const cJSON *member(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
+                           bool required, const char *expected, char *field, size_t size)
+{
+    field_name(field, size, prefix, key);
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!it && required) ERR(c, RS_ERR_PARSE, field, "missing (%s)", expected);
+    return it;
+}
+
+// Reports a member of the wrong JSON type, quoting what was found.
+static void wrong_type(rs_site__reader *c, const char *field, const cJSON *it, const char *expected)
+{
+    char got[64];
+    json_excerpt(got, sizeof got, it);
+    ERR(c, RS_ERR_PARSE, field, "not %s (%s)", expected, got);
+}
+
+// Reads obj[key] as a finite number. Reports a missing required field, a wrong type or a
+// non-finite value; returns false then (and for a missing optional field).
+static bool get_number(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
+                       bool required, double *out)
+{
+    char field[256];
+    const cJSON *it = member(c, obj, prefix, key, required, "a number", field, sizeof field);
+    if (!it) return false;
+    if (!cJSON_IsNumber(it)) {
+        wrong_type(c, field, it, "a number");
+        return false;
+    }
+    if (!isfinite(it->valuedouble)) {
+        ERR(c, RS_ERR_INVALID, field, "not a finite number");
+        return false;
+    }
+    *out = it->valuedouble;
+    return true;
+}
+
+// get_number, and the value must be > 0.
+static bool get_positive(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
+                         bool required, double *out)
+{
+    double v;
+    if (!get_number(c, obj, prefix, key, required, &v)) return false;
+    if (v <= 0) {
+        char field[256];
+        ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, key), "%g must be > 0", v);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+// Reads obj[key] as a non-empty string (pointer into the JSON tree).
+static bool get_string(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
+                       bool required, const char **out)
+{
+    char field[256];
+    const cJSON *it = member(c, obj, prefix, key, required, "a string", field, sizeof field);
+    if (!it) return false;
+    if (!cJSON_IsString(it)) {
+        wrong_type(c, field, it, "a string in double quotes");
+        return false;
+    }
+    if (!it->valuestring[0]) {
+        ERR(c, RS_ERR_INVALID, field, "empty");
+        return false;
+    }
+    *out = it->valuestring;
+    return true;
+}
+
+// Reads obj[key] as a JSON object; NULL if missing (reported if required) or not an object.
+static const cJSON *get_object(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
+                               bool required, const char *expected)
+{
+    char field[256];
+    const cJSON *it = member(c, obj, prefix, key, required, expected, field, sizeof field);
+    if (it && !cJSON_IsObject(it)) {
+        ERR(c, RS_ERR_PARSE, field, "not an object (expected %s)", expected);
+        return NULL;
+    }
+    return it;
+}
+
+// Warns about members of obj not in `known` (NULL-terminated): most often a misspelt name.
+static void warn_unknown_keys(rs_site__reader *c, const cJSON *obj, const char *prefix,
+                              const char *const *known)
+{
+    for (const cJSON *it = obj ? obj->child : NULL; it; it = it->next) {
+        bool found = false;
+        for (int i = 0; known[i] && !found; i++) found = it->string && !strcmp(it->string, known[i]);
+        if (found) continue;
+        char field[256];
+        WARN(c, field_name(field, sizeof field, prefix, it->string ? it->string : "?"),
+             "unknown field, ignored (misspelt?)");
+    }
+}
+
+// ---- site.json ----
+
+// Reads {lat, lon, h} (and sigma_m for a prior) of obj into given = (lat, lon, h).
+static bool get_llh(rs_site__reader *c, const cJSON *obj, const char *prefix, double given[3])
+{
+    bool ok = get_number(c, obj, prefix, "lat", true, &given[0]);
+    ok = get_number(c, obj, prefix, "lon", true, &given[1]) && ok;
+    ok = get_number(c, obj, prefix, "h", true, &given[2]) && ok;
+    return ok;
+}
+
+static void read_heights(rs_site__reader *c, const cJSON *root, bool *ok)
+{
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(root, "heights");
+    const char *expected = "\"ellipsoidal\" or {\"orthometric\": N}, N = geoid undulation in metres";
+    if (!it) {
+        ERR(c, RS_ERR_PARSE, "heights", "missing (%s)", expected);
+        *ok = false;
+    } else if (cJSON_IsString(it) && !strcmp(it->valuestring, "ellipsoidal")) {
+        c->site->heights_orthometric = false;
+        c->site->geoid_undulation_m = 0;
+    } else if (cJSON_IsObject(it) && cJSON_GetObjectItemCaseSensitive(it, "orthometric")) {
+        static const char *const known[] = {"orthometric", NULL};
+        warn_unknown_keys(c, it, "heights", known);
+        c->site->heights_orthometric = true;
+        if (!get_number(c, it, "heights", "orthometric", true, &c->site->geoid_undulation_m)) *ok = false;
+        else if (fabs(c->site->geoid_undulation_m) > 120) {
+            ERR(c, RS_ERR_INVALID, "heights.orthometric",
+                "%g m is not a geoid undulation (|N| < 110 m on Earth)", c->site->geoid_undulation_m);
+            *ok = false;
+        }
+    } else {
+        char got[64];
+        json_excerpt(got, sizeof got, it);
+        ERR(c, RS_ERR_INVALID, "heights", "%s: expected %s", got, expected);
+        *ok = false;
+    }
+}
+
+static void read_ground_plane(rs_site__reader *c, const cJSON *root)
+{
+    const cJSON *g = get_object(c, root, NULL, "ground_plane", false, "{\"normal_enu\": [0, 0, 1], \"offset_m\": 0}");
+    if (!g) return;
+    static const char *const known[] = {"normal_enu", "offset_m", NULL};
+    warn_unknown_keys(c, g, "ground_plane", known);
+    const cJSON *n = cJSON_GetObjectItemCaseSensitive(g, "normal_enu");
+    double v[3], offset = 0;
+    bool ok = cJSON_IsArray(n) && cJSON_GetArraySize(n) == 3;
+    for (int k = 0; ok && k < 3; k++) {
+        const cJSON *x = cJSON_GetArrayItem(n, k);
+        ok = cJSON_IsNumber(x) && isfinite(x->valuedouble);
+        if (ok) v[k] = x->valuedouble;
+    }
+    double norm = ok ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : 0;
+    if (!ok || !(norm > 0)) {
+        ERR(c, n ? RS_ERR_INVALID : RS_ERR_PARSE, "ground_plane.normal_enu",
+            "%s: expected 3 finite numbers, not all zero (e.g. [0, 0, 1])", n ? "invalid" : "missing");
+        return;
+    }
+    if (cJSON_GetObjectItemCaseSensitive(g, "offset_m") &&
+        !get_number(c, g, "ground_plane", "offset_m", false, &offset))
+        return;
+    for (int k = 0; k < 3; k++) c->site->ground_normal_enu[k] = v[k] / norm;
+    c->site->ground_offset_m = offset / norm;
+}
+
+// One entry of a camera's "background_images" into *bg (docs/backgrounds.md). False (after
+// reporting) when it cannot be used: not an object, no "file", a wrong type.
+static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJSON *e,
+                            const char *prefix)
+{
+    if (!cJSON_IsObject(e)) {
+        ERR(c, RS_ERR_PARSE, prefix, "not an object ({\"name\": ..., \"file\": ..., \"tags\": {...}})");
+        return false;
+    }
+    static const char *const known[] = {"name", "file", "synthetic", "tags", "source", NULL};
+    warn_unknown_keys(c, e, prefix, known);
+    char field[256];
+    const char *file = NULL, *name = NULL;
+    bool ok = get_string(c, e, prefix, "file", true, &file);
+    if (cJSON_GetObjectItemCaseSensitive(e, "name")) ok = get_string(c, e, prefix, "name", false, &name) && ok;
+    const cJSON *synthetic = member(c, e, prefix, "synthetic", false, "", field, sizeof field);
+    if (synthetic && !cJSON_IsBool(synthetic)) {
+        wrong_type(c, field, synthetic, "true or false");
+        ok = false;
+    }
+    field_name(field, sizeof field, prefix, "tags");
+    const cJSON *tags = get_object(c, e, prefix, "tags", false, "{\"time\": ..., \"conditions\": ..., ...}");
+    if (!ok || (cJSON_GetObjectItemCaseSensitive(e, "tags") && !tags)) return false;
+
+    bg->name = rs_site__dup(c, name);
+    bg->file = rs_site__dup(c, file);
+    bg->path = rs_site__join(c, c->site->dir, file);
+    bg->synthetic = cJSON_IsTrue(synthetic);
+    bg->tags = calloc((size_t)cJSON_GetArraySize(tags) + 1, sizeof *bg->tags);
+    if (!bg->tags) c->r->nomem = true;
+    for (const cJSON *t = tags ? tags->child : NULL; t && bg->tags; t = t->next) {
+        if (!cJSON_IsString(t) && !cJSON_IsBool(t)) {
+            char sub[300];
+            WARN(c, field_name(sub, sizeof sub, field, t->string ? t->string : "?"),
+                 "not text or a boolean, ignored");
+            continue;
+        }
+        rs_site_tag *tag = &bg->tags[bg->Ntags++];
+        tag->key = rs_site__dup(c, t->string ? t->string : "");
+        tag->value = rs_site__dup(c, cJSON_IsString(t) ? t->valuestring : cJSON_IsTrue(t) ? "true" : "false");
+    }
+    return true;
+}
+
+// A camera's "background_images" list, if it has one.
+static void read_background_images(rs_site__reader *c, rs_site_camera *cam, const cJSON *item,
+                                   const char *prefix)
+{
+    char field[96];
+    const cJSON *list = member(c, item, prefix, "background_images", false, "", field, sizeof field);
+    if (!list) return;
+    if (!cJSON_IsArray(list)) {
+        wrong_type(c, field, list, "a list [...]");
+        return;
+    }
+    cam->background_images = calloc((size_t)cJSON_GetArraySize(list) + 1, sizeof *cam->background_images);
+    if (!cam->background_images) {
+        c->r->nomem = true;
+        return;
+    }
+    int j = 0;
+    for (const cJSON *e = list->child; e; e = e->next, j++) {
+        char entry[128];
+        snprintf(entry, sizeof entry, "%s[%d]", field, j);
+        if (read_background(c, &cam->background_images[cam->Nbackground_images], e, entry))
+            cam->Nbackground_images++;
+    }
+}
+
+static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
+{
+    rs_site *site = c->site;
+    rs_site_camera *cam = &site->cameras[site->Ncameras++];
+    char prefix[64], field[128];
+    snprintf(prefix, sizeof prefix, "cameras[%d]", i);
+    if (!cJSON_IsObject(item)) {
+        ERR(c, RS_ERR_PARSE, prefix, "not an object ({\"id\": ..., \"model\": ..., \"observations\": ...})");
+        cam->id = rs_site__dup(c, prefix);
+        return;
+    }
+    static const char *const known[] = {"id", "model", "observations", "backgrounds",
+                                        "background_images", "position_prior", "note", NULL};
+    warn_unknown_keys(c, item, prefix, known);
+    const char *s;
+    cam->id = rs_site__dup(c, get_string(c, item, prefix, "id", true, &s) ? s : prefix);
+    if (get_string(c, item, prefix, "model", true, &s)) cam->model_path = rs_site__join(c, site->dir, s);
+    if (get_string(c, item, prefix, "observations", true, &s))
+        cam->observations_path = rs_site__join(c, site->dir, s);
+    if (get_string(c, item, prefix, "backgrounds", false, &s)) {
+        cam->backgrounds_path = rs_site__join(c, site->dir, s);
+        struct stat sb;
+        if (cam->backgrounds_path && (stat(cam->backgrounds_path, &sb) != 0 || !S_ISDIR(sb.st_mode)))
+            WARN(c, field_name(field, sizeof field, prefix, "backgrounds"), "'%s' is not a folder",
+                 cam->backgrounds_path);
+    }
+    if (get_string(c, item, prefix, "note", false, &s)) cam->note = rs_site__dup(c, s);
+    read_background_images(c, cam, item, prefix);
+
+    field_name(field, sizeof field, prefix, "position_prior");
+    const cJSON *prior = get_object(c, item, prefix, "position_prior", false, "{lat, lon, h, sigma_m}");
+    if (prior) {
+        static const char *const known_prior[] = {"lat", "lon", "h", "sigma_m", NULL};
+        warn_unknown_keys(c, prior, field, known_prior);
+        double given[3], llh[3];
+        bool ok = get_llh(c, prior, field, given);
+        ok = get_positive(c, prior, field, "sigma_m", true, &cam->prior_sigma_m) && ok;
+        if (ok && rs_site__check_position(llh, cam->prior_p_enu_m, c->r, site, c->origin_ok, c->file,
+                                          -1, NULL, field, false, given)) {
+            cam->has_position_prior = true;
+            cam->prior_llh = (rs_llh){llh[0], llh[1], llh[2]};
+        }
+    }
+}
+
+static void read_site_json(rs_site__reader *c)
+{
+    rs_site *site = c->site;
+    char *path = NULL;
+    cJSON *root = read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton");
+    if (!root) goto done;
+    if (!cJSON_IsObject(root)) {
+        ERR(c, RS_ERR_PARSE, NULL, "the top level must be an object {\"name\": ..., \"origin\": ...}");
+        goto done;
+    }
+    // "simulated": how `roadside site simulate` made the site (free-form, for people and tools)
+    static const char *const known[] = {"name", "origin", "heights", "landmark_sigma_m",
+                                        "ground_plane", "max_landmark_distance_m", "cameras",
+                                        "simulated", NULL};
+    warn_unknown_keys(c, root, NULL, known);
+
+    const char *name;
+    if (get_string(c, root, NULL, "name", true, &name)) site->name = rs_site__dup(c, name);
+
+    bool origin_ok = true;
+    double given[3] = {NAN, NAN, NAN};
+    const cJSON *origin = get_object(c, root, NULL, "origin", true, "{\"lat\": deg, \"lon\": deg, \"h\": m}");
+    if (origin) {
+        static const char *const known_origin[] = {"lat", "lon", "h", NULL};
+        warn_unknown_keys(c, origin, "origin", known_origin);
+        origin_ok = get_llh(c, origin, "origin", given);
+        if (origin_ok && !(given[0] >= -90 && given[0] <= 90)) {
+            ERR(c, RS_ERR_INVALID, "origin.lat", "%.9g is out of range [-90, 90]", given[0]);
+            origin_ok = false;
+        }
+        if (origin_ok && !(given[1] >= -180 && given[1] <= 180)) {
+            ERR(c, RS_ERR_INVALID, "origin.lon", "%.9g is out of range [-180, 180]", given[1]);
+            origin_ok = false;
+        }
+    } else {
+        origin_ok = false;
+    }
+    read_heights(c, root, &origin_ok);
+    site->origin = (rs_llh){given[0], given[1], given[2] + site->geoid_undulation_m};
+    c->origin_ok = origin_ok;
+
+    const char *sigma_form = "{\"horizontal\": m, \"vertical\": m}";
+    const cJSON *sigma = get_object(c, root, NULL, "landmark_sigma_m", true, sigma_form);
+    if (sigma) {
+        static const char *const known_sigma[] = {"horizontal", "vertical", NULL};
+        warn_unknown_keys(c, sigma, "landmark_sigma_m", known_sigma);
+        get_positive(c, sigma, "landmark_sigma_m", "horizontal", true, &site->landmark_sigma_h_m);
+        get_positive(c, sigma, "landmark_sigma_m", "vertical", true, &site->landmark_sigma_v_m);
+    }
+    read_ground_plane(c, root);
+    get_positive(c, root, NULL, "max_landmark_distance_m", false, &site->max_landmark_distance_m);
+
+    const cJSON *cameras = cJSON_GetObjectItemCaseSensitive(root, "cameras");
+    if (!cameras) {
+        ERR(c, RS_ERR_PARSE, "cameras", "missing (a list of cameras)");
+    } else if (!cJSON_IsArray(cameras)) {
+        ERR(c, RS_ERR_PARSE, "cameras", "not a list [...]");
+    } else if (cJSON_GetArraySize(cameras) == 0) {
+        ERR(c, RS_ERR_INVALID, "cameras", "empty: a site needs at least one camera");
+    } else {
+        site->cameras = calloc((size_t)cJSON_GetArraySize(cameras), sizeof *site->cameras);
+        if (!site->cameras) c->r->nomem = true;
+        int i = 0;
+        for (const cJSON *it = cameras->child; it && site->cameras; it = it->next) read_camera_entry(c, it, i++);
+    }
+done:
+    cJSON_Delete(root);
+    c->file = NULL;
+    free(path);
+}
+
+// ---- landmarks.geojson ----
+
+static void read_feature(rs_site__reader *c, const cJSON *f, int i)
+{
+    rs_site *site = c->site;
+    c->feature = i;
+    c->fid = NULL;
+    if (!cJSON_IsObject(f)) {
+        ERR(c, RS_ERR_PARSE, NULL, "not an object (a GeoJSON Feature)");
+        goto done;
+    }
+    const char *type = NULL;
+    if (get_string(c, f, NULL, "type", true, &type) && strcmp(type, "Feature"))
+        ERR(c, RS_ERR_PARSE, "type", "'%s', expected \"Feature\"", type);
+    const cJSON *props = get_object(c, f, NULL, "properties", true, "{\"id\": \"...\"}");
+    const char *id = NULL, *kind = NULL, *note = NULL;
+    double sigma_h = site->landmark_sigma_h_m, sigma_v = site->landmark_sigma_v_m;
+    if (props) {
+        const cJSON *jid = cJSON_GetObjectItemCaseSensitive(props, "id");
+        if (cJSON_IsNumber(jid)) ERR(c, RS_ERR_PARSE, "properties.id", "must be a string: write \"%g\"", jid->valuedouble);
+        else if (get_string(c, props, "properties", "id", true, &id)) c->fid = id;
+        get_positive(c, props, "properties", "sigma_h_m", false, &sigma_h);
+        get_positive(c, props, "properties", "sigma_v_m", false, &sigma_v);
+        get_string(c, props, "properties", "kind", false, &kind);
+        get_string(c, props, "properties", "note", false, &note);
+    }
+
+    double given[3], llh[3] = {NAN, NAN, NAN}, p_enu[3] = {NAN, NAN, NAN};
+    bool coords_ok = false;
+    const cJSON *geometry = get_object(c, f, NULL, "geometry", true, "{\"type\": \"Point\", \"coordinates\": [lon, lat, h]}");
+    if (geometry) {
+        const char *gtype;
+        const cJSON *xyz = cJSON_GetObjectItemCaseSensitive(geometry, "coordinates");
+        int n = cJSON_GetArraySize(xyz);
+        if (get_string(c, geometry, "geometry", "type", true, &gtype) && strcmp(gtype, "Point")) {
+            ERR(c, RS_ERR_INVALID, "geometry.type", "'%s': a landmark is a \"Point\"", gtype);
+        } else if (!xyz) {
+            ERR(c, RS_ERR_PARSE, "coordinates", "missing ([lon, lat, h])");
+        } else if (!cJSON_IsArray(xyz) || (n != 2 && n != 3)) {
+            ERR(c, RS_ERR_PARSE, "coordinates", "expected [lon, lat, h] (3 numbers)");
+        } else if (n == 2) {
+            ERR(c, RS_ERR_PARSE, "coordinates", "the height is missing: expected [lon, lat, h]");
+        } else {
+            double v[3];
+            coords_ok = true;
+            for (int k = 0; k < 3; k++) {
+                const cJSON *x = cJSON_GetArrayItem(xyz, k);
+                char got[64];
+                json_excerpt(got, sizeof got, x);
+                if (!cJSON_IsNumber(x)) ERR(c, RS_ERR_PARSE, "coordinates", "%s (%s) is not a number", k == 0 ? "lon" : k == 1 ? "lat" : "h", got);
+                else if (!isfinite(x->valuedouble)) ERR(c, RS_ERR_INVALID, "coordinates", "%s is not finite", k == 0 ? "lon" : k == 1 ? "lat" : "h");
+                else v[k] = x->valuedouble;
+                coords_ok = coords_ok && cJSON_IsNumber(x) && isfinite(x->valuedouble);
+            }
+            given[0] = v[1], given[1] = v[0], given[2] = v[2];
+        }
+    }
+    if (coords_ok)
+        rs_site__check_position(llh, p_enu, c->r, site, c->origin_ok, c->file, i, c->fid,
+                                "coordinates", true, given);
+    if (id) {
+        rs_site_landmark *l = &site->landmarks[site->Nlandmarks++];
+        l->id = rs_site__dup(c, id);
+        l->feature = i;
+        l->llh = (rs_llh){llh[0], llh[1], llh[2]};
+        memcpy(l->p_enu_m, p_enu, sizeof p_enu);
+        l->sigma_h_m = sigma_h;
+        l->sigma_v_m = sigma_v;
+        l->kind = rs_site__dup(c, kind);
+        l->note = rs_site__dup(c, note);
+    }
+done:
+    c->feature = -1;
+    c->fid = NULL;
+}
+
+static void read_landmarks(rs_site__reader *c)
+{
+    rs_site *site = c->site;
+    char *path = NULL;
+    cJSON *root = read_json_file(c, &path, "landmarks.geojson",
+                                 "the surveyed landmarks; 'roadside site init' writes an empty one");
+    if (!root) goto done;
+    const char *type;
+    const cJSON *features = cJSON_GetObjectItemCaseSensitive(root, "features");
+    if (!cJSON_IsObject(root)) {
+        ERR(c, RS_ERR_PARSE, NULL, "the top level must be a GeoJSON FeatureCollection object");
+    } else if (get_string(c, root, NULL, "type", true, &type) && strcmp(type, "FeatureCollection")) {
+        ERR(c, RS_ERR_PARSE, "type", "'%s', expected \"FeatureCollection\"", type);
+    } else if (!cJSON_IsArray(features)) {
+        ERR(c, RS_ERR_PARSE, "features", "%s (a list of Point features)", features ? "not a list" : "missing");
+    } else {
+        c->landmarks_ok = true;
+        int n = cJSON_GetArraySize(features);
+        if (n == 0) ERR(c, RS_ERR_INVALID, "features", "empty: add one Point feature per surveyed landmark");
+        site->landmarks = calloc((size_t)(n ? n : 1), sizeof *site->landmarks);
+        if (!site->landmarks) c->r->nomem = true;
+        int i = 0;
+        for (const cJSON *f = features->child; f && site->landmarks; f = f->next) read_feature(c, f, i++);
+    }
+done:
+    cJSON_Delete(root);
+    c->file = NULL;
+    free(path);
+}
+
+// ---- the reader ----
+
+// The one reader behind rs_site_load and rs_site_check: reads every file of the site folder it
+// can, fills *site with everything that could be read (landmarks whose position is unusable get
+// NaN coordinates) and reports every problem into r. *site is NULL only when out of memory.
+static void read_site(rs_site **out, rs_site__report *r, const char *dir)
+{
+    *out = NULL;
+    rs_site *site = calloc(1, sizeof *site);
+    if (!site || !(site->dir = strdup(dir))) {
+        free(site);
+        r->nomem = true;
+        return;
+    }
+    site->max_landmark_distance_m = DEFAULT_MAX_LANDMARK_DISTANCE_M;
+    site->ground_normal_enu[2] = 1;
+    site->landmark_sigma_h_m = site->landmark_sigma_v_m = NAN;
+    rs_site__reader c = {.r = r, .site = site, .feature = -1};
+
+    read_site_json(&c);
+    read_landmarks(&c);
+    for (int i = 0; i < site->Ncameras; i++) {
+        rs_site_camera *cam = &site->cameras[i];
+        if (cam->model_path) rs_site__read_camera_model(&c, cam, i);
+        if (cam->observations_path) rs_site__read_observations(&c, cam, i);
+    }
+    rs_site__check_site(r, site);
+    *out = site;
+}
+
+// ---- public ----
+
+rs_status rs_site_load(rs_site **out, const char *dir, rs_err *err)
+{
+    *out = NULL;
+    rs_site__report *r = calloc(1, sizeof *r);
+    if (!r) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
+    rs_site *site = NULL;
+    read_site(&site, r, dir);
+    rs_status st = RS_OK;
+    if (!site || r->nomem) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory while reading the site", dir);
+    } else {
+        for (int i = 0; i < r->pub.N && st == RS_OK; i++) {
+            const rs_site_diag *d = &r->pub.diags[i];
+            if (d->severity != RS_SITE_ERROR) continue;
+            char msg[sizeof err->msg];
+            rs_site_diag_format(msg, sizeof msg, d);
+            st = rs_err_set(err, d->status, "%s", msg);
+        }
+    }
+    rs_site_report_free(&r->pub);
+    if (st != RS_OK) rs_site_free(site);
+    else *out = site;
+    return st;
+}
+
+rs_status rs_site_check(rs_site_report **report, const char *dir, rs_err *err)
+{
+    *report = NULL;
+    rs_site__report *r = calloc(1, sizeof *r);
+    if (!r) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
+    rs_site *site = NULL;
+    read_site(&site, r, dir);
+    rs_site_free(site);
+    if (!site || r->nomem) {
+        rs_site_report_free(&r->pub);
+        return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory while checking", dir);
+    }
+    *report = &r->pub;
+    return RS_OK;
+}

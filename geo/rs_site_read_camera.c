@@ -1,0 +1,254 @@
+// rs_site_read_camera.c -- reading each camera's files of a site: the model file
+// (cameras/<id>.cameramodel, or OpenCV intrinsics) and the observations CSV
+// (observations/<id>.csv), reporting every problem on the way. Called by rs_site_read.c; calls
+// rs_site_check.c (each pick, each camera), rs_site_report.c and rs_site.c (landmark lookup).
+#include <ctype.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "geo/internal/rs_site_internal.h"
+
+static const double DEFAULT_SIGMA_PX = 1.0;
+
+// ---- camera models ----
+
+static bool has_extension(const char *path, const char *ext)
+{
+    const char *dot = strrchr(path, '.');
+    return dot && !strchr(dot, '/') && !strcasecmp(dot + 1, ext);
+}
+
+// mrcal 2.2's .cameramodel rs_site__reader reads past the end of its buffer when a quoted string is not
+// closed (found by tests/site/test_site_fuzz.py under AddressSanitizer), so such files are refused
+// before mrcal sees them; everything else is left to mrcal. Returns NULL if the text may be
+// handed to mrcal, else what is wrong (and *line where).
+static const char *cameramodel_precheck(const char *text, size_t len, int *line)
+{
+    *line = 0;
+    if (len == 0) return "the file is empty";
+    if (strlen(text) != len) return "the file contains a NUL byte";
+    char quote = 0;
+    int quote_line = 0, l = 1;
+    bool comment = false;
+    for (const char *p = text; *p; p++) {
+        if (*p == '\n') l++;
+        if (comment) comment = *p != '\n';
+        else if (quote) quote = *p == quote ? 0 : quote;
+        else if (*p == '\'' || *p == '"') quote = *p, quote_line = l;
+        else if (*p == '#') comment = true;
+    }
+    if (!quote) return NULL;
+    *line = quote_line;
+    return "a quoted string that is never closed";
+}
+
+// Reports a failed core camera read as a diagnostic: its message is "PATH: FIELD: what", and
+// the diagnostic names the file already.
+static void camera_error(rs_site__reader *c, const rs_site_camera *cam, const rs_err *e)
+{
+    if (e->status == RS_ERR_NOMEM) c->r->nomem = true;
+    size_t n = strlen(cam->model_path);
+    const char *what = strncmp(e->msg, cam->model_path, n) ? e->msg : e->msg + n + (e->msg[n] == ':' ? 2 : 0);
+    ERR(c, e->status, NULL, "%s", what);
+}
+
+void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
+{
+    char why[160];
+    snprintf(why, sizeof why, "named by cameras[%d].model in site.json", i);
+    c->file = cam->model_path;
+    if (!rs_site__file_exists(c, why)) goto done;
+    rs_err e = {0};
+    if (has_extension(cam->model_path, "yaml") || has_extension(cam->model_path, "yml") ||
+        has_extension(cam->model_path, "json")) {
+        if (rs_camera_read(&cam->camera, NULL, cam->model_path, &e)) camera_error(c, cam, &e);
+        else if (cam->camera.width == 0 || cam->camera.height == 0) {
+            ERR(c, RS_ERR_PARSE, cam->camera.width == 0 ? "image_width" : "image_height", "missing");
+            rs_camera_free(&cam->camera);
+        }
+        goto done;
+    }
+    size_t len = 0;
+    char *text = rs_site__read_file(c, why, &len);
+    if (!text) goto done;
+    int line = 0;
+    const char *bad = cameramodel_precheck(text, len, &line);
+    if (bad) ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
+    else if (rs_camera_read_cameramodel_text(&cam->camera, text, len, cam->model_path, &e)) camera_error(c, cam, &e);
+    else memset(cam->camera.rt_cam_enu, 0, sizeof cam->camera.rt_cam_enu); // intrinsics only
+    free(text);
+done:
+    c->file = NULL;
+}
+
+// ---- observations/<id>.csv ----
+
+// Splits one CSV line in place into fields (RFC 4180 quoting, surrounding blanks trimmed).
+// Stores at most maxf fields; returns how many there are, or -1 for malformed quoting.
+static int split_csv(char *s, char **fields, int maxf)
+{
+    int n = 0;
+    for (;;) {
+        while (*s == ' ' || *s == '\t') s++;
+        char *start = s, *out = s;
+        if (*s == '"') {
+            for (s++;; s++) {
+                if (!*s) return -1;
+                if (*s == '"' && s[1] == '"') *out++ = *s++;
+                else if (*s == '"') break;
+                else *out++ = *s;
+            }
+            s++;
+            while (*s == ' ' || *s == '\t') s++;
+            if (*s && *s != ',') return -1;
+        } else {
+            while (*s && *s != ',') s++;
+            out = s;
+            while (out > start && (out[-1] == ' ' || out[-1] == '\t')) out--;
+        }
+        char sep = *s;
+        *out = '\0';
+        if (n < maxf) fields[n] = start;
+        n++;
+        if (sep != ',') return n;
+        s++;
+    }
+}
+
+static bool parse_csv_number(rs_site__reader *c, int line, const char *field, const char *text, double *out)
+{
+    char *end;
+    double v = strtod(text, &end);
+    if (!*text || *end) {
+        ERR_AT(c, RS_ERR_PARSE, line, field, "not a number ('%s')", text);
+        return false;
+    }
+    if (!isfinite(v)) {
+        ERR_AT(c, RS_ERR_INVALID, line, field, "not finite ('%s')", text);
+        return false;
+    }
+    *out = v;
+    return true;
+}
+
+enum { COL_LANDMARK, COL_U, COL_V, COL_SIGMA, NCOLS, MAXFIELDS = 32 };
+static const char *const column_names[NCOLS] = {"landmark", "u", "v", "sigma_px"};
+
+// Reads the header line; fills col[] with the index of each known column (-1 if absent).
+static bool read_csv_header(rs_site__reader *c, int line, char **fields, int nfields, int col[NCOLS])
+{
+    for (int k = 0; k < NCOLS; k++) col[k] = -1;
+    for (int f = 0; f < nfields && f < MAXFIELDS; f++) {
+        int k = 0;
+        while (k < NCOLS && strcmp(fields[f], column_names[k])) k++;
+        if (k == NCOLS) WARN_AT(c, line, "header", "unknown column '%s', ignored", fields[f]);
+        else if (col[k] >= 0) ERR_AT(c, RS_ERR_PARSE, line, "header", "column '%s' appears twice", fields[f]);
+        else col[k] = f;
+    }
+    for (int k = 0; k < COL_SIGMA; k++)
+        if (col[k] < 0) {
+            bool other_separator = nfields == 1 && strpbrk(fields[0], ";\t");
+            ERR_AT(c, RS_ERR_PARSE, line, "header",
+                   "no column '%s': the first line must be the header landmark,u,v (and optionally "
+                   ",sigma_px)%s", column_names[k],
+                   other_separator ? "; separate the fields with commas, not semicolons or tabs" : "");
+            return false;
+        }
+    return true;
+}
+
+// Suggests an id that differs only in case (the commonest mismatch), or NULL.
+static const char *similar_landmark(const rs_site *site, const char *id)
+{
+    for (int i = 0; i < site->Nlandmarks; i++)
+        if (!strcasecmp(site->landmarks[i].id, id)) return site->landmarks[i].id;
+    return NULL;
+}
+
+static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int line, char **fields,
+                                 const int col[NCOLS])
+{
+    const char *id = fields[col[COL_LANDMARK]];
+    rs_site_observation obs = {.ilandmark = -1, .sigma_px = DEFAULT_SIGMA_PX, .line = line};
+    bool ok = true;
+    if (!*id) {
+        ERR_AT(c, RS_ERR_PARSE, line, "landmark", "empty");
+        ok = false;
+    }
+    ok = parse_csv_number(c, line, "u", fields[col[COL_U]], &obs.q_px[0]) && ok;
+    ok = parse_csv_number(c, line, "v", fields[col[COL_V]], &obs.q_px[1]) && ok;
+    if (col[COL_SIGMA] >= 0 && *fields[col[COL_SIGMA]]) {
+        if (!parse_csv_number(c, line, "sigma_px", fields[col[COL_SIGMA]], &obs.sigma_px)) ok = false;
+        else if (obs.sigma_px <= 0) {
+            ERR_AT(c, RS_ERR_INVALID, line, "sigma_px", "%g must be > 0", obs.sigma_px);
+            ok = false;
+        }
+    }
+    if (!ok || !c->landmarks_ok) return;
+    obs.ilandmark = rs_site_find_landmark(c->site, id);
+    if (obs.ilandmark < 0) {
+        const char *like = similar_landmark(c->site, id);
+        ERR_AT(c, RS_ERR_NOT_FOUND, line, "landmark", "'%s' is not a landmark of landmarks.geojson%s%s%s",
+               id, like ? " (ids are case-sensitive: '" : "", like ? like : "", like ? "'?)" : "");
+        return;
+    }
+    if (!rs_site__check_observation(c->r, cam, &obs, c->site)) return;
+    rs_site_observation *grown = realloc(cam->observations, (size_t)(cam->Nobservations + 1) * sizeof obs);
+    if (!grown) {
+        c->r->nomem = true;
+        return;
+    }
+    cam->observations = grown;
+    cam->observations[cam->Nobservations++] = obs;
+}
+
+void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
+{
+    char why[160];
+    snprintf(why, sizeof why, "named by cameras[%d].observations in site.json", i);
+    c->file = cam->observations_path;
+    char *text = rs_site__read_file(c, why, NULL);
+    if (!text) goto done;
+    char *p = text;
+    if (!strncmp(p, "\xEF\xBB\xBF", 3)) p += 3; // UTF-8 byte order mark
+    int line = 0, nheader = 0, col[NCOLS];
+    bool have_header = false;
+    while (*p) {
+        line++;
+        char *eol = strchr(p, '\n'), *next = eol ? eol + 1 : p + strlen(p);
+        if (eol) *eol = '\0';
+        if (eol && eol > p && eol[-1] == '\r') eol[-1] = '\0';
+        char *s = p;
+        p = next;
+        while (isspace((unsigned char)*s)) s++;
+        if (!*s || *s == '#') continue; // blank lines and comments
+        char *fields[MAXFIELDS];
+        int n = split_csv(s, fields, MAXFIELDS);
+        if (n < 0) {
+            ERR_AT(c, RS_ERR_PARSE, line, NULL, "malformed quoting (a \" that is not closed, or text after it)");
+            continue;
+        }
+        if (!have_header) {
+            if (!read_csv_header(c, line, fields, n, col)) goto done;
+            have_header = true;
+            nheader = n;
+            continue;
+        }
+        if (n != nheader) {
+            ERR_AT(c, RS_ERR_PARSE, line, NULL, "%d field%s, the header has %d%s", n, n == 1 ? "" : "s",
+                   nheader, n > nheader ? " (a decimal comma? write 12.5, not 12,5)" : "");
+            continue;
+        }
+        read_observation_row(c, cam, line, fields, col);
+    }
+    if (!have_header)
+        ERR(c, RS_ERR_PARSE, "header", "the file is empty: the first line must be the header landmark,u,v");
+    else if (c->landmarks_ok)
+        rs_site__check_camera(c->r, cam);
+done:
+    free(text);
+    c->file = NULL;
+}

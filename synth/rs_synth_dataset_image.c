@@ -1,0 +1,336 @@
+// rs_synth_dataset_image.c -- one image of `roadside synth` (synth/rs_synth_dataset.h): its
+// random stream, its background (fitted to the camera, with its appearance), the traffic the
+// camera sees, the render, the composite with shadows, the labels and the image's files, the
+// per-image COCO file last. Called by rs_synth_dataset.c; calls the other rooms of synth/
+// (traffic, fleet, render, labels, appearance) and core/.
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/rs_io.h"
+#include "synth/internal/rs_synth_dataset_internal.h"
+#include "synth/rs_synth_labels.h"
+#include "synth/rs_synth_opencv.h"
+#include "synth/rs_synth_render.h"
+#include "synth/rs_synth_scene.h"
+#include "synth/rs_synth_sun.h"
+#include "synth/rs_synth_traffic.h"
+
+// ---- the random stream of one image ----
+
+// splitmix64's output function (Steele, Lea, Flood, "Fast splittable pseudorandom number
+// generators", OOPSLA 2014).
+static uint64_t mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+}
+
+uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k)
+{
+    return mix64(seed + 0x9e3779b97f4a7c15ULL * ((uint64_t)k + 1));
+}
+
+static uint64_t rng_next(uint64_t *s)
+{
+    *s += 0x9e3779b97f4a7c15ULL;
+    return mix64(*s);
+}
+
+// ---- the background ----
+
+// The background at the camera's size (linear resampling when it differs) and its appearance
+// (rs_synth_appearance_estimate on the original file: noise, blur, JPEG quality are the
+// camera's), computed at first use and kept.
+static rs_status background_fit(rs_synth_dataset__background *b, int width, int height,
+                                rs_err *err)
+{
+    if (b->fitted.data)
+        return RS_OK;
+    rs_image src = {0};
+    float *map = NULL;
+    rs_status st = rs_image_read(&src, b->src->path, err);
+    if (st)
+        return st;
+    if (src.channels < 3) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: not an RGB image", b->src->path);
+        goto done;
+    }
+    map = malloc(sizeof(float) * 2 * (size_t)width * (size_t)height);
+    if (!map) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    const double sx = (double)src.width / width, sy = (double)src.height / height;
+    for (int v = 0; v < height; v++)
+        for (int u = 0; u < width; u++) {
+            map[2 * ((size_t)v * width + u) + 0] = (float)((u + 0.5) * sx - 0.5);
+            map[2 * ((size_t)v * width + u) + 1] = (float)((v + 0.5) * sy - 0.5);
+        }
+    if ((st = rs_synth_remap(&b->fitted, &src, map, width, height, 1, err)) ||
+        (st = rs_image_alloc(&b->linear, width, height, 3, err)))
+        goto done;
+    for (size_t i = 0; i < (size_t)width * height; i++)
+        for (int c = 0; c < 3; c++)
+            b->linear.data[3 * i + c] =
+                (float)rs_synth_srgb_decode(b->fitted.data[(size_t)b->fitted.channels * i + c]);
+    b->app_ok = rs_synth_appearance_estimate(&b->app, b->src->path, NULL, NULL) == RS_OK;
+done:
+    free(map);
+    rs_image_free(&src);
+    return st;
+}
+
+// ---- shadows and appearance over a background ----
+
+// Differential rendering (Debevec, "Rendering synthetic objects into real scenes", SIGGRAPH
+// 1998): the ground with the vehicles and the ground alone, under the same sun and sky; their
+// ratio is the render's shadow pass (rs_synth_render_result.shadow: the ground alone, lit by
+// parallel lights, is uniform and needs no pass). On background pixels (id 0) the background
+// in linear light is multiplied by it (in [0, 1]: only shadows, no added light).
+static void shade_background(rs_image *bg_lin, const float *shadow, const uint16_t *ids)
+{
+    const size_t n = (size_t)bg_lin->width * (size_t)bg_lin->height;
+    for (size_t i = 0; i < n; i++) {
+        if (ids[i] != 0 || shadow[i] >= 1)
+            continue;
+        for (int c = 0; c < 3; c++)
+            bg_lin->data[3 * i + c] *= shadow[i];
+    }
+}
+
+// The composite over a background: shadows (when given), the vehicle layer matched to the
+// background (rs_synth_appearance.h; skipped when the background gives no estimate), straight
+// alpha over the background in linear light, sRGB, the background's JPEG quality.
+// in,out: r (its composite replaced); in: shadow passes may be NULL
+static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__background *b,
+                           uint64_t seed, rs_err *err)
+{
+    const rs_synth_appearance app = b->app;
+    const bool matched = b->app_ok;
+    rs_status st = RS_OK;
+    const size_t n = (size_t)r->width * (size_t)r->height;
+    rs_image lin = {0};
+    if ((st = rs_image_alloc(&lin, r->width, r->height, 3, err)))
+        goto done;
+    memcpy(lin.data, b->linear.data, sizeof(float) * 3 * n);
+    if (r->shadow)
+        shade_background(&lin, r->shadow, r->ids);
+    if (matched && (st = rs_synth_appearance_apply(&r->rgba, &app, 0.6, seed, err))) {
+        rs_image_free(&lin);
+        goto done;
+    }
+    for (size_t i = 0; i < n; i++) {
+        const double a = r->rgba.data[4 * i + 3];
+        for (int c = 0; c < 3; c++) {
+            const double v = a * r->rgba.data[4 * i + c] + (1 - a) * lin.data[3 * i + c];
+            r->composite.data[3 * i + c] =
+                (float)rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
+        }
+    }
+    rs_image_free(&lin);
+    if (matched)
+        st = rs_synth_appearance_jpeg(&r->composite, &app, err);
+done:
+    return st;
+}
+
+// ---- one image ----
+
+void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id)
+{
+    snprintf(stem, n, "%06d_%s", k, camera_id);
+    for (char *p = stem; *p; p++)
+        if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') ||
+              *p == '_' || *p == '-'))
+            *p = '_';
+}
+
+rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem,
+                                       rs_synth_dataset__camera *c, bool *grey,
+                                       double *seconds_povray, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    uint64_t rng = rs_synth_dataset_image_seed(opt->seed, k);
+    char name[600];
+    char *work = NULL, *part_tmp = NULL, *part = NULL, *image = NULL;
+    rs_synth_traffic_vehicle *tv = NULL;
+    rs_synth_vehicle *v = NULL;
+    rs_synth_prepared prepared = {0};
+    rs_synth_render_result r = {0};
+    const rs_synth_dataset__background *b = NULL;
+    rs_synth_label *labels = NULL;
+    double *up = NULL;
+    rs_synth_mesh *meshes = NULL;
+    const char **ids = NULL;
+    uint8_t *coarse = NULL; // (N,) vehicle i gets the coarse mesh
+    int N = 0;
+    rs_status st;
+
+    work = rs_io_join(d->work_root, stem);
+    if (!work)
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_io_remove_tree(work); // a previous, interrupted attempt
+    if ((st = rs_io_mkdir_p(work, err)))
+        goto done;
+
+    rs_synth_render_options ropt;
+    rs_synth_render_options_default(&ropt);
+    ropt.povray = opt->povray;
+    ropt.write_files = false; // the dataset composites and writes the image itself
+    if (!c->have_canvas) {
+        const rs_camera *cc = &c->cam;
+        if ((st = rs_synth_canvas_for_lens(&c->canvas, &cc->lensmodel, cc->intrinsics, cc->width,
+                                           cc->height, 1, err)) ||
+            (!c->canvas.identity &&
+             (st = rs_synth_canvas_map(&c->canvas_map, &c->canvas, &cc->lensmodel,
+                                       cc->intrinsics, cc->width, cc->height, err))))
+            goto done;
+        c->have_canvas = true;
+    }
+    ropt.canvas = &c->canvas;
+    ropt.canvas_map = c->canvas_map;
+    ropt.separate_processes = opt->separate_processes;
+    ropt.full_frame = opt->full_frame;
+    const uint64_t r_bg = rng_next(&rng);
+    if (c->Nbg > 0) {
+        rs_synth_dataset__background *bm = &c->bg[r_bg % (uint64_t)c->Nbg];
+        b = bm;
+        if ((st = background_fit(bm, c->cam.width, c->cam.height, err)))
+            goto done;
+        // the vehicles alone over transparency; composite() puts them onto the background
+        ropt.scene.ground_visible = false;
+        ropt.scene.overcast = b->overcast;
+        ropt.shadow = opt->shadows && !b->night;
+        double t_s;
+        if (b->time_iso && rs_synth_parse_iso8601(&t_s, b->time_iso, "time", NULL) == RS_OK)
+            rs_synth_sun_position(&ropt.scene.sun_azimuth_deg, &ropt.scene.sun_elevation_deg,
+                                  d->site->origin.lat_deg, d->site->origin.lon_deg, t_s);
+        *grey = false;
+    } else {
+        ropt.scene.ground_visible = true; // neutral grey ground rendered by POV-Ray
+        *grey = true;
+    }
+
+    rs_synth_traffic_options topt;
+    rs_synth_traffic_options_default(&topt);
+    topt.seed = rng_next(&rng);
+    topt.count = 0; // every vehicle that fits; the camera's view picks among them below
+    if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err)))
+        goto done;
+    rs_synth_randomise_options xopt;
+    rs_synth_randomise_options_default(&xopt);
+    xopt.seed = rng_next(&rng);
+    if ((st = rs_synth_traffic_randomise(tv, &N, &xopt, err)))
+        goto done;
+    const size_t n = (size_t)(N > 0 ? N : 1);
+    v = calloc(n, sizeof(*v));
+    up = malloc(n * sizeof(double));
+    meshes = malloc(n * sizeof(rs_synth_mesh));
+    ids = malloc(n * sizeof(char *));
+    coarse = calloc(n, 1);
+    if (!v || !up || !meshes || !ids || !coarse) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    // The vehicles the camera sees (their box meets the image), at most opt->vehicles of them,
+    // a uniformly drawn subset kept in placement order: the traffic of the whole site would
+    // leave most images nearly empty.
+    int Nseen = 0;
+    for (int i = 0; i < N; i++) {
+        const rs_synth_vehicle vi = {.cls = tv[i].cls, .id = tv[i].id, .e_m = tv[i].e_m,
+                                     .n_m = tv[i].n_m, .yaw_deg = tv[i].yaw_deg,
+                                     .length_m = tv[i].length_m, .width_m = tv[i].width_m,
+                                     .height_m = tv[i].height_m, .rgb = {-1, -1, -1},
+                                     .variant = tv[i].variant};
+        double corners[8][3];
+        int rect[4];
+        rs_synth_vehicle_corners_enu(corners, &vi, d->site->ground_normal_enu,
+                                     d->site->ground_offset_m);
+        if (rs_synth_vehicle_rect(rect, c->canvas.fxycxy, c->canvas.width, c->canvas.height,
+                                  c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
+            coarse[Nseen] = rect[3] - rect[1] + 1 < opt->coarse_below_px;
+            v[Nseen++] = vi;
+        }
+    }
+    const uint64_t r_pick = rng_next(&rng);
+    if (Nseen > opt->vehicles) {
+        // selection sampling (Knuth, TAOCP vol. 2, Algorithm S): keep each with probability
+        // (still needed) / (still left), in order
+        uint64_t s_pick = r_pick;
+        int kept = 0;
+        for (int i = 0; i < Nseen && kept < opt->vehicles; i++) {
+            const double u01 = (double)(rng_next(&s_pick) >> 11) * 0x1.0p-53;
+            if (u01 * (Nseen - i) < opt->vehicles - kept) {
+                coarse[kept] = coarse[i];
+                v[kept++] = v[i];
+            }
+        }
+        Nseen = kept;
+    }
+    N = Nseen;
+    for (int i = 0; i < N; i++)
+        ids[i] = v[i].id;
+    if ((st = rs_synth_prepare_lod(&prepared, v, NULL, N, coarse, err)))
+        goto done;
+    const rs_camera *cam = &c->cam;
+    if ((st = rs_synth_render(&r, work, &cam->lensmodel, cam->intrinsics, cam->width, cam->height,
+                              cam->rt_cam_enu, d->site->ground_normal_enu,
+                              d->site->ground_offset_m, &prepared, &ropt, err)))
+        goto done;
+    *seconds_povray += r.seconds_povray;
+    const uint64_t r_look = rng_next(&rng);
+    if (b && (st = composite(&r, b, r_look, err)))
+        goto done;
+    for (int i = 0; i < N; i++) {
+        up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m,
+                                     prepared.v[i].e_m, prepared.v[i].n_m);
+        meshes[i] = prepared.meshes[prepared.imesh[i]];
+    }
+    if ((st = rs_synth_labels_compute(&labels, cam, prepared.v, up, N, meshes, r.ids, err)))
+        goto done;
+    char file_name[320];
+    snprintf(file_name, sizeof(file_name), "%s.png", stem);
+    const rs_synth_label_image img = {.file_name = file_name, .width = r.width, .height = r.height,
+                                      .labels = labels, .Nlabels = N, .vehicle_ids = ids};
+    const rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
+    // YOLO, KITTI and the image, then the per-image COCO file last: it marks the image done.
+    image = rs_io_join(d->split_dir, file_name);
+    snprintf(name, sizeof(name), "annotations/instances_%s.json", opt->split);
+    part_tmp = rs_io_join(work, name);
+    snprintf(name, sizeof(name), "%s.json", stem);
+    part = rs_io_join(d->parts_dir, name);
+    if (!image || !part_tmp || !part) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if ((st = rs_synth_labels_write_yolo(opt->out_dir, opt->split, &img, 1, &lopt, err)) ||
+        (st = rs_synth_labels_write_kitti(opt->out_dir, &img, 1, &lopt, err)) ||
+        (st = rs_image_write(image, &r.composite, 8, err)) ||
+        (st = rs_synth_labels_write_coco(work, opt->split, &img, 1, &lopt, err)))
+        goto done;
+    if (rename(part_tmp, part) != 0) {
+        st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
+        goto done;
+    }
+    rs_io_remove_tree(work);
+done:
+    free(work);
+    free(part_tmp);
+    free(part);
+    free(image);
+    free(tv);
+    free(v);
+    free(up);
+    free(meshes);
+    free(ids);
+    free(coarse);
+    free(labels);
+    rs_synth_prepared_free(&prepared);
+    rs_synth_render_result_free(&r);
+    return st;
+}
