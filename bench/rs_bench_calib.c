@@ -1,13 +1,14 @@
-// rs_calib_bench.c -- roadside bench calib: methods side by side, the Cramer-Rao bound, the
-// stress run. See rs_calib_bench.h.
+// rs_bench_calib.c -- roadside bench calib: the methods side by side on the sweep of simulated
+// problems, with the Cramer-Rao bound. See rs_bench_calib.h; the CSV and the plot are in
+// rs_bench_calib_output.c, the stress run in rs_bench_calib_stress.c.
 #include "bench/rs_bench_calib.h"
+#include "bench/internal/rs_bench_calib_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#include <cairo.h>
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
@@ -15,45 +16,33 @@
 #include "calib/rs_calib_init.h"
 #include "bench/rs_bench_opencv.h"
 #include "calib/rs_calib_opengv.h"
-#include "core/rs_io.h"
 #include "sim/rs_simulate.h"
 #include "core/rs_pose.h"
-#include "core/rs_rng.h"
 
 #define DEG (180.0 / M_PI)
 
 // ---- the methods ----
 
-typedef enum { LIB_ROADSIDE, LIB_OPENCV, LIB_OPENGV } bench_lib;
-
-typedef struct {
-    const char *name;
-    bench_lib lib;
-    int variant;    // roadside: 0 full, 1 init, 2 no prior; OpenCV/OpenGV: the shim's enum
-    bool refine_lm; // OpenCV: + solvePnPRefineLM
-} bench_method;
-
-static const bench_method methods[] = {
-    {"roadside", LIB_ROADSIDE, 0, false},
-    {"roadside-init", LIB_ROADSIDE, 1, false},
-    {"roadside-noprior", LIB_ROADSIDE, 2, false},
-    {"cv-iterative", LIB_OPENCV, RS_BENCH_OPENCV_PNP_ITERATIVE, false},
-    {"cv-iterative+lm", LIB_OPENCV, RS_BENCH_OPENCV_PNP_ITERATIVE, true},
-    {"cv-epnp", LIB_OPENCV, RS_BENCH_OPENCV_PNP_EPNP, false},
-    {"cv-epnp+lm", LIB_OPENCV, RS_BENCH_OPENCV_PNP_EPNP, true},
-    {"cv-sqpnp", LIB_OPENCV, RS_BENCH_OPENCV_PNP_SQPNP, false},
-    {"cv-sqpnp+lm", LIB_OPENCV, RS_BENCH_OPENCV_PNP_SQPNP, true},
-    {"cv-ippe", LIB_OPENCV, RS_BENCH_OPENCV_PNP_IPPE, false},
-    {"cv-ippe+lm", LIB_OPENCV, RS_BENCH_OPENCV_PNP_IPPE, true},
-    {"cv-ransac", LIB_OPENCV, RS_BENCH_OPENCV_PNP_RANSAC, false},
-    {"cv-ransac+lm", LIB_OPENCV, RS_BENCH_OPENCV_PNP_RANSAC, true},
-    {"gv-p3p-kneip-ransac", LIB_OPENGV, RS_CALIB_OPENGV_POSE_P3P_KNEIP_RANSAC, false},
-    {"gv-p3p-gao-ransac", LIB_OPENGV, RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC, false},
-    {"gv-epnp", LIB_OPENGV, RS_CALIB_OPENGV_POSE_EPNP, false},
-    {"gv-upnp", LIB_OPENGV, RS_CALIB_OPENGV_POSE_UPNP, false},
-    {"gv-epnp+nonlin", LIB_OPENGV, RS_CALIB_OPENGV_POSE_EPNP_NONLINEAR, false},
+const rs_bench_calib_method rs_bench_calib_methods[RS_BENCH_CALIB_NMETHODS] = {
+    {"roadside", RS_BENCH_CALIB_LIB_ROADSIDE, 0, false},
+    {"roadside-init", RS_BENCH_CALIB_LIB_ROADSIDE, 1, false},
+    {"roadside-noprior", RS_BENCH_CALIB_LIB_ROADSIDE, 2, false},
+    {"cv-iterative", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_ITERATIVE, false},
+    {"cv-iterative+lm", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_ITERATIVE, true},
+    {"cv-epnp", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_EPNP, false},
+    {"cv-epnp+lm", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_EPNP, true},
+    {"cv-sqpnp", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_SQPNP, false},
+    {"cv-sqpnp+lm", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_SQPNP, true},
+    {"cv-ippe", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_IPPE, false},
+    {"cv-ippe+lm", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_IPPE, true},
+    {"cv-ransac", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_RANSAC, false},
+    {"cv-ransac+lm", RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_OPENCV_PNP_RANSAC, true},
+    {"gv-p3p-kneip-ransac", RS_BENCH_CALIB_LIB_OPENGV, RS_CALIB_OPENGV_POSE_P3P_KNEIP_RANSAC, false},
+    {"gv-p3p-gao-ransac", RS_BENCH_CALIB_LIB_OPENGV, RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC, false},
+    {"gv-epnp", RS_BENCH_CALIB_LIB_OPENGV, RS_CALIB_OPENGV_POSE_EPNP, false},
+    {"gv-upnp", RS_BENCH_CALIB_LIB_OPENGV, RS_CALIB_OPENGV_POSE_UPNP, false},
+    {"gv-epnp+nonlin", RS_BENCH_CALIB_LIB_OPENGV, RS_CALIB_OPENGV_POSE_EPNP_NONLINEAR, false},
 };
-enum { Nmethods = (int)(sizeof(methods) / sizeof(methods[0])) };
 
 // ---- the configurations ----
 
@@ -168,9 +157,9 @@ static void fill_problem(rs_calib_problem *cp, const bench_trial *T, const doubl
 static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, rs_err *err)
 {
     const rs_simulate_problem *P = T->P;
-    const bench_method *bm = &methods[m];
+    const rs_bench_calib_method *bm = &rs_bench_calib_methods[m];
     *cond = NAN;
-    if (bm->lib == LIB_ROADSIDE) {
+    if (bm->lib == RS_BENCH_CALIB_LIB_ROADSIDE) {
         if (bm->variant == 1) {
             rs_calib_init_result ir;
             rs_calib_init_options io;
@@ -192,7 +181,7 @@ static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, r
         rs_calib_result_free(&res);
         return st;
     }
-    if (bm->lib == LIB_OPENCV)
+    if (bm->lib == RS_BENCH_CALIB_LIB_OPENCV)
         return rs_bench_opencv_pnp(rt, NULL, P->p_enu_survey_m, P->q_px, P->Npoints, P->camera.intrinsics,
                                    P->camera.Nintrinsics - 4, (rs_bench_opencv_pnp_method)bm->variant,
                                    bm->refine_lm, 8.0, err);
@@ -386,7 +375,7 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
             ss_crb_pos += tr_p;
             Ncrb++;
         }
-        for (int m = 0; m < Nmethods; m++) trial_method(&acc[m], m, &T, scale_m);
+        for (int m = 0; m < RS_BENCH_CALIB_NMETHODS; m++) trial_method(&acc[m], m, &T, scale_m);
         rs_simulate_problem_free(P);
     }
     free(T.sigma_enu);
@@ -395,13 +384,13 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
 
     const double crb_rot = Ncrb ? DEG * sqrt(ss_crb_rot / Ncrb) : NAN;
     const double crb_pos = Ncrb ? sqrt(ss_crb_pos / Ncrb) : NAN;
-    for (int m = 0; m < Nmethods; m++) {
+    for (int m = 0; m < RS_BENCH_CALIB_NMETHODS; m++) {
         bench_acc *A = &acc[m];
         rs_bench_calib_row *r = &rows[m];
         memset(r, 0, sizeof *r);
         snprintf(r->family, sizeof r->family, "%s", c->family);
         snprintf(r->config, sizeof r->config, "%s", c->config);
-        snprintf(r->method, sizeof r->method, "%s", methods[m].name);
+        snprintf(r->method, sizeof r->method, "%s", rs_bench_calib_methods[m].name);
         r->trials = Ngen;
         r->failures = A->Nfail;
         r->time_med_us = quantile(A->time_us, A->Ncalls, 0.5);
@@ -429,27 +418,27 @@ rs_status rs_bench_calib_run(rs_bench_calib_row **rows, int *Nrows, const rs_ben
         return rs_err_set(err, RS_ERR_USAGE, "trials: must be in [1, 1000000]");
     bench_config cfg[64];
     const int Nc = make_configs(cfg, o->quick);
-    rs_bench_calib_row *out = calloc((size_t)Nc * Nmethods, sizeof *out);
-    bench_acc acc[Nmethods];
+    rs_bench_calib_row *out = calloc((size_t)Nc * RS_BENCH_CALIB_NMETHODS, sizeof *out);
+    bench_acc acc[RS_BENCH_CALIB_NMETHODS];
     memset(acc, 0, sizeof acc);
     bool ok = out != NULL;
-    for (int m = 0; m < Nmethods && ok; m++) {
+    for (int m = 0; m < RS_BENCH_CALIB_NMETHODS && ok; m++) {
         acc[m].time_us = malloc(sizeof(double) * (size_t)o->trials);
         acc[m].cond = malloc(sizeof(double) * (size_t)o->trials);
         ok = acc[m].time_us && acc[m].cond;
     }
     rs_status st = ok ? RS_OK : RS_ERR_NOMEM;
     for (int c = 0; c < Nc && st == RS_OK; c++) {
-        for (int m = 0; m < Nmethods; m++) {
+        for (int m = 0; m < RS_BENCH_CALIB_NMETHODS; m++) {
             double *t = acc[m].time_us, *k = acc[m].cond;
             memset(&acc[m], 0, sizeof acc[m]);
             acc[m].time_us = t;
             acc[m].cond = k;
         }
-        st = run_config(&out[c * Nmethods], &cfg[c], c, o, acc);
+        st = run_config(&out[c * RS_BENCH_CALIB_NMETHODS], &cfg[c], c, o, acc);
         if (progress) progress(c + 1, Nc, cookie);
     }
-    for (int m = 0; m < Nmethods; m++) {
+    for (int m = 0; m < RS_BENCH_CALIB_NMETHODS; m++) {
         free(acc[m].time_us);
         free(acc[m].cond);
     }
@@ -458,367 +447,6 @@ rs_status rs_bench_calib_run(rs_bench_calib_row **rows, int *Nrows, const rs_ben
         return rs_err_set(err, st, "bench calib: out of memory");
     }
     *rows = out;
-    *Nrows = Nc * Nmethods;
-    return RS_OK;
-}
-
-// ---- CSV ----
-
-rs_status rs_bench_calib_write_csv(const char *path, const rs_bench_calib_row *rows, int Nrows, rs_err *err)
-{
-    rs_io_atomic a;
-    rs_status st = rs_io_atomic_open(&a, path, err);
-    if (st != RS_OK) return st;
-    fprintf(a.f, "family,config,method,trials,failures,time_med_us,time_p90_us,rot_rms_deg,pos_rms_m,"
-                 "ground_rms_m,crb_rot_deg,crb_pos_m,rot_ratio,pos_ratio,cond_median,failure\n");
-    for (int i = 0; i < Nrows; i++) {
-        const rs_bench_calib_row *r = &rows[i];
-        char failure[sizeof r->failure];
-        snprintf(failure, sizeof failure, "%s", r->failure);
-        for (char *p = failure; *p; p++)
-            if (*p == '"' || *p == '\n' || *p == '\r') *p = '\'';
-        fprintf(a.f, "%s,%s,%s,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,\"%s\"\n", r->family,
-                r->config, r->method, r->trials, r->failures, r->time_med_us, r->time_p90_us, r->rot_rms_deg,
-                r->pos_rms_m, r->ground_rms_m, r->crb_rot_deg, r->crb_pos_m, r->rot_ratio, r->pos_ratio,
-                r->cond_median, failure);
-    }
-    if (ferror(a.f)) {
-        rs_io_atomic_abort(&a);
-        return rs_err_set(err, RS_ERR_IO, "%s: write failed", path);
-    }
-    return rs_io_atomic_commit(&a, err);
-}
-
-// ---- the plot ----
-
-static void method_colour(int m, double rgb[3])
-{
-    // hues spread around the circle, lightness alternating so neighbours stay apart
-    const double h = 6.0 * fmod(m * 0.61803398875, 1.0);
-    const double v = (m % 2) ? 0.85 : 0.55, s = 0.9;
-    const int i = (int)h;
-    const double f = h - i, p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
-    const double tab[6][3] = {{v, t, p}, {q, v, p}, {p, v, t}, {p, q, v}, {t, p, v}, {v, p, q}};
-    memcpy(rgb, tab[i % 6], sizeof tab[0]);
-}
-
-static void marker(cairo_t *cr, int m, double x, double y)
-{
-    const double s = 6.0;
-    double rgb[3];
-    method_colour(m, rgb);
-    cairo_new_path(cr);
-    cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
-    switch (methods[m].lib) {
-    case LIB_ROADSIDE: cairo_arc(cr, x, y, s, 0, 2 * M_PI); break;
-    case LIB_OPENCV: cairo_rectangle(cr, x - s, y - s, 2 * s, 2 * s); break;
-    case LIB_OPENGV:
-        cairo_move_to(cr, x, y - s * 1.2);
-        cairo_line_to(cr, x + s * 1.1, y + s * 0.8);
-        cairo_line_to(cr, x - s * 1.1, y + s * 0.8);
-        cairo_close_path(cr);
-        break;
-    }
-    cairo_fill_preserve(cr);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_set_line_width(cr, 0.8);
-    cairo_stroke(cr);
-}
-
-typedef struct {
-    double x0, y0, w, h;          // panel in device units
-    double lx0, lx1, ly0, ly1;    // log10 ranges
-} panel;
-
-static double px(const panel *p, double v) { return p->x0 + p->w * (log10(v) - p->lx0) / (p->lx1 - p->lx0); }
-static double py(const panel *p, double v) { return p->y0 + p->h - p->h * (log10(v) - p->ly0) / (p->ly1 - p->ly0); }
-
-static void draw_axes(cairo_t *cr, const panel *p, const char *title)
-{
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_set_line_width(cr, 1.0);
-    cairo_rectangle(cr, p->x0, p->y0, p->w, p->h);
-    cairo_stroke(cr);
-    cairo_set_font_size(cr, 11);
-    char s[32];
-    for (int e = (int)ceil(p->lx0); e <= (int)floor(p->lx1); e++) {
-        const double x = px(p, pow(10, e));
-        cairo_set_source_rgb(cr, 0.85, 0.85, 0.85);
-        cairo_move_to(cr, x, p->y0);
-        cairo_line_to(cr, x, p->y0 + p->h);
-        cairo_stroke(cr);
-        cairo_set_source_rgb(cr, 0, 0, 0);
-        snprintf(s, sizeof s, "1e%d", e);
-        cairo_move_to(cr, x - 10, p->y0 + p->h + 14);
-        cairo_show_text(cr, s);
-    }
-    for (int e = (int)ceil(p->ly0); e <= (int)floor(p->ly1); e++) {
-        const double y = py(p, pow(10, e));
-        cairo_set_source_rgb(cr, e == 0 ? 0.3 : 0.85, e == 0 ? 0.6 : 0.85, e == 0 ? 0.3 : 0.85);
-        cairo_move_to(cr, p->x0, y);
-        cairo_line_to(cr, p->x0 + p->w, y);
-        cairo_stroke(cr);
-        cairo_set_source_rgb(cr, 0, 0, 0);
-        snprintf(s, sizeof s, "1e%d", e);
-        cairo_move_to(cr, p->x0 - 30, y + 4);
-        cairo_show_text(cr, s);
-    }
-    cairo_move_to(cr, p->x0 + p->w / 2 - 40, p->y0 + p->h + 28);
-    cairo_show_text(cr, "median time, us");
-    cairo_set_font_size(cr, 13);
-    cairo_move_to(cr, p->x0 + 4, p->y0 - 6);
-    cairo_show_text(cr, title);
-    cairo_new_path(cr);
-}
-
-rs_status rs_bench_calib_plot(const char *path, const rs_bench_calib_row *rows, int Nrows, rs_err *err)
-{
-    // families in order of appearance; per family and method: median time, geometric mean ratio
-    enum { MAXF = 16 };
-    const char *fam[MAXF];
-    int Nf = 0;
-    for (int i = 0; i < Nrows; i++) {
-        int f = 0;
-        while (f < Nf && strcmp(fam[f], rows[i].family)) f++;
-        if (f == Nf && Nf < MAXF) fam[Nf++] = rows[i].family;
-    }
-    double X[MAXF][Nmethods], Y[MAXF][Nmethods];
-    double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
-    for (int f = 0; f < Nf; f++)
-        for (int m = 0; m < Nmethods; m++) {
-            double lt = 0, lr = 0;
-            int nt = 0, nr = 0;
-            for (int i = 0; i < Nrows; i++) {
-                if (strcmp(rows[i].family, fam[f]) || strcmp(rows[i].method, methods[m].name)) continue;
-                if (rows[i].time_med_us > 0) lt += log(rows[i].time_med_us), nt++;
-                if (rows[i].pos_ratio > 0 && isfinite(rows[i].pos_ratio)) lr += log(rows[i].pos_ratio), nr++;
-            }
-            X[f][m] = nt && nr ? exp(lt / nt) : NAN;
-            Y[f][m] = nt && nr ? exp(lr / nr) : NAN;
-            if (isfinite(X[f][m]) && isfinite(Y[f][m])) {
-                xmin = fmin(xmin, X[f][m]);
-                xmax = fmax(xmax, X[f][m]);
-                ymin = fmin(ymin, Y[f][m]);
-                ymax = fmax(ymax, Y[f][m]);
-            }
-        }
-    if (!(xmin <= xmax)) xmin = 1, xmax = 10, ymin = 1, ymax = 10;
-    const double lx0 = floor(log10(xmin)), lx1 = fmax(ceil(log10(xmax)), lx0 + 1);
-    const double ly0 = fmin(floor(log10(ymin)), 0.0), ly1 = fmax(ceil(log10(ymax)), ly0 + 1);
-
-    const int W = 1600, H = 1000, cols = 4, legend_w = 230;
-    const int rows_p = Nf > cols ? (Nf + cols - 1) / cols : 1;
-    cairo_surface_t *surf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, W, H);
-    cairo_t *cr = cairo_create(surf);
-    cairo_set_source_rgb(cr, 1, 1, 1);
-    cairo_paint(cr);
-    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_set_font_size(cr, 16);
-    cairo_move_to(cr, 20, 24);
-    cairo_show_text(cr, "roadside bench calib: median CPU time (us) vs position error / Cramer-Rao bound "
-                        "(log-log; 1 = at the bound; one point per method per configuration family)");
-    const double cw = (double)(W - legend_w - 20) / cols, ch = (double)(H - 50) / rows_p;
-    for (int f = 0; f < Nf; f++) {
-        panel p = {20 + 50 + (f % cols) * cw, 50 + 20 + (f / cols) * ch, cw - 70, ch - 60, lx0, lx1, ly0, ly1};
-        char title[64];
-        snprintf(title, sizeof title, "%s", fam[f]);
-        draw_axes(cr, &p, title);
-        for (int m = 0; m < Nmethods; m++)
-            if (isfinite(X[f][m]) && isfinite(Y[f][m])) marker(cr, m, px(&p, X[f][m]), py(&p, Y[f][m]));
-    }
-    cairo_set_font_size(cr, 12);
-    for (int m = 0; m < Nmethods; m++) {
-        const double x = W - legend_w + 10, y = 80 + 24.0 * m;
-        marker(cr, m, x, y);
-        cairo_set_source_rgb(cr, 0, 0, 0);
-        cairo_move_to(cr, x + 14, y + 4);
-        cairo_show_text(cr, methods[m].name);
-    }
-    cairo_move_to(cr, W - legend_w + 10, 80 + 24.0 * Nmethods + 10);
-    cairo_show_text(cr, "x: time (us), y: pos err / CRB");
-    cairo_destroy(cr);
-
-    rs_io_atomic a;
-    rs_status st = cairo_surface_status(surf) == CAIRO_STATUS_SUCCESS
-                       ? rs_io_atomic_open(&a, path, err)
-                       : rs_err_set(err, RS_ERR_EXTERNAL, "%s: cairo: %s", path,
-                                    cairo_status_to_string(cairo_surface_status(surf)));
-    if (st == RS_OK) st = rs_io_atomic_release(&a, err);
-    if (st == RS_OK) {
-        const cairo_status_t cs = cairo_surface_write_to_png(surf, a.tmp_path);
-        if (cs != CAIRO_STATUS_SUCCESS) {
-            rs_io_atomic_abort(&a);
-            st = rs_err_set(err, RS_ERR_IO, "%s: cairo: %s", path, cairo_status_to_string(cs));
-        } else {
-            st = rs_io_atomic_commit(&a, err);
-        }
-    }
-    cairo_surface_destroy(surf);
-    return st;
-}
-
-// ---- the stress run ----
-
-static bool all_finite(const double *v, int n)
-{
-    for (int i = 0; i < n; i++)
-        if (!isfinite(v[i])) return false;
-    return true;
-}
-
-// Random options of stress problem `seed` (see the header for the ranges).
-static void stress_options(rs_simulate_camera_options *s, uint64_t seed)
-{
-    static const char *const lens[] = {"LENSMODEL_PINHOLE", "LENSMODEL_OPENCV8", "LENSMODEL_CAHVOR"};
-    rs_rng rng;
-    rs_rng_seed(&rng, seed ^ 0x5eed5eed5eedull);
-#define U() rs_rng_uniform(&rng)
-    rs_simulate_camera_options_default(s);
-    s->seed = seed;
-    s->lensmodel = lens[(int)(3 * U())];
-    s->hfov_deg = 20 + 70 * U();
-    s->Nlandmarks = 4 + (int)(37 * U());
-    s->pixel_sigma_px = pow(10.0, -3.0 + 3.7 * U());
-    s->outlier_fraction = U() < 0.3 ? 0.0 : 0.5 * U();
-    s->survey_sigma_h_m = U() < 0.2 ? 0.0 : 2.0 * U();
-    s->survey_sigma_v_m = s->survey_sigma_h_m * (0.5 + U());
-    s->elevated_fraction = U() < 0.4 ? 0.0 : 0.5 * U();
-    s->camera_height_m = 3.0 * pow(100.0 / 3.0, U());
-    s->distance_m = 10.0 * pow(200.0, U());
-    s->max_range_m = s->distance_m * (1.5 + 2.0 * U());
-    s->roll_sigma_deg = 3.0 * U();
-#undef U
-}
-
-// Cholesky solve of the 6x6 SPD covariance: returns d^T C^-1 d, or NAN if C is not SPD.
-static double mahalanobis2(const double *C, const double *d)
-{
-    double L[36] = {0}, y[6];
-    for (int i = 0; i < 6; i++)
-        for (int j = 0; j <= i; j++) {
-            double s = C[6 * i + j];
-            for (int k = 0; k < j; k++) s -= L[6 * i + k] * L[6 * j + k];
-            if (i == j) {
-                if (!(s > 0)) return NAN;
-                L[6 * i + i] = sqrt(s);
-            } else {
-                L[6 * i + j] = s / L[6 * j + j];
-            }
-        }
-    double m2 = 0;
-    for (int i = 0; i < 6; i++) {
-        double s = d[i];
-        for (int k = 0; k < i; k++) s -= L[6 * i + k] * y[k];
-        y[i] = s / L[6 * i + i];
-        m2 += y[i] * y[i];
-    }
-    return m2;
-}
-
-// d = r_est - r_true in the chart of r_est (where the covariance is stated), with r_true written
-// as whichever of its two Rodrigues vectors (angle theta about u, or theta - 2 pi about u) is
-// nearer: near a half-turn the same rotation has r and nearly -r, and a plain difference of the
-// vectors would call a perfect estimate wrong.
-static void rotation_difference(double d[3], const double r_est[3], const double r_true[3])
-{
-    const double th = sqrt(r_true[0] * r_true[0] + r_true[1] * r_true[1] + r_true[2] * r_true[2]);
-    double best = INFINITY;
-    for (int alt = 0; alt < 2; alt++) {
-        if (alt && !(th > 0)) break;
-        const double s = alt ? 1.0 - 2.0 * M_PI / th : 1.0;
-        double e[3], n2 = 0;
-        for (int k = 0; k < 3; k++) {
-            e[k] = r_est[k] - s * r_true[k];
-            n2 += e[k] * e[k];
-        }
-        if (n2 < best) {
-            best = n2;
-            memcpy(d, e, sizeof e);
-        }
-    }
-}
-
-static void stress_bad(rs_bench_calib_stress_summary *S, uint64_t seed, const char *what, double v)
-{
-    if (S->first_bad[0]) return;
-    S->first_bad_seed = seed;
-    snprintf(S->first_bad, sizeof S->first_bad, "%s (%.3g)", what, v);
-}
-
-// Solves one stress problem and checks the result (see the header).
-static void stress_one(rs_bench_calib_stress_summary *S, uint64_t seed)
-{
-    rs_simulate_camera_options s;
-    stress_options(&s, seed);
-    rs_simulate_problem *P = NULL;
-    if (rs_simulate_camera_problem(&P, &s, NULL) != RS_OK) return;
-    S->Ngenerated++;
-    const int N = P->Npoints;
-    double *sig = malloc(sizeof(double) * 4 * (size_t)N);
-    if (!sig) {
-        rs_simulate_problem_free(P);
-        return;
-    }
-    for (int i = 0; i < N; i++) {
-        sig[3 * i] = sig[3 * i + 1] = s.survey_sigma_h_m;
-        sig[3 * i + 2] = s.survey_sigma_v_m;
-        sig[3 * N + i] = fmax(s.pixel_sigma_px, 1e-3);
-    }
-    rs_calib_problem cp = {.N = N, .p_enu_m = P->p_enu_survey_m, .sigma_enu_m = sig, .q_px = P->q_px,
-                           .sigma_px = sig + 3 * N, .camera = &P->camera};
-    rs_calib_options opt;
-    rs_calib_options_default(&opt);
-    rs_calib_result r;
-    rs_err e = {0};
-    const rs_status st = rs_calib_solve(&r, &cp, &opt, &e);
-    if (st != RS_OK) {
-        S->Nerror[(unsigned)st < 16 ? st : 15]++;
-        if (strlen(e.msg) < 8) {
-            S->Nunnamed++;
-            stress_bad(S, seed, "an error without a message, status", st);
-        }
-    } else {
-        S->Nok++;
-        const bool finite = all_finite(r.rt_cam_enu, 6) && all_finite(r.covariance_rt_cam_enu, 36) &&
-                            all_finite(r.position_enu_m, 3) && all_finite(r.sigma_position_enu_m, 3) &&
-                            all_finite(r.yaw_pitch_roll_deg, 3) && all_finite(r.sigma_yaw_pitch_roll_deg, 3) &&
-                            isfinite(r.rms_px) && isfinite(r.condition_number) && isfinite(r.variance_factor);
-        bool diag = true;
-        for (int k = 0; k < 6; k++) diag = diag && r.covariance_rt_cam_enu[7 * k] > 0;
-        if (!finite || !diag) {
-            S->Nnonfinite++;
-            stress_bad(S, seed, finite ? "covariance diagonal not positive" : "non-finite output", 0);
-        }
-        const bool flagged = r.condition_number > opt.condition_warn;
-        if (flagged) {
-            S->Nflagged++;
-            if (!strstr(r.warnings, "condition number")) {
-                S->Nunflagged++;
-                stress_bad(S, seed, "condition number beyond the bound without a warning", r.condition_number);
-            }
-        }
-        if (isfinite(r.condition_number)) S->cond_max = fmax(S->cond_max, r.condition_number);
-        double d[6];
-        rotation_difference(d, r.rt_cam_enu, P->camera.rt_cam_enu);
-        for (int k = 3; k < 6; k++) d[k] = r.rt_cam_enu[k] - P->camera.rt_cam_enu[k];
-        const double m2 = mahalanobis2(r.covariance_rt_cam_enu, d);
-        if (!flagged && !r.warnings[0] && !(m2 <= 100.0)) {
-            S->Nbad++;
-            stress_bad(S, seed, "a confident wrong pose: Mahalanobis distance", sqrt(m2));
-        }
-    }
-    rs_calib_result_free(&r);
-    free(sig);
-    rs_simulate_problem_free(P);
-}
-
-rs_status rs_bench_calib_stress(rs_bench_calib_stress_summary *summary, int Nproblems, uint64_t seed,
-                                rs_err *err)
-{
-    memset(summary, 0, sizeof *summary);
-    if (Nproblems < 1) return rs_err_set(err, RS_ERR_USAGE, "stress: Nproblems = %d, must be >= 1", Nproblems);
-    summary->Nproblems = Nproblems;
-    for (int k = 0; k < Nproblems; k++) stress_one(summary, seed + (uint64_t)k);
+    *Nrows = Nc * RS_BENCH_CALIB_NMETHODS;
     return RS_OK;
 }

@@ -1,9 +1,11 @@
-// rs_calib_bench.h -- run time against error: roadside's pose solver next to OpenCV's and
+// rs_bench_calib.h -- run time against error: roadside's pose solver next to OpenCV's and
 // OpenGV's on identical simulated problems, each figure next to the Cramer-Rao bound; and the
 // numerical stress run (many random problems, nothing non-finite, every failure named).
 //
 // Purpose: `roadside bench calib` (issue 5). The library computes the rows; the cli prints them,
 // writes the CSV (rs_bench_calib_write_csv) and the plot (rs_bench_calib_plot).
+// Files: rs_bench_calib.c (methods, sweep, trials, the bound, the run), rs_bench_calib_output.c
+// (CSV, plot), rs_bench_calib_stress.c (the stress run).
 //
 // Problems: rs_simulate_camera_problem() (calib/rs_simulate.h), LENSMODEL_OPENCV8 with mild
 // distortion (so that OpenCV gets the exact lens as K + distortion, and OpenGV exact bearings
@@ -90,10 +92,11 @@ rs_status rs_bench_calib_write_csv(const char *path,
                                    const rs_bench_calib_row *rows, int Nrows,
                                    rs_err *err);
 
-// Writes a PNG (cairo, 1600 x 1000): one log-log panel per configuration family, x = median
-// time (us), y = position error / Cramer-Rao bound (geometric mean over the family's
-// configurations), one marker per method, a shared legend. Atomic. Errors: RS_ERR_IO,
-// RS_ERR_EXTERNAL (cairo).
+// Writes a PNG (1600 x 1000, drawn by rs_report_plot_loglog_png, report/rs_report_plot.h): one
+// log-log panel per configuration family (the first 16), x = median time (us), y = position
+// error / Cramer-Rao bound (geometric mean over the family's configurations), one marker per
+// method (circle: roadside, square: OpenCV, triangle: OpenGV), a shared legend. Atomic.
+// Errors: RS_ERR_IO, RS_ERR_EXTERNAL (cairo), RS_ERR_NOMEM.
 rs_status rs_bench_calib_plot(const char *path,
                               const rs_bench_calib_row *rows, int Nrows,
                               rs_err *err);

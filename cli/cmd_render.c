@@ -141,9 +141,7 @@ int rs_cli_render(int argc, char **argv)
     ropt.scene.overcast = overcast;
     rs_err err = {0};
     rs_synth_render_result r;
-    rs_status st = rs_synth_render(&r, s.output, &s.camera.lensmodel, s.camera.intrinsics,
-                                   s.camera.width, s.camera.height, s.camera.rt_cam_enu,
-                                   s.site->ground_normal_enu, s.site->ground_offset_m,
+    rs_status st = rs_synth_render(&r, s.output, &s.camera, s.site->ground_normal_enu, s.site->ground_offset_m,
                                    &s.prepared, &ropt, &err);
     if (st == RS_OK && labels)
         st = rs_synth_render_write_labels(s.output, &r, split, &lopt, &s.camera, s.site->ground_normal_enu,

@@ -1,5 +1,7 @@
 // rs_report_draw.h -- the figures of `roadside report`, drawn with cairo on any surface (image
-// surface for the HTML's PNGs, PDF surface for the PDF). Private to calib/rs_report*.c.
+// surface for the HTML's PNGs, PDF surface for the PDF). Private to report/rs_report*.c.
+// Files: rs_report_draw.c (shared helpers, camera geometry), rs_report_draw_image.c (the
+// camera's image), rs_report_draw_map.c (the top-down maps, the best map).
 //
 // Geometry goes through the libraries: ENU -> camera with mrcal_transform_point_rt, camera ->
 // pixel with mrcal_project (the full lens model), pixel -> ray with mrcal_unproject. Figures

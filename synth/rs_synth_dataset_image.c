@@ -278,8 +278,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     if ((st = rs_synth_prepare_lod(&prepared, v, NULL, N, coarse, err)))
         goto done;
     const rs_camera *cam = &c->cam;
-    if ((st = rs_synth_render(&r, work, &cam->lensmodel, cam->intrinsics, cam->width, cam->height,
-                              cam->rt_cam_enu, d->site->ground_normal_enu,
+    if ((st = rs_synth_render(&r, work, cam, d->site->ground_normal_enu,
                               d->site->ground_offset_m, &prepared, &ropt, err)))
         goto done;
     *seconds_povray += r.seconds_povray;

@@ -447,14 +447,15 @@ static rs_status write_outputs(const char *out_dir, const rs_synth_render_result
     return st;
 }
 
-rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir,
-                          const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width,
-                          int height, const double rt_cam_enu[6],
+rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, const rs_camera *camera,
                           const double ground_normal_enu[3], double ground_offset_m,
                           const rs_synth_prepared *vehicles, const rs_synth_render_options *opt_in,
                           rs_err *err)
 {
     memset(out, 0, sizeof(*out));
+    const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
+    const double *intrinsics = camera->intrinsics, *rt_cam_enu = camera->rt_cam_enu;
+    const int width = camera->width, height = camera->height;
     rs_synth_render_options opt;
     if (opt_in)
         opt = *opt_in;

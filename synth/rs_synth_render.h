@@ -93,8 +93,8 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 //   (16-bit linear RGBA, real lens),  out_dir/ids.png  the ID pass (16-bit grey, value k+1),
 //   out_dir/shadow.png  with the shadow pass, the lit fraction (16-bit grey, 1 = open ground),
 // each atomically; with keep_files also the scene files and povray's own outputs.
-// in: lensmodel, intrinsics (Nintrinsics,), width, height, rt_cam_enu (6,): the calibrated
-//     camera; ground plane; the prepared vehicles (rs_synth_scene.h); opt may be NULL (defaults)
+// in: camera: the calibrated camera (core/rs_camera.h); ground plane; the prepared vehicles
+//     (rs_synth_scene.h); opt may be NULL (defaults)
 // Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
 // last line), RS_ERR_IO for the files.
 // Runs the real POV-Ray: `povray ARGS...` (no shell) in folder `dir`, with HOME = dir (so that
@@ -110,9 +110,9 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir,
 rs_status rs_synth_render(// out
                           rs_synth_render_result *out,
                           // in
-                          const char *out_dir, const mrcal_lensmodel_t *lensmodel,
-                          const double *intrinsics, int width, int height,
-                          const double rt_cam_enu[6], const double ground_normal_enu[3],
+                          const char *out_dir,
+                          const rs_camera *camera, // calibrated: lens, intrinsics, size, pose
+                          const double ground_normal_enu[3],
                           double ground_offset_m, const rs_synth_prepared *vehicles,
                           const rs_synth_render_options *opt, rs_err *err);
 

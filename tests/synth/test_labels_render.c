@@ -77,8 +77,7 @@ static int run(const char *outdir, const char *lens_name, int opencv8) {
     rs_synth_render_result r = {0};
     char dir[4096];
     snprintf(dir, sizeof dir, "%s/%s", outdir, lens_name);
-    rs_status st = rs_synth_render(&r, dir, &cam.lensmodel, cam.intrinsics, cam.width, cam.height,
-                                   cam.rt_cam_enu, normal, offset, &prep, &ropt, &err);
+    rs_status st = rs_synth_render(&r, dir, &cam, normal, offset, &prep, &ropt, &err);
     if (st) {
         fprintf(stderr, "render: %s\n", err.msg);
         rs_synth_prepared_free(&prep);
