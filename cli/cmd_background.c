@@ -7,8 +7,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include <cjson/cJSON.h>
-
 #include "core/rs_camera.h"
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
@@ -118,9 +116,7 @@ int rs_cli_background(int argc, char **argv)
     }
     rs_site *site = NULL;
     rs_synth_median med = {0};
-    rs_image img = {0};
-    char *path = NULL, *dir = NULL, *source_json = NULL;
-    cJSON *source = NULL;
+    char *path = NULL;
     rs_status st;
     const double t0 = (double)clock() / CLOCKS_PER_SEC;
     if ((st = rs_site_load(&site, site_dir, &err))) {
@@ -148,33 +144,8 @@ int rs_cli_background(int argc, char **argv)
     if (med.width != nominal->width || med.height != nominal->height)
         fprintf(stderr, "roadside background: warning: frames are %dx%d, camera %s is %dx%d\n", med.width,
                 med.height, camera, nominal->width, nominal->height);
-    if ((st = rs_image_alloc(&img, med.width, med.height, 3, &err))) {
-        rc = rs_cli_fail(CMD, st, &err);
-        goto done;
-    }
-    for (size_t p = 0; p < (size_t)med.width * med.height * 3; p++)
-        img.data[p] = med.rgb[p] / 255.0f;
-    path = rs_synth_background_path(site_dir, camera, tags.name);
-    dir = path ? strdup(path) : NULL;
-    source = cJSON_CreateObject();
-    if (!path || !dir || !source) {
-        rc = rs_cli_fail(CMD, RS_ERR_NOMEM, NULL);
-        goto done;
-    }
-    *strrchr(dir, '/') = 0;
-    cJSON_AddStringToObject(source, "method", "temporal median");
-    cJSON *in = cJSON_AddArrayToObject(source, "inputs");
-    for (int i = 0; i < Ninputs; i++)
-        cJSON_AddItemToArray(in, cJSON_CreateString(inputs[i]));
-    cJSON_AddNumberToObject(source, "frames_read", (double)med.Nframes_read);
-    cJSON_AddNumberToObject(source, "frames_used", med.Nframes_used);
-    cJSON_AddNumberToObject(source, "stride", med.stride);
-    if (!(source_json = cJSON_PrintUnformatted(source))) {
-        rc = rs_cli_fail(CMD, RS_ERR_NOMEM, NULL);
-        goto done;
-    }
-    if ((st = rs_io_mkdir_p(dir, &err)) || (st = rs_image_write(path, &img, 8, &err)) ||
-        (st = rs_synth_background_record(site_dir, camera, &tags, source_json, &err))) {
+    if ((st = rs_synth_background_save_median(&path, site_dir, camera, &tags, &med, (const char *const *)inputs,
+                                              Ninputs, &err))) {
         rc = rs_cli_fail(CMD, st, &err);
         goto done;
     }
@@ -184,11 +155,7 @@ int rs_cli_background(int argc, char **argv)
            1e3 * seconds / (double)med.Nframes_read);
     printf("recorded in %s/site.json (camera %s, name %s)\n", site_dir, camera, tags.name);
 done:
-    cJSON_Delete(source);
-    cJSON_free(source_json);
     free(path);
-    free(dir);
-    rs_image_free(&img);
     rs_synth_median_free(&med);
     rs_site_free(site);
     free(inputs);
@@ -206,91 +173,31 @@ static int split_list(char *s, char **out, int max)
     return n;
 }
 
-// Renders the backgrounds of one camera: every time x weather.
-static int render_camera(const char *site_dir, const rs_site *site, const char *calib_dir,
-                         const char *cam_id, const char *lanes, char **times, int Ntimes,
-                         char **weathers, int Nweathers, const rs_synth_twin_options *opt)
+// Prints each background as it is recorded.
+static void twin_done(void *ctx, const char *camera_id, const char *path, double az_deg, double el_deg,
+                      const char *conditions)
+{
+    (void)ctx;
+    printf("%s: %s (sun azimuth %.2f, elevation %.2f deg, %s)\n", camera_id, path, az_deg, el_deg, conditions);
+}
+
+// Renders and records the backgrounds of one camera: every time x weather.
+static int render_camera(const char *site_dir, const rs_site *site, const char *calib_dir, const char *cam_id,
+                         const char *lanes, char **times, int Ntimes, char **weathers, int Nweathers,
+                         const rs_synth_twin_options *opt)
 {
     static const char *const WHAT = "site render-backgrounds";
-    char model[4096], work[4096];
+    char model[4096];
     snprintf(model, sizeof(model), "%s/%s.cameramodel", calib_dir, cam_id);
-    snprintf(work, sizeof(work), "%s/backgrounds/%s/.twin-work", site_dir, cam_id);
     rs_camera cam = {0};
     rs_err err = {0};
     rs_status st = rs_camera_read(&cam, NULL, model, &err);
-    if (st)
-        return rs_cli_fail(WHAT, st, &err);
-    int rc = RS_EXIT_OK;
-    for (int t = 0; t < Ntimes && rc == RS_EXIT_OK; t++) {
-        double unix_s;
-        if ((st = rs_synth_parse_iso8601(&unix_s, times[t], "--times", &err))) {
-            rc = rs_cli_fail(WHAT, st, &err);
-            break;
-        }
-        const time_t tt = (time_t)floor(unix_s);
-        struct tm utc;
-        char stamp[32];
-        gmtime_r(&tt, &utc);
-        strftime(stamp, sizeof(stamp), "%Y%m%dT%H%MZ", &utc);
-        for (int w = 0; w < Nweathers && rc == RS_EXIT_OK; w++) {
-            double az, el;
-            const char *cond;
-            char name[128], tmp[4200];
-            double el0;
-            rs_synth_sun_position(&az, &el0, site->origin.lat_deg, site->origin.lon_deg, unix_s);
-            if (w > 0 && el0 < -6.0)
-                continue; // night whatever the weather: one image per time (rendered at w = 0)
-            // render under a temporary name first: the conditions (night?) decide the final name
-            snprintf(tmp, sizeof(tmp), "%s/render.png", work);
-            if ((st = rs_synth_background_render_twin(&az, &el, &cond, tmp, work, site, lanes,
-                                                      &cam.lensmodel, cam.intrinsics, cam.width,
-                                                      cam.height, cam.rt_cam_enu, unix_s,
-                                                      weathers[w], opt, &err))) {
-                rc = rs_cli_fail(WHAT, st, &err);
-                break;
-            }
-            snprintf(name, sizeof(name), "twin_%s_%s", stamp, cond);
-            char *path = rs_synth_background_path(site_dir, cam_id, name);
-            cJSON *source = cJSON_CreateObject();
-            char azel[64];
-            snprintf(azel, sizeof(azel), "%.3f", az);
-            const char *keys[3] = {"sun_azimuth_deg", "sun_elevation_deg", "weather"};
-            char elv[64];
-            snprintf(elv, sizeof(elv), "%.3f", el);
-            const char *values[3] = {azel, elv, weathers[w]};
-            rs_synth_background_tags tags = {.name = name, .time_iso = times[t],
-                                             .conditions = cond, .synthetic = true,
-                                             .keys = keys, .values = values, .Ntags = 3};
-            if (source) {
-                cJSON_AddStringToObject(source, "method", "digital twin (POV-Ray)");
-                cJSON_AddStringToObject(source, "calibration", model);
-            }
-            char *source_json = source ? cJSON_PrintUnformatted(source) : NULL;
-            if (!path || !source_json) {
-                st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
-            } else if (rename(tmp, path) != 0) {
-                st = rs_err_set(&err, RS_ERR_IO, "%s: cannot rename to %s", tmp, path);
-            } else {
-                st = rs_synth_background_record(site_dir, cam_id, &tags, source_json, &err);
-            }
-            if (st)
-                rc = rs_cli_fail(WHAT, st, &err);
-            else
-                printf("%s: %s (sun azimuth %.2f, elevation %.2f deg, %s)\n", cam_id, path, az, el,
-                       cond);
-            cJSON_Delete(source);
-            cJSON_free(source_json);
-            free(path);
-        }
-    }
-    char log[4200];
-    snprintf(log, sizeof(log), "%s/povray.log", work);
-    if (rc == RS_EXIT_OK) {
-        remove(log);
-        rmdir(work);
-    }
+    if (st == RS_OK)
+        st = rs_synth_background_twins(site_dir, site, cam_id, &cam, model, lanes, (const char *const *)times,
+                                       Ntimes, (const char *const *)weathers, Nweathers, opt, twin_done, NULL,
+                                       &err);
     rs_camera_free(&cam);
-    return rc;
+    return st ? rs_cli_fail(WHAT, st, &err) : RS_EXIT_OK;
 }
 
 int rs_cli_site_render_backgrounds(int argc, char **argv)

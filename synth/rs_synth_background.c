@@ -9,6 +9,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
 #include "geo/rs_site_write.h"
@@ -383,13 +387,13 @@ static rs_status run_twin_povray(const char *povray, const char *work_dir, int w
 rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_elevation_deg,
                                           const char **conditions_out, const char *out_png,
                                           const char *work_dir, const rs_site *site,
-                                          const char *lanes_path,
-                                          const mrcal_lensmodel_t *lensmodel,
-                                          const double *intrinsics, int width, int height,
-                                          const double rt_cam_enu[6], double unix_time_s,
-                                          const char *weather, const rs_synth_twin_options *opt,
-                                          rs_err *err)
+                                          const char *lanes_path, const rs_camera *camera,
+                                          double unix_time_s, const char *weather,
+                                          const rs_synth_twin_options *opt, rs_err *err)
 {
+    const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
+    const double *intrinsics = camera->intrinsics, *rt_cam_enu = camera->rt_cam_enu;
+    const int width = camera->width, height = camera->height;
     rs_synth_twin_options o;
     if (opt)
         o = *opt;
@@ -468,5 +472,118 @@ done:
     free(pov);
     free(png);
     free(log);
+    return st;
+}
+
+rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, const char *cam_id,
+                                    const rs_camera *cam, const char *calibration, const char *lanes,
+                                    const char *const *times, int Ntimes, const char *const *weathers,
+                                    int Nweathers, const rs_synth_twin_options *opt,
+                                    rs_synth_twin_progress progress, void *ctx, rs_err *err)
+{
+    char work[4096];
+    snprintf(work, sizeof(work), "%s/backgrounds/%s/.twin-work", site_dir, cam_id);
+    rs_status st = RS_OK;
+    for (int t = 0; t < Ntimes && st == RS_OK; t++) {
+        double unix_s;
+        if ((st = rs_synth_parse_iso8601(&unix_s, times[t], "--times", err)))
+            break;
+        const time_t tt = (time_t)floor(unix_s);
+        struct tm utc;
+        char stamp[32];
+        gmtime_r(&tt, &utc);
+        strftime(stamp, sizeof(stamp), "%Y%m%dT%H%MZ", &utc);
+        for (int w = 0; w < Nweathers && st == RS_OK; w++) {
+            double az, el;
+            const char *cond;
+            char name[128], tmp[4200];
+            double el0;
+            rs_synth_sun_position(&az, &el0, site->origin.lat_deg, site->origin.lon_deg, unix_s);
+            if (w > 0 && el0 < -6.0)
+                continue; // night whatever the weather: one image per time (rendered at w = 0)
+            // render under a temporary name first: the conditions (night?) decide the final name
+            snprintf(tmp, sizeof(tmp), "%s/render.png", work);
+            if ((st = rs_synth_background_render_twin(&az, &el, &cond, tmp, work, site, lanes, cam, unix_s,
+                                                      weathers[w], opt, err)))
+                break;
+            snprintf(name, sizeof(name), "twin_%s_%s", stamp, cond);
+            char *path = rs_synth_background_path(site_dir, cam_id, name);
+            cJSON *source = cJSON_CreateObject();
+            char azel[64];
+            snprintf(azel, sizeof(azel), "%.3f", az);
+            const char *keys[3] = {"sun_azimuth_deg", "sun_elevation_deg", "weather"};
+            char elv[64];
+            snprintf(elv, sizeof(elv), "%.3f", el);
+            const char *values[3] = {azel, elv, weathers[w]};
+            rs_synth_background_tags tags = {.name = name, .time_iso = times[t],
+                                             .conditions = cond, .synthetic = true,
+                                             .keys = keys, .values = values, .Ntags = 3};
+            if (source) {
+                cJSON_AddStringToObject(source, "method", "digital twin (POV-Ray)");
+                cJSON_AddStringToObject(source, "calibration", calibration);
+            }
+            char *source_json = source ? cJSON_PrintUnformatted(source) : NULL;
+            if (!path || !source_json)
+                st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            else if (rename(tmp, path) != 0)
+                st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename to %s", tmp, path);
+            else
+                st = rs_synth_background_record(site_dir, cam_id, &tags, source_json, err);
+            if (st == RS_OK && progress)
+                progress(ctx, cam_id, path, az, el, cond);
+            cJSON_Delete(source);
+            cJSON_free(source_json);
+            free(path);
+        }
+    }
+    if (st == RS_OK) {
+        char log[4200];
+        snprintf(log, sizeof(log), "%s/povray.log", work);
+        remove(log);
+        rmdir(work);
+    }
+    return st;
+}
+
+rs_status rs_synth_background_save_median(char **path_out, const char *site_dir, const char *camera_id,
+                                          const rs_synth_background_tags *tags, const rs_synth_median *med,
+                                          const char *const *inputs, int Ninputs, rs_err *err)
+{
+    *path_out = NULL;
+    rs_image img = {0};
+    char *path = NULL, *dir = NULL, *source_json = NULL;
+    cJSON *source = NULL;
+    rs_status st = rs_image_alloc(&img, med->width, med->height, 3, err);
+    if (st) return st;
+    for (size_t p = 0; p < (size_t)med->width * med->height * 3; p++) img.data[p] = med->rgb[p] / 255.0f;
+    path = rs_synth_background_path(site_dir, camera_id, tags->name);
+    dir = path ? strdup(path) : NULL;
+    source = cJSON_CreateObject();
+    if (!path || !dir || !source) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    *strrchr(dir, '/') = 0;
+    cJSON_AddStringToObject(source, "method", "temporal median");
+    cJSON *in = cJSON_AddArrayToObject(source, "inputs");
+    for (int i = 0; i < Ninputs; i++) cJSON_AddItemToArray(in, cJSON_CreateString(inputs[i]));
+    cJSON_AddNumberToObject(source, "frames_read", (double)med->Nframes_read);
+    cJSON_AddNumberToObject(source, "frames_used", med->Nframes_used);
+    cJSON_AddNumberToObject(source, "stride", med->stride);
+    if (!(source_json = cJSON_PrintUnformatted(source))) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if ((st = rs_io_mkdir_p(dir, err)) || (st = rs_image_write(path, &img, 8, err)) ||
+        (st = rs_synth_background_record(site_dir, camera_id, tags, source_json, err)))
+        goto done;
+    *path_out = path;
+    path = NULL;
+done:
+    cJSON_Delete(source);
+    cJSON_free(source_json);
+    free(path);
+    free(dir);
+    rs_image_free(&img);
     return st;
 }

@@ -15,6 +15,7 @@
 #include <stddef.h>
 #include <mrcal/mrcal.h>
 #include "geo/rs_site.h"
+#include "core/rs_camera.h"
 #include "core/rs_status.h"
 #ifdef __cplusplus
 extern "C" {
@@ -105,6 +106,14 @@ rs_status rs_synth_background_record(const char *site_dir, const char *camera_id
                                      const rs_synth_background_tags *tags,
                                      const char *source_json, rs_err *err);
 
+// `roadside background`: writes a temporal median as SITE/backgrounds/<id>/<name>.png (8-bit,
+// atomically; the folder is created) and records it in site.json with its tags and its source
+// (method "temporal median", the inputs, frames read and used, the stride).
+// out: *path_out, the image's path (malloc'ed: caller frees; NULL on failure)
+rs_status rs_synth_background_save_median(char **path_out, const char *site_dir, const char *camera_id,
+                                          const rs_synth_background_tags *tags, const rs_synth_median *med,
+                                          const char *const *inputs, int Ninputs, rs_err *err);
+
 // ---- digital-twin backgrounds ----
 
 // The weathers of a rendered background: "sunny", "cloudy", "rain", "snow" (conditions tag), and
@@ -125,9 +134,8 @@ void rs_synth_twin_options_default(rs_synth_twin_options *opt);
 // Writes the 8-bit sRGB image to out_png atomically (a distorted lens is rendered on a pinhole
 // canvas and resampled with mrcal's projection, rs_synth_camera.h). Temporary scene files go to
 // work_dir (created if missing) and are removed.
-// in: site (loaded), lanes_path (lanes.geojson; may be NULL: no markings), camera: lensmodel,
-//     intrinsics (Nintrinsics,), width, height, rt_cam_enu (6,); unix_time_s; weather (one of
-//     sunny/cloudy/rain/snow; "night" also accepted); opt may be NULL
+// in: site (loaded), lanes_path (lanes.geojson; may be NULL: no markings), cam (calibrated);
+//     unix_time_s; weather (one of sunny/cloudy/rain/snow; "night" also accepted); opt may be NULL
 // out: *sun_azimuth_deg, *sun_elevation_deg (may be NULL); *conditions_out: the conditions tag
 //      the image shows (static string; weather, or "night")
 // Returns RS_ERR_EXTERNAL when povray is missing or fails, RS_ERR_INVALID for a bad weather.
@@ -137,11 +145,31 @@ rs_status rs_synth_background_render_twin(// out
                                           // in
                                           const char *out_png, const char *work_dir,
                                           const rs_site *site, const char *lanes_path,
-                                          const mrcal_lensmodel_t *lensmodel,
-                                          const double *intrinsics, int width, int height,
-                                          const double rt_cam_enu[6], double unix_time_s,
+                                          const rs_camera *cam, double unix_time_s,
                                           const char *weather, const rs_synth_twin_options *opt,
                                           rs_err *err);
+
+// Called as each background is recorded: the camera, the image's path, the sun and the
+// conditions tag (rs_synth_background_twins).
+typedef void (*rs_synth_twin_progress)(void *ctx, const char *camera_id, const char *path, double sun_azimuth_deg,
+                                       double sun_elevation_deg, const char *conditions);
+
+// `roadside site render-backgrounds` for one camera: a digital-twin background
+// (rs_synth_background_render_twin) for every time x weather (one image per time at night),
+// each renamed to SITE/backgrounds/<id>/twin_<UTC stamp>_<conditions>.png and recorded in
+// site.json (rs_synth_background_record: its time, conditions, sun and weather tags and its
+// source, the calibration file it was made from). The work folder
+// SITE/backgrounds/<id>/.twin-work is removed when all went well.
+// in: site_dir, site (loaded), cam_id, cam (calibrated), calibration (its file, recorded),
+//     lanes (may be NULL: no markings), times (Ntimes,) ISO 8601, weathers (Nweathers,),
+//     opt (may be NULL); progress (may be NULL) and its ctx
+// Errors: those of rs_synth_background_render_twin and rs_synth_background_record; a time
+// that is not ISO 8601 is RS_ERR_USAGE naming "--times".
+rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, const char *cam_id,
+                                    const rs_camera *cam, const char *calibration, const char *lanes,
+                                    const char *const *times, int Ntimes, const char *const *weathers,
+                                    int Nweathers, const rs_synth_twin_options *opt,
+                                    rs_synth_twin_progress progress, void *ctx, rs_err *err);
 
 #ifdef __cplusplus
 }
