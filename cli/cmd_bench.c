@@ -3,12 +3,10 @@
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "cli/rs_cli.h"
-#include "eval/rs_eval.h"
 #include "core/rs_io.h"
 #include "bench/rs_bench_eval.h"
 
@@ -33,30 +31,6 @@ static void usage(FILE *out)
             "                 temporary folder under $TMPDIR or /tmp, removed afterwards)\n"
             "\n"
             "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/benchmarks.md.\n");
-}
-
-static double now_s(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-// CPU time of this process so far (user + system), seconds: the figure that does not depend on
-// what else the machine runs.
-static double cpu_s(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-// Peak resident set size of this process so far, bytes.
-static double peak_rss_bytes(void)
-{
-    struct rusage u;
-    getrusage(RUSAGE_SELF, &u);
-    return 1024.0 * (double)u.ru_maxrss;
 }
 
 typedef struct {
@@ -101,45 +75,6 @@ static int parse_bench_eval(int argc, char **argv, bench_eval_args *a)
     return RS_EXIT_OK;
 }
 
-typedef struct {
-    size_t gt, crowd;
-    double generate_s, parse_s, eval_s, parse_cpu_s, eval_cpu_s, rss_before, rss_after, data_bytes, map, ar;
-} bench_eval_figures;
-
-static rs_status bench_eval_run(bench_eval_figures *f, const bench_eval_args *a, const char *gt_path,
-                                const char *dets_path, rs_err *err)
-{
-    double t0 = now_s();
-    rs_status st = rs_bench_eval_write_data(gt_path, dets_path, (int)a->images, a->dets, (uint64_t)a->seed, err);
-    if (st != RS_OK) return st;
-    f->generate_s = now_s() - t0;
-    f->rss_before = peak_rss_bytes();
-
-    rs_eval_data *data = NULL;
-    rs_eval_result *r = NULL;
-    const rs_eval_load_options lo = {.center_shift = 0.5};
-    t0 = now_s();
-    double c0 = cpu_s();
-    if ((st = rs_eval_load(&data, gt_path, dets_path, &lo, err))) return st;
-    f->parse_s = now_s() - t0;
-    f->parse_cpu_s = cpu_s() - c0;
-    f->data_bytes = (double)rs_eval_data_bytes(data);
-    rs_eval_data_counts(data, NULL, &f->gt, &f->crowd, NULL);
-    t0 = now_s();
-    c0 = cpu_s();
-    st = rs_eval_run(&r, data, NULL, err);
-    f->eval_s = now_s() - t0;
-    f->eval_cpu_s = cpu_s() - c0;
-    f->rss_after = peak_rss_bytes();
-    if (st == RS_OK) {
-        f->map = r->all.map;
-        f->ar = r->all.ar;
-    }
-    rs_eval_result_free(r);
-    rs_eval_data_free(data);
-    return st;
-}
-
 static int bench_eval(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -162,9 +97,9 @@ static int bench_eval(int argc, char **argv)
     } else if ((st = rs_io_mkdir_p(dir, &err)))
         return rs_cli_fail("bench eval", st, &err);
     char *gt_path = rs_io_join(dir, "gt.json"), *dets_path = rs_io_join(dir, "dets.json");
-    bench_eval_figures f = {0};
+    rs_bench_eval_figures f = {0};
     if (!gt_path || !dets_path) st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
-    else st = bench_eval_run(&f, &a, gt_path, dets_path, &err);
+    else st = rs_bench_eval_run(&f, (int)a.images, a.dets, (uint64_t)a.seed, gt_path, dets_path, &err);
     if (!a.dir) {
         if (gt_path) unlink(gt_path);
         if (dets_path) unlink(dets_path);
