@@ -10,16 +10,11 @@
 #include <strings.h>
 
 #include "geo/internal/rs_site_internal.h"
+#include "core/rs_io.h"
 
 static const double DEFAULT_SIGMA_PX = 1.0;
 
 // ---- camera models ----
-
-static bool has_extension(const char *path, const char *ext)
-{
-    const char *dot = strrchr(path, '.');
-    return dot && !strchr(dot, '/') && !strcasecmp(dot + 1, ext);
-}
 
 // mrcal 2.2's .cameramodel rs_site__reader reads past the end of its buffer when a quoted string is not
 // closed (found by tests/site/test_site_fuzz.py under AddressSanitizer), so such files are refused
@@ -62,8 +57,8 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
     c->file = cam->model_path;
     if (!rs_site__file_exists(c, why)) goto done;
     rs_err e = {0};
-    if (has_extension(cam->model_path, "yaml") || has_extension(cam->model_path, "yml") ||
-        has_extension(cam->model_path, "json")) {
+    if (rs_io_has_extension(cam->model_path, "yaml") || rs_io_has_extension(cam->model_path, "yml") ||
+        rs_io_has_extension(cam->model_path, "json")) {
         if (rs_camera_read(&cam->camera, NULL, cam->model_path, &e)) camera_error(c, cam, &e);
         else if (cam->camera.width == 0 || cam->camera.height == 0) {
             ERR(c, RS_ERR_PARSE, cam->camera.width == 0 ? "image_width" : "image_height", "missing");

@@ -16,8 +16,8 @@
 #include "core/rs_image.h"
 #include "calib/rs_calib_site.h"
 #include "core/rs_io.h"
-#include "report/rs_report_doc.h"
-#include "report/rs_report_draw.h"
+#include "report/internal/rs_report_doc.h"
+#include "report/internal/rs_report_draw.h"
 
 void rs_report_options_default(rs_report_options *opt)
 {
@@ -30,112 +30,49 @@ void rs_report_options_default(rs_report_options *opt)
     opt->audit_options.range_m = opt->range_m;
 }
 
-// ---- reading <id>.json ----
+// ---- <id>.json, read by calib (rs_calib_site_result_read) ----
 
-static rs_status json_numbers(double *out, int n, const cJSON *obj, const char *name, const char *path, rs_err *err)
-{
-    const cJSON *a = cJSON_GetObjectItemCaseSensitive(obj, name);
-    if (!cJSON_IsArray(a) || cJSON_GetArraySize(a) != n)
-        return rs_err_set(err, RS_ERR_PARSE, "%s: %s: expected an array of %d numbers", path, name, n);
-    int i = 0;
-    const cJSON *x;
-    cJSON_ArrayForEach(x, a)
-    {
-        if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
-            return rs_err_set(err, RS_ERR_PARSE, "%s: %s[%d]: not a finite number", path, name, i);
-        out[i++] = x->valuedouble;
-    }
-    return RS_OK;
-}
-
-static rs_status json_number(double *out, const cJSON *obj, const char *name, const char *path, rs_err *err)
-{
-    const cJSON *x = cJSON_GetObjectItemCaseSensitive(obj, name);
-    if (!cJSON_IsNumber(x)) return rs_err_set(err, RS_ERR_PARSE, "%s: %s: expected a number", path, name);
-    *out = x->valuedouble;
-    return RS_OK;
-}
-
-// Fills the <id>.json part of cam from `path`.
+// Fills the <id>.json part of cam from `path`: the figures copied, the strings handed over.
 static rs_status read_result_json(rs_report_camera *cam, const rs_site *site, const char *path, rs_err *err)
 {
-    char *text = NULL;
-    rs_status st = rs_io_read_file(&text, NULL, path, err);
-    if (st) return st;
-    cJSON *root = cJSON_Parse(text);
-    free(text);
-    if (!cJSON_IsObject(root)) {
-        cJSON_Delete(root);
-        return rs_err_set(err, RS_ERR_PARSE, "%s: not a JSON object (run 'roadside calib' again?)", path);
+    rs_calib_site_result r;
+    rs_status st = rs_calib_site_result_read(&r, path, err);
+    if (st == RS_OK && !(cam->landmarks = calloc((size_t)r.N + 1, sizeof *cam->landmarks)))
+        st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    if (st) {
+        rs_calib_site_result_free(&r);
+        return st;
     }
-    double used = 0, rejected = 0;
-    if (!st) st = json_numbers(cam->position_enu_m, 3, root, "position_enu_m", path, err);
-    if (!st) st = json_numbers(cam->sigma_position_enu_m, 3, root, "sigma_position_enu_m", path, err);
-    if (!st) st = json_numbers(cam->position_llh, 3, root, "position_llh", path, err);
-    if (!st) st = json_numbers(cam->yaw_pitch_roll_deg, 3, root, "yaw_pitch_roll_deg", path, err);
-    if (!st) st = json_numbers(cam->sigma_yaw_pitch_roll_deg, 3, root, "sigma_yaw_pitch_roll_deg", path, err);
-    if (!st) st = json_number(&cam->rms_px, root, "rms_px", path, err);
-    if (!st) st = json_number(&cam->variance_factor, root, "variance_factor", path, err);
-    if (!st) st = json_number(&cam->condition_number, root, "condition_number", path, err);
-    if (!st) st = json_number(&used, root, "landmarks_used", path, err);
-    if (!st) st = json_number(&rejected, root, "landmarks_rejected", path, err);
-    cam->Nused = (int)used;
-    cam->Nrejected = (int)rejected;
-    const cJSON *lm = cJSON_GetObjectItemCaseSensitive(root, "lensmodel");
-    if (!st && !cJSON_IsString(lm)) st = rs_err_set(err, RS_ERR_PARSE, "%s: lensmodel: expected a string", path);
-    if (!st && !(cam->lensmodel = strdup(lm->valuestring))) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-
-    const cJSON *warnings = cJSON_GetObjectItemCaseSensitive(root, "warnings");
-    if (!st && !cJSON_IsArray(warnings)) st = rs_err_set(err, RS_ERR_PARSE, "%s: warnings: expected an array", path);
-    if (!st) {
-        cam->warnings = calloc((size_t)cJSON_GetArraySize(warnings) + 1, sizeof *cam->warnings);
-        if (!cam->warnings) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-        const cJSON *w;
-        cJSON_ArrayForEach(w, warnings)
-        {
-            if (st) break;
-            if (!cJSON_IsString(w))
-                st = rs_err_set(err, RS_ERR_PARSE, "%s: warnings[%d]: expected a string", path, cam->Nwarnings);
-            else if (!(cam->warnings[cam->Nwarnings++] = strdup(w->valuestring)))
-                st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-        }
+    memcpy(cam->position_enu_m, r.position_enu_m, sizeof cam->position_enu_m);
+    memcpy(cam->sigma_position_enu_m, r.sigma_position_enu_m, sizeof cam->sigma_position_enu_m);
+    memcpy(cam->position_llh, r.position_llh, sizeof cam->position_llh);
+    memcpy(cam->yaw_pitch_roll_deg, r.yaw_pitch_roll_deg, sizeof cam->yaw_pitch_roll_deg);
+    memcpy(cam->sigma_yaw_pitch_roll_deg, r.sigma_yaw_pitch_roll_deg, sizeof cam->sigma_yaw_pitch_roll_deg);
+    cam->rms_px = r.rms_px;
+    cam->variance_factor = r.variance_factor;
+    cam->condition_number = r.condition_number;
+    cam->Nused = r.Nused;
+    cam->Nrejected = r.Nrejected;
+    cam->lensmodel = r.lensmodel;
+    cam->warnings = r.warnings;
+    cam->Nwarnings = r.Nwarnings;
+    r.lensmodel = NULL;
+    r.warnings = NULL;
+    r.Nwarnings = 0;
+    for (int i = 0; i < r.N; i++) {
+        const rs_calib_site_landmark *m = &r.landmarks[i];
+        rs_report_landmark *l = &cam->landmarks[cam->N++];
+        l->id = m->id;
+        r.landmarks[i].id = NULL;
+        l->ilandmark = rs_site_find_landmark(site, l->id);
+        memcpy(l->observed_px, m->observed_px, sizeof l->observed_px);
+        memcpy(l->predicted_px, m->predicted_px, sizeof l->predicted_px);
+        memcpy(l->residual_px, m->residual_px, sizeof l->residual_px);
+        l->normalised = m->normalised_residual;
+        l->inlier = m->inlier;
     }
-
-    const cJSON *lms = cJSON_GetObjectItemCaseSensitive(root, "landmarks");
-    if (!st && !cJSON_IsArray(lms)) st = rs_err_set(err, RS_ERR_PARSE, "%s: landmarks: expected an array", path);
-    if (!st) {
-        int N = cJSON_GetArraySize(lms);
-        cam->landmarks = calloc((size_t)N + 1, sizeof *cam->landmarks);
-        if (!cam->landmarks) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-        const cJSON *l;
-        cJSON_ArrayForEach(l, lms)
-        {
-            if (st) break;
-            rs_report_landmark *r = &cam->landmarks[cam->N];
-            char field[64];
-            snprintf(field, sizeof field, "landmarks[%d]", cam->N);
-            const cJSON *id = cJSON_GetObjectItemCaseSensitive(l, "id");
-            const cJSON *inl = cJSON_GetObjectItemCaseSensitive(l, "inlier");
-            if (!cJSON_IsString(id) || !cJSON_IsBool(inl)) {
-                st = rs_err_set(err, RS_ERR_PARSE, "%s: %s: expected a string id and a boolean inlier", path, field);
-                break;
-            }
-            if (!(r->id = strdup(id->valuestring))) {
-                st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-                break;
-            }
-            cam->N++;
-            r->inlier = cJSON_IsTrue(inl);
-            r->ilandmark = rs_site_find_landmark(site, r->id);
-            if (!st) st = json_numbers(r->observed_px, 2, l, "observed_px", path, err);
-            if (!st) st = json_numbers(r->predicted_px, 2, l, "predicted_px", path, err);
-            if (!st) st = json_numbers(r->residual_px, 2, l, "residual_px", path, err);
-            if (!st) st = json_number(&r->normalised, l, "normalised_residual", path, err);
-            if (st) rs_err_prefix(err, "%s", field);
-        }
-    }
-    cJSON_Delete(root);
-    return st;
+    rs_calib_site_result_free(&r);
+    return RS_OK;
 }
 
 // ---- lanes.geojson ----

@@ -1,6 +1,6 @@
 // rs_report_doc.c -- the report's document model and its two writers (HTML, PDF). See
 // rs_report_doc.h.
-#include "report/rs_report_doc.h"
+#include "report/internal/rs_report_doc.h"
 
 #include <cairo-pdf.h>
 #include <stdarg.h>

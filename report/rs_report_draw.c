@@ -1,9 +1,9 @@
 // rs_report_draw.c -- the drawing helpers the report's figures share
 // (report/internal/rs_report_draw_internal.h) and the cameras' figure geometry
 // (rs_report_camera_geometry). The figures: rs_report_draw_image.c, rs_report_draw_map.c.
-#include "report/rs_report_draw.h"
+#include "report/internal/rs_report_draw.h"
 #include "report/internal/rs_report_draw_internal.h"
-#include "report/rs_report_doc.h"
+#include "report/internal/rs_report_doc.h"
 #include "core/rs_pose.h"
 
 #include <math.h>

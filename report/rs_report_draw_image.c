@@ -1,8 +1,8 @@
 // rs_report_draw_image.c -- the camera's image figure (rs_report_draw_camera): background or
 // neutral canvas, ground grid, lanes, picks, reprojections and magnified residuals, legend.
-#include "report/rs_report_draw.h"
+#include "report/internal/rs_report_draw.h"
 #include "report/internal/rs_report_draw_internal.h"
-#include "report/rs_report_doc.h"
+#include "report/internal/rs_report_doc.h"
 #include "core/rs_pose.h"
 
 #include <math.h>

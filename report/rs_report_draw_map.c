@@ -2,9 +2,9 @@
 // (rs_report_draw_camera_map) and of the whole site (rs_report_draw_site_map), with the layers
 // they share (lanes, fields of view, cameras, landmarks, uncertainty field and contours, colour
 // bar, scale and north arrow), and the site's best uncertainty map (rs_report_best_map).
-#include "report/rs_report_draw.h"
+#include "report/internal/rs_report_draw.h"
 #include "report/internal/rs_report_draw_internal.h"
-#include "report/rs_report_doc.h"
+#include "report/internal/rs_report_doc.h"
 
 #include <math.h>
 #include <stdint.h>

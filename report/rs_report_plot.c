@@ -1,6 +1,6 @@
 // rs_report_plot.c -- log-log scatter panels as a PNG (see rs_report_plot.h).
 #include "report/rs_report_plot.h"
-#include "report/rs_report_doc.h"
+#include "report/internal/rs_report_doc.h"
 #include "core/rs_io.h"
 
 #include <math.h>

@@ -1,7 +1,7 @@
 // rs_report_doc.h -- a small document model (headings, paragraphs, tables, figures) rendered
 // twice from the same blocks: a self-contained HTML file (figures as base64 PNG data URIs,
 // inline CSS, no script, no external resource) and a PDF drawn with cairo (figures as vectors
-// on cairo's PDF surface, text with cairo's toy font API). Private to calib/rs_report*.c.
+// on cairo's PDF surface, text with cairo's toy font API). Private to report/ (internal).
 //
 // Every string handed to the document is copied; the HTML writer escapes it (& < > " '), so
 // text from input files (site names, landmark ids, notes) can never inject markup.
