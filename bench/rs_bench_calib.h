@@ -7,14 +7,14 @@
 // Files: rs_bench_calib.c (methods, sweep, trials, the bound, the run), rs_bench_calib_output.c
 // (CSV, plot), rs_bench_calib_stress.c (the stress run).
 //
-// Problems: rs_simulate_camera_problem() (calib/rs_simulate.h), LENSMODEL_OPENCV8 with mild
+// Problems: rs_simulate_camera_problem() (sim/rs_simulate.h), LENSMODEL_OPENCV8 with mild
 // distortion (so that OpenCV gets the exact lens as K + distortion, and OpenGV exact bearings
 // from mrcal_unproject), 1920x1080, 60 degree field of view. The sweep moves one knob at a time
 // away from a baseline (20 landmarks, 1 px, survey sigma 0.3 m on every axis, no outliers, 25%
 // of the landmarks 2-6 m above the ground, camera 8 m up, 25 m from the point it looks at);
-// the families and their values are listed by rs_bench_calib_configs().
+// the families and their values are the table in bench/rs_bench_calib.c (and docs/benchmarks.md).
 //
-// Methods (rs_bench_calib_method_name): roadside (rs_calib_solve, full: RANSAC, Ceres with
+// Methods (the rows' `method` names): roadside (rs_calib_solve, full: RANSAC, Ceres with
 // landmark priors, outliers, covariance), roadside-init (rs_calib_init_pose alone),
 // roadside-noprior (rs_calib_solve with the survey taken as exact); OpenCV solvePnP ITERATIVE,
 // EPNP, SQPNP, IPPE, each alone and followed by solvePnPRefineLM, solvePnPRansac alone and + LM;

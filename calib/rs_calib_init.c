@@ -1,7 +1,7 @@
 // rs_calib_init.c -- initial camera pose: bearings, degeneracy checks, RANSAC over P3P scored
 // in pixels, non-minimal solve on the inliers. See rs_calib_init.h and
 // docs/calibration-init.md. The solvers themselves are OpenGV's and OpenCV's, behind the shims
-// rs_calib_opengv.h and rs_calib_opencv.h; this file holds the logic.
+// rs_calib_opengv.h and calib/internal/rs_calib_opencv.h; this file holds the logic.
 #include "calib/rs_calib_init.h"
 
 #include <math.h>

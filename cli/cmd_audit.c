@@ -1,4 +1,4 @@
-// roadside audit: parse arguments, call calib/rs_audit.h, print.
+// roadside audit: parse arguments, call audit/rs_audit.h, print.
 #include <getopt.h>
 #include <math.h>
 #include <stdlib.h>

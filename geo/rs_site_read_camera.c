@@ -17,7 +17,7 @@ static const double DEFAULT_SIGMA_PX = 1.0;
 // ---- camera models ----
 
 // mrcal 2.2's .cameramodel rs_site__reader reads past the end of its buffer when a quoted string is not
-// closed (found by tests/site/test_site_fuzz.py under AddressSanitizer), so such files are refused
+// closed (found by tests/geo/test_site_fuzz.py under AddressSanitizer), so such files are refused
 // before mrcal sees them; everything else is left to mrcal. Returns NULL if the text may be
 // handed to mrcal, else what is wrong (and *line where).
 static const char *cameramodel_precheck(const char *text, size_t len, int *line)

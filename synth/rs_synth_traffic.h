@@ -118,7 +118,7 @@ bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_syn
 // Writes the vehicles file `roadside scene` reads (synth/rs_synth_scene.h,
 // rs_synth_vehicles_read): a JSON list of {"id", "class", "e", "n", "yaw_deg", "length",
 // "width", "height", "variant", "speed_mps"}, lengths to 1e-4 m, angles to 1e-4 degree. Written
-// atomically (geo/rs_io.h).
+// atomically (core/rs_io.h).
 rs_status rs_synth_traffic_write_json(const char *path,
                                       // in
                                       const rs_synth_traffic_vehicle *vehicles, int N,

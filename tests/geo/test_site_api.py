@@ -15,7 +15,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import site_fixture as fx  # noqa: E402
 
-# rs_status values (geo/rs_status.h)
+# rs_status values (core/rs_status.h)
 RS = {"OK": 0, "IO": 1, "PARSE": 2, "INVALID": 3, "NOT_FOUND": 4, "UNSUPPORTED": 9}
 
 

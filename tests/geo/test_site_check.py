@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 # test_site_check.py DEFECT -- `roadside site check` on the fixture with one injected defect.
 #
-# Each defect is one meson test (tests/site/meson.build lists them). The test copies the valid
+# Each defect is one meson test (tests/geo/meson.build lists them). The test copies the valid
 # fixture, injects the defect, runs `roadside site check SITE` and asserts the exit status
 # (1 for errors, 0 for warnings only) and that one output line names the file, the line or the
 # feature, and the field, with the expected message. 'clean' checks the fixture itself passes.
