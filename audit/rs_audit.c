@@ -11,6 +11,7 @@
 
 #include <mrcal/poseutils.h>
 
+#include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
 #include "core/rs_pose.h"
 
@@ -37,9 +38,12 @@ static rs_status check_options(const rs_audit_options *o, rs_err *err)
     const struct {
         const char *name;
         double v;
-    } pos[] = {{"max_rms_px", o->max_rms_px},         {"max_loo_px", o->max_loo_px},
-               {"max_loo_m", o->max_loo_m},           {"detection_sigma_px", o->detection_sigma_px},
-               {"range_m", o->range_m},               {"cell_m", o->cell_m},
+    } pos[] = {{"max_rms_px", o->max_rms_px},
+               {"max_loo_px", o->max_loo_px},
+               {"max_loo_m", o->max_loo_m},
+               {"detection_sigma_px", o->detection_sigma_px},
+               {"range_m", o->range_m},
+               {"cell_m", o->cell_m},
                {"consistency_px", o->consistency_px}};
     for (size_t i = 0; i < sizeof pos / sizeof pos[0]; i++)
         if (!(pos[i].v > 0 && isfinite(pos[i].v)))
@@ -77,14 +81,9 @@ static double rotation_between_deg(const double ra[3], const double rb[3])
     return sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) * DEG;
 }
 
-static double dist3(const double *a, const double *b)
-{
-    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-}
-
 // Projects ENU points through a pose and lens; false if mrcal refuses.
-static bool project_enu(double q[2], const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6],
-                        const double p_enu[3])
+static bool project_enu(
+    double q[2], const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6], const double p_enu[3])
 {
     mrcal_point3_t pc;
     mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt, p_enu);
@@ -95,209 +94,10 @@ static bool project_enu(double q[2], const mrcal_lensmodel_t *lm, const double *
     return isfinite(q[0]) && isfinite(q[1]);
 }
 
-// ---- ground uncertainty (rs_audit.h, Method) ----
-
-// Cov(g) of the ground point p (on the plane) seen by the camera; false if degenerate.
-static bool ground_cov(double cov[4], double q_out[2], const mrcal_lensmodel_t *lm, const double *intrinsics,
-                       const double rt[6], const double C_rt[36], const double p[3], double sigma_px,
-                       const double n[3])
-{
-    double pc[3], dpc_drt[18], dpc_dp[9];
-    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, rt, p);
-    if (!(pc[2] > 0)) return false;
-    mrcal_point2_t q;
-    mrcal_point3_t dq_dpc[2];
-    if (!mrcal_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics)) return false;
-    if (q_out) q_out[0] = q.x, q_out[1] = q.y;
-    const double dp_dg[6] = {1, 0, 0, 1, -n[0] / n[2], -n[1] / n[2]}; // (3,2)
-    double A[4] = {0}, B[12] = {0};                                    // (2,2), (2,6)
-    for (int i = 0; i < 2; i++) {
-        double dq_dp[3] = {0};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++) dq_dp[k] += dq_dpc[i].xyz[j] * dpc_dp[3 * j + k];
-        for (int c = 0; c < 2; c++)
-            for (int k = 0; k < 3; k++) A[2 * i + c] += dq_dp[k] * dp_dg[2 * k + c];
-        for (int c = 0; c < 6; c++)
-            for (int j = 0; j < 3; j++) B[6 * i + c] += dq_dpc[i].xyz[j] * dpc_drt[6 * j + c];
-    }
-    double det = A[0] * A[3] - A[1] * A[2];
-    if (!(fabs(det) > 0) || !isfinite(det)) return false;
-    const double Ai[4] = {A[3] / det, -A[1] / det, -A[2] / det, A[0] / det};
-    double M[4] = {sigma_px * sigma_px, 0, 0, sigma_px * sigma_px}; // B C B^T + s^2 I
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++)
-            for (int a = 0; a < 6; a++)
-                for (int b = 0; b < 6; b++) M[2 * i + j] += B[6 * i + a] * C_rt[6 * a + b] * B[6 * j + b];
-    double T[4] = {0};
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++)
-            for (int k = 0; k < 2; k++) T[2 * i + j] += Ai[2 * i + k] * M[2 * k + j];
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++) {
-            cov[2 * i + j] = 0;
-            for (int k = 0; k < 2; k++) cov[2 * i + j] += T[2 * i + k] * Ai[2 * j + k];
-        }
-    return isfinite(cov[0]) && isfinite(cov[3]);
-}
-
-static rs_status check_plane(const double n[3], rs_err *err)
-{
-    if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) || !(fabs(n[2]) > 1e-9))
-        return rs_err_set(err, RS_ERR_INVALID, "ground plane normal (%g, %g, %g): must be finite and not vertical",
-                          n[0], n[1], n[2]);
-    return RS_OK;
-}
-
-rs_status rs_audit_ground_sigma(double *sigma_m, double *cov_en_m2, double p_enu_m[3], const rs_camera *cam,
-                                const double covariance_rt[36],
-                                const double q_px[2], double detection_sigma_px,
-                                const double ground_normal_enu[3], double ground_offset_m, rs_err *err)
-{
-    *sigma_m = NAN;
-    rs_status st = check_plane(ground_normal_enu, err);
-    if (st) return st;
-    double p[3], cov[4];
-    st = rs_camera_locate_ground(p, cam, q_px, ground_normal_enu, ground_offset_m, err);
-    if (st) return st;
-    if (!ground_cov(cov, NULL, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, covariance_rt, p, detection_sigma_px,
-                    ground_normal_enu))
-        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): the ground point's covariance is undefined",
-                          q_px[0], q_px[1]);
-    *sigma_m = sqrt(cov[0] + cov[3]);
-    if (cov_en_m2) memcpy(cov_en_m2, cov, sizeof cov);
-    if (p_enu_m) memcpy(p_enu_m, p, sizeof p);
-    return RS_OK;
-}
-
-static void plane_point(double p[3], const double en[2], const double n[3], double offset)
-{
-    p[0] = en[0];
-    p[1] = en[1];
-    p[2] = (offset - n[0] * en[0] - n[1] * en[1]) / n[2];
-}
-
-rs_status rs_audit_ground_sigma_at(double *sigma_m, const rs_camera *cam, const double covariance_rt[36],
-                                   const double en_m[2], double detection_sigma_px,
-                                   const double ground_normal_enu[3], double ground_offset_m, rs_err *err)
-{
-    *sigma_m = NAN;
-    rs_status st = check_plane(ground_normal_enu, err);
-    if (st) return st;
-    double p[3], cov[4], q[2];
-    plane_point(p, en_m, ground_normal_enu, ground_offset_m);
-    if (!ground_cov(cov, q, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, covariance_rt, p, detection_sigma_px,
-                    ground_normal_enu))
-        return RS_OK;
-    if (!(q[0] >= -0.5 && q[0] <= cam->width - 0.5 && q[1] >= -0.5 && q[1] <= cam->height - 0.5)) return RS_OK;
-    // the projection of a far point can fold back into the image: keep it only if the
-    // pixel's ray really comes back to it
-    double back[3];
-    if (rs_camera_locate_ground(back, cam, q, ground_normal_enu, ground_offset_m, NULL) ||
-        dist3(back, p) > 1e-3 * (1 + dist3(p, (double[3]){0, 0, 0})))
-        return RS_OK;
-    *sigma_m = sqrt(cov[0] + cov[3]);
-    return RS_OK;
-}
-
-// ---- the map and coverage ----
-
-static rs_status compute_map(rs_audit_result *r, const rs_calib_problem *pb, const double n[3], double offset,
-                             const rs_audit_options *opt, rs_err *err)
-{
-    rs_audit_map *m = &r->map;
-    const rs_calib_result *s = &r->solve;
-    const double *C = s->position_enu_m;
-    const double cell = opt->cell_m, range = opt->range_m;
-    int half = (int)ceil(range / cell);
-    int nfull = 2 * half + 1;
-    double *full = malloc((size_t)nfull * (size_t)nfull * sizeof *full);
-    if (!full) return rs_err_set(err, RS_ERR_NOMEM, "uncertainty map: out of memory");
-    double e0 = C[0] - half * cell, n0 = C[1] - half * cell;
-    const rs_camera cal = rs_calib_result_camera(pb->camera, s);
-    int xmin = nfull, xmax = -1, ymin = nfull, ymax = -1;
-    for (int iy = 0; iy < nfull; iy++)
-        for (int ix = 0; ix < nfull; ix++) {
-            double en[2] = {e0 + ix * cell, n0 + iy * cell}, sig = NAN;
-            double dE = en[0] - C[0], dN = en[1] - C[1];
-            if (dE * dE + dN * dN <= range * range)
-                rs_audit_ground_sigma_at(&sig, &cal, s->covariance_rt_cam_enu, en, opt->detection_sigma_px, n, offset, NULL);
-            full[iy * nfull + ix] = sig;
-            if (isfinite(sig)) {
-                if (ix < xmin) xmin = ix;
-                if (ix > xmax) xmax = ix;
-                if (iy < ymin) ymin = iy;
-                if (iy > ymax) ymax = iy;
-            }
-        }
-    if (xmax < 0) xmin = xmax = ymin = ymax = half; // sees no ground: one NaN cell
-    m->nx = xmax - xmin + 1;
-    m->ny = ymax - ymin + 1;
-    m->sigma_m = malloc((size_t)m->nx * (size_t)m->ny * sizeof *m->sigma_m);
-    if (!m->sigma_m) {
-        free(full);
-        return rs_err_set(err, RS_ERR_NOMEM, "uncertainty map: out of memory");
-    }
-    for (int iy = 0; iy < m->ny; iy++)
-        memcpy(&m->sigma_m[iy * m->nx], &full[(ymin + iy) * nfull + xmin], (size_t)m->nx * sizeof(double));
-    free(full);
-    m->e0_m = e0 + xmin * cell;
-    m->n0_m = n0 + ymin * cell;
-    m->cell_m = cell;
-    m->detection_sigma_px = opt->detection_sigma_px;
-    m->range_m = range;
-    m->camera_en_m[0] = C[0];
-    m->camera_en_m[1] = C[1];
-    return RS_OK;
-}
-
-// Image hull share, and the ground hull share over the map's seen cells.
-static rs_status compute_coverage(rs_audit_result *r, const rs_calib_problem *pb, rs_err *err)
-{
-    const int N = pb->N;
-    double *xy = malloc((size_t)(N > 0 ? N : 1) * 4 * sizeof *xy), *en = xy + 2 * (N > 0 ? N : 1);
-    if (!xy) return rs_err_set(err, RS_ERR_NOMEM, "coverage: out of memory");
-    int Nin = 0;
-    for (int i = 0; i < N; i++)
-        if (r->solve.inlier[i]) {
-            memcpy(&xy[2 * Nin], &pb->q_px[2 * i], 2 * sizeof(double));
-            memcpy(&en[2 * Nin], &pb->p_enu_m[3 * i], 2 * sizeof(double));
-            Nin++;
-        }
-    double area = 0;
-    rs_status st = rs_audit_opencv_convex_hull(&area, NULL, xy, Nin, NULL, 0, err);
-    r->image_hull_share = pb->camera->width > 0 && pb->camera->height > 0 ? area / ((double)pb->camera->width * pb->camera->height) : NAN;
-    r->ground_seen_m2 = NAN;
-    r->ground_hull_share = NAN;
-    const rs_audit_map *m = &r->map;
-    if (st == RS_OK && m->sigma_m) {
-        int ncell = m->nx * m->ny, nseen = 0;
-        double *cells = malloc((size_t)ncell * 2 * sizeof *cells);
-        unsigned char *inside = malloc((size_t)ncell);
-        if (!cells || !inside) st = rs_err_set(err, RS_ERR_NOMEM, "coverage: out of memory");
-        for (int k = 0; st == RS_OK && k < ncell; k++)
-            if (isfinite(m->sigma_m[k])) {
-                cells[2 * nseen] = m->e0_m + (k % m->nx) * m->cell_m;
-                cells[2 * nseen + 1] = m->n0_m + (k / m->nx) * m->cell_m;
-                nseen++;
-            }
-        if (st == RS_OK) st = rs_audit_opencv_convex_hull(&area, inside, en, Nin, cells, nseen, err);
-        if (st == RS_OK) {
-            int nin = 0;
-            for (int k = 0; k < nseen; k++) nin += inside[k];
-            r->ground_seen_m2 = nseen * m->cell_m * m->cell_m;
-            r->ground_hull_share = nseen ? (double)nin / nseen : 0;
-        }
-        free(cells);
-        free(inside);
-    }
-    free(xy);
-    return st;
-}
-
 // ---- degeneracy ----
 
-static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *pb, const rs_audit_options *opt,
-                                    rs_err *err)
+static rs_status
+compute_degeneracy(rs_audit_result *r, const rs_calib_problem *pb, const rs_audit_options *opt, rs_err *err)
 {
     const rs_calib_result *s = &r->solve;
     int N = pb->N, Nin = 0;
@@ -335,20 +135,30 @@ static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *
     size_t ws = sizeof r->warnings;
     if (s->warnings[0]) append(w, ws, "%s", s->warnings);
     if (isfinite(r->condition_number) && r->condition_number > opt->calib.condition_warn)
-        append(w, ws, "condition number %.0f: the pose is poorly determined by these landmarks (well-spread "
-                      "scenes give 1.5-10)", r->condition_number);
+        append(w, ws,
+               "condition number %.0f: the pose is poorly determined by these landmarks (well-spread "
+               "scenes give 1.5-10)",
+               r->condition_number);
     if (r->collinearity < 0.1)
-        append(w, ws, "the landmarks lie nearly on a line (spread across it only %.0f%% of that along it): the "
-                      "rotation about that line is weakly determined", 100 * r->collinearity);
+        append(w, ws,
+               "the landmarks lie nearly on a line (spread across it only %.0f%% of that along it): the "
+               "rotation about that line is weakly determined",
+               100 * r->collinearity);
     if (r->image_hull_share < 0.15 && !strstr(s->warnings, "of the image")) // the solver's is at 5%
-        append(w, ws, "the landmarks cover only %.0f%% of the image: they are clustered, and errors grow away "
-                      "from them", 100 * r->image_hull_share);
+        append(w, ws,
+               "the landmarks cover only %.0f%% of the image: they are clustered, and errors grow away "
+               "from them",
+               100 * r->image_hull_share);
     if (r->planarity < 0.05 && r->head_on_deg < 25)
-        append(w, ws, "the landmarks are nearly planar and seen almost head-on (%.0f deg from the plane's "
-                      "normal): distance and focal length trade off", r->head_on_deg);
+        append(w, ws,
+               "the landmarks are nearly planar and seen almost head-on (%.0f deg from the plane's "
+               "normal): distance and focal length trade off",
+               r->head_on_deg);
     if (r->ground_hull_share < 0.1)
-        append(w, ws, "the landmarks span only %.0f%% of the ground the camera sees within %g m: vehicles "
-                      "located outside them are extrapolated", 100 * r->ground_hull_share, opt->range_m);
+        append(w, ws,
+               "the landmarks span only %.0f%% of the ground the camera sees within %g m: vehicles "
+               "located outside them are extrapolated",
+               100 * r->ground_hull_share, opt->range_m);
     if (s->variance_factor > 4)
         append(w, ws, "variance factor %.1f: the residuals are larger than the stated pixel and survey sigmas",
                s->variance_factor);
@@ -357,8 +167,13 @@ static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *
 
 // The left-out landmark's prediction error in sigmas (rs_audit.h, loo_normalised): d = q_pred -
 // q_obs with S = s_px^2 I + Jp diag(s_enu^2) Jp^T + Jrt C_rt Jrt^T. NaN when S is singular.
-static double loo_sigmas(const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6],
-                         const double C_rt[36], const double p[3], const double s_enu[3], double s_px,
+static double loo_sigmas(const mrcal_lensmodel_t *lm,
+                         const double *intrinsics,
+                         const double rt[6],
+                         const double C_rt[36],
+                         const double p[3],
+                         const double s_enu[3],
+                         double s_px,
                          const double d[2])
 {
     double pc[3], dpc_drt[18], dpc_dp[9];
@@ -388,9 +203,9 @@ static double loo_sigmas(const mrcal_lensmodel_t *lm, const double *intrinsics, 
 
 // Some of a problem's landmarks, in arrays of its own.
 typedef struct {
-    rs_calib_problem pb;   // points into buf
-    double *buf;           // owned
-    int *index;            // (pb.N,) owned: the landmark's index in the original problem
+    rs_calib_problem pb; // points into buf
+    double *buf;         // owned
+    int *index;          // (pb.N,) owned: the landmark's index in the original problem
 } subset;
 
 static rs_status subset_alloc(subset *s, int N, rs_err *err)
@@ -410,8 +225,7 @@ static void subset_free(subset *s)
 
 // The landmarks of `from` except `skip` (-1: none) and those whose pixel in q_px is NaN, with
 // the pixels q_px, sigma_px (NULL: from's own).
-static void subset_fill(subset *s, const rs_calib_problem *from, int skip, const double *q_px,
-                        const double *sigma_px)
+static void subset_fill(subset *s, const rs_calib_problem *from, int skip, const double *q_px, const double *sigma_px)
 {
     const int N = from->N;
     double *p = s->buf, *sp = p + 3 * N, *q = sp + 3 * N, *sq = q + 2 * N;
@@ -441,8 +255,8 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, const double n[3],
-                               const rs_audit_options *opt, rs_err *err)
+static rs_status leave_one_out(
+    rs_audit_result *r, const rs_calib_problem *pb, const double n[3], const rs_audit_options *opt, rs_err *err)
 {
     const int N = pb->N;
     subset sub;
@@ -459,18 +273,19 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
         const double *pi = &pb->p_enu_m[3 * i], *qi = &pb->q_px[2 * i];
         double g[3];
         const rs_camera loo_cam = rs_calib_result_camera(pb->camera, &lr);
-        L->loo_ok = st == RS_OK && project_enu(L->loo_predicted_px, &pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu, pi) &&
-                    rs_camera_locate_ground(g, &loo_cam, qi, n, n[0] * pi[0] + n[1] * pi[1] + n[2] * pi[2], NULL) == RS_OK;
+        L->loo_ok =
+            st == RS_OK && project_enu(L->loo_predicted_px, &pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu, pi) &&
+            rs_camera_locate_ground(g, &loo_cam, qi, n, n[0] * pi[0] + n[1] * pi[1] + n[2] * pi[2], NULL) == RS_OK;
         if (L->loo_ok) {
             L->loo_error_px = hypot(L->loo_predicted_px[0] - qi[0], L->loo_predicted_px[1] - qi[1]);
-            L->loo_ground_error_m = dist3(g, pi);
+            L->loo_ground_error_m = rs_audit__dist3(g, pi);
             const double s_enu[3] = {pb->sigma_enu_m ? pb->sigma_enu_m[3 * i] : 0,
                                      pb->sigma_enu_m ? pb->sigma_enu_m[3 * i + 1] : 0,
                                      pb->sigma_enu_m ? pb->sigma_enu_m[3 * i + 2] : 0};
             const double d[2] = {L->loo_predicted_px[0] - qi[0], L->loo_predicted_px[1] - qi[1]};
-            L->loo_normalised = loo_sigmas(&pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu, lr.covariance_rt_cam_enu,
-                                           pi, s_enu, pb->sigma_px ? pb->sigma_px[i] : 1, d);
-            L->influence_m = dist3(lr.position_enu_m, r->solve.position_enu_m);
+            L->loo_normalised = loo_sigmas(&pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu,
+                                           lr.covariance_rt_cam_enu, pi, s_enu, pb->sigma_px ? pb->sigma_px[i] : 1, d);
+            L->influence_m = rs_audit__dist3(lr.position_enu_m, r->solve.position_enu_m);
             L->influence_deg = rotation_between_deg(lr.rt_cam_enu, r->solve.rt_cam_enu);
         }
         rs_calib_result_free(&lr);
@@ -507,12 +322,15 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
         rs_audit_landmark *L = &r->landmarks[i];
         if (!L->inlier || !L->loo_ok) continue;
         if (L->loo_normalised > opt->calib.outlier_threshold)
-            append(L->reason, sizeof L->reason, "the others predict its pixel %.1f px away, %.1f sigma (limit %.2f): "
-                   "its pick or survey disagrees with the rest", L->loo_error_px, L->loo_normalised,
-                   opt->calib.outlier_threshold);
+            append(L->reason, sizeof L->reason,
+                   "the others predict its pixel %.1f px away, %.1f sigma (limit %.2f): "
+                   "its pick or survey disagrees with the rest",
+                   L->loo_error_px, L->loo_normalised, opt->calib.outlier_threshold);
         if (ci >= 5 && L->influence_m > 5 * med_inf && L->influence_m > 0.1)
-            append(L->reason, sizeof L->reason, "leaving it out moves the camera %.2f m (%.1f x the median): the "
-                   "pose leans on it", L->influence_m, L->influence_m / med_inf);
+            append(L->reason, sizeof L->reason,
+                   "leaving it out moves the camera %.2f m (%.1f x the median): the "
+                   "pose leans on it",
+                   L->influence_m, L->influence_m / med_inf);
     }
     return RS_OK;
 }
@@ -546,8 +364,12 @@ static void ypr_diff(double d[3], const double a[6], const double b[6])
     }
 }
 
-static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, const double *q_new,
-                              const double *s_new, const double rt_stored[6], const rs_audit_options *opt,
+static rs_status against_test(rs_audit_result *r,
+                              const rs_calib_problem *pb,
+                              const double *q_new,
+                              const double *s_new,
+                              const double rt_stored[6],
+                              const rs_audit_options *opt,
                               rs_err *err)
 {
     rs_audit_against *a = &r->against;
@@ -584,8 +406,10 @@ static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, co
     rs_pose_position_from_rt(pos_stored, NULL, rt_stored);
     rs_calib_result_free(&nr);
     if (M < 3) {
-        st = rs_err_set(err, RS_ERR_DEGENERATE, "the new picks share only %d usable landmarks with the old ones "
-                        "(at least 3 are needed)", M);
+        st = rs_err_set(err, RS_ERR_DEGENERATE,
+                        "the new picks share only %d usable landmarks with the old ones "
+                        "(at least 3 are needed)",
+                        M);
         goto done;
     }
     a->M = M;
@@ -598,13 +422,13 @@ static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, co
     double pos_new[3];
     rs_pose_position_from_rt(pos_new, NULL, a->rt_cam_enu_new);
     for (int c = 0; c < 3; c++) a->shift_enu_m[c] = pos_new[c] - pos_stored[c];
-    a->shift_m = dist3(pos_new, pos_stored);
+    a->shift_m = rs_audit__dist3(pos_new, pos_stored);
     ypr_diff(a->dyaw_pitch_roll_deg, a->rt_cam_enu_new, rt_stored);
     snprintf(a->message, sizeof a->message,
              "%s: the %d re-picked landmarks moved %.2f px RMS (chi2 %.1f on %d dof, p = %.2g, alpha %g); "
              "estimated rotation %.3f deg, shift %.3f m",
-             a->moved ? "MOVED" : "not moved", M, a->rms_shift_px, T, a->dof, a->p_value, opt->alpha,
-             a->rotation_deg, a->shift_m);
+             a->moved ? "MOVED" : "not moved", M, a->rms_shift_px, T, a->dof, a->p_value, opt->alpha, a->rotation_deg,
+             a->shift_m);
     r->has_against = true;
 done:
     subset_free(&sub);
@@ -613,7 +437,9 @@ done:
 
 // ---- an external calibration ----
 
-static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const rs_audit_calibration *cal,
+static void external_check(rs_audit_result *r,
+                           const rs_calib_problem *pb,
+                           const rs_audit_calibration *cal,
                            const rs_audit_options *opt)
 {
     rs_audit_external *x = &r->external;
@@ -624,7 +450,8 @@ static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const
     for (int i = 0; i < N; i++) {
         double qp[2];
         double *res = &x->residual_px[2 * i];
-        if (!project_enu(qp, &cal->camera.lensmodel, cal->camera.intrinsics, cal->camera.rt_cam_enu, &pb->p_enu_m[3 * i])) {
+        if (!project_enu(qp, &cal->camera.lensmodel, cal->camera.intrinsics, cal->camera.rt_cam_enu,
+                         &pb->p_enu_m[3 * i])) {
             res[0] = res[1] = NAN;
             continue;
         }
@@ -641,12 +468,14 @@ static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const
     x->rotation_deg = rotation_between_deg(cal->camera.rt_cam_enu, r->solve.rt_cam_enu);
     double pos[3];
     rs_pose_position_from_rt(pos, NULL, cal->camera.rt_cam_enu);
-    x->shift_m = dist3(pos, r->solve.position_enu_m);
+    x->shift_m = rs_audit__dist3(pos, r->solve.position_enu_m);
 
     // the parts: R a rotation, P ~ K [R | t]
     double R[9];
-    if (cal->extra.has_R) memcpy(R, cal->extra.R_cam_enu, sizeof R);
-    else mrcal_R_from_r(R, NULL, cal->camera.rt_cam_enu);
+    if (cal->extra.has_R)
+        memcpy(R, cal->extra.R_cam_enu, sizeof R);
+    else
+        mrcal_R_from_r(R, NULL, cal->camera.rt_cam_enu);
     x->R_orthonormality = 0;
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) {
@@ -678,7 +507,8 @@ static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const
             for (int row = 0; row < 3; row++) {
                 a[row] = cal->extra.P[4 * row + 3];
                 b[row] = KRt[4 * row + 3];
-                for (int k = 0; k < 3; k++) a[row] += cal->extra.P[4 * row + k] * pe[k], b[row] += KRt[4 * row + k] * pe[k];
+                for (int k = 0; k < 3; k++)
+                    a[row] += cal->extra.P[4 * row + k] * pe[k], b[row] += KRt[4 * row + k] * pe[k];
             }
             double d = hypot(a[0] / a[2] - b[0] / b[2], a[1] / a[2] - b[1] / b[2]);
             if (!isfinite(d)) d = INFINITY;
@@ -687,7 +517,8 @@ static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const
         if (!(x->P_max_px <= opt->consistency_px))
             append(x->consistency, sizeof x->consistency,
                    "the projection matrix P disagrees with K [R | t]: the landmarks land up to %.3g px apart "
-                   "(limit %g px)", x->P_max_px, opt->consistency_px);
+                   "(limit %g px)",
+                   x->P_max_px, opt->consistency_px);
     }
     if (cal->camera.width > 0 && cal->camera.height > 0 && pb->camera->width > 0 &&
         (cal->camera.width != pb->camera->width || cal->camera.height != pb->camera->height))
@@ -708,9 +539,15 @@ void rs_audit_result_free(rs_audit_result *r)
     memset(r, 0, sizeof *r);
 }
 
-rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, const double ground_normal_enu[3],
-                          double ground_offset_m, const double *q_new_px, const double *sigma_new_px,
-                          const rs_audit_calibration *external, const rs_audit_options *opt, rs_err *err)
+rs_status rs_audit_camera(rs_audit_result *r,
+                          const rs_calib_problem *problem,
+                          const double ground_normal_enu[3],
+                          double ground_offset_m,
+                          const double *q_new_px,
+                          const double *sigma_new_px,
+                          const rs_audit_calibration *external,
+                          const rs_audit_options *opt,
+                          rs_err *err)
 {
     memset(r, 0, sizeof *r);
     rs_audit_options defaults;
@@ -719,7 +556,7 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
         opt = &defaults;
     }
     rs_status st = check_options(opt, err);
-    if (st == RS_OK) st = check_plane(ground_normal_enu, err);
+    if (st == RS_OK) st = rs_audit__check_plane(ground_normal_enu, err);
     if (st) return st;
     rs_calib_problem pb = *problem;
     rs_camera external_nominal; // the external lens and intrinsics, the site camera's image size
@@ -748,8 +585,8 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
                      L->normalised_residual, opt->calib.outlier_threshold);
     }
     if (opt->leave_one_out && (st = leave_one_out(r, &pb, ground_normal_enu, opt, err))) return st;
-    if (opt->map && (st = compute_map(r, &pb, ground_normal_enu, ground_offset_m, opt, err))) return st;
-    if ((st = compute_coverage(r, &pb, err))) return st;
+    if (opt->map && (st = rs_audit__compute_map(r, &pb, ground_normal_enu, ground_offset_m, opt, err))) return st;
+    if ((st = rs_audit__compute_coverage(r, &pb, err))) return st;
     if ((st = compute_degeneracy(r, &pb, opt, err))) return st;
     if (external) {
         r->has_external = true;
@@ -757,16 +594,14 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
         if (!r->external.residual_px) return rs_err_set(err, RS_ERR_NOMEM, "audit: out of memory");
         external_check(r, &pb, external, opt);
     }
-    if (q_new_px &&
-        (st = against_test(r, &pb, q_new_px, sigma_new_px, external ? external->camera.rt_cam_enu : r->solve.rt_cam_enu,
-                           opt, err)))
+    if (q_new_px && (st = against_test(r, &pb, q_new_px, sigma_new_px,
+                                       external ? external->camera.rt_cam_enu : r->solve.rt_cam_enu, opt, err)))
         return st;
 
     // the verdict
     char *f = r->failures;
     size_t fs = sizeof r->failures;
-    if (!(r->solve.rms_px <= opt->max_rms_px))
-        append(f, fs, "RMS %.2f px > %g px", r->solve.rms_px, opt->max_rms_px);
+    if (!(r->solve.rms_px <= opt->max_rms_px)) append(f, fs, "RMS %.2f px > %g px", r->solve.rms_px, opt->max_rms_px);
     if (r->loo_count && r->loo_rms_px > opt->max_loo_px)
         append(f, fs, "leave-one-out RMS %.2f px > %g px", r->loo_rms_px, opt->max_loo_px);
     if (r->loo_count && r->loo_median_m > opt->max_loo_m)
@@ -778,7 +613,8 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
     if (r->has_external && !(r->external.rms_px <= opt->max_rms_px))
         append(f, fs, "the external calibration's RMS %.2f px > %g px", r->external.rms_px, opt->max_rms_px);
     if (opt->leave_one_out && r->loo_count == 0)
-        append(f, fs, "no leave-one-out re-solve succeeded (too few landmarks): the calibration cannot be "
+        append(f, fs,
+               "no leave-one-out re-solve succeeded (too few landmarks): the calibration cannot be "
                "cross-checked");
     r->pass = f[0] == '\0';
     return RS_OK;

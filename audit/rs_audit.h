@@ -53,8 +53,8 @@
 #include <mrcal/mrcal.h>
 
 #include "calib/rs_calib.h"
-#include "geo/rs_site.h"
 #include "core/rs_status.h"
+#include "geo/rs_site.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -84,52 +84,52 @@ void rs_audit_options_default(rs_audit_options *opt);
 
 // One landmark of the camera (index i of the problem's arrays).
 typedef struct {
-    bool inlier;                 // used by the full solve
-    double residual_px[2];       // predicted - observed, full solve
-    double normalised_residual;  // sqrt(block chi2) in sigmas (rs_calib_result)
-    char reason[160];            // why it is flagged, in words; "" when it is fine
-    bool loo_ok;                 // the re-solve without it succeeded (else loo_* are NaN)
-    double loo_predicted_px[2];  // its SURVEYED position projected with the re-solved pose
-    double loo_error_px;         // |loo_predicted_px - observed|, px
-    double loo_normalised;       // loo_predicted_px - observed in sigmas: sqrt(d^T S^-1 d) with
-                                 //   S = its pixel sigma^2 I + the propagated survey sigmas of
-                                 //   the landmark + the re-solved pose covariance (2 dof; flagged
-                                 //   when > calib.outlier_threshold)
-    double loo_ground_error_m;   // distance from its surveyed position to where its observed
-                                 //   pixel's ray (re-solved pose) meets the plane with the
-                                 //   site's ground normal through it, metres
-    double influence_m;          // |camera position without it - with it|, metres
-    double influence_deg;        // rotation angle between the two orientations, degrees
+    bool inlier;                // used by the full solve
+    double residual_px[2];      // predicted - observed, full solve
+    double normalised_residual; // sqrt(block chi2) in sigmas (rs_calib_result)
+    char reason[160];           // why it is flagged, in words; "" when it is fine
+    bool loo_ok;                // the re-solve without it succeeded (else loo_* are NaN)
+    double loo_predicted_px[2]; // its SURVEYED position projected with the re-solved pose
+    double loo_error_px;        // |loo_predicted_px - observed|, px
+    double loo_normalised;      // loo_predicted_px - observed in sigmas: sqrt(d^T S^-1 d) with
+                                //   S = its pixel sigma^2 I + the propagated survey sigmas of
+                                //   the landmark + the re-solved pose covariance (2 dof; flagged
+                                //   when > calib.outlier_threshold)
+    double loo_ground_error_m;  // distance from its surveyed position to where its observed
+                                //   pixel's ray (re-solved pose) meets the plane with the
+                                //   site's ground normal through it, metres
+    double influence_m;         // |camera position without it - with it|, metres
+    double influence_deg;       // rotation angle between the two orientations, degrees
 } rs_audit_landmark;
 
 // The ground localisation uncertainty map: a regular grid in site ENU (E, N) on the ground
 // plane. Cell (iy, ix) has its CENTRE at (e0_m + ix cell_m, n0_m + iy cell_m).
 typedef struct {
-    double e0_m, n0_m;          // ENU east, north of the centre of cell (0, 0), metres
-    double cell_m;              // cell size, metres
-    int nx, ny;                 // columns (east), rows (north)
-    double *sigma_m;            // (ny,nx) row-major: 1-sigma horizontal error sqrt(sE^2 + sN^2)
-                                //   in metres; NaN where the camera does not see the ground
-                                //   (behind it, outside the image, beyond range_m) (owned)
-    double detection_sigma_px;  // the detection noise it assumes, px
-    double range_m;             // the range it covers, metres
-    double camera_en_m[2];      // the camera's (E, N), metres (for drawing)
+    double e0_m, n0_m;         // ENU east, north of the centre of cell (0, 0), metres
+    double cell_m;             // cell size, metres
+    int nx, ny;                // columns (east), rows (north)
+    double *sigma_m;           // (ny,nx) row-major: 1-sigma horizontal error sqrt(sE^2 + sN^2)
+                               //   in metres; NaN where the camera does not see the ground
+                               //   (behind it, outside the image, beyond range_m) (owned)
+    double detection_sigma_px; // the detection noise it assumes, px
+    double range_m;            // the range it covers, metres
+    double camera_en_m[2];     // the camera's (E, N), metres (for drawing)
 } rs_audit_map;
 
 // The moved-camera test (Method above).
 typedef struct {
-    int M;                          // landmarks compared (inliers of both solves)
-    double chi2;                    // T
-    int dof;                        // 2M
-    double p_value;                 // P(chi2_dof > T)
-    bool moved;                     // p_value < alpha
-    double rms_shift_px;            // RMS of |q_new - q_old| over the M landmarks
-    double rotation_deg;            // angle of R_new R_stored^T, degrees
-    double shift_m;                 // |position_new - position_stored|, metres
-    double dyaw_pitch_roll_deg[3];  // new - stored yaw, pitch, roll (yaw wrapped to +-180)
-    double shift_enu_m[3];          // position_new - position_stored, metres
-    double rt_cam_enu_new[6];       // the pose re-solved from the new picks
-    char message[256];              // the verdict in words
+    int M;                         // landmarks compared (inliers of both solves)
+    double chi2;                   // T
+    int dof;                       // 2M
+    double p_value;                // P(chi2_dof > T)
+    bool moved;                    // p_value < alpha
+    double rms_shift_px;           // RMS of |q_new - q_old| over the M landmarks
+    double rotation_deg;           // angle of R_new R_stored^T, degrees
+    double shift_m;                // |position_new - position_stored|, metres
+    double dyaw_pitch_roll_deg[3]; // new - stored yaw, pitch, roll (yaw wrapped to +-180)
+    double shift_enu_m[3];         // position_new - position_stored, metres
+    double rt_cam_enu_new[6];      // the pose re-solved from the new picks
+    char message[256];             // the verdict in words
 } rs_audit_against;
 
 // A calibration made elsewhere, to audit against the site. Read from an mrcal .cameramodel
@@ -138,71 +138,72 @@ typedef struct {
 // R (3,3, R_cam_enu) or rvec (3), and t or tvec (3) (p_cam = R p_enu + t), optionally P (3,4),
 // image_width, image_height.
 typedef struct {
-    char *path;                 // owned: the file read
-    rs_camera camera;           // owned: lens, intrinsics, size (0 x 0: not given) and the pose
-                                //   (from R as given, projected to the nearest rotation)
-    rs_camera_extra extra;      // what an OpenCV file gave beyond the camera: R as given, P
+    char *path;            // owned: the file read
+    rs_camera camera;      // owned: lens, intrinsics, size (0 x 0: not given) and the pose
+                           //   (from R as given, projected to the nearest rotation)
+    rs_camera_extra extra; // what an OpenCV file gave beyond the camera: R as given, P
 } rs_audit_calibration;
 
 // Reads a calibration file (see above). out is zeroed on failure; free with
 // rs_audit_calibration_free. Errors: RS_ERR_IO, RS_ERR_PARSE, RS_ERR_INVALID (missing pose,
 // wrong shapes, non-finite values), RS_ERR_UNSUPPORTED (skew, tilted sensor), naming the file
 // and field.
-rs_status rs_audit_calibration_read(// out
-                                    rs_audit_calibration *out,
-                                    // in
-                                    const char *path, rs_err *err);
+rs_status rs_audit_calibration_read( // out
+    rs_audit_calibration *out,
+    // in
+    const char *path,
+    rs_err *err);
 void rs_audit_calibration_free(rs_audit_calibration *cal); // NULL-safe
 
 // What the audit says about an external calibration.
 typedef struct {
-    double rms_px;               // RMS of (its projection of the surveyed landmarks - picks)
-                                 //   over the landmarks the site's solve keeps as inliers, px
-    double max_px;               // the largest such error, px
-    double *residual_px;         // (N,2) per landmark (owned)
-    double rotation_deg;         // its orientation vs the site's solve, degrees
-    double shift_m;              // its position vs the site's solve, metres
-    double R_orthonormality;     // |R^T R - I|_F of R as given (0 without a matrix R)
-    double P_max_px;             // largest pixel difference P vs K[R|t] over the landmarks
-                                 //   (NaN without P)
-    double P_scale;              // the scale s fitted in P ~ s K[R|t] (NaN without P)
-    bool consistent;             // its parts agree (R is a rotation, P matches K[R|t])
-    char consistency[512];       // what disagrees, in words ("" when consistent)
+    double rms_px;           // RMS of (its projection of the surveyed landmarks - picks)
+                             //   over the landmarks the site's solve keeps as inliers, px
+    double max_px;           // the largest such error, px
+    double *residual_px;     // (N,2) per landmark (owned)
+    double rotation_deg;     // its orientation vs the site's solve, degrees
+    double shift_m;          // its position vs the site's solve, metres
+    double R_orthonormality; // |R^T R - I|_F of R as given (0 without a matrix R)
+    double P_max_px;         // largest pixel difference P vs K[R|t] over the landmarks
+                             //   (NaN without P)
+    double P_scale;          // the scale s fitted in P ~ s K[R|t] (NaN without P)
+    bool consistent;         // its parts agree (R is a rotation, P matches K[R|t])
+    char consistency[512];   // what disagrees, in words ("" when consistent)
 } rs_audit_external;
 
 typedef struct {
-    int N;                            // landmarks of the problem
-    rs_calib_result solve;            // the full solve (owned: rs_audit_result_free frees it)
-    rs_audit_landmark *landmarks;     // (N,) (owned)
+    int N;                        // landmarks of the problem
+    rs_calib_result solve;        // the full solve (owned: rs_audit_result_free frees it)
+    rs_audit_landmark *landmarks; // (N,) (owned)
 
     // leave-one-out summary over the inliers whose re-solve succeeded
     int loo_count;
-    double loo_rms_px, loo_max_px;    // px
-    double loo_median_m, loo_max_m;   // metres
+    double loo_rms_px, loo_max_px;  // px
+    double loo_median_m, loo_max_m; // metres
 
     // coverage
-    double image_hull_share;          // [0,1]: image area inside the hull of the inlier picks
-    double ground_seen_m2;            // ground area the camera sees within range_m, m^2
-    double ground_hull_share;         // [0,1]: share of it inside the inliers' (E, N) hull
+    double image_hull_share;  // [0,1]: image area inside the hull of the inlier picks
+    double ground_seen_m2;    // ground area the camera sees within range_m, m^2
+    double ground_hull_share; // [0,1]: share of it inside the inliers' (E, N) hull
 
     // degeneracy indicators (numbers; the words are in `warnings`)
-    double condition_number;          // rs_calib_result.condition_number
-    double collinearity;              // s2/s1 of the centred inlier landmarks (0: collinear)
-    double planarity;                 // s3/s1 (0: exactly planar)
-    double head_on_deg;               // angle between the landmarks' best-fit plane normal and
-                                      //   the line of sight to their centroid (0: head-on)
+    double condition_number; // rs_calib_result.condition_number
+    double collinearity;     // s2/s1 of the centred inlier landmarks (0: collinear)
+    double planarity;        // s3/s1 (0: exactly planar)
+    double head_on_deg;      // angle between the landmarks' best-fit plane normal and
+                             //   the line of sight to their centroid (0: head-on)
 
-    rs_audit_map map;                 // zeroed (sigma_m NULL) when opt->map is false
+    rs_audit_map map; // zeroed (sigma_m NULL) when opt->map is false
 
     bool has_against;
     rs_audit_against against;
     bool has_external;
     rs_audit_external external;
 
-    bool pass;                        // meets every threshold (and not moved, consistent)
-    char failures[512];               // which thresholds fail, "; "-separated ("" when pass)
-    char warnings[2048];              // degeneracy and other warnings in plain words,
-                                      //   "; "-separated ("" when none)
+    bool pass;           // meets every threshold (and not moved, consistent)
+    char failures[512];  // which thresholds fail, "; "-separated ("" when pass)
+    char warnings[2048]; // degeneracy and other warnings in plain words,
+                         //   "; "-separated ("" when none)
 } rs_audit_result;
 
 // Audits one camera.
@@ -220,16 +221,17 @@ typedef struct {
 // ground plane, a sigma_new_px <= 0), RS_ERR_DEGENERATE (fewer than 3 landmarks usable in both
 // the old and the new picks), RS_ERR_NOMEM. A failing leave-one-out re-solve is not an error
 // (loo_ok false); an external calibration whose image size differs is reported as inconsistent.
-rs_status rs_audit_camera(// out
-                          rs_audit_result *result,
-                          // in
-                          const rs_calib_problem *problem,
-                          const double ground_normal_enu[3], double ground_offset_m,
-                          const double *q_new_px,              // (N,2), may be NULL
-                          const double *sigma_new_px,          // (N,), may be NULL: 1 px
-                          const rs_audit_calibration *external, // may be NULL
-                          const rs_audit_options *opt,          // may be NULL: defaults
-                          rs_err *err);                         // may be NULL
+rs_status rs_audit_camera( // out
+    rs_audit_result *result,
+    // in
+    const rs_calib_problem *problem,
+    const double ground_normal_enu[3],
+    double ground_offset_m,
+    const double *q_new_px,               // (N,2), may be NULL
+    const double *sigma_new_px,           // (N,), may be NULL: 1 px
+    const rs_audit_calibration *external, // may be NULL
+    const rs_audit_options *opt,          // may be NULL: defaults
+    rs_err *err);                         // may be NULL
 
 void rs_audit_result_free(rs_audit_result *result); // NULL-safe
 
@@ -237,29 +239,31 @@ void rs_audit_result_free(rs_audit_result *result); // NULL-safe
 // (Method above), and optionally its 2x2 covariance. Returns RS_ERR_DEGENERATE when the pixel's
 // ray misses the plane in front of the camera, RS_ERR_UNSUPPORTED for a lens model without
 // unprojection.
-rs_status rs_audit_ground_sigma(// out
-                                double *sigma_m,
-                                double *cov_en_m2,  // (2,2) row-major, may be NULL
-                                double p_enu_m[3],  // the located point, may be NULL
-                                // in
-                                const rs_camera *cam,            // calibrated: intrinsics, pose
-                                const double covariance_rt[36],  // (6,6) row-major, of the pose
-                                const double q_px[2],
-                                double detection_sigma_px,
-                                const double ground_normal_enu[3], double ground_offset_m,
-                                rs_err *err);                    // may be NULL
+rs_status rs_audit_ground_sigma( // out
+    double *sigma_m,
+    double *cov_en_m2, // (2,2) row-major, may be NULL
+    double p_enu_m[3], // the located point, may be NULL
+    // in
+    const rs_camera *cam,           // calibrated: intrinsics, pose
+    const double covariance_rt[36], // (6,6) row-major, of the pose
+    const double q_px[2],
+    double detection_sigma_px,
+    const double ground_normal_enu[3],
+    double ground_offset_m,
+    rs_err *err); // may be NULL
 
 // The same at a ground point (E, N) given in metres instead of a pixel: NaN (and RS_OK) when the
 // camera does not see it (behind the camera or outside its image). Used for the map.
-rs_status rs_audit_ground_sigma_at(// out
-                                   double *sigma_m,
-                                   // in
-                                   const rs_camera *cam, // calibrated: intrinsics, size, pose
-                                   const double covariance_rt[36],
-                                   const double en_m[2],
-                                   double detection_sigma_px,
-                                   const double ground_normal_enu[3], double ground_offset_m,
-                                   rs_err *err);
+rs_status rs_audit_ground_sigma_at( // out
+    double *sigma_m,
+    // in
+    const rs_camera *cam, // calibrated: intrinsics, size, pose
+    const double covariance_rt[36],
+    const double en_m[2],
+    double detection_sigma_px,
+    const double ground_normal_enu[3],
+    double ground_offset_m,
+    rs_err *err);
 
 // ---- a site's cameras ----
 
@@ -267,23 +271,26 @@ rs_status rs_audit_ground_sigma_at(// out
 // site's ground plane, new picks from against_csv (header "landmark,u,v[,sigma_px]", the site's
 // observations format; may be NULL) and an external calibration file (may be NULL).
 // Errors: those of rs_audit_camera, RS_ERR_IO/PARSE/NOT_FOUND for the CSV (file, line, field).
-rs_status rs_audit_site_camera(// out
-                               rs_audit_result *result,
-                               // in
-                               const rs_site *site, int icam,
-                               const char *calib_path,   // may be NULL
-                               const char *against_csv,  // may be NULL
-                               const rs_audit_options *opt, // may be NULL
-                               rs_err *err);
+rs_status rs_audit_site_camera( // out
+    rs_audit_result *result,
+    // in
+    const rs_site *site,
+    int icam,
+    const char *calib_path,      // may be NULL
+    const char *against_csv,     // may be NULL
+    const rs_audit_options *opt, // may be NULL
+    rs_err *err);
 
 // The audit as JSON text (the content of <id>.audit.json; docs/audit.md lists the fields).
 // Caller frees with free(); NULL when out of memory.
-char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result *result,
-                           const rs_audit_options *opt);
+char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result *result, const rs_audit_options *opt);
 
 // Writes out_dir/<id>.audit.json atomically (out_dir must exist).
-rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam,
-                              const rs_audit_result *result, const rs_audit_options *opt,
+rs_status rs_audit_site_write(const char *out_dir,
+                              const rs_site *site,
+                              int icam,
+                              const rs_audit_result *result,
+                              const rs_audit_options *opt,
                               rs_err *err);
 
 #ifdef __cplusplus

@@ -10,10 +10,8 @@ extern "C" {
 #include "audit/internal/rs_audit_opencv.h"
 }
 
-
-extern "C" rs_status rs_audit_opencv_convex_hull(double *area, unsigned char *inside,
-                                                 const double *xy, int N, const double *query,
-                                                 int Nquery, rs_err *err)
+extern "C" rs_status rs_audit_opencv_convex_hull(
+    double *area, unsigned char *inside, const double *xy, int N, const double *query, int Nquery, rs_err *err)
 {
     try {
         *area = 0;
@@ -28,8 +26,8 @@ extern "C" rs_status rs_audit_opencv_convex_hull(double *area, unsigned char *in
         *area = cv::contourArea(hull);
         if (inside && query)
             for (int i = 0; i < Nquery; i++)
-                inside[i] = cv::pointPolygonTest(hull, cv::Point2f((float)query[2 * i], (float)query[2 * i + 1]),
-                                                 false) >= 0;
+                inside[i] =
+                    cv::pointPolygonTest(hull, cv::Point2f((float)query[2 * i], (float)query[2 * i + 1]), false) >= 0;
         return RS_OK;
     } catch (const std::exception &e) {
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV convexHull threw: %s", e.what());
@@ -38,8 +36,7 @@ extern "C" rs_status rs_audit_opencv_convex_hull(double *area, unsigned char *in
     }
 }
 
-extern "C" rs_status rs_audit_opencv_principal_axes3(double *s, double *Vt, const double *p,
-                                                     int N, rs_err *err)
+extern "C" rs_status rs_audit_opencv_principal_axes3(double *s, double *Vt, const double *p, int N, rs_err *err)
 {
     try {
         const cv::Mat P(N, 3, CV_64F, const_cast<double *>(p)); // read only
@@ -54,4 +51,3 @@ extern "C" rs_status rs_audit_opencv_principal_axes3(double *s, double *Vt, cons
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV SVD threw an unknown exception");
     }
 }
-

@@ -12,8 +12,8 @@
 #include <cjson/cJSON.h>
 
 #include "audit/rs_audit.h"
-#include "core/rs_camera.h"
 #include "calib/rs_calib_site.h"
+#include "core/rs_camera.h"
 #include "core/rs_io.h"
 
 // ---- external calibration files ----
@@ -98,8 +98,8 @@ static bool csv_number(const char *s, double *v)
 
 // Reads `path` (landmark,u,v[,sigma_px]) into q_new (N,2) / s_new (N,) indexed like the camera's
 // observations; rows not re-picked stay NaN.
-static rs_status read_new_picks(double *q_new, double *s_new, const rs_site *site, int icam, const char *path,
-                                rs_err *err)
+static rs_status
+read_new_picks(double *q_new, double *s_new, const rs_site *site, int icam, const char *path, rs_err *err)
 {
     const rs_site_camera *cam = &site->cameras[icam];
     for (int i = 0; i < cam->Nobservations; i++) q_new[2 * i] = q_new[2 * i + 1] = s_new[i] = NAN;
@@ -170,8 +170,13 @@ done:
 
 // ---- a site camera ----
 
-rs_status rs_audit_site_camera(rs_audit_result *result, const rs_site *site, int icam, const char *calib_path,
-                               const char *against_csv, const rs_audit_options *opt, rs_err *err)
+rs_status rs_audit_site_camera(rs_audit_result *result,
+                               const rs_site *site,
+                               int icam,
+                               const char *calib_path,
+                               const char *against_csv,
+                               const rs_audit_options *opt,
+                               rs_err *err)
 {
     memset(result, 0, sizeof *result);
     const rs_site_camera *cam = &site->cameras[icam];
@@ -207,10 +212,7 @@ done:
 
 // ---- JSON ----
 
-static cJSON *num_array(const double *v, int n)
-{
-    return cJSON_CreateDoubleArray(v, n);
-}
+static cJSON *num_array(const double *v, int n) { return cJSON_CreateDoubleArray(v, n); }
 
 // A "; "-separated text as a JSON list of strings.
 static cJSON *sentences(const char *text)
@@ -237,8 +239,9 @@ static void add_numbers(cJSON *o, const named_number *v, size_t n)
 {
     for (size_t i = 0; i < n; i++) cJSON_AddNumberToObject(o, v[i].name, v[i].value);
 }
-#define ADD_NUMBERS(o, ...) \
-    add_numbers((o), (const named_number[]){__VA_ARGS__}, sizeof((const named_number[]){__VA_ARGS__}) / sizeof(named_number))
+#define ADD_NUMBERS(o, ...)                               \
+    add_numbers((o), (const named_number[]){__VA_ARGS__}, \
+                sizeof((const named_number[]){__VA_ARGS__}) / sizeof(named_number))
 
 static void add_landmarks(cJSON *root, const rs_site *site, const rs_site_camera *cam, const rs_audit_result *r)
 {
@@ -336,15 +339,19 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
     return text;
 }
 
-rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam, const rs_audit_result *result,
-                              const rs_audit_options *opt, rs_err *err)
+rs_status rs_audit_site_write(const char *out_dir,
+                              const rs_site *site,
+                              int icam,
+                              const rs_audit_result *result,
+                              const rs_audit_options *opt,
+                              rs_err *err)
 {
     char name[512];
     snprintf(name, sizeof name, "%s.audit.json", site->cameras[icam].id);
     char *path = rs_io_join(out_dir, name);
     char *text = rs_audit_result_json(site, icam, result, opt);
-    rs_status st = path && text ? rs_io_write_file(path, text, strlen(text), err)
-                                : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st =
+        path && text ? rs_io_write_file(path, text, strlen(text), err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     free(path);
     free(text);
     return st;

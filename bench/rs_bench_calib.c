@@ -12,12 +12,12 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
+#include "bench/rs_bench_opencv.h"
 #include "calib/rs_calib.h"
 #include "calib/rs_calib_init.h"
-#include "bench/rs_bench_opencv.h"
 #include "calib/rs_calib_opengv.h"
-#include "sim/rs_simulate.h"
 #include "core/rs_pose.h"
+#include "sim/rs_simulate.h"
 
 #define DEG (180.0 / M_PI)
 
@@ -66,13 +66,13 @@ static void baseline(rs_simulate_camera_options *s)
 static int make_configs(bench_config *c, bool quick)
 {
     int n = 0;
-#define ADD(fam, fmt, val, field, expr)                                                           \
-    do {                                                                                           \
-        c[n].family = fam;                                                                         \
-        snprintf(c[n].config, sizeof c[n].config, fmt, val);                                       \
-        baseline(&c[n].sim);                                                                       \
-        c[n].sim.field = (expr);                                                                   \
-        n++;                                                                                       \
+#define ADD(fam, fmt, val, field, expr)                      \
+    do {                                                     \
+        c[n].family = fam;                                   \
+        snprintf(c[n].config, sizeof c[n].config, fmt, val); \
+        baseline(&c[n].sim);                                 \
+        c[n].sim.field = (expr);                             \
+        n++;                                                 \
     } while (0)
     ADD("baseline", "%s", "baseline", Nlandmarks, 20);
     static const double noise_full[] = {0.1, 0.5, 2, 5}, noise_quick[] = {5};
@@ -86,8 +86,7 @@ static int make_configs(bench_config *c, bool quick)
     const double *out = quick ? out_quick : out_full;
     for (int i = 0; i < (quick ? 1 : 4); i++) ADD("noise", "noise=%gpx", noise[i], pixel_sigma_px, noise[i]);
     for (int i = 0; i < (quick ? 1 : 4); i++) ADD("landmarks", "N=%d", lm[i], Nlandmarks, lm[i]);
-    for (int i = 0; i < (quick ? 1 : 3); i++)
-        ADD("outliers", "outliers=%g%%", 100 * out[i], outlier_fraction, out[i]);
+    for (int i = 0; i < (quick ? 1 : 3); i++) ADD("outliers", "outliers=%g%%", 100 * out[i], outlier_fraction, out[i]);
     if (quick) return n;
     for (int i = 0; i < 3; i++) {
         ADD("survey", "survey=%gm", survey_full[i], survey_sigma_h_m, survey_full[i]);
@@ -124,9 +123,9 @@ enum { GRID_U = 12, GRID_V = 8 };
 typedef struct {
     const rs_simulate_problem *P;
     const rs_simulate_camera_options *sim;
-    double *sigma_enu;   // (N,3)
-    double *sigma_px;    // (N,)
-    double *v_cam;       // (N,3) scratch: bearings
+    double *sigma_enu; // (N,3)
+    double *sigma_px;  // (N,)
+    double *v_cam;     // (N,3) scratch: bearings
     double q_grid[GRID_U * GRID_V][2];
     double g_true[GRID_U * GRID_V][3];
     int Ngrid;
@@ -141,8 +140,8 @@ static double rotation_error_deg(const double *r_est, const double *r_true, doub
     return DEG * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
-static void fill_problem(rs_calib_problem *cp, const bench_trial *T, const double *p, const double *q,
-                         int N, bool survey_exact)
+static void
+fill_problem(rs_calib_problem *cp, const bench_trial *T, const double *p, const double *q, int N, bool survey_exact)
 {
     memset(cp, 0, sizeof *cp);
     cp->N = N;
@@ -183,10 +182,10 @@ static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, r
     }
     if (bm->lib == RS_BENCH_CALIB_LIB_OPENCV)
         return rs_bench_opencv_pnp(rt, NULL, P->p_enu_survey_m, P->q_px, P->Npoints, P->camera.intrinsics,
-                                   P->camera.Nintrinsics - 4, (rs_bench_opencv_pnp_method)bm->variant,
-                                   bm->refine_lm, 8.0, err);
-    if (!mrcal_unproject((mrcal_point3_t *)T->v_cam, (const mrcal_point2_t *)P->q_px, P->Npoints,
-                         &P->camera.lensmodel, P->camera.intrinsics))
+                                   P->camera.Nintrinsics - 4, (rs_bench_opencv_pnp_method)bm->variant, bm->refine_lm,
+                                   8.0, err);
+    if (!mrcal_unproject((mrcal_point3_t *)T->v_cam, (const mrcal_point2_t *)P->q_px, P->Npoints, &P->camera.lensmodel,
+                         P->camera.intrinsics))
         return rs_err_set(err, RS_ERR_EXTERNAL, "mrcal_unproject failed");
     for (int i = 0; i < P->Npoints; i++) {
         double *v = &T->v_cam[3 * i];
@@ -194,9 +193,9 @@ static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, r
         for (int k = 0; k < 3; k++) v[k] /= n;
     }
     double Rt[12];
-    const rs_status st = rs_calib_opengv_pose(Rt, T->v_cam, P->p_enu_survey_m, P->Npoints,
-                                              (rs_calib_opengv_pose_method)bm->variant,
-                                              atan(8.0 / P->camera.intrinsics[0]), 500, err);
+    const rs_status st =
+        rs_calib_opengv_pose(Rt, T->v_cam, P->p_enu_survey_m, P->Npoints, (rs_calib_opengv_pose_method)bm->variant,
+                             atan(8.0 / P->camera.intrinsics[0]), 500, err);
     if (st == RS_OK) mrcal_rt_from_Rt(rt, NULL, Rt);
     return st;
 }
@@ -257,10 +256,8 @@ static void ground_grid(bench_trial *T)
             double *q = T->q_grid[T->Ngrid], *g = T->g_true[T->Ngrid];
             q[0] = (i + 0.5) * P->camera.width / GRID_U;
             q[1] = (j + 0.5) * P->camera.height / GRID_V;
-            if (rs_camera_locate_ground(g, &P->camera, q, n_up, 0.0, NULL) != RS_OK)
-                continue;
-            if (hypot(g[0] - P->p_cam_enu_m[0], g[1] - P->p_cam_enu_m[1]) <= T->sim->max_range_m)
-                T->Ngrid++;
+            if (rs_camera_locate_ground(g, &P->camera, q, n_up, 0.0, NULL) != RS_OK) continue;
+            if (hypot(g[0] - P->p_cam_enu_m[0], g[1] - P->p_cam_enu_m[1]) <= T->sim->max_range_m) T->Ngrid++;
         }
 }
 
@@ -310,8 +307,8 @@ static void trial_method(bench_acc *A, int m, bench_trial *T, double scale_m)
     if (!(drot <= 5.0 && dpos <= 0.2 * scale_m)) {
         A->Nfail++;
         if (!A->failure[0])
-            snprintf(A->failure, sizeof A->failure, "wrong pose: rotation off by %.3g deg, position by %.3g m",
-                     drot, dpos);
+            snprintf(A->failure, sizeof A->failure, "wrong pose: rotation off by %.3g deg, position by %.3g m", drot,
+                     dpos);
         return;
     }
     A->Nok++;
@@ -325,15 +322,15 @@ static void trial_method(bench_acc *A, int m, bench_trial *T, double scale_m)
         memcpy(estimated.rt_cam_enu, rt, sizeof estimated.rt_cam_enu);
         if (rs_camera_locate_ground(p, &estimated, T->q_grid[g], n_up, 0.0, NULL) != RS_OK)
             p[0] = p[1] = p[2] = INFINITY; // the estimated ray misses the ground: counted, huge
-        const double d2 = (p[0] - T->g_true[g][0]) * (p[0] - T->g_true[g][0]) +
-                          (p[1] - T->g_true[g][1]) * (p[1] - T->g_true[g][1]);
+        const double d2 =
+            (p[0] - T->g_true[g][0]) * (p[0] - T->g_true[g][0]) + (p[1] - T->g_true[g][1]) * (p[1] - T->g_true[g][1]);
         A->ss_ground += isfinite(d2) ? d2 : scale_m * scale_m;
         A->Nground++;
     }
 }
 
-static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int ic,
-                            const rs_bench_calib_options *o, bench_acc *acc)
+static rs_status
+run_config(rs_bench_calib_row *rows, const bench_config *c, int ic, const rs_bench_calib_options *o, bench_acc *acc)
 {
     const int N = c->sim.Nlandmarks;
     bench_trial T = {0};
@@ -408,8 +405,11 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
     return RS_OK;
 }
 
-rs_status rs_bench_calib_run(rs_bench_calib_row **rows, int *Nrows, const rs_bench_calib_options *o,
-                             void (*progress)(int done, int total, void *cookie), void *cookie,
+rs_status rs_bench_calib_run(rs_bench_calib_row **rows,
+                             int *Nrows,
+                             const rs_bench_calib_options *o,
+                             void (*progress)(int done, int total, void *cookie),
+                             void *cookie,
                              rs_err *err)
 {
     *rows = NULL;

@@ -50,26 +50,26 @@ extern "C" {
 #endif
 
 typedef struct {
-    int trials;     // problems per configuration (default 50)
-    bool quick;     // the small grid: 2-3 configurations, for the test suite
-    uint64_t seed;  // trial k of configuration c uses seed + 1000003 c + k (default 1)
+    int trials;    // problems per configuration (default 50)
+    bool quick;    // the small grid: 2-3 configurations, for the test suite
+    uint64_t seed; // trial k of configuration c uses seed + 1000003 c + k (default 1)
 } rs_bench_calib_options;
 
 // Fills o with the defaults above. o must not be NULL.
 void rs_bench_calib_options_default(rs_bench_calib_options *o);
 
 typedef struct {
-    char family[24];        // "baseline", "noise", "landmarks", "outliers", "survey", "planar",
-                            //   "height", "distance"
-    char config[40];        // e.g. "noise=0.1px"
-    char method[28];        // e.g. "cv-ransac+lm"
+    char family[24]; // "baseline", "noise", "landmarks", "outliers", "survey", "planar",
+                     //   "height", "distance"
+    char config[40]; // e.g. "noise=0.1px"
+    char method[28]; // e.g. "cv-ransac+lm"
     int trials, failures;
     double time_med_us, time_p90_us;
     double rot_rms_deg, pos_rms_m, ground_rms_m; // NAN when every trial failed
     double crb_rot_deg, crb_pos_m;               // NAN when the bound could not be computed
     double rot_ratio, pos_ratio;                 // error / bound; NAN as above
-    double cond_median;     // median condition number (roadside methods; NAN for the others)
-    char failure[120];      // the first failure's cause ("" when none)
+    double cond_median;                          // median condition number (roadside methods; NAN for the others)
+    char failure[120];                           // the first failure's cause ("" when none)
 } rs_bench_calib_row;
 
 // Runs the benchmark.
@@ -77,47 +77,43 @@ typedef struct {
 // progress: called after each configuration (done, total) -- may be NULL.
 // Errors: RS_ERR_USAGE (bad options), RS_ERR_NOMEM. A configuration whose problems cannot be
 // generated gives rows with trials = 0 and the generator's message in `failure`.
-rs_status rs_bench_calib_run(// out
-                             rs_bench_calib_row **rows,
-                             int *Nrows,
-                             // in
-                             const rs_bench_calib_options *o,
-                             void (*progress)(int done, int total, void *cookie), // may be NULL
-                             void *cookie,
-                             rs_err *err);
+rs_status rs_bench_calib_run( // out
+    rs_bench_calib_row **rows,
+    int *Nrows,
+    // in
+    const rs_bench_calib_options *o,
+    void (*progress)(int done, int total, void *cookie), // may be NULL
+    void *cookie,
+    rs_err *err);
 
 // Writes the rows as CSV (header line, one row per method and configuration; NAN written as
 // "nan"), atomically. Errors: RS_ERR_IO.
-rs_status rs_bench_calib_write_csv(const char *path,
-                                   const rs_bench_calib_row *rows, int Nrows,
-                                   rs_err *err);
+rs_status rs_bench_calib_write_csv(const char *path, const rs_bench_calib_row *rows, int Nrows, rs_err *err);
 
 // Writes a PNG (1600 x 1000, drawn by rs_report_plot_loglog_png, report/rs_report_plot.h): one
 // log-log panel per configuration family (the first 16), x = median time (us), y = position
 // error / Cramer-Rao bound (geometric mean over the family's configurations), one marker per
 // method (circle: roadside, square: OpenCV, triangle: OpenGV), a shared legend. Atomic.
 // Errors: RS_ERR_IO, RS_ERR_EXTERNAL (cairo), RS_ERR_NOMEM.
-rs_status rs_bench_calib_plot(const char *path,
-                              const rs_bench_calib_row *rows, int Nrows,
-                              rs_err *err);
+rs_status rs_bench_calib_plot(const char *path, const rs_bench_calib_row *rows, int Nrows, rs_err *err);
 
 // ---- the stress run ----
 
 typedef struct {
-    int Nproblems;          // asked for
-    int Ngenerated;         // problems the simulator produced (the rest: options it refused)
-    int Nok;                // rs_calib_solve returned a pose
-    int Nerror[16];         // errors, by rs_status code
-    int Nflagged;           // poses whose condition number exceeded the bound (and were warned)
-    int Nnonfinite;         // poses with a NaN/inf anywhere in the result: must be 0
-    int Nunnamed;           // errors without a cause in the message: must be 0
-    int Nunflagged;         // condition number beyond the bound without a warning: must be 0
-    int Nbad;               // poses more than 10 reported sigmas (Mahalanobis) from the truth
-                            //   while not flagged (a confident wrong answer)
-    double cond_max;        // largest condition number of a returned pose
-    uint64_t first_bad_seed;// seed of the first problem counted in Nnonfinite, Nunnamed,
-                            //   Nunflagged or Nbad
-    char first_bad[200];    // what was wrong with it ("" when nothing was)
+    int Nproblems;           // asked for
+    int Ngenerated;          // problems the simulator produced (the rest: options it refused)
+    int Nok;                 // rs_calib_solve returned a pose
+    int Nerror[16];          // errors, by rs_status code
+    int Nflagged;            // poses whose condition number exceeded the bound (and were warned)
+    int Nnonfinite;          // poses with a NaN/inf anywhere in the result: must be 0
+    int Nunnamed;            // errors without a cause in the message: must be 0
+    int Nunflagged;          // condition number beyond the bound without a warning: must be 0
+    int Nbad;                // poses more than 10 reported sigmas (Mahalanobis) from the truth
+                             //   while not flagged (a confident wrong answer)
+    double cond_max;         // largest condition number of a returned pose
+    uint64_t first_bad_seed; // seed of the first problem counted in Nnonfinite, Nunnamed,
+                             //   Nunflagged or Nbad
+    char first_bad[200];     // what was wrong with it ("" when nothing was)
 } rs_bench_calib_stress_summary;
 
 // Solves Nproblems random problems with rs_calib_solve: lens pinhole / OPENCV8 / CAHVOR,
@@ -128,12 +124,12 @@ typedef struct {
 // positive diagonal, a condition number beyond the bound (rs_calib_options.condition_warn,
 // default 100) comes with a warning naming it, every error has a message.
 // Errors: RS_ERR_USAGE for Nproblems < 1. The findings are in *summary, not in the status.
-rs_status rs_bench_calib_stress(// out
-                                rs_bench_calib_stress_summary *summary,
-                                // in
-                                int Nproblems,
-                                uint64_t seed,
-                                rs_err *err);
+rs_status rs_bench_calib_stress( // out
+    rs_bench_calib_stress_summary *summary,
+    // in
+    int Nproblems,
+    uint64_t seed,
+    rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -1,7 +1,7 @@
 // rs_bench_calib_output.c -- the outputs of roadside bench calib: the rows as CSV and the plot
 // (the per-family figures computed here, drawn by report/rs_report_plot.h).
-#include "bench/rs_bench_calib.h"
 #include "bench/internal/rs_bench_calib_internal.h"
+#include "bench/rs_bench_calib.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -25,10 +25,9 @@ rs_status rs_bench_calib_write_csv(const char *path, const rs_bench_calib_row *r
         snprintf(failure, sizeof failure, "%s", r->failure);
         for (char *p = failure; *p; p++)
             if (*p == '"' || *p == '\n' || *p == '\r') *p = '\'';
-        fprintf(a.f, "%s,%s,%s,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,\"%s\"\n", r->family,
-                r->config, r->method, r->trials, r->failures, r->time_med_us, r->time_p90_us, r->rot_rms_deg,
-                r->pos_rms_m, r->ground_rms_m, r->crb_rot_deg, r->crb_pos_m, r->rot_ratio, r->pos_ratio,
-                r->cond_median, failure);
+        fprintf(a.f, "%s,%s,%s,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,\"%s\"\n", r->family, r->config,
+                r->method, r->trials, r->failures, r->time_med_us, r->time_p90_us, r->rot_rms_deg, r->pos_rms_m,
+                r->ground_rms_m, r->crb_rot_deg, r->crb_pos_m, r->rot_ratio, r->pos_ratio, r->cond_median, failure);
     }
     if (ferror(a.f)) {
         rs_io_atomic_abort(&a);

@@ -116,8 +116,12 @@ static void stress_one(rs_bench_calib_stress_summary *S, uint64_t seed)
         sig[3 * i + 2] = s.survey_sigma_v_m;
         sig[3 * N + i] = fmax(s.pixel_sigma_px, 1e-3);
     }
-    rs_calib_problem cp = {.N = N, .p_enu_m = P->p_enu_survey_m, .sigma_enu_m = sig, .q_px = P->q_px,
-                           .sigma_px = sig + 3 * N, .camera = &P->camera};
+    rs_calib_problem cp = {.N = N,
+                           .p_enu_m = P->p_enu_survey_m,
+                           .sigma_enu_m = sig,
+                           .q_px = P->q_px,
+                           .sigma_px = sig + 3 * N,
+                           .camera = &P->camera};
     rs_calib_options opt;
     rs_calib_options_default(&opt);
     rs_calib_result r;
@@ -164,8 +168,7 @@ static void stress_one(rs_bench_calib_stress_summary *S, uint64_t seed)
     rs_simulate_problem_free(P);
 }
 
-rs_status rs_bench_calib_stress(rs_bench_calib_stress_summary *summary, int Nproblems, uint64_t seed,
-                                rs_err *err)
+rs_status rs_bench_calib_stress(rs_bench_calib_stress_summary *summary, int Nproblems, uint64_t seed, rs_err *err)
 {
     memset(summary, 0, sizeof *summary);
     if (Nproblems < 1) return rs_err_set(err, RS_ERR_USAGE, "stress: Nproblems = %d, must be >= 1", Nproblems);

@@ -2,9 +2,9 @@
 #include "bench/rs_bench_eval.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <sys/resource.h>
 #include <time.h>
-#include <stdlib.h>
 
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
@@ -13,14 +13,13 @@
 static const char *const conditions[3] = {"normal", "rain", "night"};
 static const char *const categories[3] = {"car", "truck", "bus"};
 
-
 typedef struct {
     double x, y, w, h;
     int category;
 } box;
 
-rs_status rs_bench_eval_write_data(const char *gt_path, const char *dets_path, int Nimages, long Ndets,
-                                  uint64_t seed, rs_err *err)
+rs_status rs_bench_eval_write_data(
+    const char *gt_path, const char *dets_path, int Nimages, long Ndets, uint64_t seed, rs_err *err)
 {
     if (Nimages < 1 || Ndets < 0)
         return rs_err_set(err, RS_ERR_USAGE, "synthetic data: need at least one image and no negative count");
@@ -37,8 +36,8 @@ rs_status rs_bench_eval_write_data(const char *gt_path, const char *dets_path, i
 
     fprintf(gt.f, "{\"images\": [\n");
     for (int m = 0; m < Nimages; m++)
-        fprintf(gt.f, "%s{\"id\": %d, \"width\": 1920, \"height\": 1080, \"condition\": \"%s\"}\n", m ? "," : "",
-                m + 1, conditions[(int)(3 * rs_rng_uniform(&rng))]);
+        fprintf(gt.f, "%s{\"id\": %d, \"width\": 1920, \"height\": 1080, \"condition\": \"%s\"}\n", m ? "," : "", m + 1,
+                conditions[(int)(3 * rs_rng_uniform(&rng))]);
     fprintf(gt.f, "], \"categories\": [\n");
     for (int k = 0; k < 3; k++) fprintf(gt.f, "%s{\"id\": %d, \"name\": \"%s\"}\n", k ? "," : "", k + 1, categories[k]);
     fprintf(gt.f, "], \"annotations\": [\n");
@@ -63,7 +62,8 @@ rs_status rs_bench_eval_write_data(const char *gt_path, const char *dets_path, i
         if (m % 20 == 0) {
             double x = rs_rng_uniform_in(&rng, 0, 1500), y = rs_rng_uniform_in(&rng, 300, 800);
             fprintf(gt.f,
-                    ",{\"id\": %ld, \"image_id\": %d, \"category_id\": 1, \"bbox\": [%.2f, %.2f, 400, 200], \"iscrowd\": 1}\n",
+                    ",{\"id\": %ld, \"image_id\": %d, \"category_id\": 1, \"bbox\": [%.2f, %.2f, 400, 200], "
+                    "\"iscrowd\": 1}\n",
                     n_ann + 1, m + 1, x, y);
             n_ann++;
         }
@@ -85,7 +85,8 @@ rs_status rs_bench_eval_write_data(const char *gt_path, const char *dets_path, i
                 b.category = 1 + (int)(3 * rs_rng_uniform(&rng));
                 score = rs_rng_uniform_in(&rng, 0, 0.6);
             }
-            fprintf(dets.f, "%s{\"image_id\": %d, \"category_id\": %d, \"bbox\": [%.2f, %.2f, %.2f, %.2f], \"score\": %.5f}\n",
+            fprintf(dets.f,
+                    "%s{\"image_id\": %d, \"category_id\": %d, \"bbox\": [%.2f, %.2f, %.2f, %.2f], \"score\": %.5f}\n",
                     n_det ? "," : "", m + 1, b.category, b.x, b.y, b.w, b.h, score);
             n_det++;
         }
@@ -129,8 +130,13 @@ static double peak_rss_bytes(void)
     return 1024.0 * (double)u.ru_maxrss;
 }
 
-rs_status rs_bench_eval_run(rs_bench_eval_figures *f, int Nimages, long Ndets, uint64_t seed, const char *gt_path,
-                            const char *dets_path, rs_err *err)
+rs_status rs_bench_eval_run(rs_bench_eval_figures *f,
+                            int Nimages,
+                            long Ndets,
+                            uint64_t seed,
+                            const char *gt_path,
+                            const char *dets_path,
+                            rs_err *err)
 {
     double t0 = now_s();
     rs_status st = rs_bench_eval_write_data(gt_path, dets_path, Nimages, Ndets, seed, err);
@@ -162,4 +168,3 @@ rs_status rs_bench_eval_run(rs_bench_eval_figures *f, int Nimages, long Ndets, u
     rs_eval_data_free(data);
     return st;
 }
-

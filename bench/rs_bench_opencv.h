@@ -14,10 +14,10 @@ extern "C" {
 // LENSMODEL_OPENCVn order) passed as OpenCV users pass them.
 typedef enum {
     RS_BENCH_OPENCV_PNP_ITERATIVE = 0, // cv::SOLVEPNP_ITERATIVE (DLT/homography init + LM)
-    RS_BENCH_OPENCV_PNP_EPNP      = 1, // cv::SOLVEPNP_EPNP (Lepetit et al., IJCV 2009)
-    RS_BENCH_OPENCV_PNP_SQPNP     = 2, // cv::SOLVEPNP_SQPNP (Terzakis & Lourakis, ECCV 2020)
-    RS_BENCH_OPENCV_PNP_IPPE      = 3, // cv::SOLVEPNP_IPPE (coplanar landmarks only)
-    RS_BENCH_OPENCV_PNP_RANSAC    = 4, // cv::solvePnPRansac, ITERATIVE inside, 100 iterations,
+    RS_BENCH_OPENCV_PNP_EPNP = 1,      // cv::SOLVEPNP_EPNP (Lepetit et al., IJCV 2009)
+    RS_BENCH_OPENCV_PNP_SQPNP = 2,     // cv::SOLVEPNP_SQPNP (Terzakis & Lourakis, ECCV 2020)
+    RS_BENCH_OPENCV_PNP_IPPE = 3,      // cv::SOLVEPNP_IPPE (coplanar landmarks only)
+    RS_BENCH_OPENCV_PNP_RANSAC = 4,    // cv::solvePnPRansac, ITERATIVE inside, 100 iterations,
                                        //   confidence 0.99, threshold ransac_threshold_px
 } rs_bench_opencv_pnp_method;
 
@@ -27,19 +27,19 @@ typedef enum {
 // Returns RS_ERR_DEGENERATE when OpenCV finds no pose or a non-finite one, RS_ERR_EXTERNAL when
 // it throws (its message is kept: e.g. IPPE's "points are not coplanar"), RS_ERR_USAGE for a
 // bad Ndistortion. Never prints.
-rs_status rs_bench_opencv_pnp(// out
-                              double *rt_cam_ref,        // (6,)
-                              bool *inlier,              // (N,) may be NULL
-                              // in
-                              const double *p_ref,       // (N,3) landmarks, metres
-                              const double *q_px,        // (N,2) observed pixels
-                              int N,
-                              const double *intrinsics,  // (4 + Ndistortion,) fx fy cx cy k...
-                              int Ndistortion,           // 0, 4, 5, 8, 12 or 14
-                              rs_bench_opencv_pnp_method method,
-                              bool refine_lm,
-                              double ransac_threshold_px, // RANSAC only, pixels
-                              rs_err *err);              // may be NULL
+rs_status rs_bench_opencv_pnp( // out
+    double *rt_cam_ref,        // (6,)
+    bool *inlier,              // (N,) may be NULL
+    // in
+    const double *p_ref, // (N,3) landmarks, metres
+    const double *q_px,  // (N,2) observed pixels
+    int N,
+    const double *intrinsics, // (4 + Ndistortion,) fx fy cx cy k...
+    int Ndistortion,          // 0, 4, 5, 8, 12 or 14
+    rs_bench_opencv_pnp_method method,
+    bool refine_lm,
+    double ransac_threshold_px, // RANSAC only, pixels
+    rs_err *err);               // may be NULL
 
 #ifdef __cplusplus
 }

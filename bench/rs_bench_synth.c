@@ -18,11 +18,9 @@ void rs_bench_synth_variants(rs_bench_synth_row *rows, int J)
         {"all", "every saving", false, false, false, false, false},
         {"jobs=1", "one image at a time", true, false, false, false, false},
         {"separate", "one povray process per pass", false, true, false, false, false},
-        {"full-frame", "no culling, no region: the whole image rendered", false, false, true,
-         false, false},
+        {"full-frame", "no culling, no region: the whole image rendered", false, false, true, false, false},
         {"no-shadows", "the shadow pass skipped", false, false, false, true, false},
-        {"full-detail", "every vehicle's mesh in full detail (no coarse meshes)", false, false,
-         false, false, true},
+        {"full-detail", "every vehicle's mesh in full detail (no coarse meshes)", false, false, false, false, true},
     };
     for (int k = 0; k < RS_SYNTH_BENCH_VARIANTS; k++) {
         memset(&rows[k], 0, sizeof(rows[k]));
@@ -49,22 +47,18 @@ static double cpu_now(void)
     struct rusage self, kids;
     getrusage(RUSAGE_SELF, &self);
     getrusage(RUSAGE_CHILDREN, &kids);
-    return self.ru_utime.tv_sec + self.ru_stime.tv_sec + kids.ru_utime.tv_sec +
-           kids.ru_stime.tv_sec +
-           1e-6 * (self.ru_utime.tv_usec + self.ru_stime.tv_usec + kids.ru_utime.tv_usec +
-                   kids.ru_stime.tv_usec);
+    return self.ru_utime.tv_sec + self.ru_stime.tv_sec + kids.ru_utime.tv_sec + kids.ru_stime.tv_sec +
+           1e-6 * (self.ru_utime.tv_usec + self.ru_stime.tv_usec + kids.ru_utime.tv_usec + kids.ru_stime.tv_usec);
 }
 
-rs_status rs_bench_synth_run(rs_bench_synth_row *rows, int Nrows,
-                             const rs_synth_dataset_options *base, const char *work_dir,
-                             rs_err *err)
+rs_status rs_bench_synth_run(
+    rs_bench_synth_row *rows, int Nrows, const rs_synth_dataset_options *base, const char *work_dir, rs_err *err)
 {
     rs_status st = rs_io_mkdir_p(work_dir, err);
     for (int k = 0; k < Nrows && !st; k++) {
         rs_bench_synth_row *r = &rows[k];
         char *out = rs_io_join(work_dir, r->name);
-        if (!out)
-            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!out) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         rs_io_remove_tree(out);
         rs_synth_dataset_options o = *base;
         o.out_dir = out;
@@ -72,8 +66,7 @@ rs_status rs_bench_synth_run(rs_bench_synth_row *rows, int Nrows,
         o.separate_processes = r->separate_processes;
         o.full_frame = r->full_frame;
         o.shadows = r->shadows;
-        if (r->full_detail)
-            o.coarse_below_px = 0;
+        if (r->full_detail) o.coarse_below_px = 0;
         o.shard_index = 0;
         o.shard_count = 1;
         o.progress = NULL;

@@ -26,9 +26,9 @@ typedef struct {
     bool separate_processes, full_frame, shadows, full_detail;
     // figures
     int Nimages, Nannotations;
-    double wall_s;    // the whole run: loading, images, assembling the COCO file
-    double cpu_s;     // CPU of this process and of its children (workers, povray), user + sys
-    double povray_s;  // wall time inside povray, summed over the images
+    double wall_s;   // the whole run: loading, images, assembling the COCO file
+    double cpu_s;    // CPU of this process and of its children (workers, povray), user + sys
+    double povray_s; // wall time inside povray, summed over the images
 } rs_bench_synth_row;
 
 #define RS_SYNTH_BENCH_VARIANTS 6
@@ -40,9 +40,8 @@ void rs_bench_synth_variants(rs_bench_synth_row *rows, int J);
 // Runs each row's variant: base's site, calib, count, seed, size, vehicles, povray, with the
 // row's jobs / separate / full-frame / shadows, output into work_dir/<name> (created, then
 // removed). base->progress is ignored. Fills the figures. Stops at the first error.
-rs_status rs_bench_synth_run(rs_bench_synth_row *rows, int Nrows,
-                             const rs_synth_dataset_options *base, const char *work_dir,
-                             rs_err *err);
+rs_status rs_bench_synth_run(
+    rs_bench_synth_row *rows, int Nrows, const rs_synth_dataset_options *base, const char *work_dir, rs_err *err);
 
 #ifdef __cplusplus
 }

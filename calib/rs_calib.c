@@ -17,7 +17,8 @@
 
 #define DEG (180.0 / M_PI)
 
-void rs_calib_options_default(rs_calib_options *opt) {
+void rs_calib_options_default(rs_calib_options *opt)
+{
     memset(opt, 0, sizeof(*opt));
     opt->refine = RS_CALIB_REFINE_NONE;
     opt->robust_scale = 2.0;
@@ -33,7 +34,8 @@ void rs_calib_options_default(rs_calib_options *opt) {
     opt->sigma_rotation_warn_deg = 2.0;
 }
 
-void rs_calib_result_free(rs_calib_result *result) {
+void rs_calib_result_free(rs_calib_result *result)
+{
     if (!result) return;
     free(result->intrinsics);
     free(result->sigma_intrinsics);
@@ -46,7 +48,8 @@ void rs_calib_result_free(rs_calib_result *result) {
     memset(result, 0, sizeof(*result));
 }
 
-rs_camera rs_calib_result_camera(const rs_camera *nominal, const rs_calib_result *result) {
+rs_camera rs_calib_result_camera(const rs_camera *nominal, const rs_calib_result *result)
+{
     rs_camera c = *nominal;
     c.intrinsics = result->intrinsics;
     c.Nintrinsics = result->Nintrinsics;
@@ -57,7 +60,8 @@ rs_camera rs_calib_result_camera(const rs_camera *nominal, const rs_calib_result
 // ---------------------------------------------------------------- small helpers
 
 // out (n,n) = J (n,m) C (m,m) J^T
-static void sandwich(double *out, const double *J, const double *C, int n, int m) {
+static void sandwich(double *out, const double *J, const double *C, int n, int m)
+{
     for (int a = 0; a < n; a++)
         for (int b = 0; b < n; b++) {
             double s = 0.0;
@@ -70,7 +74,8 @@ static void sandwich(double *out, const double *J, const double *C, int n, int m
 // ---------------------------------------------------------------- rs_calib_solve
 
 static void warn(rs_calib_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void warn(rs_calib_result *r, const char *fmt, ...) {
+static void warn(rs_calib_result *r, const char *fmt, ...)
+{
     size_t len = strlen(r->warnings);
     if (len + 3 >= sizeof(r->warnings)) return;
     if (len) {
@@ -83,40 +88,36 @@ static void warn(rs_calib_result *r, const char *fmt, ...) {
     va_end(ap);
 }
 
-static bool all_finite(const double *x, int n) {
+static bool all_finite(const double *x, int n)
+{
     for (int i = 0; i < n; i++)
         if (!isfinite(x[i])) return false;
     return true;
 }
 
-static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
-                          rs_err *err) {
-    if (!pb->camera || !pb->camera->intrinsics)
-        return rs_err_set(err, RS_ERR_INVALID, "lensmodel/intrinsics: NULL");
+static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *opt, int Ni, rs_err *err)
+{
+    if (!pb->camera || !pb->camera->intrinsics) return rs_err_set(err, RS_ERR_INVALID, "lensmodel/intrinsics: NULL");
     if ((&pb->camera->lensmodel)->type == MRCAL_LENSMODEL_CAHVORE)
         return rs_err_set(err, RS_ERR_UNSUPPORTED,
                           "lensmodel: CAHVORE has no projection gradients in mrcal; not supported");
     if (Ni <= 0) return rs_err_set(err, RS_ERR_INVALID, "lensmodel: invalid");
-    if (!all_finite(pb->camera->intrinsics, Ni))
-        return rs_err_set(err, RS_ERR_INVALID, "intrinsics: not finite");
+    if (!all_finite(pb->camera->intrinsics, Ni)) return rs_err_set(err, RS_ERR_INVALID, "intrinsics: not finite");
     if (opt->refine != RS_CALIB_REFINE_NONE) {
-        if (opt->refine & ~(unsigned)(RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER |
-                                      RS_CALIB_REFINE_DISTORTION))
+        if (opt->refine & ~(unsigned)(RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER | RS_CALIB_REFINE_DISTORTION))
             return rs_err_set(err, RS_ERR_INVALID, "options: refine: unknown flags 0x%x", opt->refine);
         if (!mrcal_lensmodel_metadata((&pb->camera->lensmodel)).has_core)
-            return rs_err_set(err, RS_ERR_UNSUPPORTED,
-                              "refine: this lens model has no (fx, fy, cx, cy) core");
-        if ((opt->refine & RS_CALIB_REFINE_FOCAL) && !(pb->camera->intrinsics[0] > 0.0 && pb->camera->intrinsics[1] > 0.0))
+            return rs_err_set(err, RS_ERR_UNSUPPORTED, "refine: this lens model has no (fx, fy, cx, cy) core");
+        if ((opt->refine & RS_CALIB_REFINE_FOCAL) &&
+            !(pb->camera->intrinsics[0] > 0.0 && pb->camera->intrinsics[1] > 0.0))
             return rs_err_set(err, RS_ERR_INVALID, "intrinsics: focal lengths must be > 0");
     }
-    if (!(opt->outlier_threshold > 0.0) || !isfinite(opt->robust_scale) ||
-        !(opt->focal_search_min > 0.0) || !(opt->focal_search_max >= opt->focal_search_min) ||
-        !(opt->focal_prior_rel_sigma >= 0.0) || !(opt->center_prior_sigma_px >= 0.0) ||
-        !(opt->distortion_prior_sigma >= 0.0))
+    if (!(opt->outlier_threshold > 0.0) || !isfinite(opt->robust_scale) || !(opt->focal_search_min > 0.0) ||
+        !(opt->focal_search_max >= opt->focal_search_min) || !(opt->focal_prior_rel_sigma >= 0.0) ||
+        !(opt->center_prior_sigma_px >= 0.0) || !(opt->distortion_prior_sigma >= 0.0))
         return rs_err_set(err, RS_ERR_INVALID, "options: out of range");
     if (pb->N < 0) return rs_err_set(err, RS_ERR_INVALID, "N: %d < 0", pb->N);
-    if (pb->N > 0 && (!pb->p_enu_m || !pb->q_px))
-        return rs_err_set(err, RS_ERR_INVALID, "p_enu_m/q_px: NULL");
+    if (pb->N > 0 && (!pb->p_enu_m || !pb->q_px)) return rs_err_set(err, RS_ERR_INVALID, "p_enu_m/q_px: NULL");
     for (int i = 0; i < pb->N; i++) {
         if (!all_finite(&pb->p_enu_m[3 * i], 3))
             return rs_err_set(err, RS_ERR_INVALID, "landmark %d: p_enu_m: not finite", i);
@@ -127,17 +128,17 @@ static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *op
         if (pb->sigma_enu_m)
             for (int k = 0; k < 3; k++)
                 if (!(pb->sigma_enu_m[3 * i + k] >= 0.0 && isfinite(pb->sigma_enu_m[3 * i + k])))
-                    return rs_err_set(err, RS_ERR_INVALID,
-                                      "landmark %d: sigma_enu_m[%d]: must be finite and >= 0", i, k);
+                    return rs_err_set(err, RS_ERR_INVALID, "landmark %d: sigma_enu_m[%d]: must be finite and >= 0", i,
+                                      k);
     }
     if (pb->has_position_prior &&
         (!all_finite(pb->prior_position_enu_m, 3) || !(pb->prior_sigma_m > 0.0 && isfinite(pb->prior_sigma_m))))
-        return rs_err_set(err, RS_ERR_INVALID,
-                          "position prior: position must be finite and prior_sigma_m > 0");
+        return rs_err_set(err, RS_ERR_INVALID, "position prior: position must be finite and prior_sigma_m > 0");
     if (pb->N < 4)
         return rs_err_set(err, RS_ERR_DEGENERATE,
                           "only %d landmarks: a pose needs at least 4 (6 unknowns, 2 per landmark, "
-                          "and one more to pick among the P3P solutions)", pb->N);
+                          "and one more to pick among the P3P solutions)",
+                          pb->N);
     return RS_OK;
 }
 
@@ -145,16 +146,21 @@ static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *op
 // consensus: a survey sigma of 0.3 m on a landmark 12 m away is 30 px at f = 1200 px, so the
 // user's threshold (default 8 px) can be too tight for the near landmarks. *T_used receives the
 // threshold that worked. Invalid input is not retried.
-static rs_status init_escalating(rs_calib_init_result *init, double *T_used, const double *intrinsics,
-                                 const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err) {
+static rs_status init_escalating(rs_calib_init_result *init,
+                                 double *T_used,
+                                 const double *intrinsics,
+                                 const rs_calib_problem *pb,
+                                 const rs_calib_options *opt,
+                                 rs_err *err)
+{
     rs_calib_init_options io = opt->init;
     if (!(io.ransac_threshold_px > 0.0)) io.ransac_threshold_px = 8.0;
     io.sigma_enu_m = pb->sigma_enu_m;
     rs_status st = RS_ERR_DEGENERATE;
     rs_err e = {RS_OK, ""};
     for (int k = 0; k < 5; k++, io.ransac_threshold_px *= 2.0) {
-        st = rs_calib_init_pose(init, NULL, (&pb->camera->lensmodel), intrinsics, pb->p_enu_m, pb->q_px,
-                                pb->N, &io, &e);
+        st =
+            rs_calib_init_pose(init, NULL, (&pb->camera->lensmodel), intrinsics, pb->p_enu_m, pb->q_px, pb->N, &io, &e);
         *T_used = io.ransac_threshold_px;
         if (st != RS_ERR_DEGENERATE) break;
     }
@@ -165,8 +171,8 @@ static rs_status init_escalating(rs_calib_init_result *init, double *T_used, con
 // MSAC cost (Torr & Zisserman 2000) of a pose over ALL landmarks: sum_i min(e_i^2, T^2), e_i the
 // reprojection error in pixels through the given intrinsics; a landmark behind the camera or
 // that does not project costs T^2.
-static double msac_cost(const double rt_cam_enu[6], const double *intrinsics,
-                        const rs_calib_problem *pb, double T) {
+static double msac_cost(const double rt_cam_enu[6], const double *intrinsics, const rs_calib_problem *pb, double T)
+{
     double cost = 0.0;
     for (int i = 0; i < pb->N; i++) {
         mrcal_point3_t pc;
@@ -187,11 +193,15 @@ static double msac_cost(const double rt_cam_enu[6], const double *intrinsics,
 // fx s, fy s and keeps the s whose pose has the smallest MSAC cost over all landmarks, with
 // one truncation for every s: T = 4 x the RANSAC threshold (32 px by default), so that poses
 // found at different escalated thresholds compare fairly. intrinsics receives the chosen scale.
-static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, double *scale_out,
-                              const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
-                              rs_err *err) {
-    const bool search = (opt->refine & RS_CALIB_REFINE_FOCAL) &&
-                        opt->focal_search_max > opt->focal_search_min;
+static rs_status initial_pose(rs_calib_init_result *init,
+                              double *intrinsics,
+                              double *scale_out,
+                              const rs_calib_problem *pb,
+                              const rs_calib_options *opt,
+                              int Ni,
+                              rs_err *err)
+{
+    const bool search = (opt->refine & RS_CALIB_REFINE_FOCAL) && opt->focal_search_max > opt->focal_search_min;
     double T;
     *scale_out = 1.0;
     if (!search) return init_escalating(init, &T, intrinsics, pb, opt, err);
@@ -203,8 +213,8 @@ static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, do
     double *trial = malloc((size_t)Ni * sizeof(double));
     if (!trial) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (int k = 0; k < K; k++) {
-        const double s = opt->focal_search_min *
-                         pow(opt->focal_search_max / opt->focal_search_min, (double)k / (K - 1));
+        const double s =
+            opt->focal_search_min * pow(opt->focal_search_max / opt->focal_search_min, (double)k / (K - 1));
         memcpy(trial, pb->camera->intrinsics, (size_t)Ni * sizeof(double));
         trial[0] *= s;
         trial[1] *= s;
@@ -235,7 +245,8 @@ static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, do
 }
 
 // rt in the centred frame (p_c = p_enu - c) <-> ENU: t_enu = t_c - R c. J (6,6) = d rt_enu / d rt_c.
-static void rt_enu_from_centred(double rt_enu[6], double J[36], const double rt_c[6], const double c[3]) {
+static void rt_enu_from_centred(double rt_enu[6], double J[36], const double rt_c[6], const double c[3])
+{
     double Rc[3], dRc_dr[9];
     mrcal_rotate_point_r(Rc, dRc_dr, NULL, rt_c, c);
     double out[6];
@@ -253,7 +264,8 @@ static void rt_enu_from_centred(double rt_enu[6], double J[36], const double rt_
         }
     }
 }
-static void rt_centred_from_enu(double rt_c[6], const double rt_enu[6], const double c[3]) {
+static void rt_centred_from_enu(double rt_c[6], const double rt_enu[6], const double c[3])
+{
     double Rc[3];
     mrcal_rotate_point_r(Rc, NULL, NULL, rt_enu, c);
     for (int i = 0; i < 3; i++) {
@@ -265,7 +277,8 @@ static void rt_centred_from_enu(double rt_c[6], const double rt_enu[6], const do
 // Ceres moves r additively and may leave it beyond |r| = pi; the same rotation with
 // |r| <= pi (mrcal_r_from_R) is reported, the covariance carried through dr'/dr (chain of
 // mrcal's R_from_r and r_from_R gradients). cov_rt (6,6) in,out.
-static void normalise_r(double rt[6], double cov_rt[36]) {
+static void normalise_r(double rt[6], double cov_rt[36])
+{
     const double th = sqrt(rt[0] * rt[0] + rt[1] * rt[1] + rt[2] * rt[2]);
     if (th <= M_PI) return;
     double R[9], dR_dr[27], r[3], dr_dR[27], J[9];
@@ -289,7 +302,8 @@ static void normalise_r(double rt[6], double cov_rt[36]) {
 
 // sigma of yaw/pitch/roll: cov_r (3,3) propagated through d(ypr)/dr, by central differences of
 // rs_pose_ypr_from_rt() (step 1e-7 rad; yaw and roll differences wrapped to (-180, 180]).
-static void ypr_sigma(double sigma_deg[3], const double rt[6], const double cov_r[9]) {
+static void ypr_sigma(double sigma_deg[3], const double rt[6], const double cov_r[9])
+{
     double J[9];
     const double h = 1e-7;
     for (int j = 0; j < 3; j++) {
@@ -312,13 +326,15 @@ static void ypr_sigma(double sigma_deg[3], const double rt[6], const double cov_
 }
 
 // Wilson-Hilferty approximation of the chi-square quantile with k dof at standard normal z.
-static double chi2_quantile(int k, double z) {
+static double chi2_quantile(int k, double z)
+{
     const double a = 2.0 / (9.0 * k);
     const double b = 1.0 - a + z * sqrt(a);
     return k * b * b * b;
 }
 
-static rs_status alloc_result(rs_calib_result *r, int N, int Ni) {
+static rs_status alloc_result(rs_calib_result *r, int N, int Ni)
+{
     r->N = N;
     r->Nintrinsics = Ni;
     r->intrinsics = calloc((size_t)Ni, sizeof(double));
@@ -329,8 +345,8 @@ static rs_status alloc_result(rs_calib_result *r, int N, int Ni) {
     r->normalised_residual = calloc((size_t)N, sizeof(double));
     r->inlier = calloc((size_t)N, sizeof(bool));
     r->p_enu_refined_m = calloc((size_t)N * 3, sizeof(double));
-    if (!r->intrinsics || !r->sigma_intrinsics || !r->covariance_intrinsics || !r->predicted_px ||
-        !r->residual_px || !r->normalised_residual || !r->inlier || !r->p_enu_refined_m)
+    if (!r->intrinsics || !r->sigma_intrinsics || !r->covariance_intrinsics || !r->predicted_px || !r->residual_px ||
+        !r->normalised_residual || !r->inlier || !r->p_enu_refined_m)
         return RS_ERR_NOMEM;
     return RS_OK;
 }
@@ -340,7 +356,8 @@ typedef struct {
     bool *use;
 } work_t;
 
-static void work_free(work_t *w) {
+static void work_free(work_t *w)
+{
     free(w->p_survey_c);
     free(w->p_c);
     free(w->cov);
@@ -349,8 +366,9 @@ static void work_free(work_t *w) {
     free(w->use);
 }
 
-static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *pb,
-                       const rs_calib_options *opt, int Ni, rs_err *err) {
+static rs_status
+solve(rs_calib_result *res, work_t *w, const rs_calib_problem *pb, const rs_calib_options *opt, int Ni, rs_err *err)
+{
     const int N = pb->N;
     rs_status st = validate(pb, opt, Ni, err);
     if (st != RS_OK) return st;
@@ -384,18 +402,25 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     double rt_c[6];
     rt_centred_from_enu(rt_c, init.rt_cam_enu, c);
 
-    rs_calib_refine_problem rp = {
-        .N = N, .p_survey_c_m = w->p_survey_c, .sigma_enu_m = pb->sigma_enu_m, .q_px = pb->q_px,
-        .sigma_px = pb->sigma_px, .use = w->use, .lensmodel = (&pb->camera->lensmodel),
-        .intrinsics_nominal = pb->camera->intrinsics, .has_position_prior = pb->has_position_prior,
-        .prior_sigma_m = pb->prior_sigma_m};
+    rs_calib_refine_problem rp = {.N = N,
+                                  .p_survey_c_m = w->p_survey_c,
+                                  .sigma_enu_m = pb->sigma_enu_m,
+                                  .q_px = pb->q_px,
+                                  .sigma_px = pb->sigma_px,
+                                  .use = w->use,
+                                  .lensmodel = (&pb->camera->lensmodel),
+                                  .intrinsics_nominal = pb->camera->intrinsics,
+                                  .has_position_prior = pb->has_position_prior,
+                                  .prior_sigma_m = pb->prior_sigma_m};
     for (int k = 0; k < 3; k++) rp.prior_position_c_m[k] = pb->prior_position_enu_m[k] - c[k];
-    rs_calib_refine_options ro = {.refine = opt->refine, .robust_scale = opt->robust_scale,
+    rs_calib_refine_options ro = {.refine = opt->refine,
+                                  .robust_scale = opt->robust_scale,
                                   .max_iterations = opt->max_iterations,
                                   .focal_prior_rel_sigma = opt->focal_prior_rel_sigma,
                                   .center_prior_sigma_px = opt->center_prior_sigma_px,
                                   .distortion_prior_sigma = opt->distortion_prior_sigma,
-                                  .covariance = false, .rough = true,
+                                  .covariance = false,
+                                  .rough = true,
                                   // the robust pass with landmarks held and their survey
                                   // sigmas folded into the pixels (rs_calib_refine.h): 0.79
                                   // instead of 1.0 ms for 20 landmarks. Not with intrinsics
@@ -410,8 +435,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
 
     // 2. robust solve on every landmark, 3. outliers
     if (opt->robust_scale > 0.0) {
-        st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL,
-                                 &rp, &ro, err);
+        st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
         if (st != RS_OK) {
             rs_err_prefix(err, "robust refinement");
             return st;
@@ -425,8 +449,8 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
                 memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
             }
         }
-        snprintf(robust_desc, sizeof(robust_desc), " + ceres-cauchy(%g) + outliers>%g sigma",
-                 opt->robust_scale, opt->outlier_threshold);
+        snprintf(robust_desc, sizeof(robust_desc), " + ceres-cauchy(%g) + outliers>%g sigma", opt->robust_scale,
+                 opt->outlier_threshold);
     }
     const int Ninl = N - Noutliers;
     if (Ninl < 4)
@@ -440,8 +464,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     ro.covariance = true;
     ro.rough = false;
     ro.marginal = false;
-    st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred,
-                             &rp, &ro, err);
+    st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred, &rp, &ro, err);
     if (st != RS_OK) {
         rs_err_prefix(err, "refinement");
         return st;
@@ -454,9 +477,8 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
         double pc[3];
         mrcal_transform_point_rt(pc, NULL, NULL, rt_c, &w->p_c[3 * i]);
         if (!(pc[2] > 0.0))
-            return rs_err_set(err, RS_ERR_DEGENERATE,
-                              "landmark %d: behind the camera at the solution (z_cam = %.3g m)", i,
-                              pc[2]);
+            return rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d: behind the camera at the solution (z_cam = %.3g m)",
+                              i, pc[2]);
     }
 
     // 5. outputs in ENU
@@ -510,8 +532,8 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     res->condition_number = sum.condition_number;
     char focal_desc[48] = "";
     if (scale != 1.0) snprintf(focal_desc, sizeof(focal_desc), " + focal-search(x%.3g)", scale);
-    snprintf(res->method, sizeof(res->method), "%s%s%s + ceres-wls + covariance(absolute)",
-             init.method, focal_desc, robust_desc);
+    snprintf(res->method, sizeof(res->method), "%s%s%s + ceres-wls + covariance(absolute)", init.method, focal_desc,
+             robust_desc);
 
     // 6. warnings in plain words
     if (Noutliers > 0) {
@@ -553,11 +575,11 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
         warn(res, "no redundancy (dof %d): the fit cannot be checked against the sigmas", res->dof);
     }
     if ((opt->refine & RS_CALIB_REFINE_FOCAL) && res->sigma_intrinsics[0] > 0.05 * res->intrinsics[0])
-        warn(res, "the focal length is poorly determined (sigma %.1f%%): the landmarks' depth "
-                  "range or their spread in the image is too small to separate it from the distance",
+        warn(res,
+             "the focal length is poorly determined (sigma %.1f%%): the landmarks' depth "
+             "range or their spread in the image is too small to separate it from the distance",
              100.0 * res->sigma_intrinsics[0] / res->intrinsics[0]);
-    if (Ninl < 6)
-        warn(res, "only %d inlying landmarks: little redundancy to catch a further mistake", Ninl);
+    if (Ninl < 6) warn(res, "only %d inlying landmarks: little redundancy to catch a further mistake", Ninl);
     if (fabs(res->yaw_pitch_roll_deg[1]) > 89.0)
         warn(res, "camera looks nearly straight %s: yaw and roll are ill-defined",
              res->yaw_pitch_roll_deg[1] > 0 ? "up" : "down");
@@ -571,16 +593,18 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
                 }
         const double area = (qmax[0] - qmin[0]) * (qmax[1] - qmin[1]);
         if (area < 0.05 * pb->camera->width * pb->camera->height)
-            warn(res, "the inlying landmarks cover only %.1f%% of the image: the pose is "
-                      "sensitive to their errors", 100.0 * area / (pb->camera->width * pb->camera->height));
+            warn(res,
+                 "the inlying landmarks cover only %.1f%% of the image: the pose is "
+                 "sensitive to their errors",
+                 100.0 * area / (pb->camera->width * pb->camera->height));
     }
     return RS_OK;
 }
 
-rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *problem,
-                         const rs_calib_options *opt_in, rs_err *err) {
-    if (!result || !problem)
-        return rs_err_set(err, RS_ERR_INVALID, "rs_calib_solve: NULL result or problem");
+rs_status
+rs_calib_solve(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt_in, rs_err *err)
+{
+    if (!result || !problem) return rs_err_set(err, RS_ERR_INVALID, "rs_calib_solve: NULL result or problem");
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     memset(result, 0, sizeof(*result));

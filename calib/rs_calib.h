@@ -33,8 +33,8 @@
 // reported covariance is consistent with the errors (tests/calib/test_solve_nees.c: mean NEES
 // of the 6-dof pose within [0.7,1.3] x 6 over 200+ trials).
 #pragma once
-#include <stdbool.h>
 #include <mrcal/mrcal.h>
+#include <stdbool.h>
 
 #include "core/rs_camera.h"
 
@@ -50,85 +50,85 @@ extern "C" {
 // pixel aspect) stays nominal, because one view of 10-30 landmarks cannot separate them.
 // CENTER refines (cx, cy). DISTORTION refines every intrinsic after the core.
 typedef enum {
-    RS_CALIB_REFINE_NONE       = 0,
-    RS_CALIB_REFINE_FOCAL      = 1,
-    RS_CALIB_REFINE_CENTER     = 2,
+    RS_CALIB_REFINE_NONE = 0,
+    RS_CALIB_REFINE_FOCAL = 1,
+    RS_CALIB_REFINE_CENTER = 2,
     RS_CALIB_REFINE_DISTORTION = 4,
 } rs_calib_refine_flags;
 
 // One camera's observations.
 typedef struct {
-    int N;                              // number of landmarks observed by this camera
-    const double *p_enu_m;              // (N,3) surveyed landmark positions, site ENU, metres
-    const double *sigma_enu_m;          // (N,3) 1-sigma survey error of E, N, U, metres, >= 0;
-                                        //   0 holds that coordinate exactly; NULL: all exact
-    const double *q_px;                 // (N,2) observed pixels
-    const double *sigma_px;             // (N,) 1-sigma of each pixel coordinate, > 0; NULL: 1 px
-    const rs_camera *camera;            // the lens model (CAHVORE is not supported: no
-                                        //   gradients), its NOMINAL intrinsics and the image
-                                        //   size (for warnings; may be 0: unknown); its pose is
-                                        //   not used
-    bool has_position_prior;            // a surveyed camera position (a pole) is known
-    double prior_position_enu_m[3];     //   its ENU position, metres
-    double prior_sigma_m;               //   its isotropic 1-sigma, metres, > 0
+    int N;                          // number of landmarks observed by this camera
+    const double *p_enu_m;          // (N,3) surveyed landmark positions, site ENU, metres
+    const double *sigma_enu_m;      // (N,3) 1-sigma survey error of E, N, U, metres, >= 0;
+                                    //   0 holds that coordinate exactly; NULL: all exact
+    const double *q_px;             // (N,2) observed pixels
+    const double *sigma_px;         // (N,) 1-sigma of each pixel coordinate, > 0; NULL: 1 px
+    const rs_camera *camera;        // the lens model (CAHVORE is not supported: no
+                                    //   gradients), its NOMINAL intrinsics and the image
+                                    //   size (for warnings; may be 0: unknown); its pose is
+                                    //   not used
+    bool has_position_prior;        // a surveyed camera position (a pole) is known
+    double prior_position_enu_m[3]; //   its ENU position, metres
+    double prior_sigma_m;           //   its isotropic 1-sigma, metres, > 0
 } rs_calib_problem;
 
 typedef struct {
-    unsigned refine;               // OR of rs_calib_refine_flags (default RS_CALIB_REFINE_NONE)
-    double robust_scale;           // Cauchy loss scale on each landmark's normalised residual
-                                   //   block (pixel + survey prior), in sigmas (default 2);
-                                   //   <= 0: no robust loss and no outlier rejection
-    double outlier_threshold;      // flag a landmark when sqrt(block chi2) > this, in sigmas
-                                   //   (default 3.717 = sqrt of the 99.9% chi-square 2 dof)
-    rs_calib_init_options init;    // options of the initial pose (rs_calib_init.h)
-    int max_iterations;            // Ceres iterations per solve (default 500; a well-posed
-                                   //   problem needs 5-20, narrow valleys a few hundred)
-    double focal_prior_rel_sigma;  // prior on the focal scale about the nominal, relative
-                                   //   1-sigma (default 1.0: weak); 0: no prior
-    double center_prior_sigma_px;  // prior on (cx, cy) about nominal, px (default 50); 0: none
-    double distortion_prior_sigma; // prior on each distortion coefficient about nominal, in
-                                   //   its own unit (default 0.1); 0: none
+    unsigned refine;                           // OR of rs_calib_refine_flags (default RS_CALIB_REFINE_NONE)
+    double robust_scale;                       // Cauchy loss scale on each landmark's normalised residual
+                                               //   block (pixel + survey prior), in sigmas (default 2);
+                                               //   <= 0: no robust loss and no outlier rejection
+    double outlier_threshold;                  // flag a landmark when sqrt(block chi2) > this, in sigmas
+                                               //   (default 3.717 = sqrt of the 99.9% chi-square 2 dof)
+    rs_calib_init_options init;                // options of the initial pose (rs_calib_init.h)
+    int max_iterations;                        // Ceres iterations per solve (default 500; a well-posed
+                                               //   problem needs 5-20, narrow valleys a few hundred)
+    double focal_prior_rel_sigma;              // prior on the focal scale about the nominal, relative
+                                               //   1-sigma (default 1.0: weak); 0: no prior
+    double center_prior_sigma_px;              // prior on (cx, cy) about nominal, px (default 50); 0: none
+    double distortion_prior_sigma;             // prior on each distortion coefficient about nominal, in
+                                               //   its own unit (default 0.1); 0: none
     double focal_search_min, focal_search_max; // range of the focal scale search (default
-                                   //   0.25, 4); min == max == 1 disables the search
-    double condition_warn;         // warn when the condition number exceeds this (default 100;
-                                   //   well-spread road scenes give 1.5-10)
-    double sigma_rotation_warn_deg;// warn when a yaw/pitch/roll sigma exceeds this (default 2):
-                                   //   the covariance is a first-order approximation, and the stress run
-                                   //   (issue 3) found poses this loose more than 10 sigmas off
+                                               //   0.25, 4); min == max == 1 disables the search
+    double condition_warn;                     // warn when the condition number exceeds this (default 100;
+                                               //   well-spread road scenes give 1.5-10)
+    double sigma_rotation_warn_deg;            // warn when a yaw/pitch/roll sigma exceeds this (default 2):
+                                               //   the covariance is a first-order approximation, and the stress run
+                                               //   (issue 3) found poses this loose more than 10 sigmas off
 } rs_calib_options;
 
 // Fills opt with the defaults above. opt must not be NULL.
 void rs_calib_options_default(rs_calib_options *opt);
 
 typedef struct {
-    double rt_cam_enu[6];            // the pose: maps ENU into the camera frame
-    double covariance_rt_cam_enu[36];// (6,6) row-major covariance of rt_cam_enu (r rad, t m)
+    double rt_cam_enu[6];             // the pose: maps ENU into the camera frame
+    double covariance_rt_cam_enu[36]; // (6,6) row-major covariance of rt_cam_enu (r rad, t m)
     int Nintrinsics;
-    double *intrinsics;              // (Nintrinsics,) final intrinsics (owned)
-    double *sigma_intrinsics;        // (Nintrinsics,) 1-sigma, 0 for those not refined (owned)
-    double *covariance_intrinsics;   // (Nintrinsics,Nintrinsics) row-major (owned)
-    double position_enu_m[3];        // camera centre in ENU, metres
-    double sigma_position_enu_m[3];  // its 1-sigma in E, N, U, metres
-    double yaw_pitch_roll_deg[3];    // orientation, degrees (conventions above)
+    double *intrinsics;                 // (Nintrinsics,) final intrinsics (owned)
+    double *sigma_intrinsics;           // (Nintrinsics,) 1-sigma, 0 for those not refined (owned)
+    double *covariance_intrinsics;      // (Nintrinsics,Nintrinsics) row-major (owned)
+    double position_enu_m[3];           // camera centre in ENU, metres
+    double sigma_position_enu_m[3];     // its 1-sigma in E, N, U, metres
+    double yaw_pitch_roll_deg[3];       // orientation, degrees (conventions above)
     double sigma_yaw_pitch_roll_deg[3]; // their 1-sigma, degrees
-    double rms_px;                   // RMS reprojection error of the inliers (pixel part), px
+    double rms_px;                      // RMS reprojection error of the inliers (pixel part), px
     int Ninliers;
-    int N;                           // copy of problem->N: the length of the arrays below
-    double *predicted_px;            // (N,2) projection of each landmark (refined position for
-                                     //   inliers, surveyed for outliers) (owned)
-    double *residual_px;             // (N,2) predicted_px - q_px (owned)
-    double *normalised_residual;     // (N,) sqrt(block chi2) in sigmas, the outlier statistic
-                                     //   (owned)
-    bool *inlier;                    // (N,) (owned)
-    double *p_enu_refined_m;         // (N,3) landmark positions after the adjustment (owned)
-    double chi2;                     // sum of squared whitened residuals of the final solve
-    int dof;                         // residuals - free parameters of the final solve
-    double variance_factor;          // chi2/dof: ~1 when the stated sigmas are right
-    double condition_number;         // of the equilibrated Jacobian, landmarks eliminated
-    int iterations;                  // Ceres iterations, all solves together
-    double time_us;                  // wall time of rs_calib_solve, microseconds
-    char method[224];                // what was done, e.g. "opengv-p3p ... + ceres-cauchy(2)..."
-    char warnings[1024];             // plain-words warnings, "; "-separated; "" when none
+    int N;                       // copy of problem->N: the length of the arrays below
+    double *predicted_px;        // (N,2) projection of each landmark (refined position for
+                                 //   inliers, surveyed for outliers) (owned)
+    double *residual_px;         // (N,2) predicted_px - q_px (owned)
+    double *normalised_residual; // (N,) sqrt(block chi2) in sigmas, the outlier statistic
+                                 //   (owned)
+    bool *inlier;                // (N,) (owned)
+    double *p_enu_refined_m;     // (N,3) landmark positions after the adjustment (owned)
+    double chi2;                 // sum of squared whitened residuals of the final solve
+    int dof;                     // residuals - free parameters of the final solve
+    double variance_factor;      // chi2/dof: ~1 when the stated sigmas are right
+    double condition_number;     // of the equilibrated Jacobian, landmarks eliminated
+    int iterations;              // Ceres iterations, all solves together
+    double time_us;              // wall time of rs_calib_solve, microseconds
+    char method[224];            // what was done, e.g. "opengv-p3p ... + ceres-cauchy(2)..."
+    char warnings[1024];         // plain-words warnings, "; "-separated; "" when none
 } rs_calib_result;
 
 // Solves one camera's pose (see the method above).
@@ -144,12 +144,12 @@ typedef struct {
 //                      data cannot determine (rank-deficient covariance)
 //   RS_ERR_NOCONVERGE  Ceres did not converge
 //   RS_ERR_NOMEM, RS_ERR_EXTERNAL (a Ceres exception)
-rs_status rs_calib_solve(// out
-                         rs_calib_result *result,
-                         // in
-                         const rs_calib_problem *problem,
-                         const rs_calib_options *opt, // may be NULL: defaults
-                         rs_err *err);                // may be NULL
+rs_status rs_calib_solve( // out
+    rs_calib_result *result,
+    // in
+    const rs_calib_problem *problem,
+    const rs_calib_options *opt, // may be NULL: defaults
+    rs_err *err);                // may be NULL
 
 // Frees the owned arrays of result and zeroes it. NULL-safe.
 void rs_calib_result_free(rs_calib_result *result);

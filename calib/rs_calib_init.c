@@ -19,17 +19,17 @@
 #define RS_INIT_COLLINEAR_RATIO 1e-3
 // Observations whose bearings all lie within this angle of each other sit in a tiny patch of
 // the image: the pose is not determined (0.2 deg is 3.5 px at f = 1000 px).
-#define RS_INIT_MIN_SPREAD_DEG 0.2
+#define RS_INIT_MIN_SPREAD_DEG  0.2
 // Two landmarks closer than this fraction of the cloud's RMS radius are the same landmark.
-#define RS_INIT_DUPLICATE_REL 1e-9
+#define RS_INIT_DUPLICATE_REL   1e-9
 // RANSAC stops once an outlier-free sample has been drawn with this probability.
-#define RS_INIT_CONFIDENCE 0.999
+#define RS_INIT_CONFIDENCE      0.999
 // OpenGV's EPnP wants a few more points than the minimum.
-#define RS_INIT_EPNP_MIN 6
+#define RS_INIT_EPNP_MIN        6
 // Landmarks with s3/s2 below this are exactly coplanar (0.1 mm of relief across 100 m).
-#define RS_INIT_EXACTLY_PLANAR 1e-6
+#define RS_INIT_EXACTLY_PLANAR  1e-6
 // IPPE needs bearings clearly in front of the camera to form x/z, y/z.
-#define RS_INIT_IPPE_MIN_VZ 1e-6
+#define RS_INIT_IPPE_MIN_VZ     1e-6
 
 void rs_calib_init_options_default(rs_calib_init_options *opt)
 {
@@ -57,8 +57,7 @@ typedef struct {
 // rs_calib_opengv_score_fn: reprojection error in pixels through the lens model (scaled by
 // the survey noise when s->ks_px is set); +inf for landmarks not in front of the camera
 // (z_cam <= 0) or that do not project.
-static void pixel_errors(double *err_px, const double *Rt_cam_c, const int *indices,
-                         int Nindices, void *cookie)
+static void pixel_errors(double *err_px, const double *Rt_cam_c, const int *indices, int Nindices, void *cookie)
 {
     const scorer *s = cookie;
     for (int k = 0; k < Nindices; k++) {
@@ -81,8 +80,7 @@ static void pixel_errors(double *err_px, const double *Rt_cam_c, const int *indi
 
 // RMS pixel error of the observations `indices` at the pose rt_cam_c (centred frame); +inf if
 // any of them is behind the camera. tmp is (Nindices,) scratch.
-static double rms_px_at(const double *rt_cam_c, const int *indices, int Nindices,
-                        const scorer *s, double *tmp)
+static double rms_px_at(const double *rt_cam_c, const int *indices, int Nindices, const scorer *s, double *tmp)
 {
     double Rt[12];
     mrcal_Rt_from_rt(Rt, NULL, rt_cam_c);
@@ -95,77 +93,72 @@ static double rms_px_at(const double *rt_cam_c, const int *indices, int Nindices
 static double angle_deg(const double *a, const double *b)
 {
     // atan2(|a x b|, a.b): accurate for tiny angles, unlike acos
-    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                         a[0] * b[1] - a[1] * b[0]};
-    return atan2(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]),
-                 a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * 180.0 / M_PI;
+    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    return atan2(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * 180.0 / M_PI;
 }
 
 static rs_status check_arguments(const rs_calib_init_result *result,
-                                 const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
-                                 const double *p_enu_m, const double *q_px, int N,
-                                 const rs_calib_init_options *opt, rs_err *err)
+                                 const mrcal_lensmodel_t *lensmodel,
+                                 const double *intrinsics,
+                                 const double *p_enu_m,
+                                 const double *q_px,
+                                 int N,
+                                 const rs_calib_init_options *opt,
+                                 rs_err *err)
 {
     if (!result || !lensmodel || !intrinsics || N < 0 || (N > 0 && (!p_enu_m || !q_px)))
         return rs_err_set(err, RS_ERR_USAGE,
                           "rs_calib_init_pose: NULL result, lensmodel, intrinsics, p_enu_m or "
-                          "q_px, or N < 0 (N = %d)", N);
+                          "q_px, or N < 0 (N = %d)",
+                          N);
     if (!(opt->ransac_threshold_px > 0.0) || !isfinite(opt->ransac_threshold_px))
         return rs_err_set(err, RS_ERR_INVALID, "ransac_threshold_px: %g is not a positive pixel count",
                           opt->ransac_threshold_px);
     if (opt->ransac_max_iterations < 1)
-        return rs_err_set(err, RS_ERR_INVALID, "ransac_max_iterations: %d is not >= 1",
-                          opt->ransac_max_iterations);
+        return rs_err_set(err, RS_ERR_INVALID, "ransac_max_iterations: %d is not >= 1", opt->ransac_max_iterations);
     if (!(opt->survey_sigmas >= 0.0) || !isfinite(opt->survey_sigmas))
-        return rs_err_set(err, RS_ERR_INVALID, "survey_sigmas: %g is not a finite number >= 0",
-                          opt->survey_sigmas);
+        return rs_err_set(err, RS_ERR_INVALID, "survey_sigmas: %g is not a finite number >= 0", opt->survey_sigmas);
     if (opt->sigma_enu_m)
         for (int i = 0; i < 3 * N; i++)
             if (!(opt->sigma_enu_m[i] >= 0.0) || !isfinite(opt->sigma_enu_m[i]))
                 return rs_err_set(err, RS_ERR_INVALID,
                                   "sigma_enu_m[%d]: landmark %d's survey sigma %g is not a finite "
-                                  "number >= 0", i / 3, i / 3, opt->sigma_enu_m[i]);
+                                  "number >= 0",
+                                  i / 3, i / 3, opt->sigma_enu_m[i]);
     if (!(opt->planarity_ratio >= 0.0 && opt->planarity_ratio < 1.0))
-        return rs_err_set(err, RS_ERR_INVALID, "planarity_ratio: %g is not in [0,1)",
-                          opt->planarity_ratio);
+        return rs_err_set(err, RS_ERR_INVALID, "planarity_ratio: %g is not in [0,1)", opt->planarity_ratio);
     if (lensmodel->type == MRCAL_LENSMODEL_CAHVORE)
-        return rs_err_set(err, RS_ERR_UNSUPPORTED,
-                          "lensmodel: mrcal cannot unproject through LENSMODEL_CAHVORE");
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "lensmodel: mrcal cannot unproject through LENSMODEL_CAHVORE");
     const int Nintrinsics = mrcal_lensmodel_num_params(lensmodel);
     if (Nintrinsics <= 0)
         return rs_err_set(err, RS_ERR_INVALID, "lensmodel: not a valid mrcal lens model (type %d)",
                           (int)lensmodel->type);
     for (int j = 0; j < Nintrinsics; j++)
         if (!isfinite(intrinsics[j]))
-            return rs_err_set(err, RS_ERR_INVALID, "intrinsics[%d]: non-finite value %g", j,
-                              intrinsics[j]);
+            return rs_err_set(err, RS_ERR_INVALID, "intrinsics[%d]: non-finite value %g", j, intrinsics[j]);
     for (int i = 0; i < N; i++) {
         const double *p = &p_enu_m[3 * i], *q = &q_px[2 * i];
         if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
-            return rs_err_set(err, RS_ERR_INVALID,
-                              "p_enu_m[%d]: landmark %d has a non-finite coordinate (%g, %g, %g)",
+            return rs_err_set(err, RS_ERR_INVALID, "p_enu_m[%d]: landmark %d has a non-finite coordinate (%g, %g, %g)",
                               i, i, p[0], p[1], p[2]);
         if (!isfinite(q[0]) || !isfinite(q[1]))
-            return rs_err_set(err, RS_ERR_INVALID,
-                              "q_px[%d]: observation %d has a non-finite pixel (%g, %g)", i, i,
+            return rs_err_set(err, RS_ERR_INVALID, "q_px[%d]: observation %d has a non-finite pixel (%g, %g)", i, i,
                               q[0], q[1]);
     }
     return RS_OK;
 }
 
 // Degeneracy checks on the usable observations. s: singular values of the centred landmarks.
-static rs_status check_geometry(const double *p_c, const double *v, const int *usable,
-                                int Nusable, const double *s, rs_err *err)
+static rs_status
+check_geometry(const double *p_c, const double *v, const int *usable, int Nusable, const double *s, rs_err *err)
 {
     // repeated landmarks
-    const double rms_radius = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] > 0.0
-                                  ? sqrt((s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) / Nusable)
-                                  : 0.0;
+    const double rms_radius =
+        s[0] * s[0] + s[1] * s[1] + s[2] * s[2] > 0.0 ? sqrt((s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) / Nusable) : 0.0;
     for (int a = 0; a < Nusable; a++)
         for (int b = a + 1; b < Nusable; b++) {
             const double *pa = &p_c[3 * usable[a]], *pb = &p_c[3 * usable[b]];
-            const double d = sqrt((pa[0] - pb[0]) * (pa[0] - pb[0]) +
-                                  (pa[1] - pb[1]) * (pa[1] - pb[1]) +
+            const double d = sqrt((pa[0] - pb[0]) * (pa[0] - pb[0]) + (pa[1] - pb[1]) * (pa[1] - pb[1]) +
                                   (pa[2] - pb[2]) * (pa[2] - pb[2]));
             if (d <= RS_INIT_DUPLICATE_REL * rms_radius)
                 return rs_err_set(err, RS_ERR_DEGENERATE,
@@ -203,8 +196,8 @@ static void uncentre(double *rt_cam_enu, const double *rt_cam_c, const double *c
 
 // OpenCV's IPPE on the inliers `in` whose bearings are clearly in front (normalised image
 // coordinates x/z, y/z). xy (Nin,2) and p_sel (Nin,3) are scratch. False if the solver refuses.
-static bool solve_ippe(double *rt_cam_c, const double *v, const double *p_c, const int *in,
-                       int Nin, double *xy, double *p_sel)
+static bool
+solve_ippe(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin, double *xy, double *p_sel)
 {
     int n = 0;
     for (int k = 0; k < Nin; k++) {
@@ -219,20 +212,23 @@ static bool solve_ippe(double *rt_cam_c, const double *v, const double *p_c, con
 }
 
 // OpenGV's EPnP on the inliers `in`. False if there are too few or the solver fails.
-static bool solve_epnp(double *rt_cam_c, const double *v, const double *p_c, const int *in,
-                       int Nin)
+static bool solve_epnp(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin)
 {
     double Rt[12];
-    if (Nin < RS_INIT_EPNP_MIN || rs_calib_opengv_epnp(Rt, v, p_c, in, Nin, NULL) != RS_OK)
-        return false;
+    if (Nin < RS_INIT_EPNP_MIN || rs_calib_opengv_epnp(Rt, v, p_c, in, Nin, NULL) != RS_OK) return false;
     mrcal_rt_from_Rt(rt_cam_c, NULL, Rt);
     return true;
 }
 
-rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
-                             const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
-                             const double *p_enu_m, const double *q_px, int N,
-                             const rs_calib_init_options *opt, rs_err *err)
+rs_status rs_calib_init_pose(rs_calib_init_result *result,
+                             bool *inlier,
+                             const mrcal_lensmodel_t *lensmodel,
+                             const double *intrinsics,
+                             const double *p_enu_m,
+                             const double *q_px,
+                             int N,
+                             const rs_calib_init_options *opt,
+                             rs_err *err)
 {
     rs_calib_init_options defaults;
     if (!opt) {
@@ -272,9 +268,8 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
         Nunprojectable++;
     }
     if (Nusable < 4) {
-        st = rs_err_set(err, RS_ERR_DEGENERATE,
-                        "q_px: only %d of %d observations are usable (need at least 4)%s", Nusable,
-                        N, Nunprojectable ? "; some pixels do not unproject through the lens model" : "");
+        st = rs_err_set(err, RS_ERR_DEGENERATE, "q_px: only %d of %d observations are usable (need at least 4)%s",
+                        Nusable, N, Nunprojectable ? "; some pixels do not unproject through the lens model" : "");
         goto done;
     }
 
@@ -305,10 +300,9 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
     }
     double Rt_cam_c[12];
     int Niterations = 0, Nfallback = 0;
-    st = rs_calib_opengv_ransac_p3p(Rt_cam_c, is_in, &Niterations, &Nfallback, v, p_c, N, usable,
-                                    Nusable, RS_CALIB_OPENGV_P3P_KNEIP, opt->ransac_threshold_px,
-                                    opt->ransac_max_iterations, RS_INIT_CONFIDENCE, opt->seed,
-                                    pixel_errors, (void *)&sc_ransac, err);
+    st = rs_calib_opengv_ransac_p3p(Rt_cam_c, is_in, &Niterations, &Nfallback, v, p_c, N, usable, Nusable,
+                                    RS_CALIB_OPENGV_P3P_KNEIP, opt->ransac_threshold_px, opt->ransac_max_iterations,
+                                    RS_INIT_CONFIDENCE, opt->seed, pixel_errors, (void *)&sc_ransac, err);
     int Nin = 0;
     if (st == RS_OK)
         for (int i = 0; i < N; i++)
@@ -323,17 +317,14 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
                         "iterations): landmarks behind the camera, or too many pixels not "
                         "matching their landmarks",
                         Nneeded, Nusable, opt->ransac_threshold_px,
-                        sc_ransac.ks_px ? " (widened by their survey sigmas)" : "",
-                        st == RS_OK ? Nin : 0,
-                        Niterations);
+                        sc_ransac.ks_px ? " (widened by their survey sigmas)" : "", st == RS_OK ? Nin : 0, Niterations);
         goto done;
     }
     if (st) goto done;
     double rt_best[6];
     mrcal_rt_from_Rt(rt_best, NULL, Rt_cam_c);
     double rms_best = rms_px_at(rt_best, in, Nin, &sc, tmp);
-    snprintf(result->method, sizeof(result->method), "opengv-p3p-%s-ransac",
-             Nfallback ? "kneip+gao" : "kneip");
+    snprintf(result->method, sizeof(result->method), "opengv-p3p-%s-ransac", Nfallback ? "kneip+gao" : "kneip");
 
     // 4. non-minimal solves on the inliers; keep whichever fits the inliers best. IPPE is
     // exact for coplanar landmarks but biased by any relief, EPnP the reverse: on landmarks
@@ -359,8 +350,7 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier,
         snprintf(result->method + len, sizeof(result->method) - len, " + %s", best_name);
     }
     if (!isfinite(rms_best)) { // cannot happen: RANSAC inliers are in front by construction
-        st = rs_err_set(err, RS_ERR_DEGENERATE,
-                        "q_px: the pose found puts some inliers behind the camera");
+        st = rs_err_set(err, RS_ERR_DEGENERATE, "q_px: the pose found puts some inliers behind the camera");
         goto done;
     }
 

@@ -33,9 +33,9 @@
 // (median; 3.5 px worst of 1800) -- a linear/minimal solution, which the refinement polishes.
 // Time: 50..150 us per call for 20 landmarks.
 #pragma once
+#include "core/rs_status.h"
 #include <stdbool.h>
 #include <stdint.h>
-#include "core/rs_status.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -44,28 +44,28 @@ extern "C" {
 #include <mrcal/mrcal.h>
 
 typedef struct {
-    double ransac_threshold_px;    // inlier threshold on reprojection error, pixels (default 8)
-    int    ransac_max_iterations;  // default 500 (adaptive stop at 99.9% confidence)
-    uint64_t seed;                 // RANSAC sampling seed (default 1)
-    double planarity_ratio;        // planar if s3/s2 of the centred landmarks' SVD < this (default 0.02)
+    double ransac_threshold_px; // inlier threshold on reprojection error, pixels (default 8)
+    int ransac_max_iterations;  // default 500 (adaptive stop at 99.9% confidence)
+    uint64_t seed;              // RANSAC sampling seed (default 1)
+    double planarity_ratio;     // planar if s3/s2 of the centred landmarks' SVD < this (default 0.02)
     // Survey noise in the inlier test: landmark i is an inlier of a hypothesis when its
     // reprojection error is below sqrt(T^2 + (k f s_i / z_i)^2) px, T = ransac_threshold_px,
     // k = survey_sigmas, f = the larger focal length of the lens core, s_i = the largest of
     // landmark i's three survey sigmas and z_i its depth under that hypothesis: a near landmark
     // surveyed to 0.3 m is off by tens of pixels without being an outlier.
-    const double *sigma_enu_m;     // (N,3) survey 1-sigma of E, N, U, metres; NULL: exact
-    double survey_sigmas;          // k above (default 3)
+    const double *sigma_enu_m; // (N,3) survey 1-sigma of E, N, U, metres; NULL: exact
+    double survey_sigmas;      // k above (default 3)
 } rs_calib_init_options;
 
 // Fills opt with the defaults above. opt must not be NULL.
 void rs_calib_init_options_default(rs_calib_init_options *opt);
 
 typedef struct {
-    double rt_cam_enu[6];  // initial pose (mrcal rt, maps ENU into camera)
-    int    Ninliers;
-    bool   planar;         // landmarks judged coplanar
-    double rms_px;         // RMS reprojection error of the inliers at this pose
-    char   method[96];     // e.g. "opengv-p3p-kneip-ransac + opencv-ippe"
+    double rt_cam_enu[6]; // initial pose (mrcal rt, maps ENU into camera)
+    int Ninliers;
+    bool planar;     // landmarks judged coplanar
+    double rms_px;   // RMS reprojection error of the inliers at this pose
+    char method[96]; // e.g. "opengv-p3p-kneip-ransac + opencv-ippe"
 } rs_calib_init_result;
 
 // Finds an initial pose. inlier may be NULL; else (N,) filled with the RANSAC inlier flags.
@@ -78,17 +78,17 @@ typedef struct {
 // RS_ERR_UNSUPPORTED for LENSMODEL_CAHVORE (mrcal cannot unproject it); RS_ERR_USAGE for NULL
 // arguments; RS_ERR_EXTERNAL if OpenGV/OpenCV threw. On any error `result` is not filled and
 // every inlier flag is false. Thread-safe (no global state); never prints.
-rs_status rs_calib_init_pose(// out
-                             rs_calib_init_result *result,
-                             bool *inlier,                          // (N,) may be NULL
-                             // in
-                             const mrcal_lensmodel_t *lensmodel,
-                             const double *intrinsics,              // (Nintrinsics,)
-                             const double *p_enu_m,                 // (N,3)
-                             const double *q_px,                    // (N,2)
-                             int N,
-                             const rs_calib_init_options *opt,      // may be NULL: defaults
-                             rs_err *err);
+rs_status rs_calib_init_pose( // out
+    rs_calib_init_result *result,
+    bool *inlier, // (N,) may be NULL
+    // in
+    const mrcal_lensmodel_t *lensmodel,
+    const double *intrinsics, // (Nintrinsics,)
+    const double *p_enu_m,    // (N,3)
+    const double *q_px,       // (N,2)
+    int N,
+    const rs_calib_init_options *opt, // may be NULL: defaults
+    rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -11,8 +11,7 @@ extern "C" {
 #include "calib/internal/rs_calib_opencv.h"
 }
 
-extern "C" rs_status rs_calib_opencv_singular_values3(double *s, const double *p, int N,
-                                                      rs_err *err)
+extern "C" rs_status rs_calib_opencv_singular_values3(double *s, const double *p, int N, rs_err *err)
 {
     try {
         const cv::Mat P(N, 3, CV_64F, const_cast<double *>(p)); // read only
@@ -27,23 +26,21 @@ extern "C" rs_status rs_calib_opencv_singular_values3(double *s, const double *p
     }
 }
 
-extern "C" rs_status rs_calib_opencv_ippe(double *rt_cam_ref, const double *xy,
-                                          const double *p_ref, int N, rs_err *err)
+extern "C" rs_status rs_calib_opencv_ippe(double *rt_cam_ref, const double *xy, const double *p_ref, int N, rs_err *err)
 {
     try {
         const cv::Mat object(N, 3, CV_64F, const_cast<double *>(p_ref)); // read only
         const cv::Mat image(N, 2, CV_64F, const_cast<double *>(xy));     // read only
         cv::Mat rvec, tvec;
-        if (!cv::solvePnP(object, image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec,
-                          false, cv::SOLVEPNP_IPPE))
+        if (!cv::solvePnP(object, image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false,
+                          cv::SOLVEPNP_IPPE))
             return rs_err_set(err, RS_ERR_DEGENERATE, "IPPE found no pose");
         for (int i = 0; i < 3; i++) {
             rt_cam_ref[i] = rvec.at<double>(i);
             rt_cam_ref[3 + i] = tvec.at<double>(i);
         }
         for (int i = 0; i < 6; i++)
-            if (!std::isfinite(rt_cam_ref[i]))
-                return rs_err_set(err, RS_ERR_DEGENERATE, "IPPE: non-finite pose");
+            if (!std::isfinite(rt_cam_ref[i])) return rs_err_set(err, RS_ERR_DEGENERATE, "IPPE: non-finite pose");
         return RS_OK;
     } catch (const std::exception &e) {
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV IPPE threw: %s", e.what());
@@ -51,4 +48,3 @@ extern "C" rs_status rs_calib_opencv_ippe(double *rt_cam_ref, const double *xy,
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV IPPE threw an unknown exception");
     }
 }
-

@@ -77,12 +77,15 @@ struct Correspondences {
 // caller's seed, the distances are the caller's pixel errors, and a sample on which the chosen
 // P3P solver finds nothing is retried with the other one.
 class PixelP3pProblem : public AbsolutePoseSacProblem {
-public:
-    PixelP3pProblem(adapter_t &adapter, algorithm_t primary, const std::vector<int> &indices,
-                    uint64_t seed, rs_calib_opengv_score_fn *score, void *cookie)
+  public:
+    PixelP3pProblem(adapter_t &adapter,
+                    algorithm_t primary,
+                    const std::vector<int> &indices,
+                    uint64_t seed,
+                    rs_calib_opengv_score_fn *score,
+                    void *cookie)
         : AbsolutePoseSacProblem(adapter, primary, indices, false),
-          fallback_(adapter, primary == KNEIP ? GAO : KNEIP, indices, false),
-          score_(score), cookie_(cookie)
+          fallback_(adapter, primary == KNEIP ? GAO : KNEIP, indices, false), score_(score), cookie_(cookie)
     {
         std::seed_seq seq{(uint32_t)(seed & 0xffffffffu), (uint32_t)(seed >> 32)};
         rng_alg_.seed(seq);
@@ -90,16 +93,15 @@ public:
         rng_gen_.reset(new std::function<int()>(std::bind(*rng_dist_, rng_alg_)));
     }
 
-    bool computeModelCoefficients(const std::vector<int> &indices,
-                                  model_t &model) const override
+    bool computeModelCoefficients(const std::vector<int> &indices, model_t &model) const override
     {
-        if (AbsolutePoseSacProblem::computeModelCoefficients(indices, model) && model.allFinite())
-            return true;
+        if (AbsolutePoseSacProblem::computeModelCoefficients(indices, model) && model.allFinite()) return true;
         ++Nfallback;
         return fallback_.computeModelCoefficients(indices, model) && model.allFinite();
     }
 
-    void getSelectedDistancesToModel(const model_t &model, const std::vector<int> &indices,
+    void getSelectedDistancesToModel(const model_t &model,
+                                     const std::vector<int> &indices,
                                      std::vector<double> &scores) const override
     {
         double Rt[12];
@@ -111,7 +113,7 @@ public:
 
     mutable int Nfallback = 0;
 
-private:
+  private:
     AbsolutePoseSacProblem fallback_;
     rs_calib_opengv_score_fn *score_;
     void *cookie_;
@@ -126,7 +128,8 @@ struct UpnpSolutions {
     alignas(opengv::transformations_t) unsigned char raw[sizeof(opengv::transformations_t)];
     opengv::transformations_t &Ts;
     explicit UpnpSolutions(const opengv::absolute_pose::AbsoluteAdapterBase &adapter)
-        : Ts(*new (raw) opengv::transformations_t(opengv::absolute_pose::upnp(adapter))) {}
+        : Ts(*new (raw) opengv::transformations_t(opengv::absolute_pose::upnp(adapter)))
+    {}
     ~UpnpSolutions()
     {
 #if defined(__SANITIZE_ADDRESS__)
@@ -141,14 +144,23 @@ struct UpnpSolutions {
 
 } // namespace
 
-extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier,
-                                                int *Niterations, int *Nfallback,
-                                                const double *v_cam, const double *p_ref, int N,
-                                                const int *usable, int Nusable,
-                                                rs_calib_opengv_p3p method, double threshold_px,
-                                                int max_iterations, double confidence,
-                                                uint64_t seed, rs_calib_opengv_score_fn *score,
-                                                void *cookie, rs_err *err)
+extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref,
+                                                bool *inlier,
+                                                int *Niterations,
+                                                int *Nfallback,
+                                                const double *v_cam,
+                                                const double *p_ref,
+                                                int N,
+                                                const int *usable,
+                                                int Nusable,
+                                                rs_calib_opengv_p3p method,
+                                                double threshold_px,
+                                                int max_iterations,
+                                                double confidence,
+                                                uint64_t seed,
+                                                rs_calib_opengv_score_fn *score,
+                                                void *cookie,
+                                                rs_err *err)
 {
     QuietStreams quiet;
     try {
@@ -156,19 +168,15 @@ extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier
         opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
         const std::vector<int> indices(usable, usable + Nusable);
         auto problem = std::make_shared<PixelP3pProblem>(
-            adapter,
-            method == RS_CALIB_OPENGV_P3P_GAO ? AbsolutePoseSacProblem::GAO
-                                              : AbsolutePoseSacProblem::KNEIP,
+            adapter, method == RS_CALIB_OPENGV_P3P_GAO ? AbsolutePoseSacProblem::GAO : AbsolutePoseSacProblem::KNEIP,
             indices, seed, score, cookie);
-        opengv::sac::Ransac<AbsolutePoseSacProblem> ransac(max_iterations, threshold_px,
-                                                           confidence);
+        opengv::sac::Ransac<AbsolutePoseSacProblem> ransac(max_iterations, threshold_px, confidence);
         ransac.sac_model_ = problem;
         const bool ok = ransac.computeModel(0);
         if (Niterations) *Niterations = ransac.iterations_;
         if (Nfallback) *Nfallback = problem->Nfallback;
         if (!ok || !ransac.model_coefficients_.allFinite())
-            return rs_err_set(err, RS_ERR_DEGENERATE,
-                              "P3P RANSAC: no sample of 4 observations gave a pose");
+            return rs_err_set(err, RS_ERR_DEGENERATE, "P3P RANSAC: no sample of 4 observations gave a pose");
         model_to_Rt(Rt_cam_ref, ransac.model_coefficients_);
         for (int i = 0; i < N; i++) inlier[i] = false;
         for (int i : ransac.inliers_)
@@ -181,9 +189,8 @@ extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier
     }
 }
 
-extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_cam,
-                                          const double *p_ref, const int *indices, int Nindices,
-                                          rs_err *err)
+extern "C" rs_status rs_calib_opengv_epnp(
+    double *Rt_cam_ref, const double *v_cam, const double *p_ref, const int *indices, int Nindices, rs_err *err)
 {
     QuietStreams quiet;
     try {
@@ -195,8 +202,7 @@ extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_ca
         opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
         const opengv::transformation_t T =
             opengv::absolute_pose::epnp(adapter, std::vector<int>(indices, indices + Nindices));
-        if (!T.allFinite())
-            return rs_err_set(err, RS_ERR_DEGENERATE, "EPnP: non-finite pose");
+        if (!T.allFinite()) return rs_err_set(err, RS_ERR_DEGENERATE, "EPnP: non-finite pose");
         model_to_Rt(Rt_cam_ref, T);
         return RS_OK;
     } catch (const std::exception &e) {
@@ -206,10 +212,14 @@ extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_ca
     }
 }
 
-extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_cam,
-                                          const double *p_ref, int N,
+extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref,
+                                          const double *v_cam,
+                                          const double *p_ref,
+                                          int N,
                                           rs_calib_opengv_pose_method method,
-                                          double threshold_rad, int max_iterations, rs_err *err)
+                                          double threshold_rad,
+                                          int max_iterations,
+                                          rs_err *err)
 {
     static const char *const names[] = {"P3P Kneip RANSAC", "P3P Gao RANSAC", "EPnP", "UPnP",
                                         "EPnP + optimize_nonlinear"};
@@ -221,15 +231,13 @@ extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_ca
         Correspondences c(v_cam, p_ref, N);
         opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
         opengv::transformation_t T;
-        if (method == RS_CALIB_OPENGV_POSE_P3P_KNEIP_RANSAC ||
-            method == RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC) {
-            auto problem = std::make_shared<AbsolutePoseSacProblem>(
-                adapter,
-                method == RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC ? AbsolutePoseSacProblem::GAO
-                                                              : AbsolutePoseSacProblem::KNEIP,
-                false);
-            opengv::sac::Ransac<AbsolutePoseSacProblem> ransac(max_iterations,
-                                                               1.0 - std::cos(threshold_rad), 0.99);
+        if (method == RS_CALIB_OPENGV_POSE_P3P_KNEIP_RANSAC || method == RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC) {
+            auto problem = std::make_shared<AbsolutePoseSacProblem>(adapter,
+                                                                    method == RS_CALIB_OPENGV_POSE_P3P_GAO_RANSAC
+                                                                        ? AbsolutePoseSacProblem::GAO
+                                                                        : AbsolutePoseSacProblem::KNEIP,
+                                                                    false);
+            opengv::sac::Ransac<AbsolutePoseSacProblem> ransac(max_iterations, 1.0 - std::cos(threshold_rad), 0.99);
             ransac.sac_model_ = problem;
             if (!ransac.computeModel(0))
                 return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: no sample gave a pose", name);
@@ -251,8 +259,7 @@ extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_ca
                     T = Ti;
                 }
             }
-            if (!(best < INFINITY))
-                return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: no finite solution", name);
+            if (!(best < INFINITY)) return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: no finite solution", name);
         } else {
             T = opengv::absolute_pose::epnp(adapter);
             if (method == RS_CALIB_OPENGV_POSE_EPNP_NONLINEAR && T.allFinite()) {

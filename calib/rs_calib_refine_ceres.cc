@@ -29,8 +29,8 @@
 extern "C" {
 #include <mrcal/poseutils.h>
 
-#include "calib/rs_calib.h"
 #include "calib/internal/rs_calib_refine.h"
+#include "calib/rs_calib.h"
 #include "core/rs_pose.h"
 }
 
@@ -57,7 +57,8 @@ double inv_or_zero(double sigma) { return sigma > 0.0 ? 1.0 / sigma : 0.0; }
 // One landmark seen by the camera: 2 pixel residuals + 3 survey-prior residuals, so that the
 // robust loss acts on the landmark as a whole (an outlier cannot hide by pulling its landmark).
 // out (2,n) = dq/dp_cam (2,3) . dp_cam/dx (3,n): the chain rule through the camera frame.
-void chain_dq(double *out, const mrcal_point3_t dq_dpcam[2], const double *dpcam_dx, int n) {
+void chain_dq(double *out, const mrcal_point3_t dq_dpcam[2], const double *dpcam_dx, int n)
+{
     for (int a = 0; a < 2; a++)
         for (int j = 0; j < n; j++) {
             double s = 0.0;
@@ -68,9 +69,14 @@ void chain_dq(double *out, const mrcal_point3_t dq_dpcam[2], const double *dpcam
 
 class LandmarkCost final : public ceres::CostFunction {
   public:
-    LandmarkCost(const mrcal_lensmodel_t *lensmodel, int Nintrinsics, const double q_obs[2],
-                 double sigma_px, const double p_survey[3], const double sigma_m[3])
-        : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics), w_px_(1.0 / sigma_px) {
+    LandmarkCost(const mrcal_lensmodel_t *lensmodel,
+                 int Nintrinsics,
+                 const double q_obs[2],
+                 double sigma_px,
+                 const double p_survey[3],
+                 const double sigma_m[3])
+        : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics), w_px_(1.0 / sigma_px)
+    {
         for (int k = 0; k < 2; k++) q_obs_[k] = q_obs[k];
         for (int k = 0; k < 3; k++) {
             p_survey_[k] = p_survey[k];
@@ -82,19 +88,18 @@ class LandmarkCost final : public ceres::CostFunction {
         mutable_parameter_block_sizes()->push_back(Nintrinsics);
     }
 
-    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override
+    {
         const double *rt = x[0], *p = x[1], *intrinsics = x[2];
         const bool want_rt = jacobians && jacobians[0], want_p = jacobians && jacobians[1];
         const bool want_i = jacobians && jacobians[2];
         mrcal_point3_t p_cam;
         double dpcam_drt[18], dpcam_dp[9];
-        mrcal_transform_point_rt(p_cam.xyz, want_rt ? dpcam_drt : nullptr,
-                                 want_p ? dpcam_dp : nullptr, rt, p);
+        mrcal_transform_point_rt(p_cam.xyz, want_rt ? dpcam_drt : nullptr, want_p ? dpcam_dp : nullptr, rt, p);
         mrcal_point2_t q;
         mrcal_point3_t dq_dpcam[2];
         std::vector<double> dq_di(want_i ? 2 * (size_t)Nintrinsics_ : 0);
-        if (!mrcal_project(&q, dq_dpcam, want_i ? dq_di.data() : nullptr, &p_cam, 1, lensmodel_,
-                           intrinsics))
+        if (!mrcal_project(&q, dq_dpcam, want_i ? dq_di.data() : nullptr, &p_cam, 1, lensmodel_, intrinsics))
             return false;
         residuals[0] = (q.x - q_obs_[0]) * w_px_;
         residuals[1] = (q.y - q_obs_[1]) * w_px_;
@@ -118,7 +123,8 @@ class LandmarkCost final : public ceres::CostFunction {
 
   private:
     // J (5,n) = [dq_dpcam (2,3) . dpcam_dx (3,n) / sigma_px ; 0 (3,n)]
-    void chain(double *J, const mrcal_point3_t dq_dpcam[2], const double *dpcam_dx, int n) const {
+    void chain(double *J, const mrcal_point3_t dq_dpcam[2], const double *dpcam_dx, int n) const
+    {
         std::memset(J, 0, sizeof(double) * 5 * (size_t)n);
         chain_dq(J, dq_dpcam, dpcam_dx, n);
         for (int j = 0; j < 2 * n; j++) J[j] *= w_px_;
@@ -135,10 +141,16 @@ class LandmarkCost final : public ceres::CostFunction {
 // once, at the pose given to the constructor (rs_calib_refine_options.marginal).
 class MarginalCost final : public ceres::CostFunction {
   public:
-    MarginalCost(const mrcal_lensmodel_t *lensmodel, int Nintrinsics, const double q_obs[2],
-                 double sigma_px, const double p_survey[3], const double sigma_m[3],
-                 const double rt0[6], const double *intrinsics0)
-        : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics) {
+    MarginalCost(const mrcal_lensmodel_t *lensmodel,
+                 int Nintrinsics,
+                 const double q_obs[2],
+                 double sigma_px,
+                 const double p_survey[3],
+                 const double sigma_m[3],
+                 const double rt0[6],
+                 const double *intrinsics0)
+        : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics)
+    {
         for (int k = 0; k < 2; k++) q_obs_[k] = q_obs[k];
         for (int k = 0; k < 3; k++) p_survey_[k] = p_survey[k];
         mrcal_point3_t p_cam;
@@ -167,7 +179,8 @@ class MarginalCost final : public ceres::CostFunction {
         mutable_parameter_block_sizes()->push_back(Nintrinsics);
     }
 
-    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override
+    {
         const double *rt = x[0], *intrinsics = x[1];
         const bool want_rt = jacobians && jacobians[0], want_i = jacobians && jacobians[1];
         mrcal_point3_t p_cam;
@@ -176,8 +189,7 @@ class MarginalCost final : public ceres::CostFunction {
         mrcal_point2_t q;
         mrcal_point3_t dq_dpcam[2];
         std::vector<double> dq_di(want_i ? 2 * (size_t)Nintrinsics_ : 0);
-        if (!mrcal_project(&q, dq_dpcam, want_i ? dq_di.data() : nullptr, &p_cam, 1, lensmodel_,
-                           intrinsics))
+        if (!mrcal_project(&q, dq_dpcam, want_i ? dq_di.data() : nullptr, &p_cam, 1, lensmodel_, intrinsics))
             return false;
         const double e[2] = {q.x - q_obs_[0], q.y - q_obs_[1]};
         residuals[0] = W_[0] * e[0] + W_[1] * e[1];
@@ -209,10 +221,12 @@ class MarginalCost final : public ceres::CostFunction {
 // Prior on the camera centre C = -R^T t (a surveyed pole): (C - C_prior)/sigma.
 class PositionPriorCost final : public ceres::SizedCostFunction<3, 6> {
   public:
-    PositionPriorCost(const double C_prior[3], double sigma_m) : w_(1.0 / sigma_m) {
+    PositionPriorCost(const double C_prior[3], double sigma_m) : w_(1.0 / sigma_m)
+    {
         for (int k = 0; k < 3; k++) C_prior_[k] = C_prior[k];
     }
-    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override
+    {
         double J[18];
         double C[3];
         rs_pose_position_from_rt(C, (jacobians && jacobians[0]) ? J : nullptr, x[0]);
@@ -232,10 +246,12 @@ class PositionPriorCost final : public ceres::SizedCostFunction<3, 6> {
 class SubspaceManifold final : public ceres::Manifold {
   public:
     SubspaceManifold(int n, std::vector<double> B_colmajor)
-        : n_(n), k_((int)(B_colmajor.size() / (size_t)n)), B_(std::move(B_colmajor)) {}
+        : n_(n), k_((int)(B_colmajor.size() / (size_t)n)), B_(std::move(B_colmajor))
+    {}
     int AmbientSize() const override { return n_; }
     int TangentSize() const override { return k_; }
-    bool Plus(const double *x, const double *delta, double *x_plus_delta) const override {
+    bool Plus(const double *x, const double *delta, double *x_plus_delta) const override
+    {
         for (int i = 0; i < n_; i++) {
             double s = x[i];
             for (int j = 0; j < k_; j++) s += B(i, j) * delta[j];
@@ -243,12 +259,14 @@ class SubspaceManifold final : public ceres::Manifold {
         }
         return true;
     }
-    bool PlusJacobian(const double *, double *jacobian) const override {
+    bool PlusJacobian(const double *, double *jacobian) const override
+    {
         for (int i = 0; i < n_; i++)
             for (int j = 0; j < k_; j++) jacobian[i * k_ + j] = B(i, j);
         return true;
     }
-    bool Minus(const double *y, const double *x, double *y_minus_x) const override {
+    bool Minus(const double *y, const double *x, double *y_minus_x) const override
+    {
         for (int j = 0; j < k_; j++) {
             double s = 0.0;
             for (int i = 0; i < n_; i++) s += B(i, j) * (y[i] - x[i]);
@@ -256,7 +274,8 @@ class SubspaceManifold final : public ceres::Manifold {
         }
         return true;
     }
-    bool MinusJacobian(const double *, double *jacobian) const override {
+    bool MinusJacobian(const double *, double *jacobian) const override
+    {
         for (int j = 0; j < k_; j++)
             for (int i = 0; i < n_; i++) jacobian[j * n_ + i] = B(i, j);
         return true;
@@ -276,12 +295,13 @@ class IntrinsicsPriorCost final : public ceres::CostFunction {
         int index;
         double nominal, weight;
     };
-    IntrinsicsPriorCost(int Nintrinsics, std::vector<Row> rows)
-        : Nintrinsics_(Nintrinsics), rows_(std::move(rows)) {
+    IntrinsicsPriorCost(int Nintrinsics, std::vector<Row> rows) : Nintrinsics_(Nintrinsics), rows_(std::move(rows))
+    {
         set_num_residuals((int)rows_.size());
         mutable_parameter_block_sizes()->push_back(Nintrinsics);
     }
-    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override {
+    bool Evaluate(double const *const *x, double *residuals, double **jacobians) const override
+    {
         for (size_t r = 0; r < rows_.size(); r++)
             residuals[r] = (x[0][rows_[r].index] - rows_[r].nominal) * rows_[r].weight;
         if (jacobians && jacobians[0]) {
@@ -298,8 +318,12 @@ class IntrinsicsPriorCost final : public ceres::CostFunction {
 };
 
 // Builds the subspace basis (column-major, Nintrinsics x k) and the prior rows.
-void intrinsics_subspace(std::vector<double> *B, std::vector<IntrinsicsPriorCost::Row> *rows,
-                         int Nintrinsics, const double *nominal, const rs_calib_refine_options *opt) {
+void intrinsics_subspace(std::vector<double> *B,
+                         std::vector<IntrinsicsPriorCost::Row> *rows,
+                         int Nintrinsics,
+                         const double *nominal,
+                         const rs_calib_refine_options *opt)
+{
     auto unit = [&](int i) {
         size_t c = B->size();
         B->resize(c + (size_t)Nintrinsics, 0.0);
@@ -317,14 +341,12 @@ void intrinsics_subspace(std::vector<double> *B, std::vector<IntrinsicsPriorCost
     if (opt->refine & RS_CALIB_REFINE_CENTER)
         for (int i = 2; i < 4; i++) {
             unit(i);
-            if (opt->center_prior_sigma_px > 0.0)
-                rows->push_back({i, nominal[i], 1.0 / opt->center_prior_sigma_px});
+            if (opt->center_prior_sigma_px > 0.0) rows->push_back({i, nominal[i], 1.0 / opt->center_prior_sigma_px});
         }
     if (opt->refine & RS_CALIB_REFINE_DISTORTION)
         for (int i = 4; i < Nintrinsics; i++) {
             unit(i);
-            if (opt->distortion_prior_sigma > 0.0)
-                rows->push_back({i, nominal[i], 1.0 / opt->distortion_prior_sigma});
+            if (opt->distortion_prior_sigma > 0.0) rows->push_back({i, nominal[i], 1.0 / opt->distortion_prior_sigma});
         }
 }
 
@@ -338,9 +360,12 @@ void intrinsics_subspace(std::vector<double> *B, std::vector<IntrinsicsPriorCost
 // Also returns the covariance of the head in its tangent space, (Rd^T Rd)^-1 from the SVD of
 // the equilibrated Rd, in *cov_tangent (may be NULL), and the ratio of the largest to the
 // smallest column norm of the whole Jacobian in *column_range (may be NULL).
-double reduced_condition(ceres::Problem *problem, const std::vector<double *> &head,
-                         const std::vector<double *> &landmarks, Eigen::MatrixXd *cov_tangent,
-                         double *column_range) {
+double reduced_condition(ceres::Problem *problem,
+                         const std::vector<double *> &head,
+                         const std::vector<double *> &landmarks,
+                         Eigen::MatrixXd *cov_tangent,
+                         double *column_range)
+{
     ceres::Problem::EvaluateOptions eo;
     eo.parameter_blocks = head;
     eo.parameter_blocks.insert(eo.parameter_blocks.end(), landmarks.begin(), landmarks.end());
@@ -438,10 +463,17 @@ const double kColumnRangeCeres = 1e7;
 // 50 landmarks, 156, and more, faster with SuiteSparse).
 const int kEigenCovarianceMax = 100;
 
-rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_summary *summary,
-                 double *cov, double *block_chi2, double *q_pred,
-                 const rs_calib_refine_problem *pb, const rs_calib_refine_options *opt,
-                 rs_err *err) {
+rs_status refine(double rt[6],
+                 double *intrinsics,
+                 double *p_c,
+                 rs_calib_refine_summary *summary,
+                 double *cov,
+                 double *block_chi2,
+                 double *q_pred,
+                 const rs_calib_refine_problem *pb,
+                 const rs_calib_refine_options *opt,
+                 rs_err *err)
+{
     const int Ni = mrcal_lensmodel_num_params(pb->lensmodel);
     if (Ni < 4 || pb->N < 0) return rs_err_set(err, RS_ERR_INVALID, "refine: bad sizes");
     const bool refine_i = opt->refine != RS_CALIB_REFINE_NONE;
@@ -466,15 +498,13 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     for (int i = 0; i < pb->N; i++) {
         const double *sig = pb->sigma_enu_m ? &pb->sigma_enu_m[3 * i] : nullptr;
         costs[(size_t)i].reset(new LandmarkCost(pb->lensmodel, Ni, &pb->q_px[2 * i],
-                                                pb->sigma_px ? pb->sigma_px[i] : 1.0,
-                                                &pb->p_survey_c_m[3 * i], sig));
+                                                pb->sigma_px ? pb->sigma_px[i] : 1.0, &pb->p_survey_c_m[3 * i], sig));
         if (opt->marginal)
             mcosts[(size_t)i].reset(new MarginalCost(pb->lensmodel, Ni, &pb->q_px[2 * i],
-                                                     pb->sigma_px ? pb->sigma_px[i] : 1.0,
-                                                     &pb->p_survey_c_m[3 * i], sig, rt, intrinsics));
+                                                     pb->sigma_px ? pb->sigma_px[i] : 1.0, &pb->p_survey_c_m[3 * i],
+                                                     sig, rt, intrinsics));
         if (pb->use && !pb->use[i]) continue;
-        ceres::LossFunction *loss =
-            opt->robust_scale > 0.0 ? new ceres::CauchyLoss(opt->robust_scale) : nullptr;
+        ceres::LossFunction *loss = opt->robust_scale > 0.0 ? new ceres::CauchyLoss(opt->robust_scale) : nullptr;
         if (opt->marginal) {
             problem.AddResidualBlock(mcosts[(size_t)i].get(), loss, rt, intrinsics);
             Nresiduals += 2;
@@ -559,16 +589,15 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
         double r[5] = {0, 0, 0, 0, 0};
         const double *x[3] = {rt, &p_c[3 * i], intrinsics};
         const double *xm[2] = {rt, intrinsics};
-        const bool ok = opt->marginal ? mcosts[(size_t)i]->Evaluate(xm, r, nullptr)
-                                      : costs[(size_t)i]->Evaluate(x, r, nullptr);
+        const bool ok =
+            opt->marginal ? mcosts[(size_t)i]->Evaluate(xm, r, nullptr) : costs[(size_t)i]->Evaluate(x, r, nullptr);
         if (!ok) {
             if (pb->use && !pb->use[i]) { // an outlier that no longer projects: report it as such
                 if (block_chi2) block_chi2[i] = INFINITY;
                 if (q_pred) q_pred[2 * i] = q_pred[2 * i + 1] = NAN;
                 continue;
             }
-            return rs_err_set(err, RS_ERR_DEGENERATE,
-                              "landmark %d: cannot be projected at the solution", i);
+            return rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d: cannot be projected at the solution", i);
         }
         const double c2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3] + r[4] * r[4];
         if (block_chi2) block_chi2[i] = c2;
@@ -603,8 +632,7 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
         return rs_err_set(err, RS_ERR_DEGENERATE,
                           "the landmarks do not determine the pose%s: the Jacobian is "
                           "rank-deficient (condition number %.3g)",
-                          refine_i ? " and the refined intrinsics" : "",
-                          summary->condition_number);
+                          refine_i ? " and the refined intrinsics" : "", summary->condition_number);
     const int n = 6 + Ni, m = 6 + (refine_i ? Ni : 0);
     std::vector<double> c((size_t)m * (size_t)m);
     summary->covariance_by_ceres = column_range < kColumnRangeCeres;
@@ -655,9 +683,11 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
 
 } // namespace
 
-extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const double *intrinsics,
+extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6],
+                                                 const double *intrinsics,
                                                  const double *p_c_m,
-                                                 const rs_calib_refine_problem *pb) {
+                                                 const rs_calib_refine_problem *pb)
+{
     QuietGlog quiet;
     try {
         const int Ni = mrcal_lensmodel_num_params(pb->lensmodel);
@@ -698,15 +728,20 @@ extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const
     }
 }
 
-extern "C" rs_status rs_calib_refine_run(double rt_cam_c[6], double *intrinsics, double *p_c_m,
-                                         rs_calib_refine_summary *summary, double *cov,
-                                         double *block_chi2, double *q_pred_px,
+extern "C" rs_status rs_calib_refine_run(double rt_cam_c[6],
+                                         double *intrinsics,
+                                         double *p_c_m,
+                                         rs_calib_refine_summary *summary,
+                                         double *cov,
+                                         double *block_chi2,
+                                         double *q_pred_px,
                                          const rs_calib_refine_problem *problem,
-                                         const rs_calib_refine_options *opt, rs_err *err) {
+                                         const rs_calib_refine_options *opt,
+                                         rs_err *err)
+{
     QuietGlog quiet;
     try {
-        return refine(rt_cam_c, intrinsics, p_c_m, summary, cov, block_chi2, q_pred_px, problem,
-                      opt, err);
+        return refine(rt_cam_c, intrinsics, p_c_m, summary, cov, block_chi2, q_pred_px, problem, opt, err);
     } catch (const std::bad_alloc &) {
         return rs_err_set(err, RS_ERR_NOMEM, "refine: out of memory");
     } catch (const std::exception &e) {

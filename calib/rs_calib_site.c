@@ -9,14 +9,13 @@
 #include <mrcal/poseutils.h>
 
 #include "core/rs_camera.h"
-#include "geo/rs_geo.h"
 #include "core/rs_io.h"
 #include "core/rs_pose.h"
+#include "geo/rs_geo.h"
 
 // ---------------------------------------------------------------- problem
 
-rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *site, int icam,
-                                     rs_err *err)
+rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *site, int icam, rs_err *err)
 {
     memset(sp, 0, sizeof *sp);
     if (!site || icam < 0 || icam >= site->Ncameras)
@@ -93,9 +92,12 @@ static void normalise_h(double *H)
     for (int i = 0; i < 9; i++) H[i] /= s;
 }
 
-rs_status rs_calib_ground_homography(double H_px_from_ground[9], double H_ground_from_px[9],
-                                     const double fxycxy[4], const double rt_cam_enu[6],
-                                     const double plane_normal_enu[3], double plane_offset_m,
+rs_status rs_calib_ground_homography(double H_px_from_ground[9],
+                                     double H_ground_from_px[9],
+                                     const double fxycxy[4],
+                                     const double rt_cam_enu[6],
+                                     const double plane_normal_enu[3],
+                                     double plane_offset_m,
                                      rs_err *err)
 {
     const double *n = plane_normal_enu;
@@ -152,10 +154,7 @@ double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_cal
 
 // ---------------------------------------------------------------- JSON
 
-static cJSON *json_array(const double *v, int n)
-{
-    return cJSON_CreateDoubleArray(v, n);
-}
+static cJSON *json_array(const double *v, int n) { return cJSON_CreateDoubleArray(v, n); }
 
 // (rows, cols) row-major as a list of rows
 static cJSON *json_matrix(const double *m, int rows, int cols)
@@ -200,8 +199,10 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     cJSON_AddNumberToObject(root, "rms_px", r->rms_px);
     double *q_surveyed = malloc((size_t)(r->N > 0 ? r->N : 1) * 2 * sizeof(double));
     double rms_surveyed = rs_calib_site_rms_surveyed_px(site, icam, r, q_surveyed);
-    if (isfinite(rms_surveyed)) cJSON_AddNumberToObject(root, "rms_px_surveyed", rms_surveyed);
-    else cJSON_AddNullToObject(root, "rms_px_surveyed");
+    if (isfinite(rms_surveyed))
+        cJSON_AddNumberToObject(root, "rms_px_surveyed", rms_surveyed);
+    else
+        cJSON_AddNullToObject(root, "rms_px_surveyed");
     cJSON_AddNumberToObject(root, "landmarks_used", r->Ninliers);
     cJSON_AddNumberToObject(root, "landmarks_rejected", r->N - r->Ninliers);
     cJSON_AddNumberToObject(root, "chi2", r->chi2);
@@ -246,8 +247,7 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
 
 // ---------------------------------------------------------------- files
 
-static rs_status write_text(const char *out_dir, const char *id, const char *suffix, const char *text,
-                            rs_err *err)
+static rs_status write_text(const char *out_dir, const char *id, const char *suffix, const char *text, rs_err *err)
 {
     size_t n = strlen(id) + strlen(suffix) + 1;
     char *name = malloc(n);
@@ -261,8 +261,8 @@ static rs_status write_text(const char *out_dir, const char *id, const char *suf
     return st;
 }
 
-static rs_status write_homography(const char *path, const rs_site *site, const rs_site_camera *cam,
-                                  const rs_calib_result *r, rs_err *err)
+static rs_status write_homography(
+    const char *path, const rs_site *site, const rs_site_camera *cam, const rs_calib_result *r, rs_err *err)
 {
     double H[9], Hi[9];
     rs_status st = rs_calib_ground_homography(H, Hi, r->intrinsics, r->rt_cam_enu, site->ground_normal_enu,
@@ -290,9 +290,7 @@ static rs_status write_homography(const char *path, const rs_site *site, const r
     return st;
 }
 
-
-rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *r,
-                              rs_err *err)
+rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *r, rs_err *err)
 {
     const rs_site_camera *cam = &site->cameras[icam];
     char name[1024];

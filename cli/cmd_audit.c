@@ -63,8 +63,8 @@ static void print_row(const char *id, const rs_audit_result *r)
     char moved[16] = "-";
     if (r->has_against) snprintf(moved, sizeof moved, "%s", r->against.moved ? "MOVED" : "no");
     printf("%-12s %5d %7.3f %8.3f %8.2f %8.2f %6.0f%% %6.0f%% %6s  %s\n", id, r->solve.Ninliers, r->solve.rms_px,
-           r->loo_rms_px, r->loo_median_m, r->loo_max_m, 100 * r->image_hull_share, 100 * r->ground_hull_share,
-           moved, r->pass ? "pass" : "FAIL");
+           r->loo_rms_px, r->loo_median_m, r->loo_max_m, 100 * r->image_hull_share, 100 * r->ground_hull_share, moved,
+           r->pass ? "pass" : "FAIL");
 }
 
 static void print_details(const rs_site *site, int icam, const rs_audit_result *r)
@@ -173,7 +173,8 @@ int rs_cli_audit(int argc, char **argv)
 
     int failed = 0;
     bool first = true;
-    if (json) printf("[\n");
+    if (json)
+        printf("[\n");
     else
         printf("%-12s %5s %7s %8s %8s %8s %7s %7s %6s  %s\n", "camera", "used", "rms_px", "loo_px", "loo_med_m",
                "loo_max_m", "image", "ground", "moved", "verdict");
@@ -215,8 +216,10 @@ int rs_cli_audit(int argc, char **argv)
         }
         rs_audit_result_free(&r);
     }
-    if (json) printf("\n]\n");
-    else printf("written to %s/<camera>.audit.json\n", out_dir);
+    if (json)
+        printf("\n]\n");
+    else
+        printf("written to %s/<camera>.audit.json\n", out_dir);
     free(only);
     free(default_out);
     rs_site_free(site);

@@ -7,8 +7,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "core/rs_camera.h"
 #include "cli/rs_cli.h"
+#include "core/rs_camera.h"
 #include "core/rs_io.h"
 #include "geo/rs_site.h"
 #include "synth/rs_synth_background.h"
@@ -20,50 +20,48 @@ enum { MAX_TAGS = 64 };
 
 static void usage_background(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside background SITE --camera ID INPUT... [--tag key=value]... [--name NAME]\n"
-            "\n"
-            "Makes a background image of camera ID's empty scene by the temporal median of the\n"
-            "frames of the INPUTs (videos, read with OpenCV, and/or image files, in order), and\n"
-            "stores it as SITE/backgrounds/ID/NAME.png, recorded in site.json (the camera's\n"
-            "\"background_images\" list, docs/backgrounds.md) with its tags.\n"
-            "\n"
-            "Streaming with bounded memory: at most --max-frames frames, evenly spaced over the whole\n"
-            "input, are kept (every s-th frame, s doubling whenever the buffer fills); the median is\n"
-            "exact over them. Memory: (max-frames + 3) x W x H x 3 bytes (174 MB at 1920x1080, 25).\n"
-            "\n"
-            "  --camera ID        the site's camera (required)\n"
-            "  --name NAME        file stem, [A-Za-z0-9_.-] [median]\n"
-            "  --tag key=value    time=ISO-8601-with-zone (e.g. 2024-06-21T14:30:00+02:00),\n"
-            "                     conditions=sunny|cloudy|rain|snow|night, or any other key; repeatable\n"
-            "  --max-frames K     frame budget, 3..255 [25]\n"
-            "\n"
-            "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n");
+    fprintf(out, "usage: roadside background SITE --camera ID INPUT... [--tag key=value]... [--name NAME]\n"
+                 "\n"
+                 "Makes a background image of camera ID's empty scene by the temporal median of the\n"
+                 "frames of the INPUTs (videos, read with OpenCV, and/or image files, in order), and\n"
+                 "stores it as SITE/backgrounds/ID/NAME.png, recorded in site.json (the camera's\n"
+                 "\"background_images\" list, docs/backgrounds.md) with its tags.\n"
+                 "\n"
+                 "Streaming with bounded memory: at most --max-frames frames, evenly spaced over the whole\n"
+                 "input, are kept (every s-th frame, s doubling whenever the buffer fills); the median is\n"
+                 "exact over them. Memory: (max-frames + 3) x W x H x 3 bytes (174 MB at 1920x1080, 25).\n"
+                 "\n"
+                 "  --camera ID        the site's camera (required)\n"
+                 "  --name NAME        file stem, [A-Za-z0-9_.-] [median]\n"
+                 "  --tag key=value    time=ISO-8601-with-zone (e.g. 2024-06-21T14:30:00+02:00),\n"
+                 "                     conditions=sunny|cloudy|rain|snow|night, or any other key; repeatable\n"
+                 "  --max-frames K     frame budget, 3..255 [25]\n"
+                 "\n"
+                 "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n");
 }
 
 static void usage_render(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside site render-backgrounds SITE --calib DIR [--camera ID] [--times T1,T2,...]\n"
-            "                                        [--weather W1,W2,...]\n"
-            "\n"
-            "Ray-traces (POV-Ray) a digital twin of the site's ground through each calibrated camera\n"
-            "(DIR/<id>.cameramodel, as written by `roadside calib`): asphalt on the site's ground\n"
-            "plane, white markings along both edges of every lane of SITE/lanes.geojson, the sun at\n"
-            "its position for the site's origin and each time. Stores SITE/backgrounds/<id>/\n"
-            "twin_<UTC time>_<conditions>.png, recorded in site.json with synthetic = true and\n"
-            "tags time, conditions (docs/backgrounds.md).\n"
-            "\n"
-            "  --calib DIR        folder of calibrated .cameramodel files (required)\n"
-            "  --camera ID        only this camera [all the site's cameras]\n"
-            "  --times LIST       ISO 8601 times with zone, comma-separated\n"
-            "                     [2024-06-21 at mean solar 09:00, 12:00, 16:00 at the site]\n"
-            "  --weather LIST     of sunny, cloudy, rain, snow [sunny,cloudy]; a sun below -6 deg\n"
-            "                     makes it night whatever the weather\n"
-            "  --lanes FILE       lanes file [SITE/lanes.geojson; none: no markings]\n"
-            "  --antialias N      POV-Ray antialiasing depth, 0 or 2..9 [0]\n"
-            "\n"
-            "Exit status: 0 written, 1 failed, 2 bad arguments.\n");
+    fprintf(out, "usage: roadside site render-backgrounds SITE --calib DIR [--camera ID] [--times T1,T2,...]\n"
+                 "                                        [--weather W1,W2,...]\n"
+                 "\n"
+                 "Ray-traces (POV-Ray) a digital twin of the site's ground through each calibrated camera\n"
+                 "(DIR/<id>.cameramodel, as written by `roadside calib`): asphalt on the site's ground\n"
+                 "plane, white markings along both edges of every lane of SITE/lanes.geojson, the sun at\n"
+                 "its position for the site's origin and each time. Stores SITE/backgrounds/<id>/\n"
+                 "twin_<UTC time>_<conditions>.png, recorded in site.json with synthetic = true and\n"
+                 "tags time, conditions (docs/backgrounds.md).\n"
+                 "\n"
+                 "  --calib DIR        folder of calibrated .cameramodel files (required)\n"
+                 "  --camera ID        only this camera [all the site's cameras]\n"
+                 "  --times LIST       ISO 8601 times with zone, comma-separated\n"
+                 "                     [2024-06-21 at mean solar 09:00, 12:00, 16:00 at the site]\n"
+                 "  --weather LIST     of sunny, cloudy, rain, snow [sunny,cloudy]; a sun below -6 deg\n"
+                 "                     makes it night whatever the weather\n"
+                 "  --lanes FILE       lanes file [SITE/lanes.geojson; none: no markings]\n"
+                 "  --antialias N      POV-Ray antialiasing depth, 0 or 2..9 [0]\n"
+                 "\n"
+                 "Exit status: 0 written, 1 failed, 2 bad arguments.\n");
 }
 
 int rs_cli_background(int argc, char **argv)
@@ -81,8 +79,7 @@ int rs_cli_background(int argc, char **argv)
     long max_frames = 25;
     rs_err err = {0};
     int rc = RS_EXIT_OK;
-    if (!inputs)
-        return rs_cli_fail(CMD, RS_ERR_NOMEM, NULL);
+    if (!inputs) return rs_cli_fail(CMD, RS_ERR_NOMEM, NULL);
     for (int i = 1; i < argc && rc == RS_EXIT_OK; i++) {
         const char *a = argv[i];
         const bool has_value = i + 1 < argc;
@@ -92,8 +89,7 @@ int rs_cli_background(int argc, char **argv)
             tags.name = argv[++i];
         else if (!strcmp(a, "--max-frames") && has_value) {
             if (!rs_cli_parse_int(argv[++i], 3, 255, &max_frames))
-                rc = rs_cli_usage_error(CMD, "--max-frames: '%s' is not an integer in 3..255",
-                                        argv[i]);
+                rc = rs_cli_usage_error(CMD, "--max-frames: '%s' is not an integer in 3..255", argv[i]);
         } else if (!strcmp(a, "--tag") && has_value) {
             if (tags.Ntags >= MAX_TAGS)
                 rc = rs_cli_usage_error(CMD, "--tag: at most %d tags", MAX_TAGS);
@@ -108,8 +104,7 @@ int rs_cli_background(int argc, char **argv)
     }
     if (rc == RS_EXIT_OK && (!site_dir || !camera || Ninputs == 0))
         rc = rs_cli_usage_error(CMD, "needs SITE, --camera ID and at least one INPUT");
-    if (rc == RS_EXIT_OK && rs_synth_background_tags_check(&tags, &err))
-        rc = rs_cli_usage_error(CMD, "%s", err.msg);
+    if (rc == RS_EXIT_OK && rs_synth_background_tags_check(&tags, &err)) rc = rs_cli_usage_error(CMD, "%s", err.msg);
     if (rc != RS_EXIT_OK) {
         free(inputs);
         return rc;
@@ -130,29 +125,26 @@ int rs_cli_background(int argc, char **argv)
         goto done;
     }
     if (rs_site_find_camera(site, camera) < 0) {
-        rc = rs_cli_fail(CMD, RS_ERR_NOT_FOUND,
-                         &(rs_err){RS_ERR_NOT_FOUND, "--camera: the site has no such camera"});
+        rc = rs_cli_fail(CMD, RS_ERR_NOT_FOUND, &(rs_err){RS_ERR_NOT_FOUND, "--camera: the site has no such camera"});
         goto done;
     }
-    if ((st = rs_synth_background_median(&med, (const char *const *)inputs, Ninputs,
-                                         (int)max_frames, &err))) {
+    if ((st = rs_synth_background_median(&med, (const char *const *)inputs, Ninputs, (int)max_frames, &err))) {
         rc = rs_cli_fail(CMD, st, &err);
         goto done;
     }
     const double seconds = (double)clock() / CLOCKS_PER_SEC - t0;
     const rs_camera *nominal = &site->cameras[rs_site_find_camera(site, camera)].camera;
     if (med.width != nominal->width || med.height != nominal->height)
-        fprintf(stderr, "roadside background: warning: frames are %dx%d, camera %s is %dx%d\n", med.width,
-                med.height, camera, nominal->width, nominal->height);
+        fprintf(stderr, "roadside background: warning: frames are %dx%d, camera %s is %dx%d\n", med.width, med.height,
+                camera, nominal->width, nominal->height);
     if ((st = rs_synth_background_save_median(&path, site_dir, camera, &tags, &med, (const char *const *)inputs,
                                               Ninputs, &err))) {
         rc = rs_cli_fail(CMD, st, &err);
         goto done;
     }
     printf("background: %s (%dx%d)\n", path, med.width, med.height);
-    printf("frames read %ld, median over %d (every %d-th), memory bound %.1f MB, %.2f ms/frame\n",
-           med.Nframes_read, med.Nframes_used, med.stride, med.bytes_bound / 1e6,
-           1e3 * seconds / (double)med.Nframes_read);
+    printf("frames read %ld, median over %d (every %d-th), memory bound %.1f MB, %.2f ms/frame\n", med.Nframes_read,
+           med.Nframes_used, med.stride, med.bytes_bound / 1e6, 1e3 * seconds / (double)med.Nframes_read);
     printf("recorded in %s/site.json (camera %s, name %s)\n", site_dir, camera, tags.name);
 done:
     free(path);
@@ -168,22 +160,28 @@ done:
 static int split_list(char *s, char **out, int max)
 {
     int n = 0;
-    for (char *tok = strtok(s, ","); tok && n < max; tok = strtok(NULL, ","))
-        out[n++] = tok;
+    for (char *tok = strtok(s, ","); tok && n < max; tok = strtok(NULL, ",")) out[n++] = tok;
     return n;
 }
 
 // Prints each background as it is recorded.
-static void twin_done(void *ctx, const char *camera_id, const char *path, double az_deg, double el_deg,
-                      const char *conditions)
+static void
+twin_done(void *ctx, const char *camera_id, const char *path, double az_deg, double el_deg, const char *conditions)
 {
     (void)ctx;
     printf("%s: %s (sun azimuth %.2f, elevation %.2f deg, %s)\n", camera_id, path, az_deg, el_deg, conditions);
 }
 
 // Renders and records the backgrounds of one camera: every time x weather.
-static int render_camera(const char *site_dir, const rs_site *site, const char *calib_dir, const char *cam_id,
-                         const char *lanes, char **times, int Ntimes, char **weathers, int Nweathers,
+static int render_camera(const char *site_dir,
+                         const rs_site *site,
+                         const char *calib_dir,
+                         const char *cam_id,
+                         const char *lanes,
+                         char **times,
+                         int Ntimes,
+                         char **weathers,
+                         int Nweathers,
                          const rs_synth_twin_options *opt)
 {
     static const char *const WHAT = "site render-backgrounds";
@@ -193,9 +191,8 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
     rs_err err = {0};
     rs_status st = rs_camera_read(&cam, NULL, model, &err);
     if (st == RS_OK)
-        st = rs_synth_background_twins(site_dir, site, cam_id, &cam, model, lanes, (const char *const *)times,
-                                       Ntimes, (const char *const *)weathers, Nweathers, opt, twin_done, NULL,
-                                       &err);
+        st = rs_synth_background_twins(site_dir, site, cam_id, &cam, model, lanes, (const char *const *)times, Ntimes,
+                                       (const char *const *)weathers, Nweathers, opt, twin_done, NULL, &err);
     rs_camera_free(&cam);
     return st ? rs_cli_fail(WHAT, st, &err) : RS_EXIT_OK;
 }
@@ -237,8 +234,7 @@ int rs_cli_site_render_backgrounds(int argc, char **argv)
         else
             rc = rs_cli_usage_error(CMD, "unexpected argument '%s'", a);
     }
-    if (rc == RS_EXIT_OK && (!site_dir || !calib))
-        rc = rs_cli_usage_error(CMD, "needs SITE and --calib DIR");
+    if (rc == RS_EXIT_OK && (!site_dir || !calib)) rc = rs_cli_usage_error(CMD, "needs SITE and --calib DIR");
     char *times[64], *weathers[8];
     char default_times[3][40];
     int Ntimes = 0, Nweathers = 0;
@@ -246,31 +242,23 @@ int rs_cli_site_render_backgrounds(int argc, char **argv)
     if (rc == RS_EXIT_OK) {
         Nweathers = split_list(weather_arg ? weather_arg : weather_default, weathers, 8);
         for (int w = 0; w < Nweathers && rc == RS_EXIT_OK; w++)
-            if (strcmp(weathers[w], "sunny") && strcmp(weathers[w], "cloudy") &&
-                strcmp(weathers[w], "rain") && strcmp(weathers[w], "snow") &&
-                strcmp(weathers[w], "night"))
-                rc = rs_cli_usage_error(CMD, "--weather: '%s' is not sunny, cloudy, rain or snow",
-                                        weathers[w]);
-        if (times_arg)
-            Ntimes = split_list(times_arg, times, 64);
-        if (rc == RS_EXIT_OK && Nweathers == 0)
-            rc = rs_cli_usage_error(CMD, "--weather: empty list");
-        if (rc == RS_EXIT_OK && times_arg && Ntimes == 0)
-            rc = rs_cli_usage_error(CMD, "--times: empty list");
+            if (strcmp(weathers[w], "sunny") && strcmp(weathers[w], "cloudy") && strcmp(weathers[w], "rain") &&
+                strcmp(weathers[w], "snow") && strcmp(weathers[w], "night"))
+                rc = rs_cli_usage_error(CMD, "--weather: '%s' is not sunny, cloudy, rain or snow", weathers[w]);
+        if (times_arg) Ntimes = split_list(times_arg, times, 64);
+        if (rc == RS_EXIT_OK && Nweathers == 0) rc = rs_cli_usage_error(CMD, "--weather: empty list");
+        if (rc == RS_EXIT_OK && times_arg && Ntimes == 0) rc = rs_cli_usage_error(CMD, "--times: empty list");
     }
-    if (rc != RS_EXIT_OK)
-        return rc;
+    if (rc != RS_EXIT_OK) return rc;
     rs_site *site = NULL;
     rs_err err = {0};
     rs_status st = rs_site_load(&site, site_dir, &err);
-    if (st)
-        return rs_cli_fail(site_dir, st, &err);
+    if (st) return rs_cli_fail(site_dir, st, &err);
     if (!times_arg) {
         // 2024-06-21 at mean solar 09:00, 12:00, 16:00: UTC = solar - longitude / 15 h
         const double solar_h[3] = {9, 12, 16};
         for (int k = 0; k < 3; k++) {
-            const time_t t =
-                (time_t)(1718928000.0 + 3600.0 * solar_h[k] - 240.0 * site->origin.lon_deg);
+            const time_t t = (time_t)(1718928000.0 + 3600.0 * solar_h[k] - 240.0 * site->origin.lon_deg);
             struct tm utc;
             gmtime_r(&t, &utc);
             strftime(default_times[k], sizeof(default_times[k]), "%Y-%m-%dT%H:%M:%SZ", &utc);
@@ -284,8 +272,7 @@ int rs_cli_site_render_backgrounds(int argc, char **argv)
         return rs_cli_fail(CMD, RS_ERR_NOMEM, NULL);
     }
     if (!lanes_opt && access(lanes, R_OK) != 0) {
-        fprintf(stderr, "roadside %s: %s: no lanes file, rendering the ground without markings\n",
-                CMD, lanes);
+        fprintf(stderr, "roadside %s: %s: no lanes file, rendering the ground without markings\n", CMD, lanes);
         free(lanes);
         lanes = NULL;
     }
@@ -299,8 +286,8 @@ int rs_cli_site_render_backgrounds(int argc, char **argv)
                              &(rs_err){RS_ERR_INVALID, "camera id cannot be a folder name "
                                                        "([A-Za-z0-9_.-], not starting with '.')"});
         else
-            rc = render_camera(site_dir, site, calib, site->cameras[c].id, lanes, times, Ntimes,
-                               weathers, Nweathers, &opt);
+            rc = render_camera(site_dir, site, calib, site->cameras[c].id, lanes, times, Ntimes, weathers, Nweathers,
+                               &opt);
     free(lanes);
     rs_site_free(site);
     return rc;

@@ -6,31 +6,30 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bench/rs_bench_eval.h"
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
-#include "bench/rs_bench_eval.h"
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside bench eval [--images N] [--dets N] [--seed S] [--csv FILE] [--dir DIR]\n"
-            "       roadside bench calib ...   (see 'roadside bench calib --help')\n"
-            "       roadside bench synth ...   (see 'roadside bench synth --help')\n"
-            "\n"
-            "Benchmarks are programs: each prints a table and writes CSV.\n"
-            "\n"
-            "  eval  writes a synthetic COCO ground truth and COCO results (1920x1080 images,\n"
-            "        3 categories, an ignore region in every 20th image, detections +-6 px off\n"
-            "        their vehicle plus clutter), then times `roadside eval --center-shift 0.5`\n"
-            "        on them: parsing and evaluation separately, with the peak resident memory.\n"
-            "    --images N   images (default 10000)\n"
-            "    --dets N     detections, spread evenly over the images (default 1000000)\n"
-            "    --seed S     random seed (default 1)\n"
-            "    --csv FILE   write the figures as CSV to FILE\n"
-            "    --dir DIR    write gt.json and dets.json into DIR and keep them (default: a\n"
-            "                 temporary folder under $TMPDIR or /tmp, removed afterwards)\n"
-            "\n"
-            "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/benchmarks.md.\n");
+    fprintf(out, "usage: roadside bench eval [--images N] [--dets N] [--seed S] [--csv FILE] [--dir DIR]\n"
+                 "       roadside bench calib ...   (see 'roadside bench calib --help')\n"
+                 "       roadside bench synth ...   (see 'roadside bench synth --help')\n"
+                 "\n"
+                 "Benchmarks are programs: each prints a table and writes CSV.\n"
+                 "\n"
+                 "  eval  writes a synthetic COCO ground truth and COCO results (1920x1080 images,\n"
+                 "        3 categories, an ignore region in every 20th image, detections +-6 px off\n"
+                 "        their vehicle plus clutter), then times `roadside eval --center-shift 0.5`\n"
+                 "        on them: parsing and evaluation separately, with the peak resident memory.\n"
+                 "    --images N   images (default 10000)\n"
+                 "    --dets N     detections, spread evenly over the images (default 1000000)\n"
+                 "    --seed S     random seed (default 1)\n"
+                 "    --csv FILE   write the figures as CSV to FILE\n"
+                 "    --dir DIR    write gt.json and dets.json into DIR and keep them (default: a\n"
+                 "                 temporary folder under $TMPDIR or /tmp, removed afterwards)\n"
+                 "\n"
+                 "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/benchmarks.md.\n");
 }
 
 typedef struct {
@@ -42,12 +41,10 @@ static int parse_bench_eval(int argc, char **argv, bench_eval_args *a)
 {
     *a = (bench_eval_args){.images = 10000, .dets = 1000000, .seed = 1};
     enum { O_IMAGES = 256, O_DETS, O_SEED, O_CSV, O_DIR };
-    static const struct option options[] = {{"images", required_argument, NULL, O_IMAGES},
-                                            {"dets", required_argument, NULL, O_DETS},
-                                            {"seed", required_argument, NULL, O_SEED},
-                                            {"csv", required_argument, NULL, O_CSV},
-                                            {"dir", required_argument, NULL, O_DIR},
-                                            {NULL, 0, NULL, 0}};
+    static const struct option options[] = {
+        {"images", required_argument, NULL, O_IMAGES}, {"dets", required_argument, NULL, O_DETS},
+        {"seed", required_argument, NULL, O_SEED},     {"csv", required_argument, NULL, O_CSV},
+        {"dir", required_argument, NULL, O_DIR},       {NULL, 0, NULL, 0}};
     opterr = 0;
     optind = 0; // glibc: full re-initialisation
     int c;
@@ -98,8 +95,10 @@ static int bench_eval(int argc, char **argv)
         return rs_cli_fail("bench eval", st, &err);
     char *gt_path = rs_io_join(dir, "gt.json"), *dets_path = rs_io_join(dir, "dets.json");
     rs_bench_eval_figures f = {0};
-    if (!gt_path || !dets_path) st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
-    else st = rs_bench_eval_run(&f, (int)a.images, a.dets, (uint64_t)a.seed, gt_path, dets_path, &err);
+    if (!gt_path || !dets_path)
+        st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
+    else
+        st = rs_bench_eval_run(&f, (int)a.images, a.dets, (uint64_t)a.seed, gt_path, dets_path, &err);
     if (!a.dir) {
         if (gt_path) unlink(gt_path);
         if (dets_path) unlink(dets_path);
@@ -112,9 +111,8 @@ static int bench_eval(int argc, char **argv)
     const double per_det = a.dets ? 1.0 / (double)a.dets : 0;
     const double rss_mib = f.rss_after / 1048576.0;
     const double rss_per_det = (f.rss_after - f.rss_before) * per_det;
-    printf("%7s %8s %7s %8s %7s %8s %9s %8s %9s %8s %9s %10s %6s %6s\n", "images", "dets", "gt", "parse_s",
-           "eval_s", "total_s", "parse_cpu", "eval_cpu", "total_cpu", "peak_MiB", "rss_B/det", "data_B/det", "mAP",
-           "AR");
+    printf("%7s %8s %7s %8s %7s %8s %9s %8s %9s %8s %9s %10s %6s %6s\n", "images", "dets", "gt", "parse_s", "eval_s",
+           "total_s", "parse_cpu", "eval_cpu", "total_cpu", "peak_MiB", "rss_B/det", "data_B/det", "mAP", "AR");
     printf("%7ld %8ld %7zu %8.3f %7.3f %8.3f %9.3f %8.3f %9.3f %8.1f %9.1f %10.1f %6.4f %6.4f\n", a.images, a.dets,
            f.gt, f.parse_s, f.eval_s, f.parse_s + f.eval_s, f.parse_cpu_s, f.eval_cpu_s, f.parse_cpu_s + f.eval_cpu_s,
            rss_mib, rss_per_det, f.data_bytes * per_det, f.map, f.ar);

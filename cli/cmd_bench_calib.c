@@ -12,31 +12,30 @@
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside bench calib [--trials N] [--csv FILE] [--plot FILE.png] [--quick] [--seed S]\n"
-            "       roadside bench calib --stress N [--seed S]\n"
-            "\n"
-            "Runs roadside's pose solver (full, initialisation only, survey taken as exact), OpenCV's\n"
-            "solvePnP (ITERATIVE, EPNP, SQPNP, IPPE; each alone and + solvePnPRefineLM; solvePnPRansac\n"
-            "alone and + LM) and OpenGV's (P3P Kneip/Gao in RANSAC, EPnP, UPnP, EPnP + non-linear\n"
-            "optimisation) on identical simulated problems, sweeping one knob at a time away from a\n"
-            "baseline (20 landmarks, 1 px, 0.3 m survey sigma, no outliers, camera 8 m up, 25 m away):\n"
-            "pixel noise, landmark count, outlier fraction, survey noise, planar landmarks, camera\n"
-            "height, distance. For each method and configuration it prints the median and 90th\n"
-            "percentile CPU time (us), the RMS rotation, position and ground-localisation errors, the\n"
-            "failure rate and the Cramer-Rao bound (CRB) of the same configuration.\n"
-            "\n"
-            "  --trials N     problems per configuration (default 50; --quick: 3)\n"
-            "  --quick        a small grid (3 configurations), for the test suite\n"
-            "  --csv FILE     write every row as CSV (written atomically)\n"
-            "  --plot FILE    write a PNG: time against error / CRB, one panel per family\n"
-            "  --seed S       seed of the problems (default 1)\n"
-            "  --stress N     instead: solve N random problems with roadside's solver and check that\n"
-            "                 every output is finite and every failure is named; the seed is random\n"
-            "                 (and printed) unless --seed is given\n"
-            "\n"
-            "Exit status: 0 ok (for --stress: no finding), 1 failure, 2 usage error.\n"
-            "Definitions and the last full run: docs/benchmarks.md.\n");
+    fprintf(out, "usage: roadside bench calib [--trials N] [--csv FILE] [--plot FILE.png] [--quick] [--seed S]\n"
+                 "       roadside bench calib --stress N [--seed S]\n"
+                 "\n"
+                 "Runs roadside's pose solver (full, initialisation only, survey taken as exact), OpenCV's\n"
+                 "solvePnP (ITERATIVE, EPNP, SQPNP, IPPE; each alone and + solvePnPRefineLM; solvePnPRansac\n"
+                 "alone and + LM) and OpenGV's (P3P Kneip/Gao in RANSAC, EPnP, UPnP, EPnP + non-linear\n"
+                 "optimisation) on identical simulated problems, sweeping one knob at a time away from a\n"
+                 "baseline (20 landmarks, 1 px, 0.3 m survey sigma, no outliers, camera 8 m up, 25 m away):\n"
+                 "pixel noise, landmark count, outlier fraction, survey noise, planar landmarks, camera\n"
+                 "height, distance. For each method and configuration it prints the median and 90th\n"
+                 "percentile CPU time (us), the RMS rotation, position and ground-localisation errors, the\n"
+                 "failure rate and the Cramer-Rao bound (CRB) of the same configuration.\n"
+                 "\n"
+                 "  --trials N     problems per configuration (default 50; --quick: 3)\n"
+                 "  --quick        a small grid (3 configurations), for the test suite\n"
+                 "  --csv FILE     write every row as CSV (written atomically)\n"
+                 "  --plot FILE    write a PNG: time against error / CRB, one panel per family\n"
+                 "  --seed S       seed of the problems (default 1)\n"
+                 "  --stress N     instead: solve N random problems with roadside's solver and check that\n"
+                 "                 every output is finite and every failure is named; the seed is random\n"
+                 "                 (and printed) unless --seed is given\n"
+                 "\n"
+                 "Exit status: 0 ok (for --stress: no finding), 1 failure, 2 usage error.\n"
+                 "Definitions and the last full run: docs/benchmarks.md.\n");
 }
 
 static void progress(int done, int total, void *cookie)
@@ -48,9 +47,9 @@ static void progress(int done, int total, void *cookie)
 
 static void print_table(const rs_bench_calib_row *rows, int Nrows)
 {
-    printf("%-15s %-19s %5s %7s %9s %9s %10s %10s %10s %9s %9s %7s %7s  %s\n", "config", "method", "fail",
-           "med_us", "p90_us", "rot_deg", "pos_m", "ground_m", "crb_rot", "crb_pos", "rot/crb", "pos/crb",
-           "cond", "first failure");
+    printf("%-15s %-19s %5s %7s %9s %9s %10s %10s %10s %9s %9s %7s %7s  %s\n", "config", "method", "fail", "med_us",
+           "p90_us", "rot_deg", "pos_m", "ground_m", "crb_rot", "crb_pos", "rot/crb", "pos/crb", "cond",
+           "first failure");
     const char *last = "";
     for (int i = 0; i < Nrows; i++) {
         const rs_bench_calib_row *r = &rows[i];
@@ -58,10 +57,9 @@ static void print_table(const rs_bench_calib_row *rows, int Nrows)
         last = r->config;
         char fail[16];
         snprintf(fail, sizeof fail, "%d/%d", r->failures, r->trials);
-        printf("%-15s %-19s %5s %7.0f %9.0f %9.3g %10.3g %10.3g %10.3g %9.3g %9.3g %7.3g %7.3g  %s\n",
-               r->config, r->method, fail, r->time_med_us, r->time_p90_us, r->rot_rms_deg, r->pos_rms_m,
-               r->ground_rms_m, r->crb_rot_deg, r->crb_pos_m, r->rot_ratio, r->pos_ratio, r->cond_median,
-               r->failure);
+        printf("%-15s %-19s %5s %7.0f %9.0f %9.3g %10.3g %10.3g %10.3g %9.3g %9.3g %7.3g %7.3g  %s\n", r->config,
+               r->method, fail, r->time_med_us, r->time_p90_us, r->rot_rms_deg, r->pos_rms_m, r->ground_rms_m,
+               r->crb_rot_deg, r->crb_pos_m, r->rot_ratio, r->pos_ratio, r->cond_median, r->failure);
     }
 }
 
@@ -79,8 +77,8 @@ static int run_stress(long N, bool have_seed, uint64_t seed)
     rs_err err = {0};
     const rs_status st = rs_bench_calib_stress(&S, (int)N, seed, &err);
     if (st != RS_OK) return rs_cli_fail("bench calib --stress", st, &err);
-    printf("generated %d, poses %d, flagged (condition number > 100) %d, largest condition number %.3g\n",
-           S.Ngenerated, S.Nok, S.Nflagged, S.cond_max);
+    printf("generated %d, poses %d, flagged (condition number > 100) %d, largest condition number %.3g\n", S.Ngenerated,
+           S.Nok, S.Nflagged, S.cond_max);
     for (int c = 1; c < 16; c++)
         if (S.Nerror[c]) printf("errors %-28s %d\n", rs_strerror((rs_status)c), S.Nerror[c]);
     printf("findings: non-finite %d, unnamed errors %d, unflagged condition %d, confident wrong poses %d\n",
@@ -95,11 +93,13 @@ int rs_cli_bench_calib(int argc, char **argv)
         usage(stdout);
         return RS_EXIT_OK;
     }
-    static const struct option longopts[] = {
-        {"trials", required_argument, 0, 't'}, {"csv", required_argument, 0, 'c'},
-        {"plot", required_argument, 0, 'p'},   {"quick", no_argument, 0, 'q'},
-        {"seed", required_argument, 0, 's'},   {"stress", required_argument, 0, 'S'},
-        {0, 0, 0, 0}};
+    static const struct option longopts[] = {{"trials", required_argument, 0, 't'},
+                                             {"csv", required_argument, 0, 'c'},
+                                             {"plot", required_argument, 0, 'p'},
+                                             {"quick", no_argument, 0, 'q'},
+                                             {"seed", required_argument, 0, 's'},
+                                             {"stress", required_argument, 0, 'S'},
+                                             {0, 0, 0, 0}};
     rs_bench_calib_options o;
     rs_bench_calib_options_default(&o);
     const char *csv = NULL, *plot = NULL;
@@ -126,8 +126,7 @@ int rs_cli_bench_calib(int argc, char **argv)
             if (!rs_cli_parse_int(optarg, 1, 100000000, &stress))
                 return rs_cli_usage_error("bench calib", "--stress: '%s' is not an integer in [1, 1e8]", optarg);
             break;
-        default:
-            return rs_cli_usage_error("bench calib", "unknown or incomplete option '%s'", argv[optind - 1]);
+        default: return rs_cli_usage_error("bench calib", "unknown or incomplete option '%s'", argv[optind - 1]);
         }
     }
     if (optind < argc) return rs_cli_usage_error("bench calib", "unexpected argument '%s'", argv[optind]);

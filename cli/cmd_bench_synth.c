@@ -6,9 +6,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "bench/rs_bench_synth.h"
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
-#include "bench/rs_bench_synth.h"
 
 static const char bench_synth_usage[] =
     "usage: roadside bench synth SITE --calib DIR [--count N] [--size WxH] [--vehicles N]\n"
@@ -72,10 +72,9 @@ int rs_cli_bench_synth(int argc, char **argv)
             break;
         case O_SIZE: {
             int used = 0;
-            if (sscanf(optarg, "%dx%d%n", &o.width, &o.height, &used) != 2 || optarg[used] ||
-                o.width < 8 || o.height < 8 || o.width > 20000 || o.height > 20000)
-                return rs_cli_usage_error("bench synth", "--size: expected WxH (8..20000), got \"%s\"",
-                                          optarg);
+            if (sscanf(optarg, "%dx%d%n", &o.width, &o.height, &used) != 2 || optarg[used] || o.width < 8 ||
+                o.height < 8 || o.width > 20000 || o.height > 20000)
+                return rs_cli_usage_error("bench synth", "--size: expected WxH (8..20000), got \"%s\"", optarg);
             break;
         }
         case O_VEHICLES:
@@ -96,15 +95,11 @@ int rs_cli_bench_synth(int argc, char **argv)
         case O_CSV: csv = optarg; break;
         case O_DIR: dir = optarg; break;
         case O_QUICK: quick = true; break;
-        default:
-            return rs_cli_usage_error("bench synth", "unknown option or missing value: %s",
-                                      argv[optind - 1]);
+        default: return rs_cli_usage_error("bench synth", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
-    if (optind != argc - 1)
-        return rs_cli_usage_error("bench synth", "expected one SITE folder");
-    if (!o.calib_dir)
-        return rs_cli_usage_error("bench synth", "--calib DIR is required");
+    if (optind != argc - 1) return rs_cli_usage_error("bench synth", "expected one SITE folder");
+    if (!o.calib_dir) return rs_cli_usage_error("bench synth", "--calib DIR is required");
     o.site_dir = argv[optind];
     o.count = count > 0 ? count : quick ? 8 : 48;
 
@@ -128,29 +123,26 @@ int rs_cli_bench_synth(int argc, char **argv)
     fflush(stdout);
     rs_err err = {0};
     rs_status st = rs_bench_synth_run(rows, Nrows, &o, dir ? dir : scratch, &err);
-    if (scratch)
-        rs_io_remove_tree(scratch);
-    if (st)
-        return rs_cli_fail("bench synth", st, &err);
-    printf("\n%-11s %4s %6s %8s %8s %9s %10s %10s %12s  %s\n", "variant", "jobs", "images", "veh/img",
-           "wall_s", "s/image", "cpu_s/img", "4x1000_min", "povray_s/img", "what");
+    if (scratch) rs_io_remove_tree(scratch);
+    if (st) return rs_cli_fail("bench synth", st, &err);
+    printf("\n%-11s %4s %6s %8s %8s %9s %10s %10s %12s  %s\n", "variant", "jobs", "images", "veh/img", "wall_s",
+           "s/image", "cpu_s/img", "4x1000_min", "povray_s/img", "what");
     char text[8192];
-    int n = snprintf(text, sizeof(text), "variant,jobs,images,vehicles_per_image,wall_s,"
-                                         "s_per_image,cpu_s_per_image,povray_s_per_image\n");
+    int n = snprintf(text, sizeof(text),
+                     "variant,jobs,images,vehicles_per_image,wall_s,"
+                     "s_per_image,cpu_s_per_image,povray_s_per_image\n");
     for (int k = 0; k < Nrows; k++) {
         const rs_bench_synth_row *r = &rows[k];
         const double per = r->wall_s / (r->Nimages > 0 ? r->Nimages : 1);
         const double vpi = (double)r->Nannotations / (r->Nimages > 0 ? r->Nimages : 1);
-        printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f  %s\n", r->name, r->jobs,
-               r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
-               4000 * per / 60, r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->what);
+        printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f  %s\n", r->name, r->jobs, r->Nimages, vpi,
+               r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1), 4000 * per / 60,
+               r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->what);
         if (n < (int)sizeof(text))
-            n += snprintf(text + n, sizeof(text) - (size_t)n, "%s,%d,%d,%.3f,%.3f,%.4f,%.4f,%.4f\n",
-                          r->name, r->jobs, r->Nimages, vpi, r->wall_s, per,
-                          r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
+            n += snprintf(text + n, sizeof(text) - (size_t)n, "%s,%d,%d,%.3f,%.3f,%.4f,%.4f,%.4f\n", r->name, r->jobs,
+                          r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
                           r->povray_s / (r->Nimages > 0 ? r->Nimages : 1));
     }
-    if (csv && (st = rs_io_write_file(csv, text, (size_t)n, &err)))
-        return rs_cli_fail("bench synth", st, &err);
+    if (csv && (st = rs_io_write_file(csv, text, (size_t)n, &err))) return rs_cli_fail("bench synth", st, &err);
     return RS_EXIT_OK;
 }

@@ -69,19 +69,24 @@ static bool parse_refine(const char *s, unsigned *flags)
     *flags = 0;
     char *save = NULL;
     for (char *w = strtok_r(buf, "+,", &save); w; w = strtok_r(NULL, "+,", &save)) {
-        if (!strcmp(w, "focal")) *flags |= RS_CALIB_REFINE_FOCAL;
-        else if (!strcmp(w, "center") || !strcmp(w, "centre")) *flags |= RS_CALIB_REFINE_CENTER;
-        else if (!strcmp(w, "distortion")) *flags |= RS_CALIB_REFINE_DISTORTION;
-        else if (!strcmp(w, "none")) continue;
-        else return false;
+        if (!strcmp(w, "focal"))
+            *flags |= RS_CALIB_REFINE_FOCAL;
+        else if (!strcmp(w, "center") || !strcmp(w, "centre"))
+            *flags |= RS_CALIB_REFINE_CENTER;
+        else if (!strcmp(w, "distortion"))
+            *flags |= RS_CALIB_REFINE_DISTORTION;
+        else if (!strcmp(w, "none"))
+            continue;
+        else
+            return false;
     }
     return true;
 }
 
 static void print_summary_header(void)
 {
-    printf("%-12s %5s %8s %8s %9s %12s %10s %10s  %s\n", "camera", "used", "rejected", "rms_px",
-           "rms_srv", "sigma_pos_m", "sigma_yaw", "var_factor", "warnings");
+    printf("%-12s %5s %8s %8s %9s %12s %10s %10s  %s\n", "camera", "used", "rejected", "rms_px", "rms_srv",
+           "sigma_pos_m", "sigma_yaw", "var_factor", "warnings");
 }
 
 static void print_summary_row(const rs_site *site, int icam, const rs_calib_result *r)
@@ -122,8 +127,8 @@ int rs_cli_calib(int argc, char **argv)
         case 'r':
             if (!parse_refine(optarg, &opt.refine)) {
                 free(only);
-                return rs_cli_usage_error("calib", "--refine: '%s': expected focal, center or distortion, joined with '+'",
-                                          optarg);
+                return rs_cli_usage_error(
+                    "calib", "--refine: '%s': expected focal, center or distortion, joined with '+'", optarg);
             }
             break;
         case 'j': json = true; break;
@@ -156,8 +161,10 @@ int rs_cli_calib(int argc, char **argv)
 
     int failed = 0;
     bool first = true;
-    if (json) printf("[\n");
-    else print_summary_header();
+    if (json)
+        printf("[\n");
+    else
+        print_summary_header();
     for (int icam = 0; icam < site->Ncameras; icam++) {
         const char *id = site->cameras[icam].id;
         bool selected = Nonly == 0;
@@ -185,8 +192,10 @@ int rs_cli_calib(int argc, char **argv)
         rs_calib_result_free(&r);
         rs_calib_site_problem_free(&sp);
     }
-    if (json) printf("\n]\n");
-    else printf("written to %s/\n", out_dir);
+    if (json)
+        printf("\n]\n");
+    else
+        printf("written to %s/\n", out_dir);
     free(only);
     free(default_out);
     rs_site_free(site);
@@ -235,9 +244,11 @@ int rs_cli_locate(int argc, char **argv)
     if (!camera) return rs_cli_usage_error("locate", "--camera ID is required");
     int npos = argc - optind;
     double q[2];
-    if (npos != 0 && npos != 2) return rs_cli_usage_error("locate", "expected U V, or no pixel and lines on standard input");
+    if (npos != 0 && npos != 2)
+        return rs_cli_usage_error("locate", "expected U V, or no pixel and lines on standard input");
     if (npos == 2 && (!rs_cli_parse_double(argv[optind], &q[0]) || !rs_cli_parse_double(argv[optind + 1], &q[1])))
-        return rs_cli_usage_error("locate", "U V: '%s %s' is not a pair of finite numbers", argv[optind], argv[optind + 1]);
+        return rs_cli_usage_error("locate", "U V: '%s %s' is not a pair of finite numbers", argv[optind],
+                                  argv[optind + 1]);
 
     rs_err err = {0};
     rs_site *site = rs_cli_load_site("locate", site_dir);

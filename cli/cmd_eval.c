@@ -10,37 +10,36 @@
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside eval GT.json DETS.json [--center-shift K] [--thresholds LIST]\n"
-            "                     [--max-dets N] [--per-class] [--by KEY] [--json OUT]\n"
-            "                     [--site SITE --calib DIR [--camera-field KEY]]\n"
-            "\n"
-            "Average precision of vehicle detections judged by where they are: a detection is a\n"
-            "true positive when its bottom-centre point lies closer than a pixel threshold to the\n"
-            "bottom centre of a ground truth not matched yet (nearest first, highest scores first).\n"
-            "\n"
-            "  GT.json            COCO ground truth: images, annotations (bbox [x, y, w, h] or\n"
-            "                     bottom_center [u, v]; iscrowd = 1 marks an ignore region),\n"
-            "                     categories\n"
-            "  DETS.json          COCO results: a list of {image_id, category_id, bbox, score}\n"
-            "  --center-shift K   detection point (x + w/2, y + h/2 + K h) (default 0: the box\n"
-            "                     centre; 0.5: the bottom edge; the seed paper used 0.35)\n"
-            "  --thresholds LIST  distances in pixels, comma-separated (default 2,5,10,15,20,50)\n"
-            "  --max-dets N       keep the N highest-scoring detections per image (default 100)\n"
-            "  --per-class        also one row per category, matching only within it\n"
-            "  --by KEY           also one row per value of the image field KEY (e.g. condition)\n"
-            "  --json OUT         write the metrics as JSON to OUT\n"
-            "  --site SITE, --calib DIR\n"
-            "                     metric thresholds: map every point to the site's ground plane\n"
-            "                     through its image's camera (DIR/<camera>.cameramodel from\n"
-            "                     'roadside calib', full lens model); thresholds are then metres\n"
-            "                     (default 0.5,1,2,4: nuScenes' centre distances)\n"
-            "  --camera-field KEY the image field naming its camera (default camera)\n"
-            "\n"
-            "Prints AP at each threshold, mAP (mean AP over the thresholds) and AR (mean final\n"
-            "recall); '-' (null in JSON) where there is no ground truth. The exact rules (ignore\n"
-            "regions, ties, max-dets): docs/evaluation.md. Exit status: 0 ok, 1 bad input (the\n"
-            "message names the file, line, entry and field), 2 usage error.\n");
+    fprintf(out, "usage: roadside eval GT.json DETS.json [--center-shift K] [--thresholds LIST]\n"
+                 "                     [--max-dets N] [--per-class] [--by KEY] [--json OUT]\n"
+                 "                     [--site SITE --calib DIR [--camera-field KEY]]\n"
+                 "\n"
+                 "Average precision of vehicle detections judged by where they are: a detection is a\n"
+                 "true positive when its bottom-centre point lies closer than a pixel threshold to the\n"
+                 "bottom centre of a ground truth not matched yet (nearest first, highest scores first).\n"
+                 "\n"
+                 "  GT.json            COCO ground truth: images, annotations (bbox [x, y, w, h] or\n"
+                 "                     bottom_center [u, v]; iscrowd = 1 marks an ignore region),\n"
+                 "                     categories\n"
+                 "  DETS.json          COCO results: a list of {image_id, category_id, bbox, score}\n"
+                 "  --center-shift K   detection point (x + w/2, y + h/2 + K h) (default 0: the box\n"
+                 "                     centre; 0.5: the bottom edge; the seed paper used 0.35)\n"
+                 "  --thresholds LIST  distances in pixels, comma-separated (default 2,5,10,15,20,50)\n"
+                 "  --max-dets N       keep the N highest-scoring detections per image (default 100)\n"
+                 "  --per-class        also one row per category, matching only within it\n"
+                 "  --by KEY           also one row per value of the image field KEY (e.g. condition)\n"
+                 "  --json OUT         write the metrics as JSON to OUT\n"
+                 "  --site SITE, --calib DIR\n"
+                 "                     metric thresholds: map every point to the site's ground plane\n"
+                 "                     through its image's camera (DIR/<camera>.cameramodel from\n"
+                 "                     'roadside calib', full lens model); thresholds are then metres\n"
+                 "                     (default 0.5,1,2,4: nuScenes' centre distances)\n"
+                 "  --camera-field KEY the image field naming its camera (default camera)\n"
+                 "\n"
+                 "Prints AP at each threshold, mAP (mean AP over the thresholds) and AR (mean final\n"
+                 "recall); '-' (null in JSON) where there is no ground truth. The exact rules (ignore\n"
+                 "regions, ties, max-dets): docs/evaluation.md. Exit status: 0 ok, 1 bad input (the\n"
+                 "message names the file, line, entry and field), 2 usage error.\n");
 }
 
 typedef struct {
@@ -71,12 +70,16 @@ static int parse_args(int argc, char **argv, eval_args *a)
 {
     *a = (eval_args){0};
     enum { O_SHIFT = 256, O_THRESHOLDS, O_MAXDETS, O_PERCLASS, O_BY, O_JSON, O_SITE, O_CALIB, O_CAMFIELD };
-    static const struct option options[] = {
-        {"center-shift", required_argument, NULL, O_SHIFT}, {"thresholds", required_argument, NULL, O_THRESHOLDS},
-        {"max-dets", required_argument, NULL, O_MAXDETS},   {"per-class", no_argument, NULL, O_PERCLASS},
-        {"by", required_argument, NULL, O_BY},              {"json", required_argument, NULL, O_JSON},
-        {"site", required_argument, NULL, O_SITE},          {"calib", required_argument, NULL, O_CALIB},
-        {"camera-field", required_argument, NULL, O_CAMFIELD}, {NULL, 0, NULL, 0}};
+    static const struct option options[] = {{"center-shift", required_argument, NULL, O_SHIFT},
+                                            {"thresholds", required_argument, NULL, O_THRESHOLDS},
+                                            {"max-dets", required_argument, NULL, O_MAXDETS},
+                                            {"per-class", no_argument, NULL, O_PERCLASS},
+                                            {"by", required_argument, NULL, O_BY},
+                                            {"json", required_argument, NULL, O_JSON},
+                                            {"site", required_argument, NULL, O_SITE},
+                                            {"calib", required_argument, NULL, O_CALIB},
+                                            {"camera-field", required_argument, NULL, O_CAMFIELD},
+                                            {NULL, 0, NULL, 0}};
     opterr = 0;
     optind = 0; // glibc: full re-initialisation
     int c;
@@ -121,10 +124,14 @@ static void print_row(const char *label, const rs_eval_result *r, const rs_eval_
 {
     printf("%-24s %8zu %9zu", label, m->num_gt, m->num_det);
     for (int t = 0; t < r->Nthresholds; t++)
-        if (isnan(m->ap[t])) printf(" %7s", "-");
-        else printf(" %7.4f", m->ap[t]);
-    if (isnan(m->map)) printf(" %7s %7s\n", "-", "-");
-    else printf(" %7.4f %7.4f\n", m->map, m->ar);
+        if (isnan(m->ap[t]))
+            printf(" %7s", "-");
+        else
+            printf(" %7.4f", m->ap[t]);
+    if (isnan(m->map))
+        printf(" %7s %7s\n", "-", "-");
+    else
+        printf(" %7.4f %7.4f\n", m->map, m->ar);
 }
 
 static void print_table(const rs_eval_result *r, const char *by)
@@ -162,8 +169,7 @@ int rs_cli_eval(int argc, char **argv)
     rs_err err = {0};
     rs_eval_data *data = NULL;
     rs_eval_result *result = NULL;
-    const rs_eval_load_options lo = {.center_shift = a.center_shift, .group_key = a.by,
-                                     .camera_key = a.camera_field};
+    const rs_eval_load_options lo = {.center_shift = a.center_shift, .group_key = a.by, .camera_key = a.camera_field};
     rs_status st = rs_eval_load(&data, a.gt, a.dets, &lo, &err);
     if (st != RS_OK) return rs_cli_fail("eval", st, &err);
     if (a.site) {

@@ -6,33 +6,32 @@
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside geo enu --origin LAT,LON,H [--from utm:ZONE]\n"
-            "       roadside geo llh --origin LAT,LON,H\n"
-            "       roadside geo utm [--zone ZONE]\n"
-            "\n"
-            "Converts points read from stdin, one per line, and writes one line per point.\n"
-            "\n"
-            "  enu   lat lon h (degrees, degrees, metres; WGS84, h ellipsoidal) -> e n u, metres,\n"
-            "        in the site ENU frame at --origin (GeographicLib's LocalCartesian: x east,\n"
-            "        y north, z up along the ellipsoid normal). With --from utm:ZONE the input\n"
-            "        lines are easting northing h (metres) in that UTM/UPS zone.\n"
-            "  llh   e n u in the site ENU frame at --origin -> lat lon h.\n"
-            "  utm   lat lon h -> easting northing h ZONE, in --zone if given, otherwise in each\n"
-            "        point's standard zone.\n"
-            "\n"
-            "  --origin LAT,LON,H  the site origin, degrees, degrees, metres (ellipsoidal)\n"
-            "  --from utm:ZONE     (enu) read UTM/UPS coordinates of ZONE\n"
-            "  --zone ZONE         (utm) project into ZONE\n"
-            "  ZONE is a UTM zone 1..60 and hemisphere, e.g. 33N or 19s, or N / S for UPS.\n"
-            "\n"
-            "Fields are separated by spaces, tabs or commas; blank lines and lines starting with #\n"
-            "are skipped (and print nothing). Output: metres with 9 decimals, degrees with 12.\n"
-            "The output is streamed: on a bad line (wrong number of fields, not a finite number,\n"
-            "latitude outside [-90, 90], coordinate outside the zone) the command stops with a\n"
-            "message naming the line and field and exits 1, after the lines before it have been\n"
-            "printed. Exit status: 0 ok, 1 bad input, 2 usage error.\n"
-            "Accuracy: a few nanometres (GeographicLib); see geo/rs_geo.h.\n");
+    fprintf(out, "usage: roadside geo enu --origin LAT,LON,H [--from utm:ZONE]\n"
+                 "       roadside geo llh --origin LAT,LON,H\n"
+                 "       roadside geo utm [--zone ZONE]\n"
+                 "\n"
+                 "Converts points read from stdin, one per line, and writes one line per point.\n"
+                 "\n"
+                 "  enu   lat lon h (degrees, degrees, metres; WGS84, h ellipsoidal) -> e n u, metres,\n"
+                 "        in the site ENU frame at --origin (GeographicLib's LocalCartesian: x east,\n"
+                 "        y north, z up along the ellipsoid normal). With --from utm:ZONE the input\n"
+                 "        lines are easting northing h (metres) in that UTM/UPS zone.\n"
+                 "  llh   e n u in the site ENU frame at --origin -> lat lon h.\n"
+                 "  utm   lat lon h -> easting northing h ZONE, in --zone if given, otherwise in each\n"
+                 "        point's standard zone.\n"
+                 "\n"
+                 "  --origin LAT,LON,H  the site origin, degrees, degrees, metres (ellipsoidal)\n"
+                 "  --from utm:ZONE     (enu) read UTM/UPS coordinates of ZONE\n"
+                 "  --zone ZONE         (utm) project into ZONE\n"
+                 "  ZONE is a UTM zone 1..60 and hemisphere, e.g. 33N or 19s, or N / S for UPS.\n"
+                 "\n"
+                 "Fields are separated by spaces, tabs or commas; blank lines and lines starting with #\n"
+                 "are skipped (and print nothing). Output: metres with 9 decimals, degrees with 12.\n"
+                 "The output is streamed: on a bad line (wrong number of fields, not a finite number,\n"
+                 "latitude outside [-90, 90], coordinate outside the zone) the command stops with a\n"
+                 "message naming the line and field and exits 1, after the lines before it have been\n"
+                 "printed. Exit status: 0 ok, 1 bad input, 2 usage error.\n"
+                 "Accuracy: a few nanometres (GeographicLib); see geo/rs_geo.h.\n");
 }
 
 typedef enum { MODE_ENU, MODE_LLH, MODE_UTM } geo_mode;
@@ -40,8 +39,8 @@ typedef enum { MODE_ENU, MODE_LLH, MODE_UTM } geo_mode;
 typedef struct {
     geo_mode mode;
     rs_llh origin;
-    bool from_utm;       // enu: input is UTM/UPS
-    int zone;            // UTM/UPS zone (0 = UPS) of --from / --zone; -1: standard zone (utm)
+    bool from_utm; // enu: input is UTM/UPS
+    int zone;      // UTM/UPS zone (0 = UPS) of --from / --zone; -1: standard zone (utm)
     bool north;
 } geo_args;
 
@@ -64,10 +63,14 @@ static int parse_args(int argc, char **argv, geo_args *a)
 {
     *a = (geo_args){.zone = -1, .north = true};
     if (argc < 2) return rs_cli_usage_error("geo", "missing mode: enu, llh or utm");
-    if (!strcmp(argv[1], "enu")) a->mode = MODE_ENU;
-    else if (!strcmp(argv[1], "llh")) a->mode = MODE_LLH;
-    else if (!strcmp(argv[1], "utm")) a->mode = MODE_UTM;
-    else return rs_cli_usage_error("geo", "unknown mode '%s': enu, llh or utm", argv[1]);
+    if (!strcmp(argv[1], "enu"))
+        a->mode = MODE_ENU;
+    else if (!strcmp(argv[1], "llh"))
+        a->mode = MODE_LLH;
+    else if (!strcmp(argv[1], "utm"))
+        a->mode = MODE_UTM;
+    else
+        return rs_cli_usage_error("geo", "unknown mode '%s': enu, llh or utm", argv[1]);
     bool have_origin = false;
     for (int i = 2; i < argc; i++) {
         bool missing = false;
@@ -78,8 +81,7 @@ static int parse_args(int argc, char **argv, geo_args *a)
                 return rs_cli_usage_error("geo", "--origin: '%s' is not LAT,LON,H (finite, |LAT| <= 90)", v);
             have_origin = true;
         } else if (a->mode == MODE_ENU && (v = option_value(argc, argv, &i, "--from", &missing))) {
-            if (missing || strncmp(v, "utm:", 4) != 0 ||
-                rs_geo_utm_zone_parse(&a->zone, &a->north, v + 4, &err))
+            if (missing || strncmp(v, "utm:", 4) != 0 || rs_geo_utm_zone_parse(&a->zone, &a->north, v + 4, &err))
                 return rs_cli_usage_error("geo", "--from: '%s': %s", v,
                                           err.msg[0] ? err.msg : "expected utm:ZONE, e.g. utm:33N");
             a->from_utm = true;

@@ -55,8 +55,20 @@ static const char render_usage[] =
     "Prints one line: vehicles, rendered, region, seconds in povray.\n"
     "Exit status: 0 rendered, 1 failed (a clear message if povray is missing), 2 usage error.\n";
 
-enum { OPT_BACKGROUND = 2000, OPT_FULL, OPT_AA, OPT_SCALE, OPT_KEEP, OPT_LABELS, OPT_SPLIT,
-       OPT_BBOX, OPT_MINVIS, OPT_SHADOWS, OPT_OVERCAST, OPT_SEPARATE };
+enum {
+    OPT_BACKGROUND = 2000,
+    OPT_FULL,
+    OPT_AA,
+    OPT_SCALE,
+    OPT_KEEP,
+    OPT_LABELS,
+    OPT_SPLIT,
+    OPT_BBOX,
+    OPT_MINVIS,
+    OPT_SHADOWS,
+    OPT_OVERCAST,
+    OPT_SEPARATE
+};
 
 int rs_cli_render(int argc, char **argv)
 {
@@ -64,21 +76,20 @@ int rs_cli_render(int argc, char **argv)
         fputs(render_usage, stdout);
         return RS_EXIT_OK;
     }
-    static const struct option longopts[] = {
-        RS_CLI_SYNTH_LONGOPTS,
-        {"background", required_argument, NULL, OPT_BACKGROUND},
-        {"full-frame", no_argument, NULL, OPT_FULL},
-        {"antialias", required_argument, NULL, OPT_AA},
-        {"canvas-scale", required_argument, NULL, OPT_SCALE},
-        {"keep", no_argument, NULL, OPT_KEEP},
-        {"shadows", no_argument, NULL, OPT_SHADOWS},
-        {"overcast", no_argument, NULL, OPT_OVERCAST},
-        {"separate-processes", no_argument, NULL, OPT_SEPARATE},
-        {"labels", no_argument, NULL, OPT_LABELS},
-        {"split", required_argument, NULL, OPT_SPLIT},
-        {"bbox", required_argument, NULL, OPT_BBOX},
-        {"min-visibility", required_argument, NULL, OPT_MINVIS},
-        {NULL, 0, NULL, 0}};
+    static const struct option longopts[] = {RS_CLI_SYNTH_LONGOPTS,
+                                             {"background", required_argument, NULL, OPT_BACKGROUND},
+                                             {"full-frame", no_argument, NULL, OPT_FULL},
+                                             {"antialias", required_argument, NULL, OPT_AA},
+                                             {"canvas-scale", required_argument, NULL, OPT_SCALE},
+                                             {"keep", no_argument, NULL, OPT_KEEP},
+                                             {"shadows", no_argument, NULL, OPT_SHADOWS},
+                                             {"overcast", no_argument, NULL, OPT_OVERCAST},
+                                             {"separate-processes", no_argument, NULL, OPT_SEPARATE},
+                                             {"labels", no_argument, NULL, OPT_LABELS},
+                                             {"split", required_argument, NULL, OPT_SPLIT},
+                                             {"bbox", required_argument, NULL, OPT_BBOX},
+                                             {"min-visibility", required_argument, NULL, OPT_MINVIS},
+                                             {NULL, 0, NULL, 0}};
     rs_cli_synth_args s = {0};
     rs_synth_render_options ropt;
     rs_synth_render_options_default(&ropt);
@@ -103,8 +114,7 @@ int rs_cli_render(int argc, char **argv)
             for (const char *p = optarg; *p; p++)
                 if (!(isalnum((unsigned char)*p) || *p == '_' || *p == '-'))
                     return rs_cli_usage_error("render", "--split: use only [A-Za-z0-9_-]");
-            if (!*optarg)
-                return rs_cli_usage_error("render", "--split: empty");
+            if (!*optarg) return rs_cli_usage_error("render", "--split: empty");
             split = optarg;
             continue;
         case OPT_BBOX:
@@ -122,21 +132,17 @@ int rs_cli_render(int argc, char **argv)
             ropt.antialias = (int)aa;
             continue;
         case OPT_SCALE:
-            if (!rs_cli_parse_double(optarg, &ropt.canvas_scale) || ropt.canvas_scale < 1 ||
-                ropt.canvas_scale > 8)
+            if (!rs_cli_parse_double(optarg, &ropt.canvas_scale) || ropt.canvas_scale < 1 || ropt.canvas_scale > 8)
                 return rs_cli_usage_error("render", "--canvas-scale: expected a number in [1, 8]");
             continue;
         case '?':
-        case ':':
-            return rs_cli_usage_error("render", "unknown option or missing value: %s",
-                                      argv[optind - 1]);
+        case ':': return rs_cli_usage_error("render", "unknown option or missing value: %s", argv[optind - 1]);
         default:
             if ((rc = rs_cli_synth_option(&s, "render", c, optarg)) != 0)
                 return rc > 0 ? rc : rs_cli_usage_error("render", "unexpected option");
         }
     }
-    if ((rc = rs_cli_synth_load(&s, "render", argc, argv, optind)) != RS_EXIT_OK)
-        return rc;
+    if ((rc = rs_cli_synth_load(&s, "render", argc, argv, optind)) != RS_EXIT_OK) return rc;
     ropt.scene = s.scene;
     ropt.scene.overcast = overcast;
     rs_err err = {0};
@@ -149,9 +155,9 @@ int rs_cli_render(int argc, char **argv)
     if (st) {
         rc = rs_cli_fail("render", st, &err);
     } else {
-        printf("vehicles %d rendered %d region %d %d %d %d povray_s %.3f passes %d processes %d -> %s\n",
-               r.Nvehicles, r.Nrendered, r.region[0], r.region[1], r.region[2], r.region[3],
-               r.seconds_povray, r.Npasses, r.Npovray, s.output);
+        printf("vehicles %d rendered %d region %d %d %d %d povray_s %.3f passes %d processes %d -> %s\n", r.Nvehicles,
+               r.Nrendered, r.region[0], r.region[1], r.region[2], r.region[3], r.seconds_povray, r.Npasses, r.Npovray,
+               s.output);
         rc = RS_EXIT_OK;
     }
     rs_synth_render_result_free(&r);

@@ -5,8 +5,8 @@
 
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
-#include "report/rs_report.h"
 #include "geo/rs_site.h"
+#include "report/rs_report.h"
 
 static const char report_usage[] =
     "usage: roadside report SITE [--calib DIR] -o DIR [options]\n"
@@ -46,10 +46,14 @@ int rs_cli_report(int argc, char **argv)
         return RS_EXIT_OK;
     }
     static const struct option longopts[] = {
-        {"output", required_argument, NULL, 'o'},       {"calib", required_argument, NULL, 'c'},
-        {"range", required_argument, NULL, 'r'},        {"grid", required_argument, NULL, 'g'},
-        {"detection-px", required_argument, NULL, 'd'}, {"cell", required_argument, NULL, 'l'},
-        {"width", required_argument, NULL, 'w'},        {"no-audit", no_argument, NULL, 'n'},
+        {"output", required_argument, NULL, 'o'},
+        {"calib", required_argument, NULL, 'c'},
+        {"range", required_argument, NULL, 'r'},
+        {"grid", required_argument, NULL, 'g'},
+        {"detection-px", required_argument, NULL, 'd'},
+        {"cell", required_argument, NULL, 'l'},
+        {"width", required_argument, NULL, 'w'},
+        {"no-audit", no_argument, NULL, 'n'},
         {NULL, 0, NULL, 0},
     };
     rs_report_options opt;
@@ -110,8 +114,8 @@ int rs_cli_report(int argc, char **argv)
     if (st) return rs_cli_fail("report", st, &err);
     printf("report of %d camera%s, %d figures", sum.Ncameras, sum.Ncameras == 1 ? "" : "s", sum.Nfigures);
     if (sum.Naudit_fail) printf("; %d camera%s FAIL the audit", sum.Naudit_fail, sum.Naudit_fail == 1 ? "" : "s");
-    if (sum.Naudit_failed) printf("; the audit could not run for %d camera%s", sum.Naudit_failed,
-                                  sum.Naudit_failed == 1 ? "" : "s");
+    if (sum.Naudit_failed)
+        printf("; the audit could not run for %d camera%s", sum.Naudit_failed, sum.Naudit_failed == 1 ? "" : "s");
     printf("\n  %s/report.html\n  %s/report.pdf\n", out_dir, out_dir);
     return RS_EXIT_OK;
 }

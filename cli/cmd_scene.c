@@ -52,8 +52,7 @@ int rs_cli_synth_option(rs_cli_synth_args *s, const char *command, int opt, cons
         strcpy(buf, arg);
         buf[comma - arg] = 0;
         if (!rs_cli_parse_double(buf, &s->sun_az_deg) ||
-            !rs_cli_parse_double(buf + (comma - arg) + 1, &s->sun_el_deg) ||
-            s->sun_el_deg < -90 || s->sun_el_deg > 90)
+            !rs_cli_parse_double(buf + (comma - arg) + 1, &s->sun_el_deg) || s->sun_el_deg < -90 || s->sun_el_deg > 90)
             return rs_cli_usage_error(command, "--sun: expected AZ,EL in degrees, EL in [-90, 90]");
         s->has_sun = true;
         return 0;
@@ -64,8 +63,7 @@ int rs_cli_synth_option(rs_cli_synth_args *s, const char *command, int opt, cons
 
 void rs_cli_synth_free(rs_cli_synth_args *s)
 {
-    if (!s)
-        return;
+    if (!s) return;
     rs_synth_prepared_free(&s->prepared);
     rs_synth_vehicle_list_free(&s->list);
     rs_camera_free(&s->camera);
@@ -79,23 +77,19 @@ static int synth_load(rs_cli_synth_args *s, const char *command)
 {
     if (!s->calib_dir || !s->camera_id || !s->vehicles_path || !s->output)
         return rs_cli_usage_error(command, "--calib, --camera, --vehicles and -o are required");
-    if (s->has_sun && s->time_iso)
-        return rs_cli_usage_error(command, "give --sun or --time, not both");
+    if (s->has_sun && s->time_iso) return rs_cli_usage_error(command, "give --sun or --time, not both");
     rs_err err = {0};
     rs_status st;
     double t_s = 0;
     if (s->time_iso && (st = rs_synth_parse_iso8601(&t_s, s->time_iso, "--time", &err)))
         return rs_cli_usage_error(command, "%s", err.msg);
-    if ((st = rs_site_load(&s->site, s->site_dir, &err)))
-        return rs_cli_fail(command, st, &err);
+    if ((st = rs_site_load(&s->site, s->site_dir, &err))) return rs_cli_fail(command, st, &err);
     if (rs_site_find_camera(s->site, s->camera_id) < 0)
-        return rs_cli_usage_error(command, "--camera: no camera \"%s\" in %s", s->camera_id,
-                                  s->site_dir);
+        return rs_cli_usage_error(command, "--camera: no camera \"%s\" in %s", s->camera_id, s->site_dir);
     char name[512];
     snprintf(name, sizeof(name), "%s.cameramodel", s->camera_id);
     char *model = rs_io_join(s->calib_dir, name);
-    if (!model)
-        return rs_cli_fail("out of memory", RS_ERR_NOMEM, NULL);
+    if (!model) return rs_cli_fail("out of memory", RS_ERR_NOMEM, NULL);
     st = rs_camera_read(&s->camera, NULL, model, &err);
     if (st) {
         int rc = rs_cli_fail(command, st, &err);
@@ -103,8 +97,7 @@ static int synth_load(rs_cli_synth_args *s, const char *command)
         return rc;
     }
     free(model);
-    if ((st = rs_synth_vehicles_read(&s->list, s->vehicles_path, &err)))
-        return rs_cli_fail(command, st, &err);
+    if ((st = rs_synth_vehicles_read(&s->list, s->vehicles_path, &err))) return rs_cli_fail(command, st, &err);
     if ((st = rs_synth_prepare(&s->prepared, s->list.v, s->list.obj, s->list.N, &err)))
         return rs_cli_fail(command, st, &err);
     rs_synth_scene_options_default(&s->scene);
@@ -112,13 +105,12 @@ static int synth_load(rs_cli_synth_args *s, const char *command)
         s->scene.sun_azimuth_deg = s->sun_az_deg;
         s->scene.sun_elevation_deg = s->sun_el_deg;
     } else if (s->time_iso) {
-        rs_synth_sun_position(&s->scene.sun_azimuth_deg, &s->scene.sun_elevation_deg,
-                              s->site->origin.lat_deg, s->site->origin.lon_deg, t_s);
+        rs_synth_sun_position(&s->scene.sun_azimuth_deg, &s->scene.sun_elevation_deg, s->site->origin.lat_deg,
+                              s->site->origin.lon_deg, t_s);
     }
     if (s->pins && s->site->Nlandmarks > 0) {
         s->pins_enu_m = malloc(sizeof(double) * 3 * (size_t)s->site->Nlandmarks);
-        if (!s->pins_enu_m)
-            return rs_cli_fail("out of memory", RS_ERR_NOMEM, NULL);
+        if (!s->pins_enu_m) return rs_cli_fail("out of memory", RS_ERR_NOMEM, NULL);
         for (int i = 0; i < s->site->Nlandmarks; i++)
             memcpy(&s->pins_enu_m[3 * i], s->site->landmarks[i].p_enu_m, 3 * sizeof(double));
         s->Npins = s->site->Nlandmarks;
@@ -130,12 +122,10 @@ static int synth_load(rs_cli_synth_args *s, const char *command)
 
 int rs_cli_synth_load(rs_cli_synth_args *s, const char *command, int argc, char **argv, int optind)
 {
-    if (optind + 1 != argc)
-        return rs_cli_usage_error(command, "expected one SITE folder");
+    if (optind + 1 != argc) return rs_cli_usage_error(command, "expected one SITE folder");
     s->site_dir = argv[optind];
     const int rc = synth_load(s, command);
-    if (rc != RS_EXIT_OK)
-        rs_cli_synth_free(s);
+    if (rc != RS_EXIT_OK) rs_cli_synth_free(s);
     return rc;
 }
 
@@ -152,13 +142,11 @@ int rs_cli_scene(int argc, char **argv)
     opterr = 0;
     while ((c = getopt_long(argc, argv, "o:h", longopts, NULL)) != -1) {
         if (c == '?' || c == ':')
-            return rs_cli_usage_error("scene", "unknown option or missing value: %s",
-                                      argv[optind - 1]);
+            return rs_cli_usage_error("scene", "unknown option or missing value: %s", argv[optind - 1]);
         if ((rc = rs_cli_synth_option(&s, "scene", c, optarg)) != 0)
             return rc > 0 ? rc : rs_cli_usage_error("scene", "unexpected option");
     }
-    if ((rc = rs_cli_synth_load(&s, "scene", argc, argv, optind)) != RS_EXIT_OK)
-        return rc;
+    if ((rc = rs_cli_synth_load(&s, "scene", argc, argv, optind)) != RS_EXIT_OK) return rc;
     rs_err err = {0};
     rs_synth_povcam cam;
     rs_status st = RS_OK;
@@ -178,12 +166,12 @@ int rs_cli_scene(int argc, char **argv)
         goto done;
     }
     strcpy(ini + len - 4, ".ini");
-    if ((st = rs_synth_povcam_init(&cam, s.camera.intrinsics, s.camera.width, s.camera.height,
-                                   s.camera.rt_cam_enu, &err)) ||
+    if ((st = rs_synth_povcam_init(&cam, s.camera.intrinsics, s.camera.width, s.camera.height, s.camera.rt_cam_enu,
+                                   &err)) ||
         (st = rs_io_atomic_open(&a, s.output, &err)))
         goto done;
-    if ((st = rs_synth_scene_write(a.f, &cam, s.camera.intrinsics, s.site->ground_normal_enu,
-                                   s.site->ground_offset_m, &s.prepared, &s.scene, &err))) {
+    if ((st = rs_synth_scene_write(a.f, &cam, s.camera.intrinsics, s.site->ground_normal_enu, s.site->ground_offset_m,
+                                   &s.prepared, &s.scene, &err))) {
         rs_io_atomic_abort(&a);
         goto done;
     }
@@ -195,9 +183,8 @@ int rs_cli_scene(int argc, char **argv)
         remove(ini);
         goto done;
     }
-    printf("wrote %s and %s: %d vehicles, %d pins, %dx%d, sun azimuth %.2f elevation %.2f deg\n",
-           s.output, ini, s.prepared.N, s.Npins, cam.width, cam.height,
-           s.scene.sun_azimuth_deg, s.scene.sun_elevation_deg);
+    printf("wrote %s and %s: %d vehicles, %d pins, %dx%d, sun azimuth %.2f elevation %.2f deg\n", s.output, ini,
+           s.prepared.N, s.Npins, cam.width, cam.height, s.scene.sun_azimuth_deg, s.scene.sun_elevation_deg);
 done:
     rc = st ? rs_cli_fail(s.output, st, &err) : RS_EXIT_OK;
     free(ini);

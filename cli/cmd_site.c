@@ -12,39 +12,38 @@
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside site check SITE\n"
-            "       roadside site describe [--landmarks] SITE\n"
-            "       roadside site init NAME --origin LAT,LON,H [--orthometric N] [--name TEXT]\n"
-            "       roadside site simulate ...   (see 'roadside site simulate --help')\n"
-            "       roadside site render-backgrounds ...   (see its --help)\n"
-            "\n"
-            "A site is a folder: site.json, landmarks.geojson, cameras/<id>.cameramodel,\n"
-            "observations/<id>.csv, backgrounds/<id>/ (format: docs/site-format.md).\n"
-            "\n"
-            "  check     reads every file of SITE and prints one line per problem,\n"
-            "            \"FILE[:LINE]: [feature F (id 'ID'): ]FIELD: what\", then\n"
-            "            \"N errors, M warnings\". Exit status 0 when the site is usable (warnings\n"
-            "            alone do not fail), 1 when it has errors. An optional lanes.geojson is read\n"
-            "            too once the rest is free of errors (its first problem is one error).\n"
-            "  describe  loads SITE and summarises it: name, origin, heights, landmarks and their\n"
-            "            ENU extent, and per camera the lens model, image size, observations,\n"
-            "            position prior and the extent and distance of the landmarks it sees.\n"
-            "            --landmarks also lists every landmark in ENU (metres, 9 decimals).\n"
-            "            Exit status 1 if SITE does not load (run 'check' to see every problem).\n"
-            "  init      creates the folder NAME (it must not exist, or be empty) with a skeleton\n"
-            "            site.json (origin, heights, one example camera 'cam1'), an empty\n"
-            "            landmarks.geojson, cameras/, observations/cam1.csv (header only),\n"
-            "            backgrounds/cam1/ and a README.md saying what to fill in. The skeleton\n"
-            "            passes 'check' only once filled in: check lists what is missing.\n"
-            "            --origin LAT,LON,H  the ENU origin: degrees, degrees, metres\n"
-            "            --orthometric N     heights are orthometric, N = geoid undulation in\n"
-            "                                metres (h_ell = h + N); default: ellipsoidal\n"
-            "            --name TEXT         the site's name (default: the folder's last part)\n"
-            "  simulate  makes a synthetic site with known cameras (see its --help).\n"
-            "  render-backgrounds  ray-traces synthetic backgrounds of the site's ground.\n"
-            "\n"
-            "Exit status: 0 ok, 1 failure, 2 usage error.\n");
+    fprintf(out, "usage: roadside site check SITE\n"
+                 "       roadside site describe [--landmarks] SITE\n"
+                 "       roadside site init NAME --origin LAT,LON,H [--orthometric N] [--name TEXT]\n"
+                 "       roadside site simulate ...   (see 'roadside site simulate --help')\n"
+                 "       roadside site render-backgrounds ...   (see its --help)\n"
+                 "\n"
+                 "A site is a folder: site.json, landmarks.geojson, cameras/<id>.cameramodel,\n"
+                 "observations/<id>.csv, backgrounds/<id>/ (format: docs/site-format.md).\n"
+                 "\n"
+                 "  check     reads every file of SITE and prints one line per problem,\n"
+                 "            \"FILE[:LINE]: [feature F (id 'ID'): ]FIELD: what\", then\n"
+                 "            \"N errors, M warnings\". Exit status 0 when the site is usable (warnings\n"
+                 "            alone do not fail), 1 when it has errors. An optional lanes.geojson is read\n"
+                 "            too once the rest is free of errors (its first problem is one error).\n"
+                 "  describe  loads SITE and summarises it: name, origin, heights, landmarks and their\n"
+                 "            ENU extent, and per camera the lens model, image size, observations,\n"
+                 "            position prior and the extent and distance of the landmarks it sees.\n"
+                 "            --landmarks also lists every landmark in ENU (metres, 9 decimals).\n"
+                 "            Exit status 1 if SITE does not load (run 'check' to see every problem).\n"
+                 "  init      creates the folder NAME (it must not exist, or be empty) with a skeleton\n"
+                 "            site.json (origin, heights, one example camera 'cam1'), an empty\n"
+                 "            landmarks.geojson, cameras/, observations/cam1.csv (header only),\n"
+                 "            backgrounds/cam1/ and a README.md saying what to fill in. The skeleton\n"
+                 "            passes 'check' only once filled in: check lists what is missing.\n"
+                 "            --origin LAT,LON,H  the ENU origin: degrees, degrees, metres\n"
+                 "            --orthometric N     heights are orthometric, N = geoid undulation in\n"
+                 "                                metres (h_ell = h + N); default: ellipsoidal\n"
+                 "            --name TEXT         the site's name (default: the folder's last part)\n"
+                 "  simulate  makes a synthetic site with known cameras (see its --help).\n"
+                 "  render-backgrounds  ray-traces synthetic backgrounds of the site's ground.\n"
+                 "\n"
+                 "Exit status: 0 ok, 1 failure, 2 usage error.\n");
 }
 
 static int cmd_check(int argc, char **argv)
@@ -89,8 +88,8 @@ static void print_extent(const rs_site *site, int icam, const char *indent)
 {
     double lo[3], hi[3], dmin, dmax;
     if (!rs_site_landmark_extent(lo, hi, &dmin, &dmax, site, icam)) return;
-    printf("%sENU extent: east [%.1f, %.1f] m, north [%.1f, %.1f] m, up [%.1f, %.1f] m\n", indent,
-           lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
+    printf("%sENU extent: east [%.1f, %.1f] m, north [%.1f, %.1f] m, up [%.1f, %.1f] m\n", indent, lo[0], hi[0], lo[1],
+           hi[1], lo[2], hi[2]);
     printf("%sdistance from the origin: %.1f .. %.1f m\n", indent, dmin, dmax);
 }
 
@@ -111,12 +110,12 @@ static void describe_camera(const rs_site *site, int icam)
         sigma_lo = fmin(sigma_lo, cam->observations[i].sigma_px);
         sigma_hi = fmax(sigma_hi, cam->observations[i].sigma_px);
     }
-    printf("    observations: %d in %s (sigma %g .. %g px)\n", cam->Nobservations,
-           cam->observations_path, sigma_lo, sigma_hi);
+    printf("    observations: %d in %s (sigma %g .. %g px)\n", cam->Nobservations, cam->observations_path, sigma_lo,
+           sigma_hi);
     if (cam->has_position_prior) {
         const double *p = cam->prior_p_enu_m;
-        printf("    position prior: ENU (%.3f, %.3f, %.3f) m, sigma %g m, %.1f m from the origin\n",
-               p[0], p[1], p[2], cam->prior_sigma_m, sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
+        printf("    position prior: ENU (%.3f, %.3f, %.3f) m, sigma %g m, %.1f m from the origin\n", p[0], p[1], p[2],
+               cam->prior_sigma_m, sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]));
     } else {
         printf("    position prior: none\n");
     }
@@ -130,10 +129,14 @@ static int cmd_describe(int argc, char **argv)
     bool list = false;
     const char *dir = NULL;
     for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--landmarks")) list = true;
-        else if (argv[i][0] == '-') return rs_cli_usage_error("site", "describe: unknown option '%s'", argv[i]);
-        else if (dir) return rs_cli_usage_error("site", "describe takes one SITE folder");
-        else dir = argv[i];
+        if (!strcmp(argv[i], "--landmarks"))
+            list = true;
+        else if (argv[i][0] == '-')
+            return rs_cli_usage_error("site", "describe: unknown option '%s'", argv[i]);
+        else if (dir)
+            return rs_cli_usage_error("site", "describe takes one SITE folder");
+        else
+            dir = argv[i];
     }
     if (!dir) return rs_cli_usage_error("site", "describe: missing SITE folder");
     rs_site *site = NULL;
@@ -145,16 +148,16 @@ static int cmd_describe(int argc, char **argv)
         return rc;
     }
     printf("site '%s' (%s)\n", site->name, site->dir);
-    printf("origin: lat %.9f, lon %.9f, h %.3f m (ellipsoidal)\n", site->origin.lat_deg,
-           site->origin.lon_deg, site->origin.h_m);
+    printf("origin: lat %.9f, lon %.9f, h %.3f m (ellipsoidal)\n", site->origin.lat_deg, site->origin.lon_deg,
+           site->origin.h_m);
     if (site->heights_orthometric)
         printf("heights: orthometric in the files, N = %g m (h_ellipsoidal = h + N)\n", site->geoid_undulation_m);
     else
         printf("heights: ellipsoidal\n");
-    printf("ground plane: n = (%g, %g, %g), n . p = %g m\n", site->ground_normal_enu[0],
-           site->ground_normal_enu[1], site->ground_normal_enu[2], site->ground_offset_m);
-    printf("landmarks: %d (default sigma %g m horizontal, %g m vertical)\n", site->Nlandmarks,
-           site->landmark_sigma_h_m, site->landmark_sigma_v_m);
+    printf("ground plane: n = (%g, %g, %g), n . p = %g m\n", site->ground_normal_enu[0], site->ground_normal_enu[1],
+           site->ground_normal_enu[2], site->ground_offset_m);
+    printf("landmarks: %d (default sigma %g m horizontal, %g m vertical)\n", site->Nlandmarks, site->landmark_sigma_h_m,
+           site->landmark_sigma_v_m);
     print_extent(site, -1, "  ");
     printf("cameras: %d\n", site->Ncameras);
     for (int i = 0; i < site->Ncameras; i++) describe_camera(site, i);
@@ -163,8 +166,8 @@ static int cmd_describe(int argc, char **argv)
         printf("  %-16s %16s %16s %16s %9s %9s  %s\n", "id", "east", "north", "up", "sigma_h", "sigma_v", "kind");
         for (int i = 0; i < site->Nlandmarks; i++) {
             const rs_site_landmark *l = &site->landmarks[i];
-            printf("  %-16s %16.9f %16.9f %16.9f %9g %9g  %s\n", l->id, l->p_enu_m[0], l->p_enu_m[1],
-                   l->p_enu_m[2], l->sigma_h_m, l->sigma_v_m, l->kind ? l->kind : "-");
+            printf("  %-16s %16.9f %16.9f %16.9f %9g %9g  %s\n", l->id, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2],
+                   l->sigma_h_m, l->sigma_v_m, l->kind ? l->kind : "-");
         }
     }
     rs_site_free(site);
@@ -185,8 +188,10 @@ static int cmd_init(int argc, char **argv)
             const char *v = argv[++i];
             if (!strcmp(opt, "--origin")) {
                 if (!rs_cli_parse_llh(v, &origin) || fabs(origin.lon_deg) > 180)
-                    return rs_cli_usage_error("site", "init: --origin '%s' is not LAT,LON,H (degrees, "
-                                              "degrees, metres; |LAT| <= 90, |LON| <= 180)", v);
+                    return rs_cli_usage_error("site",
+                                              "init: --origin '%s' is not LAT,LON,H (degrees, "
+                                              "degrees, metres; |LAT| <= 90, |LON| <= 180)",
+                                              v);
                 have_origin = true;
             } else if (!strcmp(opt, "--orthometric")) {
                 if (!rs_cli_parse_double(v, &N))
@@ -217,8 +222,7 @@ static int cmd_init(int argc, char **argv)
     rs_err err = {0};
     rs_status st = rs_site_init(dir, name, &origin, orthometric ? &N : NULL, &err);
     if (st != RS_OK) return rs_cli_fail("site init", st, &err);
-    printf("created %s: fill in what %s/README.md says, then run 'roadside site check %s'\n", dir,
-           dir, dir);
+    printf("created %s: fill in what %s/README.md says, then run 'roadside site check %s'\n", dir, dir, dir);
     return RS_EXIT_OK;
 }
 
@@ -238,5 +242,6 @@ int rs_cli_site(int argc, char **argv)
     if (!strcmp(sub, "check")) return cmd_check(argc - 1, argv + 1);
     if (!strcmp(sub, "describe")) return cmd_describe(argc - 1, argv + 1);
     if (!strcmp(sub, "init")) return cmd_init(argc - 1, argv + 1);
-    return rs_cli_usage_error("site", "unknown subcommand '%s': check, describe, init, simulate or render-backgrounds", sub);
+    return rs_cli_usage_error("site", "unknown subcommand '%s': check, describe, init, simulate or render-backgrounds",
+                              sub);
 }

@@ -105,7 +105,8 @@ int rs_cli_site_simulate(int argc, char **argv)
             o.width_px = (int)x;
             o.height_px = (int)y;
         } else if (strcmp(a, "--hfov-deg") == 0) {
-            if (!rs_cli_parse_double(v, &o.hfov_deg)) return rs_cli_usage_error(CMD, "--hfov-deg: '%s' is not a number", v);
+            if (!rs_cli_parse_double(v, &o.hfov_deg))
+                return rs_cli_usage_error(CMD, "--hfov-deg: '%s' is not a number", v);
         } else if (strcmp(a, "--pixel-sigma") == 0) {
             if (!rs_cli_parse_double(v, &o.pixel_sigma_px))
                 return rs_cli_usage_error(CMD, "--pixel-sigma: '%s' is not a number", v);

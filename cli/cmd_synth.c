@@ -55,8 +55,20 @@ static const char synth_usage[] =
     "10 images). Prints a summary line and where each output is.\n"
     "Exit status: 0 done, 1 failed, 2 usage error.\n";
 
-enum { OPT_CALIB = 1000, OPT_COUNT, OPT_SEED, OPT_BG, OPT_SHARD, OPT_CAMERA, OPT_SIZE,
-       OPT_VEHICLES, OPT_SPLIT, OPT_NO_SHADOWS, OPT_JOBS, OPT_SEPARATE };
+enum {
+    OPT_CALIB = 1000,
+    OPT_COUNT,
+    OPT_SEED,
+    OPT_BG,
+    OPT_SHARD,
+    OPT_CAMERA,
+    OPT_SIZE,
+    OPT_VEHICLES,
+    OPT_SPLIT,
+    OPT_NO_SHADOWS,
+    OPT_JOBS,
+    OPT_SEPARATE
+};
 
 typedef struct {
     double t0;
@@ -80,15 +92,13 @@ static void progress(void *ctx, int done, int total, int skipped)
     if (p->tty) {
         char bar[31];
         const int fill = total > 0 ? 30 * done / total : 30;
-        for (int i = 0; i < 30; i++)
-            bar[i] = i < fill ? '#' : '.';
+        for (int i = 0; i < 30; i++) bar[i] = i < fill ? '#' : '.';
         bar[30] = 0;
         fprintf(stderr, "\r[%s] %d/%d  %.2f img/s  %.0f s left ", bar, done, total, rate, left);
-        if (done == total)
-            fputc('\n', stderr);
+        if (done == total) fputc('\n', stderr);
     } else if (done % 10 == 0 || done == total) {
-        fprintf(stderr, "synth: %d/%d images (%d skipped), %.2f img/s, %.0f s left\n", done,
-                total, skipped, rate, left);
+        fprintf(stderr, "synth: %d/%d images (%d skipped), %.2f img/s, %.0f s left\n", done, total, skipped, rate,
+                left);
     }
 }
 
@@ -97,8 +107,7 @@ static int synth_merge(int argc, char **argv)
     const char *out = NULL;
     const char **inputs = calloc((size_t)argc, sizeof(char *));
     int Ninputs = 0;
-    if (!inputs)
-        return rs_cli_fail("synth merge", RS_ERR_NOMEM, NULL);
+    if (!inputs) return rs_cli_fail("synth merge", RS_ERR_NOMEM, NULL);
     for (int i = 2; i < argc; i++) {
         if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
             if (i + 1 >= argc) {
@@ -121,10 +130,8 @@ static int synth_merge(int argc, char **argv)
     rs_err err = {0};
     rs_status st = rs_synth_dataset_merge(&Nimages, &Nanns, out, inputs, Ninputs, &err);
     free(inputs);
-    if (st)
-        return rs_cli_fail("synth merge", st, &err);
-    printf("merged %d datasets: %d images, %d annotations -> %s/annotations\n", Ninputs, Nimages,
-           Nanns, out);
+    if (st) return rs_cli_fail("synth merge", st, &err);
+    printf("merged %d datasets: %d images, %d annotations -> %s/annotations\n", Ninputs, Nimages, Nanns, out);
     return RS_EXIT_OK;
 }
 
@@ -134,24 +141,22 @@ int rs_cli_synth(int argc, char **argv)
         fputs(synth_usage, stdout);
         return RS_EXIT_OK;
     }
-    if (argc >= 2 && !strcmp(argv[1], "merge"))
-        return synth_merge(argc, argv);
-    static const struct option longopts[] = {
-        {"calib", required_argument, NULL, OPT_CALIB},
-        {"count", required_argument, NULL, OPT_COUNT},
-        {"seed", required_argument, NULL, OPT_SEED},
-        {"backgrounds", required_argument, NULL, OPT_BG},
-        {"shard", required_argument, NULL, OPT_SHARD},
-        {"camera", required_argument, NULL, OPT_CAMERA},
-        {"size", required_argument, NULL, OPT_SIZE},
-        {"vehicles", required_argument, NULL, OPT_VEHICLES},
-        {"split", required_argument, NULL, OPT_SPLIT},
-        {"no-shadows", no_argument, NULL, OPT_NO_SHADOWS},
-        {"jobs", required_argument, NULL, OPT_JOBS},
-        {"separate-processes", no_argument, NULL, OPT_SEPARATE},
-        {"output", required_argument, NULL, 'o'},
-        {"help", no_argument, NULL, 'h'},
-        {NULL, 0, NULL, 0}};
+    if (argc >= 2 && !strcmp(argv[1], "merge")) return synth_merge(argc, argv);
+    static const struct option longopts[] = {{"calib", required_argument, NULL, OPT_CALIB},
+                                             {"count", required_argument, NULL, OPT_COUNT},
+                                             {"seed", required_argument, NULL, OPT_SEED},
+                                             {"backgrounds", required_argument, NULL, OPT_BG},
+                                             {"shard", required_argument, NULL, OPT_SHARD},
+                                             {"camera", required_argument, NULL, OPT_CAMERA},
+                                             {"size", required_argument, NULL, OPT_SIZE},
+                                             {"vehicles", required_argument, NULL, OPT_VEHICLES},
+                                             {"split", required_argument, NULL, OPT_SPLIT},
+                                             {"no-shadows", no_argument, NULL, OPT_NO_SHADOWS},
+                                             {"jobs", required_argument, NULL, OPT_JOBS},
+                                             {"separate-processes", no_argument, NULL, OPT_SEPARATE},
+                                             {"output", required_argument, NULL, 'o'},
+                                             {"help", no_argument, NULL, 'h'},
+                                             {NULL, 0, NULL, 0}};
     rs_synth_dataset_options opt;
     rs_synth_dataset_options_default(&opt);
     const long cores = sysconf(_SC_NPROCESSORS_ONLN);
@@ -190,8 +195,7 @@ int rs_cli_synth(int argc, char **argv)
         case OPT_BG: {
             char *eq = strchr(optarg, '=');
             if (!eq || eq == optarg || !eq[1]) {
-                rc = rs_cli_usage_error("synth", "--backgrounds: expected TAG=VALUE, got \"%s\"",
-                                        optarg);
+                rc = rs_cli_usage_error("synth", "--backgrounds: expected TAG=VALUE, got \"%s\"", optarg);
                 break;
             }
             kv[Nkv] = strdup(optarg);
@@ -207,10 +211,11 @@ int rs_cli_synth(int argc, char **argv)
         }
         case OPT_SHARD: {
             int i, N, used = 0;
-            if (sscanf(optarg, "%d/%d%n", &i, &N, &used) != 2 || optarg[used] || N < 1 || i < 0 ||
-                i >= N)
-                rc = rs_cli_usage_error("synth", "--shard: expected I/N with 0 <= I < N, got "
-                                        "\"%s\"", optarg);
+            if (sscanf(optarg, "%d/%d%n", &i, &N, &used) != 2 || optarg[used] || N < 1 || i < 0 || i >= N)
+                rc = rs_cli_usage_error("synth",
+                                        "--shard: expected I/N with 0 <= I < N, got "
+                                        "\"%s\"",
+                                        optarg);
             opt.shard_index = i;
             opt.shard_count = N;
             break;
@@ -219,11 +224,9 @@ int rs_cli_synth(int argc, char **argv)
         case OPT_NO_SHADOWS: opt.shadows = false; break;
         case OPT_SIZE: {
             int used = 0;
-            if (sscanf(optarg, "%dx%d%n", &opt.width, &opt.height, &used) != 2 ||
-                optarg[used] || opt.width < 8 || opt.height < 8 || opt.width > 20000 ||
-                opt.height > 20000)
-                rc = rs_cli_usage_error("synth", "--size: expected WxH (8..20000), got \"%s\"",
-                                        optarg);
+            if (sscanf(optarg, "%dx%d%n", &opt.width, &opt.height, &used) != 2 || optarg[used] || opt.width < 8 ||
+                opt.height < 8 || opt.width > 20000 || opt.height > 20000)
+                rc = rs_cli_usage_error("synth", "--size: expected WxH (8..20000), got \"%s\"", optarg);
             break;
         }
         case OPT_JOBS:
@@ -239,20 +242,16 @@ int rs_cli_synth(int argc, char **argv)
             break;
         case OPT_SPLIT:
             for (const char *p = optarg; *p; p++)
-                if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') ||
-                      (*p >= '0' && *p <= '9') || *p == '_' || *p == '-'))
+                if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_' ||
+                      *p == '-'))
                     rc = rs_cli_usage_error("synth", "--split: use only [A-Za-z0-9_-]");
-            if (!*optarg)
-                rc = rs_cli_usage_error("synth", "--split: empty");
+            if (!*optarg) rc = rs_cli_usage_error("synth", "--split: empty");
             opt.split = optarg;
             break;
-        default:
-            rc = rs_cli_usage_error("synth", "unknown option or missing value: %s",
-                                    argv[optind - 1]);
+        default: rc = rs_cli_usage_error("synth", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
-    if (rc != RS_EXIT_OK)
-        goto done;
+    if (rc != RS_EXIT_OK) goto done;
     if (optind + 1 != argc) {
         rc = rs_cli_usage_error("synth", "expected one SITE folder");
         goto done;
@@ -278,16 +277,14 @@ int rs_cli_synth(int argc, char **argv)
     }
     printf("synth: shard %d/%d: %d images (%d made, %d already done, %d over the grey ground), "
            "%d annotations in the dataset, %.1f s (%.1f s in povray, %.3f s/image)\n",
-           opt.shard_index, opt.shard_count, sum.Nimages, sum.Nmade, sum.Nskipped, sum.Ngrey,
-           sum.Nannotations, sum.seconds, sum.seconds_povray,
-           sum.Nmade > 0 ? sum.seconds / sum.Nmade : 0.0);
+           opt.shard_index, opt.shard_count, sum.Nimages, sum.Nmade, sum.Nskipped, sum.Ngrey, sum.Nannotations,
+           sum.seconds, sum.seconds_povray, sum.Nmade > 0 ? sum.seconds / sum.Nmade : 0.0);
     printf("images:      %s/%s/\n", opt.out_dir, opt.split);
     printf("COCO:        %s/annotations/instances_%s.json\n", opt.out_dir, opt.split);
     printf("YOLO:        %s/labels/%s/\n", opt.out_dir, opt.split);
     printf("KITTI:       %s/label_2/\n", opt.out_dir);
 done:
-    for (int i = 0; i < Nkv; i++)
-        free(kv[i]);
+    for (int i = 0; i < Nkv; i++) free(kv[i]);
     free(kv);
     free(cams);
     free(keys);

@@ -15,44 +15,43 @@ static const char *const CMD = "traffic";
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside traffic SITE -o OUT [options]\n"
-            "\n"
-            "Places vehicles along the site's lanes (SITE/lanes.geojson, docs/site-format.md) and writes\n"
-            "a vehicles file for `roadside scene`: a JSON list of {id, class, e, n, yaw_deg, length,\n"
-            "width, height, variant, speed_mps} in the site ENU frame (yaw clockwise from north).\n"
-            "\n"
-            "Built-in traffic (the default; OUT is a .json file):\n"
-            "  vehicles queue along every lane (junction lanes excluded) with time-headway gaps\n"
-            "  s0 + v T u, v = U(0, 1) x the lane's speed limit, u = U(0.5, 1.5) (docs/traffic.md).\n"
-            "  --count N          keep at most N vehicles (a random subset) [all that fit]\n"
-            "  --min-gap M        standstill gap s0, metres [2]\n"
-            "  --headway S        time headway T, seconds [1.5]\n"
-            "  --junction-lanes   fill junction lanes too (their vehicles may cross; overlaps dropped)\n"
-            "\n"
-            "SUMO (--sumo; OUT is a folder: frame_NNNNNN.json per time step, and frames.json listing\n"
-            "each frame's file and time):\n"
-            "  --sumo             build a network from the lanes (netconvert), a flow for every\n"
-            "                     manoeuvre, run sumo and read its floating car data\n"
-            "  --osm FILE         build the network from this OpenStreetMap file instead\n"
-            "  --duration S       simulated seconds [300]      --warmup S   no frames before [60]\n"
-            "  --period S         seconds between frames [1]   --flow VPH   vehicles/hour per manoeuvre [200]\n"
-            "  --keep DIR         keep SUMO's files (network, routes, fcd.xml, sumo.log) in DIR\n"
-            "\n"
-            "Both:\n"
-            "  --seed S           random seed, 0 .. 2^53 [0]\n"
-            "  --mix SPEC         class weights, e.g. sedan=3,suv=3,van=1,bus=0.2 (classes sedan,\n"
-            "                     hatchback, suv, pickup, van, bus, box_truck, articulated_truck)\n"
-            "                     [sedan=0.24,hatchback=0.22,suv=0.30,pickup=0.03,van=0.10,bus=0.02,\n"
-            "                     box_truck=0.06,articulated_truck=0.03]\n"
-            "  --lanes FILE       lanes file [SITE/lanes.geojson]\n"
-            "  --sigma M          domain randomisation: normal offset along and across the lane,\n"
-            "                     metres [0.7071 = sqrt(0.5): variance 0.5 m^2]\n"
-            "  --yaw-jitter DEG   heading offset uniform in [-DEG, DEG] [5]\n"
-            "  --no-randomise     no offsets (overlapping vehicles are still dropped)\n"
-            "\n"
-            "No two footprints overlap: a vehicle is redrawn up to 20 times, then dropped.\n"
-            "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n");
+    fprintf(out, "usage: roadside traffic SITE -o OUT [options]\n"
+                 "\n"
+                 "Places vehicles along the site's lanes (SITE/lanes.geojson, docs/site-format.md) and writes\n"
+                 "a vehicles file for `roadside scene`: a JSON list of {id, class, e, n, yaw_deg, length,\n"
+                 "width, height, variant, speed_mps} in the site ENU frame (yaw clockwise from north).\n"
+                 "\n"
+                 "Built-in traffic (the default; OUT is a .json file):\n"
+                 "  vehicles queue along every lane (junction lanes excluded) with time-headway gaps\n"
+                 "  s0 + v T u, v = U(0, 1) x the lane's speed limit, u = U(0.5, 1.5) (docs/traffic.md).\n"
+                 "  --count N          keep at most N vehicles (a random subset) [all that fit]\n"
+                 "  --min-gap M        standstill gap s0, metres [2]\n"
+                 "  --headway S        time headway T, seconds [1.5]\n"
+                 "  --junction-lanes   fill junction lanes too (their vehicles may cross; overlaps dropped)\n"
+                 "\n"
+                 "SUMO (--sumo; OUT is a folder: frame_NNNNNN.json per time step, and frames.json listing\n"
+                 "each frame's file and time):\n"
+                 "  --sumo             build a network from the lanes (netconvert), a flow for every\n"
+                 "                     manoeuvre, run sumo and read its floating car data\n"
+                 "  --osm FILE         build the network from this OpenStreetMap file instead\n"
+                 "  --duration S       simulated seconds [300]      --warmup S   no frames before [60]\n"
+                 "  --period S         seconds between frames [1]   --flow VPH   vehicles/hour per manoeuvre [200]\n"
+                 "  --keep DIR         keep SUMO's files (network, routes, fcd.xml, sumo.log) in DIR\n"
+                 "\n"
+                 "Both:\n"
+                 "  --seed S           random seed, 0 .. 2^53 [0]\n"
+                 "  --mix SPEC         class weights, e.g. sedan=3,suv=3,van=1,bus=0.2 (classes sedan,\n"
+                 "                     hatchback, suv, pickup, van, bus, box_truck, articulated_truck)\n"
+                 "                     [sedan=0.24,hatchback=0.22,suv=0.30,pickup=0.03,van=0.10,bus=0.02,\n"
+                 "                     box_truck=0.06,articulated_truck=0.03]\n"
+                 "  --lanes FILE       lanes file [SITE/lanes.geojson]\n"
+                 "  --sigma M          domain randomisation: normal offset along and across the lane,\n"
+                 "                     metres [0.7071 = sqrt(0.5): variance 0.5 m^2]\n"
+                 "  --yaw-jitter DEG   heading offset uniform in [-DEG, DEG] [5]\n"
+                 "  --no-randomise     no offsets (overlapping vehicles are still dropped)\n"
+                 "\n"
+                 "No two footprints overlap: a vehicle is redrawn up to 20 times, then dropped.\n"
+                 "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n");
 }
 
 typedef struct {
@@ -134,7 +133,8 @@ static int parse_args(traffic_args *t, int argc, char **argv)
             t->traffic.headway_s = x;
         } else if (!strcmp(a, "--duration") || !strcmp(a, "--warmup") || !strcmp(a, "--period") ||
                    !strcmp(a, "--flow")) {
-            if (!rs_cli_parse_double(v, &x) || x < 0) return rs_cli_usage_error(CMD, "%s: '%s' is not a number >= 0", a, v);
+            if (!rs_cli_parse_double(v, &x) || x < 0)
+                return rs_cli_usage_error(CMD, "%s: '%s' is not a number >= 0", a, v);
             double *dst = !strcmp(a, "--duration") ? &t->so.duration_s
                           : !strcmp(a, "--warmup") ? &t->so.warmup_s
                           : !strcmp(a, "--period") ? &t->so.period_s
@@ -187,8 +187,8 @@ int rs_cli_traffic(int argc, char **argv)
         what = "traffic --sumo";
         if ((st = rs_synth_sumo_run(&frames, &lanes, &site->origin, &t.so, &err))) goto done;
         if ((st = rs_synth_sumo_frames_write(t.out, &frames, &t.rnd, t.randomise, &N, &err))) goto done;
-        printf("wrote %s: %d frames from SUMO (seed %llu), %d vehicles in all; index %s/frames.json\n", t.out,
-               frames.N, (unsigned long long)t.so.seed, N, t.out);
+        printf("wrote %s: %d frames from SUMO (seed %llu), %d vehicles in all; index %s/frames.json\n", t.out, frames.N,
+               (unsigned long long)t.so.seed, N, t.out);
     } else {
         if ((st = rs_synth_traffic_place(&v, &N, &lanes, &t.traffic, &err))) goto done;
         int placed = N;

@@ -33,16 +33,14 @@ static const int Ncommands = (int)(sizeof commands / sizeof commands[0]);
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside [--version] [--help] COMMAND [ARGS...]\n"
-            "\n"
-            "Turns fixed roadside traffic cameras into calibrated, metric sensors.\n"
-            "\n"
-            "Commands:\n");
+    fprintf(out, "usage: roadside [--version] [--help] COMMAND [ARGS...]\n"
+                 "\n"
+                 "Turns fixed roadside traffic cameras into calibrated, metric sensors.\n"
+                 "\n"
+                 "Commands:\n");
     for (int i = 0; i < Ncommands; i++) fprintf(out, "  %-8s %s\n", commands[i].name, commands[i].summary);
-    fprintf(out,
-            "\n"
-            "'roadside COMMAND --help' describes one command. Conventions: docs/conventions.md.\n");
+    fprintf(out, "\n"
+                 "'roadside COMMAND --help' describes one command. Conventions: docs/conventions.md.\n");
 }
 
 int main(int argc, char **argv)

@@ -4,9 +4,9 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+#include "core/rs_status.h"
 #include "geo/rs_geo.h"
 #include "geo/rs_site.h"
-#include "core/rs_status.h"
 
 // Exit codes: 0 success, 1 the work failed (bad input, a check failed), 2 usage error.
 enum { RS_EXIT_OK = 0, RS_EXIT_FAIL = 1, RS_EXIT_USAGE = 2 };

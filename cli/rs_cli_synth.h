@@ -30,16 +30,22 @@ typedef struct {
 int rs_cli_synth_option(rs_cli_synth_args *s, const char *command, int opt, const char *arg);
 
 // getopt_long values of the shared options.
-enum { RS_CLI_SYNTH_CALIB = 1000, RS_CLI_SYNTH_CAMERA, RS_CLI_SYNTH_VEHICLES, RS_CLI_SYNTH_PINS,
-       RS_CLI_SYNTH_SUN, RS_CLI_SYNTH_TIME };
-#define RS_CLI_SYNTH_LONGOPTS                                                                     \
-    {"calib", required_argument, NULL, RS_CLI_SYNTH_CALIB},                                      \
-        {"camera", required_argument, NULL, RS_CLI_SYNTH_CAMERA},                                \
-        {"vehicles", required_argument, NULL, RS_CLI_SYNTH_VEHICLES},                            \
-        {"pins", no_argument, NULL, RS_CLI_SYNTH_PINS},                                          \
-        {"sun", required_argument, NULL, RS_CLI_SYNTH_SUN},                                      \
-        {"time", required_argument, NULL, RS_CLI_SYNTH_TIME},                                    \
-        {"output", required_argument, NULL, 'o'}, {"help", no_argument, NULL, 'h'}
+enum {
+    RS_CLI_SYNTH_CALIB = 1000,
+    RS_CLI_SYNTH_CAMERA,
+    RS_CLI_SYNTH_VEHICLES,
+    RS_CLI_SYNTH_PINS,
+    RS_CLI_SYNTH_SUN,
+    RS_CLI_SYNTH_TIME
+};
+#define RS_CLI_SYNTH_LONGOPTS                                                                                         \
+    {"calib", required_argument, NULL, RS_CLI_SYNTH_CALIB}, {"camera", required_argument, NULL, RS_CLI_SYNTH_CAMERA}, \
+        {"vehicles", required_argument, NULL, RS_CLI_SYNTH_VEHICLES}, {"pins", no_argument, NULL, RS_CLI_SYNTH_PINS}, \
+        {"sun", required_argument, NULL, RS_CLI_SYNTH_SUN}, {"time", required_argument, NULL, RS_CLI_SYNTH_TIME},     \
+        {"output", required_argument, NULL, 'o'},                                                                     \
+    {                                                                                                                 \
+        "help", no_argument, NULL, 'h'                                                                                \
+    }
 
 // Takes the one positional argument (SITE) left after option parsing (argv[optind..]), checks
 // the required options, then loads everything. Returns an exit code (RS_EXIT_OK on success;

@@ -15,14 +15,16 @@
 
 #define MAX_IMAGE_SIDE_PX 1000000
 
-void rs_camera_free(rs_camera *cam) {
+void rs_camera_free(rs_camera *cam)
+{
     if (!cam) return;
     free(cam->intrinsics);
     memset(cam, 0, sizeof *cam);
 }
 
-rs_status rs_camera_init(rs_camera *cam, const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
-                         int width, int height, rs_err *err) {
+rs_status rs_camera_init(
+    rs_camera *cam, const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width, int height, rs_err *err)
+{
     memset(cam, 0, sizeof *cam);
     const int n = mrcal_lensmodel_num_params(lensmodel);
     if (n <= 0) return rs_err_set(err, RS_ERR_INVALID, "lensmodel: not a lens model mrcal knows");
@@ -36,13 +38,15 @@ rs_status rs_camera_init(rs_camera *cam, const mrcal_lensmodel_t *lensmodel, con
     return RS_OK;
 }
 
-rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err) {
+rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err)
+{
     rs_status st = rs_camera_init(out, &in->lensmodel, in->intrinsics, in->width, in->height, err);
     if (st == RS_OK) memcpy(out->rt_cam_enu, in->rt_cam_enu, sizeof out->rt_cam_enu);
     return st;
 }
 
-rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err) {
+rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err)
+{
     if (cam->width < 0 || cam->height < 0 || cam->width > MAX_IMAGE_SIDE_PX || cam->height > MAX_IMAGE_SIDE_PX)
         return rs_err_set(err, RS_ERR_INVALID, "%s: imagersize: %d x %d is not an image size", path, cam->width,
                           cam->height);
@@ -53,13 +57,13 @@ rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err) {
         return rs_err_set(err, RS_ERR_INVALID, "%s: intrinsics: fx = %g, fy = %g: both must be > 0", path,
                           cam->intrinsics[0], cam->intrinsics[1]);
     for (int i = 0; i < 6; i++)
-        if (!isfinite(cam->rt_cam_enu[i]))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: extrinsics: non-finite", path);
+        if (!isfinite(cam->rt_cam_enu[i])) return rs_err_set(err, RS_ERR_INVALID, "%s: extrinsics: non-finite", path);
     return RS_OK;
 }
 
 // mrcal's model (flexible array) -> rs_camera, checked.
-static rs_status from_mrcal(rs_camera *cam, const mrcal_cameramodel_t *m, const char *path, rs_err *err) {
+static rs_status from_mrcal(rs_camera *cam, const mrcal_cameramodel_t *m, const char *path, rs_err *err)
+{
     if (m->imagersize[0] < 1 || m->imagersize[1] < 1 || m->imagersize[0] > MAX_IMAGE_SIDE_PX ||
         m->imagersize[1] > MAX_IMAGE_SIDE_PX)
         return rs_err_set(err, RS_ERR_INVALID, "%s: imagersize: %u x %u is not an image size", path, m->imagersize[0],
@@ -71,8 +75,8 @@ static rs_status from_mrcal(rs_camera *cam, const mrcal_cameramodel_t *m, const 
     return st;
 }
 
-rs_status rs_camera_read_cameramodel_text(rs_camera *cam, const char *text, size_t len, const char *path,
-                                          rs_err *err) {
+rs_status rs_camera_read_cameramodel_text(rs_camera *cam, const char *text, size_t len, const char *path, rs_err *err)
+{
     memset(cam, 0, sizeof *cam);
     if (len > (size_t)0x7fffffff) return rs_err_set(err, RS_ERR_INVALID, "%s: too large for a .cameramodel", path);
     mrcal_cameramodel_t *m = mrcal_read_cameramodel_string(text, (int)len);
@@ -88,8 +92,9 @@ rs_status rs_camera_read_cameramodel_text(rs_camera *cam, const char *text, size
 
 // OpenCV K and distortion -> the mrcal model with the same projection (LENSMODEL_OPENCVn keeps
 // OpenCV's coefficient order; no coefficients, or all zero: LENSMODEL_PINHOLE).
-static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_camera_opencv_file *f,
-                             const char *path, rs_err *err) {
+static rs_status
+from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_camera_opencv_file *f, const char *path, rs_err *err)
+{
     const double *K = f->K;
     if (K[3] != 0 || K[6] != 0 || K[7] != 0 || K[8] != 1)
         return rs_err_set(err, RS_ERR_INVALID, "%s: camera_matrix: not of the form [fx 0 cx; 0 fy cy; 0 0 1]", path);
@@ -137,7 +142,8 @@ static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_ca
     return RS_OK;
 }
 
-rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *path, rs_err *err) {
+rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *path, rs_err *err)
+{
     memset(cam, 0, sizeof *cam);
     if (extra) memset(extra, 0, sizeof *extra);
     rs_status st;
@@ -156,7 +162,8 @@ rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *pat
     return st;
 }
 
-rs_status rs_camera_write_cameramodel(const rs_camera *cam, const char *path, rs_err *err) {
+rs_status rs_camera_write_cameramodel(const rs_camera *cam, const char *path, rs_err *err)
+{
     mrcal_cameramodel_t *m = calloc(1, sizeof *m + (size_t)cam->Nintrinsics * sizeof(double));
     if (!m) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     memcpy(m->rt_cam_ref, cam->rt_cam_enu, sizeof m->rt_cam_ref);
@@ -171,13 +178,16 @@ rs_status rs_camera_write_cameramodel(const rs_camera *cam, const char *path, rs
     if (st == RS_OK) st = rs_io_atomic_release(&a, err);
     if (st == RS_OK && !mrcal_write_cameramodel_file(a.tmp_path, m))
         st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: mrcal could not write the camera model", path);
-    if (st == RS_OK) st = rs_io_atomic_commit(&a, err);
-    else rs_io_atomic_abort(&a);
+    if (st == RS_OK)
+        st = rs_io_atomic_commit(&a, err);
+    else
+        rs_io_atomic_abort(&a);
     free(m);
     return st;
 }
 
-bool rs_camera_has_opencv_equivalent(const rs_camera *cam) {
+bool rs_camera_has_opencv_equivalent(const rs_camera *cam)
+{
     switch (cam->lensmodel.type) {
     case MRCAL_LENSMODEL_PINHOLE:
     case MRCAL_LENSMODEL_OPENCV4:
@@ -188,19 +198,21 @@ bool rs_camera_has_opencv_equivalent(const rs_camera *cam) {
     }
 }
 
-rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs_err *err) {
+rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs_err *err)
+{
     if (!rs_camera_has_opencv_equivalent(cam))
         return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: lens model %s has no OpenCV equivalent", path,
                           mrcal_lensmodel_name_unconfigured(&cam->lensmodel));
     char *text = NULL;
-    rs_status st = rs_camera_opencv_yaml_text(&text, cam->intrinsics, cam->Nintrinsics - 4, cam->rt_cam_enu,
-                                              cam->width, cam->height, err);
+    rs_status st = rs_camera_opencv_yaml_text(&text, cam->intrinsics, cam->Nintrinsics - 4, cam->rt_cam_enu, cam->width,
+                                              cam->height, err);
     if (st == RS_OK) st = rs_io_write_file(path, text, strlen(text), err);
     free(text);
     return st;
 }
 
-int rs_camera_project(double *q_px, const rs_camera *cam, const double *p_enu_m, int N) {
+int rs_camera_project(double *q_px, const rs_camera *cam, const double *p_enu_m, int N)
+{
     int n = 0;
     for (int i = 0; i < N; i++) {
         mrcal_point3_t pc;
@@ -215,8 +227,13 @@ int rs_camera_project(double *q_px, const rs_camera *cam, const double *p_enu_m,
     return n;
 }
 
-rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const double q_px[2],
-                                  const double plane_normal_enu[3], double plane_offset_m, rs_err *err) {
+rs_status rs_camera_locate_ground(double p_enu_m[3],
+                                  const rs_camera *cam,
+                                  const double q_px[2],
+                                  const double plane_normal_enu[3],
+                                  double plane_offset_m,
+                                  rs_err *err)
+{
     if (!p_enu_m || !cam || !cam->intrinsics || !q_px || !plane_normal_enu)
         return rs_err_set(err, RS_ERR_INVALID, "rs_camera_locate_ground: NULL argument");
     const mrcal_lensmodel_t *lensmodel = &cam->lensmodel;
@@ -237,10 +254,8 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
 
     mrcal_point2_t q = {.x = q_px[0], .y = q_px[1]};
     mrcal_point3_t v;
-    if (!mrcal_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) ||
-        !isfinite(v.z))
-        return rs_err_set(err, RS_ERR_UNSUPPORTED,
-                          "pixel (%g, %g): mrcal cannot unproject it with this lens model",
+    if (!mrcal_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z))
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "pixel (%g, %g): mrcal cannot unproject it with this lens model",
                           q_px[0], q_px[1]);
     double R[9], C[3], d[3];
     mrcal_R_from_r(R, NULL, rt_cam_enu);
@@ -250,13 +265,11 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
     const double nd = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
     const double nC = n[0] * C[0] + n[1] * C[1] + n[2] * C[2];
     if (fabs(nd) < 1e-12)
-        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): its ray is parallel to the plane",
-                          q_px[0], q_px[1]);
+        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): its ray is parallel to the plane", q_px[0], q_px[1]);
     const double lambda = (offset - nC) / nd;
     if (!(lambda > 0.0))
-        return rs_err_set(err, RS_ERR_DEGENERATE,
-                          "pixel (%g, %g): the plane is behind the camera along its ray", q_px[0],
-                          q_px[1]);
+        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): the plane is behind the camera along its ray",
+                          q_px[0], q_px[1]);
     double p[3];
     for (int i = 0; i < 3; i++) p[i] = C[i] + lambda * d[i];
 
@@ -286,8 +299,8 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
         for (int r = 0; r < 2; r++) {
             double g[3];
             for (int j = 0; j < 3; j++)
-                g[j] = dq_dpc[r].xyz[0] * dpc_dp[j] + dq_dpc[r].xyz[1] * dpc_dp[3 + j] +
-                       dq_dpc[r].xyz[2] * dpc_dp[6 + j];
+                g[j] =
+                    dq_dpc[r].xyz[0] * dpc_dp[j] + dq_dpc[r].xyz[1] * dpc_dp[3 + j] + dq_dpc[r].xyz[2] * dpc_dp[6 + j];
             J[r * 2] = g[0] * u[0] + g[1] * u[1] + g[2] * u[2];
             J[r * 2 + 1] = g[0] * w[0] + g[1] * w[1] + g[2] * w[2];
         }

@@ -28,19 +28,19 @@ extern "C" {
 
 typedef struct {
     mrcal_lensmodel_t lensmodel;
-    double *intrinsics;    // (Nintrinsics,) owned
-    int Nintrinsics;       // mrcal_lensmodel_num_params(&lensmodel)
-    int width, height;     // image size, pixels (0 x 0 only for an OpenCV file that gives none)
-    double rt_cam_enu[6];  // the pose: maps site ENU into the camera (zero: no pose known)
+    double *intrinsics;   // (Nintrinsics,) owned
+    int Nintrinsics;      // mrcal_lensmodel_num_params(&lensmodel)
+    int width, height;    // image size, pixels (0 x 0 only for an OpenCV file that gives none)
+    double rt_cam_enu[6]; // the pose: maps site ENU into the camera (zero: no pose known)
 } rs_camera;
 
 // What an OpenCV-style file may carry beyond the camera (rs_camera_read with extra != NULL).
 typedef struct {
-    bool has_pose;         // a rotation (R or rvec) and a translation (t or tvec) were given
-    bool has_R;            // the rotation was given as a matrix R (or R_cam_enu)
-    double R_cam_enu[9];   // as given, row-major (the camera's pose uses its nearest rotation)
-    bool has_P;            // a projection matrix was given
-    double P[12];          // (3,4) row-major, as given
+    bool has_pose;       // a rotation (R or rvec) and a translation (t or tvec) were given
+    bool has_R;          // the rotation was given as a matrix R (or R_cam_enu)
+    double R_cam_enu[9]; // as given, row-major (the camera's pose uses its nearest rotation)
+    bool has_P;          // a projection matrix was given
+    double P[12];        // (3,4) row-major, as given
 } rs_camera_extra;
 
 // Frees the intrinsics and zeroes the camera. Accepts NULL.
@@ -49,11 +49,14 @@ void rs_camera_free(rs_camera *cam);
 // Makes *cam a camera of the given lens, a copy of `intrinsics` ((Nintrinsics,) of lensmodel),
 // the image size and a zero pose. *cam is zeroed first (its old contents are not freed).
 // Returns RS_ERR_INVALID for a lens model mrcal does not know, RS_ERR_NOMEM.
-rs_status rs_camera_init(// out
-                         rs_camera *cam,
-                         // in
-                         const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
-                         int width, int height, rs_err *err);
+rs_status rs_camera_init( // out
+    rs_camera *cam,
+    // in
+    const mrcal_lensmodel_t *lensmodel,
+    const double *intrinsics,
+    int width,
+    int height,
+    rs_err *err);
 
 // A deep copy of `in` into *out (zeroed first). RS_ERR_NOMEM.
 rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err);
@@ -72,18 +75,22 @@ rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err);
 // the wrong type), RS_ERR_INVALID (a wrong count, non-finite or out-of-range value, R with
 // det <= 0, only one of rotation and translation), RS_ERR_UNSUPPORTED (skew, tilted sensor: no
 // mrcal equivalent), RS_ERR_NOMEM.
-rs_status rs_camera_read(// out
-                         rs_camera *cam, rs_camera_extra *extra,
-                         // in
-                         const char *path, rs_err *err);
+rs_status rs_camera_read( // out
+    rs_camera *cam,
+    rs_camera_extra *extra,
+    // in
+    const char *path,
+    rs_err *err);
 
 // An mrcal .cameramodel held in memory (text, len bytes; it need not be NUL-terminated), checked
 // as rs_camera_read does. `path` names it in messages.
-rs_status rs_camera_read_cameramodel_text(// out
-                                          rs_camera *cam,
-                                          // in
-                                          const char *text, size_t len, const char *path,
-                                          rs_err *err);
+rs_status rs_camera_read_cameramodel_text( // out
+    rs_camera *cam,
+    // in
+    const char *text,
+    size_t len,
+    const char *path,
+    rs_err *err);
 
 // Checks a camera's values (the checks of rs_camera_read). Errors as "PATH: FIELD: what".
 rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err);
@@ -105,12 +112,12 @@ rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs
 // Projects N points of the site ENU frame through the camera (mrcal_transform_point_rt, then
 // mrcal_project). q_px (N,2); a point mrcal cannot project gets NaN. Returns the number of
 // points projected (finite results in front of the camera, z > 0).
-int rs_camera_project(// out
-                      double *q_px,          // (N,2)
-                      // in
-                      const rs_camera *cam,
-                      const double *p_enu_m, // (N,3)
-                      int N);
+int rs_camera_project( // out
+    double *q_px,      // (N,2)
+    // in
+    const rs_camera *cam,
+    const double *p_enu_m, // (N,3)
+    int N);
 
 // Intersects the ray of pixel q_px (through the full lens model: mrcal_unproject, then
 // Gauss-Newton steps on mrcal_project to polish) with the plane n . p = plane_offset_m.
@@ -119,14 +126,14 @@ int rs_camera_project(// out
 // Errors: RS_ERR_INVALID (non-finite input, zero normal), RS_ERR_UNSUPPORTED (lens model
 // without unprojection), RS_ERR_DEGENERATE (ray parallel to the plane or the plane behind
 // the camera).
-rs_status rs_camera_locate_ground(// out
-                                  double p_enu_m[3],
-                                  // in
-                                  const rs_camera *cam,
-                                  const double q_px[2],
-                                  const double plane_normal_enu[3],
-                                  double plane_offset_m,
-                                  rs_err *err); // may be NULL
+rs_status rs_camera_locate_ground( // out
+    double p_enu_m[3],
+    // in
+    const rs_camera *cam,
+    const double q_px[2],
+    const double plane_normal_enu[3],
+    double plane_offset_m,
+    rs_err *err); // may be NULL
 
 #ifdef __cplusplus
 }

@@ -18,11 +18,17 @@ rs_status rs_io_read_file(char **data, size_t *len, const char *path, rs_err *er
     size_t cap = 4096, n = 0;
     char *buf = malloc(cap);
     rs_status st = RS_OK;
-    if (!buf) { st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path); goto done; }
+    if (!buf) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+        goto done;
+    }
     for (;;) {
         if (cap - n < 2) {
             char *grown = realloc(buf, cap * 2);
-            if (!grown) { st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path); goto done; }
+            if (!grown) {
+                st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+                goto done;
+            }
             buf = grown;
             cap *= 2;
         }
@@ -30,11 +36,17 @@ rs_status rs_io_read_file(char **data, size_t *len, const char *path, rs_err *er
         n += got;
         if (got == 0) break;
     }
-    if (ferror(f)) { st = rs_err_set(err, RS_ERR_IO, "%s: read error: %s", path, strerror(errno)); goto done; }
+    if (ferror(f)) {
+        st = rs_err_set(err, RS_ERR_IO, "%s: read error: %s", path, strerror(errno));
+        goto done;
+    }
     buf[n] = '\0';
 done:
     fclose(f);
-    if (st != RS_OK) { free(buf); return st; }
+    if (st != RS_OK) {
+        free(buf);
+        return st;
+    }
     *data = buf;
     if (len) *len = n;
     return RS_OK;
@@ -90,10 +102,14 @@ rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err)
     if (a->f) {
         bad = ferror(a->f) || fflush(a->f) != 0 || fsync(fileno(a->f)) != 0;
         saved = errno;
-        if (fclose(a->f) != 0 && !bad) { bad = 1; saved = errno; }
+        if (fclose(a->f) != 0 && !bad) {
+            bad = 1;
+            saved = errno;
+        }
         a->f = NULL;
     }
-    if (bad) st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(saved));
+    if (bad)
+        st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(saved));
     else if (rename(a->tmp_path, a->path) != 0)
         st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename into place: %s", a->path, strerror(errno));
     if (st != RS_OK) remove(a->tmp_path);
@@ -171,10 +187,7 @@ static int remove_entry(const char *path, const struct stat *sb, int type, struc
     return 0; // go on with the rest
 }
 
-void rs_io_remove_tree(const char *path)
-{
-    nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
-}
+void rs_io_remove_tree(const char *path) { nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS); }
 
 bool rs_io_has_extension(const char *path, const char *ext)
 {

@@ -26,7 +26,8 @@ namespace {
 
 // The numbers of a node (a number, a nested list or an OpenCV matrix) in row-major order;
 // false when it holds anything else. An empty matrix or list gives no numbers.
-bool node_numbers(const cv::FileNode &node, std::vector<double> &out) {
+bool node_numbers(const cv::FileNode &node, std::vector<double> &out)
+{
     if (node.isInt() || node.isReal()) {
         out.push_back((double)node);
         return true;
@@ -48,9 +49,15 @@ bool node_numbers(const cv::FileNode &node, std::vector<double> &out) {
 
 // Reads the first present key of `keys` into v; *found tells whether any was there. Checks the
 // count against `counts` (`need` words them) and that every value is finite.
-rs_status read_numbers(std::vector<double> &v, bool *found, const cv::FileStorage &fs,
-                       std::initializer_list<const char *> keys, std::initializer_list<size_t> counts,
-                       const char *need, const char *path, rs_err *err) {
+rs_status read_numbers(std::vector<double> &v,
+                       bool *found,
+                       const cv::FileStorage &fs,
+                       std::initializer_list<const char *> keys,
+                       std::initializer_list<size_t> counts,
+                       const char *need,
+                       const char *path,
+                       rs_err *err)
+{
     v.clear();
     *found = false;
     for (const char *key : keys) {
@@ -69,7 +76,8 @@ rs_status read_numbers(std::vector<double> &v, bool *found, const cv::FileStorag
     return RS_OK;
 }
 
-rs_status read_file(rs_camera_opencv_file *f, const char *path, rs_err *err) {
+rs_status read_file(rs_camera_opencv_file *f, const char *path, rs_err *err)
+{
     cv::FileStorage fs;
     try {
         if (!fs.open(path, cv::FileStorage::READ))
@@ -92,8 +100,8 @@ rs_status read_file(rs_camera_opencv_file *f, const char *path, rs_err *err) {
             return rs_err_set(err, RS_ERR_PARSE, "%s: %s: not a number", path, sizes[i]);
         const double d = (double)node;
         if (!std::isfinite(d) || d < 1 || d > 1e6 || d != std::floor(d))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: %s: %g is not a positive whole number of pixels",
-                              path, sizes[i], d);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: %s: %g is not a positive whole number of pixels", path,
+                              sizes[i], d);
         *size_out[i] = (int)d;
     }
     if ((st = read_numbers(v, &found, fs, {"camera_matrix", "K"}, {9}, "9 (3x3)", path, err))) return st;
@@ -133,7 +141,8 @@ rs_status read_file(rs_camera_opencv_file *f, const char *path, rs_err *err) {
 
 } // namespace
 
-extern "C" rs_status rs_camera_opencv_read(rs_camera_opencv_file *f, const char *path, rs_err *err) {
+extern "C" rs_status rs_camera_opencv_read(rs_camera_opencv_file *f, const char *path, rs_err *err)
+{
     try {
         *f = rs_camera_opencv_file();
         return read_file(f, path, err);
@@ -148,9 +157,14 @@ extern "C" rs_status rs_camera_opencv_read(rs_camera_opencv_file *f, const char 
     }
 }
 
-extern "C" rs_status rs_camera_opencv_yaml_text(char **text, const double *intrinsics, int Ndistortion,
-                                                const double rt_cam_enu[6], int width, int height,
-                                                rs_err *err) {
+extern "C" rs_status rs_camera_opencv_yaml_text(char **text,
+                                                const double *intrinsics,
+                                                int Ndistortion,
+                                                const double rt_cam_enu[6],
+                                                int width,
+                                                int height,
+                                                rs_err *err)
+{
     *text = nullptr;
     try {
         if (Ndistortion < 0) return rs_err_set(err, RS_ERR_USAGE, "Ndistortion = %d", Ndistortion);
@@ -188,34 +202,26 @@ namespace {
 int cv_type(int channels) { return CV_MAKETYPE(CV_32F, channels); }
 
 // A cv::Mat header over an rs_image (no copy).
-cv::Mat wrap(const rs_image *img)
-{
-    return cv::Mat(img->height, img->width, cv_type(img->channels), img->data);
-}
+cv::Mat wrap(const rs_image *img) { return cv::Mat(img->height, img->width, cv_type(img->channels), img->data); }
 
 // File extension including the dot ("" when none), for cv::imencode.
 std::string extension(const char *path)
 {
     const char *slash = std::strrchr(path, '/');
     const char *dot = std::strrchr(path, '.');
-    if (!dot || (slash && dot < slash))
-        return "";
+    if (!dot || (slash && dot < slash)) return "";
     return dot;
 }
 
 } // namespace
 
-extern "C" rs_status rs_image_alloc(rs_image *img, int width, int height,
-                                          int channels, rs_err *err)
+extern "C" rs_status rs_image_alloc(rs_image *img, int width, int height, int channels, rs_err *err)
 {
     *img = rs_image{};
     if (width <= 0 || height <= 0 || (channels != 1 && channels != 3 && channels != 4))
-        return rs_err_set(err, RS_ERR_INVALID, "image: bad size %dx%dx%d", width, height,
-                          channels);
-    img->data = static_cast<float *>(
-        std::calloc(static_cast<size_t>(width) * height * channels, sizeof(float)));
-    if (!img->data)
-        return rs_err_set(err, RS_ERR_NOMEM, "image %dx%d: out of memory", width, height);
+        return rs_err_set(err, RS_ERR_INVALID, "image: bad size %dx%dx%d", width, height, channels);
+    img->data = static_cast<float *>(std::calloc(static_cast<size_t>(width) * height * channels, sizeof(float)));
+    if (!img->data) return rs_err_set(err, RS_ERR_NOMEM, "image %dx%d: out of memory", width, height);
     img->width = width;
     img->height = height;
     img->channels = channels;
@@ -224,8 +230,7 @@ extern "C" rs_status rs_image_alloc(rs_image *img, int width, int height,
 
 extern "C" void rs_image_free(rs_image *img)
 {
-    if (!img)
-        return;
+    if (!img) return;
     std::free(img->data);
     *img = rs_image{};
 }
@@ -236,15 +241,16 @@ extern "C" rs_status rs_image_read(rs_image *img, const char *path, rs_err *err)
     try {
         cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
         if (m.empty())
-            return rs_err_set(err, RS_ERR_IO, "%s: cannot read the image (missing, or not an "
-                                              "image OpenCV can decode)", path);
+            return rs_err_set(err, RS_ERR_IO,
+                              "%s: cannot read the image (missing, or not an "
+                              "image OpenCV can decode)",
+                              path);
         double unit;
         switch (m.depth()) {
         case CV_8U: unit = 255.0; break;
         case CV_16U: unit = 65535.0; break;
         case CV_32F: unit = 1.0; break;
-        default:
-            return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: unsupported pixel depth", path);
+        default: return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: unsupported pixel depth", path);
         }
         const int channels = m.channels();
         if (channels == 3)
@@ -254,8 +260,7 @@ extern "C" rs_status rs_image_read(rs_image *img, const char *path, rs_err *err)
         else if (channels != 1)
             return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: %d channels", path, channels);
         rs_status st = rs_image_alloc(img, m.cols, m.rows, channels, err);
-        if (st)
-            return st;
+        if (st) return st;
         cv::Mat out = wrap(img);
         m.convertTo(out, cv_type(channels), 1.0 / unit);
         return RS_OK;
@@ -268,8 +273,7 @@ extern "C" rs_status rs_image_read(rs_image *img, const char *path, rs_err *err)
     }
 }
 
-extern "C" rs_status rs_image_write(const char *path, const rs_image *img, int bits,
-                                          rs_err *err)
+extern "C" rs_status rs_image_write(const char *path, const rs_image *img, int bits, rs_err *err)
 {
     if (bits != 8 && bits != 16)
         return rs_err_set(err, RS_ERR_INVALID, "%s: bits must be 8 or 16 (got %d)", path, bits);
@@ -291,4 +295,3 @@ extern "C" rs_status rs_image_write(const char *path, const rs_image *img, int b
         return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: unknown exception", path);
     }
 }
-

@@ -14,34 +14,38 @@
 // A level camera looking north: columns x_cam -> east, y_cam -> down, z_cam -> north.
 static const double R_enu_cam0[9] = {1, 0, 0, 0, 0, 1, 0, -1, 0};
 
-void rs_pose_mat3_mul(double out[9], const double a[9], const double b[9]) {
+void rs_pose_mat3_mul(double out[9], const double a[9], const double b[9])
+{
     double m[9];
     for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++)
-            m[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
+        for (int j = 0; j < 3; j++) m[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
     memcpy(out, m, sizeof m);
 }
 
-void rs_pose_mat3_transpose(double out[9], const double a[9]) {
+void rs_pose_mat3_transpose(double out[9], const double a[9])
+{
     double m[9];
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++) m[3 * j + i] = a[3 * i + j];
     memcpy(out, m, sizeof m);
 }
 
-void rs_pose_Rx(double R[9], double a) {
+void rs_pose_Rx(double R[9], double a)
+{
     const double c = cos(a), s = sin(a);
     const double m[9] = {1, 0, 0, 0, c, -s, 0, s, c};
     memcpy(R, m, sizeof m);
 }
 
-void rs_pose_Rz(double R[9], double a) {
+void rs_pose_Rz(double R[9], double a)
+{
     const double c = cos(a), s = sin(a);
     const double m[9] = {c, -s, 0, s, c, 0, 0, 0, 1};
     memcpy(R, m, sizeof m);
 }
 
-void rs_pose_R_from_ypr(double R_cam_enu[9], const double ypr_deg[3]) {
+void rs_pose_R_from_ypr(double R_cam_enu[9], const double ypr_deg[3])
+{
     double A[9], B[9], R[9];
     rs_pose_Rz(A, -ypr_deg[0] * RAD_PER_DEG);
     rs_pose_Rx(B, ypr_deg[1] * RAD_PER_DEG);
@@ -52,7 +56,8 @@ void rs_pose_R_from_ypr(double R_cam_enu[9], const double ypr_deg[3]) {
     rs_pose_mat3_transpose(R_cam_enu, R);
 }
 
-void rs_pose_ypr_from_R(double ypr_deg[3], const double R_cam_enu[9]) {
+void rs_pose_ypr_from_R(double ypr_deg[3], const double R_cam_enu[9])
+{
     double R_enu_cam[9];
     rs_pose_mat3_transpose(R_enu_cam, R_cam_enu);
     // optical axis in ENU = third column of R_enu_cam = (sin y cos p, cos y cos p, sin p)
@@ -78,7 +83,8 @@ void rs_pose_ypr_from_R(double ypr_deg[3], const double R_cam_enu[9]) {
     ypr_deg[2] = roll_deg;
 }
 
-void rs_pose_position_from_rt(double position_enu_m[3], double *dpos_drt, const double rt_cam_enu[6]) {
+void rs_pose_position_from_rt(double position_enu_m[3], double *dpos_drt, const double rt_cam_enu[6])
+{
     double rt_enu_cam[6], dt_dr[9], dt_dt[9];
     mrcal_invert_rt(rt_enu_cam, dt_dr, dt_dt, rt_cam_enu);
     memcpy(position_enu_m, &rt_enu_cam[3], 3 * sizeof(double));
@@ -90,23 +96,26 @@ void rs_pose_position_from_rt(double position_enu_m[3], double *dpos_drt, const 
             }
 }
 
-void rs_pose_ypr_from_rt(double ypr_deg[3], double position_enu_m[3], const double rt_cam_enu[6]) {
+void rs_pose_ypr_from_rt(double ypr_deg[3], double position_enu_m[3], const double rt_cam_enu[6])
+{
     double R_cam_enu[9];
     mrcal_R_from_r(R_cam_enu, NULL, rt_cam_enu);
     rs_pose_ypr_from_R(ypr_deg, R_cam_enu);
     if (position_enu_m) rs_pose_position_from_rt(position_enu_m, NULL, rt_cam_enu);
 }
 
-void rs_pose_rt_from_ypr(double rt_cam_enu[6], const double ypr_deg[3], const double position_enu_m[3]) {
+void rs_pose_rt_from_ypr(double rt_cam_enu[6], const double ypr_deg[3], const double position_enu_m[3])
+{
     double R[9];
     rs_pose_R_from_ypr(R, ypr_deg);
     rs_pose_r_from_R(rt_cam_enu, R); // not mrcal's alone: wrong at a half-turn (looking down)
     for (int i = 0; i < 3; i++)
-        rt_cam_enu[3 + i] = -(R[i * 3] * position_enu_m[0] + R[i * 3 + 1] * position_enu_m[1] +
-                              R[i * 3 + 2] * position_enu_m[2]);
+        rt_cam_enu[3 + i] =
+            -(R[i * 3] * position_enu_m[0] + R[i * 3 + 1] * position_enu_m[1] + R[i * 3 + 2] * position_enu_m[2]);
 }
 
-void rs_pose_r_from_R(double r[3], const double R[9]) {
+void rs_pose_r_from_R(double r[3], const double R[9])
+{
     mrcal_r_from_R(r, NULL, R);
     double back[9];
     mrcal_R_from_r(back, NULL, r);

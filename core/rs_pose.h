@@ -30,37 +30,37 @@ void rs_pose_Rx(double R[9], double angle_rad);
 void rs_pose_Rz(double R[9], double angle_rad);
 
 // R_cam_enu (maps ENU vectors into the camera frame) from yaw, pitch, roll in degrees.
-void rs_pose_R_from_ypr(// out
-                        double R_cam_enu[9],
-                        // in
-                        const double yaw_pitch_roll_deg[3]);
+void rs_pose_R_from_ypr( // out
+    double R_cam_enu[9],
+    // in
+    const double yaw_pitch_roll_deg[3]);
 
 // yaw, pitch, roll in degrees (ranges above) of a rotation R_cam_enu.
-void rs_pose_ypr_from_R(// out
-                        double yaw_pitch_roll_deg[3],
-                        // in
-                        const double R_cam_enu[9]);
+void rs_pose_ypr_from_R( // out
+    double yaw_pitch_roll_deg[3],
+    // in
+    const double R_cam_enu[9]);
 
 // Camera position and yaw/pitch/roll of a pose.
-void rs_pose_ypr_from_rt(// out
-                         double yaw_pitch_roll_deg[3],
-                         double position_enu_m[3], // may be NULL
-                         // in
-                         const double rt_cam_enu[6]);
+void rs_pose_ypr_from_rt( // out
+    double yaw_pitch_roll_deg[3],
+    double position_enu_m[3], // may be NULL
+    // in
+    const double rt_cam_enu[6]);
 
 // The pose of a camera at position_enu_m with the given yaw/pitch/roll (degrees).
-void rs_pose_rt_from_ypr(// out
-                         double rt_cam_enu[6],
-                         // in
-                         const double yaw_pitch_roll_deg[3],
-                         const double position_enu_m[3]);
+void rs_pose_rt_from_ypr( // out
+    double rt_cam_enu[6],
+    // in
+    const double yaw_pitch_roll_deg[3],
+    const double position_enu_m[3]);
 
 // Camera centre in ENU: -R(r)^T t.
-void rs_pose_position_from_rt(// out
-                              double position_enu_m[3],
-                              double *dpos_drt, // (3,6) row-major, may be NULL
-                              // in
-                              const double rt_cam_enu[6]);
+void rs_pose_position_from_rt( // out
+    double position_enu_m[3],
+    double *dpos_drt, // (3,6) row-major, may be NULL
+    // in
+    const double rt_cam_enu[6]);
 
 // Rodrigues vector of a rotation matrix, correct for every rotation. mrcal 2.2's r_from_R
 // returns r = 0 for a half-turn (e.g. diag(1,-1,-1): a camera looking straight down) and is

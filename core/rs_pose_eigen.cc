@@ -6,7 +6,8 @@ extern "C" {
 #include "core/internal/rs_pose_eigen.h"
 }
 
-extern "C" void rs_pose_eigen_r_from_R(double r[3], const double R[9]) {
+extern "C" void rs_pose_eigen_r_from_R(double r[3], const double R[9])
+{
     try {
         const Eigen::Matrix3d M = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(R);
         const Eigen::AngleAxisd aa(M);

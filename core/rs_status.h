@@ -37,8 +37,7 @@ const char *rs_strerror(rs_status status);
 
 // Sets err (if not NULL) to status and a printf-style message, and returns status, so that
 // callers can write `return rs_err_set(err, RS_ERR_PARSE, "%s:%d: u: not a number", path, line);`
-rs_status rs_err_set(rs_err *err, rs_status status, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
+rs_status rs_err_set(rs_err *err, rs_status status, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 rs_status rs_err_vset(rs_err *err, rs_status status, const char *fmt, va_list ap);
 
 // Prefixes err->msg with "prefix: " (for adding context such as a camera id on the way up).

@@ -45,15 +45,15 @@ static void sort_scored(scored *s, scored *tmp, size_t N)
 
 // A detection kept by max-dets, filed under its image.
 typedef struct {
-    double u, v;  // its point, pixels
-    size_t rank;  // position in the evaluation order (descending score, then input order)
+    double u, v; // its point, pixels
+    size_t rank; // position in the evaluation order (descending score, then input order)
     int category;
 } slot;
 
 // A ground truth or ignore region closer to a detection than the largest threshold.
 typedef struct {
-    double d2;  // squared distance, pixels^2
-    size_t gt;  // annotation index
+    double d2; // squared distance, pixels^2
+    size_t gt; // annotation index
 } candidate;
 
 // The detections kept by max-dets, grouped by image (images in order; within an image in
@@ -64,10 +64,10 @@ typedef struct {
 // the nearest one is at least the largest threshold away: a false positive at every threshold.
 typedef struct {
     size_t Nkept;
-    size_t *begin;        // (Nimages+1) slots of image m: begin[m] .. begin[m+1]-1
-    slot *slots;          // (Nkept)
-    size_t *cand_begin;   // (Nkept+1) candidates of slot j: cand_begin[j] .. cand_begin[j+1]-1
-    candidate *cands;     // (cand_begin[Nkept])
+    size_t *begin;          // (Nimages+1) slots of image m: begin[m] .. begin[m+1]-1
+    slot *slots;            // (Nkept)
+    size_t *cand_begin;     // (Nkept+1) candidates of slot j: cand_begin[j] .. cand_begin[j+1]-1
+    candidate *cands;       // (cand_begin[Nkept])
     unsigned char *outcome; // (Nkept) by rank, scratch
     unsigned char *matched; // (Ngt) scratch
     double *tp_precision;   // (Nkept) scratch
@@ -96,8 +96,8 @@ static bool before(const rs_eval_data *d, const candidate *x, const candidate *y
 }
 
 // Appends the candidates of detection e of image m to k->cands (insertion-sorted: lists are short).
-static bool add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_data *d, int m, const slot *e,
-                           double theta_max_px)
+static bool
+add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_data *d, int m, const slot *e, double theta_max_px)
 {
     const size_t first = *n;
     for (size_t a = d->gt_begin[m]; a < d->gt_begin[m + 1]; a++) {
@@ -131,7 +131,8 @@ static rs_status keep(kept_dets *k, const rs_eval_data *d, int max_dets, double 
     k->outcome = malloc(N ? N : 1);
     k->matched = malloc(d->Ngt ? d->Ngt : 1);
     k->tp_precision = malloc((N ? N : 1) * sizeof *k->tp_precision);
-    if (!s || !tmp || !next || !k->begin || !k->slots || !k->cand_begin || !k->outcome || !k->matched || !k->tp_precision)
+    if (!s || !tmp || !next || !k->begin || !k->slots || !k->cand_begin || !k->outcome || !k->matched ||
+        !k->tp_precision)
         goto nomem;
     for (size_t i = 0; i < N; i++) s[i] = (scored){descending_key(d->det_score[i]), i};
     sort_scored(s, tmp, N);
@@ -188,7 +189,8 @@ static void match_image(kept_dets *k, const rs_eval_data *d, int m, int category
             const size_t a = k->cands[c].gt;
             if (k->matched[a] || (category >= 0 && d->gt_category[a] != category)) continue;
             if (sqrt(k->cands[c].d2) < theta_px) {
-                if (d->gt_crowd[a]) o = DROPPED;
+                if (d->gt_crowd[a])
+                    o = DROPPED;
                 else {
                     o = TRUE_POSITIVE;
                     k->matched[a] = 1;
@@ -201,8 +203,8 @@ static void match_image(kept_dets *k, const rs_eval_data *d, int m, int category
 }
 
 // Evaluates one scope.
-static void evaluate_scope(rs_eval_metrics *out, kept_dets *k, const rs_eval_data *d, const double *theta_px, int T,
-                           scope s)
+static void
+evaluate_scope(rs_eval_metrics *out, kept_dets *k, const rs_eval_data *d, const double *theta_px, int T, scope s)
 {
     size_t num_gt = 0, num_det = 0;
     for (int m = 0; m < d->Nimages; m++) {
@@ -284,8 +286,15 @@ void rs_eval_result_free(rs_eval_result *r)
 
 // Allocates and evaluates one row per group (groups) or per category (!groups), named by names.
 // *Nrows counts the rows allocated so far, for rs_eval_result_free after a failure.
-static rs_status evaluate_rows(rs_eval_metrics **rows, int *Nrows, int N, char *const *names, bool groups,
-                               kept_dets *k, const rs_eval_data *d, const double *theta_px, int T)
+static rs_status evaluate_rows(rs_eval_metrics **rows,
+                               int *Nrows,
+                               int N,
+                               char *const *names,
+                               bool groups,
+                               kept_dets *k,
+                               const rs_eval_data *d,
+                               const double *theta_px,
+                               int T)
 {
     if (!(*rows = calloc((size_t)(N ? N : 1), sizeof **rows))) return RS_ERR_NOMEM;
     for (int i = 0; i < N; i++) {
@@ -304,7 +313,8 @@ static rs_status check_options(const rs_eval_options *opt, const rs_eval_data *d
                               opt->Nthresholds);
         for (int t = 0; t < opt->Nthresholds; t++) {
             double x = opt->thresholds[t];
-            if (!isfinite(x) || x <= 0) return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g is not a positive number", x);
+            if (!isfinite(x) || x <= 0)
+                return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g is not a positive number", x);
             for (int u = 0; u < t; u++)
                 if (opt->thresholds[u] == x) return rs_err_set(err, RS_ERR_USAGE, "thresholds: %g given twice", x);
         }
@@ -324,12 +334,10 @@ rs_status rs_eval_run(rs_eval_result **result, const rs_eval_data *d, const rs_e
     if (st != RS_OK) return st;
     // nuScenes' centre-distance thresholds for ground distances, the seed paper's for pixels
     static const double default_thresholds_m[] = {0.5, 1, 2, 4};
-    const double *theta = opt->thresholds ? opt->thresholds
-                          : d->metres        ? default_thresholds_m
-                                             : default_thresholds_px;
+    const double *theta = opt->thresholds ? opt->thresholds : d->metres ? default_thresholds_m : default_thresholds_px;
     const int T = opt->thresholds ? opt->Nthresholds
-                  : d->metres        ? (int)(sizeof default_thresholds_m / sizeof(double))
-                                     : (int)(sizeof default_thresholds_px / sizeof(double));
+                  : d->metres     ? (int)(sizeof default_thresholds_m / sizeof(double))
+                                  : (int)(sizeof default_thresholds_px / sizeof(double));
 
     rs_eval_result *r = calloc(1, sizeof *r);
     kept_dets k = {0};

@@ -34,8 +34,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-#include "geo/rs_site.h"
 #include "core/rs_status.h"
+#include "geo/rs_site.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -45,10 +45,10 @@ extern "C" {
 typedef struct rs_eval_data rs_eval_data;
 
 typedef struct {
-    double center_shift;   // K (unitless, fraction of the box height); 0 = the box centre
-    const char *group_key; // image-level field to group by (`--by`), may be NULL
+    double center_shift;    // K (unitless, fraction of the box height); 0 = the box centre
+    const char *group_key;  // image-level field to group by (`--by`), may be NULL
     const char *camera_key; // image-level field naming each image's camera (for
-                           //   rs_eval_data_to_ground), may be NULL
+                            //   rs_eval_data_to_ground), may be NULL
 } rs_eval_load_options;
 
 // Reads a COCO ground-truth file and a COCO results file (a JSON list of {image_id,
@@ -57,21 +57,26 @@ typedef struct {
 // RS_ERR_INVALID (negative box size, non-finite number, duplicate image id), RS_ERR_NOT_FOUND
 // (a detection or annotation for an unknown image or category). The message names the file,
 // its line and the entry (0-based index in its list, as jq's .[N]) and field.
-rs_status rs_eval_load(// out
-                       rs_eval_data **data,
-                       // in
-                       const char *gt_path, const char *dets_path,
-                       const rs_eval_load_options *opt, // may be NULL: K = 0, no groups
-                       rs_err *err);
+rs_status rs_eval_load( // out
+    rs_eval_data **data,
+    // in
+    const char *gt_path,
+    const char *dets_path,
+    const rs_eval_load_options *opt, // may be NULL: K = 0, no groups
+    rs_err *err);
 
 // The same from text in memory; the names are used in messages only.
-rs_status rs_eval_parse(// out
-                        rs_eval_data **data,
-                        // in
-                        const char *gt_text, size_t gt_len, const char *gt_name,
-                        const char *dets_text, size_t dets_len, const char *dets_name,
-                        const rs_eval_load_options *opt, // may be NULL
-                        rs_err *err);
+rs_status rs_eval_parse( // out
+    rs_eval_data **data,
+    // in
+    const char *gt_text,
+    size_t gt_len,
+    const char *gt_name,
+    const char *dets_text,
+    size_t dets_len,
+    const char *dets_name,
+    const rs_eval_load_options *opt, // may be NULL
+    rs_err *err);
 
 void rs_eval_data_free(rs_eval_data *data);
 
@@ -84,16 +89,16 @@ void rs_eval_data_free(rs_eval_data *data);
 // nothing: such a detection is a false positive and such a ground truth stays unmatched.
 // Errors: RS_ERR_INVALID (data loaded without camera_key, an image without a camera),
 // RS_ERR_NOT_FOUND (a camera the site or calib_dir lacks), RS_ERR_IO / RS_ERR_PARSE (model).
-rs_status rs_eval_data_to_ground(// in,out
-                                 rs_eval_data *data,
-                                 // in
-                                 const rs_site *site, const char *calib_dir,
-                                 size_t *Nmissed, // may be NULL: points whose ray misses the ground
-                                 rs_err *err);
+rs_status rs_eval_data_to_ground( // in,out
+    rs_eval_data *data,
+    // in
+    const rs_site *site,
+    const char *calib_dir,
+    size_t *Nmissed, // may be NULL: points whose ray misses the ground
+    rs_err *err);
 
 // Counts: images, non-crowd ground truths, ignore regions, detections (before max-dets).
-void rs_eval_data_counts(const rs_eval_data *data, size_t *Nimages, size_t *Ngt, size_t *Ncrowd,
-                         size_t *Ndets);
+void rs_eval_data_counts(const rs_eval_data *data, size_t *Nimages, size_t *Ngt, size_t *Ncrowd, size_t *Ndets);
 // Bytes held by data (its arrays, not the input text).
 size_t rs_eval_data_bytes(const rs_eval_data *data);
 
@@ -103,43 +108,43 @@ typedef struct {
     const double *thresholds; // (Nthresholds) > 0, finite, distinct: pixels, or metres for data
                               //   on the ground (rs_eval_data_to_ground); NULL: 2,5,10,15,20,50
     int Nthresholds;          // 1..RS_EVAL_MAX_THRESHOLDS (ignored when thresholds NULL)
-    int max_dets;                // per image, >= 1 (0 selects the default, 100)
-    bool per_class;              // also one row per category
-    bool by_group;               // also one row per value of the load-time group_key
+    int max_dets;             // per image, >= 1 (0 selects the default, 100)
+    bool per_class;           // also one row per category
+    bool by_group;            // also one row per value of the load-time group_key
 } rs_eval_options;
 
 // The metrics of one scope: the whole dataset, one group of images or one category.
 typedef struct {
-    char *name;           // group value or category name; NULL for the whole dataset
+    char *name;            // group value or category name; NULL for the whole dataset
     long long category_id; // for category rows; 0 otherwise
-    size_t num_gt;        // non-crowd ground truths in the scope
-    size_t num_det;       // detections in the scope kept by max-dets (dropped ones included)
-    double *ap;           // (Nthresholds) NaN when num_gt == 0
-    double *recall;       // (Nthresholds) NaN when num_gt == 0
-    size_t *num_dropped;  // (Nthresholds) detections dropped by ignore regions
-    double map, ar;       // means over the thresholds; NaN when num_gt == 0
+    size_t num_gt;         // non-crowd ground truths in the scope
+    size_t num_det;        // detections in the scope kept by max-dets (dropped ones included)
+    double *ap;            // (Nthresholds) NaN when num_gt == 0
+    double *recall;        // (Nthresholds) NaN when num_gt == 0
+    size_t *num_dropped;   // (Nthresholds) detections dropped by ignore regions
+    double map, ar;        // means over the thresholds; NaN when num_gt == 0
 } rs_eval_metrics;
 
 typedef struct {
     int Nthresholds;
-    double *thresholds;       // (Nthresholds) in pixels, or metres (`metres`) after
-                              //   rs_eval_data_to_ground
-    bool metres;              // the thresholds are ground distances in metres
+    double *thresholds; // (Nthresholds) in pixels, or metres (`metres`) after
+                        //   rs_eval_data_to_ground
+    bool metres;        // the thresholds are ground distances in metres
     int max_dets;
-    rs_eval_metrics all;      // class-agnostic, every image
+    rs_eval_metrics all; // class-agnostic, every image
     int Ngroups;
-    rs_eval_metrics *groups;  // (Ngroups) class-agnostic, first-appearance order; NULL if none
+    rs_eval_metrics *groups; // (Ngroups) class-agnostic, first-appearance order; NULL if none
     int Nclasses;
     rs_eval_metrics *classes; // (Nclasses) in the ground truth's category order; NULL if none
 } rs_eval_result;
 
 // Evaluates. Errors: RS_ERR_USAGE for bad options (naming the option), RS_ERR_NOMEM.
-rs_status rs_eval_run(// out
-                      rs_eval_result **result,
-                      // in
-                      const rs_eval_data *data,
-                      const rs_eval_options *opt, // may be NULL: the defaults
-                      rs_err *err);
+rs_status rs_eval_run( // out
+    rs_eval_result **result,
+    // in
+    const rs_eval_data *data,
+    const rs_eval_options *opt, // may be NULL: the defaults
+    rs_err *err);
 
 void rs_eval_result_free(rs_eval_result *result);
 

@@ -4,8 +4,8 @@
 #include <string.h>
 
 #include "core/rs_camera.h"
-#include "eval/internal/rs_eval_internal.h"
 #include "core/rs_io.h"
+#include "eval/internal/rs_eval_internal.h"
 #include "geo/rs_site.h"
 
 // Points whose rays miss the ground are parked far away, detections and ground truths on
@@ -25,12 +25,11 @@ static bool to_ground(double *q, const rs_camera *cam, const rs_site *site, doub
     return true;
 }
 
-rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const char *calib_dir, size_t *Nmissed,
-                                 rs_err *err)
+rs_status
+rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const char *calib_dir, size_t *Nmissed, rs_err *err)
 {
     if (Nmissed) *Nmissed = 0;
-    if (!d->image_camera)
-        return rs_err_set(err, RS_ERR_INVALID, "the ground truth was loaded without a camera field");
+    if (!d->image_camera) return rs_err_set(err, RS_ERR_INVALID, "the ground truth was loaded without a camera field");
     if (d->metres) return rs_err_set(err, RS_ERR_INVALID, "the points are on the ground already");
     // one camera model per distinct camera name, loaded on first use
     int *cam_of_image = malloc((size_t)(d->Nimages ? d->Nimages : 1) * sizeof *cam_of_image);

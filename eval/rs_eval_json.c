@@ -25,8 +25,10 @@ static size_t skip_space(const char *t, size_t i, size_t end)
 static size_t skip_string(const char *t, size_t i, size_t end)
 {
     for (i++; i < end; i++) {
-        if (t[i] == '\\') i++;
-        else if (t[i] == '"') return i + 1;
+        if (t[i] == '\\')
+            i++;
+        else if (t[i] == '"')
+            return i + 1;
     }
     return end;
 }
@@ -42,7 +44,8 @@ static size_t skip_value(const char *t, size_t i, size_t end)
             i = skip_string(t, i, end);
             continue;
         }
-        if (c == '{' || c == '[') depth++;
+        if (c == '{' || c == '[')
+            depth++;
         else if (c == '}' || c == ']') {
             if (depth == 0) return i;
             depth--;
@@ -60,8 +63,8 @@ static rs_status syntax(const char *t, size_t at, const char *name, const char *
 
 // Parses the value starting at text[begin] with cJSON, which stops where the value ends.
 // out: *item (caller deletes), *stop: the index just past the value.
-static rs_status parse_value(cJSON **item, size_t *stop, const char *text, size_t begin, size_t end,
-                             const char *name, rs_err *err)
+static rs_status
+parse_value(cJSON **item, size_t *stop, const char *text, size_t begin, size_t end, const char *name, rs_err *err)
 {
     const char *after = NULL;
     *item = cJSON_ParseWithLengthOpts(text + begin, end - begin, &after, false);
@@ -71,15 +74,14 @@ static rs_status parse_value(cJSON **item, size_t *stop, const char *text, size_
         char near[24] = {0};
         size_t n = end - at < sizeof near - 1 ? end - at : sizeof near - 1;
         for (size_t k = 0; k < n; k++) near[k] = text[at + k] == '\n' ? ' ' : text[at + k];
-        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: JSON syntax error near '%s'", name,
-                          rs_eval_json_line(text, at), near);
+        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: JSON syntax error near '%s'", name, rs_eval_json_line(text, at),
+                          near);
     }
     *stop = (size_t)(after - text);
     return RS_OK;
 }
 
-rs_status rs_eval_json_parse(cJSON **item, const char *text, size_t begin, size_t end,
-                             const char *name, rs_err *err)
+rs_status rs_eval_json_parse(cJSON **item, const char *text, size_t begin, size_t end, const char *name, rs_err *err)
 {
     size_t stop = 0;
     rs_status st = parse_value(item, &stop, text, begin, end, name, err);
@@ -96,11 +98,12 @@ rs_status rs_eval_json_parse(cJSON **item, const char *text, size_t begin, size_
 // The end of a container: only white space may follow its closing bracket at text[i].
 static rs_status closed(const char *text, size_t i, size_t end, const char *name, rs_err *err)
 {
-    return skip_space(text, i + 1, end) == end ? RS_OK : syntax(text, i + 1, name, "unexpected text after the end", err);
+    return skip_space(text, i + 1, end) == end ? RS_OK
+                                               : syntax(text, i + 1, name, "unexpected text after the end", err);
 }
 
-rs_status rs_eval_json_array(const char *text, size_t begin, size_t end, const char *name,
-                             rs_eval_json_item_fn each, void *ctx, rs_err *err)
+rs_status rs_eval_json_array(
+    const char *text, size_t begin, size_t end, const char *name, rs_eval_json_item_fn each, void *ctx, rs_err *err)
 {
     size_t i = skip_space(text, begin, end);
     if (i == end || text[i] != '[') return syntax(text, i, name, "expected a list '['", err);
@@ -124,8 +127,8 @@ rs_status rs_eval_json_array(const char *text, size_t begin, size_t end, const c
     }
 }
 
-rs_status rs_eval_json_object(const char *text, size_t begin, size_t end, const char *name,
-                              rs_eval_json_span_fn each, void *ctx, rs_err *err)
+rs_status rs_eval_json_object(
+    const char *text, size_t begin, size_t end, const char *name, rs_eval_json_span_fn each, void *ctx, rs_err *err)
 {
     size_t i = skip_space(text, begin, end);
     if (i == end || text[i] != '{') return syntax(text, i, name, "expected an object '{'", err);

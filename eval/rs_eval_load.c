@@ -8,8 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "eval/internal/rs_eval_internal.h"
 #include "core/rs_io.h"
+#include "eval/internal/rs_eval_internal.h"
 
 // ---- small helpers ----
 
@@ -35,8 +35,8 @@ typedef struct {
     size_t index;
 } where;
 
-__attribute__((format(printf, 4, 5))) static rs_status bad(const where *w, rs_err *err, rs_status st,
-                                                           const char *fmt, ...)
+__attribute__((format(printf, 4, 5))) static rs_status
+bad(const where *w, rs_err *err, rs_status st, const char *fmt, ...)
 {
     char msg[768];
     va_list ap;
@@ -44,13 +44,19 @@ __attribute__((format(printf, 4, 5))) static rs_status bad(const where *w, rs_er
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     char entry[64];
-    if (w->index == SIZE_MAX) snprintf(entry, sizeof entry, "top level");
-    else if (!w->list) snprintf(entry, sizeof entry, "entry %zu", w->index);
-    else snprintf(entry, sizeof entry, "%s[%zu]", w->list, w->index);
+    if (w->index == SIZE_MAX)
+        snprintf(entry, sizeof entry, "top level");
+    else if (!w->list)
+        snprintf(entry, sizeof entry, "entry %zu", w->index);
+    else
+        snprintf(entry, sizeof entry, "%s[%zu]", w->list, w->index);
     return rs_err_set(err, st, "%s:%d: %s: %s", w->name, rs_eval_json_line(w->text, w->at), entry, msg);
 }
 
-static rs_status nomem(const where *w, rs_err *err) { return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", w->name); }
+static rs_status nomem(const where *w, rs_err *err)
+{
+    return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", w->name);
+}
 
 // An id -> index map: a sorted array searched by bisection.
 typedef struct {
@@ -70,8 +76,10 @@ static int find_id(const id_index *map, int N, long long id)
     int lo = 0, hi = N;
     while (lo < hi) {
         int mid = lo + (hi - lo) / 2;
-        if (map[mid].id < id) lo = mid + 1;
-        else hi = mid;
+        if (map[mid].id < id)
+            lo = mid + 1;
+        else
+            hi = mid;
     }
     return lo < N && map[lo].id == id ? map[lo].index : -1;
 }
@@ -141,9 +149,9 @@ typedef struct {
     bool has[3];
 
     size_t cap_images;
-    size_t *image_at;     // (Nimages) offset of each image entry
-    char **image_value;   // (Nimages) the group value, owned
-    id_index *image_map;  // (Nimages) sorted
+    size_t *image_at;    // (Nimages) offset of each image entry
+    char **image_value;  // (Nimages) the group value, owned
+    id_index *image_map; // (Nimages) sorted
     size_t cap_categories;
     id_index *category_map; // (Ncategories) sorted
     bool categories_listed; // a "categories" list exists: annotations must use its ids
@@ -177,9 +185,12 @@ static rs_status group_value(const where *w, const cJSON *o, const char *key, ch
     const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
     char buf[64];
     const char *s;
-    if (!v || cJSON_IsNull(v)) s = "(missing)";
-    else if (cJSON_IsString(v)) s = v->valuestring;
-    else if (cJSON_IsBool(v)) s = cJSON_IsTrue(v) ? "true" : "false";
+    if (!v || cJSON_IsNull(v))
+        s = "(missing)";
+    else if (cJSON_IsString(v))
+        s = v->valuestring;
+    else if (cJSON_IsBool(v))
+        s = cJSON_IsTrue(v) ? "true" : "false";
     else if (cJSON_IsNumber(v)) {
         snprintf(buf, sizeof buf, "%.15g", v->valuedouble);
         s = buf;
@@ -275,8 +286,7 @@ static rs_status gt_annotation(void *vctx, size_t index, const cJSON *o, size_t 
         (st = get_id(&c->w, o, "category_id", &category_id, err)) || (st = get_point(&c->w, o, 0, q, err)))
         return st;
     int image = find_id(c->image_map, d->Nimages, image_id);
-    if (image < 0)
-        return bad(&c->w, err, RS_ERR_NOT_FOUND, "image_id %lld not in \"images\"", image_id);
+    if (image < 0) return bad(&c->w, err, RS_ERR_NOT_FOUND, "image_id %lld not in \"images\"", image_id);
     int category = find_id(c->category_map, d->Ncategories, category_id);
     if (category < 0) {
         if (c->categories_listed)
@@ -286,8 +296,10 @@ static rs_status gt_annotation(void *vctx, size_t index, const cJSON *o, size_t 
     }
     const cJSON *ic = cJSON_GetObjectItemCaseSensitive(o, "iscrowd");
     if (ic && !cJSON_IsNull(ic)) {
-        if (cJSON_IsBool(ic)) crowd = cJSON_IsTrue(ic);
-        else if (cJSON_IsNumber(ic) && (ic->valuedouble == 0 || ic->valuedouble == 1)) crowd = ic->valuedouble == 1;
+        if (cJSON_IsBool(ic))
+            crowd = cJSON_IsTrue(ic);
+        else if (cJSON_IsNumber(ic) && (ic->valuedouble == 0 || ic->valuedouble == 1))
+            crowd = ic->valuedouble == 1;
         else
             return bad(&c->w, err, RS_ERR_PARSE, "iscrowd: not 0, 1, true or false");
     }
@@ -354,7 +366,8 @@ static rs_status make_groups(gt_ctx *c, rs_err *err)
         // every image's group: its value's position among the distinct values
         for (int g = 0; g < Nu; g++) v[g].image = g;
         named_image *byname = malloc((size_t)(Nu ? Nu : 1) * sizeof *byname);
-        if (!byname) st = nomem(&c->w, err);
+        if (!byname)
+            st = nomem(&c->w, err);
         else {
             memcpy(byname, v, (size_t)Nu * sizeof *v);
             qsort(byname, (size_t)Nu, sizeof *byname, cmp_named_image);
@@ -363,8 +376,10 @@ static rs_status make_groups(gt_ctx *c, rs_err *err)
                 int lo = 0, hi = Nu;
                 while (lo < hi) {
                     int mid = lo + (hi - lo) / 2;
-                    if (strcmp(byname[mid].s, key.s) < 0) lo = mid + 1;
-                    else hi = mid;
+                    if (strcmp(byname[mid].s, key.s) < 0)
+                        lo = mid + 1;
+                    else
+                        hi = mid;
                 }
                 d->image_group[i] = byname[lo].image;
             }
@@ -410,10 +425,10 @@ static rs_status load_gt(gt_ctx *c, size_t len, rs_err *err)
     rs_status st = rs_eval_json_object(c->w.text, 0, len, c->w.name, gt_top, c, err);
     if (st != RS_OK) return st;
     for (int k = 0; k < 2; k++)
-        if (!c->has[k]) return bad(&c->w, err, RS_ERR_PARSE, "no \"%s\" list (a COCO ground-truth file has one)", gt_keys[k]);
+        if (!c->has[k])
+            return bad(&c->w, err, RS_ERR_PARSE, "no \"%s\" list (a COCO ground-truth file has one)", gt_keys[k]);
 
-    if ((st = rs_eval_json_array(c->w.text, c->span[0][0], c->span[0][1], c->w.name, gt_image, c, err)))
-        return st;
+    if ((st = rs_eval_json_array(c->w.text, c->span[0][0], c->span[0][1], c->w.name, gt_image, c, err))) return st;
     c->image_map = malloc((size_t)(d->Nimages ? d->Nimages : 1) * sizeof *c->image_map);
     if (!c->image_map) return nomem(&c->w, err);
     for (int i = 0; i < d->Nimages; i++) c->image_map[i] = (id_index){d->image_id[i], i};
@@ -424,7 +439,8 @@ static rs_status load_gt(gt_ctx *c, size_t len, rs_err *err)
             c->w.at = c->image_at[twice];
             c->w.list = "images";
             c->w.index = (size_t)twice;
-            return bad(&c->w, err, RS_ERR_INVALID, "id: image %lld already listed as images[%d]", c->image_map[i].id, first);
+            return bad(&c->w, err, RS_ERR_INVALID, "id: image %lld already listed as images[%d]", c->image_map[i].id,
+                       first);
         }
     if (c->group_key && (st = make_groups(c, err))) return st;
 
@@ -433,8 +449,7 @@ static rs_status load_gt(gt_ctx *c, size_t len, rs_err *err)
         if ((st = rs_eval_json_array(c->w.text, c->span[2][0], c->span[2][1], c->w.name, gt_category, c, err)))
             return st;
     }
-    if ((st = rs_eval_json_array(c->w.text, c->span[1][0], c->span[1][1], c->w.name, gt_annotation, c, err)))
-        return st;
+    if ((st = rs_eval_json_array(c->w.text, c->span[1][0], c->span[1][1], c->w.name, gt_annotation, c, err))) return st;
     return gather_annotations(c, err);
 }
 
@@ -473,17 +488,14 @@ static rs_status det_entry(void *vctx, size_t index, const cJSON *o, size_t offs
         (st = get_id(&c->w, o, "category_id", &category_id, err)))
         return st;
     const cJSON *score = cJSON_GetObjectItemCaseSensitive(o, "score");
-    if (!score)
-        return bad(&c->w, err, RS_ERR_PARSE, "score: missing");
+    if (!score) return bad(&c->w, err, RS_ERR_PARSE, "score: missing");
     if (!cJSON_IsNumber(score) || !isfinite(score->valuedouble))
         return bad(&c->w, err, RS_ERR_PARSE, "score: not a finite number");
     if ((st = get_point(&c->w, o, c->K, q, err))) return st;
     int image = find_id(c->image_map, d->Nimages, image_id);
-    if (image < 0)
-        return bad(&c->w, err, RS_ERR_NOT_FOUND, "image_id %lld not in the ground truth", image_id);
+    if (image < 0) return bad(&c->w, err, RS_ERR_NOT_FOUND, "image_id %lld not in the ground truth", image_id);
     int category = find_id(c->category_map, d->Ncategories, category_id);
-    if (category < 0)
-        return bad(&c->w, err, RS_ERR_NOT_FOUND, "category_id %lld not in the ground truth", category_id);
+    if (category < 0) return bad(&c->w, err, RS_ERR_NOT_FOUND, "category_id %lld not in the ground truth", category_id);
     size_t n = d->Ndets, cap = c->cap;
     if (!grow(&d->det_point, &cap, n, 2 * sizeof *d->det_point) ||
         !grow(&d->det_score, &(size_t){c->cap}, n, sizeof *d->det_score) ||
@@ -502,20 +514,31 @@ static rs_status det_entry(void *vctx, size_t index, const cJSON *o, size_t offs
 
 // ---- public ----
 
-rs_status rs_eval_parse(rs_eval_data **data, const char *gt_text, size_t gt_len, const char *gt_name,
-                        const char *dets_text, size_t dets_len, const char *dets_name,
-                        const rs_eval_load_options *opt, rs_err *err)
+rs_status rs_eval_parse(rs_eval_data **data,
+                        const char *gt_text,
+                        size_t gt_len,
+                        const char *gt_name,
+                        const char *dets_text,
+                        size_t dets_len,
+                        const char *dets_name,
+                        const rs_eval_load_options *opt,
+                        rs_err *err)
 {
     *data = NULL;
     double K = opt ? opt->center_shift : 0;
     if (!isfinite(K)) return rs_err_set(err, RS_ERR_USAGE, "center shift: not finite");
     rs_eval_data *d = calloc(1, sizeof *d);
     if (!d) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    gt_ctx g = {.d = d, .w = {.text = gt_text, .name = gt_name}, .group_key = opt ? opt->group_key : NULL,
+    gt_ctx g = {.d = d,
+                .w = {.text = gt_text, .name = gt_name},
+                .group_key = opt ? opt->group_key : NULL,
                 .camera_key = opt ? opt->camera_key : NULL};
     rs_status st = load_gt(&g, gt_len, err);
     if (st == RS_OK) {
-        det_ctx c = {.d = d, .image_map = g.image_map, .category_map = g.category_map, .K = K,
+        det_ctx c = {.d = d,
+                     .image_map = g.image_map,
+                     .category_map = g.category_map,
+                     .K = K,
                      .w = {.text = dets_text, .name = dets_name, .index = SIZE_MAX}};
         st = rs_eval_json_array(dets_text, 0, dets_len, dets_name, det_entry, &c, err);
     }
@@ -530,8 +553,8 @@ rs_status rs_eval_parse(rs_eval_data **data, const char *gt_text, size_t gt_len,
     return RS_OK;
 }
 
-rs_status rs_eval_load(rs_eval_data **data, const char *gt_path, const char *dets_path,
-                       const rs_eval_load_options *opt, rs_err *err)
+rs_status rs_eval_load(
+    rs_eval_data **data, const char *gt_path, const char *dets_path, const rs_eval_load_options *opt, rs_err *err)
 {
     *data = NULL;
     char *gt = NULL, *dets = NULL;

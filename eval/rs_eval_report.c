@@ -5,8 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "eval/rs_eval.h"
 #include "core/rs_io.h"
+#include "eval/rs_eval.h"
 
 // A number, or null for NaN. Returns false when out of memory.
 static bool add_number(cJSON *o, const char *key, double x)
@@ -15,8 +15,7 @@ static bool add_number(cJSON *o, const char *key, double x)
 }
 
 // {"<theta>": x[t], ...}
-static bool add_per_threshold(cJSON *o, const char *key, const rs_eval_result *r, const double *x,
-                              const size_t *n)
+static bool add_per_threshold(cJSON *o, const char *key, const rs_eval_result *r, const double *x, const size_t *n)
 {
     cJSON *m = cJSON_AddObjectToObject(o, key);
     if (!m) return false;
@@ -30,16 +29,17 @@ static bool add_per_threshold(cJSON *o, const char *key, const rs_eval_result *r
 
 static bool add_metrics(cJSON *o, const rs_eval_result *r, const rs_eval_metrics *m)
 {
-    return add_per_threshold(o, "AP", r, m->ap, NULL) && add_number(o, "mAP", m->map) &&
-           add_number(o, "AR", m->ar) && add_per_threshold(o, "recall", r, m->recall, NULL) &&
-           add_number(o, "num_gt", (double)m->num_gt) && add_number(o, "num_det", (double)m->num_det) &&
-           add_per_threshold(o, "num_dropped", r, NULL, m->num_dropped);
+    return add_per_threshold(o, "AP", r, m->ap, NULL) && add_number(o, "mAP", m->map) && add_number(o, "AR", m->ar) &&
+           add_per_threshold(o, "recall", r, m->recall, NULL) && add_number(o, "num_gt", (double)m->num_gt) &&
+           add_number(o, "num_det", (double)m->num_det) && add_per_threshold(o, "num_dropped", r, NULL, m->num_dropped);
 }
 
 char *rs_eval_result_json(const rs_eval_result *r)
 {
     cJSON *o = cJSON_CreateObject();
-    bool ok = o && cJSON_AddItemToObject(o, r->metres ? "thresholds_m" : "thresholds_px", cJSON_CreateDoubleArray(r->thresholds, r->Nthresholds)) &&
+    bool ok = o &&
+              cJSON_AddItemToObject(o, r->metres ? "thresholds_m" : "thresholds_px",
+                                    cJSON_CreateDoubleArray(r->thresholds, r->Nthresholds)) &&
               add_number(o, "max_dets", r->max_dets) && add_metrics(o, r, &r->all);
     if (ok && r->groups) {
         cJSON *g = cJSON_AddObjectToObject(o, "groups");

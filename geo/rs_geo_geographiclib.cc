@@ -86,8 +86,7 @@ rs_status check_zone(int zone, bool allow_standard, rs_err *err)
 
 // Runs body(i) for i = 0..N-1, stopping at the first non-OK status, and turns any exception
 // into a status naming the row it came from.
-template <class Body>
-rs_status for_each_row(int N, rs_err *err, Body body)
+template <class Body> rs_status for_each_row(int N, rs_err *err, Body body)
 {
     int i = 0;
     try {
@@ -108,8 +107,7 @@ rs_status for_each_row(int N, rs_err *err, Body body)
 }
 
 // The same for a single call without rows.
-template <class Body>
-rs_status guarded(rs_err *err, Body body)
+template <class Body> rs_status guarded(rs_err *err, Body body)
 {
     return for_each_row(1, err, [&](int) { return body(); });
 }
@@ -131,8 +129,7 @@ rs_status map_rows(double *out, const double *in, int N, const char *const field
 }
 
 // Checks origin and runs op(the LocalCartesian frame at origin), catching exceptions.
-template <class Op>
-rs_status with_local_cartesian(const rs_llh *origin, rs_err *err, Op op)
+template <class Op> rs_status with_local_cartesian(const rs_llh *origin, rs_err *err, Op op)
 {
     rs_status st = check_origin(origin, err);
     if (st) return st;
@@ -144,8 +141,16 @@ rs_status with_local_cartesian(const rs_llh *origin, rs_err *err, Op op)
 
 // The UTM/UPS forward projection of one row into `zone` (< 0: the standard zone), hemisphere
 // `north` when zone >= 0; returns the zone and hemisphere used.
-rs_status utm_forward(const double *llh, int zone, bool north, int N, int i, double enh[3],
-                      int *zone_used, bool *north_used, double *gamma_deg, rs_err *err)
+rs_status utm_forward(const double *llh,
+                      int zone,
+                      bool north,
+                      int N,
+                      int i,
+                      double enh[3],
+                      int *zone_used,
+                      bool *north_used,
+                      double *gamma_deg,
+                      rs_err *err)
 {
     rs_status st = check_llh(llh, N, i, err);
     if (st) return st;
@@ -185,8 +190,7 @@ rs_status rs_geo_ecef_to_llh(double *llh, const double *p_ecef_m, int N, rs_err 
                     [&](const double *p, double *q) { earth.Reverse(p[0], p[1], p[2], q[0], q[1], q[2]); });
 }
 
-rs_status rs_geo_llh_to_enu(double *p_enu_m, const rs_llh *origin, const double *llh, int N,
-                            rs_err *err)
+rs_status rs_geo_llh_to_enu(double *p_enu_m, const rs_llh *origin, const double *llh, int N, rs_err *err)
 {
     return with_local_cartesian(origin, err, [&](const LocalCartesian &lc) {
         return map_rows(p_enu_m, llh, N, llh_fields, err,
@@ -194,8 +198,7 @@ rs_status rs_geo_llh_to_enu(double *p_enu_m, const rs_llh *origin, const double 
     });
 }
 
-rs_status rs_geo_enu_to_llh(double *llh, const rs_llh *origin, const double *p_enu_m, int N,
-                            rs_err *err)
+rs_status rs_geo_enu_to_llh(double *llh, const rs_llh *origin, const double *p_enu_m, int N, rs_err *err)
 {
     return with_local_cartesian(origin, err, [&](const LocalCartesian &lc) {
         return map_rows(llh, p_enu_m, N, enu_fields, err,
@@ -203,8 +206,7 @@ rs_status rs_geo_enu_to_llh(double *llh, const rs_llh *origin, const double *p_e
     });
 }
 
-rs_status rs_geo_enu_frame(double R_ecef_enu[9], double origin_ecef_m[3], const rs_llh *origin,
-                           rs_err *err)
+rs_status rs_geo_enu_frame(double R_ecef_enu[9], double origin_ecef_m[3], const rs_llh *origin, rs_err *err)
 {
     if (!R_ecef_enu) return rs_err_set(err, RS_ERR_USAGE, "R_ecef_enu: NULL");
     rs_status st = check_origin(origin, err);
@@ -223,8 +225,7 @@ rs_status rs_geo_enu_frame(double R_ecef_enu[9], double origin_ecef_m[3], const 
     });
 }
 
-rs_status rs_geo_utm_to_llh(double *llh, int zone, bool north, const double *enh, int N,
-                            rs_err *err)
+rs_status rs_geo_utm_to_llh(double *llh, int zone, bool north, const double *enh, int N, rs_err *err)
 {
     rs_status st = check_zone(zone, false, err);
     if (st) return st;
@@ -234,8 +235,8 @@ rs_status rs_geo_utm_to_llh(double *llh, int zone, bool north, const double *enh
     });
 }
 
-rs_status rs_geo_llh_to_utm(double *enh, int *zone_out, bool *north_out, int zone, bool north,
-                            const double *llh, int N, rs_err *err)
+rs_status rs_geo_llh_to_utm(
+    double *enh, int *zone_out, bool *north_out, int zone, bool north, const double *llh, int N, rs_err *err)
 {
     rs_status st = check_args(enh, llh, N, err);
     if (!st) st = check_zone(zone, true, err);
@@ -253,8 +254,7 @@ rs_status rs_geo_llh_to_utm(double *enh, int *zone_out, bool *north_out, int zon
         } else if (z != zone_all || np != north_all) {
             const std::string zi = UTMUPS::EncodeZone(z, np), z0 = UTMUPS::EncodeZone(zone_all, north_all);
             return fail_row(err, RS_ERR_INVALID, N, i,
-                            "zone: standard zone %s differs from row 0's %s; ask for one zone",
-                            zi.c_str(), z0.c_str());
+                            "zone: standard zone %s differs from row 0's %s; ask for one zone", zi.c_str(), z0.c_str());
         }
         return RS_OK;
     });
@@ -264,8 +264,7 @@ rs_status rs_geo_llh_to_utm(double *enh, int *zone_out, bool *north_out, int zon
     return RS_OK;
 }
 
-rs_status rs_geo_utm_convergence_deg(double *gamma_deg, int zone, bool north, const double *llh,
-                                     int N, rs_err *err)
+rs_status rs_geo_utm_convergence_deg(double *gamma_deg, int zone, bool north, const double *llh, int N, rs_err *err)
 {
     rs_status st = check_args(gamma_deg, llh, N, err);
     if (!st) st = check_zone(zone, true, err);

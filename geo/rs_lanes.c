@@ -75,20 +75,20 @@ double rs_lane_distance_m(double *heading_deg, const rs_lane *lane, const double
 }
 
 // Reads feature i's properties and geometry into lane (ENU at origin).
-static rs_status read_lane(rs_lane *lane, const cJSON *f, int i, const char *path, const rs_site *site,
-                           rs_err *err)
+static rs_status read_lane(rs_lane *lane, const cJSON *f, int i, const char *path, const rs_site *site, rs_err *err)
 {
     lane->feature = i;
     lane->speed_mps = NAN;
     const cJSON *props = cJSON_GetObjectItemCaseSensitive(f, "properties");
     const cJSON *id = cJSON_GetObjectItemCaseSensitive(props, "id");
     if (!cJSON_IsString(id) || !*id->valuestring)
-        return rs_err_set(err, RS_ERR_PARSE, "%s: feature %d: properties.id: missing or not a non-empty string", path, i);
+        return rs_err_set(err, RS_ERR_PARSE, "%s: feature %d: properties.id: missing or not a non-empty string", path,
+                          i);
     if (!(lane->id = strdup(id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-#define LANE_FAIL(code, field, ...)                                                                                  \
-    rs_err_set(err, code, "%s: feature %d (id '%s'): " field ": " __VA_ARGS__)
+#define LANE_FAIL(code, field, ...) rs_err_set(err, code, "%s: feature %d (id '%s'): " field ": " __VA_ARGS__)
     const cJSON *w = cJSON_GetObjectItemCaseSensitive(props, "width_m");
-    if (!cJSON_IsNumber(w)) return LANE_FAIL(RS_ERR_PARSE, "properties.width_m", "missing or not a number", path, i, lane->id);
+    if (!cJSON_IsNumber(w))
+        return LANE_FAIL(RS_ERR_PARSE, "properties.width_m", "missing or not a number", path, i, lane->id);
     lane->width_m = w->valuedouble;
     if (!(lane->width_m > 0) || !isfinite(lane->width_m))
         return LANE_FAIL(RS_ERR_INVALID, "properties.width_m", "%g: must be > 0", path, i, lane->id, lane->width_m);
@@ -166,8 +166,9 @@ static rs_status read_lane(rs_lane *lane, const cJSON *f, int i, const char *pat
         const double *n_up = site->ground_normal_enu;
         lane->p_enu_m[q][0] = enu[3 * k];
         lane->p_enu_m[q][1] = enu[3 * k + 1];
-        lane->p_enu_m[q][2] = on_ground[k] ? (site->ground_offset_m - n_up[0] * enu[3 * k] - n_up[1] * enu[3 * k + 1]) / n_up[2]
-                                           : enu[3 * k + 2];
+        lane->p_enu_m[q][2] = on_ground[k]
+                                  ? (site->ground_offset_m - n_up[0] * enu[3 * k] - n_up[1] * enu[3 * k + 1]) / n_up[2]
+                                  : enu[3 * k + 2];
         lane->Npoints++;
     }
     if (lane->Npoints < 2)
@@ -194,12 +195,15 @@ static rs_status resolve_next(rs_lanes *lanes, const cJSON *features, const char
         rs_lane *lane = &lanes->lane[i];
         const cJSON *next = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(f, "properties"), "next");
         if (!next || cJSON_IsNull(next)) continue;
-        if (!cJSON_IsArray(next)) return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
+        if (!cJSON_IsArray(next))
+            return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
         int n = cJSON_GetArraySize(next);
         if (n == 0) continue;
-        if (!(lane->next = malloc(sizeof *lane->next * (size_t)n))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!(lane->next = malloc(sizeof *lane->next * (size_t)n)))
+            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         for (const cJSON *x = next->child; x; x = x->next) {
-            if (!cJSON_IsString(x)) return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
+            if (!cJSON_IsString(x))
+                return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
             int j = find_lane(lanes, x->valuestring);
             if (j < 0)
                 return LANE_FAIL(RS_ERR_NOT_FOUND, "properties.next", "'%s' is not a lane of this file", path, i,
@@ -257,20 +261,26 @@ done:
 // ---- writing ----
 
 // One lane as a GeoJSON LineString feature into *out (owned by the caller).
-static rs_status lane_feature(cJSON **out, const rs_lanes *lanes, int i, const rs_llh *origin, double N,
-                              bool with_height, const char *path, rs_err *err)
+static rs_status lane_feature(cJSON **out,
+                              const rs_lanes *lanes,
+                              int i,
+                              const rs_llh *origin,
+                              double N,
+                              bool with_height,
+                              const char *path,
+                              rs_err *err)
 {
     const rs_lane *lane = &lanes->lane[i];
     *out = NULL;
     if (!lane->id) return rs_err_set(err, RS_ERR_INVALID, "%s: lane %d: id missing", path, i);
     for (int k = 0; k < lane->Nnext; k++)
         if (lane->next[k] < 0 || lane->next[k] >= lanes->N || !lanes->lane[lane->next[k]].id)
-            return rs_err_set(err, RS_ERR_INVALID, "%s: lane '%s': next[%d] = %d is not a lane", path, lane->id,
-                              k, lane->next[k]);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: lane '%s': next[%d] = %d is not a lane", path, lane->id, k,
+                              lane->next[k]);
     double(*llh)[3] = malloc(sizeof *llh * (size_t)(lane->Npoints > 0 ? lane->Npoints : 1));
     if (!llh) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    rs_status st = lane->Npoints > 0 ? rs_geo_enu_to_llh(&llh[0][0], origin, &lane->p_enu_m[0][0], lane->Npoints, err)
-                                     : RS_OK;
+    rs_status st =
+        lane->Npoints > 0 ? rs_geo_enu_to_llh(&llh[0][0], origin, &lane->p_enu_m[0][0], lane->Npoints, err) : RS_OK;
     if (st) {
         free(llh);
         rs_err_prefix(err, "%s: lane '%s'", path, lane->id);
@@ -302,12 +312,16 @@ static rs_status lane_feature(cJSON **out, const rs_lanes *lanes, int i, const r
         return RS_OK;
     }
     cJSON_Delete(f);
-    return rs_err_set(err, RS_ERR_INVALID, "%s: lane '%s': a number is not finite (or out of memory)", path,
-                      lane->id);
+    return rs_err_set(err, RS_ERR_INVALID, "%s: lane '%s': a number is not finite (or out of memory)", path, lane->id);
 }
 
-rs_status rs_lanes_write(const char *path, const rs_lanes *lanes, const rs_llh *origin,
-                         double geoid_undulation_m, bool with_height, rs_site_layout layout, rs_err *err)
+rs_status rs_lanes_write(const char *path,
+                         const rs_lanes *lanes,
+                         const rs_llh *origin,
+                         double geoid_undulation_m,
+                         bool with_height,
+                         rs_site_layout layout,
+                         rs_err *err)
 {
     cJSON *j = cJSON_CreateObject(), *features = NULL;
     if (!j || !cJSON_AddStringToObject(j, "type", "FeatureCollection") ||

@@ -16,7 +16,6 @@
 extern "C" {
 #endif
 
-
 typedef enum {
     RS_LANE_FORWARD = 0, // vehicles travel in vertex order
     RS_LANE_BOTH         // either way (a single-track road)
@@ -24,21 +23,21 @@ typedef enum {
 
 // One lane: a LineString of lanes.geojson in the site ENU frame.
 typedef struct {
-    char *id;              // owned; unique
-    char *kind;            // owned, may be NULL ("approach", "exit", "junction", ...)
-    double width_m;        // > 0
+    char *id;       // owned; unique
+    char *kind;     // owned, may be NULL ("approach", "exit", "junction", ...)
+    double width_m; // > 0
     rs_lane_direction direction;
-    double speed_mps;      // speed limit, > 0; NaN when the file gives none
-    double (*p_enu_m)[3];  // (Npoints, 3) owned: east, north, up, metres (up: the given height,
-                           //   or on the site's ground plane where none is given)
-    int Npoints;           // >= 2; consecutive points at least 1 mm apart
-    int *next;             // (Nnext,) owned: indices of the lanes this one continues into
+    double speed_mps;     // speed limit, > 0; NaN when the file gives none
+    double (*p_enu_m)[3]; // (Npoints, 3) owned: east, north, up, metres (up: the given height,
+                          //   or on the site's ground plane where none is given)
+    int Npoints;          // >= 2; consecutive points at least 1 mm apart
+    int *next;            // (Nnext,) owned: indices of the lanes this one continues into
     int Nnext;
-    int feature;           // index in the file's "features"
+    int feature; // index in the file's "features"
 } rs_lane;
 
 typedef struct {
-    rs_lane *lane;   // (N,) owned
+    rs_lane *lane; // (N,) owned
     int N;
 } rs_lanes;
 
@@ -55,10 +54,12 @@ typedef struct {
 // duplicate id, fewer than 2 distinct points, a point more than 100 km from the origin),
 // RS_ERR_NOT_FOUND (a `next` id that is no lane), RS_ERR_NOMEM.
 // out: *lanes (owned; rs_lanes_free). On failure *lanes is empty.
-rs_status rs_lanes_read(// out
-                        rs_lanes *lanes,
-                        // in
-                        const char *path, const rs_site *site, rs_err *err);
+rs_status rs_lanes_read( // out
+    rs_lanes *lanes,
+    // in
+    const char *path,
+    const rs_site *site,
+    rs_err *err);
 void rs_lanes_free(rs_lanes *lanes); // NULL-safe; leaves *lanes empty
 
 // Writes lanes.geojson (the format rs_lanes_read reads), atomically (rs_io_write_file): one
@@ -73,10 +74,14 @@ void rs_lanes_free(rs_lanes *lanes); // NULL-safe; leaves *lanes empty
 //     geo/rs_site_write.h
 // Returns RS_ERR_INVALID (no id, a `next` out of range, a non-finite number), the status of
 // rs_geo_enu_to_llh, RS_ERR_IO, RS_ERR_NOMEM.
-rs_status rs_lanes_write(// in
-                         const char *path, const rs_lanes *lanes, const rs_llh *origin,
-                         double geoid_undulation_m, bool with_height, rs_site_layout layout,
-                         rs_err *err);
+rs_status rs_lanes_write( // in
+    const char *path,
+    const rs_lanes *lanes,
+    const rs_llh *origin,
+    double geoid_undulation_m,
+    bool with_height,
+    rs_site_layout layout,
+    rs_err *err);
 
 // Length of a lane's polyline, metres.
 double rs_lane_length_m(const rs_lane *lane);
@@ -84,15 +89,18 @@ double rs_lane_length_m(const rs_lane *lane);
 // The point at arc length s (clamped to [0, length]) along a lane and the compass heading of the
 // segment it lies on (clockwise from north, degrees, [0, 360)), in the lane's vertex order.
 // out: p_enu_m (2,); heading_deg may be NULL
-void rs_lane_point(double p_enu_m[2], double *heading_deg,
-                         // in
-                         const rs_lane *lane, double s_m);
+void rs_lane_point(double p_enu_m[2],
+                   double *heading_deg,
+                   // in
+                   const rs_lane *lane,
+                   double s_m);
 
 // Distance from a point to the nearest point of a lane's polyline, metres; *heading_deg (may be
 // NULL) receives the heading of the nearest segment in vertex order.
 double rs_lane_distance_m(double *heading_deg,
-                                // in
-                                const rs_lane *lane, const double p_enu_m[2]);
+                          // in
+                          const rs_lane *lane,
+                          const double p_enu_m[2]);
 
 #ifdef __cplusplus
 }

@@ -47,64 +47,64 @@ extern "C" {
 
 // A surveyed landmark, in the site ENU frame.
 typedef struct {
-    char *id;           // owned; unique within the site
-    int feature;        // index in landmarks.geojson's "features" (from 0)
-    rs_llh llh;         // as surveyed, height converted to ellipsoidal
-    double p_enu_m[3];  // (3,) east, north, up, metres
-    double sigma_h_m;   // 1-sigma horizontal uncertainty (per axis), metres, > 0
-    double sigma_v_m;   // 1-sigma vertical uncertainty, metres, > 0
-    char *kind;         // owned, may be NULL (free-form: "road-marking", "pole-base", ...)
-    char *note;         // owned, may be NULL
+    char *id;          // owned; unique within the site
+    int feature;       // index in landmarks.geojson's "features" (from 0)
+    rs_llh llh;        // as surveyed, height converted to ellipsoidal
+    double p_enu_m[3]; // (3,) east, north, up, metres
+    double sigma_h_m;  // 1-sigma horizontal uncertainty (per axis), metres, > 0
+    double sigma_v_m;  // 1-sigma vertical uncertainty, metres, > 0
+    char *kind;        // owned, may be NULL (free-form: "road-marking", "pole-base", ...)
+    char *note;        // owned, may be NULL
 } rs_site_landmark;
 
 // One pixel pick of a landmark in one camera.
 typedef struct {
-    int ilandmark;      // index into rs_site.landmarks
-    double q_px[2];     // (2,) u, v in pixels, (0,0) = centre of the top-left pixel
-    double sigma_px;    // 1-sigma pick uncertainty per axis, pixels, > 0 (default 1.0)
-    int line;           // line number in the observations CSV (from 1), for messages
+    int ilandmark;   // index into rs_site.landmarks
+    double q_px[2];  // (2,) u, v in pixels, (0,0) = centre of the top-left pixel
+    double sigma_px; // 1-sigma pick uncertainty per axis, pixels, > 0 (default 1.0)
+    int line;        // line number in the observations CSV (from 1), for messages
 } rs_site_observation;
 
 // One tag of a background image: key = value, both text.
 typedef struct {
-    char *key;          // owned
-    char *value;        // owned; a JSON boolean reads as "true" / "false"
+    char *key;   // owned
+    char *value; // owned; a JSON boolean reads as "true" / "false"
 } rs_site_tag;
 
 // A background image of a camera's empty scene: one entry of the camera's "background_images"
 // in site.json (docs/backgrounds.md), as `roadside background` and `roadside site
 // render-backgrounds` record it (rs_site_record_background, geo/rs_site_write.h).
 typedef struct {
-    char *name;         // owned; may be NULL (the entry gives none)
-    char *file;         // owned; as written in site.json, relative to the site folder
-    char *path;         // owned; `file` joined to the site folder
-    bool synthetic;     // rendered, not photographed (default false)
-    rs_site_tag *tags;  // owned, (Ntags,) in file order: "time" (ISO 8601 with a zone),
-    int Ntags;          //   "conditions" (sunny, cloudy, rain, snow, night) and free tags;
-                        //   tags that are neither text nor boolean are skipped (a warning)
+    char *name;        // owned; may be NULL (the entry gives none)
+    char *file;        // owned; as written in site.json, relative to the site folder
+    char *path;        // owned; `file` joined to the site folder
+    bool synthetic;    // rendered, not photographed (default false)
+    rs_site_tag *tags; // owned, (Ntags,) in file order: "time" (ISO 8601 with a zone),
+    int Ntags;         //   "conditions" (sunny, cloudy, rain, snow, night) and free tags;
+                       //   tags that are neither text nor boolean are skipped (a warning)
 } rs_site_background;
 
 typedef struct {
-    char *id;                       // owned; unique within the site
-    char *model_path;               // owned; path of the intrinsics file (site folder joined)
-    char *observations_path;        // owned; path of the observations CSV
-    char *backgrounds_path;         // owned; may be NULL (no "backgrounds" given)
-    char *note;                     // owned; may be NULL
+    char *id;                // owned; unique within the site
+    char *model_path;        // owned; path of the intrinsics file (site folder joined)
+    char *observations_path; // owned; path of the observations CSV
+    char *backgrounds_path;  // owned; may be NULL (no "backgrounds" given)
+    char *note;              // owned; may be NULL
 
     rs_site_background *background_images; // owned, (Nbackground_images,) in site.json order
     int Nbackground_images;
 
-    rs_camera camera;               // owned: the nominal lens model, intrinsics and image size
-                                    //   (OpenCV files are converted); pose zero. Zeroed (no
-                                    //   intrinsics, size 0 x 0) when the model file is unusable
+    rs_camera camera; // owned: the nominal lens model, intrinsics and image size
+                      //   (OpenCV files are converted); pose zero. Zeroed (no
+                      //   intrinsics, size 0 x 0) when the model file is unusable
 
     rs_site_observation *observations; // owned, (Nobservations,)
     int Nobservations;
 
-    bool has_position_prior;        // a surveyed camera position was given
-    rs_llh prior_llh;               // height ellipsoidal; valid if has_position_prior
-    double prior_p_enu_m[3];        // (3,) prior position in ENU, metres
-    double prior_sigma_m;           // 1-sigma of the prior per axis, metres, > 0
+    bool has_position_prior; // a surveyed camera position was given
+    rs_llh prior_llh;        // height ellipsoidal; valid if has_position_prior
+    double prior_p_enu_m[3]; // (3,) prior position in ENU, metres
+    double prior_sigma_m;    // 1-sigma of the prior per axis, metres, > 0
 } rs_site_camera;
 
 typedef struct {
@@ -119,9 +119,9 @@ typedef struct {
     double ground_offset_m;         // (default: n = (0,0,1), offset 0, i.e. up = 0)
     double max_landmark_distance_m; // check warns about landmarks farther (default 1000)
 
-    rs_site_landmark *landmarks;    // owned, (Nlandmarks,) in file order
+    rs_site_landmark *landmarks; // owned, (Nlandmarks,) in file order
     int Nlandmarks;
-    rs_site_camera *cameras;        // owned, (Ncameras,) in site.json order
+    rs_site_camera *cameras; // owned, (Ncameras,) in site.json order
     int Ncameras;
 } rs_site;
 
@@ -135,10 +135,11 @@ typedef struct {
 // RS_ERR_PARSE (malformed JSON/GeoJSON/CSV/model), RS_ERR_INVALID (well-formed but wrong),
 // RS_ERR_NOT_FOUND (an observation of an unknown landmark), RS_ERR_UNSUPPORTED (OpenCV
 // intrinsics with no mrcal equivalent), RS_ERR_NOMEM.
-rs_status rs_site_load(// out
-                       rs_site **out,
-                       // in
-                       const char *dir, rs_err *err);
+rs_status rs_site_load( // out
+    rs_site **out,
+    // in
+    const char *dir,
+    rs_err *err);
 
 // Frees a site and everything it owns. Accepts NULL.
 void rs_site_free(rs_site *site);
@@ -157,11 +158,14 @@ const char *rs_site_background_tag(const rs_site_background *bg, const char *key
 // all of them (icam < 0) or those observed by camera icam.
 // out:  min_enu_m, max_enu_m: (3,) each; dmin_m, dmax_m: metres (any may be NULL)
 // Returns the number of landmarks in the set (0: outputs untouched).
-int rs_site_landmark_extent(// out
-                            double *min_enu_m, double *max_enu_m, // (3,) each, may be NULL
-                            double *dmin_m, double *dmax_m,       // may be NULL
-                            // in
-                            const rs_site *site, int icam);
+int rs_site_landmark_extent( // out
+    double *min_enu_m,
+    double *max_enu_m, // (3,) each, may be NULL
+    double *dmin_m,
+    double *dmax_m, // may be NULL
+    // in
+    const rs_site *site,
+    int icam);
 
 // ---- checking ----
 
@@ -170,14 +174,14 @@ typedef enum { RS_SITE_ERROR, RS_SITE_WARNING } rs_site_severity;
 // One problem found in a site.
 typedef struct {
     rs_site_severity severity;
-    rs_status status;   // the status rs_site_load returns for this problem (RS_OK for warnings)
-    char *file;         // owned; path of the file at fault (site folder joined), never NULL
-    int line;           // line in that file (from 1), 0 if none applies
-    int feature;        // GeoJSON feature index (from 0), -1 if none applies
-    char *feature_id;   // owned; that feature's id, may be NULL
-    char *field;        // owned; the field at fault ("coordinates", "cameras[1].model", "u"),
-                        // may be NULL
-    char *message;      // owned; what is wrong and, where known, what it should be
+    rs_status status; // the status rs_site_load returns for this problem (RS_OK for warnings)
+    char *file;       // owned; path of the file at fault (site folder joined), never NULL
+    int line;         // line in that file (from 1), 0 if none applies
+    int feature;      // GeoJSON feature index (from 0), -1 if none applies
+    char *feature_id; // owned; that feature's id, may be NULL
+    char *field;      // owned; the field at fault ("coordinates", "cameras[1].model", "u"),
+                      // may be NULL
+    char *message;    // owned; what is wrong and, where known, what it should be
 } rs_site_diag;
 
 typedef struct {
@@ -194,20 +198,22 @@ typedef struct {
 // in:   dir: the site folder
 // Returns RS_OK whenever the check itself ran (whatever it found: look at Nerrors), or
 // RS_ERR_NOMEM.
-rs_status rs_site_check(// out
-                        rs_site_report **report,
-                        // in
-                        const char *dir, rs_err *err);
+rs_status rs_site_check( // out
+    rs_site_report **report,
+    // in
+    const char *dir,
+    rs_err *err);
 
 void rs_site_report_free(rs_site_report *report); // accepts NULL
 
 // Formats one diagnostic on one line, without a newline:
 //   "FILE[:LINE]: [feature F (id 'ID'): ][FIELD: ]MESSAGE"
 // in the size-limited manner of snprintf. Returns the length the full text needs.
-int rs_site_diag_format(// out
-                        char *buf, size_t size,
-                        // in
-                        const rs_site_diag *diag);
+int rs_site_diag_format( // out
+    char *buf,
+    size_t size,
+    // in
+    const rs_site_diag *diag);
 
 // ---- creating ----
 //
@@ -225,7 +231,9 @@ int rs_site_diag_format(// out
 //      origin: lat_deg in [-90, 90], lon_deg in [-180, 180], h_m in the declared heights
 //      geoid_undulation_m: NULL for ellipsoidal heights, else N of {"orthometric": N}
 // Every file is written atomically (rs_io_write_file).
-rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin,
+rs_status rs_site_init(const char *dir,
+                       const char *name,
+                       const rs_llh *origin,
                        const double *geoid_undulation_m, // may be NULL
                        rs_err *err);
 

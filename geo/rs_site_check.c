@@ -19,8 +19,8 @@ enum { MIN_OBSERVATIONS = 4 };
 
 // Distance of (lat, lon, h_ell) from the site origin; false if the point is not a valid
 // geodetic position.
-static bool distance_from_origin(double *d_m, double p_enu_m[3], const rs_site *site, double lat,
-                                 double lon, double h_ell)
+static bool
+distance_from_origin(double *d_m, double p_enu_m[3], const rs_site *site, double lat, double lon, double h_ell)
 {
     if (!(lat >= -90 && lat <= 90 && lon >= -180 && lon <= 180)) return false;
     const double llh[3] = {lat, lon, h_ell};
@@ -31,23 +31,30 @@ static bool distance_from_origin(double *d_m, double p_enu_m[3], const rs_site *
 
 static void format_distance(char *buf, size_t size, double d_m)
 {
-    if (d_m >= 10000) snprintf(buf, size, "%.0f km", d_m / 1000);
-    else snprintf(buf, size, "%.1f m", d_m);
+    if (d_m >= 10000)
+        snprintf(buf, size, "%.0f km", d_m / 1000);
+    else
+        snprintf(buf, size, "%.1f m", d_m);
 }
 
 // How a corrected position should be written: as a GeoJSON triple or as lat/lon fields.
-static void format_position(char *buf, size_t size, bool geojson_order, double lat, double lon,
-                            double h)
+static void format_position(char *buf, size_t size, bool geojson_order, double lat, double lon, double h)
 {
-    if (geojson_order) snprintf(buf, size, "[%.9f, %.9f, %.3f]", lon, lat, h);
-    else snprintf(buf, size, "lat %.9f, lon %.9f", lat, lon);
+    if (geojson_order)
+        snprintf(buf, size, "[%.9f, %.9f, %.3f]", lon, lat, h);
+    else
+        snprintf(buf, size, "lat %.9f, lon %.9f", lat, lon);
 }
 
 // Heights in two systems (an orthometric origin with ellipsoidal landmarks, or the other way
 // round) put points tens of metres above or below the ground. Warns when a point lies more than
 // HEIGHT_WARN_M above or below the origin and steeper than 1:2 from it.
-static void check_height(rs_site__report *r, const char *file, int feature, const char *feature_id,
-                         const char *field, const double p_enu_m[3])
+static void check_height(rs_site__report *r,
+                         const char *file,
+                         int feature,
+                         const char *feature_id,
+                         const char *field,
+                         const double p_enu_m[3])
 {
     const double HEIGHT_WARN_M = 20;
     double horizontal = hypot(p_enu_m[0], p_enu_m[1]);
@@ -59,9 +66,16 @@ static void check_height(rs_site__report *r, const char *file, int feature, cons
                   fabs(p_enu_m[2]), p_enu_m[2] > 0 ? "above" : "below", horizontal);
 }
 
-bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *r,
-                             const rs_site *site, bool origin_ok, const char *file, int feature,
-                             const char *feature_id, const char *field, bool geojson_order,
+bool rs_site__check_position(double llh[3],
+                             double p_enu_m[3],
+                             rs_site__report *r,
+                             const rs_site *site,
+                             bool origin_ok,
+                             const char *file,
+                             int feature,
+                             const char *feature_id,
+                             const char *field,
+                             bool geojson_order,
                              const double given[3])
 {
     const double lat = given[0], lon = given[1], h = given[2];
@@ -89,8 +103,8 @@ bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
                           "looks like latitude and longitude are exchanged%s (as given: %s%s; "
                           "exchanged: %s from the origin): should it be %s?",
-                          geojson_order ? " ([lat, lon] order; GeoJSON is [lon, lat, h])" : "",
-                          as_given, have_d ? " from the origin" : "", dist, fixed);
+                          geojson_order ? " ([lat, lon] order; GeoJSON is [lon, lat, h])" : "", as_given,
+                          have_d ? " from the origin" : "", dist, fixed);
             return false;
         }
         const double deg = 180.0 / M_PI;
@@ -126,8 +140,10 @@ bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *
 
 // ---- observations ----
 
-bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam,
-                                const rs_site_observation *obs, const rs_site *site)
+bool rs_site__check_observation(rs_site__report *r,
+                                const rs_site_camera *cam,
+                                const rs_site_observation *obs,
+                                const rs_site *site)
 {
     const char *file = cam->observations_path;
     bool ok = true;
@@ -137,17 +153,16 @@ bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam,
         for (int k = 0; k < 2; k++) {
             if (obs->q_px[k] >= -0.5 && obs->q_px[k] <= size[k] - 0.5) continue;
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, axis[k],
-                          "%g is outside the image: valid %s in [-0.5, %.1f] (%s %d in %s)",
-                          obs->q_px[k], axis[k], size[k] - 0.5, k ? "height" : "width",
-                          size[k], cam->model_path);
+                          "%g is outside the image: valid %s in [-0.5, %.1f] (%s %d in %s)", obs->q_px[k], axis[k],
+                          size[k] - 0.5, k ? "height" : "width", size[k], cam->model_path);
             ok = false;
         }
     }
     for (int i = 0; i < cam->Nobservations; i++) {
         if (cam->observations[i].ilandmark != obs->ilandmark) continue;
         rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "landmark",
-                      "'%s' is observed twice in this camera (first at line %d)",
-                      site->landmarks[obs->ilandmark].id, cam->observations[i].line);
+                      "'%s' is observed twice in this camera (first at line %d)", site->landmarks[obs->ilandmark].id,
+                      cam->observations[i].line);
         ok = false;
         break;
     }
@@ -160,8 +175,7 @@ void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam)
     rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1, NULL, NULL,
                   "camera '%s' has %d usable observation%s: it needs at least %d landmarks "
                   "picked to be calibrated",
-                  cam->id, cam->Nobservations, cam->Nobservations == 1 ? "" : "s",
-                  MIN_OBSERVATIONS);
+                  cam->id, cam->Nobservations, cam->Nobservations == 1 ? "" : "s", MIN_OBSERVATIONS);
 }
 
 // ---- the whole site ----
@@ -177,9 +191,9 @@ void rs_site__check_site(rs_site__report *r, const rs_site *site)
     for (int j = 1; j < site->Nlandmarks; j++)
         for (int i = 0; i < j; i++) {
             if (strcmp(site->landmarks[i].id, site->landmarks[j].id)) continue;
-            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, landmarks_path, 0,
-                          site->landmarks[j].feature, site->landmarks[j].id, "properties.id",
-                          "duplicate id (already used by feature %d)", site->landmarks[i].feature);
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, landmarks_path, 0, site->landmarks[j].feature,
+                          site->landmarks[j].id, "properties.id", "duplicate id (already used by feature %d)",
+                          site->landmarks[i].feature);
             break;
         }
     for (int j = 1; j < site->Ncameras; j++)
@@ -188,8 +202,7 @@ void rs_site__check_site(rs_site__report *r, const rs_site *site)
             char field[64];
             snprintf(field, sizeof field, "cameras[%d].id", j);
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, site_path, 0, -1, NULL, field,
-                          "duplicate camera id '%s' (already used by cameras[%d])",
-                          site->cameras[j].id, i);
+                          "duplicate camera id '%s' (already used by cameras[%d])", site->cameras[j].id, i);
             break;
         }
 done:

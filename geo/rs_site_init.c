@@ -19,10 +19,11 @@
 
 // The files and folders of a skeleton, relative to the site folder, in creation order.
 static const char *const skeleton_dirs[] = {"cameras", "observations", "backgrounds", "backgrounds/cam1"};
-static const char *const skeleton_files[] = {"site.json", "landmarks.geojson", "observations/cam1.csv",
-                                             "README.md"};
-enum { NDIRS = sizeof skeleton_dirs / sizeof skeleton_dirs[0],
-       NFILES = sizeof skeleton_files / sizeof skeleton_files[0] };
+static const char *const skeleton_files[] = {"site.json", "landmarks.geojson", "observations/cam1.csv", "README.md"};
+enum {
+    NDIRS = sizeof skeleton_dirs / sizeof skeleton_dirs[0],
+    NFILES = sizeof skeleton_files / sizeof skeleton_files[0]
+};
 
 static const char *const readme_format =
     "# Site '%s': what to fill in\n"
@@ -110,8 +111,11 @@ static const rs_site_spec_camera example_camera = {
 
 // The files of the skeleton (skeleton_files, in that order) into the folder `tmp`; `dir` is
 // the name the README gives the folder.
-static rs_status write_skeleton(const char *tmp, const char *dir, const char *name,
-                                const rs_llh *origin, const double *geoid_undulation_m,
+static rs_status write_skeleton(const char *tmp,
+                                const char *dir,
+                                const char *name,
+                                const rs_llh *origin,
+                                const double *geoid_undulation_m,
                                 rs_err *err)
 {
     const rs_site_spec spec = {
@@ -155,11 +159,9 @@ static rs_status check_target(const char *dir, bool *exists, rs_err *err)
     DIR *d = opendir(dir);
     if (!d) return rs_err_set(err, RS_ERR_IO, "%s: %s", dir, strerror(errno));
     bool empty = true;
-    for (struct dirent *e; empty && (e = readdir(d));)
-        empty = !strcmp(e->d_name, ".") || !strcmp(e->d_name, "..");
+    for (struct dirent *e; empty && (e = readdir(d));) empty = !strcmp(e->d_name, ".") || !strcmp(e->d_name, "..");
     closedir(d);
-    if (!empty)
-        return rs_err_set(err, RS_ERR_INVALID, "%s: exists and is not empty: not overwriting it", dir);
+    if (!empty) return rs_err_set(err, RS_ERR_INVALID, "%s: exists and is not empty: not overwriting it", dir);
     *exists = true;
     return RS_OK;
 }
@@ -180,14 +182,14 @@ static void remove_skeleton(const char *tmp)
     rmdir(tmp);
 }
 
-rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin,
-                       const double *geoid_undulation_m, rs_err *err)
+rs_status
+rs_site_init(const char *dir, const char *name, const rs_llh *origin, const double *geoid_undulation_m, rs_err *err)
 {
     if (!(isfinite(origin->lat_deg) && isfinite(origin->lon_deg) && isfinite(origin->h_m)) ||
         fabs(origin->lat_deg) > 90 || fabs(origin->lon_deg) > 180)
         return rs_err_set(err, RS_ERR_INVALID,
-                          "origin: (%g, %g, %g) is not lat in [-90, 90], lon in [-180, 180], finite h",
-                          origin->lat_deg, origin->lon_deg, origin->h_m);
+                          "origin: (%g, %g, %g) is not lat in [-90, 90], lon in [-180, 180], finite h", origin->lat_deg,
+                          origin->lon_deg, origin->h_m);
     if (geoid_undulation_m && !(fabs(*geoid_undulation_m) <= 120))
         return rs_err_set(err, RS_ERR_INVALID, "heights.orthometric: %g m is not a geoid undulation",
                           *geoid_undulation_m);
@@ -215,8 +217,7 @@ rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin,
         }
     }
     if (!mkdtemp(tmp)) {
-        st = rs_err_set(err, RS_ERR_IO, "%s: cannot create a temporary folder next to it: %s", dir,
-                        strerror(errno));
+        st = rs_err_set(err, RS_ERR_IO, "%s: cannot create a temporary folder next to it: %s", dir, strerror(errno));
         free(tmp);
         return st;
     }

@@ -30,15 +30,19 @@ static cJSON *parse_json(rs_site__reader *c, const char *text)
     }
     int line = 1, column = 1;
     for (const char *p = text; end && p < end && *p; p++) {
-        if (*p == '\n') line++, column = 1;
-        else column++;
+        if (*p == '\n')
+            line++, column = 1;
+        else
+            column++;
     }
     char near[32] = "";
     int n = 0;
     for (const char *p = end; p && *p && n < 20; p++) near[n++] = (*p == '\n' || *p == '\r' || *p == '\t') ? ' ' : *p;
     near[n] = '\0';
-    if (n) ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d, near '%s'", column, near);
-    else ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d: unexpected end of file", column);
+    if (n)
+        ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d, near '%s'", column, near);
+    else
+        ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d: unexpected end of file", column);
     return NULL;
 }
 
@@ -59,8 +63,10 @@ static cJSON *read_json_file(rs_site__reader *c, char **path, const char *name, 
 // "prefix.key" (or "key") into buf.
 static const char *field_name(char *buf, size_t size, const char *prefix, const char *key)
 {
-    if (prefix) snprintf(buf, size, "%s.%s", prefix, key);
-    else snprintf(buf, size, "%s", key);
+    if (prefix)
+        snprintf(buf, size, "%s.%s", prefix, key);
+    else
+        snprintf(buf, size, "%s", key);
     return buf;
 }
 
@@ -75,8 +81,14 @@ static void json_excerpt(char *buf, size_t size, const cJSON *item)
 
 // Looks up obj[key], writing its full name ("prefix.key") into field. A missing member is
 // reported if required ("missing (EXPECTED)"); returns NULL then.
-static const cJSON *member(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
-                           bool required, const char *expected, char *field, size_t size)
+static const cJSON *member(rs_site__reader *c,
+                           const cJSON *obj,
+                           const char *prefix,
+                           const char *key,
+                           bool required,
+                           const char *expected,
+                           char *field,
+                           size_t size)
 {
     field_name(field, size, prefix, key);
     const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
@@ -94,8 +106,8 @@ static void wrong_type(rs_site__reader *c, const char *field, const cJSON *it, c
 
 // Reads obj[key] as a finite number. Reports a missing required field, a wrong type or a
 // non-finite value; returns false then (and for a missing optional field).
-static bool get_number(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
-                       bool required, double *out)
+static bool
+get_number(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, double *out)
 {
     char field[256];
     const cJSON *it = member(c, obj, prefix, key, required, "a number", field, sizeof field);
@@ -113,8 +125,8 @@ static bool get_number(rs_site__reader *c, const cJSON *obj, const char *prefix,
 }
 
 // get_number, and the value must be > 0.
-static bool get_positive(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
-                         bool required, double *out)
+static bool
+get_positive(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, double *out)
 {
     double v;
     if (!get_number(c, obj, prefix, key, required, &v)) return false;
@@ -128,8 +140,8 @@ static bool get_positive(rs_site__reader *c, const cJSON *obj, const char *prefi
 }
 
 // Reads obj[key] as a non-empty string (pointer into the JSON tree).
-static bool get_string(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
-                       bool required, const char **out)
+static bool
+get_string(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, const char **out)
 {
     char field[256];
     const cJSON *it = member(c, obj, prefix, key, required, "a string", field, sizeof field);
@@ -147,8 +159,8 @@ static bool get_string(rs_site__reader *c, const cJSON *obj, const char *prefix,
 }
 
 // Reads obj[key] as a JSON object; NULL if missing (reported if required) or not an object.
-static const cJSON *get_object(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
-                               bool required, const char *expected)
+static const cJSON *get_object(
+    rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, const char *expected)
 {
     char field[256];
     const cJSON *it = member(c, obj, prefix, key, required, expected, field, sizeof field);
@@ -160,8 +172,7 @@ static const cJSON *get_object(rs_site__reader *c, const cJSON *obj, const char 
 }
 
 // Warns about members of obj not in `known` (NULL-terminated): most often a misspelt name.
-static void warn_unknown_keys(rs_site__reader *c, const cJSON *obj, const char *prefix,
-                              const char *const *known)
+static void warn_unknown_keys(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *const *known)
 {
     for (const cJSON *it = obj ? obj->child : NULL; it; it = it->next) {
         bool found = false;
@@ -198,10 +209,11 @@ static void read_heights(rs_site__reader *c, const cJSON *root, bool *ok)
         static const char *const known[] = {"orthometric", NULL};
         warn_unknown_keys(c, it, "heights", known);
         c->site->heights_orthometric = true;
-        if (!get_number(c, it, "heights", "orthometric", true, &c->site->geoid_undulation_m)) *ok = false;
+        if (!get_number(c, it, "heights", "orthometric", true, &c->site->geoid_undulation_m))
+            *ok = false;
         else if (fabs(c->site->geoid_undulation_m) > 120) {
-            ERR(c, RS_ERR_INVALID, "heights.orthometric",
-                "%g m is not a geoid undulation (|N| < 110 m on Earth)", c->site->geoid_undulation_m);
+            ERR(c, RS_ERR_INVALID, "heights.orthometric", "%g m is not a geoid undulation (|N| < 110 m on Earth)",
+                c->site->geoid_undulation_m);
             *ok = false;
         }
     } else {
@@ -241,8 +253,7 @@ static void read_ground_plane(rs_site__reader *c, const cJSON *root)
 
 // One entry of a camera's "background_images" into *bg (docs/backgrounds.md). False (after
 // reporting) when it cannot be used: not an object, no "file", a wrong type.
-static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJSON *e,
-                            const char *prefix)
+static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJSON *e, const char *prefix)
 {
     if (!cJSON_IsObject(e)) {
         ERR(c, RS_ERR_PARSE, prefix, "not an object ({\"name\": ..., \"file\": ..., \"tags\": {...}})");
@@ -272,8 +283,7 @@ static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJ
     for (const cJSON *t = tags ? tags->child : NULL; t && bg->tags; t = t->next) {
         if (!cJSON_IsString(t) && !cJSON_IsBool(t)) {
             char sub[300];
-            WARN(c, field_name(sub, sizeof sub, field, t->string ? t->string : "?"),
-                 "not text or a boolean, ignored");
+            WARN(c, field_name(sub, sizeof sub, field, t->string ? t->string : "?"), "not text or a boolean, ignored");
             continue;
         }
         rs_site_tag *tag = &bg->tags[bg->Ntags++];
@@ -284,8 +294,7 @@ static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJ
 }
 
 // A camera's "background_images" list, if it has one.
-static void read_background_images(rs_site__reader *c, rs_site_camera *cam, const cJSON *item,
-                                   const char *prefix)
+static void read_background_images(rs_site__reader *c, rs_site_camera *cam, const cJSON *item, const char *prefix)
 {
     char field[96];
     const cJSON *list = member(c, item, prefix, "background_images", false, "", field, sizeof field);
@@ -303,8 +312,7 @@ static void read_background_images(rs_site__reader *c, rs_site_camera *cam, cons
     for (const cJSON *e = list->child; e; e = e->next, j++) {
         char entry[128];
         snprintf(entry, sizeof entry, "%s[%d]", field, j);
-        if (read_background(c, &cam->background_images[cam->Nbackground_images], e, entry))
-            cam->Nbackground_images++;
+        if (read_background(c, &cam->background_images[cam->Nbackground_images], e, entry)) cam->Nbackground_images++;
     }
 }
 
@@ -319,14 +327,13 @@ static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
         cam->id = rs_site__dup(c, prefix);
         return;
     }
-    static const char *const known[] = {"id", "model", "observations", "backgrounds",
-                                        "background_images", "position_prior", "note", NULL};
+    static const char *const known[] = {
+        "id", "model", "observations", "backgrounds", "background_images", "position_prior", "note", NULL};
     warn_unknown_keys(c, item, prefix, known);
     const char *s;
     cam->id = rs_site__dup(c, get_string(c, item, prefix, "id", true, &s) ? s : prefix);
     if (get_string(c, item, prefix, "model", true, &s)) cam->model_path = rs_site__join(c, site->dir, s);
-    if (get_string(c, item, prefix, "observations", true, &s))
-        cam->observations_path = rs_site__join(c, site->dir, s);
+    if (get_string(c, item, prefix, "observations", true, &s)) cam->observations_path = rs_site__join(c, site->dir, s);
     if (get_string(c, item, prefix, "backgrounds", false, &s)) {
         cam->backgrounds_path = rs_site__join(c, site->dir, s);
         struct stat sb;
@@ -345,8 +352,8 @@ static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
         double given[3], llh[3];
         bool ok = get_llh(c, prior, field, given);
         ok = get_positive(c, prior, field, "sigma_m", true, &cam->prior_sigma_m) && ok;
-        if (ok && rs_site__check_position(llh, cam->prior_p_enu_m, c->r, site, c->origin_ok, c->file,
-                                          -1, NULL, field, false, given)) {
+        if (ok && rs_site__check_position(llh, cam->prior_p_enu_m, c->r, site, c->origin_ok, c->file, -1, NULL, field,
+                                          false, given)) {
             cam->has_position_prior = true;
             cam->prior_llh = (rs_llh){llh[0], llh[1], llh[2]};
         }
@@ -364,9 +371,9 @@ static void read_site_json(rs_site__reader *c)
         goto done;
     }
     // "simulated": how `roadside site simulate` made the site (free-form, for people and tools)
-    static const char *const known[] = {"name", "origin", "heights", "landmark_sigma_m",
-                                        "ground_plane", "max_landmark_distance_m", "cameras",
-                                        "simulated", NULL};
+    static const char *const known[] = {
+        "name",    "origin",    "heights", "landmark_sigma_m", "ground_plane", "max_landmark_distance_m",
+        "cameras", "simulated", NULL};
     warn_unknown_keys(c, root, NULL, known);
 
     const char *name;
@@ -443,8 +450,10 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
     double sigma_h = site->landmark_sigma_h_m, sigma_v = site->landmark_sigma_v_m;
     if (props) {
         const cJSON *jid = cJSON_GetObjectItemCaseSensitive(props, "id");
-        if (cJSON_IsNumber(jid)) ERR(c, RS_ERR_PARSE, "properties.id", "must be a string: write \"%g\"", jid->valuedouble);
-        else if (get_string(c, props, "properties", "id", true, &id)) c->fid = id;
+        if (cJSON_IsNumber(jid))
+            ERR(c, RS_ERR_PARSE, "properties.id", "must be a string: write \"%g\"", jid->valuedouble);
+        else if (get_string(c, props, "properties", "id", true, &id))
+            c->fid = id;
         get_positive(c, props, "properties", "sigma_h_m", false, &sigma_h);
         get_positive(c, props, "properties", "sigma_v_m", false, &sigma_v);
         get_string(c, props, "properties", "kind", false, &kind);
@@ -453,7 +462,8 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
 
     double given[3], llh[3] = {NAN, NAN, NAN}, p_enu[3] = {NAN, NAN, NAN};
     bool coords_ok = false;
-    const cJSON *geometry = get_object(c, f, NULL, "geometry", true, "{\"type\": \"Point\", \"coordinates\": [lon, lat, h]}");
+    const cJSON *geometry =
+        get_object(c, f, NULL, "geometry", true, "{\"type\": \"Point\", \"coordinates\": [lon, lat, h]}");
     if (geometry) {
         const char *gtype;
         const cJSON *xyz = cJSON_GetObjectItemCaseSensitive(geometry, "coordinates");
@@ -473,17 +483,23 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
                 const cJSON *x = cJSON_GetArrayItem(xyz, k);
                 char got[64];
                 json_excerpt(got, sizeof got, x);
-                if (!cJSON_IsNumber(x)) ERR(c, RS_ERR_PARSE, "coordinates", "%s (%s) is not a number", k == 0 ? "lon" : k == 1 ? "lat" : "h", got);
-                else if (!isfinite(x->valuedouble)) ERR(c, RS_ERR_INVALID, "coordinates", "%s is not finite", k == 0 ? "lon" : k == 1 ? "lat" : "h");
-                else v[k] = x->valuedouble;
+                if (!cJSON_IsNumber(x))
+                    ERR(c, RS_ERR_PARSE, "coordinates", "%s (%s) is not a number",
+                        k == 0   ? "lon"
+                        : k == 1 ? "lat"
+                                 : "h",
+                        got);
+                else if (!isfinite(x->valuedouble))
+                    ERR(c, RS_ERR_INVALID, "coordinates", "%s is not finite", k == 0 ? "lon" : k == 1 ? "lat" : "h");
+                else
+                    v[k] = x->valuedouble;
                 coords_ok = coords_ok && cJSON_IsNumber(x) && isfinite(x->valuedouble);
             }
             given[0] = v[1], given[1] = v[0], given[2] = v[2];
         }
     }
     if (coords_ok)
-        rs_site__check_position(llh, p_enu, c->r, site, c->origin_ok, c->file, i, c->fid,
-                                "coordinates", true, given);
+        rs_site__check_position(llh, p_enu, c->r, site, c->origin_ok, c->file, i, c->fid, "coordinates", true, given);
     if (id) {
         rs_site_landmark *l = &site->landmarks[site->Nlandmarks++];
         l->id = rs_site__dup(c, id);
@@ -582,8 +598,10 @@ rs_status rs_site_load(rs_site **out, const char *dir, rs_err *err)
         }
     }
     rs_site_report_free(&r->pub);
-    if (st != RS_OK) rs_site_free(site);
-    else *out = site;
+    if (st != RS_OK)
+        rs_site_free(site);
+    else
+        *out = site;
     return st;
 }
 

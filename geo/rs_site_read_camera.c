@@ -9,8 +9,8 @@
 #include <string.h>
 #include <strings.h>
 
-#include "geo/internal/rs_site_internal.h"
 #include "core/rs_io.h"
+#include "geo/internal/rs_site_internal.h"
 
 static const double DEFAULT_SIGMA_PX = 1.0;
 
@@ -30,10 +30,14 @@ static const char *cameramodel_precheck(const char *text, size_t len, int *line)
     bool comment = false;
     for (const char *p = text; *p; p++) {
         if (*p == '\n') l++;
-        if (comment) comment = *p != '\n';
-        else if (quote) quote = *p == quote ? 0 : quote;
-        else if (*p == '\'' || *p == '"') quote = *p, quote_line = l;
-        else if (*p == '#') comment = true;
+        if (comment)
+            comment = *p != '\n';
+        else if (quote)
+            quote = *p == quote ? 0 : quote;
+        else if (*p == '\'' || *p == '"')
+            quote = *p, quote_line = l;
+        else if (*p == '#')
+            comment = true;
     }
     if (!quote) return NULL;
     *line = quote_line;
@@ -59,7 +63,8 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
     rs_err e = {0};
     if (rs_io_has_extension(cam->model_path, "yaml") || rs_io_has_extension(cam->model_path, "yml") ||
         rs_io_has_extension(cam->model_path, "json")) {
-        if (rs_camera_read(&cam->camera, NULL, cam->model_path, &e)) camera_error(c, cam, &e);
+        if (rs_camera_read(&cam->camera, NULL, cam->model_path, &e))
+            camera_error(c, cam, &e);
         else if (cam->camera.width == 0 || cam->camera.height == 0) {
             ERR(c, RS_ERR_PARSE, cam->camera.width == 0 ? "image_width" : "image_height", "missing");
             rs_camera_free(&cam->camera);
@@ -71,9 +76,12 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
     if (!text) goto done;
     int line = 0;
     const char *bad = cameramodel_precheck(text, len, &line);
-    if (bad) ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
-    else if (rs_camera_read_cameramodel_text(&cam->camera, text, len, cam->model_path, &e)) camera_error(c, cam, &e);
-    else memset(cam->camera.rt_cam_enu, 0, sizeof cam->camera.rt_cam_enu); // intrinsics only
+    if (bad)
+        ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
+    else if (rs_camera_read_cameramodel_text(&cam->camera, text, len, cam->model_path, &e))
+        camera_error(c, cam, &e);
+    else
+        memset(cam->camera.rt_cam_enu, 0, sizeof cam->camera.rt_cam_enu); // intrinsics only
     free(text);
 done:
     c->file = NULL;
@@ -92,9 +100,12 @@ static int split_csv(char *s, char **fields, int maxf)
         if (*s == '"') {
             for (s++;; s++) {
                 if (!*s) return -1;
-                if (*s == '"' && s[1] == '"') *out++ = *s++;
-                else if (*s == '"') break;
-                else *out++ = *s;
+                if (*s == '"' && s[1] == '"')
+                    *out++ = *s++;
+                else if (*s == '"')
+                    break;
+                else
+                    *out++ = *s;
             }
             s++;
             while (*s == ' ' || *s == '\t') s++;
@@ -139,17 +150,20 @@ static bool read_csv_header(rs_site__reader *c, int line, char **fields, int nfi
     for (int f = 0; f < nfields && f < MAXFIELDS; f++) {
         int k = 0;
         while (k < NCOLS && strcmp(fields[f], column_names[k])) k++;
-        if (k == NCOLS) WARN_AT(c, line, "header", "unknown column '%s', ignored", fields[f]);
-        else if (col[k] >= 0) ERR_AT(c, RS_ERR_PARSE, line, "header", "column '%s' appears twice", fields[f]);
-        else col[k] = f;
+        if (k == NCOLS)
+            WARN_AT(c, line, "header", "unknown column '%s', ignored", fields[f]);
+        else if (col[k] >= 0)
+            ERR_AT(c, RS_ERR_PARSE, line, "header", "column '%s' appears twice", fields[f]);
+        else
+            col[k] = f;
     }
     for (int k = 0; k < COL_SIGMA; k++)
         if (col[k] < 0) {
             bool other_separator = nfields == 1 && strpbrk(fields[0], ";\t");
             ERR_AT(c, RS_ERR_PARSE, line, "header",
                    "no column '%s': the first line must be the header landmark,u,v (and optionally "
-                   ",sigma_px)%s", column_names[k],
-                   other_separator ? "; separate the fields with commas, not semicolons or tabs" : "");
+                   ",sigma_px)%s",
+                   column_names[k], other_separator ? "; separate the fields with commas, not semicolons or tabs" : "");
             return false;
         }
     return true;
@@ -163,8 +177,7 @@ static const char *similar_landmark(const rs_site *site, const char *id)
     return NULL;
 }
 
-static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int line, char **fields,
-                                 const int col[NCOLS])
+static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int line, char **fields, const int col[NCOLS])
 {
     const char *id = fields[col[COL_LANDMARK]];
     rs_site_observation obs = {.ilandmark = -1, .sigma_px = DEFAULT_SIGMA_PX, .line = line};
@@ -176,7 +189,8 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
     ok = parse_csv_number(c, line, "u", fields[col[COL_U]], &obs.q_px[0]) && ok;
     ok = parse_csv_number(c, line, "v", fields[col[COL_V]], &obs.q_px[1]) && ok;
     if (col[COL_SIGMA] >= 0 && *fields[col[COL_SIGMA]]) {
-        if (!parse_csv_number(c, line, "sigma_px", fields[col[COL_SIGMA]], &obs.sigma_px)) ok = false;
+        if (!parse_csv_number(c, line, "sigma_px", fields[col[COL_SIGMA]], &obs.sigma_px))
+            ok = false;
         else if (obs.sigma_px <= 0) {
             ERR_AT(c, RS_ERR_INVALID, line, "sigma_px", "%g must be > 0", obs.sigma_px);
             ok = false;
@@ -186,8 +200,8 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
     obs.ilandmark = rs_site_find_landmark(c->site, id);
     if (obs.ilandmark < 0) {
         const char *like = similar_landmark(c->site, id);
-        ERR_AT(c, RS_ERR_NOT_FOUND, line, "landmark", "'%s' is not a landmark of landmarks.geojson%s%s%s",
-               id, like ? " (ids are case-sensitive: '" : "", like ? like : "", like ? "'?)" : "");
+        ERR_AT(c, RS_ERR_NOT_FOUND, line, "landmark", "'%s' is not a landmark of landmarks.geojson%s%s%s", id,
+               like ? " (ids are case-sensitive: '" : "", like ? like : "", like ? "'?)" : "");
         return;
     }
     if (!rs_site__check_observation(c->r, cam, &obs, c->site)) return;
@@ -233,8 +247,8 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
             continue;
         }
         if (n != nheader) {
-            ERR_AT(c, RS_ERR_PARSE, line, NULL, "%d field%s, the header has %d%s", n, n == 1 ? "" : "s",
-                   nheader, n > nheader ? " (a decimal comma? write 12.5, not 12,5)" : "");
+            ERR_AT(c, RS_ERR_PARSE, line, NULL, "%d field%s, the header has %d%s", n, n == 1 ? "" : "s", nheader,
+                   n > nheader ? " (a decimal comma? write 12.5, not 12,5)" : "");
             continue;
         }
         read_observation_row(c, cam, line, fields, col);

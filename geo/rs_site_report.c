@@ -21,9 +21,16 @@ static char *dup_printable(const char *s)
     return d;
 }
 
-void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status status,
-                   const char *file, int line, int feature, const char *feature_id,
-                   const char *field, const char *fmt, ...)
+void rs_site__diag(rs_site__report *r,
+                   rs_site_severity severity,
+                   rs_status status,
+                   const char *file,
+                   int line,
+                   int feature,
+                   const char *feature_id,
+                   const char *field,
+                   const char *fmt,
+                   ...)
 {
     rs_site_report *p = &r->pub;
     if (p->N == r->cap) {
@@ -61,8 +68,10 @@ void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status stat
         return;
     }
     p->diags[p->N++] = d;
-    if (severity == RS_SITE_ERROR) p->Nerrors++;
-    else p->Nwarnings++;
+    if (severity == RS_SITE_ERROR)
+        p->Nerrors++;
+    else
+        p->Nwarnings++;
 }
 
 void rs_site_report_free(rs_site_report *report)
@@ -95,8 +104,8 @@ int rs_site_diag_format(char *buf, size_t size, const rs_site_diag *d)
 
 // ---- the reader's context ----
 
-void rs_site__say(rs_site__reader *c, rs_site_severity severity, rs_status status, int line,
-                  const char *field, const char *fmt, ...)
+void rs_site__say(
+    rs_site__reader *c, rs_site_severity severity, rs_status status, int line, const char *field, const char *fmt, ...)
 {
     char msg[1024];
     va_list ap;
@@ -124,9 +133,12 @@ char *rs_site__join(rs_site__reader *c, const char *dir, const char *rel)
 bool rs_site__file_exists(rs_site__reader *c, const char *why)
 {
     struct stat sb;
-    if (stat(c->file, &sb) != 0) ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
-    else if (S_ISDIR(sb.st_mode)) ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
-    else return true;
+    if (stat(c->file, &sb) != 0)
+        ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
+    else if (S_ISDIR(sb.st_mode))
+        ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
+    else
+        return true;
     return false;
 }
 

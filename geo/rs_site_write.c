@@ -45,8 +45,10 @@ static void put(text *t, const char *s)
 static void put_leaf(text *t, const cJSON *item)
 {
     char *s = cJSON_PrintUnformatted(item);
-    if (!s) t->nomem = true;
-    else put(t, s);
+    if (!s)
+        t->nomem = true;
+    else
+        put(t, s);
     cJSON_free(s);
 }
 
@@ -54,8 +56,10 @@ static void put_leaf(text *t, const cJSON *item)
 static void put_key(text *t, const char *key)
 {
     cJSON *k = cJSON_CreateString(key ? key : "");
-    if (!k) t->nomem = true;
-    else put_leaf(t, k);
+    if (!k)
+        t->nomem = true;
+    else
+        put_leaf(t, k);
     cJSON_Delete(k);
     put(t, ": ");
 }
@@ -130,28 +134,31 @@ static void put_hand(text *t, const cJSON *root)
     for (const cJSON *m = root->child; m; m = m->next) {
         put(t, "  ");
         put_key(t, m->string);
-        if (is_list_of_objects(m)) put_entries(t, m);
-        else put_inline(t, m);
+        if (is_list_of_objects(m))
+            put_entries(t, m);
+        else
+            put_inline(t, m);
         put(t, m->next ? ",\n" : "\n");
     }
     put(t, "}");
 }
 
-rs_status rs_site__write_json(const char *path, const cJSON *root, rs_site_layout layout,
-                              rs_err *err)
+rs_status rs_site__write_json(const char *path, const cJSON *root, rs_site_layout layout, rs_err *err)
 {
     text t = {0};
     if (layout == RS_SITE_LAYOUT_HAND) {
         put_hand(&t, root);
     } else {
         char *s = cJSON_Print(root);
-        if (!s) t.nomem = true;
-        else put(&t, s);
+        if (!s)
+            t.nomem = true;
+        else
+            put(&t, s);
         cJSON_free(s);
     }
     put(&t, "\n");
-    rs_status st = t.nomem ? rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path)
-                           : rs_io_write_file(path, t.s, t.n, err);
+    rs_status st =
+        t.nomem ? rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path) : rs_io_write_file(path, t.s, t.n, err);
     free(t.s);
     return st;
 }
@@ -189,15 +196,17 @@ static cJSON *llh_object(const rs_llh *llh)
 
 // Writes `root` as DIR/name; a NULL root means that building it failed (a non-finite number, or
 // out of memory).
-static rs_status write_document(const char *dir, const char *name, const cJSON *root,
-                                rs_site_layout layout, rs_err *err)
+static rs_status
+write_document(const char *dir, const char *name, const cJSON *root, rs_site_layout layout, rs_err *err)
 {
     char *path = rs_io_join(dir, name);
     rs_status st;
-    if (!path) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", name);
+    if (!path)
+        st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", name);
     else if (!root)
         st = rs_err_set(err, RS_ERR_INVALID, "%s: a number is not finite (or out of memory)", path);
-    else st = rs_site__write_json(path, root, layout, err);
+    else
+        st = rs_site__write_json(path, root, layout, err);
     free(path);
     return st;
 }
@@ -224,8 +233,7 @@ static cJSON *camera_object(const rs_site_spec_camera *c)
 static cJSON *site_document(const rs_site_spec *spec)
 {
     cJSON *j = cJSON_CreateObject(), *sigma = NULL, *cams = NULL;
-    bool ok = j && cJSON_AddStringToObject(j, "name", spec->name) &&
-              add_item(j, "origin", llh_object(&spec->origin));
+    bool ok = j && cJSON_AddStringToObject(j, "name", spec->name) && add_item(j, "origin", llh_object(&spec->origin));
     if (ok && spec->geoid_undulation_m) {
         cJSON *h = cJSON_CreateObject();
         ok = add_item(j, "heights", h) && rs_site__add_number(h, "orthometric", *spec->geoid_undulation_m);
@@ -253,15 +261,16 @@ static cJSON *site_document(const rs_site_spec *spec)
     return NULL;
 }
 
-rs_status rs_site_write_json(const char *dir, const rs_site_spec *spec, rs_site_layout layout,
-                             rs_err *err)
+rs_status rs_site_write_json(const char *dir, const rs_site_spec *spec, rs_site_layout layout, rs_err *err)
 {
     if (!spec->name) return rs_err_set(err, RS_ERR_INVALID, "%s/site.json: name: missing", dir);
     for (int i = 0; i < spec->Ncameras; i++) {
         const rs_site_spec_camera *c = &spec->cameras[i];
         if (!c->id || !c->model || !c->observations)
             return rs_err_set(err, RS_ERR_INVALID, "%s/site.json: cameras[%d]: %s missing", dir, i,
-                              !c->id ? "id" : !c->model ? "model" : "observations");
+                              !c->id      ? "id"
+                              : !c->model ? "model"
+                                          : "observations");
     }
     cJSON *j = site_document(spec);
     rs_status st = RS_OK;
@@ -295,9 +304,12 @@ static cJSON *landmark_feature(const rs_site_landmark *l, double geoid_undulatio
     return NULL;
 }
 
-rs_status rs_site_write_landmarks(const char *dir, const rs_site_landmark *landmarks,
-                                  int Nlandmarks, double geoid_undulation_m,
-                                  rs_site_layout layout, rs_err *err)
+rs_status rs_site_write_landmarks(const char *dir,
+                                  const rs_site_landmark *landmarks,
+                                  int Nlandmarks,
+                                  double geoid_undulation_m,
+                                  rs_site_layout layout,
+                                  rs_err *err)
 {
     for (int i = 0; i < Nlandmarks; i++)
         if (!landmarks[i].id)
@@ -317,9 +329,8 @@ rs_status rs_site_write_landmarks(const char *dir, const rs_site_landmark *landm
 
 // ---- observations/<id>.csv ----
 
-rs_status rs_site_write_observations(const char *path, const rs_site_observation *obs,
-                                     int Nobservations, const rs_site_landmark *landmarks,
-                                     rs_err *err)
+rs_status rs_site_write_observations(
+    const char *path, const rs_site_observation *obs, int Nobservations, const rs_site_landmark *landmarks, rs_err *err)
 {
     rs_io_atomic a;
     rs_status st = rs_io_atomic_open(&a, path, err);
@@ -342,8 +353,12 @@ char *rs_site_background_file(const char *camera_id, const char *name)
 }
 
 // The entry of a background record (rs_site_record_background); NULL when out of memory.
-static cJSON *background_entry(const char *file, const char *name, bool synthetic,
-                               const char *const *keys, const char *const *values, int Ntags,
+static cJSON *background_entry(const char *file,
+                               const char *name,
+                               bool synthetic,
+                               const char *const *keys,
+                               const char *const *values,
+                               int Ntags,
                                cJSON *source)
 {
     cJSON *e = cJSON_CreateObject(), *tags = NULL;
@@ -359,10 +374,15 @@ static cJSON *background_entry(const char *file, const char *name, bool syntheti
     return NULL;
 }
 
-rs_status rs_site_record_background(const char *dir, const char *camera_id, const char *name,
-                                    bool synthetic, const char *const *keys,
-                                    const char *const *values, int Ntags,
-                                    const char *source_json, rs_err *err)
+rs_status rs_site_record_background(const char *dir,
+                                    const char *camera_id,
+                                    const char *name,
+                                    bool synthetic,
+                                    const char *const *keys,
+                                    const char *const *values,
+                                    int Ntags,
+                                    const char *source_json,
+                                    rs_err *err)
 {
     char *path = rs_io_join(dir, "site.json"), *text = NULL, *file = NULL;
     cJSON *root = NULL, *source = NULL;
@@ -375,15 +395,15 @@ rs_status rs_site_record_background(const char *dir, const char *camera_id, cons
         st = rs_err_set(err, RS_ERR_PARSE, "%s: background '%s': source: not JSON", path, name);
         goto done;
     }
-    if ((st = rs_io_read_file(&text, NULL, path, err)))
-        goto done;
+    if ((st = rs_io_read_file(&text, NULL, path, err))) goto done;
     const char *json = strncmp(text, "\xEF\xBB\xBF", 3) ? text : text + 3; // UTF-8 BOM
     if (!(root = cJSON_Parse(json))) {
         st = rs_err_set(err, RS_ERR_PARSE, "%s: not valid JSON", path);
         goto done;
     }
     cJSON *cams = cJSON_GetObjectItemCaseSensitive(root, "cameras"), *cam = NULL, *it;
-    cJSON_ArrayForEach(it, cams) {
+    cJSON_ArrayForEach(it, cams)
+    {
         const cJSON *id = cJSON_GetObjectItemCaseSensitive(it, "id");
         if (cJSON_IsString(id) && !strcmp(id->valuestring, camera_id)) cam = it;
     }
@@ -407,13 +427,16 @@ rs_status rs_site_record_background(const char *dir, const char *camera_id, cons
     }
     // replace an entry of the same name, else append
     int i = 0, found = -1;
-    cJSON_ArrayForEach(it, list) {
+    cJSON_ArrayForEach(it, list)
+    {
         const cJSON *nm = cJSON_GetObjectItemCaseSensitive(it, "name");
         if (cJSON_IsString(nm) && !strcmp(nm->valuestring, name)) found = i;
         i++;
     }
-    if (found >= 0) cJSON_ReplaceItemInArray(list, found, e);
-    else cJSON_AddItemToArray(list, e);
+    if (found >= 0)
+        cJSON_ReplaceItemInArray(list, found, e);
+    else
+        cJSON_AddItemToArray(list, e);
     st = rs_site__write_json(path, root, RS_SITE_LAYOUT_TOOL, err);
 done:
     cJSON_Delete(root);

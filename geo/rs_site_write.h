@@ -34,31 +34,31 @@ typedef enum {
 
 // One camera of site.json, as written (paths relative to the site folder).
 typedef struct {
-    const char *id;              // unique within the site
-    const char *model;           // the intrinsics file, e.g. "cameras/<id>.cameramodel"
-    const char *observations;    // the observations CSV, e.g. "observations/<id>.csv"
-    const char *backgrounds;     // a folder of background images; may be NULL (not written)
+    const char *id;               // unique within the site
+    const char *model;            // the intrinsics file, e.g. "cameras/<id>.cameramodel"
+    const char *observations;     // the observations CSV, e.g. "observations/<id>.csv"
+    const char *backgrounds;      // a folder of background images; may be NULL (not written)
     const rs_llh *position_prior; // surveyed camera position: lat_deg, lon_deg, h_m in the
                                   //   declared heights; may be NULL (no prior)
-    double prior_sigma_m;        // 1-sigma of the prior per axis, metres, > 0 (with a prior)
-    const char *note;            // may be NULL
+    double prior_sigma_m;         // 1-sigma of the prior per axis, metres, > 0 (with a prior)
+    const char *note;             // may be NULL
 } rs_site_spec_camera;
 
 // Everything site.json says (docs/site-format.md "site.json"), as written.
 typedef struct {
     const char *name;
-    rs_llh origin;                      // lat_deg, lon_deg, h_m in the declared heights
-    const double *geoid_undulation_m;   // NULL: "heights": "ellipsoidal"; else
-                                        //   {"orthometric": N} with N = *geoid_undulation_m, metres
-    double landmark_sigma_h_m;          // site-wide 1-sigma of the landmarks, metres, > 0
+    rs_llh origin;                    // lat_deg, lon_deg, h_m in the declared heights
+    const double *geoid_undulation_m; // NULL: "heights": "ellipsoidal"; else
+                                      //   {"orthometric": N} with N = *geoid_undulation_m, metres
+    double landmark_sigma_h_m;        // site-wide 1-sigma of the landmarks, metres, > 0
     double landmark_sigma_v_m;
     const double *ground_normal_enu;    // (3,) the ground plane n . p_enu = offset; may be NULL:
     double ground_offset_m;             //   no "ground_plane" (the default up = 0)
     double max_landmark_distance_m;     // > 0; 0: not written (the default 1000 m applies)
     const rs_site_spec_camera *cameras; // (Ncameras,) in order
     int Ncameras;
-    const char *extra_name;             // one more top-level member after "cameras", e.g.
-    const char *extra_json;             //   "simulated", and its value as JSON text; NULL: none
+    const char *extra_name; // one more top-level member after "cameras", e.g.
+    const char *extra_json; //   "simulated", and its value as JSON text; NULL: none
 } rs_site_spec;
 
 // Writes DIR/site.json. Members in the order of docs/site-format.md: name, origin, heights,
@@ -66,9 +66,11 @@ typedef struct {
 // backgrounds, position_prior {lat, lon, h, sigma_m}, note), then the extra member.
 // Returns RS_ERR_INVALID for a missing name or camera string or a non-finite number,
 // RS_ERR_PARSE when extra_json is not JSON, RS_ERR_IO, RS_ERR_NOMEM.
-rs_status rs_site_write_json(// in
-                             const char *dir, const rs_site_spec *spec, rs_site_layout layout,
-                             rs_err *err);
+rs_status rs_site_write_json( // in
+    const char *dir,
+    const rs_site_spec *spec,
+    rs_site_layout layout,
+    rs_err *err);
 
 // Writes DIR/landmarks.geojson: a FeatureCollection of Point features, coordinates
 // [lon_deg, lat_deg, h_m] (RFC 7946 order; h = llh.h_m - geoid_undulation_m), properties id,
@@ -79,10 +81,13 @@ rs_status rs_site_write_json(// in
 //     are ignored
 //     geoid_undulation_m: N of the site's "heights" (0 for an ellipsoidal site)
 // Returns RS_ERR_INVALID (no id, a non-finite coordinate), RS_ERR_IO, RS_ERR_NOMEM.
-rs_status rs_site_write_landmarks(// in
-                                  const char *dir, const rs_site_landmark *landmarks,
-                                  int Nlandmarks, double geoid_undulation_m,
-                                  rs_site_layout layout, rs_err *err);
+rs_status rs_site_write_landmarks( // in
+    const char *dir,
+    const rs_site_landmark *landmarks,
+    int Nlandmarks,
+    double geoid_undulation_m,
+    rs_site_layout layout,
+    rs_err *err);
 
 // Writes an observations CSV: the header "landmark,u,v,sigma_px", then one line per pick,
 // "ID,u,v,sigma" with u and v to 1e-6 px ("%.6f") and sigma_px as "%g".
@@ -90,10 +95,12 @@ rs_status rs_site_write_landmarks(// in
 //     landmarks, whose id is written), q_px, sigma_px; line is ignored
 //     landmarks: the site's landmarks (only their ids are used)
 // Returns RS_ERR_IO, RS_ERR_NOMEM.
-rs_status rs_site_write_observations(// in
-                                     const char *path, const rs_site_observation *obs,
-                                     int Nobservations, const rs_site_landmark *landmarks,
-                                     rs_err *err);
+rs_status rs_site_write_observations( // in
+    const char *path,
+    const rs_site_observation *obs,
+    int Nobservations,
+    const rs_site_landmark *landmarks,
+    rs_err *err);
 
 // The file of background `name` of camera `camera_id`, relative to the site folder:
 // "backgrounds/<camera_id>/<name>.png". Malloc'ed (caller frees); NULL when out of memory.
@@ -112,11 +119,16 @@ char *rs_site_background_file(const char *camera_id, const char *name);
 //     may be NULL (no "source")
 // Returns RS_ERR_IO / RS_ERR_PARSE for site.json (or a source_json that is not JSON),
 // RS_ERR_NOT_FOUND for an unknown camera, RS_ERR_NOMEM.
-rs_status rs_site_record_background(// in
-                                    const char *dir, const char *camera_id, const char *name,
-                                    bool synthetic, const char *const *keys,
-                                    const char *const *values, int Ntags,
-                                    const char *source_json, rs_err *err);
+rs_status rs_site_record_background( // in
+    const char *dir,
+    const char *camera_id,
+    const char *name,
+    bool synthetic,
+    const char *const *keys,
+    const char *const *values,
+    int Ntags,
+    const char *source_json,
+    rs_err *err);
 
 #ifdef __cplusplus
 }

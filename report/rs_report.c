@@ -5,16 +5,16 @@
 #include <ctype.h>
 #include <dirent.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
 #include <cJSON.h>
 
-#include "core/rs_image.h"
 #include "calib/rs_calib_site.h"
+#include "core/rs_image.h"
 #include "core/rs_io.h"
 #include "report/internal/rs_report_doc.h"
 #include "report/internal/rs_report_draw.h"
@@ -79,8 +79,14 @@ static rs_status read_result_json(rs_report_camera *cam, const rs_site *site, co
 
 // Appends one polyline: the GeoJSON positions `coords` converted to ENU, offset by offset_m to
 // the left in the (E, N) plane (0: the centreline).
-static rs_status lanes_add_line(rs_report_lanes *lanes, const cJSON *coords, const rs_site *site, const char *path,
-                                const char *field, bool junction, double offset_m, rs_err *err)
+static rs_status lanes_add_line(rs_report_lanes *lanes,
+                                const cJSON *coords,
+                                const rs_site *site,
+                                const char *path,
+                                const char *field,
+                                bool junction,
+                                double offset_m,
+                                rs_err *err)
 {
     int n = cJSON_GetArraySize(coords);
     if (!cJSON_IsArray(coords) || n < 2)
@@ -138,8 +144,13 @@ static rs_status lanes_add_line(rs_report_lanes *lanes, const cJSON *coords, con
 }
 
 // One LineString's lines: both edges when the feature has a width_m, else the centreline.
-static rs_status lanes_add_feature(rs_report_lanes *lanes, const cJSON *coords, const cJSON *props,
-                                   const rs_site *site, const char *path, const char *field, rs_err *err)
+static rs_status lanes_add_feature(rs_report_lanes *lanes,
+                                   const cJSON *coords,
+                                   const cJSON *props,
+                                   const rs_site *site,
+                                   const char *path,
+                                   const char *field,
+                                   rs_err *err)
 {
     const cJSON *kind = cJSON_GetObjectItemCaseSensitive(props, "kind");
     const cJSON *width = cJSON_GetObjectItemCaseSensitive(props, "width_m");
@@ -193,8 +204,10 @@ static rs_status read_lanes(rs_report_lanes *lanes, const rs_site *site, rs_err 
                     if ((st = lanes_add_feature(lanes, line, props, site, path, field, err))) break;
                 }
             } else
-                st = rs_err_set(err, RS_ERR_PARSE, "%s: features[%d].geometry.type: '%s': expected LineString or "
-                                "MultiLineString with coordinates", path, k, type->valuestring);
+                st = rs_err_set(err, RS_ERR_PARSE,
+                                "%s: features[%d].geometry.type: '%s': expected LineString or "
+                                "MultiLineString with coordinates",
+                                path, k, type->valuestring);
             if (st) break;
             k++;
         }
@@ -205,10 +218,7 @@ static rs_status read_lanes(rs_report_lanes *lanes, const rs_site *site, rs_err 
 
 // ---- backgrounds ----
 
-static int cmp_str(const void *a, const void *b)
-{
-    return strcmp(*(char *const *)a, *(char *const *)b);
-}
+static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
 static bool is_image_name(const char *name)
 {
@@ -310,8 +320,8 @@ static void camera_free(rs_report_camera *cam)
     rs_audit_result_free(&cam->audit);
 }
 
-static rs_status camera_load(rs_report_camera *cam, const rs_site *site, const char *calib_dir,
-                             const rs_report_options *opt, rs_err *err)
+static rs_status camera_load(
+    rs_report_camera *cam, const rs_site *site, const char *calib_dir, const rs_report_options *opt, rs_err *err)
 {
     const char *id = site->cameras[cam->icam].id;
     char name[600];
@@ -385,8 +395,8 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
                      site->heights_orthometric ? "; the site's heights are orthometric, converted" : "",
                      site->Nlandmarks, site->Ncameras, calib_dir);
     rs_doc_table(doc, 9);
-    static const char *head[9] = {"camera", "used", "rejected", "RMS px", "LOO RMS px", "LOO median m",
-                                  "sigma pos m", "sigma yaw deg", "audit"};
+    static const char *head[9] = {"camera",       "used",        "rejected",      "RMS px", "LOO RMS px",
+                                  "LOO median m", "sigma pos m", "sigma yaw deg", "audit"};
     for (int k = 0; k < 9; k++) rs_doc_cell(doc, "%s", head[k]);
     for (int c = 0; c < rep->Ncameras; c++) {
         const rs_report_camera *cam = &rep->cameras[c];
@@ -408,9 +418,11 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
     }
     char colour[400] = "";
     if (rep->best_map.sigma_m)
-        snprintf(colour, sizeof colour, "; colour: the 1-sigma horizontal error in metres of a vehicle located on "
+        snprintf(colour, sizeof colour,
+                 "; colour: the 1-sigma horizontal error in metres of a vehicle located on "
                  "the ground by the best camera seeing it (pose covariance plus %g px detection noise), with "
-                 "labelled contours", rep->detection_sigma_px);
+                 "labelled contours",
+                 rep->detection_sigma_px);
     rs_doc_figure(doc, rs_report_draw_site_map, rep, 0.8,
                   "Site map, north up, in the local east-north-up frame: cameras (discs, with a line along the "
                   "heading), the ground each camera sees within %g m (dashed outline%s), surveyed "
@@ -434,7 +446,8 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
     rs_doc_figure(doc, rs_report_draw_camera, cam, (double)cam->model.height / cam->model.width,
                   "%s, %d x %d px, %s: picks (green circles; red crosses for outliers), landmarks reprojected "
                   "through the calibration (blue dots), inlier residual vectors magnified %g times (pink; the scale "
-                  "bar gives their length in pixels) and outlier residuals at true size (dashed red), ground grid every %g m and lane lines projected through the "
+                  "bar gives their length in pixels) and outlier residuals at true size (dashed red), ground grid "
+                  "every %g m and lane lines projected through the "
                   "calibrated lens model.",
                   id, cam->model.width, cam->model.height, bg, cam->magnification, rep->grid_m);
 
@@ -488,8 +501,8 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
                      "position projected (px) and its pick located on the ground (m); influence: how far "
                      "leaving it out moves (m) and turns (deg) the camera.");
     rs_doc_table(doc, 11);
-    static const char *lhead[11] = {"landmark", "u px", "v px", "du px", "dv px", "normalised", "status",
-                                    "LOO px", "LOO m", "infl. m", "infl. deg"};
+    static const char *lhead[11] = {"landmark", "u px",   "v px",  "du px",   "dv px",    "normalised",
+                                    "status",   "LOO px", "LOO m", "infl. m", "infl. deg"};
     for (int k = 0; k < 11; k++) rs_doc_cell(doc, "%s", lhead[k]);
     const rs_site_camera *sc = &site->cameras[cam->icam];
     for (int i = 0; i < cam->N; i++) {
@@ -547,8 +560,8 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
 
 // ---- writing ----
 
-rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const rs_site *site,
-                          const rs_report_options *opt_in, rs_err *err)
+rs_status rs_report_write(
+    rs_report_summary *summary, const char *out_dir, const rs_site *site, const rs_report_options *opt_in, rs_err *err)
 {
     rs_report_options opt;
     if (opt_in)
@@ -558,7 +571,8 @@ rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const
     if (summary) memset(summary, 0, sizeof *summary);
     if (!(opt.range_m > 0) || !isfinite(opt.range_m) || !isfinite(opt.grid_m) || opt.figure_width_px < 200 ||
         opt.figure_width_px > 10000)
-        return rs_err_set(err, RS_ERR_INVALID, "report options: range_m > 0, finite grid_m and figure_width_px in "
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "report options: range_m > 0, finite grid_m and figure_width_px in "
                           "[200, 10000] expected");
     if (site->Ncameras < 1) return rs_err_set(err, RS_ERR_INVALID, "%s: the site has no camera", site->dir);
     opt.audit_options.range_m = opt.range_m; // one range for the figures and the maps

@@ -33,24 +33,24 @@
 #include <stdbool.h>
 
 #include "audit/rs_audit.h"
-#include "geo/rs_site.h"
 #include "core/rs_status.h"
+#include "geo/rs_site.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 typedef struct {
-    const char *calib_dir;   // folder with <id>.cameramodel and <id>.json; NULL: SITE/calib
-    double range_m;          // ground shown within this horizontal distance of each camera,
-                             //   metres (default 100; also the audit's range_m)
-    double grid_m;           // ground grid spacing drawn into the images, metres; <= 0:
-                             //   automatic (a 1-2-5 number near range_m / 10; default 0)
-    int figure_width_px;     // width of the HTML's PNG figures (default 1000, >= 200)
-    bool audit;              // run the audit for leave-one-out figures, the uncertainty map
-                             //   and the warnings (default true)
+    const char *calib_dir;          // folder with <id>.cameramodel and <id>.json; NULL: SITE/calib
+    double range_m;                 // ground shown within this horizontal distance of each camera,
+                                    //   metres (default 100; also the audit's range_m)
+    double grid_m;                  // ground grid spacing drawn into the images, metres; <= 0:
+                                    //   automatic (a 1-2-5 number near range_m / 10; default 0)
+    int figure_width_px;            // width of the HTML's PNG figures (default 1000, >= 200)
+    bool audit;                     // run the audit for leave-one-out figures, the uncertainty map
+                                    //   and the warnings (default true)
     rs_audit_options audit_options; // (default rs_audit_options_default); its range_m is
-                             //   replaced by range_m above
+                                    //   replaced by range_m above
 } rs_report_options;
 
 // Fills opt with the defaults above. opt must not be NULL.
@@ -58,10 +58,10 @@ void rs_report_options_default(rs_report_options *opt);
 
 // What was written.
 typedef struct {
-    int Ncameras;        // cameras in the report
-    int Nfigures;        // figures in each of the two files (1 + 2 per camera)
-    int Naudit_failed;   // cameras whose audit could not run (their sections say why)
-    int Naudit_fail;     // cameras whose audit ran and found a threshold exceeded
+    int Ncameras;      // cameras in the report
+    int Nfigures;      // figures in each of the two files (1 + 2 per camera)
+    int Naudit_failed; // cameras whose audit could not run (their sections say why)
+    int Naudit_fail;   // cameras whose audit ran and found a threshold exceeded
 } rs_report_summary;
 
 // Writes out_dir/report.html and out_dir/report.pdf (out_dir is created if needed; both files
@@ -74,12 +74,13 @@ typedef struct {
 // file or background image, naming the file and field), RS_ERR_INVALID (bad options),
 // RS_ERR_NOMEM, RS_ERR_EXTERNAL (cairo). An audit that fails for a camera is not an error: the
 // report says so in that camera's section.
-rs_status rs_report_write(// out
-                          rs_report_summary *summary,
-                          // in
-                          const char *out_dir, const rs_site *site,
-                          const rs_report_options *opt, // may be NULL
-                          rs_err *err);                 // may be NULL
+rs_status rs_report_write( // out
+    rs_report_summary *summary,
+    // in
+    const char *out_dir,
+    const rs_site *site,
+    const rs_report_options *opt, // may be NULL
+    rs_err *err);                 // may be NULL
 
 #ifdef __cplusplus
 }

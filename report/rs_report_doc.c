@@ -43,13 +43,13 @@ static rs_doc_block *push(rs_doc *doc, rs_doc_kind kind)
     return b;
 }
 
-#define WITH_TEXT(b, fmt)                                                                          \
-    do {                                                                                           \
-        va_list ap;                                                                                \
-        va_start(ap, fmt);                                                                         \
-        (b)->text = vformat(fmt, ap);                                                              \
-        va_end(ap);                                                                                \
-        if (!(b)->text) doc->nomem = true;                                                         \
+#define WITH_TEXT(b, fmt)                  \
+    do {                                   \
+        va_list ap;                        \
+        va_start(ap, fmt);                 \
+        (b)->text = vformat(fmt, ap);      \
+        va_end(ap);                        \
+        if (!(b)->text) doc->nomem = true; \
     } while (0)
 
 void rs_doc_heading(rs_doc *doc, int level, const char *fmt, ...)
@@ -314,8 +314,7 @@ static rs_status figure_png(membuf *html, const rs_doc_block *b, int width_px, r
     return RS_OK;
 }
 
-rs_status rs_doc_write_html(const rs_doc *doc, const char *title, int figure_width_px, const char *path,
-                            rs_err *err)
+rs_status rs_doc_write_html(const rs_doc *doc, const char *title, int figure_width_px, const char *path, rs_err *err)
 {
     if (doc->nomem) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
     membuf m = {0};
@@ -365,7 +364,7 @@ static const double page_w = 595.276, page_h = 841.89, margin = 42;
 
 typedef struct {
     cairo_t *cr;
-    double y;     // top of the free space on the current page
+    double y; // top of the free space on the current page
     int page;
     const char *title;
 } pdf_state;
@@ -413,16 +412,16 @@ static void pdf_need(pdf_state *p, double height)
 
 // Word-wrapped text across the page width: draws it and advances p->y, or with draw false only
 // returns the height it would take (no page break counted).
-static double pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic,
-                           double indent, bool draw);
+static double
+pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent, bool draw);
 
 static void pdf_text(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent)
 {
     pdf_text_run(p, text, size, bold, italic, indent, true);
 }
 
-static double pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic,
-                           double indent, bool draw)
+static double
+pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent, bool draw)
 {
     double height = 0;
     cairo_t *cr = p->cr;
@@ -468,8 +467,7 @@ static double pdf_run_height(pdf_state *p, const rs_doc *doc, int i)
 {
     double h = 0;
     for (int k = i + 1; k < doc->N && doc->blocks[k].kind == RS_DOC_PARAGRAPH; k++)
-        h += pdf_text_run(p, doc->blocks[k].text, PDF_BODY_PT, false, false,
-                          doc->blocks[k].warning ? 8 : 0, false) + 4;
+        h += pdf_text_run(p, doc->blocks[k].text, PDF_BODY_PT, false, false, doc->blocks[k].warning ? 8 : 0, false) + 4;
     return h;
 }
 

@@ -2,9 +2,9 @@
 // (report/internal/rs_report_draw_internal.h) and the cameras' figure geometry
 // (rs_report_camera_geometry). The figures: rs_report_draw_image.c, rs_report_draw_map.c.
 #include "report/internal/rs_report_draw.h"
-#include "report/internal/rs_report_draw_internal.h"
-#include "report/internal/rs_report_doc.h"
 #include "core/rs_pose.h"
+#include "report/internal/rs_report_doc.h"
+#include "report/internal/rs_report_draw_internal.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -28,10 +28,9 @@ double rs_report_nice_ceil(double x)
 // Qualitative palette for cameras (Tableau 10).
 void rs_report_camera_rgb(cairo_t *cr, int k, double alpha)
 {
-    static const double pal[10][3] = {{0.12, 0.47, 0.71}, {1.00, 0.50, 0.05}, {0.17, 0.63, 0.17},
-                                      {0.84, 0.15, 0.16}, {0.58, 0.40, 0.74}, {0.55, 0.34, 0.29},
-                                      {0.89, 0.47, 0.76}, {0.50, 0.50, 0.50}, {0.74, 0.74, 0.13},
-                                      {0.09, 0.75, 0.81}};
+    static const double pal[10][3] = {{0.12, 0.47, 0.71}, {1.00, 0.50, 0.05}, {0.17, 0.63, 0.17}, {0.84, 0.15, 0.16},
+                                      {0.58, 0.40, 0.74}, {0.55, 0.34, 0.29}, {0.89, 0.47, 0.76}, {0.50, 0.50, 0.50},
+                                      {0.74, 0.74, 0.13}, {0.09, 0.75, 0.81}};
     const double *c = pal[k % 10];
     cairo_set_source_rgba(cr, c[0], c[1], c[2], alpha);
 }
@@ -39,9 +38,8 @@ void rs_report_camera_rgb(cairo_t *cr, int k, double alpha)
 // Viridis, sampled at 9 stops and interpolated linearly; t in [0,1].
 void rs_report_viridis(double t, double rgb[3])
 {
-    static const double stop[9][3] = {{68, 1, 84},    {71, 44, 122},  {59, 81, 139},
-                                      {44, 113, 142}, {33, 144, 141}, {39, 173, 129},
-                                      {92, 200, 99},  {170, 220, 50}, {253, 231, 37}};
+    static const double stop[9][3] = {{68, 1, 84},    {71, 44, 122}, {59, 81, 139},  {44, 113, 142}, {33, 144, 141},
+                                      {39, 173, 129}, {92, 200, 99}, {170, 220, 50}, {253, 231, 37}};
     t = t < 0 ? 0 : t > 1 ? 1 : t;
     double x = t * 8;
     int i = (int)x;
@@ -157,7 +155,8 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
     if (!r) return false;
     int Nr = 0;
     for (int i = 0; i < cam->N; i++)
-        if (cam->landmarks[i].inlier) r[Nr++] = hypot(cam->landmarks[i].residual_px[0], cam->landmarks[i].residual_px[1]);
+        if (cam->landmarks[i].inlier)
+            r[Nr++] = hypot(cam->landmarks[i].residual_px[0], cam->landmarks[i].residual_px[1]);
     double med = 0;
     if (Nr) {
         for (int i = 1; i < Nr; i++) // insertion sort: a few dozen values

@@ -1,9 +1,9 @@
 // rs_report_draw_image.c -- the camera's image figure (rs_report_draw_camera): background or
 // neutral canvas, ground grid, lanes, picks, reprojections and magnified residuals, legend.
+#include "core/rs_pose.h"
+#include "report/internal/rs_report_doc.h"
 #include "report/internal/rs_report_draw.h"
 #include "report/internal/rs_report_draw_internal.h"
-#include "report/internal/rs_report_doc.h"
-#include "core/rs_pose.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -36,7 +36,8 @@ static void image_polyline(cairo_t *cr, const rs_report_camera *cam, double s, c
     bool pen = false;
     for (int i = 0; i + 1 < Np; i++) {
         const double *a = &p[3 * i], *b = &p[3 * i + 3];
-        double len = sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
+        double len =
+            sqrt((b[0] - a[0]) * (b[0] - a[0]) + (b[1] - a[1]) * (b[1] - a[1]) + (b[2] - a[2]) * (b[2] - a[2]));
         int n = (int)ceil(len / step_m);
         if (n < 1) n = 1;
         if (n > 4000) n = 4000;
@@ -69,8 +70,16 @@ static double ground_up(const rs_site *site, double e, double n)
 typedef enum { LEGEND_CIRCLE, LEGEND_CROSS, LEGEND_DOT, LEGEND_LINE } legend_shape;
 
 // One legend row: a sample (shape, colour, line width lw_fs * fs) and its text.
-static void legend_row(cairo_t *cr, double x, double y, double fs, legend_shape shape, double r, double g, double b,
-                       double lw_fs, const char *text)
+static void legend_row(cairo_t *cr,
+                       double x,
+                       double y,
+                       double fs,
+                       legend_shape shape,
+                       double r,
+                       double g,
+                       double b,
+                       double lw_fs,
+                       const char *text)
 {
     double cx = x + fs * 0.6, cy = y - fs * 0.35;
     cairo_save(cr);
@@ -195,7 +204,8 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
     cairo_fill(cr);
     double y = ly + lh;
     legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_CIRCLE, 0.1, 0.75, 0.1, 0.15, "pick (inlier)"), y += lh;
-    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_CROSS, 0.9, 0.1, 0.1, 0.15, "pick (outlier), residual true size"), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_CROSS, 0.9, 0.1, 0.1, 0.15, "pick (outlier), residual true size"),
+        y += lh;
     legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_DOT, 0.1, 0.3, 1, 0.15, "reprojected landmark"), y += lh;
     snprintf(buf, sizeof buf, "inlier residual x%g", cam->magnification);
     legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_LINE, 1, 0.2, 0.6, 0.15, buf), y += lh;

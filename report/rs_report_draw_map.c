@@ -2,9 +2,9 @@
 // (rs_report_draw_camera_map) and of the whole site (rs_report_draw_site_map), with the layers
 // they share (lanes, fields of view, cameras, landmarks, uncertainty field and contours, colour
 // bar, scale and north arrow), and the site's best uncertainty map (rs_report_best_map).
+#include "report/internal/rs_report_doc.h"
 #include "report/internal/rs_report_draw.h"
 #include "report/internal/rs_report_draw_internal.h"
-#include "report/internal/rs_report_doc.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -148,8 +148,8 @@ static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, do
 
 // Landmarks of the site: observed by `cam` (if not NULL) drawn as inlier / outlier, the rest
 // as small grey dots; ids written when `ids`.
-static void map_landmarks(cairo_t *cr, const map_view *v, const struct rs_report_ctx *rep, const rs_report_camera *cam,
-                          double fs, bool ids)
+static void map_landmarks(
+    cairo_t *cr, const map_view *v, const struct rs_report_ctx *rep, const rs_report_camera *cam, double fs, bool ids)
 {
     const rs_site *site = rep->site;
     for (int i = 0; i < site->Nlandmarks; i++) {
@@ -287,8 +287,8 @@ static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, d
 }
 
 // The colour bar in the strip [w - cbar_w, w] on the right.
-static void map_colourbar(cairo_t *cr, double w, double h, double cbar_w, double fs, double vmax,
-                          double detection_sigma_px)
+static void
+map_colourbar(cairo_t *cr, double w, double h, double cbar_w, double fs, double vmax, double detection_sigma_px)
 {
     double bx = w - cbar_w + fs * 1.2, by = fs * 5, bw = fs * 1.2, bh = h - fs * 10;
     for (int i = 0; i < 100; i++) {
@@ -342,7 +342,7 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
             const double *p = rep->site->landmarks[cam->landmarks[i].ilandmark].p_enu_m;
             extent_add(ext, p[0], p[1]);
         }
-    double cbar_w = map ? fs * 7 : 0; // room on the right for the colour bar
+    double cbar_w = map ? fs * 7 : 0;                                            // room on the right for the colour bar
     map_view v = map_fit(ext[0], ext[1], ext[2], ext[3], w - cbar_w, h, fs * 4); // room for the furniture
 
     cairo_set_source_rgb(cr, 0.97, 0.97, 0.96);
@@ -370,7 +370,8 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     const rs_site *site = rep->site;
     double fs = w / 65;
     double ext[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY};
-    for (int i = 0; i < site->Nlandmarks; i++) extent_add(ext, site->landmarks[i].p_enu_m[0], site->landmarks[i].p_enu_m[1]);
+    for (int i = 0; i < site->Nlandmarks; i++)
+        extent_add(ext, site->landmarks[i].p_enu_m[0], site->landmarks[i].p_enu_m[1]);
     for (int c = 0; c < rep->Ncameras; c++) {
         const rs_report_camera *cam = &rep->cameras[c];
         extent_add(ext, cam->position_enu_m[0], cam->position_enu_m[1]);

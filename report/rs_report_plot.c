@@ -1,7 +1,7 @@
 // rs_report_plot.c -- log-log scatter panels as a PNG (see rs_report_plot.h).
 #include "report/rs_report_plot.h"
-#include "report/internal/rs_report_doc.h"
 #include "core/rs_io.h"
+#include "report/internal/rs_report_doc.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -45,8 +45,8 @@ static void marker(cairo_t *cr, const rs_report_plot_loglog *plot, int m, double
 }
 
 typedef struct {
-    double x0, y0, w, h;          // panel in device units
-    double lx0, lx1, ly0, ly1;    // log10 ranges
+    double x0, y0, w, h;       // panel in device units
+    double lx0, lx1, ly0, ly1; // log10 ranges
 } panel;
 
 static double px(const panel *p, double v) { return p->x0 + p->w * (log10(v) - p->lx0) / (p->lx1 - p->lx0); }
@@ -150,7 +150,8 @@ rs_status rs_report_plot_loglog_png(const char *path, const rs_report_plot_loglo
 
     rs_status st = RS_OK;
     if (cairo_surface_status(surf) != CAIRO_STATUS_SUCCESS)
-        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: cairo: %s", path, cairo_status_to_string(cairo_surface_status(surf)));
+        st =
+            rs_err_set(err, RS_ERR_EXTERNAL, "%s: cairo: %s", path, cairo_status_to_string(cairo_surface_status(surf)));
     unsigned char *png = NULL;
     size_t len = 0;
     if (st == RS_OK) st = rs_doc_png(&png, &len, surf, err);

@@ -21,11 +21,7 @@ extern "C" {
 #endif
 
 // Marker shapes.
-typedef enum {
-    RS_REPORT_PLOT_CIRCLE = 0,
-    RS_REPORT_PLOT_SQUARE,
-    RS_REPORT_PLOT_TRIANGLE
-} rs_report_plot_marker;
+typedef enum { RS_REPORT_PLOT_CIRCLE = 0, RS_REPORT_PLOT_SQUARE, RS_REPORT_PLOT_TRIANGLE } rs_report_plot_marker;
 
 typedef struct {
     const char *name;             // legend text

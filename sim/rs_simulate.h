@@ -29,15 +29,15 @@
 // camera x right / y down / z forward, pixel (0,0) at the centre of the top-left pixel,
 // yaw/pitch/roll as defined there.
 #pragma once
+#include <mrcal/mrcal.h>
 #include <stdbool.h>
 #include <stdint.h>
-#include <mrcal/mrcal.h>
 
 #include "core/rs_camera.h"
 
-#include "geo/rs_geo.h"
-#include "core/rs_status.h"
 #include "core/rs_rng.h"
+#include "core/rs_status.h"
+#include "geo/rs_geo.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -58,47 +58,48 @@ extern "C" {
 // names mrcal knows), a model without an intrinsics core, a field of view that the model cannot
 // show (pinhole-like models: hfov must be below 170 degrees), a bad image size.
 // out: *intrinsics is malloc'ed, (*Nintrinsics,), owned by the caller (free()).
-rs_status rs_simulate_lens(// out
-                           mrcal_lensmodel_t *lensmodel,
-                           double **intrinsics,
-                           int *Nintrinsics,
-                           // in,out
-                           rs_rng *rng,
-                           // in
-                           const char *lensmodel_name, // e.g. "LENSMODEL_OPENCV8"
-                           int width_px, int height_px,
-                           double hfov_deg,
-                           bool distortion,
-                           rs_err *err);
+rs_status rs_simulate_lens( // out
+    mrcal_lensmodel_t *lensmodel,
+    double **intrinsics,
+    int *Nintrinsics,
+    // in,out
+    rs_rng *rng,
+    // in
+    const char *lensmodel_name, // e.g. "LENSMODEL_OPENCV8"
+    int width_px,
+    int height_px,
+    double hfov_deg,
+    bool distortion,
+    rs_err *err);
 
 // ---- one camera's problem, in memory ----
 
 typedef struct {
-    const char *lensmodel;     // mrcal lens model name (default "LENSMODEL_OPENCV8")
-    int width_px, height_px;   // image size (default 1920 x 1080)
-    double hfov_deg;           // horizontal field of view (default 60)
-    bool distortion;           // draw mild distortion (default true); false: all zero
+    const char *lensmodel;   // mrcal lens model name (default "LENSMODEL_OPENCV8")
+    int width_px, height_px; // image size (default 1920 x 1080)
+    double hfov_deg;         // horizontal field of view (default 60)
+    bool distortion;         // draw mild distortion (default true); false: all zero
 
-    double camera_height_m;    // camera height above the ground plane u = 0 (default 8)
-    double distance_m;         // horizontal distance from the camera to the point it looks at,
-                               // the ENU origin (default 25)
-    double yaw_deg;            // heading of the camera (default 30)
-    double roll_sigma_deg;     // roll ~ N(0, this) (default 1)
-                               // pitch: the ENU origin appears at 62% of the image height
+    double camera_height_m; // camera height above the ground plane u = 0 (default 8)
+    double distance_m;      // horizontal distance from the camera to the point it looks at,
+                            // the ENU origin (default 25)
+    double yaw_deg;         // heading of the camera (default 30)
+    double roll_sigma_deg;  // roll ~ N(0, this) (default 1)
+                            // pitch: the ENU origin appears at 62% of the image height
 
-    int Nlandmarks;            // landmarks to generate, all visible (default 12)
-    double elevated_fraction;  // fraction above the ground (default 0.25); 0 = planar problem
+    int Nlandmarks;                        // landmarks to generate, all visible (default 12)
+    double elevated_fraction;              // fraction above the ground (default 0.25); 0 = planar problem
     double elevated_min_m, elevated_max_m; // height range of those (default 2, 6)
-    double max_range_m;        // max horizontal distance camera -> landmark (default 80); keep
-                               // it well above distance_m, or little ground is left to use
-    double margin_px;          // landmarks project at least this far inside the image (20)
+    double max_range_m;                    // max horizontal distance camera -> landmark (default 80); keep
+                                           // it well above distance_m, or little ground is left to use
+    double margin_px;                      // landmarks project at least this far inside the image (20)
 
-    double pixel_sigma_px;     // pixel noise (default 1)
-    double survey_sigma_h_m;   // survey noise, east and north (default 0.3)
-    double survey_sigma_v_m;   // survey noise, up (default 0.5)
-    double outlier_fraction;   // probability that a pick is a gross outlier (default 0.05)
-    double outlier_min_px;     // an outlier is at least this far from the truth (default 30)
-    uint64_t seed;             // default 1
+    double pixel_sigma_px;   // pixel noise (default 1)
+    double survey_sigma_h_m; // survey noise, east and north (default 0.3)
+    double survey_sigma_v_m; // survey noise, up (default 0.5)
+    double outlier_fraction; // probability that a pick is a gross outlier (default 0.05)
+    double outlier_min_px;   // an outlier is at least this far from the truth (default 30)
+    uint64_t seed;           // default 1
 } rs_simulate_camera_options;
 
 // Fills o with the defaults above. o must not be NULL.
@@ -107,17 +108,17 @@ void rs_simulate_camera_options_default(rs_simulate_camera_options *o);
 // One camera's problem. Owned by whoever rs_simulate_camera_problem() returned it to; free with
 // rs_simulate_problem_free().
 typedef struct {
-    rs_camera camera;          // the TRUE camera: lens, intrinsics (owned), image size, pose
-    double p_cam_enu_m[3];     // camera position in ENU, -R^T t
-    double ypr_deg[3];         // yaw, pitch, roll of the true pose
+    rs_camera camera;      // the TRUE camera: lens, intrinsics (owned), image size, pose
+    double p_cam_enu_m[3]; // camera position in ENU, -R^T t
+    double ypr_deg[3];     // yaw, pitch, roll of the true pose
 
     int Npoints;
-    double *p_enu_true_m;      // (Npoints,3) true landmark positions
-    double *p_enu_survey_m;    // (Npoints,3) surveyed = true + survey noise
-    double *q_true_px;         // (Npoints,2) exact projections of the true positions
-    double *q_px;              // (Npoints,2) picked pixels: noisy, outliers replaced
-    bool *outlier;             // (Npoints,) true where q_px is a gross outlier
-    bool *elevated;            // (Npoints,) true where the landmark is above the ground
+    double *p_enu_true_m;   // (Npoints,3) true landmark positions
+    double *p_enu_survey_m; // (Npoints,3) surveyed = true + survey noise
+    double *q_true_px;      // (Npoints,2) exact projections of the true positions
+    double *q_px;           // (Npoints,2) picked pixels: noisy, outliers replaced
+    bool *outlier;          // (Npoints,) true where q_px is a gross outlier
+    bool *elevated;         // (Npoints,) true where the landmark is above the ground
     int Noutliers;
 } rs_simulate_problem;
 
@@ -127,11 +128,11 @@ typedef struct {
 // Errors: RS_ERR_USAGE for bad options (the message names the field), RS_ERR_DEGENERATE when the
 // camera sees too little ground to place the landmarks (e.g. it looks above the horizon).
 // out: *problem, owned by the caller; NULL on failure.
-rs_status rs_simulate_camera_problem(// out
-                                     rs_simulate_problem **problem,
-                                     // in
-                                     const rs_simulate_camera_options *o,
-                                     rs_err *err);
+rs_status rs_simulate_camera_problem( // out
+    rs_simulate_problem **problem,
+    // in
+    const rs_simulate_camera_options *o,
+    rs_err *err);
 
 // Frees a problem. Accepts NULL.
 void rs_simulate_problem_free(rs_simulate_problem *problem);
@@ -139,23 +140,23 @@ void rs_simulate_problem_free(rs_simulate_problem *problem);
 // ---- a whole site ----
 
 typedef struct {
-    uint64_t seed;              // default 1; at most 2^53 (it is written to JSON)
-    int Ncameras;               // 1..16 (default 4): the first 4 on the corners, then along
-                                // the approaches
-    int landmarks_per_camera;   // 4..100 (default 12): each camera sees about this many
-    const char *lensmodel;      // mrcal lens model name (default "LENSMODEL_OPENCV8")
-    int width_px, height_px;    // default 1920 x 1080
-    double hfov_deg;            // default 60
-    double pixel_sigma_px;      // default 1
-    double survey_sigma_h_m;    // default 0.3
-    double survey_sigma_v_m;    // default 0.5
-    double outlier_fraction;    // default 0.05, in [0, 0.9]
-    double focal_error;         // nominal focal length = true * this (default 1: exact), [0.5, 2]
-    double pole_prior_sigma_m;  // > 0: each camera gets a position prior, its true position
-                                // plus N(0, this) per axis; 0 (default): no prior
-    double elevated_fraction;   // share of each camera's landmarks above the ground (0.25)
-    rs_llh origin;              // default 48.1374, 11.5755, 560 (ellipsoidal)
-    bool force;                 // replace an existing site folder (default false)
+    uint64_t seed;             // default 1; at most 2^53 (it is written to JSON)
+    int Ncameras;              // 1..16 (default 4): the first 4 on the corners, then along
+                               // the approaches
+    int landmarks_per_camera;  // 4..100 (default 12): each camera sees about this many
+    const char *lensmodel;     // mrcal lens model name (default "LENSMODEL_OPENCV8")
+    int width_px, height_px;   // default 1920 x 1080
+    double hfov_deg;           // default 60
+    double pixel_sigma_px;     // default 1
+    double survey_sigma_h_m;   // default 0.3
+    double survey_sigma_v_m;   // default 0.5
+    double outlier_fraction;   // default 0.05, in [0, 0.9]
+    double focal_error;        // nominal focal length = true * this (default 1: exact), [0.5, 2]
+    double pole_prior_sigma_m; // > 0: each camera gets a position prior, its true position
+                               // plus N(0, this) per axis; 0 (default): no prior
+    double elevated_fraction;  // share of each camera's landmarks above the ground (0.25)
+    rs_llh origin;             // default 48.1374, 11.5755, 560 (ellipsoidal)
+    bool force;                // replace an existing site folder (default false)
 } rs_simulate_site_options;
 
 // Fills o with the defaults above. o must not be NULL.
@@ -178,10 +179,10 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 // RS_ERR_IO and nothing is touched.
 // Errors: RS_ERR_USAGE (bad options), RS_ERR_IO (folder exists, cannot write), RS_ERR_DEGENERATE
 // (a camera sees fewer than 4 landmarks), RS_ERR_EXTERNAL (mrcal failed).
-rs_status rs_simulate_site(// in
-                           const char *dir,
-                           const rs_simulate_site_options *o,
-                           rs_err *err);
+rs_status rs_simulate_site( // in
+    const char *dir,
+    const rs_simulate_site_options *o,
+    rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -29,10 +29,14 @@ static bool camera_unproject(const rs_simulate__camera *c, mrcal_point3_t *v, co
 rs_status rs_simulate__camera_field_of_view(rs_simulate__camera *c, rs_err *err)
 {
     mrcal_point2_t q[8] = {
-        {.x = -0.5, .y = -0.5},           {.x = c->cam.width - 0.5, .y = -0.5},
-        {.x = -0.5, .y = c->cam.height - 0.5},     {.x = c->cam.width - 0.5, .y = c->cam.height - 0.5},
-        {.x = 0.5 * c->cam.width, .y = -0.5},     {.x = 0.5 * c->cam.width, .y = c->cam.height - 0.5},
-        {.x = -0.5, .y = 0.5 * c->cam.height},     {.x = c->cam.width - 0.5, .y = 0.5 * c->cam.height},
+        {.x = -0.5, .y = -0.5},
+        {.x = c->cam.width - 0.5, .y = -0.5},
+        {.x = -0.5, .y = c->cam.height - 0.5},
+        {.x = c->cam.width - 0.5, .y = c->cam.height - 0.5},
+        {.x = 0.5 * c->cam.width, .y = -0.5},
+        {.x = 0.5 * c->cam.width, .y = c->cam.height - 0.5},
+        {.x = -0.5, .y = 0.5 * c->cam.height},
+        {.x = c->cam.width - 0.5, .y = 0.5 * c->cam.height},
     };
     mrcal_point3_t v[8];
     if (!camera_unproject(c, v, q, 8))
@@ -51,8 +55,8 @@ rs_status rs_simulate__camera_field_of_view(rs_simulate__camera *c, rs_err *err)
 
 // Sets the pose of a camera at p_cam looking at `target`, turned by yaw_offset_deg and rolled by
 // roll_deg, pitched so that the target appears at 62% of the image height. Rounds rt to 1e-6.
-void rs_simulate__camera_look_at(rs_simulate__camera *c, const double p_cam[3], const double target[3], double yaw_offset_deg,
-                           double roll_deg)
+void rs_simulate__camera_look_at(
+    rs_simulate__camera *c, const double p_cam[3], const double target[3], double yaw_offset_deg, double roll_deg)
 {
     double d[3] = {target[0] - p_cam[0], target[1] - p_cam[1], target[2] - p_cam[2]};
     double yaw = atan2(d[0], d[1]) / DEG + yaw_offset_deg;
@@ -85,14 +89,21 @@ bool rs_simulate__camera_sees(const rs_simulate__camera *c, double q_px[2], cons
     if (!mrcal_project(&q, NULL, NULL, &pc, 1, &c->cam.lensmodel, c->cam.intrinsics)) return false;
     q_px[0] = q.x;
     q_px[1] = q.y;
-    return isfinite(q.x) && isfinite(q.y) && q.x >= margin_px && q.y >= margin_px && q.x <= c->cam.width - 1 - margin_px &&
-           q.y <= c->cam.height - 1 - margin_px;
+    return isfinite(q.x) && isfinite(q.y) && q.x >= margin_px && q.y >= margin_px &&
+           q.x <= c->cam.width - 1 - margin_px && q.y <= c->cam.height - 1 - margin_px;
 }
 
 // Picks: the true pixel plus N(0, sigma) noise kept inside the image (redrawn until it is), or,
 // with probability outlier_fraction, a uniformly random pixel at least outlier_min_px away.
-int rs_simulate__camera_pick(rs_rng *rng, double *q_px, bool *outlier, const double *q_true_px, int N,
-                       const rs_simulate__camera *c, double sigma_px, double outlier_fraction, double outlier_min_px)
+int rs_simulate__camera_pick(rs_rng *rng,
+                             double *q_px,
+                             bool *outlier,
+                             const double *q_true_px,
+                             int N,
+                             const rs_simulate__camera *c,
+                             double sigma_px,
+                             double outlier_fraction,
+                             double outlier_min_px)
 {
     int Noutliers = 0;
     for (int i = 0; i < N; i++) {
@@ -115,8 +126,8 @@ int rs_simulate__camera_pick(rs_rng *rng, double *q_px, bool *outlier, const dou
     return Noutliers;
 }
 
-void rs_simulate__survey_noise(rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h,
-                         double sigma_v)
+void rs_simulate__survey_noise(
+    rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h, double sigma_v)
 {
     for (int i = 0; i < N; i++) {
         p_survey[3 * i + 0] = p_true[3 * i + 0] + sigma_h * rs_rng_normal(rng);
@@ -174,8 +185,7 @@ static rs_status camera_options_check(const rs_simulate_camera_options *o, rs_er
                  o->survey_sigma_h_m);
     CHECK_OPTION(o->survey_sigma_v_m >= 0 && o->survey_sigma_v_m <= 1000, "survey_sigma_v_m", "%g",
                  o->survey_sigma_v_m);
-    CHECK_OPTION(o->outlier_fraction >= 0 && o->outlier_fraction <= 0.9, "outlier_fraction", "%g",
-                 o->outlier_fraction);
+    CHECK_OPTION(o->outlier_fraction >= 0 && o->outlier_fraction <= 0.9, "outlier_fraction", "%g", o->outlier_fraction);
     CHECK_OPTION(o->outlier_min_px >= 0 && 4 * o->outlier_min_px < o->height_px, "outlier_min_px", "%g",
                  o->outlier_min_px);
     return RS_OK;
@@ -195,8 +205,12 @@ void rs_simulate_problem_free(rs_simulate_problem *p)
 }
 
 // Places landmark i on a ray through a random pixel, on the ground or at a random height.
-static bool place_landmark(rs_rng *rng, double p_enu[3], double q_true_px[2], const rs_simulate__camera *c,
-                           bool elevated, const rs_simulate_camera_options *o)
+static bool place_landmark(rs_rng *rng,
+                           double p_enu[3],
+                           double q_true_px[2],
+                           const rs_simulate__camera *c,
+                           bool elevated,
+                           const rs_simulate_camera_options *o)
 {
     mrcal_point2_t q = {.x = rs_rng_uniform_in(rng, o->margin_px, c->cam.width - 1 - o->margin_px),
                         .y = rs_rng_uniform_in(rng, o->margin_px, c->cam.height - 1 - o->margin_px)};
@@ -214,8 +228,7 @@ static bool place_landmark(rs_rng *rng, double p_enu[3], double q_true_px[2], co
     return rs_simulate__camera_sees(c, q_true_px, p_enu, 0.5 * o->margin_px);
 }
 
-rs_status rs_simulate_camera_problem(rs_simulate_problem **problem, const rs_simulate_camera_options *o,
-                                     rs_err *err)
+rs_status rs_simulate_camera_problem(rs_simulate_problem **problem, const rs_simulate_camera_options *o, rs_err *err)
 {
     *problem = NULL;
     rs_status st = camera_options_check(o, err);
@@ -264,14 +277,14 @@ rs_status rs_simulate_camera_problem(rs_simulate_problem **problem, const rs_sim
         while (!place_landmark(&rng, p->p_enu_true_m + 3 * i, p->q_true_px + 2 * i, &c, p->elevated[i], o))
             if (++tries == 10000) {
                 st = rs_err_set(err, RS_ERR_DEGENERATE,
-                                "landmark %d: no %s point within %g m is visible (camera %g m high, pitch %.1f deg)",
-                                i, p->elevated[i] ? "elevated" : "ground", o->max_range_m, o->camera_height_m,
+                                "landmark %d: no %s point within %g m is visible (camera %g m high, pitch %.1f deg)", i,
+                                p->elevated[i] ? "elevated" : "ground", o->max_range_m, o->camera_height_m,
                                 c.ypr_deg[1]);
                 goto fail;
             }
     }
     p->Noutliers = rs_simulate__camera_pick(&rng, p->q_px, p->outlier, p->q_true_px, N, &c, o->pixel_sigma_px,
-                               o->outlier_fraction, o->outlier_min_px);
+                                            o->outlier_fraction, o->outlier_min_px);
     rs_simulate__survey_noise(&rng, p->p_enu_survey_m, p->p_enu_true_m, N, o->survey_sigma_h_m, o->survey_sigma_v_m);
     *problem = p;
     return RS_OK;

@@ -15,11 +15,17 @@
 
 // Lane width 3.5 m, two lanes each way: the roads are 14 m wide. Distances "along" an approach
 // are from the centre of the intersection; "s" is across it, positive on the inbound side.
-#define LANE_M 3.5
+#define LANE_M      3.5
 #define ROAD_HALF_M (2 * LANE_M)
 
-static bool add_candidate(rs_simulate__candidates *l, const double R_road[4], double along, double s, double dx, double dy,
-                          double h, const char *kind)
+static bool add_candidate(rs_simulate__candidates *l,
+                          const double R_road[4],
+                          double along,
+                          double s,
+                          double dx,
+                          double dy,
+                          double h,
+                          const char *kind)
 {
     if (l->N == l->cap) {
         int cap = l->cap ? 2 * l->cap : 256;
@@ -242,8 +248,8 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
         rs_simulate__camera *c = &s->cam[k];
         c->cam.width = o->width_px;
         c->cam.height = o->height_px;
-        if ((st = rs_simulate_lens(&c->cam.lensmodel, &c->cam.intrinsics, &c->cam.Nintrinsics, &rng, o->lensmodel, o->width_px,
-                                   o->height_px, o->hfov_deg, true, err)))
+        if ((st = rs_simulate_lens(&c->cam.lensmodel, &c->cam.intrinsics, &c->cam.Nintrinsics, &rng, o->lensmodel,
+                                   o->width_px, o->height_px, o->hfov_deg, true, err)))
             return st;
         if ((st = rs_simulate__camera_field_of_view(c, err))) return rs_err_prefix(err, "camera %d", k + 1);
         // Draw the pole and the aim until the camera sees at least 4 candidates.
@@ -255,7 +261,8 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
             rs_simulate__camera_look_at(c, p_cam, centre, rs_rng_uniform_in(&rng, -10.0, 10.0), roll);
             Nvisible = 0;
             for (int j = 0; j < Nc; j++) {
-                bool v = rs_simulate__camera_sees(c, s->q_true_px + 2 * ((size_t)k * Nc + j), s->cand.c[j].p_enu_m, 20.0);
+                bool v =
+                    rs_simulate__camera_sees(c, s->q_true_px + 2 * ((size_t)k * Nc + j), s->cand.c[j].p_enu_m, 20.0);
                 s->visible[(size_t)k * Nc + j] = v;
                 Nvisible += v;
             }
@@ -277,13 +284,12 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
             if (s->landmark_of[j] < 0 || !s->visible[kj]) continue;
             s->Nobservations++;
             s->Noutliers += rs_simulate__camera_pick(&rng, s->q_px + 2 * kj, s->outlier + kj, s->q_true_px + 2 * kj, 1,
-                                        &s->cam[k], o->pixel_sigma_px, o->outlier_fraction, 30.0);
+                                                     &s->cam[k], o->pixel_sigma_px, o->outlier_fraction, 30.0);
         }
     for (int k = 0; k < K; k++) {
         int n = 0;
         for (int j = 0; j < Nc; j++) n += s->landmark_of[j] >= 0 && s->visible[(size_t)k * Nc + j];
-        if (n < 4)
-            return rs_err_set(err, RS_ERR_DEGENERATE, "camera %d: observes %d landmarks, needs 4", k + 1, n);
+        if (n < 4) return rs_err_set(err, RS_ERR_DEGENERATE, "camera %d: observes %d landmarks, needs 4", k + 1, n);
     }
 
     // The survey: true positions plus noise, in WGS84.
@@ -328,7 +334,6 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
     return RS_OK;
 }
 
-
 void rs_simulate__landmark_id(char id[16], int i) { snprintf(id, 16, "L%03d", i + 1); }
 void rs_simulate__camera_id(char id[16], int k) { snprintf(id, 16, "cam%d", k + 1); }
 
@@ -346,8 +351,8 @@ void rs_simulate__camera_id(char id[16], int k) { snprintf(id, 16, "cam%d", k + 
 // turning junction lane; then the 8 exit lanes (a, k). So lane (a, k) of kind approach is
 // 3 (2a + k - 1), its junction lanes follow it, and exit (a, k) is 24 + 2a + k - 1.
 
-#define LANE_FAR_M 60.0
-#define LANE_STOP_M 13.5
+#define LANE_FAR_M     60.0
+#define LANE_STOP_M    13.5
 #define LANE_SPEED_MPS 13.89 // 50 km/h
 #define TURN_SPEED_MPS 8.33  // 30 km/h
 enum { NLANES = 32 };
@@ -370,8 +375,15 @@ static int exit_lane(int a, int k) { return 24 + 2 * a + k - 1; }
 
 // Fills one lane: pts_road (Npts, 2) in the road frame, rotated into ENU, rounded to 0.1 mm, on
 // the ground; continuing into the lanes next (Nnext,).
-static bool set_lane(rs_lane *lane, const rs_simulate__site *s, const char *id, const char *kind,
-                     double speed_mps, const double (*pts_road)[2], int Npts, const int *next, int Nnext)
+static bool set_lane(rs_lane *lane,
+                     const rs_simulate__site *s,
+                     const char *id,
+                     const char *kind,
+                     double speed_mps,
+                     const double (*pts_road)[2],
+                     int Npts,
+                     const int *next,
+                     int Nnext)
 {
     lane->id = strdup(id);
     lane->kind = strdup(kind);
@@ -383,8 +395,10 @@ static bool set_lane(rs_lane *lane, const rs_simulate__site *s, const char *id, 
     lane->speed_mps = speed_mps;
     lane->Npoints = Npts;
     for (int i = 0; i < Npts; i++) {
-        lane->p_enu_m[i][0] = rs_simulate__quantize(s->R_road[0] * pts_road[i][0] + s->R_road[1] * pts_road[i][1], Q_ENU);
-        lane->p_enu_m[i][1] = rs_simulate__quantize(s->R_road[2] * pts_road[i][0] + s->R_road[3] * pts_road[i][1], Q_ENU);
+        lane->p_enu_m[i][0] =
+            rs_simulate__quantize(s->R_road[0] * pts_road[i][0] + s->R_road[1] * pts_road[i][1], Q_ENU);
+        lane->p_enu_m[i][1] =
+            rs_simulate__quantize(s->R_road[2] * pts_road[i][0] + s->R_road[3] * pts_road[i][1], Q_ENU);
         lane->p_enu_m[i][2] = 0.0;
     }
     for (int i = 0; i < Nnext; i++) lane->next[i] = next[i];
@@ -410,24 +424,25 @@ rs_status rs_simulate__lanes(rs_lanes *lanes, const rs_simulate__site *s, rs_err
             lane_id(id, sizeof id, a, true, k);
             approach_point(pts[0], a, LANE_FAR_M, s_in);
             approach_point(pts[1], a, LANE_STOP_M, s_in);
-            ok = set_lane(&lanes->lane[in], s, id, "approach", LANE_SPEED_MPS, (const double(*)[2])pts, 2,
-                          junctions, 2);
+            ok =
+                set_lane(&lanes->lane[in], s, id, "approach", LANE_SPEED_MPS, (const double(*)[2])pts, 2, junctions, 2);
             for (int m = 0; m < 2 && ok; m++) {
                 // Cubic Bezier from the stop bar of (a, k) to the start of outbound lane k of to[m].
                 double p0[2], p3[2], d0[2], d3[2], q[2];
                 approach_point(p0, a, LANE_STOP_M, s_in);
                 approach_point(p3, to[m], LANE_STOP_M, -s_in);
                 approach_point(q, a, LANE_STOP_M - 1.0, s_in);
-                d0[0] = q[0] - p0[0], d0[1] = q[1] - p0[1];          // unit inbound direction
+                d0[0] = q[0] - p0[0], d0[1] = q[1] - p0[1]; // unit inbound direction
                 approach_point(q, to[m], LANE_STOP_M + 1.0, -s_in);
-                d3[0] = q[0] - p3[0], d3[1] = q[1] - p3[1];          // unit outbound direction
+                d3[0] = q[0] - p3[0], d3[1] = q[1] - p3[1]; // unit outbound direction
                 double L = hypot(p3[0] - p0[0], p3[1] - p0[1]) / 3.0;
                 double p1[2] = {p0[0] + L * d0[0], p0[1] + L * d0[1]};
                 double p2[2] = {p3[0] - L * d3[0], p3[1] - L * d3[1]};
                 for (int i = 0; i <= 8; i++) {
                     double t = i / 8.0, u = 1 - t;
                     for (int c = 0; c < 2; c++)
-                        pts[i][c] = u * u * u * p0[c] + 3 * u * u * t * p1[c] + 3 * u * t * t * p2[c] + t * t * t * p3[c];
+                        pts[i][c] =
+                            u * u * u * p0[c] + 3 * u * u * t * p1[c] + 3 * u * t * t * p2[c] + t * t * t * p3[c];
                 }
                 lane_id(jid, sizeof jid, to[m], false, k);
                 snprintf(nid, sizeof nid, "%s_%s_%s", id, how[m], jid);

@@ -48,9 +48,16 @@ rs_status rs_simulate__lens_check(mrcal_lensmodel_t *lm, const char *name, int W
     return RS_OK;
 }
 
-rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel, double **intrinsics, int *Nintrinsics,
-                           rs_rng *rng, const char *lensmodel_name, int width_px, int height_px,
-                           double hfov_deg, bool distortion, rs_err *err)
+rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel,
+                           double **intrinsics,
+                           int *Nintrinsics,
+                           rs_rng *rng,
+                           const char *lensmodel_name,
+                           int width_px,
+                           int height_px,
+                           double hfov_deg,
+                           bool distortion,
+                           rs_err *err)
 {
     *intrinsics = NULL;
     *Nintrinsics = 0;
@@ -74,18 +81,18 @@ rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel, double **intrinsics, in
     if (distortion) {
         mrcal_lensmodel_type_t t = lensmodel->type;
         if (MRCAL_LENSMODEL_IS_OPENCV(t)) {
-            p[4] = -0.08 + 0.02 * rs_rng_normal(rng); // k1
-            p[5] = 0.03 + 0.01 * rs_rng_normal(rng);  // k2
-            p[6] = 2e-4 * rs_rng_normal(rng);         // p1
-            p[7] = 2e-4 * rs_rng_normal(rng);         // p2
-            if (N > 8) p[8] = -0.005 + 0.002 * rs_rng_normal(rng); // k3
-            if (N > 9) p[9] = 0.01 * rs_rng_normal(rng);           // k4 (k5, k6 = 0)
+            p[4] = -0.08 + 0.02 * rs_rng_normal(rng);                      // k1
+            p[5] = 0.03 + 0.01 * rs_rng_normal(rng);                       // k2
+            p[6] = 2e-4 * rs_rng_normal(rng);                              // p1
+            p[7] = 2e-4 * rs_rng_normal(rng);                              // p2
+            if (N > 8) p[8] = -0.005 + 0.002 * rs_rng_normal(rng);         // k3
+            if (N > 9) p[9] = 0.01 * rs_rng_normal(rng);                   // k4 (k5, k6 = 0)
             for (int i = 12; i < N; i++) p[i] = 1e-4 * rs_rng_normal(rng); // s1..s4
         } else if (t == MRCAL_LENSMODEL_CAHVOR || t == MRCAL_LENSMODEL_CAHVORE) {
-            p[4] = 1e-3 * rs_rng_normal(rng);          // alpha
-            p[5] = 1e-3 * rs_rng_normal(rng);          // beta
-            p[7] = -0.05 + 0.01 * rs_rng_normal(rng);  // r1 (r0 = 0)
-            p[8] = 0.01 + 0.003 * rs_rng_normal(rng);  // r2 (CAHVORE's e = 0)
+            p[4] = 1e-3 * rs_rng_normal(rng);         // alpha
+            p[5] = 1e-3 * rs_rng_normal(rng);         // beta
+            p[7] = -0.05 + 0.01 * rs_rng_normal(rng); // r1 (r0 = 0)
+            p[8] = 0.01 + 0.003 * rs_rng_normal(rng); // r2 (CAHVORE's e = 0)
         }
     }
     for (int i = 0; i < N; i++) p[i] = rs_simulate__quantize(p[i], Q_MODEL);

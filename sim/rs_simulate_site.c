@@ -53,10 +53,9 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 {
     CHECK_OPTION(o->seed <= (1ULL << 53), "seed", "%llu", (unsigned long long)o->seed);
     CHECK_OPTION(o->Ncameras >= 1 && o->Ncameras <= 16, "cameras", "%d (1..16)", o->Ncameras);
-    CHECK_OPTION(o->landmarks_per_camera >= 4 && o->landmarks_per_camera <= 100, "landmarks-per-camera",
-                 "%d (4..100)", o->landmarks_per_camera);
-    CHECK_OPTION(o->pixel_sigma_px >= 0 && o->pixel_sigma_px <= 20, "pixel-sigma", "%g (0..20 px)",
-                 o->pixel_sigma_px);
+    CHECK_OPTION(o->landmarks_per_camera >= 4 && o->landmarks_per_camera <= 100, "landmarks-per-camera", "%d (4..100)",
+                 o->landmarks_per_camera);
+    CHECK_OPTION(o->pixel_sigma_px >= 0 && o->pixel_sigma_px <= 20, "pixel-sigma", "%g (0..20 px)", o->pixel_sigma_px);
     CHECK_OPTION(o->survey_sigma_h_m >= 0 && o->survey_sigma_h_m <= 100, "survey-sigma", "horizontal %g (0..100 m)",
                  o->survey_sigma_h_m);
     CHECK_OPTION(o->survey_sigma_v_m >= 0 && o->survey_sigma_v_m <= 100, "survey-sigma", "vertical %g (0..100 m)",
@@ -97,8 +96,12 @@ static void camera_files_of(camera_files *f, int k)
 }
 
 // Writes camera c's lens and size with the given intrinsics and pose (core's writer: atomic).
-static rs_status write_cameramodel(const char *dir, const char *rel, const rs_simulate__camera *c, const double *intrinsics,
-                                   const double rt_cam_enu[6], rs_err *err)
+static rs_status write_cameramodel(const char *dir,
+                                   const char *rel,
+                                   const rs_simulate__camera *c,
+                                   const double *intrinsics,
+                                   const double rt_cam_enu[6],
+                                   rs_err *err)
 {
     char *path = rs_io_join(dir, rel);
     if (!path) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", rel);
@@ -110,10 +113,7 @@ static rs_status write_cameramodel(const char *dir, const char *rel, const rs_si
     return st;
 }
 
-static cJSON *json_array(const double *x, int n)
-{
-    return cJSON_CreateDoubleArray(x, n);
-}
+static cJSON *json_array(const double *x, int n) { return cJSON_CreateDoubleArray(x, n); }
 
 static cJSON *json_llh(double lat, double lon, double h)
 {
@@ -148,8 +148,8 @@ static cJSON *json_options(const rs_simulate_site_options *o)
 }
 
 // site.json, through geo's writer; "simulated" records the options.
-static rs_status write_site_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o,
-                                 rs_err *err)
+static rs_status
+write_site_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
 {
     const int K = s->Ncameras;
     static const double up[3] = {0, 0, 1};
@@ -167,8 +167,8 @@ static rs_status write_site_json(const char *dir, const rs_simulate__site *s, co
     }
     for (int k = 0; k < K; k++) {
         camera_files_of(&files[k], k);
-        cams[k] = (rs_site_spec_camera){.id = files[k].id, .model = files[k].model,
-                                        .observations = files[k].observations, .note = s->note[k]};
+        cams[k] = (rs_site_spec_camera){
+            .id = files[k].id, .model = files[k].model, .observations = files[k].observations, .note = s->note[k]};
         if (s->prior_llh) {
             const double *p = s->prior_llh + 3 * k;
             priors[k] = (rs_llh){p[0], p[1], p[2]};
@@ -200,8 +200,7 @@ done:
 
 // The surveyed landmarks as the site gives them (ids "L001", ...; kinds static strings).
 // out: *landmarks (Nlandmarks,) and *ids (Nlandmarks, 16) that their ids point into (free both)
-static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], const rs_simulate__site *s,
-                                rs_err *err)
+static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], const rs_simulate__site *s, rs_err *err)
 {
     const int L = s->Nlandmarks;
     *landmarks = calloc((size_t)(L ? L : 1), sizeof **landmarks);
@@ -210,16 +209,24 @@ static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], 
     for (int i = 0; i < L; i++) {
         const double *llh = s->survey_llh + 3 * i;
         rs_simulate__landmark_id((*ids)[i], i);
-        (*landmarks)[i] = (rs_site_landmark){.id = (*ids)[i], .feature = i, .llh = {llh[0], llh[1], llh[2]},
-                                             .sigma_h_m = NAN, .sigma_v_m = NAN,
+        (*landmarks)[i] = (rs_site_landmark){.id = (*ids)[i],
+                                             .feature = i,
+                                             .llh = {llh[0], llh[1], llh[2]},
+                                             .sigma_h_m = NAN,
+                                             .sigma_v_m = NAN,
                                              .kind = (char *)s->cand.c[s->cand_of[i]].kind};
     }
     return RS_OK;
 }
 
 // observations/<id>.csv of camera k: its picks of the landmarks it sees, in landmark order.
-static rs_status write_observations(const char *dir, const camera_files *f, const rs_simulate__site *s, int k,
-                                    const rs_site_landmark *landmarks, double sigma_px, rs_err *err)
+static rs_status write_observations(const char *dir,
+                                    const camera_files *f,
+                                    const rs_simulate__site *s,
+                                    int k,
+                                    const rs_site_landmark *landmarks,
+                                    double sigma_px,
+                                    rs_err *err)
 {
     const int Nc = s->cand.N;
     rs_site_observation *obs = calloc((size_t)(s->Nlandmarks ? s->Nlandmarks : 1), sizeof *obs);
@@ -228,8 +235,8 @@ static rs_status write_observations(const char *dir, const camera_files *f, cons
     for (int i = 0; obs && i < s->Nlandmarks; i++) {
         size_t kj = (size_t)k * Nc + s->cand_of[i];
         if (s->visible[kj])
-            obs[n++] = (rs_site_observation){.ilandmark = i, .q_px = {s->q_px[2 * kj], s->q_px[2 * kj + 1]},
-                                             .sigma_px = sigma_px};
+            obs[n++] = (rs_site_observation){
+                .ilandmark = i, .q_px = {s->q_px[2 * kj], s->q_px[2 * kj + 1]}, .sigma_px = sigma_px};
     }
     rs_status st = obs && path ? rs_site_write_observations(path, obs, n, landmarks, err)
                                : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", f->observations);
@@ -256,7 +263,8 @@ static rs_status write_truth_landmarks(const char *dir, const rs_simulate__site 
     return rs_io_atomic_commit(&a, err);
 }
 
-static rs_status write_truth_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
+static rs_status
+write_truth_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
 {
     cJSON *j = cJSON_CreateObject();
     cJSON_AddNumberToObject(j, "seed", (double)o->seed);
@@ -307,7 +315,8 @@ static rs_status write_truth_json(const char *dir, const rs_simulate__site *s, c
     char *path = rs_io_join(dir, "truth/truth.json"), *text = cJSON_Print(j);
     cJSON_Delete(j);
     rs_io_atomic a;
-    rs_status st = path && text ? rs_io_atomic_open(&a, path, err) : rs_err_set(err, RS_ERR_NOMEM, "truth.json: out of memory");
+    rs_status st =
+        path && text ? rs_io_atomic_open(&a, path, err) : rs_err_set(err, RS_ERR_NOMEM, "truth.json: out of memory");
     if (!st) {
         fprintf(a.f, "%s\n", text);
         st = rs_io_atomic_commit(&a, err);
@@ -331,7 +340,8 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
     char(*ids)[16] = NULL;
     rs_lanes lanes = {0};
     char *lanes_path = rs_io_join(dir, "lanes.geojson");
-    if (!lanes_path) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!lanes_path)
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     else if (!(st = write_site_json(dir, s, o, err)) && !(st = site_landmarks(&landmarks, &ids, s, err)) &&
              !(st = rs_site_write_landmarks(dir, landmarks, s->Nlandmarks, 0, RS_SITE_LAYOUT_TOOL, err)) &&
              !(st = rs_simulate__lanes(&lanes, s, err)) &&
@@ -345,7 +355,8 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
         camera_files_of(&f, k);
         if (!(st = write_cameramodel(dir, f.model, c, s->nominal + (size_t)k * c->cam.Nintrinsics, zero_rt, err)) &&
             !(st = write_cameramodel(dir, f.truth_model, c, c->cam.intrinsics, c->cam.rt_cam_enu, err)))
-            st = write_observations(dir, &f, s, k, landmarks, fmax(o->pixel_sigma_px, DECLARED_PIXEL_SIGMA_MIN_PX), err);
+            st =
+                write_observations(dir, &f, s, k, landmarks, fmax(o->pixel_sigma_px, DECLARED_PIXEL_SIGMA_MIN_PX), err);
     }
     rs_lanes_free(&lanes);
     free(lanes_path);
@@ -355,7 +366,6 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
 }
 
 // ---- the folder: built aside, renamed into place ----
-
 
 // 0: does not exist; 1: empty folder; 2: a site folder (non-empty, holds site.json);
 // 3: anything else (a file, a non-empty folder that is not a site).

@@ -26,19 +26,19 @@ typedef enum {
     RS_SYNTH_BOX_TRUCK,
     RS_SYNTH_ARTICULATED_TRUCK,
     RS_SYNTH_NCLASSES,
-    RS_SYNTH_USER_MODEL = 100  // an OBJ mesh given by the user (model_path)
+    RS_SYNTH_USER_MODEL = 100 // an OBJ mesh given by the user (model_path)
 } rs_synth_class;
 
 // One vehicle in a scene. Strings are borrowed (the caller owns them).
 typedef struct {
     rs_synth_class cls;
-    const char *model_path;   // OBJ file when cls == RS_SYNTH_USER_MODEL, else NULL
-    const char *id;           // free-form label from the input (never trusted in scene text)
-    double e_m, n_m;          // footprint centre, site ENU, metres
-    double yaw_deg;           // compass heading of the forward axis, clockwise from north
+    const char *model_path;             // OBJ file when cls == RS_SYNTH_USER_MODEL, else NULL
+    const char *id;                     // free-form label from the input (never trusted in scene text)
+    double e_m, n_m;                    // footprint centre, site ENU, metres
+    double yaw_deg;                     // compass heading of the forward axis, clockwise from north
     double length_m, width_m, height_m; // bounding box; 0 = drawn from the class's ranges
-    double rgb[3];            // paint in linear [0,1]; negative = drawn from the colour mix
-    uint64_t variant;         // seeds the procedural shape and any drawn value
+    double rgb[3];                      // paint in linear [0,1]; negative = drawn from the colour mix
+    uint64_t variant;                   // seeds the procedural shape and any drawn value
 } rs_synth_vehicle;
 
 #ifdef __cplusplus

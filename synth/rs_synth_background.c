@@ -32,8 +32,7 @@ size_t rs_synth_median_bytes_bound(int width, int height, int max_frames)
 
 void rs_synth_median_free(rs_synth_median *m)
 {
-    if (!m)
-        return;
+    if (!m) return;
     free(m->rgb);
     memset(m, 0, sizeof(*m));
 }
@@ -64,8 +63,8 @@ static unsigned char select_kth(unsigned char *a, int n, int k)
     return a[k];
 }
 
-rs_status rs_synth_background_median(rs_synth_median *out, const char *const *inputs, int Ninputs,
-                                     int max_frames, rs_err *err)
+rs_status
+rs_synth_background_median(rs_synth_median *out, const char *const *inputs, int Ninputs, int max_frames, rs_err *err)
 {
     memset(out, 0, sizeof(*out));
     if (max_frames < 3 || max_frames > 255)
@@ -77,25 +76,22 @@ rs_status rs_synth_background_median(rs_synth_median *out, const char *const *in
     rs_status st = RS_OK;
     for (int in = 0; in < Ninputs && !st; in++) {
         rs_synth_frames *fr = NULL;
-        if ((st = rs_synth_frames_open(&fr, inputs[in], err)))
-            break;
+        if ((st = rs_synth_frames_open(&fr, inputs[in], err))) break;
         for (;;) {
             const unsigned char *rgb;
             int w, h, got;
-            if ((st = rs_synth_frames_next(fr, &rgb, &w, &h, &got, err)) || !got)
-                break;
+            if ((st = rs_synth_frames_next(fr, &rgb, &w, &h, &got, err)) || !got) break;
             if (!buf) {
                 width = w;
                 height = h;
                 frame_bytes = (size_t)w * h * 3;
                 if (!(buf = malloc(frame_bytes * (size_t)max_frames))) {
-                    st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory for %d frames of %dx%d",
-                                    inputs[in], max_frames, w, h);
+                    st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory for %d frames of %dx%d", inputs[in],
+                                    max_frames, w, h);
                     break;
                 }
             } else if (w != width || h != height) {
-                st = rs_err_set(err, RS_ERR_INVALID,
-                                "%s: frame %ld is %dx%d, the first frame was %dx%d", inputs[in],
+                st = rs_err_set(err, RS_ERR_INVALID, "%s: frame %ld is %dx%d, the first frame was %dx%d", inputs[in],
                                 index, w, h, width, height);
                 break;
             }
@@ -104,23 +100,18 @@ rs_status rs_synth_background_median(rs_synth_median *out, const char *const *in
                     // full: keep buffer positions 0, 2, 4, ... and double the stride
                     int k = 0;
                     for (int i = 0; i < n; i += 2, k++)
-                        if (k != i)
-                            memcpy(buf + k * frame_bytes, buf + i * frame_bytes, frame_bytes);
+                        if (k != i) memcpy(buf + k * frame_bytes, buf + i * frame_bytes, frame_bytes);
                     n = k;
                     stride *= 2;
                 }
-                if (index % stride == 0)
-                    memcpy(buf + (size_t)n++ * frame_bytes, rgb, frame_bytes);
+                if (index % stride == 0) memcpy(buf + (size_t)n++ * frame_bytes, rgb, frame_bytes);
             }
             index++;
         }
         rs_synth_frames_close(fr);
     }
-    if (!st && n == 0)
-        st = rs_err_set(err, RS_ERR_DEGENERATE, "no frame could be read from the %d input(s)",
-                        Ninputs);
-    if (!st && !(out->rgb = malloc(frame_bytes)))
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st && n == 0) st = rs_err_set(err, RS_ERR_DEGENERATE, "no frame could be read from the %d input(s)", Ninputs);
+    if (!st && !(out->rgb = malloc(frame_bytes))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (st) {
         free(buf);
         memset(out, 0, sizeof(*out));
@@ -129,8 +120,7 @@ rs_status rs_synth_background_median(rs_synth_median *out, const char *const *in
     unsigned char v[255];
     const int k = (n - 1) / 2;
     for (size_t p = 0; p < frame_bytes; p++) {
-        for (int i = 0; i < n; i++)
-            v[i] = buf[(size_t)i * frame_bytes + p];
+        for (int i = 0; i < n; i++) v[i] = buf[(size_t)i * frame_bytes + p];
         out->rgb[p] = select_kth(v, n, k);
     }
     free(buf);
@@ -145,23 +135,17 @@ rs_status rs_synth_background_median(rs_synth_median *out, const char *const *in
 
 // ---- tags and site.json ----
 
-const char *const rs_synth_background_conditions[] = {"sunny", "cloudy", "rain", "snow", "night",
-                                                      NULL};
+const char *const rs_synth_background_conditions[] = {"sunny", "cloudy", "rain", "snow", "night", NULL};
 
 static bool is_safe_name(const char *s, size_t max)
 {
-    if (!s || !*s || *s == '.' || strlen(s) > max)
-        return false;
+    if (!s || !*s || *s == '.' || strlen(s) > max) return false;
     for (; *s; s++)
-        if (!isalnum((unsigned char)*s) && *s != '_' && *s != '.' && *s != '-')
-            return false;
+        if (!isalnum((unsigned char)*s) && *s != '_' && *s != '.' && *s != '-') return false;
     return true;
 }
 
-bool rs_synth_background_name_ok(const char *s)
-{
-    return is_safe_name(s, 100);
-}
+bool rs_synth_background_name_ok(const char *s) { return is_safe_name(s, 100); }
 
 rs_status rs_synth_background_tags_check(const rs_synth_background_tags *t, rs_err *err)
 {
@@ -173,27 +157,24 @@ rs_status rs_synth_background_tags_check(const rs_synth_background_tags *t, rs_e
     if (t->time_iso) {
         double unix_s;
         rs_status st = rs_synth_parse_iso8601(&unix_s, t->time_iso, "tag time", err);
-        if (st)
-            return st;
+        if (st) return st;
     }
     if (t->conditions) {
         bool ok = false;
         for (int i = 0; rs_synth_background_conditions[i]; i++)
             ok = ok || !strcmp(t->conditions, rs_synth_background_conditions[i]);
         if (!ok)
-            return rs_err_set(err, RS_ERR_USAGE,
-                              "tag conditions: '%s' is not one of sunny, cloudy, rain, snow, night",
+            return rs_err_set(err, RS_ERR_USAGE, "tag conditions: '%s' is not one of sunny, cloudy, rain, snow, night",
                               t->conditions);
     }
     return RS_OK;
 }
 
-rs_status rs_synth_background_tag_parse(rs_synth_background_tags *t, const char **keys,
-                                        const char **values, char *kv, rs_err *err)
+rs_status rs_synth_background_tag_parse(
+    rs_synth_background_tags *t, const char **keys, const char **values, char *kv, rs_err *err)
 {
     char *eq = strchr(kv, '=');
-    if (!eq || eq == kv)
-        return rs_err_set(err, RS_ERR_USAGE, "tag '%s': expected key=value", kv);
+    if (!eq || eq == kv) return rs_err_set(err, RS_ERR_USAGE, "tag '%s': expected key=value", kv);
     *eq = 0;
     const char *key = kv, *value = eq + 1;
     if (!strcmp(key, "time"))
@@ -202,8 +183,7 @@ rs_status rs_synth_background_tag_parse(rs_synth_background_tags *t, const char 
         t->conditions = value;
     else if (!strcmp(key, "synthetic") || !is_safe_name(key, 64)) {
         *eq = '=';
-        return rs_err_set(err, RS_ERR_USAGE,
-                          "tag '%s': the key must be [A-Za-z0-9_.-]+ and not 'synthetic'", kv);
+        return rs_err_set(err, RS_ERR_USAGE, "tag '%s': the key must be [A-Za-z0-9_.-]+ and not 'synthetic'", kv);
     } else {
         keys[t->Ntags] = key;
         values[t->Ntags] = value;
@@ -222,8 +202,10 @@ char *rs_synth_background_path(const char *site_dir, const char *camera_id, cons
     return p;
 }
 
-rs_status rs_synth_background_record(const char *site_dir, const char *camera_id,
-                                     const rs_synth_background_tags *t, const char *source_json,
+rs_status rs_synth_background_record(const char *site_dir,
+                                     const char *camera_id,
+                                     const rs_synth_background_tags *t,
+                                     const char *source_json,
                                      rs_err *err)
 {
     // time and conditions first, then the free tags in the order given
@@ -235,14 +217,10 @@ rs_status rs_synth_background_record(const char *site_dir, const char *camera_id
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if (t->time_iso)
-        keys[n] = "time", values[n++] = t->time_iso;
-    if (t->conditions)
-        keys[n] = "conditions", values[n++] = t->conditions;
-    for (int i = 0; i < t->Ntags; i++)
-        keys[n] = t->keys[i], values[n++] = t->values[i];
-    st = rs_site_record_background(site_dir, camera_id, t->name, t->synthetic, keys, values, n,
-                                   source_json, err);
+    if (t->time_iso) keys[n] = "time", values[n++] = t->time_iso;
+    if (t->conditions) keys[n] = "conditions", values[n++] = t->conditions;
+    for (int i = 0; i < t->Ntags; i++) keys[n] = t->keys[i], values[n++] = t->values[i];
+    st = rs_site_record_background(site_dir, camera_id, t->name, t->synthetic, keys, values, n, source_json, err);
 done:
     free(keys);
     free(values);
@@ -272,21 +250,16 @@ static const weather_look looks[] = {
     {"night", 0.03, 0.0, {0.01, 0.01, 0.02}, 0.10, 0.0, 0.80},
 };
 
-static void write_pov_point(FILE *f, double e, double n, double up)
-{
-    fprintf(f, "<%.9g, %.9g, %.9g>", e, up, n);
-}
+static void write_pov_point(FILE *f, double e, double n, double up) { fprintf(f, "<%.9g, %.9g, %.9g>", e, up, n); }
 
 // One lane-edge marking along a polyline offset sideways by `offset_m` (left positive), as flat
 // triangles 5 mm above the ground.
-static void write_marking(FILE *f, const rs_lane *lane, double offset_m, double half_w,
-                          const rs_site *site)
+static void write_marking(FILE *f, const rs_lane *lane, double offset_m, double half_w, const rs_site *site)
 {
     for (int i = 0; i + 1 < lane->Npoints; i++) {
         const double *a = lane->p_enu_m[i], *b = lane->p_enu_m[i + 1];
         const double de = b[0] - a[0], dn = b[1] - a[1], len = hypot(de, dn);
-        if (len < 1e-6)
-            continue;
+        if (len < 1e-6) continue;
         const double le = -dn / len, ln = de / len; // left normal
         double q[4][2];
         for (int k = 0; k < 4; k++) {
@@ -297,9 +270,7 @@ static void write_marking(FILE *f, const rs_lane *lane, double offset_m, double 
         }
         double up[4];
         for (int k = 0; k < 4; k++)
-            up[k] = rs_synth_ground_up_m(site->ground_normal_enu, site->ground_offset_m, q[k][0],
-                                         q[k][1]) +
-                    0.005;
+            up[k] = rs_synth_ground_up_m(site->ground_normal_enu, site->ground_offset_m, q[k][0], q[k][1]) + 0.005;
         for (int t = 0; t < 2; t++) {
             const int idx[2][3] = {{0, 1, 2}, {0, 2, 3}};
             fprintf(f, "  triangle { ");
@@ -312,43 +283,46 @@ static void write_marking(FILE *f, const rs_lane *lane, double offset_m, double 
     }
 }
 
-static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *cam,
-                                  const rs_site *site, const rs_lanes *lanes,
-                                  const weather_look *look, double sun_az, double sun_el,
-                                  double marking_width_m, rs_err *err)
+static rs_status write_twin_scene(const char *pov_path,
+                                  const rs_synth_povcam *cam,
+                                  const rs_site *site,
+                                  const rs_lanes *lanes,
+                                  const weather_look *look,
+                                  double sun_az,
+                                  double sun_el,
+                                  double marking_width_m,
+                                  rs_err *err)
 {
     rs_io_atomic a = {0};
     rs_status st = rs_io_atomic_open(&a, pov_path, err);
-    if (st)
-        return st;
+    if (st) return st;
     FILE *f = a.f;
-    fprintf(f, "// Written by roadside site render-backgrounds: a digital-twin ground (%s).\n"
-               "// POV-Ray world <x, y, z> = <east, up, north>, metres. No include files.\n"
-               "#version 3.7;\n"
-               "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
+    fprintf(f,
+            "// Written by roadside site render-backgrounds: a digital-twin ground (%s).\n"
+            "// POV-Ray world <x, y, z> = <east, up, north>, metres. No include files.\n"
+            "#version 3.7;\n"
+            "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
             look->name);
     if ((st = rs_synth_povcam_write(f, cam, err))) {
         rs_io_atomic_abort(&a);
         return st;
     }
-    fprintf(f, "background { rgb <%.4g, %.4g, %.4g> }\n", look->sky_rgb[0], look->sky_rgb[1],
-            look->sky_rgb[2]);
+    fprintf(f, "background { rgb <%.4g, %.4g, %.4g> }\n", look->sky_rgb[0], look->sky_rgb[1], look->sky_rgb[2]);
     const double d2r = M_PI / 180.0, az = sun_az * d2r, el = sun_el * d2r;
     if (look->sun > 0 && sun_el > 0) {
         fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg\nlight_source { ", sun_az, sun_el);
         write_pov_point(f, 1e6 * sin(az) * cos(el), 1e6 * cos(az) * cos(el), 1e6 * sin(el));
         fprintf(f, " color rgb <1.0, 0.97, 0.92> parallel point_at <0, 0, 0> }\n");
     }
-    fprintf(f, "light_source { <0, 1e6, 0> color rgb %.4g parallel point_at <0, 0, 0> shadowless }\n",
-            look->sky_light);
+    fprintf(f, "light_source { <0, 1e6, 0> color rgb %.4g parallel point_at <0, 0, 0> shadowless }\n", look->sky_light);
     const double *nrm = site->ground_normal_enu;
     const double nn = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
     fprintf(f,
             "plane { <%.17g, %.17g, %.17g>, %.17g\n"
             "  texture { pigment { granite color_map { [0 rgb %.4g] [1 rgb %.4g] } scale 0.05 }\n"
             "            finish { ambient 0 diffuse 0.8 reflection %.3g } } }\n",
-            nrm[0] / nn, nrm[2] / nn, nrm[1] / nn, site->ground_offset_m / nn,
-            look->asphalt * 0.8, look->asphalt * 1.2, look->asphalt_reflection);
+            nrm[0] / nn, nrm[2] / nn, nrm[1] / nn, site->ground_offset_m / nn, look->asphalt * 0.8, look->asphalt * 1.2,
+            look->asphalt_reflection);
     if (lanes && lanes->N > 0) {
         fprintf(f, "// lane-edge markings (%d lanes)\nmesh {\n", lanes->N);
         for (int i = 0; i < lanes->N; i++) {
@@ -358,8 +332,7 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
             write_marking(f, &lanes->lane[i], hw, 0.5 * marking_width_m, site);
             write_marking(f, &lanes->lane[i], -hw, 0.5 * marking_width_m, site);
         }
-        fprintf(f, "  texture { pigment { rgb %.4g } finish { ambient 0 diffuse 0.8 } }\n}\n",
-                look->marking);
+        fprintf(f, "  texture { pigment { rgb %.4g } finish { ambient 0 diffuse 0.8 } }\n}\n", look->marking);
     }
     if (ferror(f)) {
         rs_io_atomic_abort(&a);
@@ -369,8 +342,8 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
 }
 
 // Runs `povray +Itwin.pov +Otwin.png +W +H ...` in work_dir (rs_synth_povray_run).
-static rs_status run_twin_povray(const char *povray, const char *work_dir, int width, int height,
-                                 int antialias, rs_err *err)
+static rs_status
+run_twin_povray(const char *povray, const char *work_dir, int width, int height, int antialias, rs_err *err)
 {
     char w[32], h[32], aa[32];
     snprintf(w, sizeof(w), "+W%d", width);
@@ -379,17 +352,23 @@ static rs_status run_twin_povray(const char *povray, const char *work_dir, int w
         snprintf(aa, sizeof(aa), "+R%d", antialias > 9 ? 9 : antialias);
     else
         snprintf(aa, sizeof(aa), "-A");
-    const char *args[] = {"+Itwin.pov", "+Otwin.png", w, h, "-D", "+FN8", "File_Gamma=sRGB",
-                          antialias >= 2 ? "+A0.1" : "-A", aa, "+WT1"};
+    const char *args[] = {
+        "+Itwin.pov", "+Otwin.png", w, h, "-D", "+FN8", "File_Gamma=sRGB", antialias >= 2 ? "+A0.1" : "-A", aa, "+WT1"};
     return rs_synth_povray_run(povray, work_dir, args, (int)(sizeof(args) / sizeof(args[0])), NULL, err);
 }
 
-rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_elevation_deg,
-                                          const char **conditions_out, const char *out_png,
-                                          const char *work_dir, const rs_site *site,
-                                          const char *lanes_path, const rs_camera *camera,
-                                          double unix_time_s, const char *weather,
-                                          const rs_synth_twin_options *opt, rs_err *err)
+rs_status rs_synth_background_render_twin(double *sun_azimuth_deg,
+                                          double *sun_elevation_deg,
+                                          const char **conditions_out,
+                                          const char *out_png,
+                                          const char *work_dir,
+                                          const rs_site *site,
+                                          const char *lanes_path,
+                                          const rs_camera *camera,
+                                          double unix_time_s,
+                                          const char *weather,
+                                          const rs_synth_twin_options *opt,
+                                          rs_err *err)
 {
     const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
     const double *intrinsics = camera->intrinsics, *rt_cam_enu = camera->rt_cam_enu;
@@ -400,29 +379,21 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
     else
         rs_synth_twin_options_default(&o);
     const char *povray = o.povray ? o.povray : getenv("ROADSIDE_POVRAY");
-    if (!povray || !*povray)
-        povray = "povray";
+    if (!povray || !*povray) povray = "povray";
     const weather_look *look = NULL;
     for (size_t i = 0; i < sizeof(looks) / sizeof(looks[0]); i++)
-        if (weather && !strcmp(weather, looks[i].name))
-            look = &looks[i];
+        if (weather && !strcmp(weather, looks[i].name)) look = &looks[i];
     if (!look)
-        return rs_err_set(err, RS_ERR_INVALID,
-                          "weather: '%s' is not one of sunny, cloudy, rain, snow, night",
+        return rs_err_set(err, RS_ERR_INVALID, "weather: '%s' is not one of sunny, cloudy, rain, snow, night",
                           weather ? weather : "");
     double az, el;
-    rs_status st = rs_synth_sun_position_checked(&az, &el, site->origin.lat_deg,
-                                                 site->origin.lon_deg, unix_time_s, err);
-    if (st)
-        return st;
-    if (el < -6.0)
-        look = &looks[4]; // night
-    if (sun_azimuth_deg)
-        *sun_azimuth_deg = az;
-    if (sun_elevation_deg)
-        *sun_elevation_deg = el;
-    if (conditions_out)
-        *conditions_out = look->name;
+    rs_status st =
+        rs_synth_sun_position_checked(&az, &el, site->origin.lat_deg, site->origin.lon_deg, unix_time_s, err);
+    if (st) return st;
+    if (el < -6.0) look = &looks[4]; // night
+    if (sun_azimuth_deg) *sun_azimuth_deg = az;
+    if (sun_elevation_deg) *sun_elevation_deg = el;
+    if (conditions_out) *conditions_out = look->name;
 
     rs_lanes lanes = {0};
     rs_synth_canvas canvas;
@@ -435,20 +406,18 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if (lanes_path && (st = rs_lanes_read(&lanes, lanes_path, site, err)))
-        goto done;
+    if (lanes_path && (st = rs_lanes_read(&lanes, lanes_path, site, err))) goto done;
     if ((st = rs_io_mkdir_p(work_dir, err)) ||
         (st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
                                        o.canvas_scale >= 1 ? o.canvas_scale : 1, err)) ||
-        (st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
-                                   err)) ||
+        (st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, err)) ||
         (st = write_twin_scene(pov, &cam, site, &lanes, look, az, el, o.marking_width_m, err)) ||
         (st = run_twin_povray(povray, work_dir, canvas.width, canvas.height, o.antialias, err)) ||
         (st = rs_image_read(&img, png, err)))
         goto done;
     if (img.width != canvas.width || img.height != canvas.height) {
-        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
-                        img.width, img.height, canvas.width, canvas.height);
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png, img.width, img.height,
+                        canvas.width, canvas.height);
         goto done;
     }
     if (canvas.identity) {
@@ -475,19 +444,27 @@ done:
     return st;
 }
 
-rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, const char *cam_id,
-                                    const rs_camera *cam, const char *calibration, const char *lanes,
-                                    const char *const *times, int Ntimes, const char *const *weathers,
-                                    int Nweathers, const rs_synth_twin_options *opt,
-                                    rs_synth_twin_progress progress, void *ctx, rs_err *err)
+rs_status rs_synth_background_twins(const char *site_dir,
+                                    const rs_site *site,
+                                    const char *cam_id,
+                                    const rs_camera *cam,
+                                    const char *calibration,
+                                    const char *lanes,
+                                    const char *const *times,
+                                    int Ntimes,
+                                    const char *const *weathers,
+                                    int Nweathers,
+                                    const rs_synth_twin_options *opt,
+                                    rs_synth_twin_progress progress,
+                                    void *ctx,
+                                    rs_err *err)
 {
     char work[4096];
     snprintf(work, sizeof(work), "%s/backgrounds/%s/.twin-work", site_dir, cam_id);
     rs_status st = RS_OK;
     for (int t = 0; t < Ntimes && st == RS_OK; t++) {
         double unix_s;
-        if ((st = rs_synth_parse_iso8601(&unix_s, times[t], "--times", err)))
-            break;
+        if ((st = rs_synth_parse_iso8601(&unix_s, times[t], "--times", err))) break;
         const time_t tt = (time_t)floor(unix_s);
         struct tm utc;
         char stamp[32];
@@ -499,12 +476,11 @@ rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, c
             char name[128], tmp[4200];
             double el0;
             rs_synth_sun_position(&az, &el0, site->origin.lat_deg, site->origin.lon_deg, unix_s);
-            if (w > 0 && el0 < -6.0)
-                continue; // night whatever the weather: one image per time (rendered at w = 0)
+            if (w > 0 && el0 < -6.0) continue; // night whatever the weather: one image per time (rendered at w = 0)
             // render under a temporary name first: the conditions (night?) decide the final name
             snprintf(tmp, sizeof(tmp), "%s/render.png", work);
-            if ((st = rs_synth_background_render_twin(&az, &el, &cond, tmp, work, site, lanes, cam, unix_s,
-                                                      weathers[w], opt, err)))
+            if ((st = rs_synth_background_render_twin(&az, &el, &cond, tmp, work, site, lanes, cam, unix_s, weathers[w],
+                                                      opt, err)))
                 break;
             snprintf(name, sizeof(name), "twin_%s_%s", stamp, cond);
             char *path = rs_synth_background_path(site_dir, cam_id, name);
@@ -515,9 +491,13 @@ rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, c
             char elv[64];
             snprintf(elv, sizeof(elv), "%.3f", el);
             const char *values[3] = {azel, elv, weathers[w]};
-            rs_synth_background_tags tags = {.name = name, .time_iso = times[t],
-                                             .conditions = cond, .synthetic = true,
-                                             .keys = keys, .values = values, .Ntags = 3};
+            rs_synth_background_tags tags = {.name = name,
+                                             .time_iso = times[t],
+                                             .conditions = cond,
+                                             .synthetic = true,
+                                             .keys = keys,
+                                             .values = values,
+                                             .Ntags = 3};
             if (source) {
                 cJSON_AddStringToObject(source, "method", "digital twin (POV-Ray)");
                 cJSON_AddStringToObject(source, "calibration", calibration);
@@ -529,8 +509,7 @@ rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, c
                 st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename to %s", tmp, path);
             else
                 st = rs_synth_background_record(site_dir, cam_id, &tags, source_json, err);
-            if (st == RS_OK && progress)
-                progress(ctx, cam_id, path, az, el, cond);
+            if (st == RS_OK && progress) progress(ctx, cam_id, path, az, el, cond);
             cJSON_Delete(source);
             cJSON_free(source_json);
             free(path);
@@ -545,9 +524,14 @@ rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, c
     return st;
 }
 
-rs_status rs_synth_background_save_median(char **path_out, const char *site_dir, const char *camera_id,
-                                          const rs_synth_background_tags *tags, const rs_synth_median *med,
-                                          const char *const *inputs, int Ninputs, rs_err *err)
+rs_status rs_synth_background_save_median(char **path_out,
+                                          const char *site_dir,
+                                          const char *camera_id,
+                                          const rs_synth_background_tags *tags,
+                                          const rs_synth_median *med,
+                                          const char *const *inputs,
+                                          int Ninputs,
+                                          rs_err *err)
 {
     *path_out = NULL;
     rs_image img = {0};

@@ -11,12 +11,12 @@
 // else in site.json is kept as it was. The site loader reads them back (rs_site_background,
 // geo/rs_site.h).
 #pragma once
-#include <stdbool.h>
-#include <stddef.h>
-#include <mrcal/mrcal.h>
-#include "geo/rs_site.h"
 #include "core/rs_camera.h"
 #include "core/rs_status.h"
+#include "geo/rs_site.h"
+#include <mrcal/mrcal.h>
+#include <stdbool.h>
+#include <stddef.h>
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -39,11 +39,11 @@ extern "C" {
 // 720 x 480.
 typedef struct {
     int width, height;
-    unsigned char *rgb;   // (height, width, 3) owned (free()): the median
-    long Nframes_read;    // frames decoded from all inputs
-    int Nframes_used;     // frames the median was taken over
-    int stride;           // every stride-th frame was used
-    size_t bytes_bound;   // the memory bound above for this size and max_frames
+    unsigned char *rgb; // (height, width, 3) owned (free()): the median
+    long Nframes_read;  // frames decoded from all inputs
+    int Nframes_used;   // frames the median was taken over
+    int stride;         // every stride-th frame was used
+    size_t bytes_bound; // the memory bound above for this size and max_frames
 } rs_synth_median;
 
 // out: *out (rs_synth_median_free)
@@ -51,11 +51,13 @@ typedef struct {
 //      max_frames in [3, 255]
 // Returns RS_ERR_IO for an unreadable input, RS_ERR_INVALID when frame sizes differ (naming the
 // input), RS_ERR_DEGENERATE when no frame was read, RS_ERR_NOMEM.
-rs_status rs_synth_background_median(// out
-                                     rs_synth_median *out,
-                                     // in
-                                     const char *const *inputs, int Ninputs, int max_frames,
-                                     rs_err *err);
+rs_status rs_synth_background_median( // out
+    rs_synth_median *out,
+    // in
+    const char *const *inputs,
+    int Ninputs,
+    int max_frames,
+    rs_err *err);
 void rs_synth_median_free(rs_synth_median *m); // NULL-safe; zeroes *m
 // The memory bound of rs_synth_background_median, bytes.
 size_t rs_synth_median_bytes_bound(int width, int height, int max_frames);
@@ -66,10 +68,10 @@ size_t rs_synth_median_bytes_bound(int width, int height, int max_frames);
 extern const char *const rs_synth_background_conditions[];
 
 typedef struct {
-    const char *name;       // file stem: [A-Za-z0-9_.-], not starting with '.', <= 100 chars
-    const char *time_iso;   // ISO 8601 with zone, may be NULL
-    const char *conditions; // one of rs_synth_background_conditions, may be NULL
-    bool synthetic;         // rendered, not photographed
+    const char *name;          // file stem: [A-Za-z0-9_.-], not starting with '.', <= 100 chars
+    const char *time_iso;      // ISO 8601 with zone, may be NULL
+    const char *conditions;    // one of rs_synth_background_conditions, may be NULL
+    bool synthetic;            // rendered, not photographed
     const char *const *keys;   // (Ntags,) further free tags (not "time"/"conditions"/"synthetic")
     const char *const *values; // (Ntags,)
     int Ntags;
@@ -81,7 +83,9 @@ typedef struct {
 // Returns RS_ERR_USAGE naming the tag when it is malformed.
 rs_status rs_synth_background_tag_parse(rs_synth_background_tags *tags,
                                         // in,out
-                                        const char **keys, const char **values, char *kv,
+                                        const char **keys,
+                                        const char **values,
+                                        char *kv,
                                         rs_err *err);
 // Checks a name, a time and conditions (RS_ERR_USAGE / RS_ERR_PARSE naming the field).
 rs_status rs_synth_background_tags_check(const rs_synth_background_tags *tags, rs_err *err);
@@ -102,27 +106,34 @@ char *rs_synth_background_path(const char *site_dir, const char *camera_id, cons
 // rs_synth_background_tags_check).
 // in: source_json: how the image was made, a JSON object as text; may be NULL.
 // Returns RS_ERR_IO / RS_ERR_PARSE for site.json, RS_ERR_NOT_FOUND for an unknown camera.
-rs_status rs_synth_background_record(const char *site_dir, const char *camera_id,
+rs_status rs_synth_background_record(const char *site_dir,
+                                     const char *camera_id,
                                      const rs_synth_background_tags *tags,
-                                     const char *source_json, rs_err *err);
+                                     const char *source_json,
+                                     rs_err *err);
 
 // `roadside background`: writes a temporal median as SITE/backgrounds/<id>/<name>.png (8-bit,
 // atomically; the folder is created) and records it in site.json with its tags and its source
 // (method "temporal median", the inputs, frames read and used, the stride).
 // out: *path_out, the image's path (malloc'ed: caller frees; NULL on failure)
-rs_status rs_synth_background_save_median(char **path_out, const char *site_dir, const char *camera_id,
-                                          const rs_synth_background_tags *tags, const rs_synth_median *med,
-                                          const char *const *inputs, int Ninputs, rs_err *err);
+rs_status rs_synth_background_save_median(char **path_out,
+                                          const char *site_dir,
+                                          const char *camera_id,
+                                          const rs_synth_background_tags *tags,
+                                          const rs_synth_median *med,
+                                          const char *const *inputs,
+                                          int Ninputs,
+                                          rs_err *err);
 
 // ---- digital-twin backgrounds ----
 
 // The weathers of a rendered background: "sunny", "cloudy", "rain", "snow" (conditions tag), and
 // "night" is chosen automatically when the sun is below -6 degrees (civil twilight).
 typedef struct {
-    const char *povray;   // executable; NULL: $ROADSIDE_POVRAY, else "povray"
-    double marking_width_m;   // lane-edge marking width (default 0.15 m)
-    double canvas_scale;      // distorted lenses: canvas pixels per core pixel (default 1)
-    int antialias;            // 0 none, n >= 2: +A0.1 +AM2 +R(n) (default 0)
+    const char *povray;     // executable; NULL: $ROADSIDE_POVRAY, else "povray"
+    double marking_width_m; // lane-edge marking width (default 0.15 m)
+    double canvas_scale;    // distorted lenses: canvas pixels per core pixel (default 1)
+    int antialias;          // 0 none, n >= 2: +A0.1 +AM2 +R(n) (default 0)
 } rs_synth_twin_options;
 void rs_synth_twin_options_default(rs_synth_twin_options *opt);
 
@@ -139,20 +150,29 @@ void rs_synth_twin_options_default(rs_synth_twin_options *opt);
 // out: *sun_azimuth_deg, *sun_elevation_deg (may be NULL); *conditions_out: the conditions tag
 //      the image shows (static string; weather, or "night")
 // Returns RS_ERR_EXTERNAL when povray is missing or fails, RS_ERR_INVALID for a bad weather.
-rs_status rs_synth_background_render_twin(// out
-                                          double *sun_azimuth_deg, double *sun_elevation_deg,
-                                          const char **conditions_out,
-                                          // in
-                                          const char *out_png, const char *work_dir,
-                                          const rs_site *site, const char *lanes_path,
-                                          const rs_camera *cam, double unix_time_s,
-                                          const char *weather, const rs_synth_twin_options *opt,
-                                          rs_err *err);
+rs_status rs_synth_background_render_twin( // out
+    double *sun_azimuth_deg,
+    double *sun_elevation_deg,
+    const char **conditions_out,
+    // in
+    const char *out_png,
+    const char *work_dir,
+    const rs_site *site,
+    const char *lanes_path,
+    const rs_camera *cam,
+    double unix_time_s,
+    const char *weather,
+    const rs_synth_twin_options *opt,
+    rs_err *err);
 
 // Called as each background is recorded: the camera, the image's path, the sun and the
 // conditions tag (rs_synth_background_twins).
-typedef void (*rs_synth_twin_progress)(void *ctx, const char *camera_id, const char *path, double sun_azimuth_deg,
-                                       double sun_elevation_deg, const char *conditions);
+typedef void (*rs_synth_twin_progress)(void *ctx,
+                                       const char *camera_id,
+                                       const char *path,
+                                       double sun_azimuth_deg,
+                                       double sun_elevation_deg,
+                                       const char *conditions);
 
 // `roadside site render-backgrounds` for one camera: a digital-twin background
 // (rs_synth_background_render_twin) for every time x weather (one image per time at night),
@@ -165,11 +185,20 @@ typedef void (*rs_synth_twin_progress)(void *ctx, const char *camera_id, const c
 //     opt (may be NULL); progress (may be NULL) and its ctx
 // Errors: those of rs_synth_background_render_twin and rs_synth_background_record; a time
 // that is not ISO 8601 is RS_ERR_USAGE naming "--times".
-rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, const char *cam_id,
-                                    const rs_camera *cam, const char *calibration, const char *lanes,
-                                    const char *const *times, int Ntimes, const char *const *weathers,
-                                    int Nweathers, const rs_synth_twin_options *opt,
-                                    rs_synth_twin_progress progress, void *ctx, rs_err *err);
+rs_status rs_synth_background_twins(const char *site_dir,
+                                    const rs_site *site,
+                                    const char *cam_id,
+                                    const rs_camera *cam,
+                                    const char *calibration,
+                                    const char *lanes,
+                                    const char *const *times,
+                                    int Ntimes,
+                                    const char *const *weathers,
+                                    int Nweathers,
+                                    const rs_synth_twin_options *opt,
+                                    rs_synth_twin_progress progress,
+                                    void *ctx,
+                                    rs_err *err);
 
 #ifdef __cplusplus
 }

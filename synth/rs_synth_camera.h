@@ -44,11 +44,14 @@ void rs_synth_enu_to_pov(double p_pov[3], const double p_enu[3]);
 // out: *cam
 // in:  fxycxy (4,): fx, fy (> 0), cx, cy, pixels; width, height > 0; rt_cam_enu (6,)
 // Returns RS_ERR_INVALID for non-positive or non-finite focal lengths or sizes.
-rs_status rs_synth_povcam_init(// out
-                               rs_synth_povcam *cam,
-                               // in
-                               const double fxycxy[4], int width, int height,
-                               const double rt_cam_enu[6], rs_err *err);
+rs_status rs_synth_povcam_init( // out
+    rs_synth_povcam *cam,
+    // in
+    const double fxycxy[4],
+    int width,
+    int height,
+    const double rt_cam_enu[6],
+    rs_err *err);
 
 // Writes "camera { perspective location ... right ... up ... direction ... }" with 17 significant
 // digits. Returns RS_ERR_IO if the stream reports an error.
@@ -56,10 +59,10 @@ rs_status rs_synth_povcam_write(FILE *f, const rs_synth_povcam *cam, rs_err *err
 
 // The pinhole canvas that a distorted lens is rendered on before it is resampled into the lens.
 typedef struct {
-    double fxycxy[4];     // (4,) canvas pinhole: the lens's fx, fy times `scale`; its own cx, cy
-    int width, height;    // canvas size, pixels
-    double scale;         // canvas pixels per pinhole-core pixel (>= 1: supersampled)
-    int identity;         // 1 if the lens is LENSMODEL_PINHOLE and scale = 1: no resampling needed
+    double fxycxy[4];  // (4,) canvas pinhole: the lens's fx, fy times `scale`; its own cx, cy
+    int width, height; // canvas size, pixels
+    double scale;      // canvas pixels per pinhole-core pixel (>= 1: supersampled)
+    int identity;      // 1 if the lens is LENSMODEL_PINHOLE and scale = 1: no resampling needed
 } rs_synth_canvas;
 
 // Chooses the canvas that covers every pixel of the real lens: unprojects (mrcal_unproject) the
@@ -72,21 +75,29 @@ typedef struct {
 //      scale: canvas pixels per core pixel, >= 1 (1 is fine for the test suite; 2 gives sharper
 //      resampling)
 // Returns RS_ERR_UNSUPPORTED if the canvas would exceed 16384 pixels on a side.
-rs_status rs_synth_canvas_for_lens(// out
-                                   rs_synth_canvas *canvas,
-                                   // in
-                                   const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
-                                   int width, int height, double scale, rs_err *err);
+rs_status rs_synth_canvas_for_lens( // out
+    rs_synth_canvas *canvas,
+    // in
+    const mrcal_lensmodel_t *lensmodel,
+    const double *intrinsics,
+    int width,
+    int height,
+    double scale,
+    rs_err *err);
 
 // The resampling map: for every pixel (u, v) of the real image, the canvas pixel that sees the
 // same direction: mrcal_unproject through the real lens, then the canvas pinhole. Coordinates
 // follow mrcal/OpenCV (pixel (0,0) = centre of the top-left pixel).
 // out: *map_xy, (height, width, 2) float, owned by the caller (free())
-rs_status rs_synth_canvas_map(// out
-                              float **map_xy,
-                              // in
-                              const rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
-                              const double *intrinsics, int width, int height, rs_err *err);
+rs_status rs_synth_canvas_map( // out
+    float **map_xy,
+    // in
+    const rs_synth_canvas *canvas,
+    const mrcal_lensmodel_t *lensmodel,
+    const double *intrinsics,
+    int width,
+    int height,
+    rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -4,7 +4,7 @@
 // or in forked workers, and assembles DATASET's COCO file. Calls rs_synth_dataset_image.c (one
 // image), rs_synth_dataset_coco.c (assembly), geo and core/.
 #define _POSIX_C_SOURCE 200809L
-#define _XOPEN_SOURCE 700
+#define _XOPEN_SOURCE   700
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -41,20 +41,21 @@ static double now_s(void)
 
 // Scales a camera to width x height: fx, fy, cx, cy with the pixel-centre origin
 // (c' = (c + 0.5) s - 0.5); distortion untouched (it acts on normalised coordinates).
-static rs_status scale_camera(rs_camera *cam, int width, int height, const char *id,
-                              rs_err *err)
+static rs_status scale_camera(rs_camera *cam, int width, int height, const char *id, rs_err *err)
 {
-    if (width <= 0 || (width == cam->width && height == cam->height))
-        return RS_OK;
+    if (width <= 0 || (width == cam->width && height == cam->height)) return RS_OK;
     mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(&cam->lensmodel);
     if (!meta.has_core)
-        return rs_err_set(err, RS_ERR_UNSUPPORTED, "camera %s: --size: lens model without "
-                          "fx, fy, cx, cy cannot be scaled", id);
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "camera %s: --size: lens model without "
+                          "fx, fy, cx, cy cannot be scaled",
+                          id);
     const double sx = (double)width / cam->width, sy = (double)height / cam->height;
     if (fabs(sx / sy - 1) > 0.01)
-        return rs_err_set(err, RS_ERR_INVALID, "camera %s: --size %dx%d: aspect differs from "
-                          "the camera's %dx%d by more than 1 %%", id, width, height, cam->width,
-                          cam->height);
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "camera %s: --size %dx%d: aspect differs from "
+                          "the camera's %dx%d by more than 1 %%",
+                          id, width, height, cam->width, cam->height);
     cam->intrinsics[0] *= sx;
     cam->intrinsics[1] *= sy;
     cam->intrinsics[2] = (cam->intrinsics[2] + 0.5) * sx - 0.5;
@@ -87,13 +88,14 @@ static void dataset_free(rs_synth_dataset__run *d)
 
 // The backgrounds of the site's camera sc (site.json "background_images", read by geo) whose
 // tags match every filter.
-static rs_status select_backgrounds(rs_synth_dataset__camera *c, const rs_site_camera *sc,
-                                    const rs_synth_dataset_options *opt, rs_err *err)
+static rs_status select_backgrounds(rs_synth_dataset__camera *c,
+                                    const rs_site_camera *sc,
+                                    const rs_synth_dataset_options *opt,
+                                    rs_err *err)
 {
-    c->bg = calloc((size_t)(sc->Nbackground_images > 0 ? sc->Nbackground_images : 1),
-                   sizeof(rs_synth_dataset__background));
-    if (!c->bg)
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    c->bg =
+        calloc((size_t)(sc->Nbackground_images > 0 ? sc->Nbackground_images : 1), sizeof(rs_synth_dataset__background));
+    if (!c->bg) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (int i = 0; i < sc->Nbackground_images; i++) {
         const rs_site_background *e = &sc->background_images[i];
         bool keep = true;
@@ -101,8 +103,7 @@ static rs_status select_backgrounds(rs_synth_dataset__camera *c, const rs_site_c
             const char *v = rs_site_background_tag(e, opt->filter_keys[f]);
             keep = v && strcmp(v, opt->filter_values[f]) == 0;
         }
-        if (!keep)
-            continue;
+        if (!keep) continue;
         rs_synth_dataset__background *b = &c->bg[c->Nbg++];
         b->src = e;
         b->time_iso = rs_site_background_tag(e, "time");
@@ -118,18 +119,17 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
     const rs_synth_dataset_options *opt = d->opt;
     rs_status st;
     char *path = NULL;
-    if ((st = rs_site_load(&d->site, opt->site_dir, err)))
-        return st;
+    if ((st = rs_site_load(&d->site, opt->site_dir, err))) return st;
     path = rs_io_join(opt->site_dir, "lanes.geojson");
-    if (!path)
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!rs_synth_dataset__file_exists(path)) {
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: missing: the built-in traffic needs the site's "
-                        "lanes (docs/traffic.md)", path);
+        st = rs_err_set(err, RS_ERR_INVALID,
+                        "%s: missing: the built-in traffic needs the site's "
+                        "lanes (docs/traffic.md)",
+                        path);
         goto done;
     }
-    if ((st = rs_lanes_read(&d->lanes, path, d->site, err)))
-        goto done;
+    if ((st = rs_lanes_read(&d->lanes, path, d->site, err))) goto done;
     const int Nc = opt->Ncameras > 0 ? opt->Ncameras : d->site->Ncameras;
     d->cams = calloc((size_t)(Nc > 0 ? Nc : 1), sizeof(rs_synth_dataset__camera));
     if (!d->cams) {
@@ -140,8 +140,7 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
         const char *id = opt->Ncameras > 0 ? opt->cameras[i] : d->site->cameras[i].id;
         const int isite = rs_site_find_camera(d->site, id);
         if (isite < 0) {
-            st = rs_err_set(err, RS_ERR_USAGE, "--camera: no camera \"%s\" in %s", id,
-                            opt->site_dir);
+            st = rs_err_set(err, RS_ERR_USAGE, "--camera: no camera \"%s\" in %s", id, opt->site_dir);
             goto done;
         }
         rs_synth_dataset__camera *c = &d->cams[d->Ncams++];
@@ -159,8 +158,7 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
             (st = select_backgrounds(c, &d->site->cameras[isite], opt, err)))
             goto done;
     }
-    if (d->Ncams == 0)
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: no camera", opt->site_dir);
+    if (d->Ncams == 0) st = rs_err_set(err, RS_ERR_INVALID, "%s: no camera", opt->site_dir);
 done:
     free(path);
     return st;
@@ -170,24 +168,22 @@ done:
 
 // What a worker tells the parent after each image, in one write (atomic: < PIPE_BUF).
 typedef struct {
-    char kind;              // 'm' made, 'g' made over the grey ground, 's' skipped, 'e' error
-    int status;             // rs_status of an error
-    double seconds_povray;  // of this image
-    char msg[400];          // an error's message
+    char kind;             // 'm' made, 'g' made over the grey ground, 's' skipped, 'e' error
+    int status;            // rs_status of an error
+    double seconds_povray; // of this image
+    char msg[400];         // an error's message
 } worker_report;
 
 // Makes the images at positions j, j + J, .. of the shard. With fd >= 0 (a worker) each image
 // is reported through fd, else counted in *sum with the progress callback called.
-static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *sum, int j,
-                            int J, int fd, rs_err *err)
+static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *sum, int j, int J, int fd, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     rs_status st = RS_OK;
     char name[400];
     int pos = 0;
     for (int k = opt->shard_index; k < opt->count && !st; k += opt->shard_count, pos++) {
-        if (pos % J != j)
-            continue;
+        if (pos % J != j) continue;
         rs_synth_dataset__camera *c = &d->cams[k % d->Ncams];
         char stem[300];
         rs_synth_dataset__stem(stem, sizeof(stem), k, c->id);
@@ -209,19 +205,15 @@ static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *
                 rep.status = st;
                 snprintf(rep.msg, sizeof(rep.msg), "%.399s", err ? err->msg : "");
             }
-            if (write(fd, &rep, sizeof(rep)) != (ssize_t)sizeof(rep))
-                return RS_ERR_IO; // the parent is gone
+            if (write(fd, &rep, sizeof(rep)) != (ssize_t)sizeof(rep)) return RS_ERR_IO; // the parent is gone
             continue;
         }
-        if (st)
-            break;
+        if (st) break;
         sum->Nskipped += rep.kind == 's';
         sum->Nmade += rep.kind != 's';
         sum->Ngrey += rep.kind == 'g';
         sum->seconds_povray += rep.seconds_povray;
-        if (opt->progress)
-            opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages,
-                          sum->Nskipped);
+        if (opt->progress) opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages, sum->Nskipped);
     }
     return st;
 }
@@ -234,8 +226,7 @@ static rs_status run_workers(rs_synth_dataset__run *d, rs_synth_dataset_summary 
     const rs_synth_dataset_options *opt = d->opt;
     const int J = opt->jobs < sum->Nimages ? opt->jobs : sum->Nimages;
     int fds[2];
-    if (pipe(fds) != 0)
-        return rs_err_set(err, RS_ERR_IO, "synth: pipe: %s", strerror(errno));
+    if (pipe(fds) != 0) return rs_err_set(err, RS_ERR_IO, "synth: pipe: %s", strerror(errno));
     pid_t *pids = calloc((size_t)J, sizeof(pid_t));
     if (!pids) {
         close(fds[0]);
@@ -255,8 +246,7 @@ static rs_status run_workers(rs_synth_dataset__run *d, rs_synth_dataset_summary 
         if (pids[j] == 0) {
             // a worker dies with the parent: a killed `roadside synth` leaves nothing running
             // that could race a rerun on the same images
-            if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent)
-                _exit(1);
+            if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(1);
             close(fds[0]);
             rs_err e = {RS_OK, ""};
             const rs_status ws = run_images(d, sum, j, J, fds[1], &e);
@@ -280,37 +270,33 @@ static rs_status run_workers(rs_synth_dataset__run *d, rs_synth_dataset_summary 
         sum->Ngrey += rep.kind == 'g';
         sum->seconds_povray += rep.seconds_povray;
         if (!failed && opt->progress)
-            opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages,
-                          sum->Nskipped);
+            opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages, sum->Nskipped);
     }
     close(fds[0]);
     for (int j = 0; j < started; j++) {
         int ws = 0;
         while (waitpid(pids[j], &ws, 0) < 0 && errno == EINTR) {}
         if (!st && !(WIFEXITED(ws) && WEXITSTATUS(ws) == 0))
-            st = rs_err_set(err, RS_ERR_EXTERNAL, "synth: worker %d of %d ended with %s %d", j,
-                            J, WIFSIGNALED(ws) ? "signal" : "status",
-                            WIFSIGNALED(ws) ? WTERMSIG(ws) : WEXITSTATUS(ws));
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "synth: worker %d of %d ended with %s %d", j, J,
+                            WIFSIGNALED(ws) ? "signal" : "status", WIFSIGNALED(ws) ? WTERMSIG(ws) : WEXITSTATUS(ws));
     }
     free(pids);
     return st;
 }
 
-rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
-                               const rs_synth_dataset_options *opt, rs_err *err)
+rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth_dataset_options *opt, rs_err *err)
 {
     rs_synth_dataset_summary sum = {0};
     const double t0 = now_s();
-    if (!opt || !opt->site_dir || !opt->calib_dir || !opt->out_dir || opt->count < 1 ||
-        opt->shard_count < 1 || opt->shard_index < 0 || opt->shard_index >= opt->shard_count ||
-        opt->vehicles < 0 || !opt->split)
-        return rs_err_set(err, RS_ERR_INVALID, "synth: bad options (count >= 1, shard I/N with "
+    if (!opt || !opt->site_dir || !opt->calib_dir || !opt->out_dir || opt->count < 1 || opt->shard_count < 1 ||
+        opt->shard_index < 0 || opt->shard_index >= opt->shard_count || opt->vehicles < 0 || !opt->split)
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "synth: bad options (count >= 1, shard I/N with "
                           "0 <= I < N, site, calib and output folders required)");
     rs_synth_dataset__run d = {.opt = opt};
     char name[600];
     rs_status st = dataset_load(&d, err);
-    if (st)
-        goto done;
+    if (st) goto done;
     snprintf(name, sizeof(name), "labels/%s", opt->split);
     d.split_dir = rs_io_join(opt->out_dir, opt->split);
     d.parts_dir = rs_io_join(opt->out_dir, "parts");
@@ -326,12 +312,9 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
     free(labels_dir);
     free(annot_dir);
     free(kitti_dir);
-    if (st)
-        goto done;
-    for (int k = opt->shard_index; k < opt->count; k += opt->shard_count)
-        sum.Nimages++;
-    st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err)
-                                          : run_images(&d, &sum, 0, 1, -1, err);
+    if (st) goto done;
+    for (int k = opt->shard_index; k < opt->count; k += opt->shard_count) sum.Nimages++;
+    st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err) : run_images(&d, &sum, 0, 1, -1, err);
     if (!st) {
         st = rs_synth_dataset__assemble(&d, &sum.Nannotations, err);
         rmdir(d.work_root); // empty when every image finished
@@ -339,7 +322,6 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
 done:
     dataset_free(&d);
     sum.seconds = now_s() - t0;
-    if (summary)
-        *summary = sum;
+    if (summary) *summary = sum;
     return st;
 }

@@ -44,10 +44,10 @@ extern "C" {
 #endif
 
 typedef struct {
-    const char *site_dir;     // the site folder (site.json, lanes.geojson, backgrounds)
-    const char *calib_dir;    // folder of calibrated <camera>.cameramodel files
-    const char *out_dir;      // DATASET, created if missing
-    int count;                // images in the whole dataset (all shards), >= 1
+    const char *site_dir;  // the site folder (site.json, lanes.geojson, backgrounds)
+    const char *calib_dir; // folder of calibrated <camera>.cameramodel files
+    const char *out_dir;   // DATASET, created if missing
+    int count;             // images in the whole dataset (all shards), >= 1
     uint64_t seed;
     int shard_index, shard_count; // this process makes the k with k % shard_count == shard_index
     const char *const *cameras;   // (Ncameras,) camera ids; NULL / 0: every camera of the site
@@ -55,20 +55,20 @@ typedef struct {
     const char *const *filter_keys;   // (Nfilters,) background tag filters key == value
     const char *const *filter_values; // (Nfilters,)
     int Nfilters;
-    int width, height;        // output size; 0: the camera's own (intrinsics are scaled)
-    int vehicles;             // at most this many vehicles per image's traffic (default 10)
-    const char *split;        // COCO split name (default "train2017")
-    bool shadows;             // differential-rendering shadows over backgrounds (default on)
-    bool separate_processes;  // one povray process per pass (benchmarks; default off)
-    bool full_frame;          // no culling, no region: povray renders the whole image
-                              // (benchmarks; default off)
-    int coarse_below_px;      // a vehicle whose box is fewer pixels tall than this in the image
-                              // gets the coarse mesh (rs_synth_fleet_build_lod; default 40;
-                              // 0: every vehicle in full detail)
-    int jobs;                 // worker processes (default 1): worker j makes the images at
-                              // positions j, j + jobs, .. of this shard; povray spends much of
-                              // its time waiting on itself, so jobs > cores pays (bench synth)
-    const char *povray;       // NULL: $ROADSIDE_POVRAY, else povray on PATH
+    int width, height;       // output size; 0: the camera's own (intrinsics are scaled)
+    int vehicles;            // at most this many vehicles per image's traffic (default 10)
+    const char *split;       // COCO split name (default "train2017")
+    bool shadows;            // differential-rendering shadows over backgrounds (default on)
+    bool separate_processes; // one povray process per pass (benchmarks; default off)
+    bool full_frame;         // no culling, no region: povray renders the whole image
+                             // (benchmarks; default off)
+    int coarse_below_px;     // a vehicle whose box is fewer pixels tall than this in the image
+                             // gets the coarse mesh (rs_synth_fleet_build_lod; default 40;
+                             // 0: every vehicle in full detail)
+    int jobs;                // worker processes (default 1): worker j makes the images at
+                             // positions j, j + jobs, .. of this shard; povray spends much of
+                             // its time waiting on itself, so jobs > cores pays (bench synth)
+    const char *povray;      // NULL: $ROADSIDE_POVRAY, else povray on PATH
     // Called after each image of this shard (made or skipped); may be NULL.
     void (*progress)(void *ctx, int done, int total, int skipped);
     void *progress_ctx;
@@ -77,11 +77,11 @@ typedef struct {
 void rs_synth_dataset_options_default(rs_synth_dataset_options *opt);
 
 typedef struct {
-    int Nimages;       // images of this shard
+    int Nimages;         // images of this shard
     int Nmade, Nskipped; // made now / found finished
-    int Nannotations;  // annotations in the assembled COCO file
-    int Ngrey;         // images rendered over the grey ground (no matching background)
-    double seconds;    // wall time
+    int Nannotations;    // annotations in the assembled COCO file
+    int Ngrey;           // images rendered over the grey ground (no matching background)
+    double seconds;      // wall time
     double seconds_povray;
 } rs_synth_dataset_summary;
 
@@ -94,7 +94,8 @@ typedef struct {
 // out: summary may be NULL
 rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
                                // in
-                               const rs_synth_dataset_options *opt, rs_err *err);
+                               const rs_synth_dataset_options *opt,
+                               rs_err *err);
 
 // Splitmix64 mixing of (seed, k): the seed of image k's random stream.
 uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
@@ -105,9 +106,12 @@ uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
 // the first input; image files are hard-linked into OUT (copied across file systems), with
 // their YOLO and KITTI files when present. Writes OUT/annotations/instances_<split>.json.
 // out: *Nimages, *Nannotations may be NULL (totals over splits)
-rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations,
+rs_status rs_synth_dataset_merge(int *Nimages,
+                                 int *Nannotations,
                                  // in
-                                 const char *out_dir, const char *const *inputs, int Ninputs,
+                                 const char *out_dir,
+                                 const char *const *inputs,
+                                 int Ninputs,
                                  rs_err *err);
 
 #ifdef __cplusplus

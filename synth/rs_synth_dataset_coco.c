@@ -45,8 +45,7 @@ static rs_status coco_add_file(coco_acc *a, const char *path, rs_err *err)
 {
     char *text = NULL;
     rs_status st = rs_io_read_file(&text, NULL, path, err);
-    if (st)
-        return st;
+    if (st) return st;
     cJSON *doc = cJSON_Parse(text);
     free(text);
     const cJSON *images = cJSON_GetObjectItemCaseSensitive(doc, "images");
@@ -55,8 +54,7 @@ static rs_status coco_add_file(coco_acc *a, const char *path, rs_err *err)
         cJSON_Delete(doc);
         return rs_err_set(err, RS_ERR_PARSE, "%s: not a COCO file (images, annotations)", path);
     }
-    if (!a->categories)
-        a->categories = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "categories"), 1);
+    if (!a->categories) a->categories = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "categories"), 1);
     cJSON_ArrayForEach(im, images)
     {
         const cJSON *id = cJSON_GetObjectItemCaseSensitive(im, "id");
@@ -102,12 +100,10 @@ static rs_status coco_write(coco_acc *a, const char *path, int *Nimages, int *Na
     cJSON *doc = cJSON_CreateObject();
     cJSON *images = cJSON_AddArrayToObject(doc, "images");
     cJSON *anns = cJSON_AddArrayToObject(doc, "annotations");
-    cJSON_AddItemToObject(doc, "categories",
-                          a->categories ? cJSON_Duplicate(a->categories, 1) : cJSON_CreateArray());
+    cJSON_AddItemToObject(doc, "categories", a->categories ? cJSON_Duplicate(a->categories, 1) : cJSON_CreateArray());
     int ni = 0, na = 0;
     for (int i = 0; i < a->N; i++) {
-        if (i > 0 && strcmp(a->e[i].file_name, a->e[i - 1].file_name) == 0)
-            continue;
+        if (i > 0 && strcmp(a->e[i].file_name, a->e[i - 1].file_name) == 0) continue;
         ni++;
         cJSON *im = cJSON_Duplicate(a->e[i].image, 1);
         cJSON_ReplaceItemInObjectCaseSensitive(im, "id", cJSON_CreateNumber(ni));
@@ -123,14 +119,11 @@ static rs_status coco_write(coco_acc *a, const char *path, int *Nimages, int *Na
     }
     char *text = cJSON_Print(doc);
     cJSON_Delete(doc);
-    if (!text)
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!text) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     rs_status st = rs_io_write_file(path, text, strlen(text), err);
     free(text);
-    if (Nimages)
-        *Nimages += ni;
-    if (Nanns)
-        *Nanns += na;
+    if (Nimages) *Nimages += ni;
+    if (Nanns) *Nanns += na;
     return st;
 }
 
@@ -155,10 +148,8 @@ rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns,
         free(part);
     }
     snprintf(name, sizeof(name), "annotations/instances_%s.json", opt->split);
-    if (!st && !(path = rs_io_join(opt->out_dir, name)))
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    if (!st)
-        st = coco_write(&a, path, NULL, Nanns, err);
+    if (!st && !(path = rs_io_join(opt->out_dir, name))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) st = coco_write(&a, path, NULL, Nanns, err);
     free(path);
     coco_acc_free(&a);
     return st;
@@ -169,20 +160,18 @@ rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns,
 // Hard-links src to dst (a copy when linking fails), unless dst exists.
 static rs_status link_or_copy(const char *src, const char *dst, rs_err *err)
 {
-    if (rs_synth_dataset__file_exists(dst) || link(src, dst) == 0)
-        return RS_OK;
+    if (rs_synth_dataset__file_exists(dst) || link(src, dst) == 0) return RS_OK;
     char *data = NULL;
     size_t len = 0;
     rs_status st = rs_io_read_file(&data, &len, src, err);
-    if (!st)
-        st = rs_io_write_file(dst, data, len, err);
+    if (!st) st = rs_io_write_file(dst, data, len, err);
     free(data);
     return st;
 }
 
 // Links DIR/<sub>/<stem><ext> of an input into OUT when it exists.
-static rs_status link_sidecar(const char *in_dir, const char *out_dir, const char *sub,
-                              const char *file_name, const char *ext, rs_err *err)
+static rs_status link_sidecar(
+    const char *in_dir, const char *out_dir, const char *sub, const char *file_name, const char *ext, rs_err *err)
 {
     char rel[1200];
     const char *dot = strrchr(file_name, '.');
@@ -205,26 +194,21 @@ static rs_status link_sidecar(const char *in_dir, const char *out_dir, const cha
 static rs_status list_splits(const char *adir, char ***splits, int *Nsplits, rs_err *err)
 {
     DIR *dir = opendir(adir);
-    if (!dir)
-        return rs_err_set(err, RS_ERR_IO, "%s: %s (not a dataset?)", adir, strerror(errno));
+    if (!dir) return rs_err_set(err, RS_ERR_IO, "%s: %s (not a dataset?)", adir, strerror(errno));
     struct dirent *de;
     rs_status st = RS_OK;
     while (!st && (de = readdir(dir))) {
         const char *n = de->d_name;
         const size_t len = strlen(n);
-        if (strncmp(n, "instances_", 10) != 0 || len <= 15 || strcmp(n + len - 5, ".json") != 0)
-            continue;
+        if (strncmp(n, "instances_", 10) != 0 || len <= 15 || strcmp(n + len - 5, ".json") != 0) continue;
         char split[256];
         snprintf(split, sizeof(split), "%.*s", (int)(len - 15), n + 10);
         bool have = false;
-        for (int s = 0; s < *Nsplits; s++)
-            have = have || strcmp((*splits)[s], split) == 0;
-        if (have)
-            continue;
+        for (int s = 0; s < *Nsplits; s++) have = have || strcmp((*splits)[s], split) == 0;
+        if (have) continue;
         char **grown = realloc(*splits, (size_t)(*Nsplits + 1) * sizeof(char *));
         if (!grown || !(grown[*Nsplits] = strdup(split))) {
-            if (grown)
-                *splits = grown;
+            if (grown) *splits = grown;
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             break;
         }
@@ -235,13 +219,11 @@ static rs_status list_splits(const char *adir, char ***splits, int *Nsplits, rs_
     return st;
 }
 
-rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *out_dir,
-                                 const char *const *inputs, int Ninputs, rs_err *err)
+rs_status rs_synth_dataset_merge(
+    int *Nimages, int *Nannotations, const char *out_dir, const char *const *inputs, int Ninputs, rs_err *err)
 {
-    if (Nimages)
-        *Nimages = 0;
-    if (Nannotations)
-        *Nannotations = 0;
+    if (Nimages) *Nimages = 0;
+    if (Nannotations) *Nannotations = 0;
     if (!out_dir || Ninputs < 1)
         return rs_err_set(err, RS_ERR_INVALID, "merge: an output and at least one input needed");
     // The splits: every annotations/instances_<split>.json of every input.
@@ -250,8 +232,7 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
     rs_status st = RS_OK;
     for (int i = 0; i < Ninputs && !st; i++) {
         char *adir = rs_io_join(inputs[i], "annotations");
-        if (!adir)
-            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!adir) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         rs_status s2 = list_splits(adir, &splits, &Nsplits, err);
         free(adir);
         st = s2;
@@ -275,17 +256,12 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
                     if (!src || !dst || !folder)
                         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
                     else if (!rs_synth_dataset__file_exists(src))
-                        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: listed in %s but missing",
-                                        src, path);
-                    else if (!(st = rs_io_mkdir_p(folder, err)) &&
-                             !(st = link_or_copy(src, dst, err)))
-                    {
+                        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: listed in %s but missing", src, path);
+                    else if (!(st = rs_io_mkdir_p(folder, err)) && !(st = link_or_copy(src, dst, err))) {
                         char sub[700];
                         snprintf(sub, sizeof(sub), "labels/%s", splits[s]);
-                        if (!(st = link_sidecar(inputs[i], out_dir, sub, a.e[e].file_name,
-                                                ".txt", err)))
-                            st = link_sidecar(inputs[i], out_dir, "label_2", a.e[e].file_name,
-                                              ".txt", err);
+                        if (!(st = link_sidecar(inputs[i], out_dir, sub, a.e[e].file_name, ".txt", err)))
+                            st = link_sidecar(inputs[i], out_dir, "label_2", a.e[e].file_name, ".txt", err);
                     }
                     free(src);
                     free(dst);
@@ -295,23 +271,21 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
             free(path);
         }
         char *out = rs_io_join(out_dir, rel);
-        if (!st && !out)
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!st && !out) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         if (!st) {
             char *adir = rs_io_join(out_dir, "annotations");
             st = adir ? rs_io_mkdir_p(adir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             free(adir);
         }
-        if (!st)
-            st = coco_write(&a, out, Nimages, Nannotations, err);
+        if (!st) st = coco_write(&a, out, Nimages, Nannotations, err);
         free(out);
         coco_acc_free(&a);
     }
     if (!st && Nsplits == 0)
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: no annotations/instances_*.json in the "
+        st = rs_err_set(err, RS_ERR_NOT_FOUND,
+                        "merge: no annotations/instances_*.json in the "
                         "inputs");
-    for (int s = 0; s < Nsplits; s++)
-        free(splits[s]);
+    for (int s = 0; s < Nsplits; s++) free(splits[s]);
     free(splits);
     return st;
 }

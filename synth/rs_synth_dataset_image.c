@@ -46,16 +46,13 @@ static uint64_t rng_next(uint64_t *s)
 // The background at the camera's size (linear resampling when it differs) and its appearance
 // (rs_synth_appearance_estimate on the original file: noise, blur, JPEG quality are the
 // camera's), computed at first use and kept.
-static rs_status background_fit(rs_synth_dataset__background *b, int width, int height,
-                                rs_err *err)
+static rs_status background_fit(rs_synth_dataset__background *b, int width, int height, rs_err *err)
 {
-    if (b->fitted.data)
-        return RS_OK;
+    if (b->fitted.data) return RS_OK;
     rs_image src = {0};
     float *map = NULL;
     rs_status st = rs_image_read(&src, b->src->path, err);
-    if (st)
-        return st;
+    if (st) return st;
     if (src.channels < 3) {
         st = rs_err_set(err, RS_ERR_INVALID, "%s: not an RGB image", b->src->path);
         goto done;
@@ -76,8 +73,7 @@ static rs_status background_fit(rs_synth_dataset__background *b, int width, int 
         goto done;
     for (size_t i = 0; i < (size_t)width * height; i++)
         for (int c = 0; c < 3; c++)
-            b->linear.data[3 * i + c] =
-                (float)rs_synth_srgb_decode(b->fitted.data[(size_t)b->fitted.channels * i + c]);
+            b->linear.data[3 * i + c] = (float)rs_synth_srgb_decode(b->fitted.data[(size_t)b->fitted.channels * i + c]);
     b->app_ok = rs_synth_appearance_estimate(&b->app, b->src->path, NULL, NULL) == RS_OK;
 done:
     free(map);
@@ -96,10 +92,8 @@ static void shade_background(rs_image *bg_lin, const float *shadow, const uint16
 {
     const size_t n = (size_t)bg_lin->width * (size_t)bg_lin->height;
     for (size_t i = 0; i < n; i++) {
-        if (ids[i] != 0 || shadow[i] >= 1)
-            continue;
-        for (int c = 0; c < 3; c++)
-            bg_lin->data[3 * i + c] *= shadow[i];
+        if (ids[i] != 0 || shadow[i] >= 1) continue;
+        for (int c = 0; c < 3; c++) bg_lin->data[3 * i + c] *= shadow[i];
     }
 }
 
@@ -107,19 +101,16 @@ static void shade_background(rs_image *bg_lin, const float *shadow, const uint16
 // background (rs_synth_appearance.h; skipped when the background gives no estimate), straight
 // alpha over the background in linear light, sRGB, the background's JPEG quality.
 // in,out: r (its composite replaced); in: shadow passes may be NULL
-static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__background *b,
-                           uint64_t seed, rs_err *err)
+static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__background *b, uint64_t seed, rs_err *err)
 {
     const rs_synth_appearance app = b->app;
     const bool matched = b->app_ok;
     rs_status st = RS_OK;
     const size_t n = (size_t)r->width * (size_t)r->height;
     rs_image lin = {0};
-    if ((st = rs_image_alloc(&lin, r->width, r->height, 3, err)))
-        goto done;
+    if ((st = rs_image_alloc(&lin, r->width, r->height, 3, err))) goto done;
     memcpy(lin.data, b->linear.data, sizeof(float) * 3 * n);
-    if (r->shadow)
-        shade_background(&lin, r->shadow, r->ids);
+    if (r->shadow) shade_background(&lin, r->shadow, r->ids);
     if (matched && (st = rs_synth_appearance_apply(&r->rgba, &app, 0.6, seed, err))) {
         rs_image_free(&lin);
         goto done;
@@ -128,13 +119,11 @@ static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__ba
         const double a = r->rgba.data[4 * i + 3];
         for (int c = 0; c < 3; c++) {
             const double v = a * r->rgba.data[4 * i + c] + (1 - a) * lin.data[3 * i + c];
-            r->composite.data[3 * i + c] =
-                (float)rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
+            r->composite.data[3 * i + c] = (float)rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
         }
     }
     rs_image_free(&lin);
-    if (matched)
-        st = rs_synth_appearance_jpeg(&r->composite, &app, err);
+    if (matched) st = rs_synth_appearance_jpeg(&r->composite, &app, err);
 done:
     return st;
 }
@@ -145,14 +134,18 @@ void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id)
 {
     snprintf(stem, n, "%06d_%s", k, camera_id);
     for (char *p = stem; *p; p++)
-        if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') ||
-              *p == '_' || *p == '-'))
+        if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_' ||
+              *p == '-'))
             *p = '_';
 }
 
-rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem,
-                                       rs_synth_dataset__camera *c, bool *grey,
-                                       double *seconds_povray, rs_err *err)
+rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d,
+                                       int k,
+                                       const char *stem,
+                                       rs_synth_dataset__camera *c,
+                                       bool *grey,
+                                       double *seconds_povray,
+                                       rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     uint64_t rng = rs_synth_dataset_image_seed(opt->seed, k);
@@ -172,11 +165,9 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     rs_status st;
 
     work = rs_io_join(d->work_root, stem);
-    if (!work)
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!work) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     rs_io_remove_tree(work); // a previous, interrupted attempt
-    if ((st = rs_io_mkdir_p(work, err)))
-        goto done;
+    if ((st = rs_io_mkdir_p(work, err))) goto done;
 
     rs_synth_render_options ropt;
     rs_synth_render_options_default(&ropt);
@@ -184,11 +175,10 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     ropt.write_files = false; // the dataset composites and writes the image itself
     if (!c->have_canvas) {
         const rs_camera *cc = &c->cam;
-        if ((st = rs_synth_canvas_for_lens(&c->canvas, &cc->lensmodel, cc->intrinsics, cc->width,
-                                           cc->height, 1, err)) ||
-            (!c->canvas.identity &&
-             (st = rs_synth_canvas_map(&c->canvas_map, &c->canvas, &cc->lensmodel,
-                                       cc->intrinsics, cc->width, cc->height, err))))
+        if ((st =
+                 rs_synth_canvas_for_lens(&c->canvas, &cc->lensmodel, cc->intrinsics, cc->width, cc->height, 1, err)) ||
+            (!c->canvas.identity && (st = rs_synth_canvas_map(&c->canvas_map, &c->canvas, &cc->lensmodel,
+                                                              cc->intrinsics, cc->width, cc->height, err))))
             goto done;
         c->have_canvas = true;
     }
@@ -200,16 +190,15 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     if (c->Nbg > 0) {
         rs_synth_dataset__background *bm = &c->bg[r_bg % (uint64_t)c->Nbg];
         b = bm;
-        if ((st = background_fit(bm, c->cam.width, c->cam.height, err)))
-            goto done;
+        if ((st = background_fit(bm, c->cam.width, c->cam.height, err))) goto done;
         // the vehicles alone over transparency; composite() puts them onto the background
         ropt.scene.ground_visible = false;
         ropt.scene.overcast = b->overcast;
         ropt.shadow = opt->shadows && !b->night;
         double t_s;
         if (b->time_iso && rs_synth_parse_iso8601(&t_s, b->time_iso, "time", NULL) == RS_OK)
-            rs_synth_sun_position(&ropt.scene.sun_azimuth_deg, &ropt.scene.sun_elevation_deg,
-                                  d->site->origin.lat_deg, d->site->origin.lon_deg, t_s);
+            rs_synth_sun_position(&ropt.scene.sun_azimuth_deg, &ropt.scene.sun_elevation_deg, d->site->origin.lat_deg,
+                                  d->site->origin.lon_deg, t_s);
         *grey = false;
     } else {
         ropt.scene.ground_visible = true; // neutral grey ground rendered by POV-Ray
@@ -220,13 +209,11 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     rs_synth_traffic_options_default(&topt);
     topt.seed = rng_next(&rng);
     topt.count = 0; // every vehicle that fits; the camera's view picks among them below
-    if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err)))
-        goto done;
+    if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err))) goto done;
     rs_synth_randomise_options xopt;
     rs_synth_randomise_options_default(&xopt);
     xopt.seed = rng_next(&rng);
-    if ((st = rs_synth_traffic_randomise(tv, &N, &xopt, err)))
-        goto done;
+    if ((st = rs_synth_traffic_randomise(tv, &N, &xopt, err))) goto done;
     const size_t n = (size_t)(N > 0 ? N : 1);
     v = calloc(n, sizeof(*v));
     up = malloc(n * sizeof(double));
@@ -242,17 +229,21 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     // leave most images nearly empty.
     int Nseen = 0;
     for (int i = 0; i < N; i++) {
-        const rs_synth_vehicle vi = {.cls = tv[i].cls, .id = tv[i].id, .e_m = tv[i].e_m,
-                                     .n_m = tv[i].n_m, .yaw_deg = tv[i].yaw_deg,
-                                     .length_m = tv[i].length_m, .width_m = tv[i].width_m,
-                                     .height_m = tv[i].height_m, .rgb = {-1, -1, -1},
+        const rs_synth_vehicle vi = {.cls = tv[i].cls,
+                                     .id = tv[i].id,
+                                     .e_m = tv[i].e_m,
+                                     .n_m = tv[i].n_m,
+                                     .yaw_deg = tv[i].yaw_deg,
+                                     .length_m = tv[i].length_m,
+                                     .width_m = tv[i].width_m,
+                                     .height_m = tv[i].height_m,
+                                     .rgb = {-1, -1, -1},
                                      .variant = tv[i].variant};
         double corners[8][3];
         int rect[4];
-        rs_synth_vehicle_corners_enu(corners, &vi, d->site->ground_normal_enu,
-                                     d->site->ground_offset_m);
-        if (rs_synth_vehicle_rect(rect, c->canvas.fxycxy, c->canvas.width, c->canvas.height,
-                                  c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
+        rs_synth_vehicle_corners_enu(corners, &vi, d->site->ground_normal_enu, d->site->ground_offset_m);
+        if (rs_synth_vehicle_rect(rect, c->canvas.fxycxy, c->canvas.width, c->canvas.height, c->cam.rt_cam_enu,
+                                  (const double(*)[3])corners, 0.05)) {
             coarse[Nseen] = rect[3] - rect[1] + 1 < opt->coarse_below_px;
             v[Nseen++] = vi;
         }
@@ -273,29 +264,29 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         Nseen = kept;
     }
     N = Nseen;
-    for (int i = 0; i < N; i++)
-        ids[i] = v[i].id;
-    if ((st = rs_synth_prepare_lod(&prepared, v, NULL, N, coarse, err)))
-        goto done;
+    for (int i = 0; i < N; i++) ids[i] = v[i].id;
+    if ((st = rs_synth_prepare_lod(&prepared, v, NULL, N, coarse, err))) goto done;
     const rs_camera *cam = &c->cam;
-    if ((st = rs_synth_render(&r, work, cam, d->site->ground_normal_enu,
-                              d->site->ground_offset_m, &prepared, &ropt, err)))
+    if ((st = rs_synth_render(&r, work, cam, d->site->ground_normal_enu, d->site->ground_offset_m, &prepared, &ropt,
+                              err)))
         goto done;
     *seconds_povray += r.seconds_povray;
     const uint64_t r_look = rng_next(&rng);
-    if (b && (st = composite(&r, b, r_look, err)))
-        goto done;
+    if (b && (st = composite(&r, b, r_look, err))) goto done;
     for (int i = 0; i < N; i++) {
-        up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m,
-                                     prepared.v[i].e_m, prepared.v[i].n_m);
+        up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m, prepared.v[i].e_m,
+                                     prepared.v[i].n_m);
         meshes[i] = prepared.meshes[prepared.imesh[i]];
     }
-    if ((st = rs_synth_labels_compute(&labels, cam, prepared.v, up, N, meshes, r.ids, err)))
-        goto done;
+    if ((st = rs_synth_labels_compute(&labels, cam, prepared.v, up, N, meshes, r.ids, err))) goto done;
     char file_name[320];
     snprintf(file_name, sizeof(file_name), "%s.png", stem);
-    const rs_synth_label_image img = {.file_name = file_name, .width = r.width, .height = r.height,
-                                      .labels = labels, .Nlabels = N, .vehicle_ids = ids};
+    const rs_synth_label_image img = {.file_name = file_name,
+                                      .width = r.width,
+                                      .height = r.height,
+                                      .labels = labels,
+                                      .Nlabels = N,
+                                      .vehicle_ids = ids};
     const rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
     // YOLO, KITTI and the image, then the per-image COCO file last: it marks the image done.
     image = rs_io_join(d->split_dir, file_name);

@@ -12,8 +12,8 @@
 
 // ---------------------------------------------------------------- classes and ranges
 
-static const char *const class_names[RS_SYNTH_NCLASSES] = {
-    "sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck", "articulated_truck"};
+static const char *const class_names[RS_SYNTH_NCLASSES] = {"sedan", "hatchback", "suv",       "pickup",
+                                                           "van",   "bus",       "box_truck", "articulated_truck"};
 
 // Length, width, height ranges, metres (docs/fleet.md: estimates from manufacturers' data of
 // common models and SUMO's vehicle-type defaults).
@@ -28,13 +28,15 @@ static const rs_synth_class_range class_ranges[RS_SYNTH_NCLASSES] = {
     {{15.50, 16.50}, {2.50, 2.55}, {3.80, 4.00}}, // articulated truck (tractor + semi-trailer)
 };
 
-const char *rs_synth_class_name(rs_synth_class cls) {
+const char *rs_synth_class_name(rs_synth_class cls)
+{
     if (cls == RS_SYNTH_USER_MODEL) return "model";
     if ((int)cls < 0 || cls >= RS_SYNTH_NCLASSES) return NULL;
     return class_names[cls];
 }
 
-rs_status rs_synth_class_from_name(rs_synth_class *cls, const char *name, rs_err *err) {
+rs_status rs_synth_class_from_name(rs_synth_class *cls, const char *name, rs_err *err)
+{
     for (int i = 0; i < RS_SYNTH_NCLASSES; i++)
         if (name && strcmp(name, class_names[i]) == 0) {
             *cls = (rs_synth_class)i;
@@ -45,7 +47,8 @@ rs_status rs_synth_class_from_name(rs_synth_class *cls, const char *name, rs_err
                       "bus, box_truck, articulated_truck)");
 }
 
-rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls, rs_err *err) {
+rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls, rs_err *err)
+{
     if ((int)cls < 0 || cls >= RS_SYNTH_NCLASSES)
         return rs_err_set(err, RS_ERR_INVALID, "class: %d is not a procedural class", (int)cls);
     *out = class_ranges[cls];
@@ -54,13 +57,15 @@ rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls
 
 // ---------------------------------------------------------------- deterministic draws
 
-rs_rng rs_synth_fleet_stream(uint64_t variant, int which) {
+rs_rng rs_synth_fleet_stream(uint64_t variant, int which)
+{
     rs_rng rng;
     rs_rng_seed(&rng, variant * 0x9E3779B97F4A7C15ull + (uint64_t)which * 0xD1B54A32D192ED03ull);
     return rng;
 }
 
-static double uniform_in(rs_rng *rng, const double range[2]) {
+static double uniform_in(rs_rng *rng, const double range[2])
+{
     return range[0] + (range[1] - range[0]) * rs_rng_uniform(rng);
 }
 
@@ -71,8 +76,8 @@ static double uniform_in(rs_rng *rng, const double range[2]) {
 // values (sRGB, converted to linear) and their jitter.
 typedef struct {
     double share;
-    double srgb[3];  // [0,1]
-    double jitter;   // +- per channel, sRGB
+    double srgb[3]; // [0,1]
+    double jitter;  // +- per channel, sRGB
 } paint;
 static const paint paints[] = {
     {0.34, {0.93, 0.93, 0.92}, 0.03}, // white
@@ -86,12 +91,14 @@ static const paint paints[] = {
     {0.01, {0.85, 0.70, 0.10}, 0.06}, // yellow / orange
 };
 
-static double srgb_to_linear(double c) {
+static double srgb_to_linear(double c)
+{
     c = c < 0 ? 0 : c > 1 ? 1 : c;
     return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
 }
 
-static void draw_paint(double rgb[3], uint64_t variant) {
+static void draw_paint(double rgb[3], uint64_t variant)
+{
     rs_rng rng = rs_synth_fleet_stream(variant, RS_SYNTH_FLEET_STREAM_COLOUR);
     double u = rs_rng_uniform(&rng), acc = 0;
     size_t n = sizeof paints / sizeof paints[0], k = n - 1;
@@ -112,14 +119,14 @@ static void draw_paint(double rgb[3], uint64_t variant) {
 // Traffic mix of rs_synth_fleet_random (our estimate for urban arterial roads).
 static const double class_mix[RS_SYNTH_NCLASSES] = {0.30, 0.20, 0.22, 0.06, 0.08, 0.03, 0.06, 0.05};
 
-rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *in, rs_err *err) {
+rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *in, rs_err *err)
+{
     rs_synth_vehicle v = *in;
     double *dims[3] = {&v.length_m, &v.width_m, &v.height_m};
     const char *names[3] = {"length", "width", "height"};
     for (int i = 0; i < 3; i++)
         if (!isfinite(*dims[i]) || *dims[i] < 0 || (*dims[i] > 0 && (*dims[i] < 0.5 || *dims[i] > 30)))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: %g m is not 0 (drawn) or in [0.5, 30] m",
-                              names[i], *dims[i]);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: %g m is not 0 (drawn) or in [0.5, 30] m", names[i], *dims[i]);
     if (v.cls != RS_SYNTH_USER_MODEL) {
         if ((int)v.cls < 0 || v.cls >= RS_SYNTH_NCLASSES)
             return rs_err_set(err, RS_ERR_INVALID, "class: %d is not a vehicle class", (int)v.cls);
@@ -127,21 +134,20 @@ rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *
         const double *ranges[3] = {r->length_m, r->width_m, r->height_m};
         for (int i = 0; i < 3; i++)
             if (*dims[i] == 0) {
-                rs_rng rng =
-                    rs_synth_fleet_stream(v.variant, RS_SYNTH_FLEET_STREAM_LENGTH + i);
+                rs_rng rng = rs_synth_fleet_stream(v.variant, RS_SYNTH_FLEET_STREAM_LENGTH + i);
                 *dims[i] = uniform_in(&rng, ranges[i]);
             }
     }
     if (!(v.rgb[0] >= 0)) draw_paint(v.rgb, v.variant);
     for (int c = 0; c < 3; c++)
         if (!(v.rgb[c] >= 0 && v.rgb[c] <= 1))
-            return rs_err_set(err, RS_ERR_INVALID, "colour: channel %d = %g is not in [0, 1]", c,
-                              v.rgb[c]);
+            return rs_err_set(err, RS_ERR_INVALID, "colour: channel %d = %g is not in [0, 1]", c, v.rgb[c]);
     *out = v;
     return RS_OK;
 }
 
-rs_status rs_synth_fleet_random(rs_synth_vehicle *out, uint64_t seed, rs_err *err) {
+rs_status rs_synth_fleet_random(rs_synth_vehicle *out, uint64_t seed, rs_err *err)
+{
     rs_rng rng = rs_synth_fleet_stream(seed, RS_SYNTH_FLEET_STREAM_CLASS);
     double u = rs_rng_uniform(&rng), acc = 0;
     rs_synth_vehicle v = {0};

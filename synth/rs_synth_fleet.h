@@ -39,12 +39,12 @@ typedef enum {
 // (the geometric normal (b-a)x(c-a) points outward). vn is optional: per-vertex normals for
 // smooth shading, same indexing as v (NULL = flat shading). Owned arrays; rs_synth_mesh_free.
 typedef struct {
-    int Nv;             // number of vertices
-    double (*v)[3];     // (Nv,3) vertices, vehicle frame, metres
-    double (*vn)[3];    // (Nv,3) unit normals, or NULL
-    int Ntri;           // number of triangles
-    int (*tri)[3];      // (Ntri,3) vertex indices
-    uint8_t *part;      // (Ntri,) rs_synth_part of each triangle
+    int Nv;          // number of vertices
+    double (*v)[3];  // (Nv,3) vertices, vehicle frame, metres
+    double (*vn)[3]; // (Nv,3) unit normals, or NULL
+    int Ntri;        // number of triangles
+    int (*tri)[3];   // (Ntri,3) vertex indices
+    uint8_t *part;   // (Ntri,) rs_synth_part of each triangle
 } rs_synth_mesh;
 
 void rs_synth_mesh_free(rs_synth_mesh *mesh); // NULL-safe; leaves *mesh zeroed
@@ -57,10 +57,11 @@ void rs_synth_mesh_bounds(double lo[3], double hi[3], const rs_synth_mesh *mesh)
 // "bus", "box_truck", "articulated_truck" ("model" for RS_SYNTH_USER_MODEL). NULL if unknown.
 const char *rs_synth_class_name(rs_synth_class cls);
 // Inverse of rs_synth_class_name (exact, lower case). RS_ERR_NOT_FOUND names the valid ones.
-rs_status rs_synth_class_from_name(// out
-                                   rs_synth_class *cls,
-                                   // in
-                                   const char *name, rs_err *err);
+rs_status rs_synth_class_from_name( // out
+    rs_synth_class *cls,
+    // in
+    const char *name,
+    rs_err *err);
 
 // Realistic dimension ranges of a class, metres (docs/fleet.md gives the sources).
 typedef struct {
@@ -76,17 +77,19 @@ rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls
 // User models (RS_SYNTH_USER_MODEL): only the paint is filled; their box comes from the mesh.
 // Returns RS_ERR_INVALID for an unknown class, a negative or non-finite dimension, or a given
 // dimension outside [0.5, 30] m.
-rs_status rs_synth_fleet_resolve(// out
-                                 rs_synth_vehicle *out,
-                                 // in
-                                 const rs_synth_vehicle *in, rs_err *err);
+rs_status rs_synth_fleet_resolve( // out
+    rs_synth_vehicle *out,
+    // in
+    const rs_synth_vehicle *in,
+    rs_err *err);
 
 // A random procedural vehicle: the class drawn from the traffic mix of docs/fleet.md, then
 // resolved (rs_synth_fleet_resolve) with variant = seed; position and yaw are 0. Deterministic.
-rs_status rs_synth_fleet_random(// out
-                                rs_synth_vehicle *out,
-                                // in
-                                uint64_t seed, rs_err *err);
+rs_status rs_synth_fleet_random( // out
+    rs_synth_vehicle *out,
+    // in
+    uint64_t seed,
+    rs_err *err);
 
 // Builds the procedural mesh of a RESOLVED vehicle (rs_synth_fleet_resolve): a body lofted from
 // a class side profile and plan shape (shape details drawn from v->variant), wheels, glazing,
@@ -94,20 +97,23 @@ rs_status rs_synth_fleet_random(// out
 // every closed part is consistently wound outward; no triangle has zero area.
 // out: *mesh (owned; rs_synth_mesh_free). Returns RS_ERR_INVALID for unresolved dimensions or a
 // user model, RS_ERR_NOMEM.
-rs_status rs_synth_fleet_build(// out
-                               rs_synth_mesh *mesh,
-                               // in
-                               const rs_synth_vehicle *v, rs_err *err);
+rs_status rs_synth_fleet_build( // out
+    rs_synth_mesh *mesh,
+    // in
+    const rs_synth_vehicle *v,
+    rs_err *err);
 
 // The same at a level of detail: coarse = 8 uniform stations along each body instead of 56
 // (the side profile's control points are always stations, so the roof line and the bounds stay
 // exact) and octagonal wheels instead of 24-gons, for vehicles a few pixels tall: about a
 // fifth of the triangles, so a fifth of the scene text POV-Ray parses for that vehicle
 // (docs/fleet.md, `roadside bench synth`).
-rs_status rs_synth_fleet_build_lod(// out
-                                   rs_synth_mesh *mesh,
-                                   // in
-                                   const rs_synth_vehicle *v, bool coarse, rs_err *err);
+rs_status rs_synth_fleet_build_lod( // out
+    rs_synth_mesh *mesh,
+    // in
+    const rs_synth_vehicle *v,
+    bool coarse,
+    rs_err *err);
 
 // How an OBJ user model is declared: scale and which OBJ axes point forward and up.
 typedef struct {
@@ -124,10 +130,11 @@ typedef struct {
 // normalised) when every face corner has one, else vn = NULL.
 // Errors name the file and line: RS_ERR_IO, RS_ERR_PARSE ("model.obj:12: f: index 9 out of
 // range"), RS_ERR_INVALID (bad spec, no faces, degenerate triangles only), RS_ERR_NOMEM.
-rs_status rs_synth_obj_load(// out
-                            rs_synth_mesh *mesh,
-                            // in
-                            const rs_synth_obj_spec *spec, rs_err *err);
+rs_status rs_synth_obj_load( // out
+    rs_synth_mesh *mesh,
+    // in
+    const rs_synth_obj_spec *spec,
+    rs_err *err);
 
 // Declaration styles.
 typedef enum {
@@ -147,21 +154,24 @@ typedef enum {
 // Returns RS_ERR_IO when writing fails.
 rs_status rs_synth_fleet_write_declare(FILE *f,
                                        // in
-                                       const char *name, const rs_synth_mesh *mesh,
-                                       rs_synth_declare_style style, const double paint_rgb[3],
+                                       const char *name,
+                                       const rs_synth_mesh *mesh,
+                                       rs_synth_declare_style style,
+                                       const double paint_rgb[3],
                                        rs_err *err);
 
 // Writes " rotate <0, YAW, 0> translate <E, UP, N>" (a leading space, no newline): the
 // placement of a declared vehicle whose footprint centre is at (v->e_m, v->n_m, up_m) ENU.
 rs_status rs_synth_fleet_write_placement(FILE *f,
                                          // in
-                                         const rs_synth_vehicle *v, double up_m, rs_err *err);
+                                         const rs_synth_vehicle *v,
+                                         double up_m,
+                                         rs_err *err);
 
 // Maps a vehicle-frame point into site ENU for a vehicle whose footprint centre is at ground
 // height up_m: p_enu = (e, n, up) + x_v forward_enu + y_v left_enu + z_v (0,0,1).
 // out: p_enu_m (3,); in: p_v_m (3,)
-void rs_synth_vehicle_to_enu(double p_enu_m[3], const rs_synth_vehicle *v, double up_m,
-                             const double p_v_m[3]);
+void rs_synth_vehicle_to_enu(double p_enu_m[3], const rs_synth_vehicle *v, double up_m, const double p_v_m[3]);
 
 #ifdef __cplusplus
 }

@@ -7,7 +7,8 @@
 
 #include "synth/internal/rs_synth_fleet_internal.h"
 
-void rs_synth_mesh_free(rs_synth_mesh *mesh) {
+void rs_synth_mesh_free(rs_synth_mesh *mesh)
+{
     if (!mesh) return;
     free(mesh->v);
     free(mesh->vn);
@@ -16,7 +17,8 @@ void rs_synth_mesh_free(rs_synth_mesh *mesh) {
     memset(mesh, 0, sizeof *mesh);
 }
 
-void rs_synth_mesh_bounds(double lo[3], double hi[3], const rs_synth_mesh *mesh) {
+void rs_synth_mesh_bounds(double lo[3], double hi[3], const rs_synth_mesh *mesh)
+{
     for (int k = 0; k < 3; k++) lo[k] = hi[k] = 0;
     for (int i = 0; i < mesh->Nv; i++)
         for (int k = 0; k < 3; k++) {
@@ -26,7 +28,8 @@ void rs_synth_mesh_bounds(double lo[3], double hi[3], const rs_synth_mesh *mesh)
         }
 }
 
-int rs_synth_fleet_add_v(rs_synth_fleet_builder *b, double x, double y, double z) {
+int rs_synth_fleet_add_v(rs_synth_fleet_builder *b, double x, double y, double z)
+{
     if (b->failed) return 0;
     if (b->m.Nv == b->cap_v) {
         int cap = b->cap_v ? 2 * b->cap_v : 256;
@@ -44,7 +47,8 @@ int rs_synth_fleet_add_v(rs_synth_fleet_builder *b, double x, double y, double z
     return b->m.Nv++;
 }
 
-void rs_synth_fleet_add_t(rs_synth_fleet_builder *b, int i, int j, int k, int part) {
+void rs_synth_fleet_add_t(rs_synth_fleet_builder *b, int i, int j, int k, int part)
+{
     if (b->failed) return;
     if (b->m.Ntri == b->cap_t) {
         int cap = b->cap_t ? 2 * b->cap_t : 512;

@@ -10,7 +10,8 @@
 #include "synth/internal/rs_synth_fleet_internal.h"
 
 // "+x" -> axis 0, sign +1, ...; returns 0 when not an axis.
-static int parse_axis(const char *s, int *axis, double *sign) {
+static int parse_axis(const char *s, int *axis, double *sign)
+{
     if (!s || strlen(s) != 2 || (s[0] != '+' && s[0] != '-') || s[1] < 'x' || s[1] > 'z') return 0;
     *axis = s[1] - 'x';
     *sign = s[0] == '+' ? 1 : -1;
@@ -22,7 +23,8 @@ typedef struct {
     int n, cap;
 } vec3_list;
 
-static int vec3_push(vec3_list *l, const double x[3]) {
+static int vec3_push(vec3_list *l, const double x[3])
+{
     if (l->n == l->cap) {
         int cap = l->cap ? 2 * l->cap : 256;
         void *p = realloc(l->a, (size_t)cap * sizeof *l->a);
@@ -35,7 +37,8 @@ static int vec3_push(vec3_list *l, const double x[3]) {
 }
 
 // One face corner "v", "v/vt", "v//vn" or "v/vt/vn" -> 0-based v and vn (-1 if absent).
-static int parse_corner(const char *tok, int nv, int nvn, int *iv, int *ivn) {
+static int parse_corner(const char *tok, int nv, int nvn, int *iv, int *ivn)
+{
     char *end;
     long a = strtol(tok, &end, 10);
     if (end == tok) return 0;
@@ -56,23 +59,25 @@ static int parse_corner(const char *tok, int nv, int nvn, int *iv, int *ivn) {
     if (n != 0) {
         n = n < 0 ? nvn + n : n - 1;
         if (n < 0 || n >= nvn) return -1;
-    } else n = -1;
+    } else
+        n = -1;
     *iv = (int)a;
     *ivn = (int)n;
     return 1;
 }
 
-static void rotate3(double y[3], const double R[3][3], const double x[3], double scale) {
+static void rotate3(double y[3], const double R[3][3], const double x[3], double scale)
+{
     for (int r = 0; r < 3; r++) y[r] = scale * (R[r][0] * x[0] + R[r][1] * x[1] + R[r][2] * x[2]);
 }
 
 // Drops zero-area triangles, moves the box's footprint centre to the origin and its bottom to
 // z = 0, normalises the normals.
-static rs_status obj_finish(rs_synth_fleet_builder *b, const char *path, rs_err *err) {
+static rs_status obj_finish(rs_synth_fleet_builder *b, const char *path, rs_err *err)
+{
     int Nt = 0;
     for (int t = 0; t < b->m.Ntri; t++) {
-        const double *a = b->m.v[b->m.tri[t][0]], *p = b->m.v[b->m.tri[t][1]],
-                     *c = b->m.v[b->m.tri[t][2]];
+        const double *a = b->m.v[b->m.tri[t][0]], *p = b->m.v[b->m.tri[t][1]], *c = b->m.v[b->m.tri[t][2]];
         double u[3], w[3], n[3];
         for (int k = 0; k < 3; k++) u[k] = p[k] - a[k], w[k] = c[k] - a[k];
         n[0] = u[1] * w[2] - u[2] * w[1];
@@ -99,20 +104,18 @@ static rs_status obj_finish(rs_synth_fleet_builder *b, const char *path, rs_err 
     return RS_OK;
 }
 
-rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, rs_err *err) {
+rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, rs_err *err)
+{
     memset(mesh, 0, sizeof *mesh);
     int fa, ua;
     double fs, us;
     if (!spec || !spec->path) return rs_err_set(err, RS_ERR_INVALID, "model: no path");
     if (!(spec->scale > 0 && isfinite(spec->scale)))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: scale: %g is not a positive number", spec->path,
-                          spec->scale);
+        return rs_err_set(err, RS_ERR_INVALID, "%s: scale: %g is not a positive number", spec->path, spec->scale);
     if (!parse_axis(spec->forward, &fa, &fs))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: forward: not one of +x -x +y -y +z -z",
-                          spec->path);
+        return rs_err_set(err, RS_ERR_INVALID, "%s: forward: not one of +x -x +y -y +z -z", spec->path);
     if (!parse_axis(spec->up, &ua, &us) || ua == fa)
-        return rs_err_set(err, RS_ERR_INVALID,
-                          "%s: up: not one of +x -x +y -y +z -z, or the same axis as forward",
+        return rs_err_set(err, RS_ERR_INVALID, "%s: up: not one of +x -x +y -y +z -z, or the same axis as forward",
                           spec->path);
     // Rows of the OBJ -> vehicle rotation: x_v = forward, z_v = up, y_v = z_v x x_v.
     double R[3][3] = {{0}};
@@ -144,8 +147,8 @@ rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, 
                 char *tok = strtok_r(NULL, " \t\r", &save), *end = NULL;
                 x[k] = tok ? strtod(tok, &end) : NAN;
                 if (!tok || *end || !isfinite(x[k]))
-                    st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: coordinate %d is not a number",
-                                    spec->path, line, kw, k + 1);
+                    st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: coordinate %d is not a number", spec->path, line, kw,
+                                    k + 1);
             }
             if (!st && !vec3_push(kw[1] ? &VN : &V, x))
                 st = rs_err_set(err, RS_ERR_NOMEM, "%s:%d: out of memory", spec->path, line);
@@ -165,17 +168,20 @@ rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, 
                 }
                 int r = parse_corner(tok, V.n, VN.n, &cv[n], &cn[n]);
                 if (r == 0)
-                    st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: f: corner %d '%.40s' is not v, "
-                                    "v/vt, v//vn or v/vt/vn", spec->path, line, n + 1, tok);
+                    st = rs_err_set(err, RS_ERR_PARSE,
+                                    "%s:%d: f: corner %d '%.40s' is not v, "
+                                    "v/vt, v//vn or v/vt/vn",
+                                    spec->path, line, n + 1, tok);
                 else if (r < 0)
-                    st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: f: corner %d: index out of range "
-                                    "(%d vertices, %d normals so far)", spec->path, line, n + 1,
-                                    V.n, VN.n);
-                else if (cn[n] < 0) all_normals = 0;
+                    st = rs_err_set(err, RS_ERR_PARSE,
+                                    "%s:%d: f: corner %d: index out of range "
+                                    "(%d vertices, %d normals so far)",
+                                    spec->path, line, n + 1, V.n, VN.n);
+                else if (cn[n] < 0)
+                    all_normals = 0;
             }
             if (!st && n < 3)
-                st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: f: %d corners, at least 3 needed",
-                                spec->path, line, n);
+                st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: f: %d corners, at least 3 needed", spec->path, line, n);
             // Every corner becomes its own vertex (positions and normals may pair differently).
             int base = b.m.Nv;
             for (int k = 0; k < n && !st; k++) {
@@ -185,10 +191,8 @@ rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, 
                 if (cn[k] >= 0) rotate3(nn, R, VN.a[cn[k]], 1);
                 if (!vec3_push(&outn, nn)) b.failed = 1;
             }
-            for (int k = 1; k + 1 < n && !st; k++)
-                rs_synth_fleet_add_t(&b, base, base + k, base + k + 1, 0);
-            if (!st && b.failed)
-                st = rs_err_set(err, RS_ERR_NOMEM, "%s:%d: out of memory", spec->path, line);
+            for (int k = 1; k + 1 < n && !st; k++) rs_synth_fleet_add_t(&b, base, base + k, base + k + 1, 0);
+            if (!st && b.failed) st = rs_err_set(err, RS_ERR_NOMEM, "%s:%d: out of memory", spec->path, line);
         }
     }
     free(text);
@@ -196,8 +200,7 @@ rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, 
     free(cn);
     free(V.a);
     free(VN.a);
-    if (!st && b.m.Ntri == 0)
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: no faces", spec->path);
+    if (!st && b.m.Ntri == 0) st = rs_err_set(err, RS_ERR_INVALID, "%s: no faces", spec->path);
     if (!st && all_normals) {
         b.m.vn = outn.a;
         outn.a = NULL;

@@ -7,13 +7,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int valid_identifier(const char *s) {
+static int valid_identifier(const char *s)
+{
     if (!s || !*s || strlen(s) > 40) return 0;
     if (!((s[0] >= 'A' && s[0] <= 'Z') || s[0] == '_')) return 0;
     for (const char *p = s; *p; p++)
-        if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') ||
-              *p == '_'))
-            return 0;
+        if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_')) return 0;
     return 1;
 }
 
@@ -29,7 +28,8 @@ static const char *const part_textures[RS_SYNTH_NPARTS] = {
 };
 
 // One mesh2 of the triangles of `part` (< 0: all), its vertices renumbered.
-static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int *map) {
+static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int *map)
+{
     int Nv = 0, Nt = 0;
     for (int i = 0; i < m->Nv; i++) map[i] = -1;
     for (int t = 0; t < m->Ntri; t++)
@@ -65,24 +65,27 @@ static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int *map) {
         fprintf(f, "    %s { %d", pass ? "normal_indices" : "face_indices", Nt);
         for (int t = 0; t < m->Ntri; t++)
             if (part < 0 || m->part[t] == part)
-                fprintf(f, ",\n      <%d, %d, %d>", map[m->tri[t][0]], map[m->tri[t][1]],
-                        map[m->tri[t][2]]);
+                fprintf(f, ",\n      <%d, %d, %d>", map[m->tri[t][0]], map[m->tri[t][1]], map[m->tri[t][2]]);
         fprintf(f, " }\n");
     }
     return 1;
 }
 
-rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth_mesh *mesh,
-                                       rs_synth_declare_style style, const double paint_rgb[3],
-                                       rs_err *err) {
+rs_status rs_synth_fleet_write_declare(FILE *f,
+                                       const char *name,
+                                       const rs_synth_mesh *mesh,
+                                       rs_synth_declare_style style,
+                                       const double paint_rgb[3],
+                                       rs_err *err)
+{
     if (!valid_identifier(name))
         return rs_err_set(err, RS_ERR_INVALID,
                           "declare: name is not an upper-case POV-Ray identifier of at most 40 "
                           "characters");
     if (mesh->Ntri == 0) return rs_err_set(err, RS_ERR_INVALID, "declare %s: empty mesh", name);
     if (style == RS_SYNTH_DECLARE_TEXTURED &&
-        !(paint_rgb && paint_rgb[0] >= 0 && paint_rgb[0] <= 1 && paint_rgb[1] >= 0 &&
-          paint_rgb[1] <= 1 && paint_rgb[2] >= 0 && paint_rgb[2] <= 1))
+        !(paint_rgb && paint_rgb[0] >= 0 && paint_rgb[0] <= 1 && paint_rgb[1] >= 0 && paint_rgb[1] <= 1 &&
+          paint_rgb[2] >= 0 && paint_rgb[2] <= 1))
         return rs_err_set(err, RS_ERR_INVALID, "declare %s: paint not in [0, 1]", name);
     int *map = malloc((size_t)(mesh->Nv > 0 ? mesh->Nv : 1) * sizeof *map);
     if (!map) return rs_err_set(err, RS_ERR_NOMEM, "declare %s: out of memory", name);
@@ -97,10 +100,12 @@ rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth
             rc = write_mesh2(f, mesh, part, map);
             if (rc <= 0) continue;
             if (part == RS_SYNTH_PART_PAINT)
-                fprintf(f, "    texture { pigment { rgb <%.6f, %.6f, %.6f> } finish { specular 0.6 "
-                           "roughness 0.01 reflection 0.06 } }\n  }\n",
+                fprintf(f,
+                        "    texture { pigment { rgb <%.6f, %.6f, %.6f> } finish { specular 0.6 "
+                        "roughness 0.01 reflection 0.06 } }\n  }\n",
                         paint_rgb[0], paint_rgb[1], paint_rgb[2]);
-            else fprintf(f, "    texture { %s }\n  }\n", part_textures[part]);
+            else
+                fprintf(f, "    texture { %s }\n  }\n", part_textures[part]);
         }
         fprintf(f, "}\n");
     }
@@ -110,18 +115,17 @@ rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth
     return RS_OK;
 }
 
-rs_status rs_synth_fleet_write_placement(FILE *f, const rs_synth_vehicle *v, double up_m,
-                                         rs_err *err) {
+rs_status rs_synth_fleet_write_placement(FILE *f, const rs_synth_vehicle *v, double up_m, rs_err *err)
+{
     if (!(isfinite(v->yaw_deg) && isfinite(v->e_m) && isfinite(v->n_m) && isfinite(up_m)))
         return rs_err_set(err, RS_ERR_INVALID, "placement: non-finite yaw or position");
-    fprintf(f, " rotate <0, %.9f, 0> translate <%.6f, %.6f, %.6f>", v->yaw_deg, v->e_m, up_m,
-            v->n_m);
+    fprintf(f, " rotate <0, %.9f, 0> translate <%.6f, %.6f, %.6f>", v->yaw_deg, v->e_m, up_m, v->n_m);
     if (ferror(f)) return rs_err_set(err, RS_ERR_IO, "placement: write failed");
     return RS_OK;
 }
 
-void rs_synth_vehicle_to_enu(double p_enu_m[3], const rs_synth_vehicle *v, double up_m,
-                             const double p_v_m[3]) {
+void rs_synth_vehicle_to_enu(double p_enu_m[3], const rs_synth_vehicle *v, double up_m, const double p_v_m[3])
+{
     double y = v->yaw_deg * M_PI / 180, s = sin(y), c = cos(y);
     double x = p_v_m[0], l = p_v_m[1], z = p_v_m[2];
     p_enu_m[0] = v->e_m + x * s - l * c;

@@ -12,8 +12,8 @@
 #include "core/rs_io.h"
 
 #define EDGE_SAMPLES 64
-#define MAXPOLY 16
-#define MAXPLANES 5
+#define MAXPOLY      16
+#define MAXPLANES    5
 
 // ---------------------------------------------------------------- geometry
 
@@ -28,7 +28,8 @@ typedef struct {
     clip_planes planes;
 } projector;
 
-static rs_status projector_init(projector *pr, const rs_camera *cam, rs_err *err) {
+static rs_status projector_init(projector *pr, const rs_camera *cam, rs_err *err)
+{
     pr->cam = cam;
     clip_planes *c = &pr->planes;
     c->N = 1;
@@ -72,7 +73,8 @@ static rs_status projector_init(projector *pr, const rs_camera *cam, rs_err *err
 
 // Sutherland-Hodgman: clips the polygon p (n points, camera frame) to every plane. Returns the
 // new count (0 when nothing is left).
-static int clip_polygon(double out[MAXPOLY][3], const double in[][3], int n, const clip_planes *c) {
+static int clip_polygon(double out[MAXPOLY][3], const double in[][3], int n, const clip_planes *c)
+{
     double a[MAXPOLY][3], b[MAXPOLY][3];
     memcpy(a, in, (size_t)n * sizeof a[0]);
     for (int j = 0; j < c->N && n > 0; j++) {
@@ -95,7 +97,8 @@ static int clip_polygon(double out[MAXPOLY][3], const double in[][3], int n, con
     return n;
 }
 
-static void box_empty(double b[4]) {
+static void box_empty(double b[4])
+{
     b[0] = b[1] = INFINITY;
     b[2] = b[3] = -INFINITY;
 }
@@ -105,8 +108,8 @@ static int box_valid(const double b[4]) { return b[0] <= b[2] && b[1] <= b[3]; }
 static void box_nan(double b[4]) { b[0] = b[1] = b[2] = b[3] = NAN; }
 
 // Grows `box` by the projection of the polygon's edges sampled densely (after clipping).
-static rs_status grow_by_polygon(double box[4], const projector *pr, const double poly[][3], int n,
-                                 rs_err *err) {
+static rs_status grow_by_polygon(double box[4], const projector *pr, const double poly[][3], int n, rs_err *err)
+{
     double c[MAXPOLY][3];
     int m = clip_polygon(c, poly, n, &pr->planes);
     if (m == 0) return RS_OK;
@@ -131,22 +134,23 @@ static rs_status grow_by_polygon(double box[4], const projector *pr, const doubl
     return RS_OK;
 }
 
-static void to_cam(double p_cam[3], const rs_camera *cam, const rs_synth_vehicle *v,
-                   double up_m, const double p_v[3]) {
+static void to_cam(double p_cam[3], const rs_camera *cam, const rs_synth_vehicle *v, double up_m, const double p_v[3])
+{
     double p_enu[3];
     rs_synth_vehicle_to_enu(p_enu, v, up_m, p_v);
     mrcal_transform_point_rt(p_cam, NULL, NULL, cam->rt_cam_enu, p_enu);
 }
 
-static double box_area(const double b[4]) {
-    return box_valid(b) ? (b[2] - b[0]) * (b[3] - b[1]) : 0;
-}
+static double box_area(const double b[4]) { return box_valid(b) ? (b[2] - b[0]) * (b[3] - b[1]) : 0; }
 
 // Intersection with the image [-0.5, W-0.5] x [-0.5, H-0.5]; NaN when empty.
-static void clip_to_image(double out[4], const double b[4], int W, int H) {
+static void clip_to_image(double out[4], const double b[4], int W, int H)
+{
     double c[4] = {fmax(b[0], -0.5), fmax(b[1], -0.5), fmin(b[2], W - 0.5), fmin(b[3], H - 0.5)};
-    if (box_valid(b) && c[0] < c[2] && c[1] < c[3]) memcpy(out, c, sizeof c);
-    else box_nan(out);
+    if (box_valid(b) && c[0] < c[2] && c[1] < c[3])
+        memcpy(out, c, sizeof c);
+    else
+        box_nan(out);
 }
 
 // ---------------------------------------------------------------- rasterising (full_px)
@@ -158,7 +162,8 @@ typedef struct {
 } raster;
 
 // Marks the pixel centres inside the 2D triangle (inclusive edges).
-static void raster_triangle(raster *r, const double a[2], const double b[2], const double c[2]) {
+static void raster_triangle(raster *r, const double a[2], const double b[2], const double c[2])
+{
     double area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
     if (!isfinite(area) || area == 0) return;
     double s = area > 0 ? 1 : -1;
@@ -180,7 +185,8 @@ static void raster_triangle(raster *r, const double a[2], const double b[2], con
 }
 
 // Clips a 3D triangle (camera frame), projects the polygon and rasterises it as a fan.
-static rs_status raster_triangle3(raster *r, const projector *pr, const double tri[3][3], rs_err *err) {
+static rs_status raster_triangle3(raster *r, const projector *pr, const double tri[3][3], rs_err *err)
+{
     double c[MAXPOLY][3];
     int m = clip_polygon(c, tri, 3, &pr->planes);
     if (m < 3) return RS_OK;
@@ -193,15 +199,20 @@ static rs_status raster_triangle3(raster *r, const projector *pr, const double t
     return RS_OK;
 }
 
-static const int box_faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
-                                    {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+static const int box_faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
 
 // Pixels the vehicle covers alone: its mesh's triangles (or the box's faces) rasterised at
 // pixel centres, each triangle with straight edges between its projected corners, within its
 // body box (in the image) plus a 2 px margin for the chords of a distorting lens.
-static rs_status full_pixels(long *count, const projector *pr, const rs_synth_vehicle *v,
-                             double up_m, const rs_synth_mesh *mesh, const double corners[8][3],
-                             const double body_box_px[4], rs_err *err) {
+static rs_status full_pixels(long *count,
+                             const projector *pr,
+                             const rs_synth_vehicle *v,
+                             double up_m,
+                             const rs_synth_mesh *mesh,
+                             const double corners[8][3],
+                             const double body_box_px[4],
+                             rs_err *err)
+{
     raster r = {NULL, (int)fmax(0, floor(body_box_px[0]) - 2), (int)fmax(0, floor(body_box_px[1]) - 2),
                 (int)fmin(pr->cam->width - 1, ceil(body_box_px[2]) + 2),
                 (int)fmin(pr->cam->height - 1, ceil(body_box_px[3]) + 2)};
@@ -210,7 +221,7 @@ static rs_status full_pixels(long *count, const projector *pr, const rs_synth_ve
     if (!r.mask) return rs_err_set(err, RS_ERR_NOMEM, "labels: out of memory");
     rs_status st = RS_OK;
     if (mesh && mesh->Ntri > 0) {
-        double (*pc)[3] = malloc((size_t)mesh->Nv * sizeof *pc);
+        double(*pc)[3] = malloc((size_t)mesh->Nv * sizeof *pc);
         if (!pc) st = rs_err_set(err, RS_ERR_NOMEM, "labels: out of memory");
         for (int i = 0; i < mesh->Nv && !st; i++) to_cam(pc[i], pr->cam, v, up_m, mesh->v[i]);
         for (int t = 0; t < mesh->Ntri && !st; t++) {
@@ -237,16 +248,23 @@ static rs_status full_pixels(long *count, const projector *pr, const rs_synth_ve
 
 // ---------------------------------------------------------------- labels
 
-static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synth_vehicle *v,
-                           int k, double up_m, const rs_synth_mesh *mesh, int with_ids,
-                           rs_err *err) {
+static rs_status label_one(rs_synth_label *L,
+                           const projector *pr,
+                           const rs_synth_vehicle *v,
+                           int k,
+                           double up_m,
+                           const rs_synth_mesh *mesh,
+                           int with_ids,
+                           rs_err *err)
+{
     const rs_camera *cam = pr->cam;
     double Lm = v->length_m, Wm = v->width_m, Hm = v->height_m;
-    if (!(Lm > 0 && Wm > 0 && Hm > 0 && isfinite(Lm + Wm + Hm) && isfinite(up_m) &&
-          isfinite(v->e_m) && isfinite(v->n_m) && isfinite(v->yaw_deg)))
+    if (!(Lm > 0 && Wm > 0 && Hm > 0 && isfinite(Lm + Wm + Hm) && isfinite(up_m) && isfinite(v->e_m) &&
+          isfinite(v->n_m) && isfinite(v->yaw_deg)))
         return rs_err_set(err, RS_ERR_INVALID,
                           "vehicle %d: dimensions, position, yaw or ground height not resolved or "
-                          "not finite", k);
+                          "not finite",
+                          k);
     memset(L, 0, sizeof *L);
     L->index = k;
     L->cls = v->cls;
@@ -307,19 +325,22 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
     L->visible_px = L->full_px = -1;
     L->visibility = NAN;
     box_nan(L->visible_box_px);
-    if (with_ids && L->in_image)
-        return full_pixels(&L->full_px, pr, v, up_m, mesh, corners, L->body_box_px, err);
+    if (with_ids && L->in_image) return full_pixels(&L->full_px, pr, v, up_m, mesh, corners, L->body_box_px, err);
     if (with_ids) L->full_px = 0;
     return RS_OK;
 }
 
-rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam,
-                                  const rs_synth_vehicle *vehicles, const double *up_m,
-                                  int Nvehicles, const rs_synth_mesh *meshes,
-                                  const uint16_t *id_image, rs_err *err) {
+rs_status rs_synth_labels_compute(rs_synth_label **labels,
+                                  const rs_camera *cam,
+                                  const rs_synth_vehicle *vehicles,
+                                  const double *up_m,
+                                  int Nvehicles,
+                                  const rs_synth_mesh *meshes,
+                                  const uint16_t *id_image,
+                                  rs_err *err)
+{
     *labels = NULL;
-    if (Nvehicles < 0 || (Nvehicles > 0 && (!vehicles || !up_m)) || cam->width <= 0 ||
-        cam->height <= 0)
+    if (Nvehicles < 0 || (Nvehicles > 0 && (!vehicles || !up_m)) || cam->width <= 0 || cam->height <= 0)
         return rs_err_set(err, RS_ERR_INVALID, "labels: bad vehicle count, arrays or image size");
     projector pr;
     rs_status st = projector_init(&pr, cam, err);
@@ -327,8 +348,7 @@ rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam,
     rs_synth_label *out = calloc((size_t)(Nvehicles > 0 ? Nvehicles : 1), sizeof *out);
     if (!out) return rs_err_set(err, RS_ERR_NOMEM, "labels: out of memory");
     for (int k = 0; k < Nvehicles && !st; k++)
-        st = label_one(&out[k], &pr, &vehicles[k], k, up_m[k], meshes ? &meshes[k] : NULL,
-                       id_image != NULL, err);
+        st = label_one(&out[k], &pr, &vehicles[k], k, up_m[k], meshes ? &meshes[k] : NULL, id_image != NULL, err);
     if (!st && id_image) {
         for (int k = 0; k < Nvehicles; k++) {
             out[k].visible_px = 0;
@@ -339,8 +359,7 @@ rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam,
                 unsigned id = id_image[(size_t)j * cam->width + i];
                 if (id == 0) continue;
                 if ((int)id > Nvehicles) {
-                    st = rs_err_set(err, RS_ERR_INVALID,
-                                    "ID image: pixel (%d, %d) holds %u, but there are %d vehicles",
+                    st = rs_err_set(err, RS_ERR_INVALID, "ID image: pixel (%d, %d) holds %u, but there are %d vehicles",
                                     i, j, id, Nvehicles);
                     break;
                 }
@@ -367,18 +386,19 @@ rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam,
 
 // ---------------------------------------------------------------- writers
 
-rs_status rs_synth_bbox_kind_parse(rs_synth_bbox_kind *kind, const char *name, rs_err *err) {
+rs_status rs_synth_bbox_kind_parse(rs_synth_bbox_kind *kind, const char *name, rs_err *err)
+{
     static const char *const names[] = {"footprint", "body", "visible"};
     for (int i = 0; i < 3; i++)
         if (name && strcmp(name, names[i]) == 0) {
             *kind = (rs_synth_bbox_kind)i;
             return RS_OK;
         }
-    return rs_err_set(err, RS_ERR_USAGE, "--bbox: '%s' is not footprint, body or visible",
-                      name ? name : "");
+    return rs_err_set(err, RS_ERR_USAGE, "--bbox: '%s' is not footprint, body or visible", name ? name : "");
 }
 
-int rs_synth_label_kept(double box[4], const rs_synth_label *L, const rs_synth_label_options *opt) {
+int rs_synth_label_kept(double box[4], const rs_synth_label *L, const rs_synth_label_options *opt)
+{
     rs_synth_label_options def = {RS_SYNTH_BBOX_FOOTPRINT, 0};
     if (!opt) opt = &def;
     const double *b = opt->bbox == RS_SYNTH_BBOX_BODY      ? L->body_box_px
@@ -386,35 +406,37 @@ int rs_synth_label_kept(double box[4], const rs_synth_label *L, const rs_synth_l
                                                            : L->footprint_box_px;
     memcpy(box, b, 4 * sizeof *b);
     if (!L->in_image || !(box[2] > box[0] && box[3] > box[1])) return 0;
-    if (opt->min_visibility > 0 && isfinite(L->visibility) && L->visibility < opt->min_visibility)
-        return 0;
+    if (opt->min_visibility > 0 && isfinite(L->visibility) && L->visibility < opt->min_visibility) return 0;
     return 1;
 }
 
-static int valid_split(const char *s) {
+static int valid_split(const char *s)
+{
     if (!s || !*s || strlen(s) > 64) return 0;
     for (; *s; s++)
-        if (!((*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') || (*s >= '0' && *s <= '9') ||
-              *s == '_' || *s == '-'))
+        if (!((*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') || (*s >= '0' && *s <= '9') || *s == '_' ||
+              *s == '-'))
             return 0;
     return 1;
 }
 
 // cJSON array of n doubles (NaN -> null).
-static cJSON *numbers(const double *x, int n) {
+static cJSON *numbers(const double *x, int n)
+{
     cJSON *a = cJSON_CreateArray();
     for (int i = 0; a && i < n; i++)
         cJSON_AddItemToArray(a, isfinite(x[i]) ? cJSON_CreateNumber(x[i]) : cJSON_CreateNull());
     return a;
 }
 
-static cJSON *xywh(const double b[4]) {
+static cJSON *xywh(const double b[4])
+{
     double w[4] = {b[0], b[1], b[2] - b[0], b[3] - b[1]};
     return box_valid(b) ? numbers(w, 4) : cJSON_CreateNull();
 }
 
-static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, int image_id,
-                         const char *vehicle_id) {
+static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, int image_id, const char *vehicle_id)
+{
     cJSON *a = cJSON_CreateObject();
     if (!a) return NULL;
     cJSON_AddNumberToObject(a, "id", id);
@@ -423,8 +445,7 @@ static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, i
     cJSON_AddItemToObject(a, "bbox", xywh(box));
     cJSON_AddNumberToObject(a, "area", (box[2] - box[0]) * (box[3] - box[1]));
     cJSON_AddNumberToObject(a, "iscrowd", 0);
-    if (isfinite(L->bottom_center_px[0]))
-        cJSON_AddItemToObject(a, "bottom_center", numbers(L->bottom_center_px, 2));
+    if (isfinite(L->bottom_center_px[0])) cJSON_AddItemToObject(a, "bottom_center", numbers(L->bottom_center_px, 2));
     cJSON_AddItemToObject(a, "footprint_center", numbers(L->footprint_center_px, 2));
     cJSON_AddItemToObject(a, "footprint_bbox", xywh(L->footprint_box_px));
     cJSON_AddItemToObject(a, "footprint_bbox_full", xywh(L->footprint_box_full_px));
@@ -433,8 +454,8 @@ static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, i
     cJSON_AddNumberToObject(a, "truncation", L->truncation);
     cJSON *corners = cJSON_CreateArray();
     for (int c = 0; corners && c < 8; c++)
-        cJSON_AddItemToArray(corners, isfinite(L->corners_px[c][0]) ? numbers(L->corners_px[c], 2)
-                                                                    : cJSON_CreateNull());
+        cJSON_AddItemToArray(corners,
+                             isfinite(L->corners_px[c][0]) ? numbers(L->corners_px[c], 2) : cJSON_CreateNull());
     cJSON_AddItemToObject(a, "corners_px", corners);
     cJSON *b3 = cJSON_CreateObject();
     if (b3) {
@@ -454,26 +475,27 @@ static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, i
     return a;
 }
 
-static rs_status check_images(const char *what, const rs_synth_label_image *images, int N,
-                              rs_err *err) {
+static rs_status check_images(const char *what, const rs_synth_label_image *images, int N, rs_err *err)
+{
     for (int i = 0; i < N; i++)
-        if (!images[i].file_name || !*images[i].file_name || strchr(images[i].file_name, '/') ||
-            images[i].width <= 0 || images[i].height <= 0 || images[i].Nlabels < 0 ||
-            (images[i].Nlabels > 0 && !images[i].labels))
-            return rs_err_set(err, RS_ERR_INVALID,
-                              "%s: image %d: file name (no '/'), size or labels missing", what, i);
+        if (!images[i].file_name || !*images[i].file_name || strchr(images[i].file_name, '/') || images[i].width <= 0 ||
+            images[i].height <= 0 || images[i].Nlabels < 0 || (images[i].Nlabels > 0 && !images[i].labels))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: image %d: file name (no '/'), size or labels missing", what, i);
     return RS_OK;
 }
 
-rs_status rs_synth_labels_write_coco(const char *dir, const char *split,
-                                     const rs_synth_label_image *images, int Nimages,
-                                     const rs_synth_label_options *opt, rs_err *err) {
-    if (!valid_split(split))
-        return rs_err_set(err, RS_ERR_INVALID, "COCO: split must be [A-Za-z0-9_-]+");
+rs_status rs_synth_labels_write_coco(const char *dir,
+                                     const char *split,
+                                     const rs_synth_label_image *images,
+                                     int Nimages,
+                                     const rs_synth_label_options *opt,
+                                     rs_err *err)
+{
+    if (!valid_split(split)) return rs_err_set(err, RS_ERR_INVALID, "COCO: split must be [A-Za-z0-9_-]+");
     rs_status st = check_images("COCO", images, Nimages, err);
     if (st) return st;
-    cJSON *root = cJSON_CreateObject(), *jimages = cJSON_CreateArray(),
-          *jann = cJSON_CreateArray(), *jcat = cJSON_CreateArray();
+    cJSON *root = cJSON_CreateObject(), *jimages = cJSON_CreateArray(), *jann = cJSON_CreateArray(),
+          *jcat = cJSON_CreateArray();
     cJSON_AddItemToObject(root, "images", jimages);
     cJSON_AddItemToObject(root, "annotations", jann);
     cJSON_AddItemToObject(root, "categories", jcat);
@@ -497,9 +519,7 @@ rs_status rs_synth_labels_write_coco(const char *dir, const char *split,
             double box[4];
             if (!rs_synth_label_kept(box, L, opt)) continue;
             cJSON_AddItemToArray(jann, annotation(L, box, ann_id++, i + 1,
-                                                  images[i].vehicle_ids
-                                                      ? images[i].vehicle_ids[L->index]
-                                                      : NULL));
+                                                  images[i].vehicle_ids ? images[i].vehicle_ids[L->index] : NULL));
         }
     }
     char *text = cJSON_PrintUnformatted(root);
@@ -522,7 +542,8 @@ rs_status rs_synth_labels_write_coco(const char *dir, const char *split,
 }
 
 // "cam1_000001.png" -> "cam1_000001.txt" under folder; malloc'ed.
-static char *txt_path(const char *folder, const char *file_name) {
+static char *txt_path(const char *folder, const char *file_name)
+{
     const char *dot = strrchr(file_name, '.');
     int stem = dot && dot != file_name ? (int)(dot - file_name) : (int)strlen(file_name);
     char *name = malloc((size_t)stem + 5), *path = NULL;
@@ -535,12 +556,16 @@ static char *txt_path(const char *folder, const char *file_name) {
 }
 
 // Writes one text file per image into `folder`, the lines made by `line`.
-typedef void (*line_fn)(FILE *f, const rs_synth_label *L, const double box[4],
-                        const rs_synth_label_image *im);
+typedef void (*line_fn)(FILE *f, const rs_synth_label *L, const double box[4], const rs_synth_label_image *im);
 
-static rs_status write_text_files(const char *what, const char *folder,
-                                  const rs_synth_label_image *images, int Nimages,
-                                  const rs_synth_label_options *opt, line_fn line, rs_err *err) {
+static rs_status write_text_files(const char *what,
+                                  const char *folder,
+                                  const rs_synth_label_image *images,
+                                  int Nimages,
+                                  const rs_synth_label_options *opt,
+                                  line_fn line,
+                                  rs_err *err)
+{
     rs_status st = check_images(what, images, Nimages, err);
     if (!st) st = rs_io_mkdir_p(folder, err);
     for (int i = 0; i < Nimages && !st; i++) {
@@ -552,26 +577,27 @@ static rs_status write_text_files(const char *what, const char *folder,
         if (st) break;
         for (int l = 0; l < images[i].Nlabels; l++) {
             double box[4];
-            if (rs_synth_label_kept(box, &images[i].labels[l], opt))
-                line(a.f, &images[i].labels[l], box, &images[i]);
+            if (rs_synth_label_kept(box, &images[i].labels[l], opt)) line(a.f, &images[i].labels[l], box, &images[i]);
         }
         st = rs_io_atomic_commit(&a, err);
     }
     return st;
 }
 
-static void yolo_line(FILE *f, const rs_synth_label *L, const double b[4],
-                      const rs_synth_label_image *im) {
+static void yolo_line(FILE *f, const rs_synth_label *L, const double b[4], const rs_synth_label_image *im)
+{
     fprintf(f, "%d %.6f %.6f %.6f %.6f\n", (int)L->cls, (0.5 * (b[0] + b[2]) + 0.5) / im->width,
-            (0.5 * (b[1] + b[3]) + 0.5) / im->height, (b[2] - b[0]) / im->width,
-            (b[3] - b[1]) / im->height);
+            (0.5 * (b[1] + b[3]) + 0.5) / im->height, (b[2] - b[0]) / im->width, (b[3] - b[1]) / im->height);
 }
 
-rs_status rs_synth_labels_write_yolo(const char *dir, const char *split,
-                                     const rs_synth_label_image *images, int Nimages,
-                                     const rs_synth_label_options *opt, rs_err *err) {
-    if (!valid_split(split))
-        return rs_err_set(err, RS_ERR_INVALID, "YOLO: split must be [A-Za-z0-9_-]+");
+rs_status rs_synth_labels_write_yolo(const char *dir,
+                                     const char *split,
+                                     const rs_synth_label_image *images,
+                                     int Nimages,
+                                     const rs_synth_label_options *opt,
+                                     rs_err *err)
+{
+    if (!valid_split(split)) return rs_err_set(err, RS_ERR_INVALID, "YOLO: split must be [A-Za-z0-9_-]+");
     char *labels = rs_io_join(dir, "labels"), *folder = labels ? rs_io_join(labels, split) : NULL;
     rs_status st = folder ? write_text_files("YOLO", folder, images, Nimages, opt, yolo_line, err)
                           : rs_err_set(err, RS_ERR_NOMEM, "YOLO: out of memory");
@@ -580,23 +606,23 @@ rs_status rs_synth_labels_write_yolo(const char *dir, const char *split,
     return st;
 }
 
-static void kitti_line(FILE *f, const rs_synth_label *L, const double b[4],
-                       const rs_synth_label_image *im) {
+static void kitti_line(FILE *f, const rs_synth_label *L, const double b[4], const rs_synth_label_image *im)
+{
     (void)im;
-    static const char *const types[RS_SYNTH_NCLASSES] = {
-        "Car", "Car", "Car", "Car", "Van", "Bus", "Truck", "Truck"};
+    static const char *const types[RS_SYNTH_NCLASSES] = {"Car", "Car", "Car", "Car", "Van", "Bus", "Truck", "Truck"};
     const char *type = (int)L->cls >= 0 && L->cls < RS_SYNTH_NCLASSES ? types[L->cls] : "Misc";
     int occluded = !isfinite(L->visibility) ? 3 : L->visibility >= 0.8 ? 0 : L->visibility >= 0.4 ? 1 : 2;
     const double *x = L->bottom_center_cam_m;
     double alpha = L->rotation_y_rad - atan2(x[0], x[2]);
     alpha = atan2(sin(alpha), cos(alpha));
-    fprintf(f, "%s %.4f %d %.4f %.2f %.2f %.2f %.2f %.4f %.4f %.4f %.4f %.4f %.4f %.4f\n", type,
-            L->truncation, occluded, alpha, b[0], b[1], b[2], b[3], L->dims_m[2], L->dims_m[1],
-            L->dims_m[0], x[0], x[1], x[2], L->rotation_y_rad);
+    fprintf(f, "%s %.4f %d %.4f %.2f %.2f %.2f %.2f %.4f %.4f %.4f %.4f %.4f %.4f %.4f\n", type, L->truncation,
+            occluded, alpha, b[0], b[1], b[2], b[3], L->dims_m[2], L->dims_m[1], L->dims_m[0], x[0], x[1], x[2],
+            L->rotation_y_rad);
 }
 
-rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_image *images,
-                                      int Nimages, const rs_synth_label_options *opt, rs_err *err) {
+rs_status rs_synth_labels_write_kitti(
+    const char *dir, const rs_synth_label_image *images, int Nimages, const rs_synth_label_options *opt, rs_err *err)
+{
     char *folder = rs_io_join(dir, "label_2");
     rs_status st = folder ? write_text_files("KITTI", folder, images, Nimages, opt, kitti_line, err)
                           : rs_err_set(err, RS_ERR_NOMEM, "KITTI: out of memory");

@@ -32,17 +32,17 @@ extern "C" {
 
 // The labels of one vehicle in one image. NaN marks a value that does not exist.
 typedef struct {
-    int index;                  // the vehicle's index k in the input (ID image value k + 1)
+    int index; // the vehicle's index k in the input (ID image value k + 1)
     rs_synth_class cls;
-    double center_enu_m[3];     // centre of the 3D box, site ENU
-    double dims_m[3];           // length, width, height
-    double yaw_deg;             // compass heading of the forward axis
-    double corners_px[8][2];    // projected box corners, NaN if behind z_cam < ZMIN. Corner c:
-                                // x_v = +L/2 if c&1 else -L/2, y_v = +W/2 if c&2, z_v = H if c&4
-    int in_image;               // 1 when the projected box overlaps the image
-    double body_box_full_px[4]; // tight box of the projected 3D box (clipped in 3D), unclipped
-    double body_box_px[4];      // the same clipped to the image
-    double truncation;          // 1 - area(body_box_px) / area(body_box_full_px), in [0, 1]
+    double center_enu_m[3];          // centre of the 3D box, site ENU
+    double dims_m[3];                // length, width, height
+    double yaw_deg;                  // compass heading of the forward axis
+    double corners_px[8][2];         // projected box corners, NaN if behind z_cam < ZMIN. Corner c:
+                                     // x_v = +L/2 if c&1 else -L/2, y_v = +W/2 if c&2, z_v = H if c&4
+    int in_image;                    // 1 when the projected box overlaps the image
+    double body_box_full_px[4];      // tight box of the projected 3D box (clipped in 3D), unclipped
+    double body_box_px[4];           // the same clipped to the image
+    double truncation;               // 1 - area(body_box_px) / area(body_box_full_px), in [0, 1]
     double footprint_box_full_px[4]; // tight box of the projected footprint rectangle
     double footprint_box_px[4];      // the same clipped to the image (NaN if outside)
     double footprint_center_px[2];   // centre of footprint_box_full_px
@@ -50,11 +50,11 @@ typedef struct {
     double bottom_center_cam_m[3];   // the footprint's centre in the camera frame
     double rotation_y_rad;           // KITTI heading: forward_cam = (cos r, ., -sin r) in x-z
     // From the object-ID pass (all -1 / NaN when no ID image was given):
-    long visible_px;            // pixels of the ID image holding k + 1
-    long full_px;               // pixels the vehicle would cover in the image, unoccluded
-                                // (its mesh, or its 3D box if none, rasterised at pixel centres)
-    double visibility;          // visible_px / full_px, clamped to [0, 1]; 0 if full_px == 0
-    double visible_box_px[4];   // box of the visible pixels (pixel squares), NaN if none
+    long visible_px;          // pixels of the ID image holding k + 1
+    long full_px;             // pixels the vehicle would cover in the image, unoccluded
+                              // (its mesh, or its 3D box if none, rasterised at pixel centres)
+    double visibility;        // visible_px / full_px, clamped to [0, 1]; 0 if full_px == 0
+    double visible_box_px[4]; // box of the visible pixels (pixel squares), NaN if none
 } rs_synth_label;
 
 // Computes the labels of every vehicle (out[k] for vehicle k, in_image or not).
@@ -68,12 +68,16 @@ typedef struct {
 //                 may be NULL (no visibility)
 // Errors: RS_ERR_INVALID (unresolved dimensions, non-finite input, an ID value > Nvehicles),
 // RS_ERR_EXTERNAL (mrcal could not project), RS_ERR_NOMEM.
-rs_status rs_synth_labels_compute(// out
-                                  rs_synth_label **labels,
-                                  // in
-                                  const rs_camera *cam, const rs_synth_vehicle *vehicles,
-                                  const double *up_m, int Nvehicles, const rs_synth_mesh *meshes,
-                                  const uint16_t *id_image, rs_err *err);
+rs_status rs_synth_labels_compute( // out
+    rs_synth_label **labels,
+    // in
+    const rs_camera *cam,
+    const rs_synth_vehicle *vehicles,
+    const double *up_m,
+    int Nvehicles,
+    const rs_synth_mesh *meshes,
+    const uint16_t *id_image,
+    rs_err *err);
 
 // Which box a writer puts in `bbox` (COCO), the YOLO line and KITTI's 2D box.
 typedef enum {
@@ -92,17 +96,16 @@ typedef struct {
 
 // One labelled image for the writers.
 typedef struct {
-    const char *file_name;         // image file name inside the split's image folder
-    int width, height;             // pixels
-    const rs_synth_label *labels;  // (Nlabels,)
+    const char *file_name;        // image file name inside the split's image folder
+    int width, height;            // pixels
+    const rs_synth_label *labels; // (Nlabels,)
     int Nlabels;
-    const char *const *vehicle_ids;// (Nvehicles,) vehicle_ids[labels[i].index]; may be NULL
+    const char *const *vehicle_ids; // (Nvehicles,) vehicle_ids[labels[i].index]; may be NULL
 } rs_synth_label_image;
 
 // Which labels a writer keeps: in_image, the chosen box exists with a positive area, visibility
 // >= min_visibility (when known). out: box (4,) the chosen box.
-int rs_synth_label_kept(double box[4], const rs_synth_label *label,
-                        const rs_synth_label_options *opt);
+int rs_synth_label_kept(double box[4], const rs_synth_label *label, const rs_synth_label_options *opt);
 
 // COCO in YOLOX's layout: writes DIR/annotations/instances_<split>.json (atomically; folders
 // created) with images {id (1..), file_name, width, height}, categories {id = class + 1, name}
@@ -112,22 +115,28 @@ int rs_synth_label_kept(double box[4], const rs_synth_label *label,
 // visible_pixels, full_pixels, visibility, visible_bbox} (docs/labels.md). The image folder
 // DIR/<split>/ is created; the caller puts the images there.
 // in: split: [A-Za-z0-9_-]+ (e.g. "train2017"); opt may be NULL (defaults).
-rs_status rs_synth_labels_write_coco(const char *dir, const char *split,
-                                     const rs_synth_label_image *images, int Nimages,
-                                     const rs_synth_label_options *opt, rs_err *err);
+rs_status rs_synth_labels_write_coco(const char *dir,
+                                     const char *split,
+                                     const rs_synth_label_image *images,
+                                     int Nimages,
+                                     const rs_synth_label_options *opt,
+                                     rs_err *err);
 
 // YOLO txt: DIR/labels/<split>/<stem>.txt per image, lines "class cx cy w h" normalised by the
 // image size (YOLO's origin is the image corner: cx = (x0 + x1)/2 + 0.5 over width).
-rs_status rs_synth_labels_write_yolo(const char *dir, const char *split,
-                                     const rs_synth_label_image *images, int Nimages,
-                                     const rs_synth_label_options *opt, rs_err *err);
+rs_status rs_synth_labels_write_yolo(const char *dir,
+                                     const char *split,
+                                     const rs_synth_label_image *images,
+                                     int Nimages,
+                                     const rs_synth_label_options *opt,
+                                     rs_err *err);
 
 // KITTI object labels: DIR/label_2/<stem>.txt per image, lines "type truncated occluded alpha
 // x1 y1 x2 y2 h w l x y z rotation_y" with the location the bottom centre in the camera frame
 // and rotation_y the heading about the camera's y axis (docs/labels.md); occluded from
 // visibility (0: >= 0.8, 1: >= 0.4, 2: below, 3: unknown).
-rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_image *images,
-                                      int Nimages, const rs_synth_label_options *opt, rs_err *err);
+rs_status rs_synth_labels_write_kitti(
+    const char *dir, const rs_synth_label_image *images, int Nimages, const rs_synth_label_options *opt, rs_err *err);
 
 #ifdef __cplusplus
 }

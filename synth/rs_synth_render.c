@@ -5,9 +5,9 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <signal.h>
 #include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -29,8 +29,7 @@ void rs_synth_render_options_default(rs_synth_render_options *opt)
 
 void rs_synth_render_result_free(rs_synth_render_result *r)
 {
-    if (!r)
-        return;
+    if (!r) return;
     rs_image_free(&r->rgba);
     rs_image_free(&r->composite);
     free(r->ids);
@@ -41,13 +40,16 @@ void rs_synth_render_result_free(rs_synth_render_result *r)
 
 // ---- culling ----
 
-bool rs_synth_vehicle_rect(int rect[4], const double fxycxy[4], int width, int height,
-                           const double rt_cam_enu[6], const double corners_enu_m[8][3],
+bool rs_synth_vehicle_rect(int rect[4],
+                           const double fxycxy[4],
+                           int width,
+                           int height,
+                           const double rt_cam_enu[6],
+                           const double corners_enu_m[8][3],
                            double near_m)
 {
     double p[8][3];
-    for (int k = 0; k < 8; k++)
-        mrcal_transform_point_rt(p[k], NULL, NULL, rt_cam_enu, corners_enu_m[k]);
+    for (int k = 0; k < 8; k++) mrcal_transform_point_rt(p[k], NULL, NULL, rt_cam_enu, corners_enu_m[k]);
     // The box clipped to z >= near is the convex hull of its corners in front and of the
     // crossings of its 12 edges with the plane z = near: their projections bound its image.
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
@@ -57,29 +59,24 @@ bool rs_synth_vehicle_rect(int rect[4], const double fxycxy[4], int width, int h
             const int diff = a ^ b;
             double q[3];
             if (a == b) {
-                if (!(p[a][2] >= near_m))
-                    continue;
+                if (!(p[a][2] >= near_m)) continue;
                 memcpy(q, p[a], sizeof(q));
             } else if (diff == 1 || diff == 2 || diff == 4) {
                 const double za = p[a][2] - near_m, zb = p[b][2] - near_m;
-                if (!((za < 0 && zb > 0) || (za > 0 && zb < 0)))
-                    continue;
+                if (!((za < 0 && zb > 0) || (za > 0 && zb < 0))) continue;
                 const double t = za / (za - zb);
-                for (int k = 0; k < 3; k++)
-                    q[k] = p[a][k] + t * (p[b][k] - p[a][k]);
+                for (int k = 0; k < 3; k++) q[k] = p[a][k] + t * (p[b][k] - p[a][k]);
                 q[2] = near_m;
             } else {
                 continue;
             }
-            const double u = fxycxy[0] * q[0] / q[2] + fxycxy[2],
-                         v = fxycxy[1] * q[1] / q[2] + fxycxy[3];
+            const double u = fxycxy[0] * q[0] / q[2] + fxycxy[2], v = fxycxy[1] * q[1] / q[2] + fxycxy[3];
             lo[0] = fmin(lo[0], u), hi[0] = fmax(hi[0], u);
             lo[1] = fmin(lo[1], v), hi[1] = fmax(hi[1], v);
             Nin++;
         }
     }
-    if (Nin == 0 || hi[0] < -0.5 || hi[1] < -0.5 || lo[0] > width - 0.5 || lo[1] > height - 0.5)
-        return false;
+    if (Nin == 0 || hi[0] < -0.5 || hi[1] < -0.5 || lo[0] > width - 0.5 || lo[1] > height - 0.5) return false;
     // Pixel k covers [k - 0.5, k + 0.5]; one pixel of margin on each side.
     rect[0] = (int)fmax(0, floor(lo[0] + 0.5) - 1);
     rect[1] = (int)fmax(0, floor(lo[1] + 0.5) - 1);
@@ -106,8 +103,7 @@ static rs_status write_povray_conf(const char *out_dir, rs_err *err)
                                "[File I/O Security]\nrestricted\n"
                                "[Shellout Security]\nforbidden\n"
                                "[Permitted Paths]\nread+write = .\n";
-    if (!(st = rs_io_mkdir_p(conf_dir, err)))
-        st = rs_io_write_file(conf, text, sizeof(text) - 1, err);
+    if (!(st = rs_io_mkdir_p(conf_dir, err))) st = rs_io_write_file(conf, text, sizeof(text) - 1, err);
 done:
     free(conf_dir);
     free(conf);
@@ -121,19 +117,16 @@ static double now_s(void)
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args, int Nargs,
-                              double *seconds, rs_err *err)
+rs_status rs_synth_povray_run(
+    const char *povray, const char *dir, const char *const *args, int Nargs, double *seconds, rs_err *err)
 {
     const char *argv[32];
-    if (Nargs < 0 || Nargs > 30)
-        return rs_err_set(err, RS_ERR_USAGE, "povray: %d arguments (at most 30)", Nargs);
+    if (Nargs < 0 || Nargs > 30) return rs_err_set(err, RS_ERR_USAGE, "povray: %d arguments (at most 30)", Nargs);
     argv[0] = povray;
-    for (int i = 0; i < Nargs; i++)
-        argv[1 + i] = args[i];
+    for (int i = 0; i < Nargs; i++) argv[1 + i] = args[i];
     argv[1 + Nargs] = NULL;
     char *log = rs_io_join(dir, "povray.log");
-    if (!log)
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!log) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     const double t0 = now_s();
     const pid_t parent = getpid();
     pid_t pid = fork();
@@ -143,15 +136,12 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
     }
     if (pid == 0) {
         // povray dies with us (a killed roadside leaves no povray running; kept across exec)
-        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent)
-            _exit(126);
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(126);
         int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0644);
-        if (fd < 0 || chdir(dir) != 0)
-            _exit(126);
+        if (fd < 0 || chdir(dir) != 0) _exit(126);
         // HOME must be absolute for povray's %HOME%: the folder we are now in
         char cwd[4096];
-        if (!getcwd(cwd, sizeof(cwd)) || setenv("HOME", cwd, 1) != 0)
-            _exit(126);
+        if (!getcwd(cwd, sizeof(cwd)) || setenv("HOME", cwd, 1) != 0) _exit(126);
         unsetenv("POVINC");
         unsetenv("POVINI");
         dup2(fd, 1);
@@ -163,8 +153,7 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
         ;
-    if (seconds)
-        *seconds += now_s() - t0;
+    if (seconds) *seconds += now_s() - t0;
     rs_status st = RS_OK;
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         char *text = NULL;
@@ -172,8 +161,7 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
         if (rs_io_read_file(&text, NULL, log, NULL) == RS_OK) {
             // last non-empty line
             size_t n = strlen(text);
-            while (n > 0 && (text[n - 1] == '\n' || text[n - 1] == '\r'))
-                text[--n] = 0;
+            while (n > 0 && (text[n - 1] == '\n' || text[n - 1] == '\r')) text[--n] = 0;
             const char *nl = strrchr(text, '\n');
             snprintf(last, sizeof(last), "%s", nl ? nl + 1 : text);
         }
@@ -192,8 +180,13 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
 }
 
 // Runs `povray INI region` in out_dir (rs_synth_povray_run).
-static rs_status run_povray(const char *povray, const char *out_dir, const char *ini,
-                            const int region[4], int width, int height, double *seconds,
+static rs_status run_povray(const char *povray,
+                            const char *out_dir,
+                            const char *ini,
+                            const int region[4],
+                            int width,
+                            int height,
+                            double *seconds,
                             rs_err *err)
 {
     char sc[32], ec[32], sr[32], er[32];
@@ -210,7 +203,6 @@ static rs_status run_povray(const char *povray, const char *out_dir, const char 
 
 // ---- images ----
 
-
 // Zeroes (transparent) everything outside the rendered rectangle: povray leaves it opaque black.
 static void mask_outside(rs_image *img, const int region[4])
 {
@@ -225,12 +217,21 @@ static void mask_outside(rs_image *img, const int region[4])
 // out_dir, runs povray, reads its images into imgs[0..Npasses-1]: NAME.png for a single pass
 // (rs_synth_scene_write, antialias as given), else the frames NAME1.png .. NAMEn.png
 // (rs_synth_scene_write_frames; no antialiasing, which would blend the IDs).
-static rs_status render_passes(rs_image *imgs, const char *out_dir, const char *name,
-                               const char *povray, const rs_synth_povcam *cam, const double fxy[2],
-                               const double ground_normal_enu[3], double ground_offset_m,
+static rs_status render_passes(rs_image *imgs,
+                               const char *out_dir,
+                               const char *name,
+                               const char *povray,
+                               const rs_synth_povcam *cam,
+                               const double fxy[2],
+                               const double ground_normal_enu[3],
+                               double ground_offset_m,
                                const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *passes, int Npasses, int antialias,
-                               const int region[4], double *seconds, rs_err *err)
+                               const rs_synth_scene_options *passes,
+                               int Npasses,
+                               int antialias,
+                               const int region[4],
+                               double *seconds,
+                               rs_err *err)
 {
     char file[64];
     char *pov = NULL, *ini = NULL;
@@ -244,25 +245,21 @@ static rs_status render_passes(rs_image *imgs, const char *out_dir, const char *
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if ((st = rs_io_atomic_open(&a, pov, err)))
-        goto done;
-    st = Npasses == 1 ? rs_synth_scene_write(a.f, cam, fxy, ground_normal_enu, ground_offset_m,
-                                             vehicles, &passes[0], err)
-                      : rs_synth_scene_write_frames(a.f, cam, fxy, ground_normal_enu,
-                                                    ground_offset_m, vehicles, passes, Npasses,
-                                                    err);
+    if ((st = rs_io_atomic_open(&a, pov, err))) goto done;
+    st = Npasses == 1
+             ? rs_synth_scene_write(a.f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &passes[0], err)
+             : rs_synth_scene_write_frames(a.f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, passes, Npasses,
+                                           err);
     if (st) {
         rs_io_atomic_abort(&a);
         goto done;
     }
     if ((st = rs_io_atomic_commit(&a, err)) ||
-        (st = Npasses == 1
-                  ? rs_synth_scene_write_ini(ini, pov, cam, passes[0].pass, antialias, err)
-                  : rs_synth_scene_write_ini_frames(ini, pov, cam, Npasses, 0, err)))
+        (st = Npasses == 1 ? rs_synth_scene_write_ini(ini, pov, cam, passes[0].pass, antialias, err)
+                           : rs_synth_scene_write_ini_frames(ini, pov, cam, Npasses, 0, err)))
         goto done;
     snprintf(file, sizeof(file), "%s.ini", name);
-    if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err)))
-        goto done;
+    if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err))) goto done;
     for (int k = 0; k < Npasses && !st; k++) {
         if (Npasses == 1)
             snprintf(file, sizeof(file), "%s.png", name);
@@ -275,8 +272,8 @@ static rs_status render_passes(rs_image *imgs, const char *out_dir, const char *
         }
         if ((st = rs_image_read(&imgs[k], png, err)) == RS_OK &&
             (imgs[k].width != cam->width || imgs[k].height != cam->height))
-            st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png,
-                            imgs[k].width, imgs[k].height, cam->width, cam->height);
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png, imgs[k].width,
+                            imgs[k].height, cam->width, cam->height);
         else if (!st)
             mask_outside(&imgs[k], region);
         free(png);
@@ -290,30 +287,32 @@ done:
 // Widens rect (x0, y0, x1, y1; empty when x1 < x0) by the canvas rectangle of vehicle v's
 // shadows: its bottom corners and its top corners projected onto the ground along each light
 // higher than 3 deg above the ground.
-static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int height,
-                             const double rt_cam_enu[6], const double corners[8][3],
-                             const double ground_normal_enu[3], double ground_offset_m,
-                             const rs_synth_light *lights, int Nlights)
+static void widen_by_shadows(int rect[4],
+                             const double fxycxy[4],
+                             int width,
+                             int height,
+                             const double rt_cam_enu[6],
+                             const double corners[8][3],
+                             const double ground_normal_enu[3],
+                             double ground_offset_m,
+                             const rs_synth_light *lights,
+                             int Nlights)
 {
     const double *g = ground_normal_enu;
     const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
     for (int j = 0; j < Nlights; j++) {
         const double *d = lights[j].dir_enu;
         const double nd = (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn;
-        if (!(nd > 0.05))
-            continue;
+        if (!(nd > 0.05)) continue;
         double pts[8][3];
         for (int k = 0; k < 4; k++) {
             memcpy(pts[k], corners[k], sizeof(pts[k]));
             const double *p = corners[4 + k];
             const double t = ((g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) / gn - ground_offset_m / gn) / nd;
-            for (int c = 0; c < 3; c++)
-                pts[4 + k][c] = p[c] - t * d[c];
+            for (int c = 0; c < 3; c++) pts[4 + k][c] = p[c] - t * d[c];
         }
         int r[4];
-        if (!rs_synth_vehicle_rect(r, fxycxy, width, height, rt_cam_enu,
-                                   (const double(*)[3])pts, 0.05))
-            continue;
+        if (!rs_synth_vehicle_rect(r, fxycxy, width, height, rt_cam_enu, (const double(*)[3])pts, 0.05)) continue;
         if (rect[2] < rect[0]) {
             memcpy(rect, r, sizeof(r));
             continue;
@@ -327,12 +326,10 @@ static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int
 
 // The shadow frame (canvas, RGBA, white ground) as the lit fraction: value / unlit, clamped to
 // [0, 1]; 1 where nothing was rendered (transparent).
-static rs_status shadow_fraction(rs_image *frac, const rs_image *pass, double unlit,
-                                 rs_err *err)
+static rs_status shadow_fraction(rs_image *frac, const rs_image *pass, double unlit, rs_err *err)
 {
     rs_status st = rs_image_alloc(frac, pass->width, pass->height, 1, err);
-    if (st)
-        return st;
+    if (st) return st;
     const size_t n = (size_t)pass->width * pass->height;
     for (size_t i = 0; i < n; i++) {
         const float *px = &pass->data[(size_t)pass->channels * i];
@@ -346,31 +343,26 @@ static rs_status shadow_fraction(rs_image *frac, const rs_image *pass, double un
 static void remove_intermediates(const char *out_dir)
 {
     static const char *const names[] = {
-        "pass_colour.pov", "pass_colour.ini", "pass_colour.png", "pass_ids.pov", "pass_ids.ini",
-        "pass_ids.png",    "pass_shadow.pov", "pass_shadow.ini", "pass_shadow.png",
-        "passes.pov",      "passes.ini",      "passes1.png",     "passes2.png",
-        "passes3.png",     ".povray/3.7/povray.conf", ".povray/3.7", ".povray", "povray.log"};
+        "pass_colour.pov", "pass_colour.ini", "pass_colour.png",         "pass_ids.pov", "pass_ids.ini", "pass_ids.png",
+        "pass_shadow.pov", "pass_shadow.ini", "pass_shadow.png",         "passes.pov",   "passes.ini",   "passes1.png",
+        "passes2.png",     "passes3.png",     ".povray/3.7/povray.conf", ".povray/3.7",  ".povray",      "povray.log"};
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
         char *p = rs_io_join(out_dir, names[i]);
-        if (p)
-            (void)remove(p); // a missing file, or a folder someone else used: left as it is
+        if (p) (void)remove(p); // a missing file, or a folder someone else used: left as it is
         free(p);
     }
 }
 
 // Resamples the canvas passes into the real lens: colour through premultiplied linear
 // interpolation, IDs nearest-neighbour.
-static rs_status to_lens(rs_image *rgba, rs_image *ids, const float *map, int width,
-                         int height, rs_err *err)
+static rs_status to_lens(rs_image *rgba, rs_image *ids, const float *map, int width, int height, rs_err *err)
 {
     const size_t Nc = (size_t)rgba->width * rgba->height;
     for (size_t i = 0; i < Nc; i++)
-        for (int k = 0; k < 3; k++)
-            rgba->data[4 * i + k] *= rgba->data[4 * i + 3];
+        for (int k = 0; k < 3; k++) rgba->data[4 * i + k] *= rgba->data[4 * i + 3];
     rs_image out_rgba = {0}, out_ids = {0};
     rs_status st = rs_synth_remap(&out_rgba, rgba, map, width, height, 1, err);
-    if (!st)
-        st = rs_synth_remap(&out_ids, ids, map, width, height, 0, err);
+    if (!st) st = rs_synth_remap(&out_ids, ids, map, width, height, 0, err);
     if (st) {
         rs_image_free(&out_rgba);
         return st;
@@ -378,8 +370,7 @@ static rs_status to_lens(rs_image *rgba, rs_image *ids, const float *map, int wi
     const size_t N = (size_t)width * height;
     for (size_t i = 0; i < N; i++) {
         const float a = out_rgba.data[4 * i + 3];
-        for (int k = 0; k < 3; k++)
-            out_rgba.data[4 * i + k] = a > 0 ? out_rgba.data[4 * i + k] / a : 0;
+        for (int k = 0; k < 3; k++) out_rgba.data[4 * i + k] = a > 0 ? out_rgba.data[4 * i + k] / a : 0;
     }
     rs_image_free(rgba);
     rs_image_free(ids);
@@ -406,50 +397,45 @@ static void composite(rs_synth_render_result *out, const rs_image *bg)
     for (size_t i = 0; i < Npx; i++) {
         const float *c = &out->rgba.data[4 * i];
         for (int k = 0; k < 3; k++) {
-            double b = bg ? rs_synth_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)])
-                          : 0;
-            if (out->shadow && out->ids[i] == 0)
-                b *= out->shadow[i];
-            out->composite.data[3 * i + k] =
-                (float)rs_synth_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
+            double b = bg ? rs_synth_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]) : 0;
+            if (out->shadow && out->ids[i] == 0) b *= out->shadow[i];
+            out->composite.data[3 * i + k] = (float)rs_synth_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
         }
     }
 }
 
-static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out,
-                               rs_err *err)
+static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out, rs_err *err)
 {
     rs_image ids = {0};
     rs_status st = rs_image_alloc(&ids, out->width, out->height, 1, err);
-    if (st)
-        return st;
+    if (st) return st;
     const size_t Npx = (size_t)out->width * out->height;
-    for (size_t i = 0; i < Npx; i++)
-        ids.data[i] = out->ids[i] / 65535.0f;
+    for (size_t i = 0; i < Npx; i++) ids.data[i] = out->ids[i] / 65535.0f;
     const char *names[3] = {"image.png", "rgba.png", "ids.png"};
     const rs_image *imgs[3] = {&out->composite, &out->rgba, &ids};
     const int bits[3] = {8, 16, 16};
     for (int k = 0; k < 3 && !st; k++) {
         char *p = rs_io_join(out_dir, names[k]);
-        st = p ? rs_image_write(p, imgs[k], bits[k], err)
-               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        st = p ? rs_image_write(p, imgs[k], bits[k], err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(p);
     }
     if (!st && out->shadow) {
-        const rs_image sh = {.width = out->width, .height = out->height, .channels = 1,
-                                   .data = out->shadow};
+        const rs_image sh = {.width = out->width, .height = out->height, .channels = 1, .data = out->shadow};
         char *p = rs_io_join(out_dir, "shadow.png");
-        st = p ? rs_image_write(p, &sh, 16, err)
-               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        st = p ? rs_image_write(p, &sh, 16, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(p);
     }
     rs_image_free(&ids);
     return st;
 }
 
-rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, const rs_camera *camera,
-                          const double ground_normal_enu[3], double ground_offset_m,
-                          const rs_synth_prepared *vehicles, const rs_synth_render_options *opt_in,
+rs_status rs_synth_render(rs_synth_render_result *out,
+                          const char *out_dir,
+                          const rs_camera *camera,
+                          const double ground_normal_enu[3],
+                          double ground_offset_m,
+                          const rs_synth_prepared *vehicles,
+                          const rs_synth_render_options *opt_in,
                           rs_err *err)
 {
     memset(out, 0, sizeof(*out));
@@ -462,8 +448,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
     else
         rs_synth_render_options_default(&opt);
     const char *povray = opt.povray ? opt.povray : getenv("ROADSIDE_POVRAY");
-    if (!povray || !*povray)
-        povray = "povray";
+    if (!povray || !*povray) povray = "povray";
     const int N = vehicles->N;
     rs_synth_canvas canvas;
     rs_synth_povcam cam;
@@ -476,16 +461,13 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
     else if ((st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
                                             opt.canvas_scale > 1 ? opt.canvas_scale : 1, err)))
         return st;
-    if ((st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
-                                   err)))
-        return st;
+    if ((st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, err))) return st;
     if (opt.background_path) {
-        if ((st = rs_image_read(&bg, opt.background_path, err)))
-            return st;
+        if ((st = rs_image_read(&bg, opt.background_path, err))) return st;
         if (bg.width != width || bg.height != height) {
             rs_image_free(&bg);
-            return rs_err_set(err, RS_ERR_INVALID, "%s: the background is %dx%d, the camera %dx%d",
-                              opt.background_path, bg.width, bg.height, width, height);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: the background is %dx%d, the camera %dx%d", opt.background_path,
+                              bg.width, bg.height, width, height);
         }
     }
     out->width = width;
@@ -498,8 +480,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if ((st = rs_image_alloc(&out->composite, width, height, 3, err)))
-        goto done;
+    if ((st = rs_image_alloc(&out->composite, width, height, 3, err))) goto done;
     // 1-2. Culling and the region
     rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
     const int Nlights = rs_synth_scene_lights(lights, &opt.scene);
@@ -507,19 +488,16 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
     for (int i = 0; i < N; i++) {
         double corners[8][3];
         int rect[4];
-        rs_synth_vehicle_corners_enu(corners, &vehicles->v[i], ground_normal_enu,
-                                     ground_offset_m);
-        const bool in = rs_synth_vehicle_rect(rect, canvas.fxycxy, canvas.width, canvas.height,
-                                              rt_cam_enu, corners, 0.05);
+        rs_synth_vehicle_corners_enu(corners, &vehicles->v[i], ground_normal_enu, ground_offset_m);
+        const bool in =
+            rs_synth_vehicle_rect(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, corners, 0.05);
         include[i] = opt.full_frame || in;
         out->visible[i] = include[i];
-        if (!in)
-            continue;
+        if (!in) continue;
         out->Nrendered++;
         if (opt.shadow)
-            widen_by_shadows(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu,
-                             (const double(*)[3])corners, ground_normal_enu, ground_offset_m,
-                             lights, Nlights);
+            widen_by_shadows(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, (const double(*)[3])corners,
+                             ground_normal_enu, ground_offset_m, lights, Nlights);
         region[0] = rect[0] < region[0] ? rect[0] : region[0];
         region[1] = rect[1] < region[1] ? rect[1] : region[1];
         region[2] = rect[2] > region[2] ? rect[2] : region[2];
@@ -533,18 +511,14 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         region[2] = canvas.width - 1;
         region[3] = canvas.height - 1;
     }
-    if (opt.full_frame)
-        out->Nrendered = N;
+    if (opt.full_frame) out->Nrendered = N;
     const bool run = out->Nrendered > 0 || opt.scene.Npins > 0 || ground_drawn;
     if (!run) {
-        for (int k = 0; k < 4; k++)
-            out->region[k] = -1;
-        if ((st = rs_image_alloc(&out->rgba, width, height, 4, err)))
-            goto done;
+        for (int k = 0; k < 4; k++) out->region[k] = -1;
+        if ((st = rs_image_alloc(&out->rgba, width, height, 4, err))) goto done;
     } else {
         memcpy(out->region, region, sizeof(region));
-        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_povray_conf(out_dir, err)))
-            goto done;
+        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_povray_conf(out_dir, err))) goto done;
         // The passes: colour; ID and shadow when vehicles are rendered.
         rs_synth_scene_options passes[3];
         int Npasses = 0, i_id = -1, i_shadow = -1;
@@ -571,49 +545,39 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         // separate or antialiased (then the colour pass alone first).
         static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
         for (int first = 0; first < Npasses && !st; out->Npovray++) {
-            const int count = opt.separate_processes || (first == 0 && colour_alone)
-                                  ? 1 : Npasses - first;
-            st = render_passes(&imgs[first], out_dir,
-                               count == 1 ? names[passes[first].pass] : "passes", povray, &cam,
-                               intrinsics, ground_normal_enu, ground_offset_m, vehicles,
-                               &passes[first], count, first == 0 ? opt.antialias : 0, region,
-                               &out->seconds_povray, err);
+            const int count = opt.separate_processes || (first == 0 && colour_alone) ? 1 : Npasses - first;
+            st = render_passes(&imgs[first], out_dir, count == 1 ? names[passes[first].pass] : "passes", povray, &cam,
+                               intrinsics, ground_normal_enu, ground_offset_m, vehicles, &passes[first], count,
+                               first == 0 ? opt.antialias : 0, region, &out->seconds_povray, err);
             first += count;
         }
         out->Npasses = Npasses;
         rgba = imgs[0];
-        if (i_id >= 0)
-            idimg = imgs[1];
+        if (i_id >= 0) idimg = imgs[1];
         rs_image frac = {0};
         if (!st && i_shadow >= 0)
             st = shadow_fraction(&frac, &imgs[i_shadow],
-                                 rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu),
-                                 err);
-        if (i_shadow >= 0)
-            rs_image_free(&imgs[i_shadow]);
+                                 rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu), err);
+        if (i_shadow >= 0) rs_image_free(&imgs[i_shadow]);
         if (st) {
             rs_image_free(&frac);
             goto done;
         }
-        if (i_id < 0 && (st = rs_image_alloc(&idimg, canvas.width, canvas.height, 3, err)))
-            goto done;
+        if (i_id < 0 && (st = rs_image_alloc(&idimg, canvas.width, canvas.height, 3, err))) goto done;
         // 3. Into the real lens
         if (!canvas.identity) {
-            if ((!opt.canvas_map && (st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics,
-                                                              width, height, err))) ||
-                (st = to_lens(&rgba, &idimg, opt.canvas_map ? opt.canvas_map : map, width,
-                              height, err))) {
+            if ((!opt.canvas_map &&
+                 (st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics, width, height, err))) ||
+                (st = to_lens(&rgba, &idimg, opt.canvas_map ? opt.canvas_map : map, width, height, err))) {
                 rs_image_free(&frac);
                 goto done;
             }
             if (frac.data) {
                 rs_image lens = {0};
-                st = rs_synth_remap(&lens, &frac, opt.canvas_map ? opt.canvas_map : map, width,
-                                    height, 1, err);
+                st = rs_synth_remap(&lens, &frac, opt.canvas_map ? opt.canvas_map : map, width, height, 1, err);
                 rs_image_free(&frac);
                 frac = lens;
-                if (st)
-                    goto done;
+                if (st) goto done;
             }
         }
         out->shadow = frac.data; // owned by out now
@@ -623,26 +587,27 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
     }
     // 4. Composite
     composite(out, opt.background_path ? &bg : NULL);
-    if (opt.write_files &&
-        ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err))))
-        goto done;
+    if (opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
 done:
-    if (!opt.keep_files)
-        remove_intermediates(out_dir);
+    if (!opt.keep_files) remove_intermediates(out_dir);
     rs_image_free(&bg);
     rs_image_free(&rgba);
     rs_image_free(&idimg);
     free(include);
     free(map);
-    if (st)
-        rs_synth_render_result_free(out);
+    if (st) rs_synth_render_result_free(out);
     return st;
 }
 
-rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_render_result *r, const char *split,
-                                       const rs_synth_label_options *lopt, const rs_camera *cam,
-                                       const double ground_normal_enu[3], double ground_offset_m,
-                                       const rs_synth_prepared *prepared, rs_err *err)
+rs_status rs_synth_render_write_labels(const char *out_dir,
+                                       const rs_synth_render_result *r,
+                                       const char *split,
+                                       const rs_synth_label_options *lopt,
+                                       const rs_camera *cam,
+                                       const double ground_normal_enu[3],
+                                       double ground_offset_m,
+                                       const rs_synth_prepared *prepared,
+                                       rs_err *err)
 {
     const int N = prepared->N;
     const size_t n = (size_t)(N > 0 ? N : 1);
@@ -662,11 +627,12 @@ rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_rende
         meshes[i] = prepared->meshes[prepared->imesh[i]]; // shallow: borrowed arrays
         ids[i] = v->id ? v->id : "";
     }
-    if ((st = rs_synth_labels_compute(&labels, cam, prepared->v, up, N, meshes, r->ids,
-                                      err)))
-        goto done;
-    const rs_synth_label_image img = {.file_name = "image.png", .width = r->width,
-                                      .height = r->height, .labels = labels, .Nlabels = N,
+    if ((st = rs_synth_labels_compute(&labels, cam, prepared->v, up, N, meshes, r->ids, err))) goto done;
+    const rs_synth_label_image img = {.file_name = "image.png",
+                                      .width = r->width,
+                                      .height = r->height,
+                                      .labels = labels,
+                                      .Nlabels = N,
                                       .vehicle_ids = ids};
     if ((st = rs_synth_labels_write_coco(out_dir, split, &img, 1, lopt, err)) ||
         (st = rs_synth_labels_write_yolo(out_dir, split, &img, 1, lopt, err)) ||
@@ -674,8 +640,7 @@ rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_rende
         goto done;
     folder = rs_io_join(out_dir, split);
     image = folder ? rs_io_join(folder, "image.png") : NULL;
-    st = image ? rs_image_write(image, &r->composite, 8, err)
-               : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = image ? rs_image_write(image, &r->composite, 8, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
 done:
     free(up);
     free(meshes);

@@ -47,22 +47,22 @@ extern "C" {
 #endif
 
 typedef struct {
-    const char *povray;          // executable; NULL: $ROADSIDE_POVRAY, else "povray" on PATH
-    const char *background_path; // image of the camera's size to composite onto; may be NULL
-    bool full_frame;             // no culling, no region: render the whole canvas (benchmarks)
-    bool keep_files;             // keep the .pov/.ini/.png intermediates in the output folder
-    int antialias;               // 0: none; n >= 2: +A0 +AM1 +R(n) on the colour pass only
-    double canvas_scale;         // distorted lenses: canvas pixels per core pixel (default 1)
+    const char *povray;            // executable; NULL: $ROADSIDE_POVRAY, else "povray" on PATH
+    const char *background_path;   // image of the camera's size to composite onto; may be NULL
+    bool full_frame;               // no culling, no region: render the whole canvas (benchmarks)
+    bool keep_files;               // keep the .pov/.ini/.png intermediates in the output folder
+    int antialias;                 // 0: none; n >= 2: +A0 +AM1 +R(n) on the colour pass only
+    double canvas_scale;           // distorted lenses: canvas pixels per core pixel (default 1)
     const rs_synth_canvas *canvas; // precomputed for this lens, size and canvas_scale
     const float *canvas_map;       //   (rs_synth_canvas_for_lens, rs_synth_canvas_map; both
                                    //   borrowed): a caller rendering many images of one camera
                                    //   computes them once; NULL: computed here
-    bool shadow;                 // also the shadow pass (rs_synth_scene.h): out->shadow
-    bool write_files;            // write image.png, rgba.png, ids.png (default true)
-    bool separate_processes;     // one povray process per pass (default false: the passes
-                                 // are frames of one process; antialias forces the colour
-                                 // pass into a process of its own)
-    rs_synth_scene_options scene; // sun, pins, ground (pass and include are set per pass)
+    bool shadow;                   // also the shadow pass (rs_synth_scene.h): out->shadow
+    bool write_files;              // write image.png, rgba.png, ids.png (default true)
+    bool separate_processes;       // one povray process per pass (default false: the passes
+                                   // are frames of one process; antialias forces the colour
+                                   // pass into a process of its own)
+    rs_synth_scene_options scene;  // sun, pins, ground (pass and include are set per pass)
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);
@@ -70,19 +70,19 @@ void rs_synth_render_options_default(rs_synth_render_options *opt);
 // A rendered view. Images are in the real camera's size.
 typedef struct {
     int width, height;
-    rs_image rgba;     // (H, W, 4): the colour pass, linear light, straight alpha
-    rs_image composite;// (H, W, 3) sRGB-encoded [0,1]: over the background (or black)
-    uint16_t *ids;           // (H, W) owned: 0 = background, k+1 = vehicle k
-    uint8_t *visible;        // (Nvehicles,) owned: 1 = survived culling (may still be hidden)
+    rs_image rgba;      // (H, W, 4): the colour pass, linear light, straight alpha
+    rs_image composite; // (H, W, 3) sRGB-encoded [0,1]: over the background (or black)
+    uint16_t *ids;      // (H, W) owned: 0 = background, k+1 = vehicle k
+    uint8_t *visible;   // (Nvehicles,) owned: 1 = survived culling (may still be hidden)
     int Nvehicles;
-    int Nrendered;           // vehicles sent to povray (0: povray was not run)
-    int region[4];           // canvas rectangle rendered: x0, y0, x1, y1 inclusive (pixels);
-                             // all -1 when nothing was rendered
-    float *shadow;           // (H, W) owned, when the shadow pass ran (else NULL): the fraction
-                             // of the ground's light reaching each pixel, 1 in the open
-    double seconds_povray;   // wall time spent in povray (every pass)
-    int Npovray;             // povray processes run
-    int Npasses;             // passes rendered
+    int Nrendered;         // vehicles sent to povray (0: povray was not run)
+    int region[4];         // canvas rectangle rendered: x0, y0, x1, y1 inclusive (pixels);
+                           // all -1 when nothing was rendered
+    float *shadow;         // (H, W) owned, when the shadow pass ran (else NULL): the fraction
+                           // of the ground's light reaching each pixel, 1 in the open
+    double seconds_povray; // wall time spent in povray (every pass)
+    int Npovray;           // povray processes run
+    int Npasses;           // passes rendered
 } rs_synth_render_result;
 
 void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroes *r
@@ -102,39 +102,50 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 // unset; its output is appended to dir/povray.log. seconds (may be NULL) accumulates the wall
 // time. Errors: RS_ERR_EXTERNAL "cannot run" when the program is missing (exit 127), else the
 // exit status and the log's last line.
-rs_status rs_synth_povray_run(const char *povray, const char *dir,
-                              const char *const *args, int Nargs, // (Nargs,) at most 30
-                              double *seconds,                    // may be NULL
+rs_status rs_synth_povray_run(const char *povray,
+                              const char *dir,
+                              const char *const *args,
+                              int Nargs,       // (Nargs,) at most 30
+                              double *seconds, // may be NULL
                               rs_err *err);
 
-rs_status rs_synth_render(// out
-                          rs_synth_render_result *out,
-                          // in
-                          const char *out_dir,
-                          const rs_camera *camera, // calibrated: lens, intrinsics, size, pose
-                          const double ground_normal_enu[3],
-                          double ground_offset_m, const rs_synth_prepared *vehicles,
-                          const rs_synth_render_options *opt, rs_err *err);
+rs_status rs_synth_render( // out
+    rs_synth_render_result *out,
+    // in
+    const char *out_dir,
+    const rs_camera *camera, // calibrated: lens, intrinsics, size, pose
+    const double ground_normal_enu[3],
+    double ground_offset_m,
+    const rs_synth_prepared *vehicles,
+    const rs_synth_render_options *opt,
+    rs_err *err);
 
 // The canvas rectangle (x0, y0, x1, y1 inclusive, clipped to the canvas) covered by vehicle v's
 // bounding box clipped to z_cam >= near_m; returns false if it misses the canvas or lies behind.
-bool rs_synth_vehicle_rect(// out
-                           int rect[4],
-                           // in
-                           const double fxycxy[4],
-                           int width, int height, const double rt_cam_enu[6],
-                           const double corners_enu_m[8][3], double near_m);
+bool rs_synth_vehicle_rect( // out
+    int rect[4],
+    // in
+    const double fxycxy[4],
+    int width,
+    int height,
+    const double rt_cam_enu[6],
+    const double corners_enu_m[8][3],
+    double near_m);
 
 // The labels of a rendered image (synth/rs_synth_labels.h): every prepared vehicle's label
 // computed through `cam` with its visibility from r->ids, written as COCO and YOLO under
 // out_dir/<split> and KITTI under out_dir, and the composite copied to
 // out_dir/<split>/image.png. Each file is written atomically. `roadside render --labels`.
-rs_status rs_synth_render_write_labels(// in
-                                       const char *out_dir, const rs_synth_render_result *r,
-                                       const char *split, const rs_synth_label_options *lopt,
-                                       const rs_camera *cam, const double ground_normal_enu[3],
-                                       double ground_offset_m, const rs_synth_prepared *prepared,
-                                       rs_err *err);
+rs_status rs_synth_render_write_labels( // in
+    const char *out_dir,
+    const rs_synth_render_result *r,
+    const char *split,
+    const rs_synth_label_options *lopt,
+    const rs_camera *cam,
+    const double ground_normal_enu[3],
+    double ground_offset_m,
+    const rs_synth_prepared *prepared,
+    rs_err *err);
 
 #ifdef __cplusplus
 }

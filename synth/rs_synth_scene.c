@@ -20,9 +20,7 @@ static void sanitise(char *out, size_t n, const char *s)
     size_t k = 0;
     for (; s && *s && k + 1 < n; s++) {
         const unsigned char c = (unsigned char)*s;
-        out[k++] = (isalnum(c) || c == ' ' || c == '_' || c == '.' || c == ':' || c == '-')
-                       ? (char)c
-                       : '_';
+        out[k++] = (isalnum(c) || c == ' ' || c == '_' || c == '.' || c == ':' || c == '-') ? (char)c : '_';
     }
     out[k] = 0;
 }
@@ -32,22 +30,18 @@ static void sanitise(char *out, size_t n, const char *s)
 static char *list_keep(rs_synth_vehicle_list *list, const char *s)
 {
     char **grown = realloc(list->strings, (size_t)(list->Nstrings + 1) * sizeof(char *));
-    if (!grown)
-        return NULL;
+    if (!grown) return NULL;
     list->strings = grown;
     char *copy = strdup(s);
-    if (!copy)
-        return NULL;
+    if (!copy) return NULL;
     list->strings[list->Nstrings++] = copy;
     return copy;
 }
 
 void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list)
 {
-    if (!list)
-        return;
-    for (int i = 0; i < list->Nstrings; i++)
-        free(list->strings[i]);
+    if (!list) return;
+    for (int i = 0; i < list->Nstrings; i++) free(list->strings[i]);
     free(list->strings);
     free(list->v);
     free(list->obj);
@@ -55,13 +49,12 @@ void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list)
 }
 
 // Reads number member `name` of o into *out. Missing: *out untouched and RS_OK unless required.
-static rs_status get_number(double *out, const cJSON *o, const char *name, bool required,
-                            const char *path, int i, rs_err *err)
+static rs_status
+get_number(double *out, const cJSON *o, const char *name, bool required, const char *path, int i, rs_err *err)
 {
     const cJSON *m = cJSON_GetObjectItemCaseSensitive(o, name);
     if (!m) {
-        if (required)
-            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: missing", path, i, name);
+        if (required) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: missing", path, i, name);
         return RS_OK;
     }
     if (!cJSON_IsNumber(m) || !isfinite(m->valuedouble))
@@ -76,10 +69,7 @@ static const char *get_string(const cJSON *o, const char *name)
     return cJSON_IsString(m) ? m->valuestring : NULL;
 }
 
-static double srgb_to_linear(double c)
-{
-    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
-}
+static double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
 
 static rs_status parse_colour(double rgb[3], const cJSON *m, const char *path, int i, rs_err *err)
 {
@@ -96,33 +86,32 @@ static rs_status parse_colour(double rgb[3], const cJSON *m, const char *path, i
     } else if (cJSON_IsArray(m) && cJSON_GetArraySize(m) == 3) {
         for (int k = 0; k < 3; k++) {
             const cJSON *c = cJSON_GetArrayItem(m, k);
-            if (!cJSON_IsNumber(c) || !(c->valuedouble >= 0 && c->valuedouble <= 1))
-                goto bad;
+            if (!cJSON_IsNumber(c) || !(c->valuedouble >= 0 && c->valuedouble <= 1)) goto bad;
             rgb[k] = c->valuedouble;
         }
         return RS_OK;
     }
 bad:
-    return rs_err_set(err, RS_ERR_INVALID,
-                      "%s: [%d].colour: expected [r, g, b] in [0,1] (linear) or \"#rrggbb\"", path,
+    return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].colour: expected [r, g, b] in [0,1] (linear) or \"#rrggbb\"", path,
                       i);
 }
 
-static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o,
-                              const char *path, const char *dir, rs_err *err)
+static rs_status
+read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir, rs_err *err)
 {
     rs_synth_vehicle *v = &list->v[i];
     rs_synth_obj_spec *obj = &list->obj[i];
     rs_status st;
-    if (!cJSON_IsObject(o))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object", path, i);
+    if (!cJSON_IsObject(o)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object", path, i);
     memset(v, 0, sizeof(*v));
     v->rgb[0] = v->rgb[1] = v->rgb[2] = -1;
     v->variant = (uint64_t)i;
     const char *cls = get_string(o, "class"), *model = get_string(o, "model");
     if (!!cls == !!model)
-        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: give exactly one of \"class\" (a "
-                          "string) and \"model\" (an OBJ path)", path, i);
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "%s: [%d]: give exactly one of \"class\" (a "
+                          "string) and \"model\" (an OBJ path)",
+                          path, i);
     if (cls) {
         rs_err e2 = {0};
         rs_synth_class c;
@@ -132,21 +121,17 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
     } else {
         v->cls = RS_SYNTH_USER_MODEL;
         char *joined = rs_io_join(dir, model);
-        if (!joined)
-            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!joined) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         v->model_path = list_keep(list, joined);
         free(joined);
-        if (!v->model_path)
-            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!v->model_path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         obj->path = v->model_path;
         obj->scale = 1;
-        if ((st = get_number(&obj->scale, o, "scale", false, path, i, err)))
-            return st;
+        if ((st = get_number(&obj->scale, o, "scale", false, path, i, err))) return st;
         const char *fwd = get_string(o, "forward"), *up = get_string(o, "up");
         obj->forward = list_keep(list, fwd ? fwd : "+x");
         obj->up = list_keep(list, up ? up : "+z");
-        if (!obj->forward || !obj->up)
-            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!obj->forward || !obj->up) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     }
     if ((st = get_number(&v->e_m, o, "e", true, path, i, err)) ||
         (st = get_number(&v->n_m, o, "n", true, path, i, err)) ||
@@ -161,23 +146,18 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
         if (cJSON_GetObjectItemCaseSensitive(o, dims[k]) && !(dval[k] > 0))
             return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: must be > 0", path, i, dims[k]);
     const cJSON *colour = cJSON_GetObjectItemCaseSensitive(o, "colour");
-    if (colour && (st = parse_colour(v->rgb, colour, path, i, err)))
-        return st;
+    if (colour && (st = parse_colour(v->rgb, colour, path, i, err))) return st;
     const cJSON *variant = cJSON_GetObjectItemCaseSensitive(o, "variant");
     if (variant) {
-        if (!cJSON_IsNumber(variant) || !(variant->valuedouble >= 0) ||
-            variant->valuedouble > 9007199254740992.0 ||
+        if (!cJSON_IsNumber(variant) || !(variant->valuedouble >= 0) || variant->valuedouble > 9007199254740992.0 ||
             variant->valuedouble != floor(variant->valuedouble))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].variant: expected an integer >= 0",
-                              path, i);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].variant: expected an integer >= 0", path, i);
         v->variant = (uint64_t)variant->valuedouble;
     }
     const cJSON *id = cJSON_GetObjectItemCaseSensitive(o, "id");
     if (id) {
-        if (!cJSON_IsString(id))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].id: expected a string", path, i);
-        if (!(v->id = list_keep(list, id->valuestring)))
-            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!cJSON_IsString(id)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].id: expected a string", path, i);
+        if (!(v->id = list_keep(list, id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     }
     return RS_OK;
 }
@@ -188,15 +168,13 @@ rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, 
     char *text = NULL, *dir = NULL;
     cJSON *root = NULL;
     rs_status st = rs_io_read_file(&text, NULL, path, err);
-    if (st)
-        return st;
+    if (st) return st;
     root = cJSON_Parse(text);
     if (!root) {
         // cJSON points at the failure: count lines up to there
         const char *at = cJSON_GetErrorPtr();
         int line = 1;
-        for (const char *c = text; at && c < at && *c; c++)
-            line += *c == '\n';
+        for (const char *c = text; at && c < at && *c; c++) line += *c == '\n';
         st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: not valid JSON", path, line);
         goto done;
     }
@@ -221,8 +199,7 @@ rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, 
     const cJSON *o;
     cJSON_ArrayForEach(o, root)
     {
-        if ((st = read_vehicle(list, i, o, path, dir, err)))
-            goto done;
+        if ((st = read_vehicle(list, i, o, path, dir, err))) goto done;
         i++;
     }
     list->N = N;
@@ -230,27 +207,26 @@ done:
     cJSON_Delete(root);
     free(text);
     free(dir);
-    if (st)
-        rs_synth_vehicle_list_free(list);
+    if (st) rs_synth_vehicle_list_free(list);
     return st;
 }
 
 // ---- the vehicle box and the ground ----
 
-double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_offset_m, double e_m,
-                            double n_m)
+double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_offset_m, double e_m, double n_m)
 {
-    return (ground_offset_m - ground_normal_enu[0] * e_m - ground_normal_enu[1] * n_m) /
-           ground_normal_enu[2];
+    return (ground_offset_m - ground_normal_enu[0] * e_m - ground_normal_enu[1] * n_m) / ground_normal_enu[2];
 }
 
-void rs_synth_vehicle_corners_enu(double corners_enu_m[8][3], const rs_synth_vehicle *v,
-                                  const double ground_normal_enu[3], double ground_offset_m)
+void rs_synth_vehicle_corners_enu(double corners_enu_m[8][3],
+                                  const rs_synth_vehicle *v,
+                                  const double ground_normal_enu[3],
+                                  double ground_offset_m)
 {
     const double up = rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, v->e_m, v->n_m);
     for (int k = 0; k < 8; k++) {
-        const double p_v[3] = {(k & 1 ? 0.5 : -0.5) * v->length_m,
-                               (k & 2 ? 0.5 : -0.5) * v->width_m, (k & 4) ? v->height_m : 0};
+        const double p_v[3] = {(k & 1 ? 0.5 : -0.5) * v->length_m, (k & 2 ? 0.5 : -0.5) * v->width_m,
+                               (k & 4) ? v->height_m : 0};
         rs_synth_vehicle_to_enu(corners_enu_m[k], v, up, p_v);
     }
 }
@@ -268,19 +244,16 @@ static long days_from_civil(long y, unsigned m, unsigned d)
     return era * 146097 + (long)doe - 719468;
 }
 
-rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char *field,
-                                 rs_err *err)
+rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char *field, rs_err *err)
 {
     int Y, Mo, D, h, mi, n = 0;
     double sec = 0;
-    if (sscanf(s, "%4d-%2d-%2dT%2d:%2d%n", &Y, &Mo, &D, &h, &mi, &n) != 5 || n != 16)
-        goto bad;
+    if (sscanf(s, "%4d-%2d-%2dT%2d:%2d%n", &Y, &Mo, &D, &h, &mi, &n) != 5 || n != 16) goto bad;
     const char *p = s + n;
     if (*p == ':') {
         char *end;
         sec = strtod(p + 1, &end);
-        if (end == p + 1 || !(sec >= 0 && sec < 61))
-            goto bad;
+        if (end == p + 1 || !(sec >= 0 && sec < 61)) goto bad;
         p = end;
     }
     double zone_s;
@@ -289,16 +262,13 @@ rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char 
     } else if ((*p == '+' || *p == '-') && strlen(p) == 6 && p[3] == ':' && isdigit((unsigned char)p[1]) &&
                isdigit((unsigned char)p[2]) && isdigit((unsigned char)p[4]) && isdigit((unsigned char)p[5])) {
         const int zh = (p[1] - '0') * 10 + (p[2] - '0'), zm = (p[4] - '0') * 10 + (p[5] - '0');
-        if (zh > 14 || zm > 59)
-            goto bad;
+        if (zh > 14 || zm > 59) goto bad;
         zone_s = (*p == '+' ? 1 : -1) * (zh * 3600.0 + zm * 60.0);
     } else {
         goto bad;
     }
-    if (Mo < 1 || Mo > 12 || D < 1 || D > 31 || h > 23 || mi > 59 || h < 0 || mi < 0)
-        goto bad;
-    *unix_time_s = days_from_civil(Y, (unsigned)Mo, (unsigned)D) * 86400.0 + h * 3600.0 +
-                   mi * 60.0 + sec - zone_s;
+    if (Mo < 1 || Mo > 12 || D < 1 || D > 31 || h > 23 || mi > 59 || h < 0 || mi < 0) goto bad;
+    *unix_time_s = days_from_civil(Y, (unsigned)Mo, (unsigned)D) * 86400.0 + h * 3600.0 + mi * 60.0 + sec - zone_s;
     return RS_OK;
 bad:;
     char shown[64];
@@ -313,10 +283,8 @@ bad:;
 
 void rs_synth_prepared_free(rs_synth_prepared *p)
 {
-    if (!p)
-        return;
-    for (int i = 0; i < p->Nmeshes; i++)
-        rs_synth_mesh_free(&p->meshes[i]);
+    if (!p) return;
+    for (int i = 0; i < p->Nmeshes; i++) rs_synth_mesh_free(&p->meshes[i]);
     free(p->meshes);
     free(p->v);
     free(p->imesh);
@@ -325,38 +293,37 @@ void rs_synth_prepared_free(rs_synth_prepared *p)
 
 static bool same_spec(const rs_synth_obj_spec *a, const rs_synth_obj_spec *b)
 {
-    return strcmp(a->path, b->path) == 0 && a->scale == b->scale &&
-           strcmp(a->forward, b->forward) == 0 && strcmp(a->up, b->up) == 0;
+    return strcmp(a->path, b->path) == 0 && a->scale == b->scale && strcmp(a->forward, b->forward) == 0 &&
+           strcmp(a->up, b->up) == 0;
 }
 
 // Resolves vehicle i and gives it a mesh: its own procedural one, or the first identical user
 // model's.
-static rs_status prepare_one(rs_synth_prepared *out, int i, const rs_synth_vehicle *vehicles,
-                             const rs_synth_obj_spec *obj, bool coarse, rs_err *err)
+static rs_status prepare_one(rs_synth_prepared *out,
+                             int i,
+                             const rs_synth_vehicle *vehicles,
+                             const rs_synth_obj_spec *obj,
+                             bool coarse,
+                             rs_err *err)
 {
     const rs_synth_vehicle *in = &vehicles[i];
     rs_synth_vehicle *v = &out->v[i];
     rs_status st = rs_synth_fleet_resolve(v, in, err);
-    if (st)
-        return st;
+    if (st) return st;
     if (in->cls != RS_SYNTH_USER_MODEL) {
         out->imesh[i] = out->Nmeshes;
         st = rs_synth_fleet_build_lod(&out->meshes[out->Nmeshes], v, coarse, err);
-        if (st == RS_OK)
-            out->Nmeshes++;
+        if (st == RS_OK) out->Nmeshes++;
         return st;
     }
-    if (!obj || !obj[i].path)
-        return rs_err_set(err, RS_ERR_INVALID, "a user model without an OBJ specification");
+    if (!obj || !obj[i].path) return rs_err_set(err, RS_ERR_INVALID, "a user model without an OBJ specification");
     int j = 0;
-    while (j < i && !(vehicles[j].cls == RS_SYNTH_USER_MODEL && same_spec(&obj[j], &obj[i])))
-        j++;
+    while (j < i && !(vehicles[j].cls == RS_SYNTH_USER_MODEL && same_spec(&obj[j], &obj[i]))) j++;
     if (j < i) {
         out->imesh[i] = out->imesh[j];
     } else {
         out->imesh[i] = out->Nmeshes;
-        if ((st = rs_synth_obj_load(&out->meshes[out->Nmeshes], &obj[i], err)))
-            return st;
+        if ((st = rs_synth_obj_load(&out->meshes[out->Nmeshes], &obj[i], err))) return st;
         out->Nmeshes++;
     }
     // The model's box is its mesh's (footprint centred at the origin, lowest point at z = 0).
@@ -368,14 +335,17 @@ static rs_status prepare_one(rs_synth_prepared *out, int i, const rs_synth_vehic
     return RS_OK;
 }
 
-rs_status rs_synth_prepare(rs_synth_prepared *out, const rs_synth_vehicle *vehicles,
-                           const rs_synth_obj_spec *obj, int N, rs_err *err)
+rs_status rs_synth_prepare(
+    rs_synth_prepared *out, const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N, rs_err *err)
 {
     return rs_synth_prepare_lod(out, vehicles, obj, N, NULL, err);
 }
 
-rs_status rs_synth_prepare_lod(rs_synth_prepared *out, const rs_synth_vehicle *vehicles,
-                               const rs_synth_obj_spec *obj, int N, const uint8_t *coarse,
+rs_status rs_synth_prepare_lod(rs_synth_prepared *out,
+                               const rs_synth_vehicle *vehicles,
+                               const rs_synth_obj_spec *obj,
+                               int N,
+                               const uint8_t *coarse,
                                rs_err *err)
 {
     memset(out, 0, sizeof(*out));
@@ -423,35 +393,32 @@ static void write_vec_enu(FILE *f, const double p_enu[3])
 // The flat emissive texture of ID value `id` (1..65535): R + 256 G in 8-bit units.
 static void write_id_texture(FILE *f, unsigned id)
 {
-    fprintf(f, "texture { pigment { rgb <%u/255, %u/255, 0> } finish { emission 1 ambient 0 "
-               "diffuse 0 specular 0 } }",
+    fprintf(f,
+            "texture { pigment { rgb <%u/255, %u/255, 0> } finish { emission 1 ambient 0 "
+            "diffuse 0 specular 0 } }",
             id & 255u, (id >> 8) & 255u);
 }
 
-static void write_pins(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
-                       const rs_synth_scene_options *opt)
+static void write_pins(FILE *f, const rs_synth_povcam *cam, const double fxy[2], const rs_synth_scene_options *opt)
 {
     // Unit optical axis (POV-Ray world) from direction, right and up: the normal of the image
     // plane is orthogonal to right and up.
     const double *r = cam->right, *u = cam->up;
-    double z[3] = {r[1] * u[2] - r[2] * u[1], r[2] * u[0] - r[0] * u[2],
-                   r[0] * u[1] - r[1] * u[0]};
+    double z[3] = {r[1] * u[2] - r[2] * u[1], r[2] * u[0] - r[0] * u[2], r[0] * u[1] - r[1] * u[0]};
     double zn = sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2]);
     const double *d = cam->direction;
-    if (z[0] * d[0] + z[1] * d[1] + z[2] * d[2] < 0)
-        zn = -zn;
-    for (int k = 0; k < 3; k++)
-        z[k] /= zn;
+    if (z[0] * d[0] + z[1] * d[1] + z[2] * d[2] < 0) zn = -zn;
+    for (int k = 0; k < 3; k++) z[k] /= zn;
     const double f_px = sqrt(fxy[0] * fxy[1]);
     for (int i = 0; i < opt->Npins; i++) {
         double p[3];
         rs_synth_enu_to_pov(p, &opt->pins_enu_m[3 * i]);
-        const double depth = (p[0] - cam->location[0]) * z[0] + (p[1] - cam->location[1]) * z[1] +
-                             (p[2] - cam->location[2]) * z[2];
-        if (!(depth > 0))
-            continue; // behind the camera
-        fprintf(f, "sphere { <%.17g, %.17g, %.17g>, %.9g\n  texture { pigment { rgb 1 } finish { "
-                   "emission 1 ambient 0 diffuse 0 specular 0 } } no_shadow }\n",
+        const double depth =
+            (p[0] - cam->location[0]) * z[0] + (p[1] - cam->location[1]) * z[1] + (p[2] - cam->location[2]) * z[2];
+        if (!(depth > 0)) continue; // behind the camera
+        fprintf(f,
+                "sphere { <%.17g, %.17g, %.17g>, %.9g\n  texture { pigment { rgb 1 } finish { "
+                "emission 1 ambient 0 diffuse 0 specular 0 } } no_shadow }\n",
                 p[0], p[1], p[2], opt->pin_radius_px * depth / f_px);
     }
 }
@@ -472,14 +439,13 @@ int rs_synth_scene_lights(rs_synth_light *lights, const rs_synth_scene_options *
     for (int b = 0; b < 2; b++)
         for (int k = 0; k < count[b]; k++) {
             const double z = zenith_deg[b] * d2r, az = 60.0 * k * d2r;
-            lights[n++] = (rs_synth_light){{sin(az) * sin(z), cos(az) * sin(z), cos(z)},
-                                           sky * share[b] / count[b] / cos(z)};
+            lights[n++] =
+                (rs_synth_light){{sin(az) * sin(z), cos(az) * sin(z), cos(z)}, sky * share[b] / count[b] / cos(z)};
         }
     return n;
 }
 
-double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights,
-                                   const double ground_normal_enu[3])
+double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights, const double ground_normal_enu[3])
 {
     const double *g = ground_normal_enu;
     const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
@@ -494,10 +460,11 @@ double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights,
 
 static void write_head(FILE *f, const char *what)
 {
-    fprintf(f, "// Written by roadside (%s). POV-Ray world <x, y, z> = <east, up, north>,\n"
-               "// metres (docs/conventions.md, docs/povray.md). Self-contained: no include files.\n"
-               "#version 3.7;\n"
-               "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
+    fprintf(f,
+            "// Written by roadside (%s). POV-Ray world <x, y, z> = <east, up, north>,\n"
+            "// metres (docs/conventions.md, docs/povray.md). Self-contained: no include files.\n"
+            "#version 3.7;\n"
+            "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
             what);
 }
 
@@ -507,45 +474,49 @@ static const char *pass_name(rs_synth_pass pass)
 }
 
 // Everything of one pass after the head: camera, lights, ground, meshes, vehicles, pins.
-static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
-                            const double ground_normal_enu[3], double ground_offset_m,
-                            const rs_synth_prepared *vehicles, const rs_synth_scene_options *o,
+static rs_status write_body(FILE *f,
+                            const rs_synth_povcam *cam,
+                            const double fxy[2],
+                            const double ground_normal_enu[3],
+                            double ground_offset_m,
+                            const rs_synth_prepared *vehicles,
+                            const rs_synth_scene_options *o,
                             rs_err *err)
 {
     const rs_synth_scene_options opt = *o;
     const bool id_pass = opt.pass == RS_SYNTH_PASS_ID;
     const bool shadow_pass = opt.pass == RS_SYNTH_PASS_SHADOW;
     rs_status st;
-    if ((st = rs_synth_povcam_write(f, cam, err)))
-        return st;
+    if ((st = rs_synth_povcam_write(f, cam, err))) return st;
     fprintf(f, "background { rgbt <0, 0, 0, 1> }\n");
     if (!id_pass) {
         rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
         const int Nlights = rs_synth_scene_lights(lights, &opt);
         const int first_sky = Nlights - RS_SYNTH_SKY_LIGHTS;
-        fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg%s; then the sky (%d lights%s)\n",
-                opt.sun_azimuth_deg, opt.sun_elevation_deg,
-                first_sky ? "" : opt.overcast ? " (overcast: no sun)" : " (below the horizon)",
+        fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg%s; then the sky (%d lights%s)\n", opt.sun_azimuth_deg,
+                opt.sun_elevation_deg,
+                first_sky      ? ""
+                : opt.overcast ? " (overcast: no sun)"
+                               : " (below the horizon)",
                 RS_SYNTH_SKY_LIGHTS, shadow_pass ? ", casting shadows" : ", shadowless");
         for (int j = 0; j < Nlights; j++) {
             double p[3];
-            for (int k = 0; k < 3; k++)
-                p[k] = 1e6 * lights[j].dir_enu[k];
+            for (int k = 0; k < 3; k++) p[k] = 1e6 * lights[j].dir_enu[k];
             fprintf(f, "light_source { ");
             write_vec_enu(f, p);
             if (j < first_sky && !shadow_pass) // the sun, in colour
                 fprintf(f, " color rgb <1.0, 0.97, 0.92> parallel point_at <0, 0, 0> }\n");
             else
-                fprintf(f, " color rgb %.9g parallel point_at <0, 0, 0>%s }\n",
-                        lights[j].irradiance, j >= first_sky && !shadow_pass ? " shadowless" : "");
+                fprintf(f, " color rgb %.9g parallel point_at <0, 0, 0>%s }\n", lights[j].irradiance,
+                        j >= first_sky && !shadow_pass ? " shadowless" : "");
         }
     }
     // The ground: grey in the colour pass (left out of the image when compositing), an
     // occluder of value 0 in the ID pass, white in the shadow pass.
     const double n_pov[3] = {ground_normal_enu[0], ground_normal_enu[2], ground_normal_enu[1]};
     const double nn = sqrt(n_pov[0] * n_pov[0] + n_pov[1] * n_pov[1] + n_pov[2] * n_pov[2]);
-    fprintf(f, "plane { <%.17g, %.17g, %.17g>, %.17g\n", n_pov[0] / nn, n_pov[1] / nn,
-            n_pov[2] / nn, ground_offset_m / nn);
+    fprintf(f, "plane { <%.17g, %.17g, %.17g>, %.17g\n", n_pov[0] / nn, n_pov[1] / nn, n_pov[2] / nn,
+            ground_offset_m / nn);
     if (id_pass)
         fprintf(f, "  texture { pigment { rgb 0 } finish { emission 0 ambient 0 diffuse 0 } }\n");
     else if (shadow_pass)
@@ -561,34 +532,27 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
         int first = -1, users = 0;
         for (int i = 0; i < N; i++)
             if (vehicles->imesh[i] == m && (!opt.include || opt.include[i])) {
-                if (first < 0)
-                    first = i;
+                if (first < 0) first = i;
                 users++;
             }
-        if (first < 0)
-            continue;
-        const bool textured = opt.pass == RS_SYNTH_PASS_COLOUR &&
-                              vehicles->v[first].cls != RS_SYNTH_USER_MODEL;
+        if (first < 0) continue;
+        const bool textured = opt.pass == RS_SYNTH_PASS_COLOUR && vehicles->v[first].cls != RS_SYNTH_USER_MODEL;
         char name[32];
         snprintf(name, sizeof(name), "RS_MESH_%d", m);
         if ((st = rs_synth_fleet_write_declare(f, name, &vehicles->meshes[m],
-                                               textured ? RS_SYNTH_DECLARE_TEXTURED
-                                                        : RS_SYNTH_DECLARE_BARE,
+                                               textured ? RS_SYNTH_DECLARE_TEXTURED : RS_SYNTH_DECLARE_BARE,
                                                vehicles->v[first].rgb, err)))
             return st;
     }
     for (int i = 0; i < N; i++) {
-        if (opt.include && !opt.include[i])
-            continue;
+        if (opt.include && !opt.include[i]) continue;
         const rs_synth_vehicle *v = &vehicles->v[i];
         char id[64];
         sanitise(id, sizeof(id), v->id ? v->id : "");
         fprintf(f, "// vehicle %d: %s, id \"%s\"\nobject { RS_MESH_%d", i,
-                rs_synth_class_name(v->cls) ? rs_synth_class_name(v->cls) : "?", id,
-                vehicles->imesh[i]);
+                rs_synth_class_name(v->cls) ? rs_synth_class_name(v->cls) : "?", id, vehicles->imesh[i]);
         if ((st = rs_synth_fleet_write_placement(
-                 f, v, rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, v->e_m, v->n_m),
-                 err)))
+                 f, v, rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, v->e_m, v->n_m), err)))
             return st;
         if (id_pass) {
             fprintf(f, "\n  ");
@@ -597,21 +561,25 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
         } else if (shadow_pass) {
             fprintf(f, " no_image no_reflection");
         } else if (v->cls == RS_SYNTH_USER_MODEL) {
-            fprintf(f, "\n  texture { pigment { rgb <%.6f, %.6f, %.6f> } finish { ambient 0 "
-                       "diffuse 0.7 specular 0.3 roughness 0.02 } }",
+            fprintf(f,
+                    "\n  texture { pigment { rgb <%.6f, %.6f, %.6f> } finish { ambient 0 "
+                    "diffuse 0.7 specular 0.3 roughness 0.02 } }",
                     v->rgb[0], v->rgb[1], v->rgb[2]);
         }
         fprintf(f, " }\n");
     }
-    if (opt.pass == RS_SYNTH_PASS_COLOUR && opt.Npins > 0)
-        write_pins(f, cam, fxy, &opt);
+    if (opt.pass == RS_SYNTH_PASS_COLOUR && opt.Npins > 0) write_pins(f, cam, fxy, &opt);
     return RS_OK;
 }
 
-rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
-                               const double ground_normal_enu[3], double ground_offset_m,
+rs_status rs_synth_scene_write(FILE *f,
+                               const rs_synth_povcam *cam,
+                               const double fxy[2],
+                               const double ground_normal_enu[3],
+                               double ground_offset_m,
                                const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *opt_in, rs_err *err)
+                               const rs_synth_scene_options *opt_in,
+                               rs_err *err)
 {
     rs_synth_scene_options opt;
     if (opt_in)
@@ -622,20 +590,22 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
     snprintf(what, sizeof(what), "%s pass", pass_name(opt.pass));
     write_head(f, what);
     rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &opt, err);
-    if (!st && ferror(f))
-        st = rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
+    if (!st && ferror(f)) st = rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
     return st;
 }
 
-rs_status rs_synth_scene_write_frames(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
-                                      const double ground_normal_enu[3], double ground_offset_m,
+rs_status rs_synth_scene_write_frames(FILE *f,
+                                      const rs_synth_povcam *cam,
+                                      const double fxy[2],
+                                      const double ground_normal_enu[3],
+                                      double ground_offset_m,
                                       const rs_synth_prepared *vehicles,
-                                      const rs_synth_scene_options *passes, int Npasses,
+                                      const rs_synth_scene_options *passes,
+                                      int Npasses,
                                       rs_err *err)
 {
     if (Npasses < 1 || Npasses > 9)
-        return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_frames: %d passes (1..9)",
-                          Npasses);
+        return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_frames: %d passes (1..9)", Npasses);
     char what[96] = "passes as frames:";
     for (int k = 0; k < Npasses; k++) {
         const size_t len = strlen(what);
@@ -645,20 +615,20 @@ rs_status rs_synth_scene_write_frames(FILE *f, const rs_synth_povcam *cam, const
     fprintf(f, "#switch (frame_number)\n");
     for (int k = 0; k < Npasses; k++) {
         fprintf(f, "#case (%d) // %s pass\n", k + 1, pass_name(passes[k].pass));
-        rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles,
-                                  &passes[k], err);
-        if (st)
-            return st;
+        rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &passes[k], err);
+        if (st) return st;
         fprintf(f, "#break\n");
     }
     fprintf(f, "#end\n");
-    if (ferror(f))
-        return rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
+    if (ferror(f)) return rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
     return RS_OK;
 }
 
-rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
-                                   const rs_synth_povcam *cam, rs_synth_pass pass, int antialias,
+rs_status rs_synth_scene_write_ini(const char *ini_path,
+                                   const char *pov_path,
+                                   const rs_synth_povcam *cam,
+                                   rs_synth_pass pass,
+                                   int antialias,
                                    rs_err *err)
 {
     const char *base = strrchr(pov_path, '/');
@@ -666,27 +636,23 @@ rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
     char out_name[4096];
     snprintf(out_name, sizeof(out_name), "%s", base);
     char *dot = strrchr(out_name, '.');
-    if (dot)
-        *dot = 0;
+    if (dot) *dot = 0;
     for (const char *c = base; *c; c++)
         if (!(isalnum((unsigned char)*c) || *c == '_' || *c == '.' || *c == '-'))
-            return rs_err_set(err, RS_ERR_INVALID,
-                              "%s: the scene's file name may only use [A-Za-z0-9_.-]", pov_path);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: the scene's file name may only use [A-Za-z0-9_.-]", pov_path);
     char ini_base[256];
-    sanitise(ini_base, sizeof(ini_base),
-             strrchr(ini_path, '/') ? strrchr(ini_path, '/') + 1 : ini_path);
+    sanitise(ini_base, sizeof(ini_base), strrchr(ini_path, '/') ? strrchr(ini_path, '/') + 1 : ini_path);
     char text[8192];
     const bool id_pass = pass == RS_SYNTH_PASS_ID;
-    const int len = snprintf(
-        text, sizeof(text),
-        "; Written by roadside: renders %s (%s pass) at the camera's exact size.\n"
-        "; Run from this folder: povray %s\n"
-        "Input_File_Name=%s\nOutput_File_Name=%s.png\nOutput_File_Type=N\n"
-        "Width=%d\nHeight=%d\nAntialias=Off\nJitter=Off\nOutput_Alpha=%s\nBits_Per_Color=%d\n"
-        "File_Gamma=1.0\nDisplay=Off\nPause_When_Done=Off\nVerbose=Off\n",
-        base, id_pass ? "object-ID" : "colour", ini_base, base, out_name, cam->width, cam->height, id_pass ? "Off" : "On", id_pass ? 8 : 16);
-    if (len < 0 || (size_t)len >= sizeof(text))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: name too long", ini_path);
+    const int len = snprintf(text, sizeof(text),
+                             "; Written by roadside: renders %s (%s pass) at the camera's exact size.\n"
+                             "; Run from this folder: povray %s\n"
+                             "Input_File_Name=%s\nOutput_File_Name=%s.png\nOutput_File_Type=N\n"
+                             "Width=%d\nHeight=%d\nAntialias=Off\nJitter=Off\nOutput_Alpha=%s\nBits_Per_Color=%d\n"
+                             "File_Gamma=1.0\nDisplay=Off\nPause_When_Done=Off\nVerbose=Off\n",
+                             base, id_pass ? "object-ID" : "colour", ini_base, base, out_name, cam->width, cam->height,
+                             id_pass ? "Off" : "On", id_pass ? 8 : 16);
+    if (len < 0 || (size_t)len >= sizeof(text)) return rs_err_set(err, RS_ERR_INVALID, "%s: name too long", ini_path);
     int total = len;
     if (antialias >= 2 && !id_pass)
         total += snprintf(text + len, sizeof(text) - (size_t)len,
@@ -696,24 +662,20 @@ rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
     return rs_io_write_file(ini_path, text, (size_t)total, err);
 }
 
-rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_path,
-                                          const rs_synth_povcam *cam, int Nframes, int antialias,
-                                          rs_err *err)
+rs_status rs_synth_scene_write_ini_frames(
+    const char *ini_path, const char *pov_path, const rs_synth_povcam *cam, int Nframes, int antialias, rs_err *err)
 {
     if (Nframes < 1 || Nframes > 9)
-        return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_ini_frames: %d frames (1..9)",
-                          Nframes);
+        return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_ini_frames: %d frames (1..9)", Nframes);
     const char *base = strrchr(pov_path, '/');
     base = base ? base + 1 : pov_path;
     for (const char *c = base; *c; c++)
         if (!(isalnum((unsigned char)*c) || *c == '_' || *c == '.' || *c == '-'))
-            return rs_err_set(err, RS_ERR_INVALID,
-                              "%s: the scene's file name may only use [A-Za-z0-9_.-]", pov_path);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: the scene's file name may only use [A-Za-z0-9_.-]", pov_path);
     char out_name[256];
     snprintf(out_name, sizeof(out_name), "%s", base);
     char *dot = strrchr(out_name, '.');
-    if (dot)
-        *dot = 0;
+    if (dot) *dot = 0;
     char text[4096];
     int len = snprintf(text, sizeof(text),
                        "; Written by roadside: renders the %d frames of %s (one pass each) at the\n"
@@ -722,10 +684,8 @@ rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_
                        "Width=%d\nHeight=%d\nAntialias=Off\nJitter=Off\nOutput_Alpha=On\n"
                        "Bits_Per_Color=16\nFile_Gamma=1.0\nDisplay=Off\nPause_When_Done=Off\n"
                        "Verbose=Off\nInitial_Frame=1\nFinal_Frame=%d\nCyclic_Animation=Off\n",
-                       Nframes, base, out_name, out_name, Nframes, base, out_name, cam->width,
-                       cam->height, Nframes);
-    if (len < 0 || (size_t)len >= sizeof(text))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: name too long", ini_path);
+                       Nframes, base, out_name, out_name, Nframes, base, out_name, cam->width, cam->height, Nframes);
+    if (len < 0 || (size_t)len >= sizeof(text)) return rs_err_set(err, RS_ERR_INVALID, "%s: name too long", ini_path);
     if (antialias >= 2)
         len += snprintf(text + len, sizeof(text) - (size_t)len,
                         "Antialias=On\nSampling_Method=1\nAntialias_Threshold=0.0\n"

@@ -36,7 +36,7 @@ extern "C" {
 typedef struct {
     rs_synth_vehicle *v; // (N,) owned
     int N;
-    char **strings;      // owned: every string v[] points to
+    char **strings; // owned: every string v[] points to
     int Nstrings;
     rs_synth_obj_spec *obj; // (N,) owned: user models' specs (obj[i].path == v[i].model_path)
 } rs_synth_vehicle_list;
@@ -51,10 +51,11 @@ typedef struct {
 // yaw_deg is the compass heading of the vehicle's forward axis, clockwise from north.
 // A relative "model" path is taken relative to the vehicles file's folder.
 // Errors name the file, the list index and the field: "FILE: [3].yaw_deg: not a number".
-rs_status rs_synth_vehicles_read(// out
-                                 rs_synth_vehicle_list *list,
-                                 // in
-                                 const char *path, rs_err *err);
+rs_status rs_synth_vehicles_read( // out
+    rs_synth_vehicle_list *list,
+    // in
+    const char *path,
+    rs_err *err);
 void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list); // NULL-safe
 
 // ---- the vehicle box ----
@@ -62,15 +63,15 @@ void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list); // NULL-safe
 // The 8 corners of vehicle v's bounding box in ENU, metres, on the ground plane
 // n . p = offset: corner k has x_v = +-L/2 (bit 0: +), y_v = +-W/2 (bit 1: +), z_v = 0 or H
 // (bit 2: H). Requires v's length/width/height > 0 (resolve drawn dimensions first).
-void rs_synth_vehicle_corners_enu(// out
-                                  double corners_enu_m[8][3],
-                                  // in
-                                  const rs_synth_vehicle *v, const double ground_normal_enu[3],
-                                  double ground_offset_m);
+void rs_synth_vehicle_corners_enu( // out
+    double corners_enu_m[8][3],
+    // in
+    const rs_synth_vehicle *v,
+    const double ground_normal_enu[3],
+    double ground_offset_m);
 
 // Up coordinate of the ground plane n . p = offset at (e, n). n[2] must be non-zero.
-double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_offset_m,
-                            double e_m, double n_m);
+double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_offset_m, double e_m, double n_m);
 
 // ---- the sun ----
 
@@ -78,8 +79,7 @@ double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_off
 
 // Parses an ISO 8601 time "YYYY-MM-DDTHH:MM[:SS[.fff]]" followed by "Z" or "+HH:MM"/"-HH:MM"
 // (a zone is required). out: seconds since 1970 UTC. Returns RS_ERR_PARSE naming `field`.
-rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char *field,
-                                 rs_err *err);
+rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char *field, rs_err *err);
 
 // ---- the scene ----
 
@@ -90,11 +90,7 @@ rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char 
 // rs_synth_scene_shadow_unlit() is the fraction of the ground's light reaching that pixel:
 // 1 in the open, sky/(sun+sky) in a sun shadow, less under and beside a vehicle (the soft
 // sky-light shadow). The ground alone needs no pass: lit by parallel lights, it is uniform.
-typedef enum {
-    RS_SYNTH_PASS_COLOUR = 0,
-    RS_SYNTH_PASS_ID = 1,
-    RS_SYNTH_PASS_SHADOW = 2
-} rs_synth_pass;
+typedef enum { RS_SYNTH_PASS_COLOUR = 0, RS_SYNTH_PASS_ID = 1, RS_SYNTH_PASS_SHADOW = 2 } rs_synth_pass;
 
 // The sky: RS_SYNTH_SKY_LIGHTS parallel lights standing for a uniform sky, the hemisphere cut
 // into two bands of zenith angle, 0-40 and 40-90 deg, which give sin^2(40 deg) = 0.413 and
@@ -104,9 +100,9 @@ typedef enum {
 // pass they cast shadows. (13 lights in three bands, the lowest at 15 deg elevation, cost
 // 1.9 x the shadow pass's trace time and widen its region by shadows 3.7 x a vehicle's height;
 // the difference on the ground is a few percent of the light, docs/synth.md.)
-#define RS_SYNTH_SKY_LIGHTS 7
+#define RS_SYNTH_SKY_LIGHTS   7
 // The sky's irradiance on the ground relative to a sun at the zenith (1): clear and overcast.
-#define RS_SYNTH_SKY_CLEAR 0.35
+#define RS_SYNTH_SKY_CLEAR    0.35
 #define RS_SYNTH_SKY_OVERCAST 1.0
 
 typedef struct {
@@ -116,17 +112,17 @@ typedef struct {
 
 typedef struct {
     rs_synth_pass pass;
-    bool ground_visible;        // colour pass: draw the ground (false: the ground is left out,
-                                // for compositing over a photograph)
-    double sun_azimuth_deg;     // sun direction (colour pass)
+    bool ground_visible;    // colour pass: draw the ground (false: the ground is left out,
+                            // for compositing over a photograph)
+    double sun_azimuth_deg; // sun direction (colour pass)
     double sun_elevation_deg;
-    const double *pins_enu_m;   // (Npins,3) pin centres, may be NULL
+    const double *pins_enu_m; // (Npins,3) pin centres, may be NULL
     int Npins;
-    double pin_radius_px;       // pins' radius in image pixels at their distance (default 3)
-    const uint8_t *include;     // (Nvehicles,) 0 = leave vehicle out (culled), may be NULL = all
-    bool boxes;                 // draw vehicles as plain boxes (no fleet meshes)
-    bool overcast;              // no sun: the sky alone, RS_SYNTH_SKY_OVERCAST (colour and
-                                // shadow passes)
+    double pin_radius_px;   // pins' radius in image pixels at their distance (default 3)
+    const uint8_t *include; // (Nvehicles,) 0 = leave vehicle out (culled), may be NULL = all
+    bool boxes;             // draw vehicles as plain boxes (no fleet meshes)
+    bool overcast;          // no sun: the sky alone, RS_SYNTH_SKY_OVERCAST (colour and
+                            // shadow passes)
 } rs_synth_scene_options;
 
 // The lights of the colour and shadow passes: the sun (irradiance 1, when its elevation is
@@ -137,8 +133,7 @@ int rs_synth_scene_lights(rs_synth_light *lights, const rs_synth_scene_options *
 
 // What the shadow pass shows on open ground, nothing in the way: sum of irradiance *
 // max(0, n . dir) over the lights, n the unit ground normal (ENU, any length given).
-double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights,
-                                   const double ground_normal_enu[3]);
+double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights, const double ground_normal_enu[3]);
 
 // Defaults: colour pass, ground visible, sun at azimuth 135, elevation 45, no pins, radius 3 px.
 void rs_synth_scene_options_default(rs_synth_scene_options *opt);
@@ -146,31 +141,36 @@ void rs_synth_scene_options_default(rs_synth_scene_options *opt);
 // Vehicles ready for a scene: resolved (rs_synth_fleet_resolve), meshes built; a user model is
 // loaded once per distinct (path, scale, forward, up) and shared by its instances.
 typedef struct {
-    rs_synth_vehicle *v;   // (N,) owned copies, resolved: dimensions > 0 (a user model's from its
-                           // mesh bounds), paint set; strings still borrowed from the input
+    rs_synth_vehicle *v; // (N,) owned copies, resolved: dimensions > 0 (a user model's from its
+                         // mesh bounds), paint set; strings still borrowed from the input
     int N;
     rs_synth_mesh *meshes; // (Nmeshes,) owned
     int Nmeshes;
-    int *imesh;            // (N,) owned: the mesh of each vehicle
+    int *imesh; // (N,) owned: the mesh of each vehicle
 } rs_synth_prepared;
 
 // in: vehicles (N,); obj (N,) user models' specs (entries of procedural vehicles ignored), may be
 //     NULL when there is no user model
 // Errors are the fleet's, prefixed with "vehicle K (id ...): " (id sanitised).
-rs_status rs_synth_prepare(// out
-                           rs_synth_prepared *out,
-                           // in
-                           const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N,
-                           rs_err *err);
+rs_status rs_synth_prepare( // out
+    rs_synth_prepared *out,
+    // in
+    const rs_synth_vehicle *vehicles,
+    const rs_synth_obj_spec *obj,
+    int N,
+    rs_err *err);
 void rs_synth_prepared_free(rs_synth_prepared *p); // NULL-safe; zeroes *p
 
 // The same, with procedural vehicle i built coarse when coarse[i] (rs_synth_fleet_build_lod);
 // coarse may be NULL (every vehicle in full detail).
-rs_status rs_synth_prepare_lod(// out
-                               rs_synth_prepared *out,
-                               // in
-                               const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj,
-                               int N, const uint8_t *coarse, rs_err *err);
+rs_status rs_synth_prepare_lod( // out
+    rs_synth_prepared *out,
+    // in
+    const rs_synth_vehicle *vehicles,
+    const rs_synth_obj_spec *obj,
+    int N,
+    const uint8_t *coarse,
+    rs_err *err);
 
 // Writes the .pov text of a scene to f.
 // in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
@@ -182,35 +182,43 @@ rs_status rs_synth_prepare_lod(// out
 // start-up and shut-down cost about 0.35 s of waiting, measured in docs/povray.md).
 rs_status rs_synth_scene_write_frames(FILE *f,
                                       // in
-                                      const rs_synth_povcam *cam, const double fxy[2],
-                                      const double ground_normal_enu[3], double ground_offset_m,
+                                      const rs_synth_povcam *cam,
+                                      const double fxy[2],
+                                      const double ground_normal_enu[3],
+                                      double ground_offset_m,
                                       const rs_synth_prepared *vehicles,
-                                      const rs_synth_scene_options *passes, int Npasses,
+                                      const rs_synth_scene_options *passes,
+                                      int Npasses,
                                       rs_err *err);
 
 rs_status rs_synth_scene_write(FILE *f,
                                // in
-                               const rs_synth_povcam *cam, const double fxy[2],
-                               const double ground_normal_enu[3], double ground_offset_m,
+                               const rs_synth_povcam *cam,
+                               const double fxy[2],
+                               const double ground_normal_enu[3],
+                               double ground_offset_m,
                                const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *opt, rs_err *err);
+                               const rs_synth_scene_options *opt,
+                               rs_err *err);
 
 // Writes the .ini matching a scene, atomically: Input_File_Name (the .pov's base name, same
 // folder; it may only use [A-Za-z0-9_.-]), Output_File_Name (the same with .png), Width/Height,
 // File_Gamma 1 (linear output), 16-bit RGBA for the colour pass, 8-bit RGB for the ID pass.
 // antialias: 0 none; n >= 2: n x n non-adaptive supersampling without jitter (+A0 +AM1 +Rn,
 // colour pass only).
-rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path,
-                                   const rs_synth_povcam *cam, rs_synth_pass pass, int antialias,
+rs_status rs_synth_scene_write_ini(const char *ini_path,
+                                   const char *pov_path,
+                                   const rs_synth_povcam *cam,
+                                   rs_synth_pass pass,
+                                   int antialias,
                                    rs_err *err);
 
 // The .ini of a file of Nframes passes (rs_synth_scene_write_frames): 16-bit RGBA with
 // File_Gamma 1 for every frame (ID values stay exact: 257 x the 8-bit value), frames 1..Nframes
 // written as <name>1.png, <name>2.png, ... (Nframes <= 9). antialias as above applies to
 // every frame: give it only to a colour pass alone.
-rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_path,
-                                          const rs_synth_povcam *cam, int Nframes, int antialias,
-                                          rs_err *err);
+rs_status rs_synth_scene_write_ini_frames(
+    const char *ini_path, const char *pov_path, const rs_synth_povcam *cam, int Nframes, int antialias, rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -17,9 +17,9 @@
 #include <unistd.h>
 
 #include "core/rs_io.h"
+#include "core/rs_rng.h"
 #include "synth/internal/rs_synth_sumo_xml.h"
 #include "synth/rs_synth_fleet.h"
-#include "core/rs_rng.h"
 
 extern char **environ;
 
@@ -112,7 +112,7 @@ typedef struct {
 } connection;
 
 typedef struct {
-    int *parent;       // (2 Nlanes,) union-find over lane ends: 2K start, 2K+1 end
+    int *parent; // (2 Nlanes,) union-find over lane ends: 2K start, 2K+1 end
     connection *con;
     int Ncon, capcon;
     int Nedges;
@@ -173,8 +173,8 @@ static rs_status enu_to_lonlat(double lonlat[2], const rs_llh *origin, const dou
     return st;
 }
 
-static rs_status write_network_files(const char *dir, const rs_lanes *lanes, const rs_llh *origin, network *n,
-                                     rs_err *err)
+static rs_status
+write_network_files(const char *dir, const rs_lanes *lanes, const rs_llh *origin, network *n, rs_err *err)
 {
     int L = lanes->N;
     n->parent = malloc(sizeof *n->parent * 2 * (size_t)L);
@@ -219,8 +219,9 @@ static rs_status write_network_files(const char *dir, const rs_lanes *lanes, con
     for (int i = 0; i < L && !st; i++) {
         const rs_lane *l = &lanes->lane[i];
         if (is_junction(l)) continue;
-        fprintf(a.f, "  <edge id=\"e%d\" from=\"n%d\" to=\"n%d\" numLanes=\"1\" speed=\"%.3f\" width=\"%.3f\" "
-                     "spreadType=\"center\" shape=\"",
+        fprintf(a.f,
+                "  <edge id=\"e%d\" from=\"n%d\" to=\"n%d\" numLanes=\"1\" speed=\"%.3f\" width=\"%.3f\" "
+                "spreadType=\"center\" shape=\"",
                 i, uf_find(n->parent, 2 * i), uf_find(n->parent, 2 * i + 1),
                 isfinite(l->speed_mps) ? l->speed_mps : 13.89, l->width_m);
         for (int k = 0; k < l->Npoints && !st; k++) {
@@ -312,9 +313,17 @@ static bool write_paths(FILE *f, const network *n, int *path, int depth, int *Nr
     return *Nroutes < 4096;
 }
 
-static rs_status write_routes(const char *dir, const rs_lanes *lanes, const network *n, const char *const *osm_from,
-                              const char *const *osm_to, int Nosm, const rs_synth_sumo_vtype *t, const double *prob,
-                              int Nt, const rs_synth_sumo_options *o, rs_err *err)
+static rs_status write_routes(const char *dir,
+                              const rs_lanes *lanes,
+                              const network *n,
+                              const char *const *osm_from,
+                              const char *const *osm_to,
+                              int Nosm,
+                              const rs_synth_sumo_vtype *t,
+                              const double *prob,
+                              int Nt,
+                              const rs_synth_sumo_options *o,
+                              rs_err *err)
 {
     rs_io_atomic a;
     rs_status st = atomic_open_in(&a, dir, "routes.rou.xml", err);
@@ -349,10 +358,11 @@ static rs_status write_routes(const char *dir, const rs_lanes *lanes, const netw
                     r, r, o->duration_s, o->flow_vph);
     } else {
         for (int r = 0; r < Nosm; r++, Nroutes++)
-            fprintf(a.f,
-                    "  <flow id=\"m%d\" type=\"mix\" from=\"%s\" to=\"%s\" begin=\"0\" end=\"%.3f\" vehsPerHour=\"%.3f\" "
-                    "departLane=\"best\" departSpeed=\"max\"/>\n",
-                    r, osm_from[r], osm_to[r], o->duration_s, o->flow_vph);
+            fprintf(
+                a.f,
+                "  <flow id=\"m%d\" type=\"mix\" from=\"%s\" to=\"%s\" begin=\"0\" end=\"%.3f\" vehsPerHour=\"%.3f\" "
+                "departLane=\"best\" departSpeed=\"max\"/>\n",
+                r, osm_from[r], osm_to[r], o->duration_s, o->flow_vph);
     }
     fprintf(a.f, "</routes>\n");
     if (Nroutes == 0)
@@ -383,7 +393,8 @@ static void XMLCALL edges_start(void *ud, const XML_Char *name, const XML_Char *
 {
     edges_ctx *c = ud;
     if (c->x.st || strcmp(name, "edge") || rs_synth_sumo_xml_attr(a, "function")) return;
-    const char *id = rs_synth_sumo_xml_attr(a, "id"), *from = rs_synth_sumo_xml_attr(a, "from"), *to = rs_synth_sumo_xml_attr(a, "to");
+    const char *id = rs_synth_sumo_xml_attr(a, "id"), *from = rs_synth_sumo_xml_attr(a, "from"),
+               *to = rs_synth_sumo_xml_attr(a, "to");
     if (!id || !from || !to) return;
     if (c->N == c->cap) {
         int cap = c->cap ? 2 * c->cap : 256;
@@ -436,7 +447,9 @@ static rs_status osm_pairs(edges_ctx *c, const char ***from, const char ***to, i
             (*N)++;
         }
     }
-    if (*N == 0) return rs_err_set(err, RS_ERR_INVALID, "the OpenStreetMap network has no pair of dead-end edges to drive between");
+    if (*N == 0)
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "the OpenStreetMap network has no pair of dead-end edges to drive between");
     return RS_OK;
 }
 
@@ -451,10 +464,12 @@ static rs_status write_osm_types(const char *path, rs_err *err)
         double speed_mps;
         bool oneway;
     } types[] = {
-        {"motorway", 14, 2, 33.33, true},  {"motorway_link", 9, 1, 22.22, true}, {"trunk", 13, 2, 27.78, false},
-        {"trunk_link", 8, 1, 22.22, false}, {"primary", 12, 2, 13.89, false},   {"primary_link", 7, 1, 13.89, false},
-        {"secondary", 11, 1, 13.89, false}, {"secondary_link", 6, 1, 13.89, false}, {"tertiary", 10, 1, 13.89, false},
-        {"tertiary_link", 5, 1, 13.89, false}, {"unclassified", 5, 1, 13.89, false}, {"residential", 4, 1, 8.33, false},
+        {"motorway", 14, 2, 33.33, true},     {"motorway_link", 9, 1, 22.22, true},
+        {"trunk", 13, 2, 27.78, false},       {"trunk_link", 8, 1, 22.22, false},
+        {"primary", 12, 2, 13.89, false},     {"primary_link", 7, 1, 13.89, false},
+        {"secondary", 11, 1, 13.89, false},   {"secondary_link", 6, 1, 13.89, false},
+        {"tertiary", 10, 1, 13.89, false},    {"tertiary_link", 5, 1, 13.89, false},
+        {"unclassified", 5, 1, 13.89, false}, {"residential", 4, 1, 8.33, false},
         {"living_street", 3, 1, 2.78, false}, {"service", 2, 1, 5.56, false},
     };
     rs_io_atomic a;
@@ -474,13 +489,17 @@ static rs_status write_osm_types(const char *path, rs_err *err)
 // ---------------------------------------------------------------------------------------------
 // the run
 
-static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_lanes *lanes,
-                        const rs_llh *origin, const rs_synth_sumo_options *o, rs_err *err)
+static rs_status run_in(const char *dir,
+                        rs_synth_sumo_frames *frames,
+                        const rs_lanes *lanes,
+                        const rs_llh *origin,
+                        const rs_synth_sumo_options *o,
+                        rs_err *err)
 {
     char *net = rs_io_join(dir, "net.net.xml"), *nod = rs_io_join(dir, "nodes.nod.xml"),
          *edg = rs_io_join(dir, "edges.edg.xml"), *con = rs_io_join(dir, "connections.con.xml"),
-         *rou = rs_io_join(dir, "routes.rou.xml"), *fcd = rs_io_join(dir, "fcd.xml"), *log = rs_io_join(dir, "sumo.log"),
-         *typ = rs_io_join(dir, "osm.typ.xml");
+         *rou = rs_io_join(dir, "routes.rou.xml"), *fcd = rs_io_join(dir, "fcd.xml"),
+         *log = rs_io_join(dir, "sumo.log"), *typ = rs_io_join(dir, "osm.typ.xml");
     network n = {0};
     edges_ctx ec = {{0}, NULL, NULL, NULL, 0, 0};
     const char **osm_from = NULL, **osm_to = NULL;
@@ -495,9 +514,20 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
     remove(log);
     if (o->osm_path) {
         if ((st = write_osm_types(typ, err))) goto done;
-        char *argv[] = {(char *)o->netconvert, "--osm-files", (char *)o->osm_path, "--type-files", typ,
-                        "--proj.utm", "true", "--xml-validation", "never", "--no-turnarounds", "true",
-                        "--output-file", net, NULL};
+        char *argv[] = {(char *)o->netconvert,
+                        "--osm-files",
+                        (char *)o->osm_path,
+                        "--type-files",
+                        typ,
+                        "--proj.utm",
+                        "true",
+                        "--xml-validation",
+                        "never",
+                        "--no-turnarounds",
+                        "true",
+                        "--output-file",
+                        net,
+                        NULL};
         if ((st = run_program(argv, log, err))) goto done;
         ec.x = (rs_synth_sumo_xml){XML_ParserCreate(NULL), net, RS_OK, err};
         if (!ec.x.p) {
@@ -511,9 +541,22 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
         if (st || (st = osm_pairs(&ec, &osm_from, &osm_to, &Nosm, err))) goto done;
     } else {
         if ((st = write_network_files(dir, lanes, origin, &n, err))) goto done;
-        char *argv[] = {(char *)o->netconvert, "--node-files", nod, "--edge-files", edg, "--connection-files", con,
-                        "--proj.utm", "true", "--xml-validation", "never", "--no-turnarounds", "true",
-                        "--output-file", net, NULL};
+        char *argv[] = {(char *)o->netconvert,
+                        "--node-files",
+                        nod,
+                        "--edge-files",
+                        edg,
+                        "--connection-files",
+                        con,
+                        "--proj.utm",
+                        "true",
+                        "--xml-validation",
+                        "never",
+                        "--no-turnarounds",
+                        "true",
+                        "--output-file",
+                        net,
+                        NULL};
         if ((st = run_program(argv, log, err))) goto done;
     }
     int Nt = make_vtypes(types, prob, &o->mix, o->seed);
@@ -524,10 +567,34 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
     snprintf(end, sizeof end, "%.3f", o->duration_s);
     snprintf(begin, sizeof begin, "%.3f", o->warmup_s);
     snprintf(period, sizeof period, "%.3f", o->period_s);
-    char *argv[] = {(char *)o->sumo, "--net-file", net, "--route-files", rou, "--seed", seed, "--begin", "0",
-                    "--end", end, "--fcd-output", fcd, "--fcd-output.geo", "true", "--device.fcd.period", period,
-                    "--device.fcd.begin", begin, "--xml-validation", "never", "--xml-validation.net", "never",
-                    "--no-step-log", "true", "--duration-log.disable", "true", NULL};
+    char *argv[] = {(char *)o->sumo,
+                    "--net-file",
+                    net,
+                    "--route-files",
+                    rou,
+                    "--seed",
+                    seed,
+                    "--begin",
+                    "0",
+                    "--end",
+                    end,
+                    "--fcd-output",
+                    fcd,
+                    "--fcd-output.geo",
+                    "true",
+                    "--device.fcd.period",
+                    period,
+                    "--device.fcd.begin",
+                    begin,
+                    "--xml-validation",
+                    "never",
+                    "--xml-validation.net",
+                    "never",
+                    "--no-step-log",
+                    "true",
+                    "--duration-log.disable",
+                    "true",
+                    NULL};
     if ((st = run_program(argv, log, err))) goto done;
     rs_synth_sumo_location loc;
     if ((st = rs_synth_sumo_read_location(&loc, net, err))) goto done;
@@ -540,8 +607,11 @@ done:
     return st;
 }
 
-rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames, const rs_lanes *lanes, const rs_llh *origin,
-                            const rs_synth_sumo_options *o, rs_err *err)
+rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames,
+                            const rs_lanes *lanes,
+                            const rs_llh *origin,
+                            const rs_synth_sumo_options *o,
+                            rs_err *err)
 {
     frames->frame = NULL;
     frames->N = 0;

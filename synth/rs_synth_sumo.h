@@ -22,8 +22,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "geo/rs_geo.h"
 #include "core/rs_status.h"
+#include "geo/rs_geo.h"
 #include "synth/rs_synth_traffic.h"
 
 #ifdef __cplusplus
@@ -48,10 +48,11 @@ typedef struct {
 // (expat). RS_ERR_UNSUPPORTED for a network that is not projected with UTM ("!" or another
 // projection), RS_ERR_PARSE naming the file, line and attribute, RS_ERR_NOT_FOUND without a
 // <location>.
-rs_status rs_synth_sumo_read_location(// out
-                                      rs_synth_sumo_location *loc,
-                                      // in
-                                      const char *net_path, rs_err *err);
+rs_status rs_synth_sumo_read_location( // out
+    rs_synth_sumo_location *loc,
+    // in
+    const char *net_path,
+    rs_err *err);
 
 // One FCD time step.
 typedef struct {
@@ -74,12 +75,16 @@ void rs_synth_sumo_frames_free(rs_synth_sumo_frames *frames); // NULL-safe; leav
 // A vehicle's lane index is that of an edge "e<K>" of rs_synth_sumo_run's networks (lane K of
 // the site's lanes), else -1; speed from `speed`; variant from a hash of its id.
 // Errors name the file and line: "fcd.xml:57: vehicle.type: 'x' is not a known vType".
-rs_status rs_synth_sumo_read_fcd(// out
-                                 rs_synth_sumo_frames *frames,
-                                 // in
-                                 const char *fcd_path, bool geo, const rs_synth_sumo_location *loc,
-                                 const rs_llh *origin, const rs_synth_sumo_vtype *types, int Ntypes,
-                                 rs_err *err);
+rs_status rs_synth_sumo_read_fcd( // out
+    rs_synth_sumo_frames *frames,
+    // in
+    const char *fcd_path,
+    bool geo,
+    const rs_synth_sumo_location *loc,
+    const rs_llh *origin,
+    const rs_synth_sumo_vtype *types,
+    int Ntypes,
+    rs_err *err);
 
 typedef struct {
     uint64_t seed;          // sumo --seed (and the vType sizes)
@@ -111,11 +116,13 @@ void rs_synth_sumo_options_default(rs_synth_sumo_options *opt);
 // /usr/share/sumo when unset, XML validation off (nothing is fetched from the network), their
 // output in work_dir/sumo.log. RS_ERR_NOT_FOUND if sumo or netconvert is missing,
 // RS_ERR_EXTERNAL when one fails (the message ends with the last line of its log).
-rs_status rs_synth_sumo_run(// out
-                            rs_synth_sumo_frames *frames,
-                            // in
-                            const rs_lanes *lanes, const rs_llh *origin,
-                            const rs_synth_sumo_options *opt, rs_err *err);
+rs_status rs_synth_sumo_run( // out
+    rs_synth_sumo_frames *frames,
+    // in
+    const rs_lanes *lanes,
+    const rs_llh *origin,
+    const rs_synth_sumo_options *opt,
+    rs_err *err);
 
 // Writes the frames of a SUMO run as `roadside traffic --sumo` does: dir/frame_NNNNNN.json per
 // frame (rs_synth_traffic_write_json), each frame's vehicles first randomised
@@ -123,14 +130,16 @@ rs_status rs_synth_sumo_run(// out
 // overlaps are resolved: no noise), and the index dir/frames.json ({file, time_s, vehicles} per
 // frame). Every file is written atomically; dir is created. *Nvehicles: the vehicles written.
 // The frames' vehicles are changed in place (randomised).
-rs_status rs_synth_sumo_frames_write(// in
-                                     const char *dir,
-                                     // in,out
-                                     rs_synth_sumo_frames *fr,
-                                     // in
-                                     const rs_synth_randomise_options *rnd, bool randomise,
-                                     // out
-                                     int *Nvehicles, rs_err *err);
+rs_status rs_synth_sumo_frames_write( // in
+    const char *dir,
+    // in,out
+    rs_synth_sumo_frames *fr,
+    // in
+    const rs_synth_randomise_options *rnd,
+    bool randomise,
+    // out
+    int *Nvehicles,
+    rs_err *err);
 
 #ifdef __cplusplus
 }

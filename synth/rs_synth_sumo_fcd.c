@@ -44,7 +44,7 @@ static void XMLCALL location_start(void *ud, const XML_Char *name, const XML_Cha
     const char *z = proj ? strstr(proj, "+zone=") : NULL;
     if (!proj || !strstr(proj, "+proj=utm") || !z)
         return rs_synth_sumo_xml_fail(&c->x, RS_ERR_UNSUPPORTED, "location.projParameter",
-                        "is not a UTM projection (build the network with netconvert --proj.utm)", proj);
+                                      "is not a UTM projection (build the network with netconvert --proj.utm)", proj);
     c->loc->zone = atoi(z + 6);
     if (c->loc->zone < 1 || c->loc->zone > 60)
         return rs_synth_sumo_xml_fail(&c->x, RS_ERR_PARSE, "location.projParameter", "has no UTM zone 1..60", proj);
@@ -69,8 +69,8 @@ rs_status rs_synth_sumo_read_location(rs_synth_sumo_location *loc, const char *n
 typedef struct {
     rs_synth_sumo_xml x;
     rs_synth_sumo_frames *out;
-    int cap;     // frames allocated
-    int vcap;    // vehicles allocated in the current frame
+    int cap;  // frames allocated
+    int vcap; // vehicles allocated in the current frame
     bool geo;
     const rs_synth_sumo_location *loc;
     const rs_llh *origin;
@@ -89,11 +89,13 @@ static void fcd_vehicle(fcd_ctx *c, const XML_Char **a)
 {
     if (c->out->N == 0) return rs_synth_sumo_xml_fail(&c->x, RS_ERR_PARSE, "vehicle", "outside a <timestep>", NULL);
     double x, y, angle, speed = 0;
-    if (!rs_synth_sumo_xml_double(&c->x, a, "vehicle", "x", &x) || !rs_synth_sumo_xml_double(&c->x, a, "vehicle", "y", &y) ||
+    if (!rs_synth_sumo_xml_double(&c->x, a, "vehicle", "x", &x) ||
+        !rs_synth_sumo_xml_double(&c->x, a, "vehicle", "y", &y) ||
         !rs_synth_sumo_xml_double(&c->x, a, "vehicle", "angle", &angle))
         return;
     if (rs_synth_sumo_xml_attr(a, "speed") && !rs_synth_sumo_xml_double(&c->x, a, "vehicle", "speed", &speed)) return;
-    const char *id = rs_synth_sumo_xml_attr(a, "id"), *type = rs_synth_sumo_xml_attr(a, "type"), *lane = rs_synth_sumo_xml_attr(a, "lane");
+    const char *id = rs_synth_sumo_xml_attr(a, "id"), *type = rs_synth_sumo_xml_attr(a, "type"),
+               *lane = rs_synth_sumo_xml_attr(a, "lane");
     if (!id) return rs_synth_sumo_xml_fail(&c->x, RS_ERR_PARSE, "vehicle.id", "missing", NULL);
     if (!type) return rs_synth_sumo_xml_fail(&c->x, RS_ERR_PARSE, "vehicle.type", "missing", NULL);
     const rs_synth_sumo_vtype *t = NULL;
@@ -112,7 +114,8 @@ static void fcd_vehicle(fcd_ctx *c, const XML_Char **a)
     double gamma, front[3];
     if (rs_geo_utm_convergence_deg(&gamma, c->loc->zone, c->loc->north, llh, 1, &e2) ||
         rs_geo_llh_to_enu(front, c->origin, llh, 1, &e2))
-        return rs_synth_sumo_xml_fail(&c->x, RS_ERR_INVALID, c->geo ? "vehicle.x/y (lon/lat)" : "vehicle.x/y", e2.msg, NULL);
+        return rs_synth_sumo_xml_fail(&c->x, RS_ERR_INVALID, c->geo ? "vehicle.x/y (lon/lat)" : "vehicle.x/y", e2.msg,
+                                      NULL);
     double b = fmod(angle + gamma + 720.0, 360.0);
 
     rs_synth_sumo_frame *fr = &c->out->frame[c->out->N - 1];
@@ -161,9 +164,14 @@ static void XMLCALL fcd_start(void *ud, const XML_Char *name, const XML_Char **a
     }
 }
 
-rs_status rs_synth_sumo_read_fcd(rs_synth_sumo_frames *frames, const char *fcd_path, bool geo,
-                                 const rs_synth_sumo_location *loc, const rs_llh *origin,
-                                 const rs_synth_sumo_vtype *types, int Ntypes, rs_err *err)
+rs_status rs_synth_sumo_read_fcd(rs_synth_sumo_frames *frames,
+                                 const char *fcd_path,
+                                 bool geo,
+                                 const rs_synth_sumo_location *loc,
+                                 const rs_llh *origin,
+                                 const rs_synth_sumo_vtype *types,
+                                 int Ntypes,
+                                 rs_err *err)
 {
     frames->frame = NULL;
     frames->N = 0;
@@ -177,8 +185,12 @@ rs_status rs_synth_sumo_read_fcd(rs_synth_sumo_frames *frames, const char *fcd_p
     return st;
 }
 
-rs_status rs_synth_sumo_frames_write(const char *dir, rs_synth_sumo_frames *fr, const rs_synth_randomise_options *rnd,
-                              bool randomise, int *Nvehicles, rs_err *err)
+rs_status rs_synth_sumo_frames_write(const char *dir,
+                                     rs_synth_sumo_frames *fr,
+                                     const rs_synth_randomise_options *rnd,
+                                     bool randomise,
+                                     int *Nvehicles,
+                                     rs_err *err)
 {
     rs_status st = rs_io_mkdir_p(dir, err);
     if (st) return st;

@@ -5,8 +5,8 @@
 
 #define DEG (3.14159265358979323846 / 180.0)
 
-void rs_synth_sun_position(double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg,
-                           double unix_time_s)
+void rs_synth_sun_position(
+    double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg, double unix_time_s)
 {
     double az = NAN, el = NAN;
     if (isfinite(lat_deg) && isfinite(lon_deg) && isfinite(unix_time_s) && fabs(lat_deg) <= 90.0) {
@@ -14,16 +14,16 @@ void rs_synth_sun_position(double *azimuth_deg, double *elevation_deg, double la
         // 0.0008 degree).
         double jd = unix_time_s / 86400.0 + 2440587.5;
         double T = (jd - 2451545.0) / 36525.0;
-        double L0 = fmod(280.46646 + T * (36000.76983 + T * 0.0003032), 360.0);  // mean longitude
+        double L0 = fmod(280.46646 + T * (36000.76983 + T * 0.0003032), 360.0); // mean longitude
         double M = 357.52911 + T * (35999.05029 - 0.0001537 * T);               // mean anomaly
-        double e = 0.016708634 - T * (0.000042037 + 0.0000001267 * T);         // eccentricity
-        double C = sin(M * DEG) * (1.914602 - T * (0.004817 + 0.000014 * T)) + // equation of
-                   sin(2 * M * DEG) * (0.019993 - 0.000101 * T) +              // the centre
+        double e = 0.016708634 - T * (0.000042037 + 0.0000001267 * T);          // eccentricity
+        double C = sin(M * DEG) * (1.914602 - T * (0.004817 + 0.000014 * T)) +  // equation of
+                   sin(2 * M * DEG) * (0.019993 - 0.000101 * T) +               // the centre
                    sin(3 * M * DEG) * 0.000289;
-        double omega = 125.04 - 1934.136 * T;                                  // lunar node
-        double lambda = L0 + C - 0.00569 - 0.00478 * sin(omega * DEG);         // apparent long.
+        double omega = 125.04 - 1934.136 * T;                          // lunar node
+        double lambda = L0 + C - 0.00569 - 0.00478 * sin(omega * DEG); // apparent long.
         double eps0 = 23.0 + (26.0 + (21.448 - T * (46.815 + T * (0.00059 - T * 0.001813))) / 60.0) / 60.0;
-        double eps = eps0 + 0.00256 * cos(omega * DEG);                        // obliquity
+        double eps = eps0 + 0.00256 * cos(omega * DEG); // obliquity
         double decl = asin(sin(eps * DEG) * sin(lambda * DEG));
         // Equation of time (Meeus eq. 28.3, in minutes).
         double y = tan(eps * DEG / 2) * tan(eps * DEG / 2);
@@ -48,8 +48,8 @@ void rs_synth_sun_position(double *azimuth_deg, double *elevation_deg, double la
     if (elevation_deg) *elevation_deg = el;
 }
 
-rs_status rs_synth_sun_position_checked(double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg,
-                                        double unix_time_s, rs_err *err)
+rs_status rs_synth_sun_position_checked(
+    double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg, double unix_time_s, rs_err *err)
 {
     if (!isfinite(lat_deg) || fabs(lat_deg) > 90.0)
         return rs_err_set(err, RS_ERR_INVALID, "lat: %g is outside [-90, 90]", lat_deg);

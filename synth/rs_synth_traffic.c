@@ -10,8 +10,8 @@
 #include <string.h>
 
 #include "core/rs_io.h"
-#include "synth/rs_synth_fleet.h"
 #include "core/rs_rng.h"
+#include "synth/rs_synth_fleet.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -52,8 +52,8 @@ rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs
         errno = 0;
         double w = strtod(num, &stop);
         if (*stop || errno || !isfinite(w) || w < 0)
-            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: weight '%s' of '%s' is not a number >= 0", item,
-                              num, name);
+            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: weight '%s' of '%s' is not a number >= 0", item, num,
+                              name);
         m.weight[c] = w;
         total += w;
         if (!end) break;
@@ -116,8 +116,11 @@ static rs_status traffic_options_check(const rs_synth_traffic_options *o, rs_err
     return RS_OK;
 }
 
-rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, const rs_lanes *lanes,
-                                 const rs_synth_traffic_options *opt, rs_err *err)
+rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles,
+                                 int *N,
+                                 const rs_lanes *lanes,
+                                 const rs_synth_traffic_options *opt,
+                                 rs_err *err)
 {
     *vehicles = NULL;
     *N = 0;
@@ -238,11 +241,13 @@ bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_syn
     return true;
 }
 
-rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N, const rs_synth_randomise_options *opt,
+rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles,
+                                     int *N,
+                                     const rs_synth_randomise_options *opt,
                                      rs_err *err)
 {
-    if (!(opt->sigma_along_m >= 0 && opt->sigma_across_m >= 0 && opt->yaw_range_deg >= 0 &&
-          opt->yaw_range_deg <= 180 && isfinite(opt->sigma_along_m) && isfinite(opt->sigma_across_m)))
+    if (!(opt->sigma_along_m >= 0 && opt->sigma_across_m >= 0 && opt->yaw_range_deg >= 0 && opt->yaw_range_deg <= 180 &&
+          isfinite(opt->sigma_along_m) && isfinite(opt->sigma_across_m)))
         return rs_err_set(err, RS_ERR_INVALID, "randomisation: sigmas must be >= 0 and the yaw range in [0, 180]");
     if (opt->tries < 1) return rs_err_set(err, RS_ERR_INVALID, "randomisation: tries must be >= 1");
     rs_rng rng;

@@ -10,9 +10,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "core/rs_status.h"
 #include "geo/rs_geo.h"
 #include "geo/rs_lanes.h"
-#include "core/rs_status.h"
 #include "synth/rs_synth.h"
 
 #ifdef __cplusplus
@@ -24,13 +24,13 @@ extern "C" {
 // A vehicle of generated traffic (built-in or SUMO). The placement follows synth/rs_synth.h.
 typedef struct {
     rs_synth_class cls;
-    double e_m, n_m;        // footprint centre, site ENU, metres
-    double yaw_deg;         // heading, clockwise from north, [0, 360)
+    double e_m, n_m;                    // footprint centre, site ENU, metres
+    double yaw_deg;                     // heading, clockwise from north, [0, 360)
     double length_m, width_m, height_m; // bounding box, > 0
-    double speed_mps;       // speed (built-in: the one its gap was drawn for; SUMO: FCD speed)
-    int lane;               // index of the lane it was placed on, -1 if unknown (SUMO)
-    uint64_t variant;       // seeds the fleet's shape and paint (rs_synth_vehicle.variant)
-    char id[48];            // "v12" (built-in) or SUMO's vehicle id (truncated, as given)
+    double speed_mps;                   // speed (built-in: the one its gap was drawn for; SUMO: FCD speed)
+    int lane;                           // index of the lane it was placed on, -1 if unknown (SUMO)
+    uint64_t variant;                   // seeds the fleet's shape and paint (rs_synth_vehicle.variant)
+    char id[48];                        // "v12" (built-in) or SUMO's vehicle id (truncated, as given)
 } rs_synth_traffic_vehicle;
 
 // Class mix: relative weights of the classes (any non-negative numbers, at least one > 0).
@@ -47,23 +47,24 @@ void rs_synth_class_mix_default(rs_synth_class_mix *mix);
 
 // Parses "class=weight,class=weight,...": the classes named get these weights, the others 0.
 // RS_ERR_USAGE naming the item at fault (unknown class, bad or negative weight, all zero).
-rs_status rs_synth_class_mix_parse(// out
-                                   rs_synth_class_mix *mix,
-                                   // in
-                                   const char *text, rs_err *err);
+rs_status rs_synth_class_mix_parse( // out
+    rs_synth_class_mix *mix,
+    // in
+    const char *text,
+    rs_err *err);
 
 // The built-in traffic model.
 typedef struct {
     uint64_t seed;
-    int count;              // keep at most this many vehicles (a random subset); 0 = all that fit
+    int count; // keep at most this many vehicles (a random subset); 0 = all that fit
     rs_synth_class_mix mix;
-    double s0_m;            // standstill gap, bumper to bumper (default 2.0 m)
-    double headway_s;       // time headway T (default 1.5 s)
-    double headway_jitter;  // the gap's v*T part is scaled by U(1 - j, 1 + j) (default 0.5)
+    double s0_m;              // standstill gap, bumper to bumper (default 2.0 m)
+    double headway_s;         // time headway T (default 1.5 s)
+    double headway_jitter;    // the gap's v*T part is scaled by U(1 - j, 1 + j) (default 0.5)
     double speed_fraction[2]; // each vehicle's speed: U(a, b) x the lane's speed limit
                               // (default [0, 1]; 13.89 m/s when the lane gives none)
-    bool junction_lanes;    // also fill lanes whose kind is "junction" (default false: their
-                            // vehicles would cross; SUMO handles junctions)
+    bool junction_lanes;      // also fill lanes whose kind is "junction" (default false: their
+                              // vehicles would cross; SUMO handles junctions)
 } rs_synth_traffic_options;
 
 void rs_synth_traffic_options_default(rs_synth_traffic_options *opt);
@@ -79,20 +80,22 @@ void rs_synth_traffic_options_default(rs_synth_traffic_options *opt);
 // variant from the seed.
 // With count > 0, a uniformly drawn subset of count vehicles is kept (in placement order).
 // out: *vehicles (N,) owned (free()), *N. Returns RS_ERR_INVALID for bad options, RS_ERR_NOMEM.
-rs_status rs_synth_traffic_place(// out
-                                 rs_synth_traffic_vehicle **vehicles, int *N,
-                                 // in
-                                 const rs_lanes *lanes, const rs_synth_traffic_options *opt,
-                                 rs_err *err);
+rs_status rs_synth_traffic_place( // out
+    rs_synth_traffic_vehicle **vehicles,
+    int *N,
+    // in
+    const rs_lanes *lanes,
+    const rs_synth_traffic_options *opt,
+    rs_err *err);
 
 // ---- domain randomisation ----
 
 typedef struct {
     uint64_t seed;
-    double sigma_along_m;   // normal offset along the vehicle's heading (default sqrt(0.5) m)
-    double sigma_across_m;  // normal offset across it (default sqrt(0.5) m)
-    double yaw_range_deg;   // heading offset uniform in [-r, r] (default 5 degrees)
-    int tries;              // draws per vehicle before it is dropped (default 20)
+    double sigma_along_m;  // normal offset along the vehicle's heading (default sqrt(0.5) m)
+    double sigma_across_m; // normal offset across it (default sqrt(0.5) m)
+    double yaw_range_deg;  // heading offset uniform in [-r, r] (default 5 degrees)
+    int tries;             // draws per vehicle before it is dropped (default 20)
 } rs_synth_randomise_options;
 
 void rs_synth_randomise_options_default(rs_synth_randomise_options *opt);
@@ -103,10 +106,12 @@ void rs_synth_randomise_options_default(rs_synth_randomise_options *opt);
 // dropped. (The seed paper's "variance of 0.5 m" is read as a variance of 0.5 m^2, sigma =
 // 0.707 m; docs/traffic.md.) The kept vehicles are compacted to the front in their order.
 // in,out: vehicles (N,), *N (the number kept)
-rs_status rs_synth_traffic_randomise(// in,out
-                                     rs_synth_traffic_vehicle *vehicles, int *N,
-                                     // in
-                                     const rs_synth_randomise_options *opt, rs_err *err);
+rs_status rs_synth_traffic_randomise( // in,out
+    rs_synth_traffic_vehicle *vehicles,
+    int *N,
+    // in
+    const rs_synth_randomise_options *opt,
+    rs_err *err);
 
 // Whether the footprints (oriented rectangles length x width at (e, n), yaw) of two vehicles
 // overlap: separating axis theorem over the four edge normals; rectangles that only touch do
@@ -121,7 +126,8 @@ bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_syn
 // atomically (core/rs_io.h).
 rs_status rs_synth_traffic_write_json(const char *path,
                                       // in
-                                      const rs_synth_traffic_vehicle *vehicles, int N,
+                                      const rs_synth_traffic_vehicle *vehicles,
+                                      int N,
                                       rs_err *err);
 
 #ifdef __cplusplus

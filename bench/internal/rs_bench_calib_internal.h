@@ -8,17 +8,13 @@
 #include <stdbool.h>
 
 // The library a method comes from (its marker in the plot).
-typedef enum {
-    RS_BENCH_CALIB_LIB_ROADSIDE,
-    RS_BENCH_CALIB_LIB_OPENCV,
-    RS_BENCH_CALIB_LIB_OPENGV
-} rs_bench_calib_lib;
+typedef enum { RS_BENCH_CALIB_LIB_ROADSIDE, RS_BENCH_CALIB_LIB_OPENCV, RS_BENCH_CALIB_LIB_OPENGV } rs_bench_calib_lib;
 
 typedef struct {
-    const char *name;       // as in the rows and the CSV, e.g. "cv-ransac+lm"
+    const char *name; // as in the rows and the CSV, e.g. "cv-ransac+lm"
     rs_bench_calib_lib lib;
-    int variant;            // roadside: 0 full, 1 init, 2 no prior; OpenCV/OpenGV: the shim's enum
-    bool refine_lm;         // OpenCV: + solvePnPRefineLM
+    int variant;    // roadside: 0 full, 1 init, 2 no prior; OpenCV/OpenGV: the shim's enum
+    bool refine_lm; // OpenCV: + solvePnPRefineLM
 } rs_bench_calib_method;
 
 enum { RS_BENCH_CALIB_NMETHODS = 18 };

@@ -10,25 +10,25 @@
 extern "C" {
 #endif
 
-rs_status rs_calib_opencv_singular_values3(// out
-                                           double *s,       // (3,)
-                                           // in
-                                           const double *p, // (N,3)
-                                           int N,           // >= 1
-                                           rs_err *err);    // may be NULL
+rs_status rs_calib_opencv_singular_values3( // out
+    double *s,                              // (3,)
+    // in
+    const double *p, // (N,3)
+    int N,           // >= 1
+    rs_err *err);    // may be NULL
 
 // Pose from N >= 4 coplanar landmarks by OpenCV's IPPE (Collins & Bartoli, "Infinitesimal
 // Plane-Based Pose Estimation", IJCV 2014) -- cv::solvePnP(SOLVEPNP_IPPE) with K = identity on
 // normalised image coordinates xy = (v_x/v_z, v_y/v_z) of bearings in front of the camera.
 // Returns RS_ERR_EXTERNAL when OpenCV refuses the input (e.g. points not coplanar enough) or
 // throws, RS_ERR_DEGENERATE when it returns no pose or a non-finite one.
-rs_status rs_calib_opencv_ippe(// out
-                               double *rt_cam_ref,   // (6,)
-                               // in
-                               const double *xy,     // (N,2) normalised image coordinates
-                               const double *p_ref,  // (N,3) coplanar landmarks, metres
-                               int N,
-                               rs_err *err);         // may be NULL
+rs_status rs_calib_opencv_ippe( // out
+    double *rt_cam_ref,         // (6,)
+    // in
+    const double *xy,    // (N,2) normalised image coordinates
+    const double *p_ref, // (N,3) coplanar landmarks, metres
+    int N,
+    rs_err *err); // may be NULL
 
 // Writes a camera in OpenCV's own YAML layout (cv::FileStorage), for users of cv::projectPoints:
 // image_width, image_height (int), camera_matrix (3x3 K from fx fy cx cy),

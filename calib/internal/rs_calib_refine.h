@@ -16,8 +16,8 @@
 // DISTORTION frees the rest. Their priors: focal (fx - fx0)/(rel_sigma fx0), center (c - c0)/
 // sigma_px, distortion (d - d0)/sigma.
 #pragma once
-#include <stdbool.h>
 #include <mrcal/mrcal.h>
+#include <stdbool.h>
 
 #include "core/rs_status.h"
 
@@ -27,40 +27,40 @@ extern "C" {
 
 typedef struct {
     int N;
-    const double *p_survey_c_m;       // (N,3) surveyed landmark positions, centred frame, m
-    const double *sigma_enu_m;        // (N,3) survey 1-sigma per axis, m; 0: exact. May be NULL
-    const double *q_px;               // (N,2) observed pixels
-    const double *sigma_px;           // (N,) pixel 1-sigma. May be NULL: 1 px
-    const bool *use;                  // (N,) which landmarks enter the solve. May be NULL: all
+    const double *p_survey_c_m; // (N,3) surveyed landmark positions, centred frame, m
+    const double *sigma_enu_m;  // (N,3) survey 1-sigma per axis, m; 0: exact. May be NULL
+    const double *q_px;         // (N,2) observed pixels
+    const double *sigma_px;     // (N,) pixel 1-sigma. May be NULL: 1 px
+    const bool *use;            // (N,) which landmarks enter the solve. May be NULL: all
     const mrcal_lensmodel_t *lensmodel;
     const double *intrinsics_nominal; // (Nintrinsics,) centre of the intrinsics priors
     bool has_position_prior;
-    double prior_position_c_m[3];     // camera position prior, centred frame, m
+    double prior_position_c_m[3]; // camera position prior, centred frame, m
     double prior_sigma_m;
 } rs_calib_refine_problem;
 
 typedef struct {
-    unsigned refine;                  // rs_calib_refine_flags (rs_calib.h)
-    double robust_scale;              // Cauchy scale, sigmas; <= 0: plain least squares
+    unsigned refine;     // rs_calib_refine_flags (rs_calib.h)
+    double robust_scale; // Cauchy scale, sigmas; <= 0: plain least squares
     int max_iterations;
-    double focal_prior_rel_sigma;     // 0: no prior
-    double center_prior_sigma_px;     // 0: no prior
-    double distortion_prior_sigma;    // 0: no prior
-    bool covariance;                  // compute the covariance and the condition number
-    bool rough;                       // a first (robust) pass: looser tolerances, and reaching
-                                      //   max_iterations is not an error
-    bool marginal;                    // landmarks held at their surveyed positions, each one's
-                                      //   pixel residual whitened by its covariance
-                                      //   sigma_px^2 I + J_p S J_p^T (S its survey variances,
-                                      //   J_p = dq/dp at the STARTING pose): to first order the
-                                      //   same pose and the same block chi2 as the joint solve,
-                                      //   with 6 (+ intrinsics) parameters instead of 3 more per
-                                      //   landmark. For a rough pass; no covariance.
+    double focal_prior_rel_sigma;  // 0: no prior
+    double center_prior_sigma_px;  // 0: no prior
+    double distortion_prior_sigma; // 0: no prior
+    bool covariance;               // compute the covariance and the condition number
+    bool rough;                    // a first (robust) pass: looser tolerances, and reaching
+                                   //   max_iterations is not an error
+    bool marginal;                 // landmarks held at their surveyed positions, each one's
+                                   //   pixel residual whitened by its covariance
+                                   //   sigma_px^2 I + J_p S J_p^T (S its survey variances,
+                                   //   J_p = dq/dp at the STARTING pose): to first order the
+                                   //   same pose and the same block chi2 as the joint solve,
+                                   //   with 6 (+ intrinsics) parameters instead of 3 more per
+                                   //   landmark. For a rough pass; no covariance.
 } rs_calib_refine_options;
 
 typedef struct {
-    double chi2;              // sum of squared whitened residuals (loss NOT applied)
-    int Nresiduals, Nfree;    // counts of the solve; dof = Nresiduals - Nfree
+    double chi2;           // sum of squared whitened residuals (loss NOT applied)
+    int Nresiduals, Nfree; // counts of the solve; dof = Nresiduals - Nfree
     int iterations;
     double condition_number;  // equilibrated Jacobian, landmarks eliminated (NAN: not computed)
     bool covariance_by_ceres; // true: ceres::Covariance; false: the landmark-eliminated QR
@@ -76,26 +76,28 @@ typedef struct {
 //   (unused landmarks: pixel part only, at p_c_m), may be NULL; q_pred_px (N,2), may be NULL.
 // Errors: RS_ERR_NOCONVERGE, RS_ERR_DEGENERATE (covariance rank-deficient, or the projection
 // failed), RS_ERR_EXTERNAL (exception), RS_ERR_INVALID (bad sizes).
-rs_status rs_calib_refine_run(// in,out
-                              double rt_cam_c[6],
-                              double *intrinsics,
-                              double *p_c_m,
-                              // out
-                              rs_calib_refine_summary *summary,
-                              double *cov,
-                              double *block_chi2,
-                              double *q_pred_px,
-                              // in
-                              const rs_calib_refine_problem *problem,
-                              const rs_calib_refine_options *opt,
-                              rs_err *err);
+rs_status rs_calib_refine_run( // in,out
+    double rt_cam_c[6],
+    double *intrinsics,
+    double *p_c_m,
+    // out
+    rs_calib_refine_summary *summary,
+    double *cov,
+    double *block_chi2,
+    double *q_pred_px,
+    // in
+    const rs_calib_refine_problem *problem,
+    const rs_calib_refine_options *opt,
+    rs_err *err);
 
 // For tests: the worst relative disagreement, over every landmark residual block of problem
 // (use ignored) at the given point, between the analytic Jacobians (rt, landmark, all
 // intrinsics) and central differences of the same residuals (step 1e-6 max(1, |x|)).
 // Relative to the largest entry of that Jacobian row. Returns NAN if a residual fails.
-double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const double *intrinsics,
-                                      const double *p_c_m, const rs_calib_refine_problem *problem);
+double rs_calib_refine_jacobian_check(const double rt_cam_c[6],
+                                      const double *intrinsics,
+                                      const double *p_c_m,
+                                      const rs_calib_refine_problem *problem);
 
 #ifdef __cplusplus
 }

@@ -12,34 +12,38 @@ extern "C" {
 
 // The fields of an OpenCV-style camera file, as found (rs_camera.h lists the keys).
 typedef struct {
-    double K[9];        // (3,3) row-major
+    double K[9]; // (3,3) row-major
     double dist[14];
-    int Ndist;          // 0, 4, 5, 8, 12 or 14
-    int width, height;  // 0 when absent
-    bool has_rotation;  // R or rvec given
-    bool has_R;         // R given: rvec is the Rodrigues vector of its nearest rotation
-    double R[9];        // as given, row-major
+    int Ndist;         // 0, 4, 5, 8, 12 or 14
+    int width, height; // 0 when absent
+    bool has_rotation; // R or rvec given
+    bool has_R;        // R given: rvec is the Rodrigues vector of its nearest rotation
+    double R[9];       // as given, row-major
     double rvec[3];
     bool has_t;
     double t[3];
     bool has_P;
-    double P[12];       // (3,4) row-major
+    double P[12]; // (3,4) row-major
 } rs_camera_opencv_file;
 
 // Reads `path` with cv::FileStorage. Errors as "PATH: FIELD: what" (rs_camera_read).
-rs_status rs_camera_opencv_read(// out
-                                rs_camera_opencv_file *f,
-                                // in
-                                const char *path, rs_err *err);
+rs_status rs_camera_opencv_read( // out
+    rs_camera_opencv_file *f,
+    // in
+    const char *path,
+    rs_err *err);
 
 // The text of an OpenCV YAML camera file (rs_camera_write_opencv_yaml). *text is malloc'ed
 // (caller frees). Returns RS_ERR_EXTERNAL when OpenCV throws, RS_ERR_NOMEM.
-rs_status rs_camera_opencv_yaml_text(// out
-                                     char **text,
-                                     // in
-                                     const double *intrinsics, // (4 + Ndistortion,)
-                                     int Ndistortion, const double rt_cam_enu[6], int width,
-                                     int height, rs_err *err);
+rs_status rs_camera_opencv_yaml_text( // out
+    char **text,
+    // in
+    const double *intrinsics, // (4 + Ndistortion,)
+    int Ndistortion,
+    const double rt_cam_enu[6],
+    int width,
+    int height,
+    rs_err *err);
 
 #ifdef __cplusplus
 }

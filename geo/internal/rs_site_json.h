@@ -8,8 +8,7 @@
 
 // Writes `root` to `path` atomically (rs_io_write_file) in `layout` (geo/rs_site_write.h), with
 // a final newline. RS_ERR_NOMEM, RS_ERR_IO.
-rs_status rs_site__write_json(const char *path, const cJSON *root, rs_site_layout layout,
-                              rs_err *err);
+rs_status rs_site__write_json(const char *path, const cJSON *root, rs_site_layout layout, rs_err *err);
 
 // Adds a number, or fails (false) on a non-finite one (cJSON would write null) or no memory.
 bool rs_site__add_number(cJSON *obj, const char *key, double x);

@@ -25,20 +25,20 @@ typedef enum { RS_DOC_HEADING, RS_DOC_PARAGRAPH, RS_DOC_TABLE, RS_DOC_FIGURE } r
 
 typedef struct {
     rs_doc_kind kind;
-    int level;            // heading level 1..3
-    char *text;           // heading / paragraph text, figure caption (owned)
-    int Ncells, Ncols;    // table: Ncells cells, Ncols per row; row 0 is the header
-    char **cells;         // (Ncells,) owned strings, row-major
-    rs_doc_draw_fn draw;  // figure
+    int level;           // heading level 1..3
+    char *text;          // heading / paragraph text, figure caption (owned)
+    int Ncells, Ncols;   // table: Ncells cells, Ncols per row; row 0 is the header
+    char **cells;        // (Ncells,) owned strings, row-major
+    rs_doc_draw_fn draw; // figure
     const void *ctx;
-    double aspect;        // figure height / width
-    bool warning;         // paragraph shown as a warning (coloured box)
+    double aspect; // figure height / width
+    bool warning;  // paragraph shown as a warning (coloured box)
 } rs_doc_block;
 
 typedef struct {
     rs_doc_block *blocks; // owned, (N,)
     int N, capacity;
-    bool nomem;           // an allocation failed: the writers refuse the document
+    bool nomem; // an allocation failed: the writers refuse the document
     int Nfigures;
 } rs_doc;
 
@@ -55,8 +55,7 @@ void rs_doc_free(rs_doc *doc); // NULL-safe; frees the blocks, not the figure co
 
 // Writes the document as one HTML file to `path` (atomically). Figures are rendered at
 // figure_width_px pixels wide. Returns RS_ERR_NOMEM, RS_ERR_IO, RS_ERR_EXTERNAL (cairo).
-rs_status rs_doc_write_html(const rs_doc *doc, const char *title, int figure_width_px, const char *path,
-                            rs_err *err);
+rs_status rs_doc_write_html(const rs_doc *doc, const char *title, int figure_width_px, const char *path, rs_err *err);
 
 // Writes the document as an A4 PDF to `path` (atomically): blocks flow down the page, a block
 // that does not fit starts a new page, tables too long for a page continue on the next with

@@ -35,9 +35,9 @@ typedef struct {
 // (kind "junction") as thin dashed centrelines.
 typedef struct {
     int Nlines;
-    int *start;       // (Nlines+1,) line k is points start[k] .. start[k+1]-1 (owned)
-    double *p_enu_m;  // (start[Nlines],3) owned
-    bool *junction;   // (Nlines,) drawn thin and dashed (owned)
+    int *start;      // (Nlines+1,) line k is points start[k] .. start[k+1]-1 (owned)
+    double *p_enu_m; // (start[Nlines],3) owned
+    bool *junction;  // (Nlines,) drawn thin and dashed (owned)
 } rs_report_lanes;
 
 struct rs_report_ctx;
@@ -45,26 +45,26 @@ struct rs_report_ctx;
 // Everything drawn and tabulated for one camera.
 typedef struct {
     const struct rs_report_ctx *rep;
-    int icam;                        // index in site->cameras
-    int colour;                      // index into the camera palette
-    rs_camera model;           // <id>.cameramodel (owned)
+    int icam;        // index in site->cameras
+    int colour;      // index into the camera palette
+    rs_camera model; // <id>.cameramodel (owned)
     // <id>.json
     double position_enu_m[3], sigma_position_enu_m[3], position_llh[3];
     double yaw_pitch_roll_deg[3], sigma_yaw_pitch_roll_deg[3];
     double rms_px, variance_factor, condition_number;
     int Nused, Nrejected;
-    char *lensmodel;                 // owned
+    char *lensmodel; // owned
     int N;
-    rs_report_landmark *landmarks;   // (N,) owned
-    char **warnings;                 // (Nwarnings,) owned strings
+    rs_report_landmark *landmarks; // (N,) owned
+    char **warnings;               // (Nwarnings,) owned strings
     int Nwarnings;
     // derived for the figures
-    double max_tan;                  // guard: points farther off-axis than this are not drawn
-    double *fov_en_m;                // (Nfov,2) ground seen within range, polygon (owned)
+    double max_tan;   // guard: points farther off-axis than this are not drawn
+    double *fov_en_m; // (Nfov,2) ground seen within range, polygon (owned)
     int Nfov;
-    double magnification;            // residual vectors drawn this many times longer
-    char *background_path;           // owned, NULL: neutral canvas
-    cairo_surface_t *background;     // owned, may be NULL
+    double magnification;        // residual vectors drawn this many times longer
+    char *background_path;       // owned, NULL: neutral canvas
+    cairo_surface_t *background; // owned, may be NULL
     // the audit (rs_audit_site_camera); has_audit false when it failed (audit_error says why)
     bool has_audit;
     rs_audit_result audit;
@@ -74,13 +74,13 @@ typedef struct {
 struct rs_report_ctx {
     const rs_site *site;
     rs_report_lanes lanes;
-    rs_report_camera *cameras;       // (Ncameras,) owned
+    rs_report_camera *cameras; // (Ncameras,) owned
     int Ncameras;
-    double grid_m;                   // ground grid spacing, metres
-    double range_m;                  // field of view on the ground cut at this distance
-    double detection_sigma_px;       // detection noise of the uncertainty maps, px
-    rs_audit_map best_map;           // the smallest 1-sigma of the cameras' maps at each cell
-                                     //   (owned; sigma_m NULL when no camera has a map)
+    double grid_m;             // ground grid spacing, metres
+    double range_m;            // field of view on the ground cut at this distance
+    double detection_sigma_px; // detection noise of the uncertainty maps, px
+    rs_audit_map best_map;     // the smallest 1-sigma of the cameras' maps at each cell
+                               //   (owned; sigma_m NULL when no camera has a map)
 };
 
 // Fills rep->best_map from the cameras' audit maps: a grid of the cameras' cell size spanning

@@ -30,27 +30,27 @@ static inline double rs_simulate__quantize(double x, double inv_quantum)
     return round(x * inv_quantum) / inv_quantum + 0.0;
 }
 #define Q_MODEL 1e6 // .cameramodel precision (mrcal writes "%f")
-#define Q_ENU 1e4   // true landmark positions: 0.1 mm
+#define Q_ENU   1e4 // true landmark positions: 0.1 mm
 
 // A check of one option: `ok` must hold, else RS_ERR_USAGE naming the field (in a function
 // with an `rs_err *err`).
-#define CHECK_OPTION(ok, field, fmt, value)                                                                \
-    do {                                                                                                   \
-        if (!(ok)) return rs_err_set(err, RS_ERR_USAGE, "%s: " fmt " is out of range", field, value);      \
+#define CHECK_OPTION(ok, field, fmt, value)                                                           \
+    do {                                                                                              \
+        if (!(ok)) return rs_err_set(err, RS_ERR_USAGE, "%s: " fmt " is out of range", field, value); \
     } while (0)
 
 // ---- the lens (rs_simulate_lens.c) ----
 
 // Parses a lens model name and checks it against the image size and field of view
 // (RS_ERR_USAGE naming what is wrong). out: *lm.
-rs_status rs_simulate__lens_check(mrcal_lensmodel_t *lm, const char *name, int width_px, int height_px,
-                                  double hfov_deg, rs_err *err);
+rs_status rs_simulate__lens_check(
+    mrcal_lensmodel_t *lm, const char *name, int width_px, int height_px, double hfov_deg, rs_err *err);
 
 // ---- one camera (rs_simulate_camera.c) ----
 
 typedef struct {
-    rs_camera cam;      // the true camera (intrinsics owned)
-    double cos_max;     // points further off the optical axis than the image corners are ignored
+    rs_camera cam;  // the true camera (intrinsics owned)
+    double cos_max; // points further off the optical axis than the image corners are ignored
     double R_cam_enu[9];
     double p_cam_enu_m[3];
     double ypr_deg[3];
@@ -63,31 +63,36 @@ rs_status rs_simulate__camera_field_of_view(rs_simulate__camera *c, rs_err *err)
 
 // Sets the pose of a camera at p_cam looking at `target`, turned by yaw_offset_deg and rolled by
 // roll_deg, pitched so that the target appears at 62% of the image height. Rounds rt to 1e-6.
-void rs_simulate__camera_look_at(rs_simulate__camera *c, const double p_cam[3], const double target[3],
-                                 double yaw_offset_deg, double roll_deg);
+void rs_simulate__camera_look_at(
+    rs_simulate__camera *c, const double p_cam[3], const double target[3], double yaw_offset_deg, double roll_deg);
 
 // Projects p_enu through the camera into q_px (2,). True if the point is in front of the
 // camera, inside its field of view, and projects at least margin_px inside the image.
-bool rs_simulate__camera_sees(const rs_simulate__camera *c, double q_px[2], const double p_enu[3],
-                              double margin_px);
+bool rs_simulate__camera_sees(const rs_simulate__camera *c, double q_px[2], const double p_enu[3], double margin_px);
 
 // Picks of N points: the true pixel plus N(0, sigma) noise kept inside the image (redrawn until
 // it is), or, with probability outlier_fraction, a uniformly random pixel at least
 // outlier_min_px away. out: q_px (N,2), outlier (N,). Returns the number of outliers.
-int rs_simulate__camera_pick(rs_rng *rng, double *q_px, bool *outlier, const double *q_true_px, int N,
-                             const rs_simulate__camera *c, double sigma_px, double outlier_fraction,
+int rs_simulate__camera_pick(rs_rng *rng,
+                             double *q_px,
+                             bool *outlier,
+                             const double *q_true_px,
+                             int N,
+                             const rs_simulate__camera *c,
+                             double sigma_px,
+                             double outlier_fraction,
                              double outlier_min_px);
 
 // Surveyed positions: p_true (N,3) plus N(0, sigma_h) on east and north, N(0, sigma_v) on up.
-void rs_simulate__survey_noise(rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h,
-                               double sigma_v);
+void rs_simulate__survey_noise(
+    rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h, double sigma_v);
 
 // ---- the intersection (rs_simulate_intersection.c) ----
 
 // A surveyable point of the intersection.
 typedef struct {
     double p_enu_m[3];
-    const char *kind;   // static string: "crosswalk_corner", "sign_top", ...
+    const char *kind; // static string: "crosswalk_corner", "sign_top", ...
 } rs_simulate__candidate;
 
 typedef struct {
@@ -98,23 +103,23 @@ typedef struct {
 // Everything generated for a site, before it is written.
 typedef struct {
     int Ncameras;
-    rs_simulate__camera *cam; // (Ncameras,)
-    double *nominal;       // (Ncameras, Nintrinsics) the intrinsics the site's owner believes
-    char (*note)[128];     // (Ncameras,)
-    double *prior_llh;     // (Ncameras, 3) or NULL
+    rs_simulate__camera *cam;     // (Ncameras,)
+    double *nominal;              // (Ncameras, Nintrinsics) the intrinsics the site's owner believes
+    char (*note)[128];            // (Ncameras,)
+    double *prior_llh;            // (Ncameras, 3) or NULL
     rs_simulate__candidates cand; // every surveyable point
-    bool *visible;         // (Ncameras, cand.N)
-    double *q_true_px;     // (Ncameras, cand.N, 2)
-    int *landmark_of;      // (cand.N,) landmark index of a selected candidate, else -1
+    bool *visible;                // (Ncameras, cand.N)
+    double *q_true_px;            // (Ncameras, cand.N, 2)
+    int *landmark_of;             // (cand.N,) landmark index of a selected candidate, else -1
     int Nlandmarks;
-    int *cand_of;          // (Nlandmarks,) candidate index of a landmark
-    double *survey_enu_m;  // (Nlandmarks, 3)
-    double *survey_llh;    // (Nlandmarks, 3)
-    double *q_px;          // (Ncameras, cand.N, 2) picks (selected and visible only)
-    bool *outlier;         // (Ncameras, cand.N)
+    int *cand_of;         // (Nlandmarks,) candidate index of a landmark
+    double *survey_enu_m; // (Nlandmarks, 3)
+    double *survey_llh;   // (Nlandmarks, 3)
+    double *q_px;         // (Ncameras, cand.N, 2) picks (selected and visible only)
+    bool *outlier;        // (Ncameras, cand.N)
     int Nobservations, Noutliers;
     double road_azimuth_deg;
-    double R_road[4];      // road frame -> ENU (2x2 row-major), for the lanes
+    double R_road[4]; // road frame -> ENU (2x2 row-major), for the lanes
 } rs_simulate__site;
 
 // Draws the whole site for the (checked) options: the roads, the cameras on their poles, the

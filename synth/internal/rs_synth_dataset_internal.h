@@ -26,32 +26,32 @@
 // One background an image may be drawn over.
 typedef struct {
     const rs_site_background *src; // the site's record (borrowed from the dataset's site)
-    const char *time_iso;  // its "time" tag (borrowed), may be NULL
-    bool overcast;         // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
-    bool night;            // conditions night: no shadow at all
+    const char *time_iso;          // its "time" tag (borrowed), may be NULL
+    bool overcast;                 // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
+    bool night;                    // conditions night: no shadow at all
     // cache, filled at first use: the image at the output size, its appearance
     rs_image fitted;
-    rs_image linear;       // fitted, decoded from sRGB to linear light
+    rs_image linear; // fitted, decoded from sRGB to linear light
     rs_synth_appearance app;
-    bool app_ok;           // the appearance could be estimated
+    bool app_ok; // the appearance could be estimated
 } rs_synth_dataset__background;
 
 // One camera images are made for.
 typedef struct {
     const char *id;
-    rs_camera cam;         // at the output size
+    rs_camera cam;                    // at the output size
     rs_synth_dataset__background *bg; // (Nbg,) owned: the backgrounds passing the filters
     int Nbg;
     // cache, filled at first use: the POV-Ray canvas of the lens and its resampling map
     bool have_canvas;
     rs_synth_canvas canvas;
-    float *canvas_map;     // owned; NULL when the canvas is the lens itself
+    float *canvas_map; // owned; NULL when the canvas is the lens itself
 } rs_synth_dataset__camera;
 
 typedef struct {
     const rs_synth_dataset_options *opt;
-    rs_site *site;         // owned
-    rs_lanes lanes;        // owned
+    rs_site *site;                  // owned
+    rs_lanes lanes;                 // owned
     rs_synth_dataset__camera *cams; // (Ncams,) owned; image k is made for cams[k % Ncams]
     int Ncams;
     char *split_dir, *parts_dir, *work_root; // owned: DATASET/<split>, parts, work
@@ -69,9 +69,13 @@ void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
 // Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
 // finished). out: *grey: rendered over the grey ground (no background); *seconds_povray grows
 // by the image's povray time.
-rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem,
-                                       rs_synth_dataset__camera *c, bool *grey,
-                                       double *seconds_povray, rs_err *err);
+rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d,
+                                       int k,
+                                       const char *stem,
+                                       rs_synth_dataset__camera *c,
+                                       bool *grey,
+                                       double *seconds_povray,
+                                       rs_err *err);
 
 // Assembles DATASET/annotations/instances_<split>.json from every parts/ file present.
 // out: *Nanns, the annotations in it.

@@ -21,12 +21,10 @@
 #include <mrcal/poseutils.h>
 
 #include "audit/rs_audit.h"
-#include "sim/rs_simulate.h"
 #include "core/rs_pose.h"
 #include "core/rs_rng.h"
+#include "sim/rs_simulate.h"
 #include "tests/common/rs_test.h"
-
-
 
 // ---- oracles ----
 
@@ -63,8 +61,8 @@ static double oracle_angle_deg(const double ra[3], const double rb[3])
     return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 180 / M_PI;
 }
 
-static bool oracle_project(double q[2], const rs_simulate_problem *sp, const double *intrinsics, const double rt[6],
-                           const double p[3])
+static bool oracle_project(
+    double q[2], const rs_simulate_problem *sp, const double *intrinsics, const double rt[6], const double p[3])
 {
     double R[9], pc[3];
     oracle_R(R, rt);
@@ -77,8 +75,12 @@ static bool oracle_project(double q[2], const rs_simulate_problem *sp, const dou
 }
 
 // Ray of q (mrcal_unproject) from the camera centre, intersected with the plane U = h.
-static bool oracle_locate(double g[3], const rs_simulate_problem *sp, const double *intrinsics, const double rt[6],
-                          const double q[2], double h)
+static bool oracle_locate(double g[3],
+                          const rs_simulate_problem *sp,
+                          const double *intrinsics,
+                          const double rt[6],
+                          const double q[2],
+                          double h)
 {
     mrcal_point3_t v;
     mrcal_point2_t qq = {.x = q[0], .y = q[1]};
@@ -93,8 +95,8 @@ static bool oracle_locate(double g[3], const rs_simulate_problem *sp, const doub
     return true;
 }
 
-static rs_calib_problem view(const rs_simulate_problem *sp, double *sigma_enu, double *sigma_px, double s_h,
-                             double s_v, double s_px)
+static rs_calib_problem
+view(const rs_simulate_problem *sp, double *sigma_enu, double *sigma_px, double s_h, double s_v, double s_px)
 {
     for (int i = 0; i < sp->Npoints; i++) {
         sigma_enu[3 * i] = sigma_enu[3 * i + 1] = s_h;
@@ -202,9 +204,9 @@ static void test_leave_one_out(unsigned long long seed)
             double e_px = hypot(qp[0] - qi[0], qp[1] - qi[1]);
             double e_m = sqrt((g[0] - pi[0]) * (g[0] - pi[0]) + (g[1] - pi[1]) * (g[1] - pi[1]) +
                               (g[2] - pi[2]) * (g[2] - pi[2]));
-            double inf_m = sqrt((c_loo[0] - c_full[0]) * (c_loo[0] - c_full[0]) +
-                                (c_loo[1] - c_full[1]) * (c_loo[1] - c_full[1]) +
-                                (c_loo[2] - c_full[2]) * (c_loo[2] - c_full[2]));
+            double inf_m =
+                sqrt((c_loo[0] - c_full[0]) * (c_loo[0] - c_full[0]) + (c_loo[1] - c_full[1]) * (c_loo[1] - c_full[1]) +
+                     (c_loo[2] - c_full[2]) * (c_loo[2] - c_full[2]));
             double inf_deg = oracle_angle_deg(lr.rt_cam_enu, r.solve.rt_cam_enu);
             CHECK(fabs(L->loo_predicted_px[0] - qp[0]) < 1e-6 && fabs(L->loo_predicted_px[1] - qp[1]) < 1e-6,
                   "landmark %d: predicted (%.9f, %.9f) vs brute force (%.9f, %.9f)", i, L->loo_predicted_px[0],
@@ -220,8 +222,8 @@ static void test_leave_one_out(unsigned long long seed)
                   L->loo_normalised);
             // a gross outlier's pick is far from what the others predict
             if (sp->outlier[i])
-                CHECK(L->loo_normalised > 3.717 && L->reason[0], "landmark %d: outlier, loo %.1f sigma, reason '%s'",
-                      i, L->loo_normalised, L->reason);
+                CHECK(L->loo_normalised > 3.717 && L->reason[0], "landmark %d: outlier, loo %.1f sigma, reason '%s'", i,
+                      L->loo_normalised, L->reason);
             checked++;
         }
         rs_calib_result_free(&lr);
@@ -229,8 +231,8 @@ static void test_leave_one_out(unsigned long long seed)
     CHECK(checked >= N - 1, "only %d of %d landmarks compared", checked, N);
     for (int i = 0; i < N; i++)
         if (!r.landmarks[i].inlier) CHECK(r.landmarks[i].reason[0], "landmark %d dropped without a reason", i);
-    printf("leave-one-out (seed %llu): %d landmarks, %d outliers simulated, LOO RMS %.2f px, median %.3f m\n", seed,
-           N, sp->Noutliers, r.loo_rms_px, r.loo_median_m);
+    printf("leave-one-out (seed %llu): %d landmarks, %d outliers simulated, LOO RMS %.2f px, median %.3f m\n", seed, N,
+           sp->Noutliers, r.loo_rms_px, r.loo_median_m);
     rs_audit_result_free(&r);
     rs_simulate_problem_free(sp);
 }
@@ -337,7 +339,8 @@ static void test_map(unsigned long long seed)
         double mc = sqrt(ve + vn), lin = m->sigma_m[k];
         double dist = hypot(p[0] - m->camera_en_m[0], p[1] - m->camera_en_m[1]);
         printf("map (seed %llu): cell at %.1f m from the camera: map %.4f m, Monte Carlo %.4f m (%d samples), "
-               "ratio %.3f\n", seed, dist, lin, mc, n_ok, lin / mc);
+               "ratio %.3f\n",
+               seed, dist, lin, mc, n_ok, lin / mc);
         CHECK(fabs(lin / mc - 1) < 0.10, "cell at %.1f m: map %.4f m vs Monte Carlo %.4f m", dist, lin, mc);
         // rs_audit_ground_sigma through the pixel gives the same number as the cell
         double s_px;
@@ -415,7 +418,8 @@ static void test_moved(unsigned long long seed)
         rs_audit_result_free(&r);
     }
     printf("moved (seed %llu): 0.5 deg detected %d/%d (rotation within %.3f deg); unmoved false alarms %d/%d at "
-           "alpha 0.05\n", seed, detected, Nmoved, worst_rot, alarms, Ndraws);
+           "alpha 0.05\n",
+           seed, detected, Nmoved, worst_rot, alarms, Ndraws);
     // 4 standard deviations either side of 15
     CHECK(alarms >= 1 && alarms <= 31, "false alarm rate %d/%d, expected about 15", alarms, Ndraws);
     rs_simulate_problem_free(sp);
@@ -436,8 +440,8 @@ static void test_errors(void)
     rs_audit_result r;
     rs_err err = {0};
     opt.alpha = 1.5;
-    CHECK(rs_audit_camera(&r, &pb, up, 0, NULL, NULL, NULL, &opt, &err) == RS_ERR_INVALID &&
-              strstr(err.msg, "alpha"), "alpha 1.5: '%s'", err.msg);
+    CHECK(rs_audit_camera(&r, &pb, up, 0, NULL, NULL, NULL, &opt, &err) == RS_ERR_INVALID && strstr(err.msg, "alpha"),
+          "alpha 1.5: '%s'", err.msg);
     rs_audit_result_free(&r);
     opt.alpha = 0.01;
     const double vertical[3] = {1, 0, 0};
@@ -463,8 +467,11 @@ static void test_degeneracy(void)
 {
     rs_test_seed = 0;
     double intrinsics[4] = {800, 800, 499.5, 399.5};
-    const rs_camera cam = {.lensmodel = {.type = MRCAL_LENSMODEL_PINHOLE}, .intrinsics = intrinsics,
-                           .Nintrinsics = 4, .width = 1000, .height = 800};
+    const rs_camera cam = {.lensmodel = {.type = MRCAL_LENSMODEL_PINHOLE},
+                           .intrinsics = intrinsics,
+                           .Nintrinsics = 4,
+                           .width = 1000,
+                           .height = 800};
     const double ypr[3] = {10, -85, 0}, pos[3] = {0, 0, 20};
     double rt[6], p[12 * 3], q[12 * 2], s3[12 * 3], s1[12];
     rs_pose_rt_from_ypr(rt, ypr, pos);

@@ -9,12 +9,12 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "calib/rs_calib.h"
 #include "bench/rs_bench_opencv.h"
+#include "calib/rs_calib.h"
 #include "calib/rs_calib_opengv.h"
+#include "core/rs_pose.h"
 #include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
-#include "core/rs_pose.h"
 
 #define SEED 21
 
@@ -30,8 +30,8 @@ static rs_simulate_problem *noise_free(double elevated_fraction)
     return s;
 }
 
-static void check_pose(const char *name, rs_status st, const rs_err *e, const double rt[6],
-                       const rs_simulate_problem *s, double tol)
+static void check_pose(
+    const char *name, rs_status st, const rs_err *e, const double rt[6], const rs_simulate_problem *s, double tol)
 {
     CHECK(st == RS_OK, "%s: %s: %s", name, rs_strerror(st), e->msg);
     if (st != RS_OK) return;
@@ -72,8 +72,9 @@ int main(void)
         double rt[6];
         bool inlier[20];
         rs_err e = {0};
-        const rs_status st = rs_bench_opencv_pnp(rt, inlier, s->p_enu_true_m, s->q_true_px, s->Npoints,
-                                                 s->camera.intrinsics, s->camera.Nintrinsics - 4, cv[i].m, cv[i].lm, 8.0, &e);
+        const rs_status st =
+            rs_bench_opencv_pnp(rt, inlier, s->p_enu_true_m, s->q_true_px, s->Npoints, s->camera.intrinsics,
+                                s->camera.Nintrinsics - 4, cv[i].m, cv[i].lm, 8.0, &e);
         check_pose(cv[i].name, st, &e, rt, s, cv[i].tol);
         int Nin = 0;
         for (int k = 0; k < s->Npoints; k++) Nin += inlier[k];
@@ -82,7 +83,8 @@ int main(void)
 
     double v[3 * 20];
     CHECK(mrcal_unproject((mrcal_point3_t *)v, (const mrcal_point2_t *)s3d->q_true_px, s3d->Npoints,
-                          &s3d->camera.lensmodel, s3d->camera.intrinsics), "mrcal_unproject");
+                          &s3d->camera.lensmodel, s3d->camera.intrinsics),
+          "mrcal_unproject");
     for (int i = 0; i < s3d->Npoints; i++) {
         const double n = sqrt(v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]);
         for (int k = 0; k < 3; k++) v[3 * i + k] /= n;
@@ -109,8 +111,9 @@ int main(void)
     // refusals: IPPE on landmarks that are not coplanar, OpenGV with 3 points, bad distortion
     double rt[6], Rt[12];
     rs_err e = {0};
-    rs_status st = rs_bench_opencv_pnp(rt, NULL, s3d->p_enu_true_m, s3d->q_true_px, s3d->Npoints, s3d->camera.intrinsics,
-                                       s3d->camera.Nintrinsics - 4, RS_BENCH_OPENCV_PNP_IPPE, false, 8.0, &e);
+    rs_status st =
+        rs_bench_opencv_pnp(rt, NULL, s3d->p_enu_true_m, s3d->q_true_px, s3d->Npoints, s3d->camera.intrinsics,
+                            s3d->camera.Nintrinsics - 4, RS_BENCH_OPENCV_PNP_IPPE, false, 8.0, &e);
     printf("IPPE, 3-D landmarks: %s: %s\n", rs_strerror(st), e.msg);
     CHECK(st == RS_ERR_EXTERNAL || st == RS_ERR_DEGENERATE, "IPPE on 3-D landmarks: %s", rs_strerror(st));
     CHECK(st == RS_OK || strlen(e.msg) > 10, "IPPE refusal without a message");

@@ -67,14 +67,18 @@ static bool brute_crb(double cov[36], const rs_simulate_problem *s, double sigma
                 memcpy(rt, s->camera.rt_cam_enu, sizeof rt);
                 memcpy(pp, p, sizeof pp);
                 const double d = sgn ? -h : h;
-                if (j < 6) rt[j] += d;
-                else pp[j - 6] += d;
+                if (j < 6)
+                    rt[j] += d;
+                else
+                    pp[j - 6] += d;
                 project(sgn ? qb : qa, s, rt, pp);
             }
             for (int k = 0; k < 2; k++) {
                 const double g = (qa[k] - qb[k]) / (2 * h) / sigma_px;
-                if (j < 6) Jr[k][j] = g;
-                else Jp[k][j - 6] = g;
+                if (j < 6)
+                    Jr[k][j] = g;
+                else
+                    Jp[k][j - 6] = g;
             }
         }
         // Fisher blocks of this landmark: A = Jr'Jr, B = Jr'Jp, D = Jp'Jp + I/sigma_m^2
@@ -119,8 +123,12 @@ int main(void)
             sig_px[i] = sigma_px;
             for (int k = 0; k < 3; k++) sig_enu[3 * i + k] = sigma_m;
         }
-        const rs_calib_problem cp = {.N = s->Npoints, .p_enu_m = s->p_enu_true_m, .sigma_enu_m = sig_enu,
-                                     .q_px = s->q_true_px, .sigma_px = sig_px, .camera = &s->camera};
+        const rs_calib_problem cp = {.N = s->Npoints,
+                                     .p_enu_m = s->p_enu_true_m,
+                                     .sigma_enu_m = sig_enu,
+                                     .q_px = s->q_true_px,
+                                     .sigma_px = sig_px,
+                                     .camera = &s->camera};
         rs_calib_options opt;
         rs_calib_options_default(&opt);
         opt.robust_scale = 0;

@@ -16,16 +16,20 @@
 #include "test_init_gen.h"
 #include "tests/common/rs_test.h"
 
-
 // The terrains: a flat road, a road with crown and kerbs (nearly planar), street furniture.
 enum { NTERRAIN = 3 };
 static const double terrain_relief_m[NTERRAIN] = {0.0, 0.3, 8.0};
 static const char *const terrain_name[NTERRAIN] = {"planar", "nearly-planar", "3d"};
 
-
 // tg_make, or a failed check naming the test and seed.
-static bool make(tg_problem *pb, const char *what, uint64_t seed, tg_lens lens, double relief_m,
-                 int N, double noise_px, double outlier_fraction)
+static bool make(tg_problem *pb,
+                 const char *what,
+                 uint64_t seed,
+                 tg_lens lens,
+                 double relief_m,
+                 int N,
+                 double noise_px,
+                 double outlier_fraction)
 {
     const bool ok = tg_make(pb, seed, lens, relief_m, N, noise_px, outlier_fraction);
     CHECK(ok, "%s seed %llu: generator failed", what, (unsigned long long)seed);
@@ -60,12 +64,11 @@ static void test_noise_free(void)
                 rs_calib_init_result res;
                 bool inl[TG_NMAX];
                 rs_err err = {0};
-                const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics,
-                                                        pb.p_enu_m, pb.q_px, N, NULL, &err);
+                const rs_status st =
+                    rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, N, NULL, &err);
                 Ntrials++;
-                CHECK(st == RS_OK, "noise-free seed %llu %s %s N=%d: status %d: %s",
-                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], N, st,
-                      err.msg);
+                CHECK(st == RS_OK, "noise-free seed %llu %s %s N=%d: status %d: %s", (unsigned long long)seed,
+                      tg_lens_name(lens), terrain_name[terrain], N, st, err.msg);
                 if (st) continue;
                 Nnonminimal += strstr(res.method, " + ") != NULL;
                 const double rot = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu);
@@ -74,16 +77,16 @@ static void test_noise_free(void)
                 CHECK(rot < 1e-6 && pos < 1e-6 && res.rms_px < 1e-4 && res.Ninliers == N,
                       "noise-free seed %llu %s %s N=%d: rotation error %.3g rad, position "
                       "error %.3g of range, rms %.3g px, %d/%d inliers, planar judged %d, %s",
-                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], N, rot, pos,
-                      res.rms_px, res.Ninliers, N, res.planar, res.method);
+                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], N, rot, pos, res.rms_px,
+                      res.Ninliers, N, res.planar, res.method);
                 CHECK(!planar || res.planar, "noise-free seed %llu %s N=%d: planar set not judged planar",
                       (unsigned long long)seed, tg_lens_name(lens), N);
                 if (!(rot <= worst_rot)) worst_rot = rot;
                 if (!(pos <= worst_pos)) worst_pos = pos;
             }
     printf("noise-free: %d trials, worst rotation error %.3g rad, worst position error %.3g of "
-           "range (tolerance 1e-6); non-minimal pose kept in %d\n", Ntrials, worst_rot, worst_pos,
-           Nnonminimal);
+           "range (tolerance 1e-6); non-minimal pose kept in %d\n",
+           Ntrials, worst_rot, worst_pos, Nnonminimal);
 }
 
 // 2. 1 px noise + 30% gross outliers (moved >= 25 px), N = 20.
@@ -110,8 +113,8 @@ static void test_outliers(void)
                 bool inl[TG_NMAX];
                 rs_err err = {0};
                 const rs_status st = tg_init_pose(&res, inl, &pb, seed, &err);
-                CHECK(st == RS_OK, "outliers seed %llu %s %s: status %d: %s",
-                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], st, err.msg);
+                CHECK(st == RS_OK, "outliers seed %llu %s %s: status %d: %s", (unsigned long long)seed,
+                      tg_lens_name(lens), terrain_name[terrain], st, err.msg);
                 if (st) continue;
                 Nnonminimal += strstr(res.method, " + ") != NULL;
                 for (int i = 0; i < N; i++) {
@@ -126,9 +129,11 @@ static void test_outliers(void)
                 emodel[n] = tg_model_error_px(&pb, res.rt_cam_enu, pb.rt_cam_enu);
                 rot[n] = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu) * 180 / M_PI;
                 pos[n] = tg_position_error_m(res.rt_cam_enu, pb.rt_cam_enu) / pb.range_m;
-                CHECK(emodel[n] < 5.0, "outliers seed %llu %s %s: e_model %.3g px >= 5 px "
-                      "(rotation %.3g deg, position %.3g of range, %s)", (unsigned long long)seed,
-                      tg_lens_name(lens), terrain_name[terrain], emodel[n], rot[n], pos[n], res.method);
+                CHECK(emodel[n] < 5.0,
+                      "outliers seed %llu %s %s: e_model %.3g px >= 5 px "
+                      "(rotation %.3g deg, position %.3g of range, %s)",
+                      (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], emodel[n], rot[n], pos[n],
+                      res.method);
                 n++;
             }
     const double recall = Nout ? (double)Nout_flagged / Nout : 0.0;
@@ -141,23 +146,22 @@ static void test_outliers(void)
            "median %.3g deg, 95%% %.3g deg; position error median %.3g, 95%% %.3g of range; "
            "non-minimal pose kept in %d\n",
            N, n, recall, Nout_flagged, Nout, kept, med, n ? percentile(emodel, n, 95) : 0,
-           n ? percentile(emodel, n, 100) : 0, n ? percentile(rot, n, 50) : 0,
-           n ? percentile(rot, n, 95) : 0, n ? percentile(pos, n, 50) : 0, n ? percentile(pos, n, 95) : 0,
-           Nnonminimal);
+           n ? percentile(emodel, n, 100) : 0, n ? percentile(rot, n, 50) : 0, n ? percentile(rot, n, 95) : 0,
+           n ? percentile(pos, n, 50) : 0, n ? percentile(pos, n, 95) : 0, Nnonminimal);
 }
 
-static void expect_error(const char *what, rs_status want, const char *needle,
-                         const tg_problem *pb, const double *p, const double *q, int N)
+static void expect_error(
+    const char *what, rs_status want, const char *needle, const tg_problem *pb, const double *p, const double *q, int N)
 {
     rs_calib_init_result res;
     bool inl[TG_NMAX + 1];
     rs_err err = {0};
-    const rs_status st = rs_calib_init_pose(&res, inl, &pb->lensmodel, pb->intrinsics, p, q, N,
-                                            NULL, &err);
-    CHECK(st == want && strstr(err.msg, needle), "%s: status %d (want %d), message '%s' (want "
-          "'%s')", what, st, want, err.msg, needle);
-    for (int i = 0; i < N && i < TG_NMAX; i++)
-        CHECK(!inl[i], "%s: observation %d flagged inlier on failure", what, i);
+    const rs_status st = rs_calib_init_pose(&res, inl, &pb->lensmodel, pb->intrinsics, p, q, N, NULL, &err);
+    CHECK(st == want && strstr(err.msg, needle),
+          "%s: status %d (want %d), message '%s' (want "
+          "'%s')",
+          what, st, want, err.msg, needle);
+    for (int i = 0; i < N && i < TG_NMAX; i++) CHECK(!inl[i], "%s: observation %d flagged inlier on failure", what, i);
     printf("degenerate %-22s -> %d: %s\n", what, st, err.msg);
 }
 
@@ -189,8 +193,7 @@ static void test_degenerate(void)
     // collinear: all on the segment between landmarks 0 and 1, pixels through the truth pose
     for (int i = 0; i < 12; i++) {
         const double s = i / 11.0;
-        for (int k = 0; k < 3; k++)
-            p[3 * i + k] = pb.p_enu_m[k] + s * (pb.p_enu_m[3 + k] - pb.p_enu_m[k]);
+        for (int k = 0; k < 3; k++) p[3 * i + k] = pb.p_enu_m[k] + s * (pb.p_enu_m[3 + k] - pb.p_enu_m[k]);
         mrcal_point3_t pc;
         mrcal_transform_point_rt(pc.xyz, NULL, NULL, pb.rt_cam_enu, &p[3 * i]);
         mrcal_project((mrcal_point2_t *)&q[2 * i], NULL, NULL, &pc, 1, &pb.lensmodel, pb.intrinsics);
@@ -199,8 +202,7 @@ static void test_degenerate(void)
 
     // tiny patch: the landmark cloud shrunk 1000x about landmark 0, seen through the truth pose
     for (int i = 0; i < 12; i++) {
-        for (int k = 0; k < 3; k++)
-            p[3 * i + k] = pb.p_enu_m[k] + 1e-3 * (pb.p_enu_m[3 * i + k] - pb.p_enu_m[k]);
+        for (int k = 0; k < 3; k++) p[3 * i + k] = pb.p_enu_m[k] + 1e-3 * (pb.p_enu_m[3 * i + k] - pb.p_enu_m[k]);
         mrcal_point3_t pc;
         mrcal_transform_point_rt(pc.xyz, NULL, NULL, pb.rt_cam_enu, &p[3 * i]);
         mrcal_project((mrcal_point2_t *)&q[2 * i], NULL, NULL, &pc, 1, &pb.lensmodel, pb.intrinsics);
@@ -230,10 +232,10 @@ static void test_degenerate(void)
     opt.ransac_threshold_px = NAN;
     rs_calib_init_result res;
     rs_err err = {0};
-    const rs_status st = rs_calib_init_pose(&res, NULL, &pb.lensmodel, pb.intrinsics, pb.p_enu_m,
-                                            pb.q_px, 12, &opt, &err);
-    CHECK(st == RS_ERR_INVALID && strstr(err.msg, "ransac_threshold_px"),
-          "NaN threshold: status %d, '%s'", st, err.msg);
+    const rs_status st =
+        rs_calib_init_pose(&res, NULL, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, 12, &opt, &err);
+    CHECK(st == RS_ERR_INVALID && strstr(err.msg, "ransac_threshold_px"), "NaN threshold: status %d, '%s'", st,
+          err.msg);
 }
 
 // 4. Same input and seed, same answer, bit for bit.
@@ -244,10 +246,12 @@ static void test_deterministic(void)
     if (!make(&pb, "deterministic", seed, TG_OPENCV8, 0.0, 25, 1.0, 0.3)) return;
     rs_calib_init_result a, b;
     bool ia[TG_NMAX], ib[TG_NMAX];
-    const rs_status sa = rs_calib_init_pose(&a, ia, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, pb.N, NULL, NULL);
-    const rs_status sb = rs_calib_init_pose(&b, ib, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, pb.N, NULL, NULL);
+    const rs_status sa =
+        rs_calib_init_pose(&a, ia, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, pb.N, NULL, NULL);
+    const rs_status sb =
+        rs_calib_init_pose(&b, ib, &pb.lensmodel, pb.intrinsics, pb.p_enu_m, pb.q_px, pb.N, NULL, NULL);
     CHECK(sa == RS_OK && sb == RS_OK && !memcmp(a.rt_cam_enu, b.rt_cam_enu, sizeof(a.rt_cam_enu)) &&
-          !memcmp(ia, ib, (size_t)pb.N * sizeof(bool)),
+              !memcmp(ia, ib, (size_t)pb.N * sizeof(bool)),
           "deterministic seed %llu: two identical calls differ", (unsigned long long)seed);
 }
 
@@ -259,8 +263,7 @@ static void time_calls(void)
             enum { REPS = 100 };
             tg_problem pb[8];
             for (int k = 0; k < 8; k++)
-                if (!tg_make(&pb[k], 5000 + (uint64_t)k, (tg_lens)lens, 0.0, 20, 1.0, outliers ? 0.3 : 0.0))
-                    return;
+                if (!tg_make(&pb[k], 5000 + (uint64_t)k, (tg_lens)lens, 0.0, 20, 1.0, outliers ? 0.3 : 0.0)) return;
             struct timespec t0, t1;
             clock_gettime(CLOCK_MONOTONIC, &t0);
             for (int rep = 0; rep < REPS; rep++) {

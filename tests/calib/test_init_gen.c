@@ -17,10 +17,7 @@ static uint64_t tg_next(tg_rng *r)
     return z ^ (z >> 31);
 }
 
-double tg_uniform(tg_rng *r, double a, double b)
-{
-    return a + (b - a) * ((double)(tg_next(r) >> 11) * 0x1.0p-53);
-}
+double tg_uniform(tg_rng *r, double a, double b) { return a + (b - a) * ((double)(tg_next(r) >> 11) * 0x1.0p-53); }
 
 double tg_gauss(tg_rng *r)
 {
@@ -95,8 +92,8 @@ static bool project(mrcal_point2_t *q, const tg_problem *pb, const double *rt, c
     return pc.z > 0 && mrcal_project(q, NULL, NULL, &pc, 1, &pb->lensmodel, pb->intrinsics);
 }
 
-bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
-             double outlier_fraction)
+bool tg_make(
+    tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px, double outlier_fraction)
 {
     if (N < 0 || N > TG_NMAX) return false;
     memset(pb, 0, sizeof(*pb));
@@ -125,8 +122,7 @@ bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N
     for (int i = 0; i < N; i++) {
         for (;;) {
             if (++attempts > 100000) return false;
-            const mrcal_point2_t q = {.xy = {tg_uniform(&r, 20, pb->width - 21),
-                                              tg_uniform(&r, 20, pb->height - 21)}};
+            const mrcal_point2_t q = {.xy = {tg_uniform(&r, 20, pb->width - 21), tg_uniform(&r, 20, pb->height - 21)}};
             mrcal_point3_t v;
             if (!mrcal_unproject(&v, &q, 1, &pb->lensmodel, pb->intrinsics)) continue;
             double v_enu[3];
@@ -175,14 +171,12 @@ bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N
     return true;
 }
 
-rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem *pb,
-                       uint64_t seed, rs_err *err)
+rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem *pb, uint64_t seed, rs_err *err)
 {
     rs_calib_init_options opt;
     rs_calib_init_options_default(&opt);
     opt.seed = seed;
-    return rs_calib_init_pose(res, inlier, &pb->lensmodel, pb->intrinsics, pb->p_enu_m, pb->q_px,
-                              pb->N, &opt, err);
+    return rs_calib_init_pose(res, inlier, &pb->lensmodel, pb->intrinsics, pb->p_enu_m, pb->q_px, pb->N, &opt, err);
 }
 
 double tg_rotation_error_rad(const double *rt_a, const double *rt_b)

@@ -21,20 +21,22 @@ extern "C" {
 
 typedef enum { TG_PINHOLE, TG_OPENCV8, TG_CAHVOR, TG_NLENS } tg_lens;
 
-typedef struct { uint64_t state; } tg_rng;
+typedef struct {
+    uint64_t state;
+} tg_rng;
 
 typedef struct {
     mrcal_lensmodel_t lensmodel;
     double intrinsics[16];
-    int width, height;                  // image size, pixels
-    double rt_cam_enu[6];               // truth pose
-    double c_enu_m[3];                  // truth camera position
-    double range_m;                     // mean camera-landmark distance
+    int width, height;    // image size, pixels
+    double rt_cam_enu[6]; // truth pose
+    double c_enu_m[3];    // truth camera position
+    double range_m;       // mean camera-landmark distance
     int N;
-    double p_enu_m[3 * TG_NMAX];        // (N,3) landmarks
-    double q_true_px[2 * TG_NMAX];      // (N,2) noise-free pixels
-    double q_px[2 * TG_NMAX];           // (N,2) observed pixels
-    bool outlier[TG_NMAX];              // (N,) gross mistakes
+    double p_enu_m[3 * TG_NMAX];   // (N,3) landmarks
+    double q_true_px[2 * TG_NMAX]; // (N,2) noise-free pixels
+    double q_px[2 * TG_NMAX];      // (N,2) observed pixels
+    bool outlier[TG_NMAX];         // (N,) gross mistakes
 } tg_problem;
 
 void tg_seed(tg_rng *r, uint64_t seed);
@@ -43,12 +45,11 @@ double tg_gauss(tg_rng *r);
 const char *tg_lens_name(tg_lens lens);
 
 // Fills pb. Returns false if no valid layout was found (never with sane arguments).
-bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
-             double outlier_fraction);
+bool tg_make(
+    tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px, double outlier_fraction);
 
 // rs_calib_init_pose() on pb with the default options and RANSAC seed `seed`.
-rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem *pb,
-                       uint64_t seed, rs_err *err);
+rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem *pb, uint64_t seed, rs_err *err);
 
 // R_enu_cam from yaw/pitch/roll (degrees), docs/conventions.md.
 void tg_R_enu_cam(double *R, double yaw_deg, double pitch_deg, double roll_deg);

@@ -54,8 +54,7 @@ bool opencv_pose(double *rt_cam_enu, std::vector<bool> &inlier, const tg_problem
     if (pb.lensmodel.type == MRCAL_LENSMODEL_OPENCV8) dist.assign(pb.intrinsics + 4, pb.intrinsics + 12);
     cv::Mat rvec, tvec;
     std::vector<int> inl;
-    if (!cv::solvePnPRansac(obj, img, K, dist, rvec, tvec, false, 500, 8.0f, 0.999, inl))
-        return false;
+    if (!cv::solvePnPRansac(obj, img, K, dist, rvec, tvec, false, 500, 8.0f, 0.999, inl)) return false;
     double rt_cam_c[6], rt_c_enu[6] = {0, 0, 0, -c[0], -c[1], -c[2]};
     for (int k = 0; k < 3; k++) {
         rt_cam_c[k] = rvec.at<double>(k);
@@ -101,9 +100,10 @@ int main()
                 const double ec = cv_ok ? tg_model_error_px(&pb, rt_cv, pb.rt_cam_enu) : INFINITY;
                 if (!(ec < 5.0)) Ncv_fail++;
                 if (ec < 5.0 && !(eo < 5.0)) {
-                    std::fprintf(stderr, "FAIL seed %llu %s relief %g m: OpenCV e_model %.3g px, ours %.3g px "
-                                 "(status %d %s)\n", (unsigned long long)seed, tg_lens_name(lens), relief, ec, eo,
-                                 st, err.msg);
+                    std::fprintf(stderr,
+                                 "FAIL seed %llu %s relief %g m: OpenCV e_model %.3g px, ours %.3g px "
+                                 "(status %d %s)\n",
+                                 (unsigned long long)seed, tg_lens_name(lens), relief, ec, eo, st, err.msg);
                     Nfail++;
                 }
                 for (int i = 0; i < N; i++)
@@ -120,15 +120,17 @@ int main()
             std::printf("%s relief %g m: %d trials; e_model median ours %.3g px, OpenCV %.3g px; outlier "
                         "recall ours %.4f, OpenCV %.4f; OpenCV poses off by >= 5 px: %d; time per call ours "
                         "%.0f us, OpenCV %.0f us\n",
-                        tg_lens_name(lens), relief, TRIALS, mo, mc, ro, rc, Ncv_fail,
-                        1e6 * t_ours / TRIALS, 1e6 * t_cv / TRIALS);
+                        tg_lens_name(lens), relief, TRIALS, mo, mc, ro, rc, Ncv_fail, 1e6 * t_ours / TRIALS,
+                        1e6 * t_cv / TRIALS);
             if (!(mo <= 2.0 * mc)) {
-                std::fprintf(stderr, "FAIL %s relief %g m (seeds 2001..%d): median e_model %.3g px > 2 x OpenCV's %.3g px\n",
+                std::fprintf(stderr,
+                             "FAIL %s relief %g m (seeds 2001..%d): median e_model %.3g px > 2 x OpenCV's %.3g px\n",
                              tg_lens_name(lens), relief, 2000 + TRIALS, mo, mc);
                 Nfail++;
             }
             if (!(ro >= rc - 0.01)) {
-                std::fprintf(stderr, "FAIL %s relief %g m (seeds 2001..%d): outlier recall %.4f < OpenCV's %.4f - 0.01\n",
+                std::fprintf(stderr,
+                             "FAIL %s relief %g m (seeds 2001..%d): outlier recall %.4f < OpenCV's %.4f - 0.01\n",
                              tg_lens_name(lens), relief, 2000 + TRIALS, ro, rc);
                 Nfail++;
             }

@@ -6,7 +6,8 @@
 #include "calib/rs_calib.h"
 #include "test_solve_gen.h"
 
-int main(void) {
+int main(void)
+{
     for (int lens = 0; lens < 3; lens++) {
         gen_rng rng;
         gen_seed(&rng, 900 + (uint64_t)lens);
@@ -18,8 +19,7 @@ int main(void) {
         const double n[3] = {0, 0, 1};
         for (int k = 0; k < 40; k++) {
             // pixels in the lower two thirds of the image: below the horizon for these cameras
-            const double q[2] = {gen_uniform(&rng, 0, g.width - 1),
-                                 gen_uniform(&rng, g.height / 3.0, g.height - 1)};
+            const double q[2] = {gen_uniform(&rng, 0, g.width - 1), gen_uniform(&rng, g.height / 3.0, g.height - 1)};
             double p[3];
             rs_err err = {0};
             const rs_camera cam = gen_camera(&g, g.rt_true);

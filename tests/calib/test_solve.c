@@ -10,20 +10,21 @@
 
 #include <mrcal/poseutils.h>
 
-#include "calib/rs_calib.h"
 #include "calib/internal/rs_calib_refine.h"
-#include "test_solve_gen.h"
+#include "calib/rs_calib.h"
 #include "core/rs_pose.h"
-
+#include "test_solve_gen.h"
 
 static const char *lens_name[] = {"PINHOLE", "OPENCV8", "CAHVOR"};
 
-static double norm3(const double *a, const double *b) {
+static double norm3(const double *a, const double *b)
+{
     return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 // Noise-free: the truth to 1e-9 relative (rotation in rad, position relative to the range).
-static void test_noise_free(void) {
+static void test_noise_free(void)
+{
     double worst_r = 0, worst_c = 0;
     for (int lens = 0; lens < 3; lens++)
         for (uint64_t seed = 1; seed <= 10; seed++) {
@@ -51,10 +52,10 @@ static void test_noise_free(void) {
                 const double dc = norm3(res.position_enu_m, g.position_true) / g.mean_range_m;
                 worst_r = fmax(worst_r, dr);
                 worst_c = fmax(worst_c, dc);
-                CHECK(dr < 1e-9 && dc < 1e-9, "%s seed %llu N %d: |dr| %.3g rad, |dC|/range %.3g",
-                      lens_name[lens], (unsigned long long)seed, N, dr, dc);
-                CHECK(res.Ninliers == N, "%s seed %llu: %d of %d inliers", lens_name[lens],
-                      (unsigned long long)seed, res.Ninliers, N);
+                CHECK(dr < 1e-9 && dc < 1e-9, "%s seed %llu N %d: |dr| %.3g rad, |dC|/range %.3g", lens_name[lens],
+                      (unsigned long long)seed, N, dr, dc);
+                CHECK(res.Ninliers == N, "%s seed %llu: %d of %d inliers", lens_name[lens], (unsigned long long)seed,
+                      res.Ninliers, N);
                 CHECK(res.rms_px < 1e-6, "rms %g", res.rms_px);
             }
             rs_calib_result_free(&res);
@@ -63,7 +64,8 @@ static void test_noise_free(void) {
 }
 
 // A ground pixel maps back to its ground point (OPENCV8, CAHVOR).
-static void test_locate_ground(void) {
+static void test_locate_ground(void)
+{
     double worst = 0;
     for (int lens = 1; lens < 3; lens++) {
         gen_rng rng;
@@ -95,7 +97,8 @@ static void test_locate_ground(void) {
 
 // --refine focal from x2 and x0.5 (on the search grid) and x1.3, x0.63 (off it): within 4 of
 // its reported sigmas (1 px, 0.3 m noise).
-static void test_focal(void) {
+static void test_focal(void)
+{
     const double factors[] = {2.0, 0.5, 1.3, 0.63};
     for (int lens = 0; lens < 3; lens++)
         for (int fi = 0; fi < 4; fi++)
@@ -115,17 +118,17 @@ static void test_focal(void) {
                 rs_calib_result res;
                 rs_err err = {0};
                 rs_status st = rs_calib_solve(&res, &pb, &opt, &err);
-                CHECK(st == RS_OK, "%s x%g seed %llu: %s", lens_name[lens], factors[fi],
-                      (unsigned long long)seed, err.msg);
+                CHECK(st == RS_OK, "%s x%g seed %llu: %s", lens_name[lens], factors[fi], (unsigned long long)seed,
+                      err.msg);
                 if (st == RS_OK) {
                     const double df = res.intrinsics[0] - g.intrinsics[0];
                     const double sf = res.sigma_intrinsics[0];
                     printf("focal %s x%g seed %llu: f %.2f (truth %.0f) sigma %.2f, ratio fy/fx %.12f, %s\n",
-                           lens_name[lens], factors[fi], (unsigned long long)seed, res.intrinsics[0],
-                           g.intrinsics[0], sf, res.intrinsics[1] / res.intrinsics[0], res.method);
+                           lens_name[lens], factors[fi], (unsigned long long)seed, res.intrinsics[0], g.intrinsics[0],
+                           sf, res.intrinsics[1] / res.intrinsics[0], res.method);
                     CHECK(sf > 0 && sf < 0.05 * g.intrinsics[0] && fabs(df) < 4.0 * sf,
-                          "%s x%g seed %llu: focal %.3f truth %.3f sigma %.3f", lens_name[lens],
-                          factors[fi], (unsigned long long)seed, res.intrinsics[0], g.intrinsics[0], sf);
+                          "%s x%g seed %llu: focal %.3f truth %.3f sigma %.3f", lens_name[lens], factors[fi],
+                          (unsigned long long)seed, res.intrinsics[0], g.intrinsics[0], sf);
                     CHECK(fabs(res.intrinsics[1] / res.intrinsics[0] - 1.0) < 1e-12, "aspect changed");
                 }
                 rs_calib_result_free(&res);
@@ -134,7 +137,8 @@ static void test_focal(void) {
 
 // --refine focal+center (and +distortion): nominal focal 10% long, centre 20 px and 15 px off,
 // distortion 20% off: the focal length and the centre within 4 reported sigmas.
-static void test_focal_center(void) {
+static void test_focal_center(void)
+{
     for (int lens = 0; lens < 3; lens++)
         for (int mode = 0; mode < 2; mode++)
             for (uint64_t seed = 3000; seed < 3004; seed++) {
@@ -153,25 +157,27 @@ static void test_focal_center(void) {
                 rs_calib_problem pb = gen_view(&g, nominal);
                 rs_calib_options opt;
                 rs_calib_options_default(&opt);
-                opt.refine = RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER |
-                             (mode ? RS_CALIB_REFINE_DISTORTION : 0);
+                opt.refine = RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER | (mode ? RS_CALIB_REFINE_DISTORTION : 0);
                 rs_calib_result res;
                 rs_err err = {0};
                 rs_status st = rs_calib_solve(&res, &pb, &opt, &err);
-                CHECK(st == RS_OK, "%s mode %d seed %llu: %s", lens_name[lens], mode,
-                      (unsigned long long)seed, err.msg);
+                CHECK(st == RS_OK, "%s mode %d seed %llu: %s", lens_name[lens], mode, (unsigned long long)seed,
+                      err.msg);
                 for (int k = 0; k < 4 && st == RS_OK; k++) {
                     const double z = (res.intrinsics[k] - g.intrinsics[k]) / res.sigma_intrinsics[k];
-                    CHECK(res.sigma_intrinsics[k] > 0 && fabs(z) < 4, "%s mode %d seed %llu: intrinsic %d "
-                          "%.3f truth %.3f sigma %.3f", lens_name[lens], mode, (unsigned long long)seed,
-                          k, res.intrinsics[k], g.intrinsics[k], res.sigma_intrinsics[k]);
+                    CHECK(res.sigma_intrinsics[k] > 0 && fabs(z) < 4,
+                          "%s mode %d seed %llu: intrinsic %d "
+                          "%.3f truth %.3f sigma %.3f",
+                          lens_name[lens], mode, (unsigned long long)seed, k, res.intrinsics[k], g.intrinsics[k],
+                          res.sigma_intrinsics[k]);
                 }
                 rs_calib_result_free(&res);
             }
 }
 
 // A tight prior on the camera position: the solution follows it and its sigma shrinks.
-static void test_position_prior(void) {
+static void test_position_prior(void)
+{
     for (uint64_t seed = 200; seed < 205; seed++) {
         gen_rng rng;
         gen_seed(&rng, seed);
@@ -192,8 +198,8 @@ static void test_position_prior(void) {
                   "seed %llu axis %d: sigma %g (without prior %g)", (unsigned long long)seed, k,
                   prior.sigma_position_enu_m[k], free_.sigma_position_enu_m[k]);
             CHECK(fabs(prior.position_enu_m[k] - pb.prior_position_enu_m[k]) < 4 * 0.01,
-                  "seed %llu axis %d: position %.4f prior %.4f", (unsigned long long)seed, k,
-                  prior.position_enu_m[k], pb.prior_position_enu_m[k]);
+                  "seed %llu axis %d: position %.4f prior %.4f", (unsigned long long)seed, k, prior.position_enu_m[k],
+                  pb.prior_position_enu_m[k]);
         }
         if (seed == 200)
             printf("position prior: sigma E,N,U free %.3f %.3f %.3f m -> with 1 cm prior %.4f %.4f %.4f m\n",
@@ -205,7 +211,8 @@ static void test_position_prior(void) {
 }
 
 // Degenerate input: a clear status and a message naming the cause; never a silent pose.
-static void expect_fail(const char *what, rs_calib_problem *pb, rs_status want, const char *word) {
+static void expect_fail(const char *what, rs_calib_problem *pb, rs_status want, const char *word)
+{
     rs_calib_result res;
     rs_err err = {0};
     rs_status st = rs_calib_solve(&res, pb, NULL, &err);
@@ -216,7 +223,8 @@ static void expect_fail(const char *what, rs_calib_problem *pb, rs_status want, 
     rs_calib_result_free(&res);
 }
 
-static void test_degenerate(void) {
+static void test_degenerate(void)
+{
     gen_rng rng;
     gen_seed(&rng, 300);
     gen_problem g;
@@ -283,7 +291,8 @@ static void test_degenerate(void) {
         rs_calib_result res;
         rs_err err = {0};
         rs_status st = rs_calib_solve(&res, &pb, NULL, &err);
-        printf("degenerate %-14s -> %s: %s%s\n", "behind camera", rs_strerror(st), err.msg, st == RS_OK ? res.warnings : "");
+        printf("degenerate %-14s -> %s: %s%s\n", "behind camera", rs_strerror(st), err.msg,
+               st == RS_OK ? res.warnings : "");
         CHECK(st == RS_ERR_DEGENERATE || (st == RS_OK && strstr(res.warnings, "outlier")),
               "behind camera: status %s, warnings '%s'", rs_strerror(st), st == RS_OK ? res.warnings : "");
         rs_calib_result_free(&res);
@@ -295,8 +304,8 @@ static void test_degenerate(void) {
     mrcal_lensmodel_t cahvore = {.type = MRCAL_LENSMODEL_CAHVORE};
     cahvore.LENSMODEL_CAHVORE__config.linearity = 1.0;
     double intr[12] = {1200, 1200, 959.5, 539.5, 0, 0, 0, 0, 0, 0, 0, 0};
-    const rs_camera cam_cahvore = {.lensmodel = cahvore, .intrinsics = intr, .Nintrinsics = 12, .width = h.width,
-                                   .height = h.height};
+    const rs_camera cam_cahvore = {
+        .lensmodel = cahvore, .intrinsics = intr, .Nintrinsics = 12, .width = h.width, .height = h.height};
     pb.camera = &cam_cahvore;
     expect_fail("CAHVORE", &pb, RS_ERR_UNSUPPORTED, "CAHVORE");
 }
@@ -304,7 +313,8 @@ static void test_degenerate(void) {
 // The analytic Jacobians (mrcal chain) against central differences of the same residuals,
 // every lens model, at a perturbed pose, then a full solve with every intrinsic refined and the
 // position prior.
-static void test_gradients(void) {
+static void test_gradients(void)
+{
     for (int lens = 0; lens < 3; lens++) {
         gen_rng rng;
         gen_seed(&rng, 400 + lens);
@@ -321,10 +331,15 @@ static void test_gradients(void) {
         }
         double intr[16];
         memcpy(intr, g.intrinsics, sizeof(intr));
-        rs_calib_refine_problem rp = {.N = g.N, .p_survey_c_m = p_s, .sigma_enu_m = g.sigma_enu,
-                                      .q_px = g.q_obs, .sigma_px = g.sigma_px,
-                                      .lensmodel = &g.lensmodel, .intrinsics_nominal = g.intrinsics,
-                                      .has_position_prior = true, .prior_sigma_m = 1.0};
+        rs_calib_refine_problem rp = {.N = g.N,
+                                      .p_survey_c_m = p_s,
+                                      .sigma_enu_m = g.sigma_enu,
+                                      .q_px = g.q_obs,
+                                      .sigma_px = g.sigma_px,
+                                      .lensmodel = &g.lensmodel,
+                                      .intrinsics_nominal = g.intrinsics,
+                                      .has_position_prior = true,
+                                      .prior_sigma_m = 1.0};
         const double worst = rs_calib_refine_jacobian_check(rt_c, intr, p_c, &rp);
         printf("jacobian %s: worst relative error %.3g\n", lens_name[lens], worst);
         CHECK(worst < 1e-6, "%s: analytic vs numeric Jacobian: %g", lens_name[lens], worst);
@@ -332,11 +347,14 @@ static void test_gradients(void) {
         double C[3];
         rs_pose_position_from_rt(C, NULL, rt_c);
         memcpy(rp.prior_position_c_m, C, sizeof(C));
-        rs_calib_refine_options ro = {.refine = RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER |
-                                                RS_CALIB_REFINE_DISTORTION,
-                                      .robust_scale = 2.0, .max_iterations = 50,
-                                      .focal_prior_rel_sigma = 1.0, .center_prior_sigma_px = 50,
-                                      .distortion_prior_sigma = 0.1, .covariance = true};
+        rs_calib_refine_options ro = {.refine =
+                                          RS_CALIB_REFINE_FOCAL | RS_CALIB_REFINE_CENTER | RS_CALIB_REFINE_DISTORTION,
+                                      .robust_scale = 2.0,
+                                      .max_iterations = 50,
+                                      .focal_prior_rel_sigma = 1.0,
+                                      .center_prior_sigma_px = 50,
+                                      .distortion_prior_sigma = 0.1,
+                                      .covariance = true};
         rs_calib_refine_summary sum;
         double cov[(6 + 16) * (6 + 16)];
         rs_err err = {0};
@@ -344,11 +362,13 @@ static void test_gradients(void) {
         CHECK(st == RS_OK, "%s: refine everything: %s", lens_name[lens], err.msg);
         const int n = 6 + g.Nintrinsics;
         for (int i = 0; i < n && st == RS_OK; i++)
-            CHECK(isfinite(cov[i * n + i]) && cov[i * n + i] > 0, "%s: cov[%d] = %g", lens_name[lens], i, cov[i * n + i]);
+            CHECK(isfinite(cov[i * n + i]) && cov[i * n + i] > 0, "%s: cov[%d] = %g", lens_name[lens], i,
+                  cov[i * n + i]);
     }
 }
 
-int main(void) {
+int main(void)
+{
     gen_begin();
     test_noise_free();
     test_locate_ground();

@@ -13,7 +13,8 @@ int gen_failures = 0;
 static FILE *caught;
 static int saved_stderr = -1;
 
-void gen_begin(void) {
+void gen_begin(void)
+{
     setvbuf(stdout, NULL, _IOLBF, 0);
     caught = tmpfile();
     saved_stderr = dup(2);
@@ -23,7 +24,8 @@ void gen_begin(void) {
     }
 }
 
-int gen_end(const char *seeds) {
+int gen_end(const char *seeds)
+{
     fflush(stderr);
     if (caught && saved_stderr >= 0) {
         dup2(saved_stderr, 2);
@@ -45,22 +47,23 @@ int gen_end(const char *seeds) {
 
 void gen_seed(gen_rng *g, uint64_t seed) { g->s = seed * 0x9E3779B97F4A7C15ull + 12345u; }
 
-static uint64_t next(gen_rng *g) { // splitmix64
+static uint64_t next(gen_rng *g)
+{ // splitmix64
     uint64_t z = (g->s += 0x9E3779B97F4A7C15ull);
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return z ^ (z >> 31);
 }
-double gen_uniform(gen_rng *g, double a, double b) {
-    return a + (b - a) * ((double)(next(g) >> 11) * 0x1.0p-53);
-}
-double gen_normal(gen_rng *g) { // Box-Muller
+double gen_uniform(gen_rng *g, double a, double b) { return a + (b - a) * ((double)(next(g) >> 11) * 0x1.0p-53); }
+double gen_normal(gen_rng *g)
+{ // Box-Muller
     double u1 = gen_uniform(g, 0, 1), u2 = gen_uniform(g, 0, 1);
     if (u1 < 1e-300) u1 = 1e-300;
     return sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
 }
 
-static void set_lens(gen_problem *g, gen_lens lens) {
+static void set_lens(gen_problem *g, gen_lens lens)
+{
     g->width = 1920;
     g->height = 1080;
     const double core[4] = {1200.0, 1200.0, 959.5, 539.5};
@@ -84,7 +87,8 @@ static void set_lens(gen_problem *g, gen_lens lens) {
     g->Nintrinsics = mrcal_lensmodel_num_params(&g->lensmodel);
 }
 
-static bool project(double q[2], const gen_problem *g, const double p_enu[3]) {
+static bool project(double q[2], const gen_problem *g, const double p_enu[3])
+{
     mrcal_point3_t pc;
     mrcal_point2_t qq;
     mrcal_transform_point_rt(pc.xyz, NULL, NULL, g->rt_true, p_enu);
@@ -95,7 +99,8 @@ static bool project(double q[2], const gen_problem *g, const double p_enu[3]) {
     return isfinite(q[0]) && isfinite(q[1]);
 }
 
-bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_px, double sigma_m) {
+bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_px, double sigma_m)
+{
     memset(g, 0, sizeof(*g));
     if (N > GEN_MAXN) return false;
     set_lens(g, lens);
@@ -103,8 +108,7 @@ bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_p
     g->position_true[0] = gen_uniform(rng, 200.0, 600.0);
     g->position_true[1] = gen_uniform(rng, -600.0, -200.0);
     g->position_true[2] = ground + gen_uniform(rng, 6.0, 15.0);
-    const double ypr[3] = {gen_uniform(rng, 0.0, 360.0), gen_uniform(rng, -30.0, -8.0),
-                           gen_uniform(rng, -3.0, 3.0)};
+    const double ypr[3] = {gen_uniform(rng, 0.0, 360.0), gen_uniform(rng, -30.0, -8.0), gen_uniform(rng, -3.0, 3.0)};
     rs_pose_rt_from_ypr(g->rt_true, ypr, g->position_true);
     double Rt[12]; // rows 0-2: R_cam_enu; row 3: t
     mrcal_Rt_from_rt(Rt, NULL, g->rt_true);
@@ -121,8 +125,8 @@ bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_p
             double d[3]; // R^T v
             for (int k = 0; k < 3; k++) d[k] = Rt[k] * v.x + Rt[3 + k] * v.y + Rt[6 + k] * v.z;
             // 80% on the road (+-0.5 m relief), 20% on poles/signs up to 4 m
-            const double h = ground + (gen_uniform(rng, 0, 1) < 0.8 ? gen_uniform(rng, -0.5, 0.5)
-                                                                     : gen_uniform(rng, 0.5, 4.0));
+            const double h =
+                ground + (gen_uniform(rng, 0, 1) < 0.8 ? gen_uniform(rng, -0.5, 0.5) : gen_uniform(rng, 0.5, 4.0));
             if (d[2] > -1e-6) continue;
             const double lambda = (h - g->position_true[2]) / d[2];
             double *p = &g->p_true[3 * i];
@@ -146,7 +150,8 @@ bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_p
     return true;
 }
 
-void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout) {
+void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout)
+{
     for (int i = g->N - Nout; i < g->N; i++) {
         const double a = gen_uniform(rng, 0, 2 * M_PI), r = gen_uniform(rng, 200.0, 500.0);
         g->q_obs[2 * i] = g->q_true[2 * i] + r * cos(a);
@@ -155,7 +160,8 @@ void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout) {
     }
 }
 
-void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m) {
+void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m)
+{
     // new landmarks: copies of random existing ones moved along the road by 2-10 m
     int added = 0;
     for (int tries = 0; added < Nout && g->N < GEN_MAXN && tries < 1000; tries++) {
@@ -184,22 +190,32 @@ void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m)
     }
 }
 
-rs_camera gen_camera(const gen_problem *g, const double rt[6]) {
-    rs_camera c = {.lensmodel = g->lensmodel, .intrinsics = (double *)g->intrinsics,
-                   .Nintrinsics = g->Nintrinsics, .width = g->width, .height = g->height};
+rs_camera gen_camera(const gen_problem *g, const double rt[6])
+{
+    rs_camera c = {.lensmodel = g->lensmodel,
+                   .intrinsics = (double *)g->intrinsics,
+                   .Nintrinsics = g->Nintrinsics,
+                   .width = g->width,
+                   .height = g->height};
     memcpy(c.rt_cam_enu, rt, sizeof c.rt_cam_enu);
     return c;
 }
 
-rs_calib_problem gen_view(gen_problem *g, const double *intrinsics_nominal) {
+rs_calib_problem gen_view(gen_problem *g, const double *intrinsics_nominal)
+{
     g->nominal = gen_camera(g, g->rt_true);
     if (intrinsics_nominal) g->nominal.intrinsics = (double *)intrinsics_nominal;
-    rs_calib_problem pb = {.N = g->N, .p_enu_m = g->p_survey, .sigma_enu_m = g->sigma_enu,
-                           .q_px = g->q_obs, .sigma_px = g->sigma_px, .camera = &g->nominal};
+    rs_calib_problem pb = {.N = g->N,
+                           .p_enu_m = g->p_survey,
+                           .sigma_enu_m = g->sigma_enu,
+                           .q_px = g->q_obs,
+                           .sigma_px = g->sigma_px,
+                           .camera = &g->nominal};
     return pb;
 }
 
-double gen_nees(const double *e, const double *C, int n) {
+double gen_nees(const double *e, const double *C, int n)
+{
     double L[36 * 36];
     if (n > 36) return NAN;
     for (int i = 0; i < n; i++)

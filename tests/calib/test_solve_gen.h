@@ -2,9 +2,9 @@
 // pose, landmarks on a gently uneven road (some on poles), their exact pixels through mrcal,
 // pixel and survey noise, gross outliers. Deterministic from a seed.
 #pragma once
+#include <mrcal/mrcal.h>
 #include <stdbool.h>
 #include <stdint.h>
-#include <mrcal/mrcal.h>
 
 #include "calib/rs_calib.h"
 #include "core/rs_camera.h"
@@ -13,14 +13,14 @@
 
 // ---- test bookkeeping shared by the REFINE tests ----
 extern int gen_failures;
-#define CHECK(cond, ...)                                                                          \
-    do {                                                                                          \
-        if (!(cond)) {                                                                            \
-            gen_failures++;                                                                       \
-            printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond);                                \
-            printf(__VA_ARGS__);                                                                  \
-            printf("\n");                                                                         \
-        }                                                                                         \
+#define CHECK(cond, ...)                                           \
+    do {                                                           \
+        if (!(cond)) {                                             \
+            gen_failures++;                                        \
+            printf("FAIL %s:%d: %s: ", __FILE__, __LINE__, #cond); \
+            printf(__VA_ARGS__);                                   \
+            printf("\n");                                          \
+        }                                                          \
     } while (0)
 // The library never prints: gen_begin() sends stderr to a temporary file, gen_end() restores it,
 // counts every line the library wrote there as a failure, prints the verdict (with `seeds`, a
@@ -40,7 +40,7 @@ typedef enum { GEN_PINHOLE, GEN_OPENCV8, GEN_CAHVOR } gen_lens;
 typedef struct {
     mrcal_lensmodel_t lensmodel;
     int Nintrinsics;
-    double intrinsics[16];   // truth
+    double intrinsics[16]; // truth
     int width, height;
     double rt_true[6];
     double position_true[3];
@@ -49,7 +49,7 @@ typedef struct {
     double q_true[GEN_MAXN * 2], q_obs[GEN_MAXN * 2], sigma_px[GEN_MAXN];
     bool outlier[GEN_MAXN];
     double mean_range_m;
-    rs_camera nominal;       // set by gen_view: the camera the problem points to
+    rs_camera nominal; // set by gen_view: the camera the problem points to
 } gen_problem;
 
 // Fills g with N landmarks (<= GEN_MAXN) seen by a camera 6-15 m above a road some hundreds of

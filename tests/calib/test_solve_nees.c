@@ -14,16 +14,16 @@
 #include <string.h>
 
 #include "calib/rs_calib.h"
-#include "test_solve_gen.h"
 #include "core/rs_pose.h"
+#include "test_solve_gen.h"
 
 #define NTRIALS 240
-
 
 // pose error in the estimate's chart: rt_est - rt_true, with r_true replaced by its equivalent
 // r_true (1 + 2 pi k/|r_true|), k in {-1, 0, 1}, nearest to r_est (rotation vectors near
 // |r| = pi have two representatives)
-static void pose_error(double e[6], const rs_calib_result *r, const gen_problem *g) {
+static void pose_error(double e[6], const rs_calib_result *r, const gen_problem *g)
+{
     const double *rt = g->rt_true;
     const double th = sqrt(rt[0] * rt[0] + rt[1] * rt[1] + rt[2] * rt[2]);
     double best = INFINITY;
@@ -42,7 +42,8 @@ static void pose_error(double e[6], const rs_calib_result *r, const gen_problem 
     for (int k = 3; k < 6; k++) e[k] = r->rt_cam_enu[k] - rt[k];
 }
 
-int main(void) {
+int main(void)
+{
     gen_begin();
     double nees_sum = 0, nees_max = 0, vf_sum = 0;
     double sse_rot_clean = 0, sse_pos_clean = 0, sse_rot_out = 0, sse_pos_out = 0;
@@ -75,13 +76,13 @@ int main(void) {
             n_ok++;
         }
         vf_sum += res.variance_factor;
-        {   // each reported sigma alone: position E, N, U and yaw, pitch, roll
+        { // each reported sigma alone: position E, N, U and yaw, pitch, roll
             double ypr_true[3];
             rs_pose_ypr_from_rt(ypr_true, NULL, g.rt_true);
             for (int k = 0; k < 3; k++) {
                 const double zp = (res.position_enu_m[k] - g.position_true[k]) / res.sigma_position_enu_m[k];
-                const double za = remainder(res.yaw_pitch_roll_deg[k] - ypr_true[k], 360.0) /
-                                  res.sigma_yaw_pitch_roll_deg[k];
+                const double za =
+                    remainder(res.yaw_pitch_roll_deg[k] - ypr_true[k], 360.0) / res.sigma_yaw_pitch_roll_deg[k];
                 z2_sum[k] += zp * zp;
                 z2_sum[3 + k] += za * za;
             }
@@ -111,8 +112,8 @@ int main(void) {
                 outliers_total++;
                 if (res.inlier[i]) {
                     outliers_missed++;
-                    printf("seed %llu: outlier %d not flagged (normalised residual %.2f)\n",
-                            (unsigned long long)seed, i, res.normalised_residual[i]);
+                    printf("seed %llu: outlier %d not flagged (normalised residual %.2f)\n", (unsigned long long)seed,
+                           i, res.normalised_residual[i]);
                 }
             } else {
                 inliers_total++;
@@ -126,8 +127,8 @@ int main(void) {
         rs_calib_result_free(&res);
     }
     const double mean_nees = nees_sum / n_ok;
-    printf("NEES over %d trials: mean %.3f (want %.1f..%.1f), max %.1f; mean variance factor %.3f\n",
-           n_ok, mean_nees, 0.7 * 6, 1.3 * 6, nees_max, vf_sum / n_ok);
+    printf("NEES over %d trials: mean %.3f (want %.1f..%.1f), max %.1f; mean variance factor %.3f\n", n_ok, mean_nees,
+           0.7 * 6, 1.3 * 6, nees_max, vf_sum / n_ok);
     printf("condition numbers %.3g..%.3g; %d weak-geometry warnings\n", cond_min, cond_max, n_weak);
     CHECK(n_ok >= 200, "only %d usable trials", n_ok);
     CHECK(n_weak == 0, "weak-geometry warnings on well-posed sites");
@@ -137,13 +138,13 @@ int main(void) {
     for (int k = 0; k < 6; k++) printf(" %s %.3f", zname[k], z2_sum[k] / n_ok);
     printf("\n");
     for (int k = 0; k < 6; k++)
-        CHECK(z2_sum[k] / n_ok >= 0.7 && z2_sum[k] / n_ok <= 1.3, "%s: mean (error/sigma)^2 %.3f",
-              zname[k], z2_sum[k] / n_ok);
+        CHECK(z2_sum[k] / n_ok >= 0.7 && z2_sum[k] / n_ok <= 1.3, "%s: mean (error/sigma)^2 %.3f", zname[k],
+              z2_sum[k] / n_ok);
 
     const double rr_c = sqrt(sse_rot_clean / n_ok), rp_c = sqrt(sse_pos_clean / n_ok);
     const double rr_o = sqrt(sse_rot_out / n_ok), rp_o = sqrt(sse_pos_out / n_ok);
-    printf("outliers: %d of %d flagged, %d of %d inliers flagged falsely\n",
-           outliers_total - outliers_missed, outliers_total, false_flags, inliers_total);
+    printf("outliers: %d of %d flagged, %d of %d inliers flagged falsely\n", outliers_total - outliers_missed,
+           outliers_total, false_flags, inliers_total);
     printf("RMS pose error clean: rotation %.4g rad, position %.4g m; with 25%% outliers: %.4g rad "
            "(x%.3f), %.4g m (x%.3f)\n",
            rr_c, rp_c, rr_o, rr_o / rr_c, rp_o, rp_o / rp_c);

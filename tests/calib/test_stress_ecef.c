@@ -19,16 +19,16 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "calib/rs_calib.h"
 #include "bench/rs_bench_opencv.h"
-#include "geo/rs_geo.h"
+#include "calib/rs_calib.h"
 #include "core/rs_io.h"
+#include "core/rs_pose.h"
+#include "geo/rs_geo.h"
 #include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
-#include "core/rs_pose.h"
 
 #define SEED 11
-#define NL 20
+#define NL   20
 
 static double position_error(const double rt[6], const double C_true[3])
 {
@@ -175,8 +175,8 @@ int main(void)
     // 3. roadside, handed ECEF coordinates, still solves about the centroid
     double sig_px[NL];
     for (int i = 0; i < NL; i++) sig_px[i] = 0.01;
-    const rs_calib_problem cp = {.N = NL, .p_enu_m = p_ecef, .q_px = s->q_true_px, .sigma_px = sig_px,
-                                 .camera = &s->camera};
+    const rs_calib_problem cp = {
+        .N = NL, .p_enu_m = p_ecef, .q_px = s->q_true_px, .sigma_px = sig_px, .camera = &s->camera};
     rs_calib_result r;
     st = rs_calib_solve(&r, &cp, NULL, &e);
     CHECK(st == RS_OK, "roadside with ECEF coordinates: %s", e.msg);
@@ -189,9 +189,9 @@ int main(void)
 
     const char *root = getenv("ROADSIDE_SOURCE_ROOT");
     CHECK(root, "ROADSIDE_SOURCE_ROOT is not set");
-    static const char *const solver_files[] = {"calib/rs_calib.c", "calib/rs_calib_init.c",
-                                               "calib/rs_calib_refine_ceres.cc", "calib/rs_calib_site.c",
-                                               "calib/rs_calib_opengv.cc", "calib/rs_calib_opencv.cc"};
+    static const char *const solver_files[] = {
+        "calib/rs_calib.c",      "calib/rs_calib_init.c",    "calib/rs_calib_refine_ceres.cc",
+        "calib/rs_calib_site.c", "calib/rs_calib_opengv.cc", "calib/rs_calib_opencv.cc"};
     for (size_t i = 0; root && i < sizeof solver_files / sizeof *solver_files; i++)
         CHECK(!mentions_ecef(root, solver_files[i]), "%s mentions ECEF: the solver must work in site ENU",
               solver_files[i]);

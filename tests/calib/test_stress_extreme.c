@@ -14,9 +14,9 @@
 #include <mrcal/poseutils.h>
 
 #include "calib/rs_calib.h"
+#include "core/rs_pose.h"
 #include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
-#include "core/rs_pose.h"
 
 #define SEED 5
 
@@ -66,8 +66,14 @@ static bool simulate(prob *P, rs_simulate_camera_options *o, double sigma_px, do
 
 // A pinhole camera (f px, 1920x1080) at `pos` with yaw/pitch/roll `ypr`, landmarks p (N,3),
 // exact pixels + N(0, noise) from a fixed generator.
-static void build(prob *P, double f, const double ypr[3], const double pos[3], const double *p, int N,
-                  double noise_px, double sigma_m)
+static void build(prob *P,
+                  double f,
+                  const double ypr[3],
+                  const double pos[3],
+                  const double *p,
+                  int N,
+                  double noise_px,
+                  double sigma_m)
 {
     memset(P, 0, sizeof *P);
     P->lens.type = MRCAL_LENSMODEL_PINHOLE;
@@ -119,11 +125,13 @@ static void facing(double f[3], const double rt[6])
 
 static rs_status solve(rs_calib_result *r, const prob *P, rs_err *e)
 {
-    const rs_camera cam = {.lensmodel = P->lens, .intrinsics = (double *)P->intrinsics,
-                           .Nintrinsics = mrcal_lensmodel_num_params(&P->lens), .width = P->width,
+    const rs_camera cam = {.lensmodel = P->lens,
+                           .intrinsics = (double *)P->intrinsics,
+                           .Nintrinsics = mrcal_lensmodel_num_params(&P->lens),
+                           .width = P->width,
                            .height = P->height};
-    const rs_calib_problem cp = {.N = P->N, .p_enu_m = P->p, .sigma_enu_m = P->sigma_enu, .q_px = P->q,
-                                 .sigma_px = P->sigma_px, .camera = &cam};
+    const rs_calib_problem cp = {
+        .N = P->N, .p_enu_m = P->p, .sigma_enu_m = P->sigma_enu, .q_px = P->q, .sigma_px = P->sigma_px, .camera = &cam};
     return rs_calib_solve(r, &cp, NULL, e);
 }
 
@@ -151,10 +159,10 @@ static double expect_pose(const char *name, const prob *P)
         const double nees = gen_nees(d, r.covariance_rt_cam_enu, 6);
         rs_pose_position_from_rt(C, NULL, P->rt_true);
         dpos = hypot(hypot(r.position_enu_m[0] - C[0], r.position_enu_m[1] - C[1]), r.position_enu_m[2] - C[2]);
-        printf("%-28s pose: position error %.3g m (sigma %.3g m), NEES %.3g, condition %.3g%s%s\n", name,
-               dpos, sqrt(r.sigma_position_enu_m[0] * r.sigma_position_enu_m[0] +
-                          r.sigma_position_enu_m[1] * r.sigma_position_enu_m[1] +
-                          r.sigma_position_enu_m[2] * r.sigma_position_enu_m[2]),
+        printf("%-28s pose: position error %.3g m (sigma %.3g m), NEES %.3g, condition %.3g%s%s\n", name, dpos,
+               sqrt(r.sigma_position_enu_m[0] * r.sigma_position_enu_m[0] +
+                    r.sigma_position_enu_m[1] * r.sigma_position_enu_m[1] +
+                    r.sigma_position_enu_m[2] * r.sigma_position_enu_m[2]),
                nees, r.condition_number, r.warnings[0] ? "; warning: " : "", r.warnings);
         CHECK(nees < 50.0, "%s: NEES %.3g: the pose is inconsistent with its covariance", name, nees);
     }
@@ -176,8 +184,8 @@ static void expect_refusal(const char *name, const prob *P, rs_status want, cons
         CHECK(finite_result(&r), "%s: non-finite result", name);
     } else {
         printf("%-28s refused: %s: %s\n", name, rs_strerror(st), e.msg);
-        CHECK(st == want && strstr(e.msg, cause), "%s: got %s '%s', expected %s naming '%s'", name,
-              rs_strerror(st), e.msg, rs_strerror(want), cause);
+        CHECK(st == want && strstr(e.msg, cause), "%s: got %s '%s', expected %s naming '%s'", name, rs_strerror(st),
+              e.msg, rs_strerror(want), cause);
     }
     rs_calib_result_free(&r);
 }

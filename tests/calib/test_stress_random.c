@@ -24,12 +24,12 @@ int main(int argc, char **argv)
     rs_bench_calib_stress_summary S;
     rs_err err = {0};
     CHECK(rs_bench_calib_stress(&S, count, seed, &err) == RS_OK, "%s", err.msg);
-    printf("%d problems (seed %s): generated %d, poses %d, flagged %d (largest condition number %.3g)\n",
-           S.Nproblems, seeds, S.Ngenerated, S.Nok, S.Nflagged, S.cond_max);
+    printf("%d problems (seed %s): generated %d, poses %d, flagged %d (largest condition number %.3g)\n", S.Nproblems,
+           seeds, S.Ngenerated, S.Nok, S.Nflagged, S.cond_max);
     for (int c = 1; c < 16; c++)
         if (S.Nerror[c]) printf("  errors %-28s %d\n", rs_strerror((rs_status)c), S.Nerror[c]);
-    printf("  non-finite %d, unnamed errors %d, unflagged condition %d, confident wrong poses %d\n",
-           S.Nnonfinite, S.Nunnamed, S.Nunflagged, S.Nbad);
+    printf("  non-finite %d, unnamed errors %d, unflagged condition %d, confident wrong poses %d\n", S.Nnonfinite,
+           S.Nunnamed, S.Nunflagged, S.Nbad);
     if (S.first_bad[0]) printf("  first finding: seed %llu: %s\n", (unsigned long long)S.first_bad_seed, S.first_bad);
     CHECK(S.Ngenerated >= count * 9 / 10, "the simulator refused %d of %d problems", count - S.Ngenerated, count);
     CHECK(S.Nok >= S.Ngenerated / 2, "only %d poses of %d problems", S.Nok, S.Ngenerated);

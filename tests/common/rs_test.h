@@ -11,18 +11,21 @@
 static int rs_test_failures;
 static unsigned long long rs_test_seed;
 
-#define CHECK(cond, ...)                                                                                    \
-    do {                                                                                                    \
-        if (!(cond) && rs_test_failures++ < 60) {                                                           \
-            printf("FAIL %s:%d (seed %llu): %s: ", __FILE__, __LINE__, rs_test_seed, #cond);                \
-            printf(__VA_ARGS__);                                                                            \
-            printf("\n");                                                                                   \
-        }                                                                                                   \
+#define CHECK(cond, ...)                                                                     \
+    do {                                                                                     \
+        if (!(cond) && rs_test_failures++ < 60) {                                            \
+            printf("FAIL %s:%d (seed %llu): %s: ", __FILE__, __LINE__, rs_test_seed, #cond); \
+            printf(__VA_ARGS__);                                                             \
+            printf("\n");                                                                    \
+        }                                                                                    \
     } while (0)
 
-static inline int rs_test_end(const char *name) {
-    if (rs_test_failures) printf("%s: %d check(s) FAILED\n", name, rs_test_failures);
-    else printf("%s: all checks passed\n", name);
+static inline int rs_test_end(const char *name)
+{
+    if (rs_test_failures)
+        printf("%s: %d check(s) FAILED\n", name, rs_test_failures);
+    else
+        printf("%s: all checks passed\n", name);
     fflush(stdout);
     return rs_test_failures ? 1 : 0;
 }

@@ -11,7 +11,8 @@
 
 #include "core/rs_camera.h"
 
-static int read_or_fail(rs_camera *cam, rs_camera_extra *extra, const char *path) {
+static int read_or_fail(rs_camera *cam, rs_camera_extra *extra, const char *path)
+{
     rs_err err = {0};
     if (rs_camera_read(cam, extra, path, &err)) {
         printf("ERROR %s: %s\n", rs_strerror(err.status), err.msg);
@@ -20,13 +21,15 @@ static int read_or_fail(rs_camera *cam, rs_camera_extra *extra, const char *path
     return 0;
 }
 
-static void print_array(const char *name, const double *x, int n) {
+static void print_array(const char *name, const double *x, int n)
+{
     printf("\"%s\": [", name);
     for (int i = 0; i < n; i++) printf("%s%.17g", i ? ", " : "", x[i]);
     printf("]");
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     rs_camera cam;
     rs_camera_extra extra;
     if (argc == 3 && !strcmp(argv[1], "read")) {

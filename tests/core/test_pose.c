@@ -12,13 +12,14 @@
 #include "core/rs_rng.h"
 #include "tests/common/rs_test.h"
 
-
-static double dist3(const double *a, const double *b) {
+static double dist3(const double *a, const double *b)
+{
     return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 // Random yaw/pitch/roll away from the poles: the closed-form axes and both round trips.
-static void test_ypr_round_trip(void) {
+static void test_ypr_round_trip(void)
+{
     rs_test_seed = 77;
     rs_rng rng;
     rs_rng_seed(&rng, rs_test_seed);
@@ -51,14 +52,15 @@ static void test_ypr_round_trip(void) {
         worst = fmax(worst, d);
         CHECK(e_axes < 1e-12 && e_R < 1e-12 && d < 1e-9 && dist3(C, Cb) < 1e-9 && back[0] >= 0 && back[0] < 360 &&
                   back[2] > -180 && back[2] <= 180,
-              "ypr (%.12g %.12g %.12g): axes %g, R(r) %g, back (%.12g %.12g %.12g), C err %g", ypr[0], ypr[1],
-              ypr[2], e_axes, e_R, back[0], back[1], back[2], dist3(C, Cb));
+              "ypr (%.12g %.12g %.12g): axes %g, R(r) %g, back (%.12g %.12g %.12g), C err %g", ypr[0], ypr[1], ypr[2],
+              e_axes, e_R, back[0], back[1], back[2], dist3(C, Cb));
     }
     printf("ypr round trip, 2000 poses: worst %.3g deg (tolerance 1e-9)\n", worst);
 }
 
 // At pitch = +-90 yaw is undefined: yaw 0, the whole turn in roll, the same rotation back.
-static void test_ypr_poles(void) {
+static void test_ypr_poles(void)
+{
     rs_test_seed = 0;
     for (int s = -1; s <= 1; s += 2)
         for (int k = 0; k < 12; k++) {
@@ -76,7 +78,8 @@ static void test_ypr_poles(void) {
 }
 
 // Camera position and its Jacobian against central differences.
-static void test_position(void) {
+static void test_position(void)
+{
     rs_test_seed = 5;
     rs_rng rng;
     rs_rng_seed(&rng, rs_test_seed);
@@ -110,7 +113,8 @@ static void test_position(void) {
 }
 
 // The 3x3 helpers against brute force, aliasing included.
-static void test_mat3(void) {
+static void test_mat3(void)
+{
     rs_test_seed = 9;
     rs_rng rng;
     rs_rng_seed(&rng, rs_test_seed);
@@ -133,7 +137,8 @@ static void test_mat3(void) {
     CHECK(e < 1e-15, "mat3 helpers off by %g", e);
 }
 
-int main(void) {
+int main(void)
+{
     test_ypr_round_trip();
     test_ypr_poles();
     test_position();

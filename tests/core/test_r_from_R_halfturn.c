@@ -13,9 +13,8 @@ static void R_of_axis_angle(double R[9], const double a[3], double th)
 {
     double c = cos(th), s = sin(th), C = 1 - c;
     double x = a[0], y = a[1], z = a[2];
-    double M[9] = {c + x * x * C,     x * y * C - z * s, x * z * C + y * s,
-                   y * x * C + z * s, c + y * y * C,     y * z * C - x * s,
-                   z * x * C - y * s, z * y * C + x * s, c + z * z * C};
+    double M[9] = {c + x * x * C,     x * y * C - z * s, x * z * C + y * s, y * x * C + z * s, c + y * y * C,
+                   y * z * C - x * s, z * x * C - y * s, z * y * C + x * s, c + z * z * C};
     for (int i = 0; i < 9; i++) R[i] = M[i];
 }
 
@@ -46,7 +45,12 @@ int main(void)
             a[i] = 2.0 * rand() / RAND_MAX - 1;
             n += a[i] * a[i];
         }
-        if (k < 3) { a[0] = k == 0; a[1] = k == 1; a[2] = k == 2; n = 1; } // the coordinate axes
+        if (k < 3) {
+            a[0] = k == 0;
+            a[1] = k == 1;
+            a[2] = k == 2;
+            n = 1;
+        } // the coordinate axes
         for (int i = 0; i < 3; i++) a[i] /= sqrt(n);
         for (size_t e = 0; e < sizeof eps / sizeof eps[0]; e++) {
             double R[9];
@@ -54,7 +58,8 @@ int main(void)
             double d = check(R);
             worst = fmax(worst, d);
             if (!(d < 1e-9)) {
-                if (failures++ < 5) printf("FAIL: axis (%g %g %g), angle pi - %g: R differs by %g\n", a[0], a[1], a[2], eps[e], d);
+                if (failures++ < 5)
+                    printf("FAIL: axis (%g %g %g), angle pi - %g: R differs by %g\n", a[0], a[1], a[2], eps[e], d);
             }
         }
     }

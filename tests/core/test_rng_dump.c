@@ -9,7 +9,8 @@
 
 #include "core/rs_rng.h"
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     if (argc == 3 && !strcmp(argv[1], "derive")) {
         const uint64_t seed = strtoull(argv[2], NULL, 10);
         uint64_t state = seed;

@@ -29,18 +29,16 @@ static void check_near(double got, double want, const char *what)
 
 // One image, ground truths at (100,100) and (200,100), an ignore region at (400,100); detections
 // .9 at d=1 from the first, .8 far from all, .7 at d=3 from the second, .6 on the ignore region.
-static const char gt[] =
-    "{\"images\": [{\"id\": 1, \"condition\": \"rain\"}],\n"
-    " \"categories\": [{\"id\": 1, \"name\": \"car\"}],\n"
-    " \"annotations\": [\n"
-    "  {\"image_id\": 1, \"category_id\": 1, \"bottom_center\": [100, 100]},\n"
-    "  {\"image_id\": 1, \"category_id\": 1, \"bbox\": [190, 90, 20, 20]},\n"
-    "  {\"image_id\": 1, \"category_id\": 1, \"bottom_center\": [400, 100], \"iscrowd\": 1}]}\n";
-static const char dets[] =
-    "[{\"image_id\": 1, \"category_id\": 1, \"bbox\": [100, 99, 2, 2], \"score\": 0.9},\n"
-    " {\"image_id\": 1, \"category_id\": 1, \"bbox\": [300, 300, 2, 2], \"score\": 0.8},\n"
-    " {\"image_id\": 1, \"category_id\": 1, \"bbox\": [199, 102, 2, 2], \"score\": 0.7},\n"
-    " {\"image_id\": 1, \"category_id\": 1, \"bbox\": [399, 99, 2, 2], \"score\": 0.6}]\n";
+static const char gt[] = "{\"images\": [{\"id\": 1, \"condition\": \"rain\"}],\n"
+                         " \"categories\": [{\"id\": 1, \"name\": \"car\"}],\n"
+                         " \"annotations\": [\n"
+                         "  {\"image_id\": 1, \"category_id\": 1, \"bottom_center\": [100, 100]},\n"
+                         "  {\"image_id\": 1, \"category_id\": 1, \"bbox\": [190, 90, 20, 20]},\n"
+                         "  {\"image_id\": 1, \"category_id\": 1, \"bottom_center\": [400, 100], \"iscrowd\": 1}]}\n";
+static const char dets[] = "[{\"image_id\": 1, \"category_id\": 1, \"bbox\": [100, 99, 2, 2], \"score\": 0.9},\n"
+                           " {\"image_id\": 1, \"category_id\": 1, \"bbox\": [300, 300, 2, 2], \"score\": 0.8},\n"
+                           " {\"image_id\": 1, \"category_id\": 1, \"bbox\": [199, 102, 2, 2], \"score\": 0.7},\n"
+                           " {\"image_id\": 1, \"category_id\": 1, \"bbox\": [399, 99, 2, 2], \"score\": 0.6}]\n";
 
 int main(void)
 {
@@ -90,7 +88,8 @@ int main(void)
     if (st == RS_OK) {
         check_near(r->all.ap[0], 0.5, "max-dets 2: AP@5");
         check(r->all.num_det == 2, "max-dets 2: num_det");
-        check(!strcmp(r->groups[0].name, "rain") && !strcmp(r->classes[0].name, "car") && r->classes[0].category_id == 1,
+        check(!strcmp(r->groups[0].name, "rain") && !strcmp(r->classes[0].name, "car") &&
+                  r->classes[0].category_id == 1,
               "row names");
         check_near(r->groups[0].ap[0], 0.5, "group AP");
         check_near(r->classes[0].ap[0], 0.5, "class AP");
@@ -100,7 +99,8 @@ int main(void)
     // Option errors.
     const double twice[2] = {5, 5}, negative[1] = {-1};
     opt = (rs_eval_options){.thresholds = twice, .Nthresholds = 2};
-    check(rs_eval_run(&r, data, &opt, &err) == RS_ERR_USAGE && r == NULL && strstr(err.msg, "twice"), "repeated threshold");
+    check(rs_eval_run(&r, data, &opt, &err) == RS_ERR_USAGE && r == NULL && strstr(err.msg, "twice"),
+          "repeated threshold");
     opt = (rs_eval_options){.thresholds = negative, .Nthresholds = 1};
     check(rs_eval_run(&r, data, &opt, &err) == RS_ERR_USAGE, "negative threshold");
     opt = (rs_eval_options){.max_dets = -1};
@@ -118,7 +118,8 @@ int main(void)
     st = rs_eval_parse(&data, empty_gt, strlen(empty_gt), "gt", dets, strlen(dets), "dets", NULL, &err);
     check(st == RS_OK, "parse empty ground truth");
     if (st == RS_OK && rs_eval_run(&r, data, NULL, &err) == RS_OK) {
-        check(isnan(r->all.ap[0]) && isnan(r->all.recall[0]) && isnan(r->all.map) && isnan(r->all.ar) && r->all.num_gt == 0,
+        check(isnan(r->all.ap[0]) && isnan(r->all.recall[0]) && isnan(r->all.map) && isnan(r->all.ar) &&
+                  r->all.num_gt == 0,
               "empty ground truth gives NaN");
         char *json = rs_eval_result_json(r);
         check(json && strstr(json, "\"mAP\":\tnull"), "NaN written as null");
@@ -131,7 +132,8 @@ int main(void)
     const char bad_image[] = "[\n{\"image_id\": 1, \"category_id\": 1, \"bbox\": [0,0,1,1], \"score\": 1},\n"
                              "{\"image_id\": 9, \"category_id\": 1, \"bbox\": [0,0,1,1], \"score\": 1}]";
     st = rs_eval_parse(&data, gt, strlen(gt), "gt", bad_image, strlen(bad_image), "dets", NULL, &err);
-    check(st == RS_ERR_NOT_FOUND && data == NULL && !strcmp(err.msg, "dets:3: entry 1: image_id 9 not in the ground truth"),
+    check(st == RS_ERR_NOT_FOUND && data == NULL &&
+              !strcmp(err.msg, "dets:3: entry 1: image_id 9 not in the ground truth"),
           "unknown image");
     if (st != RS_ERR_NOT_FOUND) printf("   got %d: %s\n", st, err.msg);
     const char neg[] = "[{\"image_id\": 1, \"category_id\": 1, \"bbox\": [0,0,-1,1], \"score\": 1}]";

@@ -26,12 +26,12 @@ int main(int argc, char **argv)
     printf("landmarks %d\ncameras %d\n", site->Nlandmarks, site->Ncameras);
     for (int i = 0; i < site->Ncameras; i++) {
         const rs_site_camera *c = &site->cameras[i];
-        printf("camera %s %d %d %d %d %d\n", c->id, (int)c->camera.lensmodel.type, c->camera.Nintrinsics, c->camera.width,
-               c->camera.height, c->has_position_prior);
+        printf("camera %s %d %d %d %d %d\n", c->id, (int)c->camera.lensmodel.type, c->camera.Nintrinsics,
+               c->camera.width, c->camera.height, c->has_position_prior);
         for (int j = 0; j < c->Nobservations; j++) {
             const rs_site_observation *o = &c->observations[j];
-            printf("obs %s %s %.17g %.17g %.17g %d\n", c->id, site->landmarks[o->ilandmark].id,
-                   o->q_px[0], o->q_px[1], o->sigma_px, o->line);
+            printf("obs %s %s %.17g %.17g %.17g %d\n", c->id, site->landmarks[o->ilandmark].id, o->q_px[0], o->q_px[1],
+                   o->sigma_px, o->line);
         }
     }
     printf("find_camera_south %d\nfind_camera_nope %d\n", rs_site_find_camera(site, "south"),
@@ -40,17 +40,17 @@ int main(int argc, char **argv)
            rs_site_find_landmark(site, "l05"));
     double lo[3], hi[3], dmin, dmax;
     int n = rs_site_landmark_extent(lo, hi, &dmin, &dmax, site, -1);
-    printf("extent %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", n, lo[0], lo[1], lo[2], hi[0],
-           hi[1], hi[2], dmin, dmax);
+    printf("extent %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", n, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2],
+           dmin, dmax);
     n = rs_site_landmark_extent(NULL, NULL, NULL, &dmax, site, 1);
     printf("extent_south %d %.17g\n", n, dmax);
     printf("ground %.17g %.17g %.17g %.17g\n", site->ground_normal_enu[0], site->ground_normal_enu[1],
            site->ground_normal_enu[2], site->ground_offset_m);
     for (int i = 0; i < site->Nlandmarks; i++) {
         const rs_site_landmark *l = &site->landmarks[i];
-        printf("landmark %s %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %s\n", l->id, l->feature,
-               l->llh.lat_deg, l->llh.lon_deg, l->llh.h_m, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2],
-               l->sigma_h_m, l->kind ? l->kind : "-");
+        printf("landmark %s %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %s\n", l->id, l->feature, l->llh.lat_deg,
+               l->llh.lon_deg, l->llh.h_m, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2], l->sigma_h_m,
+               l->kind ? l->kind : "-");
     }
     rs_site_free(site);
     return 0;

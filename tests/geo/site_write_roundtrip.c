@@ -38,7 +38,8 @@ static rs_status write_site(const rs_site *site, const char *out, rs_site_layout
     if (site->Ncameras > 16) return rs_err_set(err, RS_ERR_INVALID, "too many cameras");
     for (int i = 0; i < site->Ncameras; i++) {
         const rs_site_camera *c = &site->cameras[i];
-        cams[i] = (rs_site_spec_camera){.id = c->id, .model = relative(c->model_path, site->dir),
+        cams[i] = (rs_site_spec_camera){.id = c->id,
+                                        .model = relative(c->model_path, site->dir),
                                         .observations = relative(c->observations_path, site->dir),
                                         .backgrounds = relative(c->backgrounds_path, site->dir),
                                         .note = c->note};
@@ -84,16 +85,30 @@ static rs_status write_site(const rs_site *site, const char *out, rs_site_layout
 }
 
 // Two lanes in ENU written and read back; prints the largest difference of the points.
-static rs_status lanes_roundtrip(const rs_site *site, const char *out, bool with_height, rs_site_layout layout,
-                                 rs_err *err)
+static rs_status
+lanes_roundtrip(const rs_site *site, const char *out, bool with_height, rs_site_layout layout, rs_err *err)
 {
     double a[3][3] = {{-40, 3, 0}, {-13.5, 3.25, 0}, {0, 0, 0}}, b[2][3] = {{0, 0, 0}, {20, 45.5, 0}};
     int next_a = 1;
     rs_lane lane[2] = {
-        {.id = "A1_in1", .kind = "approach", .width_m = 3.5, .direction = RS_LANE_FORWARD, .speed_mps = 13.89,
-         .p_enu_m = a, .Npoints = 3, .next = &next_a, .Nnext = 1},
-        {.id = "track", .kind = NULL, .width_m = 2.75, .direction = RS_LANE_BOTH, .speed_mps = NAN,
-         .p_enu_m = b, .Npoints = 2, .next = NULL, .Nnext = 0},
+        {.id = "A1_in1",
+         .kind = "approach",
+         .width_m = 3.5,
+         .direction = RS_LANE_FORWARD,
+         .speed_mps = 13.89,
+         .p_enu_m = a,
+         .Npoints = 3,
+         .next = &next_a,
+         .Nnext = 1},
+        {.id = "track",
+         .kind = NULL,
+         .width_m = 2.75,
+         .direction = RS_LANE_BOTH,
+         .speed_mps = NAN,
+         .p_enu_m = b,
+         .Npoints = 2,
+         .next = NULL,
+         .Nnext = 0},
     };
     if (with_height) a[1][2] = b[1][2] = 0.75;
     const rs_lanes lanes = {.lane = lane, .N = 2};
@@ -101,8 +116,9 @@ static rs_status lanes_roundtrip(const rs_site *site, const char *out, bool with
     snprintf(name, sizeof name, "lanes_%s.geojson", with_height ? "3d" : "2d");
     char *path = rs_io_join(out, name);
     rs_lanes back = {0};
-    rs_status st = path ? rs_lanes_write(path, &lanes, &site->origin, site->geoid_undulation_m, with_height, layout, err)
-                        : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = path
+                       ? rs_lanes_write(path, &lanes, &site->origin, site->geoid_undulation_m, with_height, layout, err)
+                       : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st) st = rs_lanes_read(&back, path, site, err);
     double dmax = 0;
     for (int i = 0; !st && i < 2; i++) {
@@ -135,8 +151,8 @@ int main(int argc, char **argv)
     if (st) return report("load", st, &err);
     if ((st = write_site(site, argv[2], layout, &err))) return report("write", st, &err);
 
-    const char *keys[4] = {"time", "conditions", "foo", "foo"}, *values[4] = {"2024-06-21T07:30:00+02:00", "sunny",
-                                                                             "1", "3"};
+    const char *keys[4] = {"time", "conditions", "foo", "foo"},
+               *values[4] = {"2024-06-21T07:30:00+02:00", "sunny", "1", "3"};
     if ((st = rs_site_record_background(argv[2], "north", "morning", false, keys, values, 4,
                                         "{\"method\": \"test\", \"frames\": 3}", &err)) ||
         (st = rs_site_record_background(argv[2], "south", "twin", true, keys + 1, values + 1, 1, NULL, &err)) ||
@@ -154,15 +170,16 @@ int main(int argc, char **argv)
     if ((st = rs_site_load(&again, argv[2], &err))) return report("reload", st, &err);
     for (int i = 0; i < again->Ncameras; i++) {
         const rs_site_camera *c = &again->cameras[i];
-        printf("backgrounds_path %s %s\n", c->id, c->backgrounds_path ? relative(c->backgrounds_path, again->dir) : "-");
+        printf("backgrounds_path %s %s\n", c->id,
+               c->backgrounds_path ? relative(c->backgrounds_path, again->dir) : "-");
         for (int j = 0; j < c->Nbackground_images; j++) {
             const rs_site_background *bg = &c->background_images[j];
             printf("background %s %s %s %s %d", c->id, bg->name, bg->file, relative(bg->path, again->dir),
                    bg->synthetic);
             for (int t = 0; t < bg->Ntags; t++) printf(" %s=%s", bg->tags[t].key, bg->tags[t].value);
             const char *time = rs_site_background_tag(bg, "time"), *syn = rs_site_background_tag(bg, "synthetic");
-            printf(" | time=%s synthetic=%s name=%s nope=%s\n", time ? time : "-", syn, rs_site_background_tag(bg, "name"),
-                   rs_site_background_tag(bg, "nope") ? "?" : "-");
+            printf(" | time=%s synthetic=%s name=%s nope=%s\n", time ? time : "-", syn,
+                   rs_site_background_tag(bg, "name"), rs_site_background_tag(bg, "nope") ? "?" : "-");
         }
     }
     printf("status 0 done\n");

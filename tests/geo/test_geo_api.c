@@ -13,7 +13,6 @@
 
 enum { SEED = 20261122 };
 
-
 static const double deg = M_PI / 180;
 static const double a_m = 6378137.0, f_wgs84 = 1 / 298.257223563;
 
@@ -21,8 +20,7 @@ static double uniform(double lo, double hi) { return lo + (hi - lo) * drand48();
 
 static double dist3(const double *a, const double *b)
 {
-    double d = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                    (a[2] - b[2]) * (a[2] - b[2]));
+    double d = sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
     return isnan(d) ? INFINITY : d;
 }
 
@@ -64,7 +62,8 @@ static void test_llh_ecef(void)
         CHECK(llh2[3 * i + 1] >= -180 && llh2[3 * i + 1] <= 180, "lon %.17g out of [-180, 180]", llh2[3 * i + 1]);
     }
     printf("llh -> ecef vs closed form: max %.3e m; llh -> ecef -> llh -> ecef: max %.3e m, "
-           "h %.3e m (%d points)\n", worst_formula, worst_trip, worst_h, N);
+           "h %.3e m (%d points)\n",
+           worst_formula, worst_trip, worst_h, N);
     CHECK(worst_formula < 2e-8, "llh -> ecef differs from the closed form by %.3e m", worst_formula);
     CHECK(worst_trip < 1e-8, "ecef round trip error %.3e m", worst_trip);
     CHECK(worst_h < 1e-8, "height round trip error %.3e m", worst_h);
@@ -90,8 +89,8 @@ static void test_centre(void)
     printf("ecef -> llh -> ecef within 100 km of the centre: max %.3e m (%d points)\n", worst, N);
     CHECK(worst < 1e-8, "round trip error near the centre %.3e m", worst);
     double b_m = a_m * (1 - f_wgs84);
-    CHECK(fabs(llh[0]) == 90 && fabs(llh[2] + b_m) < 1e-8, "centre: lat %.17g h %.17g (expected +-90, -%.17g)",
-          llh[0], llh[2], b_m);
+    CHECK(fabs(llh[0]) == 90 && fabs(llh[2] + b_m) < 1e-8, "centre: lat %.17g h %.17g (expected +-90, -%.17g)", llh[0],
+          llh[2], b_m);
 }
 
 static void test_enu_frame(void)
@@ -135,7 +134,8 @@ static void test_enu_frame(void)
         }
     }
     printf("enu frame: columns vs closed form max %.3e; R^T (ecef - o) vs enu max %.3e m; "
-           "enu -> llh -> enu max %.3e m\n", worst_rot, worst_enu, worst_trip);
+           "enu -> llh -> enu max %.3e m\n",
+           worst_rot, worst_enu, worst_trip);
     CHECK(worst_rot < 1e-15, "R_ecef_enu columns off by %.3e", worst_rot);
     CHECK(worst_enu < 1e-8, "R_ecef_enu and origin disagree with llh_to_enu by %.3e m", worst_enu);
     CHECK(worst_trip < 1e-8, "enu round trip error %.3e m", worst_trip);
@@ -159,7 +159,8 @@ static void test_convergence(void)
         llh[6] += d;
         rs_err err = {0};
         CHECK(rs_geo_llh_to_utm(enh, &zone, &north, -1, true, llh, 1, &err) == RS_OK, "llh_to_utm: %s", err.msg);
-        CHECK(rs_geo_llh_to_utm(enh + 3, NULL, NULL, zone, north, llh + 3, 2, &err) == RS_OK, "llh_to_utm: %s", err.msg);
+        CHECK(rs_geo_llh_to_utm(enh + 3, NULL, NULL, zone, north, llh + 3, 2, &err) == RS_OK, "llh_to_utm: %s",
+              err.msg);
         CHECK(rs_geo_utm_convergence_deg(&gamma, -1, true, llh, 1, &err) == RS_OK, "convergence: %s", err.msg);
         double fd = -atan2(enh[6] - enh[3], enh[7] - enh[4]) / deg;
         track(&worst, fabs(gamma - fd));
@@ -203,8 +204,8 @@ static void test_errors(void)
 
     // UTM/UPS
     double enh[6] = {500000, 5e6, 0, 500000, 1e8, 0};
-    CHECK(rs_geo_utm_to_llh(out, 61, true, enh, 1, &err) == RS_ERR_INVALID && strstr(err.msg, "zone"),
-          "zone 61: %s", err.msg);
+    CHECK(rs_geo_utm_to_llh(out, 61, true, enh, 1, &err) == RS_ERR_INVALID && strstr(err.msg, "zone"), "zone 61: %s",
+          err.msg);
     CHECK(rs_geo_utm_to_llh(out, -1, true, enh, 1, &err) == RS_ERR_INVALID, "zone -1: %s", err.msg);
     CHECK(rs_geo_utm_to_llh(out, 33, true, enh, 2, &err) == RS_ERR_INVALID &&
               strstr(err.msg, "row 1: GeographicLib: Northing"),
@@ -217,7 +218,7 @@ static void test_errors(void)
     bool north = false;
     CHECK(rs_geo_llh_to_utm(out, &zone, &north, 33, true, two, 2, &err) == RS_OK && zone == 33 && north,
           "one requested zone: %s", err.msg);
-    two[0] = -0.01;  // southern point into a northern zone: northing continued below 0
+    two[0] = -0.01; // southern point into a northern zone: northing continued below 0
     CHECK(rs_geo_llh_to_utm(out, &zone, &north, 33, true, two, 1, &err) == RS_OK && out[1] < 0 && out[1] > -2000,
           "continued northing %.17g: %s", out[1], err.msg);
     CHECK(rs_geo_llh_to_utm(out, &zone, &north, -1, true, two, 1, &err) == RS_OK && zone == 33 && !north &&
@@ -239,7 +240,8 @@ static void test_errors(void)
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++)
         CHECK(rs_geo_utm_zone_parse(&zone, &north, bad[k], &err) == RS_ERR_INVALID, "zone '%s' accepted", bad[k]);
     char buf[8];
-    CHECK(rs_geo_utm_zone_format(buf, sizeof buf, 1, false, &err) == RS_OK && !strcmp(buf, "01s"), "format 1s: %s", buf);
+    CHECK(rs_geo_utm_zone_format(buf, sizeof buf, 1, false, &err) == RS_OK && !strcmp(buf, "01s"), "format 1s: %s",
+          buf);
     CHECK(rs_geo_utm_zone_format(buf, sizeof buf, 0, true, &err) == RS_OK && !strcmp(buf, "n"), "format UPS: %s", buf);
     CHECK(rs_geo_utm_zone_format(buf, 3, 33, true, &err) == RS_ERR_USAGE, "small buffer: %s", err.msg);
     CHECK(rs_geo_utm_zone_format(buf, sizeof buf, 61, true, &err) == RS_ERR_INVALID, "zone 61 formatted");

@@ -7,12 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sim/rs_simulate.h"
-#include "core/rs_rng.h"
 #include "core/rs_pose.h"
+#include "core/rs_rng.h"
+#include "sim/rs_simulate.h"
 #include "tests/common/rs_test.h"
-
-
 
 // p_cam = R(r) p + t with the textbook Rodrigues formula.
 static void oracle_transform(double out[3], const double rt[6], const double p[3])
@@ -74,7 +72,8 @@ static void test_geometry(void)
     // Pose: where the options put it (rounded to 1e-6), looking at the ENU origin at 62% height.
     double yaw = o.yaw_deg * M_PI / 180;
     double want[3] = {-o.distance_m * sin(yaw), -o.distance_m * cos(yaw), o.camera_height_m};
-    for (int k = 0; k < 3; k++) CHECK(fabs(P->p_cam_enu_m[k] - want[k]) < 1e-4, "camera position %d: %g", k, P->p_cam_enu_m[k]);
+    for (int k = 0; k < 3; k++)
+        CHECK(fabs(P->p_cam_enu_m[k] - want[k]) < 1e-4, "camera position %d: %g", k, P->p_cam_enu_m[k]);
     CHECK(fabs(P->ypr_deg[0] - o.yaw_deg) < 1e-3, "yaw %g", P->ypr_deg[0]);
     CHECK(P->ypr_deg[1] < -10 && P->ypr_deg[1] > -30, "pitch %g", P->ypr_deg[1]);
     double zero[3] = {0, 0, 0}, pc[3];
@@ -133,7 +132,8 @@ static void test_noise(void)
     o.seed = 6;
     CHECK(rs_simulate_camera_problem(&R, &o, &err) == RS_OK, "%s", err.msg);
     if (Q && R) {
-        CHECK(!memcmp(P->q_px, Q->q_px, sizeof(double) * 2 * N) && !memcmp(P->camera.rt_cam_enu, Q->camera.rt_cam_enu, 48) &&
+        CHECK(!memcmp(P->q_px, Q->q_px, sizeof(double) * 2 * N) &&
+                  !memcmp(P->camera.rt_cam_enu, Q->camera.rt_cam_enu, 48) &&
                   !memcmp(P->p_enu_survey_m, Q->p_enu_survey_m, sizeof(double) * 3 * N),
               "same seed, different problems");
         CHECK(memcmp(P->q_px, R->q_px, sizeof(double) * 2 * N) != 0, "seeds 5 and 6 give the same picks");
@@ -146,9 +146,13 @@ static void test_noise(void)
 // Lens models, planar problems, steep cameras, and bad options.
 static void test_variants(void)
 {
-    static const char *const lenses[] = {"LENSMODEL_OPENCV4",      "LENSMODEL_OPENCV8", "LENSMODEL_OPENCV12",
-                                         "LENSMODEL_CAHVOR",       "LENSMODEL_CAHVORE_linearity=0.00",
-                                         "LENSMODEL_STEREOGRAPHIC", "LENSMODEL_LONLAT"};
+    static const char *const lenses[] = {"LENSMODEL_OPENCV4",
+                                         "LENSMODEL_OPENCV8",
+                                         "LENSMODEL_OPENCV12",
+                                         "LENSMODEL_CAHVOR",
+                                         "LENSMODEL_CAHVORE_linearity=0.00",
+                                         "LENSMODEL_STEREOGRAPHIC",
+                                         "LENSMODEL_LONLAT"};
     rs_err err = {0};
     for (size_t i = 0; i < sizeof lenses / sizeof lenses[0]; i++) {
         rs_simulate_camera_options o;
@@ -171,7 +175,8 @@ static void test_variants(void)
         mrcal_point2_t q[12];
         for (int j = 0; j < P->Npoints && j < 12; j++)
             mrcal_transform_point_rt(pc[j].xyz, NULL, NULL, P->camera.rt_cam_enu, P->p_enu_true_m + 3 * j);
-        CHECK(mrcal_project(q, NULL, NULL, pc, P->Npoints, &P->camera.lensmodel, P->camera.intrinsics), "%s: project", lenses[i]);
+        CHECK(mrcal_project(q, NULL, NULL, pc, P->Npoints, &P->camera.lensmodel, P->camera.intrinsics), "%s: project",
+              lenses[i]);
         for (int j = 0; j < P->Npoints && j < 12; j++)
             CHECK(hypot(q[j].x - P->q_true_px[2 * j], q[j].y - P->q_true_px[2 * j + 1]) < 1e-9, "%s: pixel %d",
                   lenses[i], j);

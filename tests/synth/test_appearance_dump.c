@@ -20,20 +20,17 @@ int main(int argc, char **argv)
 {
     rs_err err = {0};
     rs_image img = {0}, ref = {0};
-    if (argc < 3)
-        return 2;
+    if (argc < 3) return 2;
     const char *what = argv[1];
     if (!strcmp(what, "jpeg")) {
         int q, exact;
-        if (rs_synth_estimate_jpeg_quality(&q, &exact, argv[2], &err))
-            return fail(&err);
+        if (rs_synth_estimate_jpeg_quality(&q, &exact, argv[2], &err)) return fail(&err);
         printf("%d %d\n", q, exact);
         return 0;
     }
     if (!strcmp(what, "onnx") && argc == 5) { // onnx MODEL IN OUT
         rs_image out = {0};
-        int rc = rs_image_read(&img, argv[3], &err) ||
-                         rs_synth_dnn_translate(&out, argv[2], &img, &err) ||
+        int rc = rs_image_read(&img, argv[3], &err) || rs_synth_dnn_translate(&out, argv[2], &img, &err) ||
                          rs_image_write(argv[4], &out, 16, &err)
                      ? fail(&err)
                      : 0;
@@ -41,13 +38,11 @@ int main(int argc, char **argv)
         rs_image_free(&out);
         return rc;
     }
-    if (rs_image_read(&img, argv[2], &err))
-        return fail(&err);
+    if (rs_image_read(&img, argv[2], &err)) return fail(&err);
     int rc = 0;
     if (!strcmp(what, "noise") || !strcmp(what, "blur")) {
         double s;
-        if ((what[0] == 'n' ? rs_synth_estimate_noise(&s, &img, &err)
-                            : rs_synth_estimate_blur(&s, &img, &err)))
+        if ((what[0] == 'n' ? rs_synth_estimate_noise(&s, &img, &err) : rs_synth_estimate_blur(&s, &img, &err)))
             rc = fail(&err);
         else
             printf("%.9g\n", s);
@@ -60,10 +55,8 @@ int main(int argc, char **argv)
         else
             printf("%.9g %.9g %.9g\n", g[0], g[1], g[2]);
     } else if (!strcmp(what, "apply") && argc == 11) {
-        rs_synth_appearance a = {{atof(argv[4]), atof(argv[5]), atof(argv[6])},
-                                 atof(argv[7]), atof(argv[8]), 0};
-        if (rs_synth_appearance_apply(&img, &a, atof(argv[9]), strtoull(argv[10], NULL, 10),
-                                      &err) ||
+        rs_synth_appearance a = {{atof(argv[4]), atof(argv[5]), atof(argv[6])}, atof(argv[7]), atof(argv[8]), 0};
+        if (rs_synth_appearance_apply(&img, &a, atof(argv[9]), strtoull(argv[10], NULL, 10), &err) ||
             rs_image_write(argv[3], &img, 16, &err))
             rc = fail(&err);
     } else

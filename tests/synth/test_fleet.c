@@ -13,7 +13,8 @@
 
 // Parses every "vertex_vectors { N, <a, b, c>, ... }" of a POV-Ray text and returns the bounds
 // of the vertices mapped back to the vehicle frame (x_v = z_pov, y_v = -x_pov, z_v = y_pov).
-static int parse_pov_bounds(const char *text, double lo[3], double hi[3]) {
+static int parse_pov_bounds(const char *text, double lo[3], double hi[3])
+{
     int count = 0;
     for (const char *p = text; (p = strstr(p, "vertex_vectors {"));) {
         p += strlen("vertex_vectors {");
@@ -35,7 +36,8 @@ static int parse_pov_bounds(const char *text, double lo[3], double hi[3]) {
     return count;
 }
 
-static char *declare_text(const rs_synth_mesh *m, rs_synth_declare_style style, const double *rgb) {
+static char *declare_text(const rs_synth_mesh *m, rs_synth_declare_style style, const double *rgb)
+{
     char *buf = NULL;
     size_t len = 0;
     FILE *f = open_memstream(&buf, &len);
@@ -46,19 +48,22 @@ static char *declare_text(const rs_synth_mesh *m, rs_synth_declare_style style, 
     return buf;
 }
 
-static int cmp_edge(const void *a, const void *b) {
+static int cmp_edge(const void *a, const void *b)
+{
     const long long *x = a, *y = b;
     return (*x > *y) - (*x < *y);
 }
 
-static int find(int *parent, int i) {
+static int find(int *parent, int i)
+{
     while (parent[i] != i) i = parent[i] = parent[parent[i]];
     return i;
 }
 
 // Closed, consistently wound, outward (signed volume of every connected part > 0), no
 // zero-area triangle. Returns the number of problems.
-static int check_closed_outward(const rs_synth_mesh *m, const char *what) {
+static int check_closed_outward(const rs_synth_mesh *m, const char *what)
+{
     int bad = 0;
     long long *e = malloc((size_t)m->Ntri * 3 * sizeof *e);
     for (int t = 0; t < m->Ntri; t++)
@@ -66,7 +71,7 @@ static int check_closed_outward(const rs_synth_mesh *m, const char *what) {
     qsort(e, (size_t)m->Ntri * 3, sizeof *e, cmp_edge);
     for (int i = 0; i < 3 * m->Ntri; i++) {
         long long a = e[i] / m->Nv, b = e[i] % m->Nv, rev = b * m->Nv + a;
-        if (i > 0 && e[i] == e[i - 1]) bad++;                                 // used twice
+        if (i > 0 && e[i] == e[i - 1]) bad++;                                   // used twice
         if (!bsearch(&rev, e, (size_t)m->Ntri * 3, sizeof *e, cmp_edge)) bad++; // open edge
     }
     free(e);
@@ -94,14 +99,14 @@ static int check_closed_outward(const rs_synth_mesh *m, const char *what) {
             if (!(vol[i] > 1e-6)) negative++;
         }
     CHECK(degenerate == 0, "%s: %d triangles with area < 1e-7 m^2", what, degenerate);
-    CHECK(negative == 0, "%s: %d of %d connected parts with volume <= 0 (inward)", what, negative,
-          parts);
+    CHECK(negative == 0, "%s: %d of %d connected parts with volume <= 0 (inward)", what, negative, parts);
     free(parent);
     free(vol);
     return bad + degenerate + negative;
 }
 
-static unsigned long long hash_mesh(const rs_synth_mesh *m, const double rgb[3]) {
+static unsigned long long hash_mesh(const rs_synth_mesh *m, const double rgb[3])
+{
     unsigned long long h = 1469598103934665603ull;
     for (int i = 0; i < m->Nv; i++)
         for (int k = 0; k < 3; k++) {
@@ -112,12 +117,14 @@ static unsigned long long hash_mesh(const rs_synth_mesh *m, const double rgb[3])
     return h;
 }
 
-static int cmp_u64(const void *a, const void *b) {
+static int cmp_u64(const void *a, const void *b)
+{
     const unsigned long long *x = a, *y = b;
     return (*x > *y) - (*x < *y);
 }
 
-static void test_fleet(void) {
+static void test_fleet(void)
+{
     enum { N = 400 };
     unsigned long long hashes[N];
     int per_class[RS_SYNTH_NCLASSES] = {0};
@@ -127,22 +134,20 @@ static void test_fleet(void) {
         rs_err err = {0};
         // the first 8 * 10 seeds cover every class; then the traffic mix
         if (s < 8 * 10) {
-            rs_synth_vehicle in = {.cls = (rs_synth_class)(s % 8), .variant = (uint64_t)s,
-                                   .rgb = {-1, -1, -1}};
+            rs_synth_vehicle in = {.cls = (rs_synth_class)(s % 8), .variant = (uint64_t)s, .rgb = {-1, -1, -1}};
             CHECK(rs_synth_fleet_resolve(&v, &in, &err) == RS_OK, "seed %d: %s", s, err.msg);
-        } else CHECK(rs_synth_fleet_random(&v, (uint64_t)s, &err) == RS_OK, "seed %d: %s", s, err.msg);
+        } else
+            CHECK(rs_synth_fleet_random(&v, (uint64_t)s, &err) == RS_OK, "seed %d: %s", s, err.msg);
         per_class[v.cls]++;
         rs_synth_class_range r;
         CHECK(rs_synth_class_range_get(&r, v.cls, NULL) == RS_OK, "range");
-        CHECK(v.length_m >= r.length_m[0] && v.length_m <= r.length_m[1] &&
-                  v.width_m >= r.width_m[0] && v.width_m <= r.width_m[1] &&
-                  v.height_m >= r.height_m[0] && v.height_m <= r.height_m[1],
+        CHECK(v.length_m >= r.length_m[0] && v.length_m <= r.length_m[1] && v.width_m >= r.width_m[0] &&
+                  v.width_m <= r.width_m[1] && v.height_m >= r.height_m[0] && v.height_m <= r.height_m[1],
               "seed %d: dimensions out of the class range", s);
         rs_synth_mesh m, m2;
         CHECK(rs_synth_fleet_build(&m, &v, &err) == RS_OK, "seed %d: build: %s", s, err.msg);
         CHECK(rs_synth_fleet_build(&m2, &v, &err) == RS_OK, "seed %d: build: %s", s, err.msg);
-        CHECK(m.Nv == m2.Nv && m.Ntri == m2.Ntri &&
-                  memcmp(m.v, m2.v, (size_t)m.Nv * sizeof *m.v) == 0,
+        CHECK(m.Nv == m2.Nv && m.Ntri == m2.Ntri && memcmp(m.v, m2.v, (size_t)m.Nv * sizeof *m.v) == 0,
               "seed %d: not deterministic", s);
         rs_synth_mesh_free(&m2);
         char what[64];
@@ -150,10 +155,10 @@ static void test_fleet(void) {
         double mlo[3], mhi[3]; // in memory: exact (1e-9 m)
         rs_synth_mesh_bounds(mlo, mhi, &m);
         CHECK(fabs(mlo[0] + v.length_m / 2) < 1e-9 && fabs(mhi[0] - v.length_m / 2) < 1e-9 &&
-                  fabs(mlo[1] + v.width_m / 2) < 1e-9 && fabs(mhi[1] - v.width_m / 2) < 1e-9 &&
-                  fabs(mlo[2]) < 1e-9 && fabs(mhi[2] - v.height_m) < 1e-9,
-              "%s: mesh bounds [%g %g %g] [%g %g %g] are not the box", what, mlo[0], mlo[1],
-              mlo[2], mhi[0], mhi[1], mhi[2]);
+                  fabs(mlo[1] + v.width_m / 2) < 1e-9 && fabs(mhi[1] - v.width_m / 2) < 1e-9 && fabs(mlo[2]) < 1e-9 &&
+                  fabs(mhi[2] - v.height_m) < 1e-9,
+              "%s: mesh bounds [%g %g %g] [%g %g %g] are not the box", what, mlo[0], mlo[1], mlo[2], mhi[0], mhi[1],
+              mhi[2]);
         check_closed_outward(&m, what);
         int parts_seen[RS_SYNTH_NPARTS] = {0};
         for (int t = 0; t < m.Ntri; t++) parts_seen[m.part[t]] = 1;
@@ -171,28 +176,26 @@ static void test_fleet(void) {
             for (int k = 0; k < 3; k++) {
                 double d = fmax(fabs(lo[k] - want_lo[k]), fabs(hi[k] - want_hi[k]));
                 worst = fmax(worst, d);
-                CHECK(d < 1e-3, "%s: axis %d: mesh2 box [%.6f, %.6f], declared [%.6f, %.6f]",
-                      what, k, lo[k], hi[k], want_lo[k], want_hi[k]);
+                CHECK(d < 1e-3, "%s: axis %d: mesh2 box [%.6f, %.6f], declared [%.6f, %.6f]", what, k, lo[k], hi[k],
+                      want_lo[k], want_hi[k]);
             }
             free(text);
         }
         // the coarse level of detail: the same box exactly, closed and outward, every part,
         // at most a third of the triangles
         rs_synth_mesh mc;
-        CHECK(rs_synth_fleet_build_lod(&mc, &v, true, &err) == RS_OK, "seed %d: coarse: %s", s,
-              err.msg);
+        CHECK(rs_synth_fleet_build_lod(&mc, &v, true, &err) == RS_OK, "seed %d: coarse: %s", s, err.msg);
         double clo[3], chi[3];
         rs_synth_mesh_bounds(clo, chi, &mc);
         CHECK(fabs(clo[0] + v.length_m / 2) < 1e-9 && fabs(chi[0] - v.length_m / 2) < 1e-9 &&
-                  fabs(clo[1] + v.width_m / 2) < 1e-9 && fabs(chi[1] - v.width_m / 2) < 1e-9 &&
-                  fabs(clo[2]) < 1e-9 && fabs(chi[2] - v.height_m) < 1e-9,
-              "%s: coarse mesh bounds [%g %g %g] [%g %g %g] are not the box", what, clo[0],
-              clo[1], clo[2], chi[0], chi[1], chi[2]);
+                  fabs(clo[1] + v.width_m / 2) < 1e-9 && fabs(chi[1] - v.width_m / 2) < 1e-9 && fabs(clo[2]) < 1e-9 &&
+                  fabs(chi[2] - v.height_m) < 1e-9,
+              "%s: coarse mesh bounds [%g %g %g] [%g %g %g] are not the box", what, clo[0], clo[1], clo[2], chi[0],
+              chi[1], chi[2]);
         check_closed_outward(&mc, what);
         int coarse_parts[RS_SYNTH_NPARTS] = {0};
         for (int t = 0; t < mc.Ntri; t++) coarse_parts[mc.part[t]] = 1;
-        CHECK(memcmp(coarse_parts, parts_seen, sizeof parts_seen) == 0,
-              "%s: the coarse mesh has other parts", what);
+        CHECK(memcmp(coarse_parts, parts_seen, sizeof parts_seen) == 0, "%s: the coarse mesh has other parts", what);
         CHECK(3 * mc.Ntri <= m.Ntri, "%s: coarse %d triangles vs %d", what, mc.Ntri, m.Ntri);
         tri_full += m.Ntri;
         tri_coarse += mc.Ntri;
@@ -207,23 +210,24 @@ static void test_fleet(void) {
     for (int c = 0; c < RS_SYNTH_NCLASSES; c++)
         CHECK(per_class[c] >= 10, "class %s drawn %d times", rs_synth_class_name(c), per_class[c]);
     printf("fleet: %d vehicles, %d distinct, worst mesh2 box error %.2g m; coarse meshes: "
-           "%.1f%% of the triangles\n", N, distinct, worst, 100.0 * tri_coarse / tri_full);
+           "%.1f%% of the triangles\n",
+           N, distinct, worst, 100.0 * tri_coarse / tri_full);
 }
 
-static void test_resolve_and_colours(void) {
+static void test_resolve_and_colours(void)
+{
     // Given values are kept, the others drawn; the same variant gives the same draws.
     rs_synth_vehicle in = {.cls = RS_SYNTH_SEDAN, .length_m = 4.5, .variant = 7, .rgb = {-1, 0, 0}};
     rs_synth_vehicle a, b;
     CHECK(rs_synth_fleet_resolve(&a, &in, NULL) == RS_OK, "resolve");
     in.length_m = 0;
     CHECK(rs_synth_fleet_resolve(&b, &in, NULL) == RS_OK, "resolve");
-    CHECK(a.length_m == 4.5 && a.width_m == b.width_m && a.height_m == b.height_m &&
-              a.rgb[0] == b.rgb[0],
+    CHECK(a.length_m == 4.5 && a.width_m == b.width_m && a.height_m == b.height_m && a.rgb[0] == b.rgb[0],
           "given length changed the other draws");
     in.height_m = -1;
     rs_err err = {0};
-    CHECK(rs_synth_fleet_resolve(&a, &in, &err) == RS_ERR_INVALID && strstr(err.msg, "height"),
-          "negative height: %s", err.msg);
+    CHECK(rs_synth_fleet_resolve(&a, &in, &err) == RS_ERR_INVALID && strstr(err.msg, "height"), "negative height: %s",
+          err.msg);
     // Colour shares (Axalta 2022): white 34 %, black 21 % (seeded, 20000 draws, +-1.5 %).
     int white = 0, black = 0, n = 20000;
     for (int s = 0; s < n; s++) {
@@ -233,31 +237,27 @@ static void test_resolve_and_colours(void) {
         white += m > 0.7;
         black += m < 0.02;
     }
-    CHECK(fabs(white / (double)n - 0.34) < 0.015, "white share %.3f, want 0.34 (seeds 1000000+)",
-          white / (double)n);
-    CHECK(fabs(black / (double)n - 0.21) < 0.015, "black share %.3f, want 0.21 (seeds 1000000+)",
-          black / (double)n);
+    CHECK(fabs(white / (double)n - 0.34) < 0.015, "white share %.3f, want 0.34 (seeds 1000000+)", white / (double)n);
+    CHECK(fabs(black / (double)n - 0.21) < 0.015, "black share %.3f, want 0.21 (seeds 1000000+)", black / (double)n);
     printf("colours: white %.3f black %.3f of %d\n", white / (double)n, black / (double)n, n);
     rs_synth_class c;
-    CHECK(rs_synth_class_from_name(&c, "box_truck", NULL) == RS_OK && c == RS_SYNTH_BOX_TRUCK,
-          "class name");
+    CHECK(rs_synth_class_from_name(&c, "box_truck", NULL) == RS_OK && c == RS_SYNTH_BOX_TRUCK, "class name");
     CHECK(rs_synth_class_from_name(&c, "tank", &err) == RS_ERR_NOT_FOUND && strstr(err.msg, "sedan"),
           "unknown class: %s", err.msg);
 }
 
-static void test_declare_names(void) {
+static void test_declare_names(void)
+{
     rs_synth_vehicle v;
     rs_synth_mesh m;
-    CHECK(rs_synth_fleet_random(&v, 3, NULL) == RS_OK && rs_synth_fleet_build(&m, &v, NULL) == RS_OK,
-          "build");
-    const char *bad[] = {"car", "A\"B", "A#B", "A\nB", "", "A B",
-                         "ABCDEFGHIJKLMNOPQRSTUVWXYZABCDEFGHIJKLMNO"};
+    CHECK(rs_synth_fleet_random(&v, 3, NULL) == RS_OK && rs_synth_fleet_build(&m, &v, NULL) == RS_OK, "build");
+    const char *bad[] = {"car", "A\"B", "A#B", "A\nB", "", "A B", "ABCDEFGHIJKLMNOPQRSTUVWXYZABCDEFGHIJKLMNO"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         char *buf = NULL;
         size_t len = 0;
         FILE *f = open_memstream(&buf, &len);
-        CHECK(rs_synth_fleet_write_declare(f, bad[i], &m, RS_SYNTH_DECLARE_BARE, NULL, NULL) ==
-                  RS_ERR_INVALID, "name %zu accepted", i);
+        CHECK(rs_synth_fleet_write_declare(f, bad[i], &m, RS_SYNTH_DECLARE_BARE, NULL, NULL) == RS_ERR_INVALID,
+              "name %zu accepted", i);
         fclose(f);
         CHECK(len == 0, "name %zu: something written", i);
         free(buf);
@@ -278,13 +278,15 @@ static void test_declare_names(void) {
     rs_synth_mesh_free(NULL);
 }
 
-static void write_text(const char *path, const char *text) {
+static void write_text(const char *path, const char *text)
+{
     FILE *f = fopen(path, "w");
     fputs(text, f);
     fclose(f);
 }
 
-static void test_obj(const char *dir) {
+static void test_obj(const char *dir)
+{
     char path[4096];
     snprintf(path, sizeof path, "%s/tiny.obj", dir);
     // A unit cube in centimetres, y up, front towards -z; quads, negative indices and normals.
@@ -309,14 +311,13 @@ static void test_obj(const char *dir) {
         // 4 m long (OBJ z), 2 m wide (OBJ x), 1 m high (OBJ y); footprint centred, bottom at 0
         double want_lo[3] = {-2, -1, 0}, want_hi[3] = {2, 1, 1};
         for (int k = 0; k < 3; k++)
-            CHECK(fabs(lo[k] - want_lo[k]) < 1e-9 && fabs(hi[k] - want_hi[k]) < 1e-9,
-                  "obj: axis %d box [%g, %g]", k, lo[k], hi[k]);
+            CHECK(fabs(lo[k] - want_lo[k]) < 1e-9 && fabs(hi[k] - want_hi[k]) < 1e-9, "obj: axis %d box [%g, %g]", k,
+                  lo[k], hi[k]);
         // Forward is OBJ -z: the OBJ face at z = 0 (normal (0,0,-1)) is the vehicle's front,
         // x_v = +2, and its normal maps to +x_v.
         for (int t = 0; t < m.Ntri; t++)
             for (int k = 0; k < 3; k++)
-                if (fabs(m.v[m.tri[t][k]][0] - 2) < 1e-9 && fabs(m.vn[m.tri[t][k]][0] - 1) < 1e-9)
-                    goto found;
+                if (fabs(m.v[m.tri[t][k]][0] - 2) < 1e-9 && fabs(m.vn[m.tri[t][k]][0] - 1) < 1e-9) goto found;
         CHECK(0, "obj: front face (OBJ z = 0) not at x_v = +2 with normal +x_v");
     found:
         // winding agrees with the OBJ's normals (outward)
@@ -325,8 +326,7 @@ static void test_obj(const char *dir) {
             const double *a = m.v[m.tri[t][0]], *b = m.v[m.tri[t][1]], *c = m.v[m.tri[t][2]];
             double u[3], w[3];
             for (int k = 0; k < 3; k++) u[k] = b[k] - a[k], w[k] = c[k] - a[k];
-            double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
-                           u[0] * w[1] - u[1] * w[0]};
+            double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
             const double *vn = m.vn[m.tri[t][0]];
             inward += n[0] * vn[0] + n[1] * vn[1] + n[2] * vn[2] <= 0;
         }
@@ -347,18 +347,17 @@ static void test_obj(const char *dir) {
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         write_text(path, bad[i].text);
         rs_status st = rs_synth_obj_load(&m, &spec, &err);
-        CHECK(st != RS_OK && strstr(err.msg, bad[i].want), "bad obj %zu: got '%s', want '%s'", i,
-              err.msg, bad[i].want);
+        CHECK(st != RS_OK && strstr(err.msg, bad[i].want), "bad obj %zu: got '%s', want '%s'", i, err.msg, bad[i].want);
         CHECK(m.Nv == 0 && m.v == NULL, "bad obj %zu: mesh not zeroed", i);
     }
     rs_synth_obj_spec bad_axes = {path, 1, "+y", "+y"};
-    CHECK(rs_synth_obj_load(&m, &bad_axes, &err) == RS_ERR_INVALID && strstr(err.msg, "up"),
-          "same axes: %s", err.msg);
+    CHECK(rs_synth_obj_load(&m, &bad_axes, &err) == RS_ERR_INVALID && strstr(err.msg, "up"), "same axes: %s", err.msg);
     spec.path = "/nonexistent/x.obj";
     CHECK(rs_synth_obj_load(&m, &spec, &err) == RS_ERR_IO, "missing file: %s", err.msg);
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     const char *dir = argc > 1 ? argv[1] : ".";
     test_fleet();
     test_resolve_and_colours();

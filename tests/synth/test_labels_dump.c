@@ -14,12 +14,16 @@
 #include "core/rs_io.h"
 #include "synth/rs_synth_labels.h"
 
-static void num(FILE *f, double x) {
-    if (isfinite(x)) fprintf(f, "%.17g", x);
-    else fprintf(f, "null");
+static void num(FILE *f, double x)
+{
+    if (isfinite(x))
+        fprintf(f, "%.17g", x);
+    else
+        fprintf(f, "null");
 }
 
-static void nums(FILE *f, const char *key, const double *x, int n) {
+static void nums(FILE *f, const char *key, const double *x, int n)
+{
     fprintf(f, "\"%s\": [", key);
     for (int i = 0; i < n; i++) {
         if (i) fprintf(f, ", ");
@@ -28,12 +32,14 @@ static void nums(FILE *f, const char *key, const double *x, int n) {
     fprintf(f, "]");
 }
 
-static int fail(const char *what, const rs_err *err) {
+static int fail(const char *what, const rs_err *err)
+{
     fprintf(stderr, "test_labels_dump: %s: %s\n", what, err->msg);
     return 1;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     if (argc < 4) {
         fprintf(stderr, "usage: test_labels_dump MODEL VEHICLES OUTDIR [IDS|-] [BBOX] [MIN_VIS] [mesh]\n");
         return 2;
@@ -49,9 +55,8 @@ int main(int argc, char **argv) {
     const char *ids[256];
     int N = 0;
     unsigned long long variant;
-    while (N < 256 && fscanf(vf, "%63s %lf %lf %lf %lf %lf %lf %lf %llu", cls, &v[N].e_m, &v[N].n_m,
-                             &v[N].yaw_deg, &v[N].length_m, &v[N].width_m, &v[N].height_m, &up[N],
-                             &variant) == 9) {
+    while (N < 256 && fscanf(vf, "%63s %lf %lf %lf %lf %lf %lf %lf %llu", cls, &v[N].e_m, &v[N].n_m, &v[N].yaw_deg,
+                             &v[N].length_m, &v[N].width_m, &v[N].height_m, &up[N], &variant) == 9) {
         if (rs_synth_class_from_name(&v[N].cls, cls, &err)) return fail("class", &err);
         v[N].variant = variant;
         v[N].rgb[0] = v[N].rgb[1] = v[N].rgb[2] = -1;
@@ -98,27 +103,21 @@ int main(int argc, char **argv) {
             const double *x;
             int n;
         } fields[] = {
-            {"center_enu_m", L->center_enu_m, 3},
-            {"dims_m", L->dims_m, 3},
-            {"corners_px", &L->corners_px[0][0], 16},
-            {"body_box_full", L->body_box_full_px, 4},
-            {"body_box", L->body_box_px, 4},
-            {"footprint_box_full", L->footprint_box_full_px, 4},
-            {"footprint_box", L->footprint_box_px, 4},
-            {"footprint_center", L->footprint_center_px, 2},
-            {"bottom_center", L->bottom_center_px, 2},
-            {"bottom_center_cam_m", L->bottom_center_cam_m, 3},
-            {"truncation", &L->truncation, 1},
-            {"rotation_y", &L->rotation_y_rad, 1},
-            {"visibility", &L->visibility, 1},
-            {"visible_box", L->visible_box_px, 4},
+            {"center_enu_m", L->center_enu_m, 3},      {"dims_m", L->dims_m, 3},
+            {"corners_px", &L->corners_px[0][0], 16},  {"body_box_full", L->body_box_full_px, 4},
+            {"body_box", L->body_box_px, 4},           {"footprint_box_full", L->footprint_box_full_px, 4},
+            {"footprint_box", L->footprint_box_px, 4}, {"footprint_center", L->footprint_center_px, 2},
+            {"bottom_center", L->bottom_center_px, 2}, {"bottom_center_cam_m", L->bottom_center_cam_m, 3},
+            {"truncation", &L->truncation, 1},         {"rotation_y", &L->rotation_y_rad, 1},
+            {"visibility", &L->visibility, 1},         {"visible_box", L->visible_box_px, 4},
         };
         for (size_t i = 0; i < sizeof fields / sizeof fields[0]; i++) {
             fprintf(a.f, ", ");
             if (fields[i].n == 1) {
                 fprintf(a.f, "\"%s\": ", fields[i].key);
                 num(a.f, fields[i].x[0]);
-            } else nums(a.f, fields[i].key, fields[i].x, fields[i].n);
+            } else
+                nums(a.f, fields[i].key, fields[i].x, fields[i].n);
         }
         fprintf(a.f, ", \"visible_px\": %ld, \"full_px\": %ld", L->visible_px, L->full_px);
         fprintf(a.f, "}%s\n", k + 1 < N ? "," : "");

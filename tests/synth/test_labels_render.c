@@ -26,7 +26,8 @@
 // A camera 8 m up looking north (yaw 10), 20 degrees down: rows of R_cam_enu for yaw y, pitch p
 // (docs/conventions.md with roll 0): x_cam = (cos y, -sin y, 0),
 // z_cam = (sin y cos p, cos y cos p, sin p), y_cam = z_cam x x_cam.
-static void camera_pose(double rt[6], double yaw_deg, double pitch_deg, const double C[3]) {
+static void camera_pose(double rt[6], double yaw_deg, double pitch_deg, const double C[3])
+{
     double y = yaw_deg * M_PI / 180, p = pitch_deg * M_PI / 180;
     double R[3][3] = {{cos(y), -sin(y), 0}, {0, 0, 0}, {sin(y) * cos(p), cos(y) * cos(p), sin(p)}};
     R[1][0] = R[2][1] * R[0][2] - R[2][2] * R[0][1];
@@ -36,7 +37,8 @@ static void camera_pose(double rt[6], double yaw_deg, double pitch_deg, const do
     for (int i = 0; i < 3; i++) rt[3 + i] = -(R[i][0] * C[0] + R[i][1] * C[1] + R[i][2] * C[2]);
 }
 
-static int run(const char *outdir, const char *lens_name, int opencv8) {
+static int run(const char *outdir, const char *lens_name, int opencv8)
+{
     double intr[12] = {400, 402, 161.5, 118.5, -0.08, 0.03, 2e-4, -1e-4, 0, 0, 0, 0};
     rs_camera cam = {0};
     cam.lensmodel.type = opencv8 ? MRCAL_LENSMODEL_OPENCV8 : MRCAL_LENSMODEL_PINHOLE;
@@ -49,10 +51,22 @@ static int run(const char *outdir, const char *lens_name, int opencv8) {
     // bus broadside at n = 20; a sedan right behind it (hidden); free vehicles; one cut by the
     // left border
     rs_synth_vehicle v[6] = {
-        {.cls = RS_SYNTH_BUS, .e_m = 3, .n_m = 20, .yaw_deg = 90, .length_m = 12, .width_m = 2.5,
-         .height_m = 3.2, .variant = 1},
-        {.cls = RS_SYNTH_SEDAN, .e_m = 3, .n_m = 26, .yaw_deg = 90, .length_m = 4.2, .width_m = 1.8,
-         .height_m = 1.45, .variant = 2},
+        {.cls = RS_SYNTH_BUS,
+         .e_m = 3,
+         .n_m = 20,
+         .yaw_deg = 90,
+         .length_m = 12,
+         .width_m = 2.5,
+         .height_m = 3.2,
+         .variant = 1},
+        {.cls = RS_SYNTH_SEDAN,
+         .e_m = 3,
+         .n_m = 26,
+         .yaw_deg = 90,
+         .length_m = 4.2,
+         .width_m = 1.8,
+         .height_m = 1.45,
+         .variant = 2},
         {.cls = RS_SYNTH_SUV, .e_m = 9, .n_m = 14, .yaw_deg = 20, .variant = 3},
         {.cls = RS_SYNTH_HATCHBACK, .e_m = -1, .n_m = 13, .yaw_deg = 200, .variant = 4},
         {.cls = RS_SYNTH_VAN, .e_m = 17, .n_m = 27, .yaw_deg = 300, .variant = 5},
@@ -99,26 +113,21 @@ static int run(const char *outdir, const char *lens_name, int opencv8) {
                     if (i > bb[2]) bb[2] = i;
                     if (j > bb[3]) bb[3] = j;
                 }
-        CHECK(L->visible_px == n, "%s vehicle %d: visible_px %ld, ID pixels %ld", lens_name, k,
-              L->visible_px, n);
+        CHECK(L->visible_px == n, "%s vehicle %d: visible_px %ld, ID pixels %ld", lens_name, k, L->visible_px, n);
         if (n > 0) {
             double want[4] = {bb[0] - 0.5, bb[1] - 0.5, bb[2] + 0.5, bb[3] + 0.5};
             CHECK(memcmp(want, L->visible_box_px, sizeof want) == 0,
-                  "%s vehicle %d: visible box (%g %g %g %g) vs ID pixels (%g %g %g %g)", lens_name,
-                  k, L->visible_box_px[0], L->visible_box_px[1], L->visible_box_px[2],
-                  L->visible_box_px[3], want[0], want[1], want[2], want[3]);
-            CHECK(L->visible_box_px[0] >= L->body_box_px[0] - 1 &&
-                      L->visible_box_px[1] >= L->body_box_px[1] - 1 &&
-                      L->visible_box_px[2] <= L->body_box_px[2] + 1 &&
-                      L->visible_box_px[3] <= L->body_box_px[3] + 1,
-                  "%s vehicle %d: visible box (%g %g %g %g) outside the body box (%g %g %g %g)",
-                  lens_name, k, L->visible_box_px[0], L->visible_box_px[1], L->visible_box_px[2],
-                  L->visible_box_px[3], L->body_box_px[0], L->body_box_px[1], L->body_box_px[2],
-                  L->body_box_px[3]);
+                  "%s vehicle %d: visible box (%g %g %g %g) vs ID pixels (%g %g %g %g)", lens_name, k,
+                  L->visible_box_px[0], L->visible_box_px[1], L->visible_box_px[2], L->visible_box_px[3], want[0],
+                  want[1], want[2], want[3]);
+            CHECK(L->visible_box_px[0] >= L->body_box_px[0] - 1 && L->visible_box_px[1] >= L->body_box_px[1] - 1 &&
+                      L->visible_box_px[2] <= L->body_box_px[2] + 1 && L->visible_box_px[3] <= L->body_box_px[3] + 1,
+                  "%s vehicle %d: visible box (%g %g %g %g) outside the body box (%g %g %g %g)", lens_name, k,
+                  L->visible_box_px[0], L->visible_box_px[1], L->visible_box_px[2], L->visible_box_px[3],
+                  L->body_box_px[0], L->body_box_px[1], L->body_box_px[2], L->body_box_px[3]);
         }
-        printf("%s vehicle %d (%s): visible %ld of %ld px, visibility %.4f, truncation %.3f\n",
-               lens_name, k, rs_synth_class_name(L->cls), L->visible_px, L->full_px,
-               L->visibility, L->truncation);
+        printf("%s vehicle %d (%s): visible %ld of %ld px, visibility %.4f, truncation %.3f\n", lens_name, k,
+               rs_synth_class_name(L->cls), L->visible_px, L->full_px, L->visibility, L->truncation);
     }
     if (labels) {
         CHECK(labels[1].visible_px == 0 && labels[1].visibility == 0 && isnan(labels[1].visible_box_px[0]),
@@ -129,8 +138,7 @@ static int run(const char *outdir, const char *lens_name, int opencv8) {
                   "%s vehicle %d: unoccluded, visibility %.4f (ID %ld px, mesh %ld px)", lens_name, k,
                   labels[k].visibility, labels[k].visible_px, labels[k].full_px);
         CHECK(labels[5].truncation > 0 && labels[5].in_image,
-              "%s: vehicle 5 should be cut by the left border (truncation %g)", lens_name,
-              labels[5].truncation);
+              "%s: vehicle 5 should be cut by the left border (truncation %g)", lens_name, labels[5].truncation);
     }
     free(labels);
     rs_synth_render_result_free(&r);
@@ -138,7 +146,8 @@ static int run(const char *outdir, const char *lens_name, int opencv8) {
     return 0;
 }
 
-int main(int argc, char **argv) {
+int main(int argc, char **argv)
+{
     const char *outdir = argc > 1 ? argv[1] : ".";
     const char *povray = getenv("ROADSIDE_POVRAY");
     if (!povray && system("command -v povray > /dev/null 2>&1") != 0) {

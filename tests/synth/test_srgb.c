@@ -21,15 +21,14 @@ int main(void)
         if (ed > worst_dec) worst_dec = ed, at_dec = v;
         if (ee > worst_enc) worst_enc = ee, at_enc = v;
     }
-    printf("decode: worst %.3g at %.9f; encode: worst %.3g at %.9f (10^7 points)\n", worst_dec,
-           at_dec, worst_enc, at_enc);
+    printf("decode: worst %.3g at %.9f; encode: worst %.3g at %.9f (10^7 points)\n", worst_dec, at_dec, worst_enc,
+           at_enc);
     int fails = 0;
     if (!(worst_dec <= 1e-6) || !(worst_enc <= 1e-6)) {
         printf("FAIL: beyond 1e-6\n");
         fails++;
     }
-    if (rs_synth_srgb_encode(-0.5) != 0 || rs_synth_srgb_encode(1.5) != enc(1.0) ||
-        rs_synth_srgb_decode(NAN) != 0) {
+    if (rs_synth_srgb_encode(-0.5) != 0 || rs_synth_srgb_encode(1.5) != enc(1.0) || rs_synth_srgb_decode(NAN) != 0) {
         printf("FAIL: outside [0, 1] not clamped\n");
         fails++;
     }

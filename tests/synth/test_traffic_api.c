@@ -13,10 +13,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_rng.h"
 #include "sim/rs_simulate.h"
 #include "synth/rs_synth_sumo.h"
 #include "synth/rs_synth_traffic.h"
-#include "core/rs_rng.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -74,8 +74,8 @@ static int test_sat(void)
             fails++;
         }
     }
-    printf("sat: 20000 pairs, %d overlapping, %d within a cell of touching (skipped), %d disagreements\n",
-           Noverlap, Nambiguous, fails);
+    printf("sat: 20000 pairs, %d overlapping, %d within a cell of touching (skipped), %d disagreements\n", Noverlap,
+           Nambiguous, fails);
     if (Noverlap < 1000 || Noverlap > 19000) {
         fprintf(stderr, "sat: unbalanced test (%d overlapping)\n", Noverlap);
         fails++;
@@ -121,8 +121,7 @@ int main(int argc, char **argv)
     }
     if (argc == 6 && !strcmp(argv[1], "lanes")) {
         // a site of its own: the origin given, ellipsoidal heights, the level ground plane U = 0
-        rs_site site = {.origin = {atof(argv[3]), atof(argv[4]), atof(argv[5])},
-                        .ground_normal_enu = {0, 0, 1}};
+        rs_site site = {.origin = {atof(argv[3]), atof(argv[4]), atof(argv[5])}, .ground_normal_enu = {0, 0, 1}};
         rs_lanes lanes;
         rs_err err;
         if (rs_lanes_read(&lanes, argv[2], &site, &err)) {
