@@ -82,8 +82,8 @@ static double rotation_between_deg(const double ra[3], const double rb[3])
 }
 
 // Projects ENU points through a pose and lens; false if mrcal refuses.
-static bool project_enu(
-    double q[2], const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6], const double p_enu[3])
+static bool project_enu(double q[2], const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6],
+                        const double p_enu[3])
 {
     mrcal_point3_t pc;
     mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt, p_enu);
@@ -96,8 +96,8 @@ static bool project_enu(
 
 // ---- degeneracy ----
 
-static rs_status
-compute_degeneracy(rs_audit_result *r, const rs_calib_problem *pb, const rs_audit_options *opt, rs_err *err)
+static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *pb, const rs_audit_options *opt,
+                                    rs_err *err)
 {
     const rs_calib_result *s = &r->solve;
     int N = pb->N, Nin = 0;
@@ -167,13 +167,8 @@ compute_degeneracy(rs_audit_result *r, const rs_calib_problem *pb, const rs_audi
 
 // The left-out landmark's prediction error in sigmas (rs_audit.h, loo_normalised): d = q_pred -
 // q_obs with S = s_px^2 I + Jp diag(s_enu^2) Jp^T + Jrt C_rt Jrt^T. NaN when S is singular.
-static double loo_sigmas(const mrcal_lensmodel_t *lm,
-                         const double *intrinsics,
-                         const double rt[6],
-                         const double C_rt[36],
-                         const double p[3],
-                         const double s_enu[3],
-                         double s_px,
+static double loo_sigmas(const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6],
+                         const double C_rt[36], const double p[3], const double s_enu[3], double s_px,
                          const double d[2])
 {
     double pc[3], dpc_drt[18], dpc_dp[9];
@@ -255,8 +250,8 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static rs_status leave_one_out(
-    rs_audit_result *r, const rs_calib_problem *pb, const double n[3], const rs_audit_options *opt, rs_err *err)
+static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, const double n[3],
+                               const rs_audit_options *opt, rs_err *err)
 {
     const int N = pb->N;
     subset sub;
@@ -364,13 +359,8 @@ static void ypr_diff(double d[3], const double a[6], const double b[6])
     }
 }
 
-static rs_status against_test(rs_audit_result *r,
-                              const rs_calib_problem *pb,
-                              const double *q_new,
-                              const double *s_new,
-                              const double rt_stored[6],
-                              const rs_audit_options *opt,
-                              rs_err *err)
+static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, const double *q_new, const double *s_new,
+                              const double rt_stored[6], const rs_audit_options *opt, rs_err *err)
 {
     rs_audit_against *a = &r->against;
     const int N = pb->N;
@@ -437,9 +427,7 @@ done:
 
 // ---- an external calibration ----
 
-static void external_check(rs_audit_result *r,
-                           const rs_calib_problem *pb,
-                           const rs_audit_calibration *cal,
+static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const rs_audit_calibration *cal,
                            const rs_audit_options *opt)
 {
     rs_audit_external *x = &r->external;
@@ -539,15 +527,9 @@ void rs_audit_result_free(rs_audit_result *r)
     memset(r, 0, sizeof *r);
 }
 
-rs_status rs_audit_camera(rs_audit_result *r,
-                          const rs_calib_problem *problem,
-                          const double ground_normal_enu[3],
-                          double ground_offset_m,
-                          const double *q_new_px,
-                          const double *sigma_new_px,
-                          const rs_audit_calibration *external,
-                          const rs_audit_options *opt,
-                          rs_err *err)
+rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, const double ground_normal_enu[3],
+                          double ground_offset_m, const double *q_new_px, const double *sigma_new_px,
+                          const rs_audit_calibration *external, const rs_audit_options *opt, rs_err *err)
 {
     memset(r, 0, sizeof *r);
     rs_audit_options defaults;

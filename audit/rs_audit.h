@@ -151,8 +151,7 @@ typedef struct {
 rs_status rs_audit_calibration_read( // out
     rs_audit_calibration *out,
     // in
-    const char *path,
-    rs_err *err);
+    const char *path, rs_err *err);
 void rs_audit_calibration_free(rs_audit_calibration *cal); // NULL-safe
 
 // What the audit says about an external calibration.
@@ -224,9 +223,7 @@ typedef struct {
 rs_status rs_audit_camera( // out
     rs_audit_result *result,
     // in
-    const rs_calib_problem *problem,
-    const double ground_normal_enu[3],
-    double ground_offset_m,
+    const rs_calib_problem *problem, const double ground_normal_enu[3], double ground_offset_m,
     const double *q_new_px,               // (N,2), may be NULL
     const double *sigma_new_px,           // (N,), may be NULL: 1 px
     const rs_audit_calibration *external, // may be NULL
@@ -246,10 +243,7 @@ rs_status rs_audit_ground_sigma( // out
     // in
     const rs_camera *cam,           // calibrated: intrinsics, pose
     const double covariance_rt[36], // (6,6) row-major, of the pose
-    const double q_px[2],
-    double detection_sigma_px,
-    const double ground_normal_enu[3],
-    double ground_offset_m,
+    const double q_px[2], double detection_sigma_px, const double ground_normal_enu[3], double ground_offset_m,
     rs_err *err); // may be NULL
 
 // The same at a ground point (E, N) given in metres instead of a pixel: NaN (and RS_OK) when the
@@ -258,12 +252,8 @@ rs_status rs_audit_ground_sigma_at( // out
     double *sigma_m,
     // in
     const rs_camera *cam, // calibrated: intrinsics, size, pose
-    const double covariance_rt[36],
-    const double en_m[2],
-    double detection_sigma_px,
-    const double ground_normal_enu[3],
-    double ground_offset_m,
-    rs_err *err);
+    const double covariance_rt[36], const double en_m[2], double detection_sigma_px, const double ground_normal_enu[3],
+    double ground_offset_m, rs_err *err);
 
 // ---- a site's cameras ----
 
@@ -274,8 +264,7 @@ rs_status rs_audit_ground_sigma_at( // out
 rs_status rs_audit_site_camera( // out
     rs_audit_result *result,
     // in
-    const rs_site *site,
-    int icam,
+    const rs_site *site, int icam,
     const char *calib_path,      // may be NULL
     const char *against_csv,     // may be NULL
     const rs_audit_options *opt, // may be NULL
@@ -286,12 +275,8 @@ rs_status rs_audit_site_camera( // out
 char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result *result, const rs_audit_options *opt);
 
 // Writes out_dir/<id>.audit.json atomically (out_dir must exist).
-rs_status rs_audit_site_write(const char *out_dir,
-                              const rs_site *site,
-                              int icam,
-                              const rs_audit_result *result,
-                              const rs_audit_options *opt,
-                              rs_err *err);
+rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam, const rs_audit_result *result,
+                              const rs_audit_options *opt, rs_err *err);
 
 #ifdef __cplusplus
 }

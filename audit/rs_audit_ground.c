@@ -20,15 +20,8 @@ double rs_audit__dist3(const double *a, const double *b)
 // ---- ground uncertainty (rs_audit.h, Method) ----
 
 // Cov(g) of the ground point p (on the plane) seen by the camera; false if degenerate.
-static bool ground_cov(double cov[4],
-                       double q_out[2],
-                       const mrcal_lensmodel_t *lm,
-                       const double *intrinsics,
-                       const double rt[6],
-                       const double C_rt[36],
-                       const double p[3],
-                       double sigma_px,
-                       const double n[3])
+static bool ground_cov(double cov[4], double q_out[2], const mrcal_lensmodel_t *lm, const double *intrinsics,
+                       const double rt[6], const double C_rt[36], const double p[3], double sigma_px, const double n[3])
 {
     double pc[3], dpc_drt[18], dpc_dp[9];
     mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, rt, p);
@@ -76,16 +69,9 @@ rs_status rs_audit__check_plane(const double n[3], rs_err *err)
     return RS_OK;
 }
 
-rs_status rs_audit_ground_sigma(double *sigma_m,
-                                double *cov_en_m2,
-                                double p_enu_m[3],
-                                const rs_camera *cam,
-                                const double covariance_rt[36],
-                                const double q_px[2],
-                                double detection_sigma_px,
-                                const double ground_normal_enu[3],
-                                double ground_offset_m,
-                                rs_err *err)
+rs_status rs_audit_ground_sigma(double *sigma_m, double *cov_en_m2, double p_enu_m[3], const rs_camera *cam,
+                                const double covariance_rt[36], const double q_px[2], double detection_sigma_px,
+                                const double ground_normal_enu[3], double ground_offset_m, rs_err *err)
 {
     *sigma_m = NAN;
     rs_status st = rs_audit__check_plane(ground_normal_enu, err);
@@ -110,14 +96,9 @@ static void plane_point(double p[3], const double en[2], const double n[3], doub
     p[2] = (offset - n[0] * en[0] - n[1] * en[1]) / n[2];
 }
 
-rs_status rs_audit_ground_sigma_at(double *sigma_m,
-                                   const rs_camera *cam,
-                                   const double covariance_rt[36],
-                                   const double en_m[2],
-                                   double detection_sigma_px,
-                                   const double ground_normal_enu[3],
-                                   double ground_offset_m,
-                                   rs_err *err)
+rs_status rs_audit_ground_sigma_at(double *sigma_m, const rs_camera *cam, const double covariance_rt[36],
+                                   const double en_m[2], double detection_sigma_px, const double ground_normal_enu[3],
+                                   double ground_offset_m, rs_err *err)
 {
     *sigma_m = NAN;
     rs_status st = rs_audit__check_plane(ground_normal_enu, err);
@@ -140,12 +121,8 @@ rs_status rs_audit_ground_sigma_at(double *sigma_m,
 
 // ---- the map and coverage ----
 
-rs_status rs_audit__compute_map(rs_audit_result *r,
-                             const rs_calib_problem *pb,
-                             const double n[3],
-                             double offset,
-                             const rs_audit_options *opt,
-                             rs_err *err)
+rs_status rs_audit__compute_map(rs_audit_result *r, const rs_calib_problem *pb, const double n[3], double offset,
+                                const rs_audit_options *opt, rs_err *err)
 {
     rs_audit_map *m = &r->map;
     const rs_calib_result *s = &r->solve;
@@ -238,4 +215,3 @@ rs_status rs_audit__compute_coverage(rs_audit_result *r, const rs_calib_problem 
     free(xy);
     return st;
 }
-

@@ -10,8 +10,8 @@ extern "C" {
 #include "audit/internal/rs_audit_opencv.h"
 }
 
-extern "C" rs_status rs_audit_opencv_convex_hull(
-    double *area, unsigned char *inside, const double *xy, int N, const double *query, int Nquery, rs_err *err)
+extern "C" rs_status rs_audit_opencv_convex_hull(double *area, unsigned char *inside, const double *xy, int N,
+                                                 const double *query, int Nquery, rs_err *err)
 {
     try {
         *area = 0;

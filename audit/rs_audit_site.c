@@ -98,8 +98,8 @@ static bool csv_number(const char *s, double *v)
 
 // Reads `path` (landmark,u,v[,sigma_px]) into q_new (N,2) / s_new (N,) indexed like the camera's
 // observations; rows not re-picked stay NaN.
-static rs_status
-read_new_picks(double *q_new, double *s_new, const rs_site *site, int icam, const char *path, rs_err *err)
+static rs_status read_new_picks(double *q_new, double *s_new, const rs_site *site, int icam, const char *path,
+                                rs_err *err)
 {
     const rs_site_camera *cam = &site->cameras[icam];
     for (int i = 0; i < cam->Nobservations; i++) q_new[2 * i] = q_new[2 * i + 1] = s_new[i] = NAN;
@@ -170,13 +170,8 @@ done:
 
 // ---- a site camera ----
 
-rs_status rs_audit_site_camera(rs_audit_result *result,
-                               const rs_site *site,
-                               int icam,
-                               const char *calib_path,
-                               const char *against_csv,
-                               const rs_audit_options *opt,
-                               rs_err *err)
+rs_status rs_audit_site_camera(rs_audit_result *result, const rs_site *site, int icam, const char *calib_path,
+                               const char *against_csv, const rs_audit_options *opt, rs_err *err)
 {
     memset(result, 0, sizeof *result);
     const rs_site_camera *cam = &site->cameras[icam];
@@ -339,12 +334,8 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
     return text;
 }
 
-rs_status rs_audit_site_write(const char *out_dir,
-                              const rs_site *site,
-                              int icam,
-                              const rs_audit_result *result,
-                              const rs_audit_options *opt,
-                              rs_err *err)
+rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam, const rs_audit_result *result,
+                              const rs_audit_options *opt, rs_err *err)
 {
     char name[512];
     snprintf(name, sizeof name, "%s.audit.json", site->cameras[icam].id);

@@ -140,8 +140,8 @@ static double rotation_error_deg(const double *r_est, const double *r_true, doub
     return DEG * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
-static void
-fill_problem(rs_calib_problem *cp, const bench_trial *T, const double *p, const double *q, int N, bool survey_exact)
+static void fill_problem(rs_calib_problem *cp, const bench_trial *T, const double *p, const double *q, int N,
+                         bool survey_exact)
 {
     memset(cp, 0, sizeof *cp);
     cp->N = N;
@@ -329,8 +329,8 @@ static void trial_method(bench_acc *A, int m, bench_trial *T, double scale_m)
     }
 }
 
-static rs_status
-run_config(rs_bench_calib_row *rows, const bench_config *c, int ic, const rs_bench_calib_options *o, bench_acc *acc)
+static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int ic, const rs_bench_calib_options *o,
+                            bench_acc *acc)
 {
     const int N = c->sim.Nlandmarks;
     bench_trial T = {0};
@@ -405,12 +405,8 @@ run_config(rs_bench_calib_row *rows, const bench_config *c, int ic, const rs_ben
     return RS_OK;
 }
 
-rs_status rs_bench_calib_run(rs_bench_calib_row **rows,
-                             int *Nrows,
-                             const rs_bench_calib_options *o,
-                             void (*progress)(int done, int total, void *cookie),
-                             void *cookie,
-                             rs_err *err)
+rs_status rs_bench_calib_run(rs_bench_calib_row **rows, int *Nrows, const rs_bench_calib_options *o,
+                             void (*progress)(int done, int total, void *cookie), void *cookie, rs_err *err)
 {
     *rows = NULL;
     *Nrows = 0;

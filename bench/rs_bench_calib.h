@@ -78,13 +78,10 @@ typedef struct {
 // Errors: RS_ERR_USAGE (bad options), RS_ERR_NOMEM. A configuration whose problems cannot be
 // generated gives rows with trials = 0 and the generator's message in `failure`.
 rs_status rs_bench_calib_run( // out
-    rs_bench_calib_row **rows,
-    int *Nrows,
+    rs_bench_calib_row **rows, int *Nrows,
     // in
-    const rs_bench_calib_options *o,
-    void (*progress)(int done, int total, void *cookie), // may be NULL
-    void *cookie,
-    rs_err *err);
+    const rs_bench_calib_options *o, void (*progress)(int done, int total, void *cookie), // may be NULL
+    void *cookie, rs_err *err);
 
 // Writes the rows as CSV (header line, one row per method and configuration; NAN written as
 // "nan"), atomically. Errors: RS_ERR_IO.
@@ -127,9 +124,7 @@ typedef struct {
 rs_status rs_bench_calib_stress( // out
     rs_bench_calib_stress_summary *summary,
     // in
-    int Nproblems,
-    uint64_t seed,
-    rs_err *err);
+    int Nproblems, uint64_t seed, rs_err *err);
 
 #ifdef __cplusplus
 }

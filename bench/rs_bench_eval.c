@@ -18,8 +18,8 @@ typedef struct {
     int category;
 } box;
 
-rs_status rs_bench_eval_write_data(
-    const char *gt_path, const char *dets_path, int Nimages, long Ndets, uint64_t seed, rs_err *err)
+rs_status rs_bench_eval_write_data(const char *gt_path, const char *dets_path, int Nimages, long Ndets, uint64_t seed,
+                                   rs_err *err)
 {
     if (Nimages < 1 || Ndets < 0)
         return rs_err_set(err, RS_ERR_USAGE, "synthetic data: need at least one image and no negative count");
@@ -130,13 +130,8 @@ static double peak_rss_bytes(void)
     return 1024.0 * (double)u.ru_maxrss;
 }
 
-rs_status rs_bench_eval_run(rs_bench_eval_figures *f,
-                            int Nimages,
-                            long Ndets,
-                            uint64_t seed,
-                            const char *gt_path,
-                            const char *dets_path,
-                            rs_err *err)
+rs_status rs_bench_eval_run(rs_bench_eval_figures *f, int Nimages, long Ndets, uint64_t seed, const char *gt_path,
+                            const char *dets_path, rs_err *err)
 {
     double t0 = now_s();
     rs_status st = rs_bench_eval_write_data(gt_path, dets_path, Nimages, Ndets, seed, err);

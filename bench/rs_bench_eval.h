@@ -13,8 +13,8 @@ extern "C" {
 // 4 vehicles each (3 categories, image field "condition" in normal/rain/night, one ignore region
 // in every 20th image), and Ndets detections: a noisy detection (+-6 px) of most vehicles, the
 // rest spread at random. Writes gt_path and dets_path atomically. Deterministic in seed (core/rs_rng.h).
-rs_status rs_bench_eval_write_data(
-    const char *gt_path, const char *dets_path, int Nimages, long Ndets, uint64_t seed, rs_err *err);
+rs_status rs_bench_eval_write_data(const char *gt_path, const char *dets_path, int Nimages, long Ndets, uint64_t seed,
+                                   rs_err *err);
 
 // What `roadside bench eval` measures: the data written, then parsed (rs_eval_load, centre
 // shift 0.5) and evaluated (rs_eval_run, defaults). Times in seconds (wall, and CPU of this
@@ -33,12 +33,7 @@ typedef struct {
 rs_status rs_bench_eval_run( // out
     rs_bench_eval_figures *f,
     // in
-    int Nimages,
-    long Ndets,
-    uint64_t seed,
-    const char *gt_path,
-    const char *dets_path,
-    rs_err *err);
+    int Nimages, long Ndets, uint64_t seed, const char *gt_path, const char *dets_path, rs_err *err);
 
 #ifdef __cplusplus
 }

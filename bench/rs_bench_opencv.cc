@@ -13,16 +13,9 @@ extern "C" {
 #include "bench/rs_bench_opencv.h"
 }
 
-extern "C" rs_status rs_bench_opencv_pnp(double *rt_cam_ref,
-                                         bool *inlier,
-                                         const double *p_ref,
-                                         const double *q_px,
-                                         int N,
-                                         const double *intrinsics,
-                                         int Ndistortion,
-                                         rs_bench_opencv_pnp_method method,
-                                         bool refine_lm,
-                                         double ransac_threshold_px,
+extern "C" rs_status rs_bench_opencv_pnp(double *rt_cam_ref, bool *inlier, const double *p_ref, const double *q_px,
+                                         int N, const double *intrinsics, int Ndistortion,
+                                         rs_bench_opencv_pnp_method method, bool refine_lm, double ransac_threshold_px,
                                          rs_err *err)
 {
     static const char *const names[] = {"ITERATIVE", "EPNP", "SQPNP", "IPPE", "RANSAC"};

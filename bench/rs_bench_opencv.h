@@ -36,8 +36,7 @@ rs_status rs_bench_opencv_pnp( // out
     int N,
     const double *intrinsics, // (4 + Ndistortion,) fx fy cx cy k...
     int Ndistortion,          // 0, 4, 5, 8, 12 or 14
-    rs_bench_opencv_pnp_method method,
-    bool refine_lm,
+    rs_bench_opencv_pnp_method method, bool refine_lm,
     double ransac_threshold_px, // RANSAC only, pixels
     rs_err *err);               // may be NULL
 

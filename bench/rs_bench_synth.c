@@ -51,8 +51,8 @@ static double cpu_now(void)
            1e-6 * (self.ru_utime.tv_usec + self.ru_stime.tv_usec + kids.ru_utime.tv_usec + kids.ru_stime.tv_usec);
 }
 
-rs_status rs_bench_synth_run(
-    rs_bench_synth_row *rows, int Nrows, const rs_synth_dataset_options *base, const char *work_dir, rs_err *err)
+rs_status rs_bench_synth_run(rs_bench_synth_row *rows, int Nrows, const rs_synth_dataset_options *base,
+                             const char *work_dir, rs_err *err)
 {
     rs_status st = rs_io_mkdir_p(work_dir, err);
     for (int k = 0; k < Nrows && !st; k++) {

@@ -40,8 +40,8 @@ void rs_bench_synth_variants(rs_bench_synth_row *rows, int J);
 // Runs each row's variant: base's site, calib, count, seed, size, vehicles, povray, with the
 // row's jobs / separate / full-frame / shadows, output into work_dir/<name> (created, then
 // removed). base->progress is ignored. Fills the figures. Stops at the first error.
-rs_status rs_bench_synth_run(
-    rs_bench_synth_row *rows, int Nrows, const rs_synth_dataset_options *base, const char *work_dir, rs_err *err);
+rs_status rs_bench_synth_run(rs_bench_synth_row *rows, int Nrows, const rs_synth_dataset_options *base,
+                             const char *work_dir, rs_err *err);
 
 #ifdef __cplusplus
 }

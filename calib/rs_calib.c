@@ -146,12 +146,8 @@ static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *op
 // consensus: a survey sigma of 0.3 m on a landmark 12 m away is 30 px at f = 1200 px, so the
 // user's threshold (default 8 px) can be too tight for the near landmarks. *T_used receives the
 // threshold that worked. Invalid input is not retried.
-static rs_status init_escalating(rs_calib_init_result *init,
-                                 double *T_used,
-                                 const double *intrinsics,
-                                 const rs_calib_problem *pb,
-                                 const rs_calib_options *opt,
-                                 rs_err *err)
+static rs_status init_escalating(rs_calib_init_result *init, double *T_used, const double *intrinsics,
+                                 const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
 {
     rs_calib_init_options io = opt->init;
     if (!(io.ransac_threshold_px > 0.0)) io.ransac_threshold_px = 8.0;
@@ -193,13 +189,8 @@ static double msac_cost(const double rt_cam_enu[6], const double *intrinsics, co
 // fx s, fy s and keeps the s whose pose has the smallest MSAC cost over all landmarks, with
 // one truncation for every s: T = 4 x the RANSAC threshold (32 px by default), so that poses
 // found at different escalated thresholds compare fairly. intrinsics receives the chosen scale.
-static rs_status initial_pose(rs_calib_init_result *init,
-                              double *intrinsics,
-                              double *scale_out,
-                              const rs_calib_problem *pb,
-                              const rs_calib_options *opt,
-                              int Ni,
-                              rs_err *err)
+static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, double *scale_out,
+                              const rs_calib_problem *pb, const rs_calib_options *opt, int Ni, rs_err *err)
 {
     const bool search = (opt->refine & RS_CALIB_REFINE_FOCAL) && opt->focal_search_max > opt->focal_search_min;
     double T;
@@ -366,8 +357,8 @@ static void work_free(work_t *w)
     free(w->use);
 }
 
-static rs_status
-solve(rs_calib_result *res, work_t *w, const rs_calib_problem *pb, const rs_calib_options *opt, int Ni, rs_err *err)
+static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
+                       rs_err *err)
 {
     const int N = pb->N;
     rs_status st = validate(pb, opt, Ni, err);
@@ -601,8 +592,8 @@ solve(rs_calib_result *res, work_t *w, const rs_calib_problem *pb, const rs_cali
     return RS_OK;
 }
 
-rs_status
-rs_calib_solve(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt_in, rs_err *err)
+rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt_in,
+                         rs_err *err)
 {
     if (!result || !problem) return rs_err_set(err, RS_ERR_INVALID, "rs_calib_solve: NULL result or problem");
     struct timespec t0, t1;

@@ -97,14 +97,9 @@ static double angle_deg(const double *a, const double *b)
     return atan2(sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) * 180.0 / M_PI;
 }
 
-static rs_status check_arguments(const rs_calib_init_result *result,
-                                 const mrcal_lensmodel_t *lensmodel,
-                                 const double *intrinsics,
-                                 const double *p_enu_m,
-                                 const double *q_px,
-                                 int N,
-                                 const rs_calib_init_options *opt,
-                                 rs_err *err)
+static rs_status check_arguments(const rs_calib_init_result *result, const mrcal_lensmodel_t *lensmodel,
+                                 const double *intrinsics, const double *p_enu_m, const double *q_px, int N,
+                                 const rs_calib_init_options *opt, rs_err *err)
 {
     if (!result || !lensmodel || !intrinsics || N < 0 || (N > 0 && (!p_enu_m || !q_px)))
         return rs_err_set(err, RS_ERR_USAGE,
@@ -149,8 +144,8 @@ static rs_status check_arguments(const rs_calib_init_result *result,
 }
 
 // Degeneracy checks on the usable observations. s: singular values of the centred landmarks.
-static rs_status
-check_geometry(const double *p_c, const double *v, const int *usable, int Nusable, const double *s, rs_err *err)
+static rs_status check_geometry(const double *p_c, const double *v, const int *usable, int Nusable, const double *s,
+                                rs_err *err)
 {
     // repeated landmarks
     const double rms_radius =
@@ -196,8 +191,8 @@ static void uncentre(double *rt_cam_enu, const double *rt_cam_c, const double *c
 
 // OpenCV's IPPE on the inliers `in` whose bearings are clearly in front (normalised image
 // coordinates x/z, y/z). xy (Nin,2) and p_sel (Nin,3) are scratch. False if the solver refuses.
-static bool
-solve_ippe(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin, double *xy, double *p_sel)
+static bool solve_ippe(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin, double *xy,
+                       double *p_sel)
 {
     int n = 0;
     for (int k = 0; k < Nin; k++) {
@@ -220,15 +215,9 @@ static bool solve_epnp(double *rt_cam_c, const double *v, const double *p_c, con
     return true;
 }
 
-rs_status rs_calib_init_pose(rs_calib_init_result *result,
-                             bool *inlier,
-                             const mrcal_lensmodel_t *lensmodel,
-                             const double *intrinsics,
-                             const double *p_enu_m,
-                             const double *q_px,
-                             int N,
-                             const rs_calib_init_options *opt,
-                             rs_err *err)
+rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const mrcal_lensmodel_t *lensmodel,
+                             const double *intrinsics, const double *p_enu_m, const double *q_px, int N,
+                             const rs_calib_init_options *opt, rs_err *err)
 {
     rs_calib_init_options defaults;
     if (!opt) {

@@ -78,12 +78,8 @@ struct Correspondences {
 // P3P solver finds nothing is retried with the other one.
 class PixelP3pProblem : public AbsolutePoseSacProblem {
   public:
-    PixelP3pProblem(adapter_t &adapter,
-                    algorithm_t primary,
-                    const std::vector<int> &indices,
-                    uint64_t seed,
-                    rs_calib_opengv_score_fn *score,
-                    void *cookie)
+    PixelP3pProblem(adapter_t &adapter, algorithm_t primary, const std::vector<int> &indices, uint64_t seed,
+                    rs_calib_opengv_score_fn *score, void *cookie)
         : AbsolutePoseSacProblem(adapter, primary, indices, false),
           fallback_(adapter, primary == KNEIP ? GAO : KNEIP, indices, false), score_(score), cookie_(cookie)
     {
@@ -100,8 +96,7 @@ class PixelP3pProblem : public AbsolutePoseSacProblem {
         return fallback_.computeModelCoefficients(indices, model) && model.allFinite();
     }
 
-    void getSelectedDistancesToModel(const model_t &model,
-                                     const std::vector<int> &indices,
+    void getSelectedDistancesToModel(const model_t &model, const std::vector<int> &indices,
                                      std::vector<double> &scores) const override
     {
         double Rt[12];
@@ -144,23 +139,11 @@ struct UpnpSolutions {
 
 } // namespace
 
-extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref,
-                                                bool *inlier,
-                                                int *Niterations,
-                                                int *Nfallback,
-                                                const double *v_cam,
-                                                const double *p_ref,
-                                                int N,
-                                                const int *usable,
-                                                int Nusable,
-                                                rs_calib_opengv_p3p method,
-                                                double threshold_px,
-                                                int max_iterations,
-                                                double confidence,
-                                                uint64_t seed,
-                                                rs_calib_opengv_score_fn *score,
-                                                void *cookie,
-                                                rs_err *err)
+extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier, int *Niterations, int *Nfallback,
+                                                const double *v_cam, const double *p_ref, int N, const int *usable,
+                                                int Nusable, rs_calib_opengv_p3p method, double threshold_px,
+                                                int max_iterations, double confidence, uint64_t seed,
+                                                rs_calib_opengv_score_fn *score, void *cookie, rs_err *err)
 {
     QuietStreams quiet;
     try {
@@ -189,8 +172,8 @@ extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref,
     }
 }
 
-extern "C" rs_status rs_calib_opengv_epnp(
-    double *Rt_cam_ref, const double *v_cam, const double *p_ref, const int *indices, int Nindices, rs_err *err)
+extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_cam, const double *p_ref,
+                                          const int *indices, int Nindices, rs_err *err)
 {
     QuietStreams quiet;
     try {
@@ -212,13 +195,8 @@ extern "C" rs_status rs_calib_opengv_epnp(
     }
 }
 
-extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref,
-                                          const double *v_cam,
-                                          const double *p_ref,
-                                          int N,
-                                          rs_calib_opengv_pose_method method,
-                                          double threshold_rad,
-                                          int max_iterations,
+extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_cam, const double *p_ref, int N,
+                                          rs_calib_opengv_pose_method method, double threshold_rad, int max_iterations,
                                           rs_err *err)
 {
     static const char *const names[] = {"P3P Kneip RANSAC", "P3P Gao RANSAC", "EPnP", "UPnP",

@@ -22,8 +22,7 @@ typedef void rs_calib_opengv_score_fn( // out
     // in
     const double *Rt_cam_ref, // (4,3)
     const int *indices,       // (Nindices,)
-    int Nindices,
-    void *cookie);
+    int Nindices, void *cookie);
 
 typedef enum {
     RS_CALIB_OPENGV_P3P_KNEIP = 0, // Kneip, Scaramuzza, Siegwart, CVPR 2011
@@ -50,13 +49,9 @@ rs_status rs_calib_opengv_ransac_p3p( // out
     int N,
     const int *usable, // (Nusable,) indices to sample from
     int Nusable,       // >= 4
-    rs_calib_opengv_p3p method,
-    double threshold_px,
-    int max_iterations,
+    rs_calib_opengv_p3p method, double threshold_px, int max_iterations,
     double confidence, // e.g. 0.999
-    uint64_t seed,
-    rs_calib_opengv_score_fn *score,
-    void *cookie,
+    uint64_t seed, rs_calib_opengv_score_fn *score, void *cookie,
     rs_err *err); // may be NULL
 
 // OpenGV's EPnP (Lepetit, Moreno-Noguer, Fua, IJCV 2009) on the observations `indices`
@@ -93,10 +88,7 @@ rs_status rs_calib_opengv_pose( // out
     // in
     const double *v_cam, // (N,3) unit bearing vectors
     const double *p_ref, // (N,3) landmarks, metres
-    int N,
-    rs_calib_opengv_pose_method method,
-    double threshold_rad,
-    int max_iterations,
+    int N, rs_calib_opengv_pose_method method, double threshold_rad, int max_iterations,
     rs_err *err); // may be NULL
 
 #ifdef __cplusplus

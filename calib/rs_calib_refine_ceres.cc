@@ -69,12 +69,8 @@ void chain_dq(double *out, const mrcal_point3_t dq_dpcam[2], const double *dpcam
 
 class LandmarkCost final : public ceres::CostFunction {
   public:
-    LandmarkCost(const mrcal_lensmodel_t *lensmodel,
-                 int Nintrinsics,
-                 const double q_obs[2],
-                 double sigma_px,
-                 const double p_survey[3],
-                 const double sigma_m[3])
+    LandmarkCost(const mrcal_lensmodel_t *lensmodel, int Nintrinsics, const double q_obs[2], double sigma_px,
+                 const double p_survey[3], const double sigma_m[3])
         : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics), w_px_(1.0 / sigma_px)
     {
         for (int k = 0; k < 2; k++) q_obs_[k] = q_obs[k];
@@ -141,14 +137,8 @@ class LandmarkCost final : public ceres::CostFunction {
 // once, at the pose given to the constructor (rs_calib_refine_options.marginal).
 class MarginalCost final : public ceres::CostFunction {
   public:
-    MarginalCost(const mrcal_lensmodel_t *lensmodel,
-                 int Nintrinsics,
-                 const double q_obs[2],
-                 double sigma_px,
-                 const double p_survey[3],
-                 const double sigma_m[3],
-                 const double rt0[6],
-                 const double *intrinsics0)
+    MarginalCost(const mrcal_lensmodel_t *lensmodel, int Nintrinsics, const double q_obs[2], double sigma_px,
+                 const double p_survey[3], const double sigma_m[3], const double rt0[6], const double *intrinsics0)
         : lensmodel_(lensmodel), Nintrinsics_(Nintrinsics)
     {
         for (int k = 0; k < 2; k++) q_obs_[k] = q_obs[k];
@@ -318,11 +308,8 @@ class IntrinsicsPriorCost final : public ceres::CostFunction {
 };
 
 // Builds the subspace basis (column-major, Nintrinsics x k) and the prior rows.
-void intrinsics_subspace(std::vector<double> *B,
-                         std::vector<IntrinsicsPriorCost::Row> *rows,
-                         int Nintrinsics,
-                         const double *nominal,
-                         const rs_calib_refine_options *opt)
+void intrinsics_subspace(std::vector<double> *B, std::vector<IntrinsicsPriorCost::Row> *rows, int Nintrinsics,
+                         const double *nominal, const rs_calib_refine_options *opt)
 {
     auto unit = [&](int i) {
         size_t c = B->size();
@@ -360,11 +347,8 @@ void intrinsics_subspace(std::vector<double> *B,
 // Also returns the covariance of the head in its tangent space, (Rd^T Rd)^-1 from the SVD of
 // the equilibrated Rd, in *cov_tangent (may be NULL), and the ratio of the largest to the
 // smallest column norm of the whole Jacobian in *column_range (may be NULL).
-double reduced_condition(ceres::Problem *problem,
-                         const std::vector<double *> &head,
-                         const std::vector<double *> &landmarks,
-                         Eigen::MatrixXd *cov_tangent,
-                         double *column_range)
+double reduced_condition(ceres::Problem *problem, const std::vector<double *> &head,
+                         const std::vector<double *> &landmarks, Eigen::MatrixXd *cov_tangent, double *column_range)
 {
     ceres::Problem::EvaluateOptions eo;
     eo.parameter_blocks = head;
@@ -463,16 +447,9 @@ const double kColumnRangeCeres = 1e7;
 // 50 landmarks, 156, and more, faster with SuiteSparse).
 const int kEigenCovarianceMax = 100;
 
-rs_status refine(double rt[6],
-                 double *intrinsics,
-                 double *p_c,
-                 rs_calib_refine_summary *summary,
-                 double *cov,
-                 double *block_chi2,
-                 double *q_pred,
-                 const rs_calib_refine_problem *pb,
-                 const rs_calib_refine_options *opt,
-                 rs_err *err)
+rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_summary *summary, double *cov,
+                 double *block_chi2, double *q_pred, const rs_calib_refine_problem *pb,
+                 const rs_calib_refine_options *opt, rs_err *err)
 {
     const int Ni = mrcal_lensmodel_num_params(pb->lensmodel);
     if (Ni < 4 || pb->N < 0) return rs_err_set(err, RS_ERR_INVALID, "refine: bad sizes");
@@ -683,10 +660,8 @@ rs_status refine(double rt[6],
 
 } // namespace
 
-extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6],
-                                                 const double *intrinsics,
-                                                 const double *p_c_m,
-                                                 const rs_calib_refine_problem *pb)
+extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const double *intrinsics,
+                                                 const double *p_c_m, const rs_calib_refine_problem *pb)
 {
     QuietGlog quiet;
     try {
@@ -728,16 +703,10 @@ extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6],
     }
 }
 
-extern "C" rs_status rs_calib_refine_run(double rt_cam_c[6],
-                                         double *intrinsics,
-                                         double *p_c_m,
-                                         rs_calib_refine_summary *summary,
-                                         double *cov,
-                                         double *block_chi2,
-                                         double *q_pred_px,
-                                         const rs_calib_refine_problem *problem,
-                                         const rs_calib_refine_options *opt,
-                                         rs_err *err)
+extern "C" rs_status rs_calib_refine_run(double rt_cam_c[6], double *intrinsics, double *p_c_m,
+                                         rs_calib_refine_summary *summary, double *cov, double *block_chi2,
+                                         double *q_pred_px, const rs_calib_refine_problem *problem,
+                                         const rs_calib_refine_options *opt, rs_err *err)
 {
     QuietGlog quiet;
     try {

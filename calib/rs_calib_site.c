@@ -92,13 +92,9 @@ static void normalise_h(double *H)
     for (int i = 0; i < 9; i++) H[i] /= s;
 }
 
-rs_status rs_calib_ground_homography(double H_px_from_ground[9],
-                                     double H_ground_from_px[9],
-                                     const double fxycxy[4],
-                                     const double rt_cam_enu[6],
-                                     const double plane_normal_enu[3],
-                                     double plane_offset_m,
-                                     rs_err *err)
+rs_status rs_calib_ground_homography(double H_px_from_ground[9], double H_ground_from_px[9], const double fxycxy[4],
+                                     const double rt_cam_enu[6], const double plane_normal_enu[3],
+                                     double plane_offset_m, rs_err *err)
 {
     const double *n = plane_normal_enu;
     double nn = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -261,8 +257,8 @@ static rs_status write_text(const char *out_dir, const char *id, const char *suf
     return st;
 }
 
-static rs_status write_homography(
-    const char *path, const rs_site *site, const rs_site_camera *cam, const rs_calib_result *r, rs_err *err)
+static rs_status write_homography(const char *path, const rs_site *site, const rs_site_camera *cam,
+                                  const rs_calib_result *r, rs_err *err)
 {
     double H[9], Hi[9];
     rs_status st = rs_calib_ground_homography(H, Hi, r->intrinsics, r->rt_cam_enu, site->ground_normal_enu,

@@ -41,24 +41,20 @@ typedef struct {
 rs_status rs_calib_site_problem_init( // out
     rs_calib_site_problem *sp,
     // in
-    const rs_site *site,
-    int icam,
-    rs_err *err);
+    const rs_site *site, int icam, rs_err *err);
 void rs_calib_site_problem_free(rs_calib_site_problem *sp); // NULL-safe
 
 // Writes the four files of camera icam into out_dir (which must exist). The result must come
 // from rs_calib_site_problem_init(site, icam) + rs_calib_solve.
-rs_status
-rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *result, rs_err *err);
+rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *result,
+                              rs_err *err);
 
 // RMS reprojection error, in pixels, of the inliers' SURVEYED landmark positions through the
 // solved pose and intrinsics: what a tool that trusts the survey (OpenCV's solvePnP, a
 // homography) would call its reprojection error. (The result's rms_px is smaller: there the
 // landmarks have moved within their survey sigmas.) q_px (N,2) receives every observation's
 // projection (NaN where it fails); may be NULL. Returns NaN when no inlier projects.
-double rs_calib_site_rms_surveyed_px(const rs_site *site,
-                                     int icam,
-                                     const rs_calib_result *result,
+double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_calib_result *result,
                                      double *q_px); // (N,2) may be NULL
 
 // The result of one camera as JSON text (the content of <id>.json). Caller frees with free().
@@ -72,13 +68,9 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
 // in:  fxycxy: the pinhole core (fx, fy, cx, cy) of the intrinsics
 // Returns RS_ERR_DEGENERATE when the plane is vertical (n_u ~ 0) or the camera lies in it.
 rs_status rs_calib_ground_homography( // out
-    double H_px_from_ground[9],
-    double H_ground_from_px[9],
+    double H_px_from_ground[9], double H_ground_from_px[9],
     // in
-    const double fxycxy[4],
-    const double rt_cam_enu[6],
-    const double plane_normal_enu[3],
-    double plane_offset_m,
+    const double fxycxy[4], const double rt_cam_enu[6], const double plane_normal_enu[3], double plane_offset_m,
     rs_err *err);
 
 // ---- reading <id>.json back (the report reads calibrations through this) ----
@@ -114,8 +106,7 @@ typedef struct {
 rs_status rs_calib_site_result_read( // out
     rs_calib_site_result *out,
     // in
-    const char *path,
-    rs_err *err);
+    const char *path, rs_err *err);
 void rs_calib_site_result_free(rs_calib_site_result *r); // NULL-safe; zeroes *r
 
 #ifdef __cplusplus

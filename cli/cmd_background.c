@@ -165,23 +165,16 @@ static int split_list(char *s, char **out, int max)
 }
 
 // Prints each background as it is recorded.
-static void
-twin_done(void *ctx, const char *camera_id, const char *path, double az_deg, double el_deg, const char *conditions)
+static void twin_done(void *ctx, const char *camera_id, const char *path, double az_deg, double el_deg,
+                      const char *conditions)
 {
     (void)ctx;
     printf("%s: %s (sun azimuth %.2f, elevation %.2f deg, %s)\n", camera_id, path, az_deg, el_deg, conditions);
 }
 
 // Renders and records the backgrounds of one camera: every time x weather.
-static int render_camera(const char *site_dir,
-                         const rs_site *site,
-                         const char *calib_dir,
-                         const char *cam_id,
-                         const char *lanes,
-                         char **times,
-                         int Ntimes,
-                         char **weathers,
-                         int Nweathers,
+static int render_camera(const char *site_dir, const rs_site *site, const char *calib_dir, const char *cam_id,
+                         const char *lanes, char **times, int Ntimes, char **weathers, int Nweathers,
                          const rs_synth_twin_options *opt)
 {
     static const char *const WHAT = "site render-backgrounds";

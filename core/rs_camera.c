@@ -22,8 +22,8 @@ void rs_camera_free(rs_camera *cam)
     memset(cam, 0, sizeof *cam);
 }
 
-rs_status rs_camera_init(
-    rs_camera *cam, const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width, int height, rs_err *err)
+rs_status rs_camera_init(rs_camera *cam, const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width,
+                         int height, rs_err *err)
 {
     memset(cam, 0, sizeof *cam);
     const int n = mrcal_lensmodel_num_params(lensmodel);
@@ -92,8 +92,8 @@ rs_status rs_camera_read_cameramodel_text(rs_camera *cam, const char *text, size
 
 // OpenCV K and distortion -> the mrcal model with the same projection (LENSMODEL_OPENCVn keeps
 // OpenCV's coefficient order; no coefficients, or all zero: LENSMODEL_PINHOLE).
-static rs_status
-from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_camera_opencv_file *f, const char *path, rs_err *err)
+static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_camera_opencv_file *f, const char *path,
+                             rs_err *err)
 {
     const double *K = f->K;
     if (K[3] != 0 || K[6] != 0 || K[7] != 0 || K[8] != 1)
@@ -227,12 +227,8 @@ int rs_camera_project(double *q_px, const rs_camera *cam, const double *p_enu_m,
     return n;
 }
 
-rs_status rs_camera_locate_ground(double p_enu_m[3],
-                                  const rs_camera *cam,
-                                  const double q_px[2],
-                                  const double plane_normal_enu[3],
-                                  double plane_offset_m,
-                                  rs_err *err)
+rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const double q_px[2],
+                                  const double plane_normal_enu[3], double plane_offset_m, rs_err *err)
 {
     if (!p_enu_m || !cam || !cam->intrinsics || !q_px || !plane_normal_enu)
         return rs_err_set(err, RS_ERR_INVALID, "rs_camera_locate_ground: NULL argument");

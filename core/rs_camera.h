@@ -52,11 +52,7 @@ void rs_camera_free(rs_camera *cam);
 rs_status rs_camera_init( // out
     rs_camera *cam,
     // in
-    const mrcal_lensmodel_t *lensmodel,
-    const double *intrinsics,
-    int width,
-    int height,
-    rs_err *err);
+    const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width, int height, rs_err *err);
 
 // A deep copy of `in` into *out (zeroed first). RS_ERR_NOMEM.
 rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err);
@@ -76,21 +72,16 @@ rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err);
 // det <= 0, only one of rotation and translation), RS_ERR_UNSUPPORTED (skew, tilted sensor: no
 // mrcal equivalent), RS_ERR_NOMEM.
 rs_status rs_camera_read( // out
-    rs_camera *cam,
-    rs_camera_extra *extra,
+    rs_camera *cam, rs_camera_extra *extra,
     // in
-    const char *path,
-    rs_err *err);
+    const char *path, rs_err *err);
 
 // An mrcal .cameramodel held in memory (text, len bytes; it need not be NUL-terminated), checked
 // as rs_camera_read does. `path` names it in messages.
 rs_status rs_camera_read_cameramodel_text( // out
     rs_camera *cam,
     // in
-    const char *text,
-    size_t len,
-    const char *path,
-    rs_err *err);
+    const char *text, size_t len, const char *path, rs_err *err);
 
 // Checks a camera's values (the checks of rs_camera_read). Errors as "PATH: FIELD: what".
 rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err);
@@ -129,10 +120,7 @@ int rs_camera_project( // out
 rs_status rs_camera_locate_ground( // out
     double p_enu_m[3],
     // in
-    const rs_camera *cam,
-    const double q_px[2],
-    const double plane_normal_enu[3],
-    double plane_offset_m,
+    const rs_camera *cam, const double q_px[2], const double plane_normal_enu[3], double plane_offset_m,
     rs_err *err); // may be NULL
 
 #ifdef __cplusplus

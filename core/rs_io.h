@@ -15,11 +15,9 @@ extern "C" {
 
 // Reads a whole file into a NUL-terminated buffer.
 // out: *data, owned by the caller (free()); *len may be NULL.
-rs_status rs_io_read_file(char **data,
-                          size_t *len,
+rs_status rs_io_read_file(char **data, size_t *len,
                           // in
-                          const char *path,
-                          rs_err *err);
+                          const char *path, rs_err *err);
 
 // An output file being written under a temporary name in the same folder as `path`.
 typedef struct {

@@ -49,14 +49,9 @@ bool node_numbers(const cv::FileNode &node, std::vector<double> &out)
 
 // Reads the first present key of `keys` into v; *found tells whether any was there. Checks the
 // count against `counts` (`need` words them) and that every value is finite.
-rs_status read_numbers(std::vector<double> &v,
-                       bool *found,
-                       const cv::FileStorage &fs,
-                       std::initializer_list<const char *> keys,
-                       std::initializer_list<size_t> counts,
-                       const char *need,
-                       const char *path,
-                       rs_err *err)
+rs_status read_numbers(std::vector<double> &v, bool *found, const cv::FileStorage &fs,
+                       std::initializer_list<const char *> keys, std::initializer_list<size_t> counts, const char *need,
+                       const char *path, rs_err *err)
 {
     v.clear();
     *found = false;
@@ -157,13 +152,8 @@ extern "C" rs_status rs_camera_opencv_read(rs_camera_opencv_file *f, const char 
     }
 }
 
-extern "C" rs_status rs_camera_opencv_yaml_text(char **text,
-                                                const double *intrinsics,
-                                                int Ndistortion,
-                                                const double rt_cam_enu[6],
-                                                int width,
-                                                int height,
-                                                rs_err *err)
+extern "C" rs_status rs_camera_opencv_yaml_text(char **text, const double *intrinsics, int Ndistortion,
+                                                const double rt_cam_enu[6], int width, int height, rs_err *err)
 {
     *text = nullptr;
     try {

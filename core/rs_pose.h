@@ -52,8 +52,7 @@ void rs_pose_ypr_from_rt( // out
 void rs_pose_rt_from_ypr( // out
     double rt_cam_enu[6],
     // in
-    const double yaw_pitch_roll_deg[3],
-    const double position_enu_m[3]);
+    const double yaw_pitch_roll_deg[3], const double position_enu_m[3]);
 
 // Camera centre in ENU: -R(r)^T t.
 void rs_pose_position_from_rt( // out

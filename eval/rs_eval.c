@@ -96,8 +96,8 @@ static bool before(const rs_eval_data *d, const candidate *x, const candidate *y
 }
 
 // Appends the candidates of detection e of image m to k->cands (insertion-sorted: lists are short).
-static bool
-add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_data *d, int m, const slot *e, double theta_max_px)
+static bool add_candidates(kept_dets *k, size_t *n, size_t *cap, const rs_eval_data *d, int m, const slot *e,
+                           double theta_max_px)
 {
     const size_t first = *n;
     for (size_t a = d->gt_begin[m]; a < d->gt_begin[m + 1]; a++) {
@@ -203,8 +203,8 @@ static void match_image(kept_dets *k, const rs_eval_data *d, int m, int category
 }
 
 // Evaluates one scope.
-static void
-evaluate_scope(rs_eval_metrics *out, kept_dets *k, const rs_eval_data *d, const double *theta_px, int T, scope s)
+static void evaluate_scope(rs_eval_metrics *out, kept_dets *k, const rs_eval_data *d, const double *theta_px, int T,
+                           scope s)
 {
     size_t num_gt = 0, num_det = 0;
     for (int m = 0; m < d->Nimages; m++) {
@@ -286,15 +286,8 @@ void rs_eval_result_free(rs_eval_result *r)
 
 // Allocates and evaluates one row per group (groups) or per category (!groups), named by names.
 // *Nrows counts the rows allocated so far, for rs_eval_result_free after a failure.
-static rs_status evaluate_rows(rs_eval_metrics **rows,
-                               int *Nrows,
-                               int N,
-                               char *const *names,
-                               bool groups,
-                               kept_dets *k,
-                               const rs_eval_data *d,
-                               const double *theta_px,
-                               int T)
+static rs_status evaluate_rows(rs_eval_metrics **rows, int *Nrows, int N, char *const *names, bool groups, kept_dets *k,
+                               const rs_eval_data *d, const double *theta_px, int T)
 {
     if (!(*rows = calloc((size_t)(N ? N : 1), sizeof **rows))) return RS_ERR_NOMEM;
     for (int i = 0; i < N; i++) {

@@ -60,8 +60,7 @@ typedef struct {
 rs_status rs_eval_load( // out
     rs_eval_data **data,
     // in
-    const char *gt_path,
-    const char *dets_path,
+    const char *gt_path, const char *dets_path,
     const rs_eval_load_options *opt, // may be NULL: K = 0, no groups
     rs_err *err);
 
@@ -69,11 +68,7 @@ rs_status rs_eval_load( // out
 rs_status rs_eval_parse( // out
     rs_eval_data **data,
     // in
-    const char *gt_text,
-    size_t gt_len,
-    const char *gt_name,
-    const char *dets_text,
-    size_t dets_len,
+    const char *gt_text, size_t gt_len, const char *gt_name, const char *dets_text, size_t dets_len,
     const char *dets_name,
     const rs_eval_load_options *opt, // may be NULL
     rs_err *err);
@@ -92,8 +87,7 @@ void rs_eval_data_free(rs_eval_data *data);
 rs_status rs_eval_data_to_ground( // in,out
     rs_eval_data *data,
     // in
-    const rs_site *site,
-    const char *calib_dir,
+    const rs_site *site, const char *calib_dir,
     size_t *Nmissed, // may be NULL: points whose ray misses the ground
     rs_err *err);
 

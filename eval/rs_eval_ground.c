@@ -25,8 +25,8 @@ static bool to_ground(double *q, const rs_camera *cam, const rs_site *site, doub
     return true;
 }
 
-rs_status
-rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const char *calib_dir, size_t *Nmissed, rs_err *err)
+rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const char *calib_dir, size_t *Nmissed,
+                                 rs_err *err)
 {
     if (Nmissed) *Nmissed = 0;
     if (!d->image_camera) return rs_err_set(err, RS_ERR_INVALID, "the ground truth was loaded without a camera field");

@@ -63,8 +63,8 @@ static rs_status syntax(const char *t, size_t at, const char *name, const char *
 
 // Parses the value starting at text[begin] with cJSON, which stops where the value ends.
 // out: *item (caller deletes), *stop: the index just past the value.
-static rs_status
-parse_value(cJSON **item, size_t *stop, const char *text, size_t begin, size_t end, const char *name, rs_err *err)
+static rs_status parse_value(cJSON **item, size_t *stop, const char *text, size_t begin, size_t end, const char *name,
+                             rs_err *err)
 {
     const char *after = NULL;
     *item = cJSON_ParseWithLengthOpts(text + begin, end - begin, &after, false);
@@ -102,8 +102,8 @@ static rs_status closed(const char *text, size_t i, size_t end, const char *name
                                                : syntax(text, i + 1, name, "unexpected text after the end", err);
 }
 
-rs_status rs_eval_json_array(
-    const char *text, size_t begin, size_t end, const char *name, rs_eval_json_item_fn each, void *ctx, rs_err *err)
+rs_status rs_eval_json_array(const char *text, size_t begin, size_t end, const char *name, rs_eval_json_item_fn each,
+                             void *ctx, rs_err *err)
 {
     size_t i = skip_space(text, begin, end);
     if (i == end || text[i] != '[') return syntax(text, i, name, "expected a list '['", err);
@@ -127,8 +127,8 @@ rs_status rs_eval_json_array(
     }
 }
 
-rs_status rs_eval_json_object(
-    const char *text, size_t begin, size_t end, const char *name, rs_eval_json_span_fn each, void *ctx, rs_err *err)
+rs_status rs_eval_json_object(const char *text, size_t begin, size_t end, const char *name, rs_eval_json_span_fn each,
+                              void *ctx, rs_err *err)
 {
     size_t i = skip_space(text, begin, end);
     if (i == end || text[i] != '{') return syntax(text, i, name, "expected an object '{'", err);

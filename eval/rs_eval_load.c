@@ -35,8 +35,8 @@ typedef struct {
     size_t index;
 } where;
 
-__attribute__((format(printf, 4, 5))) static rs_status
-bad(const where *w, rs_err *err, rs_status st, const char *fmt, ...)
+__attribute__((format(printf, 4, 5))) static rs_status bad(const where *w, rs_err *err, rs_status st, const char *fmt,
+                                                           ...)
 {
     char msg[768];
     va_list ap;
@@ -514,14 +514,8 @@ static rs_status det_entry(void *vctx, size_t index, const cJSON *o, size_t offs
 
 // ---- public ----
 
-rs_status rs_eval_parse(rs_eval_data **data,
-                        const char *gt_text,
-                        size_t gt_len,
-                        const char *gt_name,
-                        const char *dets_text,
-                        size_t dets_len,
-                        const char *dets_name,
-                        const rs_eval_load_options *opt,
+rs_status rs_eval_parse(rs_eval_data **data, const char *gt_text, size_t gt_len, const char *gt_name,
+                        const char *dets_text, size_t dets_len, const char *dets_name, const rs_eval_load_options *opt,
                         rs_err *err)
 {
     *data = NULL;
@@ -553,8 +547,8 @@ rs_status rs_eval_parse(rs_eval_data **data,
     return RS_OK;
 }
 
-rs_status rs_eval_load(
-    rs_eval_data **data, const char *gt_path, const char *dets_path, const rs_eval_load_options *opt, rs_err *err)
+rs_status rs_eval_load(rs_eval_data **data, const char *gt_path, const char *dets_path, const rs_eval_load_options *opt,
+                       rs_err *err)
 {
     *data = NULL;
     char *gt = NULL, *dets = NULL;

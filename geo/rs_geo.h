@@ -56,8 +56,7 @@ rs_status rs_geo_llh_to_ecef( // out
     double *p_ecef_m,         // (N,3) metres
     // in
     const double *llh, // (N,3) lat_deg, lon_deg, h_m
-    int N,
-    rs_err *err);
+    int N, rs_err *err);
 
 // ECEF -> geodetic. Any finite point is accepted, including the centre of the earth (which
 // gives lat 90, lon 0, h = -b); of several solutions the one with the smallest |h| is returned.
@@ -65,8 +64,7 @@ rs_status rs_geo_ecef_to_llh( // out
     double *llh,              // (N,3) lat_deg, lon_deg, h_m
     // in
     const double *p_ecef_m, // (N,3) metres
-    int N,
-    rs_err *err);
+    int N, rs_err *err);
 
 // Geodetic -> site ENU at `origin` (GeographicLib::LocalCartesian::Forward).
 rs_status rs_geo_llh_to_enu( // out
@@ -74,8 +72,7 @@ rs_status rs_geo_llh_to_enu( // out
     // in
     const rs_llh *origin, // the site origin
     const double *llh,    // (N,3) lat_deg, lon_deg, h_m
-    int N,
-    rs_err *err);
+    int N, rs_err *err);
 
 // Site ENU at `origin` -> geodetic (GeographicLib::LocalCartesian::Reverse).
 rs_status rs_geo_enu_to_llh( // out
@@ -83,8 +80,7 @@ rs_status rs_geo_enu_to_llh( // out
     // in
     const rs_llh *origin,  // the site origin
     const double *p_enu_m, // (N,3) east, north, up, metres
-    int N,
-    rs_err *err);
+    int N, rs_err *err);
 
 // The rotation R_ecef_enu (row-major 3x3) whose columns are the east, north and up unit
 // vectors at `origin` in ECEF, and the origin in ECEF: p_ecef = R_ecef_enu p_enu + origin_ecef.
@@ -94,8 +90,7 @@ rs_status rs_geo_enu_frame(  // out
     double R_ecef_enu[9],    // (3,3) row-major
     double origin_ecef_m[3], // (3,) metres; may be NULL
     // in
-    const rs_llh *origin,
-    rs_err *err);
+    const rs_llh *origin, rs_err *err);
 
 // UTM/UPS -> geodetic. zone is 1..60 for UTM, 0 for UPS; north selects the hemisphere.
 // enh is (easting_m, northing_m, h_m) with the standard false easting/northing; h passes
@@ -105,11 +100,9 @@ rs_status rs_geo_enu_frame(  // out
 rs_status rs_geo_utm_to_llh( // out
     double *llh,             // (N,3) lat_deg, lon_deg, h_m
     // in
-    int zone,
-    bool north,
+    int zone, bool north,
     const double *enh, // (N,3) easting_m, northing_m, h_m
-    int N,
-    rs_err *err);
+    int N, rs_err *err);
 
 // Geodetic -> UTM/UPS. zone >= 0 (0 = UPS): project into that zone and hemisphere (a point of
 // the other hemisphere gets a northing continued across the equator), and *zone_out, *north_out
@@ -120,11 +113,9 @@ rs_status rs_geo_llh_to_utm( // out
     int *zone_out,           // may be NULL
     bool *north_out,         // may be NULL
     // in
-    int zone,
-    bool north,
+    int zone, bool north,
     const double *llh, // (N,3) lat_deg, lon_deg, h_m
-    int N,
-    rs_err *err);
+    int N, rs_err *err);
 
 // Meridian convergence of UTM/UPS at each point, in degrees: the angle, clockwise, from true
 // north to grid north. (A grid bearing b_grid becomes the true bearing b_grid + gamma.)
@@ -133,11 +124,9 @@ rs_status rs_geo_llh_to_utm( // out
 rs_status rs_geo_utm_convergence_deg( // out
     double *gamma_deg,                // (N,)
     // in
-    int zone,
-    bool north,
+    int zone, bool north,
     const double *llh, // (N,3) lat_deg, lon_deg, h_m
-    int N,
-    rs_err *err);
+    int N, rs_err *err);
 
 // Parses a UTM/UPS zone string as GeographicLib::UTMUPS::DecodeZone does: a UTM zone 1..60
 // followed by the hemisphere "n"/"s" or "north"/"south" (any case), e.g. "33N", "01s"; UPS is
@@ -146,19 +135,15 @@ rs_status rs_geo_utm_zone_parse( // out
     int *zone,                   // 1..60, or 0 for UPS
     bool *north,
     // in
-    const char *s,
-    rs_err *err);
+    const char *s, rs_err *err);
 
 // Formats a zone as GeographicLib::UTMUPS::EncodeZone does ("33n", "01s", and "n"/"s" for UPS)
 // into buf (NUL-terminated; 4 bytes are enough). RS_ERR_INVALID for a zone outside 0..60,
 // RS_ERR_USAGE if buf is too small.
 rs_status rs_geo_utm_zone_format( // out
-    char *buf,
-    size_t size,
+    char *buf, size_t size,
     // in
-    int zone,
-    bool north,
-    rs_err *err);
+    int zone, bool north, rs_err *err);
 
 #ifdef __cplusplus
 }

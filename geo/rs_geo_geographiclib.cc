@@ -141,16 +141,8 @@ template <class Op> rs_status with_local_cartesian(const rs_llh *origin, rs_err 
 
 // The UTM/UPS forward projection of one row into `zone` (< 0: the standard zone), hemisphere
 // `north` when zone >= 0; returns the zone and hemisphere used.
-rs_status utm_forward(const double *llh,
-                      int zone,
-                      bool north,
-                      int N,
-                      int i,
-                      double enh[3],
-                      int *zone_used,
-                      bool *north_used,
-                      double *gamma_deg,
-                      rs_err *err)
+rs_status utm_forward(const double *llh, int zone, bool north, int N, int i, double enh[3], int *zone_used,
+                      bool *north_used, double *gamma_deg, rs_err *err)
 {
     rs_status st = check_llh(llh, N, i, err);
     if (st) return st;
@@ -235,8 +227,8 @@ rs_status rs_geo_utm_to_llh(double *llh, int zone, bool north, const double *enh
     });
 }
 
-rs_status rs_geo_llh_to_utm(
-    double *enh, int *zone_out, bool *north_out, int zone, bool north, const double *llh, int N, rs_err *err)
+rs_status rs_geo_llh_to_utm(double *enh, int *zone_out, bool *north_out, int zone, bool north, const double *llh, int N,
+                            rs_err *err)
 {
     rs_status st = check_args(enh, llh, N, err);
     if (!st) st = check_zone(zone, true, err);

@@ -261,14 +261,8 @@ done:
 // ---- writing ----
 
 // One lane as a GeoJSON LineString feature into *out (owned by the caller).
-static rs_status lane_feature(cJSON **out,
-                              const rs_lanes *lanes,
-                              int i,
-                              const rs_llh *origin,
-                              double N,
-                              bool with_height,
-                              const char *path,
-                              rs_err *err)
+static rs_status lane_feature(cJSON **out, const rs_lanes *lanes, int i, const rs_llh *origin, double N,
+                              bool with_height, const char *path, rs_err *err)
 {
     const rs_lane *lane = &lanes->lane[i];
     *out = NULL;
@@ -315,13 +309,8 @@ static rs_status lane_feature(cJSON **out,
     return rs_err_set(err, RS_ERR_INVALID, "%s: lane '%s': a number is not finite (or out of memory)", path, lane->id);
 }
 
-rs_status rs_lanes_write(const char *path,
-                         const rs_lanes *lanes,
-                         const rs_llh *origin,
-                         double geoid_undulation_m,
-                         bool with_height,
-                         rs_site_layout layout,
-                         rs_err *err)
+rs_status rs_lanes_write(const char *path, const rs_lanes *lanes, const rs_llh *origin, double geoid_undulation_m,
+                         bool with_height, rs_site_layout layout, rs_err *err)
 {
     cJSON *j = cJSON_CreateObject(), *features = NULL;
     if (!j || !cJSON_AddStringToObject(j, "type", "FeatureCollection") ||

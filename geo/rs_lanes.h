@@ -57,9 +57,7 @@ typedef struct {
 rs_status rs_lanes_read( // out
     rs_lanes *lanes,
     // in
-    const char *path,
-    const rs_site *site,
-    rs_err *err);
+    const char *path, const rs_site *site, rs_err *err);
 void rs_lanes_free(rs_lanes *lanes); // NULL-safe; leaves *lanes empty
 
 // Writes lanes.geojson (the format rs_lanes_read reads), atomically (rs_io_write_file): one
@@ -75,13 +73,8 @@ void rs_lanes_free(rs_lanes *lanes); // NULL-safe; leaves *lanes empty
 // Returns RS_ERR_INVALID (no id, a `next` out of range, a non-finite number), the status of
 // rs_geo_enu_to_llh, RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_lanes_write( // in
-    const char *path,
-    const rs_lanes *lanes,
-    const rs_llh *origin,
-    double geoid_undulation_m,
-    bool with_height,
-    rs_site_layout layout,
-    rs_err *err);
+    const char *path, const rs_lanes *lanes, const rs_llh *origin, double geoid_undulation_m, bool with_height,
+    rs_site_layout layout, rs_err *err);
 
 // Length of a lane's polyline, metres.
 double rs_lane_length_m(const rs_lane *lane);
@@ -89,18 +82,15 @@ double rs_lane_length_m(const rs_lane *lane);
 // The point at arc length s (clamped to [0, length]) along a lane and the compass heading of the
 // segment it lies on (clockwise from north, degrees, [0, 360)), in the lane's vertex order.
 // out: p_enu_m (2,); heading_deg may be NULL
-void rs_lane_point(double p_enu_m[2],
-                   double *heading_deg,
+void rs_lane_point(double p_enu_m[2], double *heading_deg,
                    // in
-                   const rs_lane *lane,
-                   double s_m);
+                   const rs_lane *lane, double s_m);
 
 // Distance from a point to the nearest point of a lane's polyline, metres; *heading_deg (may be
 // NULL) receives the heading of the nearest segment in vertex order.
 double rs_lane_distance_m(double *heading_deg,
                           // in
-                          const rs_lane *lane,
-                          const double p_enu_m[2]);
+                          const rs_lane *lane, const double p_enu_m[2]);
 
 #ifdef __cplusplus
 }

@@ -68,8 +68,8 @@ const char *rs_site_background_tag(const rs_site_background *bg, const char *key
     return NULL;
 }
 
-int rs_site_landmark_extent(
-    double *min_enu_m, double *max_enu_m, double *dmin_m, double *dmax_m, const rs_site *site, int icam)
+int rs_site_landmark_extent(double *min_enu_m, double *max_enu_m, double *dmin_m, double *dmax_m, const rs_site *site,
+                            int icam)
 {
     int n = icam < 0 ? site->Nlandmarks : site->cameras[icam].Nobservations;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};

@@ -138,8 +138,7 @@ typedef struct {
 rs_status rs_site_load( // out
     rs_site **out,
     // in
-    const char *dir,
-    rs_err *err);
+    const char *dir, rs_err *err);
 
 // Frees a site and everything it owns. Accepts NULL.
 void rs_site_free(rs_site *site);
@@ -164,8 +163,7 @@ int rs_site_landmark_extent( // out
     double *dmin_m,
     double *dmax_m, // may be NULL
     // in
-    const rs_site *site,
-    int icam);
+    const rs_site *site, int icam);
 
 // ---- checking ----
 
@@ -201,8 +199,7 @@ typedef struct {
 rs_status rs_site_check( // out
     rs_site_report **report,
     // in
-    const char *dir,
-    rs_err *err);
+    const char *dir, rs_err *err);
 
 void rs_site_report_free(rs_site_report *report); // accepts NULL
 
@@ -210,8 +207,7 @@ void rs_site_report_free(rs_site_report *report); // accepts NULL
 //   "FILE[:LINE]: [feature F (id 'ID'): ][FIELD: ]MESSAGE"
 // in the size-limited manner of snprintf. Returns the length the full text needs.
 int rs_site_diag_format( // out
-    char *buf,
-    size_t size,
+    char *buf, size_t size,
     // in
     const rs_site_diag *diag);
 
@@ -231,9 +227,7 @@ int rs_site_diag_format( // out
 //      origin: lat_deg in [-90, 90], lon_deg in [-180, 180], h_m in the declared heights
 //      geoid_undulation_m: NULL for ellipsoidal heights, else N of {"orthometric": N}
 // Every file is written atomically (rs_io_write_file).
-rs_status rs_site_init(const char *dir,
-                       const char *name,
-                       const rs_llh *origin,
+rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin,
                        const double *geoid_undulation_m, // may be NULL
                        rs_err *err);
 

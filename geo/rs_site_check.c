@@ -19,8 +19,8 @@ enum { MIN_OBSERVATIONS = 4 };
 
 // Distance of (lat, lon, h_ell) from the site origin; false if the point is not a valid
 // geodetic position.
-static bool
-distance_from_origin(double *d_m, double p_enu_m[3], const rs_site *site, double lat, double lon, double h_ell)
+static bool distance_from_origin(double *d_m, double p_enu_m[3], const rs_site *site, double lat, double lon,
+                                 double h_ell)
 {
     if (!(lat >= -90 && lat <= 90 && lon >= -180 && lon <= 180)) return false;
     const double llh[3] = {lat, lon, h_ell};
@@ -49,11 +49,7 @@ static void format_position(char *buf, size_t size, bool geojson_order, double l
 // Heights in two systems (an orthometric origin with ellipsoidal landmarks, or the other way
 // round) put points tens of metres above or below the ground. Warns when a point lies more than
 // HEIGHT_WARN_M above or below the origin and steeper than 1:2 from it.
-static void check_height(rs_site__report *r,
-                         const char *file,
-                         int feature,
-                         const char *feature_id,
-                         const char *field,
+static void check_height(rs_site__report *r, const char *file, int feature, const char *feature_id, const char *field,
                          const double p_enu_m[3])
 {
     const double HEIGHT_WARN_M = 20;
@@ -66,17 +62,9 @@ static void check_height(rs_site__report *r,
                   fabs(p_enu_m[2]), p_enu_m[2] > 0 ? "above" : "below", horizontal);
 }
 
-bool rs_site__check_position(double llh[3],
-                             double p_enu_m[3],
-                             rs_site__report *r,
-                             const rs_site *site,
-                             bool origin_ok,
-                             const char *file,
-                             int feature,
-                             const char *feature_id,
-                             const char *field,
-                             bool geojson_order,
-                             const double given[3])
+bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *r, const rs_site *site, bool origin_ok,
+                             const char *file, int feature, const char *feature_id, const char *field,
+                             bool geojson_order, const double given[3])
 {
     const double lat = given[0], lon = given[1], h = given[2];
     const double h_ell = h + site->geoid_undulation_m;
@@ -140,9 +128,7 @@ bool rs_site__check_position(double llh[3],
 
 // ---- observations ----
 
-bool rs_site__check_observation(rs_site__report *r,
-                                const rs_site_camera *cam,
-                                const rs_site_observation *obs,
+bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam, const rs_site_observation *obs,
                                 const rs_site *site)
 {
     const char *file = cam->observations_path;

@@ -111,12 +111,8 @@ static const rs_site_spec_camera example_camera = {
 
 // The files of the skeleton (skeleton_files, in that order) into the folder `tmp`; `dir` is
 // the name the README gives the folder.
-static rs_status write_skeleton(const char *tmp,
-                                const char *dir,
-                                const char *name,
-                                const rs_llh *origin,
-                                const double *geoid_undulation_m,
-                                rs_err *err)
+static rs_status write_skeleton(const char *tmp, const char *dir, const char *name, const rs_llh *origin,
+                                const double *geoid_undulation_m, rs_err *err)
 {
     const rs_site_spec spec = {
         .name = name,
@@ -182,8 +178,8 @@ static void remove_skeleton(const char *tmp)
     rmdir(tmp);
 }
 
-rs_status
-rs_site_init(const char *dir, const char *name, const rs_llh *origin, const double *geoid_undulation_m, rs_err *err)
+rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin, const double *geoid_undulation_m,
+                       rs_err *err)
 {
     if (!(isfinite(origin->lat_deg) && isfinite(origin->lon_deg) && isfinite(origin->h_m)) ||
         fabs(origin->lat_deg) > 90 || fabs(origin->lon_deg) > 180)

@@ -81,14 +81,8 @@ static void json_excerpt(char *buf, size_t size, const cJSON *item)
 
 // Looks up obj[key], writing its full name ("prefix.key") into field. A missing member is
 // reported if required ("missing (EXPECTED)"); returns NULL then.
-static const cJSON *member(rs_site__reader *c,
-                           const cJSON *obj,
-                           const char *prefix,
-                           const char *key,
-                           bool required,
-                           const char *expected,
-                           char *field,
-                           size_t size)
+static const cJSON *member(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
+                           const char *expected, char *field, size_t size)
 {
     field_name(field, size, prefix, key);
     const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
@@ -106,8 +100,8 @@ static void wrong_type(rs_site__reader *c, const char *field, const cJSON *it, c
 
 // Reads obj[key] as a finite number. Reports a missing required field, a wrong type or a
 // non-finite value; returns false then (and for a missing optional field).
-static bool
-get_number(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, double *out)
+static bool get_number(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
+                       double *out)
 {
     char field[256];
     const cJSON *it = member(c, obj, prefix, key, required, "a number", field, sizeof field);
@@ -125,8 +119,8 @@ get_number(rs_site__reader *c, const cJSON *obj, const char *prefix, const char 
 }
 
 // get_number, and the value must be > 0.
-static bool
-get_positive(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, double *out)
+static bool get_positive(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
+                         double *out)
 {
     double v;
     if (!get_number(c, obj, prefix, key, required, &v)) return false;
@@ -140,8 +134,8 @@ get_positive(rs_site__reader *c, const cJSON *obj, const char *prefix, const cha
 }
 
 // Reads obj[key] as a non-empty string (pointer into the JSON tree).
-static bool
-get_string(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, const char **out)
+static bool get_string(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
+                       const char **out)
 {
     char field[256];
     const cJSON *it = member(c, obj, prefix, key, required, "a string", field, sizeof field);
@@ -159,8 +153,8 @@ get_string(rs_site__reader *c, const cJSON *obj, const char *prefix, const char 
 }
 
 // Reads obj[key] as a JSON object; NULL if missing (reported if required) or not an object.
-static const cJSON *get_object(
-    rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required, const char *expected)
+static const cJSON *get_object(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
+                               const char *expected)
 {
     char field[256];
     const cJSON *it = member(c, obj, prefix, key, required, expected, field, sizeof field);

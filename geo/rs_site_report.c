@@ -21,16 +21,8 @@ static char *dup_printable(const char *s)
     return d;
 }
 
-void rs_site__diag(rs_site__report *r,
-                   rs_site_severity severity,
-                   rs_status status,
-                   const char *file,
-                   int line,
-                   int feature,
-                   const char *feature_id,
-                   const char *field,
-                   const char *fmt,
-                   ...)
+void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status status, const char *file, int line,
+                   int feature, const char *feature_id, const char *field, const char *fmt, ...)
 {
     rs_site_report *p = &r->pub;
     if (p->N == r->cap) {
@@ -104,8 +96,8 @@ int rs_site_diag_format(char *buf, size_t size, const rs_site_diag *d)
 
 // ---- the reader's context ----
 
-void rs_site__say(
-    rs_site__reader *c, rs_site_severity severity, rs_status status, int line, const char *field, const char *fmt, ...)
+void rs_site__say(rs_site__reader *c, rs_site_severity severity, rs_status status, int line, const char *field,
+                  const char *fmt, ...)
 {
     char msg[1024];
     va_list ap;

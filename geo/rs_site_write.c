@@ -196,8 +196,8 @@ static cJSON *llh_object(const rs_llh *llh)
 
 // Writes `root` as DIR/name; a NULL root means that building it failed (a non-finite number, or
 // out of memory).
-static rs_status
-write_document(const char *dir, const char *name, const cJSON *root, rs_site_layout layout, rs_err *err)
+static rs_status write_document(const char *dir, const char *name, const cJSON *root, rs_site_layout layout,
+                                rs_err *err)
 {
     char *path = rs_io_join(dir, name);
     rs_status st;
@@ -304,12 +304,8 @@ static cJSON *landmark_feature(const rs_site_landmark *l, double geoid_undulatio
     return NULL;
 }
 
-rs_status rs_site_write_landmarks(const char *dir,
-                                  const rs_site_landmark *landmarks,
-                                  int Nlandmarks,
-                                  double geoid_undulation_m,
-                                  rs_site_layout layout,
-                                  rs_err *err)
+rs_status rs_site_write_landmarks(const char *dir, const rs_site_landmark *landmarks, int Nlandmarks,
+                                  double geoid_undulation_m, rs_site_layout layout, rs_err *err)
 {
     for (int i = 0; i < Nlandmarks; i++)
         if (!landmarks[i].id)
@@ -329,8 +325,8 @@ rs_status rs_site_write_landmarks(const char *dir,
 
 // ---- observations/<id>.csv ----
 
-rs_status rs_site_write_observations(
-    const char *path, const rs_site_observation *obs, int Nobservations, const rs_site_landmark *landmarks, rs_err *err)
+rs_status rs_site_write_observations(const char *path, const rs_site_observation *obs, int Nobservations,
+                                     const rs_site_landmark *landmarks, rs_err *err)
 {
     rs_io_atomic a;
     rs_status st = rs_io_atomic_open(&a, path, err);
@@ -353,13 +349,8 @@ char *rs_site_background_file(const char *camera_id, const char *name)
 }
 
 // The entry of a background record (rs_site_record_background); NULL when out of memory.
-static cJSON *background_entry(const char *file,
-                               const char *name,
-                               bool synthetic,
-                               const char *const *keys,
-                               const char *const *values,
-                               int Ntags,
-                               cJSON *source)
+static cJSON *background_entry(const char *file, const char *name, bool synthetic, const char *const *keys,
+                               const char *const *values, int Ntags, cJSON *source)
 {
     cJSON *e = cJSON_CreateObject(), *tags = NULL;
     bool ok = e && cJSON_AddStringToObject(e, "name", name) && cJSON_AddStringToObject(e, "file", file) &&
@@ -374,15 +365,9 @@ static cJSON *background_entry(const char *file,
     return NULL;
 }
 
-rs_status rs_site_record_background(const char *dir,
-                                    const char *camera_id,
-                                    const char *name,
-                                    bool synthetic,
-                                    const char *const *keys,
-                                    const char *const *values,
-                                    int Ntags,
-                                    const char *source_json,
-                                    rs_err *err)
+rs_status rs_site_record_background(const char *dir, const char *camera_id, const char *name, bool synthetic,
+                                    const char *const *keys, const char *const *values, int Ntags,
+                                    const char *source_json, rs_err *err)
 {
     char *path = rs_io_join(dir, "site.json"), *text = NULL, *file = NULL;
     cJSON *root = NULL, *source = NULL;

@@ -67,10 +67,7 @@ typedef struct {
 // Returns RS_ERR_INVALID for a missing name or camera string or a non-finite number,
 // RS_ERR_PARSE when extra_json is not JSON, RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_site_write_json( // in
-    const char *dir,
-    const rs_site_spec *spec,
-    rs_site_layout layout,
-    rs_err *err);
+    const char *dir, const rs_site_spec *spec, rs_site_layout layout, rs_err *err);
 
 // Writes DIR/landmarks.geojson: a FeatureCollection of Point features, coordinates
 // [lon_deg, lat_deg, h_m] (RFC 7946 order; h = llh.h_m - geoid_undulation_m), properties id,
@@ -82,12 +79,8 @@ rs_status rs_site_write_json( // in
 //     geoid_undulation_m: N of the site's "heights" (0 for an ellipsoidal site)
 // Returns RS_ERR_INVALID (no id, a non-finite coordinate), RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_site_write_landmarks( // in
-    const char *dir,
-    const rs_site_landmark *landmarks,
-    int Nlandmarks,
-    double geoid_undulation_m,
-    rs_site_layout layout,
-    rs_err *err);
+    const char *dir, const rs_site_landmark *landmarks, int Nlandmarks, double geoid_undulation_m,
+    rs_site_layout layout, rs_err *err);
 
 // Writes an observations CSV: the header "landmark,u,v,sigma_px", then one line per pick,
 // "ID,u,v,sigma" with u and v to 1e-6 px ("%.6f") and sigma_px as "%g".
@@ -96,10 +89,7 @@ rs_status rs_site_write_landmarks( // in
 //     landmarks: the site's landmarks (only their ids are used)
 // Returns RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_site_write_observations( // in
-    const char *path,
-    const rs_site_observation *obs,
-    int Nobservations,
-    const rs_site_landmark *landmarks,
+    const char *path, const rs_site_observation *obs, int Nobservations, const rs_site_landmark *landmarks,
     rs_err *err);
 
 // The file of background `name` of camera `camera_id`, relative to the site folder:
@@ -120,15 +110,8 @@ char *rs_site_background_file(const char *camera_id, const char *name);
 // Returns RS_ERR_IO / RS_ERR_PARSE for site.json (or a source_json that is not JSON),
 // RS_ERR_NOT_FOUND for an unknown camera, RS_ERR_NOMEM.
 rs_status rs_site_record_background( // in
-    const char *dir,
-    const char *camera_id,
-    const char *name,
-    bool synthetic,
-    const char *const *keys,
-    const char *const *values,
-    int Ntags,
-    const char *source_json,
-    rs_err *err);
+    const char *dir, const char *camera_id, const char *name, bool synthetic, const char *const *keys,
+    const char *const *values, int Ntags, const char *source_json, rs_err *err);
 
 #ifdef __cplusplus
 }

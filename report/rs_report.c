@@ -79,14 +79,8 @@ static rs_status read_result_json(rs_report_camera *cam, const rs_site *site, co
 
 // Appends one polyline: the GeoJSON positions `coords` converted to ENU, offset by offset_m to
 // the left in the (E, N) plane (0: the centreline).
-static rs_status lanes_add_line(rs_report_lanes *lanes,
-                                const cJSON *coords,
-                                const rs_site *site,
-                                const char *path,
-                                const char *field,
-                                bool junction,
-                                double offset_m,
-                                rs_err *err)
+static rs_status lanes_add_line(rs_report_lanes *lanes, const cJSON *coords, const rs_site *site, const char *path,
+                                const char *field, bool junction, double offset_m, rs_err *err)
 {
     int n = cJSON_GetArraySize(coords);
     if (!cJSON_IsArray(coords) || n < 2)
@@ -144,13 +138,8 @@ static rs_status lanes_add_line(rs_report_lanes *lanes,
 }
 
 // One LineString's lines: both edges when the feature has a width_m, else the centreline.
-static rs_status lanes_add_feature(rs_report_lanes *lanes,
-                                   const cJSON *coords,
-                                   const cJSON *props,
-                                   const rs_site *site,
-                                   const char *path,
-                                   const char *field,
-                                   rs_err *err)
+static rs_status lanes_add_feature(rs_report_lanes *lanes, const cJSON *coords, const cJSON *props, const rs_site *site,
+                                   const char *path, const char *field, rs_err *err)
 {
     const cJSON *kind = cJSON_GetObjectItemCaseSensitive(props, "kind");
     const cJSON *width = cJSON_GetObjectItemCaseSensitive(props, "width_m");
@@ -320,8 +309,8 @@ static void camera_free(rs_report_camera *cam)
     rs_audit_result_free(&cam->audit);
 }
 
-static rs_status camera_load(
-    rs_report_camera *cam, const rs_site *site, const char *calib_dir, const rs_report_options *opt, rs_err *err)
+static rs_status camera_load(rs_report_camera *cam, const rs_site *site, const char *calib_dir,
+                             const rs_report_options *opt, rs_err *err)
 {
     const char *id = site->cameras[cam->icam].id;
     char name[600];
@@ -560,8 +549,8 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
 
 // ---- writing ----
 
-rs_status rs_report_write(
-    rs_report_summary *summary, const char *out_dir, const rs_site *site, const rs_report_options *opt_in, rs_err *err)
+rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const rs_site *site,
+                          const rs_report_options *opt_in, rs_err *err)
 {
     rs_report_options opt;
     if (opt_in)

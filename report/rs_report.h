@@ -77,8 +77,7 @@ typedef struct {
 rs_status rs_report_write( // out
     rs_report_summary *summary,
     // in
-    const char *out_dir,
-    const rs_site *site,
+    const char *out_dir, const rs_site *site,
     const rs_report_options *opt, // may be NULL
     rs_err *err);                 // may be NULL
 

@@ -412,16 +412,16 @@ static void pdf_need(pdf_state *p, double height)
 
 // Word-wrapped text across the page width: draws it and advances p->y, or with draw false only
 // returns the height it would take (no page break counted).
-static double
-pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent, bool draw);
+static double pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent,
+                           bool draw);
 
 static void pdf_text(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent)
 {
     pdf_text_run(p, text, size, bold, italic, indent, true);
 }
 
-static double
-pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent, bool draw)
+static double pdf_text_run(pdf_state *p, const char *text, double size, bool bold, bool italic, double indent,
+                           bool draw)
 {
     double height = 0;
     cairo_t *cr = p->cr;

@@ -70,16 +70,8 @@ static double ground_up(const rs_site *site, double e, double n)
 typedef enum { LEGEND_CIRCLE, LEGEND_CROSS, LEGEND_DOT, LEGEND_LINE } legend_shape;
 
 // One legend row: a sample (shape, colour, line width lw_fs * fs) and its text.
-static void legend_row(cairo_t *cr,
-                       double x,
-                       double y,
-                       double fs,
-                       legend_shape shape,
-                       double r,
-                       double g,
-                       double b,
-                       double lw_fs,
-                       const char *text)
+static void legend_row(cairo_t *cr, double x, double y, double fs, legend_shape shape, double r, double g, double b,
+                       double lw_fs, const char *text)
 {
     double cx = x + fs * 0.6, cy = y - fs * 0.35;
     cairo_save(cr);

@@ -148,8 +148,8 @@ static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, do
 
 // Landmarks of the site: observed by `cam` (if not NULL) drawn as inlier / outlier, the rest
 // as small grey dots; ids written when `ids`.
-static void map_landmarks(
-    cairo_t *cr, const map_view *v, const struct rs_report_ctx *rep, const rs_report_camera *cam, double fs, bool ids)
+static void map_landmarks(cairo_t *cr, const map_view *v, const struct rs_report_ctx *rep, const rs_report_camera *cam,
+                          double fs, bool ids)
 {
     const rs_site *site = rep->site;
     for (int i = 0; i < site->Nlandmarks; i++) {
@@ -287,8 +287,8 @@ static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, d
 }
 
 // The colour bar in the strip [w - cbar_w, w] on the right.
-static void
-map_colourbar(cairo_t *cr, double w, double h, double cbar_w, double fs, double vmax, double detection_sigma_px)
+static void map_colourbar(cairo_t *cr, double w, double h, double cbar_w, double fs, double vmax,
+                          double detection_sigma_px)
 {
     double bx = w - cbar_w + fs * 1.2, by = fs * 5, bw = fs * 1.2, bh = h - fs * 10;
     for (int i = 0; i < 100; i++) {

@@ -47,8 +47,7 @@ typedef struct {
 // (cairo could not draw), RS_ERR_NOMEM, RS_ERR_IO (writing failed; nothing is left at path).
 rs_status rs_report_plot_loglog_png(const char *path,
                                     // in
-                                    const rs_report_plot_loglog *plot,
-                                    rs_err *err);
+                                    const rs_report_plot_loglog *plot, rs_err *err);
 
 #ifdef __cplusplus
 }

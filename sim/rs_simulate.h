@@ -59,18 +59,12 @@ extern "C" {
 // show (pinhole-like models: hfov must be below 170 degrees), a bad image size.
 // out: *intrinsics is malloc'ed, (*Nintrinsics,), owned by the caller (free()).
 rs_status rs_simulate_lens( // out
-    mrcal_lensmodel_t *lensmodel,
-    double **intrinsics,
-    int *Nintrinsics,
+    mrcal_lensmodel_t *lensmodel, double **intrinsics, int *Nintrinsics,
     // in,out
     rs_rng *rng,
     // in
     const char *lensmodel_name, // e.g. "LENSMODEL_OPENCV8"
-    int width_px,
-    int height_px,
-    double hfov_deg,
-    bool distortion,
-    rs_err *err);
+    int width_px, int height_px, double hfov_deg, bool distortion, rs_err *err);
 
 // ---- one camera's problem, in memory ----
 
@@ -131,8 +125,7 @@ typedef struct {
 rs_status rs_simulate_camera_problem( // out
     rs_simulate_problem **problem,
     // in
-    const rs_simulate_camera_options *o,
-    rs_err *err);
+    const rs_simulate_camera_options *o, rs_err *err);
 
 // Frees a problem. Accepts NULL.
 void rs_simulate_problem_free(rs_simulate_problem *problem);
@@ -180,9 +173,7 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 // Errors: RS_ERR_USAGE (bad options), RS_ERR_IO (folder exists, cannot write), RS_ERR_DEGENERATE
 // (a camera sees fewer than 4 landmarks), RS_ERR_EXTERNAL (mrcal failed).
 rs_status rs_simulate_site( // in
-    const char *dir,
-    const rs_simulate_site_options *o,
-    rs_err *err);
+    const char *dir, const rs_simulate_site_options *o, rs_err *err);
 
 #ifdef __cplusplus
 }

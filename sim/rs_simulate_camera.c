@@ -55,8 +55,8 @@ rs_status rs_simulate__camera_field_of_view(rs_simulate__camera *c, rs_err *err)
 
 // Sets the pose of a camera at p_cam looking at `target`, turned by yaw_offset_deg and rolled by
 // roll_deg, pitched so that the target appears at 62% of the image height. Rounds rt to 1e-6.
-void rs_simulate__camera_look_at(
-    rs_simulate__camera *c, const double p_cam[3], const double target[3], double yaw_offset_deg, double roll_deg)
+void rs_simulate__camera_look_at(rs_simulate__camera *c, const double p_cam[3], const double target[3],
+                                 double yaw_offset_deg, double roll_deg)
 {
     double d[3] = {target[0] - p_cam[0], target[1] - p_cam[1], target[2] - p_cam[2]};
     double yaw = atan2(d[0], d[1]) / DEG + yaw_offset_deg;
@@ -95,14 +95,8 @@ bool rs_simulate__camera_sees(const rs_simulate__camera *c, double q_px[2], cons
 
 // Picks: the true pixel plus N(0, sigma) noise kept inside the image (redrawn until it is), or,
 // with probability outlier_fraction, a uniformly random pixel at least outlier_min_px away.
-int rs_simulate__camera_pick(rs_rng *rng,
-                             double *q_px,
-                             bool *outlier,
-                             const double *q_true_px,
-                             int N,
-                             const rs_simulate__camera *c,
-                             double sigma_px,
-                             double outlier_fraction,
+int rs_simulate__camera_pick(rs_rng *rng, double *q_px, bool *outlier, const double *q_true_px, int N,
+                             const rs_simulate__camera *c, double sigma_px, double outlier_fraction,
                              double outlier_min_px)
 {
     int Noutliers = 0;
@@ -126,8 +120,8 @@ int rs_simulate__camera_pick(rs_rng *rng,
     return Noutliers;
 }
 
-void rs_simulate__survey_noise(
-    rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h, double sigma_v)
+void rs_simulate__survey_noise(rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h,
+                               double sigma_v)
 {
     for (int i = 0; i < N; i++) {
         p_survey[3 * i + 0] = p_true[3 * i + 0] + sigma_h * rs_rng_normal(rng);
@@ -205,12 +199,8 @@ void rs_simulate_problem_free(rs_simulate_problem *p)
 }
 
 // Places landmark i on a ray through a random pixel, on the ground or at a random height.
-static bool place_landmark(rs_rng *rng,
-                           double p_enu[3],
-                           double q_true_px[2],
-                           const rs_simulate__camera *c,
-                           bool elevated,
-                           const rs_simulate_camera_options *o)
+static bool place_landmark(rs_rng *rng, double p_enu[3], double q_true_px[2], const rs_simulate__camera *c,
+                           bool elevated, const rs_simulate_camera_options *o)
 {
     mrcal_point2_t q = {.x = rs_rng_uniform_in(rng, o->margin_px, c->cam.width - 1 - o->margin_px),
                         .y = rs_rng_uniform_in(rng, o->margin_px, c->cam.height - 1 - o->margin_px)};

@@ -18,14 +18,8 @@
 #define LANE_M      3.5
 #define ROAD_HALF_M (2 * LANE_M)
 
-static bool add_candidate(rs_simulate__candidates *l,
-                          const double R_road[4],
-                          double along,
-                          double s,
-                          double dx,
-                          double dy,
-                          double h,
-                          const char *kind)
+static bool add_candidate(rs_simulate__candidates *l, const double R_road[4], double along, double s, double dx,
+                          double dy, double h, const char *kind)
 {
     if (l->N == l->cap) {
         int cap = l->cap ? 2 * l->cap : 256;
@@ -375,15 +369,8 @@ static int exit_lane(int a, int k) { return 24 + 2 * a + k - 1; }
 
 // Fills one lane: pts_road (Npts, 2) in the road frame, rotated into ENU, rounded to 0.1 mm, on
 // the ground; continuing into the lanes next (Nnext,).
-static bool set_lane(rs_lane *lane,
-                     const rs_simulate__site *s,
-                     const char *id,
-                     const char *kind,
-                     double speed_mps,
-                     const double (*pts_road)[2],
-                     int Npts,
-                     const int *next,
-                     int Nnext)
+static bool set_lane(rs_lane *lane, const rs_simulate__site *s, const char *id, const char *kind, double speed_mps,
+                     const double (*pts_road)[2], int Npts, const int *next, int Nnext)
 {
     lane->id = strdup(id);
     lane->kind = strdup(kind);

@@ -48,15 +48,8 @@ rs_status rs_simulate__lens_check(mrcal_lensmodel_t *lm, const char *name, int W
     return RS_OK;
 }
 
-rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel,
-                           double **intrinsics,
-                           int *Nintrinsics,
-                           rs_rng *rng,
-                           const char *lensmodel_name,
-                           int width_px,
-                           int height_px,
-                           double hfov_deg,
-                           bool distortion,
+rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel, double **intrinsics, int *Nintrinsics, rs_rng *rng,
+                           const char *lensmodel_name, int width_px, int height_px, double hfov_deg, bool distortion,
                            rs_err *err)
 {
     *intrinsics = NULL;

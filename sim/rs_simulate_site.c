@@ -96,12 +96,8 @@ static void camera_files_of(camera_files *f, int k)
 }
 
 // Writes camera c's lens and size with the given intrinsics and pose (core's writer: atomic).
-static rs_status write_cameramodel(const char *dir,
-                                   const char *rel,
-                                   const rs_simulate__camera *c,
-                                   const double *intrinsics,
-                                   const double rt_cam_enu[6],
-                                   rs_err *err)
+static rs_status write_cameramodel(const char *dir, const char *rel, const rs_simulate__camera *c,
+                                   const double *intrinsics, const double rt_cam_enu[6], rs_err *err)
 {
     char *path = rs_io_join(dir, rel);
     if (!path) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", rel);
@@ -148,8 +144,8 @@ static cJSON *json_options(const rs_simulate_site_options *o)
 }
 
 // site.json, through geo's writer; "simulated" records the options.
-static rs_status
-write_site_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
+static rs_status write_site_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o,
+                                 rs_err *err)
 {
     const int K = s->Ncameras;
     static const double up[3] = {0, 0, 1};
@@ -220,13 +216,8 @@ static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], 
 }
 
 // observations/<id>.csv of camera k: its picks of the landmarks it sees, in landmark order.
-static rs_status write_observations(const char *dir,
-                                    const camera_files *f,
-                                    const rs_simulate__site *s,
-                                    int k,
-                                    const rs_site_landmark *landmarks,
-                                    double sigma_px,
-                                    rs_err *err)
+static rs_status write_observations(const char *dir, const camera_files *f, const rs_simulate__site *s, int k,
+                                    const rs_site_landmark *landmarks, double sigma_px, rs_err *err)
 {
     const int Nc = s->cand.N;
     rs_site_observation *obs = calloc((size_t)(s->Nlandmarks ? s->Nlandmarks : 1), sizeof *obs);
@@ -263,8 +254,8 @@ static rs_status write_truth_landmarks(const char *dir, const rs_simulate__site 
     return rs_io_atomic_commit(&a, err);
 }
 
-static rs_status
-write_truth_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
+static rs_status write_truth_json(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o,
+                                  rs_err *err)
 {
     cJSON *j = cJSON_CreateObject();
     cJSON_AddNumberToObject(j, "seed", (double)o->seed);

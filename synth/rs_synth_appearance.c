@@ -194,8 +194,8 @@ done:
     return st;
 }
 
-rs_status
-rs_synth_estimate_gain(double gain[3], const rs_image *t, const rs_image *ref, const uint8_t *mask, rs_err *err)
+rs_status rs_synth_estimate_gain(double gain[3], const rs_image *t, const rs_image *ref, const uint8_t *mask,
+                                 rs_err *err)
 {
     gain[0] = gain[1] = gain[2] = NAN;
     if (t->channels < 3 || (ref && (ref->channels < 3 || ref->width != t->width || ref->height != t->height)))
@@ -300,9 +300,7 @@ rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact, const char *p
 
 // ---- all together ----
 
-rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
-                                       const char *background_path,
-                                       const rs_image *reference,
+rs_status rs_synth_appearance_estimate(rs_synth_appearance *out, const char *background_path, const rs_image *reference,
                                        rs_err *err)
 {
     memset(out, 0, sizeof(*out));
@@ -319,8 +317,8 @@ rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
     return st;
 }
 
-rs_status rs_synth_appearance_apply(
-    rs_image *img, const rs_synth_appearance *a, double layer_blur_sigma_px, uint64_t seed, rs_err *err)
+rs_status rs_synth_appearance_apply(rs_image *img, const rs_synth_appearance *a, double layer_blur_sigma_px,
+                                    uint64_t seed, rs_err *err)
 {
     if (img->channels != 4)
         return rs_err_set(err, RS_ERR_INVALID, "appearance: the layer must be RGBA (has %d)", img->channels);

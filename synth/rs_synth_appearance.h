@@ -51,10 +51,7 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *
 // Returns RS_ERR_DEGENERATE with fewer than 100 usable pixels, RS_ERR_INVALID for size mismatch.
 rs_status rs_synth_estimate_gain(double gain[3],
                                  // in
-                                 const rs_image *target,
-                                 const rs_image *reference,
-                                 const uint8_t *mask,
-                                 rs_err *err);
+                                 const rs_image *target, const rs_image *reference, const uint8_t *mask, rs_err *err);
 
 // JPEG quality of a file: its quantisation tables (DQT segments) compared with the IJG (libjpeg)
 // tables at every quality 1..100 (the standard tables of ITU-T T.81 Annex K scaled by
@@ -63,11 +60,9 @@ rs_status rs_synth_estimate_gain(double gain[3],
 // (any libjpeg writer, e.g. OpenCV's), 0 for a foreign encoder (then the quality is the nearest
 // IJG equivalent). *quality = 0 for a file that is not a JPEG (PNG: no compression loss).
 // Returns RS_ERR_IO (unreadable), RS_ERR_PARSE (a JPEG without a valid DQT).
-rs_status rs_synth_estimate_jpeg_quality(int *quality,
-                                         int *exact,
+rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact,
                                          // in
-                                         const char *path,
-                                         rs_err *err);
+                                         const char *path, rs_err *err);
 
 // What a background says about its camera.
 typedef struct {
@@ -82,9 +77,7 @@ typedef struct {
 // background, rs_synth_background.h) for the exposure; NULL for grey world (colour cast only).
 rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
                                        // in
-                                       const char *background_path,
-                                       const rs_image *reference,
-                                       rs_err *err);
+                                       const char *background_path, const rs_image *reference, rs_err *err);
 
 // Applies an appearance to a rendered vehicle layer (linear light, straight alpha, (H,W,4)), in
 // place: colour x gain; then a Gaussian blur of sqrt(max(0, blur^2 - layer_blur^2)) px on the
@@ -96,10 +89,7 @@ rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
 rs_status rs_synth_appearance_apply( // in,out
     rs_image *rgba_linear,
     // in
-    const rs_synth_appearance *a,
-    double layer_blur_sigma_px,
-    uint64_t seed,
-    rs_err *err);
+    const rs_synth_appearance *a, double layer_blur_sigma_px, uint64_t seed, rs_err *err);
 
 // JPEG round trip of an sRGB composite at a->jpeg_quality (nothing when 0), in place.
 rs_status rs_synth_appearance_jpeg(rs_image *srgb, const rs_synth_appearance *a, rs_err *err);

@@ -63,8 +63,8 @@ static unsigned char select_kth(unsigned char *a, int n, int k)
     return a[k];
 }
 
-rs_status
-rs_synth_background_median(rs_synth_median *out, const char *const *inputs, int Ninputs, int max_frames, rs_err *err)
+rs_status rs_synth_background_median(rs_synth_median *out, const char *const *inputs, int Ninputs, int max_frames,
+                                     rs_err *err)
 {
     memset(out, 0, sizeof(*out));
     if (max_frames < 3 || max_frames > 255)
@@ -170,8 +170,8 @@ rs_status rs_synth_background_tags_check(const rs_synth_background_tags *t, rs_e
     return RS_OK;
 }
 
-rs_status rs_synth_background_tag_parse(
-    rs_synth_background_tags *t, const char **keys, const char **values, char *kv, rs_err *err)
+rs_status rs_synth_background_tag_parse(rs_synth_background_tags *t, const char **keys, const char **values, char *kv,
+                                        rs_err *err)
 {
     char *eq = strchr(kv, '=');
     if (!eq || eq == kv) return rs_err_set(err, RS_ERR_USAGE, "tag '%s': expected key=value", kv);
@@ -202,11 +202,8 @@ char *rs_synth_background_path(const char *site_dir, const char *camera_id, cons
     return p;
 }
 
-rs_status rs_synth_background_record(const char *site_dir,
-                                     const char *camera_id,
-                                     const rs_synth_background_tags *t,
-                                     const char *source_json,
-                                     rs_err *err)
+rs_status rs_synth_background_record(const char *site_dir, const char *camera_id, const rs_synth_background_tags *t,
+                                     const char *source_json, rs_err *err)
 {
     // time and conditions first, then the free tags in the order given
     const char **keys = malloc(sizeof(char *) * (size_t)(t->Ntags + 2));
@@ -283,15 +280,9 @@ static void write_marking(FILE *f, const rs_lane *lane, double offset_m, double 
     }
 }
 
-static rs_status write_twin_scene(const char *pov_path,
-                                  const rs_synth_povcam *cam,
-                                  const rs_site *site,
-                                  const rs_lanes *lanes,
-                                  const weather_look *look,
-                                  double sun_az,
-                                  double sun_el,
-                                  double marking_width_m,
-                                  rs_err *err)
+static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *cam, const rs_site *site,
+                                  const rs_lanes *lanes, const weather_look *look, double sun_az, double sun_el,
+                                  double marking_width_m, rs_err *err)
 {
     rs_io_atomic a = {0};
     rs_status st = rs_io_atomic_open(&a, pov_path, err);
@@ -342,8 +333,8 @@ static rs_status write_twin_scene(const char *pov_path,
 }
 
 // Runs `povray +Itwin.pov +Otwin.png +W +H ...` in work_dir (rs_synth_povray_run).
-static rs_status
-run_twin_povray(const char *povray, const char *work_dir, int width, int height, int antialias, rs_err *err)
+static rs_status run_twin_povray(const char *povray, const char *work_dir, int width, int height, int antialias,
+                                 rs_err *err)
 {
     char w[32], h[32], aa[32];
     snprintf(w, sizeof(w), "+W%d", width);
@@ -357,17 +348,10 @@ run_twin_povray(const char *povray, const char *work_dir, int width, int height,
     return rs_synth_povray_run(povray, work_dir, args, (int)(sizeof(args) / sizeof(args[0])), NULL, err);
 }
 
-rs_status rs_synth_background_render_twin(double *sun_azimuth_deg,
-                                          double *sun_elevation_deg,
-                                          const char **conditions_out,
-                                          const char *out_png,
-                                          const char *work_dir,
-                                          const rs_site *site,
-                                          const char *lanes_path,
-                                          const rs_camera *camera,
-                                          double unix_time_s,
-                                          const char *weather,
-                                          const rs_synth_twin_options *opt,
+rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_elevation_deg,
+                                          const char **conditions_out, const char *out_png, const char *work_dir,
+                                          const rs_site *site, const char *lanes_path, const rs_camera *camera,
+                                          double unix_time_s, const char *weather, const rs_synth_twin_options *opt,
                                           rs_err *err)
 {
     const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
@@ -444,20 +428,10 @@ done:
     return st;
 }
 
-rs_status rs_synth_background_twins(const char *site_dir,
-                                    const rs_site *site,
-                                    const char *cam_id,
-                                    const rs_camera *cam,
-                                    const char *calibration,
-                                    const char *lanes,
-                                    const char *const *times,
-                                    int Ntimes,
-                                    const char *const *weathers,
-                                    int Nweathers,
-                                    const rs_synth_twin_options *opt,
-                                    rs_synth_twin_progress progress,
-                                    void *ctx,
-                                    rs_err *err)
+rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, const char *cam_id, const rs_camera *cam,
+                                    const char *calibration, const char *lanes, const char *const *times, int Ntimes,
+                                    const char *const *weathers, int Nweathers, const rs_synth_twin_options *opt,
+                                    rs_synth_twin_progress progress, void *ctx, rs_err *err)
 {
     char work[4096];
     snprintf(work, sizeof(work), "%s/backgrounds/%s/.twin-work", site_dir, cam_id);
@@ -524,14 +498,9 @@ rs_status rs_synth_background_twins(const char *site_dir,
     return st;
 }
 
-rs_status rs_synth_background_save_median(char **path_out,
-                                          const char *site_dir,
-                                          const char *camera_id,
-                                          const rs_synth_background_tags *tags,
-                                          const rs_synth_median *med,
-                                          const char *const *inputs,
-                                          int Ninputs,
-                                          rs_err *err)
+rs_status rs_synth_background_save_median(char **path_out, const char *site_dir, const char *camera_id,
+                                          const rs_synth_background_tags *tags, const rs_synth_median *med,
+                                          const char *const *inputs, int Ninputs, rs_err *err)
 {
     *path_out = NULL;
     rs_image img = {0};

@@ -54,10 +54,7 @@ typedef struct {
 rs_status rs_synth_background_median( // out
     rs_synth_median *out,
     // in
-    const char *const *inputs,
-    int Ninputs,
-    int max_frames,
-    rs_err *err);
+    const char *const *inputs, int Ninputs, int max_frames, rs_err *err);
 void rs_synth_median_free(rs_synth_median *m); // NULL-safe; zeroes *m
 // The memory bound of rs_synth_background_median, bytes.
 size_t rs_synth_median_bytes_bound(int width, int height, int max_frames);
@@ -83,10 +80,7 @@ typedef struct {
 // Returns RS_ERR_USAGE naming the tag when it is malformed.
 rs_status rs_synth_background_tag_parse(rs_synth_background_tags *tags,
                                         // in,out
-                                        const char **keys,
-                                        const char **values,
-                                        char *kv,
-                                        rs_err *err);
+                                        const char **keys, const char **values, char *kv, rs_err *err);
 // Checks a name, a time and conditions (RS_ERR_USAGE / RS_ERR_PARSE naming the field).
 rs_status rs_synth_background_tags_check(const rs_synth_background_tags *tags, rs_err *err);
 
@@ -106,24 +100,16 @@ char *rs_synth_background_path(const char *site_dir, const char *camera_id, cons
 // rs_synth_background_tags_check).
 // in: source_json: how the image was made, a JSON object as text; may be NULL.
 // Returns RS_ERR_IO / RS_ERR_PARSE for site.json, RS_ERR_NOT_FOUND for an unknown camera.
-rs_status rs_synth_background_record(const char *site_dir,
-                                     const char *camera_id,
-                                     const rs_synth_background_tags *tags,
-                                     const char *source_json,
-                                     rs_err *err);
+rs_status rs_synth_background_record(const char *site_dir, const char *camera_id, const rs_synth_background_tags *tags,
+                                     const char *source_json, rs_err *err);
 
 // `roadside background`: writes a temporal median as SITE/backgrounds/<id>/<name>.png (8-bit,
 // atomically; the folder is created) and records it in site.json with its tags and its source
 // (method "temporal median", the inputs, frames read and used, the stride).
 // out: *path_out, the image's path (malloc'ed: caller frees; NULL on failure)
-rs_status rs_synth_background_save_median(char **path_out,
-                                          const char *site_dir,
-                                          const char *camera_id,
-                                          const rs_synth_background_tags *tags,
-                                          const rs_synth_median *med,
-                                          const char *const *inputs,
-                                          int Ninputs,
-                                          rs_err *err);
+rs_status rs_synth_background_save_median(char **path_out, const char *site_dir, const char *camera_id,
+                                          const rs_synth_background_tags *tags, const rs_synth_median *med,
+                                          const char *const *inputs, int Ninputs, rs_err *err);
 
 // ---- digital-twin backgrounds ----
 
@@ -151,28 +137,15 @@ void rs_synth_twin_options_default(rs_synth_twin_options *opt);
 //      the image shows (static string; weather, or "night")
 // Returns RS_ERR_EXTERNAL when povray is missing or fails, RS_ERR_INVALID for a bad weather.
 rs_status rs_synth_background_render_twin( // out
-    double *sun_azimuth_deg,
-    double *sun_elevation_deg,
-    const char **conditions_out,
+    double *sun_azimuth_deg, double *sun_elevation_deg, const char **conditions_out,
     // in
-    const char *out_png,
-    const char *work_dir,
-    const rs_site *site,
-    const char *lanes_path,
-    const rs_camera *cam,
-    double unix_time_s,
-    const char *weather,
-    const rs_synth_twin_options *opt,
-    rs_err *err);
+    const char *out_png, const char *work_dir, const rs_site *site, const char *lanes_path, const rs_camera *cam,
+    double unix_time_s, const char *weather, const rs_synth_twin_options *opt, rs_err *err);
 
 // Called as each background is recorded: the camera, the image's path, the sun and the
 // conditions tag (rs_synth_background_twins).
-typedef void (*rs_synth_twin_progress)(void *ctx,
-                                       const char *camera_id,
-                                       const char *path,
-                                       double sun_azimuth_deg,
-                                       double sun_elevation_deg,
-                                       const char *conditions);
+typedef void (*rs_synth_twin_progress)(void *ctx, const char *camera_id, const char *path, double sun_azimuth_deg,
+                                       double sun_elevation_deg, const char *conditions);
 
 // `roadside site render-backgrounds` for one camera: a digital-twin background
 // (rs_synth_background_render_twin) for every time x weather (one image per time at night),
@@ -185,20 +158,10 @@ typedef void (*rs_synth_twin_progress)(void *ctx,
 //     opt (may be NULL); progress (may be NULL) and its ctx
 // Errors: those of rs_synth_background_render_twin and rs_synth_background_record; a time
 // that is not ISO 8601 is RS_ERR_USAGE naming "--times".
-rs_status rs_synth_background_twins(const char *site_dir,
-                                    const rs_site *site,
-                                    const char *cam_id,
-                                    const rs_camera *cam,
-                                    const char *calibration,
-                                    const char *lanes,
-                                    const char *const *times,
-                                    int Ntimes,
-                                    const char *const *weathers,
-                                    int Nweathers,
-                                    const rs_synth_twin_options *opt,
-                                    rs_synth_twin_progress progress,
-                                    void *ctx,
-                                    rs_err *err);
+rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, const char *cam_id, const rs_camera *cam,
+                                    const char *calibration, const char *lanes, const char *const *times, int Ntimes,
+                                    const char *const *weathers, int Nweathers, const rs_synth_twin_options *opt,
+                                    rs_synth_twin_progress progress, void *ctx, rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -15,8 +15,8 @@ void rs_synth_enu_to_pov(double p_pov[3], const double p_enu[3])
     p_pov[2] = n;
 }
 
-rs_status rs_synth_povcam_init(
-    rs_synth_povcam *cam, const double fxycxy[4], int width, int height, const double rt_cam_enu[6], rs_err *err)
+rs_status rs_synth_povcam_init(rs_synth_povcam *cam, const double fxycxy[4], int width, int height,
+                               const double rt_cam_enu[6], rs_err *err)
 {
     for (int i = 0; i < 4; i++)
         if (!isfinite(fxycxy[i])) return rs_err_set(err, RS_ERR_INVALID, "intrinsics[%d]: not finite", i);
@@ -66,13 +66,8 @@ rs_status rs_synth_povcam_write(FILE *f, const rs_synth_povcam *cam, rs_err *err
 
 // Unprojects one pixel through the real lens and projects the ray through the canvas pinhole
 // (fx, fy of the canvas, cx = cy = 0): *ok = 0 when the ray is not usable.
-static void lens_to_pinhole(double q_out[2],
-                            int *ok,
-                            const double q_in[2],
-                            const mrcal_lensmodel_t *lensmodel,
-                            const double *intrinsics,
-                            const double fxy[2],
-                            double max_tan)
+static void lens_to_pinhole(double q_out[2], int *ok, const double q_in[2], const mrcal_lensmodel_t *lensmodel,
+                            const double *intrinsics, const double fxy[2], double max_tan)
 {
     mrcal_point2_t q = {.x = q_in[0], .y = q_in[1]};
     mrcal_point3_t v;
@@ -86,13 +81,8 @@ static void lens_to_pinhole(double q_out[2],
     *ok = 1;
 }
 
-rs_status rs_synth_canvas_for_lens(rs_synth_canvas *canvas,
-                                   const mrcal_lensmodel_t *lensmodel,
-                                   const double *intrinsics,
-                                   int width,
-                                   int height,
-                                   double scale,
-                                   rs_err *err)
+rs_status rs_synth_canvas_for_lens(rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
+                                   const double *intrinsics, int width, int height, double scale, rs_err *err)
 {
     if (!(scale >= 1) || !isfinite(scale))
         return rs_err_set(err, RS_ERR_INVALID, "canvas scale: must be >= 1 (got %g)", scale);
@@ -156,13 +146,8 @@ rs_status rs_synth_canvas_for_lens(rs_synth_canvas *canvas,
     return RS_OK;
 }
 
-rs_status rs_synth_canvas_map(float **map_xy,
-                              const rs_synth_canvas *canvas,
-                              const mrcal_lensmodel_t *lensmodel,
-                              const double *intrinsics,
-                              int width,
-                              int height,
-                              rs_err *err)
+rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
+                              const double *intrinsics, int width, int height, rs_err *err)
 {
     *map_xy = NULL;
     const size_t Npx = (size_t)width * (size_t)height;

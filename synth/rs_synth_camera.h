@@ -47,11 +47,7 @@ void rs_synth_enu_to_pov(double p_pov[3], const double p_enu[3]);
 rs_status rs_synth_povcam_init( // out
     rs_synth_povcam *cam,
     // in
-    const double fxycxy[4],
-    int width,
-    int height,
-    const double rt_cam_enu[6],
-    rs_err *err);
+    const double fxycxy[4], int width, int height, const double rt_cam_enu[6], rs_err *err);
 
 // Writes "camera { perspective location ... right ... up ... direction ... }" with 17 significant
 // digits. Returns RS_ERR_IO if the stream reports an error.
@@ -78,12 +74,7 @@ typedef struct {
 rs_status rs_synth_canvas_for_lens( // out
     rs_synth_canvas *canvas,
     // in
-    const mrcal_lensmodel_t *lensmodel,
-    const double *intrinsics,
-    int width,
-    int height,
-    double scale,
-    rs_err *err);
+    const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width, int height, double scale, rs_err *err);
 
 // The resampling map: for every pixel (u, v) of the real image, the canvas pixel that sees the
 // same direction: mrcal_unproject through the real lens, then the canvas pinhole. Coordinates
@@ -92,11 +83,7 @@ rs_status rs_synth_canvas_for_lens( // out
 rs_status rs_synth_canvas_map( // out
     float **map_xy,
     // in
-    const rs_synth_canvas *canvas,
-    const mrcal_lensmodel_t *lensmodel,
-    const double *intrinsics,
-    int width,
-    int height,
+    const rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width, int height,
     rs_err *err);
 
 #ifdef __cplusplus

@@ -88,10 +88,8 @@ static void dataset_free(rs_synth_dataset__run *d)
 
 // The backgrounds of the site's camera sc (site.json "background_images", read by geo) whose
 // tags match every filter.
-static rs_status select_backgrounds(rs_synth_dataset__camera *c,
-                                    const rs_site_camera *sc,
-                                    const rs_synth_dataset_options *opt,
-                                    rs_err *err)
+static rs_status select_backgrounds(rs_synth_dataset__camera *c, const rs_site_camera *sc,
+                                    const rs_synth_dataset_options *opt, rs_err *err)
 {
     c->bg =
         calloc((size_t)(sc->Nbackground_images > 0 ? sc->Nbackground_images : 1), sizeof(rs_synth_dataset__background));

@@ -94,8 +94,7 @@ typedef struct {
 // out: summary may be NULL
 rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
                                // in
-                               const rs_synth_dataset_options *opt,
-                               rs_err *err);
+                               const rs_synth_dataset_options *opt, rs_err *err);
 
 // Splitmix64 mixing of (seed, k): the seed of image k's random stream.
 uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
@@ -106,13 +105,9 @@ uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
 // the first input; image files are hard-linked into OUT (copied across file systems), with
 // their YOLO and KITTI files when present. Writes OUT/annotations/instances_<split>.json.
 // out: *Nimages, *Nannotations may be NULL (totals over splits)
-rs_status rs_synth_dataset_merge(int *Nimages,
-                                 int *Nannotations,
+rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations,
                                  // in
-                                 const char *out_dir,
-                                 const char *const *inputs,
-                                 int Ninputs,
-                                 rs_err *err);
+                                 const char *out_dir, const char *const *inputs, int Ninputs, rs_err *err);
 
 #ifdef __cplusplus
 }

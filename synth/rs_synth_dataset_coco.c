@@ -170,8 +170,8 @@ static rs_status link_or_copy(const char *src, const char *dst, rs_err *err)
 }
 
 // Links DIR/<sub>/<stem><ext> of an input into OUT when it exists.
-static rs_status link_sidecar(
-    const char *in_dir, const char *out_dir, const char *sub, const char *file_name, const char *ext, rs_err *err)
+static rs_status link_sidecar(const char *in_dir, const char *out_dir, const char *sub, const char *file_name,
+                              const char *ext, rs_err *err)
 {
     char rel[1200];
     const char *dot = strrchr(file_name, '.');
@@ -219,8 +219,8 @@ static rs_status list_splits(const char *adir, char ***splits, int *Nsplits, rs_
     return st;
 }
 
-rs_status rs_synth_dataset_merge(
-    int *Nimages, int *Nannotations, const char *out_dir, const char *const *inputs, int Ninputs, rs_err *err)
+rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *out_dir, const char *const *inputs,
+                                 int Ninputs, rs_err *err)
 {
     if (Nimages) *Nimages = 0;
     if (Nannotations) *Nannotations = 0;

@@ -139,13 +139,8 @@ void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id)
             *p = '_';
 }
 
-rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d,
-                                       int k,
-                                       const char *stem,
-                                       rs_synth_dataset__camera *c,
-                                       bool *grey,
-                                       double *seconds_povray,
-                                       rs_err *err)
+rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
+                                       bool *grey, double *seconds_povray, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     uint64_t rng = rs_synth_dataset_image_seed(opt->seed, k);

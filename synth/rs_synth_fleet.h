@@ -60,8 +60,7 @@ const char *rs_synth_class_name(rs_synth_class cls);
 rs_status rs_synth_class_from_name( // out
     rs_synth_class *cls,
     // in
-    const char *name,
-    rs_err *err);
+    const char *name, rs_err *err);
 
 // Realistic dimension ranges of a class, metres (docs/fleet.md gives the sources).
 typedef struct {
@@ -80,16 +79,14 @@ rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls
 rs_status rs_synth_fleet_resolve( // out
     rs_synth_vehicle *out,
     // in
-    const rs_synth_vehicle *in,
-    rs_err *err);
+    const rs_synth_vehicle *in, rs_err *err);
 
 // A random procedural vehicle: the class drawn from the traffic mix of docs/fleet.md, then
 // resolved (rs_synth_fleet_resolve) with variant = seed; position and yaw are 0. Deterministic.
 rs_status rs_synth_fleet_random( // out
     rs_synth_vehicle *out,
     // in
-    uint64_t seed,
-    rs_err *err);
+    uint64_t seed, rs_err *err);
 
 // Builds the procedural mesh of a RESOLVED vehicle (rs_synth_fleet_resolve): a body lofted from
 // a class side profile and plan shape (shape details drawn from v->variant), wheels, glazing,
@@ -100,8 +97,7 @@ rs_status rs_synth_fleet_random( // out
 rs_status rs_synth_fleet_build( // out
     rs_synth_mesh *mesh,
     // in
-    const rs_synth_vehicle *v,
-    rs_err *err);
+    const rs_synth_vehicle *v, rs_err *err);
 
 // The same at a level of detail: coarse = 8 uniform stations along each body instead of 56
 // (the side profile's control points are always stations, so the roof line and the bounds stay
@@ -111,9 +107,7 @@ rs_status rs_synth_fleet_build( // out
 rs_status rs_synth_fleet_build_lod( // out
     rs_synth_mesh *mesh,
     // in
-    const rs_synth_vehicle *v,
-    bool coarse,
-    rs_err *err);
+    const rs_synth_vehicle *v, bool coarse, rs_err *err);
 
 // How an OBJ user model is declared: scale and which OBJ axes point forward and up.
 typedef struct {
@@ -133,8 +127,7 @@ typedef struct {
 rs_status rs_synth_obj_load( // out
     rs_synth_mesh *mesh,
     // in
-    const rs_synth_obj_spec *spec,
-    rs_err *err);
+    const rs_synth_obj_spec *spec, rs_err *err);
 
 // Declaration styles.
 typedef enum {
@@ -154,19 +147,14 @@ typedef enum {
 // Returns RS_ERR_IO when writing fails.
 rs_status rs_synth_fleet_write_declare(FILE *f,
                                        // in
-                                       const char *name,
-                                       const rs_synth_mesh *mesh,
-                                       rs_synth_declare_style style,
-                                       const double paint_rgb[3],
-                                       rs_err *err);
+                                       const char *name, const rs_synth_mesh *mesh, rs_synth_declare_style style,
+                                       const double paint_rgb[3], rs_err *err);
 
 // Writes " rotate <0, YAW, 0> translate <E, UP, N>" (a leading space, no newline): the
 // placement of a declared vehicle whose footprint centre is at (v->e_m, v->n_m, up_m) ENU.
 rs_status rs_synth_fleet_write_placement(FILE *f,
                                          // in
-                                         const rs_synth_vehicle *v,
-                                         double up_m,
-                                         rs_err *err);
+                                         const rs_synth_vehicle *v, double up_m, rs_err *err);
 
 // Maps a vehicle-frame point into site ENU for a vehicle whose footprint centre is at ground
 // height up_m: p_enu = (e, n, up) + x_v forward_enu + y_v left_enu + z_v (0,0,1).

@@ -259,8 +259,8 @@ static const double prof_cab[][2] = {{0, .96}, {.04, 1}, {.90, 1}, {1, .90}};
 static const double prof_box[][2] = {{0, 1}, {1, 1}};
 static const double prof_tractor[][2] = {{0, .32}, {.40, .32}, {.42, .97}, {.45, 1}, {.93, 1}, {1, .88}};
 
-static body_spec
-car_body(double L, double W, double H, double clearance, double belt, profile prof, double glass_lo, double glass_hi)
+static body_spec car_body(double L, double W, double H, double clearance, double belt, profile prof, double glass_lo,
+                          double glass_hi)
 {
     body_spec s = {-L / 2, L / 2, W / 2 - 0.03, H, clearance, belt, 0.25, 0.09, 0.10, {glass_lo, glass_hi}, prof};
     return s;

@@ -71,12 +71,8 @@ static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int *map)
     return 1;
 }
 
-rs_status rs_synth_fleet_write_declare(FILE *f,
-                                       const char *name,
-                                       const rs_synth_mesh *mesh,
-                                       rs_synth_declare_style style,
-                                       const double paint_rgb[3],
-                                       rs_err *err)
+rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth_mesh *mesh,
+                                       rs_synth_declare_style style, const double paint_rgb[3], rs_err *err)
 {
     if (!valid_identifier(name))
         return rs_err_set(err, RS_ERR_INVALID,

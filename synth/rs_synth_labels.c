@@ -204,13 +204,8 @@ static const int box_faces[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2
 // Pixels the vehicle covers alone: its mesh's triangles (or the box's faces) rasterised at
 // pixel centres, each triangle with straight edges between its projected corners, within its
 // body box (in the image) plus a 2 px margin for the chords of a distorting lens.
-static rs_status full_pixels(long *count,
-                             const projector *pr,
-                             const rs_synth_vehicle *v,
-                             double up_m,
-                             const rs_synth_mesh *mesh,
-                             const double corners[8][3],
-                             const double body_box_px[4],
+static rs_status full_pixels(long *count, const projector *pr, const rs_synth_vehicle *v, double up_m,
+                             const rs_synth_mesh *mesh, const double corners[8][3], const double body_box_px[4],
                              rs_err *err)
 {
     raster r = {NULL, (int)fmax(0, floor(body_box_px[0]) - 2), (int)fmax(0, floor(body_box_px[1]) - 2),
@@ -248,14 +243,8 @@ static rs_status full_pixels(long *count,
 
 // ---------------------------------------------------------------- labels
 
-static rs_status label_one(rs_synth_label *L,
-                           const projector *pr,
-                           const rs_synth_vehicle *v,
-                           int k,
-                           double up_m,
-                           const rs_synth_mesh *mesh,
-                           int with_ids,
-                           rs_err *err)
+static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synth_vehicle *v, int k, double up_m,
+                           const rs_synth_mesh *mesh, int with_ids, rs_err *err)
 {
     const rs_camera *cam = pr->cam;
     double Lm = v->length_m, Wm = v->width_m, Hm = v->height_m;
@@ -330,14 +319,9 @@ static rs_status label_one(rs_synth_label *L,
     return RS_OK;
 }
 
-rs_status rs_synth_labels_compute(rs_synth_label **labels,
-                                  const rs_camera *cam,
-                                  const rs_synth_vehicle *vehicles,
-                                  const double *up_m,
-                                  int Nvehicles,
-                                  const rs_synth_mesh *meshes,
-                                  const uint16_t *id_image,
-                                  rs_err *err)
+rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam, const rs_synth_vehicle *vehicles,
+                                  const double *up_m, int Nvehicles, const rs_synth_mesh *meshes,
+                                  const uint16_t *id_image, rs_err *err)
 {
     *labels = NULL;
     if (Nvehicles < 0 || (Nvehicles > 0 && (!vehicles || !up_m)) || cam->width <= 0 || cam->height <= 0)
@@ -484,12 +468,8 @@ static rs_status check_images(const char *what, const rs_synth_label_image *imag
     return RS_OK;
 }
 
-rs_status rs_synth_labels_write_coco(const char *dir,
-                                     const char *split,
-                                     const rs_synth_label_image *images,
-                                     int Nimages,
-                                     const rs_synth_label_options *opt,
-                                     rs_err *err)
+rs_status rs_synth_labels_write_coco(const char *dir, const char *split, const rs_synth_label_image *images,
+                                     int Nimages, const rs_synth_label_options *opt, rs_err *err)
 {
     if (!valid_split(split)) return rs_err_set(err, RS_ERR_INVALID, "COCO: split must be [A-Za-z0-9_-]+");
     rs_status st = check_images("COCO", images, Nimages, err);
@@ -558,13 +538,8 @@ static char *txt_path(const char *folder, const char *file_name)
 // Writes one text file per image into `folder`, the lines made by `line`.
 typedef void (*line_fn)(FILE *f, const rs_synth_label *L, const double box[4], const rs_synth_label_image *im);
 
-static rs_status write_text_files(const char *what,
-                                  const char *folder,
-                                  const rs_synth_label_image *images,
-                                  int Nimages,
-                                  const rs_synth_label_options *opt,
-                                  line_fn line,
-                                  rs_err *err)
+static rs_status write_text_files(const char *what, const char *folder, const rs_synth_label_image *images, int Nimages,
+                                  const rs_synth_label_options *opt, line_fn line, rs_err *err)
 {
     rs_status st = check_images(what, images, Nimages, err);
     if (!st) st = rs_io_mkdir_p(folder, err);
@@ -590,12 +565,8 @@ static void yolo_line(FILE *f, const rs_synth_label *L, const double b[4], const
             (0.5 * (b[1] + b[3]) + 0.5) / im->height, (b[2] - b[0]) / im->width, (b[3] - b[1]) / im->height);
 }
 
-rs_status rs_synth_labels_write_yolo(const char *dir,
-                                     const char *split,
-                                     const rs_synth_label_image *images,
-                                     int Nimages,
-                                     const rs_synth_label_options *opt,
-                                     rs_err *err)
+rs_status rs_synth_labels_write_yolo(const char *dir, const char *split, const rs_synth_label_image *images,
+                                     int Nimages, const rs_synth_label_options *opt, rs_err *err)
 {
     if (!valid_split(split)) return rs_err_set(err, RS_ERR_INVALID, "YOLO: split must be [A-Za-z0-9_-]+");
     char *labels = rs_io_join(dir, "labels"), *folder = labels ? rs_io_join(labels, split) : NULL;
@@ -620,8 +591,8 @@ static void kitti_line(FILE *f, const rs_synth_label *L, const double b[4], cons
             L->rotation_y_rad);
 }
 
-rs_status rs_synth_labels_write_kitti(
-    const char *dir, const rs_synth_label_image *images, int Nimages, const rs_synth_label_options *opt, rs_err *err)
+rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_image *images, int Nimages,
+                                      const rs_synth_label_options *opt, rs_err *err)
 {
     char *folder = rs_io_join(dir, "label_2");
     rs_status st = folder ? write_text_files("KITTI", folder, images, Nimages, opt, kitti_line, err)

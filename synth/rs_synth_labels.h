@@ -71,13 +71,8 @@ typedef struct {
 rs_status rs_synth_labels_compute( // out
     rs_synth_label **labels,
     // in
-    const rs_camera *cam,
-    const rs_synth_vehicle *vehicles,
-    const double *up_m,
-    int Nvehicles,
-    const rs_synth_mesh *meshes,
-    const uint16_t *id_image,
-    rs_err *err);
+    const rs_camera *cam, const rs_synth_vehicle *vehicles, const double *up_m, int Nvehicles,
+    const rs_synth_mesh *meshes, const uint16_t *id_image, rs_err *err);
 
 // Which box a writer puts in `bbox` (COCO), the YOLO line and KITTI's 2D box.
 typedef enum {
@@ -115,28 +110,20 @@ int rs_synth_label_kept(double box[4], const rs_synth_label *label, const rs_syn
 // visible_pixels, full_pixels, visibility, visible_bbox} (docs/labels.md). The image folder
 // DIR/<split>/ is created; the caller puts the images there.
 // in: split: [A-Za-z0-9_-]+ (e.g. "train2017"); opt may be NULL (defaults).
-rs_status rs_synth_labels_write_coco(const char *dir,
-                                     const char *split,
-                                     const rs_synth_label_image *images,
-                                     int Nimages,
-                                     const rs_synth_label_options *opt,
-                                     rs_err *err);
+rs_status rs_synth_labels_write_coco(const char *dir, const char *split, const rs_synth_label_image *images,
+                                     int Nimages, const rs_synth_label_options *opt, rs_err *err);
 
 // YOLO txt: DIR/labels/<split>/<stem>.txt per image, lines "class cx cy w h" normalised by the
 // image size (YOLO's origin is the image corner: cx = (x0 + x1)/2 + 0.5 over width).
-rs_status rs_synth_labels_write_yolo(const char *dir,
-                                     const char *split,
-                                     const rs_synth_label_image *images,
-                                     int Nimages,
-                                     const rs_synth_label_options *opt,
-                                     rs_err *err);
+rs_status rs_synth_labels_write_yolo(const char *dir, const char *split, const rs_synth_label_image *images,
+                                     int Nimages, const rs_synth_label_options *opt, rs_err *err);
 
 // KITTI object labels: DIR/label_2/<stem>.txt per image, lines "type truncated occluded alpha
 // x1 y1 x2 y2 h w l x y z rotation_y" with the location the bottom centre in the camera frame
 // and rotation_y the heading about the camera's y axis (docs/labels.md); occluded from
 // visibility (0: >= 0.8, 1: >= 0.4, 2: below, 3: unknown).
-rs_status rs_synth_labels_write_kitti(
-    const char *dir, const rs_synth_label_image *images, int Nimages, const rs_synth_label_options *opt, rs_err *err);
+rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_image *images, int Nimages,
+                                      const rs_synth_label_options *opt, rs_err *err);
 
 #ifdef __cplusplus
 }

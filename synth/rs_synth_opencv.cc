@@ -24,8 +24,8 @@ cv::Mat wrap(const rs_image *img) { return cv::Mat(img->height, img->width, cv_t
 
 } // namespace
 
-extern "C" rs_status rs_synth_remap(
-    rs_image *dst, const rs_image *src, const float *map_xy, int width, int height, int interpolation, rs_err *err)
+extern "C" rs_status rs_synth_remap(rs_image *dst, const rs_image *src, const float *map_xy, int width, int height,
+                                    int interpolation, rs_err *err)
 {
     *dst = rs_image{};
     if (interpolation != cv::INTER_NEAREST && interpolation != cv::INTER_LINEAR && interpolation != cv::INTER_CUBIC)
@@ -125,8 +125,8 @@ extern "C" rs_status rs_synth_frames_open(rs_synth_frames **frames, const char *
     return RS_OK;
 }
 
-extern "C" rs_status
-rs_synth_frames_next(rs_synth_frames *f, const unsigned char **rgb, int *width, int *height, int *got, rs_err *err)
+extern "C" rs_status rs_synth_frames_next(rs_synth_frames *f, const unsigned char **rgb, int *width, int *height,
+                                          int *got, rs_err *err)
 {
     *rgb = nullptr;
     *got = 0;
@@ -178,8 +178,8 @@ template <class F> rs_status into_new(rs_image *dst, const rs_image *src, const 
 
 } // namespace
 
-extern "C" rs_status
-rs_synth_image_filter(rs_image *dst, const rs_image *src, const double *kernel, int kw, int kh, rs_err *err)
+extern "C" rs_status rs_synth_image_filter(rs_image *dst, const rs_image *src, const double *kernel, int kw, int kh,
+                                           rs_err *err)
 {
     return into_new(dst, src, "filter", err, [&](cv::Mat &out) {
         cv::Mat k(kh, kw, CV_64F, const_cast<double *>(kernel));

@@ -16,11 +16,7 @@ extern "C" {
 // out: *dst, allocated (width, height, src->channels); in: map_xy (height, width, 2)
 rs_status rs_synth_remap(rs_image *dst,
                          // in
-                         const rs_image *src,
-                         const float *map_xy,
-                         int width,
-                         int height,
-                         int interpolation,
+                         const rs_image *src, const float *map_xy, int width, int height, int interpolation,
                          rs_err *err);
 
 // ---- backgrounds and appearance ----
@@ -36,35 +32,23 @@ rs_status rs_synth_frames_open(rs_synth_frames **frames, const char *path, rs_er
 // call; *got = 0 at the end of the stream (then *rgb is NULL).
 rs_status rs_synth_frames_next(rs_synth_frames *frames,
                                // out
-                               const unsigned char **rgb,
-                               int *width,
-                               int *height,
-                               int *got,
-                               rs_err *err);
+                               const unsigned char **rgb, int *width, int *height, int *got, rs_err *err);
 void rs_synth_frames_close(rs_synth_frames *frames); // NULL-safe
 // Convolution with a (kh, kw) kernel, row-major, anchor at its centre (cv::filter2D, border
 // reflected about the edge pixel: BORDER_REFLECT_101). out: *dst allocated like src.
 rs_status rs_synth_image_filter(rs_image *dst,
                                 // in
-                                const rs_image *src,
-                                const double *kernel,
-                                int kw,
-                                int kh,
-                                rs_err *err);
+                                const rs_image *src, const double *kernel, int kw, int kh, rs_err *err);
 // Gaussian blur of standard deviation sigma_px (> 0) (cv::GaussianBlur, kernel 2 ceil(4 sigma)+1,
 // BORDER_REFLECT_101). sigma_px <= 0 copies. out: *dst allocated like src.
 rs_status rs_synth_image_blur(rs_image *dst,
                               // in
-                              const rs_image *src,
-                              double sigma_px,
-                              rs_err *err);
+                              const rs_image *src, double sigma_px, rs_err *err);
 // JPEG round trip of an RGB image at `quality` (1..100, libjpeg through cv::imencode/imdecode),
 // the [0,1] values taken as 8-bit codes. out: *dst (H, W, 3) allocated.
 rs_status rs_synth_image_jpeg_roundtrip(rs_image *dst,
                                         // in
-                                        const rs_image *src,
-                                        int quality,
-                                        rs_err *err);
+                                        const rs_image *src, int quality, rs_err *err);
 // Runs an ONNX image-translation model (e.g. a CUT/CycleGAN generator) through OpenCV's DNN
 // module (cv::dnn::readNetFromONNX, CPU): input 1 x 3 x H x W float, RGB, values mapped from
 // [0,1] to [-1,1] (x 2 - 1, the convention of those generators); output 1 x 3 x H x W mapped
@@ -73,9 +57,7 @@ rs_status rs_synth_image_jpeg_roundtrip(rs_image *dst,
 // Returns RS_ERR_IO / RS_ERR_EXTERNAL (model unreadable or failing), RS_ERR_INVALID (shapes).
 rs_status rs_synth_dnn_translate(rs_image *dst,
                                  // in
-                                 const char *onnx_path,
-                                 const rs_image *src,
-                                 rs_err *err);
+                                 const char *onnx_path, const rs_image *src, rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -40,13 +40,8 @@ void rs_synth_render_result_free(rs_synth_render_result *r)
 
 // ---- culling ----
 
-bool rs_synth_vehicle_rect(int rect[4],
-                           const double fxycxy[4],
-                           int width,
-                           int height,
-                           const double rt_cam_enu[6],
-                           const double corners_enu_m[8][3],
-                           double near_m)
+bool rs_synth_vehicle_rect(int rect[4], const double fxycxy[4], int width, int height, const double rt_cam_enu[6],
+                           const double corners_enu_m[8][3], double near_m)
 {
     double p[8][3];
     for (int k = 0; k < 8; k++) mrcal_transform_point_rt(p[k], NULL, NULL, rt_cam_enu, corners_enu_m[k]);
@@ -117,8 +112,8 @@ static double now_s(void)
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-rs_status rs_synth_povray_run(
-    const char *povray, const char *dir, const char *const *args, int Nargs, double *seconds, rs_err *err)
+rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args, int Nargs, double *seconds,
+                              rs_err *err)
 {
     const char *argv[32];
     if (Nargs < 0 || Nargs > 30) return rs_err_set(err, RS_ERR_USAGE, "povray: %d arguments (at most 30)", Nargs);
@@ -180,14 +175,8 @@ rs_status rs_synth_povray_run(
 }
 
 // Runs `povray INI region` in out_dir (rs_synth_povray_run).
-static rs_status run_povray(const char *povray,
-                            const char *out_dir,
-                            const char *ini,
-                            const int region[4],
-                            int width,
-                            int height,
-                            double *seconds,
-                            rs_err *err)
+static rs_status run_povray(const char *povray, const char *out_dir, const char *ini, const int region[4], int width,
+                            int height, double *seconds, rs_err *err)
 {
     char sc[32], ec[32], sr[32], er[32];
     // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
@@ -217,21 +206,11 @@ static void mask_outside(rs_image *img, const int region[4])
 // out_dir, runs povray, reads its images into imgs[0..Npasses-1]: NAME.png for a single pass
 // (rs_synth_scene_write, antialias as given), else the frames NAME1.png .. NAMEn.png
 // (rs_synth_scene_write_frames; no antialiasing, which would blend the IDs).
-static rs_status render_passes(rs_image *imgs,
-                               const char *out_dir,
-                               const char *name,
-                               const char *povray,
-                               const rs_synth_povcam *cam,
-                               const double fxy[2],
-                               const double ground_normal_enu[3],
-                               double ground_offset_m,
-                               const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *passes,
-                               int Npasses,
-                               int antialias,
-                               const int region[4],
-                               double *seconds,
-                               rs_err *err)
+static rs_status render_passes(rs_image *imgs, const char *out_dir, const char *name, const char *povray,
+                               const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],
+                               double ground_offset_m, const rs_synth_prepared *vehicles,
+                               const rs_synth_scene_options *passes, int Npasses, int antialias, const int region[4],
+                               double *seconds, rs_err *err)
 {
     char file[64];
     char *pov = NULL, *ini = NULL;
@@ -287,16 +266,9 @@ done:
 // Widens rect (x0, y0, x1, y1; empty when x1 < x0) by the canvas rectangle of vehicle v's
 // shadows: its bottom corners and its top corners projected onto the ground along each light
 // higher than 3 deg above the ground.
-static void widen_by_shadows(int rect[4],
-                             const double fxycxy[4],
-                             int width,
-                             int height,
-                             const double rt_cam_enu[6],
-                             const double corners[8][3],
-                             const double ground_normal_enu[3],
-                             double ground_offset_m,
-                             const rs_synth_light *lights,
-                             int Nlights)
+static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int height, const double rt_cam_enu[6],
+                             const double corners[8][3], const double ground_normal_enu[3], double ground_offset_m,
+                             const rs_synth_light *lights, int Nlights)
 {
     const double *g = ground_normal_enu;
     const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
@@ -429,14 +401,9 @@ static rs_status write_outputs(const char *out_dir, const rs_synth_render_result
     return st;
 }
 
-rs_status rs_synth_render(rs_synth_render_result *out,
-                          const char *out_dir,
-                          const rs_camera *camera,
-                          const double ground_normal_enu[3],
-                          double ground_offset_m,
-                          const rs_synth_prepared *vehicles,
-                          const rs_synth_render_options *opt_in,
-                          rs_err *err)
+rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, const rs_camera *camera,
+                          const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *vehicles,
+                          const rs_synth_render_options *opt_in, rs_err *err)
 {
     memset(out, 0, sizeof(*out));
     const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
@@ -599,15 +566,10 @@ done:
     return st;
 }
 
-rs_status rs_synth_render_write_labels(const char *out_dir,
-                                       const rs_synth_render_result *r,
-                                       const char *split,
-                                       const rs_synth_label_options *lopt,
-                                       const rs_camera *cam,
-                                       const double ground_normal_enu[3],
-                                       double ground_offset_m,
-                                       const rs_synth_prepared *prepared,
-                                       rs_err *err)
+rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_render_result *r, const char *split,
+                                       const rs_synth_label_options *lopt, const rs_camera *cam,
+                                       const double ground_normal_enu[3], double ground_offset_m,
+                                       const rs_synth_prepared *prepared, rs_err *err)
 {
     const int N = prepared->N;
     const size_t n = (size_t)(N > 0 ? N : 1);

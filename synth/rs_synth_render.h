@@ -102,9 +102,7 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 // unset; its output is appended to dir/povray.log. seconds (may be NULL) accumulates the wall
 // time. Errors: RS_ERR_EXTERNAL "cannot run" when the program is missing (exit 127), else the
 // exit status and the log's last line.
-rs_status rs_synth_povray_run(const char *povray,
-                              const char *dir,
-                              const char *const *args,
+rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args,
                               int Nargs,       // (Nargs,) at most 30
                               double *seconds, // may be NULL
                               rs_err *err);
@@ -114,22 +112,15 @@ rs_status rs_synth_render( // out
     // in
     const char *out_dir,
     const rs_camera *camera, // calibrated: lens, intrinsics, size, pose
-    const double ground_normal_enu[3],
-    double ground_offset_m,
-    const rs_synth_prepared *vehicles,
-    const rs_synth_render_options *opt,
-    rs_err *err);
+    const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *vehicles,
+    const rs_synth_render_options *opt, rs_err *err);
 
 // The canvas rectangle (x0, y0, x1, y1 inclusive, clipped to the canvas) covered by vehicle v's
 // bounding box clipped to z_cam >= near_m; returns false if it misses the canvas or lies behind.
 bool rs_synth_vehicle_rect( // out
     int rect[4],
     // in
-    const double fxycxy[4],
-    int width,
-    int height,
-    const double rt_cam_enu[6],
-    const double corners_enu_m[8][3],
+    const double fxycxy[4], int width, int height, const double rt_cam_enu[6], const double corners_enu_m[8][3],
     double near_m);
 
 // The labels of a rendered image (synth/rs_synth_labels.h): every prepared vehicle's label
@@ -137,14 +128,8 @@ bool rs_synth_vehicle_rect( // out
 // out_dir/<split> and KITTI under out_dir, and the composite copied to
 // out_dir/<split>/image.png. Each file is written atomically. `roadside render --labels`.
 rs_status rs_synth_render_write_labels( // in
-    const char *out_dir,
-    const rs_synth_render_result *r,
-    const char *split,
-    const rs_synth_label_options *lopt,
-    const rs_camera *cam,
-    const double ground_normal_enu[3],
-    double ground_offset_m,
-    const rs_synth_prepared *prepared,
+    const char *out_dir, const rs_synth_render_result *r, const char *split, const rs_synth_label_options *lopt,
+    const rs_camera *cam, const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *prepared,
     rs_err *err);
 
 #ifdef __cplusplus

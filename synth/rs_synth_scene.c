@@ -49,8 +49,8 @@ void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list)
 }
 
 // Reads number member `name` of o into *out. Missing: *out untouched and RS_OK unless required.
-static rs_status
-get_number(double *out, const cJSON *o, const char *name, bool required, const char *path, int i, rs_err *err)
+static rs_status get_number(double *out, const cJSON *o, const char *name, bool required, const char *path, int i,
+                            rs_err *err)
 {
     const cJSON *m = cJSON_GetObjectItemCaseSensitive(o, name);
     if (!m) {
@@ -96,8 +96,8 @@ bad:
                       i);
 }
 
-static rs_status
-read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir, rs_err *err)
+static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir,
+                              rs_err *err)
 {
     rs_synth_vehicle *v = &list->v[i];
     rs_synth_obj_spec *obj = &list->obj[i];
@@ -218,10 +218,8 @@ double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_off
     return (ground_offset_m - ground_normal_enu[0] * e_m - ground_normal_enu[1] * n_m) / ground_normal_enu[2];
 }
 
-void rs_synth_vehicle_corners_enu(double corners_enu_m[8][3],
-                                  const rs_synth_vehicle *v,
-                                  const double ground_normal_enu[3],
-                                  double ground_offset_m)
+void rs_synth_vehicle_corners_enu(double corners_enu_m[8][3], const rs_synth_vehicle *v,
+                                  const double ground_normal_enu[3], double ground_offset_m)
 {
     const double up = rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, v->e_m, v->n_m);
     for (int k = 0; k < 8; k++) {
@@ -299,12 +297,8 @@ static bool same_spec(const rs_synth_obj_spec *a, const rs_synth_obj_spec *b)
 
 // Resolves vehicle i and gives it a mesh: its own procedural one, or the first identical user
 // model's.
-static rs_status prepare_one(rs_synth_prepared *out,
-                             int i,
-                             const rs_synth_vehicle *vehicles,
-                             const rs_synth_obj_spec *obj,
-                             bool coarse,
-                             rs_err *err)
+static rs_status prepare_one(rs_synth_prepared *out, int i, const rs_synth_vehicle *vehicles,
+                             const rs_synth_obj_spec *obj, bool coarse, rs_err *err)
 {
     const rs_synth_vehicle *in = &vehicles[i];
     rs_synth_vehicle *v = &out->v[i];
@@ -335,18 +329,14 @@ static rs_status prepare_one(rs_synth_prepared *out,
     return RS_OK;
 }
 
-rs_status rs_synth_prepare(
-    rs_synth_prepared *out, const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N, rs_err *err)
+rs_status rs_synth_prepare(rs_synth_prepared *out, const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj,
+                           int N, rs_err *err)
 {
     return rs_synth_prepare_lod(out, vehicles, obj, N, NULL, err);
 }
 
-rs_status rs_synth_prepare_lod(rs_synth_prepared *out,
-                               const rs_synth_vehicle *vehicles,
-                               const rs_synth_obj_spec *obj,
-                               int N,
-                               const uint8_t *coarse,
-                               rs_err *err)
+rs_status rs_synth_prepare_lod(rs_synth_prepared *out, const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj,
+                               int N, const uint8_t *coarse, rs_err *err)
 {
     memset(out, 0, sizeof(*out));
     const size_t n = (size_t)(N > 0 ? N : 1);
@@ -474,13 +464,8 @@ static const char *pass_name(rs_synth_pass pass)
 }
 
 // Everything of one pass after the head: camera, lights, ground, meshes, vehicles, pins.
-static rs_status write_body(FILE *f,
-                            const rs_synth_povcam *cam,
-                            const double fxy[2],
-                            const double ground_normal_enu[3],
-                            double ground_offset_m,
-                            const rs_synth_prepared *vehicles,
-                            const rs_synth_scene_options *o,
+static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],
+                            double ground_offset_m, const rs_synth_prepared *vehicles, const rs_synth_scene_options *o,
                             rs_err *err)
 {
     const rs_synth_scene_options opt = *o;
@@ -572,14 +557,9 @@ static rs_status write_body(FILE *f,
     return RS_OK;
 }
 
-rs_status rs_synth_scene_write(FILE *f,
-                               const rs_synth_povcam *cam,
-                               const double fxy[2],
-                               const double ground_normal_enu[3],
-                               double ground_offset_m,
-                               const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *opt_in,
-                               rs_err *err)
+rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
+                               const double ground_normal_enu[3], double ground_offset_m,
+                               const rs_synth_prepared *vehicles, const rs_synth_scene_options *opt_in, rs_err *err)
 {
     rs_synth_scene_options opt;
     if (opt_in)
@@ -594,15 +574,10 @@ rs_status rs_synth_scene_write(FILE *f,
     return st;
 }
 
-rs_status rs_synth_scene_write_frames(FILE *f,
-                                      const rs_synth_povcam *cam,
-                                      const double fxy[2],
-                                      const double ground_normal_enu[3],
-                                      double ground_offset_m,
-                                      const rs_synth_prepared *vehicles,
-                                      const rs_synth_scene_options *passes,
-                                      int Npasses,
-                                      rs_err *err)
+rs_status rs_synth_scene_write_frames(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
+                                      const double ground_normal_enu[3], double ground_offset_m,
+                                      const rs_synth_prepared *vehicles, const rs_synth_scene_options *passes,
+                                      int Npasses, rs_err *err)
 {
     if (Npasses < 1 || Npasses > 9)
         return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_frames: %d passes (1..9)", Npasses);
@@ -624,12 +599,8 @@ rs_status rs_synth_scene_write_frames(FILE *f,
     return RS_OK;
 }
 
-rs_status rs_synth_scene_write_ini(const char *ini_path,
-                                   const char *pov_path,
-                                   const rs_synth_povcam *cam,
-                                   rs_synth_pass pass,
-                                   int antialias,
-                                   rs_err *err)
+rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path, const rs_synth_povcam *cam,
+                                   rs_synth_pass pass, int antialias, rs_err *err)
 {
     const char *base = strrchr(pov_path, '/');
     base = base ? base + 1 : pov_path;
@@ -662,8 +633,8 @@ rs_status rs_synth_scene_write_ini(const char *ini_path,
     return rs_io_write_file(ini_path, text, (size_t)total, err);
 }
 
-rs_status rs_synth_scene_write_ini_frames(
-    const char *ini_path, const char *pov_path, const rs_synth_povcam *cam, int Nframes, int antialias, rs_err *err)
+rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_path, const rs_synth_povcam *cam,
+                                          int Nframes, int antialias, rs_err *err)
 {
     if (Nframes < 1 || Nframes > 9)
         return rs_err_set(err, RS_ERR_USAGE, "rs_synth_scene_write_ini_frames: %d frames (1..9)", Nframes);

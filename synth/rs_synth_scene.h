@@ -54,8 +54,7 @@ typedef struct {
 rs_status rs_synth_vehicles_read( // out
     rs_synth_vehicle_list *list,
     // in
-    const char *path,
-    rs_err *err);
+    const char *path, rs_err *err);
 void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list); // NULL-safe
 
 // ---- the vehicle box ----
@@ -66,9 +65,7 @@ void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list); // NULL-safe
 void rs_synth_vehicle_corners_enu( // out
     double corners_enu_m[8][3],
     // in
-    const rs_synth_vehicle *v,
-    const double ground_normal_enu[3],
-    double ground_offset_m);
+    const rs_synth_vehicle *v, const double ground_normal_enu[3], double ground_offset_m);
 
 // Up coordinate of the ground plane n . p = offset at (e, n). n[2] must be non-zero.
 double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_offset_m, double e_m, double n_m);
@@ -155,10 +152,7 @@ typedef struct {
 rs_status rs_synth_prepare( // out
     rs_synth_prepared *out,
     // in
-    const rs_synth_vehicle *vehicles,
-    const rs_synth_obj_spec *obj,
-    int N,
-    rs_err *err);
+    const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N, rs_err *err);
 void rs_synth_prepared_free(rs_synth_prepared *p); // NULL-safe; zeroes *p
 
 // The same, with procedural vehicle i built coarse when coarse[i] (rs_synth_fleet_build_lod);
@@ -166,11 +160,7 @@ void rs_synth_prepared_free(rs_synth_prepared *p); // NULL-safe; zeroes *p
 rs_status rs_synth_prepare_lod( // out
     rs_synth_prepared *out,
     // in
-    const rs_synth_vehicle *vehicles,
-    const rs_synth_obj_spec *obj,
-    int N,
-    const uint8_t *coarse,
-    rs_err *err);
+    const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N, const uint8_t *coarse, rs_err *err);
 
 // Writes the .pov text of a scene to f.
 // in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
@@ -182,43 +172,31 @@ rs_status rs_synth_prepare_lod( // out
 // start-up and shut-down cost about 0.35 s of waiting, measured in docs/povray.md).
 rs_status rs_synth_scene_write_frames(FILE *f,
                                       // in
-                                      const rs_synth_povcam *cam,
-                                      const double fxy[2],
-                                      const double ground_normal_enu[3],
-                                      double ground_offset_m,
-                                      const rs_synth_prepared *vehicles,
-                                      const rs_synth_scene_options *passes,
-                                      int Npasses,
-                                      rs_err *err);
+                                      const rs_synth_povcam *cam, const double fxy[2],
+                                      const double ground_normal_enu[3], double ground_offset_m,
+                                      const rs_synth_prepared *vehicles, const rs_synth_scene_options *passes,
+                                      int Npasses, rs_err *err);
 
 rs_status rs_synth_scene_write(FILE *f,
                                // in
-                               const rs_synth_povcam *cam,
-                               const double fxy[2],
-                               const double ground_normal_enu[3],
-                               double ground_offset_m,
-                               const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *opt,
-                               rs_err *err);
+                               const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],
+                               double ground_offset_m, const rs_synth_prepared *vehicles,
+                               const rs_synth_scene_options *opt, rs_err *err);
 
 // Writes the .ini matching a scene, atomically: Input_File_Name (the .pov's base name, same
 // folder; it may only use [A-Za-z0-9_.-]), Output_File_Name (the same with .png), Width/Height,
 // File_Gamma 1 (linear output), 16-bit RGBA for the colour pass, 8-bit RGB for the ID pass.
 // antialias: 0 none; n >= 2: n x n non-adaptive supersampling without jitter (+A0 +AM1 +Rn,
 // colour pass only).
-rs_status rs_synth_scene_write_ini(const char *ini_path,
-                                   const char *pov_path,
-                                   const rs_synth_povcam *cam,
-                                   rs_synth_pass pass,
-                                   int antialias,
-                                   rs_err *err);
+rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path, const rs_synth_povcam *cam,
+                                   rs_synth_pass pass, int antialias, rs_err *err);
 
 // The .ini of a file of Nframes passes (rs_synth_scene_write_frames): 16-bit RGBA with
 // File_Gamma 1 for every frame (ID values stay exact: 257 x the 8-bit value), frames 1..Nframes
 // written as <name>1.png, <name>2.png, ... (Nframes <= 9). antialias as above applies to
 // every frame: give it only to a colour pass alone.
-rs_status rs_synth_scene_write_ini_frames(
-    const char *ini_path, const char *pov_path, const rs_synth_povcam *cam, int Nframes, int antialias, rs_err *err);
+rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_path, const rs_synth_povcam *cam,
+                                          int Nframes, int antialias, rs_err *err);
 
 #ifdef __cplusplus
 }

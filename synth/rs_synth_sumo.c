@@ -90,6 +90,23 @@ static rs_status run_program(char *const argv[], const char *log_path, rs_err *e
                       WIFEXITED(status) ? WEXITSTATUS(status) : WTERMSIG(status), log_path, last);
 }
 
+// netconvert with the given input options (Ninputs <= 8) into `net`: UTM projection, no XML
+// validation, no U-turns.
+static rs_status run_netconvert(const char *netconvert, const char *const *inputs, int Ninputs, const char *net,
+                                const char *log_path, rs_err *err)
+{
+    static const char *const common[] = {"--proj.utm",       "true", "--xml-validation", "never",
+                                         "--no-turnarounds", "true", "--output-file"};
+    char *argv[1 + 8 + 7 + 2];
+    int k = 0;
+    argv[k++] = (char *)netconvert;
+    for (int i = 0; i < Ninputs && i < 8; i++) argv[k++] = (char *)inputs[i];
+    for (size_t i = 0; i < sizeof common / sizeof common[0]; i++) argv[k++] = (char *)common[i];
+    argv[k++] = (char *)net;
+    argv[k] = NULL;
+    return run_program(argv, log_path, err);
+}
+
 // ---------------------------------------------------------------------------------------------
 // the network from the lanes
 
@@ -173,8 +190,8 @@ static rs_status enu_to_lonlat(double lonlat[2], const rs_llh *origin, const dou
     return st;
 }
 
-static rs_status
-write_network_files(const char *dir, const rs_lanes *lanes, const rs_llh *origin, network *n, rs_err *err)
+static rs_status write_network_files(const char *dir, const rs_lanes *lanes, const rs_llh *origin, network *n,
+                                     rs_err *err)
 {
     int L = lanes->N;
     n->parent = malloc(sizeof *n->parent * 2 * (size_t)L);
@@ -313,17 +330,9 @@ static bool write_paths(FILE *f, const network *n, int *path, int depth, int *Nr
     return *Nroutes < 4096;
 }
 
-static rs_status write_routes(const char *dir,
-                              const rs_lanes *lanes,
-                              const network *n,
-                              const char *const *osm_from,
-                              const char *const *osm_to,
-                              int Nosm,
-                              const rs_synth_sumo_vtype *t,
-                              const double *prob,
-                              int Nt,
-                              const rs_synth_sumo_options *o,
-                              rs_err *err)
+static rs_status write_routes(const char *dir, const rs_lanes *lanes, const network *n, const char *const *osm_from,
+                              const char *const *osm_to, int Nosm, const rs_synth_sumo_vtype *t, const double *prob,
+                              int Nt, const rs_synth_sumo_options *o, rs_err *err)
 {
     rs_io_atomic a;
     rs_status st = atomic_open_in(&a, dir, "routes.rou.xml", err);
@@ -489,12 +498,8 @@ static rs_status write_osm_types(const char *path, rs_err *err)
 // ---------------------------------------------------------------------------------------------
 // the run
 
-static rs_status run_in(const char *dir,
-                        rs_synth_sumo_frames *frames,
-                        const rs_lanes *lanes,
-                        const rs_llh *origin,
-                        const rs_synth_sumo_options *o,
-                        rs_err *err)
+static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_lanes *lanes, const rs_llh *origin,
+                        const rs_synth_sumo_options *o, rs_err *err)
 {
     char *net = rs_io_join(dir, "net.net.xml"), *nod = rs_io_join(dir, "nodes.nod.xml"),
          *edg = rs_io_join(dir, "edges.edg.xml"), *con = rs_io_join(dir, "connections.con.xml"),
@@ -514,21 +519,8 @@ static rs_status run_in(const char *dir,
     remove(log);
     if (o->osm_path) {
         if ((st = write_osm_types(typ, err))) goto done;
-        char *argv[] = {(char *)o->netconvert,
-                        "--osm-files",
-                        (char *)o->osm_path,
-                        "--type-files",
-                        typ,
-                        "--proj.utm",
-                        "true",
-                        "--xml-validation",
-                        "never",
-                        "--no-turnarounds",
-                        "true",
-                        "--output-file",
-                        net,
-                        NULL};
-        if ((st = run_program(argv, log, err))) goto done;
+        const char *inputs[] = {"--osm-files", o->osm_path, "--type-files", typ};
+        if ((st = run_netconvert(o->netconvert, inputs, 4, net, log, err))) goto done;
         ec.x = (rs_synth_sumo_xml){XML_ParserCreate(NULL), net, RS_OK, err};
         if (!ec.x.p) {
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
@@ -541,23 +533,8 @@ static rs_status run_in(const char *dir,
         if (st || (st = osm_pairs(&ec, &osm_from, &osm_to, &Nosm, err))) goto done;
     } else {
         if ((st = write_network_files(dir, lanes, origin, &n, err))) goto done;
-        char *argv[] = {(char *)o->netconvert,
-                        "--node-files",
-                        nod,
-                        "--edge-files",
-                        edg,
-                        "--connection-files",
-                        con,
-                        "--proj.utm",
-                        "true",
-                        "--xml-validation",
-                        "never",
-                        "--no-turnarounds",
-                        "true",
-                        "--output-file",
-                        net,
-                        NULL};
-        if ((st = run_program(argv, log, err))) goto done;
+        const char *inputs[] = {"--node-files", nod, "--edge-files", edg, "--connection-files", con};
+        if ((st = run_netconvert(o->netconvert, inputs, 6, net, log, err))) goto done;
     }
     int Nt = make_vtypes(types, prob, &o->mix, o->seed);
     if ((st = write_routes(dir, o->osm_path ? NULL : lanes, &n, osm_from, osm_to, Nosm, types, prob, Nt, o, err)))
@@ -607,11 +584,8 @@ done:
     return st;
 }
 
-rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames,
-                            const rs_lanes *lanes,
-                            const rs_llh *origin,
-                            const rs_synth_sumo_options *o,
-                            rs_err *err)
+rs_status rs_synth_sumo_run(rs_synth_sumo_frames *frames, const rs_lanes *lanes, const rs_llh *origin,
+                            const rs_synth_sumo_options *o, rs_err *err)
 {
     frames->frame = NULL;
     frames->N = 0;

@@ -51,8 +51,7 @@ typedef struct {
 rs_status rs_synth_sumo_read_location( // out
     rs_synth_sumo_location *loc,
     // in
-    const char *net_path,
-    rs_err *err);
+    const char *net_path, rs_err *err);
 
 // One FCD time step.
 typedef struct {
@@ -78,13 +77,8 @@ void rs_synth_sumo_frames_free(rs_synth_sumo_frames *frames); // NULL-safe; leav
 rs_status rs_synth_sumo_read_fcd( // out
     rs_synth_sumo_frames *frames,
     // in
-    const char *fcd_path,
-    bool geo,
-    const rs_synth_sumo_location *loc,
-    const rs_llh *origin,
-    const rs_synth_sumo_vtype *types,
-    int Ntypes,
-    rs_err *err);
+    const char *fcd_path, bool geo, const rs_synth_sumo_location *loc, const rs_llh *origin,
+    const rs_synth_sumo_vtype *types, int Ntypes, rs_err *err);
 
 typedef struct {
     uint64_t seed;          // sumo --seed (and the vType sizes)
@@ -119,10 +113,7 @@ void rs_synth_sumo_options_default(rs_synth_sumo_options *opt);
 rs_status rs_synth_sumo_run( // out
     rs_synth_sumo_frames *frames,
     // in
-    const rs_lanes *lanes,
-    const rs_llh *origin,
-    const rs_synth_sumo_options *opt,
-    rs_err *err);
+    const rs_lanes *lanes, const rs_llh *origin, const rs_synth_sumo_options *opt, rs_err *err);
 
 // Writes the frames of a SUMO run as `roadside traffic --sumo` does: dir/frame_NNNNNN.json per
 // frame (rs_synth_traffic_write_json), each frame's vehicles first randomised
@@ -135,11 +126,9 @@ rs_status rs_synth_sumo_frames_write( // in
     // in,out
     rs_synth_sumo_frames *fr,
     // in
-    const rs_synth_randomise_options *rnd,
-    bool randomise,
+    const rs_synth_randomise_options *rnd, bool randomise,
     // out
-    int *Nvehicles,
-    rs_err *err);
+    int *Nvehicles, rs_err *err);
 
 #ifdef __cplusplus
 }

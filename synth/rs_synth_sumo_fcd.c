@@ -164,14 +164,9 @@ static void XMLCALL fcd_start(void *ud, const XML_Char *name, const XML_Char **a
     }
 }
 
-rs_status rs_synth_sumo_read_fcd(rs_synth_sumo_frames *frames,
-                                 const char *fcd_path,
-                                 bool geo,
-                                 const rs_synth_sumo_location *loc,
-                                 const rs_llh *origin,
-                                 const rs_synth_sumo_vtype *types,
-                                 int Ntypes,
-                                 rs_err *err)
+rs_status rs_synth_sumo_read_fcd(rs_synth_sumo_frames *frames, const char *fcd_path, bool geo,
+                                 const rs_synth_sumo_location *loc, const rs_llh *origin,
+                                 const rs_synth_sumo_vtype *types, int Ntypes, rs_err *err)
 {
     frames->frame = NULL;
     frames->N = 0;
@@ -185,12 +180,8 @@ rs_status rs_synth_sumo_read_fcd(rs_synth_sumo_frames *frames,
     return st;
 }
 
-rs_status rs_synth_sumo_frames_write(const char *dir,
-                                     rs_synth_sumo_frames *fr,
-                                     const rs_synth_randomise_options *rnd,
-                                     bool randomise,
-                                     int *Nvehicles,
-                                     rs_err *err)
+rs_status rs_synth_sumo_frames_write(const char *dir, rs_synth_sumo_frames *fr, const rs_synth_randomise_options *rnd,
+                                     bool randomise, int *Nvehicles, rs_err *err)
 {
     rs_status st = rs_io_mkdir_p(dir, err);
     if (st) return st;

@@ -5,8 +5,8 @@
 
 #define DEG (3.14159265358979323846 / 180.0)
 
-void rs_synth_sun_position(
-    double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg, double unix_time_s)
+void rs_synth_sun_position(double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg,
+                           double unix_time_s)
 {
     double az = NAN, el = NAN;
     if (isfinite(lat_deg) && isfinite(lon_deg) && isfinite(unix_time_s) && fabs(lat_deg) <= 90.0) {
@@ -48,8 +48,8 @@ void rs_synth_sun_position(
     if (elevation_deg) *elevation_deg = el;
 }
 
-rs_status rs_synth_sun_position_checked(
-    double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg, double unix_time_s, rs_err *err)
+rs_status rs_synth_sun_position_checked(double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg,
+                                        double unix_time_s, rs_err *err)
 {
     if (!isfinite(lat_deg) || fabs(lat_deg) > 90.0)
         return rs_err_set(err, RS_ERR_INVALID, "lat: %g is outside [-90, 90]", lat_deg);

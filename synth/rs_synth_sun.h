@@ -33,23 +33,16 @@ extern "C" {
 // rs_synth_sun_position_checked for an error instead. This prototype is also declared in
 // synth/rs_synth_scene.h (the scene writer's --time option).
 void rs_synth_sun_position( // out
-    double *azimuth_deg,
-    double *elevation_deg,
+    double *azimuth_deg, double *elevation_deg,
     // in
-    double lat_deg,
-    double lon_deg,
-    double unix_time_s);
+    double lat_deg, double lon_deg, double unix_time_s);
 
 // The same, with its inputs checked: RS_ERR_INVALID (naming the field) for a non-finite input,
 // a latitude outside [-90, 90] or a longitude outside [-540, 540]. Outputs may be NULL.
 rs_status rs_synth_sun_position_checked( // out
-    double *azimuth_deg,
-    double *elevation_deg,
+    double *azimuth_deg, double *elevation_deg,
     // in
-    double lat_deg,
-    double lon_deg,
-    double unix_time_s,
-    rs_err *err);
+    double lat_deg, double lon_deg, double unix_time_s, rs_err *err);
 
 #ifdef __cplusplus
 }

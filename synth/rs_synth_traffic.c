@@ -116,11 +116,8 @@ static rs_status traffic_options_check(const rs_synth_traffic_options *o, rs_err
     return RS_OK;
 }
 
-rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles,
-                                 int *N,
-                                 const rs_lanes *lanes,
-                                 const rs_synth_traffic_options *opt,
-                                 rs_err *err)
+rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, const rs_lanes *lanes,
+                                 const rs_synth_traffic_options *opt, rs_err *err)
 {
     *vehicles = NULL;
     *N = 0;
@@ -241,9 +238,7 @@ bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_syn
     return true;
 }
 
-rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles,
-                                     int *N,
-                                     const rs_synth_randomise_options *opt,
+rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N, const rs_synth_randomise_options *opt,
                                      rs_err *err)
 {
     if (!(opt->sigma_along_m >= 0 && opt->sigma_across_m >= 0 && opt->yaw_range_deg >= 0 && opt->yaw_range_deg <= 180 &&

@@ -50,8 +50,7 @@ void rs_synth_class_mix_default(rs_synth_class_mix *mix);
 rs_status rs_synth_class_mix_parse( // out
     rs_synth_class_mix *mix,
     // in
-    const char *text,
-    rs_err *err);
+    const char *text, rs_err *err);
 
 // The built-in traffic model.
 typedef struct {
@@ -81,12 +80,9 @@ void rs_synth_traffic_options_default(rs_synth_traffic_options *opt);
 // With count > 0, a uniformly drawn subset of count vehicles is kept (in placement order).
 // out: *vehicles (N,) owned (free()), *N. Returns RS_ERR_INVALID for bad options, RS_ERR_NOMEM.
 rs_status rs_synth_traffic_place( // out
-    rs_synth_traffic_vehicle **vehicles,
-    int *N,
+    rs_synth_traffic_vehicle **vehicles, int *N,
     // in
-    const rs_lanes *lanes,
-    const rs_synth_traffic_options *opt,
-    rs_err *err);
+    const rs_lanes *lanes, const rs_synth_traffic_options *opt, rs_err *err);
 
 // ---- domain randomisation ----
 
@@ -107,11 +103,9 @@ void rs_synth_randomise_options_default(rs_synth_randomise_options *opt);
 // 0.707 m; docs/traffic.md.) The kept vehicles are compacted to the front in their order.
 // in,out: vehicles (N,), *N (the number kept)
 rs_status rs_synth_traffic_randomise( // in,out
-    rs_synth_traffic_vehicle *vehicles,
-    int *N,
+    rs_synth_traffic_vehicle *vehicles, int *N,
     // in
-    const rs_synth_randomise_options *opt,
-    rs_err *err);
+    const rs_synth_randomise_options *opt, rs_err *err);
 
 // Whether the footprints (oriented rectangles length x width at (e, n), yaw) of two vehicles
 // overlap: separating axis theorem over the four edge normals; rectangles that only touch do
@@ -126,9 +120,7 @@ bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_syn
 // atomically (core/rs_io.h).
 rs_status rs_synth_traffic_write_json(const char *path,
                                       // in
-                                      const rs_synth_traffic_vehicle *vehicles,
-                                      int N,
-                                      rs_err *err);
+                                      const rs_synth_traffic_vehicle *vehicles, int N, rs_err *err);
 
 #ifdef __cplusplus
 }

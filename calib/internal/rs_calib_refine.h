@@ -77,26 +77,17 @@ typedef struct {
 // Errors: RS_ERR_NOCONVERGE, RS_ERR_DEGENERATE (covariance rank-deficient, or the projection
 // failed), RS_ERR_EXTERNAL (exception), RS_ERR_INVALID (bad sizes).
 rs_status rs_calib_refine_run( // in,out
-    double rt_cam_c[6],
-    double *intrinsics,
-    double *p_c_m,
+    double rt_cam_c[6], double *intrinsics, double *p_c_m,
     // out
-    rs_calib_refine_summary *summary,
-    double *cov,
-    double *block_chi2,
-    double *q_pred_px,
+    rs_calib_refine_summary *summary, double *cov, double *block_chi2, double *q_pred_px,
     // in
-    const rs_calib_refine_problem *problem,
-    const rs_calib_refine_options *opt,
-    rs_err *err);
+    const rs_calib_refine_problem *problem, const rs_calib_refine_options *opt, rs_err *err);
 
 // For tests: the worst relative disagreement, over every landmark residual block of problem
 // (use ignored) at the given point, between the analytic Jacobians (rt, landmark, all
 // intrinsics) and central differences of the same residuals (step 1e-6 max(1, |x|)).
 // Relative to the largest entry of that Jacobian row. Returns NAN if a residual fails.
-double rs_calib_refine_jacobian_check(const double rt_cam_c[6],
-                                      const double *intrinsics,
-                                      const double *p_c_m,
+double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const double *intrinsics, const double *p_c_m,
                                       const rs_calib_refine_problem *problem);
 
 #ifdef __cplusplus

@@ -30,8 +30,7 @@ typedef struct {
 rs_status rs_camera_opencv_read( // out
     rs_camera_opencv_file *f,
     // in
-    const char *path,
-    rs_err *err);
+    const char *path, rs_err *err);
 
 // The text of an OpenCV YAML camera file (rs_camera_write_opencv_yaml). *text is malloc'ed
 // (caller frees). Returns RS_ERR_EXTERNAL when OpenCV throws, RS_ERR_NOMEM.
@@ -39,11 +38,7 @@ rs_status rs_camera_opencv_yaml_text( // out
     char **text,
     // in
     const double *intrinsics, // (4 + Ndistortion,)
-    int Ndistortion,
-    const double rt_cam_enu[6],
-    int width,
-    int height,
-    rs_err *err);
+    int Ndistortion, const double rt_cam_enu[6], int width, int height, rs_err *err);
 
 #ifdef __cplusplus
 }

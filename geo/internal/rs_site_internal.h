@@ -26,16 +26,9 @@ typedef struct {
 
 // Appends one diagnostic (severity RS_SITE_WARNING ignores `status`). On allocation failure
 // sets r->nomem and drops the diagnostic.
-void rs_site__diag(rs_site__report *r,
-                   rs_site_severity severity,
-                   rs_status status,
-                   const char *file,
-                   int line,
-                   int feature,
-                   const char *feature_id,
-                   const char *field,
-                   const char *fmt,
-                   ...) __attribute__((format(printf, 9, 10)));
+void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status status, const char *file, int line,
+                   int feature, const char *feature_id, const char *field, const char *fmt, ...)
+    __attribute__((format(printf, 9, 10)));
 
 // The state of one read: where diagnostics go, and what is being read (for messages).
 typedef struct {
@@ -49,9 +42,8 @@ typedef struct {
 } rs_site__reader;
 
 // A diagnostic at what c is reading (c->file, c->feature, c->fid), at `line` (0: none).
-void rs_site__say(
-    rs_site__reader *c, rs_site_severity severity, rs_status status, int line, const char *field, const char *fmt, ...)
-    __attribute__((format(printf, 6, 7)));
+void rs_site__say(rs_site__reader *c, rs_site_severity severity, rs_status status, int line, const char *field,
+                  const char *fmt, ...) __attribute__((format(printf, 6, 7)));
 #define ERR(c, status, field, ...)          rs_site__say(c, RS_SITE_ERROR, status, 0, field, __VA_ARGS__)
 #define ERR_AT(c, status, line, field, ...) rs_site__say(c, RS_SITE_ERROR, status, line, field, __VA_ARGS__)
 #define WARN(c, field, ...)                 rs_site__say(c, RS_SITE_WARNING, RS_OK, 0, field, __VA_ARGS__)
@@ -81,26 +73,17 @@ char *rs_site__read_file(rs_site__reader *c, const char *why, size_t *len);
 // out: llh (ellipsoidal height) and p_enu_m, (3,) each, when usable.
 // Returns true when the position is usable (possibly with a warning).
 bool rs_site__check_position( // out
-    double llh[3],
-    double p_enu_m[3],
+    double llh[3], double p_enu_m[3],
     // in,out
     rs_site__report *r,
     // in
-    const rs_site *site,
-    bool origin_ok,
-    const char *file,
-    int feature,
-    const char *feature_id,
-    const char *field,
-    bool geojson_order,
-    const double given[3]);
+    const rs_site *site, bool origin_ok, const char *file, int feature, const char *feature_id, const char *field,
+    bool geojson_order, const double given[3]);
 
 // Checks one observation just read from camera cam's CSV (line obs->line) against the camera's
 // image size (when known: cam->width > 0) and the observations read before it (duplicates).
 // Returns false if it must not be kept.
-bool rs_site__check_observation(rs_site__report *r,
-                                const rs_site_camera *cam,
-                                const rs_site_observation *obs,
+bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam, const rs_site_observation *obs,
                                 const rs_site *site);
 
 // Checks a camera once its observations CSV has been read: enough observations to calibrate.

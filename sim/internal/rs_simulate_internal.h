@@ -43,8 +43,8 @@ static inline double rs_simulate__quantize(double x, double inv_quantum)
 
 // Parses a lens model name and checks it against the image size and field of view
 // (RS_ERR_USAGE naming what is wrong). out: *lm.
-rs_status rs_simulate__lens_check(
-    mrcal_lensmodel_t *lm, const char *name, int width_px, int height_px, double hfov_deg, rs_err *err);
+rs_status rs_simulate__lens_check(mrcal_lensmodel_t *lm, const char *name, int width_px, int height_px, double hfov_deg,
+                                  rs_err *err);
 
 // ---- one camera (rs_simulate_camera.c) ----
 
@@ -63,8 +63,8 @@ rs_status rs_simulate__camera_field_of_view(rs_simulate__camera *c, rs_err *err)
 
 // Sets the pose of a camera at p_cam looking at `target`, turned by yaw_offset_deg and rolled by
 // roll_deg, pitched so that the target appears at 62% of the image height. Rounds rt to 1e-6.
-void rs_simulate__camera_look_at(
-    rs_simulate__camera *c, const double p_cam[3], const double target[3], double yaw_offset_deg, double roll_deg);
+void rs_simulate__camera_look_at(rs_simulate__camera *c, const double p_cam[3], const double target[3],
+                                 double yaw_offset_deg, double roll_deg);
 
 // Projects p_enu through the camera into q_px (2,). True if the point is in front of the
 // camera, inside its field of view, and projects at least margin_px inside the image.
@@ -73,19 +73,13 @@ bool rs_simulate__camera_sees(const rs_simulate__camera *c, double q_px[2], cons
 // Picks of N points: the true pixel plus N(0, sigma) noise kept inside the image (redrawn until
 // it is), or, with probability outlier_fraction, a uniformly random pixel at least
 // outlier_min_px away. out: q_px (N,2), outlier (N,). Returns the number of outliers.
-int rs_simulate__camera_pick(rs_rng *rng,
-                             double *q_px,
-                             bool *outlier,
-                             const double *q_true_px,
-                             int N,
-                             const rs_simulate__camera *c,
-                             double sigma_px,
-                             double outlier_fraction,
+int rs_simulate__camera_pick(rs_rng *rng, double *q_px, bool *outlier, const double *q_true_px, int N,
+                             const rs_simulate__camera *c, double sigma_px, double outlier_fraction,
                              double outlier_min_px);
 
 // Surveyed positions: p_true (N,3) plus N(0, sigma_h) on east and north, N(0, sigma_v) on up.
-void rs_simulate__survey_noise(
-    rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h, double sigma_v);
+void rs_simulate__survey_noise(rs_rng *rng, double *p_survey, const double *p_true, int N, double sigma_h,
+                               double sigma_v);
 
 // ---- the intersection (rs_simulate_intersection.c) ----
 

@@ -69,13 +69,8 @@ void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
 // Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
 // finished). out: *grey: rendered over the grey ground (no background); *seconds_povray grows
 // by the image's povray time.
-rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d,
-                                       int k,
-                                       const char *stem,
-                                       rs_synth_dataset__camera *c,
-                                       bool *grey,
-                                       double *seconds_povray,
-                                       rs_err *err);
+rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
+                                       bool *grey, double *seconds_povray, rs_err *err);
 
 // Assembles DATASET/annotations/instances_<split>.json from every parts/ file present.
 // out: *Nanns, the annotations in it.

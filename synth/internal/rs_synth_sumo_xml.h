@@ -26,8 +26,8 @@ void rs_synth_sumo_xml_fail(rs_synth_sumo_xml *c, rs_status st, const char *fiel
 
 // Attribute `name` of element `elem` as a finite number; false (and the parser stopped) when it
 // is missing or not a number.
-bool rs_synth_sumo_xml_double(
-    rs_synth_sumo_xml *c, const XML_Char **a, const char *elem, const char *name, double *out);
+bool rs_synth_sumo_xml_double(rs_synth_sumo_xml *c, const XML_Char **a, const char *elem, const char *name,
+                              double *out);
 
 // Streams c->path through c->p. Returns c->st: RS_ERR_IO, RS_ERR_PARSE or the first callback error.
 rs_status rs_synth_sumo_xml_parse_file(rs_synth_sumo_xml *c);

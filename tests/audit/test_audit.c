@@ -61,8 +61,8 @@ static double oracle_angle_deg(const double ra[3], const double rb[3])
     return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 180 / M_PI;
 }
 
-static bool oracle_project(
-    double q[2], const rs_simulate_problem *sp, const double *intrinsics, const double rt[6], const double p[3])
+static bool oracle_project(double q[2], const rs_simulate_problem *sp, const double *intrinsics, const double rt[6],
+                           const double p[3])
 {
     double R[9], pc[3];
     oracle_R(R, rt);
@@ -75,12 +75,8 @@ static bool oracle_project(
 }
 
 // Ray of q (mrcal_unproject) from the camera centre, intersected with the plane U = h.
-static bool oracle_locate(double g[3],
-                          const rs_simulate_problem *sp,
-                          const double *intrinsics,
-                          const double rt[6],
-                          const double q[2],
-                          double h)
+static bool oracle_locate(double g[3], const rs_simulate_problem *sp, const double *intrinsics, const double rt[6],
+                          const double q[2], double h)
 {
     mrcal_point3_t v;
     mrcal_point2_t qq = {.x = q[0], .y = q[1]};
@@ -95,8 +91,8 @@ static bool oracle_locate(double g[3],
     return true;
 }
 
-static rs_calib_problem
-view(const rs_simulate_problem *sp, double *sigma_enu, double *sigma_px, double s_h, double s_v, double s_px)
+static rs_calib_problem view(const rs_simulate_problem *sp, double *sigma_enu, double *sigma_px, double s_h, double s_v,
+                             double s_px)
 {
     for (int i = 0; i < sp->Npoints; i++) {
         sigma_enu[3 * i] = sigma_enu[3 * i + 1] = s_h;

@@ -30,8 +30,8 @@ static rs_simulate_problem *noise_free(double elevated_fraction)
     return s;
 }
 
-static void check_pose(
-    const char *name, rs_status st, const rs_err *e, const double rt[6], const rs_simulate_problem *s, double tol)
+static void check_pose(const char *name, rs_status st, const rs_err *e, const double rt[6],
+                       const rs_simulate_problem *s, double tol)
 {
     CHECK(st == RS_OK, "%s: %s: %s", name, rs_strerror(st), e->msg);
     if (st != RS_OK) return;

@@ -22,13 +22,7 @@ static const double terrain_relief_m[NTERRAIN] = {0.0, 0.3, 8.0};
 static const char *const terrain_name[NTERRAIN] = {"planar", "nearly-planar", "3d"};
 
 // tg_make, or a failed check naming the test and seed.
-static bool make(tg_problem *pb,
-                 const char *what,
-                 uint64_t seed,
-                 tg_lens lens,
-                 double relief_m,
-                 int N,
-                 double noise_px,
+static bool make(tg_problem *pb, const char *what, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
                  double outlier_fraction)
 {
     const bool ok = tg_make(pb, seed, lens, relief_m, N, noise_px, outlier_fraction);
@@ -150,8 +144,8 @@ static void test_outliers(void)
            n ? percentile(pos, n, 50) : 0, n ? percentile(pos, n, 95) : 0, Nnonminimal);
 }
 
-static void expect_error(
-    const char *what, rs_status want, const char *needle, const tg_problem *pb, const double *p, const double *q, int N)
+static void expect_error(const char *what, rs_status want, const char *needle, const tg_problem *pb, const double *p,
+                         const double *q, int N)
 {
     rs_calib_init_result res;
     bool inl[TG_NMAX + 1];

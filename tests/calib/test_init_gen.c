@@ -1,5 +1,6 @@
 // test_init_gen.c -- see test_init_gen.h.
 #include "test_init_gen.h"
+#include "core/rs_rng.h"
 
 #include <math.h>
 #include <string.h>
@@ -8,16 +9,8 @@
 
 void tg_seed(tg_rng *r, uint64_t seed) { r->state = seed * 0x9E3779B97F4A7C15ull + 1; }
 
-// splitmix64 (Steele, Lea, Flood 2014)
-static uint64_t tg_next(tg_rng *r)
-{
-    uint64_t z = (r->state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-double tg_uniform(tg_rng *r, double a, double b) { return a + (b - a) * ((double)(tg_next(r) >> 11) * 0x1.0p-53); }
+// splitmix64 steps of core/rs_rng.h: the stream of its seed sequence
+double tg_uniform(tg_rng *r, double a, double b) { return a + (b - a) * rs_rng_u01(rs_rng_seed_next(&r->state)); }
 
 double tg_gauss(tg_rng *r)
 {
@@ -92,8 +85,8 @@ static bool project(mrcal_point2_t *q, const tg_problem *pb, const double *rt, c
     return pc.z > 0 && mrcal_project(q, NULL, NULL, &pc, 1, &pb->lensmodel, pb->intrinsics);
 }
 
-bool tg_make(
-    tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px, double outlier_fraction)
+bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
+             double outlier_fraction)
 {
     if (N < 0 || N > TG_NMAX) return false;
     memset(pb, 0, sizeof(*pb));
@@ -154,7 +147,7 @@ bool tg_make(
     int idx[TG_NMAX];
     for (int i = 0; i < N; i++) idx[i] = i;
     for (int k = 0; k < Nout; k++) {
-        const int j = k + (int)(tg_next(&r) % (uint64_t)(N - k));
+        const int j = k + (int)(rs_rng_seed_next(&r.state) % (uint64_t)(N - k));
         const int tmp = idx[k];
         idx[k] = idx[j];
         idx[j] = tmp;

@@ -45,8 +45,8 @@ double tg_gauss(tg_rng *r);
 const char *tg_lens_name(tg_lens lens);
 
 // Fills pb. Returns false if no valid layout was found (never with sane arguments).
-bool tg_make(
-    tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px, double outlier_fraction);
+bool tg_make(tg_problem *pb, uint64_t seed, tg_lens lens, double relief_m, int N, double noise_px,
+             double outlier_fraction);
 
 // rs_calib_init_pose() on pb with the default options and RANSAC seed `seed`.
 rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem *pb, uint64_t seed, rs_err *err);

@@ -1,6 +1,7 @@
 // test_solve_gen.c -- see test_solve_gen.h.
 #include "test_solve_gen.h"
 #include "core/rs_pose.h"
+#include "core/rs_rng.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -47,14 +48,8 @@ int gen_end(const char *seeds)
 
 void gen_seed(gen_rng *g, uint64_t seed) { g->s = seed * 0x9E3779B97F4A7C15ull + 12345u; }
 
-static uint64_t next(gen_rng *g)
-{ // splitmix64
-    uint64_t z = (g->s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-double gen_uniform(gen_rng *g, double a, double b) { return a + (b - a) * ((double)(next(g) >> 11) * 0x1.0p-53); }
+// splitmix64 steps of core/rs_rng.h: the stream of its seed sequence
+double gen_uniform(gen_rng *g, double a, double b) { return a + (b - a) * rs_rng_u01(rs_rng_seed_next(&g->s)); }
 double gen_normal(gen_rng *g)
 { // Box-Muller
     double u1 = gen_uniform(g, 0, 1), u2 = gen_uniform(g, 0, 1);

@@ -66,13 +66,7 @@ static bool simulate(prob *P, rs_simulate_camera_options *o, double sigma_px, do
 
 // A pinhole camera (f px, 1920x1080) at `pos` with yaw/pitch/roll `ypr`, landmarks p (N,3),
 // exact pixels + N(0, noise) from a fixed generator.
-static void build(prob *P,
-                  double f,
-                  const double ypr[3],
-                  const double pos[3],
-                  const double *p,
-                  int N,
-                  double noise_px,
+static void build(prob *P, double f, const double ypr[3], const double pos[3], const double *p, int N, double noise_px,
                   double sigma_m)
 {
     memset(P, 0, sizeof *P);

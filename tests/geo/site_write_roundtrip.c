@@ -85,8 +85,8 @@ static rs_status write_site(const rs_site *site, const char *out, rs_site_layout
 }
 
 // Two lanes in ENU written and read back; prints the largest difference of the points.
-static rs_status
-lanes_roundtrip(const rs_site *site, const char *out, bool with_height, rs_site_layout layout, rs_err *err)
+static rs_status lanes_roundtrip(const rs_site *site, const char *out, bool with_height, rs_site_layout layout,
+                                 rs_err *err)
 {
     double a[3][3] = {{-40, 3, 0}, {-13.5, 3.25, 0}, {0, 0, 0}}, b[2][3] = {{0, 0, 0}, {20, 45.5, 0}};
     int next_a = 1;
