@@ -166,6 +166,18 @@ static double expect_pose(const char *name, const prob *P)
 
 // A case that may be refused: an error of kind `want` whose message contains `cause`, or a pose
 // that carries a warning (never a silent pose).
+// 14 landmarks: 12 on the ground within 25 x 12 m of the origin and two 5 m posts (fixed seed).
+static void ground_and_posts(double p[3 * 14])
+{
+    gen_rng g;
+    gen_seed(&g, SEED);
+    for (int i = 0; i < 14; i++) {
+        p[3 * i] = gen_uniform(&g, -25, 25);
+        p[3 * i + 1] = gen_uniform(&g, -12, 12);
+        p[3 * i + 2] = i < 2 ? 5.0 : 0.0;
+    }
+}
+
 static void expect_refusal(const char *name, const prob *P, rs_status want, const char *cause, bool pose_ok)
 {
     rs_calib_result r;
@@ -205,13 +217,7 @@ int main(void)
 
     { // straight down from 40 m: ground points under the camera and two 5 m posts
         double p[3 * 14];
-        gen_rng g;
-        gen_seed(&g, SEED);
-        for (int i = 0; i < 14; i++) {
-            p[3 * i] = gen_uniform(&g, -25, 25);
-            p[3 * i + 1] = gen_uniform(&g, -12, 12);
-            p[3 * i + 2] = i < 2 ? 5.0 : 0.0;
-        }
+        ground_and_posts(p);
         const double ypr[3] = {0, -90, 0}, pos[3] = {0, 0, 40};
         build(&P, 1000, ypr, pos, p, 14, 0.5, 0.01);
         expect_pose("looking straight down", &P);
@@ -223,13 +229,7 @@ int main(void)
     { // every landmark behind the camera: a camera 40 m up looking straight UP at the ground
         // points (pinhole pixels of points behind it are mirrored, not absent)
         double p[3 * 14];
-        gen_rng g;
-        gen_seed(&g, SEED);
-        for (int i = 0; i < 14; i++) {
-            p[3 * i] = gen_uniform(&g, -25, 25);
-            p[3 * i + 1] = gen_uniform(&g, -12, 12);
-            p[3 * i + 2] = i < 2 ? 5.0 : 0.0;
-        }
+        ground_and_posts(p);
         const double ypr[3] = {0, 90, 0}, pos[3] = {0, 0, 40};
         build(&P, 1000, ypr, pos, p, 14, 0.5, 0.01);
         // refused, but as of this writing the message blames outliers ("only 1 of 14 landmarks
