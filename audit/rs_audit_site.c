@@ -337,12 +337,12 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
 rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam, const rs_audit_result *result,
                               const rs_audit_options *opt, rs_err *err)
 {
-    char name[512];
-    snprintf(name, sizeof name, "%s.audit.json", site->cameras[icam].id);
-    char *path = rs_io_join(out_dir, name);
-    char *text = rs_audit_result_json(site, icam, result, opt);
-    rs_status st =
-        path && text ? rs_io_write_file(path, text, strlen(text), err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_err e = {0};
+    char *path = rs_io_child_path(out_dir, site->cameras[icam].id, ".audit.json", &e);
+    char *text = path ? rs_audit_result_json(site, icam, result, opt) : NULL;
+    rs_status st = !path  ? rs_err_set(err, e.status, "%s", e.msg)
+                   : text ? rs_io_write_file(path, text, strlen(text), err)
+                          : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     free(path);
     free(text);
     return st;

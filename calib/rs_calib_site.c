@@ -245,13 +245,8 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
 
 static rs_status write_text(const char *out_dir, const char *id, const char *suffix, const char *text, rs_err *err)
 {
-    size_t n = strlen(id) + strlen(suffix) + 1;
-    char *name = malloc(n);
-    if (!name) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    snprintf(name, n, "%s%s", id, suffix);
-    char *path = rs_io_join(out_dir, name);
-    free(name);
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    char *path = rs_io_child_path(out_dir, id, suffix, err);
+    if (!path) return err ? err->status : RS_ERR_INVALID;
     rs_status st = rs_io_write_file(path, text, strlen(text), err);
     free(path);
     return st;
@@ -289,12 +284,11 @@ static rs_status write_homography(const char *path, const rs_site *site, const r
 rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *r, rs_err *err)
 {
     const rs_site_camera *cam = &site->cameras[icam];
-    char name[1024];
     rs_status st;
 
-    snprintf(name, sizeof name, "%s.cameramodel", cam->id);
-    char *path = rs_io_join(out_dir, name);
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    // every name is built by rs_io_child_path: an id that could leave out_dir is refused
+    char *path = rs_io_child_path(out_dir, cam->id, ".cameramodel", err);
+    if (!path) return err ? err->status : RS_ERR_INVALID;
     const rs_camera calibrated = rs_calib_result_camera(&cam->camera, r);
     st = rs_camera_write_cameramodel(&calibrated, path, err);
     free(path);
@@ -307,17 +301,15 @@ rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam
     if (st) return st;
 
     if (rs_camera_has_opencv_equivalent(&calibrated)) {
-        snprintf(name, sizeof name, "%s.opencv.yaml", cam->id);
-        path = rs_io_join(out_dir, name);
-        if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!(path = rs_io_child_path(out_dir, cam->id, ".opencv.yaml", err)))
+            return err ? err->status : RS_ERR_INVALID;
         st = rs_camera_write_opencv_yaml(&calibrated, path, err);
         free(path);
         if (st) return st;
     }
 
-    snprintf(name, sizeof name, "%s.homography.json", cam->id);
-    path = rs_io_join(out_dir, name);
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!(path = rs_io_child_path(out_dir, cam->id, ".homography.json", err)))
+        return err ? err->status : RS_ERR_INVALID;
     st = write_homography(path, site, cam, r, err);
     free(path);
     return st;

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <ftw.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -193,4 +194,37 @@ bool rs_io_has_extension(const char *path, const char *ext)
 {
     const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
     return dot && dot > path && (!slash || dot > slash + 1) && !strcasecmp(dot + 1, ext);
+}
+
+const char *rs_io_name_problem(const char *name)
+{
+    if (!name || !*name) return "is empty";
+    const size_t n = strlen(name);
+    if (n > 64) return "is longer than 64 bytes";
+    for (const unsigned char *p = (const unsigned char *)name; *p; p++) {
+        if (*p < 0x20 || *p == 0x7f) return "contains a control character (a newline, a tab, ...)";
+        if (*p == '/' || *p == '\\') return "contains a path separator ('/' or '\\')";
+    }
+    if (strstr(name, "..")) return "contains \"..\"";
+    if (name[0] == ' ' || name[n - 1] == ' ') return "begins or ends with a blank";
+    return NULL;
+}
+
+char *rs_io_child_path(const char *dir, const char *name, const char *suffix, rs_err *err)
+{
+    const char *why = rs_io_name_problem(name);
+    if (why) {
+        rs_err_set(err, RS_ERR_INVALID, "'%.80s' %s: it cannot name a file", name ? name : "", why);
+        return NULL;
+    }
+    const size_t n = strlen(name) + (suffix ? strlen(suffix) : 0) + 1;
+    char *file = malloc(n);
+    char *path = NULL;
+    if (file) {
+        snprintf(file, n, "%s%s", name, suffix ? suffix : "");
+        path = rs_io_join(dir, file);
+    }
+    free(file);
+    if (!path) rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    return path;
 }

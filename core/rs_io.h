@@ -53,6 +53,17 @@ char *rs_io_join(const char *dir, const char *rel);
 // "yml") is true, ("a.yml/b", "yml") and ("yml", "yml") are false.
 bool rs_io_has_extension(const char *path, const char *ext);
 
+// The one rule for a name that becomes part of a file name or a table row (camera and landmark
+// ids): 1..64 bytes, no control character (bytes below 0x20, and 0x7f), no '/' or '\\', no ".."
+// anywhere, no blank at either end. Returns NULL when `name` follows it, else what is wrong
+// (a static string: "is empty", "contains '/'", ...). UTF-8 letters are allowed.
+const char *rs_io_name_problem(const char *name);
+
+// dir/<name><suffix> (malloc'ed: caller frees): the one way an output named after an id is
+// built, so that none escapes its folder. NULL, with RS_ERR_INVALID naming the name and the
+// rule it breaks (rs_io_name_problem), or RS_ERR_NOMEM, in err.
+char *rs_io_child_path(const char *dir, const char *name, const char *suffix, rs_err *err);
+
 // Removes path and everything under it (files, folders, links themselves), best effort: what
 // cannot be removed is left. A missing path is not an error.
 void rs_io_remove_tree(const char *path);

@@ -12,6 +12,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "core/rs_io.h"
 #include "geo/internal/rs_site_internal.h"
 
 enum { DEFAULT_MAX_LANDMARK_DISTANCE_M = 1000 };
@@ -326,6 +327,12 @@ static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
     warn_unknown_keys(c, item, prefix, known);
     const char *s;
     cam->id = rs_site__dup(c, get_string(c, item, prefix, "id", true, &s) ? s : prefix);
+    const char *bad_id = s && cam->id && strcmp(cam->id, prefix) ? rs_io_name_problem(cam->id) : NULL;
+    if (bad_id)
+        ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, "id"),
+            "'%.80s' %s: a camera id names its files (<id>.cameramodel, <id>.json, ...); use letters, digits, "
+            "'-', '_' or '.'",
+            cam->id, bad_id);
     if (get_string(c, item, prefix, "model", true, &s)) cam->model_path = rs_site__join(c, site->dir, s);
     if (get_string(c, item, prefix, "observations", true, &s)) cam->observations_path = rs_site__join(c, site->dir, s);
     if (get_string(c, item, prefix, "backgrounds", false, &s)) {
@@ -446,8 +453,11 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
         const cJSON *jid = cJSON_GetObjectItemCaseSensitive(props, "id");
         if (cJSON_IsNumber(jid))
             ERR(c, RS_ERR_PARSE, "properties.id", "must be a string: write \"%g\"", jid->valuedouble);
-        else if (get_string(c, props, "properties", "id", true, &id))
+        else if (get_string(c, props, "properties", "id", true, &id)) {
             c->fid = id;
+            const char *bad_id = rs_io_name_problem(id);
+            if (bad_id) ERR(c, RS_ERR_INVALID, "properties.id", "'%.80s' %s", id, bad_id);
+        }
         get_positive(c, props, "properties", "sigma_h_m", false, &sigma_h);
         get_positive(c, props, "properties", "sigma_v_m", false, &sigma_v);
         get_string(c, props, "properties", "kind", false, &kind);

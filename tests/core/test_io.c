@@ -1,0 +1,54 @@
+// test_io.c -- core/rs_io.h: the one rule for names that become file names (rs_io_name_problem)
+// case by case against the rule as written, rs_io_child_path refusing what would leave its folder
+// and joining the rest, and rs_io_has_extension.
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/rs_io.h"
+#include "tests/common/rs_test.h"
+
+int main(void)
+{
+    static const char *const good[] = {"cam1", "north-east_2", "C.3", "Kamera Süd", "a b", "x", NULL};
+    static const struct {
+        const char *name, *why;
+    } bad[] = {{"", "empty"},
+               {"../../escaped", "path separator"},
+               {"/abs", "path separator"},
+               {"a\\b", "path separator"},
+               {"..", "\"..\""},
+               {"a..b", "\"..\""},
+               {" lead", "blank"},
+               {"trail ", "blank"},
+               {"new\nline", "control"},
+               {"tab\t", "control"},
+               {"del\x7f", "control"},
+               {"ccccccccccccccccccccccccccccccccccccccccccccccccccccccccccccccccc", "longer than 64"},
+               {NULL, NULL}};
+    for (int i = 0; good[i]; i++) {
+        CHECK(rs_io_name_problem(good[i]) == NULL, "'%s' refused: %s", good[i], rs_io_name_problem(good[i]));
+        rs_err err = {0};
+        char *p = rs_io_child_path("out/dir", good[i], ".json", &err);
+        char want[256];
+        snprintf(want, sizeof want, "out/dir/%s.json", good[i]);
+        CHECK(p && !strcmp(p, want), "child path of '%s': %s", good[i], p ? p : err.msg);
+        free(p);
+    }
+    CHECK(strlen(bad[11].name) == 65, "the long name is 65 bytes");
+    for (int i = 0; bad[i].name; i++) {
+        const char *why = rs_io_name_problem(bad[i].name);
+        CHECK(why && strstr(why, bad[i].why), "'%s': %s (expected '%s')", bad[i].name, why ? why : "accepted",
+              bad[i].why);
+        rs_err err = {0};
+        char *p = rs_io_child_path("out", bad[i].name, ".json", &err);
+        CHECK(!p && err.status == RS_ERR_INVALID && strstr(err.msg, bad[i].why), "child path of '%s': %s",
+              bad[i].name, p ? p : err.msg);
+        free(p);
+    }
+    CHECK(rs_io_name_problem(NULL) != NULL, "NULL accepted");
+    CHECK(rs_io_has_extension("a/b.YML", "yml") && !rs_io_has_extension("a.yml/b", "yml") &&
+              !rs_io_has_extension(".yml", "yml") && !rs_io_has_extension("a.ym", "yml") &&
+              rs_io_has_extension("x.cameramodel", "cameramodel"),
+          "rs_io_has_extension");
+    return rs_test_end("test_io");
+}
