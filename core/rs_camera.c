@@ -149,12 +149,13 @@ rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *pat
     rs_status st;
     if (rs_io_has_extension(path, "yaml") || rs_io_has_extension(path, "yml") || rs_io_has_extension(path, "json")) {
         rs_camera_opencv_file f;
-        st = rs_camera_opencv_read(&f, path, err);
+        st = rs_io_check_regular(path, RS_IO_MAX_SMALL_FILE_BYTES, err); // OpenCV opens it by name
+        if (st == RS_OK) st = rs_camera_opencv_read(&f, path, err);
         if (st == RS_OK) st = from_opencv(cam, extra, &f, path, err);
     } else {
         char *text = NULL;
         size_t len = 0;
-        st = rs_io_read_file(&text, &len, path, err);
+        st = rs_io_read_file_max(&text, &len, path, RS_IO_MAX_SMALL_FILE_BYTES, err);
         if (st == RS_OK) st = rs_camera_read_cameramodel_text(cam, text, len, path, err);
         free(text);
     }

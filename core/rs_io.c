@@ -2,7 +2,9 @@
 #include "core/rs_io.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <ftw.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,44 +12,84 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+// Opens path for reading without waiting (a FIFO with no writer would block) and checks that it
+// is a regular file of at most max_bytes. Returns the descriptor (blocking again) or -1 (err set).
+static int open_regular(const char *path, size_t max_bytes, rs_err *err)
+{
+    const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) {
+        rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        return -1;
+    }
+    struct stat sb;
+    if (fstat(fd, &sb) != 0 || !S_ISREG(sb.st_mode)) {
+        rs_err_set(err, RS_ERR_IO, "%s: not a regular file (%s): refused", path,
+                   S_ISDIR(sb.st_mode)                          ? "a folder"
+                   : S_ISFIFO(sb.st_mode)                       ? "a FIFO"
+                   : S_ISCHR(sb.st_mode) || S_ISBLK(sb.st_mode) ? "a device"
+                                                                : "not a plain file");
+        close(fd);
+        return -1;
+    }
+    if ((uint64_t)sb.st_size > (uint64_t)max_bytes) {
+        rs_err_set(err, RS_ERR_INVALID, "%s: %lld bytes, more than the %zu bytes such a file may have", path,
+                   (long long)sb.st_size, max_bytes);
+        close(fd);
+        return -1;
+    }
+    const int flags = fcntl(fd, F_GETFL);
+    if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+    return fd;
+}
+
+rs_status rs_io_check_regular(const char *path, size_t max_bytes, rs_err *err)
+{
+    const int fd = open_regular(path, max_bytes, err);
+    if (fd < 0) return err ? err->status : RS_ERR_IO;
+    close(fd);
+    return RS_OK;
+}
+
 rs_status rs_io_read_file(char **data, size_t *len, const char *path, rs_err *err)
+{
+    return rs_io_read_file_max(data, len, path, RS_IO_MAX_FILE_BYTES, err);
+}
+
+rs_status rs_io_read_file_max(char **data, size_t *len, const char *path, size_t max_bytes, rs_err *err)
 {
     *data = NULL;
     if (len) *len = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    rs_err local = {0};
+    const int fd = open_regular(path, max_bytes, err ? err : &local);
+    if (fd < 0) return err ? err->status : local.status;
     size_t cap = 4096, n = 0;
     char *buf = malloc(cap);
-    rs_status st = RS_OK;
-    if (!buf) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-        goto done;
-    }
-    for (;;) {
+    rs_status st = buf ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    while (st == RS_OK) {
         if (cap - n < 2) {
             char *grown = realloc(buf, cap * 2);
             if (!grown) {
                 st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-                goto done;
+                break;
             }
             buf = grown;
             cap *= 2;
         }
-        size_t got = fread(buf + n, 1, cap - n - 1, f);
-        n += got;
-        if (got == 0) break;
+        const ssize_t got = read(fd, buf + n, cap - n - 1);
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) st = rs_err_set(err, RS_ERR_IO, "%s: read error: %s", path, strerror(errno));
+        if (got <= 0) break;
+        n += (size_t)got;
+        if (n > max_bytes)
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: more than the %zu bytes such a file may have (it grew)", path,
+                            max_bytes);
     }
-    if (ferror(f)) {
-        st = rs_err_set(err, RS_ERR_IO, "%s: read error: %s", path, strerror(errno));
-        goto done;
-    }
-    buf[n] = '\0';
-done:
-    fclose(f);
+    close(fd);
     if (st != RS_OK) {
         free(buf);
         return st;
     }
+    buf[n] = '\0';
     *data = buf;
     if (len) *len = n;
     return RS_OK;

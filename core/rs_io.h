@@ -13,11 +13,30 @@
 extern "C" {
 #endif
 
-// Reads a whole file into a NUL-terminated buffer.
+// The largest file rs_io_read_file reads; readers that know what a file holds pass a tighter
+// bound to rs_io_read_file_max (a site.json, a camera model: RS_IO_MAX_SMALL_FILE_BYTES).
+#define RS_IO_MAX_FILE_BYTES       ((size_t)1 << 30)  // 1 GiB
+#define RS_IO_MAX_SMALL_FILE_BYTES ((size_t)16 << 20) // 16 MiB
+
+// Reads a whole file into a NUL-terminated buffer. Only a regular file is read: a FIFO, a device
+// (/dev/zero), a socket or a folder is refused before anything is read (the open does not wait
+// for a FIFO's writer), and so is a file larger than max_bytes (RS_ERR_INVALID "PATH: N bytes,
+// more than the M bytes a ... may have"; a file that grows past the bound while being read too).
+// Errors: RS_ERR_IO (missing, unreadable, not a regular file), RS_ERR_INVALID (too large),
+// RS_ERR_NOMEM; the message starts with the path and never quotes the file's contents.
 // out: *data, owned by the caller (free()); *len may be NULL.
+rs_status rs_io_read_file_max(char **data, size_t *len,
+                              // in
+                              const char *path, size_t max_bytes, rs_err *err);
+
+// rs_io_read_file_max with RS_IO_MAX_FILE_BYTES.
 rs_status rs_io_read_file(char **data, size_t *len,
                           // in
                           const char *path, rs_err *err);
+
+// The checks of rs_io_read_file_max without reading: for files a library opens by name
+// (cv::FileStorage, cv::imread, mrcal). RS_OK when `path` is a regular file of at most max_bytes.
+rs_status rs_io_check_regular(const char *path, size_t max_bytes, rs_err *err);
 
 // An output file being written under a temporary name in the same folder as `path`.
 typedef struct {

@@ -228,6 +228,8 @@ extern "C" void rs_image_free(rs_image *img)
 extern "C" rs_status rs_image_read(rs_image *img, const char *path, rs_err *err)
 {
     *img = rs_image{};
+    rs_status checked = rs_io_check_regular(path, RS_IO_MAX_FILE_BYTES, err); // imread opens it by name
+    if (checked) return checked;
     try {
         cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
         if (m.empty())

@@ -49,12 +49,12 @@ static cJSON *parse_json(rs_site__reader *c, const char *text)
 
 // Reads and parses the JSON file `name` of the site folder, reporting what is wrong with it.
 // c->file is *path (owned by the caller, free() it and reset c->file) until the caller is done.
-static cJSON *read_json_file(rs_site__reader *c, char **path, const char *name, const char *why)
+static cJSON *read_json_file(rs_site__reader *c, char **path, const char *name, const char *why, size_t max_bytes)
 {
     *path = rs_site__join(c, c->site->dir, name);
     if (!*path) return NULL;
     c->file = *path;
-    char *text = rs_site__read_file(c, why, NULL);
+    char *text = rs_site__read_file(c, why, max_bytes, NULL);
     const char *json = text && !strncmp(text, "\xEF\xBB\xBF", 3) ? text + 3 : text; // UTF-8 BOM
     cJSON *root = json ? parse_json(c, json) : NULL;
     free(text);
@@ -365,7 +365,8 @@ static void read_site_json(rs_site__reader *c)
 {
     rs_site *site = c->site;
     char *path = NULL;
-    cJSON *root = read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton");
+    cJSON *root = read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton",
+                                 RS_IO_MAX_SMALL_FILE_BYTES);
     if (!root) goto done;
     if (!cJSON_IsObject(root)) {
         ERR(c, RS_ERR_PARSE, NULL, "the top level must be an object {\"name\": ..., \"origin\": ...}");
@@ -524,8 +525,9 @@ static void read_landmarks(rs_site__reader *c)
 {
     rs_site *site = c->site;
     char *path = NULL;
-    cJSON *root = read_json_file(c, &path, "landmarks.geojson",
-                                 "the surveyed landmarks; 'roadside site init' writes an empty one");
+    cJSON *root =
+        read_json_file(c, &path, "landmarks.geojson",
+                       "the surveyed landmarks; 'roadside site init' writes an empty one", RS_IO_MAX_FILE_BYTES);
     if (!root) goto done;
     const char *type;
     const cJSON *features = cJSON_GetObjectItemCaseSensitive(root, "features");

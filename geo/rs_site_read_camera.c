@@ -72,7 +72,7 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
         goto done;
     }
     size_t len = 0;
-    char *text = rs_site__read_file(c, why, &len);
+    char *text = rs_site__read_file(c, why, RS_IO_MAX_SMALL_FILE_BYTES, &len);
     if (!text) goto done;
     int line = 0;
     const char *bad = cameramodel_precheck(text, len, &line);
@@ -219,7 +219,7 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
     char why[160];
     snprintf(why, sizeof why, "named by cameras[%d].observations in site.json", i);
     c->file = cam->observations_path;
-    char *text = rs_site__read_file(c, why, NULL);
+    char *text = rs_site__read_file(c, why, RS_IO_MAX_FILE_BYTES, NULL);
     if (!text) goto done;
     char *p = text;
     if (!strncmp(p, "\xEF\xBB\xBF", 3)) p += 3; // UTF-8 byte order mark

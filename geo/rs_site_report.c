@@ -134,13 +134,16 @@ bool rs_site__file_exists(rs_site__reader *c, const char *why)
     return false;
 }
 
-char *rs_site__read_file(rs_site__reader *c, const char *why, size_t *len)
+char *rs_site__read_file(rs_site__reader *c, const char *why, size_t max_bytes, size_t *len)
 {
     if (!rs_site__file_exists(c, why)) return NULL;
     char *text = NULL;
     rs_err e = {0};
-    if (rs_io_read_file(&text, len, c->file, &e) != RS_OK) {
-        ERR(c, e.status, NULL, "cannot read: %s", e.msg);
+    if (rs_io_read_file_max(&text, len, c->file, max_bytes, &e) != RS_OK) {
+        // e.msg starts with the path, which the diagnostic names already
+        const size_t n = strlen(c->file);
+        const char *what = strncmp(e.msg, c->file, n) || strncmp(e.msg + n, ": ", 2) ? e.msg : e.msg + n + 2;
+        ERR(c, e.status, NULL, "cannot read (%s): %s", why, what);
         return NULL;
     }
     return text;

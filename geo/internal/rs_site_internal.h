@@ -57,9 +57,10 @@ char *rs_site__join(rs_site__reader *c, const char *dir, const char *rel);
 // there is a file.
 bool rs_site__file_exists(rs_site__reader *c, const char *why);
 
-// Reads the site file c->file (`why` as above). Returns the malloc'ed, NUL-terminated contents
-// (and their length; len may be NULL), or NULL after reporting what is wrong.
-char *rs_site__read_file(rs_site__reader *c, const char *why, size_t *len);
+// Reads the site file c->file (`why` as above), a regular file of at most max_bytes
+// (rs_io_read_file_max). Returns the malloc'ed, NUL-terminated contents (and their length; len
+// may be NULL), or NULL after reporting what is wrong.
+char *rs_site__read_file(rs_site__reader *c, const char *why, size_t max_bytes, size_t *len);
 
 // ---- checks (rs_site_check.c) ----
 

@@ -41,8 +41,8 @@ int main(void)
               bad[i].why);
         rs_err err = {0};
         char *p = rs_io_child_path("out", bad[i].name, ".json", &err);
-        CHECK(!p && err.status == RS_ERR_INVALID && strstr(err.msg, bad[i].why), "child path of '%s': %s",
-              bad[i].name, p ? p : err.msg);
+        CHECK(!p && err.status == RS_ERR_INVALID && strstr(err.msg, bad[i].why), "child path of '%s': %s", bad[i].name,
+              p ? p : err.msg);
         free(p);
     }
     CHECK(rs_io_name_problem(NULL) != NULL, "NULL accepted");
