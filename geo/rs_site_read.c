@@ -272,6 +272,11 @@ static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJ
     bg->name = rs_site__dup(c, name);
     bg->file = rs_site__dup(c, file);
     bg->path = rs_site__join(c, c->site->dir, file);
+    if (bg->path && !rs_site__inside(c, bg->path)) {
+        ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, "file"),
+            "'%.200s' is outside the site folder: a site's files live inside it (links are followed)", file);
+        return false;
+    }
     bg->synthetic = cJSON_IsTrue(synthetic);
     bg->tags = calloc((size_t)cJSON_GetArraySize(tags) + 1, sizeof *bg->tags);
     if (!bg->tags) c->r->nomem = true;
@@ -338,7 +343,10 @@ static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
     if (get_string(c, item, prefix, "backgrounds", false, &s)) {
         cam->backgrounds_path = rs_site__join(c, site->dir, s);
         struct stat sb;
-        if (cam->backgrounds_path && (stat(cam->backgrounds_path, &sb) != 0 || !S_ISDIR(sb.st_mode)))
+        if (cam->backgrounds_path && !rs_site__inside(c, cam->backgrounds_path))
+            ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, "backgrounds"),
+                "'%.200s' is outside the site folder: a site's files live inside it (links are followed)", s);
+        else if (cam->backgrounds_path && (stat(cam->backgrounds_path, &sb) != 0 || !S_ISDIR(sb.st_mode)))
             WARN(c, field_name(field, sizeof field, prefix, "backgrounds"), "'%s' is not a folder",
                  cam->backgrounds_path);
     }

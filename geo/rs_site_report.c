@@ -122,11 +122,27 @@ char *rs_site__join(rs_site__reader *c, const char *dir, const char *rel)
     return p;
 }
 
+bool rs_site__inside(const rs_site__reader *c, const char *path)
+{
+    char *dir = realpath(c->site->dir, NULL), *p = realpath(path, NULL);
+    bool inside = !dir || !p; // what does not resolve is reported as missing elsewhere
+    if (dir && p) {
+        const size_t n = strlen(dir);
+        inside = !strncmp(p, dir, n) && (p[n] == '/' || (n == 1 && dir[0] == '/'));
+    }
+    free(dir);
+    free(p);
+    return inside;
+}
+
 bool rs_site__file_exists(rs_site__reader *c, const char *why)
 {
     struct stat sb;
     if (stat(c->file, &sb) != 0)
         ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
+    else if (!rs_site__inside(c, c->file))
+        ERR(c, RS_ERR_INVALID, NULL,
+            "outside the site folder (%s): a site's files live inside it (links are followed); refused unread", why);
     else if (S_ISDIR(sb.st_mode))
         ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
     else

@@ -57,6 +57,11 @@ char *rs_site__join(rs_site__reader *c, const char *dir, const char *rel);
 // there is a file.
 bool rs_site__file_exists(rs_site__reader *c, const char *why);
 
+// True when `path`, with every link followed (realpath), lies inside the site folder, or when it
+// does not resolve (a missing file is reported as such by its reader). Paths a site names must
+// stay inside it: "/etc/shadow" or "../../x" are refused before anything is read.
+bool rs_site__inside(const rs_site__reader *c, const char *path);
+
 // Reads the site file c->file (`why` as above), a regular file of at most max_bytes
 // (rs_io_read_file_max). Returns the malloc'ed, NUL-terminated contents (and their length; len
 // may be NULL), or NULL after reporting what is wrong.

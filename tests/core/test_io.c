@@ -50,5 +50,15 @@ int main(void)
               !rs_io_has_extension(".yml", "yml") && !rs_io_has_extension("a.ym", "yml") &&
               rs_io_has_extension("x.cameramodel", "cameramodel"),
           "rs_io_has_extension");
+    // only regular files are read, within their bound (issue 14, finding 2)
+    char *data = NULL;
+    size_t len = 1;
+    rs_err err = {0};
+    CHECK(rs_io_read_file_max(&data, &len, "/dev/zero", 100, &err) == RS_ERR_IO && !data && len == 0 &&
+              strstr(err.msg, "a device"),
+          "/dev/zero: %s", err.msg);
+    CHECK(rs_io_read_file_max(&data, NULL, "/", 100, &err) == RS_ERR_IO && strstr(err.msg, "a folder"), "/: %s",
+          err.msg);
+    CHECK(rs_io_check_regular("/dev/null", 100, &err) == RS_ERR_IO, "/dev/null accepted");
     return rs_test_end("test_io");
 }

@@ -1,5 +1,8 @@
 #!/usr/bin/env python3
-"""Issue 14, finding 2 ("Unbounded reads"): only regular files are read, each kind with a size cap.
+"""Issue 14, findings 2 and 3 ("Unbounded reads", "Paths not confined to the site"): every path a
+site names must resolve (links followed) inside the site folder, refused unread otherwise (so
+"/etc/passwd" is never quoted in a message); only regular files are read, each kind with a size
+cap.
 `"observations": "/dev/zero"` made `site check` grow until the kernel killed it and a FIFO hung it
 for ever; now both are refused at once with the file named (core/rs_io.h rs_io_read_file_max:
 opened without waiting, fstat'ed, refused unless a regular file within its bound). Also a camera
@@ -45,8 +48,24 @@ def main():
             json.dump(sj, open(os.path.join(site, "site.json"), "w"))
             return site
 
+        # finding 3: paths stay inside the site folder, refused unread (no contents quoted)
         site = variant("devzero", lambda s, sj: sj["cameras"][0].update(observations="/dev/zero"))
-        refused(site, "observations /dev/zero", "/dev/zero", "not a regular file (a device)")
+        refused(site, "observations /dev/zero", "/dev/zero", "outside the site folder")
+        for name, path in (("absolute", "/etc/passwd"), ("parent", "../../../../../../etc/passwd")):
+            site = variant("passwd_" + name, lambda s, sj, path=path: sj["cameras"][0].update(observations=path))
+            refused(site, f"observations {path}", "passwd", "outside the site folder")
+            p = run("site", "check", site, timeout=30)
+            check("root:" not in p.stdout + p.stderr, f"{name}: the file's contents are quoted: {p.stdout!r}")
+
+        def link_out(s, sj):
+            os.symlink("/etc/passwd", os.path.join(s, "observations", "link.csv"))
+            sj["cameras"][0]["observations"] = "observations/link.csv"
+        refused(variant("link_out", link_out), "a link inside the site to /etc/passwd", "link.csv",
+                "outside the site folder")
+        site = variant("bg_out", lambda s, sj: sj["cameras"][0].update(backgrounds="/tmp"))
+        refused(site, "backgrounds /tmp", "cameras[0].backgrounds", "outside the site folder")
+
+        # finding 2: inside the site, only regular files, each within its bound
 
         def fifo_obs(s, sj):
             os.mkfifo(os.path.join(s, "observations", "fifo.csv"))
