@@ -166,6 +166,18 @@ void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam)
 
 // ---- the whole site ----
 
+typedef struct {
+    const char *id;
+    int index;
+} id_index;
+
+static int cmp_id_index(const void *a, const void *b)
+{
+    const id_index *x = a, *y = b;
+    const int c = strcmp(x->id, y->id);
+    return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
 void rs_site__check_site(rs_site__report *r, const rs_site *site)
 {
     char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson");
@@ -174,14 +186,30 @@ void rs_site__check_site(rs_site__report *r, const rs_site *site)
         r->nomem = true;
         goto done;
     }
-    for (int j = 1; j < site->Nlandmarks; j++)
-        for (int i = 0; i < j; i++) {
-            if (strcmp(site->landmarks[i].id, site->landmarks[j].id)) continue;
+    // duplicate landmark ids in O(N log N): sorted by (id, index), each later member of a run of
+    // equal ids refers to the run's first; reported in file order, as the pairwise loop did
+    const int N = site->Nlandmarks;
+    id_index *sorted = malloc((size_t)(N > 0 ? N : 1) * sizeof *sorted);
+    int *first = malloc((size_t)(N > 0 ? N : 1) * sizeof *first);
+    if (!sorted || !first) {
+        r->nomem = true;
+        free(sorted);
+        free(first);
+        goto done;
+    }
+    for (int k = 0; k < N; k++) // an id lost to a failed allocation (nomem is reported) compares as ""
+        sorted[k] = (id_index){site->landmarks[k].id ? site->landmarks[k].id : "", k}, first[k] = -1;
+    qsort(sorted, (size_t)N, sizeof *sorted, cmp_id_index);
+    for (int k = 1; k < N; k++)
+        if (!strcmp(sorted[k].id, sorted[k - 1].id))
+            first[sorted[k].index] = first[sorted[k - 1].index] >= 0 ? first[sorted[k - 1].index] : sorted[k - 1].index;
+    for (int j = 0; j < N; j++)
+        if (first[j] >= 0)
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, landmarks_path, 0, site->landmarks[j].feature,
                           site->landmarks[j].id, "properties.id", "duplicate id (already used by feature %d)",
-                          site->landmarks[i].feature);
-            break;
-        }
+                          site->landmarks[first[j]].feature);
+    free(sorted);
+    free(first);
     for (int j = 1; j < site->Ncameras; j++)
         for (int i = 0; i < j; i++) {
             if (strcmp(site->cameras[i].id, site->cameras[j].id)) continue;

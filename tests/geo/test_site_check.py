@@ -187,6 +187,20 @@ def d_duplicate_landmark_id(s):
                 "duplicate id")]
 
 
+def d_duplicate_landmark_ids_many(s):
+    # three features share L02's id and two share L05's: each later one names the FIRST feature
+    # with its id, in file order (the check sorts ids: O(N log N), issue 14 finding 7)
+    set_feature(s, 6, lambda f: f["properties"].update(id="L05"))
+    set_feature(s, 8, lambda f: f["properties"].update(id="L02"))
+    set_feature(s, 9, lambda f: f["properties"].update(id="L02"))
+    return 1, [(r"^SITE/landmarks\.geojson: feature 6 \(id 'L05'\): properties\.id: duplicate id \(already used by feature 5\)",
+                "L05 once"),
+               (r"^SITE/landmarks\.geojson: feature 8 \(id 'L02'\): properties\.id: duplicate id \(already used by feature 2\)",
+                "L02 first repeat"),
+               (r"^SITE/landmarks\.geojson: feature 9 \(id 'L02'\): properties\.id: duplicate id \(already used by feature 2\)",
+                "L02 second repeat")]
+
+
 def d_unknown_landmark(s):
     set_csv_line(s, "north", 4, "L99,100,200")
     return 1, [(r"^SITE/observations/north\.csv:4: landmark: 'L99' is not a landmark of landmarks\.geojson", "unknown")]
