@@ -143,24 +143,32 @@ static rs_status check_arguments(const rs_calib_init_result *result, const mrcal
     return RS_OK;
 }
 
-// Degeneracy checks on the usable observations. s: singular values of the centred landmarks.
-static rs_status check_geometry(const double *p_c, const double *v, const int *usable, int Nusable, const double *s,
-                                rs_err *err)
+// Repeated landmarks (the same point twice, a copied coordinate most often): every later copy
+// leaves `usable` (the initial pose uses the first; the refinement still sees every landmark and
+// flags whichever copy disagrees with its pixels). Pairwise over the usable observations of one
+// camera. Returns how many remain.
+static int drop_repeated(const double *p_c, int *usable, int Nusable, const double *s)
 {
-    // repeated landmarks
     const double rms_radius =
         s[0] * s[0] + s[1] * s[1] + s[2] * s[2] > 0.0 ? sqrt((s[0] * s[0] + s[1] * s[1] + s[2] * s[2]) / Nusable) : 0.0;
-    for (int a = 0; a < Nusable; a++)
-        for (int b = a + 1; b < Nusable; b++) {
-            const double *pa = &p_c[3 * usable[a]], *pb = &p_c[3 * usable[b]];
+    int n = 0;
+    for (int a = 0; a < Nusable; a++) {
+        const double *pa = &p_c[3 * usable[a]];
+        bool repeated = false;
+        for (int b = 0; b < n && !repeated; b++) {
+            const double *pb = &p_c[3 * usable[b]];
             const double d = sqrt((pa[0] - pb[0]) * (pa[0] - pb[0]) + (pa[1] - pb[1]) * (pa[1] - pb[1]) +
                                   (pa[2] - pb[2]) * (pa[2] - pb[2]));
-            if (d <= RS_INIT_DUPLICATE_REL * rms_radius)
-                return rs_err_set(err, RS_ERR_DEGENERATE,
-                                  "p_enu_m[%d], p_enu_m[%d]: landmarks %d and %d are the same "
-                                  "point (%.3g m apart): a landmark is repeated",
-                                  usable[a], usable[b], usable[a], usable[b], d);
+            repeated = d <= RS_INIT_DUPLICATE_REL * rms_radius;
         }
+        if (!repeated) usable[n++] = usable[a];
+    }
+    return n;
+}
+
+// Degeneracy checks on the usable observations. s: singular values of the centred landmarks.
+static rs_status check_geometry(const double *v, const int *usable, int Nusable, const double *s, rs_err *err)
+{
     if (!(s[1] > RS_INIT_COLLINEAR_RATIO * s[0]))
         return rs_err_set(err, RS_ERR_DEGENERATE,
                           "p_enu_m: the %d usable landmarks are collinear (singular values of the "
@@ -271,7 +279,16 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
     for (int k = 0; k < Nusable; k++) memcpy(&p_sel[3 * k], &p_c[3 * usable[k]], 3 * sizeof(double));
     double s[3];
     if ((st = rs_calib_opencv_singular_values3(s, p_sel, Nusable, err))) goto done;
-    if ((st = check_geometry(p_c, v, usable, Nusable, s, err))) goto done;
+    const int Nwith_repeats = Nusable;
+    Nusable = drop_repeated(p_c, usable, Nusable, s);
+    if (Nusable < 4) {
+        st = rs_err_set(err, RS_ERR_DEGENERATE,
+                        "p_enu_m: only %d distinct landmark positions among the %d usable observations (need at "
+                        "least 4): landmarks are repeated",
+                        Nusable, Nwith_repeats);
+        goto done;
+    }
+    if ((st = check_geometry(v, usable, Nusable, s, err))) goto done;
     result->planar = s[2] < opt->planarity_ratio * s[1];
 
     // 3. RANSAC over P3P, scored in pixels

@@ -7,8 +7,8 @@
 // Method (docs/calibration-init.md has the details and references):
 //   1. Every pixel q_px is unprojected through the lens model with mrcal_unproject() and
 //      normalised to a unit bearing vector in the camera frame.
-//   2. The input is checked for degeneracy: fewer than 4 usable points, repeated landmarks,
-//      collinear landmarks (singular values of the centred landmarks, s2/s1 < 1e-3), all
+//   2. The input is checked for degeneracy: fewer than 4 usable points (repeated landmarks
+//      count once: later copies are left out of this step), collinear landmarks (singular values of the centred landmarks, s2/s1 < 1e-3), all
 //      bearings within 0.2 deg of each other (every pixel in a tiny image patch).
 //   3. RANSAC (OpenGV's sac::Ransac) over OpenGV's P3P (Kneip, Scaramuzza, Siegwart, CVPR 2011;
 //      Gao's solver on samples where Kneip's finds nothing), scored by reprojection error in
@@ -73,7 +73,7 @@ typedef struct {
 // Errors: RS_ERR_DEGENERATE with the cause in err (fewer than 4 usable points, collinear,
 // all points in a tiny image patch, no pose with points in front of the camera), RS_ERR_INVALID
 // for NaN/inf input naming the index.
-// Also: RS_ERR_DEGENERATE for a repeated landmark and when no pose is supported by a majority
+// Also: RS_ERR_DEGENERATE for fewer than 4 distinct landmark positions and when no pose is supported by a majority
 // of the observations; RS_ERR_INVALID for bad options or non-finite intrinsics;
 // RS_ERR_UNSUPPORTED for LENSMODEL_CAHVORE (mrcal cannot unproject it); RS_ERR_USAGE for NULL
 // arguments; RS_ERR_EXTERNAL if OpenGV/OpenCV threw. On any error `result` is not filled and

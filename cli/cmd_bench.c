@@ -1,5 +1,5 @@
-// roadside bench -- benchmarks: `bench eval` (here), `bench calib` (cmd_bench_calib.c) and
-// `bench synth` (cmd_bench_synth.c).
+// roadside bench -- benchmarks: `bench eval` (here), `bench calib` (cmd_bench_calib.c),
+// `bench synth` (cmd_bench_synth.c) and `bench site` (cmd_bench_site.c).
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +15,7 @@ static void usage(FILE *out)
     fprintf(out, "usage: roadside bench eval [--images N] [--dets N] [--seed S] [--csv FILE] [--dir DIR]\n"
                  "       roadside bench calib ...   (see 'roadside bench calib --help')\n"
                  "       roadside bench synth ...   (see 'roadside bench synth --help')\n"
+                 "       roadside bench site ...    (see 'roadside bench site --help')\n"
                  "\n"
                  "Benchmarks are programs: each prints a table and writes CSV.\n"
                  "\n"
@@ -136,13 +137,14 @@ static int bench_eval(int argc, char **argv)
 
 int rs_cli_bench(int argc, char **argv)
 {
-    if (argc < 2) return rs_cli_usage_error("bench", "missing benchmark: eval, calib or synth");
+    if (argc < 2) return rs_cli_usage_error("bench", "missing benchmark: eval, calib, synth or site");
     if (!strcmp(argv[1], "eval")) return bench_eval(argc - 1, argv + 1);
     if (!strcmp(argv[1], "calib")) return rs_cli_bench_calib(argc - 1, argv + 1);
     if (!strcmp(argv[1], "synth")) return rs_cli_bench_synth(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "site")) return rs_cli_bench_site(argc - 1, argv + 1);
     if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
         usage(stdout);
         return RS_EXIT_OK;
     }
-    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib or synth", argv[1]);
+    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib, synth or site", argv[1]);
 }

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "core/rs_json.h"
 #include "eval/internal/rs_eval_internal.h"
 
 // ---- small helpers ----
@@ -50,7 +51,7 @@ __attribute__((format(printf, 4, 5))) static rs_status bad(const where *w, rs_er
         snprintf(entry, sizeof entry, "entry %zu", w->index);
     else
         snprintf(entry, sizeof entry, "%s[%zu]", w->list, w->index);
-    return rs_err_set(err, st, "%s:%d: %s: %s", w->name, rs_eval_json_line(w->text, w->at), entry, msg);
+    return rs_err_set(err, st, "%s:%d: %s: %s", w->name, rs_json_line(w->text, w->at), entry, msg);
 }
 
 static rs_status nomem(const where *w, rs_err *err)
@@ -422,13 +423,13 @@ static rs_status load_gt(gt_ctx *c, size_t len, rs_err *err)
 {
     rs_eval_data *d = c->d;
     c->w.index = SIZE_MAX;
-    rs_status st = rs_eval_json_object(c->w.text, 0, len, c->w.name, gt_top, c, err);
+    rs_status st = rs_json_object(c->w.text, 0, len, c->w.name, gt_top, c, err);
     if (st != RS_OK) return st;
     for (int k = 0; k < 2; k++)
         if (!c->has[k])
             return bad(&c->w, err, RS_ERR_PARSE, "no \"%s\" list (a COCO ground-truth file has one)", gt_keys[k]);
 
-    if ((st = rs_eval_json_array(c->w.text, c->span[0][0], c->span[0][1], c->w.name, gt_image, c, err))) return st;
+    if ((st = rs_json_array(c->w.text, c->span[0][0], c->span[0][1], c->w.name, gt_image, c, err))) return st;
     c->image_map = malloc((size_t)(d->Nimages ? d->Nimages : 1) * sizeof *c->image_map);
     if (!c->image_map) return nomem(&c->w, err);
     for (int i = 0; i < d->Nimages; i++) c->image_map[i] = (id_index){d->image_id[i], i};
@@ -446,10 +447,9 @@ static rs_status load_gt(gt_ctx *c, size_t len, rs_err *err)
 
     if (c->has[2]) {
         c->categories_listed = true;
-        if ((st = rs_eval_json_array(c->w.text, c->span[2][0], c->span[2][1], c->w.name, gt_category, c, err)))
-            return st;
+        if ((st = rs_json_array(c->w.text, c->span[2][0], c->span[2][1], c->w.name, gt_category, c, err))) return st;
     }
-    if ((st = rs_eval_json_array(c->w.text, c->span[1][0], c->span[1][1], c->w.name, gt_annotation, c, err))) return st;
+    if ((st = rs_json_array(c->w.text, c->span[1][0], c->span[1][1], c->w.name, gt_annotation, c, err))) return st;
     return gather_annotations(c, err);
 }
 
@@ -534,7 +534,7 @@ rs_status rs_eval_parse(rs_eval_data **data, const char *gt_text, size_t gt_len,
                      .category_map = g.category_map,
                      .K = K,
                      .w = {.text = dets_text, .name = dets_name, .index = SIZE_MAX}};
-        st = rs_eval_json_array(dets_text, 0, dets_len, dets_name, det_entry, &c, err);
+        st = rs_json_array(dets_text, 0, dets_len, dets_name, det_entry, &c, err);
     }
     free(g.image_map);
     free(g.category_map);

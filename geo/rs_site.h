@@ -45,6 +45,23 @@
 extern "C" {
 #endif
 
+// What a site may state, checked by the reader (rs_site_check refuses values outside, naming the
+// landmark and field): physical ranges, not tuning. A survey sigma under 1 mm is better than any
+// survey of a road feature and one over 100 m is no survey; a pick sigma under 0.01 px is beyond
+// any corner detector and one over 1000 px is no pick; a height outside [-1000, 10000] m
+// (ellipsoidal or orthometric) is not near the Earth's surface (Dead Sea shore -430 m, geoid
+// -106..+85 m, Everest 8849 m). Landmarks closer than RS_SITE_COINCIDENT_M to each other are
+// reported as coincident (a warning: a copied coordinate, most often).
+#define RS_SITE_SURVEY_SIGMA_MIN_M 1e-3
+#define RS_SITE_SURVEY_SIGMA_MAX_M 100.0
+#define RS_SITE_PIXEL_SIGMA_MIN_PX 1e-2
+#define RS_SITE_PIXEL_SIGMA_MAX_PX 1000.0
+#define RS_SITE_PRIOR_SIGMA_MIN_M  1e-3
+#define RS_SITE_PRIOR_SIGMA_MAX_M  1e5
+#define RS_SITE_HEIGHT_MIN_M       (-1000.0)
+#define RS_SITE_HEIGHT_MAX_M       10000.0
+#define RS_SITE_COINCIDENT_M       1e-3
+
 // A surveyed landmark, in the site ENU frame.
 typedef struct {
     char *id;          // owned; unique within the site

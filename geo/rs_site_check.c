@@ -71,6 +71,12 @@ bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *
     const double max_m = site->max_landmark_distance_m;
     const bool lat_ok = lat >= -90 && lat <= 90, lon_ok = lon >= -180 && lon <= 180;
 
+    if (!(h >= RS_SITE_HEIGHT_MIN_M && h <= RS_SITE_HEIGHT_MAX_M)) {
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
+                      "height %.9g m is not near the Earth's surface ([%g, %g] m)", h, RS_SITE_HEIGHT_MIN_M,
+                      RS_SITE_HEIGHT_MAX_M);
+        return false;
+    }
     double d = NAN, p[3];
     bool have_d = origin_ok && distance_from_origin(&d, p, site, lat, lon, h_ell);
     if (have_d && d <= max_m) {
@@ -117,7 +123,12 @@ bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *
                       "longitude %.9g is out of range [-180, 180]", lon);
         return false;
     }
-    if (!have_d) return false; // the origin is at fault, and reported as such
+    if (!origin_ok) return false; // the origin is at fault, and reported as such
+    if (!have_d) {                // cannot happen for a valid origin and a checked height; never silent
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
+                      "lat %.9g, lon %.9g, h %.9g m has no position in the site's ENU frame", lat, lon, h);
+        return false;
+    }
     format_distance(dist, sizeof dist, d);
     rs_site__diag(r, RS_SITE_WARNING, RS_OK, file, 0, feature, feature_id, field,
                   "%s from the origin, farther than max_landmark_distance_m (%g m)", dist, max_m);
@@ -178,6 +189,57 @@ static int cmp_id_index(const void *a, const void *b)
     return c ? c : (x->index > y->index) - (x->index < y->index);
 }
 
+typedef struct {
+    long long cell[3]; // ENU position rounded to RS_SITE_COINCIDENT_M
+    int index;
+} cell_index;
+
+static int cmp_cell_index(const void *a, const void *b)
+{
+    const cell_index *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x->cell[k] != y->cell[k]) return (x->cell[k] > y->cell[k]) - (x->cell[k] < y->cell[k]);
+    return (x->index > y->index) - (x->index < y->index);
+}
+
+// Landmarks at the same position (ENU rounded to RS_SITE_COINCIDENT_M; a copied coordinate, most
+// often): a warning each, against the first in file order, in O(N log N) like the ids. What calib
+// does with them is said, so that the user can tell whether to act.
+static void check_coincident(rs_site__report *r, const rs_site *site, const char *landmarks_path)
+{
+    const int N = site->Nlandmarks;
+    cell_index *sorted = malloc((size_t)(N > 0 ? N : 1) * sizeof *sorted);
+    if (!sorted) {
+        r->nomem = true;
+        return;
+    }
+    int n = 0;
+    for (int k = 0; k < N; k++) {
+        const double *p = site->landmarks[k].p_enu_m;
+        // unusable positions (reported where they were read) and positions beyond 10^6 km
+        // (refused there too) are not compared
+        if (!(fabs(p[0]) < 1e9 && fabs(p[1]) < 1e9 && fabs(p[2]) < 1e9)) continue;
+        cell_index *e = &sorted[n++];
+        for (int j = 0; j < 3; j++) e->cell[j] = llround(p[j] / RS_SITE_COINCIDENT_M);
+        e->index = k;
+    }
+    qsort(sorted, (size_t)n, sizeof *sorted, cmp_cell_index);
+    for (int k = 1, first = 0; k < n; k++) {
+        const long long *ck = sorted[k].cell, *cf = sorted[first].cell;
+        if (ck[0] != cf[0] || ck[1] != cf[1] || ck[2] != cf[2]) {
+            first = k;
+            continue;
+        }
+        const rs_site_landmark *a = &site->landmarks[sorted[first].index], *b = &site->landmarks[sorted[k].index];
+        rs_site__diag(r, RS_SITE_WARNING, RS_OK, landmarks_path, 0, b->feature, b->id, "coordinates",
+                      "at the same position as '%s' (feature %d, within %g mm): a copied coordinate? calib keeps "
+                      "both; a camera's initial pose uses only '%s', and the refinement flags whichever of the two "
+                      "disagrees with its picks as an outlier",
+                      a->id ? a->id : "?", a->feature, RS_SITE_COINCIDENT_M * 1e3, a->id ? a->id : "?");
+    }
+    free(sorted);
+}
+
 void rs_site__check_site(rs_site__report *r, const rs_site *site)
 {
     char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson");
@@ -210,6 +272,7 @@ void rs_site__check_site(rs_site__report *r, const rs_site *site)
                           site->landmarks[first[j]].feature);
     free(sorted);
     free(first);
+    check_coincident(r, site, landmarks_path);
     for (int j = 1; j < site->Ncameras; j++)
         for (int i = 0; i < j; i++) {
             if (strcmp(site->cameras[i].id, site->cameras[j].id)) continue;

@@ -4,6 +4,7 @@
 // and reports every problem on the way; it only reads and reports. Calls rs_site_read_camera.c,
 // rs_site_check.c (positions, the whole site), rs_site_report.c and rs_site.c (rs_site_free);
 // nothing calls back into it (the layers: geo/internal/rs_site_internal.h).
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,180 +14,19 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "core/rs_json.h"
 #include "geo/internal/rs_site_internal.h"
 
 enum { DEFAULT_MAX_LANDMARK_DISTANCE_M = 1000 };
-
-// ---- JSON ----
-
-// Parses JSON text; reports a syntax error with its line and column.
-static cJSON *parse_json(rs_site__reader *c, const char *text)
-{
-    const char *end = NULL;
-    cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
-    if (root) return root;
-    if (!c->r->nomem && !*text) {
-        ERR(c, RS_ERR_PARSE, NULL, "invalid JSON: the file is empty");
-        return NULL;
-    }
-    int line = 1, column = 1;
-    for (const char *p = text; end && p < end && *p; p++) {
-        if (*p == '\n')
-            line++, column = 1;
-        else
-            column++;
-    }
-    char near[32] = "";
-    int n = 0;
-    for (const char *p = end; p && *p && n < 20; p++) near[n++] = (*p == '\n' || *p == '\r' || *p == '\t') ? ' ' : *p;
-    near[n] = '\0';
-    if (n)
-        ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d, near '%s'", column, near);
-    else
-        ERR_AT(c, RS_ERR_PARSE, line, NULL, "invalid JSON at column %d: unexpected end of file", column);
-    return NULL;
-}
-
-// Reads and parses the JSON file `name` of the site folder, reporting what is wrong with it.
-// c->file is *path (owned by the caller, free() it and reset c->file) until the caller is done.
-static cJSON *read_json_file(rs_site__reader *c, char **path, const char *name, const char *why, size_t max_bytes)
-{
-    *path = rs_site__join(c, c->site->dir, name);
-    if (!*path) return NULL;
-    c->file = *path;
-    char *text = rs_site__read_file(c, why, max_bytes, NULL);
-    const char *json = text && !strncmp(text, "\xEF\xBB\xBF", 3) ? text + 3 : text; // UTF-8 BOM
-    cJSON *root = json ? parse_json(c, json) : NULL;
-    free(text);
-    return root;
-}
-
-// "prefix.key" (or "key") into buf.
-static const char *field_name(char *buf, size_t size, const char *prefix, const char *key)
-{
-    if (prefix)
-        snprintf(buf, size, "%s.%s", prefix, key);
-    else
-        snprintf(buf, size, "%s", key);
-    return buf;
-}
-
-// A short rendering of a JSON value for messages: the value itself, truncated.
-static void json_excerpt(char *buf, size_t size, const cJSON *item)
-{
-    char *s = cJSON_PrintUnformatted(item);
-    snprintf(buf, size, "%s", s ? s : "?");
-    if (s && strlen(s) >= size && size > 4) strcpy(buf + size - 4, "...");
-    cJSON_free(s);
-}
-
-// Looks up obj[key], writing its full name ("prefix.key") into field. A missing member is
-// reported if required ("missing (EXPECTED)"); returns NULL then.
-static const cJSON *member(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
-                           const char *expected, char *field, size_t size)
-{
-    field_name(field, size, prefix, key);
-    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
-    if (!it && required) ERR(c, RS_ERR_PARSE, field, "missing (%s)", expected);
-    return it;
-}
-
-// Reports a member of the wrong JSON type, quoting what was found.
-static void wrong_type(rs_site__reader *c, const char *field, const cJSON *it, const char *expected)
-{
-    char got[64];
-    json_excerpt(got, sizeof got, it);
-    ERR(c, RS_ERR_PARSE, field, "not %s (%s)", expected, got);
-}
-
-// Reads obj[key] as a finite number. Reports a missing required field, a wrong type or a
-// non-finite value; returns false then (and for a missing optional field).
-static bool get_number(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
-                       double *out)
-{
-    char field[256];
-    const cJSON *it = member(c, obj, prefix, key, required, "a number", field, sizeof field);
-    if (!it) return false;
-    if (!cJSON_IsNumber(it)) {
-        wrong_type(c, field, it, "a number");
-        return false;
-    }
-    if (!isfinite(it->valuedouble)) {
-        ERR(c, RS_ERR_INVALID, field, "not a finite number");
-        return false;
-    }
-    *out = it->valuedouble;
-    return true;
-}
-
-// get_number, and the value must be > 0.
-static bool get_positive(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
-                         double *out)
-{
-    double v;
-    if (!get_number(c, obj, prefix, key, required, &v)) return false;
-    if (v <= 0) {
-        char field[256];
-        ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, key), "%g must be > 0", v);
-        return false;
-    }
-    *out = v;
-    return true;
-}
-
-// Reads obj[key] as a non-empty string (pointer into the JSON tree).
-static bool get_string(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
-                       const char **out)
-{
-    char field[256];
-    const cJSON *it = member(c, obj, prefix, key, required, "a string", field, sizeof field);
-    if (!it) return false;
-    if (!cJSON_IsString(it)) {
-        wrong_type(c, field, it, "a string in double quotes");
-        return false;
-    }
-    if (!it->valuestring[0]) {
-        ERR(c, RS_ERR_INVALID, field, "empty");
-        return false;
-    }
-    *out = it->valuestring;
-    return true;
-}
-
-// Reads obj[key] as a JSON object; NULL if missing (reported if required) or not an object.
-static const cJSON *get_object(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key, bool required,
-                               const char *expected)
-{
-    char field[256];
-    const cJSON *it = member(c, obj, prefix, key, required, expected, field, sizeof field);
-    if (it && !cJSON_IsObject(it)) {
-        ERR(c, RS_ERR_PARSE, field, "not an object (expected %s)", expected);
-        return NULL;
-    }
-    return it;
-}
-
-// Warns about members of obj not in `known` (NULL-terminated): most often a misspelt name.
-static void warn_unknown_keys(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *const *known)
-{
-    for (const cJSON *it = obj ? obj->child : NULL; it; it = it->next) {
-        bool found = false;
-        for (int i = 0; known[i] && !found; i++) found = it->string && !strcmp(it->string, known[i]);
-        if (found) continue;
-        char field[256];
-        WARN(c, field_name(field, sizeof field, prefix, it->string ? it->string : "?"),
-             "unknown field, ignored (misspelt?)");
-    }
-}
 
 // ---- site.json ----
 
 // Reads {lat, lon, h} (and sigma_m for a prior) of obj into given = (lat, lon, h).
 static bool get_llh(rs_site__reader *c, const cJSON *obj, const char *prefix, double given[3])
 {
-    bool ok = get_number(c, obj, prefix, "lat", true, &given[0]);
-    ok = get_number(c, obj, prefix, "lon", true, &given[1]) && ok;
-    ok = get_number(c, obj, prefix, "h", true, &given[2]) && ok;
+    bool ok = rs_site__get_number(c, obj, prefix, "lat", true, &given[0]);
+    ok = rs_site__get_number(c, obj, prefix, "lon", true, &given[1]) && ok;
+    ok = rs_site__get_number(c, obj, prefix, "h", true, &given[2]) && ok;
     return ok;
 }
 
@@ -202,9 +42,9 @@ static void read_heights(rs_site__reader *c, const cJSON *root, bool *ok)
         c->site->geoid_undulation_m = 0;
     } else if (cJSON_IsObject(it) && cJSON_GetObjectItemCaseSensitive(it, "orthometric")) {
         static const char *const known[] = {"orthometric", NULL};
-        warn_unknown_keys(c, it, "heights", known);
+        rs_site__warn_unknown_keys(c, it, "heights", known);
         c->site->heights_orthometric = true;
-        if (!get_number(c, it, "heights", "orthometric", true, &c->site->geoid_undulation_m))
+        if (!rs_site__get_number(c, it, "heights", "orthometric", true, &c->site->geoid_undulation_m))
             *ok = false;
         else if (fabs(c->site->geoid_undulation_m) > 120) {
             ERR(c, RS_ERR_INVALID, "heights.orthometric", "%g m is not a geoid undulation (|N| < 110 m on Earth)",
@@ -213,7 +53,7 @@ static void read_heights(rs_site__reader *c, const cJSON *root, bool *ok)
         }
     } else {
         char got[64];
-        json_excerpt(got, sizeof got, it);
+        rs_site__json_excerpt(got, sizeof got, it);
         ERR(c, RS_ERR_INVALID, "heights", "%s: expected %s", got, expected);
         *ok = false;
     }
@@ -221,10 +61,11 @@ static void read_heights(rs_site__reader *c, const cJSON *root, bool *ok)
 
 static void read_ground_plane(rs_site__reader *c, const cJSON *root)
 {
-    const cJSON *g = get_object(c, root, NULL, "ground_plane", false, "{\"normal_enu\": [0, 0, 1], \"offset_m\": 0}");
+    const cJSON *g =
+        rs_site__get_object(c, root, NULL, "ground_plane", false, "{\"normal_enu\": [0, 0, 1], \"offset_m\": 0}");
     if (!g) return;
     static const char *const known[] = {"normal_enu", "offset_m", NULL};
-    warn_unknown_keys(c, g, "ground_plane", known);
+    rs_site__warn_unknown_keys(c, g, "ground_plane", known);
     const cJSON *n = cJSON_GetObjectItemCaseSensitive(g, "normal_enu");
     double v[3], offset = 0;
     bool ok = cJSON_IsArray(n) && cJSON_GetArraySize(n) == 3;
@@ -240,7 +81,7 @@ static void read_ground_plane(rs_site__reader *c, const cJSON *root)
         return;
     }
     if (cJSON_GetObjectItemCaseSensitive(g, "offset_m") &&
-        !get_number(c, g, "ground_plane", "offset_m", false, &offset))
+        !rs_site__get_number(c, g, "ground_plane", "offset_m", false, &offset))
         return;
     for (int k = 0; k < 3; k++) c->site->ground_normal_enu[k] = v[k] / norm;
     c->site->ground_offset_m = offset / norm;
@@ -255,25 +96,25 @@ static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJ
         return false;
     }
     static const char *const known[] = {"name", "file", "synthetic", "tags", "source", NULL};
-    warn_unknown_keys(c, e, prefix, known);
+    rs_site__warn_unknown_keys(c, e, prefix, known);
     char field[256];
     const char *file = NULL, *name = NULL;
-    bool ok = get_string(c, e, prefix, "file", true, &file);
-    if (cJSON_GetObjectItemCaseSensitive(e, "name")) ok = get_string(c, e, prefix, "name", false, &name) && ok;
-    const cJSON *synthetic = member(c, e, prefix, "synthetic", false, "", field, sizeof field);
+    bool ok = rs_site__get_string(c, e, prefix, "file", true, &file);
+    if (cJSON_GetObjectItemCaseSensitive(e, "name")) ok = rs_site__get_string(c, e, prefix, "name", false, &name) && ok;
+    const cJSON *synthetic = rs_site__member(c, e, prefix, "synthetic", false, "", field, sizeof field);
     if (synthetic && !cJSON_IsBool(synthetic)) {
-        wrong_type(c, field, synthetic, "true or false");
+        rs_site__wrong_type(c, field, synthetic, "true or false");
         ok = false;
     }
-    field_name(field, sizeof field, prefix, "tags");
-    const cJSON *tags = get_object(c, e, prefix, "tags", false, "{\"time\": ..., \"conditions\": ..., ...}");
+    rs_site__field_name(field, sizeof field, prefix, "tags");
+    const cJSON *tags = rs_site__get_object(c, e, prefix, "tags", false, "{\"time\": ..., \"conditions\": ..., ...}");
     if (!ok || (cJSON_GetObjectItemCaseSensitive(e, "tags") && !tags)) return false;
 
     bg->name = rs_site__dup(c, name);
     bg->file = rs_site__dup(c, file);
     bg->path = rs_site__join(c, c->site->dir, file);
     if (bg->path && !rs_site__inside(c, bg->path)) {
-        ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, "file"),
+        ERR(c, RS_ERR_INVALID, rs_site__field_name(field, sizeof field, prefix, "file"),
             "'%.200s' is outside the site folder: a site's files live inside it (links are followed)", file);
         return false;
     }
@@ -283,7 +124,8 @@ static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJ
     for (const cJSON *t = tags ? tags->child : NULL; t && bg->tags; t = t->next) {
         if (!cJSON_IsString(t) && !cJSON_IsBool(t)) {
             char sub[300];
-            WARN(c, field_name(sub, sizeof sub, field, t->string ? t->string : "?"), "not text or a boolean, ignored");
+            WARN(c, rs_site__field_name(sub, sizeof sub, field, t->string ? t->string : "?"),
+                 "not text or a boolean, ignored");
             continue;
         }
         rs_site_tag *tag = &bg->tags[bg->Ntags++];
@@ -297,10 +139,10 @@ static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJ
 static void read_background_images(rs_site__reader *c, rs_site_camera *cam, const cJSON *item, const char *prefix)
 {
     char field[96];
-    const cJSON *list = member(c, item, prefix, "background_images", false, "", field, sizeof field);
+    const cJSON *list = rs_site__member(c, item, prefix, "background_images", false, "", field, sizeof field);
     if (!list) return;
     if (!cJSON_IsArray(list)) {
-        wrong_type(c, field, list, "a list [...]");
+        rs_site__wrong_type(c, field, list, "a list [...]");
         return;
     }
     cam->background_images = calloc((size_t)cJSON_GetArraySize(list) + 1, sizeof *cam->background_images);
@@ -329,38 +171,42 @@ static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
     }
     static const char *const known[] = {
         "id", "model", "observations", "backgrounds", "background_images", "position_prior", "note", NULL};
-    warn_unknown_keys(c, item, prefix, known);
+    rs_site__warn_unknown_keys(c, item, prefix, known);
     const char *s;
-    cam->id = rs_site__dup(c, get_string(c, item, prefix, "id", true, &s) ? s : prefix);
+    cam->id = rs_site__dup(c, rs_site__get_string(c, item, prefix, "id", true, &s) ? s : prefix);
     const char *bad_id = s && cam->id && strcmp(cam->id, prefix) ? rs_io_name_problem(cam->id) : NULL;
     if (bad_id)
-        ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, "id"),
+        ERR(c, RS_ERR_INVALID, rs_site__field_name(field, sizeof field, prefix, "id"),
             "'%.80s' %s: a camera id names its files (<id>.cameramodel, <id>.json, ...); use letters, digits, "
             "'-', '_' or '.'",
             cam->id, bad_id);
-    if (get_string(c, item, prefix, "model", true, &s)) cam->model_path = rs_site__join(c, site->dir, s);
-    if (get_string(c, item, prefix, "observations", true, &s)) cam->observations_path = rs_site__join(c, site->dir, s);
-    if (get_string(c, item, prefix, "backgrounds", false, &s)) {
+    if (rs_site__get_string(c, item, prefix, "model", true, &s)) cam->model_path = rs_site__join(c, site->dir, s);
+    if (rs_site__get_string(c, item, prefix, "observations", true, &s))
+        cam->observations_path = rs_site__join(c, site->dir, s);
+    if (rs_site__get_string(c, item, prefix, "backgrounds", false, &s)) {
         cam->backgrounds_path = rs_site__join(c, site->dir, s);
         struct stat sb;
         if (cam->backgrounds_path && !rs_site__inside(c, cam->backgrounds_path))
-            ERR(c, RS_ERR_INVALID, field_name(field, sizeof field, prefix, "backgrounds"),
+            ERR(c, RS_ERR_INVALID, rs_site__field_name(field, sizeof field, prefix, "backgrounds"),
                 "'%.200s' is outside the site folder: a site's files live inside it (links are followed)", s);
         else if (cam->backgrounds_path && (stat(cam->backgrounds_path, &sb) != 0 || !S_ISDIR(sb.st_mode)))
-            WARN(c, field_name(field, sizeof field, prefix, "backgrounds"), "'%s' is not a folder",
+            WARN(c, rs_site__field_name(field, sizeof field, prefix, "backgrounds"), "'%s' is not a folder",
                  cam->backgrounds_path);
     }
-    if (get_string(c, item, prefix, "note", false, &s)) cam->note = rs_site__dup(c, s);
+    if (rs_site__get_string(c, item, prefix, "note", false, &s)) cam->note = rs_site__dup(c, s);
     read_background_images(c, cam, item, prefix);
 
-    field_name(field, sizeof field, prefix, "position_prior");
-    const cJSON *prior = get_object(c, item, prefix, "position_prior", false, "{lat, lon, h, sigma_m}");
+    rs_site__field_name(field, sizeof field, prefix, "position_prior");
+    const cJSON *prior = rs_site__get_object(c, item, prefix, "position_prior", false, "{lat, lon, h, sigma_m}");
     if (prior) {
         static const char *const known_prior[] = {"lat", "lon", "h", "sigma_m", NULL};
-        warn_unknown_keys(c, prior, field, known_prior);
+        rs_site__warn_unknown_keys(c, prior, field, known_prior);
         double given[3], llh[3];
         bool ok = get_llh(c, prior, field, given);
-        ok = get_positive(c, prior, field, "sigma_m", true, &cam->prior_sigma_m) && ok;
+        ok = rs_site__get_in_range(c, prior, field, "sigma_m", true, RS_SITE_PRIOR_SIGMA_MIN_M,
+                                   RS_SITE_PRIOR_SIGMA_MAX_M, "m", "the 1-sigma of a surveyed camera position",
+                                   &cam->prior_sigma_m) &&
+             ok;
         if (ok && rs_site__check_position(llh, cam->prior_p_enu_m, c->r, site, c->origin_ok, c->file, -1, NULL, field,
                                           false, given)) {
             cam->has_position_prior = true;
@@ -373,28 +219,30 @@ static void read_site_json(rs_site__reader *c)
 {
     rs_site *site = c->site;
     char *path = NULL;
-    cJSON *root = read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton",
-                                 RS_IO_MAX_SMALL_FILE_BYTES);
+    cJSON *root =
+        rs_site__read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton",
+                                RS_IO_MAX_SMALL_FILE_BYTES);
     if (!root) goto done;
     if (!cJSON_IsObject(root)) {
         ERR(c, RS_ERR_PARSE, NULL, "the top level must be an object {\"name\": ..., \"origin\": ...}");
         goto done;
     }
+    rs_site__check_duplicate_keys(c, root, NULL);
     // "simulated": how `roadside site simulate` made the site (free-form, for people and tools)
     static const char *const known[] = {
         "name",    "origin",    "heights", "landmark_sigma_m", "ground_plane", "max_landmark_distance_m",
         "cameras", "simulated", NULL};
-    warn_unknown_keys(c, root, NULL, known);
+    rs_site__warn_unknown_keys(c, root, NULL, known);
 
     const char *name;
-    if (get_string(c, root, NULL, "name", true, &name)) site->name = rs_site__dup(c, name);
+    if (rs_site__get_string(c, root, NULL, "name", true, &name)) site->name = rs_site__dup(c, name);
 
     bool origin_ok = true;
     double given[3] = {NAN, NAN, NAN};
-    const cJSON *origin = get_object(c, root, NULL, "origin", true, "{\"lat\": deg, \"lon\": deg, \"h\": m}");
+    const cJSON *origin = rs_site__get_object(c, root, NULL, "origin", true, "{\"lat\": deg, \"lon\": deg, \"h\": m}");
     if (origin) {
         static const char *const known_origin[] = {"lat", "lon", "h", NULL};
-        warn_unknown_keys(c, origin, "origin", known_origin);
+        rs_site__warn_unknown_keys(c, origin, "origin", known_origin);
         origin_ok = get_llh(c, origin, "origin", given);
         if (origin_ok && !(given[0] >= -90 && given[0] <= 90)) {
             ERR(c, RS_ERR_INVALID, "origin.lat", "%.9g is out of range [-90, 90]", given[0]);
@@ -402,6 +250,11 @@ static void read_site_json(rs_site__reader *c)
         }
         if (origin_ok && !(given[1] >= -180 && given[1] <= 180)) {
             ERR(c, RS_ERR_INVALID, "origin.lon", "%.9g is out of range [-180, 180]", given[1]);
+            origin_ok = false;
+        }
+        if (origin_ok && !(given[2] >= RS_SITE_HEIGHT_MIN_M && given[2] <= RS_SITE_HEIGHT_MAX_M)) {
+            ERR(c, RS_ERR_INVALID, "origin.h", "%.9g m is not a height near the Earth's surface ([%g, %g] m)", given[2],
+                RS_SITE_HEIGHT_MIN_M, RS_SITE_HEIGHT_MAX_M);
             origin_ok = false;
         }
     } else {
@@ -412,15 +265,17 @@ static void read_site_json(rs_site__reader *c)
     c->origin_ok = origin_ok;
 
     const char *sigma_form = "{\"horizontal\": m, \"vertical\": m}";
-    const cJSON *sigma = get_object(c, root, NULL, "landmark_sigma_m", true, sigma_form);
+    const cJSON *sigma = rs_site__get_object(c, root, NULL, "landmark_sigma_m", true, sigma_form);
     if (sigma) {
         static const char *const known_sigma[] = {"horizontal", "vertical", NULL};
-        warn_unknown_keys(c, sigma, "landmark_sigma_m", known_sigma);
-        get_positive(c, sigma, "landmark_sigma_m", "horizontal", true, &site->landmark_sigma_h_m);
-        get_positive(c, sigma, "landmark_sigma_m", "vertical", true, &site->landmark_sigma_v_m);
+        rs_site__warn_unknown_keys(c, sigma, "landmark_sigma_m", known_sigma);
+        rs_site__get_in_range(c, sigma, "landmark_sigma_m", "horizontal", true, RS_SITE_SURVEY_SIGMA_MIN_M,
+                              RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &site->landmark_sigma_h_m);
+        rs_site__get_in_range(c, sigma, "landmark_sigma_m", "vertical", true, RS_SITE_SURVEY_SIGMA_MIN_M,
+                              RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &site->landmark_sigma_v_m);
     }
     read_ground_plane(c, root);
-    get_positive(c, root, NULL, "max_landmark_distance_m", false, &site->max_landmark_distance_m);
+    rs_site__get_positive(c, root, NULL, "max_landmark_distance_m", false, &site->max_landmark_distance_m);
 
     const cJSON *cameras = cJSON_GetObjectItemCaseSensitive(root, "cameras");
     if (!cameras) {
@@ -453,35 +308,38 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
         goto done;
     }
     const char *type = NULL;
-    if (get_string(c, f, NULL, "type", true, &type) && strcmp(type, "Feature"))
+    if (rs_site__get_string(c, f, NULL, "type", true, &type) && strcmp(type, "Feature"))
         ERR(c, RS_ERR_PARSE, "type", "'%s', expected \"Feature\"", type);
-    const cJSON *props = get_object(c, f, NULL, "properties", true, "{\"id\": \"...\"}");
+    const cJSON *props = rs_site__get_object(c, f, NULL, "properties", true, "{\"id\": \"...\"}");
     const char *id = NULL, *kind = NULL, *note = NULL;
     double sigma_h = site->landmark_sigma_h_m, sigma_v = site->landmark_sigma_v_m;
     if (props) {
         const cJSON *jid = cJSON_GetObjectItemCaseSensitive(props, "id");
         if (cJSON_IsNumber(jid))
             ERR(c, RS_ERR_PARSE, "properties.id", "must be a string: write \"%g\"", jid->valuedouble);
-        else if (get_string(c, props, "properties", "id", true, &id)) {
+        else if (rs_site__get_string(c, props, "properties", "id", true, &id)) {
             c->fid = id;
             const char *bad_id = rs_io_name_problem(id);
             if (bad_id) ERR(c, RS_ERR_INVALID, "properties.id", "'%.80s' %s", id, bad_id);
         }
-        get_positive(c, props, "properties", "sigma_h_m", false, &sigma_h);
-        get_positive(c, props, "properties", "sigma_v_m", false, &sigma_v);
-        get_string(c, props, "properties", "kind", false, &kind);
-        get_string(c, props, "properties", "note", false, &note);
+        rs_site__get_in_range(c, props, "properties", "sigma_h_m", false, RS_SITE_SURVEY_SIGMA_MIN_M,
+                              RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &sigma_h);
+        rs_site__get_in_range(c, props, "properties", "sigma_v_m", false, RS_SITE_SURVEY_SIGMA_MIN_M,
+                              RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &sigma_v);
+        rs_site__get_string(c, props, "properties", "kind", false, &kind);
+        rs_site__get_string(c, props, "properties", "note", false, &note);
     }
+    rs_site__check_duplicate_keys(c, f, NULL); // after the id is known: messages name it
 
     double given[3], llh[3] = {NAN, NAN, NAN}, p_enu[3] = {NAN, NAN, NAN};
     bool coords_ok = false;
     const cJSON *geometry =
-        get_object(c, f, NULL, "geometry", true, "{\"type\": \"Point\", \"coordinates\": [lon, lat, h]}");
+        rs_site__get_object(c, f, NULL, "geometry", true, "{\"type\": \"Point\", \"coordinates\": [lon, lat, h]}");
     if (geometry) {
         const char *gtype;
         const cJSON *xyz = cJSON_GetObjectItemCaseSensitive(geometry, "coordinates");
         int n = cJSON_GetArraySize(xyz);
-        if (get_string(c, geometry, "geometry", "type", true, &gtype) && strcmp(gtype, "Point")) {
+        if (rs_site__get_string(c, geometry, "geometry", "type", true, &gtype) && strcmp(gtype, "Point")) {
             ERR(c, RS_ERR_INVALID, "geometry.type", "'%s': a landmark is a \"Point\"", gtype);
         } else if (!xyz) {
             ERR(c, RS_ERR_PARSE, "coordinates", "missing ([lon, lat, h])");
@@ -494,8 +352,8 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
             coords_ok = true;
             for (int k = 0; k < 3; k++) {
                 const cJSON *x = cJSON_GetArrayItem(xyz, k);
-                char got[64];
-                json_excerpt(got, sizeof got, x);
+                char got[64] = "";
+                if (!cJSON_IsNumber(x)) rs_site__json_excerpt(got, sizeof got, x);
                 if (!cJSON_IsNumber(x))
                     ERR(c, RS_ERR_PARSE, "coordinates", "%s (%s) is not a number",
                         k == 0   ? "lon"
@@ -529,33 +387,140 @@ done:
     c->fid = NULL;
 }
 
+// landmarks.geojson is read one feature at a time (core/rs_json.h): memory is the file's text
+// and the landmarks, not a cJSON tree of ~1 kB per feature (1,000,000 landmarks: 1.5 GB that
+// way).
+typedef struct {
+    rs_site__reader *c;
+    size_t span[2][2]; // the text of "type" and "features"
+    bool has[2];
+    char **keys; // every top-level key, for repeats
+    int Nkeys, cap;
+    int cap_landmarks;
+} landmarks_ctx;
+
+static rs_status landmarks_top(void *ctx, const char *key, size_t begin, size_t end, rs_err *err)
+{
+    landmarks_ctx *t = ctx;
+    if (t->Nkeys == t->cap) {
+        int cap = t->cap ? 2 * t->cap : 8;
+        char **grown = realloc(t->keys, (size_t)cap * sizeof *grown);
+        if (!grown) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        t->keys = grown, t->cap = cap;
+    }
+    if (!(t->keys[t->Nkeys] = strdup(key))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    t->Nkeys++;
+    const int k = !strcmp(key, "type") ? 0 : !strcmp(key, "features") ? 1 : -1;
+    if (k >= 0 && !t->has[k]) { // the first, as cJSON would (a repeat is an error anyway)
+        t->span[k][0] = begin, t->span[k][1] = end;
+        t->has[k] = true;
+    }
+    return RS_OK;
+}
+
+static rs_status landmarks_feature(void *ctx, size_t index, const cJSON *f, size_t offset, rs_err *err)
+{
+    (void)offset;
+    landmarks_ctx *t = ctx;
+    rs_site *site = t->c->site;
+    if (index >= INT_MAX) return rs_err_set(err, RS_ERR_INVALID, "features: more than %d", INT_MAX - 1);
+    if (site->Nlandmarks == t->cap_landmarks) {
+        int cap = t->cap_landmarks ? (t->cap_landmarks < INT_MAX / 2 ? 2 * t->cap_landmarks : INT_MAX) : 64;
+        rs_site_landmark *grown = realloc(site->landmarks, (size_t)cap * sizeof *grown);
+        if (!grown) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        site->landmarks = grown, t->cap_landmarks = cap;
+    }
+    read_feature(t->c, f, (int)index);
+    return t->c->r->nomem ? rs_err_set(err, RS_ERR_NOMEM, "out of memory") : RS_OK;
+}
+
+// A syntax error of core/rs_json.h ("PATH:LINE: JSON syntax...") as a diagnostic at its line.
+static void json_syntax_error(rs_site__reader *c, const rs_err *e)
+{
+    if (e->status == RS_ERR_NOMEM) {
+        c->r->nomem = true;
+        return;
+    }
+    const char *m = e->msg;
+    const size_t n = strlen(c->file);
+    int line = 0;
+    if (!strncmp(m, c->file, n) && m[n] == ':') {
+        char *after;
+        long v = strtol(m + n + 1, &after, 10);
+        if (*after == ':' && v > 0 && v < INT_MAX) line = (int)v, m = after + 1;
+    }
+    while (*m == ' ') m++;
+    if (!strncmp(m, "JSON syntax: ", 13))
+        m += 13;
+    else if (!strncmp(m, "JSON syntax error ", 18))
+        m += 18;
+    ERR_AT(c, e->status, line, NULL, "invalid JSON: %s", m);
+}
+
 static void read_landmarks(rs_site__reader *c)
 {
     rs_site *site = c->site;
-    char *path = NULL;
-    cJSON *root =
-        read_json_file(c, &path, "landmarks.geojson",
-                       "the surveyed landmarks; 'roadside site init' writes an empty one", RS_IO_MAX_FILE_BYTES);
-    if (!root) goto done;
-    const char *type;
-    const cJSON *features = cJSON_GetObjectItemCaseSensitive(root, "features");
-    if (!cJSON_IsObject(root)) {
-        ERR(c, RS_ERR_PARSE, NULL, "the top level must be a GeoJSON FeatureCollection object");
-    } else if (get_string(c, root, NULL, "type", true, &type) && strcmp(type, "FeatureCollection")) {
-        ERR(c, RS_ERR_PARSE, "type", "'%s', expected \"FeatureCollection\"", type);
-    } else if (!cJSON_IsArray(features)) {
-        ERR(c, RS_ERR_PARSE, "features", "%s (a list of Point features)", features ? "not a list" : "missing");
-    } else {
-        c->landmarks_ok = true;
-        int n = cJSON_GetArraySize(features);
-        if (n == 0) ERR(c, RS_ERR_INVALID, "features", "empty: add one Point feature per surveyed landmark");
-        site->landmarks = calloc((size_t)(n ? n : 1), sizeof *site->landmarks);
-        if (!site->landmarks) c->r->nomem = true;
-        int i = 0;
-        for (const cJSON *f = features->child; f && site->landmarks; f = f->next) read_feature(c, f, i++);
+    char *path = rs_site__join(c, site->dir, "landmarks.geojson");
+    if (!path) return;
+    c->file = path;
+    size_t len = 0;
+    char *text = rs_site__read_file(c, "the surveyed landmarks; 'roadside site init' writes an empty one",
+                                    RS_IO_MAX_FILE_BYTES, &len);
+    landmarks_ctx t = {.c = c};
+    rs_err e = {0};
+    cJSON *type = NULL;
+    if (!text) goto done;
+    size_t i = strncmp(text, "\xEF\xBB\xBF", 3) ? 0 : 3;
+    while (i < len && strchr(" \t\r\n", text[i])) i++;
+    if (i == len) {
+        ERR(c, RS_ERR_PARSE, NULL, "invalid JSON: the file is empty");
+        goto done;
     }
+    if (text[i] != '{') {
+        ERR(c, RS_ERR_PARSE, NULL, "the top level must be a GeoJSON FeatureCollection object");
+        goto done;
+    }
+    if (rs_json_object(text, 0, len, path, landmarks_top, &t, &e) != RS_OK) {
+        json_syntax_error(c, &e);
+        goto done;
+    }
+    qsort(t.keys, (size_t)t.Nkeys, sizeof *t.keys, rs_site__cmp_key);
+    for (int k = 1; k < t.Nkeys; k++)
+        if (!strcmp(t.keys[k], t.keys[k - 1]) && (k == 1 || strcmp(t.keys[k], t.keys[k - 2])))
+            ERR(c, RS_ERR_PARSE, t.keys[k],
+                "appears more than once at the top level: JSON readers disagree on which one counts; keep one");
+    if (!t.has[0]) {
+        ERR(c, RS_ERR_PARSE, "type", "missing (a string)");
+        goto done;
+    }
+    if (rs_json_parse(&type, text, t.span[0][0], t.span[0][1], path, &e) != RS_OK) {
+        json_syntax_error(c, &e);
+        goto done;
+    }
+    if (!cJSON_IsString(type)) {
+        rs_site__wrong_type(c, "type", type, "a string in double quotes");
+        goto done;
+    }
+    if (strcmp(type->valuestring, "FeatureCollection")) {
+        ERR(c, RS_ERR_PARSE, "type", "'%s', expected \"FeatureCollection\"", type->valuestring);
+        goto done;
+    }
+    if (!t.has[1] || text[t.span[1][0]] != '[') {
+        ERR(c, RS_ERR_PARSE, "features", "%s (a list of Point features)", t.has[1] ? "not a list" : "missing");
+        goto done;
+    }
+    c->landmarks_ok = true;
+    if (rs_json_array(text, t.span[1][0], t.span[1][1], path, landmarks_feature, &t, &e) != RS_OK) {
+        json_syntax_error(c, &e);
+        c->landmarks_ok = false;
+        goto done;
+    }
+    if (site->Nlandmarks == 0) ERR(c, RS_ERR_INVALID, "features", "empty: add one Point feature per surveyed landmark");
 done:
-    cJSON_Delete(root);
+    cJSON_Delete(type);
+    for (int k = 0; k < t.Nkeys; k++) free(t.keys[k]);
+    free(t.keys);
+    free(text);
     c->file = NULL;
     free(path);
 }

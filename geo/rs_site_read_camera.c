@@ -124,16 +124,40 @@ static int split_csv(char *s, char **fields, int maxf)
     }
 }
 
+// A plain decimal number: [+-] digits [. digits] [(e|E) [+-] digits], with a digit on at least
+// one side of the point. strtod alone also takes hexadecimal ("0x620" would be 1568), "inf",
+// "nan" and "1e" prefixes of them; a pixel written so is a mistake, not a number.
+static bool is_decimal(const char *t)
+{
+    if (*t == '+' || *t == '-') t++;
+    int digits = 0;
+    while (isdigit((unsigned char)*t)) t++, digits++;
+    if (*t == '.')
+        for (t++; isdigit((unsigned char)*t); t++) digits++;
+    if (!digits) return false;
+    if (*t == 'e' || *t == 'E') {
+        t++;
+        if (*t == '+' || *t == '-') t++;
+        if (!isdigit((unsigned char)*t)) return false;
+        while (isdigit((unsigned char)*t)) t++;
+    }
+    return !*t;
+}
+
 static bool parse_csv_number(rs_site__reader *c, int line, const char *field, const char *text, double *out)
 {
     char *end;
     double v = strtod(text, &end);
-    if (!*text || *end) {
-        ERR_AT(c, RS_ERR_PARSE, line, field, "not a number ('%s')", text);
+    if (*text && !*end && !isfinite(v)) {
+        ERR_AT(c, RS_ERR_INVALID, line, field, "not finite ('%s')", text);
         return false;
     }
-    if (!isfinite(v)) {
-        ERR_AT(c, RS_ERR_INVALID, line, field, "not finite ('%s')", text);
+    if (!is_decimal(text)) {
+        const bool hex = strchr(text, 'x') || strchr(text, 'X'), comma = strchr(text, ',');
+        ERR_AT(c, RS_ERR_PARSE, line, field, "not a number ('%.40s')%s", text,
+               hex     ? ": only decimal numbers are read (write 1568, not 0x620)"
+               : comma ? ": a decimal comma? write 812.5, not 812,5"
+                       : "");
         return false;
     }
     *out = v;
@@ -191,8 +215,12 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
     if (col[COL_SIGMA] >= 0 && *fields[col[COL_SIGMA]]) {
         if (!parse_csv_number(c, line, "sigma_px", fields[col[COL_SIGMA]], &obs.sigma_px))
             ok = false;
-        else if (obs.sigma_px <= 0) {
-            ERR_AT(c, RS_ERR_INVALID, line, "sigma_px", "%g must be > 0", obs.sigma_px);
+        else if (!(obs.sigma_px >= RS_SITE_PIXEL_SIGMA_MIN_PX && obs.sigma_px <= RS_SITE_PIXEL_SIGMA_MAX_PX)) {
+            ERR_AT(c, RS_ERR_INVALID, line, "sigma_px",
+                   "%g px is outside [%g, %g] px: a 1-sigma under %g px is beyond any corner detector, over %g px "
+                   "it is no pick",
+                   obs.sigma_px, RS_SITE_PIXEL_SIGMA_MIN_PX, RS_SITE_PIXEL_SIGMA_MAX_PX, RS_SITE_PIXEL_SIGMA_MIN_PX,
+                   RS_SITE_PIXEL_SIGMA_MAX_PX);
             ok = false;
         }
     }
@@ -227,9 +255,11 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
     bool have_header = false;
     while (*p) {
         line++;
-        char *eol = strchr(p, '\n'), *next = eol ? eol + 1 : p + strlen(p);
-        if (eol) *eol = '\0';
-        if (eol && eol > p && eol[-1] == '\r') eol[-1] = '\0';
+        // a line ends at LF, CRLF or a lone CR (spreadsheets on old Macs write CR only)
+        char *eol = p + strcspn(p, "\r\n"), *next = eol;
+        if (*next == '\r') next++;
+        if (*next == '\n') next++;
+        *eol = '\0';
         char *s = p;
         p = next;
         while (isspace((unsigned char)*s)) s++;

@@ -4,6 +4,7 @@
 // The reader is layered, every call going down (never back up):
 //
 //   rs_site_read.c         rs_site_load, rs_site_check; site.json and landmarks.geojson
+//     rs_site_json.c         members of those JSON files, with their messages; repeated keys
 //     rs_site_read_camera.c  each camera's model file and observations CSV
 //       rs_site_check.c        plausibility checks that need more than one value
 //         rs_site_report.c       the report: diagnostics, and reading a site file into it
@@ -66,6 +67,53 @@ bool rs_site__inside(const rs_site__reader *c, const char *path);
 // (rs_io_read_file_max). Returns the malloc'ed, NUL-terminated contents (and their length; len
 // may be NULL), or NULL after reporting what is wrong.
 char *rs_site__read_file(rs_site__reader *c, const char *why, size_t max_bytes, size_t *len);
+
+// ---- JSON members (rs_site_json.c) ----
+// Each reads obj[key] ("prefix.key" in messages; prefix may be NULL), reports what is wrong at c
+// (a missing required member: "missing (EXPECTED)"; a wrong type, quoting what was found) and
+// returns false / NULL then, and for a missing optional member.
+
+struct cJSON;
+
+// A 1-sigma under 1 mm is better than any survey of a road feature (geo/rs_site.h's ranges).
+#define RS_SITE__SURVEY_SIGMA_RANGE \
+    "a 1-sigma under 1 mm is better than any survey of a road feature, over 100 m it is no survey"
+
+// Reads and parses the JSON file `name` of the site folder (a UTF-8 byte order mark allowed),
+// reporting a syntax error at its line and column. c->file is *path (owned by the caller, who
+// frees it and resets c->file) until the caller is done.
+struct cJSON *rs_site__read_json_file(rs_site__reader *c, char **path, const char *name, const char *why,
+                                      size_t max_bytes);
+// "prefix.key" (or "key") into buf, truncated to fit; returns buf.
+const char *rs_site__field_name(char *buf, size_t size, const char *prefix, const char *key);
+// A short rendering of a JSON value for messages, truncated with "...".
+void rs_site__json_excerpt(char *buf, size_t size, const struct cJSON *item);
+// obj[key], its full name into field; a missing required member is reported.
+const struct cJSON *rs_site__member(rs_site__reader *c, const struct cJSON *obj, const char *prefix, const char *key,
+                                    bool required, const char *expected, char *field, size_t size);
+// Reports `field` as not of the `expected` type, quoting it.
+void rs_site__wrong_type(rs_site__reader *c, const char *field, const struct cJSON *it, const char *expected);
+// A finite number; one > 0; one in [lo, hi] (`what` says what the bounds mean).
+bool rs_site__get_number(rs_site__reader *c, const struct cJSON *obj, const char *prefix, const char *key,
+                         bool required, double *out);
+bool rs_site__get_positive(rs_site__reader *c, const struct cJSON *obj, const char *prefix, const char *key,
+                           bool required, double *out);
+bool rs_site__get_in_range(rs_site__reader *c, const struct cJSON *obj, const char *prefix, const char *key,
+                           bool required, double lo, double hi, const char *unit, const char *what, double *out);
+// A non-empty string (a pointer into the JSON tree).
+bool rs_site__get_string(rs_site__reader *c, const struct cJSON *obj, const char *prefix, const char *key,
+                         bool required, const char **out);
+// An object; NULL if missing or not an object.
+const struct cJSON *rs_site__get_object(rs_site__reader *c, const struct cJSON *obj, const char *prefix,
+                                        const char *key, bool required, const char *expected);
+// Warns about members of obj not in `known` (NULL-terminated): most often a misspelt name.
+void rs_site__warn_unknown_keys(rs_site__reader *c, const struct cJSON *obj, const char *prefix,
+                                const char *const *known);
+// strcmp of two const char * (qsort).
+int rs_site__cmp_key(const void *a, const void *b);
+// Reports every key repeated within one object of `item`, recursively (O(k log k) per object):
+// JSON readers disagree on which of two equal keys counts.
+void rs_site__check_duplicate_keys(rs_site__reader *c, const struct cJSON *item, const char *prefix);
 
 // ---- checks (rs_site_check.c) ----
 

@@ -177,12 +177,30 @@ static void test_degenerate(void)
     q[2 * 7] = INFINITY;
     expect_error("inf pixel", RS_ERR_INVALID, "q_px[7]", &pb, pb.p_enu_m, q, 12);
 
-    // repeated landmark (same point, same pixel)
+    // a repeated landmark (same point, same pixel; a copied coordinate): the initial pose uses
+    // the first copy only and is still exact on noise-free data (issue 14, finding 4)
     memcpy(p, pb.p_enu_m, sizeof(p));
     memcpy(q, pb.q_px, sizeof(q));
     memcpy(&p[3 * 9], &p[3 * 2], 3 * sizeof(double));
     memcpy(&q[2 * 9], &q[2 * 2], 2 * sizeof(double));
-    expect_error("repeated landmark", RS_ERR_DEGENERATE, "same point", &pb, p, q, 12);
+    {
+        rs_calib_init_result res;
+        bool inl[TG_NMAX];
+        rs_err err = {0};
+        const rs_status st = rs_calib_init_pose(&res, inl, &pb.lensmodel, pb.intrinsics, p, q, 12, NULL, &err);
+        double dr = 0, dt = 0;
+        for (int k = 0; k < 3; k++)
+            dr = fmax(dr, fabs(res.rt_cam_enu[k] - pb.rt_cam_enu[k])),
+            dt = fmax(dt, fabs(res.rt_cam_enu[3 + k] - pb.rt_cam_enu[3 + k]));
+        CHECK(st == RS_OK && dr < 1e-6 && dt < 1e-4 && inl[2] && !inl[9] && res.Ninliers == 11,
+              "repeated landmark: status %d '%s', |dr| %.3g rad, |dt| %.3g m, inliers %d (want 11: the copy "
+              "is left out)",
+              st, err.msg, dr, dt, res.Ninliers);
+        printf("repeated landmark            -> pose, |dr| %.3g rad, |dt| %.3g m, %d inliers\n", dr, dt, res.Ninliers);
+    }
+    // ... but 3 distinct positions (landmarks 3, 4, 5 copies of 0, 1, 2) are too few
+    for (int i = 3; i < 6; i++) memcpy(&p[3 * i], &p[3 * (i - 3)], 3 * sizeof(double));
+    expect_error("3 distinct positions", RS_ERR_DEGENERATE, "distinct", &pb, p, q, 6);
 
     // collinear: all on the segment between landmarks 0 and 1, pixels through the truth pose
     for (int i = 0; i < 12; i++) {

@@ -1,11 +1,13 @@
-// rs_eval_json.c -- cutting a JSON array or object into its members, each parsed by cJSON.
+// rs_json.c -- cutting a JSON array or object into its members, each parsed by cJSON
+// (core/rs_json.h).
+#include "core/rs_json.h"
+
 #include <cjson/cJSON.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "eval/internal/rs_eval_internal.h"
-
-int rs_eval_json_line(const char *text, size_t offset)
+int rs_json_line(const char *text, size_t offset)
 {
     int line = 1;
     for (const char *p = text, *e = text + offset; (p = memchr(p, '\n', (size_t)(e - p))); p++) line++;
@@ -18,6 +20,13 @@ static size_t skip_space(const char *t, size_t i, size_t end)
 {
     while (i < end && is_space(t[i])) i++;
     return i;
+}
+
+// Past a UTF-8 byte order mark at the very start of the text (Windows editors write one; RFC 8259
+// lets a parser ignore it).
+static size_t skip_bom(const char *t, size_t i, size_t end)
+{
+    return i == 0 && end >= 3 && !memcmp(t, "\xEF\xBB\xBF", 3) ? 3 : i;
 }
 
 // End of the string whose opening quote is at t[i]: the index just past its closing quote, or
@@ -58,7 +67,7 @@ static size_t skip_value(const char *t, size_t i, size_t end)
 
 static rs_status syntax(const char *t, size_t at, const char *name, const char *what, rs_err *err)
 {
-    return rs_err_set(err, RS_ERR_PARSE, "%s:%d: JSON syntax: %s", name, rs_eval_json_line(t, at), what);
+    return rs_err_set(err, RS_ERR_PARSE, "%s:%d: JSON syntax: %s", name, rs_json_line(t, at), what);
 }
 
 // Parses the value starting at text[begin] with cJSON, which stops where the value ends.
@@ -74,14 +83,13 @@ static rs_status parse_value(cJSON **item, size_t *stop, const char *text, size_
         char near[24] = {0};
         size_t n = end - at < sizeof near - 1 ? end - at : sizeof near - 1;
         for (size_t k = 0; k < n; k++) near[k] = text[at + k] == '\n' ? ' ' : text[at + k];
-        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: JSON syntax error near '%s'", name, rs_eval_json_line(text, at),
-                          near);
+        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: JSON syntax error near '%s'", name, rs_json_line(text, at), near);
     }
     *stop = (size_t)(after - text);
     return RS_OK;
 }
 
-rs_status rs_eval_json_parse(cJSON **item, const char *text, size_t begin, size_t end, const char *name, rs_err *err)
+rs_status rs_json_parse(cJSON **item, const char *text, size_t begin, size_t end, const char *name, rs_err *err)
 {
     size_t stop = 0;
     rs_status st = parse_value(item, &stop, text, begin, end, name, err);
@@ -102,10 +110,10 @@ static rs_status closed(const char *text, size_t i, size_t end, const char *name
                                                : syntax(text, i + 1, name, "unexpected text after the end", err);
 }
 
-rs_status rs_eval_json_array(const char *text, size_t begin, size_t end, const char *name, rs_eval_json_item_fn each,
-                             void *ctx, rs_err *err)
+rs_status rs_json_array(const char *text, size_t begin, size_t end, const char *name, rs_json_item_fn each, void *ctx,
+                        rs_err *err)
 {
-    size_t i = skip_space(text, begin, end);
+    size_t i = skip_space(text, skip_bom(text, begin, end), end);
     if (i == end || text[i] != '[') return syntax(text, i, name, "expected a list '['", err);
     i = skip_space(text, i + 1, end);
     if (i < end && text[i] == ']') return closed(text, i, end, name, err);
@@ -127,10 +135,10 @@ rs_status rs_eval_json_array(const char *text, size_t begin, size_t end, const c
     }
 }
 
-rs_status rs_eval_json_object(const char *text, size_t begin, size_t end, const char *name, rs_eval_json_span_fn each,
-                              void *ctx, rs_err *err)
+rs_status rs_json_object(const char *text, size_t begin, size_t end, const char *name, rs_json_span_fn each, void *ctx,
+                         rs_err *err)
 {
-    size_t i = skip_space(text, begin, end);
+    size_t i = skip_space(text, skip_bom(text, begin, end), end);
     if (i == end || text[i] != '{') return syntax(text, i, name, "expected an object '{'", err);
     i = skip_space(text, i + 1, end);
     if (i < end && text[i] == '}') return closed(text, i, end, name, err);
@@ -138,7 +146,7 @@ rs_status rs_eval_json_object(const char *text, size_t begin, size_t end, const 
         if (i == end || text[i] != '"') return syntax(text, i, name, "expected a member name", err);
         size_t kend = skip_string(text, i, end);
         cJSON *k = NULL;
-        rs_status st = rs_eval_json_parse(&k, text, i, kend, name, err);
+        rs_status st = rs_json_parse(&k, text, i, kend, name, err);
         if (st != RS_OK) return st;
         char *key = cJSON_IsString(k) ? strdup(k->valuestring) : NULL;
         cJSON_Delete(k);
