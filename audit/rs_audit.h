@@ -53,6 +53,7 @@
 #include <mrcal/mrcal.h>
 
 #include "calib/rs_calib.h"
+#include "calib/rs_calib_site.h"
 #include "core/rs_status.h"
 #include "geo/rs_site.h"
 
@@ -274,9 +275,16 @@ rs_status rs_audit_site_camera( // out
 // Caller frees with free(); NULL when out of memory.
 char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result *result, const rs_audit_options *opt);
 
-// Writes out_dir/<id>.audit.json atomically (out_dir must exist).
+// Writes out_dir/<id>.audit.json atomically (out_dir must exist). On failure no <id>.audit.json
+// is left in out_dir, not even an earlier run's (it would look like this run's).
 rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam, const rs_audit_result *result,
                               const rs_audit_options *opt, rs_err *err);
+
+// What `roadside audit` writes per camera (<id>.audit.json) and its run record audit.run.json:
+// the run's outputs are all or nothing per camera, a camera that cannot be audited has its
+// earlier <id>.audit.json removed (rs_calib_site_outputs_remove), and the record says which
+// cameras were written, failed or not selected (calib/rs_calib_site.h describes it).
+extern const rs_calib_site_outputs rs_audit_site_outputs;
 
 #ifdef __cplusplus
 }

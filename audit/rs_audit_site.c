@@ -334,6 +334,9 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
     return text;
 }
 
+static const char *const audit_suffixes[] = {".audit.json"};
+const rs_calib_site_outputs rs_audit_site_outputs = {"audit.run.json", "roadside audit", audit_suffixes, 1};
+
 rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam, const rs_audit_result *result,
                               const rs_audit_options *opt, rs_err *err)
 {
@@ -343,6 +346,7 @@ rs_status rs_audit_site_write(const char *out_dir, const rs_site *site, int icam
     rs_status st = !path  ? rs_err_set(err, e.status, "%s", e.msg)
                    : text ? rs_io_write_file(path, text, strlen(text), err)
                           : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (st && path) (void)rs_io_remove_if_exists(path, NULL, NULL); // an earlier run's: not this run's
     free(path);
     free(text);
     return st;

@@ -1,6 +1,8 @@
 #include "calib/rs_calib_site.h"
 
+#include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -243,22 +245,19 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
 
 // ---------------------------------------------------------------- files
 
-static rs_status write_text(const char *out_dir, const char *id, const char *suffix, const char *text, rs_err *err)
-{
-    char *path = rs_io_child_path(out_dir, id, suffix, err);
-    if (!path) return err ? err->status : RS_ERR_INVALID;
-    rs_status st = rs_io_write_file(path, text, strlen(text), err);
-    free(path);
-    return st;
-}
+static const char *const calib_suffixes[] = {".cameramodel", ".json", ".opencv.yaml", ".homography.json"};
+enum { F_MODEL, F_JSON, F_YAML, F_HOMOGRAPHY, NFILES };
+const rs_calib_site_outputs rs_calib_site_calib_outputs = {"calib.run.json", "roadside calib", calib_suffixes, NFILES};
 
-static rs_status write_homography(const char *path, const rs_site *site, const rs_site_camera *cam,
-                                  const rs_calib_result *r, rs_err *err)
+// The text of <id>.homography.json into *text (caller frees).
+static rs_status homography_json(char **text, const rs_site *site, const rs_site_camera *cam, const rs_calib_result *r,
+                                 rs_err *err)
 {
+    *text = NULL;
     double H[9], Hi[9];
     rs_status st = rs_calib_ground_homography(H, Hi, r->intrinsics, r->rt_cam_enu, site->ground_normal_enu,
                                               site->ground_offset_m, err);
-    if (st) return rs_err_prefix(err, "%s", path);
+    if (st) return rs_err_prefix(err, "%s%s", cam->id, calib_suffixes[F_HOMOGRAPHY]);
     cJSON *root = cJSON_CreateObject();
     if (!root) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     cJSON_AddStringToObject(root, "camera", cam->id);
@@ -273,45 +272,283 @@ static rs_status write_homography(const char *path, const rs_site *site, const r
     cJSON_AddNumberToObject(plane, "offset_m", site->ground_offset_m);
     cJSON_AddItemToObject(root, "H_ground_from_px", json_matrix(Hi, 3, 3));
     cJSON_AddItemToObject(root, "H_px_from_ground", json_matrix(H, 3, 3));
-    char *text = cJSON_Print(root);
+    *text = cJSON_Print(root);
     cJSON_Delete(root);
-    if (!text) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    st = rs_io_write_file(path, text, strlen(text), err);
-    free(text);
+    return *text ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+}
+
+// Writes text into a file still under its temporary name.
+static rs_status stage_text(rs_io_atomic *a, const char *text, rs_err *err)
+{
+    const size_t n = strlen(text);
+    if (fwrite(text, 1, n, a->f) != n)
+        return rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(errno));
+    return RS_OK;
+}
+
+rs_status rs_calib_site_write(unsigned *written, unsigned *removed, const char *out_dir, const rs_site *site, int icam,
+                              const rs_calib_result *r, rs_err *err)
+{
+    rs_err local = {0};
+    if (!err) err = &local;
+    if (written) *written = 0;
+    if (removed) *removed = 0;
+    const rs_site_camera *cam = &site->cameras[icam];
+    const rs_camera calibrated = rs_calib_result_camera(&cam->camera, r);
+    const bool yaml = rs_camera_has_opencv_equivalent(&calibrated);
+    rs_io_atomic staged[NFILES];
+    memset(staged, 0, sizeof staged);
+    char *json = NULL, *homography = NULL;
+    if (!strcmp(cam->id, "calib.run") || !strcmp(cam->id, "audit.run")) // nothing written, nothing removed
+        return rs_err_set(err, RS_ERR_INVALID, "camera id '%s': its %s.json would take a run record's name: rename it",
+                          cam->id, cam->id);
+    rs_status st = RS_OK;
+    // the contents first, then every file under a temporary name, then all of them into place
+    if (!st && !(json = rs_calib_site_result_json(site, icam, r))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) st = homography_json(&homography, site, cam, r, err);
+    for (int k = 0; k < NFILES && !st; k++) {
+        if (k == F_YAML && !yaml) continue;
+        // every name is built by rs_io_child_path: an id that could leave out_dir is refused
+        char *path = rs_io_child_path(out_dir, cam->id, calib_suffixes[k], err);
+        st = path ? rs_io_atomic_open(&staged[k], path, err) : err->status;
+        free(path);
+    }
+    if (!st) st = rs_io_atomic_release(&staged[F_MODEL], err);
+    if (!st) st = rs_camera_write_cameramodel(&calibrated, staged[F_MODEL].tmp_path, err);
+    if (!st) st = stage_text(&staged[F_JSON], json, err);
+    if (!st && yaml) st = rs_io_atomic_release(&staged[F_YAML], err);
+    if (!st && yaml) st = rs_camera_write_opencv_yaml(&calibrated, staged[F_YAML].tmp_path, err);
+    if (!st) st = stage_text(&staged[F_HOMOGRAPHY], homography, err);
+    for (int k = 0; k < NFILES && !st; k++)
+        if (staged[k].path) st = rs_io_atomic_commit(&staged[k], err);
+    for (int k = 0; k < NFILES; k++) rs_io_atomic_abort(&staged[k]); // the temporaries not committed
+    free(json);
+    free(homography);
+
+    rs_err rerr = {0};
+    rs_status rst = RS_OK;
+    unsigned gone = 0;
+    if (st) // nothing of this camera stays: neither a file committed before the failure nor an earlier run's
+        rst = rs_calib_site_outputs_remove(&gone, out_dir, cam->id, &rs_calib_site_calib_outputs, &rerr);
+    else if (!yaml) { // an earlier run's <id>.opencv.yaml would describe another calibration
+        char *path = rs_io_child_path(out_dir, cam->id, calib_suffixes[F_YAML], &rerr);
+        bool was = false;
+        rst = path ? rs_io_remove_if_exists(path, &was, &rerr) : rerr.status;
+        free(path);
+        gone = was ? 1u << F_YAML : 0;
+    }
+    if (removed) *removed = gone;
+    if (st && rst && rst != RS_ERR_INVALID) { // the failure, and what could not be cleaned up
+        char first[sizeof err->msg];
+        snprintf(first, sizeof first, "%s", err->msg);
+        rs_err_set(err, st, "%s; and %s", first, rerr.msg);
+    } else if (!st && rst)
+        st = rs_err_set(err, rst, "%s", rerr.msg);
+    if (!st && written) *written = (1u << NFILES) - 1 - (yaml ? 0 : 1u << F_YAML);
     return st;
 }
 
-rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *r, rs_err *err)
+// ---------------------------------------------------------------- the outputs of a run, its record
+
+rs_status rs_calib_site_outputs_remove(unsigned *removed, const char *out_dir, const char *id,
+                                       const rs_calib_site_outputs *outputs, rs_err *err)
 {
-    const rs_site_camera *cam = &site->cameras[icam];
-    rs_status st;
-
-    // every name is built by rs_io_child_path: an id that could leave out_dir is refused
-    char *path = rs_io_child_path(out_dir, cam->id, ".cameramodel", err);
-    if (!path) return err ? err->status : RS_ERR_INVALID;
-    const rs_camera calibrated = rs_calib_result_camera(&cam->camera, r);
-    st = rs_camera_write_cameramodel(&calibrated, path, err);
-    free(path);
-    if (st) return st;
-
-    char *json = rs_calib_site_result_json(site, icam, r);
-    if (!json) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    st = write_text(out_dir, cam->id, ".json", json, err);
-    free(json);
-    if (st) return st;
-
-    if (rs_camera_has_opencv_equivalent(&calibrated)) {
-        if (!(path = rs_io_child_path(out_dir, cam->id, ".opencv.yaml", err)))
-            return err ? err->status : RS_ERR_INVALID;
-        st = rs_camera_write_opencv_yaml(&calibrated, path, err);
+    if (removed) *removed = 0;
+    rs_status first = RS_OK;
+    for (int k = 0; k < outputs->Nsuffixes; k++) {
+        char name[256];
+        snprintf(name, sizeof name, "%s%s", id, outputs->suffixes[k]);
+        if (!strcmp(name, "calib.run.json") || !strcmp(name, "audit.run.json")) continue; // a record, not an output
+        rs_err e = {0};
+        char *path = rs_io_child_path(out_dir, id, outputs->suffixes[k], &e);
+        const bool named = path != NULL;
+        bool was = false;
+        rs_status st = named ? rs_io_remove_if_exists(path, &was, &e) : e.status;
         free(path);
-        if (st) return st;
+        if (was && removed) *removed |= 1u << k;
+        if (st && !first) first = rs_err_set(err, st, "%s", e.msg);
+        if (!named) break; // an id that cannot name a file has no file here
     }
+    return first;
+}
 
-    if (!(path = rs_io_child_path(out_dir, cam->id, ".homography.json", err)))
-        return err ? err->status : RS_ERR_INVALID;
-    st = write_homography(path, site, cam, r, err);
+char *rs_calib_site_outputs_names(const char *id, unsigned mask, const rs_calib_site_outputs *outputs)
+{
+    size_t n = 1;
+    for (int k = 0; k < outputs->Nsuffixes; k++)
+        if (mask & 1u << k) n += strlen(id) + strlen(outputs->suffixes[k]) + 2;
+    char *s = malloc(n);
+    if (!s) return NULL;
+    size_t len = 0;
+    s[0] = '\0';
+    for (int k = 0; k < outputs->Nsuffixes; k++)
+        if (mask & 1u << k)
+            len += (size_t)snprintf(s + len, n - len, "%s%s%s", len ? ", " : "", id, outputs->suffixes[k]);
+    return s;
+}
+
+static cJSON *names_array(const char *id, unsigned mask, const rs_calib_site_outputs *outputs)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (int k = 0; a && k < outputs->Nsuffixes; k++)
+        if (mask & 1u << k) {
+            char name[256];
+            snprintf(name, sizeof name, "%s%s", id, outputs->suffixes[k]);
+            cJSON_AddItemToArray(a, cJSON_CreateString(name));
+        }
+    return a;
+}
+
+// Appends s to the malloc'ed *text; false when out of memory.
+static bool append_text(char **text, const char *s)
+{
+    const size_t n = strlen(*text), m = strlen(s);
+    char *grown = realloc(*text, n + m + 1);
+    if (!grown) return false;
+    memcpy(grown + n, s, m + 1);
+    *text = grown;
+    return true;
+}
+
+static const char *const run_status_names[] = {"written", "failed", "not selected"};
+
+rs_status rs_calib_site_run_write(const char *out_dir, const rs_calib_site_outputs *outputs, const char *site_dir,
+                                  const char *error, const rs_calib_site_run_camera *cameras, int N, rs_err *err)
+{
+    cJSON *root = cJSON_CreateObject();
+    if (!root) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    char *site_abs = realpath(site_dir, NULL);
+    cJSON_AddStringToObject(root, "command", outputs->command);
+    cJSON_AddStringToObject(root, "site", site_abs ? site_abs : site_dir);
+    free(site_abs);
+    bool complete = !error;
+    for (int i = 0; i < N; i++) complete &= cameras[i].status != RS_CALIB_SITE_RUN_FAILED;
+    cJSON_AddBoolToObject(root, "complete", complete);
+    if (error)
+        cJSON_AddStringToObject(root, "error", error);
+    else
+        cJSON_AddNullToObject(root, "error");
+    cJSON *list = cJSON_AddArrayToObject(root, "cameras");
+    for (int i = 0; list && i < N; i++) {
+        const rs_calib_site_run_camera *c = &cameras[i];
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "id", c->id);
+        cJSON_AddStringToObject(o, "status", run_status_names[c->status]);
+        if (c->status == RS_CALIB_SITE_RUN_WRITTEN)
+            cJSON_AddItemToObject(o, "files", names_array(c->id, c->files, outputs));
+        if (c->status == RS_CALIB_SITE_RUN_FAILED) {
+            if (c->error)
+                cJSON_AddStringToObject(o, "error", c->error);
+            else
+                cJSON_AddNullToObject(o, "error");
+            cJSON_AddItemToObject(o, "removed", names_array(c->id, c->files, outputs));
+        }
+        cJSON_AddItemToArray(list, o);
+    }
+    char *text = cJSON_Print(root);
+    cJSON_Delete(root);
+    char *path = rs_io_join(out_dir, outputs->record);
+    rs_status st =
+        text && path ? rs_io_write_file(path, text, strlen(text), err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    free(text);
     free(path);
+    return st;
+}
+
+char *rs_calib_site_run_summary(const char *out_dir, const rs_calib_site_outputs *outputs,
+                                const rs_calib_site_run_camera *cameras, int N)
+{
+    char *text = calloc(1, 1);
+    bool ok = text != NULL;
+    int Nwritten = 0, Nkept = 0;
+    for (int i = 0; i < N; i++) {
+        Nwritten += cameras[i].status == RS_CALIB_SITE_RUN_WRITTEN;
+        Nkept += cameras[i].status == RS_CALIB_SITE_RUN_NOT_SELECTED;
+    }
+    if (Nwritten)
+        ok = ok && append_text(&text, "written to ") && append_text(&text, out_dir) && append_text(&text, "/: ");
+    else
+        ok = ok && append_text(&text, "no camera written: ") && append_text(&text, out_dir) &&
+             append_text(&text, "/ holds no output of this run\n");
+    for (int i = 0, n = 0; ok && i < N; i++)
+        if (cameras[i].status == RS_CALIB_SITE_RUN_WRITTEN)
+            ok = append_text(&text, n++ ? ", " : "") && append_text(&text, cameras[i].id) &&
+                 append_text(&text, n == Nwritten ? "\n" : "");
+    for (int i = 0; ok && i < N; i++) {
+        const rs_calib_site_run_camera *c = &cameras[i];
+        if (c->status != RS_CALIB_SITE_RUN_FAILED) continue;
+        char *names = rs_calib_site_outputs_names(c->id, c->files, outputs);
+        ok = names && append_text(&text, "not written: ") && append_text(&text, c->id) &&
+             append_text(&text, ": failed (") && append_text(&text, c->error ? c->error : "no reason given") &&
+             append_text(&text, "); ") && append_text(&text, names[0] ? "its earlier outputs removed: " : "") &&
+             append_text(&text, names[0] ? names : "no earlier output of it was there") && append_text(&text, "\n");
+        free(names);
+    }
+    if (ok && Nkept) ok = append_text(&text, "not selected, earlier outputs (if any) left as they were: ");
+    for (int i = 0, n = 0; ok && i < N; i++)
+        if (cameras[i].status == RS_CALIB_SITE_RUN_NOT_SELECTED)
+            ok = append_text(&text, n++ ? ", " : "") && append_text(&text, cameras[i].id) &&
+                 append_text(&text, n == Nkept ? "\n" : "");
+    if (!ok) {
+        free(text);
+        return NULL;
+    }
+    return text;
+}
+
+// Appends ", names" (or "names") to *list; false when out of memory.
+static bool append_names(char **list, const char *names)
+{
+    return !names[0] || (append_text(list, (*list)[0] ? ", " : "") && append_text(list, names));
+}
+
+rs_status rs_calib_site_run_abandon(char **removed, const char *out_dir, const rs_calib_site_outputs *outputs,
+                                    const char *site_dir, const char *const *only, int Nonly, const char *error,
+                                    rs_err *err)
+{
+    if (!(*removed = calloc(1, 1))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    char *path = rs_io_join(out_dir, outputs->record), *text = NULL, *site_abs = realpath(site_dir, NULL);
+    rs_err ignore = {0};
+    cJSON *root = NULL;
+    if (path && site_abs && !rs_io_read_file_max(&text, NULL, path, RS_IO_MAX_SMALL_FILE_BYTES, &ignore))
+        root = cJSON_Parse(text);
+    free(text);
+    free(path);
+    const cJSON *command = cJSON_GetObjectItemCaseSensitive(root, "command");
+    const cJSON *site = cJSON_GetObjectItemCaseSensitive(root, "site");
+    const cJSON *list = cJSON_GetObjectItemCaseSensitive(root, "cameras");
+    // only a record of this command for this very site folder says which files are this site's
+    const bool ours = cJSON_IsString(command) && !strcmp(command->valuestring, outputs->command) &&
+                      cJSON_IsString(site) && !strcmp(site->valuestring, site_abs) && cJSON_IsArray(list);
+    free(site_abs);
+    const int N = ours ? cJSON_GetArraySize(list) : 0;
+    rs_calib_site_run_camera *cameras = calloc((size_t)N + 1, sizeof *cameras);
+    rs_status st = cameras ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    int n = 0;
+    const cJSON *c;
+    if (!st && ours) cJSON_ArrayForEach(c, list)
+        {
+            const cJSON *id = cJSON_GetObjectItemCaseSensitive(c, "id");
+            const cJSON *status = cJSON_GetObjectItemCaseSensitive(c, "status");
+            if (!cJSON_IsString(id) || rs_io_name_problem(id->valuestring) || !cJSON_IsString(status)) continue;
+            bool selected = Nonly == 0;
+            for (int i = 0; i < Nonly; i++) selected |= !strcmp(only[i], id->valuestring);
+            rs_calib_site_run_camera *rc = &cameras[n++];
+            rc->id = id->valuestring;
+            rc->status = selected ? RS_CALIB_SITE_RUN_FAILED : RS_CALIB_SITE_RUN_NOT_SELECTED;
+            rc->error = "the site could not be read";
+            if (!selected || !strcmp(status->valuestring, run_status_names[RS_CALIB_SITE_RUN_FAILED])) continue;
+            rs_err e = {0};
+            rs_status rst = rs_calib_site_outputs_remove(&rc->files, out_dir, rc->id, outputs, &e);
+            if (rst && !st) st = rs_err_set(err, rst, "%s", e.msg);
+            char *names = rs_calib_site_outputs_names(rc->id, rc->files, outputs);
+            if (!names || !append_names(removed, names)) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            free(names);
+        }
+    rs_status wst = ours ? rs_calib_site_run_write(out_dir, outputs, site_dir, error, cameras, n, &ignore) : RS_OK;
+    if (wst && !st) st = rs_err_set(err, wst, "%s", ignore.msg);
+    free(cameras);
+    cJSON_Delete(root);
     return st;
 }
 

@@ -1,8 +1,8 @@
 // rs_calib_site.h -- calibrating the cameras of a site: from an rs_site camera to an
 // rs_calib_problem, the files `roadside calib` writes, and reading a calibrated camera back.
 //
-// Files written for camera <id> into the output folder (each atomically; docs/calibration.md
-// describes every field):
+// Files written for camera <id> into the output folder, all or nothing (rs_calib_site_write;
+// docs/calibration.md describes every field):
 //   <id>.cameramodel      mrcal .cameramodel: final intrinsics, extrinsics = rt_cam_enu (the
 //                         reference frame is the site ENU); readable by mrcal's own tools
 //   <id>.json             the result: pose, covariance, sigmas, yaw/pitch/roll, per-landmark
@@ -12,6 +12,8 @@
 //   <id>.homography.json  the 3x3 map H_ground_from_px from undistorted pixels (the pinhole
 //                         core fx, fy, cx, cy; no distortion) to ground (E, N) on the site's
 //                         ground plane, and its inverse H_px_from_ground
+// and, last, the run record calib.run.json (rs_calib_site_run_write): which cameras this run
+// wrote, which failed (and which of their earlier files it removed), which it did not touch.
 #pragma once
 #include <stdbool.h>
 
@@ -44,10 +46,106 @@ rs_status rs_calib_site_problem_init( // out
     const rs_site *site, int icam, rs_err *err);
 void rs_calib_site_problem_free(rs_calib_site_problem *sp); // NULL-safe
 
-// Writes the four files of camera icam into out_dir (which must exist). The result must come
-// from rs_calib_site_problem_init(site, icam) + rs_calib_solve.
-rs_status rs_calib_site_write(const char *out_dir, const rs_site *site, int icam, const rs_calib_result *result,
-                              rs_err *err);
+// Writes the files of camera icam into out_dir (which must exist), all or nothing: every file is
+// first written under a temporary name, and only when all are complete are they renamed into
+// place. *written receives the bits (rs_calib_site_calib_outputs' suffixes) of the files
+// written. On any failure none of the camera's files is left in out_dir, not even those of an
+// earlier run (they no longer match the site): *removed receives the bits of the files removed. On success *removed
+// has the bit of an earlier <id>.opencv.yaml that this camera's lens model no longer has (it is
+// removed: it would describe another calibration). The result must come from
+// rs_calib_site_problem_init(site, icam) + rs_calib_solve. An id whose <id>.json would be a run
+// record's name (calib.run, audit.run) is refused (RS_ERR_INVALID).
+rs_status rs_calib_site_write( // out
+    unsigned *written,         // may be NULL: the bits of the files written
+    unsigned *removed,         // may be NULL
+    // in
+    const char *out_dir, const rs_site *site, int icam, const rs_calib_result *result, rs_err *err);
+
+// ---- the outputs of a run, and its record ----
+//
+// `roadside calib` and `roadside audit` write, per camera, a fixed set of files named
+// <id><suffix> into one folder. A run's outputs are all or nothing per camera: a camera that
+// fails leaves none of its files, and the files an earlier run wrote for it are removed (only
+// the names <id><suffix> of that command, never anything else). The run ends by writing its
+// record, atomically and last: OUT/<record>, a JSON object
+//   {"command": "roadside calib", "site": "/absolute/site/folder", "complete": true|false,
+//    "error": null | "why the run wrote nothing",
+//    "cameras": [{"id": "cam1", "status": "written", "files": ["cam1.cameramodel", ...]},
+//                {"id": "cam3", "status": "failed", "error": "...", "removed": [...]},
+//                {"id": "cam2", "status": "not selected"}]}
+// "complete" is true when every selected camera was written. A camera "not selected" (--camera)
+// keeps whatever an earlier run wrote for it. The record's name cannot be an output of a camera:
+// calib refuses the ids "calib.run" and "audit.run".
+
+// What one command writes per camera.
+typedef struct {
+    const char *record;          // the run record's file name in the output folder
+    const char *command;         // "roadside calib": written into the record
+    const char *const *suffixes; // (Nsuffixes,) the ends of a camera's file names; bit k of a
+                                 //   mask below stands for suffixes[k]
+    int Nsuffixes;               // <= 16
+} rs_calib_site_outputs;
+
+// roadside calib's: .cameramodel, .json, .opencv.yaml, .homography.json; record calib.run.json
+extern const rs_calib_site_outputs rs_calib_site_calib_outputs;
+
+typedef enum {
+    RS_CALIB_SITE_RUN_WRITTEN,     // every file of the camera written by this run
+    RS_CALIB_SITE_RUN_FAILED,      // nothing written; its earlier files removed
+    RS_CALIB_SITE_RUN_NOT_SELECTED // not part of this run: earlier files, if any, left as they were
+} rs_calib_site_run_status;
+
+// One camera of a run.
+typedef struct {
+    const char *id;
+    rs_calib_site_run_status status;
+    unsigned files;    // WRITTEN: the files written; FAILED: the earlier files removed (bits of
+                       //   the suffixes)
+    const char *error; // FAILED: why; may be NULL
+} rs_calib_site_run_camera;
+
+// Removes camera id's outputs (out_dir/<id><suffix> for each suffix of `outputs`; a folder of
+// that name is not removed, nor a run record calib.run.json or audit.run.json) from out_dir.
+// out: *removed (may be NULL): the bits of the files that were there and are removed
+// Errors: RS_ERR_INVALID (an id that cannot name a file), RS_ERR_IO (a file that could not be
+// removed; the others are still tried), RS_ERR_NOMEM.
+rs_status rs_calib_site_outputs_remove( // out
+    unsigned *removed,                  // may be NULL
+    // in
+    const char *out_dir, const char *id, const rs_calib_site_outputs *outputs, rs_err *err);
+
+// The file names of id's outputs in `mask`, ", "-separated ("cam3.cameramodel, cam3.json"; ""
+// for an empty mask). Caller frees; NULL when out of memory.
+char *rs_calib_site_outputs_names(const char *id, unsigned mask, const rs_calib_site_outputs *outputs);
+
+// Writes the run record out_dir/<outputs->record> (see above) atomically. site_dir: the site
+// folder as given (recorded resolved to an absolute path); error: why the run wrote nothing
+// (may be NULL); cameras (N,): every camera of the site, in order.
+rs_status rs_calib_site_run_write(const char *out_dir, const rs_calib_site_outputs *outputs, const char *site_dir,
+                                  const char *error, const rs_calib_site_run_camera *cameras, int N, rs_err *err);
+
+// What a run wrote and did not, in words, for the command to print (caller frees; NULL when out
+// of memory): "written to OUT/: cam1, cam2" (or "no camera written: OUT/ holds no output of this
+// run"), then one line per failed camera "not written: cam3: failed (ERROR); its earlier outputs
+// removed: cam3.cameramodel, ..." and one for the cameras not selected. Every line ends in '\n'.
+char *rs_calib_site_run_summary(const char *out_dir, const rs_calib_site_outputs *outputs,
+                                const rs_calib_site_run_camera *cameras, int N);
+
+// A run whose site could not be read (rs_site_load failed with `error`): no camera can be
+// written, so the outputs an earlier run of the same command and the same site folder wrote
+// into out_dir are superseded and removed. The cameras are those out_dir's run record lists
+// as written or not selected, restricted to `only` when Nonly > 0 (--camera); then the record
+// is rewritten (those cameras failed, the others not selected, `error` given). Nothing happens
+// when out_dir holds no record of this command for this site folder (a mistyped SITE never
+// empties another site's folder).
+// out: *removed: the names of the files removed, ", "-separated, "" when none (caller frees)
+// Errors: RS_ERR_IO (a file could not be removed, or the record not written), RS_ERR_NOMEM.
+rs_status rs_calib_site_run_abandon( // out
+    char **removed,
+    // in
+    const char *out_dir, const rs_calib_site_outputs *outputs, const char *site_dir, const char *const *only,
+    int Nonly, // (Nonly,) camera ids; all when Nonly == 0
+    const char *error, rs_err *err);
 
 // RMS reprojection error, in pixels, of the inliers' SURVEYED landmark positions through the
 // solved pose and intrinsics: what a tool that trusts the survey (OpenCV's solvePnP, a

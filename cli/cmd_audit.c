@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "audit/rs_audit.h"
 #include "cli/rs_cli.h"
@@ -25,7 +26,9 @@ static const char audit_usage[] =
     "    on the re-picked pixels) and the estimated rotation and shift;\n"
     "  - with --calib: the audit of a calibration made elsewhere: its reprojection errors against\n"
     "    the site's picks and whether its parts (K, R, t, P) agree.\n"
-    "Writes OUT/<id>.audit.json per camera and prints a summary.\n"
+    "Writes OUT/<id>.audit.json per camera (a camera that cannot be audited gets none, and an\n"
+    "earlier run's is removed), then OUT/audit.run.json, the record of which cameras this run\n"
+    "wrote, which failed and which it did not select, and prints a summary.\n"
     "\n"
     "Options:\n"
     "  --calib PATH           a calibration to audit: a file (mrcal .cameramodel, or OpenCV-style\n"
@@ -50,7 +53,9 @@ static const char audit_usage[] =
     "  -h, --help             this text\n"
     "\n"
     "Exit status: 0 when every selected camera passes, 1 when any fails a threshold, has moved,\n"
-    "has an inconsistent calibration or cannot be audited, 2 on a usage error.\n";
+    "has an inconsistent calibration or cannot be audited, or the site cannot be read (then the\n"
+    "<id>.audit.json an earlier run wrote for this site, as its audit.run.json lists them, are\n"
+    "removed), 2 on a usage error.\n";
 
 static bool is_dir(const char *path)
 {
@@ -147,10 +152,31 @@ int rs_cli_audit(int argc, char **argv)
     }
     const char *site_dir = argv[optind];
     rs_err err = {0};
-    rs_status st = RS_OK;
-    rs_site *site = rs_cli_load_site("audit", site_dir);
-    if (!site) {
+    char *default_out = out_dir ? NULL : rs_io_join(site_dir, "calib");
+    if (!out_dir) out_dir = default_out;
+    if (!out_dir) {
         free(only);
+        return rs_cli_fail("audit", RS_ERR_NOMEM, NULL);
+    }
+    const rs_calib_site_outputs *outputs = &rs_audit_site_outputs;
+    rs_site *site = NULL;
+    rs_status st = rs_site_load(&site, site_dir, &err);
+    if (st) {
+        fprintf(stderr, "roadside audit: %s\n(run 'roadside site check %s' for every problem)\n",
+                err.msg[0] ? err.msg : rs_strerror(st), site_dir);
+        // no camera can be audited: what an earlier audit wrote for this site is superseded
+        char *removed = NULL;
+        rs_err rerr = {0};
+        char why[sizeof err.msg + 32];
+        snprintf(why, sizeof why, "the site could not be read: %s", err.msg[0] ? err.msg : rs_strerror(st));
+        if (rs_calib_site_run_abandon(&removed, out_dir, outputs, site_dir, only, Nonly, why, &rerr))
+            fprintf(stderr, "roadside audit: %s\n", rerr.msg);
+        if (removed && removed[0])
+            fprintf(stderr, "roadside audit: nothing written; the earlier audits of this site in %s/ are removed: %s\n",
+                    out_dir, removed);
+        free(removed);
+        free(only);
+        free(default_out);
         return RS_EXIT_FAIL;
     }
     int usage = rs_cli_check_cameras("audit", site, only, Nonly);
@@ -161,17 +187,22 @@ int rs_cli_audit(int argc, char **argv)
     bool calib_dir = calib && is_dir(calib);
     if (!usage && calib && !calib_dir && Nselected != 1)
         usage = rs_cli_usage_error("audit", "--calib %s is one file: say which camera with --camera ID", calib);
-    char *default_out = out_dir ? NULL : rs_io_join(site_dir, "calib");
-    if (!out_dir) out_dir = default_out;
+    struct stat sb;
+    const bool out_existed = stat(out_dir, &sb) == 0;
     if (!usage && (st = rs_io_mkdir_p(out_dir, &err))) usage = rs_cli_fail("audit", st, &err);
+    rs_calib_site_run_camera *runs = usage ? NULL : calloc((size_t)site->Ncameras + 1, sizeof *runs);
+    char **errors = usage ? NULL : calloc((size_t)site->Ncameras + 1, sizeof *errors);
+    if (!usage && (!runs || !errors)) usage = rs_cli_fail("audit", RS_ERR_NOMEM, NULL);
     if (usage) {
+        free(runs);
+        free(errors);
         free(only);
         free(default_out);
         rs_site_free(site);
         return usage;
     }
 
-    int failed = 0;
+    int failed = 0, written = 0;
     bool first = true;
     if (json)
         printf("[\n");
@@ -182,14 +213,15 @@ int rs_cli_audit(int argc, char **argv)
         const char *id = site->cameras[icam].id;
         bool selected = Nonly == 0;
         for (int i = 0; i < Nonly; i++) selected |= !strcmp(only[i], id);
+        runs[icam] = (rs_calib_site_run_camera){.id = id, .status = RS_CALIB_SITE_RUN_NOT_SELECTED};
         if (!selected) continue;
         char *obs = NULL;
         if (against_dir) {
             char name[512];
             snprintf(name, sizeof name, "%s.csv", id);
             obs = rs_io_join(against, name);
-            struct stat sb;
-            if (obs && stat(obs, &sb) != 0) {
+            struct stat osb;
+            if (obs && stat(obs, &osb) != 0) {
                 free(obs); // this camera was not re-picked
                 obs = NULL;
             }
@@ -200,9 +232,20 @@ int rs_cli_audit(int argc, char **argv)
         if (st == RS_OK) st = rs_audit_site_write(out_dir, site, icam, &r, &opt, &err);
         free(obs);
         if (st) {
+            // not audited: an earlier run's <id>.audit.json would look like this run's
+            unsigned removed = 0;
+            char why[sizeof err.msg];
+            snprintf(why, sizeof why, "%s", err.msg[0] ? err.msg : rs_strerror(st));
+            rs_err rerr = {0};
+            if (rs_calib_site_outputs_remove(&removed, out_dir, id, outputs, &rerr))
+                rs_err_set(&err, st, "%s; and %s", why, rerr.msg);
             failed++;
+            errors[icam] = strdup(err.msg[0] ? err.msg : rs_strerror(st));
+            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_FAILED, removed, errors[icam]};
             fprintf(stderr, "roadside audit: camera %s: %s\n", id, err.msg[0] ? err.msg : rs_strerror(st));
         } else {
+            written++;
+            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_WRITTEN, 1u, NULL};
             failed += !r.pass;
             if (json) {
                 char *text = rs_audit_result_json(site, icam, &r, &opt);
@@ -216,10 +259,23 @@ int rs_cli_audit(int argc, char **argv)
         }
         rs_audit_result_free(&r);
     }
-    if (json)
-        printf("\n]\n");
-    else
-        printf("written to %s/<camera>.audit.json\n", out_dir);
+    if (json) printf("\n]\n");
+    // the run record, last; a folder this run created and left empty is removed instead
+    if (written || out_existed) {
+        st = rs_calib_site_run_write(out_dir, outputs, site_dir, NULL, runs, site->Ncameras, &err);
+        if (st) {
+            fprintf(stderr, "roadside audit: %s\n", err.msg);
+            failed++;
+        }
+    } else
+        (void)rmdir(out_dir);
+    // what was written and what was not: on stdout under the table, on stderr after --json
+    char *summary = rs_calib_site_run_summary(out_dir, outputs, runs, site->Ncameras);
+    if (summary) fputs(summary, json ? stderr : stdout);
+    free(summary);
+    for (int icam = 0; icam < site->Ncameras; icam++) free(errors[icam]);
+    free(errors);
+    free(runs);
     free(only);
     free(default_out);
     rs_site_free(site);

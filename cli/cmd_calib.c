@@ -4,6 +4,8 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "calib/rs_calib.h"
 #include "calib/rs_calib_site.h"
@@ -24,11 +26,14 @@ static const char calib_usage[] =
     "  <id>.json             pose, covariance, sigmas, yaw/pitch/roll, residuals per landmark\n"
     "  <id>.opencv.yaml      K, distortion, R, t (lens models with an OpenCV equivalent)\n"
     "  <id>.homography.json  undistorted pixels <-> ground (E, N) on the site's ground plane\n"
-    "and prints a summary table: landmarks used and rejected as outliers; rms_px, the RMS\n"
-    "reprojection error after the landmarks moved within their survey sigmas; rms_srv, the RMS\n"
-    "of the surveyed positions (what OpenCV would report); the 1-sigma of the camera position\n"
-    "(metres, E N U combined) and of its yaw (degrees); the variance factor chi2/dof (about 1\n"
-    "when the stated sigmas are right).\n"
+    "all or nothing: a camera that fails leaves none of these, and an earlier run's files of it\n"
+    "are removed. Last, OUT/calib.run.json records which cameras this run wrote, which failed\n"
+    "and which it did not select. It prints a summary table: landmarks used and rejected as\n"
+    "outliers; rms_px, the RMS reprojection error after the landmarks moved within their\n"
+    "survey sigmas; rms_srv, the RMS of the surveyed positions (what OpenCV would report); the\n"
+    "1-sigma of the camera position (metres, E N U combined) and of its yaw (degrees); the\n"
+    "variance factor chi2/dof (about 1 when the stated sigmas are right); then which cameras\n"
+    "were written and which were not.\n"
     "\n"
     "Options:\n"
     "  -o, --output DIR   output folder (created if needed; default SITE/calib)\n"
@@ -39,7 +44,8 @@ static const char calib_usage[] =
     "  -h, --help         this text\n"
     "\n"
     "Exit status: 0 when every selected camera calibrated, 1 when any failed (the others are\n"
-    "still written), 2 on a usage error.\n";
+    "still written) or the site could not be read (then the files an earlier run wrote for\n"
+    "this site into OUT, as its calib.run.json lists them, are removed), 2 on a usage error.\n";
 
 static const char locate_usage[] =
     "usage: roadside locate SITE --camera ID [--calib DIR] [U V]\n"
@@ -142,24 +148,51 @@ int rs_cli_calib(int argc, char **argv)
     const char *site_dir = argv[optind];
 
     rs_err err = {0};
-    rs_site *site = rs_cli_load_site("calib", site_dir);
-    int usage = site ? rs_cli_check_cameras("calib", site, only, Nonly) : RS_EXIT_FAIL;
-    if (usage) {
-        free(only);
-        rs_site_free(site);
-        return usage;
-    }
     char *default_out = out_dir ? NULL : rs_io_join(site_dir, "calib");
     if (!out_dir) out_dir = default_out;
-    rs_status st = rs_io_mkdir_p(out_dir, &err);
+    if (!out_dir) {
+        free(only);
+        return rs_cli_fail("calib", RS_ERR_NOMEM, NULL);
+    }
+    const rs_calib_site_outputs *outputs = &rs_calib_site_calib_outputs;
+    rs_site *site = NULL;
+    rs_status st = rs_site_load(&site, site_dir, &err);
     if (st) {
+        fprintf(stderr, "roadside calib: %s\n(run 'roadside site check %s' for every problem)\n",
+                err.msg[0] ? err.msg : rs_strerror(st), site_dir);
+        // no camera can be calibrated: what an earlier run wrote for this site is superseded
+        char *removed = NULL;
+        rs_err rerr = {0};
+        char why[sizeof err.msg + 32];
+        snprintf(why, sizeof why, "the site could not be read: %s", err.msg[0] ? err.msg : rs_strerror(st));
+        rs_status rst = rs_calib_site_run_abandon(&removed, out_dir, outputs, site_dir, only, Nonly, why, &rerr);
+        if (removed && removed[0])
+            fprintf(stderr,
+                    "roadside calib: nothing written; the earlier outputs of this site in %s/ are removed: %s\n",
+                    out_dir, removed);
+        if (rst) fprintf(stderr, "roadside calib: %s\n", rerr.msg);
+        free(removed);
+        free(only);
+        free(default_out);
+        return RS_EXIT_FAIL;
+    }
+    int usage = rs_cli_check_cameras("calib", site, only, Nonly);
+    struct stat sb;
+    const bool out_existed = stat(out_dir, &sb) == 0;
+    if (!usage && (st = rs_io_mkdir_p(out_dir, &err))) usage = rs_cli_fail("calib", st, &err);
+    rs_calib_site_run_camera *runs = usage ? NULL : calloc((size_t)site->Ncameras + 1, sizeof *runs);
+    char **errors = usage ? NULL : calloc((size_t)site->Ncameras + 1, sizeof *errors);
+    if (!usage && (!runs || !errors)) usage = rs_cli_fail("calib", RS_ERR_NOMEM, NULL);
+    if (usage) {
+        free(runs);
+        free(errors);
         free(only);
         free(default_out);
         rs_site_free(site);
-        return rs_cli_fail("calib", st, &err);
+        return usage;
     }
 
-    int failed = 0;
+    int failed = 0, written = 0;
     bool first = true;
     if (json)
         printf("[\n");
@@ -169,33 +202,62 @@ int rs_cli_calib(int argc, char **argv)
         const char *id = site->cameras[icam].id;
         bool selected = Nonly == 0;
         for (int i = 0; i < Nonly; i++) selected |= !strcmp(only[i], id);
+        runs[icam] = (rs_calib_site_run_camera){.id = id, .status = RS_CALIB_SITE_RUN_NOT_SELECTED};
         if (!selected) continue;
 
         rs_calib_site_problem sp;
         rs_calib_result r;
         memset(&r, 0, sizeof r);
         err.msg[0] = '\0';
+        unsigned files = 0, removed = 0;
         st = rs_calib_site_problem_init(&sp, site, icam, &err);
         if (st == RS_OK) st = rs_calib_solve(&r, &sp.problem, &opt, &err);
-        if (st == RS_OK) st = rs_calib_site_write(out_dir, site, icam, &r, &err);
+        if (st == RS_OK) {
+            st = rs_calib_site_write(&files, &removed, out_dir, site, icam, &r, &err);
+        } else { // not calibrated: its earlier outputs no longer match the site
+            char why[sizeof err.msg];
+            snprintf(why, sizeof why, "%s", err.msg[0] ? err.msg : rs_strerror(st));
+            rs_err rerr = {0};
+            if (rs_calib_site_outputs_remove(&removed, out_dir, id, outputs, &rerr))
+                rs_err_set(&err, st, "%s; and %s", why, rerr.msg);
+        }
         if (st) {
             failed++;
+            errors[icam] = strdup(err.msg[0] ? err.msg : rs_strerror(st));
+            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_FAILED, removed, errors[icam]};
             fprintf(stderr, "roadside calib: camera %s: %s\n", id, err.msg[0] ? err.msg : rs_strerror(st));
-        } else if (json) {
-            char *text = rs_calib_site_result_json(site, icam, &r);
-            if (text) printf("%s%s", first ? "" : ",\n", text);
-            free(text);
-            first = false;
         } else {
-            print_summary_row(site, icam, &r);
+            written++;
+            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_WRITTEN, files, NULL};
+            if (json) {
+                char *text = rs_calib_site_result_json(site, icam, &r);
+                if (text) printf("%s%s", first ? "" : ",\n", text);
+                free(text);
+                first = false;
+            } else {
+                print_summary_row(site, icam, &r);
+            }
         }
         rs_calib_result_free(&r);
         rs_calib_site_problem_free(&sp);
     }
-    if (json)
-        printf("\n]\n");
-    else
-        printf("written to %s/\n", out_dir);
+    if (json) printf("\n]\n");
+    // the run record, last; a folder this run created and left empty is removed instead
+    if (written || out_existed) {
+        st = rs_calib_site_run_write(out_dir, outputs, site_dir, NULL, runs, site->Ncameras, &err);
+        if (st) {
+            fprintf(stderr, "roadside calib: %s\n", err.msg);
+            failed++;
+        }
+    } else
+        (void)rmdir(out_dir);
+    // what was written and what was not: on stdout under the table, on stderr after --json
+    char *summary = rs_calib_site_run_summary(out_dir, outputs, runs, site->Ncameras);
+    if (summary) fputs(summary, json ? stderr : stdout);
+    free(summary);
+    for (int icam = 0; icam < site->Ncameras; icam++) free(errors[icam]);
+    free(errors);
+    free(runs);
     free(only);
     free(default_out);
     rs_site_free(site);

@@ -35,9 +35,10 @@ static const char report_usage[] =
     "  --no-audit            skip the audit (no leave-one-out, no uncertainty map)\n"
     "  -h, --help            this text\n"
     "\n"
-    "Exit status: 0 when the report was written, 1 when it could not be (nothing is left\n"
-    "half-written), 2 on a usage error. A camera failing the audit's thresholds is reported in\n"
-    "the report and on stdout, and does not change the exit status (see 'roadside audit').\n";
+    "Exit status: 0 when the report was written, 1 when it could not be (then neither file is\n"
+    "left in DIR, not even an earlier report's: it would look current), 2 on a usage error. A\n"
+    "camera failing the audit's thresholds is reported in the report and on stdout, and does\n"
+    "not change the exit status (see 'roadside audit').\n";
 
 int rs_cli_report(int argc, char **argv)
 {
@@ -104,14 +105,25 @@ int rs_cli_report(int argc, char **argv)
     rs_err err = {0};
     rs_site *site = NULL;
     rs_status st = rs_site_load(&site, site_dir, &err);
+    rs_report_summary sum = {0};
     if (st) {
         fprintf(stderr, "roadside report: %s\n(run 'roadside site check %s' for every problem)\n", err.msg, site_dir);
+        // no report: an earlier one left in OUT would look like this run's
+        rs_err rerr = {0};
+        if (rs_report_remove(&sum.Nremoved, out_dir, &rerr)) fprintf(stderr, "roadside report: %s\n", rerr.msg);
+    } else {
+        st = rs_report_write(&sum, out_dir, site, &opt, &err);
+        rs_site_free(site);
+        if (st) rs_cli_fail("report", st, &err);
+    }
+    if (st) {
+        if (sum.Nremoved)
+            fprintf(stderr, "roadside report: no report written; the earlier report in %s/ is removed (%d file%s)\n",
+                    out_dir, sum.Nremoved, sum.Nremoved == 1 ? "" : "s");
+        else
+            fprintf(stderr, "roadside report: no report written\n");
         return RS_EXIT_FAIL;
     }
-    rs_report_summary sum;
-    st = rs_report_write(&sum, out_dir, site, &opt, &err);
-    rs_site_free(site);
-    if (st) return rs_cli_fail("report", st, &err);
     printf("report of %d camera%s, %d figures", sum.Ncameras, sum.Ncameras == 1 ? "" : "s", sum.Nfigures);
     if (sum.Naudit_fail) printf("; %d camera%s FAIL the audit", sum.Naudit_fail, sum.Naudit_fail == 1 ? "" : "s");
     if (sum.Naudit_failed)

@@ -9,7 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/file.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 // Opens path for reading without waiting (a FIFO with no writer would block) and checks that it
@@ -230,6 +232,17 @@ static int remove_entry(const char *path, const struct stat *sb, int type, struc
     return 0; // go on with the rest
 }
 
+rs_status rs_io_remove_if_exists(const char *path, bool *removed, rs_err *err)
+{
+    if (removed) *removed = false;
+    if (unlink(path) == 0) {
+        if (removed) *removed = true;
+        return RS_OK;
+    }
+    if (errno == ENOENT || errno == ENOTDIR) return RS_OK; // nothing there
+    return rs_err_set(err, RS_ERR_IO, "%s: cannot remove: %s", path, strerror(errno));
+}
+
 void rs_io_remove_tree(const char *path) { nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS); }
 
 bool rs_io_has_extension(const char *path, const char *ext)
@@ -269,4 +282,85 @@ char *rs_io_child_path(const char *dir, const char *name, const char *suffix, rs
     free(file);
     if (!path) rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     return path;
+}
+
+// ---- folder locks ----
+
+// The busy message: what the holder wrote into the lock file (fd), quoted field by field.
+static rs_status lock_busy(int fd, const char *dir, const char *path, rs_err *err)
+{
+    char text[512], since[64], what[256];
+    long pid = 0;
+    const ssize_t n = pread(fd, text, sizeof(text) - 1, 0);
+    text[n > 0 ? n : 0] = 0;
+    if (sscanf(text, "%ld %63s %255[^\n]", &pid, since, what) == 3 && pid > 0)
+        return rs_err_set(err, RS_ERR_IO, "%s is in use by %s (pid %ld) since %s (lock file %s)", dir, what, pid, since,
+                          path);
+    return rs_err_set(err, RS_ERR_IO, "%s is in use by another process (lock file %s, which names no holder yet)", dir,
+                      path);
+}
+
+rs_status rs_io_lock_dir(rs_io_lock *lock, const char *dir, const char *what, rs_err *err)
+{
+    lock->fd = -1;
+    lock->path = rs_io_join(dir, ".lock");
+    if (!lock->path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = RS_OK;
+    for (int attempt = 0;; attempt++) {
+        // O_NOFOLLOW: a link planted as DIR/.lock is refused, never followed
+        const int fd = open(lock->path, O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW | O_NOCTTY | O_NONBLOCK, 0644);
+        if (fd < 0) {
+            st = errno == ELOOP
+                     ? rs_err_set(err, RS_ERR_IO, "%s: a link, not a lock file: refused (remove it)", lock->path)
+                     : rs_err_set(err, RS_ERR_IO, "%s: cannot open the lock file: %s", lock->path, strerror(errno));
+            break;
+        }
+        struct stat sb, now;
+        if (fstat(fd, &sb) != 0 || !S_ISREG(sb.st_mode)) {
+            close(fd);
+            st = rs_err_set(err, RS_ERR_IO, "%s: the lock file is not a regular file: refused", lock->path);
+            break;
+        }
+        if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+            const int e = errno;
+            st = e == EWOULDBLOCK ? lock_busy(fd, dir, lock->path, err)
+                                  : rs_err_set(err, RS_ERR_IO, "%s: cannot lock: %s", lock->path, strerror(e));
+            close(fd);
+            break;
+        }
+        // The holder before us removes the file as it ends: if we locked a file no longer at
+        // `path`, start again with the one there now.
+        if (stat(lock->path, &now) != 0 || now.st_ino != sb.st_ino || now.st_dev != sb.st_dev) {
+            close(fd);
+            if (attempt < 100) continue;
+            st = rs_err_set(err, RS_ERR_IO, "%s: the lock file keeps being replaced", lock->path);
+            break;
+        }
+        char since[64] = "?", line[400];
+        const time_t t = time(NULL);
+        struct tm tm;
+        if (localtime_r(&t, &tm)) strftime(since, sizeof(since), "%Y-%m-%dT%H:%M:%S%z", &tm);
+        const int n = snprintf(line, sizeof(line), "%ld %s %s\n", (long)getpid(), since, what && *what ? what : "?");
+        if (n < 0 || ftruncate(fd, 0) != 0 || pwrite(fd, line, (size_t)n, 0) != n) {
+            st = rs_err_set(err, RS_ERR_IO, "%s: cannot write the lock file: %s", lock->path, strerror(errno));
+            unlink(lock->path);
+            close(fd);
+            break;
+        }
+        lock->fd = fd;
+        return RS_OK;
+    }
+    free(lock->path);
+    lock->path = NULL;
+    return st;
+}
+
+void rs_io_unlock(rs_io_lock *lock)
+{
+    if (!lock || !lock->path) return;
+    unlink(lock->path); // while still held: no other process can be holding this file
+    close(lock->fd);
+    free(lock->path);
+    lock->path = NULL;
+    lock->fd = -1;
 }

@@ -83,9 +83,41 @@ const char *rs_io_name_problem(const char *name);
 // rule it breaks (rs_io_name_problem), or RS_ERR_NOMEM, in err.
 char *rs_io_child_path(const char *dir, const char *name, const char *suffix, rs_err *err);
 
+// Removes the file `path` if there is one (unlink: a folder is never removed; a link is removed,
+// not what it points to). *removed (may be NULL) says whether a file was removed. A missing path
+// is RS_OK with *removed false; any other failure is RS_ERR_IO naming the path.
+rs_status rs_io_remove_if_exists(const char *path, bool *removed, rs_err *err);
+
 // Removes path and everything under it (files, folders, links themselves), best effort: what
 // cannot be removed is left. A missing path is not an error.
 void rs_io_remove_tree(const char *path);
+
+// ---- folder locks ----
+
+// An exclusive lock on a folder, so that two processes never write one output folder at once
+// (two `roadside synth` runs into one dataset would overwrite each other's work files). It is
+// flock(2) on DIR/.lock: the kernel drops it when the holder exits, however it ends, so a crashed
+// holder never leaves a stale lock. The lock file holds one line, "<pid> <start time> <what>",
+// that a second process quotes; it is removed by rs_io_unlock (one left by a crash is harmless:
+// the next holder takes it over). Forked children share their parent's lock (the same open file;
+// they must not call rs_io_unlock); programs they exec do not inherit it (close-on-exec).
+typedef struct {
+    int fd;     // the lock file, open while the lock is held (path != NULL)
+    char *path; // owned: DIR/.lock while held; NULL otherwise
+} rs_io_lock;
+
+// Takes the lock on the existing folder `dir` for `what` (a short text, e.g. "roadside synth")
+// without waiting. When another process holds it, returns RS_ERR_IO with
+//   "DIR is in use by WHAT (pid N) since YYYY-MM-DD HH:MM:SS +ZZZZ: ..."
+// and changes nothing in dir. Errors: RS_ERR_IO (the lock file cannot be made, is not a regular
+// file, or the file system refuses locks), RS_ERR_NOMEM. On failure *lock is not held (path NULL).
+// out: *lock, to be released with rs_io_unlock
+rs_status rs_io_lock_dir(rs_io_lock *lock,
+                         // in
+                         const char *dir, const char *what, rs_err *err);
+
+// Removes the lock file and releases the lock. Accepts NULL, a zeroed lock and a lock not held.
+void rs_io_unlock(rs_io_lock *lock);
 
 #ifdef __cplusplus
 }

@@ -10,6 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cJSON.h>
 
@@ -549,8 +551,8 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
 
 // ---- writing ----
 
-rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const rs_site *site,
-                          const rs_report_options *opt_in, rs_err *err)
+static rs_status write_report(rs_report_summary *summary, const char *out_dir, const rs_site *site,
+                              const rs_report_options *opt_in, rs_err *err)
 {
     rs_report_options opt;
     if (opt_in)
@@ -593,11 +595,18 @@ rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const
     if (!st) st = rs_io_mkdir_p(out_dir, err);
     char title[512];
     snprintf(title, sizeof title, "roadside report: %s", site->name);
-    if (!st) st = rs_doc_write_html(&doc, title, opt.figure_width_px, html_path, err);
-    if (!st) {
-        st = rs_doc_write_pdf(&doc, title, pdf_path, err);
-        if (st) remove(html_path); // no HTML without its PDF: the two are one report
-    }
+    // both files under temporary names, then both into place: the two are one report
+    rs_io_atomic html = {0}, pdf = {0};
+    if (!st) st = rs_io_atomic_open(&html, html_path, err);
+    if (!st) st = rs_io_atomic_open(&pdf, pdf_path, err);
+    if (!st) st = rs_io_atomic_release(&html, err);
+    if (!st) st = rs_io_atomic_release(&pdf, err);
+    if (!st) st = rs_doc_write_html(&doc, title, opt.figure_width_px, html.tmp_path, err);
+    if (!st) st = rs_doc_write_pdf(&doc, title, pdf.tmp_path, err);
+    if (!st) st = rs_io_atomic_commit(&html, err);
+    if (!st) st = rs_io_atomic_commit(&pdf, err);
+    rs_io_atomic_abort(&html);
+    rs_io_atomic_abort(&pdf);
     if (!st && summary) {
         summary->Ncameras = rep.Ncameras;
         summary->Nfigures = doc.Nfigures;
@@ -617,4 +626,42 @@ rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const
     free(pdf_path);
     free(default_calib);
     return st;
+}
+
+rs_status rs_report_write(rs_report_summary *summary, const char *out_dir, const rs_site *site,
+                          const rs_report_options *opt, rs_err *err)
+{
+    rs_err local = {0};
+    if (!err) err = &local;
+    struct stat sb;
+    const bool out_existed = stat(out_dir, &sb) == 0;
+    rs_status st = write_report(summary, out_dir, site, opt, err);
+    if (st) { // no report, and no earlier one that would look like this run's
+        int Nremoved = 0;
+        rs_err rerr = {0};
+        if (rs_report_remove(&Nremoved, out_dir, &rerr)) {
+            char first[sizeof err->msg];
+            snprintf(first, sizeof first, "%s", err->msg);
+            rs_err_set(err, st, "%s; and %s", first, rerr.msg);
+        }
+        if (summary) summary->Nremoved = Nremoved;
+        if (!out_existed) (void)rmdir(out_dir); // only when this call made it (and it is empty)
+    }
+    return st;
+}
+
+rs_status rs_report_remove(int *Nremoved, const char *out_dir, rs_err *err)
+{
+    if (Nremoved) *Nremoved = 0;
+    rs_status first = RS_OK;
+    static const char *const names[] = {"report.html", "report.pdf"};
+    for (int k = 0; k < 2; k++) {
+        char *path = rs_io_join(out_dir, names[k]);
+        bool was = false;
+        rs_status st = path ? rs_io_remove_if_exists(path, &was, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(path);
+        if (Nremoved) *Nremoved += was;
+        if (st && !first) first = st;
+    }
+    return first;
 }

@@ -62,10 +62,14 @@ typedef struct {
     int Nfigures;      // figures in each of the two files (1 + 2 per camera)
     int Naudit_failed; // cameras whose audit could not run (their sections say why)
     int Naudit_fail;   // cameras whose audit ran and found a threshold exceeded
+    int Nremoved;      // on failure: files of an earlier report removed from out_dir (0..2)
 } rs_report_summary;
 
-// Writes out_dir/report.html and out_dir/report.pdf (out_dir is created if needed; both files
-// atomically, so a failure leaves no partial report).
+// Writes out_dir/report.html and out_dir/report.pdf (out_dir is created if needed), together or
+// not at all: both are written under temporary names first and renamed into place only when
+// both are complete. On failure neither file is left in out_dir, not even an earlier report's
+// (it would look like this run's): summary->Nremoved counts those removed, and a folder this
+// call created is removed again.
 //
 // out:  summary (may be NULL)
 // in:   out_dir; site (rs_site_load); opt (may be NULL: defaults)
@@ -80,6 +84,14 @@ rs_status rs_report_write( // out
     const char *out_dir, const rs_site *site,
     const rs_report_options *opt, // may be NULL
     rs_err *err);                 // may be NULL
+
+// Removes out_dir/report.html and out_dir/report.pdf if they are there: what a run that could not
+// even call rs_report_write (its site unreadable) does, so that no earlier report looks like
+// its own. *Nremoved (may be NULL): how many files were removed. Errors: RS_ERR_IO, RS_ERR_NOMEM.
+rs_status rs_report_remove( // out
+    int *Nremoved,
+    // in
+    const char *out_dir, rs_err *err);
 
 #ifdef __cplusplus
 }
