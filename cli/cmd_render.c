@@ -9,6 +9,7 @@
 #include "core/rs_io.h"
 #include "synth/rs_synth_labels.h"
 #include "synth/rs_synth_render.h"
+#include "synth/rs_synth_sandbox.h"
 
 static const char render_usage[] =
     "usage: roadside render SITE --calib DIR --camera ID --vehicles FILE -o OUTDIR\n"
@@ -22,7 +23,16 @@ static const char render_usage[] =
     "image rectangle the others cover is rendered, with alpha over a transparent background,\n"
     "a distorted lens is resampled from a pinhole canvas through mrcal's projection, and the\n"
     "result is composited onto the background in linear light. An object-ID pass gives each\n"
-    "vehicle's visible pixels. povray's file I/O is restricted to OUTDIR.\n"
+    "vehicle's visible pixels.\n"
+    "\n"
+    "povray is confined by Linux Landlock (docs/povray.md, \"Confinement\"): it may read\n"
+    "and run the files under /usr (and /bin, /sbin, /lib*), /etc/povray, /etc/ld.so.cache\n"
+    "and its own executable, write /dev/null, and read and write OUTDIR (all of it: give it\n"
+    "a folder of its own); any other file is refused, and so are TCP connections on Linux\n"
+    ">= 6.7. POV-Ray's own I/O restriction (the povray.conf roadside writes) does not hold in\n"
+    "POV-Ray 3.7.0.10. Without Landlock (Linux before 5.13, a container that filters it, or\n"
+    "$ROADSIDE_POVRAY_SANDBOX=off) povray runs unconfined, with a note on stderr, and the\n"
+    "only defence is that roadside's scenes hold no file operation and no input text.\n"
     "\n"
     "Writes into OUTDIR: image.png (8-bit sRGB composite), rgba.png (16-bit linear RGBA,\n"
     "straight alpha), ids.png (16-bit: 0 background, k+1 = vehicle k of the file).\n"
@@ -50,6 +60,8 @@ static const char render_usage[] =
     "  --bbox KIND          the box written as bbox: footprint (default), body, visible\n"
     "  --min-visibility V   drop vehicles less visible than V in [0, 1] (default 0)\n"
     "  $ROADSIDE_POVRAY     the povray executable (default: povray on PATH)\n"
+    "  $ROADSIDE_POVRAY_SANDBOX=off   run povray without Landlock (a povray outside /usr\n"
+    "                       that needs files of its own)\n"
     "  -h, --help           this text\n"
     "\n"
     "Prints one line: vehicles, rendered, region, seconds in povray.\n"
@@ -69,6 +81,17 @@ enum {
     OPT_OVERCAST,
     OPT_SEPARATE
 };
+
+void rs_cli_synth_sandbox_note(const char *command)
+{
+    rs_synth_sandbox_info box;
+    rs_synth_sandbox_probe(&box);
+    if (box.abi == 0)
+        fprintf(stderr,
+                "%s: note: povray runs unconfined: %s; the scenes roadside writes hold no file operation "
+                "(docs/povray.md, \"Confinement\")\n",
+                command, box.why);
+}
 
 int rs_cli_render(int argc, char **argv)
 {
@@ -143,6 +166,7 @@ int rs_cli_render(int argc, char **argv)
         }
     }
     if ((rc = rs_cli_synth_load(&s, "render", argc, argv, optind)) != RS_EXIT_OK) return rc;
+    rs_cli_synth_sandbox_note("render");
     ropt.scene = s.scene;
     ropt.scene.overcast = overcast;
     rs_err err = {0};

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "cli/rs_cli.h"
+#include "cli/rs_cli_synth.h"
 #include "synth/rs_synth_dataset.h"
 
 static const char synth_usage[] =
@@ -26,7 +27,9 @@ static const char synth_usage[] =
     "differential rendering, the vehicles matched to the background's exposure, noise, blur\n"
     "and JPEG quality, and labelled through mrcal. Image k\n"
     "depends only on (seed, k): reruns and shard splits give identical files. A rerun skips\n"
-    "finished images. Writes DATASET/<split>/*.png, DATASET/annotations/instances_<split>.json\n"
+    "finished images after checking their files (a missing or corrupt one is remade, named on\n"
+    "stderr). One run per DATASET at a time: a second fails at once, naming the first's pid\n"
+    "(DATASET/.lock). Writes DATASET/<split>/*.png, DATASET/annotations/instances_<split>.json\n"
     "(COCO, YOLOX's layout), DATASET/labels/<split>/*.txt (YOLO), DATASET/label_2/*.txt (KITTI).\n"
     "\n"
     "Options:\n"
@@ -49,6 +52,7 @@ static const char synth_usage[] =
     "  --separate-processes   one povray process per pass (for benchmarks; default: the\n"
     "                         passes of an image are the frames of one povray process)\n"
     "  $ROADSIDE_POVRAY       the povray executable (default: povray on PATH)\n"
+    "  $ROADSIDE_POVRAY_SANDBOX=off   povray without Landlock (see roadside render --help)\n"
     "  -h, --help             this text\n"
     "\n"
     "Progress goes to stderr (a bar with rate and time left on a terminal, else a line every\n"
@@ -100,6 +104,13 @@ static void progress(void *ctx, int done, int total, int skipped)
         fprintf(stderr, "synth: %d/%d images (%d skipped), %.2f img/s, %.0f s left\n", done, total, skipped, rate,
                 left);
     }
+}
+
+// Resume notices: an image found damaged and remade, a part file left out of the COCO file.
+static void notice(void *ctx, const char *msg)
+{
+    (void)ctx;
+    fprintf(stderr, "synth: %s\n", msg);
 }
 
 static int synth_merge(int argc, char **argv)
@@ -268,8 +279,10 @@ int rs_cli_synth(int argc, char **argv)
     progress_state ps = {.t0 = wall_s(), .tty = isatty(2) != 0};
     opt.progress = progress;
     opt.progress_ctx = &ps;
+    opt.notice = notice;
     rs_synth_dataset_summary sum;
     rs_err err = {0};
+    rs_cli_synth_sandbox_note("synth");
     rs_status st = rs_synth_dataset_run(&sum, &opt, &err);
     if (st) {
         rc = rs_cli_fail("synth", st, &err);
@@ -279,6 +292,10 @@ int rs_cli_synth(int argc, char **argv)
            "%d annotations in the dataset, %.1f s (%.1f s in povray, %.3f s/image)\n",
            opt.shard_index, opt.shard_count, sum.Nimages, sum.Nmade, sum.Nskipped, sum.Ngrey, sum.Nannotations,
            sum.seconds, sum.seconds_povray, sum.Nmade > 0 ? sum.seconds / sum.Nmade : 0.0);
+    if (sum.Nremade > 0 || sum.Nleft_out > 0)
+        printf("resume:      %d of the images made were found damaged and remade; %d part files left out of the "
+               "COCO file (stderr names each)\n",
+               sum.Nremade, sum.Nleft_out);
     printf("images:      %s/%s/\n", opt.out_dir, opt.split);
     printf("COCO:        %s/annotations/instances_%s.json\n", opt.out_dir, opt.split);
     printf("YOLO:        %s/labels/%s/\n", opt.out_dir, opt.split);

@@ -52,3 +52,8 @@ enum {
 // messages printed; on failure *s is freed).
 int rs_cli_synth_load(rs_cli_synth_args *s, const char *command, int argc, char **argv, int optind);
 void rs_cli_synth_free(rs_cli_synth_args *s); // NULL-safe
+
+// Prints "COMMAND: note: povray runs unconfined: WHY ..." on stderr when Linux Landlock cannot
+// confine povray here (synth/rs_synth_sandbox.h); nothing otherwise. Implemented in
+// cmd_render.c; used by `roadside render` and `roadside synth`.
+void rs_cli_synth_sandbox_note(const char *command);

@@ -167,10 +167,26 @@ done:
 // What a worker tells the parent after each image, in one write (atomic: < PIPE_BUF).
 typedef struct {
     char kind;             // 'm' made, 'g' made over the grey ground, 's' skipped, 'e' error
+    bool remade;           // made again: found finished but damaged (note says why)
     int status;            // rs_status of an error
     double seconds_povray; // of this image
     char msg[400];         // an error's message
+    char note[700];        // a resume notice, "" if none
 } worker_report;
+
+// Counts one image's report into *sum, passes its notice on and calls the progress callback.
+static void count_report(const rs_synth_dataset_options *opt, rs_synth_dataset_summary *sum, const worker_report *rep,
+                         bool progress)
+{
+    if (rep->note[0] && opt->notice) opt->notice(opt->notice_ctx, rep->note);
+    sum->Nskipped += rep->kind == 's';
+    sum->Nmade += rep->kind != 's';
+    sum->Nremade += rep->remade;
+    sum->Ngrey += rep->kind == 'g';
+    sum->seconds_povray += rep->seconds_povray;
+    if (progress && opt->progress)
+        opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages, sum->Nskipped);
+}
 
 // Makes the images at positions j, j + J, .. of the shard. With fd >= 0 (a worker) each image
 // is reported through fd, else counted in *sum with the progress callback called.
@@ -192,11 +208,21 @@ static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *
             break;
         }
         worker_report rep = {.kind = 's'};
-        if (!rs_synth_dataset__file_exists(part)) {
+        rs_synth_dataset__state state;
+        char why[600];
+        st = rs_synth_dataset__check_finished(&state, why, sizeof(why), d, stem, c, err);
+        if (!st && state == RS_SYNTH_DATASET__DAMAGED) {
+            // unfinished from now on: an interruption of the remake leaves it to the next run
+            (void)remove(part); // (a folder in its place, if not empty, stops the remake's rename)
+            rep.remade = true;
+            snprintf(rep.note, sizeof(rep.note), "%s: remaking image %d", why, k);
+        }
+        if (!st && state != RS_SYNTH_DATASET__FINISHED) {
             bool grey = false;
             st = rs_synth_dataset__make_image(d, k, stem, c, &grey, &rep.seconds_povray, err);
-            rep.kind = st ? 'e' : grey ? 'g' : 'm';
+            rep.kind = grey ? 'g' : 'm';
         }
+        if (st) rep.kind = 'e';
         free(part);
         if (fd >= 0) {
             if (st) {
@@ -206,12 +232,11 @@ static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *
             if (write(fd, &rep, sizeof(rep)) != (ssize_t)sizeof(rep)) return RS_ERR_IO; // the parent is gone
             continue;
         }
-        if (st) break;
-        sum->Nskipped += rep.kind == 's';
-        sum->Nmade += rep.kind != 's';
-        sum->Ngrey += rep.kind == 'g';
-        sum->seconds_povray += rep.seconds_povray;
-        if (opt->progress) opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages, sum->Nskipped);
+        if (st) {
+            if (rep.note[0] && opt->notice) opt->notice(opt->notice_ctx, rep.note);
+            break;
+        }
+        count_report(opt, sum, &rep, true);
     }
     return st;
 }
@@ -255,20 +280,17 @@ static rs_status run_workers(rs_synth_dataset__run *d, rs_synth_dataset_summary 
     worker_report rep;
     bool failed = false;
     while (read(fds[0], &rep, sizeof(rep)) == (ssize_t)sizeof(rep)) {
+        rep.msg[sizeof(rep.msg) - 1] = 0;
+        rep.note[sizeof(rep.note) - 1] = 0;
         if (rep.kind == 'e') {
+            if (rep.note[0] && opt->notice) opt->notice(opt->notice_ctx, rep.note);
             if (!failed) {
-                rep.msg[sizeof(rep.msg) - 1] = 0;
                 st = rs_err_set(err, (rs_status)rep.status, "%s", rep.msg);
                 failed = true; // the other workers finish their share (resumable work)
             }
             continue;
         }
-        sum->Nskipped += rep.kind == 's';
-        sum->Nmade += rep.kind != 's';
-        sum->Ngrey += rep.kind == 'g';
-        sum->seconds_povray += rep.seconds_povray;
-        if (!failed && opt->progress)
-            opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages, sum->Nskipped);
+        count_report(opt, sum, &rep, !failed);
     }
     close(fds[0]);
     for (int j = 0; j < started; j++) {
@@ -292,9 +314,14 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
                           "synth: bad options (count >= 1, shard I/N with "
                           "0 <= I < N, site, calib and output folders required)");
     rs_synth_dataset__run d = {.opt = opt};
+    rs_io_lock lock = {0};
     char name[600];
     rs_status st = dataset_load(&d, err);
     if (st) goto done;
+    // One run per dataset folder: a second one would remake the same images in the same work/
+    // folders. The lock is taken before anything in DATASET is touched (but DATASET itself).
+    if ((st = rs_io_mkdir_p(opt->out_dir, err))) goto done;
+    if ((st = rs_io_lock_dir(&lock, opt->out_dir, "roadside synth", err))) goto done;
     snprintf(name, sizeof(name), "labels/%s", opt->split);
     d.split_dir = rs_io_join(opt->out_dir, opt->split);
     d.parts_dir = rs_io_join(opt->out_dir, "parts");
@@ -314,10 +341,11 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     for (int k = opt->shard_index; k < opt->count; k += opt->shard_count) sum.Nimages++;
     st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err) : run_images(&d, &sum, 0, 1, -1, err);
     if (!st) {
-        st = rs_synth_dataset__assemble(&d, &sum.Nannotations, err);
+        st = rs_synth_dataset__assemble(&d, &sum.Nannotations, &sum.Nleft_out, err);
         rmdir(d.work_root); // empty when every image finished
     }
 done:
+    rs_io_unlock(&lock);
     dataset_free(&d);
     sum.seconds = now_s() - t0;
     if (summary) *summary = sum;

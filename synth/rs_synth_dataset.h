@@ -31,8 +31,15 @@
 //   parts/<stem>.json                     the image's own COCO file: written LAST, atomically;
 //                                         its presence marks the image finished (resume)
 //   annotations/instances_<split>.json    assembled at the end from every parts/ file present
+//   .lock                                 while a run is on: its pid (core's rs_io_lock_dir)
 // Each file is written atomically (core/rs_io.h), so an interrupted run leaves finished images
 // and no half-written file; the per-image work folder work/<stem>/ is removed once done.
+// One run at a time: a run locks DATASET (flock, released by the kernel however the run ends); a
+// second run into it fails at once, naming the holder's pid, and changes nothing there.
+// Resume: an image whose parts/ file is present is checked before it is skipped (the part
+// parses and lists the image at the output size, the PNG decodes at that size, the YOLO and
+// KITTI files are regular files); a damaged one is made again, with a notice naming the file
+// and the fault.
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
@@ -72,13 +79,20 @@ typedef struct {
     // Called after each image of this shard (made or skipped); may be NULL.
     void (*progress)(void *ctx, int done, int total, int skipped);
     void *progress_ctx;
+    // Called with a one-line message ("FILE: fault: image remade", "FILE: fault: left out of the
+    // COCO file") for each image found damaged on resume and each part file left out of the
+    // COCO file; may be NULL.
+    void (*notice)(void *ctx, const char *msg);
+    void *notice_ctx;
 } rs_synth_dataset_options;
 
 void rs_synth_dataset_options_default(rs_synth_dataset_options *opt);
 
 typedef struct {
     int Nimages;         // images of this shard
-    int Nmade, Nskipped; // made now / found finished
+    int Nmade, Nskipped; // made now / found finished (and intact)
+    int Nremade;         // of Nmade: found finished but damaged, made again
+    int Nleft_out;       // part files left out of the COCO file (another shard's, damaged)
     int Nannotations;    // annotations in the assembled COCO file
     int Ngrey;           // images rendered over the grey ground (no matching background)
     double seconds;      // wall time
@@ -90,7 +104,8 @@ typedef struct {
 // then assembles DATASET's COCO file from every
 // finished image in DATASET. Returns RS_ERR_USAGE / RS_ERR_INVALID for bad options (an unknown
 // camera, an output size of another aspect than the camera's by more than 1 %, no lanes),
-// RS_ERR_EXTERNAL when povray fails, RS_ERR_IO / RS_ERR_PARSE for the files.
+// RS_ERR_EXTERNAL when povray fails, RS_ERR_IO / RS_ERR_PARSE for the files, RS_ERR_IO
+// "DATASET is in use by roadside synth (pid N) since TIME ..." when another run holds DATASET.
 // out: summary may be NULL
 rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
                                // in
@@ -104,6 +119,7 @@ uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
 // one run name an image the same), image and annotation ids renumbered from 1, categories of
 // the first input; image files are hard-linked into OUT (copied across file systems), with
 // their YOLO and KITTI files when present. Writes OUT/annotations/instances_<split>.json.
+// OUT is locked while merging (as a synth run locks DATASET): RS_ERR_IO "OUT is in use by ...".
 // out: *Nimages, *Nannotations may be NULL (totals over splits)
 rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations,
                                  // in

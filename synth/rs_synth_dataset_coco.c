@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cjson/cJSON.h>
@@ -129,22 +130,78 @@ static rs_status coco_write(coco_acc *a, const char *path, int *Nimages, int *Na
 
 // ---- assembling DATASET's COCO file ----
 
-// Assembles DATASET/annotations/instances_<split>.json from every parts/ file.
-rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, rs_err *err)
+// Drops the entries from `first` on (those of a file left out).
+static void coco_acc_truncate(coco_acc *a, int first)
+{
+    for (int i = first; i < a->N; i++) {
+        cJSON_Delete(a->e[i].image);
+        cJSON_Delete(a->e[i].anns);
+    }
+    if (first < a->N) a->N = first;
+}
+
+// Leaves a part file out of the COCO file: counts it, and tells why.
+static void leave_out(const rs_synth_dataset_options *opt, const char *why, int *Nleft_out)
+{
+    (*Nleft_out)++;
+    if (opt->notice) {
+        char msg[1400];
+        snprintf(msg, sizeof(msg), "%.1200s: left out of the COCO file (a rerun of its shard remakes it)", why);
+        opt->notice(opt->notice_ctx, msg);
+    }
+}
+
+// Adds a parts/ file unless it is not a COCO file or lists an image missing from split_dir:
+// then it is left out, with a notice. Errors: RS_ERR_NOMEM only.
+static rs_status add_part(coco_acc *a, const char *part, const char *split_dir, const rs_synth_dataset_options *opt,
+                          int *Nleft_out, rs_err *err)
+{
+    const int first = a->N;
+    rs_err e = {RS_OK, ""};
+    char why[1200] = "";
+    rs_status st = coco_add_file(a, part, &e);
+    if (st == RS_ERR_NOMEM) return rs_err_set(err, st, "%s", e.msg);
+    if (st) snprintf(why, sizeof(why), "%s", e.msg);
+    for (int i = first; i < a->N && !why[0]; i++) {
+        char *image = rs_io_join(split_dir, a->e[i].file_name);
+        struct stat sb;
+        if (!image) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        const bool there = lstat(image, &sb) == 0;
+        if (!there || !S_ISREG(sb.st_mode))
+            snprintf(why, sizeof(why), "%s: lists %s, which is %s", part, image,
+                     !there ? "missing" : "not a regular file");
+        free(image);
+    }
+    if (!why[0]) return RS_OK;
+    coco_acc_truncate(a, first);
+    leave_out(opt, why, Nleft_out);
+    return RS_OK;
+}
+
+rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, int *Nleft_out, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     coco_acc a = {0};
     rs_status st = RS_OK;
     char name[600], *path = NULL;
+    *Nleft_out = 0;
     for (int k = 0; k < opt->count && !st; k++) {
         char stem[300];
         rs_synth_dataset__stem(stem, sizeof(stem), k, d->cams[k % d->Ncams].id);
         snprintf(name, sizeof(name), "%s.json", stem);
         char *part = rs_io_join(d->parts_dir, name);
+        struct stat sb;
+        rs_synth_dataset__state state = RS_SYNTH_DATASET__FINISHED;
+        char why[600];
+        // another shard's image: checked as a rerun checks its own (this shard's were just now)
+        if (part && lstat(part, &sb) == 0 && k % opt->shard_count != opt->shard_index)
+            st = rs_synth_dataset__check_finished(&state, why, sizeof(why), d, stem, &d->cams[k % d->Ncams], err);
         if (!part)
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        else if (rs_synth_dataset__file_exists(part))
-            st = coco_add_file(&a, part, err);
+        else if (!st && state == RS_SYNTH_DATASET__DAMAGED)
+            leave_out(opt, why, Nleft_out);
+        else if (!st && lstat(part, &sb) == 0)
+            st = add_part(&a, part, d->split_dir, opt, Nleft_out, err);
         free(part);
     }
     snprintf(name, sizeof(name), "annotations/instances_%s.json", opt->split);
@@ -237,6 +294,10 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
         free(adir);
         st = s2;
     }
+    // OUT is written by one process at a time (a synth run or another merge into it fails)
+    rs_io_lock lock = {0};
+    if (!st && Nsplits > 0 && !(st = rs_io_mkdir_p(out_dir, err)))
+        st = rs_io_lock_dir(&lock, out_dir, "roadside synth merge", err);
     for (int s = 0; s < Nsplits && !st; s++) {
         coco_acc a = {0};
         char rel[600];
@@ -285,6 +346,7 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
         st = rs_err_set(err, RS_ERR_NOT_FOUND,
                         "merge: no annotations/instances_*.json in the "
                         "inputs");
+    rs_io_unlock(&lock);
     for (int s = 0; s < Nsplits; s++) free(splits[s]);
     free(splits);
     return st;

@@ -24,11 +24,17 @@
 // 5. ID pass: no lights, flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
 //    per-pixel vehicle index 0 = background, k+1 = vehicle k (16-bit); resampled with
 //    nearest-neighbour into the real lens.
-// povray runs in the output folder with HOME set to it, where a povray.conf sets File I/O
-// Security "restricted" with only that folder permitted (POVINC/POVINI unset). Measured caveat
-// (docs/povray.md): Debian's povray 3.7.0.10 did not enforce it against #fopen in a test, so the
-// real guarantee is that roadside's scenes contain no file operations. Its output goes to
-// OUT/povray.log.
+// povray runs in the output folder with HOME set to it (POVINC/POVINI unset), its output going
+// to OUT/povray.log. What confines it (docs/povray.md, "Confinement"):
+//  1. the scene text: roadside's scenes hold no file operation and no input text outside
+//     sanitised comments (rs_synth_scene.h; tests/synth/test_scene_cli.py,
+//     test_povray_sandbox.py);
+//  2. Linux Landlock (rs_synth_sandbox.h): povray may read the system's files under /usr,
+//     /etc/povray, and read and write only the folder it runs in; everything else is refused
+//     by the kernel. Where Landlock is unavailable povray runs unconfined (the cli says so).
+// The OUT/.povray/3.7/povray.conf written there ("restricted", only "." permitted) is NOT a
+// defence: measured with Debian 12's POV-Ray 3.7.0.10, reads anywhere and writes to /tmp,
+// /var/tmp and OUT/.. pass through it (tests/synth/test_povray_sandbox.py shows both).
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>
@@ -99,9 +105,11 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 // last line), RS_ERR_IO for the files.
 // Runs the real POV-Ray: `povray ARGS...` (no shell) in folder `dir`, with HOME = dir (so that
 // dir/.povray/3.7/povray.conf, if written, is the configuration it reads) and POVINC/POVINI
-// unset; its output is appended to dir/povray.log. seconds (may be NULL) accumulates the wall
-// time. Errors: RS_ERR_EXTERNAL "cannot run" when the program is missing (exit 127), else the
-// exit status and the log's last line.
+// unset, confined by Landlock to reading the system's files and reading and writing `dir`
+// (rs_synth_sandbox.h; unconfined where Landlock is unavailable); its output is appended to
+// dir/povray.log. seconds (may be NULL) accumulates the wall time. Errors: RS_ERR_EXTERNAL
+// "cannot run" when the program is missing (exit 127), "cannot confine povray" when Landlock is
+// there but fails (povray is then not run), else the exit status and the log's last line.
 rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args,
                               int Nargs,       // (Nargs,) at most 30
                               double *seconds, // may be NULL

@@ -5,6 +5,7 @@
 //
 //   rs_synth_dataset.c          the run: options, the site's cameras and backgrounds (from the
 //                               site geo loaded), this shard's images here or in forked workers
+//     rs_synth_dataset_check.c    resume: whether an image found finished is intact
 //     rs_synth_dataset_image.c    one image: its random stream, background, traffic, render,
 //                                 composite, labels and files
 //     rs_synth_dataset_coco.c     COCO: assembling DATASET's annotations from the finished
@@ -72,6 +73,29 @@ void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
 rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
                                        bool *grey, double *seconds_povray, rs_err *err);
 
-// Assembles DATASET/annotations/instances_<split>.json from every parts/ file present.
-// out: *Nanns, the annotations in it.
-rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, rs_err *err);
+// What a rerun finds of an image.
+typedef enum {
+    RS_SYNTH_DATASET__ABSENT,   // no parts/<stem>.json: never finished
+    RS_SYNTH_DATASET__FINISHED, // finished and intact: skipped
+    RS_SYNTH_DATASET__DAMAGED,  // its parts/ file is there, but a file of the image is missing or corrupt
+} rs_synth_dataset__state;
+
+// Whether image `stem` of camera c is finished: parts/<stem>.json is a regular file holding the
+// COCO file of the one image <stem>.png at the camera's (output) size, <split>/<stem>.png is a
+// regular file that OpenCV decodes to that size, labels/<split>/<stem>.txt and
+// label_2/<stem>.txt are regular files. Links count as damage (the run writes none). Cost: one
+// PNG decode per finished image.
+// out: *state; why[n]: when DAMAGED, the first fault, "FILE: what is wrong"
+// Errors: RS_ERR_NOMEM only (a fault of the files is a state, not an error).
+rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char *why, size_t n,
+                                           // in
+                                           const rs_synth_dataset__run *d, const char *stem,
+                                           const rs_synth_dataset__camera *c, rs_err *err);
+
+// Assembles DATASET/annotations/instances_<split>.json from every parts/ file present for k in
+// 0 .. count-1. The images of other shards (made by other runs into this folder) are checked
+// with rs_synth_dataset__check_finished (this shard's were, or were just made); a damaged one
+// is left out, with a notice (opt->notice) naming the file and the fault, and so is a part file
+// that is not a COCO file or lists an image missing from DATASET/<split>.
+// out: *Nanns, the annotations in it; *Nleft_out, part files left out.
+rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, int *Nleft_out, rs_err *err);
