@@ -16,6 +16,11 @@
 //   - optionally (--against) a test of whether the camera has moved since its picks were made;
 //   - optionally (--calib) the audit of a calibration made elsewhere (rs_audit_calibration):
 //     its reprojection errors against the site's picks and whether its parts agree.
+// Residuals are named as everywhere else (docs/calibration.md, "Residuals: which is which"):
+// rms_surveyed_px, the headline and what the threshold applies to, is the RMS of the inliers'
+// SURVEYED positions reprojected through the calibration audited; the solver's own RMS after
+// the landmarks moved within their survey sigmas is rms_adjusted_px (solve.rms_px), and the
+// leave-one-out figures are loo_*.
 //
 // Method:
 //   Uncertainty of a ground point g = (E, N) located from a pixel q: g is the solution of
@@ -62,22 +67,24 @@ extern "C" {
 #endif
 
 typedef struct {
-    rs_calib_options calib;    // options of every solve: the full one and leave-one-out
-                               //   (default rs_calib_options_default)
-    double max_rms_px;         // the camera FAILS when the inliers' RMS exceeds this (default 2)
-    double max_loo_px;         // ... when the RMS of the inliers' leave-one-out pixel errors
-                               //   exceeds this (default 50: with 0.3 m survey sigmas at 25 m
-                               //   the left-out landmark's own survey error is ~20 px)
-    double max_loo_m;          // ... when the MEDIAN of the inliers' leave-one-out ground
-                               //   errors exceeds this, metres (default 2.5)
-    double detection_sigma_px; // detection noise of a located vehicle, px per axis (default 1)
-    double range_m;            // horizontal distance from the camera up to which the ground
-                               //   counts as seen (map, ground coverage), metres (default 100)
-    double cell_m;             // map cell size, metres (default 1)
-    double alpha;              // significance of the moved-camera test (default 0.001)
-    double consistency_px;     // P vs K[R|t]: largest tolerated pixel difference (default 0.5)
-    bool leave_one_out;        // run the leave-one-out re-solves (default true)
-    bool map;                  // compute the uncertainty map (default true)
+    rs_calib_options calib;     // options of every solve: the full one and leave-one-out
+                                //   (default rs_calib_options_default)
+    double max_rms_surveyed_px; // the camera FAILS when rms_surveyed_px exceeds this (default 50:
+                                //   the demo site's cameras give 20-34 px, the real GNSS probe
+                                //   data 26 px, all of it their survey errors; docs/audit.md)
+    double max_loo_px;          // ... when the RMS of the inliers' leave-one-out pixel errors
+                                //   exceeds this (default 50: with 0.3 m survey sigmas at 25 m
+                                //   the left-out landmark's own survey error is ~20 px)
+    double max_loo_m;           // ... when the MEDIAN of the inliers' leave-one-out ground
+                                //   errors exceeds this, metres (default 2.5)
+    double detection_sigma_px;  // detection noise of a located vehicle, px per axis (default 1)
+    double range_m;             // horizontal distance from the camera up to which the ground
+                                //   counts as seen (map, ground coverage), metres (default 100)
+    double cell_m;              // map cell size, metres (default 1)
+    double alpha;               // significance of the moved-camera test (default 0.001)
+    double consistency_px;      // P vs K[R|t]: largest tolerated pixel difference (default 0.5)
+    bool leave_one_out;         // run the leave-one-out re-solves (default true)
+    bool map;                   // compute the uncertainty map (default true)
 } rs_audit_options;
 
 // Fills opt with the defaults above. opt must not be NULL.
@@ -85,22 +92,25 @@ void rs_audit_options_default(rs_audit_options *opt);
 
 // One landmark of the camera (index i of the problem's arrays).
 typedef struct {
-    bool inlier;                // used by the full solve
-    double residual_px[2];      // predicted - observed, full solve
-    double normalised_residual; // sqrt(block chi2) in sigmas (rs_calib_result)
-    char reason[160];           // why it is flagged, in words; "" when it is fine
-    bool loo_ok;                // the re-solve without it succeeded (else loo_* are NaN)
-    double loo_predicted_px[2]; // its SURVEYED position projected with the re-solved pose
-    double loo_error_px;        // |loo_predicted_px - observed|, px
-    double loo_normalised;      // loo_predicted_px - observed in sigmas: sqrt(d^T S^-1 d) with
-                                //   S = its pixel sigma^2 I + the propagated survey sigmas of
-                                //   the landmark + the re-solved pose covariance (2 dof; flagged
-                                //   when > calib.outlier_threshold)
-    double loo_ground_error_m;  // distance from its surveyed position to where its observed
-                                //   pixel's ray (re-solved pose) meets the plane with the
-                                //   site's ground normal through it, metres
-    double influence_m;         // |camera position without it - with it|, metres
-    double influence_deg;       // rotation angle between the two orientations, degrees
+    bool inlier;                    // used by the full solve
+    double residual_surveyed_px[2]; // its SURVEYED position projected through the full solve,
+                                    //   minus observed (NaN when it does not project)
+    double residual_adjusted_px[2]; // the solver's residual_px: its position after the
+                                    //   adjustment projected, minus observed
+    double normalised_residual;     // sqrt(block chi2) in sigmas (rs_calib_result)
+    char reason[160];               // why it is flagged, in words; "" when it is fine
+    bool loo_ok;                    // the re-solve without it succeeded (else loo_* are NaN)
+    double loo_predicted_px[2];     // its SURVEYED position projected with the re-solved pose
+    double loo_error_px;            // |loo_predicted_px - observed|, px
+    double loo_normalised;          // loo_predicted_px - observed in sigmas: sqrt(d^T S^-1 d) with
+                                    //   S = its pixel sigma^2 I + the propagated survey sigmas of
+                                    //   the landmark + the re-solved pose covariance (2 dof; flagged
+                                    //   when > calib.outlier_threshold)
+    double loo_ground_error_m;      // distance from its surveyed position to where its observed
+                                    //   pixel's ray (re-solved pose) meets the plane with the
+                                    //   site's ground normal through it, metres
+    double influence_m;             // |camera position without it - with it|, metres
+    double influence_deg;           // rotation angle between the two orientations, degrees
 } rs_audit_landmark;
 
 // The ground localisation uncertainty map: a regular grid in site ENU (E, N) on the ground
@@ -157,24 +167,31 @@ void rs_audit_calibration_free(rs_audit_calibration *cal); // NULL-safe
 
 // What the audit says about an external calibration.
 typedef struct {
-    double rms_px;           // RMS of (its projection of the surveyed landmarks - picks)
-                             //   over the landmarks the site's solve keeps as inliers, px
-    double max_px;           // the largest such error, px
-    double *residual_px;     // (N,2) per landmark (owned)
-    double rotation_deg;     // its orientation vs the site's solve, degrees
-    double shift_m;          // its position vs the site's solve, metres
-    double R_orthonormality; // |R^T R - I|_F of R as given (0 without a matrix R)
-    double P_max_px;         // largest pixel difference P vs K[R|t] over the landmarks
-                             //   (NaN without P)
-    double P_scale;          // the scale s fitted in P ~ s K[R|t] (NaN without P)
-    bool consistent;         // its parts agree (R is a rotation, P matches K[R|t])
-    char consistency[512];   // what disagrees, in words ("" when consistent)
+    double rms_surveyed_px;       // RMS of (its projection of the surveyed landmarks - picks)
+                                  //   over the landmarks the site's solve keeps as inliers, px
+    double max_px;                // the largest such error, px
+    double *residual_surveyed_px; // (N,2) per landmark (owned)
+    double rotation_deg;          // its orientation vs the site's solve, degrees
+    double shift_m;               // its position vs the site's solve, metres
+    double R_orthonormality;      // |R^T R - I|_F of R as given (0 without a matrix R)
+    double P_max_px;              // largest pixel difference P vs K[R|t] over the landmarks
+                                  //   (NaN without P)
+    double P_scale;               // the scale s fitted in P ~ s K[R|t] (NaN without P)
+    bool consistent;              // its parts agree (R is a rotation, P matches K[R|t])
+    char consistency[512];        // what disagrees, in words ("" when consistent)
 } rs_audit_external;
 
 typedef struct {
     int N;                        // landmarks of the problem
-    rs_calib_result solve;        // the full solve (owned: rs_audit_result_free frees it)
+    rs_calib_result solve;        // the full solve (owned: rs_audit_result_free frees it);
+                                  //   solve.rms_px is its rms_adjusted_px
     rs_audit_landmark *landmarks; // (N,) (owned)
+
+    // the headline: RMS of the inliers' SURVEYED positions reprojected through the calibration
+    // audited -- the external one when given (= external.rms_surveyed_px), else the full
+    // solve's -- minus their picks, px (NaN when none projects). Checked against
+    // max_rms_surveyed_px.
+    double rms_surveyed_px;
 
     // leave-one-out summary over the inliers whose re-solve succeeded
     int loo_count;

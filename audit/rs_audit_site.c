@@ -248,7 +248,8 @@ static void add_landmarks(cJSON *root, const rs_site *site, const rs_site_camera
         cJSON_AddStringToObject(l, "id", site->landmarks[o->ilandmark].id);
         cJSON_AddItemToObject(l, "observed_px", num_array(o->q_px, 2));
         cJSON_AddBoolToObject(l, "inlier", L->inlier);
-        cJSON_AddItemToObject(l, "residual_px", num_array(L->residual_px, 2));
+        cJSON_AddItemToObject(l, "residual_surveyed_px", num_array(L->residual_surveyed_px, 2));
+        cJSON_AddItemToObject(l, "residual_adjusted_px", num_array(L->residual_adjusted_px, 2));
         cJSON_AddNumberToObject(l, "normalised_residual", L->normalised_residual);
         cJSON_AddStringToObject(l, "reason", L->reason);
         cJSON_AddBoolToObject(l, "loo_ok", L->loo_ok);
@@ -257,7 +258,8 @@ static void add_landmarks(cJSON *root, const rs_site *site, const rs_site_camera
                     {"loo_ground_error_m", L->loo_ground_error_m}, {"influence_m", L->influence_m},
                     {"influence_deg", L->influence_deg});
         if (r->has_external)
-            cJSON_AddItemToObject(l, "external_residual_px", num_array(&r->external.residual_px[2 * i], 2));
+            cJSON_AddItemToObject(l, "external_residual_surveyed_px",
+                                  num_array(&r->external.residual_surveyed_px[2 * i], 2));
         cJSON_AddItemToArray(lms, l);
     }
 }
@@ -295,7 +297,9 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
     cJSON_AddBoolToObject(root, "pass", r->pass);
     cJSON_AddItemToObject(root, "failures", sentences(r->failures));
     cJSON_AddItemToObject(root, "warnings", sentences(r->warnings));
-    ADD_NUMBERS(cJSON_AddObjectToObject(root, "thresholds"), {"max_rms_px", opt->max_rms_px},
+    // the headline the threshold applies to (the external calibration's with --calib)
+    ADD_NUMBERS(root, {"rms_surveyed_px", r->rms_surveyed_px});
+    ADD_NUMBERS(cJSON_AddObjectToObject(root, "thresholds"), {"max_rms_surveyed_px", opt->max_rms_surveyed_px},
                 {"max_loo_px", opt->max_loo_px}, {"max_loo_m", opt->max_loo_m},
                 {"outlier_threshold", opt->calib.outlier_threshold}, {"alpha", opt->alpha},
                 {"consistency_px", opt->consistency_px});
@@ -325,9 +329,9 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
         cJSON *jx = cJSON_AddObjectToObject(root, "external");
         cJSON_AddBoolToObject(jx, "consistent", x->consistent);
         cJSON_AddItemToObject(jx, "inconsistencies", sentences(x->consistency));
-        ADD_NUMBERS(jx, {"rms_px", x->rms_px}, {"max_px", x->max_px}, {"rotation_vs_site_deg", x->rotation_deg},
-                    {"shift_vs_site_m", x->shift_m}, {"R_orthonormality", x->R_orthonormality},
-                    {"P_max_px", x->P_max_px}, {"P_scale", x->P_scale});
+        ADD_NUMBERS(jx, {"rms_surveyed_px", x->rms_surveyed_px}, {"max_px", x->max_px},
+                    {"rotation_vs_site_deg", x->rotation_deg}, {"shift_vs_site_m", x->shift_m},
+                    {"R_orthonormality", x->R_orthonormality}, {"P_max_px", x->P_max_px}, {"P_scale", x->P_scale});
     }
     char *text = cJSON_Print(root);
     cJSON_Delete(root);

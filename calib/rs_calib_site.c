@@ -194,13 +194,19 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     cJSON_AddItemToObject(root, "yaw_pitch_roll_deg", json_array(r->yaw_pitch_roll_deg, 3));
     cJSON_AddItemToObject(root, "sigma_position_enu_m", json_array(r->sigma_position_enu_m, 3));
     cJSON_AddItemToObject(root, "sigma_yaw_pitch_roll_deg", json_array(r->sigma_yaw_pitch_roll_deg, 3));
-    cJSON_AddNumberToObject(root, "rms_px", r->rms_px);
+    // the residuals (docs/calibration.md, "Residuals: which is which"): the headline is against
+    // the surveyed positions; the one after the adjustment is named as such
     double *q_surveyed = malloc((size_t)(r->N > 0 ? r->N : 1) * 2 * sizeof(double));
+    if (!q_surveyed) {
+        cJSON_Delete(root);
+        return NULL;
+    }
     double rms_surveyed = rs_calib_site_rms_surveyed_px(site, icam, r, q_surveyed);
     if (isfinite(rms_surveyed))
-        cJSON_AddNumberToObject(root, "rms_px_surveyed", rms_surveyed);
+        cJSON_AddNumberToObject(root, "rms_surveyed_px", rms_surveyed);
     else
-        cJSON_AddNullToObject(root, "rms_px_surveyed");
+        cJSON_AddNullToObject(root, "rms_surveyed_px");
+    cJSON_AddNumberToObject(root, "rms_adjusted_px", r->rms_px);
     cJSON_AddNumberToObject(root, "landmarks_used", r->Ninliers);
     cJSON_AddNumberToObject(root, "landmarks_rejected", r->N - r->Ninliers);
     cJSON_AddNumberToObject(root, "chi2", r->chi2);
@@ -223,10 +229,17 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
         cJSON *l = cJSON_CreateObject();
         cJSON_AddStringToObject(l, "id", site->landmarks[o->ilandmark].id);
         cJSON_AddItemToObject(l, "observed_px", json_array(o->q_px, 2));
-        cJSON_AddItemToObject(l, "predicted_px", json_array(&r->predicted_px[2 * i], 2));
-        cJSON_AddItemToObject(l, "residual_px", json_array(&r->residual_px[2 * i], 2));
-        if (q_surveyed && isfinite(q_surveyed[2 * i]))
-            cJSON_AddItemToObject(l, "predicted_surveyed_px", json_array(&q_surveyed[2 * i], 2));
+        const double *qs = &q_surveyed[2 * i];
+        if (isfinite(qs[0]) && isfinite(qs[1])) {
+            const double d[2] = {qs[0] - o->q_px[0], qs[1] - o->q_px[1]};
+            cJSON_AddItemToObject(l, "predicted_surveyed_px", json_array(qs, 2));
+            cJSON_AddItemToObject(l, "residual_surveyed_px", json_array(d, 2));
+        } else { // behind the camera, or outside the lens model's domain
+            cJSON_AddNullToObject(l, "predicted_surveyed_px");
+            cJSON_AddNullToObject(l, "residual_surveyed_px");
+        }
+        cJSON_AddItemToObject(l, "predicted_adjusted_px", json_array(&r->predicted_px[2 * i], 2));
+        cJSON_AddItemToObject(l, "residual_adjusted_px", json_array(&r->residual_px[2 * i], 2));
         cJSON_AddNumberToObject(l, "normalised_residual", r->normalised_residual[i]);
         cJSON_AddBoolToObject(l, "inlier", r->inlier[i]);
         cJSON_AddItemToObject(l, "p_enu_surveyed_m", json_array(site->landmarks[o->ilandmark].p_enu_m, 3));
@@ -578,6 +591,26 @@ static rs_status json_number(double *out, const cJSON *obj, const char *name, co
     return RS_OK;
 }
 
+// The member `name`, or when the file has none (written before the residuals were renamed) the
+// member `old_name`: a file is read by the names it was written with.
+static const char *member_name(const cJSON *obj, const char *name, const char *old_name)
+{
+    return !cJSON_GetObjectItemCaseSensitive(obj, name) && cJSON_GetObjectItemCaseSensitive(obj, old_name) ? old_name
+                                                                                                           : name;
+}
+
+// An optional array of n numbers: NaN when absent or null (not computable when written).
+static rs_status json_numbers_or_nan(double *out, int n, const cJSON *obj, const char *name, const char *path,
+                                     rs_err *err)
+{
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(obj, name);
+    if (!a || cJSON_IsNull(a)) {
+        for (int i = 0; i < n; i++) out[i] = NAN;
+        return RS_OK;
+    }
+    return json_numbers(out, n, obj, name, path, err);
+}
+
 static rs_status read_warnings(rs_calib_site_result *r, const cJSON *root, const char *path, rs_err *err)
 {
     const cJSON *warnings = cJSON_GetObjectItemCaseSensitive(root, "warnings");
@@ -615,8 +648,17 @@ static rs_status read_landmarks(rs_calib_site_result *r, const cJSON *root, cons
         r->N++;
         m->inlier = cJSON_IsTrue(inl);
         rs_status st = json_numbers(m->observed_px, 2, l, "observed_px", path, err);
-        if (!st) st = json_numbers(m->predicted_px, 2, l, "predicted_px", path, err);
-        if (!st) st = json_numbers(m->residual_px, 2, l, "residual_px", path, err);
+        if (!st)
+            st = json_numbers(m->predicted_adjusted_px, 2, l, member_name(l, "predicted_adjusted_px", "predicted_px"),
+                              path, err);
+        if (!st)
+            st = json_numbers(m->residual_adjusted_px, 2, l, member_name(l, "residual_adjusted_px", "residual_px"),
+                              path, err);
+        if (!st) st = json_numbers_or_nan(m->predicted_surveyed_px, 2, l, "predicted_surveyed_px", path, err);
+        if (!st) st = json_numbers_or_nan(m->residual_surveyed_px, 2, l, "residual_surveyed_px", path, err);
+        // a file with the surveyed prediction but not its residual (written before it was)
+        if (!st && !cJSON_GetObjectItemCaseSensitive(l, "residual_surveyed_px"))
+            for (int k = 0; k < 2; k++) m->residual_surveyed_px[k] = m->predicted_surveyed_px[k] - m->observed_px[k];
         if (!st) st = json_number(&m->normalised_residual, l, "normalised_residual", path, err);
         if (st) return rs_err_prefix(err, "%s", field);
     }
@@ -641,7 +683,13 @@ rs_status rs_calib_site_result_read(rs_calib_site_result *r, const char *path, r
     if (!st) st = json_numbers(r->position_llh, 3, root, "position_llh", path, err);
     if (!st) st = json_numbers(r->yaw_pitch_roll_deg, 3, root, "yaw_pitch_roll_deg", path, err);
     if (!st) st = json_numbers(r->sigma_yaw_pitch_roll_deg, 3, root, "sigma_yaw_pitch_roll_deg", path, err);
-    if (!st) st = json_number(&r->rms_px, root, "rms_px", path, err);
+    // the headline, against the surveyed positions: null when it could not be computed, absent
+    // from files older than it (NaN); the one after the adjustment is required
+    const char *srv = member_name(root, "rms_surveyed_px", "rms_px_surveyed");
+    const cJSON *rms_srv = cJSON_GetObjectItemCaseSensitive(root, srv);
+    r->rms_surveyed_px = NAN;
+    if (!st && rms_srv && !cJSON_IsNull(rms_srv)) st = json_number(&r->rms_surveyed_px, root, srv, path, err);
+    if (!st) st = json_number(&r->rms_adjusted_px, root, member_name(root, "rms_adjusted_px", "rms_px"), path, err);
     if (!st) st = json_number(&r->variance_factor, root, "variance_factor", path, err);
     if (!st) st = json_number(&r->condition_number, root, "condition_number", path, err);
     if (!st) st = json_number(&used, root, "landmarks_used", path, err);

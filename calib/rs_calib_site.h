@@ -147,11 +147,13 @@ rs_status rs_calib_site_run_abandon( // out
     int Nonly, // (Nonly,) camera ids; all when Nonly == 0
     const char *error, rs_err *err);
 
-// RMS reprojection error, in pixels, of the inliers' SURVEYED landmark positions through the
-// solved pose and intrinsics: what a tool that trusts the survey (OpenCV's solvePnP, a
-// homography) would call its reprojection error. (The result's rms_px is smaller: there the
-// landmarks have moved within their survey sigmas.) q_px (N,2) receives every observation's
-// projection (NaN where it fails); may be NULL. Returns NaN when no inlier projects.
+// rms_surveyed_px, the headline residual (docs/calibration.md, "Residuals: which is which"):
+// the RMS reprojection error, in pixels, of the inliers' SURVEYED landmark positions through the
+// solved pose and intrinsics: what anyone can check, and what a tool that trusts the survey
+// (OpenCV's solvePnP, a homography) would call its reprojection error. (The result's rms_px,
+// written as rms_adjusted_px, is smaller: there the landmarks have moved within their survey
+// sigmas.) q_px (N,2) receives every observation's projection (NaN where it fails); may be NULL.
+// Returns NaN when no inlier projects.
 double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_calib_result *result,
                                      double *q_px); // (N,2) may be NULL
 
@@ -173,23 +175,34 @@ rs_status rs_calib_ground_homography( // out
 
 // ---- reading <id>.json back (the report reads calibrations through this) ----
 
-// One landmark of a calibration result file.
+// One landmark of a calibration result file. "surveyed": the landmark's surveyed position
+// projected through the calibrated camera; "adjusted": its position after the adjustment (moved
+// within its survey sigmas; the surveyed one for outliers) projected (docs/calibration.md,
+// "Residuals: which is which").
 typedef struct {
     char *id; // owned
     bool inlier;
-    double observed_px[2];      // the pick
-    double predicted_px[2];     // the landmark's projection (refined position for inliers)
-    double residual_px[2];      // predicted - observed
-    double normalised_residual; // sqrt(block chi2), sigmas
+    double observed_px[2];           // the pick
+    double predicted_surveyed_px[2]; // the surveyed position's projection (NaN: not in the file)
+    double residual_surveyed_px[2];  // predicted_surveyed_px - observed (NaN: not in the file)
+    double predicted_adjusted_px[2]; // the adjusted position's projection
+    double residual_adjusted_px[2];  // predicted_adjusted_px - observed
+    double normalised_residual;      // sqrt(block chi2), sigmas
 } rs_calib_site_landmark;
 
 // What <id>.json (rs_calib_site_write) says, read back: the pose summary, the solver's figures,
-// the landmarks and the warnings. The fields are those of rs_calib_result with the same names.
+// the landmarks and the warnings. The fields are those of the file with the same names.
+// Files written before the residuals were renamed are read too: their rms_px is
+// rms_adjusted_px, their rms_px_surveyed rms_surveyed_px, their landmarks' predicted_px and
+// residual_px the adjusted ones.
 typedef struct {
     double position_enu_m[3], sigma_position_enu_m[3]; // metres
     double position_llh[3];                            // lat_deg, lon_deg, h_m (ellipsoidal)
     double yaw_pitch_roll_deg[3], sigma_yaw_pitch_roll_deg[3];
-    double rms_px, variance_factor, condition_number;
+    double rms_surveyed_px; // the headline: RMS of the inliers' surveyed positions reprojected,
+                            //   px; NaN when the file has none (null, or a file older than it)
+    double rms_adjusted_px; // RMS after the landmarks moved within their survey sigmas, px
+    double variance_factor, condition_number;
     int Nused, Nrejected; // landmarks used, rejected as outliers
     char *lensmodel;      // owned: the mrcal lens model name
     int N;

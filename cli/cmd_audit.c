@@ -26,6 +26,10 @@ static const char audit_usage[] =
     "    on the re-picked pixels) and the estimated rotation and shift;\n"
     "  - with --calib: the audit of a calibration made elsewhere: its reprojection errors against\n"
     "    the site's picks and whether its parts (K, R, t, P) agree.\n"
+    "The headline residual, rms_surveyed_px, is the RMS of the inliers' SURVEYED positions\n"
+    "reprojected through the calibration audited (the --calib one when given, else the audit's\n"
+    "own solve): the figure 'roadside calib' and 'roadside report' print under the same name\n"
+    "(docs/calibration.md, \"Residuals: which is which\").\n"
     "Writes OUT/<id>.audit.json per camera (a camera that cannot be audited gets none, and an\n"
     "earlier run's is removed), then OUT/audit.run.json, the record of which cameras this run\n"
     "wrote, which failed and which it did not select, and prints a summary.\n"
@@ -40,7 +44,9 @@ static const char audit_usage[] =
     "  --camera ID            audit only this camera (repeatable; default all)\n"
     "  -o, --output DIR       where <id>.audit.json go (created; default SITE/calib)\n"
     "  --json                 print the audits as a JSON array instead of the summary\n"
-    "  --max-rms-px X         fail when the RMS reprojection error exceeds X px (default 2)\n"
+    "  --max-rms-surveyed-px X\n"
+    "                         fail when rms_surveyed_px exceeds X px (default 50; the old name\n"
+    "                         --max-rms-px is accepted and means the same)\n"
     "  --max-loo-px X         fail when the RMS leave-one-out pixel error exceeds X px\n"
     "                         (default 50)\n"
     "  --max-loo-m X          fail when the median leave-one-out ground error exceeds X m\n"
@@ -63,11 +69,19 @@ static bool is_dir(const char *path)
     return stat(path, &sb) == 0 && S_ISDIR(sb.st_mode);
 }
 
+// The columns are named as in <id>.audit.json and <id>.json (docs/calibration.md, "Residuals:
+// which is which"); the leave-one-out ones start with loo_.
+static void print_header(void)
+{
+    printf("%-12s %5s %15s %10s %12s %9s %6s %6s %6s  %s\n", "camera", "used", "rms_surveyed_px", "loo_rms_px",
+           "loo_median_m", "loo_max_m", "image", "ground", "moved", "verdict");
+}
+
 static void print_row(const char *id, const rs_audit_result *r)
 {
     char moved[16] = "-";
     if (r->has_against) snprintf(moved, sizeof moved, "%s", r->against.moved ? "MOVED" : "no");
-    printf("%-12s %5d %7.3f %8.3f %8.2f %8.2f %6.0f%% %6.0f%% %6s  %s\n", id, r->solve.Ninliers, r->solve.rms_px,
+    printf("%-12s %5d %15.3f %10.3f %12.2f %9.2f %5.0f%% %5.0f%% %6s  %s\n", id, r->solve.Ninliers, r->rms_surveyed_px,
            r->loo_rms_px, r->loo_median_m, r->loo_max_m, 100 * r->image_hull_share, 100 * r->ground_hull_share, moved,
            r->pass ? "pass" : "FAIL");
 }
@@ -83,8 +97,8 @@ static void print_details(const rs_site *site, int icam, const rs_audit_result *
                    r->landmarks[i].reason);
     if (r->has_against) printf("  %s against: %s\n", id, r->against.message);
     if (r->has_external)
-        printf("  %s external: RMS %.3f px, max %.3f px, %.3f deg and %.3f m from the site's solve; %s\n", id,
-               r->external.rms_px, r->external.max_px, r->external.rotation_deg, r->external.shift_m,
+        printf("  %s external: rms_surveyed_px %.3f, max %.3f px, %.3f deg and %.3f m from the site's solve; %s\n", id,
+               r->external.rms_surveyed_px, r->external.max_px, r->external.rotation_deg, r->external.shift_m,
                r->external.consistent ? "its parts agree" : r->external.consistency);
 }
 
@@ -101,7 +115,7 @@ int rs_cli_audit(int argc, char **argv)
         {"camera", required_argument, NULL, O_CAMERA},
         {"output", required_argument, NULL, 'o'},
         {"json", no_argument, NULL, O_JSON},
-        {"max-rms-px", required_argument, NULL, O_DOUBLE + 0},
+        {"max-rms-surveyed-px", required_argument, NULL, O_DOUBLE + 0},
         {"max-loo-px", required_argument, NULL, O_DOUBLE + 1},
         {"max-loo-m", required_argument, NULL, O_DOUBLE + 2},
         {"detection-sigma-px", required_argument, NULL, O_DOUBLE + 3},
@@ -109,12 +123,19 @@ int rs_cli_audit(int argc, char **argv)
         {"cell-m", required_argument, NULL, O_DOUBLE + 5},
         {"alpha", required_argument, NULL, O_DOUBLE + 6},
         {"consistency-px", required_argument, NULL, O_DOUBLE + 7},
+        {"max-rms-px", required_argument, NULL, O_DOUBLE + 0}, // the old name: the same threshold
         {NULL, 0, NULL, 0},
     };
     rs_audit_options opt;
     rs_audit_options_default(&opt);
-    double *dst[] = {&opt.max_rms_px, &opt.max_loo_px, &opt.max_loo_m, &opt.detection_sigma_px,
-                     &opt.range_m,    &opt.cell_m,     &opt.alpha,     &opt.consistency_px};
+    double *dst[] = {&opt.max_rms_surveyed_px,
+                     &opt.max_loo_px,
+                     &opt.max_loo_m,
+                     &opt.detection_sigma_px,
+                     &opt.range_m,
+                     &opt.cell_m,
+                     &opt.alpha,
+                     &opt.consistency_px};
     const char *calib = NULL, *against = NULL, *out_dir = NULL;
     const char **only = calloc((size_t)argc, sizeof *only);
     int Nonly = 0;
@@ -207,8 +228,7 @@ int rs_cli_audit(int argc, char **argv)
     if (json)
         printf("[\n");
     else
-        printf("%-12s %5s %7s %8s %8s %8s %7s %7s %6s  %s\n", "camera", "used", "rms_px", "loo_px", "loo_med_m",
-               "loo_max_m", "image", "ground", "moved", "verdict");
+        print_header();
     for (int icam = 0; icam < site->Ncameras; icam++) {
         const char *id = site->cameras[icam].id;
         bool selected = Nonly == 0;

@@ -29,8 +29,10 @@ static const char calib_usage[] =
     "all or nothing: a camera that fails leaves none of these, and an earlier run's files of it\n"
     "are removed. Last, OUT/calib.run.json records which cameras this run wrote, which failed\n"
     "and which it did not select. It prints a summary table: landmarks used and rejected as\n"
-    "outliers; rms_px, the RMS reprojection error after the landmarks moved within their\n"
-    "survey sigmas; rms_srv, the RMS of the surveyed positions (what OpenCV would report); the\n"
+    "outliers; rms_surveyed_px, the RMS reprojection error of the inliers' SURVEYED positions\n"
+    "through the calibrated camera (the headline: what anyone can check, and what OpenCV\n"
+    "would report); rms_adjusted_px, the RMS after the landmarks moved within their survey\n"
+    "sigmas (small by construction; docs/calibration.md, \"Residuals: which is which\"); the\n"
     "1-sigma of the camera position (metres, E N U combined) and of its yaw (degrees); the\n"
     "variance factor chi2/dof (about 1 when the stated sigmas are right); then which cameras\n"
     "were written and which were not.\n"
@@ -89,18 +91,19 @@ static bool parse_refine(const char *s, unsigned *flags)
     return true;
 }
 
+// The columns are named as in <id>.json (docs/calibration.md, "Residuals: which is which").
 static void print_summary_header(void)
 {
-    printf("%-12s %5s %8s %8s %9s %12s %10s %10s  %s\n", "camera", "used", "rejected", "rms_px", "rms_srv",
-           "sigma_pos_m", "sigma_yaw", "var_factor", "warnings");
+    printf("%-12s %5s %8s %15s %15s %12s %10s %10s  %s\n", "camera", "used", "rejected", "rms_surveyed_px",
+           "rms_adjusted_px", "sigma_pos_m", "sigma_yaw", "var_factor", "warnings");
 }
 
 static void print_summary_row(const rs_site *site, int icam, const rs_calib_result *r)
 {
     const double *s = r->sigma_position_enu_m;
     double sigma_pos = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
-    printf("%-12s %5d %8d %8.3f %9.3f %12.3f %10.4f %10.3f  %s\n", site->cameras[icam].id, r->Ninliers,
-           r->N - r->Ninliers, r->rms_px, rs_calib_site_rms_surveyed_px(site, icam, r, NULL), sigma_pos,
+    printf("%-12s %5d %8d %15.3f %15.3f %12.3f %10.4f %10.3f  %s\n", site->cameras[icam].id, r->Ninliers,
+           r->N - r->Ninliers, rs_calib_site_rms_surveyed_px(site, icam, r, NULL), r->rms_px, sigma_pos,
            r->sigma_yaw_pitch_roll_deg[0], r->variance_factor, r->warnings[0] ? r->warnings : "-");
 }
 

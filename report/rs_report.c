@@ -50,7 +50,8 @@ static rs_status read_result_json(rs_report_camera *cam, const rs_site *site, co
     memcpy(cam->position_llh, r.position_llh, sizeof cam->position_llh);
     memcpy(cam->yaw_pitch_roll_deg, r.yaw_pitch_roll_deg, sizeof cam->yaw_pitch_roll_deg);
     memcpy(cam->sigma_yaw_pitch_roll_deg, r.sigma_yaw_pitch_roll_deg, sizeof cam->sigma_yaw_pitch_roll_deg);
-    cam->rms_px = r.rms_px;
+    cam->rms_surveyed_px = r.rms_surveyed_px;
+    cam->rms_adjusted_px = r.rms_adjusted_px;
     cam->variance_factor = r.variance_factor;
     cam->condition_number = r.condition_number;
     cam->Nused = r.Nused;
@@ -68,8 +69,8 @@ static rs_status read_result_json(rs_report_camera *cam, const rs_site *site, co
         r.landmarks[i].id = NULL;
         l->ilandmark = rs_site_find_landmark(site, l->id);
         memcpy(l->observed_px, m->observed_px, sizeof l->observed_px);
-        memcpy(l->predicted_px, m->predicted_px, sizeof l->predicted_px);
-        memcpy(l->residual_px, m->residual_px, sizeof l->residual_px);
+        memcpy(l->predicted_surveyed_px, m->predicted_surveyed_px, sizeof l->predicted_surveyed_px);
+        memcpy(l->residual_surveyed_px, m->residual_surveyed_px, sizeof l->residual_surveyed_px);
         l->normalised = m->normalised_residual;
         l->inlier = m->inlier;
     }
@@ -337,8 +338,10 @@ static rs_status camera_load(rs_report_camera *cam, const rs_site *site, const c
     if (!st && !rs_report_camera_geometry(cam)) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", id);
     if (!st) st = read_background(cam, site, err);
     if (!st && opt->audit) {
+        // the audit of the calibration in calib_dir, exactly `roadside audit SITE --calib
+        // CALIB_DIR`: one verdict for both (its rms_surveyed_px rule applies to these files)
         rs_err aerr = {0};
-        rs_status ast = rs_audit_site_camera(&cam->audit, site, cam->icam, NULL, NULL, &opt->audit_options, &aerr);
+        rs_status ast = rs_audit_site_camera(&cam->audit, site, cam->icam, calib_dir, NULL, &opt->audit_options, &aerr);
         cam->has_audit = ast == RS_OK;
         if (ast) {
             rs_audit_result_free(&cam->audit);
@@ -366,10 +369,20 @@ static void doc_warning_list(rs_doc *doc, const char *prefix, const char *list)
     }
 }
 
+// The audit's verdict (rs_audit_result.pass), never one of the report's own.
 static const char *verdict(const rs_report_camera *cam)
 {
     if (!cam->has_audit) return "not audited";
     return cam->audit.pass ? "pass" : "FAIL";
+}
+
+// A residual in a table cell: "-" when <id>.json predates it.
+static void cell_px(rs_doc *doc, double v)
+{
+    if (isfinite(v))
+        rs_doc_cell(doc, "%.3f", v);
+    else
+        rs_doc_cell(doc, "-");
 }
 
 static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *calib_dir)
@@ -385,9 +398,23 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
                      site->dir, site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m,
                      site->heights_orthometric ? "; the site's heights are orthometric, converted" : "",
                      site->Nlandmarks, site->Ncameras, calib_dir);
+    char audit[700] = "the audit was not requested";
+    const rs_audit_options *ao = rep->audit_options;
+    if (ao)
+        snprintf(audit, sizeof audit,
+                 "the verdict of roadside audit %s --calib %s, with the thresholds rms_surveyed_px at most %g px, "
+                 "loo_rms_px at most %g px and loo_median_m at most %g m",
+                 site->dir, calib_dir, ao->max_rms_surveyed_px, ao->max_loo_px, ao->max_loo_m);
+    rs_doc_paragraph(doc, false,
+                     "rms_surveyed_px: the RMS reprojection error of the inliers' surveyed positions through "
+                     "the calibration, in pixels (what anyone can check with the survey and the picks; "
+                     "docs/calibration.md, \"Residuals: which is which\"). loo_: leave-one-out, each inlier "
+                     "predicted by the pose solved without it. audit: %s.",
+                     audit);
     rs_doc_table(doc, 9);
-    static const char *head[9] = {"camera",       "used",        "rejected",      "RMS px", "LOO RMS px",
-                                  "LOO median m", "sigma pos m", "sigma yaw deg", "audit"};
+    static const char *head[9] = {"camera",          "used",          "rejected",
+                                  "rms_surveyed_px", "loo_rms_px",    "loo_median_m",
+                                  "sigma pos m",     "sigma yaw deg", "audit"};
     for (int k = 0; k < 9; k++) rs_doc_cell(doc, "%s", head[k]);
     for (int c = 0; c < rep->Ncameras; c++) {
         const rs_report_camera *cam = &rep->cameras[c];
@@ -395,7 +422,7 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
         rs_doc_cell(doc, "%s", site->cameras[cam->icam].id);
         rs_doc_cell(doc, "%d", cam->Nused);
         rs_doc_cell(doc, "%d", cam->Nrejected);
-        rs_doc_cell(doc, "%.3f", cam->rms_px);
+        cell_px(doc, cam->rms_surveyed_px);
         if (cam->has_audit && cam->audit.loo_count > 0) {
             rs_doc_cell(doc, "%.3f", cam->audit.loo_rms_px);
             rs_doc_cell(doc, "%.3f", cam->audit.loo_median_m);
@@ -435,8 +462,9 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
     else
         snprintf(bg, sizeof bg, "no background image, neutral canvas");
     rs_doc_figure(doc, rs_report_draw_camera, cam, (double)cam->model.height / cam->model.width,
-                  "%s, %d x %d px, %s: picks (green circles; red crosses for outliers), landmarks reprojected "
-                  "through the calibration (blue dots), inlier residual vectors magnified %g times (pink; the scale "
+                  "%s, %d x %d px, %s: picks (green circles; red crosses for outliers), the surveyed landmarks "
+                  "reprojected through the calibration (blue dots), inlier residual vectors (surveyed, from the pick "
+                  "to the reprojection) magnified %g times (pink; the scale "
                   "bar gives their length in pixels) and outlier residuals at true size (dashed red), ground grid "
                   "every %g m and lane lines projected through the "
                   "calibrated lens model.",
@@ -468,8 +496,11 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
         rs_doc_cell(doc, "%.3f", cam->yaw_pitch_roll_deg[k]);
         rs_doc_cell(doc, "%.3f", cam->sigma_yaw_pitch_roll_deg[k]);
     }
-    rs_doc_cell(doc, "RMS reprojection error of the inliers, px");
-    rs_doc_cell(doc, "%.3f", cam->rms_px);
+    rs_doc_cell(doc, "rms_surveyed_px: RMS reprojection error of the inliers' surveyed positions, px");
+    cell_px(doc, cam->rms_surveyed_px);
+    rs_doc_cell(doc, "-");
+    rs_doc_cell(doc, "rms_adjusted_px: the same after the landmarks moved within their survey sigmas, px");
+    rs_doc_cell(doc, "%.3f", cam->rms_adjusted_px);
     rs_doc_cell(doc, "-");
     rs_doc_cell(doc, "variance factor chi2/dof (about 1: sigmas right)");
     rs_doc_cell(doc, "%.3f", cam->variance_factor);
@@ -487,13 +518,14 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
     const rs_audit_result *a = cam->has_audit ? &cam->audit : NULL;
     rs_doc_heading(doc, 3, "Landmarks of %s", id);
     rs_doc_paragraph(doc, false,
-                     "Residual = reprojected - picked pixel; normalised = the residual in sigmas (pick and survey "
-                     "together). Leave-one-out (LOO): the pose re-solved without the landmark, then its surveyed "
-                     "position projected (px) and its pick located on the ground (m); influence: how far "
+                     "Residual du, dv = the landmark's surveyed position reprojected through the calibration - "
+                     "picked pixel (the residuals of rms_surveyed_px); normalised = the residual in sigmas (pick "
+                     "and survey together). Leave-one-out (loo): the pose re-solved without the landmark, then its "
+                     "surveyed position projected (px) and its pick located on the ground (m); influence: how far "
                      "leaving it out moves (m) and turns (deg) the camera.");
     rs_doc_table(doc, 11);
     static const char *lhead[11] = {"landmark", "u px",   "v px",  "du px",   "dv px",    "normalised",
-                                    "status",   "LOO px", "LOO m", "infl. m", "infl. deg"};
+                                    "status",   "loo px", "loo m", "infl. m", "infl. deg"};
     for (int k = 0; k < 11; k++) rs_doc_cell(doc, "%s", lhead[k]);
     const rs_site_camera *sc = &site->cameras[cam->icam];
     for (int i = 0; i < cam->N; i++) {
@@ -501,8 +533,8 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
         rs_doc_cell(doc, "%s", l->id);
         rs_doc_cell(doc, "%.2f", l->observed_px[0]);
         rs_doc_cell(doc, "%.2f", l->observed_px[1]);
-        rs_doc_cell(doc, "%.3f", l->residual_px[0]);
-        rs_doc_cell(doc, "%.3f", l->residual_px[1]);
+        cell_px(doc, l->residual_surveyed_px[0]);
+        cell_px(doc, l->residual_surveyed_px[1]);
         rs_doc_cell(doc, "%.2f", l->normalised);
         rs_doc_cell(doc, "%s", l->inlier ? "inlier" : "outlier");
         // the audit's landmark i is the site camera's observation i
@@ -527,8 +559,9 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
                   id, rep->detection_sigma_px, rep->range_m);
     if (a) {
         rs_doc_paragraph(doc, false,
-                         "Leave-one-out over %d landmarks: RMS %.3f px, worst %.3f px; on the ground median %.3f m, "
-                         "worst %.3f m. Coverage: the inlier picks span %.0f%% of the image; the inlier landmarks "
+                         "Leave-one-out over %d landmarks: loo_rms_px %.3f, worst %.3f px; on the ground "
+                         "loo_median_m %.3f, worst %.3f m. Coverage: the inlier picks span %.0f%% of the image; the "
+                         "inlier landmarks "
                          "span %.0f%% of the %.0f m2 of ground the camera sees within %g m.",
                          a->loo_count, a->loo_rms_px, a->loo_max_px, a->loo_median_m, a->loo_max_m,
                          100 * a->image_hull_share, 100 * a->ground_hull_share, a->ground_seen_m2, rep->range_m);
@@ -536,8 +569,9 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
 
     rs_doc_heading(doc, 3, "Verdict and warnings for %s", id);
     if (a)
-        rs_doc_paragraph(doc, !a->pass, "Audit: %s%s%s", a->pass ? "pass, every threshold met" : "FAIL",
-                         a->pass ? "" : ": ", a->pass ? "" : a->failures);
+        rs_doc_paragraph(doc, !a->pass, "Audit (roadside audit --calib of these files): %s%s%s",
+                         a->pass ? "pass, every threshold met" : "FAIL", a->pass ? "" : ": ",
+                         a->pass ? "" : a->failures);
     else
         rs_doc_paragraph(doc, true, "No audit for this camera: %s.", cam->audit_error);
     int Nw = 0;
@@ -571,6 +605,7 @@ static rs_status write_report(rs_report_summary *summary, const char *out_dir, c
     struct rs_report_ctx rep = {.site = site, .range_m = opt.range_m};
     rep.grid_m = opt.grid_m > 0 ? opt.grid_m : opt.range_m / 10;
     rep.detection_sigma_px = opt.audit_options.detection_sigma_px;
+    rep.audit_options = opt.audit ? &opt.audit_options : NULL;
     char *default_calib = opt.calib_dir ? NULL : rs_io_join(site->dir, "calib");
     const char *calib_dir = opt.calib_dir ? opt.calib_dir : default_calib;
     rs_doc doc = {0};

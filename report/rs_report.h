@@ -12,14 +12,18 @@
 // view on the ground cut at range_m, landmarks, lanes, and the smallest 1-sigma ground error
 // over the cameras' uncertainty maps as a colour scale with labelled contours); then per camera
 //   - its image (the first PNG/JPEG in the camera's backgrounds folder, else a neutral canvas)
-//     with the picks, the reprojected landmarks and the residual vectors magnified (the factor
-//     written, with a scale bar in pixels), and the ground grid and lane lines projected
-//     through the calibrated camera (mrcal_project, full lens model);
-//   - the pose (ENU, lat/lon/h, yaw/pitch/roll) with 1-sigma, RMS, variance factor, condition;
-//   - per-landmark residuals and leave-one-out figures (rs_audit_site_camera);
+//     with the picks, the surveyed landmarks reprojected and the residual vectors magnified
+//     (the factor written, with a scale bar in pixels), and the ground grid and lane lines
+//     projected through the calibrated camera (mrcal_project, full lens model);
+//   - the pose (ENU, lat/lon/h, yaw/pitch/roll) with 1-sigma, rms_surveyed_px and the labelled
+//     rms_adjusted_px (docs/calibration.md, "Residuals: which is which"), variance factor,
+//     condition;
+//   - per-landmark residuals (surveyed) and leave-one-out figures (rs_audit_site_camera);
 //   - a top-down map of the ground the camera sees with the 1-sigma ground localisation error
 //     (rs_audit_map) as a colour scale with labelled contours;
 //   - coverage, the audit's verdict and every warning in plain words.
+// The audit is that of the calibration files in calib_dir, exactly `roadside audit SITE --calib
+// CALIB_DIR` (rs_audit_site_camera with calib_dir): the verdict shown is the audit's.
 // Lanes: an optional SITE/lanes.geojson, a FeatureCollection of LineString / MultiLineString
 // features with [lon, lat] or [lon, lat, h] positions (h in the site's declared heights; without
 // h the line lies on the site's ground plane).
@@ -47,8 +51,9 @@ typedef struct {
     double grid_m;                  // ground grid spacing drawn into the images, metres; <= 0:
                                     //   automatic (a 1-2-5 number near range_m / 10; default 0)
     int figure_width_px;            // width of the HTML's PNG figures (default 1000, >= 200)
-    bool audit;                     // run the audit for leave-one-out figures, the uncertainty map
-                                    //   and the warnings (default true)
+    bool audit;                     // audit the calibration (as `roadside audit --calib`) for the
+                                    //   leave-one-out figures, the uncertainty map, the warnings
+                                    //   and the verdict (default true; false: "not audited")
     rs_audit_options audit_options; // (default rs_audit_options_default); its range_m is
                                     //   replaced by range_m above
 } rs_report_options;

@@ -150,13 +150,14 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
             cam->Nfov++;
         }
 
-    // magnification: median inlier residual drawn as ~1.5% of the image width
+    // magnification: median inlier residual (surveyed, as drawn) drawn as ~1.5% of the image width
     double *r = malloc((size_t)(cam->N > 0 ? cam->N : 1) * sizeof *r);
     if (!r) return false;
     int Nr = 0;
-    for (int i = 0; i < cam->N; i++)
-        if (cam->landmarks[i].inlier)
-            r[Nr++] = hypot(cam->landmarks[i].residual_px[0], cam->landmarks[i].residual_px[1]);
+    for (int i = 0; i < cam->N; i++) {
+        const double *d = cam->landmarks[i].residual_surveyed_px;
+        if (cam->landmarks[i].inlier && isfinite(d[0]) && isfinite(d[1])) r[Nr++] = hypot(d[0], d[1]);
+    }
     double med = 0;
     if (Nr) {
         for (int i = 1; i < Nr; i++) // insertion sort: a few dozen values

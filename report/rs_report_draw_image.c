@@ -164,9 +164,14 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
             cairo_set_source_rgb(cr, 0.9, 0.1, 0.1);
             cairo_set_dash(cr, &dash, 1, 0);
         }
-        cairo_move_to(cr, x, y);
-        cairo_line_to(cr, x + m * l->residual_px[0] * s, y + m * l->residual_px[1] * s);
-        cairo_stroke(cr);
+        // the residual against the SURVEYED position; none drawn when <id>.json predates it
+        const double *d = l->residual_surveyed_px;
+        const bool surveyed = isfinite(d[0]) && isfinite(d[1]);
+        if (surveyed) {
+            cairo_move_to(cr, x, y);
+            cairo_line_to(cr, x + m * d[0] * s, y + m * d[1] * s);
+            cairo_stroke(cr);
+        }
         cairo_set_dash(cr, NULL, 0, 0);
         cairo_set_line_width(cr, lw);
         if (l->inlier) {
@@ -177,9 +182,12 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
             rs_report_marker_cross(cr, x, y, rmark);
         }
         cairo_stroke(cr);
-        cairo_set_source_rgb(cr, 0.1, 0.3, 1);
-        rs_report_marker_circle(cr, (l->predicted_px[0] + 0.5) * s, (l->predicted_px[1] + 0.5) * s, rmark * 0.35);
-        cairo_fill(cr);
+        if (surveyed) {
+            cairo_set_source_rgb(cr, 0.1, 0.3, 1);
+            rs_report_marker_circle(cr, (l->predicted_surveyed_px[0] + 0.5) * s,
+                                    (l->predicted_surveyed_px[1] + 0.5) * s, rmark * 0.35);
+            cairo_fill(cr);
+        }
         rs_report_font(cr, fs * 0.8, false);
         cairo_set_source_rgb(cr, 0, 0, 0);
         rs_report_label(cr, x + rmark * 1.3, y - rmark * 1.3, l->id, 0.6);
@@ -198,7 +206,7 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
     legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_CIRCLE, 0.1, 0.75, 0.1, 0.15, "pick (inlier)"), y += lh;
     legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_CROSS, 0.9, 0.1, 0.1, 0.15, "pick (outlier), residual true size"),
         y += lh;
-    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_DOT, 0.1, 0.3, 1, 0.15, "reprojected landmark"), y += lh;
+    legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_DOT, 0.1, 0.3, 1, 0.15, "surveyed landmark reprojected"), y += lh;
     snprintf(buf, sizeof buf, "inlier residual x%g", cam->magnification);
     legend_row(cr, lx + fs * 0.4, y, fs, LEGEND_LINE, 1, 0.2, 0.6, 0.15, buf), y += lh;
     snprintf(buf, sizeof buf, "ground grid, %g m", g);

@@ -19,14 +19,16 @@
 extern "C" {
 #endif
 
-// One landmark of a camera as `roadside calib` wrote it in <id>.json.
+// One landmark of a camera as `roadside calib` wrote it in <id>.json (residuals named as in
+// docs/calibration.md, "Residuals: which is which").
 typedef struct {
-    char *id;               // owned
-    int ilandmark;          // index in site->landmarks, -1 when the site has no such id
-    double observed_px[2];  // the pick
-    double predicted_px[2]; // the calibrated projection
-    double residual_px[2];  // predicted - observed
-    double normalised;      // sqrt(block chi2), sigmas
+    char *id;                        // owned
+    int ilandmark;                   // index in site->landmarks, -1 when the site has no such id
+    double observed_px[2];           // the pick
+    double predicted_surveyed_px[2]; // the surveyed position through the calibration (drawn);
+                                     //   NaN when <id>.json predates it
+    double residual_surveyed_px[2];  // predicted_surveyed_px - observed (drawn, tabulated)
+    double normalised;               // sqrt(block chi2), sigmas
     bool inlier;
 } rs_report_landmark;
 
@@ -51,7 +53,9 @@ typedef struct {
     // <id>.json
     double position_enu_m[3], sigma_position_enu_m[3], position_llh[3];
     double yaw_pitch_roll_deg[3], sigma_yaw_pitch_roll_deg[3];
-    double rms_px, variance_factor, condition_number;
+    double rms_surveyed_px; // the headline (NaN when <id>.json predates it)
+    double rms_adjusted_px; // labelled as such wherever it is shown
+    double variance_factor, condition_number;
     int Nused, Nrejected;
     char *lensmodel; // owned
     int N;
@@ -76,11 +80,12 @@ struct rs_report_ctx {
     rs_report_lanes lanes;
     rs_report_camera *cameras; // (Ncameras,) owned
     int Ncameras;
-    double grid_m;             // ground grid spacing, metres
-    double range_m;            // field of view on the ground cut at this distance
-    double detection_sigma_px; // detection noise of the uncertainty maps, px
-    rs_audit_map best_map;     // the smallest 1-sigma of the cameras' maps at each cell
-                               //   (owned; sigma_m NULL when no camera has a map)
+    double grid_m;                         // ground grid spacing, metres
+    double range_m;                        // field of view on the ground cut at this distance
+    double detection_sigma_px;             // detection noise of the uncertainty maps, px
+    const rs_audit_options *audit_options; // the audit's thresholds; NULL: no audit requested
+    rs_audit_map best_map;                 // the smallest 1-sigma of the cameras' maps at each cell
+                                           //   (owned; sigma_m NULL when no camera has a map)
 };
 
 // Fills rep->best_map from the cameras' audit maps: a grid of the cameras' cell size spanning

@@ -56,7 +56,8 @@ def main():
     out = os.path.join(tmp, "calib")
     p = run("calib", site, "-o", out)
     check(p.returncode == 0, f"calib exit {p.returncode}: {p.stderr}")
-    check("camera" in p.stdout and "rms_px" in p.stdout, "calib prints a summary table")
+    check("camera" in p.stdout and "rms_surveyed_px" in p.stdout and "rms_adjusted_px" in p.stdout,
+          "calib prints a summary table with both residuals under their names")
     sitej = json.load(open(os.path.join(site, "site.json")))
     origin = (sitej["origin"]["lat"], sitej["origin"]["lon"], sitej["origin"]["h"])
     truth = {c["id"]: c for c in json.load(open(os.path.join(site, "truth", "truth.json")))["cameras"]}
@@ -73,8 +74,12 @@ def main():
         res = json.load(open(os.path.join(out, f"{cid}.json")))
         for key in ("camera", "lensmodel", "intrinsics", "rt_cam_enu", "covariance_rt_cam_enu", "position_enu_m",
                     "position_llh", "yaw_pitch_roll_deg", "sigma_position_enu_m", "sigma_yaw_pitch_roll_deg",
-                    "rms_px", "landmarks", "solver"):
+                    "rms_surveyed_px", "rms_adjusted_px", "landmarks", "solver"):
             check(key in res, f"{cid}.json lacks '{key}'")
+        # noise-free picks and survey: both residuals vanish (the surveyed one is the headline)
+        check(res.get("rms_surveyed_px", 1) < 1e-6 and res.get("rms_adjusted_px", 1) < 1e-6,
+              f"{cid}: noise-free residuals rms_surveyed_px {res.get('rms_surveyed_px')}, "
+              f"rms_adjusted_px {res.get('rms_adjusted_px')}")
         rt = np.array(res["rt_cam_enu"])
         check(relerr(rt, mt.extrinsics_rt_fromref()) < 1e-8,
               f"{cid}: rt_cam_enu {rt} vs truth {mt.extrinsics_rt_fromref()} (rel {relerr(rt, mt.extrinsics_rt_fromref()):.2e})")

@@ -154,7 +154,7 @@ def main():
             print("FAIL: calibration on all 43 rows failed")
             return 1
         res = json.loads(p.stdout)[0]
-        print(f"all rows: focal {res['intrinsics'][0]:.1f} px, rms {res['rms_px']:.2f} px, "
+        print(f"all rows: focal {res['intrinsics'][0]:.1f} px, rms against the survey {res['rms_surveyed_px']:.2f} px, "
               f"used {res['landmarks_used']}, camera at ENU {np.round(res['position_enu_m'], 2).tolist()}, "
               f"sigma {np.round(res['sigma_position_enu_m'], 2).tolist()} m, variance factor {res['variance_factor']:.2f}")
 

@@ -6,7 +6,9 @@ Modes (one meson test each):
             data URI), has 1 + 2 per camera figures, each a valid non-blank PNG of the size its
             <img> says; a background PNG put in backgrounds/cam1/ (and a JPEG in cam2/) shows
             through in that camera's image; cam1's residual vectors run along <id>.json's
-            residuals times the magnification the caption states; the ground grid drawn in cam1's image lies where mrcal's Python projects the
+            residual_surveyed_px (the headline's residuals, ~30 px on the demo; they were the
+            adjusted ones, ~0.05 px, drawn x500, before issue 13 item 6) times the
+            magnification the caption states; the ground grid drawn in cam1's image lies where mrcal's Python projects the
             grid's crossings through out/cam1.cameramodel (oracle; >= 90% of the visible
             crossings within 1.5 px of a grid-coloured pixel)
   escape    a site name and a camera note holding markup come out escaped, never as markup;
@@ -163,15 +165,15 @@ def mode_html(tmp):
     check(close > 0.5, f"JPEG background view.JPG fills most of cam2's image ({100 * close:.0f}% of pixels)")
 
     # residual vectors: magnified by the factor the caption states, in the direction of
-    # <id>.json's residual (oracle: the calibration's own numbers)
-    m = re.search(r"inlier residual vectors magnified (\d+(?:\.\d+)?) times", p.imgs[1]["alt"])
+    # <id>.json's residual_surveyed_px (oracle: the calibration's own numbers)
+    m = re.search(r"inlier residual vectors (?:\([^)]*\) )?magnified (\d+(?:\.\d+)?) times", p.imgs[1]["alt"])
     check(m, "cam1's caption states the magnification")
     mag = float(m.group(1)) if m else 1.0
     lms = json.load(open(os.path.join(calib, "cam1.json")))["landmarks"]
     pink = np.all(np.abs(cam1.astype(float) - (0.6 * 255, 0.2 * 255, 255)) < 40, axis=2)  # BGR of (1, 0.2, 0.6)
     n_long = n_hit = 0
     for l in lms:
-        r = np.array(l["residual_px"]) * mag
+        r = np.array(l["residual_surveyed_px"]) * mag  # drawn against the surveyed position
         if not l["inlier"] or np.linalg.norm(r) < 25:
             continue
         n_long += 1
