@@ -2,6 +2,8 @@
 // ground location. See rs_camera.h.
 #include "core/rs_camera.h"
 
+#include <cjson/cJSON.h>
+#include <ctype.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -61,6 +63,175 @@ rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err)
     return RS_OK;
 }
 
+// ---- what is handed to mrcal and OpenCV ----
+// mrcal 2.2's .cameramodel parser reads past the end of its buffer on some malformed text (a
+// comment or a string that runs to the end, mismatched quotes: tests/fuzz, docs/fuzzing.md), and
+// OpenCV 4.6's FileStorage hangs on some malformed YAML ("---- 1") and allocates a matrix's
+// rows x cols before counting its data. So only text of the shape these files have is handed
+// over: a strict check of the syntax, not a second parser (mrcal and OpenCV still read it).
+
+enum { MAX_DEPTH = 8, MAX_MATRIX_SIDE = 64 };
+
+typedef struct {
+    const char *p, *end;
+    int line;
+} scan;
+
+static void skip_blank(scan *s)
+{
+    while (s->p < s->end) {
+        if (*s->p == '#')
+            while (s->p < s->end && *s->p != '\n') s->p++;
+        else if (*s->p == '\n')
+            s->line++, s->p++;
+        else if (*s->p == ' ' || *s->p == '\t' || *s->p == '\r')
+            s->p++;
+        else
+            break;
+    }
+}
+
+// A Python literal of the .cameramodel subset: a dict of 'string': value, values strings (one
+// line, printable, no backslash), numbers, lists and dicts, MAX_DEPTH deep.
+static const char *literal(scan *s, int depth)
+{
+    skip_blank(s);
+    if (s->p >= s->end) return "the text ends where a value should be";
+    const char c = *s->p;
+    if (c == '\'' || c == '"') {
+        for (s->p++; s->p < s->end && *s->p != c; s->p++)
+            if (*s->p == '\n' || *s->p == '\\' || (unsigned char)*s->p < 32 || (unsigned char)*s->p > 126)
+                return "a quoted string that does not close on its line (or holds a backslash or a control byte)";
+        if (s->p >= s->end) return "a quoted string that is never closed";
+        s->p++;
+        return NULL;
+    }
+    if (c == '{' || c == '[') {
+        if (depth >= MAX_DEPTH) return "nested too deep";
+        const char close = c == '{' ? '}' : ']';
+        s->p++;
+        for (;;) {
+            skip_blank(s);
+            if (s->p < s->end && *s->p == close) {
+                s->p++;
+                return NULL;
+            }
+            if (c == '{') {
+                if (s->p >= s->end || (*s->p != '\'' && *s->p != '"')) return "a dict key that is not a quoted string";
+                const char *bad = literal(s, depth + 1);
+                if (bad) return bad;
+                skip_blank(s);
+                if (s->p >= s->end || *s->p != ':') return "a ':' missing after a key";
+                s->p++;
+            }
+            const char *bad = literal(s, depth + 1);
+            if (bad) return bad;
+            skip_blank(s);
+            if (s->p < s->end && *s->p == ',') {
+                s->p++;
+                continue;
+            }
+            if (s->p < s->end && *s->p == close) {
+                s->p++;
+                return NULL;
+            }
+            return c == '{' ? "a ',' or '}' missing in a dict" : "a ',' or ']' missing in a list";
+        }
+    }
+    const char *start = s->p; // a number
+    if (s->p < s->end && (*s->p == '+' || *s->p == '-')) s->p++;
+    int digits = 0;
+    while (s->p < s->end && ((*s->p >= '0' && *s->p <= '9') || *s->p == '.')) digits += *s->p++ != '.';
+    if (digits && s->p < s->end && (*s->p == 'e' || *s->p == 'E')) {
+        s->p++;
+        if (s->p < s->end && (*s->p == '+' || *s->p == '-')) s->p++;
+        int e = 0;
+        while (s->p < s->end && *s->p >= '0' && *s->p <= '9') s->p++, e++;
+        if (!e) return "a number with an empty exponent";
+    }
+    if (!digits || s->p == start) return "not a string, number, list or dict";
+    return NULL;
+}
+
+const char *rs_camera_cameramodel_problem(const char *text, size_t len, int *line)
+{
+    if (len == 0) return "the file is empty";
+    if (memchr(text, '\0', len)) return "the file contains a NUL byte";
+    scan s = {text, text + len, 1};
+    skip_blank(&s);
+    const char *bad = s.p < s.end && *s.p == '{' ? literal(&s, 0) : "the text is not a dict {'lensmodel': ...}";
+    if (!bad) {
+        skip_blank(&s);
+        if (s.p < s.end) bad = "text after the closing '}'";
+    }
+    *line = s.line;
+    return bad;
+}
+
+// OpenCV's YAML as cv::FileStorage writes it: "%YAML:1.0", "---", then lines "key: value" (a
+// number, a word, a quoted string, "!!opencv-matrix", or a flow list "[ ... ]" that may continue
+// over lines of numbers), indented or not; rows and cols at most MAX_MATRIX_SIDE.
+static const char *opencv_yaml_problem(const char *text, size_t len, int *line)
+{
+    if (memchr(text, '\0', len)) return "the file contains a NUL byte";
+    const char *p = text, *end = text + len;
+    bool header = false, in_list = false;
+    for (*line = 1; p < end; (*line)++) {
+        const char *eol = memchr(p, '\n', (size_t)(end - p));
+        if (!eol) eol = end;
+        const char *a = p, *b = eol;
+        p = eol < end ? eol + 1 : end;
+        while (a < b && (*a == ' ' || *a == '\t')) a++;
+        while (b > a && (b[-1] == ' ' || b[-1] == '\t' || b[-1] == '\r')) b--;
+        if (a == b || *a == '#') continue;
+        const size_t n = (size_t)(b - a);
+        if (!header) {
+            if (n < 9 || strncmp(a, "%YAML", 5) || (a[5] != ':' && a[5] != ' ') || strncmp(a + 6, "1.", 2))
+                return "not OpenCV YAML: the first line must be %YAML:1.0";
+            header = true;
+            continue;
+        }
+        if (n == 3 && !strncmp(a, "---", 3) && !in_list) continue;
+        const char *v = a;
+        if (!in_list) { // key: value
+            if (!(isalpha((unsigned char)*v) || *v == '_')) return "a line that is not 'key: value'";
+            while (v < b && (isalnum((unsigned char)*v) || *v == '_')) v++;
+            const size_t klen = (size_t)(v - a);
+            if (v >= b || *v != ':') return "a line that is not 'key: value'";
+            v++;
+            while (v < b && *v == ' ') v++;
+            const bool side = (klen == 4 && (!strncmp(a, "rows", 4) || !strncmp(a, "cols", 4)));
+            if (side && !(b - v >= 1 && b - v <= 2 && isdigit((unsigned char)v[0]) &&
+                          (b - v == 1 || isdigit((unsigned char)v[1])) && atoi(v) <= MAX_MATRIX_SIDE))
+                return "a matrix of more than 64 rows or columns (a camera file has 3x3 and 1x14 at most)";
+            if (v == b || !strncmp(v, "!!opencv-matrix", 15)) continue;
+            if (*v == '"') {
+                if (b - v < 2 || b[-1] != '"' || memchr(v + 1, '"', (size_t)(b - v - 2))) return "a malformed string";
+                continue;
+            }
+            if (*v != '[') {
+                for (const char *t = v; t < b; t++)
+                    if (!isalnum((unsigned char)*t) && !strchr("+-._", *t))
+                        return "a value that is not a number or a word";
+                continue;
+            }
+            v++;
+            in_list = true;
+        }
+        for (; v < b; v++) { // inside a flow list: numbers and commas up to ']'
+            if (*v == ']') {
+                in_list = false;
+                if (v + 1 != b) return "text after a list's ']'";
+                break;
+            }
+            if (!isalnum((unsigned char)*v) && !strchr("+-., ", *v)) return "a list of something else than numbers";
+        }
+    }
+    if (!header) return "the file is empty";
+    if (in_list) return "a list '[' that is never closed";
+    return NULL;
+}
+
 // mrcal's model (flexible array) -> rs_camera, checked.
 static rs_status from_mrcal(rs_camera *cam, const mrcal_cameramodel_t *m, const char *path, rs_err *err)
 {
@@ -79,7 +250,18 @@ rs_status rs_camera_read_cameramodel_text(rs_camera *cam, const char *text, size
 {
     memset(cam, 0, sizeof *cam);
     if (len > (size_t)0x7fffffff) return rs_err_set(err, RS_ERR_INVALID, "%s: too large for a .cameramodel", path);
-    mrcal_cameramodel_t *m = mrcal_read_cameramodel_string(text, (int)len);
+    int line = 0;
+    const char *bad = rs_camera_cameramodel_problem(text, len, &line);
+    if (bad) return rs_err_set(err, RS_ERR_PARSE, "%s:%d: not a valid mrcal .cameramodel: %s", path, line, bad);
+    // mrcal's reader also wants the last line ended (a comment at the very end runs past it)
+    char *ended = NULL;
+    if (text[len - 1] != '\n') {
+        if (!(ended = malloc(len + 2))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        memcpy(ended, text, len);
+        ended[len] = '\n', ended[len + 1] = '\0';
+    }
+    mrcal_cameramodel_t *m = mrcal_read_cameramodel_string(ended ? ended : text, (int)(ended ? len + 1 : len));
+    free(ended);
     if (!m)
         return rs_err_set(err, RS_ERR_PARSE,
                           "%s: not a valid mrcal .cameramodel (mrcal's reader prints the reason on stderr; it "
@@ -142,6 +324,36 @@ static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_ca
     return RS_OK;
 }
 
+// The text OpenCV will read from `path`: YAML of the shape above, or JSON (cJSON) whose "rows"
+// and "cols" are at most MAX_MATRIX_SIDE.
+static bool json_sides_ok(const cJSON *j)
+{
+    for (const cJSON *e = j ? j->child : NULL; e; e = e->next) {
+        if (e->string && (!strcmp(e->string, "rows") || !strcmp(e->string, "cols")) &&
+            !(cJSON_IsNumber(e) && e->valuedouble <= MAX_MATRIX_SIDE))
+            return false;
+        if (!json_sides_ok(e)) return false;
+    }
+    return true;
+}
+
+static rs_status opencv_text_check(const char *text, size_t len, const char *path, rs_err *err)
+{
+    if (rs_io_has_extension(path, "json")) {
+        cJSON *j = cJSON_ParseWithLength(text, len);
+        const bool ok = j && json_sides_ok(j);
+        cJSON_Delete(j);
+        return ok ? RS_OK
+                  : rs_err_set(err, RS_ERR_PARSE, "%s: not OpenCV JSON (invalid JSON, or a matrix over %dx%d)", path,
+                               MAX_MATRIX_SIDE, MAX_MATRIX_SIDE);
+    }
+    int line = 0;
+    const char *bad = opencv_yaml_problem(text, len, &line);
+    return bad ? rs_err_set(err, RS_ERR_PARSE, "%s:%d: not OpenCV YAML as cv::FileStorage writes it: %s", path, line,
+                            bad)
+               : RS_OK;
+}
+
 rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *path, rs_err *err)
 {
     memset(cam, 0, sizeof *cam);
@@ -149,7 +361,11 @@ rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *pat
     rs_status st;
     if (rs_io_has_extension(path, "yaml") || rs_io_has_extension(path, "yml") || rs_io_has_extension(path, "json")) {
         rs_camera_opencv_file f;
-        st = rs_io_check_regular(path, RS_IO_MAX_SMALL_FILE_BYTES, err); // OpenCV opens it by name
+        char *text = NULL;
+        size_t len = 0;
+        st = rs_io_read_file_max(&text, &len, path, RS_IO_MAX_SMALL_FILE_BYTES, err); // a regular file, bounded
+        if (st == RS_OK) st = opencv_text_check(text, len, path, err);
+        free(text);
         if (st == RS_OK) st = rs_camera_opencv_read(&f, path, err);
         if (st == RS_OK) st = from_opencv(cam, extra, &f, path, err);
     } else {

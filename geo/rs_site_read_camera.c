@@ -16,34 +16,6 @@ static const double DEFAULT_SIGMA_PX = 1.0;
 
 // ---- camera models ----
 
-// mrcal 2.2's .cameramodel rs_site__reader reads past the end of its buffer when a quoted string is not
-// closed (found by tests/geo/test_site_fuzz.py under AddressSanitizer), so such files are refused
-// before mrcal sees them; everything else is left to mrcal. Returns NULL if the text may be
-// handed to mrcal, else what is wrong (and *line where).
-static const char *cameramodel_precheck(const char *text, size_t len, int *line)
-{
-    *line = 0;
-    if (len == 0) return "the file is empty";
-    if (strlen(text) != len) return "the file contains a NUL byte";
-    char quote = 0;
-    int quote_line = 0, l = 1;
-    bool comment = false;
-    for (const char *p = text; *p; p++) {
-        if (*p == '\n') l++;
-        if (comment)
-            comment = *p != '\n';
-        else if (quote)
-            quote = *p == quote ? 0 : quote;
-        else if (*p == '\'' || *p == '"')
-            quote = *p, quote_line = l;
-        else if (*p == '#')
-            comment = true;
-    }
-    if (!quote) return NULL;
-    *line = quote_line;
-    return "a quoted string that is never closed";
-}
-
 // Reports a failed core camera read as a diagnostic: its message is "PATH: FIELD: what", and
 // the diagnostic names the file already.
 static void camera_error(rs_site__reader *c, const rs_site_camera *cam, const rs_err *e)
@@ -75,7 +47,7 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
     char *text = rs_site__read_file(c, why, RS_IO_MAX_SMALL_FILE_BYTES, &len);
     if (!text) goto done;
     int line = 0;
-    const char *bad = cameramodel_precheck(text, len, &line);
+    const char *bad = rs_camera_cameramodel_problem(text, len, &line); // core's rule, with the line
     if (bad)
         ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
     else if (rs_camera_read_cameramodel_text(&cam->camera, text, len, cam->model_path, &e))

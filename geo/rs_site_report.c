@@ -125,10 +125,24 @@ char *rs_site__join(rs_site__reader *c, const char *dir, const char *rel)
 bool rs_site__inside(const rs_site__reader *c, const char *path)
 {
     char *dir = realpath(c->site->dir, NULL), *p = realpath(path, NULL);
-    bool inside = !dir || !p; // what does not resolve is reported as missing elsewhere
+    // a path that does not resolve is judged by the nearest folder above it that does: a missing
+    // "/nonexistent/x" is outside, and saying "missing" would tell whether an outside path exists
+    char *up = p || !dir ? NULL : strdup(path);
+    while (up && !p) {
+        char *slash = strrchr(up, '/');
+        if (!slash) {
+            p = realpath(".", NULL);
+            break;
+        }
+        *(slash == up ? slash + 1 : slash) = '\0';
+        p = realpath(up, NULL);
+        if (slash == up) break;
+    }
+    free(up);
+    bool inside = !dir || !p;
     if (dir && p) {
         const size_t n = strlen(dir);
-        inside = !strncmp(p, dir, n) && (p[n] == '/' || (n == 1 && dir[0] == '/'));
+        inside = !strncmp(p, dir, n) && (p[n] == '/' || p[n] == '\0' || (n == 1 && dir[0] == '/'));
     }
     free(dir);
     free(p);
@@ -138,11 +152,17 @@ bool rs_site__inside(const rs_site__reader *c, const char *path)
 bool rs_site__file_exists(rs_site__reader *c, const char *why)
 {
     struct stat sb;
-    if (stat(c->file, &sb) != 0)
+    if (!rs_site__inside(c, c->file)) { // said of site.json, which names it: nothing outside is a diagnostic's file
+        char *site_json = rs_io_join(c->site->dir, "site.json");
+        if (!site_json) c->r->nomem = true;
+        if (site_json)
+            rs_site__diag(c->r, RS_SITE_ERROR, RS_ERR_INVALID, site_json, 0, -1, NULL, NULL,
+                          "'%.200s' is outside the site folder (%s): a site's files live inside it (links are "
+                          "followed); refused unread",
+                          c->file, why);
+        free(site_json);
+    } else if (stat(c->file, &sb) != 0)
         ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
-    else if (!rs_site__inside(c, c->file))
-        ERR(c, RS_ERR_INVALID, NULL,
-            "outside the site folder (%s): a site's files live inside it (links are followed); refused unread", why);
     else if (S_ISDIR(sb.st_mode))
         ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
     else
