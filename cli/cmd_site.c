@@ -26,10 +26,15 @@ static void usage(FILE *out)
                  "            \"N errors, M warnings\". Exit status 0 when the site is usable (warnings\n"
                  "            alone do not fail), 1 when it has errors. An optional lanes.geojson is read\n"
                  "            too once the rest is free of errors (its first problem is one error).\n"
+                 "            When landmark heights are unreliable or unknown, check also prints the\n"
+                 "            ground model that gives them (docs/site-format.md, \"Heights a survey does\n"
+                 "            not have\") before the counts.\n"
                  "  describe  loads SITE and summarises it: name, origin, heights, landmarks and their\n"
-                 "            ENU extent, and per camera the lens model, image size, observations,\n"
-                 "            position prior and the extent and distance of the landmarks it sees.\n"
-                 "            --landmarks also lists every landmark in ENU (metres, 9 decimals).\n"
+                 "            ENU extent, how far their heights are trusted and the ground model, and\n"
+                 "            per camera the lens model, image size, observations, position prior and\n"
+                 "            the extent and distance of the landmarks it sees.\n"
+                 "            --landmarks also lists every landmark in ENU (metres, 9 decimals), with\n"
+                 "            where its height comes from (surveyed, or model(unreliable|unknown)).\n"
                  "            Exit status 1 if SITE does not load (run 'check' to see every problem).\n"
                  "  init      creates the folder NAME (it must not exist, or be empty) with a skeleton\n"
                  "            site.json (origin, heights, one example camera 'cam1'), an empty\n"
@@ -44,6 +49,58 @@ static void usage(FILE *out)
                  "  render-backgrounds  ray-traces synthetic backgrounds of the site's ground.\n"
                  "\n"
                  "Exit status: 0 ok, 1 failure, 2 usage error.\n");
+}
+
+// x, with what prints as -0.000 as 0.000.
+static double tidy(double x) { return fabs(x) < 5e-4 ? 0.0 : x; }
+
+// The ground model's plane in words: its up at its centre, its slope and which way it falls.
+static void print_plane(const rs_site_ground_model *m, const char *indent)
+{
+    const double g = hypot(m->slope[0], m->slope[1]);
+    printf("%sup %.3f m at ENU (%.3f, %.3f) m; ", indent, tidy(m->up_m), tidy(m->centre_en_m[0]),
+           tidy(m->centre_en_m[1]));
+    if (g > 0) {
+        double azimuth = atan2(-m->slope[0], -m->slope[1]) * 180 / M_PI; // downhill, from north, clockwise
+        if (azimuth < 0) azimuth += 360;
+        printf("slope %.2f %% falling towards azimuth %.1f deg\n", 100 * g, azimuth);
+    } else {
+        printf("level\n");
+    }
+}
+
+// The ground model (geo/rs_site.h, rs_site_ground_model) that gives the unreliable and unknown
+// heights: where it comes from, its plane, its uncertainty and how the given heights agree.
+static void print_ground_model(const rs_site_ground_model *m, const char *indent)
+{
+    if (m->source == RS_SITE_GROUND_NONE) return;
+    static const char *const kind[] = {"", "surveyed", "unreliable"};
+    if (m->source == RS_SITE_GROUND_SITE_PLANE) {
+        printf("%sground model: the site's ground_plane (too few heights on the ground to fit a plane)\n", indent);
+    } else {
+        printf("%sground model: plane fitted to the %s heights: rests on %d of %d", indent, kind[m->source], m->Nused,
+               m->Ncandidates);
+        if (m->Ncandidates > m->Nused) printf(" (%d left out as outliers)", m->Ncandidates - m->Nused);
+        printf("\n");
+    }
+    char sub[64];
+    snprintf(sub, sizeof sub, "%s  ", indent);
+    print_plane(m, sub);
+    if (m->source == RS_SITE_GROUND_SITE_PLANE) {
+        printf("%smodelled heights keep their stated sigma_v (the ground_plane states no uncertainty)\n", sub);
+    } else {
+        char rms[32] = "n/a (3 points)";
+        if (isfinite(m->rms_m)) snprintf(rms, sizeof rms, "%.3f m", m->rms_m);
+        printf("%sresidual RMS %s, stated sigma_v %.3f m: the road's scatter about the plane %.3f m (at least %g m); "
+               "plane 1-sigma at its centre %.3f m\n",
+               sub, rms, m->stated_sigma_m, m->scatter_m, RS_SITE_GROUND_SCATTER_MIN_M, sqrt(m->cov[0]));
+    }
+    printf("%s%d height%s modelled (%d unreliable, %d unknown), sigma_v %.3f .. %.3f m\n", sub, m->Nmodelled,
+           m->Nmodelled == 1 ? "" : "s", m->Nunreliable, m->Nunknown, m->sigma_min_m, m->sigma_max_m);
+    if (m->Nunreliable > 0)
+        printf("%sgiven unreliable heights - model: mean %+.3f m, largest %.3f m; %d beyond %g sigma\n", sub,
+               tidy(m->mean_given_minus_model_m), m->max_abs_given_minus_model_m, m->Ndisagree,
+               RS_SITE_GROUND_DISAGREE_K);
 }
 
 static int cmd_check(int argc, char **argv)
@@ -77,6 +134,7 @@ static int cmd_check(int argc, char **argv)
         }
     }
     free(lanes_path);
+    print_ground_model(&report->ground, "");
     printf("%d error%s, %d warning%s\n", Nerrors, Nerrors == 1 ? "" : "s", report->Nwarnings,
            report->Nwarnings == 1 ? "" : "s");
     int rc = Nerrors ? RS_EXIT_FAIL : RS_EXIT_OK;
@@ -154,20 +212,33 @@ static int cmd_describe(int argc, char **argv)
         printf("heights: orthometric in the files, N = %g m (h_ellipsoidal = h + N)\n", site->geoid_undulation_m);
     else
         printf("heights: ellipsoidal\n");
-    printf("ground plane: n = (%g, %g, %g), n . p = %g m\n", site->ground_normal_enu[0], site->ground_normal_enu[1],
-           site->ground_normal_enu[2], site->ground_offset_m);
+    printf("ground plane: n = (%g, %g, %g), n . p = %g m%s\n", site->ground_normal_enu[0], site->ground_normal_enu[1],
+           site->ground_normal_enu[2], site->ground_offset_m,
+           site->ground_plane_given || site->ground.source == RS_SITE_GROUND_NONE ||
+                   site->ground.source == RS_SITE_GROUND_SITE_PLANE
+               ? ""
+               : " (none in site.json: the ground model's plane)");
     printf("landmarks: %d (default sigma %g m horizontal, %g m vertical)\n", site->Nlandmarks, site->landmark_sigma_h_m,
            site->landmark_sigma_v_m);
     print_extent(site, -1, "  ");
+    int Nkind[4] = {0};
+    for (int i = 0; i < site->Nlandmarks; i++) Nkind[site->landmarks[i].height]++;
+    printf("  landmark heights: \"%s\" site-wide; %d surveyed, %d unreliable, %d unknown\n",
+           rs_site_height_name(site->landmark_heights), Nkind[RS_SITE_HEIGHT_SURVEYED],
+           Nkind[RS_SITE_HEIGHT_UNRELIABLE], Nkind[RS_SITE_HEIGHT_UNKNOWN]);
+    print_ground_model(&site->ground, "  ");
     printf("cameras: %d\n", site->Ncameras);
     for (int i = 0; i < site->Ncameras; i++) describe_camera(site, i);
     if (list) {
         printf("landmarks (ENU, metres):\n");
-        printf("  %-16s %16s %16s %16s %9s %9s  %s\n", "id", "east", "north", "up", "sigma_h", "sigma_v", "kind");
+        printf("  %-16s %16s %16s %16s %9s %9s  %-17s  %s\n", "id", "east", "north", "up", "sigma_h", "sigma_v",
+               "height", "kind");
         for (int i = 0; i < site->Nlandmarks; i++) {
             const rs_site_landmark *l = &site->landmarks[i];
-            printf("  %-16s %16.9f %16.9f %16.9f %9g %9g  %s\n", l->id, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2],
-                   l->sigma_h_m, l->sigma_v_m, l->kind ? l->kind : "-");
+            char height[32];
+            snprintf(height, sizeof height, l->height_modelled ? "model(%s)" : "%s", rs_site_height_name(l->height));
+            printf("  %-16s %16.9f %16.9f %16.9f %9g %9g  %-17s  %s\n", l->id, l->p_enu_m[0], l->p_enu_m[1],
+                   l->p_enu_m[2], l->sigma_h_m, l->sigma_v_m, height, l->kind ? l->kind : "-");
         }
     }
     rs_site_free(site);

@@ -34,6 +34,13 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "  --pole-prior SIGMA_M      give each camera a position prior: its true position plus\n"
             "                            N(0, SIGMA_M) noise per axis [none]\n"
             "  --origin LAT,LON,H        site origin, degrees, degrees, m ellipsoidal [%g,%g,%g]\n"
+            "  --height-noise M          more noise on the heights of the landmarks on the ground,\n"
+            "                            N(0, M) metres (raw GNSS heights), declared in their sigma\n"
+            "                            (the rest of the site is the same as without it) [0]\n"
+            "  --landmark-heights H      site.json \"landmark_heights\" for the landmarks on the\n"
+            "                            ground: surveyed, unreliable or unknown (written [lon, lat]);\n"
+            "                            those above it then say \"height\": \"surveyed\" and their\n"
+            "                            above_ground_m (docs/site-format.md) [not written]\n"
             "  --force                   replace DIR if it already holds a site\n"
             "\n"
             "With zero noise the site still declares sigmas of 1 mm and 0.01 px (a site needs\n"
@@ -122,6 +129,15 @@ int rs_cli_site_simulate(int argc, char **argv)
         } else if (strcmp(a, "--pole-prior") == 0) {
             if (!rs_cli_parse_double(v, &o.pole_prior_sigma_m) || !(o.pole_prior_sigma_m > 0))
                 return rs_cli_usage_error(CMD, "--pole-prior: '%s' is not a positive number of metres", v);
+        } else if (strcmp(a, "--height-noise") == 0) {
+            if (!rs_cli_parse_double(v, &o.height_noise_m))
+                return rs_cli_usage_error(CMD, "--height-noise: '%s' is not a number of metres", v);
+        } else if (strcmp(a, "--landmark-heights") == 0) {
+            rs_site_height h = RS_SITE_HEIGHT_SURVEYED;
+            while (h <= RS_SITE_HEIGHT_UNKNOWN && strcmp(v, rs_site_height_name(h))) h++;
+            if (h > RS_SITE_HEIGHT_UNKNOWN)
+                return rs_cli_usage_error(CMD, "--landmark-heights: '%s' is not surveyed, unreliable or unknown", v);
+            o.landmark_heights = h;
         } else if (strcmp(a, "--origin") == 0) {
             if (!rs_cli_parse_llh(v, &o.origin))
                 return rs_cli_usage_error(CMD, "--origin: '%s' is not LAT,LON,H (degrees, degrees, metres)", v);

@@ -1,6 +1,7 @@
 // rs_site.c -- the site in memory (geo/rs_site.h): rs_site_free and the lookups (cameras,
-// landmarks, a background's tags, the landmarks' extent). Reading a site is rs_site_read.c; this
-// file calls nothing else of geo, and everything of the reader may call it.
+// landmarks, a background's tags, the landmarks' extent, the names of height kinds). Reading a
+// site is rs_site_read.c; this file calls nothing else of geo, and everything of the reader may
+// call it.
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,6 +43,17 @@ void rs_site_free(rs_site *site)
     free(site->dir);
     free(site->name);
     free(site);
+}
+
+const char *rs_site_height_name(rs_site_height h)
+{
+    switch (h) {
+    case RS_SITE_HEIGHT_DEFAULT: return "default";
+    case RS_SITE_HEIGHT_SURVEYED: return "surveyed";
+    case RS_SITE_HEIGHT_UNRELIABLE: return "unreliable";
+    case RS_SITE_HEIGHT_UNKNOWN: return "unknown";
+    }
+    return "?";
 }
 
 int rs_site_find_camera(const rs_site *site, const char *id)

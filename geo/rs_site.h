@@ -4,11 +4,13 @@
 //
 //   site.json                  name; origin {lat, lon, h}; heights ("ellipsoidal" or
 //                              {"orthometric": N_m}); landmark_sigma_m {horizontal, vertical};
-//                              optional ground_plane, max_landmark_distance_m; cameras[] (each
+//                              optional landmark_heights ("surveyed", "unreliable", "unknown"),
+//                              ground_plane, max_landmark_distance_m; cameras[] (each
 //                              with its files, optional prior, note and background_images)
 //   landmarks.geojson          FeatureCollection of Point features [lon, lat, h] (RFC 7946
-//                              order); properties: id (unique string), optional sigma_h_m,
-//                              sigma_v_m, kind, note
+//                              order; [lon, lat] where the height is unknown); properties: id
+//                              (unique string), optional sigma_h_m, sigma_v_m, height,
+//                              above_ground_m, kind, note
 //   cameras/<id>.cameramodel   intrinsics as an mrcal .cameramodel (or OpenCV-style .yaml/.yml/
 //                              .json: image_width, image_height, camera_matrix,
 //                              distortion_coefficients)
@@ -31,8 +33,16 @@
 // The reader is geo/rs_site_read.c (and the files it calls, geo/internal/rs_site_internal.h);
 // the writers are geo/rs_site_write.h. No other module reads or writes these files.
 //
+// Heights a survey does not have: a site may say that its landmark heights are "unreliable"
+// (given but noisy: raw GNSS) or "unknown" (points picked on imagery), site-wide or per landmark.
+// Those heights then come from the site's ground model (rs_site_ground_model below,
+// geo/rs_site_ground.c), fitted at load time to the heights that are reliable, with the model's
+// own uncertainty as their vertical sigma. A site that says nothing is read as before: every
+// height surveyed, no model.
+//
 // Accuracy: landmark and prior ENU coordinates are those of rs_geo_llh_to_enu (nanometres);
-// no rounding happens in between (JSON numbers are read as doubles).
+// no rounding happens in between (JSON numbers are read as doubles). Modelled heights: see
+// rs_site_ground_model.
 #pragma once
 #include <stdbool.h>
 #include <stddef.h>
@@ -62,16 +72,47 @@ extern "C" {
 #define RS_SITE_HEIGHT_MAX_M       10000.0
 #define RS_SITE_COINCIDENT_M       1e-3
 
+// How far a landmark's height can be trusted: site.json "landmark_heights" (site-wide) and a
+// feature's properties.height (that landmark), docs/site-format.md.
+typedef enum {
+    RS_SITE_HEIGHT_DEFAULT = 0, // not stated: the landmark follows the site, the site is "surveyed"
+    RS_SITE_HEIGHT_SURVEYED,    // "surveyed": levelled or surveyed, used as given
+    RS_SITE_HEIGHT_UNRELIABLE,  // "unreliable": given but noisy (raw GNSS): the ground model's height
+                                //   replaces it; its stated sigma_v is the noise of the given height
+    RS_SITE_HEIGHT_UNKNOWN,     // "unknown": none (picked on imagery; coordinates may be [lon, lat]):
+                                //   the ground model's height; a height given anyway is ignored
+} rs_site_height;
+
+// "surveyed", "unreliable", "unknown" ("default" for RS_SITE_HEIGHT_DEFAULT, "?" out of range).
+const char *rs_site_height_name(rs_site_height h);
+
 // A surveyed landmark, in the site ENU frame.
 typedef struct {
     char *id;          // owned; unique within the site
     int feature;       // index in landmarks.geojson's "features" (from 0)
-    rs_llh llh;        // as surveyed, height converted to ellipsoidal
+    rs_llh llh;        // as surveyed, height converted to ellipsoidal (modelled: see height_modelled)
     double p_enu_m[3]; // (3,) east, north, up, metres
     double sigma_h_m;  // 1-sigma horizontal uncertainty (per axis), metres, > 0
-    double sigma_v_m;  // 1-sigma vertical uncertainty, metres, > 0
+    double sigma_v_m;  // 1-sigma vertical uncertainty, metres, > 0 (modelled: the model's)
     char *kind;        // owned, may be NULL (free-form: "road-marking", "pole-base", ...)
     char *note;        // owned, may be NULL
+
+    rs_site_height height_stated; // its properties.height; RS_SITE_HEIGHT_DEFAULT when absent
+    rs_site_height height;        // what counts: height_stated, else the site's landmark_heights
+                                  //   (never DEFAULT in a loaded site)
+    double above_ground_m;        // properties.above_ground_m: how far the point is above the road
+                                  //   surface, metres, >= 0 (default 0: on the ground). Such a point
+                                  //   never carries the ground model; a modelled one is put this
+                                  //   far above it
+    bool height_modelled;         // llh.h_m, p_enu_m[2] and sigma_v_m come from the site's ground
+                                  //   model (height is UNRELIABLE or UNKNOWN); llh's lat and lon and
+                                  //   p_enu_m's east and north are the given position's
+    double given_h_m;             // the height as given, ellipsoidal, metres; NAN when none counts
+                                  //   (UNKNOWN). Equal to llh.h_m when not modelled
+    double given_up_m;            // ENU up of the position as given; NAN likewise
+    double given_sigma_v_m;       // the vertical 1-sigma stated for the given height (its
+                                  //   sigma_v_m, else the site's), metres
+    bool ground_used;             // the fitted ground plane rests on this landmark's height
 } rs_site_landmark;
 
 // One pixel pick of a landmark in one camera.
@@ -124,17 +165,100 @@ typedef struct {
     double prior_sigma_m;    // 1-sigma of the prior per axis, metres, > 0
 } rs_site_camera;
 
+// The ground model of a site: where the heights of its UNRELIABLE and UNKNOWN landmarks come from.
+// Built by the reader (geo/rs_site_ground.c) after every landmark is in ENU, and only when some
+// landmark's height is to be modelled (else source is RS_SITE_GROUND_NONE and nothing was fitted).
+//
+// Method: a plane up = up_m + slope . ((e, n) - centre_en_m), fitted by unweighted least squares
+// (the scatter about a plane is the road's own, the same for every point) to the heights it rests
+// on, chosen in this order:
+//   1. the SURVEYED heights of landmarks on the ground (above_ground_m == 0), if there are at least
+//      3 not on one line;
+//   2. else the UNRELIABLE heights of landmarks on the ground, likewise (their noise averages out
+//      over the plane);
+//   3. else the site's ground_plane (no fit; a modelled landmark keeps its stated sigma_v).
+// Robustly: a least-median-of-squares start over triples of points (all triples up to 24 points,
+// else 600 drawn with core/rs_rng.h from a fixed seed), then least squares on the points within
+// RS_SITE_GROUND_REJECT_K sigmas, repeated until the set is stable; a point's sigma is the robust
+// one (1.4826 x the median absolute residual of all candidates x sqrt(n / (n - 3))) or its own
+// stated sigma_v combined with RS_SITE_GROUND_SCATTER_MIN_M, whichever is larger, so that no
+// height is left out for a residual its stated noise explains. One wrong height (or a point above
+// the ground) cannot tilt the plane; the final plane is the plain least-squares plane of the
+// points kept. Accuracy: measured against numpy's least squares on the points kept and the
+// closed-form sigmas (tests/geo/test_site_heights_model.py, the oracle's ENU printed to 1e-9 m):
+// modelled heights within 2e-9 m, sigmas within 1e-8 relative.
+//
+// Uncertainty: s = sqrt(RSS / (Nused - 3)) (for Nused == 3: the RMS of their stated sigmas), at
+// least the RMS of their stated sigmas; cov = s^2 (A^T A)^-1 for the rows A = (1, de, dn). The
+// road's own scatter about the plane is scatter_m = sqrt(max(s^2 - stated_sigma_m^2,
+// RS_SITE_GROUND_SCATTER_MIN_M^2)): the residuals less what the stated noise of the heights
+// explains (for a plane resting on raw GNSS heights, most of the residual is their noise, which a
+// modelled height does not carry). A modelled landmark at (e, n) gets
+//   up = up_m + slope . (e - ce, n - cn) + above_ground_m,
+//   sigma_v = sqrt(x^T cov x + scatter_m^2),  x = (1, e - ce, n - cn).
+// The plane lives in the site ENU frame: over 1 km the Earth's curvature departs from it by 8 cm,
+// which the residuals take up. The modelled height keeps the given lat and lon (the point's ENU
+// east and north move by under 1 mm within 1 km of the origin).
+typedef enum {
+    RS_SITE_GROUND_NONE = 0,       // no height is modelled: no model
+    RS_SITE_GROUND_FIT_SURVEYED,   // a plane fitted to the surveyed heights
+    RS_SITE_GROUND_FIT_UNRELIABLE, // a plane fitted to the unreliable heights themselves
+    RS_SITE_GROUND_SITE_PLANE,     // the site's ground_plane (too few heights to fit one)
+} rs_site_ground_source;
+
+#define RS_SITE_GROUND_SCATTER_MIN_M 0.05 // the road departs from a plane by at least this (1-sigma)
+#define RS_SITE_GROUND_REJECT_K      3.0  // fit: heights beyond this many robust sigmas are left out
+#define RS_SITE_GROUND_DISAGREE_K    3.0  // check: a given unreliable height this many sigmas off
+
 typedef struct {
-    char *dir;                      // owned; the site folder as given
-    char *name;                     // owned
-    rs_llh origin;                  // ENU origin, height converted to ellipsoidal
-    bool heights_orthometric;       // the site's heights were declared orthometric
-    double geoid_undulation_m;      // N: h_ell = h_orth + N (0 for ellipsoidal sites)
-    double landmark_sigma_h_m;      // site-wide default 1-sigma, horizontal, metres
-    double landmark_sigma_v_m;      // site-wide default 1-sigma, vertical, metres
-    double ground_normal_enu[3];    // (3,) unit normal of the ground plane n . p_enu = offset
-    double ground_offset_m;         // (default: n = (0,0,1), offset 0, i.e. up = 0)
-    double max_landmark_distance_m; // check warns about landmarks farther (default 1000)
+    rs_site_ground_source source;
+    int Nmodelled;                   // landmarks whose height the model gives
+    int Nunreliable;                 //   of which given but unreliable
+    int Nunknown;                    //   of which unknown
+    int Ncandidates;                 // heights the plane could rest on (source FIT_*), landmarks of that kind on
+                                     //   the ground with a usable position
+    int Nused;                       // those it rests on; Ncandidates - Nused were rejected as outliers
+    double centre_en_m[2];           // (2,) east, north of the centroid of the points used, metres
+    double up_m;                     // the plane's up at centre_en_m, metres
+    double slope[2];                 // (2,) d up / d east, d up / d north (dimensionless; 0.01 = 1 %)
+    double cov[9];                   // (3,3) row-major covariance of (up_m, slope[0], slope[1]); zero for
+                                     //   SITE_PLANE
+    double rms_m;                    // sqrt(RSS / (Nused - 3)) of the points used; NAN when Nused == 3
+    double stated_sigma_m;           // RMS of the stated vertical sigmas of the points used
+    double scale_m;                  // s of the covariance: max(rms_m, stated_sigma_m)
+    double scatter_m;                // the road's scatter about the plane added to every modelled sigma
+    double sigma_min_m, sigma_max_m; // the modelled landmarks' vertical sigmas (NAN when none)
+    int Ndisagree;                   // given UNRELIABLE heights more than RS_SITE_GROUND_DISAGREE_K x
+                                     //   sqrt(stated^2 + modelled^2) sigmas from the model (warnings)
+    double mean_given_minus_model_m; // over the given UNRELIABLE heights (NAN when none): an
+                                     //   offset here means heights in another system
+    double max_abs_given_minus_model_m;
+} rs_site_ground_model;
+
+// The ground model's up at (east, north) and the 1-sigma of the plane there (its prediction
+// alone, sqrt(x^T cov x); a modelled landmark's sigma_v adds scatter_m). For SITE_PLANE the plane
+// is the site's, sigma 0. Source NONE: NAN for both.
+// out: up_m, sigma_plane_m (either may be NULL)
+void rs_site_ground_predict( // out
+    double *up_m, double *sigma_plane_m,
+    // in
+    const rs_site_ground_model *model, double e_m, double n_m);
+
+typedef struct {
+    char *dir;                       // owned; the site folder as given
+    char *name;                      // owned
+    rs_llh origin;                   // ENU origin, height converted to ellipsoidal
+    bool heights_orthometric;        // the site's heights were declared orthometric
+    double geoid_undulation_m;       // N: h_ell = h_orth + N (0 for ellipsoidal sites)
+    double landmark_sigma_h_m;       // site-wide default 1-sigma, horizontal, metres
+    double landmark_sigma_v_m;       // site-wide default 1-sigma, vertical, metres
+    double ground_normal_enu[3];     // (3,) unit normal of the ground plane n . p_enu = offset
+    double ground_offset_m;          // (default: the fitted ground model's plane when there is one,
+                                     //   source FIT_*; else n = (0,0,1), offset 0, i.e. up = 0)
+    bool ground_plane_given;         // site.json states the ground_plane
+    double max_landmark_distance_m;  // check warns about landmarks farther (default 1000)
+    rs_site_height landmark_heights; // site.json "landmark_heights" (SURVEYED when absent)
+    rs_site_ground_model ground;     // where modelled heights come from (source NONE: none is)
 
     rs_site_landmark *landmarks; // owned, (Nlandmarks,) in file order
     int Nlandmarks;
@@ -203,6 +327,8 @@ typedef struct {
     rs_site_diag *diags; // owned, (N,) in the order found: site.json, landmarks, cameras
     int N;
     int Nerrors, Nwarnings;
+    rs_site_ground_model ground; // the site's ground model as far as it could be built (source
+                                 //   NONE when no height is modelled or the landmarks are unusable)
 } rs_site_report;
 
 // Reads the site folder and collects ALL problems, not just the first. Never stops at a bad

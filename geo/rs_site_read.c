@@ -21,6 +21,32 @@ enum { DEFAULT_MAX_LANDMARK_DISTANCE_M = 1000 };
 
 // ---- site.json ----
 
+// obj[key] ("prefix.key" in messages), if present, as how far heights can be trusted: "surveyed",
+// "unreliable" or "unknown" (docs/site-format.md). False (after reporting) when it is not one.
+static bool read_height_trust(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
+                              rs_site_height *out)
+{
+    char field[128];
+    const cJSON *it = rs_site__member(c, obj, prefix, key, false, "", field, sizeof field);
+    if (!it) return true;
+    static const char *const expected = "\"surveyed\", \"unreliable\" (given but noisy: raw GNSS) or \"unknown\" "
+                                        "(picked on imagery)";
+    if (!cJSON_IsString(it)) {
+        char got[64];
+        rs_site__json_excerpt(got, sizeof got, it);
+        ERR(c, RS_ERR_PARSE, field, "%s: expected %s: how far the heights can be trusted%s", got, expected,
+            cJSON_IsNumber(it) ? " (a height itself is the third of the coordinates)" : "");
+        return false;
+    }
+    for (rs_site_height h = RS_SITE_HEIGHT_SURVEYED; h <= RS_SITE_HEIGHT_UNKNOWN; h++)
+        if (!strcmp(it->valuestring, rs_site_height_name(h))) {
+            *out = h;
+            return true;
+        }
+    ERR(c, RS_ERR_INVALID, field, "'%.80s': expected %s", it->valuestring, expected);
+    return false;
+}
+
 // Reads {lat, lon, h} (and sigma_m for a prior) of obj into given = (lat, lon, h).
 static bool get_llh(rs_site__reader *c, const cJSON *obj, const char *prefix, double given[3])
 {
@@ -85,6 +111,7 @@ static void read_ground_plane(rs_site__reader *c, const cJSON *root)
         return;
     for (int k = 0; k < 3; k++) c->site->ground_normal_enu[k] = v[k] / norm;
     c->site->ground_offset_m = offset / norm;
+    c->site->ground_plane_given = true;
 }
 
 // One entry of a camera's "background_images" into *bg (docs/backgrounds.md). False (after
@@ -229,9 +256,16 @@ static void read_site_json(rs_site__reader *c)
     }
     rs_site__check_duplicate_keys(c, root, NULL);
     // "simulated": how `roadside site simulate` made the site (free-form, for people and tools)
-    static const char *const known[] = {
-        "name",    "origin",    "heights", "landmark_sigma_m", "ground_plane", "max_landmark_distance_m",
-        "cameras", "simulated", NULL};
+    static const char *const known[] = {"name",
+                                        "origin",
+                                        "heights",
+                                        "landmark_sigma_m",
+                                        "landmark_heights",
+                                        "ground_plane",
+                                        "max_landmark_distance_m",
+                                        "cameras",
+                                        "simulated",
+                                        NULL};
     rs_site__warn_unknown_keys(c, root, NULL, known);
 
     const char *name;
@@ -274,6 +308,7 @@ static void read_site_json(rs_site__reader *c)
         rs_site__get_in_range(c, sigma, "landmark_sigma_m", "vertical", true, RS_SITE_SURVEY_SIGMA_MIN_M,
                               RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &site->landmark_sigma_v_m);
     }
+    read_height_trust(c, root, NULL, "landmark_heights", &site->landmark_heights);
     read_ground_plane(c, root);
     rs_site__get_positive(c, root, NULL, "max_landmark_distance_m", false, &site->max_landmark_distance_m);
 
@@ -312,7 +347,8 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
         ERR(c, RS_ERR_PARSE, "type", "'%s', expected \"Feature\"", type);
     const cJSON *props = rs_site__get_object(c, f, NULL, "properties", true, "{\"id\": \"...\"}");
     const char *id = NULL, *kind = NULL, *note = NULL;
-    double sigma_h = site->landmark_sigma_h_m, sigma_v = site->landmark_sigma_v_m;
+    double sigma_h = site->landmark_sigma_h_m, sigma_v = site->landmark_sigma_v_m, above_ground = 0;
+    rs_site_height height_stated = RS_SITE_HEIGHT_DEFAULT;
     if (props) {
         const cJSON *jid = cJSON_GetObjectItemCaseSensitive(props, "id");
         if (cJSON_IsNumber(jid))
@@ -328,7 +364,20 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
                               RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &sigma_v);
         rs_site__get_string(c, props, "properties", "kind", false, &kind);
         rs_site__get_string(c, props, "properties", "note", false, &note);
+        read_height_trust(c, props, "properties", "height", &height_stated);
+        double v;
+        if (cJSON_GetObjectItemCaseSensitive(props, "above_ground_m") &&
+            rs_site__get_number(c, props, "properties", "above_ground_m", false, &v)) {
+            if (v >= 0 && v <= RS_SITE__ABOVE_GROUND_MAX_M)
+                above_ground = v;
+            else
+                ERR(c, RS_ERR_INVALID, "properties.above_ground_m",
+                    "%g m is outside [0, %g] m: how far the point is above the road surface (0: on it)", v,
+                    RS_SITE__ABOVE_GROUND_MAX_M);
+        }
     }
+    const rs_site_height height = height_stated != RS_SITE_HEIGHT_DEFAULT ? height_stated : site->landmark_heights;
+    const bool height_counts = height != RS_SITE_HEIGHT_UNKNOWN;
     rs_site__check_duplicate_keys(c, f, NULL); // after the id is known: messages name it
 
     double given[3], llh[3] = {NAN, NAN, NAN}, p_enu[3] = {NAN, NAN, NAN};
@@ -344,13 +393,18 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
         } else if (!xyz) {
             ERR(c, RS_ERR_PARSE, "coordinates", "missing ([lon, lat, h])");
         } else if (!cJSON_IsArray(xyz) || (n != 2 && n != 3)) {
-            ERR(c, RS_ERR_PARSE, "coordinates", "expected [lon, lat, h] (3 numbers)");
-        } else if (n == 2) {
-            ERR(c, RS_ERR_PARSE, "coordinates", "the height is missing: expected [lon, lat, h]");
+            ERR(c, RS_ERR_PARSE, "coordinates", "expected [lon, lat, h] (3 numbers)%s",
+                height_counts ? "" : " or [lon, lat] (the height is unknown)");
+        } else if (n == 2 && height_counts) {
+            ERR(c, RS_ERR_PARSE, "coordinates",
+                "the height is missing: expected [lon, lat, h] (a point picked on imagery, without a height, says "
+                "so: properties.height \"unknown\", or site.json \"landmark_heights\": \"unknown\")");
         } else {
-            double v[3];
+            // an unknown height (absent, or given and ignored) is placed at the origin's height
+            // until the ground model gives it one
+            double v[3] = {0, 0, site->origin.h_m - site->geoid_undulation_m};
             coords_ok = true;
-            for (int k = 0; k < 3; k++) {
+            for (int k = 0; k < n; k++) {
                 const cJSON *x = cJSON_GetArrayItem(xyz, k);
                 char got[64] = "";
                 if (!cJSON_IsNumber(x)) rs_site__json_excerpt(got, sizeof got, x);
@@ -366,6 +420,7 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
                     v[k] = x->valuedouble;
                 coords_ok = coords_ok && cJSON_IsNumber(x) && isfinite(x->valuedouble);
             }
+            if (!height_counts) v[2] = site->origin.h_m - site->geoid_undulation_m;
             given[0] = v[1], given[1] = v[0], given[2] = v[2];
         }
     }
@@ -381,6 +436,14 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
         l->sigma_v_m = sigma_v;
         l->kind = rs_site__dup(c, kind);
         l->note = rs_site__dup(c, note);
+        l->height_stated = height_stated;
+        l->height = height;
+        l->above_ground_m = above_ground;
+        l->height_modelled = false; // until the ground model gives it a height (rs_site_ground.c)
+        l->given_h_m = height_counts ? llh[2] : NAN;
+        l->given_up_m = height_counts ? p_enu[2] : NAN;
+        l->given_sigma_v_m = sigma_v;
+        l->ground_used = false;
     }
 done:
     c->feature = -1;
@@ -542,10 +605,12 @@ static void read_site(rs_site **out, rs_site__report *r, const char *dir)
     site->max_landmark_distance_m = DEFAULT_MAX_LANDMARK_DISTANCE_M;
     site->ground_normal_enu[2] = 1;
     site->landmark_sigma_h_m = site->landmark_sigma_v_m = NAN;
+    site->landmark_heights = RS_SITE_HEIGHT_SURVEYED;
     rs_site__reader c = {.r = r, .site = site, .feature = -1};
 
     read_site_json(&c);
     read_landmarks(&c);
+    if (c.origin_ok) rs_site__ground_model(r, site);
     for (int i = 0; i < site->Ncameras; i++) {
         rs_site_camera *cam = &site->cameras[i];
         if (cam->model_path) rs_site__read_camera_model(&c, cam, i);
@@ -591,6 +656,7 @@ rs_status rs_site_check(rs_site_report **report, const char *dir, rs_err *err)
     if (!r) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
     rs_site *site = NULL;
     read_site(&site, r, dir);
+    if (site) r->pub.ground = site->ground;
     rs_site_free(site);
     if (!site || r->nomem) {
         rs_site_report_free(&r->pub);

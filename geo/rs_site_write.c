@@ -243,6 +243,8 @@ static cJSON *site_document(const rs_site_spec *spec)
     ok = ok && (sigma = cJSON_AddObjectToObject(j, "landmark_sigma_m")) &&
          rs_site__add_number(sigma, "horizontal", spec->landmark_sigma_h_m) &&
          rs_site__add_number(sigma, "vertical", spec->landmark_sigma_v_m);
+    if (ok && spec->landmark_heights != RS_SITE_HEIGHT_DEFAULT)
+        ok = cJSON_AddStringToObject(j, "landmark_heights", rs_site_height_name(spec->landmark_heights));
     if (ok && spec->ground_normal_enu) {
         cJSON *g = cJSON_AddObjectToObject(j, "ground_plane");
         ok = g && add_item(g, "normal_enu", rs_site__numbers(spec->ground_normal_enu, 3)) &&
@@ -290,14 +292,22 @@ rs_status rs_site_write_json(const char *dir, const rs_site_spec *spec, rs_site_
 
 static cJSON *landmark_feature(const rs_site_landmark *l, double geoid_undulation_m)
 {
-    const double lonlath[3] = {l->llh.lon_deg, l->llh.lat_deg, l->llh.h_m - geoid_undulation_m};
+    // what was given, not what the ground model made of it
+    const double h = l->height_modelled ? l->given_h_m : l->llh.h_m;
+    const double sigma_v = l->height_modelled ? l->given_sigma_v_m : l->sigma_v_m;
+    const bool unknown = l->height == RS_SITE_HEIGHT_UNKNOWN || l->height_stated == RS_SITE_HEIGHT_UNKNOWN;
+    const double lonlath[3] = {l->llh.lon_deg, l->llh.lat_deg, h - geoid_undulation_m};
     cJSON *f = cJSON_CreateObject(), *g = NULL, *p = NULL;
     bool ok = f && cJSON_AddStringToObject(f, "type", "Feature") && (g = cJSON_AddObjectToObject(f, "geometry")) &&
-              cJSON_AddStringToObject(g, "type", "Point") && add_item(g, "coordinates", rs_site__numbers(lonlath, 3)) &&
+              cJSON_AddStringToObject(g, "type", "Point") &&
+              add_item(g, "coordinates", rs_site__numbers(lonlath, unknown && isnan(h) ? 2 : 3)) &&
               (p = cJSON_AddObjectToObject(f, "properties")) && cJSON_AddStringToObject(p, "id", l->id);
     if (ok && l->kind) ok = cJSON_AddStringToObject(p, "kind", l->kind);
     if (ok && isfinite(l->sigma_h_m) && l->sigma_h_m > 0) ok = rs_site__add_number(p, "sigma_h_m", l->sigma_h_m);
-    if (ok && isfinite(l->sigma_v_m) && l->sigma_v_m > 0) ok = rs_site__add_number(p, "sigma_v_m", l->sigma_v_m);
+    if (ok && isfinite(sigma_v) && sigma_v > 0) ok = rs_site__add_number(p, "sigma_v_m", sigma_v);
+    if (ok && l->height_stated != RS_SITE_HEIGHT_DEFAULT)
+        ok = cJSON_AddStringToObject(p, "height", rs_site_height_name(l->height_stated));
+    if (ok && l->above_ground_m > 0) ok = rs_site__add_number(p, "above_ground_m", l->above_ground_m);
     if (ok && l->note) ok = cJSON_AddStringToObject(p, "note", l->note);
     if (ok) return f;
     cJSON_Delete(f);

@@ -52,6 +52,7 @@ typedef struct {
                                       //   {"orthometric": N} with N = *geoid_undulation_m, metres
     double landmark_sigma_h_m;        // site-wide 1-sigma of the landmarks, metres, > 0
     double landmark_sigma_v_m;
+    rs_site_height landmark_heights;    // "landmark_heights"; RS_SITE_HEIGHT_DEFAULT: not written
     const double *ground_normal_enu;    // (3,) the ground plane n . p_enu = offset; may be NULL:
     double ground_offset_m;             //   no "ground_plane" (the default up = 0)
     double max_landmark_distance_m;     // > 0; 0: not written (the default 1000 m applies)
@@ -62,8 +63,8 @@ typedef struct {
 } rs_site_spec;
 
 // Writes DIR/site.json. Members in the order of docs/site-format.md: name, origin, heights,
-// landmark_sigma_m, ground_plane, max_landmark_distance_m, cameras (id, model, observations,
-// backgrounds, position_prior {lat, lon, h, sigma_m}, note), then the extra member.
+// landmark_sigma_m, landmark_heights, ground_plane, max_landmark_distance_m, cameras (id, model,
+// observations, backgrounds, position_prior {lat, lon, h, sigma_m}, note), then the extra member.
 // Returns RS_ERR_INVALID for a missing name or camera string or a non-finite number,
 // RS_ERR_PARSE when extra_json is not JSON, RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_site_write_json( // in
@@ -71,11 +72,16 @@ rs_status rs_site_write_json( // in
 
 // Writes DIR/landmarks.geojson: a FeatureCollection of Point features, coordinates
 // [lon_deg, lat_deg, h_m] (RFC 7946 order; h = llh.h_m - geoid_undulation_m), properties id,
-// then kind, sigma_h_m, sigma_v_m and note where given.
+// then kind, sigma_h_m, sigma_v_m, height, above_ground_m and note where given. What is written
+// is what was given: for a landmark whose height the ground model gave (height_modelled, as
+// rs_site_load leaves it) the height is given_h_m and sigma_v_m given_sigma_v_m.
 // in: landmarks (Nlandmarks,), may be NULL when Nlandmarks is 0: id, llh (ellipsoidal height,
-//     as rs_site_load gives it), kind and note (NULL: not written), sigma_h_m and sigma_v_m
-//     (written only when finite and > 0: NAN means the site-wide default); feature and p_enu_m
-//     are ignored
+//     as rs_site_load gives it; NAN, or a NAN given_h_m when modelled, writes [lon, lat] when
+//     the height is unknown: height or height_stated RS_SITE_HEIGHT_UNKNOWN), kind and note
+//     (NULL: not written), sigma_h_m and sigma_v_m (written only when finite and > 0: NAN means
+//     the site-wide default), height_stated (properties.height; DEFAULT: not written),
+//     above_ground_m (written when > 0); feature, p_enu_m, given_up_m and ground_used are
+//     ignored
 //     geoid_undulation_m: N of the site's "heights" (0 for an ellipsoidal site)
 // Returns RS_ERR_INVALID (no id, a non-finite coordinate), RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_site_write_landmarks( // in

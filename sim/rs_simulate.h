@@ -38,6 +38,7 @@
 #include "core/rs_rng.h"
 #include "core/rs_status.h"
 #include "geo/rs_geo.h"
+#include "geo/rs_site.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -150,6 +151,19 @@ typedef struct {
     double elevated_fraction;  // share of each camera's landmarks above the ground (0.25)
     rs_llh origin;             // default 48.1374, 11.5755, 560 (ellipsoidal)
     bool force;                // replace an existing site folder (default false)
+
+    // Heights a survey does not have (docs/site-format.md): both default to what sites always
+    // were, nothing written and no noise.
+    double height_noise_m;           // >= 0, <= 100 (default 0): N(0, this) more on the surveyed
+                                     //   heights of the landmarks on the ground (raw GNSS), drawn
+                                     //   from a stream of its own: the rest of the site is the
+                                     //   same as without it; their declared sigma_v becomes
+                                     //   hypot(survey_sigma_v_m, this)
+    rs_site_height landmark_heights; // site.json "landmark_heights" for the landmarks on the
+                                     //   ground (DEFAULT: not written). Unless SURVEYED, the
+                                     //   landmarks above the ground say "height": "surveyed" and
+                                     //   their above_ground_m; UNKNOWN ones are written
+                                     //   [lon, lat]
 } rs_simulate_site_options;
 
 // Fills o with the defaults above. o must not be NULL.

@@ -297,6 +297,14 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
     }
     for (int i = 0; i < L; i++) memcpy(p_true + 3 * i, s->cand.c[s->cand_of[i]].p_enu_m, 3 * sizeof(double));
     rs_simulate__survey_noise(&rng, s->survey_enu_m, p_true, L, o->survey_sigma_h_m, o->survey_sigma_v_m);
+    if (o->height_noise_m > 0) {
+        // heights as unreliable as raw GNSS: more noise on the landmarks on the ground, from a
+        // stream of its own (the rest of the site is the same as without it)
+        rs_rng hrng;
+        rs_rng_seed(&hrng, rs_rng_seed_derive(o->seed, HEIGHT_NOISE_STREAM));
+        for (int i = 0; i < L; i++)
+            if (p_true[3 * i + 2] == 0.0) s->survey_enu_m[3 * i + 2] += o->height_noise_m * rs_rng_normal(&hrng);
+    }
     free(p_true);
     if ((st = rs_geo_enu_to_llh(s->survey_llh, &o->origin, s->survey_enu_m, L, err)))
         return rs_err_prefix(err, "landmarks");

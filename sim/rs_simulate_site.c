@@ -46,6 +46,8 @@ void rs_simulate_site_options_default(rs_simulate_site_options *o)
         .elevated_fraction = 0.25,
         .origin = {.lat_deg = 48.1374, .lon_deg = 11.5755, .h_m = 560.0},
         .force = false,
+        .height_noise_m = 0,
+        .landmark_heights = RS_SITE_HEIGHT_DEFAULT,
     };
 }
 
@@ -67,6 +69,10 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
                  o->pole_prior_sigma_m);
     CHECK_OPTION(o->elevated_fraction >= 0 && o->elevated_fraction <= 1, "elevated_fraction", "%g (0..1)",
                  o->elevated_fraction);
+    CHECK_OPTION(o->height_noise_m >= 0 && o->height_noise_m <= 100, "height-noise", "%g (0..100 m)",
+                 o->height_noise_m);
+    CHECK_OPTION(o->landmark_heights >= RS_SITE_HEIGHT_DEFAULT && o->landmark_heights <= RS_SITE_HEIGHT_UNKNOWN,
+                 "landmark-heights", "%d", (int)o->landmark_heights);
     CHECK_OPTION(isfinite(o->origin.lat_deg) && fabs(o->origin.lat_deg) <= 89.0, "origin", "latitude %g (-89..89)",
                  o->origin.lat_deg);
     CHECK_OPTION(isfinite(o->origin.lon_deg) && fabs(o->origin.lon_deg) <= 360.0, "origin", "longitude %g",
@@ -140,6 +146,10 @@ static cJSON *json_options(const rs_simulate_site_options *o)
     cJSON_AddNumberToObject(j, "pole_prior_sigma_m", o->pole_prior_sigma_m);
     cJSON_AddNumberToObject(j, "elevated_fraction", o->elevated_fraction);
     cJSON_AddItemToObject(j, "origin", json_llh(o->origin.lat_deg, o->origin.lon_deg, o->origin.h_m));
+    // only when asked for: a default site stays byte-identical to what it always was
+    if (o->height_noise_m > 0) cJSON_AddNumberToObject(j, "height_noise_m", o->height_noise_m);
+    if (o->landmark_heights != RS_SITE_HEIGHT_DEFAULT)
+        cJSON_AddStringToObject(j, "landmark_heights", rs_site_height_name(o->landmark_heights));
     return j;
 }
 
@@ -176,7 +186,8 @@ static rs_status write_site_json(const char *dir, const rs_simulate__site *s, co
         .name = name,
         .origin = o->origin,
         .landmark_sigma_h_m = fmax(o->survey_sigma_h_m, DECLARED_SURVEY_SIGMA_MIN_M),
-        .landmark_sigma_v_m = fmax(o->survey_sigma_v_m, DECLARED_SURVEY_SIGMA_MIN_M),
+        .landmark_sigma_v_m = fmax(hypot(o->survey_sigma_v_m, o->height_noise_m), DECLARED_SURVEY_SIGMA_MIN_M),
+        .landmark_heights = o->landmark_heights,
         .ground_normal_enu = up,
         .ground_offset_m = 0.0,
         .cameras = cams,
@@ -194,9 +205,13 @@ done:
     return st;
 }
 
-// The surveyed landmarks as the site gives them (ids "L001", ...; kinds static strings).
+// The surveyed landmarks as the site gives them (ids "L001", ...; kinds static strings). With
+// o->landmark_heights, those on the ground follow it (an unknown height is not written); those
+// above it say they are surveyed, how far above the ground they are and, with height noise, their
+// own sigma_v.
 // out: *landmarks (Nlandmarks,) and *ids (Nlandmarks, 16) that their ids point into (free both)
-static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], const rs_simulate__site *s, rs_err *err)
+static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], const rs_simulate__site *s,
+                                const rs_simulate_site_options *o, rs_err *err)
 {
     const int L = s->Nlandmarks;
     *landmarks = calloc((size_t)(L ? L : 1), sizeof **landmarks);
@@ -205,12 +220,24 @@ static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], 
     for (int i = 0; i < L; i++) {
         const double *llh = s->survey_llh + 3 * i;
         rs_simulate__landmark_id((*ids)[i], i);
-        (*landmarks)[i] = (rs_site_landmark){.id = (*ids)[i],
-                                             .feature = i,
-                                             .llh = {llh[0], llh[1], llh[2]},
-                                             .sigma_h_m = NAN,
-                                             .sigma_v_m = NAN,
-                                             .kind = (char *)s->cand.c[s->cand_of[i]].kind};
+        rs_site_landmark *l = &(*landmarks)[i];
+        *l = (rs_site_landmark){.id = (*ids)[i],
+                                .feature = i,
+                                .llh = {llh[0], llh[1], llh[2]},
+                                .sigma_h_m = NAN,
+                                .sigma_v_m = NAN,
+                                .kind = (char *)s->cand.c[s->cand_of[i]].kind};
+        const double above_ground_m = s->cand.c[s->cand_of[i]].p_enu_m[2];
+        if (above_ground_m != 0.0) {
+            if (o->height_noise_m > 0) l->sigma_v_m = fmax(o->survey_sigma_v_m, DECLARED_SURVEY_SIGMA_MIN_M);
+            if (o->landmark_heights != RS_SITE_HEIGHT_DEFAULT && o->landmark_heights != RS_SITE_HEIGHT_SURVEYED) {
+                l->height_stated = RS_SITE_HEIGHT_SURVEYED;
+                l->above_ground_m = above_ground_m;
+            }
+        } else if (o->landmark_heights == RS_SITE_HEIGHT_UNKNOWN) {
+            l->height = RS_SITE_HEIGHT_UNKNOWN;
+            l->llh.h_m = NAN; // written [lon, lat]
+        }
     }
     return RS_OK;
 }
@@ -333,7 +360,7 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
     char *lanes_path = rs_io_join(dir, "lanes.geojson");
     if (!lanes_path)
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    else if (!(st = write_site_json(dir, s, o, err)) && !(st = site_landmarks(&landmarks, &ids, s, err)) &&
+    else if (!(st = write_site_json(dir, s, o, err)) && !(st = site_landmarks(&landmarks, &ids, s, o, err)) &&
              !(st = rs_site_write_landmarks(dir, landmarks, s->Nlandmarks, 0, RS_SITE_LAYOUT_TOOL, err)) &&
              !(st = rs_simulate__lanes(&lanes, s, err)) &&
              !(st = rs_lanes_write(lanes_path, &lanes, &o->origin, 0, false, RS_SITE_LAYOUT_TOOL, err)) &&

@@ -5,6 +5,7 @@
 //
 //   rs_site_read.c         rs_site_load, rs_site_check; site.json and landmarks.geojson
 //     rs_site_json.c         members of those JSON files, with their messages; repeated keys
+//     rs_site_ground.c       the ground model: heights that are unreliable or unknown
 //     rs_site_read_camera.c  each camera's model file and observations CSV
 //       rs_site_check.c        plausibility checks that need more than one value
 //         rs_site_report.c       the report: diagnostics, and reading a site file into it
@@ -79,6 +80,9 @@ struct cJSON;
 #define RS_SITE__SURVEY_SIGMA_RANGE \
     "a 1-sigma under 1 mm is better than any survey of a road feature, over 100 m it is no survey"
 
+// properties.above_ground_m is at most this: a point 1 km above the road is no landmark of it.
+#define RS_SITE__ABOVE_GROUND_MAX_M 1000.0
+
 // Reads and parses the JSON file `name` of the site folder (a UTF-8 byte order mark allowed),
 // reporting a syntax error at its line and column. c->file is *path (owned by the caller, who
 // frees it and resets c->file) until the caller is done.
@@ -145,6 +149,16 @@ void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam);
 
 // Checks across the whole site once everything is read: duplicate landmark and camera ids.
 void rs_site__check_site(rs_site__report *r, const rs_site *site);
+
+// ---- the ground model (rs_site_ground.c) ----
+
+// Builds site->ground (geo/rs_site.h, rs_site_ground_model) once every landmark is read and in
+// ENU, when at least one landmark's height is UNRELIABLE or UNKNOWN, and gives those landmarks
+// their modelled llh.h_m, p_enu_m[2] and sigma_v_m (height_modelled). Landmarks with an unusable
+// position (NaN) are left alone. Reports into r: the heights left out of the fit (warnings,
+// the first 10 by name), given unreliable heights that disagree with the model (likewise, and
+// a summary), and a site ground_plane that gives no height (vertical: an error at site.json).
+void rs_site__ground_model(rs_site__report *r, rs_site *site);
 
 // ---- camera files (rs_site_read_camera.c) ----
 

@@ -32,6 +32,10 @@ static inline double rs_simulate__quantize(double x, double inv_quantum)
 #define Q_MODEL 1e6 // .cameramodel precision (mrcal writes "%f")
 #define Q_ENU   1e4 // true landmark positions: 0.1 mm
 
+// The random stream of the extra height noise (rs_rng_seed_derive(seed, this)): apart from the
+// site's own stream, so that --height-noise changes nothing else.
+#define HEIGHT_NOISE_STREAM 0x6865696768ULL // "heigh"
+
 // A check of one option: `ok` must hold, else RS_ERR_USAGE naming the field (in a function
 // with an `rs_err *err`).
 #define CHECK_OPTION(ok, field, fmt, value)                                                           \

@@ -1,6 +1,7 @@
 // site_api_dump SITE -- loads SITE through the C API (rs_site_load) and prints what the test
-// driver test_site_api.py asserts on, one "key value" per line: the status and its message,
-// the counts, every observation, the lookups, the extents. Exits 0 whenever it ran.
+// drivers test_site_api.py and test_site_heights_model.py assert on, one "key value" per line:
+// the status and its message, the counts, every observation, the lookups, the extents, the
+// ground model and each landmark's height record. Exits 0 whenever it ran.
 #include <math.h>
 #include <stdio.h>
 
@@ -51,6 +52,33 @@ int main(int argc, char **argv)
         printf("landmark %s %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %s\n", l->id, l->feature, l->llh.lat_deg,
                l->llh.lon_deg, l->llh.h_m, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2], l->sigma_h_m,
                l->kind ? l->kind : "-");
+    }
+    // the ground model (rs_site_ground_model) and each landmark's height record
+    const rs_site_ground_model *m = &site->ground;
+    printf("landmark_heights %s %d\n", rs_site_height_name(site->landmark_heights), site->ground_plane_given);
+    printf("ground_model %d %d %d %d %d %d", (int)m->source, m->Nmodelled, m->Nunreliable, m->Nunknown, m->Ncandidates,
+           m->Nused);
+    const double v[] = {m->centre_en_m[0], m->centre_en_m[1], m->up_m, m->slope[0], m->slope[1]};
+    for (int k = 0; k < 5; k++) printf(" %.17g", v[k]);
+    for (int k = 0; k < 9; k++) printf(" %.17g", m->cov[k]);
+    const double w[] = {m->rms_m,
+                        m->stated_sigma_m,
+                        m->scale_m,
+                        m->scatter_m,
+                        m->sigma_min_m,
+                        m->sigma_max_m,
+                        m->mean_given_minus_model_m,
+                        m->max_abs_given_minus_model_m};
+    for (int k = 0; k < 8; k++) printf(" %.17g", w[k]);
+    printf(" %d\n", m->Ndisagree);
+    for (int i = 0; i < site->Nlandmarks; i++) {
+        const rs_site_landmark *l = &site->landmarks[i];
+        double up, sigma_plane;
+        rs_site_ground_predict(&up, &sigma_plane, m, l->p_enu_m[0], l->p_enu_m[1]);
+        printf("lheight %s %s %s %d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", l->id,
+               rs_site_height_name(l->height_stated), rs_site_height_name(l->height), l->height_modelled,
+               l->ground_used, l->above_ground_m, l->given_h_m, l->given_up_m, l->given_sigma_v_m, l->sigma_v_m,
+               l->llh.h_m, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2], up, sigma_plane);
     }
     rs_site_free(site);
     return 0;

@@ -55,6 +55,9 @@ static rs_status write_site(const rs_site *site, const char *out, rs_site_layout
         .geoid_undulation_m = site->heights_orthometric ? &N : NULL,
         .landmark_sigma_h_m = site->landmark_sigma_h_m,
         .landmark_sigma_v_m = site->landmark_sigma_v_m,
+        // the default is not written: the fixture's site.json has no "landmark_heights"
+        .landmark_heights =
+            site->landmark_heights == RS_SITE_HEIGHT_SURVEYED ? RS_SITE_HEIGHT_DEFAULT : site->landmark_heights,
         .ground_normal_enu = site->ground_normal_enu,
         .ground_offset_m = site->ground_offset_m,
         .max_landmark_distance_m = site->max_landmark_distance_m,

@@ -9,6 +9,11 @@ usage: test_simulate.py CHECK   with CHECK one of
   outliers     the share of outliers matches --outliers (binomial, 4 sigma)
   options      bad options -> exit 2 with a message; an existing folder -> exit 1, untouched
   demo         sites/demo is exactly what `roadside site simulate sites/demo --seed 1` writes
+  heights      --height-noise 2 --landmark-heights unreliable|unknown (issue 13, item 5): the
+               rest of the site as without them; the extra noise N(0, 2) on the ground heights
+               only (4-sigma bounds); what site.json and landmarks.geojson declare; the site
+               checks clean and its ground model gives the heights (unknown: exactly the true
+               ground, up = 0)
 
 Runs with Debian's python3 (numpy, mrcal). Environment: ROADSIDE = the roadside binary.
 """
@@ -319,6 +324,72 @@ def check_demo(tmp):
     if size >= 200_000:
         fail(f"sites/demo is {size} bytes (limit 200 KB)")
     print(f"demo: sites/demo is byte-identical to a fresh --seed 1 site ({len(files)} files, {size} bytes)")
+
+
+def check_heights(tmp):
+    a, b, c = (os.path.join(tmp, x) for x in ("plain", "unreliable", "unknown"))
+    simulate(a, "--seed", str(SEED))
+    simulate(b, "--seed", str(SEED), "--height-noise", "2", "--landmark-heights", "unreliable")
+    simulate(c, "--seed", str(SEED), "--landmark-heights", "unknown")
+    same = [f for f in tree(a) if f.startswith(("cameras/", "observations/")) or f in (
+        "lanes.geojson", "truth/landmarks_enu.csv")]
+    _, mismatch, errors = filecmp.cmpfiles(a, b, same, shallow=False)
+    if mismatch or errors:
+        fail(f"--height-noise changed {mismatch + errors}")
+    sa, sb = (json.load(open(os.path.join(x, "site.json"))) for x in (a, b))
+    if sb.get("landmark_heights") != "unreliable" or "landmark_heights" in sa:
+        fail(f"site.json landmark_heights: {sb.get('landmark_heights')!r} (default site: {sa.get('landmark_heights')!r})")
+    if abs(sb["landmark_sigma_m"]["vertical"] - math.hypot(0.5, 2)) > 1e-12:
+        fail(f"declared vertical sigma {sb['landmark_sigma_m']['vertical']}, expected hypot(0.5, 2)")
+    if sb["simulated"].get("height_noise_m") != 2 or "height_noise_m" in sa["simulated"]:
+        fail("site.json's simulated does not record --height-noise (or the default site does)")
+    ta, tb = (json.load(open(os.path.join(x, "truth", "truth.json"))) for x in (a, b))
+    fa, fb, fc = ({f["properties"]["id"]: f for f in json.load(open(os.path.join(x, "landmarks.geojson")))["features"]}
+                  for x in (a, b, c))
+    extra, ground = [], 0
+    for la, lb in zip(ta["landmarks"], tb["landmarks"]):
+        lid, up = la["id"], la["enu_m"][2]
+        if la["survey_error_enu_m"][:2] != lb["survey_error_enu_m"][:2]:
+            fail(f"{lid}: --height-noise moved the horizontal survey")
+        d = lb["survey_error_enu_m"][2] - la["survey_error_enu_m"][2]
+        pb, pc = fb[lid]["properties"], fc[lid]["properties"]
+        if up == 0:
+            ground += 1
+            extra.append(d)
+            if "height" in pb or "height" in pc or len(fc[lid]["geometry"]["coordinates"]) != 2:
+                fail(f"{lid} (on the ground): {pb}, unknown site {fc[lid]}")
+        else:
+            if d != 0:
+                fail(f"{lid} ({up} m above the ground): its height got the extra noise")
+            for p, noise in ((pb, True), (pc, False)):
+                if p.get("height") != "surveyed" or abs(p.get("above_ground_m", 0) - up) > 1e-9 or \
+                        (noise and p.get("sigma_v_m") != 0.5):
+                    fail(f"{lid} ({up} m above the ground) says {p}")
+    n = len(extra)
+    mean, std = sum(extra) / n, math.sqrt(sum(x * x for x in extra) / n)
+    if not (abs(mean) < 4 * 2 / math.sqrt(n) and abs(std / 2 - 1) < 4 / math.sqrt(2 * n)):
+        fail(f"extra height noise over {n} ground landmarks: mean {mean:.3f} m, rms {std:.3f} m; expected N(0, 2)")
+    for site, source in ((b, "plane fitted to the unreliable heights"), (c, "the site's ground_plane")):
+        r = subprocess.run([ROADSIDE, "site", "check", site], capture_output=True, text=True)
+        if r.returncode != 0 or r.stdout.splitlines()[-1] != "0 errors, 0 warnings" or \
+                f"ground model: {source}" not in r.stdout:
+            fail(f"site check {site}: {r.stdout}")
+        r = subprocess.run([ROADSIDE, "site", "describe", "--landmarks", site], capture_output=True, text=True)
+        rows = {l.split()[0]: l.split() for l in r.stdout.split("landmarks (ENU, metres):")[-1].splitlines()[2:]}
+        kind = "model(unreliable)" if site == b else "model(unknown)"
+        for la in ta["landmarks"]:
+            row = rows.get(la["id"])
+            want = kind if la["enu_m"][2] == 0 else "surveyed"
+            if not row or row[6] != want:
+                fail(f"describe {site}: {la['id']}: {row}, expected {want}")
+            elif site == c and la["enu_m"][2] == 0 and not (abs(float(row[3])) < 1e-6 and float(row[5]) == 0.5):
+                fail(f"unknown site: {la['id']} modelled at up {row[3]}, sigma {row[5]}: expected the true 0, 0.5")
+    for bad in (("--landmark-heights", "maybe"), ("--height-noise", "-1"), ("--height-noise", "x")):
+        r = simulate(os.path.join(tmp, "bad"), "--seed", "1", *bad, check=False)
+        if r.returncode != 2 or bad[0].lstrip("-") not in r.stderr:
+            fail(f"{' '.join(bad)}: exit {r.returncode}, {r.stderr!r}")
+    print(f"heights: {ground} ground landmarks got N(0, 2) more (mean {mean:+.2f} m, rms {std:.2f} m), the rest "
+          f"of the site unchanged; unreliable and unknown sites check clean with their ground models")
 
 
 def main():
