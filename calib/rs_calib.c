@@ -13,6 +13,7 @@
 
 #include <mrcal/poseutils.h>
 
+#include "calib/internal/rs_calib_noise.h"
 #include "calib/internal/rs_calib_refine.h"
 
 #define DEG (180.0 / M_PI)
@@ -32,6 +33,11 @@ void rs_calib_options_default(rs_calib_options *opt)
     opt->focal_search_max = 4.0;
     opt->condition_warn = 100.0;
     opt->sigma_rotation_warn_deg = 2.0;
+    opt->estimate_noise = true;
+    opt->noise_prior_factor = 3.0;
+    opt->noise_min_redundancy = 2.0;
+    opt->snooping_critical = 3.29;
+    opt->max_rejected_fraction = 0.25;
 }
 
 void rs_calib_result_free(rs_calib_result *result)
@@ -45,6 +51,12 @@ void rs_calib_result_free(rs_calib_result *result)
     free(result->normalised_residual);
     free(result->inlier);
     free(result->p_enu_refined_m);
+    free(result->w_test);
+    free(result->redundancy);
+    free(result->mdb_px);
+    free(result->mdb_m);
+    free(result->external_m);
+    free(result->external_ground_m);
     memset(result, 0, sizeof(*result));
 }
 
@@ -336,18 +348,18 @@ static rs_status alloc_result(rs_calib_result *r, int N, int Ni)
     r->normalised_residual = calloc((size_t)N, sizeof(double));
     r->inlier = calloc((size_t)N, sizeof(bool));
     r->p_enu_refined_m = calloc((size_t)N * 3, sizeof(double));
-    if (!r->intrinsics || !r->sigma_intrinsics || !r->covariance_intrinsics || !r->predicted_px || !r->residual_px ||
-        !r->normalised_residual || !r->inlier || !r->p_enu_refined_m)
+    double **per_landmark[] = {&r->w_test, &r->redundancy, &r->mdb_px,
+                               &r->mdb_m,  &r->external_m, &r->external_ground_m};
+    bool ok = true;
+    for (size_t k = 0; k < sizeof per_landmark / sizeof *per_landmark; k++)
+        ok = (*per_landmark[k] = calloc((size_t)(N > 0 ? N : 1), sizeof(double))) && ok;
+    if (!ok || !r->intrinsics || !r->sigma_intrinsics || !r->covariance_intrinsics || !r->predicted_px ||
+        !r->residual_px || !r->normalised_residual || !r->inlier || !r->p_enu_refined_m)
         return RS_ERR_NOMEM;
     return RS_OK;
 }
 
-typedef struct {
-    double *p_survey_c, *p_c, *cov, *block_chi2, *q_pred;
-    bool *use;
-} work_t;
-
-static void work_free(work_t *w)
+static void work_free(rs_calib__work *w)
 {
     free(w->p_survey_c);
     free(w->p_c);
@@ -355,10 +367,16 @@ static void work_free(work_t *w)
     free(w->block_chi2);
     free(w->q_pred);
     free(w->use);
+    free(w->sigma_px);
+    free(w->sigma_enu);
+    free(w->e);
+    free(w->r);
+    free(w->dpos);
+    free(w->dground);
 }
 
-static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *pb, const rs_calib_options *opt, int Ni,
-                       rs_err *err)
+static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_problem *pb, const rs_calib_options *opt,
+                       int Ni, rs_err *err)
 {
     const int N = pb->N;
     rs_status st = validate(pb, opt, Ni, err);
@@ -370,8 +388,17 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     w->block_chi2 = malloc((size_t)N * sizeof(double));
     w->q_pred = malloc((size_t)N * 2 * sizeof(double));
     w->use = malloc((size_t)N * sizeof(bool));
-    if (!w->p_survey_c || !w->p_c || !w->cov || !w->block_chi2 || !w->q_pred || !w->use)
+    w->sigma_px = malloc((size_t)N * sizeof(double));
+    w->sigma_enu = malloc((size_t)N * 3 * sizeof(double));
+    w->e = malloc((size_t)N * RS_NOISE_NCOMP * sizeof(double));
+    w->r = malloc((size_t)N * RS_NOISE_NCOMP * sizeof(double));
+    w->dpos = malloc((size_t)N * RS_NOISE_NCOMP * 3 * sizeof(double));
+    w->dground = malloc((size_t)N * RS_NOISE_NCOMP * 2 * sizeof(double));
+    if (!w->p_survey_c || !w->p_c || !w->cov || !w->block_chi2 || !w->q_pred || !w->use || !w->sigma_px ||
+        !w->sigma_enu || !w->e || !w->r || !w->dpos || !w->dground)
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    const double log_theta0[RS_NOISE_NGROUPS] = {0, 0, 0};
+    rs_calib__scale_sigmas(w, pb, log_theta0);
 
     // centred frame
     double c[3] = {0, 0, 0};
@@ -395,9 +422,9 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
 
     rs_calib_refine_problem rp = {.N = N,
                                   .p_survey_c_m = w->p_survey_c,
-                                  .sigma_enu_m = pb->sigma_enu_m,
+                                  .sigma_enu_m = pb->sigma_enu_m ? w->sigma_enu : NULL,
                                   .q_px = pb->q_px,
-                                  .sigma_px = pb->sigma_px,
+                                  .sigma_px = w->sigma_px,
                                   .use = w->use,
                                   .lensmodel = (&pb->camera->lensmodel),
                                   .intrinsics_nominal = pb->camera->intrinsics,
@@ -424,31 +451,82 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
     int Noutliers = 0;
     char robust_desc[96] = "";
 
-    // 2. robust solve on every landmark, 3. outliers
+    // 2. robust solve on every landmark, with the scale taken from the data; 3. gross outliers
+    double log_theta[RS_NOISE_NGROUPS] = {0, 0, 0};
     if (opt->robust_scale > 0.0) {
-        st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
-        if (st != RS_OK) {
-            rs_err_prefix(err, "robust refinement");
-            return st;
+        for (int pass = 0; pass < 3; pass++) {
+            st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
+            if (st != RS_OK) {
+                rs_err_prefix(err, "robust refinement");
+                return st;
+            }
+            res->iterations += sum.iterations;
+            if (!opt->estimate_noise) break;
+            // the median block chi2 of a 2-dof chi-square is 1.386: a robust variance factor,
+            // whatever the stated sigmas (a quarter of gross outliers moves it little)
+            // only ever widened here: a median low by chance must not make the coarse test below
+            // stricter than the stated sigmas (the variance components and data snooping are
+            // the fine test), and never beyond 30x the stated sigma (as rs_calib__noise_update)
+            const double room = exp(2.0 * log(30.0) - log_theta[0]);
+            const double f = fmin(room, fmax(1.0, rs_calib__median(w->block_chi2, N, w->q_pred) / 1.3863));
+            if (!isfinite(f) || f <= 1.0) break;
+            for (int g = 0; g < RS_NOISE_NGROUPS; g++) log_theta[g] += log(f);
+            rs_calib__scale_sigmas(w, pb, log_theta);
+            if (fabs(log(f)) < log(2.0)) break; // close enough for the outlier test below
         }
-        res->iterations += sum.iterations;
+        if (opt->estimate_noise) { // block chi2 at the scaled sigmas, for the test below
+            ro.max_iterations = 0 < opt->max_iterations ? opt->max_iterations : 1;
+            st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
+            if (st != RS_OK) {
+                rs_err_prefix(err, "robust refinement");
+                return st;
+            }
+            res->iterations += sum.iterations;
+        }
         const double thr2 = opt->outlier_threshold * opt->outlier_threshold;
         for (int i = 0; i < N; i++) {
             w->use[i] = w->block_chi2[i] <= thr2;
+            res->w_test[i] = NAN;
             if (!w->use[i]) {
                 Noutliers++;
                 memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
             }
         }
-        snprintf(robust_desc, sizeof(robust_desc), " + ceres-cauchy(%g) + outliers>%g sigma", opt->robust_scale,
-                 opt->outlier_threshold);
+        snprintf(robust_desc, sizeof(robust_desc), " + ceres-cauchy(%g) + outliers>%g sigma%s", opt->robust_scale,
+                 opt->outlier_threshold, opt->estimate_noise ? " of the data" : "");
     }
-    const int Ninl = N - Noutliers;
-    if (Ninl < 4)
+    if (N - Noutliers < 4)
         return rs_err_set(err, RS_ERR_DEGENERATE,
                           "only %d of %d landmarks agree with one pose (the rest are outliers "
                           "beyond %g sigma): a pose needs at least 4",
-                          Ninl, N, opt->outlier_threshold);
+                          N - Noutliers, N, opt->outlier_threshold);
+
+    // 3b. variance components and data snooping (rs_calib_noise.h), alternating
+    ro.robust_scale = 0.0;
+    ro.rough = false;
+    ro.marginal = false;
+    if (opt->estimate_noise || opt->robust_scale > 0.0) {
+        st = rs_calib__noise_model(res, w, &rp, &ro, rt_c, log_theta, &Noutliers, pb, opt, err);
+        if (st != RS_OK) return st;
+    }
+    const int Ninl = N - Noutliers;
+    // 3c. the variances the pose's covariance is built on: a group with too little redundancy
+    // keeps its stated sigma; an estimated one is used at its posterior mean q / (r - 2) rather
+    // than its mode q / r (an inverse-gamma variance with r degrees of freedom), so that the
+    // covariance carries the estimate's own uncertainty (else too small by r / (r - 2) on
+    // average); log_theta keeps the estimates reported
+    double log_theta_cov[RS_NOISE_NGROUPS];
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+        double r = 0;
+        for (int i = 0; i < N; i++)
+            for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++)
+                if (rs_calib__noise_group(j) == g) r += w->r[RS_NOISE_NCOMP * i + j];
+        if (opt->estimate_noise && r < opt->noise_min_redundancy) log_theta[g] = 0.0;
+        log_theta_cov[g] =
+            log_theta[g] +
+            (opt->estimate_noise && r >= opt->noise_min_redundancy ? log(r / fmax(r - 2.0, 0.5 * r)) : 0.0);
+    }
+    if (opt->estimate_noise) rs_calib__scale_sigmas(w, pb, log_theta_cov);
 
     // 4. plain weighted least squares on the inliers, with the covariance
     ro.robust_scale = 0.0;
@@ -471,6 +549,8 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
             return rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d: behind the camera at the solution (z_cam = %.3g m)",
                               i, pc[2]);
     }
+
+    if ((st = rs_calib__reliability(res, w, &rp, rt_c, log_theta, pb, opt, err)) != RS_OK) return st;
 
     // 5. outputs in ENU
     const int n = 6 + Ni;
@@ -532,7 +612,8 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
         size_t len = 0;
         for (int i = 0; i < N && len + 12 < sizeof(list); i++)
             if (!w->use[i]) len += (size_t)snprintf(list + len, sizeof(list) - len, "%s%d", len ? "," : "", i);
-        warn(res, "%d of %d landmarks flagged as outliers and dropped (index %s)", Noutliers, N, list);
+        warn(res, "%d of %d landmarks flagged as outliers and dropped (index %s; %d by data snooping)", Noutliers, N,
+             list, res->Nrejected_snooping);
     }
     if (res->condition_number > opt->condition_warn)
         warn(res,
@@ -548,7 +629,26 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
              "the covariance, a first-order approximation, understates errors this large (add "
              "landmarks spread over the image, or survey them more accurately)",
              sy[0], sy[1], sy[2], opt->sigma_rotation_warn_deg);
-    if (res->dof > 0) {
+    static const char *const group_name[RS_NOISE_NGROUPS] = {"pixel", "survey horizontal", "survey vertical"};
+    static const char *const unit[RS_NOISE_NGROUPS] = {"px", "m", "m"};
+    for (int g = 0; g < RS_NOISE_NGROUPS && opt->estimate_noise; g++) {
+        const rs_calib_noise_group *n = &res->noise[g];
+        if (!n->Nobservations) continue;
+        if (!n->estimated_from_data) continue; // said in the result (and <id>.json), not a warning
+        const double ratio = n->estimated / n->stated;
+        if (ratio > 2.0 || ratio < 0.5)
+            warn(res,
+                 "%s noise estimated from the data at %.3g %s (+- %.2g, redundancy %.1f), %.2gx the stated %.3g %s: "
+                 "the pose and its covariance use the estimate; state it next time",
+                 group_name[g], n->estimated, unit[g], n->sigma_estimated, n->redundancy, ratio, n->stated, unit[g]);
+    }
+    if (res->noise_model_wrong)
+        warn(res,
+             "the noise model is wrong: data snooping would reject more than %.0f%% of the landmarks (%d of %d "
+             "rejected, the rest kept): check the pixel picks and the survey's datum, heights and sigmas before "
+             "trusting this pose",
+             100 * opt->max_rejected_fraction, N - Ninl, N);
+    if (res->dof > 0 && !opt->estimate_noise) {
         const double lo = chi2_quantile(res->dof, -2.576) / res->dof;
         const double hi = chi2_quantile(res->dof, 2.576) / res->dof;
         if (res->variance_factor > hi)
@@ -562,7 +662,7 @@ static rs_status solve(rs_calib_result *res, work_t *w, const rs_calib_problem *
                  "residuals smaller than the stated sigmas suggest (variance factor %.3g, 99%% "
                  "bound %.3g): the sigmas are pessimistic; the reported covariance is too large",
                  res->variance_factor, lo);
-    } else {
+    } else if (res->dof <= 0) {
         warn(res, "no redundancy (dof %d): the fit cannot be checked against the sigmas", res->dof);
     }
     if ((opt->refine & RS_CALIB_REFINE_FOCAL) && res->sigma_intrinsics[0] > 0.05 * res->intrinsics[0])
@@ -605,7 +705,7 @@ rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *proble
     else
         rs_calib_options_default(&opt);
     const int Ni = problem->camera ? mrcal_lensmodel_num_params(&problem->camera->lensmodel) : 0;
-    work_t w = {0};
+    rs_calib__work w = {0};
     const rs_status st = solve(result, &w, problem, &opt, Ni, err);
     work_free(&w);
     if (st != RS_OK) {

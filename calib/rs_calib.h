@@ -19,8 +19,15 @@
 //   3. Outliers: a landmark whose block chi2 (2 dof) exceeds opt->outlier_threshold^2 is
 //      flagged and dropped; the inliers are re-solved WITHOUT the robust loss (plain weighted
 //      least squares).
+//   3b. Noise model (rs_calib_noise.c, docs/calibration.md 3a-3c): the coarse rule of 3 at the
+//      scale the data shows; variance components of the picks, the survey's horizontal and
+//      vertical coordinates (Förstner's iteration on redundancy numbers, the stated sigmas as a
+//      log-normal prior) alternating with Baarda's data snooping (w-test, one landmark at a
+//      time, at most a quarter); per landmark w, redundancy, minimal detectable biases and
+//      external reliability in the result.
 //   4. Covariance of rt (and the refined intrinsics) by ceres::Covariance with the landmarks
-//      marginalised, ABSOLUTE scaling (residuals are whitened by the stated sigmas); the
+//      marginalised, ABSOLUTE scaling (residuals whitened by the estimated sigmas, at their
+//      posterior mean); the
 //      a-posteriori variance factor chi2/dof is reported next to it.
 //
 // Conventions (docs/conventions.md): rt_cam_enu = mrcal Rodrigues r + translation t (metres),
@@ -95,7 +102,37 @@ typedef struct {
     double sigma_rotation_warn_deg;            // warn when a yaw/pitch/roll sigma exceeds this (default 2):
                                                //   the covariance is a first-order approximation, and the stress run
                                                //   (issue 3) found poses this loose more than 10 sigmas off
+    // The noise model (docs/calibration.md, "Noise model"):
+    bool estimate_noise;          // estimate the noise from the data: variance components of the
+                                  //   pixel picks, the survey's horizontal and vertical coordinates
+                                  //   (default true); false: the stated sigmas are taken as exact
+    double noise_prior_factor;    // the stated sigmas are right to within this factor (1-sigma, default
+                                  //   3): the prior that keeps a small survey from collapsing. Chosen on
+                                  //   the real GNSS data (leave-one-out 1.59 m; 10: 1.77 m); on
+                                  //   simulated sites a group stated 5x too precise is then estimated
+                                  //   up to 40% off (tests/calib/test_noise_model.c)
+    double noise_min_redundancy;  // a group with less partial redundancy keeps its stated sigma
+                                  //   (default 2)
+    double snooping_critical;     // Baarda's w-test: reject the landmark with the largest |w| above this,
+                                  //   one at a time (default 3.29: alpha 0.1% two-sided per observation)
+    double max_rejected_fraction; // snooping stops before rejecting more than this fraction of the
+                                  //   landmarks and says that the noise model is wrong (default 0.25)
 } rs_calib_options;
+
+// The variance component groups of one camera (rs_calib_result.noise).
+enum { RS_CALIB_NOISE_PIXEL, RS_CALIB_NOISE_SURVEY_H, RS_CALIB_NOISE_SURVEY_V, RS_CALIB_NOISE_NGROUPS };
+
+// One group's noise: stated, and estimated from the residuals with their redundancy numbers.
+typedef struct {
+    double stated;            // RMS of the stated 1-sigmas of the group's observations in the final
+                              //   adjustment (px for pixels, m for the survey)
+    double estimated;         // the 1-sigma used for the pose and its covariance (px or m)
+    double sigma_estimated;   // 1-sigma of `estimated` (from the redundancy and the prior); 0 if kept
+    double redundancy;        // the group's partial redundancy: the sum of its redundancy numbers
+    int Nobservations;        // its observations (pixel coordinates, or surveyed coordinates not held)
+    bool estimated_from_data; // false: redundancy below noise_min_redundancy (or estimation off):
+                              //   the stated sigma is kept
+} rs_calib_noise_group;
 
 // Fills opt with the defaults above. opt must not be NULL.
 void rs_calib_options_default(rs_calib_options *opt);
@@ -129,6 +166,22 @@ typedef struct {
     double time_us;              // wall time of rs_calib_solve, microseconds
     char method[224];            // what was done, e.g. "opengv-p3p ... + ceres-cauchy(2)..."
     char warnings[1024];         // plain-words warnings, "; "-separated; "" when none
+
+    rs_calib_noise_group noise[RS_CALIB_NOISE_NGROUPS]; // the noise model (RS_CALIB_NOISE_*)
+    // Per landmark (N,), at the final adjustment (docs/calibration.md, "Outliers and reliability");
+    // alpha 0.1%, power 80% (delta0 = 4.13) for the minimal detectable biases. Owned.
+    double *w_test;            // Baarda's w: the largest |standardized residual| among the landmark's
+                               //   observations (pixel u, v; surveyed E, N, U); for a landmark rejected by
+                               //   data snooping, the w it was rejected at; NAN for a gross outlier
+    double *redundancy;        // the sum of its observations' redundancy numbers (0..5); 0 when rejected
+    double *mdb_px;            // minimal detectable bias of its pick, px (the larger of u, v); INFINITY
+                               //   when uncontrolled (redundancy 0); NAN when rejected
+    double *mdb_m;             // of its surveyed position, m (the largest free axis); NAN when all held
+    double *external_m;        // camera-position shift an undetected error of MDB size would cause, m
+    double *external_ground_m; // the shift of the optical axis's ground point it would cause, m
+    int Nrejected_snooping;    // landmarks rejected by data snooping (within N - Ninliers)
+    bool noise_model_wrong;    // snooping would have rejected more than max_rejected_fraction: it
+                               //   stopped there, and the warnings say so
 } rs_calib_result;
 
 // Solves one camera's pose (see the method above).

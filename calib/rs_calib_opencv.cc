@@ -1,5 +1,5 @@
-// rs_calib_opencv.cc -- the OpenCV shim of the pose solver: planarity (cv::SVD) and IPPE
-// (cv::solvePnP). Every exception is caught at the boundary and becomes an rs_status.
+// rs_calib_opencv.cc -- the OpenCV shim of the pose solver: planarity (cv::SVD), IPPE
+// (cv::solvePnP) and SPD inverses (cv::invert). Every exception is caught at the boundary and becomes an rs_status.
 #include <cmath>
 #include <exception>
 #include <vector>
@@ -46,5 +46,23 @@ extern "C" rs_status rs_calib_opencv_ippe(double *rt_cam_ref, const double *xy, 
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV IPPE threw: %s", e.what());
     } catch (...) {
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV IPPE threw an unknown exception");
+    }
+}
+
+extern "C" rs_status rs_calib_opencv_inverse_spd(double *inv, const double *A, int n, rs_err *err)
+{
+    try {
+        const cv::Mat M(n, n, CV_64F, const_cast<double *>(A)); // read only
+        cv::Mat out(n, n, CV_64F, inv);
+        if (cv::invert(M, out, cv::DECOMP_CHOLESKY) == 0)
+            return rs_err_set(err, RS_ERR_DEGENERATE, "a %dx%d normal matrix is not positive definite", n, n);
+        for (int i = 0; i < n * n; i++)
+            if (!std::isfinite(inv[i]))
+                return rs_err_set(err, RS_ERR_DEGENERATE, "a normal matrix inverse is not finite");
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV invert threw: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV invert threw an unknown exception");
     }
 }

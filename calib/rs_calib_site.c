@@ -213,6 +213,27 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     cJSON_AddNumberToObject(root, "dof", r->dof);
     cJSON_AddNumberToObject(root, "variance_factor", r->variance_factor);
     cJSON_AddNumberToObject(root, "condition_number", r->condition_number);
+    // the noise model (docs/calibration.md, "Noise model"): each group's stated and estimated
+    // 1-sigma, the estimate's own 1-sigma and the redundancy it rests on
+    cJSON *noise = cJSON_AddArrayToObject(root, "noise");
+    static const char *const groups[RS_CALIB_NOISE_NGROUPS] = {"pixel", "survey_horizontal", "survey_vertical"};
+    static const char *const units[RS_CALIB_NOISE_NGROUPS] = {"px", "m", "m"};
+    for (int g = 0; g < RS_CALIB_NOISE_NGROUPS; g++) {
+        const rs_calib_noise_group *n = &r->noise[g];
+        if (!n->Nobservations) continue;
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "group", groups[g]);
+        cJSON_AddStringToObject(o, "unit", units[g]);
+        cJSON_AddNumberToObject(o, "stated", n->stated);
+        cJSON_AddNumberToObject(o, "estimated", n->estimated);
+        cJSON_AddNumberToObject(o, "sigma_estimated", n->sigma_estimated);
+        cJSON_AddNumberToObject(o, "redundancy", n->redundancy);
+        cJSON_AddNumberToObject(o, "observations", n->Nobservations);
+        cJSON_AddBoolToObject(o, "estimated_from_data", n->estimated_from_data);
+        cJSON_AddItemToArray(noise, o);
+    }
+    cJSON_AddNumberToObject(root, "landmarks_rejected_by_snooping", r->Nrejected_snooping);
+    cJSON_AddBoolToObject(root, "noise_model_wrong", r->noise_model_wrong);
     cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
     if (r->warnings[0]) {
         char buf[sizeof r->warnings];
@@ -242,6 +263,13 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
         cJSON_AddItemToObject(l, "residual_adjusted_px", json_array(&r->residual_px[2 * i], 2));
         cJSON_AddNumberToObject(l, "normalised_residual", r->normalised_residual[i]);
         cJSON_AddBoolToObject(l, "inlier", r->inlier[i]);
+        // reliability (docs/calibration.md, "Outliers and reliability"); null where undefined
+        cJSON_AddNumberToObject(l, "w_test", r->w_test[i]);
+        cJSON_AddNumberToObject(l, "redundancy", r->redundancy[i]);
+        cJSON_AddNumberToObject(l, "mdb_px", r->mdb_px[i]);
+        cJSON_AddNumberToObject(l, "mdb_m", r->mdb_m[i]);
+        cJSON_AddNumberToObject(l, "external_position_m", r->external_m[i]);
+        cJSON_AddNumberToObject(l, "external_ground_m", r->external_ground_m[i]);
         cJSON_AddItemToObject(l, "p_enu_surveyed_m", json_array(site->landmarks[o->ilandmark].p_enu_m, 3));
         cJSON_AddItemToObject(l, "p_enu_adjusted_m", json_array(&r->p_enu_refined_m[3 * i], 3));
         cJSON_AddItemToArray(lms, l);

@@ -1,5 +1,6 @@
 // rs_calib_opencv.h -- the OpenCV shim of the pose solver (calib/rs_calib_opencv.cc): the
-// planarity test's singular values and IPPE. Internal to calib.
+// planarity test's singular values, IPPE and the SPD inverses of the noise model. Internal to
+// calib.
 //
 // Every exception is caught there and turned into RS_ERR_EXTERNAL. Poses are mrcal rt (== OpenCV
 // rvec, tvec): p_cam = R(r) p_ref + t.
@@ -29,6 +30,15 @@ rs_status rs_calib_opencv_ippe( // out
     const double *p_ref, // (N,3) coplanar landmarks, metres
     int N,
     rs_err *err); // may be NULL
+
+// The inverse of the symmetric positive definite n x n matrix A (row-major) by OpenCV's
+// Cholesky (cv::invert, DECOMP_CHOLESKY): the normal matrices of the noise model
+// (rs_calib_noise.c). RS_ERR_DEGENERATE when A is not positive definite, RS_ERR_EXTERNAL when
+// OpenCV throws. inv may not alias A.
+rs_status rs_calib_opencv_inverse_spd( // out
+    double *inv,                       // (n,n)
+    // in
+    const double *A, int n, rs_err *err);
 
 // Writes a camera in OpenCV's own YAML layout (cv::FileStorage), for users of cv::projectPoints:
 // image_width, image_height (int), camera_matrix (3x3 K from fx fy cx cy),

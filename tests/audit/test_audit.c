@@ -264,6 +264,10 @@ static void test_map(unsigned long long seed)
     opt.range_m = 60;
     opt.cell_m = 2;
     opt.detection_sigma_px = 2;
+    // the linear map against Monte Carlo at the pose covariance of the stated noise: this draw's
+    // survey-horizontal variance is estimated at 1.8x the stated one, and that covariance takes
+    // the 60 m cells out of the linear regime (map 9.3 m, Monte Carlo 10.6 m)
+    opt.calib.estimate_noise = false;
     rs_audit_result r;
     rs_err err = {0};
     rs_status st = rs_audit_camera(&r, &pb, up, 0, NULL, NULL, NULL, &opt, &err);

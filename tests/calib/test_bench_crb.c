@@ -132,6 +132,7 @@ int main(void)
         rs_calib_options opt;
         rs_calib_options_default(&opt);
         opt.robust_scale = 0;
+        opt.estimate_noise = false; // the covariance at the stated sigmas is what the Fisher information predicts
         rs_calib_result r;
         const rs_status st = rs_calib_solve(&r, &cp, &opt, &e);
         double ref[36];

@@ -1,0 +1,119 @@
+// rs_calib_noise.h -- internal: the noise model of one camera's adjustment -- redundancy
+// numbers, variance components, Baarda's w-test and reliability (calib/rs_calib_noise.c).
+// rs_calib.c drives it between plain solves (docs/calibration.md, "Noise model").
+//
+// The adjustment (rs_calib_refine.h) is a Gauss-Markov model whose observations are independent
+// after whitening: per landmark i, the pixel (u, v) with sigma_px_i and the surveyed position
+// (E, N, U) with s_i (an axis with s = 0 is held exactly: neither an observation nor a
+// parameter). Parameters: the camera c (rt, 6, and the refined intrinsics with their priors) and
+// each landmark's position p_i. With J the whitened Jacobian, the hat matrix H = J (J'J)^-1 J'
+// gives each observation's redundancy number r = 1 - H_jj (its share of the redundancy; they sum
+// to the degrees of freedom). Landmarks are eliminated per landmark (Schur complement): with A_i,
+// B_i the whitened Jacobians of landmark i's 5 observations with respect to c and p_i,
+// N_i = B_i'B_i, Ã_i = A_i - B_i N_i^-1 B_i'A_i, S = sum_i Ã_i'Ã_i + priors and Q_cc = S^-1:
+//   H_ii = Ã_i Q_cc Ã_i' + B_i N_i^-1 B_i'     (5x5 block of landmark i)
+//   dc/de_ij = Q_cc Ã_i' u_j                   (the camera's response to observation j)
+// (Förstner 1979; Koch, "Parameter Estimation and Hypothesis Testing in Linear Models", 1999,
+// sections 3.4 and 4.2; Niemeier, "Ausgleichungsrechnung", 2008, chapter 13.)
+#pragma once
+#include <mrcal/mrcal.h>
+#include <stdbool.h>
+
+#include "calib/internal/rs_calib_refine.h"
+#include "calib/rs_calib.h"
+#include "core/rs_status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// The components of a landmark's observations, in this order.
+enum { RS_NOISE_U, RS_NOISE_V, RS_NOISE_E, RS_NOISE_N, RS_NOISE_UP, RS_NOISE_NCOMP };
+
+// The variance component groups of one camera: its pixel picks, the survey's horizontal and
+// vertical coordinates.
+enum { RS_NOISE_PIXEL, RS_NOISE_SURVEY_H, RS_NOISE_SURVEY_V, RS_NOISE_NGROUPS };
+
+// The adjustment at its solution, in the frame centred on the landmarks (rs_calib_refine.h).
+typedef struct {
+    int N;
+    const double *rt_cam_c;     // (6,)
+    const double *p_c_m;        // (N,3) adjusted landmark positions
+    const double *p_survey_c_m; // (N,3) surveyed positions
+    const double *sigma_enu_m;  // (N,3) survey 1-sigma in use (scaled); 0: held. May be NULL: all held
+    const double *q_px;         // (N,2) observed pixels
+    const double *sigma_px;     // (N,) pixel 1-sigma in use (scaled). May be NULL: 1 px
+    const bool *use;            // (N,) landmarks in the adjustment
+    const mrcal_lensmodel_t *lensmodel;
+    const double *intrinsics;         // (Nintrinsics,) at the solution
+    const double *intrinsics_nominal; // (Nintrinsics,) the focal scale's reference
+    unsigned refine;                  // rs_calib_refine_flags: which intrinsics are parameters
+    double focal_prior_rel_sigma, center_prior_sigma_px, distortion_prior_sigma; // 0: no prior
+    bool has_position_prior;
+    double prior_sigma_m;
+} rs_calib_noise_state;
+
+// Per landmark and component (N, RS_NOISE_NCOMP): the whitened residual e (observation minus
+// adjusted value over its sigma, as used), the redundancy number r in [0, 1], and the shift of
+// the camera position (3, metres) and of the ground point on the optical axis (2, E N metres)
+// per unit whitened error of that observation (an error of one sigma). Unused landmarks and held
+// axes: all 0. Any output may be NULL.
+typedef struct {
+    double *e, *r;     // (N,5)
+    double *dpos_m;    // (N,5,3)
+    double *dground_m; // (N,5,2) NAN when the optical axis does not meet the ground
+} rs_calib_noise_out;
+
+// Fills out for the state s. Errors: RS_ERR_DEGENERATE (the normal matrix is singular: the
+// camera is not determined), RS_ERR_EXTERNAL (OpenCV threw), RS_ERR_NOMEM.
+rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_calib_noise_state *s, rs_err *err);
+
+// The 2-dof chi-square of landmark i's pick against the adjusted camera when the landmark is
+// NOT in the adjustment: r' (sigma_px^2 I + J_p S J_p')^-1 r with r the pixel residual at its
+// surveyed position, S its survey variances, J_p = dq/dp. NAN when it does not project.
+double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i);
+
+// One variance-component step for one group (Förstner's estimator with a log-normal prior on the
+// stated sigma): q = the sum of the group's squared whitened residuals, r = the sum of its
+// redundancy numbers, log_theta = the log of its current variance factor (variance in use /
+// stated variance). The data's estimate of the factor is theta q / r with relative variance
+// 2 / r; the prior says the stated sigma is right to within a factor prior_factor (1-sigma, in
+// sigma). Returns the new log factor, the precision-weighted mean of the two in log space,
+// within a factor 30 of the stated sigma; a group with r < 0.5 keeps log_theta.
+double rs_calib__noise_update(double q, double r, double log_theta, double prior_factor);
+
+// ---- the solve's side (rs_calib_noise_model.c; driven by rs_calib.c) ----
+
+// rs_calib_solve's scratch, (N,) arrays unless said.
+typedef struct {
+    double *p_survey_c, *p_c, *cov, *block_chi2, *q_pred;
+    bool *use;
+    double *sigma_px, *sigma_enu;   // (N,), (N,3): the sigmas in use (stated, scaled by the noise model)
+    double *e, *r, *dpos, *dground; // (N,5), (N,5), (N,5,3), (N,5,2): rs_calib_noise_out
+} rs_calib__work;
+
+// The sigmas in use: the problem's stated sigmas scaled by exp(log_theta[group]).
+void rs_calib__scale_sigmas(rs_calib__work *w, const rs_calib_problem *pb, const double log_theta[RS_NOISE_NGROUPS]);
+// The group of an observation component (RS_NOISE_U ... RS_NOISE_UP).
+int rs_calib__noise_group(int component);
+// Median of x (n,), using scratch (n,); NAN for n = 0.
+double rs_calib__median(const double *x, int n, double *scratch);
+// 3b of rs_calib_solve: variance components to convergence alternating with Baarda's data
+// snooping (one landmark at a time, opt->snooping_critical; stops before rejecting more than
+// opt->max_rejected_fraction and sets res->noise_model_wrong). in,out: rt_c, w's landmarks, use
+// and sigmas, log_theta, *Noutliers.
+rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                const rs_calib_refine_options *ro, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
+                                int *Noutliers, const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err);
+// The noise groups (res->noise) and each landmark's w, redundancy, MDBs and external
+// reliability at the final adjustment.
+rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                const double rt_c[6], const double log_theta[RS_NOISE_NGROUPS],
+                                const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err);
+// The 2-dof chi-square of an excluded landmark (rs_calib__noise_excluded_chi2) at the state of w.
+double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib__work *w, const double rt_c[6],
+                               const rs_calib_result *res, const rs_calib_options *opt, int i);
+
+#ifdef __cplusplus
+}
+#endif

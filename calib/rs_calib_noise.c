@@ -1,0 +1,291 @@
+// rs_calib_noise.c -- redundancy numbers, variance components and reliability of one camera's
+// adjustment (calib/internal/rs_calib_noise.h has the model and the references).
+#include "calib/internal/rs_calib_noise.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <mrcal/poseutils.h>
+
+#include "calib/internal/rs_calib_opencv.h"
+#include "calib/rs_calib.h"
+#include "core/rs_pose.h"
+
+enum { NC_MAX = 6 + 1 + 2 + 64 }; // rt, focal scale, centre, distortion
+
+// The camera parameters of the adjustment: rt, then the refined intrinsics. For each, the
+// column of dq/dc it is (a combination of mrcal's dq/dintrinsics) and its prior's weight.
+typedef struct {
+    int nc;
+    int Ni;
+    int kind[NC_MAX];       // -1: rt; -2: the focal scale; j >= 0: intrinsics[j]
+    double prior_w[NC_MAX]; // 1/sigma of the parameter's prior, 0: none
+} params;
+
+static void camera_params(params *pp, const rs_calib_noise_state *s)
+{
+    memset(pp, 0, sizeof *pp);
+    pp->Ni = mrcal_lensmodel_num_params(s->lensmodel);
+    for (int k = 0; k < 6; k++) pp->kind[pp->nc++] = -1;
+    if (s->refine & RS_CALIB_REFINE_FOCAL) {
+        pp->prior_w[pp->nc] = s->focal_prior_rel_sigma > 0 ? 1.0 / s->focal_prior_rel_sigma : 0.0;
+        pp->kind[pp->nc++] = -2;
+    }
+    if (s->refine & RS_CALIB_REFINE_CENTER)
+        for (int j = 2; j < 4; j++) {
+            pp->prior_w[pp->nc] = s->center_prior_sigma_px > 0 ? 1.0 / s->center_prior_sigma_px : 0.0;
+            pp->kind[pp->nc++] = j;
+        }
+    if (s->refine & RS_CALIB_REFINE_DISTORTION)
+        for (int j = 4; j < pp->Ni && pp->nc < NC_MAX; j++) {
+            pp->prior_w[pp->nc] = s->distortion_prior_sigma > 0 ? 1.0 / s->distortion_prior_sigma : 0.0;
+            pp->kind[pp->nc++] = j;
+        }
+}
+
+// The ground point (E, N) of the optical axis on the plane up = 0 of the centred frame (the
+// landmarks' mean height); false when the axis does not come down to it.
+static bool axis_ground(double g[2], const double rt[6])
+{
+    double C[3], R[9];
+    rs_pose_position_from_rt(C, NULL, rt);
+    mrcal_R_from_r(R, NULL, rt);
+    const double d[3] = {R[6], R[7], R[8]}; // R' (0, 0, 1): the optical axis in the world
+    if (!(d[2] < -1e-9)) return false;
+    const double lambda = -C[2] / d[2];
+    if (!(lambda > 0)) return false;
+    g[0] = C[0] + lambda * d[0];
+    g[1] = C[1] + lambda * d[1];
+    return true;
+}
+
+// G (2,6) = d ground / d rt by central differences; false (G NAN) when undefined.
+static bool axis_ground_jacobian(double G[12], const double rt[6])
+{
+    for (int k = 0; k < 6; k++) {
+        double rp[6], rm[6], gp[2], gm[2];
+        memcpy(rp, rt, sizeof rp);
+        memcpy(rm, rt, sizeof rm);
+        const double h = 1e-6 * fmax(1.0, fabs(rt[k]));
+        rp[k] += h, rm[k] -= h;
+        if (!axis_ground(gp, rp) || !axis_ground(gm, rm)) {
+            for (int j = 0; j < 12; j++) G[j] = NAN;
+            return false;
+        }
+        G[k] = (gp[0] - gm[0]) / (2 * h);
+        G[6 + k] = (gp[1] - gm[1]) / (2 * h);
+    }
+    return true;
+}
+
+// One landmark's whitened observations: rows (up to 5: u, v and the free survey axes) of A (nc
+// columns) and B (k <= 3 free position axes), the residuals e, which component each row is.
+typedef struct {
+    int m, k;
+    int comp[RS_NOISE_NCOMP]; // row -> component
+    int axis[3];              // free column -> axis
+    double A[RS_NOISE_NCOMP][NC_MAX], B[RS_NOISE_NCOMP][3], e[RS_NOISE_NCOMP];
+} block;
+
+static bool landmark_block(block *b, const rs_calib_noise_state *s, const params *pp, int i, double *dq_dintr)
+{
+    memset(b, 0, sizeof *b);
+    const double *p = &s->p_c_m[3 * i];
+    double pc[3], dpc_drt[18], dpc_dp[9];
+    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, s->rt_cam_c, p);
+    mrcal_point2_t q;
+    mrcal_point3_t dq_dpc[2];
+    if (!mrcal_project(&q, dq_dpc, dq_dintr, (const mrcal_point3_t *)pc, 1, s->lensmodel, s->intrinsics)) return false;
+    const double sp = s->sigma_px ? s->sigma_px[i] : 1.0;
+    for (int r = 0; r < 2; r++) {
+        b->comp[b->m] = r;
+        b->e[b->m] = (q.xy[r] - s->q_px[2 * i + r]) / sp;
+        for (int c = 0; c < pp->nc; c++) {
+            double v = 0;
+            if (pp->kind[c] == -1)
+                for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_drt[j * 6 + c];
+            else if (pp->kind[c] == -2)
+                v = s->intrinsics_nominal[0] * dq_dintr[r * pp->Ni + 0] +
+                    s->intrinsics_nominal[1] * dq_dintr[r * pp->Ni + 1];
+            else
+                v = dq_dintr[r * pp->Ni + pp->kind[c]];
+            b->A[b->m][c] = v / sp;
+        }
+        b->m++;
+    }
+    for (int a = 0; a < 3; a++) {
+        const double sa = s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0;
+        if (!(sa > 0)) continue;
+        b->axis[b->k] = a;
+        for (int r = 0; r < 2; r++) { // the pixel rows' dependence on this axis
+            double v = 0;
+            for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a];
+            b->B[r][b->k] = v / sp;
+        }
+        b->comp[b->m] = RS_NOISE_E + a;
+        b->e[b->m] = (p[a] - s->p_survey_c_m[3 * i + a]) / sa;
+        b->B[b->m][b->k] = 1.0 / sa;
+        b->m++, b->k++;
+    }
+    return true;
+}
+
+// Ã = A - B N^-1 B'A (m x nc) in place into At; Ninv (k x k) out.
+static rs_status reduce(double At[RS_NOISE_NCOMP][NC_MAX], double Ninv[9], const block *b, int nc, rs_err *err)
+{
+    double N[9] = {0};
+    for (int x = 0; x < b->k; x++)
+        for (int y = 0; y < b->k; y++)
+            for (int r = 0; r < b->m; r++) N[x * b->k + y] += b->B[r][x] * b->B[r][y];
+    if (b->k > 0) {
+        rs_status st = rs_calib_opencv_inverse_spd(Ninv, N, b->k, err);
+        if (st) return st;
+    }
+    // M = B'A (k x nc); At = A - B Ninv M
+    double M[3][NC_MAX] = {{0}};
+    for (int x = 0; x < b->k; x++)
+        for (int c = 0; c < nc; c++)
+            for (int r = 0; r < b->m; r++) M[x][c] += b->B[r][x] * b->A[r][c];
+    for (int r = 0; r < b->m; r++)
+        for (int c = 0; c < nc; c++) {
+            double v = b->A[r][c];
+            for (int x = 0; x < b->k; x++)
+                for (int y = 0; y < b->k; y++) v -= b->B[r][x] * Ninv[x * b->k + y] * M[y][c];
+            At[r][c] = v;
+        }
+    return RS_OK;
+}
+
+rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_calib_noise_state *s, rs_err *err)
+{
+    const int N = s->N;
+    params pp;
+    camera_params(&pp, s);
+    const int nc = pp.nc;
+    for (int i = 0; i < N; i++)
+        for (int j = 0; j < RS_NOISE_NCOMP; j++) {
+            if (out->e) out->e[RS_NOISE_NCOMP * i + j] = 0;
+            if (out->r) out->r[RS_NOISE_NCOMP * i + j] = 0;
+            for (int k = 0; k < 3 && out->dpos_m; k++) out->dpos_m[(RS_NOISE_NCOMP * i + j) * 3 + k] = 0;
+            for (int k = 0; k < 2 && out->dground_m; k++) out->dground_m[(RS_NOISE_NCOMP * i + j) * 2 + k] = 0;
+        }
+    double *dq_dintr = malloc((size_t)2 * (size_t)pp.Ni * sizeof *dq_dintr);
+    double *S = calloc((size_t)nc * (size_t)nc, sizeof *S), *Q = malloc((size_t)nc * (size_t)nc * sizeof *Q);
+    block *blocks = malloc((size_t)(N > 0 ? N : 1) * sizeof *blocks);
+    rs_status st = dq_dintr && S && Q && blocks ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "noise model: out of memory");
+
+    // 1. per landmark: the whitened block, Ã_i; S = sum Ã'Ã + priors
+    double(*At)[RS_NOISE_NCOMP][NC_MAX] = NULL;
+    double(*Ninv)[9] = NULL;
+    if (st == RS_OK) {
+        At = malloc((size_t)(N > 0 ? N : 1) * sizeof *At);
+        Ninv = malloc((size_t)(N > 0 ? N : 1) * sizeof *Ninv);
+        if (!At || !Ninv) st = rs_err_set(err, RS_ERR_NOMEM, "noise model: out of memory");
+    }
+    for (int i = 0; st == RS_OK && i < N; i++) {
+        if (!s->use[i]) continue;
+        if (!landmark_block(&blocks[i], s, &pp, i, dq_dintr)) {
+            st = rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d does not project at the solution", i);
+            break;
+        }
+        if ((st = reduce(At[i], Ninv[i], &blocks[i], nc, err))) break;
+        for (int r = 0; r < blocks[i].m; r++)
+            for (int a = 0; a < nc; a++)
+                for (int b = 0; b < nc; b++) S[a * nc + b] += At[i][r][a] * At[i][r][b];
+    }
+    double dC_drt[18];
+    double C[3];
+    rs_pose_position_from_rt(C, dC_drt, s->rt_cam_c);
+    if (st == RS_OK) {
+        for (int c = 0; c < nc; c++) S[c * nc + c] += pp.prior_w[c] * pp.prior_w[c];
+        if (s->has_position_prior && s->prior_sigma_m > 0)
+            for (int a = 0; a < 6; a++)
+                for (int b = 0; b < 6; b++)
+                    for (int k = 0; k < 3; k++)
+                        S[a * nc + b] += dC_drt[k * 6 + a] * dC_drt[k * 6 + b] / (s->prior_sigma_m * s->prior_sigma_m);
+        st = rs_calib_opencv_inverse_spd(Q, S, nc, err);
+    }
+    double G[12];
+    const bool have_ground = st == RS_OK && axis_ground_jacobian(G, s->rt_cam_c);
+
+    // 2. per observation: H_jj, r = 1 - H_jj, the camera's response
+    for (int i = 0; st == RS_OK && i < N; i++) {
+        if (!s->use[i]) continue;
+        const block *b = &blocks[i];
+        for (int r = 0; r < b->m; r++) {
+            const int j = RS_NOISE_NCOMP * i + b->comp[r];
+            double dc[NC_MAX], h = 0;
+            for (int a = 0; a < nc; a++) {
+                dc[a] = 0;
+                for (int c = 0; c < nc; c++) dc[a] += Q[a * nc + c] * At[i][r][c];
+                h += At[i][r][a] * dc[a];
+            }
+            for (int x = 0; x < b->k; x++)
+                for (int y = 0; y < b->k; y++) h += b->B[r][x] * Ninv[i][x * b->k + y] * b->B[r][y];
+            if (out->e) out->e[j] = b->e[r];
+            if (out->r) out->r[j] = fmin(1.0, fmax(0.0, 1.0 - h));
+            for (int k = 0; k < 3 && out->dpos_m; k++) {
+                double v = 0;
+                for (int a = 0; a < 6; a++) v += dC_drt[k * 6 + a] * dc[a];
+                out->dpos_m[3 * j + k] = v;
+            }
+            for (int k = 0; k < 2 && out->dground_m; k++) {
+                double v = 0;
+                for (int a = 0; a < 6; a++) v += G[k * 6 + a] * dc[a];
+                out->dground_m[2 * j + k] = have_ground ? v : NAN;
+            }
+        }
+    }
+    free(dq_dintr);
+    free(S);
+    free(Q);
+    free(blocks);
+    free(At);
+    free(Ninv);
+    return st;
+}
+
+double rs_calib__noise_update(double q, double r, double log_theta, double prior_factor)
+{
+    // below half an observation's worth of redundancy the group's residuals say nothing: it
+    // stays where it is (a group stated far too precisely has little redundancy until its
+    // variance grows, so the threshold for moving is lower than the one for reporting)
+    if (!(r >= 0.5) || !(q > 0)) return log_theta;
+    const double data = log_theta + log(q / r); // Förstner: the factor that makes q = r
+    const double var_data = 2.0 / r;            // of log(q/r), to first order
+    const double lp = 2.0 * log(prior_factor);  // the prior's 1-sigma in log variance
+    const double var_prior = lp > 0 ? lp * lp : 1e-12;
+    const double est = data * var_prior / (var_prior + var_data);
+    // within a factor 30 of the stated sigma either way: beyond, the stated sigma was no
+    // statement (and a noise-free simulated survey would drive the variance to 0)
+    const double bound = 2.0 * log(30.0);
+    return fmax(-bound, fmin(bound, est));
+}
+
+double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i)
+{
+    const double *p = &s->p_survey_c_m[3 * i];
+    double pc[3], dpc_dp[9];
+    mrcal_transform_point_rt(pc, NULL, dpc_dp, s->rt_cam_c, p);
+    mrcal_point2_t q;
+    mrcal_point3_t dq_dpc[2];
+    if (!(pc[2] > 0) || !mrcal_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, s->lensmodel, s->intrinsics))
+        return NAN;
+    const double sp = s->sigma_px ? s->sigma_px[i] : 1.0;
+    double C[4] = {sp * sp, 0, 0, sp * sp};
+    for (int a = 0; a < 3; a++) {
+        const double sa = s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0;
+        double J[2];
+        for (int r = 0; r < 2; r++) {
+            J[r] = 0;
+            for (int j = 0; j < 3; j++) J[r] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a];
+        }
+        for (int r = 0; r < 2; r++)
+            for (int c = 0; c < 2; c++) C[2 * r + c] += J[r] * sa * sa * J[c];
+    }
+    const double e[2] = {q.xy[0] - s->q_px[2 * i], q.xy[1] - s->q_px[2 * i + 1]};
+    const double det = C[0] * C[3] - C[1] * C[2];
+    if (!(det > 0)) return NAN;
+    return (C[3] * e[0] * e[0] - (C[1] + C[2]) * e[0] * e[1] + C[0] * e[1] * e[1]) / det;
+}

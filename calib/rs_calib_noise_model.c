@@ -1,0 +1,217 @@
+// rs_calib_noise_model.c -- the noise model's place in rs_calib_solve: variance components
+// alternating with data snooping, and the reliability of the final adjustment
+// (calib/internal/rs_calib_noise.h; the numbers themselves: rs_calib_noise.c).
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_refine.h"
+#include "calib/rs_calib.h"
+
+// The sigmas in use: the stated ones scaled by the variance factors exp(log_theta[group]).
+void rs_calib__scale_sigmas(rs_calib__work *w, const rs_calib_problem *pb, const double log_theta[RS_NOISE_NGROUPS])
+{
+    const double fp = exp(0.5 * log_theta[RS_NOISE_PIXEL]), fh = exp(0.5 * log_theta[RS_NOISE_SURVEY_H]),
+                 fv = exp(0.5 * log_theta[RS_NOISE_SURVEY_V]);
+    for (int i = 0; i < pb->N; i++) {
+        w->sigma_px[i] = (pb->sigma_px ? pb->sigma_px[i] : 1.0) * fp;
+        for (int k = 0; k < 3; k++)
+            w->sigma_enu[3 * i + k] = (pb->sigma_enu_m ? pb->sigma_enu_m[3 * i + k] : 0.0) * (k < 2 ? fh : fv);
+    }
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+// Median of x (n,), using scratch (n,).
+double rs_calib__median(const double *x, int n, double *scratch)
+{
+    if (n <= 0) return NAN;
+    memcpy(scratch, x, (size_t)n * sizeof *x);
+    qsort(scratch, (size_t)n, sizeof *scratch, cmp_double);
+    return n % 2 ? scratch[n / 2] : 0.5 * (scratch[n / 2 - 1] + scratch[n / 2]);
+}
+
+int rs_calib__noise_group(int component)
+{
+    return component < RS_NOISE_E ? RS_NOISE_PIXEL : component < RS_NOISE_UP ? RS_NOISE_SURVEY_H : RS_NOISE_SURVEY_V;
+}
+
+static rs_calib_noise_state noise_state(const rs_calib_refine_problem *rp, const rs_calib__work *w,
+                                        const double rt_c[6], const rs_calib_result *res, const rs_calib_options *opt)
+{
+    return (rs_calib_noise_state){.N = rp->N,
+                                  .rt_cam_c = rt_c,
+                                  .p_c_m = w->p_c,
+                                  .p_survey_c_m = w->p_survey_c,
+                                  .sigma_enu_m = rp->sigma_enu_m,
+                                  .q_px = rp->q_px,
+                                  .sigma_px = rp->sigma_px,
+                                  .use = w->use,
+                                  .lensmodel = rp->lensmodel,
+                                  .intrinsics = res->intrinsics,
+                                  .intrinsics_nominal = rp->intrinsics_nominal,
+                                  .refine = opt->refine,
+                                  .focal_prior_rel_sigma = opt->focal_prior_rel_sigma,
+                                  .center_prior_sigma_px = opt->center_prior_sigma_px,
+                                  .distortion_prior_sigma = opt->distortion_prior_sigma,
+                                  .has_position_prior = rp->has_position_prior,
+                                  .prior_sigma_m = rp->prior_sigma_m};
+}
+
+// An observation with a smaller redundancy number is all but uncontrolled: its w would be
+// noise over noise (its minimal detectable bias is over 18 sigma); it is not tested.
+#define MIN_TESTABLE_R 0.05
+
+// Baarda's w of landmark i: the largest |e| / sqrt(r) among its observations (r > MIN_TESTABLE_R).
+static double landmark_w(const rs_calib__work *w, int i)
+{
+    double m = 0;
+    for (int j = 0; j < RS_NOISE_NCOMP; j++) {
+        const double r = w->r[RS_NOISE_NCOMP * i + j];
+        if (r > MIN_TESTABLE_R) m = fmax(m, fabs(w->e[RS_NOISE_NCOMP * i + j]) / sqrt(r));
+    }
+    return m;
+}
+
+// 3b. The noise model, alternating with plain solves: variance components to convergence
+// (Förstner's estimator, rs_calib__noise_update), then Baarda's data snooping -- the landmark
+// with the largest |w| above opt->snooping_critical leaves the adjustment, one at a time -- and
+// again, until no w exceeds it or a quarter of the landmarks would be gone (then it stops and
+// says that the noise model is wrong). in,out: rt_c, the landmarks and the sigmas in w,
+// log_theta, *Noutliers.
+rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                const rs_calib_refine_options *ro, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
+                                int *Noutliers, const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
+{
+    const int N = pb->N;
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    const rs_calib_noise_out out = {.e = w->e, .r = w->r};
+    const int max_rejected = (int)floor(opt->max_rejected_fraction * N);
+    if (*Noutliers > max_rejected) res->noise_model_wrong = true;
+    for (int round = 0; round <= N; round++) {
+        for (int it = 0; it < 50; it++) {
+            rs_calib_refine_summary sum;
+            rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, NULL, NULL, rp, ro, err);
+            if (st == RS_ERR_NOCONVERGE && round == 0 && it == 0)
+                return RS_OK; // no noise model on a problem that does not converge: the final
+                              // solve reports it (or its cause, such as landmarks behind)
+            if (st == RS_OK) st = rs_calib__noise_redundancy(&out, &ns, err);
+            if (st != RS_OK) {
+                rs_err_prefix(err, "noise model");
+                return st;
+            }
+            res->iterations += sum.iterations;
+            if (!opt->estimate_noise) break;
+            double q[RS_NOISE_NGROUPS] = {0}, r[RS_NOISE_NGROUPS] = {0}, change = 0;
+            for (int i = 0; i < N; i++)
+                for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++) {
+                    q[rs_calib__noise_group(j)] += w->e[RS_NOISE_NCOMP * i + j] * w->e[RS_NOISE_NCOMP * i + j];
+                    r[rs_calib__noise_group(j)] += w->r[RS_NOISE_NCOMP * i + j];
+                }
+            for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+                const double next = rs_calib__noise_update(q[g], r[g], log_theta[g], opt->noise_prior_factor);
+                change = fmax(change, fabs(next - log_theta[g]));
+                log_theta[g] = next;
+            }
+            rs_calib__scale_sigmas(w, pb, log_theta);
+            if (change < 1e-3) break;
+        }
+        if (!(opt->robust_scale > 0.0)) break;
+        int worst = -1;
+        double wmax = 0;
+        for (int i = 0; i < N; i++) {
+            const double wi = w->use[i] ? landmark_w(w, i) : 0;
+            if (wi > wmax) wmax = wi, worst = i;
+        }
+        if (worst < 0 || !(wmax > opt->snooping_critical)) break;
+        if (*Noutliers + 1 > max_rejected || N - *Noutliers - 1 < 4) {
+            res->noise_model_wrong = true;
+            break;
+        }
+        w->use[worst] = false;
+        res->w_test[worst] = wmax;
+        memcpy(&w->p_c[3 * worst], &w->p_survey_c[3 * worst], 3 * sizeof(double));
+        (*Noutliers)++;
+        res->Nrejected_snooping++;
+    }
+    return RS_OK;
+}
+
+// The noise groups and each landmark's reliability at the final adjustment (rs_calib.h).
+rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                const double rt_c[6], const double log_theta[RS_NOISE_NGROUPS],
+                                const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
+{
+    const int N = pb->N;
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    const rs_calib_noise_out out = {.e = w->e, .r = w->r, .dpos_m = w->dpos, .dground_m = w->dground};
+    rs_status st = rs_calib__noise_redundancy(&out, &ns, err);
+    if (st != RS_OK) {
+        rs_err_prefix(err, "reliability");
+        return st;
+    }
+    const double delta0 = 4.13; // alpha 0.1%, power 80% (Baarda 1968)
+    double stated2[RS_NOISE_NGROUPS] = {0};
+    memset(res->noise, 0, sizeof res->noise);
+    for (int i = 0; i < N; i++) {
+        double wmax = 0, rsum = 0, mdb_px = 0, mdb_m = NAN, ext = 0, ext_g = 0;
+        for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++) {
+            const int k = RS_NOISE_NCOMP * i + j;
+            const bool pixel = j < RS_NOISE_E;
+            const double sigma = pixel ? w->sigma_px[i] : w->sigma_enu[3 * i + (j - RS_NOISE_E)];
+            if (!(sigma > 0)) continue; // a held axis
+            const double stated =
+                pixel ? (pb->sigma_px ? pb->sigma_px[i] : 1.0) : pb->sigma_enu_m[3 * i + j - RS_NOISE_E];
+            rs_calib_noise_group *g = &res->noise[rs_calib__noise_group(j)];
+            g->redundancy += w->r[k];
+            g->Nobservations++;
+            stated2[rs_calib__noise_group(j)] += stated * stated;
+            rsum += w->r[k];
+            const double delta = w->r[k] > 1e-9 ? delta0 / sqrt(w->r[k]) : INFINITY; // in sigmas
+            if (w->r[k] > MIN_TESTABLE_R) wmax = fmax(wmax, fabs(w->e[k]) / sqrt(w->r[k]));
+            if (pixel)
+                mdb_px = fmax(mdb_px, delta * sigma);
+            else
+                mdb_m = isnan(mdb_m) ? delta * sigma : fmax(mdb_m, delta * sigma);
+            const double *dp = &w->dpos[3 * k], *dg = &w->dground[2 * k];
+            ext = fmax(ext, delta * sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]));
+            ext_g = isnan(dg[0]) ? NAN : fmax(ext_g, delta * hypot(dg[0], dg[1]));
+        }
+        res->redundancy[i] = rsum;
+        if (w->use[i]) {
+            res->w_test[i] = wmax;
+            res->mdb_px[i] = mdb_px;
+            res->mdb_m[i] = mdb_m;
+            res->external_m[i] = ext;
+            res->external_ground_m[i] = ext_g;
+        } else {
+            res->mdb_px[i] = res->mdb_m[i] = res->external_m[i] = res->external_ground_m[i] = NAN;
+        }
+    }
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+        rs_calib_noise_group *n = &res->noise[g];
+        if (!n->Nobservations) continue;
+        n->stated = sqrt(stated2[g] / n->Nobservations);
+        n->estimated = n->stated * exp(0.5 * log_theta[g]);
+        n->estimated_from_data = opt->estimate_noise && n->redundancy >= opt->noise_min_redundancy;
+        if (n->estimated_from_data) { // posterior 1-sigma of log(variance), halved for the sigma
+            const double lp = 2.0 * log(opt->noise_prior_factor);
+            const double precision = n->redundancy / 2.0 + (lp > 0 ? 1.0 / (lp * lp) : 0.0);
+            n->sigma_estimated = n->estimated * 0.5 / sqrt(precision);
+        }
+    }
+    return RS_OK;
+}
+
+double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib__work *w, const double rt_c[6],
+                               const rs_calib_result *res, const rs_calib_options *opt, int i)
+{
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    return rs_calib__noise_excluded_chi2(&ns, i);
+}
