@@ -221,6 +221,7 @@ static bool crb(double *tr_rot_rad2, double *tr_pos_m2, bench_trial *T)
         rs_calib_options opt;
         rs_calib_options_default(&opt);
         opt.robust_scale = 0.0;
+        opt.estimate_noise = false; // the bound is at the true noise: noise-free data estimate none
         rs_calib_result res;
         if (rs_calib_solve(&res, &cp, &opt, NULL) == RS_OK) {
             double D[9], C[9];
