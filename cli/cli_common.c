@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "calib/rs_calib_site.h"
 #include "cli/rs_cli.h"
 
 int rs_cli_fail(const char *what, rs_status st, const rs_err *err)
@@ -41,6 +42,29 @@ int rs_cli_check_cameras(const char *command, const rs_site *site, const char *c
         if (rs_site_find_camera(site, ids[i]) < 0)
             return rs_cli_usage_error(command, "--camera %s: no such camera in %s/site.json", ids[i], site->dir);
     return RS_EXIT_OK;
+}
+
+rs_site *rs_cli_load_site_or_abandon(const char *command, const char *what, const char *site_dir, const char *out_dir,
+                                     const rs_calib_site_outputs *outputs, const char *const *only, int Nonly)
+{
+    rs_site *site = NULL;
+    rs_err err = {0};
+    const rs_status st = rs_site_load(&site, site_dir, &err);
+    if (st == RS_OK) return site;
+    const char *msg = err.msg[0] ? err.msg : rs_strerror(st);
+    fprintf(stderr, "roadside %s: %s\n(run 'roadside site check %s' for every problem)\n", command, msg, site_dir);
+    // nothing can be done for any camera: what an earlier run wrote for this site is superseded
+    char *removed = NULL;
+    rs_err rerr = {0};
+    char why[sizeof err.msg + 32];
+    snprintf(why, sizeof why, "the site could not be read: %s", msg);
+    if (rs_calib_site_run_abandon(&removed, out_dir, outputs, site_dir, only, Nonly, why, &rerr))
+        fprintf(stderr, "roadside %s: %s\n", command, rerr.msg);
+    if (removed && removed[0])
+        fprintf(stderr, "roadside %s: nothing written; the earlier %s of this site in %s/ are removed: %s\n", command,
+                what, out_dir, removed);
+    free(removed);
+    return NULL;
 }
 
 bool rs_cli_wants_help(int argc, char **argv)

@@ -180,26 +180,13 @@ int rs_cli_audit(int argc, char **argv)
         return rs_cli_fail("audit", RS_ERR_NOMEM, NULL);
     }
     const rs_calib_site_outputs *outputs = &rs_audit_site_outputs;
-    rs_site *site = NULL;
-    rs_status st = rs_site_load(&site, site_dir, &err);
-    if (st) {
-        fprintf(stderr, "roadside audit: %s\n(run 'roadside site check %s' for every problem)\n",
-                err.msg[0] ? err.msg : rs_strerror(st), site_dir);
-        // no camera can be audited: what an earlier audit wrote for this site is superseded
-        char *removed = NULL;
-        rs_err rerr = {0};
-        char why[sizeof err.msg + 32];
-        snprintf(why, sizeof why, "the site could not be read: %s", err.msg[0] ? err.msg : rs_strerror(st));
-        if (rs_calib_site_run_abandon(&removed, out_dir, outputs, site_dir, only, Nonly, why, &rerr))
-            fprintf(stderr, "roadside audit: %s\n", rerr.msg);
-        if (removed && removed[0])
-            fprintf(stderr, "roadside audit: nothing written; the earlier audits of this site in %s/ are removed: %s\n",
-                    out_dir, removed);
-        free(removed);
+    rs_site *site = rs_cli_load_site_or_abandon("audit", "audits", site_dir, out_dir, outputs, only, Nonly);
+    if (!site) {
         free(only);
         free(default_out);
         return RS_EXIT_FAIL;
     }
+    rs_status st = RS_OK;
     int usage = rs_cli_check_cameras("audit", site, only, Nonly);
     int Nselected = Nonly ? Nonly : site->Ncameras;
     bool against_dir = against && is_dir(against);

@@ -158,27 +158,13 @@ int rs_cli_calib(int argc, char **argv)
         return rs_cli_fail("calib", RS_ERR_NOMEM, NULL);
     }
     const rs_calib_site_outputs *outputs = &rs_calib_site_calib_outputs;
-    rs_site *site = NULL;
-    rs_status st = rs_site_load(&site, site_dir, &err);
-    if (st) {
-        fprintf(stderr, "roadside calib: %s\n(run 'roadside site check %s' for every problem)\n",
-                err.msg[0] ? err.msg : rs_strerror(st), site_dir);
-        // no camera can be calibrated: what an earlier run wrote for this site is superseded
-        char *removed = NULL;
-        rs_err rerr = {0};
-        char why[sizeof err.msg + 32];
-        snprintf(why, sizeof why, "the site could not be read: %s", err.msg[0] ? err.msg : rs_strerror(st));
-        rs_status rst = rs_calib_site_run_abandon(&removed, out_dir, outputs, site_dir, only, Nonly, why, &rerr);
-        if (removed && removed[0])
-            fprintf(stderr,
-                    "roadside calib: nothing written; the earlier outputs of this site in %s/ are removed: %s\n",
-                    out_dir, removed);
-        if (rst) fprintf(stderr, "roadside calib: %s\n", rerr.msg);
-        free(removed);
+    rs_site *site = rs_cli_load_site_or_abandon("calib", "outputs", site_dir, out_dir, outputs, only, Nonly);
+    if (!site) {
         free(only);
         free(default_out);
         return RS_EXIT_FAIL;
     }
+    rs_status st = RS_OK;
     int usage = rs_cli_check_cameras("calib", site, only, Nonly);
     struct stat sb;
     const bool out_existed = stat(out_dir, &sb) == 0;

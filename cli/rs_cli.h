@@ -4,6 +4,7 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+#include "calib/rs_calib_site.h"
 #include "core/rs_status.h"
 #include "geo/rs_geo.h"
 #include "geo/rs_site.h"
@@ -49,6 +50,12 @@ rs_site *rs_cli_load_site(const char *command, const char *dir);
 // Checks that every id names a camera of the site; prints a usage error for the first that does
 // not and returns RS_EXIT_USAGE, else RS_EXIT_OK.
 int rs_cli_check_cameras(const char *command, const rs_site *site, const char *const *ids, int N);
+
+// Loads SITE for `command` (calib, audit). When it cannot be read, prints why (and the hint to
+// run `site check`), removes what an earlier run of that command wrote for this site folder into
+// out_dir (rs_calib_site_run_abandon; `what` names those files in the message) and returns NULL.
+rs_site *rs_cli_load_site_or_abandon(const char *command, const char *what, const char *site_dir, const char *out_dir,
+                                     const rs_calib_site_outputs *outputs, const char *const *only, int Nonly);
 
 // True if argv holds -h or --help before any "--".
 bool rs_cli_wants_help(int argc, char **argv);
