@@ -438,14 +438,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
                                   .center_prior_sigma_px = opt->center_prior_sigma_px,
                                   .distortion_prior_sigma = opt->distortion_prior_sigma,
                                   .covariance = false,
-                                  .rough = true,
-                                  // the robust pass with landmarks held and their survey
-                                  // sigmas folded into the pixels (rs_calib_refine.h): 0.79
-                                  // instead of 1.0 ms for 20 landmarks. Not with intrinsics
-                                  // refined, whose start may be 9% off: the whitening, taken at
-                                  // the start, then misjudges outliers (the real data's
-                                  // leave-one-out median went from 1.63 to 1.86 m).
-                                  .marginal = opt->refine == RS_CALIB_REFINE_NONE};
+                                  .rough = true};
     rs_calib_refine_summary sum;
     for (int i = 0; i < N; i++) w->use[i] = true;
     int Noutliers = 0;
@@ -501,10 +494,10 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
                           "beyond %g sigma): a pose needs at least 4",
                           N - Noutliers, N, opt->outlier_threshold);
 
-    // 3b. variance components and data snooping (rs_calib_noise.h), alternating
+    // 3b. variance components and data snooping (rs_calib_noise.h), alternating; their solves
+    // need not be tight (the variance factors change by 1e-3 in the end): the final solve is
     ro.robust_scale = 0.0;
-    ro.rough = false;
-    ro.marginal = false;
+    ro.rough = true;
     if (opt->estimate_noise || opt->robust_scale > 0.0) {
         st = rs_calib__noise_model(res, w, &rp, &ro, rt_c, log_theta, &Noutliers, pb, opt, err);
         if (st != RS_OK) return st;
@@ -532,7 +525,6 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     ro.robust_scale = 0.0;
     ro.covariance = true;
     ro.rough = false;
-    ro.marginal = false;
     st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred, &rp, &ro, err);
     if (st != RS_OK) {
         rs_err_prefix(err, "refinement");

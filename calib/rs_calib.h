@@ -10,7 +10,8 @@
 //   1. Initial pose: rs_calib_init_pose() (RANSAC over P3P, then EPnP or planar IPPE). When
 //      the focal length is refined, a 1-D search over a focal scale drives rs_calib_init_pose()
 //      and keeps the scale with the smallest robust reprojection cost.
-//   2. Ceres refinement (errors in variables): parameters are rt (6), every landmark's ENU
+//   2. Refinement (errors in variables; Ceres' TinySolver on the variable-projection problem,
+//      calib/rs_calib_refine_ceres.cc): parameters are rt (6), every landmark's ENU
 //      position (3, held to its survey by a prior (p - p_survey)/sigma per axis; sigma 0 holds
 //      that axis exactly) and optionally a subset of the intrinsics (with priors). Residual
 //      (mrcal_project(transform_rt(p)) - q_obs) / sigma_px with analytic Jacobians from mrcal.
@@ -25,10 +26,11 @@
 //      log-normal prior) alternating with Baarda's data snooping (w-test, one landmark at a
 //      time, at most a quarter); per landmark w, redundancy, minimal detectable biases and
 //      external reliability in the result.
-//   4. Covariance of rt (and the refined intrinsics) by ceres::Covariance with the landmarks
-//      marginalised, ABSOLUTE scaling (residuals whitened by the estimated sigmas, at their
-//      posterior mean); the
-//      a-posteriori variance factor chi2/dof is reported next to it.
+//   4. Covariance of rt (and the refined intrinsics) with the landmarks marginalised: the
+//      inverse of the reduced problem's Gauss-Newton matrix (exactly the Schur complement),
+//      from the QR and SVD of its column-equilibrated Jacobian; ABSOLUTE scaling (residuals
+//      whitened by the estimated sigmas, at their posterior mean); the a-posteriori variance
+//      factor chi2/dof is reported next to it.
 //
 // Conventions (docs/conventions.md): rt_cam_enu = mrcal Rodrigues r + translation t (metres),
 // p_cam = R(r) p_enu + t; camera x right, y down, z forward; pixel (0,0) is the centre of the

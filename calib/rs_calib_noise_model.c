@@ -120,7 +120,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
                 log_theta[g] = next;
             }
             rs_calib__scale_sigmas(w, pb, log_theta);
-            if (change < 1e-3) break;
+            if (change < 1e-2) break; // 1% in a variance: a tenth of its own uncertainty at r = 200
         }
         if (!(opt->robust_scale > 0.0)) break;
         int worst = -1;

@@ -1,5 +1,6 @@
-// rs_calib_refine.h -- internal: one Ceres refinement of a camera pose with landmark priors
-// (errors in variables), optional intrinsics, and the covariance. The C face of
+// rs_calib_refine.h -- internal: one refinement of a camera pose with landmark priors (errors in
+// variables), optional intrinsics, and the covariance: variable projection solved by Ceres'
+// TinySolver (the method is at the top of rs_calib_refine_ceres.cc). The C face of
 // rs_calib_refine_ceres.cc; rs_calib.c drives it (robust solve, outliers, plain re-solve).
 //
 // Problem (all positions in a frame CENTRED on the landmarks' centroid c: p_c = p_enu - c,
@@ -9,7 +10,9 @@
 //           + sum_j ((x_j - x_nominal_j)/sigma_j)^2               (priors of refined intrinsics)
 //   q(i) = mrcal_project(mrcal_transform_point_rt(rt_cam_c, p_i), intrinsics)
 // over rt_cam_c (6), the landmarks p_i (3 each; axis k with s_ik = 0 is held exactly) and the
-// refined intrinsics. rho is Ceres' CauchyLoss(robust_scale) (identity when robust_scale <= 0).
+// refined intrinsics. rho is Cauchy's loss a^2 log(1 + s/a^2), a = robust_scale, on each landmark's
+// block (none when robust_scale <= 0). The landmarks are solved for inside each evaluation
+// (variable projection), so the solver's unknowns are rt and the intrinsics only.
 // Jacobians are analytic: mrcal_project's dq_dp and dq_dintrinsics chained with
 // mrcal_transform_point_rt's dp_cam/drt and dp_cam/dp.
 // Intrinsics: FOCAL moves (fx, fy) along (fx0, fy0) (one scale); CENTER frees (cx, cy);
@@ -47,24 +50,16 @@ typedef struct {
     double center_prior_sigma_px;  // 0: no prior
     double distortion_prior_sigma; // 0: no prior
     bool covariance;               // compute the covariance and the condition number
-    bool rough;                    // a first (robust) pass: looser tolerances, and reaching
-                                   //   max_iterations is not an error
-    bool marginal;                 // landmarks held at their surveyed positions, each one's
-                                   //   pixel residual whitened by its covariance
-                                   //   sigma_px^2 I + J_p S J_p^T (S its survey variances,
-                                   //   J_p = dq/dp at the STARTING pose): to first order the
-                                   //   same pose and the same block chi2 as the joint solve,
-                                   //   with 6 (+ intrinsics) parameters instead of 3 more per
-                                   //   landmark. For a rough pass; no covariance.
+    bool rough;                    // an intermediate pass (robust, or the noise model's): looser
+                                   //   tolerances (the landmarks' inner solves to 1e-3 of their
+                                   //   sigma instead of 1e-6), reaching max_iterations is no error
 } rs_calib_refine_options;
 
 typedef struct {
     double chi2;           // sum of squared whitened residuals (loss NOT applied)
     int Nresiduals, Nfree; // counts of the solve; dof = Nresiduals - Nfree
     int iterations;
-    double condition_number;  // equilibrated Jacobian, landmarks eliminated (NAN: not computed)
-    bool covariance_by_ceres; // true: ceres::Covariance; false: the landmark-eliminated QR
-                              //   (Jacobian column norms spanning more than 1e7, see the .cc)
+    double condition_number; // equilibrated Jacobian, landmarks eliminated (NAN: not computed)
 } rs_calib_refine_summary;
 
 // Runs one solve from the given starting point.
