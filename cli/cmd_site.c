@@ -221,6 +221,15 @@ static int cmd_describe(int argc, char **argv)
     printf("landmarks: %d (default sigma %g m horizontal, %g m vertical)\n", site->Nlandmarks, site->landmark_sigma_h_m,
            site->landmark_sigma_v_m);
     print_extent(site, -1, "  ");
+    int Nshape[3] = {0}, Nvertices = 0; // poles and lines (docs/site-format.md "Landmark kinds")
+    for (int i = 0; i < site->Nlandmarks; i++) {
+        Nshape[site->landmarks[i].shape]++;
+        if (site->landmarks[i].shape == RS_SITE_LINE) Nvertices += site->landmarks[i].Nvertices;
+    }
+    if (Nshape[RS_SITE_POLE] || Nshape[RS_SITE_LINE])
+        printf("  kinds: %d points, %d poles, %d lines (%d vertices); the extent includes every vertex and pole "
+               "top\n",
+               Nshape[RS_SITE_POINT], Nshape[RS_SITE_POLE], Nshape[RS_SITE_LINE], Nvertices);
     int Nkind[4] = {0};
     for (int i = 0; i < site->Nlandmarks; i++) Nkind[site->landmarks[i].height]++;
     printf("  landmark heights: \"%s\" site-wide; %d surveyed, %d unreliable, %d unknown\n",

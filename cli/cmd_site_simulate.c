@@ -22,7 +22,15 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "Options (defaults in brackets):\n"
             "  --seed N                  random seed, 0 .. 2^53 (required)\n"
             "  --cameras K               number of cameras, 1..16 [%d]\n"
-            "  --landmarks-per-camera M  about this many landmarks seen by each camera, 4..100 [%d]\n"
+            "  --landmarks-per-camera M  about this many points seen by each camera, 4..100 (0..100\n"
+            "                            with --poles or --lines) [%d]; --points M is the same\n"
+            "  --poles N                 about this many poles seen by each camera, 0..50 [0]:\n"
+            "                            delineator posts (1.0-1.2 m) along the road edges, lamp posts\n"
+            "                            (6-10 m) and sign posts (3-4.5 m); each picked at its base and\n"
+            "                            top where they are in the image, and once along it\n"
+            "  --lines N                 about this many lines seen by each camera, 0..20 [0]: stop\n"
+            "                            bars, centre and edge lines, kerbs round the corners; each\n"
+            "                            picked 3 times along its visible part\n"
             "  --lens MODEL              any mrcal lens model name [%s]; configured models in\n"
             "                            full, e.g. LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=100\n"
             "  --image WxH               image size in pixels [%dx%d]\n"
@@ -42,6 +50,9 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "                            those above it then say \"height\": \"surveyed\" and their\n"
             "                            above_ground_m (docs/site-format.md) [not written]\n"
             "  --force                   replace DIR if it already holds a site\n"
+            "\n"
+            "A site of only poles and lines: --points 0 --poles N --lines M. Their picks' truth (the\n"
+            "true point picked) is in truth/picks.csv, their true geometry in truth/vertices_enu.csv.\n"
             "\n"
             "With zero noise the site still declares sigmas of 1 mm and 0.01 px (a site needs\n"
             "sigmas > 0); site.json's \"simulated\" records the noise actually drawn.\n"
@@ -100,10 +111,16 @@ int rs_cli_site_simulate(int argc, char **argv)
         } else if (strcmp(a, "--cameras") == 0) {
             if (!rs_cli_parse_int(v, 1, 16, &n)) return rs_cli_usage_error(CMD, "--cameras: '%s' is not in 1..16", v);
             o.Ncameras = (int)n;
-        } else if (strcmp(a, "--landmarks-per-camera") == 0) {
-            if (!rs_cli_parse_int(v, 4, 100, &n))
-                return rs_cli_usage_error(CMD, "--landmarks-per-camera: '%s' is not in 4..100", v);
+        } else if (strcmp(a, "--landmarks-per-camera") == 0 || strcmp(a, "--points") == 0) {
+            if (!rs_cli_parse_int(v, 0, 100, &n))
+                return rs_cli_usage_error(CMD, "%s: '%s' is not in 0..100 (at least 4 without poles or lines)", a, v);
             o.landmarks_per_camera = (int)n;
+        } else if (strcmp(a, "--poles") == 0) {
+            if (!rs_cli_parse_int(v, 0, 50, &n)) return rs_cli_usage_error(CMD, "--poles: '%s' is not in 0..50", v);
+            o.poles_per_camera = (int)n;
+        } else if (strcmp(a, "--lines") == 0) {
+            if (!rs_cli_parse_int(v, 0, 20, &n)) return rs_cli_usage_error(CMD, "--lines: '%s' is not in 0..20", v);
+            o.lines_per_camera = (int)n;
         } else if (strcmp(a, "--lens") == 0) {
             o.lensmodel = v;
         } else if (strcmp(a, "--image") == 0) {

@@ -1,7 +1,7 @@
 // rs_site.c -- the site in memory (geo/rs_site.h): rs_site_free and the lookups (cameras,
-// landmarks, a background's tags, the landmarks' extent, the names of height kinds). Reading a
-// site is rs_site_read.c; this file calls nothing else of geo, and everything of the reader may
-// call it.
+// landmarks, a background's tags, the landmarks' extent, the names of height kinds, shapes and
+// pick places). Reading a site is rs_site_read.c; this file calls nothing else of geo, and
+// everything of the reader may call it.
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +15,10 @@ void rs_site_free(rs_site *site)
         free(site->landmarks[i].id);
         free(site->landmarks[i].kind);
         free(site->landmarks[i].note);
+        free(site->landmarks[i].vertices_enu_m);
+        free(site->landmarks[i].vertices_llh);
+        free(site->landmarks[i].vertices_sigma_v_m);
+        free(site->landmarks[i].vertices_given_h_m);
     }
     free(site->landmarks);
     for (int i = 0; i < site->Ncameras; i++) {
@@ -56,6 +60,41 @@ const char *rs_site_height_name(rs_site_height h)
     return "?";
 }
 
+const char *rs_site_shape_name(rs_site_shape shape)
+{
+    switch (shape) {
+    case RS_SITE_POINT: return "point";
+    case RS_SITE_POLE: return "pole";
+    case RS_SITE_LINE: return "line";
+    }
+    return "?";
+}
+
+const char *rs_site_at_name(rs_site_at at)
+{
+    switch (at) {
+    case RS_SITE_AT_POINT: return "point";
+    case RS_SITE_AT_BASE: return "base";
+    case RS_SITE_AT_TOP: return "top";
+    case RS_SITE_AT_ALONG: return "along";
+    }
+    return "?";
+}
+
+bool rs_site_observed_point(double p_enu_m[3], double sigma_enu_m[3], const rs_site *site, const rs_site_observation *o)
+{
+    const rs_site_landmark *l = &site->landmarks[o->ilandmark];
+    if (o->at == RS_SITE_AT_ALONG) return false;
+    memcpy(p_enu_m, l->p_enu_m, 3 * sizeof(double));
+    sigma_enu_m[0] = sigma_enu_m[1] = l->sigma_h_m;
+    sigma_enu_m[2] = l->sigma_v_m;
+    if (o->at == RS_SITE_AT_TOP) { // the top: straight up from the base, its height's sigma added
+        p_enu_m[2] += l->pole_height_m;
+        sigma_enu_m[2] = hypot(l->sigma_v_m, l->sigma_pole_height_m);
+    }
+    return true;
+}
+
 int rs_site_find_camera(const rs_site *site, const char *id)
 {
     for (int i = 0; i < site->Ncameras; i++)
@@ -88,14 +127,21 @@ int rs_site_landmark_extent(double *min_enu_m, double *max_enu_m, double *dmin_m
     double dlo = INFINITY, dhi = -INFINITY;
     for (int i = 0; i < n; i++) {
         int il = icam < 0 ? i : site->cameras[icam].observations[i].ilandmark;
-        const double *p = site->landmarks[il].p_enu_m;
-        for (int k = 0; k < 3; k++) {
-            lo[k] = fmin(lo[k], p[k]);
-            hi[k] = fmax(hi[k], p[k]);
+        const rs_site_landmark *l = &site->landmarks[il];
+        // every vertex of a line, a pole's base and top
+        const int nv = l->shape == RS_SITE_LINE && l->vertices_enu_m ? l->Nvertices : 1;
+        for (int v = 0; v < nv + (l->shape == RS_SITE_POLE); v++) {
+            double p[3];
+            memcpy(p, v < nv && v > 0 ? &l->vertices_enu_m[3 * v] : l->p_enu_m, sizeof p);
+            if (v == nv) p[2] += l->pole_height_m;
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmin(lo[k], p[k]);
+                hi[k] = fmax(hi[k], p[k]);
+            }
+            double d = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            dlo = fmin(dlo, d);
+            dhi = fmax(dhi, d);
         }
-        double d = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-        dlo = fmin(dlo, d);
-        dhi = fmax(dhi, d);
     }
     if (n == 0) return 0;
     if (min_enu_m) memcpy(min_enu_m, lo, sizeof lo);

@@ -10,11 +10,14 @@
 //   landmarks.geojson          FeatureCollection of Point features [lon, lat, h] (RFC 7946
 //                              order; [lon, lat] where the height is unknown); properties: id
 //                              (unique string), optional sigma_h_m, sigma_v_m, height,
-//                              above_ground_m, kind, note
+//                              above_ground_m, kind, note; a Point with height_m (and optional
+//                              sigma_height_m) is a pole; LineString features are lines
+//                              (rs_site_shape below)
 //   cameras/<id>.cameramodel   intrinsics as an mrcal .cameramodel (or OpenCV-style .yaml/.yml/
 //                              .json: image_width, image_height, camera_matrix,
 //                              distortion_coefficients)
-//   observations/<id>.csv      header "landmark,u,v[,sigma_px]": pixel picks of landmarks
+//   observations/<id>.csv      header "landmark,u,v[,sigma_px][,at]": pixel picks of landmarks
+//                              (at: where on a pole or line, rs_site_at below)
 //   backgrounds/<id>/...       optional background images
 //
 // Conventions (docs/conventions.md): geodetic llh = (lat_deg, lon_deg, h_m) on WGS84; every
@@ -71,6 +74,12 @@ extern "C" {
 #define RS_SITE_HEIGHT_MIN_M       (-1000.0)
 #define RS_SITE_HEIGHT_MAX_M       10000.0
 #define RS_SITE_COINCIDENT_M       1e-3
+// A pole is at most RS_SITE_POLE_HEIGHT_MAX_M tall (a lamp or gantry post; a taller thing is no
+// roadside pole); a line has at most RS_SITE_LINE_VERTICES_MAX vertices (a kerb surveyed every
+// 10 cm over 1 km; split anything longer). Consecutive vertices of a line closer than
+// RS_SITE_COINCIDENT_M make a zero-length segment, an error.
+#define RS_SITE_POLE_HEIGHT_MAX_M  100.0
+#define RS_SITE_LINE_VERTICES_MAX  10000
 
 // How far a landmark's height can be trusted: site.json "landmark_heights" (site-wide) and a
 // feature's properties.height (that landmark), docs/site-format.md.
@@ -86,7 +95,32 @@ typedef enum {
 // "surveyed", "unreliable", "unknown" ("default" for RS_SITE_HEIGHT_DEFAULT, "?" out of range).
 const char *rs_site_height_name(rs_site_height h);
 
-// A surveyed landmark, in the site ENU frame.
+// What a landmark is (docs/site-format.md "Landmark kinds"):
+typedef enum {
+    RS_SITE_POINT = 0, // a surveyed point (GeoJSON Point): picked where it is
+    RS_SITE_POLE,      // a vertical pole (GeoJSON Point with properties.height_m): a surveyed base
+                       //   (the point) and a top pole_height_m straight up (ENU up at the site
+                       //   origin) from it; picked at its base, its top, or anywhere along it
+    RS_SITE_LINE,      // a surveyed polyline (GeoJSON LineString: a lane marking, stop bar, kerb):
+                       //   picked anywhere along it
+} rs_site_shape;
+
+// Where on its landmark a pick lies: the observations CSV's column `at` (docs/site-format.md).
+typedef enum {
+    RS_SITE_AT_POINT = 0, // "point": the point itself (points only; their default)
+    RS_SITE_AT_BASE,      // "base": a pole's base (the surveyed point); at most once per camera
+    RS_SITE_AT_TOP,       // "top": a pole's top; at most once per camera
+    RS_SITE_AT_ALONG,     // "along": anywhere on a pole's segment or a line's polyline (the default
+                          //   for both); may repeat: each row is one pick somewhere on it
+} rs_site_at;
+
+// "point", "pole", "line" / "point", "base", "top", "along" ("?" out of range).
+const char *rs_site_shape_name(rs_site_shape shape);
+const char *rs_site_at_name(rs_site_at at);
+
+// A surveyed landmark, in the site ENU frame. For a pole, every field of a point describes its
+// base; for a line, its first vertex (p_enu_m, llh, given_*), so that code that knows only points
+// sees a point on it.
 typedef struct {
     char *id;          // owned; unique within the site
     int feature;       // index in landmarks.geojson's "features" (from 0)
@@ -112,7 +146,26 @@ typedef struct {
     double given_up_m;            // ENU up of the position as given; NAN likewise
     double given_sigma_v_m;       // the vertical 1-sigma stated for the given height (its
                                   //   sigma_v_m, else the site's), metres
-    bool ground_used;             // the fitted ground plane rests on this landmark's height
+    bool ground_used;             // the fitted ground plane rests on this landmark's height (a
+                                  //   line: on one of its vertices' heights at least)
+
+    rs_site_shape shape;        // POINT (0: what a zeroed struct is), POLE or LINE
+    double pole_height_m;       // POLE: the top is this far above the base along ENU up, metres,
+                                //   in (0, RS_SITE_POLE_HEIGHT_MAX_M]; 0 otherwise
+    double sigma_pole_height_m; // POLE: 1-sigma of pole_height_m, metres, > 0 (properties.
+                                //   sigma_height_m; default the stated sigma_v, given_sigma_v_m);
+                                //   0 otherwise
+    int Nvertices;              // 1 for a point or pole; 2..RS_SITE_LINE_VERTICES_MAX for a line
+                                //   (0 in structs not made by the reader: the writer then uses llh)
+    double *vertices_enu_m;     // owned, (Nvertices,3) east, north, up, metres: vertices_enu_m[0..2]
+                                //   == p_enu_m (a pole: its base; the top is the base +
+                                //   (0, 0, pole_height_m)); NaN where the position is unusable
+    rs_llh *vertices_llh;       // owned, (Nvertices,): vertices_llh[0] == llh; heights ellipsoidal,
+                                //   modelled ones as modelled
+    double *vertices_sigma_v_m; // owned, (Nvertices,) each vertex's vertical 1-sigma, metres
+                                //   ([0] == sigma_v_m; modelled heights have their own)
+    double *vertices_given_h_m; // owned, (Nvertices,) each vertex's height as given, ellipsoidal,
+                                //   metres; NAN where none counts ([0] == given_h_m)
 } rs_site_landmark;
 
 // One pixel pick of a landmark in one camera.
@@ -121,6 +174,10 @@ typedef struct {
     double q_px[2];  // (2,) u, v in pixels, (0,0) = centre of the top-left pixel
     double sigma_px; // 1-sigma pick uncertainty per axis, pixels, > 0 (default 1.0)
     int line;        // line number in the observations CSV (from 1), for messages
+    rs_site_at at;   // where on the landmark (column `at`); after load always the resolved value:
+                     //   POINT for a point, BASE, TOP or ALONG for a pole, ALONG for a line.
+                     //   The residual of an ALONG pick is the pixel's distance to the projected
+                     //   segment (pole) or polyline (line), one number, not two
 } rs_site_observation;
 
 // One tag of a background image: key = value, both text.
@@ -141,6 +198,14 @@ typedef struct {
     int Ntags;         //   "conditions" (sunny, cloudy, rain, snow, night) and free tags;
                        //   tags that are neither text nor boolean are skipped (a warning)
 } rs_site_background;
+
+// A camera's stated intrinsics uncertainty (site.json cameras[].intrinsics_sigma): a relative focal
+// 1-sigma under 1e-5 is beyond any calibration and one over 1 (100%) is no statement; a principal
+// point 1-sigma under 0.01 px likewise, over 1e4 px beyond any image.
+#define RS_SITE_FOCAL_REL_SIGMA_MIN 1e-5
+#define RS_SITE_FOCAL_REL_SIGMA_MAX 1.0
+#define RS_SITE_CENTER_SIGMA_MIN_PX 1e-2
+#define RS_SITE_CENTER_SIGMA_MAX_PX 1e4
 
 typedef struct {
     char *id;                // owned; unique within the site
@@ -163,6 +228,11 @@ typedef struct {
     rs_llh prior_llh;        // height ellipsoidal; valid if has_position_prior
     double prior_p_enu_m[3]; // (3,) prior position in ENU, metres
     double prior_sigma_m;    // 1-sigma of the prior per axis, metres, > 0
+
+    // How well the nominal intrinsics are known (site.json "intrinsics_sigma"); 0: not stated,
+    // the intrinsics are exact (docs/site-format.md)
+    double focal_rel_sigma; // 1-sigma of the focal length relative to the nominal (0.1: 10%)
+    double center_sigma_px; // 1-sigma of the principal point (cx and cy each), px
 } rs_site_camera;
 
 // The ground model of a site: where the heights of its UNRELIABLE and UNKNOWN landmarks come from.
@@ -286,6 +356,13 @@ void rs_site_free(rs_site *site);
 
 // Index of the camera / landmark with this id, or -1 if there is none. Linear search.
 int rs_site_find_camera(const rs_site *site, const char *id);
+
+// The surveyed point a pick is of, in ENU (metres), with its 1-sigma per axis: a point's or a
+// pole's base as surveyed; a pole's top pole_height_m straight up from its base, its vertical
+// sigma combined with sigma_pole_height_m. False for an `along` pick (a pole's segment or a
+// line: no single point). site and o must not be NULL.
+bool rs_site_observed_point(double p_enu_m[3], double sigma_enu_m[3], const rs_site *site,
+                            const rs_site_observation *o);
 int rs_site_find_landmark(const rs_site *site, const char *id);
 
 // The value a background has for `key`: its tag `key` if it has one, else its own "name",
@@ -295,7 +372,8 @@ int rs_site_find_landmark(const rs_site *site, const char *id);
 const char *rs_site_background_tag(const rs_site_background *bg, const char *key);
 
 // Axis-aligned ENU extent and the range of distances from the origin of a set of landmarks:
-// all of them (icam < 0) or those observed by camera icam.
+// all of them (icam < 0) or those observed by camera icam; of every vertex of a line and of a
+// pole's base and top.
 // out:  min_enu_m, max_enu_m: (3,) each; dmin_m, dmax_m: metres (any may be NULL)
 // Returns the number of landmarks in the set (0: outputs untouched).
 int rs_site_landmark_extent( // out

@@ -14,6 +14,8 @@
 // A camera needs at least this many landmarks picked: the fewest that determine a pose without
 // ambiguity (P3P has up to four solutions).
 enum { MIN_OBSERVATIONS = 4 };
+// Straight pieces within this angle of each other count as parallel (site check's warning).
+#define PARALLEL_DEG 1.0
 
 // ---- positions ----
 
@@ -155,24 +157,108 @@ bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam, c
             ok = false;
         }
     }
-    for (int i = 0; i < cam->Nobservations; i++) {
-        if (cam->observations[i].ilandmark != obs->ilandmark) continue;
-        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "landmark",
-                      "'%s' is observed twice in this camera (first at line %d)", site->landmarks[obs->ilandmark].id,
-                      cam->observations[i].line);
+    // a point, a pole's base and a pole's top are each picked at most once; `along` picks repeat
+    for (int i = 0; obs->at != RS_SITE_AT_ALONG && i < cam->Nobservations; i++) {
+        if (cam->observations[i].ilandmark != obs->ilandmark || cam->observations[i].at != obs->at) continue;
+        if (obs->at == RS_SITE_AT_POINT)
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "landmark",
+                          "'%s' is observed twice in this camera (first at line %d)",
+                          site->landmarks[obs->ilandmark].id, cam->observations[i].line);
+        else
+            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "at",
+                          "'%s' is picked at its %s twice in this camera (first at line %d); only 'along' picks "
+                          "may repeat",
+                          site->landmarks[obs->ilandmark].id, rs_site_at_name(obs->at), cam->observations[i].line);
         ok = false;
         break;
     }
     return ok;
 }
 
-void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam)
+// The straight pieces of a landmark: a pole 1 (vertical), a line Nvertices - 1. Zero for points.
+static int segments(const rs_site_landmark *l)
 {
-    if (cam->Nobservations >= MIN_OBSERVATIONS) return;
-    rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1, NULL, NULL,
-                  "camera '%s' has %d usable observation%s: it needs at least %d landmarks "
-                  "picked to be calibrated",
-                  cam->id, cam->Nobservations, cam->Nobservations == 1 ? "" : "s", MIN_OBSERVATIONS);
+    return l->shape == RS_SITE_POLE ? 1 : l->shape == RS_SITE_LINE && l->Nvertices > 1 ? l->Nvertices - 1 : 0;
+}
+
+// Unit direction of segment k of a pole or line into d (3,); false when unusable.
+static bool segment_direction(double d[3], const rs_site_landmark *l, int k)
+{
+    if (l->shape == RS_SITE_POLE) {
+        d[0] = d[1] = 0, d[2] = 1;
+        return true;
+    }
+    const double *a = &l->vertices_enu_m[3 * k], *b = a + 3;
+    for (int j = 0; j < 3; j++) d[j] = b[j] - a[j];
+    const double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if (!(n > 0) || !isfinite(n)) return false;
+    for (int j = 0; j < 3; j++) d[j] /= n;
+    return true;
+}
+
+void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam, const rs_site *site)
+{
+    // Constraints: a pick of a point, a pole's base or top fixes 2 (u and v); an `along` pick 1
+    // (its distance to the projected segment or polyline), and the along picks of one landmark at
+    // most 2 per straight segment (the image of a straight segment is fixed by 2 numbers).
+    int Nconstraints = 0, Nalong = 0, Nfixed = 0;
+    for (int i = 0; i < cam->Nobservations; i++) {
+        const rs_site_observation *o = &cam->observations[i];
+        if (o->at != RS_SITE_AT_ALONG) {
+            Nconstraints += 2, Nfixed++;
+            continue;
+        }
+        Nalong++;
+        int before = 0; // count each landmark's along picks once, at its first
+        for (int j = 0; j < i && !before; j++)
+            before = cam->observations[j].ilandmark == o->ilandmark && cam->observations[j].at == RS_SITE_AT_ALONG;
+        if (before) continue;
+        int n = 0;
+        for (int j = i; j < cam->Nobservations; j++)
+            n += cam->observations[j].ilandmark == o->ilandmark && cam->observations[j].at == RS_SITE_AT_ALONG;
+        const int most = 2 * segments(&site->landmarks[o->ilandmark]);
+        Nconstraints += n < most ? n : most;
+    }
+    if (Nalong == 0) {
+        if (cam->Nobservations >= MIN_OBSERVATIONS) return;
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1, NULL, NULL,
+                      "camera '%s' has %d usable observation%s: it needs at least %d landmarks "
+                      "picked to be calibrated",
+                      cam->id, cam->Nobservations, cam->Nobservations == 1 ? "" : "s", MIN_OBSERVATIONS);
+        return;
+    }
+    if (Nconstraints < 2 * MIN_OBSERVATIONS) {
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1, NULL, NULL,
+                      "camera '%s': its %d picks (%d along a pole or line) fix %d numbers (2 per point, base or top "
+                      "pick; 1 per along pick, at most 2 per straight segment): it needs at least %d, as %d points "
+                      "give, to be calibrated",
+                      cam->id, cam->Nobservations, Nalong, Nconstraints, 2 * MIN_OBSERVATIONS, MIN_OBSERVATIONS);
+        return;
+    }
+    // Only along picks, all on segments of one direction (parallel lane lines): nothing fixes
+    // where the camera is along that direction.
+    if (Nfixed > 0) return;
+    double d0[3] = {0, 0, 0};
+    bool have = false, parallel = true;
+    for (int i = 0; i < cam->Nobservations && parallel; i++) {
+        const rs_site_landmark *l = &site->landmarks[cam->observations[i].ilandmark];
+        for (int k = 0; k < segments(l) && parallel; k++) {
+            double d[3];
+            if (!segment_direction(d, l, k)) continue;
+            if (!have) {
+                memcpy(d0, d, sizeof d0), have = true;
+                continue;
+            }
+            const double cosine = fabs(d[0] * d0[0] + d[1] * d0[1] + d[2] * d0[2]);
+            parallel = cosine >= cos(PARALLEL_DEG * M_PI / 180);
+        }
+    }
+    if (have && parallel)
+        rs_site__diag(r, RS_SITE_WARNING, RS_OK, cam->observations_path, 0, -1, NULL, NULL,
+                      "camera '%s': every pick is 'along' a pole or line, and they all run in one direction (within "
+                      "%g degrees, ENU (%.3f, %.3f, %.3f)): nothing fixes where the camera is along it; pick a "
+                      "point, a pole's base or top, or a line across them",
+                      cam->id, PARALLEL_DEG, d0[0], d0[1], d0[2]);
 }
 
 // ---- the whole site ----

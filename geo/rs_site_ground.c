@@ -4,6 +4,7 @@
 // reader calls it once every landmark is in ENU (rs_site__ground_model,
 // geo/internal/rs_site_internal.h); it calls the report (rs_site__diag), the geodesy
 // (rs_geo_llh_to_enu) and core's random generator (the fixed-seed draws of the robust start).
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -283,18 +284,31 @@ static bool modelled(const rs_site_landmark *l)
     return l->height == RS_SITE_HEIGHT_UNRELIABLE || l->height == RS_SITE_HEIGHT_UNKNOWN;
 }
 
-// Collects the landmarks of height kind `h` on the ground with a usable given height: their
-// indices into idx, their ENU (east, north, given up) into p, 3 per point, and the least sigma
-// that may leave them out of the fit into floor_m: hypot(stated sigma_v, SCATTER_MIN).
-static int candidates(int *idx, double *p, double *floor_m, const rs_site *site, rs_site_height h)
+// The heights a plane can rest on are those of points, of pole bases and of every vertex of a
+// line (a lane marking or kerb surveyed vertex by vertex is the ground there): Nvertices per
+// landmark (a zeroed struct counts as one).
+static int nvertices(const rs_site_landmark *l) { return l->Nvertices > 0 ? l->Nvertices : 1; }
+
+// Collects the vertices of the landmarks of height kind `h` on the ground with a usable given
+// height: their landmark indices into idx and vertex indices into vtx, their ENU (east, north,
+// given up) into p, 3 per point, and the least sigma that may leave them out of the fit into
+// floor_m: hypot(stated sigma_v, SCATTER_MIN). Until the model is applied, a vertex's ENU is
+// its given position.
+static int candidates(int *idx, int *vtx, double *p, double *floor_m, const rs_site *site, rs_site_height h)
 {
     int n = 0;
     for (int i = 0; i < site->Nlandmarks; i++) {
         const rs_site_landmark *l = &site->landmarks[i];
         if (l->height != h || l->above_ground_m != 0 || !usable(l) || !isfinite(l->given_up_m)) continue;
-        p[3 * n] = l->p_enu_m[0], p[3 * n + 1] = l->p_enu_m[1], p[3 * n + 2] = l->given_up_m;
-        floor_m[n] = hypot(l->given_sigma_v_m, RS_SITE_GROUND_SCATTER_MIN_M);
-        idx[n++] = i;
+        for (int k = 0; k < nvertices(l); k++) {
+            const double *q = k == 0 || !l->vertices_enu_m ? l->p_enu_m : &l->vertices_enu_m[3 * k];
+            const double up = k == 0 ? l->given_up_m : q[2];
+            if (!isfinite(up)) continue;
+            p[3 * n] = q[0], p[3 * n + 1] = q[1], p[3 * n + 2] = up;
+            floor_m[n] = hypot(l->given_sigma_v_m, RS_SITE_GROUND_SCATTER_MIN_M);
+            vtx[n] = k;
+            idx[n++] = i;
+        }
     }
     return n;
 }
@@ -310,7 +324,7 @@ static int fit_model(rs_site_ground_model *m, bool *keep, rs_site *site, const i
     double stated2 = 0;
     for (int i = 0; i < n; i++) {
         rs_site_landmark *l = &site->landmarks[idx[i]];
-        l->ground_used = keep[i];
+        l->ground_used = l->ground_used || keep[i];
         if (keep[i]) stated2 += l->given_sigma_v_m * l->given_sigma_v_m / nused;
     }
     m->Ncandidates = n;
@@ -327,10 +341,12 @@ static int fit_model(rs_site_ground_model *m, bool *keep, rs_site *site, const i
     return 1;
 }
 
-// Moves landmark l's height onto the model (keeping its lat and lon), with its sigma.
-static bool apply(rs_site_landmark *l, const rs_site *site, const rs_site_ground_model *m)
+// Moves the height of one position (llh_io, p_enu_io: (3,) each) onto the model, above_ground_m
+// above it, keeping its lat and lon; out: its vertical sigma.
+static bool apply_one(double llh_io[3], double p_enu_io[3], double *sigma_v_m, const rs_site_landmark *l,
+                      const rs_site *site, const rs_site_ground_model *m)
 {
-    double llh[3] = {l->llh.lat_deg, l->llh.lon_deg, l->llh.h_m}, p[3];
+    double llh[3] = {llh_io[0], llh_io[1], llh_io[2]}, p[3];
     if (!isfinite(llh[2])) llh[2] = site->origin.h_m;
     double sigma_plane = 0;
     // the up direction at the point is within a milliradian of the origin's within 6 km: each
@@ -342,11 +358,34 @@ static bool apply(rs_site_landmark *l, const rs_site *site, const rs_site_ground
         llh[2] += up + l->above_ground_m - p[2];
     }
     if (rs_geo_llh_to_enu(p, &site->origin, llh, 1, NULL) != RS_OK || !isfinite(p[2])) return false;
+    llh_io[2] = llh[2];
+    memcpy(p_enu_io, p, sizeof p);
+    *sigma_v_m = m->source == RS_SITE_GROUND_SITE_PLANE ? l->given_sigma_v_m
+                                                        : sqrt(sigma_plane * sigma_plane + m->scatter_m * m->scatter_m);
+    return true;
+}
+
+// Moves landmark l's height onto the model (keeping its lat and lon), with its sigma: every
+// vertex of a line, a pole's base (its top stays pole_height_m above it).
+static bool apply(rs_site_landmark *l, const rs_site *site, const rs_site_ground_model *m)
+{
+    double llh[3] = {l->llh.lat_deg, l->llh.lon_deg, l->llh.h_m}, p[3], sigma;
+    if (!apply_one(llh, p, &sigma, l, site, m)) return false;
+    for (int k = 1; k < l->Nvertices; k++) {
+        rs_llh *v = &l->vertices_llh[k];
+        double vllh[3] = {v->lat_deg, v->lon_deg, v->h_m}, vp[3];
+        if (!apply_one(vllh, vp, &l->vertices_sigma_v_m[k], l, site, m)) return false;
+        v->h_m = vllh[2];
+        memcpy(&l->vertices_enu_m[3 * k], vp, sizeof vp);
+    }
     l->llh.h_m = llh[2];
     memcpy(l->p_enu_m, p, sizeof p);
-    l->sigma_v_m = m->source == RS_SITE_GROUND_SITE_PLANE
-                       ? l->given_sigma_v_m
-                       : sqrt(sigma_plane * sigma_plane + m->scatter_m * m->scatter_m);
+    l->sigma_v_m = sigma;
+    if (l->Nvertices > 0) { // vertex 0 is the landmark's own position
+        l->vertices_llh[0] = l->llh;
+        memcpy(l->vertices_enu_m, p, sizeof p);
+        l->vertices_sigma_v_m[0] = sigma;
+    }
     l->height_modelled = true;
     return true;
 }
@@ -361,19 +400,22 @@ static const char *source_text(rs_site_ground_source s)
     }
 }
 
-// Warnings for the candidates left out of the fit (the first MAX_NAMED by name).
+// Warnings for the candidates (idx, vtx, p)[0..n) left out of the fit (the first MAX_NAMED by
+// name; a line's vertex by its index).
 static void report_rejected(rs_site__report *r, const rs_site *site, const rs_site_ground_model *m, const int *idx,
-                            const bool *keep, int n, const char *landmarks_path)
+                            const int *vtx, const double *p, const bool *keep, int n, const char *landmarks_path)
 {
     int named = 0;
     for (int i = 0; i < n; i++) {
         if (keep[i]) continue;
         const rs_site_landmark *l = &site->landmarks[idx[i]];
         double up;
-        rs_site_ground_predict(&up, NULL, m, l->p_enu_m[0], l->p_enu_m[1]);
-        const double d = l->given_up_m - up;
+        rs_site_ground_predict(&up, NULL, m, p[3 * i], p[3 * i + 1]);
+        const double d = p[3 * i + 2] - up;
+        char field[48] = "coordinates";
+        if (l->shape == RS_SITE_LINE) snprintf(field, sizeof field, "coordinates[%d]", vtx[i]);
         if (named++ < MAX_NAMED)
-            rs_site__diag(r, RS_SITE_WARNING, RS_OK, landmarks_path, 0, l->feature, l->id, "coordinates",
+            rs_site__diag(r, RS_SITE_WARNING, RS_OK, landmarks_path, 0, l->feature, l->id, field,
                           "height %.2f m %s %s: left out of that fit as an outlier (a wrong height, or a point "
                           "above the ground: say so with properties.above_ground_m)",
                           fabs(d), d > 0 ? "above" : "below", source_text(m->source));
@@ -394,17 +436,26 @@ static void report_disagreement(rs_site__report *r, rs_site *site, const char *l
     for (int i = 0; i < site->Nlandmarks; i++) {
         const rs_site_landmark *l = &site->landmarks[i];
         if (!l->height_modelled || l->height != RS_SITE_HEIGHT_UNRELIABLE || !isfinite(l->given_up_m)) continue;
-        const double d = l->given_up_m - l->p_enu_m[2];
-        const double sigma = sqrt(l->given_sigma_v_m * l->given_sigma_v_m + l->sigma_v_m * l->sigma_v_m);
-        sum += d, n++;
-        max_abs = fmax(max_abs, fabs(d));
-        if (!(fabs(d) > RS_SITE_GROUND_DISAGREE_K * sigma)) continue;
-        if (m->Ndisagree++ < MAX_NAMED)
-            rs_site__diag(r, RS_SITE_WARNING, RS_OK, landmarks_path, 0, l->feature, l->id, "coordinates",
-                          "the given (unreliable) height is %.2f m %s %s, more than %g sigma (%.2f m: stated %.2g m, "
-                          "model %.2g m); its modelled height is used",
-                          fabs(d), d > 0 ? "above" : "below", source_text(m->source), RS_SITE_GROUND_DISAGREE_K,
-                          RS_SITE_GROUND_DISAGREE_K * sigma, l->given_sigma_v_m, l->sigma_v_m);
+        for (int k = 0; k < nvertices(l); k++) {
+            // a line's further vertices: the difference of the heights, which is that of up to 1e-6
+            // relative within 6 km of the origin
+            const double d = k == 0 ? l->given_up_m - l->p_enu_m[2] : l->vertices_given_h_m[k] - l->vertices_llh[k].h_m;
+            const double sigma_v = k == 0 ? l->sigma_v_m : l->vertices_sigma_v_m[k];
+            const double sigma = sqrt(l->given_sigma_v_m * l->given_sigma_v_m + sigma_v * sigma_v);
+            if (!isfinite(d)) continue;
+            sum += d, n++;
+            max_abs = fmax(max_abs, fabs(d));
+            if (!(fabs(d) > RS_SITE_GROUND_DISAGREE_K * sigma)) continue;
+            char field[48] = "coordinates";
+            if (l->shape == RS_SITE_LINE) snprintf(field, sizeof field, "coordinates[%d]", k);
+            if (m->Ndisagree++ < MAX_NAMED)
+                rs_site__diag(
+                    r, RS_SITE_WARNING, RS_OK, landmarks_path, 0, l->feature, l->id, field,
+                    "the given (unreliable) height is %.2f m %s %s, more than %g sigma (%.2f m: stated %.2g m, "
+                    "model %.2g m); its modelled height is used",
+                    fabs(d), d > 0 ? "above" : "below", source_text(m->source), RS_SITE_GROUND_DISAGREE_K,
+                    RS_SITE_GROUND_DISAGREE_K * sigma, l->given_sigma_v_m, sigma_v);
+        }
     }
     m->mean_given_minus_model_m = n ? sum / n : NAN;
     m->max_abs_given_minus_model_m = n ? max_abs : NAN;
@@ -435,10 +486,12 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
 
     char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson"), *site_path = rs_io_join(site->dir, "site.json");
     const int N = site->Nlandmarks;
-    int *idx = malloc((size_t)N * sizeof *idx), *local = malloc((size_t)N * sizeof *local);
-    double *p = malloc((size_t)N * 3 * sizeof *p), *floor_m = malloc((size_t)N * sizeof *floor_m);
-    bool *keep = malloc((size_t)N * sizeof *keep);
-    if (!landmarks_path || !site_path || !idx || !local || !p || !floor_m || !keep) {
+    size_t Nv = 0; // every vertex of every landmark: the most candidates there can be
+    for (int i = 0; i < N; i++) Nv += (size_t)nvertices(&site->landmarks[i]);
+    int *idx = malloc(Nv * sizeof *idx), *local = malloc(Nv * sizeof *local), *vtx = malloc(Nv * sizeof *vtx);
+    double *p = malloc(Nv * 3 * sizeof *p), *floor_m = malloc(Nv * sizeof *floor_m);
+    bool *keep = malloc(Nv * sizeof *keep);
+    if (Nv > INT_MAX || !landmarks_path || !site_path || !idx || !local || !vtx || !p || !floor_m || !keep) {
         r->nomem = true;
         goto done;
     }
@@ -446,7 +499,7 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
     static const rs_site_ground_source sources[2] = {RS_SITE_GROUND_FIT_SURVEYED, RS_SITE_GROUND_FIT_UNRELIABLE};
     int n = 0, Nheights = 0;
     for (int t = 0; t < 2 && m->source == RS_SITE_GROUND_NONE; t++) {
-        n = candidates(idx, p, floor_m, site, tiers[t]);
+        n = candidates(idx, vtx, p, floor_m, site, tiers[t]);
         Nheights += n;
         for (int i = 0; i < n; i++) local[i] = i;
         if (!spread_ok(p, local, n)) continue;
@@ -477,7 +530,7 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
                           "unreliable or unknown, with their stated sigma_v",
                           Nheights, Nheights == 1 ? "" : "s", Nmodel);
     } else {
-        if (m->Nused < m->Ncandidates) report_rejected(r, site, m, idx, keep, n, landmarks_path);
+        if (m->Nused < m->Ncandidates) report_rejected(r, site, m, idx, vtx, p, keep, n, landmarks_path);
         if (!site->ground_plane_given) { // the fitted plane is the site's best knowledge of its ground
             const double nv[3] = {-m->slope[0], -m->slope[1], 1}, norm = sqrt(nv[0] * nv[0] + nv[1] * nv[1] + 1);
             for (int k = 0; k < 3; k++) site->ground_normal_enu[k] = nv[k] / norm;
@@ -499,10 +552,15 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
         m->Nunknown += l->height == RS_SITE_HEIGHT_UNKNOWN;
         m->sigma_min_m = m->Nmodelled == 1 ? l->sigma_v_m : fmin(m->sigma_min_m, l->sigma_v_m);
         m->sigma_max_m = m->Nmodelled == 1 ? l->sigma_v_m : fmax(m->sigma_max_m, l->sigma_v_m);
+        for (int k = 1; k < l->Nvertices; k++) {
+            m->sigma_min_m = fmin(m->sigma_min_m, l->vertices_sigma_v_m[k]);
+            m->sigma_max_m = fmax(m->sigma_max_m, l->vertices_sigma_v_m[k]);
+        }
     }
     report_disagreement(r, site, landmarks_path, site_path);
 done:
     free(idx);
+    free(vtx);
     free(local);
     free(p);
     free(floor_m);

@@ -1,6 +1,6 @@
 // rs_site_read.c -- the one reader of a site folder, behind both rs_site_load and
-// rs_site_check (geo/rs_site.h): reads site.json (with each camera's background_images) and
-// landmarks.geojson here, each camera's model and observations through rs_site_read_camera.c,
+// rs_site_check (geo/rs_site.h): reads landmarks.geojson here, site.json (with each camera's
+// entry and background_images) through rs_site_read_json.c, each camera's model and observations through rs_site_read_camera.c,
 // and reports every problem on the way; it only reads and reports. Calls rs_site_read_camera.c,
 // rs_site_check.c (positions, the whole site), rs_site_report.c and rs_site.c (rs_site_free);
 // nothing calls back into it (the layers: geo/internal/rs_site_internal.h).
@@ -19,325 +19,157 @@
 
 enum { DEFAULT_MAX_LANDMARK_DISTANCE_M = 1000 };
 
-// ---- site.json ----
+// ---- landmarks.geojson ----
 
-// obj[key] ("prefix.key" in messages), if present, as how far heights can be trusted: "surveyed",
-// "unreliable" or "unknown" (docs/site-format.md). False (after reporting) when it is not one.
-static bool read_height_trust(rs_site__reader *c, const cJSON *obj, const char *prefix, const char *key,
-                              rs_site_height *out)
+// One GeoJSON position [lon, lat, h] (or [lon, lat] where the height does not count) at `field`
+// into given = (lat, lon, h). The height of a position whose height does not count (absent, or
+// given and ignored) is the origin's until the ground model gives it one. False after reporting.
+static bool read_position(rs_site__reader *c, const cJSON *xyz, bool height_counts, const char *field, double given[3])
 {
-    char field[128];
-    const cJSON *it = rs_site__member(c, obj, prefix, key, false, "", field, sizeof field);
-    if (!it) return true;
-    static const char *const expected = "\"surveyed\", \"unreliable\" (given but noisy: raw GNSS) or \"unknown\" "
-                                        "(picked on imagery)";
-    if (!cJSON_IsString(it)) {
-        char got[64];
-        rs_site__json_excerpt(got, sizeof got, it);
-        ERR(c, RS_ERR_PARSE, field, "%s: expected %s: how far the heights can be trusted%s", got, expected,
-            cJSON_IsNumber(it) ? " (a height itself is the third of the coordinates)" : "");
+    const rs_site *site = c->site;
+    const int n = cJSON_GetArraySize(xyz);
+    if (!cJSON_IsArray(xyz) || (n != 2 && n != 3)) {
+        ERR(c, RS_ERR_PARSE, field, "expected [lon, lat, h] (3 numbers)%s",
+            height_counts ? "" : " or [lon, lat] (the height is unknown)");
         return false;
     }
-    for (rs_site_height h = RS_SITE_HEIGHT_SURVEYED; h <= RS_SITE_HEIGHT_UNKNOWN; h++)
-        if (!strcmp(it->valuestring, rs_site_height_name(h))) {
-            *out = h;
-            return true;
+    if (n == 2 && height_counts) {
+        ERR(c, RS_ERR_PARSE, field,
+            "the height is missing: expected [lon, lat, h] (a point picked on imagery, without a height, says "
+            "so: properties.height \"unknown\", or site.json \"landmark_heights\": \"unknown\")");
+        return false;
+    }
+    double v[3] = {0, 0, site->origin.h_m - site->geoid_undulation_m};
+    bool ok = true;
+    for (int k = 0; k < n; k++) {
+        const cJSON *x = cJSON_GetArrayItem(xyz, k);
+        const char *name = k == 0 ? "lon" : k == 1 ? "lat" : "h";
+        if (!cJSON_IsNumber(x)) {
+            char got[64] = "";
+            rs_site__json_excerpt(got, sizeof got, x);
+            ERR(c, RS_ERR_PARSE, field, "%s (%s) is not a number", name, got);
+        } else if (!isfinite(x->valuedouble)) {
+            ERR(c, RS_ERR_INVALID, field, "%s is not finite", name);
+        } else {
+            v[k] = x->valuedouble;
         }
-    ERR(c, RS_ERR_INVALID, field, "'%.80s': expected %s", it->valuestring, expected);
-    return false;
-}
-
-// Reads {lat, lon, h} (and sigma_m for a prior) of obj into given = (lat, lon, h).
-static bool get_llh(rs_site__reader *c, const cJSON *obj, const char *prefix, double given[3])
-{
-    bool ok = rs_site__get_number(c, obj, prefix, "lat", true, &given[0]);
-    ok = rs_site__get_number(c, obj, prefix, "lon", true, &given[1]) && ok;
-    ok = rs_site__get_number(c, obj, prefix, "h", true, &given[2]) && ok;
+        ok = ok && cJSON_IsNumber(x) && isfinite(x->valuedouble);
+    }
+    if (!height_counts) v[2] = site->origin.h_m - site->geoid_undulation_m;
+    given[0] = v[1], given[1] = v[0], given[2] = v[2];
     return ok;
 }
 
-static void read_heights(rs_site__reader *c, const cJSON *root, bool *ok)
-{
-    const cJSON *it = cJSON_GetObjectItemCaseSensitive(root, "heights");
-    const char *expected = "\"ellipsoidal\" or {\"orthometric\": N}, N = geoid undulation in metres";
-    if (!it) {
-        ERR(c, RS_ERR_PARSE, "heights", "missing (%s)", expected);
-        *ok = false;
-    } else if (cJSON_IsString(it) && !strcmp(it->valuestring, "ellipsoidal")) {
-        c->site->heights_orthometric = false;
-        c->site->geoid_undulation_m = 0;
-    } else if (cJSON_IsObject(it) && cJSON_GetObjectItemCaseSensitive(it, "orthometric")) {
-        static const char *const known[] = {"orthometric", NULL};
-        rs_site__warn_unknown_keys(c, it, "heights", known);
-        c->site->heights_orthometric = true;
-        if (!rs_site__get_number(c, it, "heights", "orthometric", true, &c->site->geoid_undulation_m))
-            *ok = false;
-        else if (fabs(c->site->geoid_undulation_m) > 120) {
-            ERR(c, RS_ERR_INVALID, "heights.orthometric", "%g m is not a geoid undulation (|N| < 110 m on Earth)",
-                c->site->geoid_undulation_m);
-            *ok = false;
-        }
-    } else {
-        char got[64];
-        rs_site__json_excerpt(got, sizeof got, it);
-        ERR(c, RS_ERR_INVALID, "heights", "%s: expected %s", got, expected);
-        *ok = false;
-    }
-}
+// The vertices of a landmark as read: n positions, (n,3) each, NaN where unusable.
+typedef struct {
+    int n;
+    double *llh, *enu;
+} vertices;
 
-static void read_ground_plane(rs_site__reader *c, const cJSON *root)
+// A LineString's coordinates into *out (allocated; NaN where a vertex is unusable): 2 ..
+// RS_SITE_LINE_VERTICES_MAX positions, no zero-length segment. False after reporting when the
+// line cannot be used.
+static bool read_line(rs_site__reader *c, const cJSON *xyz, bool height_counts, vertices *out)
 {
-    const cJSON *g =
-        rs_site__get_object(c, root, NULL, "ground_plane", false, "{\"normal_enu\": [0, 0, 1], \"offset_m\": 0}");
-    if (!g) return;
-    static const char *const known[] = {"normal_enu", "offset_m", NULL};
-    rs_site__warn_unknown_keys(c, g, "ground_plane", known);
-    const cJSON *n = cJSON_GetObjectItemCaseSensitive(g, "normal_enu");
-    double v[3], offset = 0;
-    bool ok = cJSON_IsArray(n) && cJSON_GetArraySize(n) == 3;
-    for (int k = 0; ok && k < 3; k++) {
-        const cJSON *x = cJSON_GetArrayItem(n, k);
-        ok = cJSON_IsNumber(x) && isfinite(x->valuedouble);
-        if (ok) v[k] = x->valuedouble;
-    }
-    double norm = ok ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : 0;
-    if (!ok || !(norm > 0)) {
-        ERR(c, n ? RS_ERR_INVALID : RS_ERR_PARSE, "ground_plane.normal_enu",
-            "%s: expected 3 finite numbers, not all zero (e.g. [0, 0, 1])", n ? "invalid" : "missing");
-        return;
-    }
-    if (cJSON_GetObjectItemCaseSensitive(g, "offset_m") &&
-        !rs_site__get_number(c, g, "ground_plane", "offset_m", false, &offset))
-        return;
-    for (int k = 0; k < 3; k++) c->site->ground_normal_enu[k] = v[k] / norm;
-    c->site->ground_offset_m = offset / norm;
-    c->site->ground_plane_given = true;
-}
-
-// One entry of a camera's "background_images" into *bg (docs/backgrounds.md). False (after
-// reporting) when it cannot be used: not an object, no "file", a wrong type.
-static bool read_background(rs_site__reader *c, rs_site_background *bg, const cJSON *e, const char *prefix)
-{
-    if (!cJSON_IsObject(e)) {
-        ERR(c, RS_ERR_PARSE, prefix, "not an object ({\"name\": ..., \"file\": ..., \"tags\": {...}})");
+    const rs_site *site = c->site;
+    const int n = cJSON_GetArraySize(xyz);
+    if (!cJSON_IsArray(xyz)) {
+        ERR(c, RS_ERR_PARSE, "coordinates", "expected a list of positions [[lon, lat, h], [lon, lat, h], ...]");
         return false;
     }
-    static const char *const known[] = {"name", "file", "synthetic", "tags", "source", NULL};
-    rs_site__warn_unknown_keys(c, e, prefix, known);
-    char field[256];
-    const char *file = NULL, *name = NULL;
-    bool ok = rs_site__get_string(c, e, prefix, "file", true, &file);
-    if (cJSON_GetObjectItemCaseSensitive(e, "name")) ok = rs_site__get_string(c, e, prefix, "name", false, &name) && ok;
-    const cJSON *synthetic = rs_site__member(c, e, prefix, "synthetic", false, "", field, sizeof field);
-    if (synthetic && !cJSON_IsBool(synthetic)) {
-        rs_site__wrong_type(c, field, synthetic, "true or false");
-        ok = false;
-    }
-    rs_site__field_name(field, sizeof field, prefix, "tags");
-    const cJSON *tags = rs_site__get_object(c, e, prefix, "tags", false, "{\"time\": ..., \"conditions\": ..., ...}");
-    if (!ok || (cJSON_GetObjectItemCaseSensitive(e, "tags") && !tags)) return false;
-
-    bg->name = rs_site__dup(c, name);
-    bg->file = rs_site__dup(c, file);
-    bg->path = rs_site__join(c, c->site->dir, file);
-    if (bg->path && !rs_site__inside(c, bg->path)) {
-        ERR(c, RS_ERR_INVALID, rs_site__field_name(field, sizeof field, prefix, "file"),
-            "'%.200s' is outside the site folder: a site's files live inside it (links are followed)", file);
+    if (n < 2) {
+        ERR(c, RS_ERR_INVALID, "coordinates",
+            "%d position%s: a line needs at least 2 distinct positions [[lon, lat, h], [lon, lat, h], ...]", n,
+            n == 1 ? "" : "s");
         return false;
     }
-    bg->synthetic = cJSON_IsTrue(synthetic);
-    bg->tags = calloc((size_t)cJSON_GetArraySize(tags) + 1, sizeof *bg->tags);
-    if (!bg->tags) c->r->nomem = true;
-    for (const cJSON *t = tags ? tags->child : NULL; t && bg->tags; t = t->next) {
-        if (!cJSON_IsString(t) && !cJSON_IsBool(t)) {
-            char sub[300];
-            WARN(c, rs_site__field_name(sub, sizeof sub, field, t->string ? t->string : "?"),
-                 "not text or a boolean, ignored");
+    if (n > RS_SITE_LINE_VERTICES_MAX) {
+        ERR(c, RS_ERR_INVALID, "coordinates", "%d positions, more than %d: split the line into several", n,
+            RS_SITE_LINE_VERTICES_MAX);
+        return false;
+    }
+    out->n = n;
+    out->llh = malloc((size_t)n * 3 * sizeof *out->llh);
+    out->enu = malloc((size_t)n * 3 * sizeof *out->enu);
+    if (!out->llh || !out->enu) {
+        c->r->nomem = true;
+        return false;
+    }
+    bool ok = true;
+    int k = 0, Nzero = 0, first_zero = -1;
+    for (const cJSON *x = xyz->child; x; x = x->next, k++) {
+        char field[48];
+        snprintf(field, sizeof field, "coordinates[%d]", k);
+        double given[3], *llh = &out->llh[3 * k], *p = &out->enu[3 * k];
+        for (int j = 0; j < 3; j++) llh[j] = p[j] = NAN;
+        if (!read_position(c, x, height_counts, field, given) ||
+            !rs_site__check_position(llh, p, c->r, site, c->origin_ok, c->file, c->feature, c->fid, field, true,
+                                     given)) {
+            ok = false;
             continue;
         }
-        rs_site_tag *tag = &bg->tags[bg->Ntags++];
-        tag->key = rs_site__dup(c, t->string ? t->string : "");
-        tag->value = rs_site__dup(c, cJSON_IsString(t) ? t->valuestring : cJSON_IsTrue(t) ? "true" : "false");
+        if (k > 0 && isfinite(p[-3])) {
+            const double d = sqrt((p[0] - p[-3]) * (p[0] - p[-3]) + (p[1] - p[-2]) * (p[1] - p[-2]) +
+                                  (p[2] - p[-1]) * (p[2] - p[-1]));
+            if (!(d >= RS_SITE_COINCIDENT_M)) {
+                if (first_zero < 0) first_zero = k;
+                Nzero++;
+            }
+        }
     }
-    return true;
+    if (Nzero) {
+        char field[48];
+        snprintf(field, sizeof field, "coordinates[%d]", first_zero);
+        ERR(c, RS_ERR_INVALID, field,
+            "at the same position as coordinates[%d] (within %g mm): a zero-length segment; remove the repeated "
+            "position%s",
+            first_zero - 1, RS_SITE_COINCIDENT_M * 1e3,
+            Nzero > 1 ? " (the line has more such segments: every pair of consecutive positions must differ)" : "");
+        ok = false;
+    }
+    return ok;
 }
 
-// A camera's "background_images" list, if it has one.
-static void read_background_images(rs_site__reader *c, rs_site_camera *cam, const cJSON *item, const char *prefix)
+// A pole's height_m and sigma_height_m of properties (geometry a Point); both NAN when absent.
+// False after reporting a bad value.
+static bool read_pole(rs_site__reader *c, const cJSON *props, double *height_m, double *sigma_m)
 {
-    char field[96];
-    const cJSON *list = rs_site__member(c, item, prefix, "background_images", false, "", field, sizeof field);
-    if (!list) return;
-    if (!cJSON_IsArray(list)) {
-        rs_site__wrong_type(c, field, list, "a list [...]");
-        return;
+    *height_m = *sigma_m = NAN;
+    if (!props) return true;
+    bool ok = true;
+    double v;
+    if (cJSON_GetObjectItemCaseSensitive(props, "height_m")) {
+        if (!rs_site__get_number(c, props, "properties", "height_m", false, &v))
+            ok = false;
+        else if (!(v > 0 && v <= RS_SITE_POLE_HEIGHT_MAX_M)) {
+            ERR(c, RS_ERR_INVALID, "properties.height_m",
+                "%g m is outside (0, %g] m: a pole's height, from its base (the point) to its top", v,
+                RS_SITE_POLE_HEIGHT_MAX_M);
+            ok = false;
+        } else
+            *height_m = v;
     }
-    cam->background_images = calloc((size_t)cJSON_GetArraySize(list) + 1, sizeof *cam->background_images);
-    if (!cam->background_images) {
-        c->r->nomem = true;
-        return;
+    if (cJSON_GetObjectItemCaseSensitive(props, "sigma_height_m")) {
+        if (!rs_site__get_in_range(c, props, "properties", "sigma_height_m", false, RS_SITE_SURVEY_SIGMA_MIN_M,
+                                   RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &v))
+            ok = false;
+        else
+            *sigma_m = v;
+        if (!cJSON_GetObjectItemCaseSensitive(props, "height_m")) {
+            ERR(c, RS_ERR_INVALID, "properties.sigma_height_m",
+                "given without properties.height_m: it is the 1-sigma of a pole's height");
+            ok = false;
+        }
     }
-    int j = 0;
-    for (const cJSON *e = list->child; e; e = e->next, j++) {
-        char entry[128];
-        snprintf(entry, sizeof entry, "%s[%d]", field, j);
-        if (read_background(c, &cam->background_images[cam->Nbackground_images], e, entry)) cam->Nbackground_images++;
-    }
+    return ok;
 }
-
-static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
-{
-    rs_site *site = c->site;
-    rs_site_camera *cam = &site->cameras[site->Ncameras++];
-    char prefix[64], field[128];
-    snprintf(prefix, sizeof prefix, "cameras[%d]", i);
-    if (!cJSON_IsObject(item)) {
-        ERR(c, RS_ERR_PARSE, prefix, "not an object ({\"id\": ..., \"model\": ..., \"observations\": ...})");
-        cam->id = rs_site__dup(c, prefix);
-        return;
-    }
-    static const char *const known[] = {
-        "id", "model", "observations", "backgrounds", "background_images", "position_prior", "note", NULL};
-    rs_site__warn_unknown_keys(c, item, prefix, known);
-    const char *s;
-    cam->id = rs_site__dup(c, rs_site__get_string(c, item, prefix, "id", true, &s) ? s : prefix);
-    const char *bad_id = s && cam->id && strcmp(cam->id, prefix) ? rs_io_name_problem(cam->id) : NULL;
-    if (bad_id)
-        ERR(c, RS_ERR_INVALID, rs_site__field_name(field, sizeof field, prefix, "id"),
-            "'%.80s' %s: a camera id names its files (<id>.cameramodel, <id>.json, ...); use letters, digits, "
-            "'-', '_' or '.'",
-            cam->id, bad_id);
-    if (rs_site__get_string(c, item, prefix, "model", true, &s)) cam->model_path = rs_site__join(c, site->dir, s);
-    if (rs_site__get_string(c, item, prefix, "observations", true, &s))
-        cam->observations_path = rs_site__join(c, site->dir, s);
-    if (rs_site__get_string(c, item, prefix, "backgrounds", false, &s)) {
-        cam->backgrounds_path = rs_site__join(c, site->dir, s);
-        struct stat sb;
-        if (cam->backgrounds_path && !rs_site__inside(c, cam->backgrounds_path))
-            ERR(c, RS_ERR_INVALID, rs_site__field_name(field, sizeof field, prefix, "backgrounds"),
-                "'%.200s' is outside the site folder: a site's files live inside it (links are followed)", s);
-        else if (cam->backgrounds_path && (stat(cam->backgrounds_path, &sb) != 0 || !S_ISDIR(sb.st_mode)))
-            WARN(c, rs_site__field_name(field, sizeof field, prefix, "backgrounds"), "'%s' is not a folder",
-                 cam->backgrounds_path);
-    }
-    if (rs_site__get_string(c, item, prefix, "note", false, &s)) cam->note = rs_site__dup(c, s);
-    read_background_images(c, cam, item, prefix);
-
-    rs_site__field_name(field, sizeof field, prefix, "position_prior");
-    const cJSON *prior = rs_site__get_object(c, item, prefix, "position_prior", false, "{lat, lon, h, sigma_m}");
-    if (prior) {
-        static const char *const known_prior[] = {"lat", "lon", "h", "sigma_m", NULL};
-        rs_site__warn_unknown_keys(c, prior, field, known_prior);
-        double given[3], llh[3];
-        bool ok = get_llh(c, prior, field, given);
-        ok = rs_site__get_in_range(c, prior, field, "sigma_m", true, RS_SITE_PRIOR_SIGMA_MIN_M,
-                                   RS_SITE_PRIOR_SIGMA_MAX_M, "m", "the 1-sigma of a surveyed camera position",
-                                   &cam->prior_sigma_m) &&
-             ok;
-        if (ok && rs_site__check_position(llh, cam->prior_p_enu_m, c->r, site, c->origin_ok, c->file, -1, NULL, field,
-                                          false, given)) {
-            cam->has_position_prior = true;
-            cam->prior_llh = (rs_llh){llh[0], llh[1], llh[2]};
-        }
-    }
-}
-
-static void read_site_json(rs_site__reader *c)
-{
-    rs_site *site = c->site;
-    char *path = NULL;
-    cJSON *root =
-        rs_site__read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton",
-                                RS_IO_MAX_SMALL_FILE_BYTES);
-    if (!root) goto done;
-    if (!cJSON_IsObject(root)) {
-        ERR(c, RS_ERR_PARSE, NULL, "the top level must be an object {\"name\": ..., \"origin\": ...}");
-        goto done;
-    }
-    rs_site__check_duplicate_keys(c, root, NULL);
-    // "simulated": how `roadside site simulate` made the site (free-form, for people and tools)
-    static const char *const known[] = {"name",
-                                        "origin",
-                                        "heights",
-                                        "landmark_sigma_m",
-                                        "landmark_heights",
-                                        "ground_plane",
-                                        "max_landmark_distance_m",
-                                        "cameras",
-                                        "simulated",
-                                        NULL};
-    rs_site__warn_unknown_keys(c, root, NULL, known);
-
-    const char *name;
-    if (rs_site__get_string(c, root, NULL, "name", true, &name)) site->name = rs_site__dup(c, name);
-
-    bool origin_ok = true;
-    double given[3] = {NAN, NAN, NAN};
-    const cJSON *origin = rs_site__get_object(c, root, NULL, "origin", true, "{\"lat\": deg, \"lon\": deg, \"h\": m}");
-    if (origin) {
-        static const char *const known_origin[] = {"lat", "lon", "h", NULL};
-        rs_site__warn_unknown_keys(c, origin, "origin", known_origin);
-        origin_ok = get_llh(c, origin, "origin", given);
-        if (origin_ok && !(given[0] >= -90 && given[0] <= 90)) {
-            ERR(c, RS_ERR_INVALID, "origin.lat", "%.9g is out of range [-90, 90]", given[0]);
-            origin_ok = false;
-        }
-        if (origin_ok && !(given[1] >= -180 && given[1] <= 180)) {
-            ERR(c, RS_ERR_INVALID, "origin.lon", "%.9g is out of range [-180, 180]", given[1]);
-            origin_ok = false;
-        }
-        if (origin_ok && !(given[2] >= RS_SITE_HEIGHT_MIN_M && given[2] <= RS_SITE_HEIGHT_MAX_M)) {
-            ERR(c, RS_ERR_INVALID, "origin.h", "%.9g m is not a height near the Earth's surface ([%g, %g] m)", given[2],
-                RS_SITE_HEIGHT_MIN_M, RS_SITE_HEIGHT_MAX_M);
-            origin_ok = false;
-        }
-    } else {
-        origin_ok = false;
-    }
-    read_heights(c, root, &origin_ok);
-    site->origin = (rs_llh){given[0], given[1], given[2] + site->geoid_undulation_m};
-    c->origin_ok = origin_ok;
-
-    const char *sigma_form = "{\"horizontal\": m, \"vertical\": m}";
-    const cJSON *sigma = rs_site__get_object(c, root, NULL, "landmark_sigma_m", true, sigma_form);
-    if (sigma) {
-        static const char *const known_sigma[] = {"horizontal", "vertical", NULL};
-        rs_site__warn_unknown_keys(c, sigma, "landmark_sigma_m", known_sigma);
-        rs_site__get_in_range(c, sigma, "landmark_sigma_m", "horizontal", true, RS_SITE_SURVEY_SIGMA_MIN_M,
-                              RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &site->landmark_sigma_h_m);
-        rs_site__get_in_range(c, sigma, "landmark_sigma_m", "vertical", true, RS_SITE_SURVEY_SIGMA_MIN_M,
-                              RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &site->landmark_sigma_v_m);
-    }
-    read_height_trust(c, root, NULL, "landmark_heights", &site->landmark_heights);
-    read_ground_plane(c, root);
-    rs_site__get_positive(c, root, NULL, "max_landmark_distance_m", false, &site->max_landmark_distance_m);
-
-    const cJSON *cameras = cJSON_GetObjectItemCaseSensitive(root, "cameras");
-    if (!cameras) {
-        ERR(c, RS_ERR_PARSE, "cameras", "missing (a list of cameras)");
-    } else if (!cJSON_IsArray(cameras)) {
-        ERR(c, RS_ERR_PARSE, "cameras", "not a list [...]");
-    } else if (cJSON_GetArraySize(cameras) == 0) {
-        ERR(c, RS_ERR_INVALID, "cameras", "empty: a site needs at least one camera");
-    } else {
-        site->cameras = calloc((size_t)cJSON_GetArraySize(cameras), sizeof *site->cameras);
-        if (!site->cameras) c->r->nomem = true;
-        int i = 0;
-        for (const cJSON *it = cameras->child; it && site->cameras; it = it->next) read_camera_entry(c, it, i++);
-    }
-done:
-    cJSON_Delete(root);
-    c->file = NULL;
-    free(path);
-}
-
-// ---- landmarks.geojson ----
 
 static void read_feature(rs_site__reader *c, const cJSON *f, int i)
 {
     rs_site *site = c->site;
     c->feature = i;
     c->fid = NULL;
+    vertices vx = {0};
     if (!cJSON_IsObject(f)) {
         ERR(c, RS_ERR_PARSE, NULL, "not an object (a GeoJSON Feature)");
         goto done;
@@ -364,7 +196,7 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
                               RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &sigma_v);
         rs_site__get_string(c, props, "properties", "kind", false, &kind);
         rs_site__get_string(c, props, "properties", "note", false, &note);
-        read_height_trust(c, props, "properties", "height", &height_stated);
+        rs_site__read_height_trust(c, props, "properties", "height", &height_stated);
         double v;
         if (cJSON_GetObjectItemCaseSensitive(props, "above_ground_m") &&
             rs_site__get_number(c, props, "properties", "above_ground_m", false, &v)) {
@@ -380,58 +212,57 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
     const bool height_counts = height != RS_SITE_HEIGHT_UNKNOWN;
     rs_site__check_duplicate_keys(c, f, NULL); // after the id is known: messages name it
 
-    double given[3], llh[3] = {NAN, NAN, NAN}, p_enu[3] = {NAN, NAN, NAN};
+    rs_site_shape shape = RS_SITE_POINT;
+    double pole_height = NAN, sigma_pole = NAN;
     bool coords_ok = false;
     const cJSON *geometry =
         rs_site__get_object(c, f, NULL, "geometry", true, "{\"type\": \"Point\", \"coordinates\": [lon, lat, h]}");
     if (geometry) {
-        const char *gtype;
+        const char *gtype = NULL;
         const cJSON *xyz = cJSON_GetObjectItemCaseSensitive(geometry, "coordinates");
-        int n = cJSON_GetArraySize(xyz);
-        if (rs_site__get_string(c, geometry, "geometry", "type", true, &gtype) && strcmp(gtype, "Point")) {
-            ERR(c, RS_ERR_INVALID, "geometry.type", "'%s': a landmark is a \"Point\"", gtype);
+        const bool is_line =
+            rs_site__get_string(c, geometry, "geometry", "type", true, &gtype) && !strcmp(gtype, "LineString");
+        if (gtype && strcmp(gtype, "Point") && !is_line) {
+            ERR(c, RS_ERR_INVALID, "geometry.type",
+                "'%s': a landmark is a \"Point\" (a point, or with properties.height_m a pole) or a \"LineString\" "
+                "(a line)",
+                gtype);
         } else if (!xyz) {
-            ERR(c, RS_ERR_PARSE, "coordinates", "missing ([lon, lat, h])");
-        } else if (!cJSON_IsArray(xyz) || (n != 2 && n != 3)) {
-            ERR(c, RS_ERR_PARSE, "coordinates", "expected [lon, lat, h] (3 numbers)%s",
-                height_counts ? "" : " or [lon, lat] (the height is unknown)");
-        } else if (n == 2 && height_counts) {
-            ERR(c, RS_ERR_PARSE, "coordinates",
-                "the height is missing: expected [lon, lat, h] (a point picked on imagery, without a height, says "
-                "so: properties.height \"unknown\", or site.json \"landmark_heights\": \"unknown\")");
+            ERR(c, RS_ERR_PARSE, "coordinates", is_line ? "missing ([[lon, lat, h], ...])" : "missing ([lon, lat, h])");
+        } else if (is_line) {
+            shape = RS_SITE_LINE;
+            if (props && cJSON_GetObjectItemCaseSensitive(props, "height_m"))
+                ERR(c, RS_ERR_INVALID, "properties.height_m",
+                    "a line has no height_m (only a pole, a Point feature, does): the heights are its coordinates'");
+            else if (props && cJSON_GetObjectItemCaseSensitive(props, "sigma_height_m"))
+                ERR(c, RS_ERR_INVALID, "properties.sigma_height_m",
+                    "a line has no sigma_height_m (only a pole, a Point feature, does)");
+            coords_ok = read_line(c, xyz, height_counts, &vx);
         } else {
-            // an unknown height (absent, or given and ignored) is placed at the origin's height
-            // until the ground model gives it one
-            double v[3] = {0, 0, site->origin.h_m - site->geoid_undulation_m};
-            coords_ok = true;
-            for (int k = 0; k < n; k++) {
-                const cJSON *x = cJSON_GetArrayItem(xyz, k);
-                char got[64] = "";
-                if (!cJSON_IsNumber(x)) rs_site__json_excerpt(got, sizeof got, x);
-                if (!cJSON_IsNumber(x))
-                    ERR(c, RS_ERR_PARSE, "coordinates", "%s (%s) is not a number",
-                        k == 0   ? "lon"
-                        : k == 1 ? "lat"
-                                 : "h",
-                        got);
-                else if (!isfinite(x->valuedouble))
-                    ERR(c, RS_ERR_INVALID, "coordinates", "%s is not finite", k == 0 ? "lon" : k == 1 ? "lat" : "h");
-                else
-                    v[k] = x->valuedouble;
-                coords_ok = coords_ok && cJSON_IsNumber(x) && isfinite(x->valuedouble);
+            if (read_pole(c, props, &pole_height, &sigma_pole) && isfinite(pole_height)) shape = RS_SITE_POLE;
+            vx.n = 1;
+            vx.llh = malloc(3 * sizeof *vx.llh);
+            vx.enu = malloc(3 * sizeof *vx.enu);
+            if (!vx.llh || !vx.enu) {
+                c->r->nomem = true;
+                goto done;
             }
-            if (!height_counts) v[2] = site->origin.h_m - site->geoid_undulation_m;
-            given[0] = v[1], given[1] = v[0], given[2] = v[2];
+            for (int k = 0; k < 3; k++) vx.llh[k] = vx.enu[k] = NAN;
+            double given[3];
+            coords_ok = read_position(c, xyz, height_counts, "coordinates", given) &&
+                        rs_site__check_position(vx.llh, vx.enu, c->r, site, c->origin_ok, c->file, i, c->fid,
+                                                "coordinates", true, given);
         }
     }
-    if (coords_ok)
-        rs_site__check_position(llh, p_enu, c->r, site, c->origin_ok, c->file, i, c->fid, "coordinates", true, given);
+    if (!coords_ok) // unusable: NaN everywhere (reported above)
+        for (int k = 0; k < 3 * vx.n; k++) vx.llh[k] = vx.enu[k] = NAN;
     if (id) {
         rs_site_landmark *l = &site->landmarks[site->Nlandmarks++];
+        *l = (rs_site_landmark){0};
         l->id = rs_site__dup(c, id);
         l->feature = i;
-        l->llh = (rs_llh){llh[0], llh[1], llh[2]};
-        memcpy(l->p_enu_m, p_enu, sizeof p_enu);
+        l->llh = vx.n ? (rs_llh){vx.llh[0], vx.llh[1], vx.llh[2]} : (rs_llh){NAN, NAN, NAN};
+        for (int k = 0; k < 3; k++) l->p_enu_m[k] = vx.n ? vx.enu[k] : NAN;
         l->sigma_h_m = sigma_h;
         l->sigma_v_m = sigma_v;
         l->kind = rs_site__dup(c, kind);
@@ -440,16 +271,38 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
         l->height = height;
         l->above_ground_m = above_ground;
         l->height_modelled = false; // until the ground model gives it a height (rs_site_ground.c)
-        l->given_h_m = height_counts ? llh[2] : NAN;
-        l->given_up_m = height_counts ? p_enu[2] : NAN;
+        l->given_h_m = height_counts ? l->llh.h_m : NAN;
+        l->given_up_m = height_counts ? l->p_enu_m[2] : NAN;
         l->given_sigma_v_m = sigma_v;
         l->ground_used = false;
+        l->shape = shape;
+        l->pole_height_m = shape == RS_SITE_POLE ? pole_height : 0;
+        l->sigma_pole_height_m = shape == RS_SITE_POLE ? (isfinite(sigma_pole) ? sigma_pole : sigma_v) : 0;
+        // every landmark has its vertices: a point or pole one, (NaN when its geometry is unusable)
+        const int n = vx.n ? vx.n : 1;
+        l->vertices_enu_m = malloc((size_t)n * 3 * sizeof *l->vertices_enu_m);
+        l->vertices_llh = malloc((size_t)n * sizeof *l->vertices_llh);
+        l->vertices_sigma_v_m = malloc((size_t)n * sizeof *l->vertices_sigma_v_m);
+        l->vertices_given_h_m = malloc((size_t)n * sizeof *l->vertices_given_h_m);
+        if (!l->vertices_enu_m || !l->vertices_llh || !l->vertices_sigma_v_m || !l->vertices_given_h_m) {
+            c->r->nomem = true;
+            goto done;
+        }
+        l->Nvertices = n;
+        for (int k = 0; k < n; k++) {
+            for (int j = 0; j < 3; j++) l->vertices_enu_m[3 * k + j] = vx.n ? vx.enu[3 * k + j] : NAN;
+            l->vertices_llh[k] =
+                vx.n ? (rs_llh){vx.llh[3 * k], vx.llh[3 * k + 1], vx.llh[3 * k + 2]} : (rs_llh){NAN, NAN, NAN};
+            l->vertices_sigma_v_m[k] = sigma_v;
+            l->vertices_given_h_m[k] = height_counts ? l->vertices_llh[k].h_m : NAN;
+        }
     }
 done:
+    free(vx.llh);
+    free(vx.enu);
     c->feature = -1;
     c->fid = NULL;
 }
-
 // landmarks.geojson is read one feature at a time (core/rs_json.h): memory is the file's text
 // and the landmarks, not a cJSON tree of ~1 kB per feature (1,000,000 landmarks: 1.5 GB that
 // way).
@@ -608,7 +461,7 @@ static void read_site(rs_site **out, rs_site__report *r, const char *dir)
     site->landmark_heights = RS_SITE_HEIGHT_SURVEYED;
     rs_site__reader c = {.r = r, .site = site, .feature = -1};
 
-    read_site_json(&c);
+    rs_site__read_site_json(&c);
     read_landmarks(&c);
     if (c.origin_ok) rs_site__ground_model(r, site);
     for (int i = 0; i < site->Ncameras; i++) {

@@ -136,8 +136,8 @@ static bool parse_csv_number(rs_site__reader *c, int line, const char *field, co
     return true;
 }
 
-enum { COL_LANDMARK, COL_U, COL_V, COL_SIGMA, NCOLS, MAXFIELDS = 32 };
-static const char *const column_names[NCOLS] = {"landmark", "u", "v", "sigma_px"};
+enum { COL_LANDMARK, COL_U, COL_V, COL_SIGMA, COL_AT, NCOLS, MAXFIELDS = 32 };
+static const char *const column_names[NCOLS] = {"landmark", "u", "v", "sigma_px", "at"};
 
 // Reads the header line; fills col[] with the index of each known column (-1 if absent).
 static bool read_csv_header(rs_site__reader *c, int line, char **fields, int nfields, int col[NCOLS])
@@ -158,7 +158,7 @@ static bool read_csv_header(rs_site__reader *c, int line, char **fields, int nfi
             bool other_separator = nfields == 1 && strpbrk(fields[0], ";\t");
             ERR_AT(c, RS_ERR_PARSE, line, "header",
                    "no column '%s': the first line must be the header landmark,u,v (and optionally "
-                   ",sigma_px)%s",
+                   ",sigma_px and ,at)%s",
                    column_names[k], other_separator ? "; separate the fields with commas, not semicolons or tabs" : "");
             return false;
         }
@@ -196,12 +196,42 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
             ok = false;
         }
     }
+    // where on the landmark: a name, or empty for the landmark's default (resolved below)
+    const char *at = col[COL_AT] >= 0 ? fields[col[COL_AT]] : "";
+    bool at_given = false;
+    if (*at) {
+        rs_site_at a = RS_SITE_AT_POINT;
+        while (a <= RS_SITE_AT_ALONG && strcmp(at, rs_site_at_name(a))) a++;
+        if (a > RS_SITE_AT_ALONG) {
+            ERR_AT(c, RS_ERR_PARSE, line, "at",
+                   "'%.40s': expected point (a point), base, top or along (a pole), along (a line), or empty for "
+                   "the landmark's default",
+                   at);
+            ok = false;
+        } else {
+            obs.at = a;
+            at_given = true;
+        }
+    }
     if (!ok || !c->landmarks_ok) return;
     obs.ilandmark = rs_site_find_landmark(c->site, id);
     if (obs.ilandmark < 0) {
         const char *like = similar_landmark(c->site, id);
         ERR_AT(c, RS_ERR_NOT_FOUND, line, "landmark", "'%s' is not a landmark of landmarks.geojson%s%s%s", id,
                like ? " (ids are case-sensitive: '" : "", like ? like : "", like ? "'?)" : "");
+        return;
+    }
+    const rs_site_shape shape = c->site->landmarks[obs.ilandmark].shape;
+    if (!at_given) {
+        obs.at = shape == RS_SITE_POINT ? RS_SITE_AT_POINT : RS_SITE_AT_ALONG;
+    } else if ((shape == RS_SITE_POINT) != (obs.at == RS_SITE_AT_POINT) ||
+               (shape == RS_SITE_LINE && obs.at != RS_SITE_AT_ALONG)) {
+        ERR_AT(c, RS_ERR_INVALID, line, "at", "'%s' is a %s: it is picked %s, not at '%s'", id,
+               rs_site_shape_name(shape),
+               shape == RS_SITE_POINT  ? "at 'point' (the default)"
+               : shape == RS_SITE_POLE ? "at 'base', 'top' or 'along' (the default)"
+                                       : "'along' (the default)",
+               rs_site_at_name(obs.at));
         return;
     }
     if (!rs_site__check_observation(c->r, cam, &obs, c->site)) return;
@@ -258,7 +288,7 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
     if (!have_header)
         ERR(c, RS_ERR_PARSE, "header", "the file is empty: the first line must be the header landmark,u,v");
     else if (c->landmarks_ok)
-        rs_site__check_camera(c->r, cam);
+        rs_site__check_camera(c->r, cam, c->site);
 done:
     free(text);
     c->file = NULL;

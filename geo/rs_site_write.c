@@ -290,21 +290,48 @@ rs_status rs_site_write_json(const char *dir, const rs_site_spec *spec, rs_site_
 
 // ---- landmarks.geojson ----
 
+// A line's coordinates [[lon, lat, h], ...] as given (NULL for a non-finite number, or when
+// out of memory): each vertex [lon, lat] where its height is unknown.
+static cJSON *line_coordinates(const rs_site_landmark *l, bool unknown, double geoid_undulation_m)
+{
+    cJSON *list = cJSON_CreateArray();
+    for (int k = 0; list && k < l->Nvertices; k++) {
+        const rs_llh *v = &l->vertices_llh[k];
+        const double h = l->height_modelled ? l->vertices_given_h_m[k] : v->h_m;
+        const double lonlath[3] = {v->lon_deg, v->lat_deg, h - geoid_undulation_m};
+        cJSON *position = rs_site__numbers(lonlath, unknown && isnan(h) ? 2 : 3);
+        if (!position || !cJSON_AddItemToArray(list, position)) {
+            cJSON_Delete(position);
+            cJSON_Delete(list);
+            return NULL;
+        }
+    }
+    return list;
+}
+
 static cJSON *landmark_feature(const rs_site_landmark *l, double geoid_undulation_m)
 {
     // what was given, not what the ground model made of it
     const double h = l->height_modelled ? l->given_h_m : l->llh.h_m;
     const double sigma_v = l->height_modelled ? l->given_sigma_v_m : l->sigma_v_m;
     const bool unknown = l->height == RS_SITE_HEIGHT_UNKNOWN || l->height_stated == RS_SITE_HEIGHT_UNKNOWN;
+    const bool line = l->shape == RS_SITE_LINE;
     const double lonlath[3] = {l->llh.lon_deg, l->llh.lat_deg, h - geoid_undulation_m};
     cJSON *f = cJSON_CreateObject(), *g = NULL, *p = NULL;
     bool ok = f && cJSON_AddStringToObject(f, "type", "Feature") && (g = cJSON_AddObjectToObject(f, "geometry")) &&
-              cJSON_AddStringToObject(g, "type", "Point") &&
-              add_item(g, "coordinates", rs_site__numbers(lonlath, unknown && isnan(h) ? 2 : 3)) &&
+              cJSON_AddStringToObject(g, "type", line ? "LineString" : "Point") &&
+              add_item(g, "coordinates",
+                       line ? line_coordinates(l, unknown, geoid_undulation_m)
+                            : rs_site__numbers(lonlath, unknown && isnan(h) ? 2 : 3)) &&
               (p = cJSON_AddObjectToObject(f, "properties")) && cJSON_AddStringToObject(p, "id", l->id);
     if (ok && l->kind) ok = cJSON_AddStringToObject(p, "kind", l->kind);
     if (ok && isfinite(l->sigma_h_m) && l->sigma_h_m > 0) ok = rs_site__add_number(p, "sigma_h_m", l->sigma_h_m);
     if (ok && isfinite(sigma_v) && sigma_v > 0) ok = rs_site__add_number(p, "sigma_v_m", sigma_v);
+    if (ok && l->shape == RS_SITE_POLE) {
+        ok = rs_site__add_number(p, "height_m", l->pole_height_m);
+        if (ok && isfinite(l->sigma_pole_height_m) && l->sigma_pole_height_m > 0)
+            ok = rs_site__add_number(p, "sigma_height_m", l->sigma_pole_height_m);
+    }
     if (ok && l->height_stated != RS_SITE_HEIGHT_DEFAULT)
         ok = cJSON_AddStringToObject(p, "height", rs_site_height_name(l->height_stated));
     if (ok && l->above_ground_m > 0) ok = rs_site__add_number(p, "above_ground_m", l->above_ground_m);
@@ -317,9 +344,19 @@ static cJSON *landmark_feature(const rs_site_landmark *l, double geoid_undulatio
 rs_status rs_site_write_landmarks(const char *dir, const rs_site_landmark *landmarks, int Nlandmarks,
                                   double geoid_undulation_m, rs_site_layout layout, rs_err *err)
 {
-    for (int i = 0; i < Nlandmarks; i++)
-        if (!landmarks[i].id)
-            return rs_err_set(err, RS_ERR_INVALID, "%s/landmarks.geojson: feature %d: id missing", dir, i);
+    for (int i = 0; i < Nlandmarks; i++) {
+        const rs_site_landmark *l = &landmarks[i];
+        if (!l->id) return rs_err_set(err, RS_ERR_INVALID, "%s/landmarks.geojson: feature %d: id missing", dir, i);
+        if (l->shape == RS_SITE_LINE && (l->Nvertices < 2 || !l->vertices_llh || !l->vertices_given_h_m))
+            return rs_err_set(err, RS_ERR_INVALID, "%s/landmarks.geojson: feature %d (id '%s'): a line needs %s", dir,
+                              i, l->id,
+                              l->Nvertices < 2 ? "at least 2 vertices" : "vertices_llh and vertices_given_h_m");
+        if (l->shape == RS_SITE_POLE && !(l->pole_height_m > 0 && l->pole_height_m <= RS_SITE_POLE_HEIGHT_MAX_M))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "%s/landmarks.geojson: feature %d (id '%s'): pole height %g m is "
+                              "outside (0, %g] m",
+                              dir, i, l->id, l->pole_height_m, RS_SITE_POLE_HEIGHT_MAX_M);
+    }
     cJSON *j = cJSON_CreateObject(), *features = NULL;
     bool ok = j && cJSON_AddStringToObject(j, "type", "FeatureCollection") &&
               (features = cJSON_AddArrayToObject(j, "features"));
@@ -338,13 +375,19 @@ rs_status rs_site_write_landmarks(const char *dir, const rs_site_landmark *landm
 rs_status rs_site_write_observations(const char *path, const rs_site_observation *obs, int Nobservations,
                                      const rs_site_landmark *landmarks, rs_err *err)
 {
+    // the column `at` only where a pick is of a pole or line (a site of points is written as ever)
+    bool with_at = false;
+    for (int i = 0; i < Nobservations; i++)
+        with_at = with_at || obs[i].at != RS_SITE_AT_POINT || landmarks[obs[i].ilandmark].shape != RS_SITE_POINT;
     rs_io_atomic a;
     rs_status st = rs_io_atomic_open(&a, path, err);
     if (st) return st;
-    fprintf(a.f, "landmark,u,v,sigma_px\n");
-    for (int i = 0; i < Nobservations; i++)
-        fprintf(a.f, "%s,%.6f,%.6f,%g\n", landmarks[obs[i].ilandmark].id, obs[i].q_px[0], obs[i].q_px[1],
+    fprintf(a.f, with_at ? "landmark,u,v,sigma_px,at\n" : "landmark,u,v,sigma_px\n");
+    for (int i = 0; i < Nobservations; i++) {
+        fprintf(a.f, "%s,%.6f,%.6f,%g", landmarks[obs[i].ilandmark].id, obs[i].q_px[0], obs[i].q_px[1],
                 obs[i].sigma_px);
+        fprintf(a.f, with_at ? ",%s\n" : "\n", rs_site_at_name(obs[i].at));
+    }
     return rs_io_atomic_commit(&a, err);
 }
 

@@ -70,9 +70,11 @@ typedef struct {
 rs_status rs_site_write_json( // in
     const char *dir, const rs_site_spec *spec, rs_site_layout layout, rs_err *err);
 
-// Writes DIR/landmarks.geojson: a FeatureCollection of Point features, coordinates
-// [lon_deg, lat_deg, h_m] (RFC 7946 order; h = llh.h_m - geoid_undulation_m), properties id,
-// then kind, sigma_h_m, sigma_v_m, height, above_ground_m and note where given. What is written
+// Writes DIR/landmarks.geojson: a FeatureCollection of Point features (points and poles),
+// coordinates [lon_deg, lat_deg, h_m] (RFC 7946 order; h = llh.h_m - geoid_undulation_m), and
+// LineString features (lines), coordinates [[lon, lat, h], ...] from vertices_llh; properties id,
+// then kind, sigma_h_m, sigma_v_m, (poles) height_m and sigma_height_m, height, above_ground_m
+// and note where given (docs/site-format.md "Landmark kinds"). What is written
 // is what was given: for a landmark whose height the ground model gave (height_modelled, as
 // rs_site_load leaves it) the height is given_h_m and sigma_v_m given_sigma_v_m.
 // in: landmarks (Nlandmarks,), may be NULL when Nlandmarks is 0: id, llh (ellipsoidal height,
@@ -80,8 +82,11 @@ rs_status rs_site_write_json( // in
 //     the height is unknown: height or height_stated RS_SITE_HEIGHT_UNKNOWN), kind and note
 //     (NULL: not written), sigma_h_m and sigma_v_m (written only when finite and > 0: NAN means
 //     the site-wide default), height_stated (properties.height; DEFAULT: not written),
-//     above_ground_m (written when > 0); feature, p_enu_m, given_up_m and ground_used are
-//     ignored
+//     above_ground_m (written when > 0); shape: POLE writes pole_height_m (in (0, 100] m, else
+//     RS_ERR_INVALID) and sigma_pole_height_m (when finite and > 0); LINE writes vertices_llh
+//     (Nvertices >= 2, else RS_ERR_INVALID), each vertex's height vertices_given_h_m when
+//     height_modelled ([lon, lat] where it is NAN and the height unknown); feature, p_enu_m,
+//     given_up_m, ground_used, vertices_enu_m and vertices_sigma_v_m are ignored
 //     geoid_undulation_m: N of the site's "heights" (0 for an ellipsoidal site)
 // Returns RS_ERR_INVALID (no id, a non-finite coordinate), RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_site_write_landmarks( // in
@@ -89,10 +94,12 @@ rs_status rs_site_write_landmarks( // in
     rs_site_layout layout, rs_err *err);
 
 // Writes an observations CSV: the header "landmark,u,v,sigma_px", then one line per pick,
-// "ID,u,v,sigma" with u and v to 1e-6 px ("%.6f") and sigma_px as "%g".
+// "ID,u,v,sigma" with u and v to 1e-6 px ("%.6f") and sigma_px as "%g"; when some pick is of a
+// pole or line (or its `at` is not POINT), the header "landmark,u,v,sigma_px,at" and each line
+// ends ",AT" (rs_site_at_name: "point", "base", "top", "along").
 // in: obs (Nobservations,), may be NULL when Nobservations is 0: ilandmark (an index into
-//     landmarks, whose id is written), q_px, sigma_px; line is ignored
-//     landmarks: the site's landmarks (only their ids are used)
+//     landmarks, whose id is written), q_px, sigma_px, at; line is ignored
+//     landmarks: the site's landmarks (only their ids and shapes are used)
 // Returns RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_site_write_observations( // in
     const char *path, const rs_site_observation *obs, int Nobservations, const rs_site_landmark *landmarks,

@@ -137,7 +137,8 @@ typedef struct {
     uint64_t seed;             // default 1; at most 2^53 (it is written to JSON)
     int Ncameras;              // 1..16 (default 4): the first 4 on the corners, then along
                                // the approaches
-    int landmarks_per_camera;  // 4..100 (default 12): each camera sees about this many
+    int landmarks_per_camera;  // 0..100 (default 12): each camera sees about this many points
+                               //   (at least 4 unless poles or lines are asked for)
     const char *lensmodel;     // mrcal lens model name (default "LENSMODEL_OPENCV8")
     int width_px, height_px;   // default 1920 x 1080
     double hfov_deg;           // default 60
@@ -164,6 +165,19 @@ typedef struct {
                                      //   landmarks above the ground say "height": "surveyed" and
                                      //   their above_ground_m; UNKNOWN ones are written
                                      //   [lon, lat]
+
+    // Poles and lines as landmarks (docs/site-format.md "Landmark kinds"; issue 13, item 4). Both
+    // default to 0: the site is what it always was, byte for byte. Drawn from a random stream of
+    // their own: the cameras and points are those of the same site without them.
+    int poles_per_camera; // 0..50: each camera sees about this many poles: delineator posts
+                          //   (1.0-1.2 m) along the road edges, lamp posts (6-10 m) and sign posts
+                          //   (3-4.5 m) beside the roads. A visible pole is picked at its base and
+                          //   its top where those are in the image, and once along it (a random
+                          //   point of the part of it in the image)
+    int lines_per_camera; // 0..20: each camera sees about this many lines: stop bars, centre and
+                          //   edge lines (a vertex every 4 m), kerbs round the corners (straight
+                          //   runs and a 5 m radius arc); a visible line is picked 3 times along
+                          //   it (random points of its visible part)
 } rs_simulate_site_options;
 
 // Fills o with the defaults above. o must not be NULL.
@@ -184,8 +198,16 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 // failure never leaves a half site. `dir` may not exist, or be an empty folder; a non-empty one
 // is replaced only with o->force, and only if it holds a site.json (a site folder), otherwise
 // RS_ERR_IO and nothing is touched.
+// With poles or lines: every pick of them is the true point picked (a pole's base or top, or a
+// uniformly random point of the visible part of the segment or polyline) projected, plus the
+// site's pixel noise (or an outlier, as for points); their survey is the true base, height and
+// vertices plus the survey noise of points (sigma_h, sigma_v; the height sigma_v). truth/ then
+// also holds vertices_enu.csv (id, shape, vertex, e, n, u: a pole's base and top, a line's
+// vertices, true) and picks.csv (camera, row: the pick's data row in the observations CSV from
+// 1, landmark, at, the true point picked e, n, u, its projection, outlier).
 // Errors: RS_ERR_USAGE (bad options), RS_ERR_IO (folder exists, cannot write), RS_ERR_DEGENERATE
-// (a camera sees fewer than 4 landmarks), RS_ERR_EXTERNAL (mrcal failed).
+// (a camera sees fewer than 4 landmarks; with poles or lines, its picks fix fewer than 8
+// numbers: docs/site-format.md), RS_ERR_EXTERNAL (mrcal failed).
 rs_status rs_simulate_site( // in
     const char *dir, const rs_simulate_site_options *o, rs_err *err);
 

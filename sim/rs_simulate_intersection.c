@@ -100,6 +100,7 @@ void rs_simulate__site_free(rs_simulate__site *s)
     free(s->survey_llh);
     free(s->q_px);
     free(s->outlier);
+    rs_simulate__shapes_free(s);
 }
 
 static const char *compass_name(double azimuth_deg)
@@ -280,8 +281,8 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
             s->Noutliers += rs_simulate__camera_pick(&rng, s->q_px + 2 * kj, s->outlier + kj, s->q_true_px + 2 * kj, 1,
                                                      &s->cam[k], o->pixel_sigma_px, o->outlier_fraction, 30.0);
         }
-    for (int k = 0; k < K; k++) {
-        int n = 0;
+    for (int k = 0; k < K && o->poles_per_camera == 0 && o->lines_per_camera == 0; k++) {
+        int n = 0; // with poles or lines, rs_simulate__shapes_draw checks what all the picks fix
         for (int j = 0; j < Nc; j++) n += s->landmark_of[j] >= 0 && s->visible[(size_t)k * Nc + j];
         if (n < 4) return rs_err_set(err, RS_ERR_DEGENERATE, "camera %d: observes %d landmarks, needs 4", k + 1, n);
     }
@@ -333,7 +334,8 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
         free(p);
         if (st) return rs_err_prefix(err, "position priors");
     }
-    return RS_OK;
+    // poles and lines, from a stream of their own (nothing unless asked for)
+    return rs_simulate__shapes_draw(s, o, err);
 }
 
 void rs_simulate__landmark_id(char id[16], int i) { snprintf(id, 16, "L%03d", i + 1); }

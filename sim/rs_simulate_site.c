@@ -48,6 +48,8 @@ void rs_simulate_site_options_default(rs_simulate_site_options *o)
         .force = false,
         .height_noise_m = 0,
         .landmark_heights = RS_SITE_HEIGHT_DEFAULT,
+        .poles_per_camera = 0,
+        .lines_per_camera = 0,
     };
 }
 
@@ -55,8 +57,11 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 {
     CHECK_OPTION(o->seed <= (1ULL << 53), "seed", "%llu", (unsigned long long)o->seed);
     CHECK_OPTION(o->Ncameras >= 1 && o->Ncameras <= 16, "cameras", "%d (1..16)", o->Ncameras);
-    CHECK_OPTION(o->landmarks_per_camera >= 4 && o->landmarks_per_camera <= 100, "landmarks-per-camera", "%d (4..100)",
-                 o->landmarks_per_camera);
+    CHECK_OPTION(o->poles_per_camera >= 0 && o->poles_per_camera <= 50, "poles", "%d (0..50)", o->poles_per_camera);
+    CHECK_OPTION(o->lines_per_camera >= 0 && o->lines_per_camera <= 20, "lines", "%d (0..20)", o->lines_per_camera);
+    const bool shapes = o->poles_per_camera > 0 || o->lines_per_camera > 0;
+    CHECK_OPTION(o->landmarks_per_camera >= (shapes ? 0 : 4) && o->landmarks_per_camera <= 100, "landmarks-per-camera",
+                 "%d (4..100; 0..100 with poles or lines)", o->landmarks_per_camera);
     CHECK_OPTION(o->pixel_sigma_px >= 0 && o->pixel_sigma_px <= 20, "pixel-sigma", "%g (0..20 px)", o->pixel_sigma_px);
     CHECK_OPTION(o->survey_sigma_h_m >= 0 && o->survey_sigma_h_m <= 100, "survey-sigma", "horizontal %g (0..100 m)",
                  o->survey_sigma_h_m);
@@ -150,6 +155,8 @@ static cJSON *json_options(const rs_simulate_site_options *o)
     if (o->height_noise_m > 0) cJSON_AddNumberToObject(j, "height_noise_m", o->height_noise_m);
     if (o->landmark_heights != RS_SITE_HEIGHT_DEFAULT)
         cJSON_AddStringToObject(j, "landmark_heights", rs_site_height_name(o->landmark_heights));
+    if (o->poles_per_camera > 0) cJSON_AddNumberToObject(j, "poles_per_camera", o->poles_per_camera);
+    if (o->lines_per_camera > 0) cJSON_AddNumberToObject(j, "lines_per_camera", o->lines_per_camera);
     return j;
 }
 
@@ -205,17 +212,73 @@ done:
     return st;
 }
 
-// The surveyed landmarks as the site gives them (ids "L001", ...; kinds static strings). With
-// o->landmark_heights, those on the ground follow it (an unknown height is not written); those
-// above it say they are surveyed, how far above the ground they are and, with height noise, their
-// own sigma_v.
-// out: *landmarks (Nlandmarks,) and *ids (Nlandmarks, 16) that their ids point into (free both)
-static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], const rs_simulate__site *s,
-                                const rs_simulate_site_options *o, rs_err *err)
+// The vertices of the site's lines as the writer takes them (rs_site_landmark.vertices_llh and
+// vertices_given_h_m point into these).
+typedef struct {
+    rs_llh *llh;
+    double *given_h_m;
+} line_vertices;
+
+// The site's poles and lines after its points, (*landmarks)[s->Nlandmarks ..]: ids "P001", ...,
+// "LN001", ...; heights on the ground follow o->landmark_heights as the points' do (a pole's base
+// and a line's vertices are on it); with height noise a pole declares the sigma of its height.
+static rs_status shape_landmarks(rs_site_landmark *landmarks, char (*ids)[16], line_vertices *lv,
+                                 const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
 {
-    const int L = s->Nlandmarks;
-    *landmarks = calloc((size_t)(L ? L : 1), sizeof **landmarks);
-    *ids = calloc((size_t)(L ? L : 1), sizeof **ids);
+    size_t Nv = 0;
+    for (int i = 0; i < s->Npoles + s->Nlines; i++) Nv += (size_t)s->shape[s->shape_of[i]].Nvertices;
+    lv->llh = calloc(Nv + 1, sizeof *lv->llh);
+    lv->given_h_m = calloc(Nv + 1, sizeof *lv->given_h_m);
+    if (!lv->llh || !lv->given_h_m) return rs_err_set(err, RS_ERR_NOMEM, "landmarks: out of memory");
+    const bool unknown = o->landmark_heights == RS_SITE_HEIGHT_UNKNOWN;
+    size_t used = 0;
+    for (int i = 0; i < s->Npoles + s->Nlines; i++) {
+        const rs_simulate__shape *c = &s->shape[s->shape_of[i]];
+        const int il = s->Nlandmarks + i;
+        if (i < s->Npoles)
+            rs_simulate__pole_id(ids[il], i);
+        else
+            rs_simulate__line_id(ids[il], i - s->Npoles);
+        rs_site_landmark *l = &landmarks[il];
+        *l = (rs_site_landmark){.id = ids[il],
+                                .feature = il,
+                                .llh = {c->survey_llh[0], c->survey_llh[1], unknown ? NAN : c->survey_llh[2]},
+                                .sigma_h_m = NAN,
+                                .sigma_v_m = NAN,
+                                .kind = (char *)c->kind,
+                                .height = unknown ? RS_SITE_HEIGHT_UNKNOWN : RS_SITE_HEIGHT_DEFAULT,
+                                .shape = c->shape};
+        if (c->shape == RS_SITE_POLE) {
+            l->pole_height_m = c->survey_height_m;
+            l->sigma_pole_height_m =
+                o->height_noise_m > 0 ? fmax(o->survey_sigma_v_m, DECLARED_SURVEY_SIGMA_MIN_M) : NAN;
+            continue;
+        }
+        l->Nvertices = c->Nvertices;
+        l->vertices_llh = &lv->llh[used];
+        l->vertices_given_h_m = &lv->given_h_m[used];
+        for (int v = 0; v < c->Nvertices; v++) {
+            const double *q = &c->survey_llh[3 * v];
+            lv->llh[used + v] = (rs_llh){q[0], q[1], unknown ? NAN : q[2]};
+            lv->given_h_m[used + v] = unknown ? NAN : q[2];
+        }
+        used += (size_t)c->Nvertices;
+    }
+    return RS_OK;
+}
+
+// The surveyed landmarks as the site gives them (ids "L001", ...; kinds static strings), then its
+// poles and lines (shape_landmarks). With o->landmark_heights, those on the ground follow it (an
+// unknown height is not written); those above it say they are surveyed, how far above the ground
+// they are and, with height noise, their own sigma_v.
+// out: *landmarks (Nlandmarks + Npoles + Nlines,), *ids (that many, 16) that their ids point into
+//      and *lv (free all three)
+static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], line_vertices *lv,
+                                const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
+{
+    const int L = s->Nlandmarks, Lall = L + s->Npoles + s->Nlines;
+    *landmarks = calloc((size_t)(Lall ? Lall : 1), sizeof **landmarks);
+    *ids = calloc((size_t)(Lall ? Lall : 1), sizeof **ids);
     if (!*landmarks || !*ids) return rs_err_set(err, RS_ERR_NOMEM, "landmarks: out of memory");
     for (int i = 0; i < L; i++) {
         const double *llh = s->survey_llh + 3 * i;
@@ -239,7 +302,7 @@ static rs_status site_landmarks(rs_site_landmark **landmarks, char (**ids)[16], 
             l->llh.h_m = NAN; // written [lon, lat]
         }
     }
-    return RS_OK;
+    return shape_landmarks(*landmarks, *ids, lv, s, o, err);
 }
 
 // observations/<id>.csv of camera k: its picks of the landmarks it sees, in landmark order.
@@ -247,7 +310,7 @@ static rs_status write_observations(const char *dir, const camera_files *f, cons
                                     const rs_site_landmark *landmarks, double sigma_px, rs_err *err)
 {
     const int Nc = s->cand.N;
-    rs_site_observation *obs = calloc((size_t)(s->Nlandmarks ? s->Nlandmarks : 1), sizeof *obs);
+    rs_site_observation *obs = calloc((size_t)(s->Nlandmarks + s->Npicks + 1), sizeof *obs);
     char *path = rs_io_join(dir, f->observations);
     int n = 0;
     for (int i = 0; obs && i < s->Nlandmarks; i++) {
@@ -256,6 +319,12 @@ static rs_status write_observations(const char *dir, const camera_files *f, cons
             obs[n++] = (rs_site_observation){
                 .ilandmark = i, .q_px = {s->q_px[2 * kj], s->q_px[2 * kj + 1]}, .sigma_px = sigma_px};
     }
+    for (int i = 0; obs && i < s->Npicks; i++) // then its picks of poles and lines
+        if (s->picks[i].cam == k)
+            obs[n++] = (rs_site_observation){.ilandmark = s->picks[i].landmark,
+                                             .q_px = {s->picks[i].q_px[0], s->picks[i].q_px[1]},
+                                             .sigma_px = sigma_px,
+                                             .at = s->picks[i].at};
     rs_status st = obs && path ? rs_site_write_observations(path, obs, n, landmarks, err)
                                : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", f->observations);
     free(path);
@@ -277,6 +346,58 @@ static rs_status write_truth_landmarks(const char *dir, const rs_simulate__site 
         rs_simulate__landmark_id(id, i);
         const double *p = s->cand.c[s->cand_of[i]].p_enu_m;
         fprintf(a.f, "%s,%.4f,%.4f,%.4f\n", id, p[0], p[1], p[2]);
+    }
+    return rs_io_atomic_commit(&a, err);
+}
+
+// truth/vertices_enu.csv and truth/picks.csv (rs_simulate_site, sim/rs_simulate.h), when the
+// site has poles or lines.
+static rs_status write_truth_shapes(const char *dir, const rs_simulate__site *s, rs_err *err)
+{
+    if (s->Npoles + s->Nlines == 0) return RS_OK;
+    char *path = rs_io_join(dir, "truth/vertices_enu.csv");
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_io_atomic a;
+    rs_status st = rs_io_atomic_open(&a, path, err);
+    free(path);
+    if (st) return st;
+    fprintf(a.f, "id,shape,vertex,e,n,u\n");
+    for (int i = 0; i < s->Npoles + s->Nlines; i++) {
+        const rs_simulate__shape *c = &s->shape[s->shape_of[i]];
+        char id[16];
+        if (i < s->Npoles)
+            rs_simulate__pole_id(id, i);
+        else
+            rs_simulate__line_id(id, i - s->Npoles);
+        for (int v = 0; v < c->Nvertices; v++)
+            fprintf(a.f, "%s,%s,%d,%.4f,%.4f,%.4f\n", id, rs_site_shape_name(c->shape), v, c->p_enu_m[3 * v],
+                    c->p_enu_m[3 * v + 1], c->p_enu_m[3 * v + 2]);
+    }
+    if ((st = rs_io_atomic_commit(&a, err))) return st;
+
+    if (!(path = rs_io_join(dir, "truth/picks.csv"))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    st = rs_io_atomic_open(&a, path, err);
+    free(path);
+    if (st) return st;
+    fprintf(a.f, "camera,row,landmark,at,e,n,u,u_true_px,v_true_px,outlier\n");
+    for (int k = 0; k < s->Ncameras; k++) {
+        int row = 0; // the data row in observations/<id>.csv: the points it sees come first
+        for (int i = 0; i < s->Nlandmarks; i++) row += s->visible[(size_t)k * s->cand.N + s->cand_of[i]];
+        char cid[16];
+        rs_simulate__camera_id(cid, k);
+        for (int i = 0; i < s->Npicks; i++) {
+            const rs_simulate__pick *p = &s->picks[i];
+            if (p->cam != k) continue;
+            const int j = p->landmark - s->Nlandmarks;
+            char id[16];
+            if (j < s->Npoles)
+                rs_simulate__pole_id(id, j);
+            else
+                rs_simulate__line_id(id, j - s->Npoles);
+            fprintf(a.f, "%s,%d,%s,%s,%.9f,%.9f,%.9f,%.9f,%.9f,%d\n", cid, ++row, id, rs_site_at_name(p->at),
+                    p->p_true_enu_m[0], p->p_true_enu_m[1], p->p_true_enu_m[2], p->q_true_px[0], p->q_true_px[1],
+                    p->outlier);
+        }
     }
     return rs_io_atomic_commit(&a, err);
 }
@@ -356,15 +477,17 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
     }
     rs_site_landmark *landmarks = NULL;
     char(*ids)[16] = NULL;
+    line_vertices lv = {0};
+    const int Nall = s->Nlandmarks + s->Npoles + s->Nlines;
     rs_lanes lanes = {0};
     char *lanes_path = rs_io_join(dir, "lanes.geojson");
     if (!lanes_path)
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    else if (!(st = write_site_json(dir, s, o, err)) && !(st = site_landmarks(&landmarks, &ids, s, o, err)) &&
-             !(st = rs_site_write_landmarks(dir, landmarks, s->Nlandmarks, 0, RS_SITE_LAYOUT_TOOL, err)) &&
+    else if (!(st = write_site_json(dir, s, o, err)) && !(st = site_landmarks(&landmarks, &ids, &lv, s, o, err)) &&
+             !(st = rs_site_write_landmarks(dir, landmarks, Nall, 0, RS_SITE_LAYOUT_TOOL, err)) &&
              !(st = rs_simulate__lanes(&lanes, s, err)) &&
              !(st = rs_lanes_write(lanes_path, &lanes, &o->origin, 0, false, RS_SITE_LAYOUT_TOOL, err)) &&
-             !(st = write_truth_landmarks(dir, s, err)))
+             !(st = write_truth_landmarks(dir, s, err)) && !(st = write_truth_shapes(dir, s, err)))
         st = write_truth_json(dir, s, o, err);
     static const double zero_rt[6] = {0};
     for (int k = 0; k < s->Ncameras && !st; k++) {
@@ -380,6 +503,8 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
     free(lanes_path);
     free(landmarks);
     free(ids);
+    free(lv.llh);
+    free(lv.given_h_m);
     return st;
 }
 

@@ -138,14 +138,18 @@ bool rs_site__check_position( // out
     const rs_site *site, bool origin_ok, const char *file, int feature, const char *feature_id, const char *field,
     bool geojson_order, const double given[3]);
 
-// Checks one observation just read from camera cam's CSV (line obs->line) against the camera's
-// image size (when known: cam->width > 0) and the observations read before it (duplicates).
+// Checks one observation just read from camera cam's CSV (line obs->line, obs->at resolved)
+// against the camera's image size (when known: cam->width > 0) and the observations read before
+// it (duplicates: a point, a pole's base, a pole's top at most once; `along` picks may repeat).
 // Returns false if it must not be kept.
 bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam, const rs_site_observation *obs,
                                 const rs_site *site);
 
-// Checks a camera once its observations CSV has been read: enough observations to calibrate.
-void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam);
+// Checks a camera once its observations CSV has been read: enough observations to calibrate
+// (4 picks of points; with `along` picks, as many numbers fixed as 4 points fix: 8, counting 2
+// per point, base or top pick and 1 per along pick, at most 2 per straight segment), and warns
+// when every pick is `along` segments of one direction (nothing fixes the camera along it).
+void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam, const rs_site *site);
 
 // Checks across the whole site once everything is read: duplicate landmark and camera ids.
 void rs_site__check_site(rs_site__report *r, const rs_site *site);
@@ -159,6 +163,17 @@ void rs_site__check_site(rs_site__report *r, const rs_site *site);
 // the first 10 by name), given unreliable heights that disagree with the model (likewise, and
 // a summary), and a site ground_plane that gives no height (vertical: an error at site.json).
 void rs_site__ground_model(rs_site__report *r, rs_site *site);
+
+// ---- site.json (rs_site_read_json.c) ----
+
+// obj[key] ("prefix.key" in messages), if present, as how far heights can be trusted ("surveyed",
+// "unreliable", "unknown") into *out; false (after reporting) when it is not one.
+bool rs_site__read_height_trust(rs_site__reader *c, const struct cJSON *obj, const char *prefix, const char *key,
+                                rs_site_height *out);
+// obj's lat, lon, h ("prefix.lat" ... in messages) into given = (lat, lon, h); false after reporting.
+bool rs_site__get_llh(rs_site__reader *c, const struct cJSON *obj, const char *prefix, double given[3]);
+// Reads site.json into c->site (origin, heights, ground plane, cameras' entries), reporting.
+void rs_site__read_site_json(rs_site__reader *c);
 
 // ---- camera files (rs_site_read_camera.c) ----
 

@@ -7,6 +7,8 @@
 //                               rs_lanes.h) and the truth, the folder built aside and renamed
 //     rs_simulate_intersection.c  the intersection: its surveyable points, poles, landmarks
 //                                 chosen, picks, survey, lanes -- everything before writing
+//       rs_simulate_shapes.c        its poles and lines as landmarks (issue 13, item 4):
+//                                   candidates, choice, picks at base, top or along, survey
 //       rs_simulate_camera.c        one camera: pose, field of view, projection, picks; and one
 //                                   camera's problem in memory (rs_simulate_camera_problem)
 //         rs_simulate_lens.c          the true lens (rs_simulate_lens)
@@ -35,6 +37,9 @@ static inline double rs_simulate__quantize(double x, double inv_quantum)
 // The random stream of the extra height noise (rs_rng_seed_derive(seed, this)): apart from the
 // site's own stream, so that --height-noise changes nothing else.
 #define HEIGHT_NOISE_STREAM 0x6865696768ULL // "heigh"
+// The random stream of the poles and lines (rs_simulate_shapes.c): apart from the site's own, so
+// that a site asked for poles or lines has the same cameras and points as without them.
+#define SHAPES_STREAM       0x7368617065ULL // "shape"
 
 // A check of one option: `ok` must hold, else RS_ERR_USAGE naming the field (in a function
 // with an `rs_err *err`).
@@ -98,6 +103,33 @@ typedef struct {
     int N, cap;
 } rs_simulate__candidates;
 
+// A pole or line of the intersection (rs_simulate_shapes.c): its true geometry and, once
+// chosen, its survey.
+typedef struct {
+    rs_site_shape shape;  // RS_SITE_POLE or RS_SITE_LINE
+    const char *kind;     // static string: "delineator_post", "lamp_post", "edge_line", "kerb", ...
+    int Nvertices;        // a pole 2 (base, top), a line its vertices
+    double *p_enu_m;      // (Nvertices,3) true, owned; rounded to 0.1 mm
+    double height_m;      // a pole's true height (top - base), metres; 0 for a line
+    double length_m;      // total length of the segments
+    bool chosen;          // a landmark of the site
+    double *survey_enu_m; // (Nsurveyed,3) owned: a pole's base (1), a line's vertices
+    double *survey_llh;   // (Nsurveyed,3) owned, ellipsoidal
+    double survey_height_m;
+} rs_simulate__shape;
+
+// One pick of a pole or line by one camera.
+typedef struct {
+    int cam;                // camera index
+    int landmark;           // index among the site's landmarks: points first, then poles, then lines
+    int shape;              // index into rs_simulate__site.shape
+    rs_site_at at;          // BASE, TOP or ALONG
+    double p_true_enu_m[3]; // the true point picked
+    double q_true_px[2];    // its exact projection
+    double q_px[2];         // the pick: noisy (or an outlier)
+    bool outlier;
+} rs_simulate__pick;
+
 // Everything generated for a site, before it is written.
 typedef struct {
     int Ncameras;
@@ -118,6 +150,14 @@ typedef struct {
     int Nobservations, Noutliers;
     double road_azimuth_deg;
     double R_road[4]; // road frame -> ENU (2x2 row-major), for the lanes
+
+    // poles and lines (rs_simulate_shapes.c): none unless asked for
+    rs_simulate__shape *shape; // (Nshapes,) owned: every candidate, poles first
+    int Nshapes;
+    int *shape_of;            // (Npoles + Nlines,) the chosen, poles then lines, candidate order
+    int Npoles, Nlines;       // chosen
+    rs_simulate__pick *picks; // (Npicks,) owned, by camera, then landmark, then base/top/along
+    int Npicks;
 } rs_simulate__site;
 
 // Draws the whole site for the (checked) options: the roads, the cameras on their poles, the
@@ -125,6 +165,18 @@ typedef struct {
 // partly filled: free it with rs_simulate__site_free either way.
 rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err);
 void rs_simulate__site_free(rs_simulate__site *s);
+
+// The poles and lines of the site (o->poles_per_camera, o->lines_per_camera; nothing when both
+// are 0): candidates along the intersection's roads, chosen so that each camera sees about that
+// many, their picks and their survey, from the stream SHAPES_STREAM. Then checks that each camera
+// has enough picks (points, poles and lines) to be calibrated. Called by rs_simulate__site_draw
+// once its cameras and points are drawn. RS_ERR_DEGENERATE when a camera sees too little.
+rs_status rs_simulate__shapes_draw(rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err);
+void rs_simulate__shapes_free(rs_simulate__site *s);
+
+// The ids of the site's poles and lines: "P001", ..., "LN001", ...
+void rs_simulate__pole_id(char id[16], int i);
+void rs_simulate__line_id(char id[16], int i);
 
 // The intersection's 32 lanes (docs/site-format.md "lanes.geojson") in the site ENU frame, on the
 // ground (up = 0), positions rounded to 0.1 mm. out: *lanes (owned; rs_lanes_free).

@@ -80,6 +80,24 @@ int main(int argc, char **argv)
                l->ground_used, l->above_ground_m, l->given_h_m, l->given_up_m, l->given_sigma_v_m, l->sigma_v_m,
                l->llh.h_m, l->p_enu_m[0], l->p_enu_m[1], l->p_enu_m[2], up, sigma_plane);
     }
+    // issue 13, item 4: each landmark's shape and vertices, each pick's place on it
+    for (int i = 0; i < site->Nlandmarks; i++) {
+        const rs_site_landmark *l = &site->landmarks[i];
+        printf("shape %s %s %.17g %.17g %d\n", l->id, rs_site_shape_name(l->shape), l->pole_height_m,
+               l->sigma_pole_height_m, l->Nvertices);
+        for (int k = 0; k < l->Nvertices; k++) {
+            const rs_llh *v = &l->vertices_llh[k];
+            const double *p = &l->vertices_enu_m[3 * k];
+            printf("vertex %s %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", l->id, k, v->lat_deg, v->lon_deg,
+                   v->h_m, p[0], p[1], p[2], l->vertices_sigma_v_m[k], l->vertices_given_h_m[k]);
+        }
+    }
+    for (int i = 0; i < site->Ncameras; i++) {
+        const rs_site_camera *c = &site->cameras[i];
+        for (int j = 0; j < c->Nobservations; j++)
+            printf("obsat %s %s %s %d\n", c->id, site->landmarks[c->observations[j].ilandmark].id,
+                   rs_site_at_name(c->observations[j].at), c->observations[j].line);
+    }
     rs_site_free(site);
     return 0;
 }

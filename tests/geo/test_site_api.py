@@ -23,7 +23,7 @@ def dump(exe, site):
     p = subprocess.run([exe, site], capture_output=True, text=True, errors="replace")
     if p.returncode != 0 or "Sanitizer" in p.stderr or "runtime error:" in p.stderr:
         fx.fail("site_api_dump failed", p.stdout, p.stderr)
-    d = {"obs": [], "camera": [], "landmark": [], "lheight": []}
+    d = {"obs": [], "camera": [], "landmark": [], "lheight": [], "shape": [], "vertex": [], "obsat": []}
     for line in p.stdout.splitlines():
         k, _, v = line.partition(" ")
         if k in d:

@@ -126,8 +126,9 @@ def d_not_feature_collection(s):
 
 
 def d_not_a_point(s):
-    set_feature(s, 2, lambda f: f["geometry"].update(type="LineString"))
-    return 1, [(r"^SITE/landmarks\.geojson: feature 2 \(id 'L02'\): geometry\.type: 'LineString'", "geometry")]
+    # a LineString is a line landmark (issue 13, item 4): any other geometry type is refused
+    set_feature(s, 2, lambda f: f["geometry"].update(type="Polygon"))
+    return 1, [(r"^SITE/landmarks\.geojson: feature 2 \(id 'L02'\): geometry\.type: 'Polygon'", "geometry")]
 
 
 def d_missing_height(s):

@@ -9,6 +9,9 @@ usage: test_simulate.py CHECK   with CHECK one of
   outliers     the share of outliers matches --outliers (binomial, 4 sigma)
   options      bad options -> exit 2 with a message; an existing folder -> exit 1, untouched
   demo         sites/demo is exactly what `roadside site simulate sites/demo --seed 1` writes
+  shapes       --points 0 --poles N --lines M (issue 13, item 4): a site of only poles and lines
+               checks clean; every pick within 5 sigma of the projected true segment or
+               polyline (mrcal's Python projection, distance computed in the test)
   heights      --height-noise 2 --landmark-heights unreliable|unknown (issue 13, item 5): the
                rest of the site as without them; the extra noise N(0, 2) on the ground heights
                only (4-sigma bounds); what site.json and landmarks.geojson declare; the site
@@ -390,6 +393,113 @@ def check_heights(tmp):
             fail(f"{' '.join(bad)}: exit {r.returncode}, {r.stderr!r}")
     print(f"heights: {ground} ground landmarks got N(0, 2) more (mean {mean:+.2f} m, rms {std:.2f} m), the rest "
           f"of the site unchanged; unreliable and unknown sites check clean with their ground models")
+
+
+def distance_to_projected(model, pts_enu, q, step_m=0.01):
+    """Pixel distance from q to the projection (mrcal, the true model) of the polyline pts_enu
+    (N,3): sampled every step_m, samples less than 0.5 m in front of the camera dropped, the kept
+    consecutive samples joined by straight pieces in the image."""
+    import mrcal
+    import numpy as np
+    P = np.asarray(pts_enu, float)
+    samples = [P[0]]
+    for a, b in zip(P[:-1], P[1:]):
+        n = max(1, int(math.ceil(np.linalg.norm(b - a) / step_m)))
+        samples += [a + (b - a) * t for t in np.arange(1, n + 1) / n]
+    S = np.array(samples)
+    pc = mrcal.transform_point_rt(model.extrinsics_rt_fromref(), S)
+    front = pc[:, 2] > 0.5
+    Q = mrcal.project(pc, *model.intrinsics())
+    q = np.asarray(q, float)
+    best = math.inf
+    if len(Q) == 1:
+        return float(np.linalg.norm(Q[0] - q)) if front[0] else math.inf
+    A, B = Q[:-1], Q[1:]
+    ok = front[:-1] & front[1:]
+    AB = B - A
+    t = np.clip(np.einsum("ij,ij->i", q - A, AB) / np.maximum(np.einsum("ij,ij->i", AB, AB), 1e-300), 0, 1)
+    d = np.linalg.norm(A + AB * t[:, None] - q, axis=1)
+    if ok.any():
+        best = float(d[ok].min())
+    return best
+
+
+def check_shapes(tmp):
+    """issue 13, item 4: --points 0 --poles N --lines M: a site of only poles and lines loads and
+    checks clean; every pick lies within 5 sigma of the projected true segment or polyline (mrcal's
+    Python projection of truth/, the distance computed here), at base or top within 5 sigma of
+    the projected true point; truth/picks.csv's true point lies on the true geometry and projects
+    to its recorded pixel; the cameras and points are those of the same site without poles and
+    lines."""
+    import mrcal
+    import numpy as np
+    plain, both, only = (os.path.join(tmp, x) for x in ("plain", "both", "only"))
+    simulate(plain, "--seed", str(SEED))
+    simulate(both, "--seed", str(SEED), "--poles", "4", "--lines", "3")
+    same = [f for f in tree(plain) if f.startswith(("cameras/", "truth/cam")) or f in (
+        "lanes.geojson", "truth/landmarks_enu.csv")]
+    _, mismatch, errors = filecmp.cmpfiles(plain, both, same, shallow=False)
+    if mismatch or errors:
+        fail(f"--poles/--lines changed {mismatch + errors}")
+    sigma = 1.0
+    simulate(only, "--seed", str(SEED), "--points", "0", "--poles", "8", "--lines", "5", "--cameras", "6")
+    r = subprocess.run([ROADSIDE, "site", "check", only], capture_output=True, text=True)
+    if r.returncode != 0 or r.stdout.splitlines()[-1] != "0 errors, 0 warnings":
+        fail(f"site check of the poles-and-lines site: exit {r.returncode}: {r.stdout}{r.stderr}")
+    feats = json.load(open(os.path.join(only, "landmarks.geojson")))["features"]
+    kinds = {("line" if f["geometry"]["type"] == "LineString" else
+              "pole" if "height_m" in f["properties"] else "point") for f in feats}
+    if kinds != {"pole", "line"}:
+        fail(f"the site of only poles and lines has {kinds}")
+    geometry = {}
+    for row in read_csv(os.path.join(only, "truth", "vertices_enu.csv")):
+        geometry.setdefault(row["id"], []).append([float(row["e"]), float(row["n"]), float(row["u"])])
+    truth_picks = {(r["camera"], int(r["row"])): r for r in read_csv(os.path.join(only, "truth", "picks.csv"))}
+    models = truth_cameras(only)
+    worst, worst_true, n, n_out, on_geom = 0.0, 0.0, 0, 0, 0.0
+    counts = {"base": 0, "top": 0, "along": 0}
+    for cam, m in models.items():
+        rows = read_csv(os.path.join(only, "observations", f"{cam}.csv"))
+        for i, r in enumerate(rows, start=1):
+            t = truth_picks.get((cam, i))
+            if t is None or t["landmark"] != r["landmark"] or t["at"] != r["at"]:
+                fail(f"{cam} row {i}: {r} has no matching truth/picks.csv row ({t})")
+                continue
+            g = geometry[r["landmark"]]
+            p = np.array([float(t["e"]), float(t["n"]), float(t["u"])])
+            # the true point picked lies on the true geometry, and projects where truth says
+            d3 = min(float(np.linalg.norm(np.cross(b - a, p - a)) / np.linalg.norm(b - a))
+                     if np.dot(p - a, b - a) >= 0 and np.dot(p - b, a - b) >= 0 else min(np.linalg.norm(p - a),
+                                                                                          np.linalg.norm(p - b))
+                     for a, b in zip(np.array(g[:-1]), np.array(g[1:])))
+            on_geom = max(on_geom, d3)
+            qt = mrcal.project(mrcal.transform_point_rt(m.extrinsics_rt_fromref(), p), *m.intrinsics())
+            worst_true = max(worst_true, float(np.max(np.abs(qt - [float(t["u_true_px"]), float(t["v_true_px"])]))))
+            q = [float(r["u"]), float(r["v"])]
+            if r["at"] == "along":
+                d = distance_to_projected(m, g, q)
+            else:
+                d = distance_to_projected(m, [g[0] if r["at"] == "base" else g[1]], q)
+            counts[r["at"]] += 1
+            n += 1
+            if t["outlier"] == "1":
+                n_out += 1
+                continue
+            if not (d <= 5 * sigma):  # also catches NaN
+                fail(f"{cam} row {i} {r['landmark']} at {r['at']}: {d:.2f} px from the projected truth (> 5 sigma)")
+            worst = max(worst, d)
+    if on_geom > 1e-6 or worst_true > 1e-5:  # printed to 1e-9 m and px
+        fail(f"truth/picks.csv: true points {on_geom:.2g} m off their geometry, {worst_true:.2g} px off mrcal")
+    if n < 100 or min(counts.values()) < 10:
+        fail(f"only {n} picks ({counts})")
+    print(f"shapes: {n} picks of poles and lines ({counts}, {n_out} outliers) within {worst:.2f} px of the "
+          f"projected true geometry (tolerance 5 sigma = {5 * sigma} px); true points on it to {on_geom:.1e} m, "
+          f"projecting to {worst_true:.1e} px; the poles-and-lines site checks clean; cameras and points "
+          f"unchanged by --poles/--lines")
+    for bad in (("--poles", "51"), ("--lines", "x"), ("--points", "-1")):
+        r = simulate(os.path.join(tmp, "bad"), "--seed", "1", *bad, check=False)
+        if r.returncode != 2 or bad[0] not in r.stderr:
+            fail(f"{' '.join(bad)}: exit {r.returncode}, {r.stderr!r}")
 
 
 def main():
