@@ -13,6 +13,7 @@
 
 #include <mrcal/poseutils.h>
 
+#include "calib/internal/rs_calib_intrinsics.h"
 #include "calib/internal/rs_calib_noise.h"
 #include "calib/internal/rs_calib_refine.h"
 
@@ -376,7 +377,7 @@ static void work_free(rs_calib__work *w)
 }
 
 static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_problem *pb, const rs_calib_options *opt,
-                       int Ni, rs_err *err)
+                       unsigned user_refine, int Ni, rs_err *err)
 {
     const int N = pb->N;
     rs_status st = validate(pb, opt, Ni, err);
@@ -543,6 +544,10 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     }
 
     if ((st = rs_calib__reliability(res, w, &rp, rt_c, log_theta, pb, opt, err)) != RS_OK) return st;
+    // ---- hook: the intrinsics against the image (rs_calib_intrinsics.c) ----
+    st = rs_calib__intrinsics_check(res, w, &rp, rt_c, w->cov, user_refine, pb, opt, warn, err);
+    if (st != RS_OK) return st;
+    // ---- end hook ----
 
     // 5. outputs in ENU
     const int n = 6 + Ni;
@@ -657,7 +662,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     } else if (res->dof <= 0) {
         warn(res, "no redundancy (dof %d): the fit cannot be checked against the sigmas", res->dof);
     }
-    if ((opt->refine & RS_CALIB_REFINE_FOCAL) && res->sigma_intrinsics[0] > 0.05 * res->intrinsics[0])
+    if ((user_refine & RS_CALIB_REFINE_FOCAL) && res->sigma_intrinsics[0] > 0.05 * res->intrinsics[0])
         warn(res,
              "the focal length is poorly determined (sigma %.1f%%): the landmarks' depth "
              "range or their spread in the image is too small to separate it from the distance",
@@ -697,8 +702,13 @@ rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *proble
     else
         rs_calib_options_default(&opt);
     const int Ni = problem->camera ? mrcal_lensmodel_num_params(&problem->camera->lensmodel) : 0;
+    // ---- hook: intrinsics with a stated uncertainty become parameters (rs_calib_intrinsics.c) ----
+    const unsigned user_refine = opt.refine;
+    rs_status st = rs_calib__intrinsics_options(&opt, problem, err);
+    if (st != RS_OK) return st;
+    // ---- end hook ----
     rs_calib__work w = {0};
-    const rs_status st = solve(result, &w, problem, &opt, Ni, err);
+    st = solve(result, &w, problem, &opt, user_refine, Ni, err);
     work_free(&w);
     if (st != RS_OK) {
         rs_calib_result_free(result);

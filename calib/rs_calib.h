@@ -26,6 +26,10 @@
 //      log-normal prior) alternating with Baarda's data snooping (w-test, one landmark at a
 //      time, at most a quarter); per landmark w, redundancy, minimal detectable biases and
 //      external reliability in the result.
+//   3c. Intrinsics (rs_calib_intrinsics.c, docs/calibration.md 7a): a stated uncertainty
+//      (problem.focal_rel_sigma, center_sigma_px) makes them parameters with that prior; then
+//      the image's own estimate of the focal and centre is tested against the statement, and a
+//      focal held exact that the landmarks cannot check is named in the warnings.
 //   4. Covariance of rt (and the refined intrinsics) with the landmarks marginalised: the
 //      inverse of the reduced problem's Gauss-Newton matrix (exactly the Schur complement),
 //      from the QR and SVD of its column-equilibrated Jacobian; ABSOLUTE scaling (residuals
@@ -80,6 +84,13 @@ typedef struct {
     bool has_position_prior;        // a surveyed camera position (a pole) is known
     double prior_position_enu_m[3]; //   its ENU position, metres
     double prior_sigma_m;           //   its isotropic 1-sigma, metres, > 0
+    // How well the nominal intrinsics are known (docs/calibration.md, "Intrinsics with
+    // uncertainty"); 0 (the default): exact. A stated sigma makes that intrinsic a parameter of
+    // the adjustment with this prior, so that the pose's covariance includes it; the result's
+    // intrinsics_check says whether the image agrees with the statement.
+    double focal_rel_sigma; // 1-sigma of the focal length (fx and fy together), relative to the
+                            //   nominal (0.1: known to 10%), in [0, 1]
+    double center_sigma_px; // 1-sigma of the principal point (cx and cy each), px, in [0, 1e4]
 } rs_calib_problem;
 
 typedef struct {
@@ -139,6 +150,36 @@ typedef struct {
 // Fills opt with the defaults above. opt must not be NULL.
 void rs_calib_options_default(rs_calib_options *opt);
 
+// What the image says about the intrinsics that were held (stated exact) or constrained by a
+// stated sigma: the picks and the survey alone, linearised at the solution (docs/calibration.md,
+// "Intrinsics with uncertainty"; calib/internal/rs_calib_intrinsics.h has the method). The focal
+// and the centre are tested apart, each at alpha 0.1%; an intrinsic refined at the caller's
+// request (rs_calib_options.refine) is not tested.
+typedef struct {
+    bool focal_tested;         // false: focal refined on request, no (fx, fy, cx, cy) core, or the
+                               //   test could not be made (the fields below are then 0)
+    double focal_rel;          // the data's f / f_nominal - 1 (0.28: the image says 28% longer)
+    double sigma_focal_rel;    //   its 1-sigma from the data alone
+    double focal_stated_rel;   //   the stated 1-sigma (problem.focal_rel_sigma; 0: exact)
+    double chi2_focal;         //   focal_rel^2 / (sigma^2 + stated^2): significant above
+    double critical_focal;     //   this (alpha 0.1%: F(1, dof) of the fit with the focal free;
+                               //   10.83, chi-square 1 dof, for a large dof)
+    bool center_tested;        // likewise for the principal point
+    double center_px[2];       // the data's (cx, cy) - nominal, px
+    double sigma_center_px[2]; //   their 1-sigma from the data alone
+    double center_stated_px;   //   the stated 1-sigma (problem.center_sigma_px; 0: exact)
+    double chi2_center;        //   likewise (2 dof), significant above
+    double critical_center;    //   this (2 F(2, dof) at 99.9%; 13.82 for a large dof)
+    // A focal taken as exact (nothing stated): how much the pose rests on it (Baarda's external
+    // reliability): the smallest focal error the test finds with power 80% (its MDB), and what
+    // it does to the pose. 0 when the focal is stated, refined or not tested.
+    double focal_mdb_rel;      // the minimal detectable focal error, relative (4.13 sigma)
+    double shift_position_m;   //   how far an error of that size moves the camera centre, m
+    double shift_mahalanobis2; //   that pose change in the reported covariance (6 dof): above
+                               //   22.46 the pose's 99.9% ellipsoid does not cover it
+    bool warned;               // the warnings say the pose may be wrong because of the intrinsics
+} rs_calib_intrinsics_check;
+
 typedef struct {
     double rt_cam_enu[6];             // the pose: maps ENU into the camera frame
     double covariance_rt_cam_enu[36]; // (6,6) row-major covariance of rt_cam_enu (r rad, t m)
@@ -167,7 +208,8 @@ typedef struct {
     int iterations;              // Ceres iterations, all solves together
     double time_us;              // wall time of rs_calib_solve, microseconds
     char method[224];            // what was done, e.g. "opengv-p3p ... + ceres-cauchy(2)..."
-    char warnings[1024];         // plain-words warnings, "; "-separated; "" when none
+    char warnings[2048];         // plain-words warnings, "; "-separated; "" when none (2048: the
+                                 //   intrinsics warning, 7a, comes first and is ~350 bytes)
 
     rs_calib_noise_group noise[RS_CALIB_NOISE_NGROUPS]; // the noise model (RS_CALIB_NOISE_*)
     // Per landmark (N,), at the final adjustment (docs/calibration.md, "Outliers and reliability");
@@ -184,6 +226,7 @@ typedef struct {
     int Nrejected_snooping;    // landmarks rejected by data snooping (within N - Ninliers)
     bool noise_model_wrong;    // snooping would have rejected more than max_rejected_fraction: it
                                //   stopped there, and the warnings say so
+    rs_calib_intrinsics_check intrinsics_check; // the intrinsics against the image (above)
 } rs_calib_result;
 
 // Solves one camera's pose (see the method above).

@@ -24,6 +24,12 @@ rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *s
         return rs_err_set(err, RS_ERR_USAGE, "camera index %d out of range", icam);
     const rs_site_camera *cam = &site->cameras[icam];
     int N = cam->Nobservations;
+    for (int i = 0; i < N; i++) // the solver has no residual yet for picks along poles and lines
+        if (cam->observations[i].at == RS_SITE_AT_ALONG)
+            return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                              "%s line %d: a pick 'along' a pole or a line: calib uses picks of points and of poles' "
+                              "bases and tops only so far; leave the along picks out of this camera",
+                              cam->observations_path, cam->observations[i].line);
     size_t n = N > 0 ? (size_t)N : 1;
     sp->p_enu_m = malloc(n * 3 * sizeof(double));
     sp->sigma_enu_m = malloc(n * 3 * sizeof(double));
@@ -35,11 +41,7 @@ rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *s
     }
     for (int i = 0; i < N; i++) {
         const rs_site_observation *o = &cam->observations[i];
-        const rs_site_landmark *l = &site->landmarks[o->ilandmark];
-        memcpy(&sp->p_enu_m[3 * i], l->p_enu_m, 3 * sizeof(double));
-        sp->sigma_enu_m[3 * i + 0] = l->sigma_h_m;
-        sp->sigma_enu_m[3 * i + 1] = l->sigma_h_m;
-        sp->sigma_enu_m[3 * i + 2] = l->sigma_v_m;
+        rs_site_observed_point(&sp->p_enu_m[3 * i], &sp->sigma_enu_m[3 * i], site, o);
         sp->q_px[2 * i + 0] = o->q_px[0];
         sp->q_px[2 * i + 1] = o->q_px[1];
         sp->sigma_px[i] = o->sigma_px;
@@ -56,6 +58,8 @@ rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *s
         memcpy(p->prior_position_enu_m, cam->prior_p_enu_m, sizeof p->prior_position_enu_m);
         p->prior_sigma_m = cam->prior_sigma_m;
     }
+    p->focal_rel_sigma = cam->focal_rel_sigma; // the stated intrinsics uncertainty (0: exact)
+    p->center_sigma_px = cam->center_sigma_px;
     return RS_OK;
 }
 
@@ -135,7 +139,9 @@ double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_cal
     for (int i = 0; i < r->N && i < cam->Nobservations; i++) {
         const rs_site_observation *o = &cam->observations[i];
         double p_cam[3], q[2] = {NAN, NAN};
-        mrcal_transform_point_rt(p_cam, NULL, NULL, r->rt_cam_enu, site->landmarks[o->ilandmark].p_enu_m);
+        double p_enu[3], sigma_enu[3];
+        if (!rs_site_observed_point(p_enu, sigma_enu, site, o)) continue;
+        mrcal_transform_point_rt(p_cam, NULL, NULL, r->rt_cam_enu, p_enu);
         if (!mrcal_project((mrcal_point2_t *)q, NULL, NULL, (const mrcal_point3_t *)p_cam, 1, &cam->camera.lensmodel,
                            r->intrinsics))
             q[0] = q[1] = NAN;
@@ -183,6 +189,14 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     cJSON_AddItemToObject(root, "intrinsics", json_array(r->intrinsics, r->Nintrinsics));
     if (r->sigma_intrinsics)
         cJSON_AddItemToObject(root, "sigma_intrinsics", json_array(r->sigma_intrinsics, r->Nintrinsics));
+    // the frame rt_cam_enu maps from: the site's ENU, whose origin a camera file alone cannot tell
+    cJSON *origin = cJSON_AddObjectToObject(root, "enu_origin");
+    cJSON_AddNumberToObject(origin, "lat_deg", site->origin.lat_deg);
+    cJSON_AddNumberToObject(origin, "lon_deg", site->origin.lon_deg);
+    cJSON_AddNumberToObject(origin, "h_m", site->origin.h_m);
+    cJSON_AddStringToObject(origin, "frame",
+                            "local east-north-up (metres) tangent to the WGS84 ellipsoid at this origin; h "
+                            "ellipsoidal; rt_cam_enu maps it into the camera (x right, y down, z forward)");
     cJSON_AddItemToObject(root, "rt_cam_enu", json_array(r->rt_cam_enu, 6));
     cJSON_AddItemToObject(root, "covariance_rt_cam_enu", json_matrix(r->covariance_rt_cam_enu, 6, 6));
     cJSON_AddItemToObject(root, "position_enu_m", json_array(r->position_enu_m, 3));
@@ -270,7 +284,10 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
         cJSON_AddNumberToObject(l, "mdb_m", r->mdb_m[i]);
         cJSON_AddNumberToObject(l, "external_position_m", r->external_m[i]);
         cJSON_AddNumberToObject(l, "external_ground_m", r->external_ground_m[i]);
-        cJSON_AddItemToObject(l, "p_enu_surveyed_m", json_array(site->landmarks[o->ilandmark].p_enu_m, 3));
+        double p_surveyed[3], sigma_surveyed[3];
+        if (!rs_site_observed_point(p_surveyed, sigma_surveyed, site, o))
+            memcpy(p_surveyed, site->landmarks[o->ilandmark].p_enu_m, sizeof p_surveyed);
+        cJSON_AddItemToObject(l, "p_enu_surveyed_m", json_array(p_surveyed, 3));
         cJSON_AddItemToObject(l, "p_enu_adjusted_m", json_array(&r->p_enu_refined_m[3 * i], 3));
         cJSON_AddItemToArray(lms, l);
     }
@@ -318,6 +335,40 @@ static rs_status homography_json(char **text, const rs_site *site, const rs_site
     return *text ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
 }
 
+// Puts comment lines (each starting with "# ") saying which frame the extrinsics map from into a
+// camera file core/rs_camera.h just wrote under its temporary name: at the top of a .cameramodel
+// (mrcal reads '#' comments), after the "%YAML:1.0" and "---" lines of an OpenCV YAML.
+static rs_status annotate_frame(const char *tmp_path, const rs_site *site, const rs_site_camera *cam, bool yaml,
+                                rs_err *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&text, &len, tmp_path, err);
+    if (st) return st;
+    char note[1024];
+    snprintf(note, sizeof note,
+             "# roadside calib: camera %s of site '%s'\n"
+             "# %s map site ENU into the camera frame (x right, y down, z forward):\n"
+             "# ENU = local east-north-up in metres, tangent to the WGS84 ellipsoid at the site's origin\n"
+             "# enu_origin: lat %.9f deg, lon %.9f deg, h %.4f m (ellipsoidal)\n",
+             cam->id, site->name ? site->name : "", yaml ? "rvec, tvec and R_cam_enu" : "The extrinsics (rt_cam_enu)",
+             site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m);
+    size_t at = 0; // where the note goes
+    if (yaml)
+        for (int lines = 0; lines < 2 && at < len; lines++) {
+            const char *nl = memchr(text + at, '\n', len - at);
+            if (!nl || (lines == 1 && strncmp(text + at, "---", 3))) break;
+            at = (size_t)(nl - text) + 1;
+        }
+    FILE *f = fopen(tmp_path, "wb");
+    if (!f) st = rs_err_set(err, RS_ERR_IO, "%s: %s", tmp_path, strerror(errno));
+    if (!st && (fwrite(text, 1, at, f) != at || fputs(note, f) < 0 || fwrite(text + at, 1, len - at, f) != len - at))
+        st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", tmp_path, strerror(errno));
+    if (f && fclose(f) != 0 && !st) st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", tmp_path, strerror(errno));
+    free(text);
+    return st;
+}
+
 // Writes text into a file still under its temporary name.
 static rs_status stage_text(rs_io_atomic *a, const char *text, rs_err *err)
 {
@@ -356,9 +407,11 @@ rs_status rs_calib_site_write(unsigned *written, unsigned *removed, const char *
     }
     if (!st) st = rs_io_atomic_release(&staged[F_MODEL], err);
     if (!st) st = rs_camera_write_cameramodel(&calibrated, staged[F_MODEL].tmp_path, err);
+    if (!st) st = annotate_frame(staged[F_MODEL].tmp_path, site, cam, false, err);
     if (!st) st = stage_text(&staged[F_JSON], json, err);
     if (!st && yaml) st = rs_io_atomic_release(&staged[F_YAML], err);
     if (!st && yaml) st = rs_camera_write_opencv_yaml(&calibrated, staged[F_YAML].tmp_path, err);
+    if (!st && yaml) st = annotate_frame(staged[F_YAML].tmp_path, site, cam, true, err);
     if (!st) st = stage_text(&staged[F_HOMOGRAPHY], homography, err);
     for (int k = 0; k < NFILES && !st; k++)
         if (staged[k].path) st = rs_io_atomic_commit(&staged[k], err);
