@@ -21,9 +21,11 @@ void rs_audit_options_default(rs_audit_options *opt)
 {
     memset(opt, 0, sizeof *opt);
     rs_calib_options_default(&opt->calib);
-    opt->max_rms_surveyed_px = 50;
-    opt->max_loo_px = 50;
-    opt->max_loo_m = 2.5;
+    opt->need_ground_m = 1;
+    opt->max_rms_surveyed_px = 0; // 0: derived from need_ground_m
+    opt->max_loo_px = 0;
+    opt->max_loo_m = 0;
+    opt->max_ground_sigma_m = 0;
     opt->detection_sigma_px = 1;
     opt->range_m = 100;
     opt->cell_m = 1;
@@ -38,9 +40,7 @@ static rs_status check_options(const rs_audit_options *o, rs_err *err)
     const struct {
         const char *name;
         double v;
-    } pos[] = {{"max_rms_surveyed_px", o->max_rms_surveyed_px},
-               {"max_loo_px", o->max_loo_px},
-               {"max_loo_m", o->max_loo_m},
+    } pos[] = {{"need_ground_m", o->need_ground_m},
                {"detection_sigma_px", o->detection_sigma_px},
                {"range_m", o->range_m},
                {"cell_m", o->cell_m},
@@ -48,6 +48,13 @@ static rs_status check_options(const rs_audit_options *o, rs_err *err)
     for (size_t i = 0; i < sizeof pos / sizeof pos[0]; i++)
         if (!(pos[i].v > 0 && isfinite(pos[i].v)))
             return rs_err_set(err, RS_ERR_INVALID, "audit options: %s = %g: must be > 0", pos[i].name, pos[i].v);
+    const double derivable[] = {o->max_rms_surveyed_px, o->max_loo_px, o->max_loo_m, o->max_ground_sigma_m};
+    for (size_t i = 0; i < sizeof derivable / sizeof derivable[0]; i++)
+        if (!(derivable[i] >= 0 && isfinite(derivable[i])))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "audit options: a max_ threshold is %g: must be >= 0 (0: derived "
+                              "from need_ground_m)",
+                              derivable[i]);
     if (!(o->alpha > 0 && o->alpha < 1))
         return rs_err_set(err, RS_ERR_INVALID, "audit options: alpha = %g: must be in (0, 1)", o->alpha);
     if (o->range_m / o->cell_m > 4000)
@@ -70,6 +77,8 @@ __attribute__((format(printf, 3, 4))) static void append(char *buf, size_t size,
     vsnprintf(buf + n, size - n, fmt, ap);
     va_end(ap);
 }
+
+static int cmp_double(const void *a, const void *b);
 
 // ---- small geometry ----
 
@@ -120,6 +129,40 @@ static double surveyed_residuals(double *residual_px, double *max_px, const rs_c
     }
     if (max_px) *max_px = c ? worst : NAN;
     return c ? sqrt(ss / c) : NAN;
+}
+
+// The pixel size of one metre of ground at the inlier landmarks (rs_audit_result.px_per_m): at
+// each, J (2,2) = d(pixel)/d(E, N) along the ground plane n (central differences of 5 cm), and
+// the median of sqrt(|det J|) (the geometric mean of J's singular values: foreshortening counts
+// half). NaN when no landmark projects.
+static double pixels_per_metre(const rs_calib_problem *pb, const double n[3], const rs_calib_result *s)
+{
+    double *v = malloc((size_t)(pb->N > 0 ? pb->N : 1) * sizeof *v);
+    if (!v) return NAN;
+    int c = 0;
+    const double h = 0.05;
+    for (int i = 0; i < pb->N; i++) {
+        if (!s->inlier[i]) continue;
+        double J[2][2];
+        bool ok = true;
+        for (int k = 0; k < 2 && ok; k++) {
+            // a step east (k = 0) or north (k = 1) with the up change that keeps it on the plane
+            double d[3] = {k == 0 ? h : 0, k == 1 ? h : 0, 0}, pp[3], pm[3], qp[2], qm[2];
+            d[2] = -(n[0] * d[0] + n[1] * d[1]) / n[2];
+            for (int j = 0; j < 3; j++) pp[j] = pb->p_enu_m[3 * i + j] + d[j], pm[j] = pb->p_enu_m[3 * i + j] - d[j];
+            ok = project_enu(qp, &pb->camera->lensmodel, s->intrinsics, s->rt_cam_enu, pp) &&
+                 project_enu(qm, &pb->camera->lensmodel, s->intrinsics, s->rt_cam_enu, pm);
+            if (ok) J[0][k] = (qp[0] - qm[0]) / (2 * h), J[1][k] = (qp[1] - qm[1]) / (2 * h);
+        }
+        if (ok) v[c++] = sqrt(fabs(J[0][0] * J[1][1] - J[0][1] * J[1][0]));
+    }
+    double med = NAN;
+    if (c) {
+        qsort(v, (size_t)c, sizeof *v, cmp_double);
+        med = c % 2 ? v[c / 2] : 0.5 * (v[c / 2 - 1] + v[c / 2]);
+    }
+    free(v);
+    return med;
 }
 
 // ---- degeneracy ----
@@ -598,18 +641,31 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
                                        external ? external->camera.rt_cam_enu : r->solve.rt_cam_enu, opt, err)))
         return st;
 
+    // the thresholds: those not given derive from what the site needs on the ground
+    r->px_per_m = pixels_per_metre(&pb, ground_normal_enu, &r->solve);
+    const double need = opt->need_ground_m;
+    const double need_px = isfinite(r->px_per_m) ? need * r->px_per_m : INFINITY; // nothing to derive from
+    r->thresholds.need_ground_m = need;
+    r->thresholds.max_rms_surveyed_px = opt->max_rms_surveyed_px > 0 ? opt->max_rms_surveyed_px : need_px;
+    r->thresholds.max_loo_px = opt->max_loo_px > 0 ? opt->max_loo_px : need_px;
+    r->thresholds.max_loo_m = opt->max_loo_m > 0 ? opt->max_loo_m : need;
+    r->thresholds.max_ground_sigma_m = opt->max_ground_sigma_m > 0 ? opt->max_ground_sigma_m : need;
+    const double max_rms = r->thresholds.max_rms_surveyed_px, max_loo_px = r->thresholds.max_loo_px;
+
     // the verdict
     char *f = r->failures;
     size_t fs = sizeof r->failures;
     // one rule, on the headline: the surveyed positions through the calibration audited
-    if (!(r->rms_surveyed_px <= opt->max_rms_surveyed_px))
-        append(f, fs, "rms_surveyed_px %.2f px > %g px (the inliers' surveyed positions reprojected through %s)",
-               r->rms_surveyed_px, opt->max_rms_surveyed_px,
-               r->has_external ? "the external calibration" : "the audit's solve");
-    if (r->loo_count && r->loo_rms_px > opt->max_loo_px)
-        append(f, fs, "leave-one-out RMS %.2f px > %g px", r->loo_rms_px, opt->max_loo_px);
-    if (r->loo_count && r->loo_median_m > opt->max_loo_m)
-        append(f, fs, "leave-one-out median ground error %.2f m > %g m", r->loo_median_m, opt->max_loo_m);
+    if (!(r->rms_surveyed_px <= max_rms))
+        append(f, fs, "rms_surveyed_px %.2f px > %.3g px (the inliers' surveyed positions reprojected through %s)",
+               r->rms_surveyed_px, max_rms, r->has_external ? "the external calibration" : "the audit's solve");
+    if (r->loo_count && !(r->loo_rms_px <= max_loo_px))
+        append(f, fs, "leave-one-out RMS %.2f px > %.3g px", r->loo_rms_px, max_loo_px);
+    if (r->loo_count && r->loo_median_m > r->thresholds.max_loo_m)
+        append(f, fs, "leave-one-out median ground error %.2f m > %g m", r->loo_median_m, r->thresholds.max_loo_m);
+    if (isfinite(r->ground_sigma_inside_p90_m) && r->ground_sigma_inside_p90_m > r->thresholds.max_ground_sigma_m)
+        append(f, fs, "predicted ground error %.2f m (1 sigma, 90th percentile where the landmarks are) > %g m",
+               r->ground_sigma_inside_p90_m, r->thresholds.max_ground_sigma_m);
     if (r->has_against && r->against.moved)
         append(f, fs, "the camera has moved (%.3f deg, %.3f m)", r->against.rotation_deg, r->against.shift_m);
     if (r->has_external && !r->external.consistent)

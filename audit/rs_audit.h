@@ -54,6 +54,7 @@
 // 2-core machine, 1.8 s while other jobs ran; with --range-m 10 1.0 s under the same load.
 #pragma once
 #include <stdbool.h>
+#include <stddef.h>
 
 #include <mrcal/mrcal.h>
 
@@ -69,14 +70,20 @@ extern "C" {
 typedef struct {
     rs_calib_options calib;     // options of every solve: the full one and leave-one-out
                                 //   (default rs_calib_options_default)
-    double max_rms_surveyed_px; // the camera FAILS when rms_surveyed_px exceeds this (default 50:
-                                //   the demo site's cameras give 20-34 px, the real GNSS probe
-                                //   data 26 px, all of it their survey errors; docs/audit.md)
+    double need_ground_m;       // what the site is for: the 1-sigma horizontal ground accuracy
+                                //   needed where the landmarks are (the intersection), metres
+                                //   (default 1). The thresholds below left at 0 derive from it
+                                //   (rs_audit_result.thresholds says what they came to)
+    double max_rms_surveyed_px; // the camera FAILS when rms_surveyed_px exceeds this; 0 (the
+                                //   default): need_ground_m in pixels at the landmarks
+                                //   (rs_audit_result.px_per_m): 23 px on the demo's cam1
     double max_loo_px;          // ... when the RMS of the inliers' leave-one-out pixel errors
-                                //   exceeds this (default 50: with 0.3 m survey sigmas at 25 m
-                                //   the left-out landmark's own survey error is ~20 px)
+                                //   exceeds this; 0 (default): need_ground_m in pixels, as above
     double max_loo_m;           // ... when the MEDIAN of the inliers' leave-one-out ground
-                                //   errors exceeds this, metres (default 2.5)
+                                //   errors exceeds this, metres; 0 (default): need_ground_m
+    double max_ground_sigma_m;  // ... when the predicted 1-sigma ground error (the map) exceeds
+                                //   this over 10% or more of the landmarks' area (its 90th
+                                //   percentile there), metres; 0 (default): need_ground_m
     double detection_sigma_px;  // detection noise of a located vehicle, px per axis (default 1)
     double range_m;             // horizontal distance from the camera up to which the ground
                                 //   counts as seen (map, ground coverage), metres (default 100)
@@ -111,6 +118,9 @@ typedef struct {
                                     //   site's ground normal through it, metres
     double influence_m;             // |camera position without it - with it|, metres
     double influence_deg;           // rotation angle between the two orientations, degrees
+    double sigma_ground_m;          // the map's predicted 1-sigma ground error at its surveyed
+                                    //   (E, N) (nearest cell), metres; NaN without a map there
+    double distance_m;              // horizontal distance from the camera, metres
 } rs_audit_landmark;
 
 // The ground localisation uncertainty map: a regular grid in site ENU (E, N) on the ground
@@ -202,6 +212,16 @@ typedef struct {
     double image_hull_share;  // [0,1]: image area inside the hull of the inlier picks
     double ground_seen_m2;    // ground area the camera sees within range_m, m^2
     double ground_hull_share; // [0,1]: share of it inside the inliers' (E, N) hull
+    // the predicted 1-sigma ground error (the map) inside the inliers' (E, N) hull, "where the
+    // landmarks are": median and 90th percentile over its cells, metres (NaN without a map)
+    double ground_sigma_inside_median_m, ground_sigma_inside_p90_m;
+
+    // the thresholds applied (rs_audit_options, those left at 0 derived from need_ground_m)
+    double px_per_m; // the pixel size of one metre of ground at the inlier landmarks: median of
+                     //   sqrt(|det J|), J (2,2) = d(pixel)/d(ground E, N) at each, px/m
+    struct {
+        double need_ground_m, max_rms_surveyed_px, max_loo_px, max_loo_m, max_ground_sigma_m;
+    } thresholds;
 
     // degeneracy indicators (numbers; the words are in `warnings`)
     double condition_number; // rs_calib_result.condition_number
@@ -221,6 +241,9 @@ typedef struct {
     char failures[512];  // which thresholds fail, "; "-separated ("" when pass)
     char warnings[2048]; // degeneracy and other warnings in plain words,
                          //   "; "-separated ("" when none)
+    char verdict[1536];  // the verdict in plain words for a city engineer, naming landmarks by
+                         //   id: rs_audit_site_camera fills it (rs_audit_site_verdict); "" from
+                         //   rs_audit_camera alone
 } rs_audit_result;
 
 // Audits one camera.
@@ -287,6 +310,18 @@ rs_status rs_audit_site_camera( // out
     const char *against_csv,     // may be NULL
     const rs_audit_options *opt, // may be NULL
     rs_err *err);
+
+// The verdict of an audit in plain words (what rs_audit_site_camera puts in result->verdict): the
+// need it is judged against, the predicted ground accuracy where the landmarks are and at the
+// farthest one, the held-out (leave-one-out) check, each outlier named by its landmark id with
+// how far its pick lands from its survey on the ground and what to do, and the thresholds
+// failed. `roadside audit` prints it and `roadside report` shows it: one text for both.
+// out: text (size bytes, NUL-terminated, truncated if need be)
+void rs_audit_site_verdict(char *text, size_t size, const rs_site *site, int icam, const rs_audit_result *result);
+
+// Replaces the solver's "(index 2,5; ..." in a warning with the landmark ids of camera icam
+// ("(L003, L006; ..."), in place (text of size bytes).
+void rs_audit_site_name_landmarks(char *text, size_t size, const rs_site *site, int icam);
 
 // The audit as JSON text (the content of <id>.audit.json; docs/audit.md lists the fields).
 // Caller frees with free(); NULL when out of memory.

@@ -171,11 +171,17 @@ rs_status rs_audit__compute_map(rs_audit_result *r, const rs_calib_problem *pb, 
     return RS_OK;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
 // Image hull share, and the ground hull share over the map's seen cells.
 rs_status rs_audit__compute_coverage(rs_audit_result *r, const rs_calib_problem *pb, rs_err *err)
 {
     const int N = pb->N;
-    double *xy = malloc((size_t)(N > 0 ? N : 1) * 4 * sizeof *xy), *en = xy + 2 * (N > 0 ? N : 1);
+    double *xy = calloc((size_t)(N > 0 ? N : 1) * 4, sizeof *xy), *en = xy + 2 * (N > 0 ? N : 1);
     if (!xy) return rs_err_set(err, RS_ERR_NOMEM, "coverage: out of memory");
     int Nin = 0;
     for (int i = 0; i < N; i++)
@@ -190,7 +196,17 @@ rs_status rs_audit__compute_coverage(rs_audit_result *r, const rs_calib_problem 
         pb->camera->width > 0 && pb->camera->height > 0 ? area / ((double)pb->camera->width * pb->camera->height) : NAN;
     r->ground_seen_m2 = NAN;
     r->ground_hull_share = NAN;
+    r->ground_sigma_inside_median_m = r->ground_sigma_inside_p90_m = NAN;
     const rs_audit_map *m = &r->map;
+    for (int i = 0; i < N; i++) { // each landmark's predicted sigma (nearest cell) and distance
+        const double *p = &pb->p_enu_m[3 * i];
+        rs_audit_landmark *L = &r->landmarks[i];
+        L->sigma_ground_m = NAN;
+        L->distance_m = hypot(p[0] - r->solve.position_enu_m[0], p[1] - r->solve.position_enu_m[1]);
+        if (!m->sigma_m) continue;
+        long ix = lround((p[0] - m->e0_m) / m->cell_m), iy = lround((p[1] - m->n0_m) / m->cell_m);
+        if (ix >= 0 && iy >= 0 && ix < m->nx && iy < m->ny) L->sigma_ground_m = m->sigma_m[iy * m->nx + ix];
+    }
     if (st == RS_OK && m->sigma_m) {
         int ncell = m->nx * m->ny, nseen = 0;
         double *cells = malloc((size_t)ncell * 2 * sizeof *cells);
@@ -208,6 +224,18 @@ rs_status rs_audit__compute_coverage(rs_audit_result *r, const rs_calib_problem 
             for (int k = 0; k < nseen; k++) nin += inside[k];
             r->ground_seen_m2 = nseen * m->cell_m * m->cell_m;
             r->ground_hull_share = nseen ? (double)nin / nseen : 0;
+            // the predicted sigma where the landmarks are: cells[] is reused for the values
+            int c = 0;
+            for (int k = 0, j = 0; k < ncell; k++)
+                if (isfinite(m->sigma_m[k])) {
+                    if (inside[j]) cells[c++] = m->sigma_m[k];
+                    j++;
+                }
+            if (c) {
+                qsort(cells, (size_t)c, sizeof *cells, cmp_double);
+                r->ground_sigma_inside_median_m = c % 2 ? cells[c / 2] : 0.5 * (cells[c / 2 - 1] + cells[c / 2]);
+                r->ground_sigma_inside_p90_m = cells[(int)floor(0.9 * (c - 1))];
+            }
         }
         free(cells);
         free(inside);

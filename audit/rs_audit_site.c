@@ -3,6 +3,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -198,11 +199,119 @@ rs_status rs_audit_site_camera(rs_audit_result *result, const rs_site *site, int
     }
     st = rs_audit_camera(result, &sp.problem, site->ground_normal_enu, site->ground_offset_m, q_new,
                          q_new ? q_new + 2 * cam->Nobservations : NULL, calib_path ? &cal : NULL, opt, err);
+    if (st == RS_OK) { // landmarks named by id, the verdict in words
+        rs_audit_site_name_landmarks(result->warnings, sizeof result->warnings, site, icam);
+        rs_audit_site_verdict(result->verdict, sizeof result->verdict, site, icam, result);
+    }
 done:
     free(q_new);
     rs_audit_calibration_free(&cal);
     rs_calib_site_problem_free(&sp);
     return st;
+}
+
+// ---- in words ----
+
+// The id of the camera's observation i ("#i" when out of range).
+static const char *obs_id(char *buf, size_t size, const rs_site *site, int icam, int i)
+{
+    const rs_site_camera *cam = &site->cameras[icam];
+    if (i >= 0 && i < cam->Nobservations && cam->observations[i].ilandmark >= 0 &&
+        cam->observations[i].ilandmark < site->Nlandmarks && site->landmarks[cam->observations[i].ilandmark].id)
+        return site->landmarks[cam->observations[i].ilandmark].id;
+    snprintf(buf, size, "#%d", i);
+    return buf;
+}
+
+void rs_audit_site_name_landmarks(char *text, size_t size, const rs_site *site, int icam)
+{
+    char *at = strstr(text, "(index ");
+    if (!at) return;
+    char *list = at + strlen("(index "), *end = list;
+    while (isdigit((unsigned char)*end) || *end == ',') end++;
+    if (end == list) return;
+    char names[512] = "", buf[16];
+    size_t n = 0;
+    for (char *p = list; p < end && n + 2 < sizeof names;) {
+        int i = (int)strtol(p, &p, 10);
+        n += (size_t)snprintf(names + n, sizeof names - n, "%s%s", n ? ", " : "",
+                              obs_id(buf, sizeof buf, site, icam, i));
+        if (*p == ',') p++;
+    }
+    if (n >= sizeof names) n = sizeof names - 1;
+    // "(index 2,5" -> "(landmark L003, L006"
+    char *out = malloc(size);
+    if (!out) return;
+    snprintf(out, size, "%.*s(landmark%s %s%s", (int)(at - text), text, strchr(names, ',') ? "s" : "", names, end);
+    memcpy(text, out, size);
+    text[size - 1] = '\0';
+    free(out);
+}
+
+// Appends printf text to a fixed buffer (truncating).
+__attribute__((format(printf, 3, 4))) static void say(char *buf, size_t size, const char *fmt, ...)
+{
+    size_t n = strlen(buf);
+    if (n + 1 >= size) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf + n, size - n, fmt, ap);
+    va_end(ap);
+}
+
+void rs_audit_site_verdict(char *text, size_t size, const rs_site *site, int icam, const rs_audit_result *r)
+{
+    text[0] = '\0';
+    char buf[16];
+    const double need = r->thresholds.need_ground_m;
+    say(text, size, "%s for the need of %g m (1 sigma on the ground where the landmarks are). ",
+        r->pass ? "Good enough" : "NOT good enough", need);
+    if (isfinite(r->ground_sigma_inside_median_m)) {
+        int far = -1; // the farthest inlier with a predicted sigma
+        for (int i = 0; i < r->N; i++)
+            if (r->landmarks[i].inlier && isfinite(r->landmarks[i].sigma_ground_m) &&
+                (far < 0 || r->landmarks[i].distance_m > r->landmarks[far].distance_m))
+                far = i;
+        say(text, size,
+            "Ground positions within the landmarks' area are good to %.2f m (1 sigma, median; 90%% of it "
+            "within %.2f m)",
+            r->ground_sigma_inside_median_m, r->ground_sigma_inside_p90_m);
+        if (far >= 0)
+            say(text, size, ", %.2f m at the farthest landmark, %s, %.0f m from the camera",
+                r->landmarks[far].sigma_ground_m, obs_id(buf, sizeof buf, site, icam, far),
+                r->landmarks[far].distance_m);
+        say(text, size, ". ");
+    }
+    if (r->loo_count)
+        say(text, size,
+            "Checked against the survey, each landmark left out in turn is located from its pick "
+            "%.2f m from its surveyed position (median; worst %.2f m)%s. ",
+            r->loo_median_m, r->loo_max_m,
+            r->loo_median_m > r->thresholds.max_loo_m ? ", more than the need allows" : "");
+    for (int i = 0; i < r->N; i++) {
+        const rs_audit_landmark *L = &r->landmarks[i];
+        const char *id = obs_id(buf, sizeof buf, site, icam, i);
+        const double px = hypot(L->residual_surveyed_px[0], L->residual_surveyed_px[1]);
+        if (!L->inlier) {
+            say(text, size, "Landmark %s disagrees with the survey", id);
+            if (L->loo_ok && isfinite(L->loo_ground_error_m))
+                say(text, size, " by %.1f m on the ground", L->loo_ground_error_m);
+            if (isfinite(px)) say(text, size, " (%.0f px in the image)", px);
+            say(text, size, ": it was left out; re-survey it or re-pick it. ");
+        } else if (L->reason[0])
+            say(text, size, "Landmark %s: %s%s%.1f m on the ground: check its survey and its pick. ", id,
+                L->loo_ok ? "the others locate it " : "", L->loo_ok ? "" : "", L->loo_ok ? L->loo_ground_error_m : NAN);
+    }
+    if (!r->pass) {
+        say(text, size, "Fails: %s.", r->failures);
+        if (r->loo_count && r->loo_median_m > r->thresholds.max_loo_m)
+            say(text, size,
+                " To meet the need, survey the landmarks more accurately or add landmarks spread over the "
+                "area, then re-pick and recalibrate.");
+    } else if (r->warnings[0])
+        say(text, size, "Passes, with warnings below.");
+    else
+        say(text, size, "Passes every threshold.");
 }
 
 // ---- JSON ----
@@ -256,7 +365,8 @@ static void add_landmarks(cJSON *root, const rs_site *site, const rs_site_camera
         cJSON_AddItemToObject(l, "loo_predicted_px", num_array(L->loo_predicted_px, 2));
         ADD_NUMBERS(l, {"loo_error_px", L->loo_error_px}, {"loo_normalised", L->loo_normalised},
                     {"loo_ground_error_m", L->loo_ground_error_m}, {"influence_m", L->influence_m},
-                    {"influence_deg", L->influence_deg});
+                    {"influence_deg", L->influence_deg}, {"sigma_ground_m", L->sigma_ground_m},
+                    {"distance_m", L->distance_m});
         if (r->has_external)
             cJSON_AddItemToObject(l, "external_residual_surveyed_px",
                                   num_array(&r->external.residual_surveyed_px[2 * i], 2));
@@ -297,10 +407,14 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
     cJSON_AddBoolToObject(root, "pass", r->pass);
     cJSON_AddItemToObject(root, "failures", sentences(r->failures));
     cJSON_AddItemToObject(root, "warnings", sentences(r->warnings));
+    cJSON_AddStringToObject(root, "verdict", r->verdict);
     // the headline the threshold applies to (the external calibration's with --calib)
     ADD_NUMBERS(root, {"rms_surveyed_px", r->rms_surveyed_px});
-    ADD_NUMBERS(cJSON_AddObjectToObject(root, "thresholds"), {"max_rms_surveyed_px", opt->max_rms_surveyed_px},
-                {"max_loo_px", opt->max_loo_px}, {"max_loo_m", opt->max_loo_m},
+    // the thresholds applied: those not given derive from need_ground_m (px_per_m converts)
+    ADD_NUMBERS(cJSON_AddObjectToObject(root, "thresholds"), {"need_ground_m", r->thresholds.need_ground_m},
+                {"px_per_m", r->px_per_m}, {"max_rms_surveyed_px", r->thresholds.max_rms_surveyed_px},
+                {"max_loo_px", r->thresholds.max_loo_px}, {"max_loo_m", r->thresholds.max_loo_m},
+                {"max_ground_sigma_m", r->thresholds.max_ground_sigma_m},
                 {"outlier_threshold", opt->calib.outlier_threshold}, {"alpha", opt->alpha},
                 {"consistency_px", opt->consistency_px});
     cJSON_AddItemToObject(root, "solve", solve);
@@ -308,7 +422,8 @@ char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result 
                 {"max_px", r->loo_max_px}, {"median_m", r->loo_median_m}, {"max_m", r->loo_max_m});
     ADD_NUMBERS(cJSON_AddObjectToObject(root, "coverage"), {"image_hull_share", r->image_hull_share},
                 {"ground_seen_m2", r->ground_seen_m2}, {"ground_hull_share", r->ground_hull_share},
-                {"range_m", opt->range_m});
+                {"ground_sigma_inside_median_m", r->ground_sigma_inside_median_m},
+                {"ground_sigma_inside_p90_m", r->ground_sigma_inside_p90_m}, {"range_m", opt->range_m});
     ADD_NUMBERS(cJSON_AddObjectToObject(root, "degeneracy"), {"condition_number", r->condition_number},
                 {"collinearity", r->collinearity}, {"planarity", r->planarity}, {"head_on_deg", r->head_on_deg});
     add_landmarks(root, site, cam, r);

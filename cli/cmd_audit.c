@@ -44,13 +44,17 @@ static const char audit_usage[] =
     "  --camera ID            audit only this camera (repeatable; default all)\n"
     "  -o, --output DIR       where <id>.audit.json go (created; default SITE/calib)\n"
     "  --json                 print the audits as a JSON array instead of the summary\n"
+    "  --need-ground-m X      what the site is for: the 1-sigma ground accuracy needed where\n"
+    "                         the landmarks are, metres (default 1). The thresholds below\n"
+    "                         derive from it unless given: X metres in pixels at the landmarks\n"
+    "                         for the pixel ones (printed as px_per_m), X for the metre ones\n"
     "  --max-rms-surveyed-px X\n"
-    "                         fail when rms_surveyed_px exceeds X px (default 50; the old name\n"
-    "                         --max-rms-px is accepted and means the same)\n"
+    "                         fail when rms_surveyed_px exceeds X px (the old name --max-rms-px\n"
+    "                         is accepted and means the same)\n"
     "  --max-loo-px X         fail when the RMS leave-one-out pixel error exceeds X px\n"
-    "                         (default 50)\n"
     "  --max-loo-m X          fail when the median leave-one-out ground error exceeds X m\n"
-    "                         (default 2.5)\n"
+    "  --max-ground-sigma-m X fail when the predicted 1-sigma ground error exceeds X m over 10%\n"
+    "                         or more of the landmarks' area\n"
     "  --detection-sigma-px X detection noise for the uncertainty map, px (default 1)\n"
     "  --range-m X            ground range for the map and coverage, m (default 100)\n"
     "  --cell-m X             map cell size, m (default 1)\n"
@@ -89,12 +93,20 @@ static void print_row(const char *id, const rs_audit_result *r)
 static void print_details(const rs_site *site, int icam, const rs_audit_result *r)
 {
     const char *id = site->cameras[icam].id;
+    if (r->verdict[0]) printf("  %s verdict: %s\n", id, r->verdict);
+    printf("  %s thresholds: need %g m; rms_surveyed_px and loo_rms_px at most %.3g px (%.1f px/m at the "
+           "landmarks), loo_median_m at most %g m, predicted ground error at most %g m\n",
+           id, r->thresholds.need_ground_m, r->thresholds.max_rms_surveyed_px, r->px_per_m, r->thresholds.max_loo_m,
+           r->thresholds.max_ground_sigma_m);
     if (r->failures[0]) printf("  %s fails: %s\n", id, r->failures);
     if (r->warnings[0]) printf("  %s warnings: %s\n", id, r->warnings);
+    const rs_site_camera *sc = &site->cameras[icam];
     for (int i = 0; i < r->N; i++)
-        if (r->landmarks[i].reason[0])
-            printf("  %s landmark %s: %s\n", id, site->landmarks[site->cameras[icam].observations[i].ilandmark].id,
+        if (r->landmarks[i].reason[0]) {
+            const int il = i < sc->Nobservations ? sc->observations[i].ilandmark : -1;
+            printf("  %s landmark %s: %s\n", id, il >= 0 && il < site->Nlandmarks ? site->landmarks[il].id : "?",
                    r->landmarks[i].reason);
+        }
     if (r->has_against) printf("  %s against: %s\n", id, r->against.message);
     if (r->has_external)
         printf("  %s external: rms_surveyed_px %.3f, max %.3f px, %.3f deg and %.3f m from the site's solve; %s\n", id,
@@ -123,6 +135,8 @@ int rs_cli_audit(int argc, char **argv)
         {"cell-m", required_argument, NULL, O_DOUBLE + 5},
         {"alpha", required_argument, NULL, O_DOUBLE + 6},
         {"consistency-px", required_argument, NULL, O_DOUBLE + 7},
+        {"need-ground-m", required_argument, NULL, O_DOUBLE + 8},
+        {"max-ground-sigma-m", required_argument, NULL, O_DOUBLE + 9},
         {"max-rms-px", required_argument, NULL, O_DOUBLE + 0}, // the old name: the same threshold
         {NULL, 0, NULL, 0},
     };
@@ -135,7 +149,9 @@ int rs_cli_audit(int argc, char **argv)
                      &opt.range_m,
                      &opt.cell_m,
                      &opt.alpha,
-                     &opt.consistency_px};
+                     &opt.consistency_px,
+                     &opt.need_ground_m,
+                     &opt.max_ground_sigma_m};
     const char *calib = NULL, *against = NULL, *out_dir = NULL;
     const char **only = calloc((size_t)argc, sizeof *only);
     int Nonly = 0;
@@ -143,7 +159,7 @@ int rs_cli_audit(int argc, char **argv)
     optind = 1;
     int c, option_index = 0;
     while ((c = getopt_long(argc, argv, "o:", longopts, &option_index)) != -1) {
-        if (c >= O_DOUBLE && c < O_DOUBLE + 8) {
+        if (c >= O_DOUBLE && c < O_DOUBLE + 10) {
             double v;
             if (!rs_cli_parse_double(optarg, &v) || !(v > 0) || (c == O_DOUBLE + 6 && !(v < 1))) {
                 free(only);

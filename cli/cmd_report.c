@@ -8,10 +8,16 @@
 #include "geo/rs_site.h"
 #include "report/rs_report.h"
 
+#ifndef RS_VERSION
+#define RS_VERSION "unknown"
+#endif
+
 static const char report_usage[] =
     "usage: roadside report SITE [--calib DIR] -o DIR [options]\n"
     "\n"
-    "Writes the calibration report of a site, for an engineer to send on: DIR/report.html (one\n"
+    "Writes the calibration report of a site, for an engineer to send on; it opens with each\n"
+    "camera's verdict in plain words (what its ground positions are good to, what to fix), then\n"
+    "the evidence, the date, the version and the SHA-256 of every input. DIR/report.html (one\n"
     "self-contained file: figures embedded, no external resource) and DIR/report.pdf (the same\n"
     "content). It reads the cameras' <id>.cameramodel and <id>.json written by 'roadside calib'\n"
     "and audits that calibration exactly as 'roadside audit SITE --calib DIR' does, with its\n"
@@ -37,6 +43,10 @@ static const char report_usage[] =
     "  --detection-px S      detection noise of the uncertainty map, px (default 1)\n"
     "  --cell M              uncertainty map cell size, metres (default 1)\n"
     "  --width PX            width of the HTML figures, pixels (default 1000)\n"
+    "  --need-ground-m X     the ground accuracy the site needs, 1 sigma, metres (default 1): the\n"
+    "                        verdicts are judged against it, as in 'roadside audit'\n"
+    "  --max-rms-surveyed-px X, --max-loo-px X, --max-loo-m X, --max-ground-sigma-m X\n"
+    "                        the audit's thresholds (default: derived from --need-ground-m)\n"
     "  --no-audit            skip the audit (no leave-one-out, no uncertainty map; every\n"
     "                        camera 'not audited')\n"
     "  -h, --help            this text\n"
@@ -61,10 +71,18 @@ int rs_cli_report(int argc, char **argv)
         {"cell", required_argument, NULL, 'l'},
         {"width", required_argument, NULL, 'w'},
         {"no-audit", no_argument, NULL, 'n'},
+        {"need-ground-m", required_argument, NULL, 'N'},
+        {"max-rms-surveyed-px", required_argument, NULL, '1'},
+        {"max-loo-px", required_argument, NULL, '2'},
+        {"max-loo-m", required_argument, NULL, '3'},
+        {"max-ground-sigma-m", required_argument, NULL, '4'},
         {NULL, 0, NULL, 0},
     };
     rs_report_options opt;
     rs_report_options_default(&opt);
+    opt.version = RS_VERSION;
+    const char *epoch = getenv("SOURCE_DATE_EPOCH"); // reproducible builds' convention for "now"
+    if (epoch && *epoch) opt.written_utc_s = strtoll(epoch, NULL, 10);
     const char *out_dir = NULL;
     optind = 1;
     int c;
@@ -101,6 +119,22 @@ int rs_cli_report(int argc, char **argv)
             opt.figure_width_px = (int)width;
             break;
         case 'n': opt.audit = false; break;
+        case 'N':
+        case '1':
+        case '2':
+        case '3':
+        case '4': {
+            double *dst[] = {&opt.audit_options.need_ground_m, &opt.audit_options.max_rms_surveyed_px,
+                             &opt.audit_options.max_loo_px, &opt.audit_options.max_loo_m,
+                             &opt.audit_options.max_ground_sigma_m};
+            if (!rs_cli_parse_double(optarg, &x) || !(x > 0))
+                return rs_cli_usage_error("report",
+                                          "'%s': expected a positive number (the thresholds of 'roadside "
+                                          "audit')",
+                                          optarg);
+            *dst[c == 'N' ? 0 : c - '0'] = x;
+            break;
+        }
         default: return rs_cli_usage_error("report", "unknown option");
         }
     }

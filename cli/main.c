@@ -21,6 +21,7 @@ static const command commands[] = {
     {"locate", rs_cli_locate, "map pixels to ground points through a calibrated camera"},
     {"audit", rs_cli_audit, "audit calibrations: cross-validation, outliers, coverage, uncertainty"},
     {"report", rs_cli_report, "a per-intersection calibration report (HTML and PDF)"},
+    {"export", rs_cli_export, "cameras, footprints, landmarks, lanes for GIS (GeoPackage, GeoJSON, GeoTIFF)"},
     {"scene", rs_cli_scene, "write a POV-Ray scene of vehicles seen by a calibrated camera"},
     {"render", rs_cli_render, "render a scene with POV-Ray and write its labels"},
     {"background", rs_cli_background, "background images of a camera: temporal median of video or frames"},

@@ -19,6 +19,7 @@ int rs_cli_calib(int argc, char **argv);
 int rs_cli_locate(int argc, char **argv);
 int rs_cli_audit(int argc, char **argv);
 int rs_cli_report(int argc, char **argv);
+int rs_cli_export(int argc, char **argv);
 int rs_cli_scene(int argc, char **argv);
 int rs_cli_render(int argc, char **argv);
 int rs_cli_background(int argc, char **argv);

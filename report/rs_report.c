@@ -20,6 +20,7 @@
 #include "core/rs_io.h"
 #include "report/internal/rs_report_doc.h"
 #include "report/internal/rs_report_draw.h"
+#include "report/internal/rs_report_words.h"
 
 void rs_report_options_default(rs_report_options *opt)
 {
@@ -354,20 +355,35 @@ static rs_status camera_load(rs_report_camera *cam, const rs_site *site, const c
     return st;
 }
 
-// ---- the document ----
-
-// "a; b; c" -> one warning paragraph each
-static void doc_warning_list(rs_doc *doc, const char *prefix, const char *list)
+rs_status rs_report_load_cameras(struct rs_report_ctx *rep, const rs_report_options *opt, rs_err *err)
 {
-    const char *s = list;
-    while (*s) {
-        const char *e = strstr(s, "; ");
-        int len = e ? (int)(e - s) : (int)strlen(s);
-        if (len > 0) rs_doc_paragraph(doc, true, "%s%.*s", prefix, len, s);
-        s += len;
-        while (*s == ';' || *s == ' ') s++;
+    rep->cameras = calloc((size_t)rep->site->Ncameras + 1, sizeof *rep->cameras);
+    if (!rep->cameras) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = read_lanes(&rep->lanes, rep->site, err);
+    for (int c = 0; c < rep->site->Ncameras && !st; c++) {
+        rs_report_camera *cam = &rep->cameras[rep->Ncameras++];
+        cam->rep = rep;
+        cam->icam = c;
+        cam->colour = c;
+        st = camera_load(cam, rep->site, rep->calib_dir, opt, err);
     }
+    if (!st && !rs_report_best_map(rep)) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    return st;
 }
+
+void rs_report_free_cameras(struct rs_report_ctx *rep)
+{
+    for (int c = 0; c < rep->Ncameras; c++) camera_free(&rep->cameras[c]);
+    free(rep->cameras);
+    free(rep->lanes.start);
+    free(rep->lanes.p_enu_m);
+    free(rep->lanes.junction);
+    free(rep->best_map.sigma_m);
+    rep->cameras = NULL;
+    rep->Ncameras = 0;
+}
+
+// ---- the document ----
 
 // The audit's verdict (rs_audit_result.pass), never one of the report's own.
 static const char *verdict(const rs_report_camera *cam)
@@ -398,13 +414,18 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
                      site->dir, site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m,
                      site->heights_orthometric ? "; the site's heights are orthometric, converted" : "",
                      site->Nlandmarks, site->Ncameras, calib_dir);
+    char stamp[200];
+    rs_report_stamp(stamp, sizeof stamp, rep);
+    rs_doc_paragraph(doc, false, "%s. The inputs and their SHA-256 are listed at the end.", stamp);
+    rs_report_doc_verdicts(doc, rep);
+    rs_doc_heading(doc, 2, "The evidence");
     char audit[700] = "the audit was not requested";
     const rs_audit_options *ao = rep->audit_options;
     if (ao)
         snprintf(audit, sizeof audit,
-                 "the verdict of roadside audit %s --calib %s, with the thresholds rms_surveyed_px at most %g px, "
-                 "loo_rms_px at most %g px and loo_median_m at most %g m",
-                 site->dir, calib_dir, ao->max_rms_surveyed_px, ao->max_loo_px, ao->max_loo_m);
+                 "the verdict of roadside audit %s --calib %s --need-ground-m %g (thresholds per camera in its "
+                 "section)",
+                 site->dir, calib_dir, ao->need_ground_m);
     rs_doc_paragraph(doc, false,
                      "rms_surveyed_px: the RMS reprojection error of the inliers' surveyed positions through "
                      "the calibration, in pixels (what anyone can check with the survey and the picks; "
@@ -454,6 +475,7 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
     const rs_site *site = rep->site;
     const char *id = site->cameras[cam->icam].id;
     rs_doc_heading(doc, 2, "Camera %s", id);
+    rs_report_doc_camera_verdict(doc, rep, cam);
     if (site->cameras[cam->icam].note) rs_doc_paragraph(doc, false, "Note: %s", site->cameras[cam->icam].note);
     char bg[700];
     if (cam->background)
@@ -514,6 +536,7 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
     rs_doc_cell(doc, "lens model");
     rs_doc_cell(doc, "%s", cam->lensmodel);
     rs_doc_cell(doc, "-");
+    rs_report_doc_pose_words(doc, cam);
 
     const rs_audit_result *a = cam->has_audit ? &cam->audit : NULL;
     rs_doc_heading(doc, 3, "Landmarks of %s", id);
@@ -569,18 +592,18 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
 
     rs_doc_heading(doc, 3, "Verdict and warnings for %s", id);
     if (a)
-        rs_doc_paragraph(doc, !a->pass, "Audit (roadside audit --calib of these files): %s%s%s",
-                         a->pass ? "pass, every threshold met" : "FAIL", a->pass ? "" : ": ",
-                         a->pass ? "" : a->failures);
+        rs_doc_paragraph(doc, !a->pass,
+                         "Audit (roadside audit --calib of these files, need %g m): %s%s%s. Thresholds: "
+                         "rms_surveyed_px and loo_rms_px at most %.3g px (%g m at %.1f px per metre of ground at "
+                         "the landmarks), loo_median_m at most %g m, predicted ground error (90th percentile where "
+                         "the landmarks are, %.2f m here) at most %g m.",
+                         a->thresholds.need_ground_m, a->pass ? "pass, every threshold met" : "FAIL",
+                         a->pass ? "" : ": ", a->pass ? "" : a->failures, a->thresholds.max_rms_surveyed_px,
+                         a->thresholds.need_ground_m, a->px_per_m, a->thresholds.max_loo_m,
+                         a->ground_sigma_inside_p90_m, a->thresholds.max_ground_sigma_m);
     else
         rs_doc_paragraph(doc, true, "No audit for this camera: %s.", cam->audit_error);
-    int Nw = 0;
-    for (int i = 0; i < cam->Nwarnings; i++, Nw++) rs_doc_paragraph(doc, true, "Calibration: %s", cam->warnings[i]);
-    if (a && a->warnings[0]) {
-        doc_warning_list(doc, "Audit: ", a->warnings);
-        Nw++;
-    }
-    if (!Nw) rs_doc_paragraph(doc, false, "No warnings.");
+    if (!rs_report_doc_warnings(doc, rep, cam)) rs_doc_paragraph(doc, false, "No warnings.");
 }
 
 // ---- writing ----
@@ -602,12 +625,14 @@ static rs_status write_report(rs_report_summary *summary, const char *out_dir, c
     if (site->Ncameras < 1) return rs_err_set(err, RS_ERR_INVALID, "%s: the site has no camera", site->dir);
     opt.audit_options.range_m = opt.range_m; // one range for the figures and the maps
 
-    struct rs_report_ctx rep = {.site = site, .range_m = opt.range_m};
+    struct rs_report_ctx rep = {
+        .site = site, .range_m = opt.range_m, .version = opt.version, .written_utc_s = opt.written_utc_s};
     rep.grid_m = opt.grid_m > 0 ? opt.grid_m : opt.range_m / 10;
     rep.detection_sigma_px = opt.audit_options.detection_sigma_px;
     rep.audit_options = opt.audit ? &opt.audit_options : NULL;
     char *default_calib = opt.calib_dir ? NULL : rs_io_join(site->dir, "calib");
     const char *calib_dir = opt.calib_dir ? opt.calib_dir : default_calib;
+    rep.calib_dir = calib_dir;
     rs_doc doc = {0};
     char *html_path = rs_io_join(out_dir, "report.html"), *pdf_path = rs_io_join(out_dir, "report.pdf");
     rep.cameras = calloc((size_t)site->Ncameras, sizeof *rep.cameras);
@@ -626,6 +651,7 @@ static rs_status write_report(rs_report_summary *summary, const char *out_dir, c
     if (!st) {
         doc_site(&doc, &rep, calib_dir);
         for (int c = 0; c < rep.Ncameras; c++) doc_camera(&doc, &rep, &rep.cameras[c]);
+        rs_report_doc_inputs(&doc, &rep);
     }
     if (!st) st = rs_io_mkdir_p(out_dir, err);
     char title[512];

@@ -8,7 +8,10 @@
 //                        input file is HTML-escaped
 //   out_dir/report.pdf   A4, the same headings, tables and figures drawn with cairo's PDF
 //                        surface (figures as vectors)
-// Content: a site summary table and a top-down ENU map of the site (cameras, their fields of
+// Content: first the verdict per camera in plain words (rs_audit_site_verdict: the need, the
+// ground accuracy where the landmarks are and at the farthest one, outliers named with what to
+// do), the date, the version and the SHA-256 of every input (an appendix table); then a site
+// summary table and a top-down ENU map of the site (cameras, their fields of
 // view on the ground cut at range_m, landmarks, lanes, and the smallest 1-sigma ground error
 // over the cameras' uncertainty maps as a colour scale with labelled contours); then per camera
 //   - its image (the first PNG/JPEG in the camera's backgrounds folder, else a neutral canvas)
@@ -54,8 +57,11 @@ typedef struct {
     bool audit;                     // audit the calibration (as `roadside audit --calib`) for the
                                     //   leave-one-out figures, the uncertainty map, the warnings
                                     //   and the verdict (default true; false: "not audited")
-    rs_audit_options audit_options; // (default rs_audit_options_default); its range_m is
-                                    //   replaced by range_m above
+    rs_audit_options audit_options; // (default rs_audit_options_default: need_ground_m 1 m and
+                                    //   the thresholds derived from it); its range_m is replaced
+                                    //   by range_m above
+    const char *version;            // the software version printed on the report; NULL: "unknown"
+    long long written_utc_s;        // the date printed, seconds since 1970 UTC; 0: now
 } rs_report_options;
 
 // Fills opt with the defaults above. opt must not be NULL.

@@ -7,7 +7,9 @@
 #include "report/internal/rs_report_draw_internal.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
@@ -173,4 +175,78 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
     cam->magnification = med > 1e-6 ? rs_report_nice_ceil(target / med) / 2 : 1;
     if (cam->magnification < 1) cam->magnification = 1;
     return true;
+}
+
+// ---- label placement ----
+
+static void placer_log(const rs_report_placer *p, const char *kind, const double b[4], const char *s);
+
+void rs_report_placer_init(rs_report_placer *p, const char *figure, double w, double h)
+{
+    memset(p, 0, sizeof *p);
+    p->figure = figure;
+    p->w = w, p->h = h;
+    const double none[4] = {0, 0, 0, 0};
+    placer_log(p, "begin", none, NULL);
+}
+
+void rs_report_placer_free(rs_report_placer *p)
+{
+    free(p->box);
+    memset(p, 0, sizeof *p);
+}
+
+static void placer_log(const rs_report_placer *p, const char *kind, const double b[4], const char *s)
+{
+    const char *path = getenv("ROADSIDE_REPORT_LABEL_BOXES");
+    if (!path || !*path || p->w <= 400) return;
+    FILE *f = fopen(path, "a");
+    if (!f) return;
+    fprintf(f, "%s %s %.3f %.3f %.3f %.3f %.3f %.3f %s\n", p->figure, kind, b[0], b[1], b[2], b[3], p->w, p->h,
+            s ? s : "-");
+    fclose(f);
+}
+
+static bool placer_add(rs_report_placer *p, const double b[4])
+{
+    if (p->N == p->capacity) {
+        int cap = p->capacity ? 2 * p->capacity : 64;
+        double(*nb)[4] = realloc(p->box, (size_t)cap * sizeof *nb);
+        if (!nb) return false;
+        p->box = nb, p->capacity = cap;
+    }
+    memcpy(p->box[p->N++], b, 4 * sizeof(double));
+    return true;
+}
+
+void rs_report_placer_reserve(rs_report_placer *p, double x0, double y0, double x1, double y1)
+{
+    const double b[4] = {fmin(x0, x1), fmin(y0, y1), fmax(x0, x1), fmax(y0, y1)};
+    if (placer_add(p, b)) placer_log(p, "reserved", b, NULL);
+}
+
+bool rs_report_placer_label(rs_report_placer *p, cairo_t *cr, double x, double y, double gap, const char *s,
+                            double box_alpha)
+{
+    cairo_text_extents_t e;
+    rs_doc_text_extents(cr, s, &e);
+    const double pad = 0.25 * e.height + 1, bw = e.width + 2 * pad, bh = e.height + 2 * pad;
+    // the box's top-left corner for each candidate, relative to the anchor
+    for (int ring = 0; ring < 2; ring++, gap = 3 * gap + bh) { // then once more, farther out
+        const double cx[8] = {gap, -gap - bw, gap, -gap - bw, gap, -gap - bw, -bw / 2, -bw / 2};
+        const double cy[8] = {-gap - bh, -gap - bh, gap, gap, -bh / 2, -bh / 2, -gap - bh, gap};
+        for (int k = 0; k < 8; k++) {
+            const double b[4] = {x + cx[k], y + cy[k], x + cx[k] + bw, y + cy[k] + bh};
+            bool free_place = b[0] >= 0 && b[1] >= 0 && b[2] <= p->w && b[3] <= p->h;
+            for (int i = 0; i < p->N && free_place; i++)
+                free_place =
+                    b[2] <= p->box[i][0] || b[0] >= p->box[i][2] || b[3] <= p->box[i][1] || b[1] >= p->box[i][3];
+            if (!free_place) continue;
+            if (placer_add(p, b)) placer_log(p, "label", b, s);
+            // rs_report_label puts the box at (x + x_bearing - pad, y + y_bearing - pad)
+            rs_report_label(cr, b[0] + pad - e.x_bearing, b[1] + pad - e.y_bearing, s, box_alpha);
+            return true;
+        }
+    }
+    return false;
 }

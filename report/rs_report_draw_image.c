@@ -136,12 +136,11 @@ void rs_report_draw_camera(cairo_t *cr, double w, double h, const void *ctx)
         }
     cairo_stroke(cr);
 
-    // lanes: edges solid, junction connectors thin and dashed
+    // lanes: edges, then junction connectors thin and light (solid: dashes on many crossing curves
+    // read as scattered specks)
     for (int pass = 0; pass < 2; pass++) {
-        cairo_set_source_rgba(cr, 1, 0.8, 0, pass ? 0.5 : 0.95);
-        cairo_set_line_width(cr, fmax(w / (pass ? 1000 : 450), pass ? 0.4 : 0.8));
-        double dash = w / 150;
-        cairo_set_dash(cr, &dash, pass, 0);
+        cairo_set_source_rgba(cr, 1, 0.8, 0, pass ? 0.45 : 0.95);
+        cairo_set_line_width(cr, fmax(w / (pass ? 1200 : 450), pass ? 0.4 : 0.8));
         for (int k = 0; k < rep->lanes.Nlines; k++)
             if (rep->lanes.junction[k] == (pass == 1))
                 image_polyline(cr, cam, s, &rep->lanes.p_enu_m[3 * rep->lanes.start[k]],

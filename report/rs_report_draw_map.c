@@ -47,11 +47,10 @@ static void extent_add(double ext[4], double e, double n)
 
 static void map_lanes(cairo_t *cr, const map_view *v, const rs_report_lanes *lanes, double lw)
 {
-    for (int pass = 0; pass < 2; pass++) { // edges solid, junction connectors thin and dashed
-        cairo_set_source_rgba(cr, 0.85, 0.65, 0, pass ? 0.6 : 0.9);
-        cairo_set_line_width(cr, pass ? lw / 2 : lw);
-        double dash = lw * 6;
-        cairo_set_dash(cr, &dash, pass, 0);
+    for (int pass = 0; pass < 2; pass++) { // edges, then junction connectors thin and light (solid: dashes
+                                           // on dozens of crossing curves read as scattered specks)
+        cairo_set_source_rgba(cr, 0.85, 0.65, 0, pass ? 0.45 : 0.9);
+        cairo_set_line_width(cr, pass ? lw / 2.5 : lw);
         for (int k = 0; k < lanes->Nlines; k++) {
             if (lanes->junction[k] != (pass == 1)) continue;
             for (int i = lanes->start[k]; i < lanes->start[k + 1]; i++) {
@@ -65,7 +64,6 @@ static void map_lanes(cairo_t *cr, const map_view *v, const rs_report_lanes *lan
         }
         cairo_stroke(cr);
     }
-    cairo_set_dash(cr, NULL, 0, 0);
 }
 
 static void map_fov(cairo_t *cr, const map_view *v, const rs_report_camera *cam, double fill_alpha, double lw)
@@ -93,7 +91,7 @@ static void map_fov(cairo_t *cr, const map_view *v, const rs_report_camera *cam,
 }
 
 // The camera: a filled disc and an arrow along its heading, with its id.
-static void map_camera(cairo_t *cr, const map_view *v, const rs_report_camera *cam, double fs)
+static void map_camera(cairo_t *cr, const map_view *v, const rs_report_camera *cam, double fs, rs_report_placer *pl)
 {
     double x, y, yaw = cam->yaw_pitch_roll_deg[0] * M_PI / 180;
     map_xy(v, cam->position_enu_m[0], cam->position_enu_m[1], &x, &y);
@@ -109,15 +107,31 @@ static void map_camera(cairo_t *cr, const map_view *v, const rs_report_camera *c
     cairo_set_line_width(cr, fs * 0.08);
     cairo_stroke(cr);
     rs_report_font(cr, fs, true);
-    rs_report_label(cr, x + fs * 0.7, y + fs * 1.2, cam->rep->site->cameras[cam->icam].id, 0.7);
+    rs_report_placer_label(pl, cr, x, y, fs * 0.5, cam->rep->site->cameras[cam->icam].id, 0.7);
 }
 
-// Scale bar (bottom left) and north arrow (top right).
-static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, double fs)
+// The camera's disc as a reserved box (labels keep off it).
+static void map_camera_reserve(const map_view *v, const rs_report_camera *cam, double fs, rs_report_placer *pl)
+{
+    double x, y;
+    map_xy(v, cam->position_enu_m[0], cam->position_enu_m[1], &x, &y);
+    rs_report_placer_reserve(pl, x - fs * 0.5, y - fs * 0.5, x + fs * 0.5, y + fs * 0.5);
+}
+
+// Scale bar (bottom left) and north arrow (top left): their boxes reserved first (reserve true),
+// then drawn last (reserve false), over everything else.
+static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, double fs, rs_report_placer *pl,
+                          bool reserve)
 {
     double len_m = rs_report_nice_ceil(0.18 * w / v->k), len = len_m * v->k;
     if (len > 0.3 * w) len_m /= 2, len /= 2;
     double x = fs, y = h - fs;
+    double nx = fs * 1.6, ny = fs * 1.2;
+    if (reserve) {
+        rs_report_placer_reserve(pl, x - fs * 0.4, y - fs * 1.7, x + len + fs * 4.1, y + fs * 0.5);
+        rs_report_placer_reserve(pl, nx - fs * 0.8, ny - fs * 0.3, nx + fs * 0.8, ny + fs * 3.6);
+        return;
+    }
     cairo_set_source_rgba(cr, 1, 1, 1, 0.75);
     cairo_rectangle(cr, x - fs * 0.4, y - fs * 1.7, len + fs * 4.5, fs * 2.2);
     cairo_fill(cr);
@@ -134,7 +148,6 @@ static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, do
     cairo_move_to(cr, x + len + fs * 0.4, y);
     rs_doc_show_text(cr, buf);
 
-    double nx = fs * 1.6, ny = fs * 1.2;
     cairo_move_to(cr, nx, ny);
     cairo_line_to(cr, nx - fs * 0.6, ny + fs * 2);
     cairo_line_to(cr, nx, ny + fs * 1.5);
@@ -148,8 +161,12 @@ static void map_furniture(cairo_t *cr, const map_view *v, double w, double h, do
 
 // Landmarks of the site: observed by `cam` (if not NULL) drawn as inlier / outlier, the rest
 // as small grey dots; ids written when `ids`.
+static void map_camera(cairo_t *cr, const map_view *v, const rs_report_camera *cam, double fs, rs_report_placer *pl);
+
+// ... then the cameras (`cam` alone, else every camera of rep), their labels placed after every
+// marker is reserved and before the landmarks' ids.
 static void map_landmarks(cairo_t *cr, const map_view *v, const struct rs_report_ctx *rep, const rs_report_camera *cam,
-                          double fs, bool ids)
+                          double fs, bool ids, rs_report_placer *pl)
 {
     const rs_site *site = rep->site;
     for (int i = 0; i < site->Nlandmarks; i++) {
@@ -172,18 +189,30 @@ static void map_landmarks(cairo_t *cr, const map_view *v, const struct rs_report
             rs_report_marker_circle(cr, x, y, fs * (state ? 0.28 : 0.18));
             cairo_fill(cr);
         }
-        if (ids && (state || !cam)) {
-            rs_report_font(cr, fs * 0.7, false);
-            cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
-            cairo_move_to(cr, x + fs * 0.35, y - fs * 0.35);
-            rs_doc_show_text(cr, site->landmarks[i].id);
-        }
+        if (ids && (state || !cam))
+            rs_report_placer_reserve(pl, x - fs * 0.2, y - fs * 0.2, x + fs * 0.2, y + fs * 0.2);
+    }
+    if (cam)
+        map_camera(cr, v, cam, fs, pl);
+    else
+        for (int c = 0; c < rep->Ncameras; c++) map_camera(cr, v, &rep->cameras[c], fs, pl);
+    // the ids, once every marker is reserved, in site order
+    for (int i = 0; ids && i < site->Nlandmarks; i++) {
+        bool seen = !cam;
+        for (int k = 0; cam && k < cam->N; k++) seen |= cam->landmarks[k].ilandmark == i;
+        if (!seen) continue;
+        double x, y;
+        map_xy(v, site->landmarks[i].p_enu_m[0], site->landmarks[i].p_enu_m[1], &x, &y);
+        rs_report_font(cr, fs * 0.7, false);
+        cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
+        rs_report_placer_label(pl, cr, x, y, fs * 0.25, site->landmarks[i].id, 0.6);
     }
 }
 
 // Contour segments of `map` at `level` by marching squares over the cell centres (cells with a
 // NaN corner are skipped); up to 3 places far apart get the level written next to them.
-static void map_contour(cairo_t *cr, const map_view *v, const rs_audit_map *map, double level, double fs)
+static void map_contour(cairo_t *cr, const map_view *v, const rs_audit_map *map, double level, double fs,
+                        rs_report_placer *pl)
 {
     int nx = map->nx, ny = map->ny, Nlab = 0;
     double lx[3], ly[3];
@@ -209,21 +238,26 @@ static void map_contour(cairo_t *cr, const map_view *v, const rs_audit_map *map,
                 double x0, y0, x1, y1;
                 map_xy(v, map->e0_m + pe[k] * map->cell_m, map->n0_m + pn[k] * map->cell_m, &x0, &y0);
                 map_xy(v, map->e0_m + pe[k + 1] * map->cell_m, map->n0_m + pn[k + 1] * map->cell_m, &x1, &y1);
-                cairo_move_to(cr, x0, y0);
-                cairo_line_to(cr, x1, y1);
+                if (!pl) {
+                    cairo_move_to(cr, x0, y0);
+                    cairo_line_to(cr, x1, y1);
+                }
                 bool far = Nlab < 3;
                 for (int j = 0; j < Nlab && far; j++) far = hypot(x0 - lx[j], y0 - ly[j]) > 20 * fs;
                 if (far) lx[Nlab] = x0, ly[Nlab] = y0, Nlab++;
             }
         }
-    cairo_set_source_rgba(cr, 1, 1, 1, 0.9);
-    cairo_set_line_width(cr, fs * 0.12);
-    cairo_stroke(cr);
-    char buf[32];
+    if (!pl) { // the lines
+        cairo_set_source_rgba(cr, 1, 1, 1, 0.9);
+        cairo_set_line_width(cr, fs * 0.12);
+        cairo_stroke(cr);
+        return;
+    }
+    char buf[32]; // the labels, where they find room
     snprintf(buf, sizeof buf, "%g m", level);
     rs_report_font(cr, fs * 0.8, true);
     cairo_set_source_rgb(cr, 0, 0, 0);
-    for (int j = 0; j < Nlab; j++) rs_report_label(cr, lx[j], ly[j], buf, 0.75);
+    for (int j = 0; j < Nlab; j++) rs_report_placer_label(pl, cr, lx[j], ly[j], fs * 0.1, buf, 0.75);
 }
 
 // The 90th percentile of the finite map values (0 when none).
@@ -283,7 +317,14 @@ static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, d
     cairo_paint_with_alpha(cr, 0.85);
     cairo_restore(cr);
     cairo_surface_destroy(img);
-    for (int k = 1; k <= 4; k++) map_contour(cr, v, map, vmax * k / 5, fs);
+    for (int k = 1; k <= 4; k++) map_contour(cr, v, map, vmax * k / 5, fs, NULL);
+}
+
+// The contour labels (after the other labels: they give way).
+static void map_contour_labels(cairo_t *cr, const map_view *v, const rs_audit_map *map, double vmax, double fs,
+                               rs_report_placer *pl)
+{
+    for (int k = 1; k <= 4; k++) map_contour(cr, v, map, vmax * k / 5, fs, pl);
 }
 
 // The colour bar in the strip [w - cbar_w, w] on the right.
@@ -347,13 +388,18 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
 
     cairo_set_source_rgb(cr, 0.97, 0.97, 0.96);
     cairo_paint(cr);
+    rs_report_placer pl;
+    rs_report_placer_init(&pl, "camera_map", w - cbar_w, h);
+    map_furniture(cr, &v, w - cbar_w, h, fs, &pl, true);
     double vmax = map ? rs_report_nice_ceil(fmax(map_p90(map), 1e-3)) : 0;
     if (map) map_field(cr, &v, map, vmax, fs);
     map_lanes(cr, &v, &rep->lanes, fs * 0.15);
     map_fov(cr, &v, cam, map ? 0 : 0.15, fs * 0.12);
-    map_landmarks(cr, &v, rep, cam, fs, true);
-    map_camera(cr, &v, cam, fs);
-    map_furniture(cr, &v, w - cbar_w, h, fs);
+    map_camera_reserve(&v, cam, fs, &pl);
+    map_landmarks(cr, &v, rep, cam, fs, true, &pl);
+    if (map) map_contour_labels(cr, &v, map, vmax, fs, &pl);
+    map_furniture(cr, &v, w - cbar_w, h, fs, &pl, false);
+    rs_report_placer_free(&pl);
     if (map)
         map_colourbar(cr, w, h, cbar_w, fs, vmax, map->detection_sigma_px);
     else {
@@ -389,13 +435,15 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     cairo_save(cr);
     cairo_rectangle(cr, 0, 0, wmap, h);
     cairo_clip(cr);
+    rs_report_placer pl;
+    rs_report_placer_init(&pl, "site_map", wmap, h);
+    map_furniture(cr, &v, wmap, h, fs, &pl, true);
     double vmax = best ? rs_report_nice_ceil(fmax(map_p90(best), 1e-3)) : 0;
     if (best) map_field(cr, &v, best, vmax, fs);
     // a light ENU graticule
     double step = rs_report_nice_ceil(0.12 * w / v.k);
-    cairo_set_source_rgb(cr, 0.85, 0.85, 0.85);
+    cairo_set_source_rgb(cr, 0.8, 0.8, 0.8);
     cairo_set_line_width(cr, fs * 0.05);
-    rs_report_font(cr, fs * 0.7, false);
     for (double e = ceil(-v.ox / v.k / step) * step; v.ox + v.k * e < wmap; e += step) {
         cairo_move_to(cr, v.ox + v.k * e, 0);
         cairo_line_to(cr, v.ox + v.k * e, h);
@@ -405,24 +453,22 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
         cairo_line_to(cr, wmap, v.oy - v.k * n);
     }
     cairo_stroke(cr);
-    cairo_set_source_rgb(cr, 0.5, 0.5, 0.5);
+    // the axis labels (metres east / north of the origin): E along the top, N down the left,
+    // on white boxes, reserved before the map's own labels
+    rs_report_font(cr, fs * 0.8, false);
+    cairo_set_source_rgb(cr, 0.25, 0.25, 0.25);
     char buf[64];
     for (double e = ceil(-v.ox / v.k / step) * step; v.ox + v.k * e < wmap; e += step) {
-        snprintf(buf, sizeof buf, "E %g", e);
-        cairo_move_to(cr, v.ox + v.k * e + fs * 0.2, h - fs * 2.6);
-        rs_doc_show_text(cr, buf);
+        snprintf(buf, sizeof buf, "E %g m", e == 0 ? 0 : e);
+        rs_report_placer_label(&pl, cr, v.ox + v.k * e, 0, fs * 0.15, buf, 0.8);
     }
     for (double n = ceil((v.oy - h) / v.k / step) * step; v.oy - v.k * n > 0; n += step) {
-        snprintf(buf, sizeof buf, "N %g", n);
-        cairo_move_to(cr, fs * 0.2, v.oy - v.k * n - fs * 0.2);
-        rs_doc_show_text(cr, buf);
+        snprintf(buf, sizeof buf, "N %g m", n == 0 ? 0 : n);
+        rs_report_placer_label(&pl, cr, 0, v.oy - v.k * n, fs * 0.15, buf, 0.8);
     }
 
     for (int c = 0; c < rep->Ncameras; c++) map_fov(cr, &v, &rep->cameras[c], best ? 0 : 0.12, fs * 0.1);
     map_lanes(cr, &v, &rep->lanes, fs * 0.15);
-    map_landmarks(cr, &v, rep, NULL, fs, site->Nlandmarks <= 80);
-    for (int c = 0; c < rep->Ncameras; c++) map_camera(cr, &v, &rep->cameras[c], fs);
-    map_furniture(cr, &v, wmap, h, fs);
     // origin
     double x, y;
     map_xy(&v, 0, 0, &x, &y);
@@ -430,8 +476,15 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     cairo_set_line_width(cr, fs * 0.1);
     rs_report_marker_cross(cr, x, y, fs * 0.5);
     cairo_stroke(cr);
+    rs_report_placer_reserve(&pl, x - fs * 0.5, y - fs * 0.5, x + fs * 0.5, y + fs * 0.5);
+    for (int c = 0; c < rep->Ncameras; c++) map_camera_reserve(&v, &rep->cameras[c], fs, &pl);
+    map_landmarks(cr, &v, rep, NULL, fs, site->Nlandmarks <= 80, &pl);
     rs_report_font(cr, fs * 0.75, false);
-    rs_report_label(cr, x + fs * 0.5, y + fs * 1.1, "origin", 0.6);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    rs_report_placer_label(&pl, cr, x, y, fs * 0.5, "origin", 0.6);
+    if (best) map_contour_labels(cr, &v, best, vmax, fs, &pl);
+    map_furniture(cr, &v, wmap, h, fs, &pl, false);
+    rs_report_placer_free(&pl);
     cairo_restore(cr);
     if (best) map_colourbar(cr, w, h, cbar_w, fs, vmax, best->detection_sigma_px);
 }

@@ -14,6 +14,7 @@
 #include "audit/rs_audit.h"
 #include "calib/rs_calib_site.h"
 #include "geo/rs_site.h"
+#include "report/rs_report.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -84,9 +85,18 @@ struct rs_report_ctx {
     double range_m;                        // field of view on the ground cut at this distance
     double detection_sigma_px;             // detection noise of the uncertainty maps, px
     const rs_audit_options *audit_options; // the audit's thresholds; NULL: no audit requested
+    const char *calib_dir;                 // where <id>.cameramodel and <id>.json were read
+    const char *version;                   // the software version printed ("unknown" if NULL)
+    long long written_utc_s;               // the date printed, seconds since 1970 UTC
     rs_audit_map best_map;                 // the smallest 1-sigma of the cameras' maps at each cell
                                            //   (owned; sigma_m NULL when no camera has a map)
 };
+
+// Loads rep->cameras (rep->site, rep->calib_dir and rep->range_m set): each camera's
+// <id>.cameramodel and <id>.json, its figure geometry, background and (opt->audit) its audit,
+// then the lanes and the best map. Free with rs_report_free_cameras, also on error.
+rs_status rs_report_load_cameras(struct rs_report_ctx *rep, const rs_report_options *opt, rs_err *err);
+void rs_report_free_cameras(struct rs_report_ctx *rep);
 
 // Fills rep->best_map from the cameras' audit maps: a grid of the cameras' cell size spanning
 // all their maps, each cell the smallest sigma over the maps (nearest cell) that see it, NaN

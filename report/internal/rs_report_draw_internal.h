@@ -35,3 +35,27 @@ double rs_report_text_w(cairo_t *cr, const char *s);
 // whose arms reach r along both axes, centred at (x, y).
 void rs_report_marker_circle(cairo_t *cr, double x, double y, double r);
 void rs_report_marker_cross(cairo_t *cr, double x, double y, double r);
+
+// ---- label placement ----
+// A figure's labels are placed one by one, each at the first of 8 positions around its anchor
+// (right-above, left-above, right-below, left-below, right, left, above, below) whose box
+// overlaps no box placed or reserved before and lies inside the figure; a label with no such
+// position is not drawn. Reserved boxes are furniture (scale bar, north arrow, colour bar, axis
+// labels). With the environment variable ROADSIDE_REPORT_LABEL_BOXES set to a file name, every
+// box of a figure drawn at figure width > 400 user units is appended to that file, one line
+// "figure kind x0 y0 x1 y1 w h text" (kind: begin -- a new figure --, label or reserved), for tests.
+typedef struct {
+    double w, h;      // the figure's size, user units
+    double (*box)[4]; // (N,4) x0, y0, x1, y1 (owned)
+    int N, capacity;
+    const char *figure; // the figure's name, for the boxes file
+} rs_report_placer;
+
+void rs_report_placer_init(rs_report_placer *p, const char *figure, double w, double h);
+void rs_report_placer_free(rs_report_placer *p);
+// Reserves a box (furniture): later labels avoid it.
+void rs_report_placer_reserve(rs_report_placer *p, double x0, double y0, double x1, double y1);
+// Places and draws s (current font, source = text colour) near the anchor (x, y), at least gap
+// away, on a white box of opacity box_alpha. Returns false when it found no free place.
+bool rs_report_placer_label(rs_report_placer *p, cairo_t *cr, double x, double y, double gap, const char *s,
+                            double box_alpha);

@@ -21,7 +21,19 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
-from rs_check import check, failures, finish, run  # noqa: E402
+from rs_check import check, failures, finish  # noqa: E402
+from rs_check import run as rs_run  # noqa: E402
+
+# issue 16 derived the default thresholds from --need-ground-m (1 m: the demo's cam1, cam2 and
+# cam4 fail it); this test is about files, so its audits use loose thresholds that every demo
+# camera passes (a threshold given on the command line still applies: it comes first)
+LOOSE = ["--need-ground-m", "10", "--max-loo-px", "50", "--max-loo-m", "2.5"]
+
+
+def run(*args, **kw):
+    if args and args[0] == "audit":
+        args = tuple(args) + tuple(x for x in LOOSE if x not in args)
+    return rs_run(*args, **kw)
 
 SOURCE = os.environ["ROADSIDE_SOURCE_ROOT"]
 CAMS = ["cam1", "cam2", "cam3", "cam4"]

@@ -1,0 +1,528 @@
+// rs_report_export.c -- `roadside export`: the site's calibration as GIS layers and the ground
+// uncertainty map as a GeoTIFF, through GDAL/OGR's C API (see rs_report_export.h).
+#include "report/rs_report_export.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_string.h>
+#include <gdal.h>
+#include <gdalwarper.h>
+#include <ogr_api.h>
+#include <ogr_srs_api.h>
+
+#include "core/rs_io.h"
+#include "core/rs_pose.h"
+#include "geo/rs_geo.h"
+#include "report/internal/rs_report_draw.h"
+
+void rs_report_export_options_default(rs_report_export_options *opt)
+{
+    memset(opt, 0, sizeof *opt);
+    opt->range_m = 100;
+    rs_audit_options_default(&opt->audit_options);
+}
+
+// ---- GDAL errors as rs_err ----
+
+static rs_status gdal_fail(rs_err *err, const char *path, const char *what)
+{
+    const char *msg = CPLGetLastErrorMsg();
+    return rs_err_set(err, RS_ERR_EXTERNAL, "%s: %s%s%s", path, what, msg && *msg ? ": " : "", msg ? msg : "");
+}
+
+// ---- coordinates ----
+
+typedef struct {
+    const rs_site *site;
+    OGRSpatialReferenceH srs;       // the layers' CRS (axis order: x east / longitude first)
+    OGRCoordinateTransformationH t; // WGS84 (lon, lat) -> srs; NULL: srs is WGS84 itself
+} frame;
+
+// ENU (E, N, U) -> (x, y, z) of the target CRS; z is the ellipsoidal height.
+static bool to_crs(const frame *f, const double p_enu_m[3], double xyz[3])
+{
+    double llh[3];
+    if (rs_geo_enu_to_llh(llh, &f->site->origin, p_enu_m, 1, NULL) != RS_OK) return false;
+    xyz[0] = llh[1], xyz[1] = llh[0], xyz[2] = llh[2];
+    if (f->t && !OCTTransform(f->t, 1, &xyz[0], &xyz[1], NULL)) return false;
+    return isfinite(xyz[0]) && isfinite(xyz[1]);
+}
+
+static double ground_up(const rs_site *site, double e, double n)
+{
+    const double *nn = site->ground_normal_enu;
+    return (site->ground_offset_m - nn[0] * e - nn[1] * n) / nn[2];
+}
+
+// ---- layers ----
+
+typedef enum { L_CAMERAS, L_FOOTPRINTS, L_LANDMARKS, L_LANES, NLAYERS } layer_kind;
+static const char *const layer_names[NLAYERS] = {"cameras", "footprints", "landmarks", "lanes"};
+
+typedef struct {
+    const char *name;
+    OGRFieldType type;
+    layer_kind kind;
+} field_def;
+
+static const field_def fields[] = {
+    {"layer", OFTString, NLAYERS}, // every layer
+    {"camera", OFTString, NLAYERS},
+    {"east_m", OFTReal, L_CAMERAS},
+    {"north_m", OFTReal, L_CAMERAS},
+    {"up_m", OFTReal, L_CAMERAS},
+    {"lat_deg", OFTReal, L_CAMERAS},
+    {"lon_deg", OFTReal, L_CAMERAS},
+    {"h_m", OFTReal, L_CAMERAS},
+    {"above_ground_m", OFTReal, L_CAMERAS},
+    {"heading_deg", OFTReal, L_CAMERAS},
+    {"pitch_deg", OFTReal, L_CAMERAS},
+    {"roll_deg", OFTReal, L_CAMERAS},
+    {"sigma_east_m", OFTReal, L_CAMERAS},
+    {"sigma_north_m", OFTReal, L_CAMERAS},
+    {"sigma_up_m", OFTReal, L_CAMERAS},
+    {"sigma_heading_deg", OFTReal, L_CAMERAS},
+    {"sigma_pitch_deg", OFTReal, L_CAMERAS},
+    {"sigma_roll_deg", OFTReal, L_CAMERAS},
+    {"rms_surveyed_px", OFTReal, L_CAMERAS},
+    {"verdict", OFTString, L_CAMERAS},
+    {"need_ground_m", OFTReal, L_CAMERAS},
+    {"ground_sigma_median_m", OFTReal, L_CAMERAS},
+    {"ground_sigma_p90_m", OFTReal, L_CAMERAS},
+    {"loo_median_m", OFTReal, L_CAMERAS},
+    {"verdict_text", OFTString, L_CAMERAS},
+    {"enu_origin", OFTString, L_CAMERAS},
+    {"range_m", OFTReal, L_FOOTPRINTS},
+    {"landmark", OFTString, L_LANDMARKS},
+    {"residual_u_px", OFTReal, L_LANDMARKS},
+    {"residual_v_px", OFTReal, L_LANDMARKS},
+    {"residual_px", OFTReal, L_LANDMARKS},
+    {"normalised", OFTReal, L_LANDMARKS},
+    {"inlier", OFTInteger, L_LANDMARKS},
+    {"loo_ground_error_m", OFTReal, L_LANDMARKS},
+    {"loo_error_px", OFTReal, L_LANDMARKS},
+    {"sigma_ground_m", OFTReal, L_LANDMARKS},
+    {"flag", OFTString, L_LANDMARKS},
+    {"junction", OFTInteger, L_LANES},
+};
+#define NFIELDS (int)(sizeof fields / sizeof fields[0])
+
+typedef struct {
+    GDALDatasetH ds;
+    OGRLayerH layers[NLAYERS]; // GeoJSON: the same layer four times
+    const char *path;          // the final name, for messages
+} vector_out;
+
+static rs_status create_layers(vector_out *v, const frame *f, bool single, rs_err *err)
+{
+    static const OGRwkbGeometryType geom[NLAYERS] = {wkbPoint25D, wkbPolygon, wkbPoint25D, wkbLineString25D};
+    for (int k = 0; k < NLAYERS; k++) {
+        if (single && k > 0) {
+            v->layers[k] = v->layers[0];
+            continue;
+        }
+        v->layers[k] = GDALDatasetCreateLayer(v->ds, single ? "roadside" : layer_names[k], f->srs,
+                                              single ? wkbUnknown : geom[k], NULL);
+        if (!v->layers[k]) return gdal_fail(err, v->path, "cannot create a layer");
+        for (int i = 0; i < NFIELDS; i++) {
+            if (!single && fields[i].kind != NLAYERS && fields[i].kind != (layer_kind)k) continue;
+            OGRFieldDefnH fd = OGR_Fld_Create(fields[i].name, fields[i].type);
+            OGRErr e = OGR_L_CreateField(v->layers[k], fd, TRUE);
+            OGR_Fld_Destroy(fd);
+            if (e != OGRERR_NONE) return gdal_fail(err, v->path, "cannot create a field");
+        }
+    }
+    return RS_OK;
+}
+
+static void set_real(OGRFeatureH ft, const char *name, double x)
+{
+    int i = OGR_F_GetFieldIndex(ft, name);
+    if (i < 0) return;
+    if (isfinite(x))
+        OGR_F_SetFieldDouble(ft, i, x);
+    else
+        OGR_F_SetFieldNull(ft, i);
+}
+
+static void set_str(OGRFeatureH ft, const char *name, const char *s)
+{
+    int i = OGR_F_GetFieldIndex(ft, name);
+    if (i >= 0) OGR_F_SetFieldString(ft, i, s ? s : "");
+}
+
+static void set_int(OGRFeatureH ft, const char *name, int x)
+{
+    int i = OGR_F_GetFieldIndex(ft, name);
+    if (i >= 0) OGR_F_SetFieldInteger(ft, i, x);
+}
+
+// A new feature of layer k with its "layer" and "camera" fields.
+static OGRFeatureH feature(const vector_out *v, layer_kind k, const char *camera)
+{
+    OGRFeatureH ft = OGR_F_Create(OGR_L_GetLayerDefn(v->layers[k]));
+    if (!ft) return NULL;
+    set_str(ft, "layer", layer_names[k]);
+    if (camera) set_str(ft, "camera", camera);
+    return ft;
+}
+
+// Writes the feature into layer k (taking the geometry g) and destroys it.
+static rs_status put(vector_out *v, layer_kind k, OGRFeatureH ft, OGRGeometryH g, rs_err *err)
+{
+    if (!ft) {
+        OGR_G_DestroyGeometry(g);
+        return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", v->path);
+    }
+    if (g) OGR_F_SetGeometryDirectly(ft, g);
+    OGRErr e = OGR_L_CreateFeature(v->layers[k], ft);
+    OGR_F_Destroy(ft);
+    return e == OGRERR_NONE ? RS_OK : gdal_fail(err, v->path, "cannot write a feature");
+}
+
+static OGRGeometryH point(const frame *f, const double p_enu_m[3])
+{
+    double xyz[3];
+    if (!to_crs(f, p_enu_m, xyz)) return NULL;
+    OGRGeometryH g = OGR_G_CreateGeometry(wkbPoint25D);
+    if (g) OGR_G_SetPoint(g, 0, xyz[0], xyz[1], xyz[2]);
+    return g;
+}
+
+static rs_status write_cameras(vector_out *v, const frame *f, const struct rs_report_ctx *rep,
+                               rs_report_export_summary *sum, rs_err *err)
+{
+    const rs_site *site = rep->site;
+    char origin[128];
+    snprintf(origin, sizeof origin, "%.9f, %.9f, %.4f", site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m);
+    rs_status st = RS_OK;
+    for (int c = 0; c < rep->Ncameras && !st; c++) {
+        const rs_report_camera *cam = &rep->cameras[c];
+        const char *id = site->cameras[cam->icam].id;
+        const double *p = cam->position_enu_m, *s = cam->sigma_position_enu_m;
+        OGRFeatureH ft = feature(v, L_CAMERAS, id);
+        if (ft) {
+            static const char *const names[] = {"east_m",
+                                                "north_m",
+                                                "up_m",
+                                                "lat_deg",
+                                                "lon_deg",
+                                                "h_m",
+                                                "heading_deg",
+                                                "pitch_deg",
+                                                "roll_deg",
+                                                "sigma_east_m",
+                                                "sigma_north_m",
+                                                "sigma_up_m",
+                                                "sigma_heading_deg",
+                                                "sigma_pitch_deg",
+                                                "sigma_roll_deg"};
+            const double vals[] = {p[0],
+                                   p[1],
+                                   p[2],
+                                   cam->position_llh[0],
+                                   cam->position_llh[1],
+                                   cam->position_llh[2],
+                                   cam->yaw_pitch_roll_deg[0],
+                                   cam->yaw_pitch_roll_deg[1],
+                                   cam->yaw_pitch_roll_deg[2],
+                                   s[0],
+                                   s[1],
+                                   s[2],
+                                   cam->sigma_yaw_pitch_roll_deg[0],
+                                   cam->sigma_yaw_pitch_roll_deg[1],
+                                   cam->sigma_yaw_pitch_roll_deg[2]};
+            for (size_t k = 0; k < sizeof vals / sizeof vals[0]; k++) set_real(ft, names[k], vals[k]);
+            set_real(ft, "above_ground_m", p[2] - ground_up(site, p[0], p[1]));
+            set_real(ft, "rms_surveyed_px", cam->rms_surveyed_px);
+            set_str(ft, "enu_origin", origin);
+            const rs_audit_result *a = cam->has_audit ? &cam->audit : NULL;
+            set_str(ft, "verdict", a ? (a->pass ? "pass" : "FAIL") : "not audited");
+            set_str(ft, "verdict_text", a ? a->verdict : cam->audit_error);
+            set_real(ft, "need_ground_m", a ? a->thresholds.need_ground_m : NAN);
+            set_real(ft, "ground_sigma_median_m", a ? a->ground_sigma_inside_median_m : NAN);
+            set_real(ft, "ground_sigma_p90_m", a ? a->ground_sigma_inside_p90_m : NAN);
+            set_real(ft, "loo_median_m", a ? a->loo_median_m : NAN);
+        }
+        st = put(v, L_CAMERAS, ft, point(f, p), err);
+        sum->Ncameras += !st;
+        // the footprint: the ground seen, a closed ring
+        if (st || cam->Nfov < 3) continue;
+        OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing), poly = OGR_G_CreateGeometry(wkbPolygon);
+        bool ok = ring && poly;
+        for (int i = 0; ok && i <= cam->Nfov; i++) {
+            const double *en = &cam->fov_en_m[2 * (i % cam->Nfov)];
+            double q[3] = {en[0], en[1], ground_up(site, en[0], en[1])}, xyz[3];
+            ok = to_crs(f, q, xyz);
+            if (ok) OGR_G_AddPoint_2D(ring, xyz[0], xyz[1]);
+        }
+        if (ok) ok = OGR_G_AddGeometryDirectly(poly, ring) == OGRERR_NONE, ring = NULL;
+        OGR_G_DestroyGeometry(ring);
+        if (!ok) {
+            OGR_G_DestroyGeometry(poly);
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: camera %s: its footprint cannot be transformed", v->path, id);
+            break;
+        }
+        ft = feature(v, L_FOOTPRINTS, id);
+        if (ft) set_real(ft, "range_m", rep->range_m);
+        st = put(v, L_FOOTPRINTS, ft, poly, err);
+    }
+    return st;
+}
+
+static rs_status write_landmarks(vector_out *v, const frame *f, const struct rs_report_ctx *rep,
+                                 rs_report_export_summary *sum, rs_err *err)
+{
+    const rs_site *site = rep->site;
+    rs_status st = RS_OK;
+    for (int c = 0; c < rep->Ncameras && !st; c++) {
+        const rs_report_camera *cam = &rep->cameras[c];
+        const rs_site_camera *sc = &site->cameras[cam->icam];
+        for (int i = 0; i < cam->N && !st; i++) {
+            const rs_report_landmark *l = &cam->landmarks[i];
+            if (l->ilandmark < 0) continue;
+            // the audit's landmark i is the site camera's observation i
+            const rs_audit_landmark *al = NULL;
+            if (cam->has_audit && i < cam->audit.N && i < sc->Nobservations &&
+                sc->observations[i].ilandmark == l->ilandmark)
+                al = &cam->audit.landmarks[i];
+            OGRFeatureH ft = feature(v, L_LANDMARKS, sc->id);
+            if (ft) {
+                set_str(ft, "landmark", l->id);
+                set_real(ft, "residual_u_px", l->residual_surveyed_px[0]);
+                set_real(ft, "residual_v_px", l->residual_surveyed_px[1]);
+                set_real(ft, "residual_px", hypot(l->residual_surveyed_px[0], l->residual_surveyed_px[1]));
+                set_real(ft, "normalised", l->normalised);
+                set_int(ft, "inlier", l->inlier);
+                set_real(ft, "loo_ground_error_m", al && al->loo_ok ? al->loo_ground_error_m : NAN);
+                set_real(ft, "loo_error_px", al && al->loo_ok ? al->loo_error_px : NAN);
+                set_real(ft, "sigma_ground_m", al ? al->sigma_ground_m : NAN);
+                set_str(ft, "flag", al ? al->reason : (l->inlier ? "" : "outlier"));
+            }
+            st = put(v, L_LANDMARKS, ft, point(f, site->landmarks[l->ilandmark].p_enu_m), err);
+            sum->Nlandmarks += !st;
+        }
+    }
+    return st;
+}
+
+static rs_status write_lanes(vector_out *v, const frame *f, const struct rs_report_ctx *rep,
+                             rs_report_export_summary *sum, rs_err *err)
+{
+    const rs_report_lanes *lanes = &rep->lanes;
+    rs_status st = RS_OK;
+    for (int k = 0; k < lanes->Nlines && !st; k++) {
+        OGRGeometryH g = OGR_G_CreateGeometry(wkbLineString25D);
+        bool ok = g != NULL;
+        for (int i = lanes->start[k]; ok && i < lanes->start[k + 1]; i++) {
+            double xyz[3];
+            ok = to_crs(f, &lanes->p_enu_m[3 * i], xyz);
+            if (ok) OGR_G_AddPoint(g, xyz[0], xyz[1], xyz[2]);
+        }
+        if (!ok) {
+            OGR_G_DestroyGeometry(g);
+            return rs_err_set(err, RS_ERR_EXTERNAL, "%s: lane line %d cannot be transformed", v->path, k);
+        }
+        OGRFeatureH ft = feature(v, L_LANES, NULL);
+        if (ft) set_int(ft, "junction", lanes->junction[k]);
+        st = put(v, L_LANES, ft, g, err);
+        sum->Nlanes += !st;
+    }
+    return st;
+}
+
+// ---- files ----
+
+// A temporary name next to `path` for a GDAL driver to create (rs_io's atomic temporary, emptied:
+// GDAL's drivers create their files themselves).
+static rs_status temp_for_gdal(rs_io_atomic *a, const char *path, rs_err *err)
+{
+    rs_status st = rs_io_atomic_open(a, path, err);
+    if (!st) st = rs_io_atomic_release(a, err);
+    if (!st && unlink(a->tmp_path) != 0) st = rs_err_set(err, RS_ERR_IO, "%s: cannot prepare", a->tmp_path);
+    return st;
+}
+
+static rs_status write_vector(const char *path, const frame *f, const struct rs_report_ctx *rep,
+                              rs_report_export_summary *sum, rs_err *err)
+{
+    const bool gpkg = rs_io_has_extension(path, "gpkg");
+    const bool geojson = rs_io_has_extension(path, "geojson") || rs_io_has_extension(path, "json");
+    if (!gpkg && !geojson)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: expected a .gpkg (GeoPackage) or .geojson file name", path);
+    GDALDriverH drv = GDALGetDriverByName(gpkg ? "GPKG" : "GeoJSON");
+    if (!drv) return gdal_fail(err, path, gpkg ? "GDAL has no GPKG driver" : "GDAL has no GeoJSON driver");
+    rs_io_atomic a = {0};
+    rs_status st = temp_for_gdal(&a, path, err);
+    vector_out v = {.path = path};
+    if (!st) {
+        v.ds = GDALCreate(drv, a.tmp_path, 0, 0, 0, GDT_Unknown, NULL);
+        if (!v.ds) st = gdal_fail(err, path, "cannot create");
+    }
+    if (!st) st = create_layers(&v, f, geojson, err);
+    if (!st) st = write_cameras(&v, f, rep, sum, err);
+    if (!st) st = write_landmarks(&v, f, rep, sum, err);
+    if (!st) st = write_lanes(&v, f, rep, sum, err);
+    if (v.ds) { // GDAL 3.6's GDALClose returns nothing: its errors are read back
+        CPLErrorReset();
+        GDALClose(v.ds);
+        if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish");
+    }
+    if (!st) st = rs_io_atomic_commit(&a, err);
+    rs_io_atomic_abort(&a);
+    return st;
+}
+
+// The site's ENU grid as a CRS: the ellipsoidal orthographic projection at the origin.
+static OGRSpatialReferenceH enu_srs(const rs_site *site)
+{
+    char proj[256];
+    snprintf(proj, sizeof proj, "+proj=ortho +lat_0=%.10f +lon_0=%.10f +x_0=0 +y_0=0 +ellps=WGS84 +units=m +no_defs",
+             site->origin.lat_deg, site->origin.lon_deg);
+    OGRSpatialReferenceH s = OSRNewSpatialReference(NULL);
+    if (s && OSRImportFromProj4(s, proj) != OGRERR_NONE) {
+        OSRDestroySpatialReference(s);
+        return NULL;
+    }
+    return s;
+}
+
+static rs_status write_raster(const char *path, const OGRSpatialReferenceH target, const struct rs_report_ctx *rep,
+                              rs_report_export_summary *sum, rs_err *err)
+{
+    const rs_audit_map *m = &rep->best_map;
+    if (!m->sigma_m)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: no camera has an uncertainty map (no audit ran)", path);
+    if (!rs_io_has_extension(path, "tif") && !rs_io_has_extension(path, "tiff"))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: expected a .tif (GeoTIFF) file name", path);
+    GDALDriverH mem = GDALGetDriverByName("MEM"), gtiff = GDALGetDriverByName("GTiff");
+    if (!mem || !gtiff) return gdal_fail(err, path, "GDAL has no MEM or GTiff driver");
+    OGRSpatialReferenceH enu = enu_srs(rep->site);
+    if (!enu) return gdal_fail(err, path, "cannot define the site's ENU grid as a CRS");
+    char *enu_wkt = NULL;
+    OSRExportToWkt(enu, &enu_wkt);
+    GDALDatasetH src = GDALCreate(mem, "", m->nx, m->ny, 1, GDT_Float32, NULL);
+    rs_status st = src ? RS_OK : gdal_fail(err, path, "cannot create the grid in memory");
+    float *row = malloc((size_t)m->nx * sizeof *row);
+    if (!st && !row) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    if (!st) {
+        // row 0 of the image is the northernmost row of cells; cell centres at (e0 + ix c, n0 + iy c)
+        double gt[6] = {m->e0_m - m->cell_m / 2, m->cell_m, 0, m->n0_m + (m->ny - 0.5) * m->cell_m, 0, -m->cell_m};
+        GDALSetGeoTransform(src, gt);
+        GDALSetProjection(src, enu_wkt);
+        GDALRasterBandH b = GDALGetRasterBand(src, 1);
+        GDALSetRasterNoDataValue(b, NAN);
+        GDALSetDescription(b, "1-sigma horizontal ground error, metres");
+        for (int r = 0; r < m->ny && !st; r++) {
+            const double *srow = &m->sigma_m[(size_t)(m->ny - 1 - r) * (size_t)m->nx];
+            for (int x = 0; x < m->nx; x++) row[x] = (float)srow[x];
+            if (GDALRasterIO(b, GF_Write, 0, r, m->nx, 1, row, m->nx, 1, GDT_Float32, 0, 0) != CE_None)
+                st = gdal_fail(err, path, "cannot fill the grid");
+        }
+    }
+    GDALDatasetH out_src = src;
+    if (!st && target) { // warped into the target CRS, nearest neighbour
+        char *dst_wkt = NULL;
+        OSRExportToWkt(target, &dst_wkt);
+        out_src = GDALAutoCreateWarpedVRT(src, enu_wkt, dst_wkt, GRA_NearestNeighbour, 0.0, NULL);
+        CPLFree(dst_wkt);
+        if (!out_src) st = gdal_fail(err, path, "cannot warp the grid into the requested CRS");
+    }
+    rs_io_atomic a = {0};
+    if (!st) st = temp_for_gdal(&a, path, err);
+    if (!st) {
+        char **co = CSLSetNameValue(NULL, "COMPRESS", "DEFLATE");
+        GDALDatasetH out = GDALCreateCopy(gtiff, a.tmp_path, out_src, FALSE, co, NULL, NULL);
+        CSLDestroy(co);
+        if (!out) st = gdal_fail(err, path, "cannot write the GeoTIFF");
+        if (out) {
+            sum->raster_width = GDALGetRasterXSize(out);
+            sum->raster_height = GDALGetRasterYSize(out);
+            CPLErrorReset();
+            GDALClose(out);
+            if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish the GeoTIFF");
+        }
+    }
+    if (!st) st = rs_io_atomic_commit(&a, err);
+    rs_io_atomic_abort(&a);
+    if (out_src && out_src != src) GDALClose(out_src);
+    if (src) GDALClose(src);
+    free(row);
+    CPLFree(enu_wkt);
+    OSRDestroySpatialReference(enu);
+    return st;
+}
+
+rs_status rs_report_export(rs_report_export_summary *summary, const char *vector_path, const char *raster_path,
+                           const rs_site *site, const rs_report_export_options *opt_in, rs_err *err)
+{
+    rs_err local = {0};
+    if (!err) err = &local;
+    rs_report_export_summary sum = {0};
+    rs_report_export_options opt;
+    if (opt_in)
+        opt = *opt_in;
+    else
+        rs_report_export_options_default(&opt);
+    if (!vector_path && !raster_path) return rs_err_set(err, RS_ERR_INVALID, "export: nothing to write");
+    if (!(opt.range_m > 0)) return rs_err_set(err, RS_ERR_INVALID, "export: range_m = %g: must be > 0", opt.range_m);
+    // stale outputs first: an earlier export under these names is not this run's
+    if (vector_path) (void)rs_io_remove_if_exists(vector_path, NULL, NULL);
+    if (raster_path) (void)rs_io_remove_if_exists(raster_path, NULL, NULL);
+    GDALAllRegister();
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler); // GDAL's messages come back as rs_err, not on stderr
+
+    rs_report_options ropt;
+    rs_report_options_default(&ropt);
+    ropt.range_m = opt.range_m;
+    ropt.audit_options = opt.audit_options;
+    ropt.audit_options.range_m = opt.range_m;
+    char *default_calib = opt.calib_dir ? NULL : rs_io_join(site->dir, "calib");
+    struct rs_report_ctx rep = {.site = site, .range_m = opt.range_m, .grid_m = opt.range_m / 10};
+    rep.calib_dir = opt.calib_dir ? opt.calib_dir : default_calib;
+    rep.audit_options = &ropt.audit_options;
+    rep.detection_sigma_px = ropt.audit_options.detection_sigma_px;
+    rs_status st = rep.calib_dir ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+
+    frame f = {.site = site};
+    OGRSpatialReferenceH target = NULL; // the CRS asked for; NULL: WGS84
+    if (!st) {
+        f.srs = OSRNewSpatialReference(NULL);
+        if (!f.srs || OSRSetFromUserInput(f.srs, opt.crs ? opt.crs : "EPSG:4326") != OGRERR_NONE)
+            st = rs_err_set(err, RS_ERR_INVALID, "--crs %s: not a CRS GDAL knows (try EPSG:4326, EPSG:25832, ...)",
+                            opt.crs ? opt.crs : "EPSG:4326");
+    }
+    if (!st) {
+        OSRSetAxisMappingStrategy(f.srs, OAMS_TRADITIONAL_GIS_ORDER);
+        OGRSpatialReferenceH wgs84 = OSRNewSpatialReference(NULL);
+        OSRSetFromUserInput(wgs84, "EPSG:4326");
+        OSRSetAxisMappingStrategy(wgs84, OAMS_TRADITIONAL_GIS_ORDER);
+        if (!OSRIsSame(wgs84, f.srs)) {
+            f.t = OCTNewCoordinateTransformation(wgs84, f.srs);
+            if (!f.t) st = rs_err_set(err, RS_ERR_INVALID, "--crs %s: no transformation from WGS84", opt.crs);
+            target = f.srs;
+        }
+        OSRDestroySpatialReference(wgs84);
+    }
+    if (!st) st = rs_report_load_cameras(&rep, &ropt, err);
+    if (!st && vector_path) st = write_vector(vector_path, &f, &rep, &sum, err);
+    if (!st && raster_path) st = write_raster(raster_path, target, &rep, &sum, err);
+    if (st) { // all or nothing
+        if (vector_path) (void)rs_io_remove_if_exists(vector_path, NULL, NULL);
+        if (raster_path) (void)rs_io_remove_if_exists(raster_path, NULL, NULL);
+    }
+    rs_report_free_cameras(&rep);
+    if (f.t) OCTDestroyCoordinateTransformation(f.t);
+    if (f.srs) OSRDestroySpatialReference(f.srs);
+    free(default_calib);
+    CPLPopErrorHandler();
+    if (summary) *summary = st ? (rs_report_export_summary){0} : sum;
+    return st;
+}
