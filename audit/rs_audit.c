@@ -113,9 +113,13 @@ static double surveyed_residuals(double *residual_px, double *max_px, const rs_c
 {
     double ss = 0, worst = 0;
     int c = 0;
+    rs_camera cam = *pb->camera; // a view: lens, these intrinsics and pose
+    cam.lensmodel = *lm;
+    cam.intrinsics = (double *)intrinsics;
+    memcpy(cam.rt_cam_enu, rt, sizeof cam.rt_cam_enu);
     for (int i = 0; i < pb->N; i++) {
-        double q[2], *res = &residual_px[2 * i];
-        if (!project_enu(q, lm, intrinsics, rt, &pb->p_enu_m[3 * i])) {
+        double q[2], p[3], *res = &residual_px[2 * i];
+        if (!rs_calib_problem_seen_point(p, q, pb, i, &cam)) { // along a pole or line: its nearest point
             res[0] = res[1] = NAN;
             continue;
         }
@@ -269,17 +273,22 @@ static double loo_sigmas(const mrcal_lensmodel_t *lm, const double *intrinsics, 
 
 // Some of a problem's landmarks, in arrays of its own.
 typedef struct {
-    rs_calib_problem pb; // points into buf
-    double *buf;         // owned
-    int *index;          // (pb.N,) owned: the landmark's index in the original problem
+    rs_calib_problem pb;      // points into buf, along and shared
+    double *buf;              // owned
+    int *index;               // (pb.N,) owned: the landmark's index in the original problem
+    rs_calib_polyline *along; // (pb.N,) owned: the original's (picks along poles and lines)
+    int *shared;              // (pb.N,) owned: the original's survey_shared
 } subset;
 
 static rs_status subset_alloc(subset *s, int N, rs_err *err)
 {
     memset(s, 0, sizeof *s);
-    s->buf = malloc((size_t)(N > 0 ? N : 1) * 9 * sizeof *s->buf);
-    s->index = malloc((size_t)(N > 0 ? N : 1) * sizeof *s->index);
-    if (!s->buf || !s->index) return rs_err_set(err, RS_ERR_NOMEM, "audit: out of memory");
+    const size_t n = (size_t)(N > 0 ? N : 1);
+    s->buf = malloc(n * 9 * sizeof *s->buf);
+    s->index = malloc(n * sizeof *s->index);
+    s->along = malloc(n * sizeof *s->along);
+    s->shared = malloc(n * sizeof *s->shared);
+    if (!s->buf || !s->index || !s->along || !s->shared) return rs_err_set(err, RS_ERR_NOMEM, "audit: out of memory");
     return RS_OK;
 }
 
@@ -287,6 +296,8 @@ static void subset_free(subset *s)
 {
     free(s->buf);
     free(s->index);
+    free(s->along);
+    free(s->shared);
 }
 
 // The landmarks of `from` except `skip` (-1: none) and those whose pixel in q_px is NaN, with
@@ -303,9 +314,13 @@ static void subset_fill(subset *s, const rs_calib_problem *from, int skip, const
         for (int c = 0; c < 3; c++) sp[3 * k + c] = from->sigma_enu_m ? from->sigma_enu_m[3 * i + c] : 0;
         memcpy(&q[2 * k], &q_px[2 * i], 2 * sizeof(double));
         sq[k] = sigma_px ? sigma_px[i] : 1;
+        if (from->along) s->along[k] = from->along[i];
+        if (from->survey_shared) s->shared[k] = from->survey_shared[i];
         s->index[k++] = i;
     }
     s->pb = *from;
+    s->pb.along = from->along ? s->along : NULL;
+    s->pb.survey_shared = from->survey_shared ? s->shared : NULL;
     s->pb.N = k;
     s->pb.p_enu_m = p;
     s->pb.sigma_enu_m = sp;
@@ -336,11 +351,11 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
         subset_fill(&sub, pb, i, NULL, NULL);
         rs_calib_result lr;
         rs_status st = rs_calib_solve(&lr, &sub.pb, &opt->calib, NULL);
-        const double *pi = &pb->p_enu_m[3 * i], *qi = &pb->q_px[2 * i];
-        double g[3];
+        const double *qi = &pb->q_px[2 * i];
+        double g[3], pi[3]; // its surveyed point (along a pole or a line: the nearest one)
         const rs_camera loo_cam = rs_calib_result_camera(pb->camera, &lr);
         L->loo_ok =
-            st == RS_OK && project_enu(L->loo_predicted_px, &pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu, pi) &&
+            st == RS_OK && rs_calib_problem_seen_point(pi, L->loo_predicted_px, pb, i, &loo_cam) &&
             rs_camera_locate_ground(g, &loo_cam, qi, n, n[0] * pi[0] + n[1] * pi[1] + n[2] * pi[2], NULL) == RS_OK;
         if (L->loo_ok) {
             L->loo_error_px = hypot(L->loo_predicted_px[0] - qi[0], L->loo_predicted_px[1] - qi[1]);

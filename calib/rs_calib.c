@@ -147,6 +147,14 @@ static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *op
     if (pb->has_position_prior &&
         (!all_finite(pb->prior_position_enu_m, 3) || !(pb->prior_sigma_m > 0.0 && isfinite(pb->prior_sigma_m))))
         return rs_err_set(err, RS_ERR_INVALID, "position prior: position must be finite and prior_sigma_m > 0");
+    int Npoints = pb->N;
+    rs_status st = rs_calib__along_validate(&Npoints, pb, err);
+    if (st != RS_OK) return st;
+    if (Npoints < 4 && pb->N >= 4)
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "only %d point landmarks (points, poles' bases and tops): the initial pose needs 4; "
+                          "picks along poles and lines only refine it",
+                          Npoints);
     if (pb->N < 4)
         return rs_err_set(err, RS_ERR_DEGENERATE,
                           "only %d landmarks: a pose needs at least 4 (6 unknowns, 2 per landmark, "
@@ -374,6 +382,9 @@ static void work_free(rs_calib__work *w)
     free(w->r);
     free(w->dpos);
     free(w->dground);
+    free(w->along_c);
+    free(w->share);
+    free(w->s_along);
 }
 
 static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_problem *pb, const rs_calib_options *opt,
@@ -395,9 +406,20 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     w->r = malloc((size_t)N * RS_NOISE_NCOMP * sizeof(double));
     w->dpos = malloc((size_t)N * RS_NOISE_NCOMP * 3 * sizeof(double));
     w->dground = malloc((size_t)N * RS_NOISE_NCOMP * 2 * sizeof(double));
+    w->share = malloc((size_t)(N > 0 ? N : 1) * sizeof(double));
+    if (pb->along) {
+        w->along_c = calloc((size_t)N * 3, sizeof(double));
+        w->s_along = calloc((size_t)N, sizeof(double));
+    }
     if (!w->p_survey_c || !w->p_c || !w->cov || !w->block_chi2 || !w->q_pred || !w->use || !w->sigma_px ||
-        !w->sigma_enu || !w->e || !w->r || !w->dpos || !w->dground)
+        !w->sigma_enu || !w->e || !w->r || !w->dpos || !w->dground || !w->share ||
+        (pb->along && (!w->along_c || !w->s_along)))
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < N; i++) { // picks sharing a survey error (quadratic: N is tens)
+        w->share[i] = 1;
+        for (int j = 0; j < N && pb->survey_shared && pb->survey_shared[i] >= 0; j++)
+            w->share[i] += j != i && pb->survey_shared[j] == pb->survey_shared[i];
+    }
     const double log_theta0[RS_NOISE_NGROUPS] = {0, 0, 0};
     rs_calib__scale_sigmas(w, pb, log_theta0);
 
@@ -412,14 +434,18 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     // 1. initial pose
     memcpy(res->intrinsics, pb->camera->intrinsics, (size_t)Ni * sizeof(double));
     rs_calib_init_result init;
-    double scale = 1.0;
-    st = initial_pose(&init, res->intrinsics, &scale, pb, opt, Ni, err);
+    double scale = 1.0, *points_buffer = NULL;
+    rs_calib_problem points; // the point landmarks alone: picks along poles and lines come later
+    st = rs_calib__point_problem(&points, &points_buffer, pb, err);
+    if (st == RS_OK) st = initial_pose(&init, res->intrinsics, &scale, &points, opt, Ni, err);
+    free(points_buffer);
     if (st != RS_OK) {
         rs_err_prefix(err, "initial pose");
         return st;
     }
     double rt_c[6];
     rt_centred_from_enu(rt_c, init.rt_cam_enu, c);
+    rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
 
     rs_calib_refine_problem rp = {.N = N,
                                   .p_survey_c_m = w->p_survey_c,
@@ -427,6 +453,8 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
                                   .q_px = pb->q_px,
                                   .sigma_px = w->sigma_px,
                                   .use = w->use,
+                                  .along_c = w->along_c,
+                                  .s_along_m = w->s_along,
                                   .lensmodel = (&pb->camera->lensmodel),
                                   .intrinsics_nominal = pb->camera->intrinsics,
                                   .has_position_prior = pb->has_position_prior,
@@ -468,7 +496,9 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
             rs_calib__scale_sigmas(w, pb, log_theta);
             if (fabs(log(f)) < log(2.0)) break; // close enough for the outlier test below
         }
-        if (opt->estimate_noise) { // block chi2 at the scaled sigmas, for the test below
+        // the segments the along picks are on, at the robust pose (better than the initial one)
+        rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
+        if (opt->estimate_noise || pb->along) { // block chi2 at the scaled sigmas and segments, for the test below
             ro.max_iterations = 0 < opt->max_iterations ? opt->max_iterations : 1;
             st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
             if (st != RS_OK) {
@@ -514,7 +544,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         double r = 0;
         for (int i = 0; i < N; i++)
             for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++)
-                if (rs_calib__noise_group(j) == g) r += w->r[RS_NOISE_NCOMP * i + j];
+                if (rs_calib__noise_group(j) == g) r += rs_calib__vce_redundancy(w, i, j);
         if (opt->estimate_noise && r < opt->noise_min_redundancy) log_theta[g] = 0.0;
         log_theta_cov[g] =
             log_theta[g] +
@@ -536,8 +566,9 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     // landmarks in front of the camera
     for (int i = 0; i < N; i++) {
         if (!w->use[i]) continue;
-        double pc[3];
-        mrcal_transform_point_rt(pc, NULL, NULL, rt_c, &w->p_c[3 * i]);
+        double pc[3], seen[3], d[3];
+        rs_calib__seen_point(seen, d, w->p_c, w->along_c, w->s_along, i);
+        mrcal_transform_point_rt(pc, NULL, NULL, rt_c, seen);
         if (!(pc[2] > 0.0))
             return rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d: behind the camera at the solution (z_cam = %.3g m)",
                               i, pc[2]);
@@ -582,7 +613,9 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     double sse = 0.0;
     for (int i = 0; i < N; i++) {
         res->inlier[i] = w->use[i];
-        for (int k = 0; k < 3; k++) res->p_enu_refined_m[3 * i + k] = w->p_c[3 * i + k] + c[k];
+        double seen[3], d[3];
+        rs_calib__seen_point(seen, d, w->p_c, w->along_c, w->s_along, i);
+        for (int k = 0; k < 3; k++) res->p_enu_refined_m[3 * i + k] = seen[k] + c[k];
         for (int k = 0; k < 2; k++) {
             res->predicted_px[2 * i + k] = w->q_pred[2 * i + k];
             res->residual_px[2 * i + k] = w->q_pred[2 * i + k] - pb->q_px[2 * i + k];

@@ -69,6 +69,16 @@ typedef enum {
     RS_CALIB_REFINE_DISTORTION = 4,
 } rs_calib_refine_flags;
 
+// A landmark picked anywhere along a polyline (docs/calibration.md, "Poles and lines"): a pole's
+// segment from its base to its top, or a surveyed line (a lane marking, a stop bar, a kerb). The
+// pick's residual is its distance to the projected polyline: the solver slides the landmark's
+// point along the segment the pick is nearest to, so only the across-segment error counts.
+typedef struct {
+    int Nvertices;         // >= 2; 0: the landmark is a point (p_enu_m)
+    const double *p_enu_m; // (Nvertices,3) its surveyed vertices, site ENU, metres; consecutive
+                           //   vertices distinct. Their survey sigma is the landmark's sigma_enu_m
+} rs_calib_polyline;
+
 // One camera's observations.
 typedef struct {
     int N;                          // number of landmarks observed by this camera
@@ -77,6 +87,17 @@ typedef struct {
                                     //   0 holds that coordinate exactly; NULL: all exact
     const double *q_px;             // (N,2) observed pixels
     const double *sigma_px;         // (N,) 1-sigma of each pixel coordinate, > 0; NULL: 1 px
+    const rs_calib_polyline *along; // (N,) NULL: every landmark is a point. along[i].Nvertices
+                                    //   >= 2: pick i is anywhere along that polyline, and
+                                    //   p_enu_m[i] is one of its points (for the centroid only).
+                                    //   The initial pose needs 4 point landmarks (points, poles'
+                                    //   bases and tops); picks along refine it
+    const int *survey_shared;       // (N,) NULL: every landmark's survey error is its own. Picks
+                                    //   with the same id >= 0 share one (a pole's base, top and
+                                    //   along picks; the picks along one line); -1: its own. The
+                                    //   solver widens the survey sigmas of k sharing picks by
+                                    //   sqrt(k) (an upper bound of the true covariance) and counts
+                                    //   them once in the variance components
     const rs_camera *camera;        // the lens model (CAHVORE is not supported: no
                                     //   gradients), its NOMINAL intrinsics and the image
                                     //   size (for warnings; may be 0: unknown); its pose is
@@ -256,6 +277,13 @@ void rs_calib_result_free(rs_calib_result *result);
 // and pose. A view, not a copy: its intrinsics belong to the result (never rs_camera_free it);
 // valid while the result lives.
 rs_camera rs_calib_result_camera(const rs_camera *nominal, const rs_calib_result *result);
+
+// Landmark i's surveyed point as the camera cam sees it: p_enu_m[i] for a point; for a pick along
+// a polyline (problem.along), its point whose projection is nearest the pick
+// (rs_camera_nearest_on_polyline). p_enu_m (3,) and its projection q_px (2,) out; false when it
+// does not project (NaN out). What "residual against the surveyed position" means for every kind.
+bool rs_calib_problem_seen_point(double p_enu_m[3], double q_px[2], const rs_calib_problem *problem, int i,
+                                 const rs_camera *cam);
 
 // Pose helpers (yaw/pitch/roll, camera position, r_from_R) are core/rs_pose.h; ground location
 // through a camera is core/rs_camera.h.

@@ -77,7 +77,7 @@ static void add_column(columns *c, int kind, int group, bool refined, double pri
 // columns, B (rows x k) its free position axes, e the residuals (predicted - observed over sigma).
 typedef struct {
     int m, k;
-    double A[5][NC_MAX], B[5][3], e[5];
+    double A[5][NC_MAX], B[5][4], e[5]; // B: up to 3 axes, and s for a landmark picked along a segment
 } block;
 
 static bool landmark_block(block *b, const columns *cl, const rs_calib_refine_problem *rp, const rs_calib__work *w,
@@ -85,8 +85,9 @@ static bool landmark_block(block *b, const columns *cl, const rs_calib_refine_pr
 {
     memset(b, 0, sizeof *b);
     const double *p = &w->p_c[3 * i];
-    double pc[3], dpc_drt[18], dpc_dp[9];
-    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, rt_c, p);
+    double pc[3], dpc_drt[18], dpc_dp[9], seen[3], d[3];
+    const bool slides = rs_calib__seen_point(seen, d, w->p_c, w->along_c, w->s_along, i);
+    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, rt_c, seen);
     mrcal_point2_t q;
     mrcal_point3_t dq_dpc[2];
     if (!(pc[2] > 0.0) ||
@@ -119,6 +120,12 @@ static bool landmark_block(block *b, const columns *cl, const rs_calib_refine_pr
         b->B[b->m][b->k] = 1.0 / sa;
         b->m++, b->k++;
     }
+    if (slides) { // s: the pixel rows' dependence on the seen point, along d
+        for (int r = 0; r < 2; r++)
+            for (int j = 0; j < 3; j++)
+                for (int a = 0; a < 3; a++) b->B[r][b->k] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a] * d[a] / sp;
+        b->k++;
+    }
     return true;
 }
 
@@ -130,13 +137,13 @@ static rs_status add_landmark(double *S, double *g, const block *b, int nc, rs_e
     double PA[5][NC_MAX];
     memcpy(PA, b->A, sizeof PA);
     if (b->k > 0) {
-        double N[9] = {0}, Ninv[9];
+        double N[16] = {0}, Ninv[16];
         for (int x = 0; x < b->k; x++)
             for (int y = 0; y < b->k; y++)
                 for (int r = 0; r < b->m; r++) N[x * b->k + y] += b->B[r][x] * b->B[r][y];
         rs_status st = rs_calib_opencv_inverse_spd(Ninv, N, b->k, err);
         if (st) return st;
-        double BA[3][NC_MAX] = {{0}};
+        double BA[4][NC_MAX] = {{0}};
         for (int x = 0; x < b->k; x++)
             for (int r = 0; r < b->m; r++) {
                 for (int c = 0; c < nc; c++) BA[x][c] += b->B[r][x] * b->A[r][c];

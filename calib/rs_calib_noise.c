@@ -79,21 +79,34 @@ static bool axis_ground_jacobian(double G[12], const double rt[6])
     return true;
 }
 
+bool rs_calib__seen_point(double seen[3], double d[3], const double *p_c_m, const double *along_c,
+                          const double *s_along_m, int i)
+{
+    const double *a = along_c ? &along_c[3 * i] : NULL;
+    const bool slides = a && (a[0] != 0.0 || a[1] != 0.0 || a[2] != 0.0);
+    for (int k = 0; k < 3; k++) {
+        d[k] = slides ? a[k] : 0.0;
+        seen[k] = p_c_m[3 * i + k] + (slides ? s_along_m[i] * a[k] : 0.0);
+    }
+    return slides;
+}
+
 // One landmark's whitened observations: rows (up to 5: u, v and the free survey axes) of A (nc
-// columns) and B (k <= 3 free position axes), the residuals e, which component each row is.
+// columns) and B (k <= 4: the free position axes, and s for a landmark picked along a segment),
+// the residuals e, which component each row is.
 typedef struct {
     int m, k;
     int comp[RS_NOISE_NCOMP]; // row -> component
-    int axis[3];              // free column -> axis
-    double A[RS_NOISE_NCOMP][NC_MAX], B[RS_NOISE_NCOMP][3], e[RS_NOISE_NCOMP];
+    double A[RS_NOISE_NCOMP][NC_MAX], B[RS_NOISE_NCOMP][4], e[RS_NOISE_NCOMP];
 } block;
 
 static bool landmark_block(block *b, const rs_calib_noise_state *s, const params *pp, int i, double *dq_dintr)
 {
     memset(b, 0, sizeof *b);
     const double *p = &s->p_c_m[3 * i];
-    double pc[3], dpc_drt[18], dpc_dp[9];
-    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, s->rt_cam_c, p);
+    double pc[3], dpc_drt[18], dpc_dp[9], seen[3], d[3];
+    const bool slides = rs_calib__seen_point(seen, d, s->p_c_m, s->along_c, s->s_along_m, i);
+    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, s->rt_cam_c, seen);
     mrcal_point2_t q;
     mrcal_point3_t dq_dpc[2];
     if (!mrcal_project(&q, dq_dpc, dq_dintr, (const mrcal_point3_t *)pc, 1, s->lensmodel, s->intrinsics)) return false;
@@ -117,7 +130,6 @@ static bool landmark_block(block *b, const rs_calib_noise_state *s, const params
     for (int a = 0; a < 3; a++) {
         const double sa = s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0;
         if (!(sa > 0)) continue;
-        b->axis[b->k] = a;
         for (int r = 0; r < 2; r++) { // the pixel rows' dependence on this axis
             double v = 0;
             for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a];
@@ -128,13 +140,19 @@ static bool landmark_block(block *b, const rs_calib_noise_state *s, const params
         b->B[b->m][b->k] = 1.0 / sa;
         b->m++, b->k++;
     }
+    if (slides) { // s: the pixel rows' dependence on the seen point, along d
+        for (int r = 0; r < 2; r++)
+            for (int j = 0; j < 3; j++)
+                for (int a = 0; a < 3; a++) b->B[r][b->k] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a] * d[a] / sp;
+        b->k++;
+    }
     return true;
 }
 
 // Ã = A - B N^-1 B'A (m x nc) in place into At; Ninv (k x k) out.
-static rs_status reduce(double At[RS_NOISE_NCOMP][NC_MAX], double Ninv[9], const block *b, int nc, rs_err *err)
+static rs_status reduce(double At[RS_NOISE_NCOMP][NC_MAX], double Ninv[16], const block *b, int nc, rs_err *err)
 {
-    double N[9] = {0};
+    double N[16] = {0};
     for (int x = 0; x < b->k; x++)
         for (int y = 0; y < b->k; y++)
             for (int r = 0; r < b->m; r++) N[x * b->k + y] += b->B[r][x] * b->B[r][y];
@@ -143,7 +161,7 @@ static rs_status reduce(double At[RS_NOISE_NCOMP][NC_MAX], double Ninv[9], const
         if (st) return st;
     }
     // M = B'A (k x nc); At = A - B Ninv M
-    double M[3][NC_MAX] = {{0}};
+    double M[4][NC_MAX] = {{0}};
     for (int x = 0; x < b->k; x++)
         for (int c = 0; c < nc; c++)
             for (int r = 0; r < b->m; r++) M[x][c] += b->B[r][x] * b->A[r][c];
@@ -177,7 +195,7 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
 
     // 1. per landmark: the whitened block, Ã_i; S = sum Ã'Ã + priors
     double(*At)[RS_NOISE_NCOMP][NC_MAX] = NULL;
-    double(*Ninv)[9] = NULL;
+    double(*Ninv)[16] = NULL;
     if (st == RS_OK) {
         At = malloc((size_t)(N > 0 ? N : 1) * sizeof *At);
         Ninv = malloc((size_t)(N > 0 ? N : 1) * sizeof *Ninv);
@@ -265,7 +283,8 @@ double rs_calib__noise_update(double q, double r, double log_theta, double prior
 
 double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i)
 {
-    const double *p = &s->p_survey_c_m[3 * i];
+    double p[3], d[3];
+    const bool slides = rs_calib__seen_point(p, d, s->p_survey_c_m, s->along_c, s->s_along_m, i);
     double pc[3], dpc_dp[9];
     mrcal_transform_point_rt(pc, NULL, dpc_dp, s->rt_cam_c, p);
     mrcal_point2_t q;
@@ -283,6 +302,15 @@ double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i)
         }
         for (int r = 0; r < 2; r++)
             for (int c = 0; c < 2; c++) C[2 * r + c] += J[r] * sa * sa * J[c];
+    }
+    if (slides) { // anywhere along the segment: its image direction carries no information
+        double J[2] = {0, 0};
+        for (int r = 0; r < 2; r++)
+            for (int j = 0; j < 3; j++)
+                for (int a = 0; a < 3; a++) J[r] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a] * d[a];
+        const double big = 1e6 * (C[0] + C[3]) / (J[0] * J[0] + J[1] * J[1] + 1e-300);
+        for (int r = 0; r < 2; r++)
+            for (int c = 0; c < 2; c++) C[2 * r + c] += J[r] * big * J[c];
     }
     const double e[2] = {q.xy[0] - s->q_px[2 * i], q.xy[1] - s->q_px[2 * i + 1]};
     const double det = C[0] * C[3] - C[1] * C[2];

@@ -17,9 +17,16 @@ void rs_calib__scale_sigmas(rs_calib__work *w, const rs_calib_problem *pb, const
                  fv = exp(0.5 * log_theta[RS_NOISE_SURVEY_V]);
     for (int i = 0; i < pb->N; i++) {
         w->sigma_px[i] = (pb->sigma_px ? pb->sigma_px[i] : 1.0) * fp;
+        const double widen = sqrt(w->share[i]); // picks sharing one survey error (rs_calib.h)
         for (int k = 0; k < 3; k++)
-            w->sigma_enu[3 * i + k] = (pb->sigma_enu_m ? pb->sigma_enu_m[3 * i + k] : 0.0) * (k < 2 ? fh : fv);
+            w->sigma_enu[3 * i + k] = (pb->sigma_enu_m ? pb->sigma_enu_m[3 * i + k] : 0.0) * (k < 2 ? fh : fv) * widen;
     }
+}
+
+double rs_calib__vce_redundancy(const rs_calib__work *w, int i, int j)
+{
+    const double r = w->r[RS_NOISE_NCOMP * i + j];
+    return j < RS_NOISE_E ? r : r / w->share[i];
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -53,6 +60,8 @@ static rs_calib_noise_state noise_state(const rs_calib_refine_problem *rp, const
                                   .q_px = rp->q_px,
                                   .sigma_px = rp->sigma_px,
                                   .use = w->use,
+                                  .along_c = w->along_c,
+                                  .s_along_m = w->s_along,
                                   .lensmodel = rp->lensmodel,
                                   .intrinsics = res->intrinsics,
                                   .intrinsics_nominal = rp->intrinsics_nominal,
@@ -112,7 +121,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
             for (int i = 0; i < N; i++)
                 for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++) {
                     q[rs_calib__noise_group(j)] += w->e[RS_NOISE_NCOMP * i + j] * w->e[RS_NOISE_NCOMP * i + j];
-                    r[rs_calib__noise_group(j)] += w->r[RS_NOISE_NCOMP * i + j];
+                    r[rs_calib__noise_group(j)] += rs_calib__vce_redundancy(w, i, j);
                 }
             for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
                 const double next = rs_calib__noise_update(q[g], r[g], log_theta[g], opt->noise_prior_factor);
@@ -169,7 +178,7 @@ rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const r
             const double stated =
                 pixel ? (pb->sigma_px ? pb->sigma_px[i] : 1.0) : pb->sigma_enu_m[3 * i + j - RS_NOISE_E];
             rs_calib_noise_group *g = &res->noise[rs_calib__noise_group(j)];
-            g->redundancy += w->r[k];
+            g->redundancy += rs_calib__vce_redundancy(w, i, j);
             g->Nobservations++;
             stated2[rs_calib__noise_group(j)] += stated * stated;
             rsum += w->r[k];

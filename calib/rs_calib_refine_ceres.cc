@@ -81,37 +81,45 @@ struct Pose {
 };
 
 // One landmark: 2 pixel residuals + 3 survey-prior residuals, so that the robust loss acts on
-// the landmark as a whole (an outlier cannot hide by pulling its landmark).
+// the landmark as a whole (an outlier cannot hide by pulling its landmark). A landmark picked
+// along a segment is seen at p + s d (d the segment's direction, s free: one more unknown with no
+// prior row), so that its pixel residual is the distance to the projected line.
 struct Landmark {
-    double q_obs[2], w_px, p_survey[3], w_m[3];
-    int free[3], nfree; // the axes with a survey sigma > 0: the landmark's own unknowns
-    double sigma_min;   // the smallest free survey sigma, m (0: none free)
+    double q_obs[2], w_px, p_survey[3], w_m[3], d[3];
+    int free[3], naxes; // the axes with a survey sigma > 0: the landmark's own unknowns
+    bool slides;        // picked along a segment: s is an unknown too
+    int nfree;          // naxes + slides
+    double sigma_min;   // the smallest free survey sigma, m (1 when none: s is in metres too)
 
-    Landmark(const double q[2], double sigma_px, const double ps[3], const double *sigma_m)
+    Landmark(const double q[2], double sigma_px, const double ps[3], const double *sigma_m, const double *along)
     {
         w_px = 1.0 / sigma_px;
-        nfree = 0;
+        naxes = 0;
+        slides = along && (along[0] != 0.0 || along[1] != 0.0 || along[2] != 0.0);
+        for (int k = 0; k < 3; k++) d[k] = slides ? along[k] : 0.0;
         for (int k = 0; k < 2; k++) q_obs[k] = q[k];
         for (int k = 0; k < 3; k++) {
             p_survey[k] = ps[k];
             w_m[k] = inv_or_zero(sigma_m ? sigma_m[k] : 0.0);
-            if (w_m[k] > 0.0) free[nfree++] = k;
+            if (w_m[k] > 0.0) free[naxes++] = k;
         }
+        nfree = naxes + (slides ? 1 : 0);
         double wmax = 0.0;
         for (int k = 0; k < 3; k++) wmax = std::max(wmax, w_m[k]);
-        sigma_min = wmax > 0.0 ? 1.0 / wmax : 0.0;
+        sigma_min = wmax > 0.0 ? 1.0 / wmax : 1.0;
     }
 
-    // r (5,) at (pose, intrinsics, p); optionally dr/drt (5,6), dr/dp (5,3), dr/dintrinsics
-    // (5,Ni), all row-major. dq_di: scratch (2,Ni), needed with dr_di. False when p does not
-    // project.
+    // r (5,) at (pose, intrinsics, p, s); optionally dr/drt (5,6), dr/dp (5,3), dr/dintrinsics
+    // (5,Ni), all row-major (the pixel rows of dr/dp are also those of dr/d(seen point)).
+    // dq_di: scratch (2,Ni), needed with dr_di. False when the seen point does not project.
     bool evaluate(double r[5], double *dr_drt, double *dr_dp, double *dr_di, double *dq_di,
                   const mrcal_lensmodel_t *lensmodel, int Ni, const Pose &pose, const double *intrinsics,
-                  const double p[3]) const
+                  const double p[3], double s) const
     {
         mrcal_point3_t p_cam;
-        double dpcam_drt[18];
-        pose.apply(p_cam.xyz, dr_drt ? dpcam_drt : nullptr, p);
+        double dpcam_drt[18], seen[3];
+        for (int k = 0; k < 3; k++) seen[k] = p[k] + s * d[k];
+        pose.apply(p_cam.xyz, dr_drt ? dpcam_drt : nullptr, seen);
         mrcal_point2_t q;
         mrcal_point3_t dq_dpcam[2];
         if (!mrcal_project(&q, dq_dpcam, dr_di ? dq_di : nullptr, &p_cam, 1, lensmodel, intrinsics)) return false;
@@ -146,13 +154,14 @@ struct Landmark {
 // complement of the landmark's columns. By hand because the matrix is tiny and fixed: Eigen's
 // blocked, dynamically sized QR took a third of the solve.
 struct SmallQR {
-    double a[5][3]; // R above the diagonal, and the reflectors' tails below it
-    double v0[3], beta[3], diag[3];
+    double a[5][4]; // R above the diagonal, and the reflectors' tails below it
+    double v0[4], beta[4], diag[4];
     int n;
 
     // false when a column is zero (the axis does not enter the residual: cannot happen with a
-    // survey sigma > 0, whose prior row is that axis's own)
-    bool factor(const double J[5][3], int n_)
+    // survey sigma > 0, whose prior row is that axis's own; a segment seen end-on has a zero s
+    // column)
+    bool factor(const double J[5][4], int n_)
     {
         n = n_;
         std::memcpy(a, J, sizeof a);
@@ -185,7 +194,7 @@ struct SmallQR {
         for (int i = j + 1; i < 5; i++) b[i] -= s * a[i][j];
     }
     // x (n,) = argmin |J x - b|
-    void solve(double x[3], const double b_in[5]) const
+    void solve(double x[4], const double b_in[5]) const
     {
         double b[5];
         std::memcpy(b, b_in, sizeof b);
@@ -241,11 +250,13 @@ class Reduced {
         : pb_(pb), lensmodel_(pb->lensmodel), Ni_(mrcal_lensmodel_num_params(pb->lensmodel)),
           i0_(intrinsics_start, intrinsics_start + Ni_),
           robust_b_(opt->robust_scale > 0.0 ? opt->robust_scale * opt->robust_scale : 0.0),
-          inner_tol_(opt->rough ? 1e-3 : 1e-6), p_(p_start, p_start + 3 * (size_t)pb->N)
+          inner_tol_(opt->rough ? 1e-3 : 1e-6), p_(p_start, p_start + 3 * (size_t)pb->N), s_((size_t)pb->N, 0.0)
     {
         for (int i = 0; i < pb->N; i++) {
             landmarks_.emplace_back(&pb->q_px[2 * i], pb->sigma_px ? pb->sigma_px[i] : 1.0, &pb->p_survey_c_m[3 * i],
-                                    pb->sigma_enu_m ? &pb->sigma_enu_m[3 * i] : nullptr);
+                                    pb->sigma_enu_m ? &pb->sigma_enu_m[3 * i] : nullptr,
+                                    pb->along_c ? &pb->along_c[3 * i] : nullptr);
+            if (pb->along_c && pb->s_along_m) s_[(size_t)i] = pb->s_along_m[i];
             if (!pb->use || pb->use[i]) used_.push_back(i);
         }
         subspace(opt);
@@ -265,6 +276,7 @@ class Reduced {
     const std::vector<int> &used() const { return used_; }
     const std::vector<Landmark> &landmarks() const { return landmarks_; }
     const std::vector<double> &p() const { return p_; }
+    const std::vector<double> &s() const { return s_; }
     // the basis of the refined intrinsics, column-major (Ni, k)
     const std::vector<double> &basis() const { return B_; }
     void set_robust(bool on, double b) { robust_b_ = on ? b : 0.0; }
@@ -348,23 +360,30 @@ class Reduced {
     {
         const Landmark &L = landmarks_[(size_t)i];
         const int nf = L.nfree;
-        double *p = &p_[3 * (size_t)i];
+        double *p = &p_[3 * (size_t)i], &s = s_[(size_t)i];
         const bool want_i = J && k_ > 0;
-        double dr_drt[30], dr_dp[15], Jp[5][3];
+        double dr_drt[30], dr_dp[15], Jp[5][4];
         SmallQR qr;
         for (int it = 0;; it++) {
             if (!L.evaluate(r, dr_drt, dr_dp, want_i ? dr_di_.data() : nullptr, dq_di_.data(), lensmodel_, Ni_, pose,
-                            intr, p))
+                            intr, p, s))
                 return false;
             if (nf == 0) break;
-            for (int a = 0; a < 5; a++)
-                for (int f = 0; f < nf; f++) Jp[a][f] = dr_dp[a * 3 + L.free[f]];
+            for (int a = 0; a < 5; a++) {
+                for (int f = 0; f < L.naxes; f++) Jp[a][f] = dr_dp[a * 3 + L.free[f]];
+                if (L.slides) // the pixel rows only: s has no prior
+                    Jp[a][L.naxes] =
+                        a < 2 ? dr_dp[a * 3] * L.d[0] + dr_dp[a * 3 + 1] * L.d[1] + dr_dp[a * 3 + 2] * L.d[2] : 0.0;
+            }
             if (!qr.factor(Jp, nf)) return false;
-            double dx[3], minus_r[5], step = 0.0;
+            double dx[4], minus_r[5], step = 0.0;
             for (int a = 0; a < 5; a++) minus_r[a] = -r[a];
             qr.solve(dx, minus_r);
             for (int f = 0; f < nf; f++) {
-                p[L.free[f]] += dx[f];
+                if (f < L.naxes)
+                    p[L.free[f]] += dx[f];
+                else
+                    s += dx[f];
                 step = std::max(step, std::fabs(dx[f]));
             }
             if (!std::isfinite(step)) return false;
@@ -399,7 +418,7 @@ class Reduced {
     bool at_current(int i, const double *c, double r[5]) const
     {
         return landmarks_[(size_t)i].evaluate(r, nullptr, nullptr, nullptr, nullptr, lensmodel_, Ni_, Pose(c),
-                                              intrinsics(c), &p_[3 * (size_t)i]);
+                                              intrinsics(c), &p_[3 * (size_t)i], s_[(size_t)i]);
     }
 
   private:
@@ -454,7 +473,7 @@ class Reduced {
     double inner_tol_; // the inner solve's last step, in sigmas
     // state of the evaluations: the landmarks' positions (warm start of the next inner solve)
     // and scratch
-    mutable std::vector<double> p_, intr_, dq_di_, dr_di_;
+    mutable std::vector<double> p_, s_, intr_, dq_di_, dr_di_;
     mutable std::vector<double> cached_c_, cached_r_, cached_J_; // the last evaluation
     mutable bool cached_ = false, cached_ok_ = false;
     mutable double cached_robust_b_ = 0.0;
@@ -537,8 +556,9 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     for (int i : f.used()) {
         used[(size_t)i] = true;
         Nfree += f.landmarks()[(size_t)i].nfree;
-        Nresiduals += f.landmarks()[(size_t)i].nfree;
+        Nresiduals += f.landmarks()[(size_t)i].naxes; // s has no prior row
         std::memcpy(&p_c[3 * i], &f.p()[3 * (size_t)i], 3 * sizeof(double));
+        if (pb->along_c && pb->s_along_m) pb->s_along_m[i] = f.s()[(size_t)i];
     }
     summary->Nresiduals = Nresiduals;
     summary->Nfree = Nfree;
@@ -593,7 +613,7 @@ extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const
         std::vector<double> dq_di(2 * (size_t)Ni), J2(5 * (size_t)Ni), x2(intrinsics, intrinsics + Ni);
         for (int i = 0; i < pb->N; i++) {
             const Landmark L(&pb->q_px[2 * i], pb->sigma_px ? pb->sigma_px[i] : 1.0, &pb->p_survey_c_m[3 * i],
-                             pb->sigma_enu_m ? &pb->sigma_enu_m[3 * i] : nullptr);
+                             pb->sigma_enu_m ? &pb->sigma_enu_m[3 * i] : nullptr, nullptr);
             std::vector<double> x0(rt_cam_c, rt_cam_c + 6), x1(&p_c_m[3 * i], &p_c_m[3 * i] + 3);
             std::vector<double> *blocks[3] = {&x0, &x1, &x2};
             double J0[30], J1[15];
@@ -601,7 +621,7 @@ extern "C" double rs_calib_refine_jacobian_check(const double rt_cam_c[6], const
             double r[5], rp[5], rm[5];
             auto eval = [&](double *out, bool jac) {
                 return L.evaluate(out, jac ? J0 : nullptr, jac ? J1 : nullptr, jac ? J2.data() : nullptr, dq_di.data(),
-                                  pb->lensmodel, Ni, Pose(x0.data()), x2.data(), x1.data());
+                                  pb->lensmodel, Ni, Pose(x0.data()), x2.data(), x1.data(), 0.0);
             };
             if (!eval(r, true)) return NAN;
             for (int b = 0; b < 3; b++) {

@@ -15,64 +15,6 @@
 #include "core/rs_pose.h"
 #include "geo/rs_geo.h"
 
-// ---------------------------------------------------------------- problem
-
-rs_status rs_calib_site_problem_init(rs_calib_site_problem *sp, const rs_site *site, int icam, rs_err *err)
-{
-    memset(sp, 0, sizeof *sp);
-    if (!site || icam < 0 || icam >= site->Ncameras)
-        return rs_err_set(err, RS_ERR_USAGE, "camera index %d out of range", icam);
-    const rs_site_camera *cam = &site->cameras[icam];
-    int N = cam->Nobservations;
-    for (int i = 0; i < N; i++) // the solver has no residual yet for picks along poles and lines
-        if (cam->observations[i].at == RS_SITE_AT_ALONG)
-            return rs_err_set(err, RS_ERR_UNSUPPORTED,
-                              "%s line %d: a pick 'along' a pole or a line: calib uses picks of points and of poles' "
-                              "bases and tops only so far; leave the along picks out of this camera",
-                              cam->observations_path, cam->observations[i].line);
-    size_t n = N > 0 ? (size_t)N : 1;
-    sp->p_enu_m = malloc(n * 3 * sizeof(double));
-    sp->sigma_enu_m = malloc(n * 3 * sizeof(double));
-    sp->q_px = malloc(n * 2 * sizeof(double));
-    sp->sigma_px = malloc(n * sizeof(double));
-    if (!sp->p_enu_m || !sp->sigma_enu_m || !sp->q_px || !sp->sigma_px) {
-        rs_calib_site_problem_free(sp);
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    }
-    for (int i = 0; i < N; i++) {
-        const rs_site_observation *o = &cam->observations[i];
-        rs_site_observed_point(&sp->p_enu_m[3 * i], &sp->sigma_enu_m[3 * i], site, o);
-        sp->q_px[2 * i + 0] = o->q_px[0];
-        sp->q_px[2 * i + 1] = o->q_px[1];
-        sp->sigma_px[i] = o->sigma_px;
-    }
-    rs_calib_problem *p = &sp->problem;
-    p->N = N;
-    p->p_enu_m = sp->p_enu_m;
-    p->sigma_enu_m = sp->sigma_enu_m;
-    p->q_px = sp->q_px;
-    p->sigma_px = sp->sigma_px;
-    p->camera = &cam->camera;
-    p->has_position_prior = cam->has_position_prior;
-    if (cam->has_position_prior) {
-        memcpy(p->prior_position_enu_m, cam->prior_p_enu_m, sizeof p->prior_position_enu_m);
-        p->prior_sigma_m = cam->prior_sigma_m;
-    }
-    p->focal_rel_sigma = cam->focal_rel_sigma; // the stated intrinsics uncertainty (0: exact)
-    p->center_sigma_px = cam->center_sigma_px;
-    return RS_OK;
-}
-
-void rs_calib_site_problem_free(rs_calib_site_problem *sp)
-{
-    if (!sp) return;
-    free(sp->p_enu_m);
-    free(sp->sigma_enu_m);
-    free(sp->q_px);
-    free(sp->sigma_px);
-    memset(sp, 0, sizeof *sp);
-}
-
 // ---------------------------------------------------------------- homography
 
 // Inverse of a 3x3 by the adjugate; false when singular relative to its scale.
@@ -134,17 +76,13 @@ rs_status rs_calib_ground_homography(double H_px_from_ground[9], double H_ground
 double rs_calib_site_rms_surveyed_px(const rs_site *site, int icam, const rs_calib_result *r, double *q_px)
 {
     const rs_site_camera *cam = &site->cameras[icam];
+    const rs_camera calibrated = rs_calib_result_camera(&cam->camera, r);
     double sum = 0;
     int n = 0;
     for (int i = 0; i < r->N && i < cam->Nobservations; i++) {
         const rs_site_observation *o = &cam->observations[i];
-        double p_cam[3], q[2] = {NAN, NAN};
-        double p_enu[3], sigma_enu[3];
-        if (!rs_site_observed_point(p_enu, sigma_enu, site, o)) continue;
-        mrcal_transform_point_rt(p_cam, NULL, NULL, r->rt_cam_enu, p_enu);
-        if (!mrcal_project((mrcal_point2_t *)q, NULL, NULL, (const mrcal_point3_t *)p_cam, 1, &cam->camera.lensmodel,
-                           r->intrinsics))
-            q[0] = q[1] = NAN;
+        double q[2] = {NAN, NAN}, p_enu[3];
+        rs_site_seen_point(p_enu, q, site, o, &calibrated); // along: the nearest point of its polyline
         if (q_px) {
             q_px[2 * i] = q[0];
             q_px[2 * i + 1] = q[1];
@@ -284,10 +222,12 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
         cJSON_AddNumberToObject(l, "mdb_m", r->mdb_m[i]);
         cJSON_AddNumberToObject(l, "external_position_m", r->external_m[i]);
         cJSON_AddNumberToObject(l, "external_ground_m", r->external_ground_m[i]);
-        double p_surveyed[3], sigma_surveyed[3];
-        if (!rs_site_observed_point(p_surveyed, sigma_surveyed, site, o))
+        double p_surveyed[3]; // along a pole or a line: the point of it nearest the pick
+        const rs_camera calibrated = rs_calib_result_camera(&cam->camera, r);
+        if (!rs_site_seen_point(p_surveyed, NULL, site, o, &calibrated))
             memcpy(p_surveyed, site->landmarks[o->ilandmark].p_enu_m, sizeof p_surveyed);
         cJSON_AddItemToObject(l, "p_enu_surveyed_m", json_array(p_surveyed, 3));
+        cJSON_AddStringToObject(l, "at", rs_site_at_name(o->at));
         cJSON_AddItemToObject(l, "p_enu_adjusted_m", json_array(&r->p_enu_refined_m[3 * i], 3));
         cJSON_AddItemToArray(lms, l);
     }

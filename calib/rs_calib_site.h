@@ -35,10 +35,15 @@ typedef struct {
     double *sigma_enu_m;      // (N,3) owned
     double *q_px;             // (N,2) owned
     double *sigma_px;         // (N,) owned
+    rs_calib_polyline *along; // (N,) owned, NULL when no pick is `along`: each along pick's
+                              //   polyline (a line's vertices belong to the site)
+    double *pole_vertices_m;  // (N,6) owned, with along: a pole's base and top
+    int *survey_shared;       // (N,) owned: the landmark index of a pole's or line's pick, -1 for a point
 } rs_calib_site_problem;
 
 // Builds camera icam's problem from the site: every observation, its landmark's surveyed ENU
-// position with (sigma_h, sigma_h, sigma_v), the pixel and its sigma, the lens model and
+// position with (sigma_h, sigma_h, sigma_v) (a pick along a pole or a line: its polyline), the
+// pixel and its sigma, the lens model and
 // nominal intrinsics, the image size and the position prior if any.
 rs_status rs_calib_site_problem_init( // out
     rs_calib_site_problem *sp,

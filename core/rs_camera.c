@@ -526,3 +526,49 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
     memcpy(p_enu_m, p, sizeof(p));
     return RS_OK;
 }
+
+// The squared pixel distance from q of the point a + t (b - a), its projection in qt; INFINITY
+// when it does not project.
+static double seen_distance2(double qt[2], double p[3], double t, const double a[3], const double b[3],
+                             const double q[2], const rs_camera *cam)
+{
+    for (int k = 0; k < 3; k++) p[k] = a[k] + t * (b[k] - a[k]);
+    if (rs_camera_project(qt, cam, p, 1) != 1) return INFINITY;
+    return (qt[0] - q[0]) * (qt[0] - q[0]) + (qt[1] - q[1]) * (qt[1] - q[1]);
+}
+
+bool rs_camera_nearest_on_polyline(double p_enu_m[3], double q_px[2], const rs_camera *cam,
+                                   const double *vertices_enu_m, int Nvertices, const double q_pick_px[2])
+{
+    enum { SAMPLES = 256 };
+    double best = INFINITY, p[3], q[2];
+    for (int s = 0; s + 1 < Nvertices; s++) {
+        const double *a = &vertices_enu_m[3 * s], *b = &vertices_enu_m[3 * s + 3];
+        int kbest = -1;
+        double dbest = INFINITY;
+        for (int k = 0; k <= SAMPLES; k++) {
+            const double d = seen_distance2(q, p, (double)k / SAMPLES, a, b, q_pick_px, cam);
+            if (d < dbest) dbest = d, kbest = k;
+        }
+        if (kbest < 0) continue;
+        // ternary search in the bracket around the best sample (the distance is unimodal there)
+        double lo = fmax(0.0, (kbest - 1.0) / SAMPLES), hi = fmin(1.0, (kbest + 1.0) / SAMPLES);
+        while (hi - lo > 1e-6) {
+            const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+            if (seen_distance2(q, p, m1, a, b, q_pick_px, cam) < seen_distance2(q, p, m2, a, b, q_pick_px, cam))
+                hi = m2;
+            else
+                lo = m1;
+        }
+        const double d = seen_distance2(q, p, 0.5 * (lo + hi), a, b, q_pick_px, cam);
+        if (d < best) {
+            best = d;
+            memcpy(p_enu_m, p, sizeof p);
+            q_px[0] = q[0], q_px[1] = q[1];
+        }
+    }
+    if (isfinite(best)) return true;
+    p_enu_m[0] = p_enu_m[1] = p_enu_m[2] = NAN;
+    q_px[0] = q_px[1] = NAN;
+    return false;
+}

@@ -117,6 +117,14 @@ int rs_camera_project( // out
     const double *p_enu_m, // (N,3)
     int N);
 
+// The point of a polyline (vertices_enu_m (Nvertices,3), Nvertices >= 2) whose projection through
+// cam is nearest the pixel q_pick_px: p_enu_m (3,) and its projection q_px (2,). Each segment is
+// sampled at 256 points, then a ternary search around the nearest sample narrows it to 1e-6 of
+// the segment (the distance is unimodal there for any segment shorter than the view). False
+// when no part of it projects (both outputs NaN). Used for picks anywhere along a pole or a line.
+bool rs_camera_nearest_on_polyline(double p_enu_m[3], double q_px[2], const rs_camera *cam,
+                                   const double *vertices_enu_m, int Nvertices, const double q_pick_px[2]);
+
 // Intersects the ray of pixel q_px (through the full lens model: mrcal_unproject, then
 // Gauss-Newton steps on mrcal_project to polish) with the plane n . p = plane_offset_m.
 // plane_normal_enu need not be unit length; (0,0,1) with offset h is the level plane U = h.

@@ -95,6 +95,42 @@ bool rs_site_observed_point(double p_enu_m[3], double sigma_enu_m[3], const rs_s
     return true;
 }
 
+int rs_site_along_polyline(const double **vertices_enu_m, double pole_vertices_enu_m[6], double sigma_enu_m[3],
+                           const rs_site *site, const rs_site_observation *o)
+{
+    const rs_site_landmark *l = &site->landmarks[o->ilandmark];
+    *vertices_enu_m = NULL;
+    sigma_enu_m[0] = sigma_enu_m[1] = l->sigma_h_m;
+    sigma_enu_m[2] = l->sigma_v_m;
+    if (o->at != RS_SITE_AT_ALONG) return 0;
+    if (l->shape == RS_SITE_POLE) {
+        memcpy(pole_vertices_enu_m, l->p_enu_m, 3 * sizeof(double));
+        memcpy(pole_vertices_enu_m + 3, l->p_enu_m, 3 * sizeof(double));
+        pole_vertices_enu_m[5] += l->pole_height_m;
+        *vertices_enu_m = pole_vertices_enu_m;
+        return 2;
+    }
+    *vertices_enu_m = l->vertices_enu_m;
+    return l->Nvertices;
+}
+
+bool rs_site_seen_point(double p_enu_m[3], double *q_px, const rs_site *site, const rs_site_observation *o,
+                        const rs_camera *cam)
+{
+    double sigma[3], pole[6], q[2];
+    const double *v;
+    const int n = rs_site_along_polyline(&v, pole, sigma, site, o);
+    if (n == 0) {
+        rs_site_observed_point(p_enu_m, sigma, site, o);
+        const bool ok = rs_camera_project(q, cam, p_enu_m, 1) == 1;
+        if (q_px) q_px[0] = q[0], q_px[1] = q[1];
+        return ok;
+    }
+    const bool ok = rs_camera_nearest_on_polyline(p_enu_m, q, cam, v, n, o->q_px);
+    if (q_px) q_px[0] = q[0], q_px[1] = q[1];
+    return ok;
+}
+
 int rs_site_find_camera(const rs_site *site, const char *id)
 {
     for (int i = 0; i < site->Ncameras; i++)

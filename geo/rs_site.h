@@ -351,6 +351,14 @@ rs_status rs_site_load( // out
     // in
     const char *dir, rs_err *err);
 
+// rs_site_load for survey onboarding (`roadside pick`): a camera with too few picks to be
+// calibrated (fewer than 4 points) loads, the problem a warning instead of an error, since picking
+// starts from none. Everything else as rs_site_load.
+rs_status rs_site_load_for_picking( // out
+    rs_site **out,
+    // in
+    const char *dir, rs_err *err);
+
 // Frees a site and everything it owns. Accepts NULL.
 void rs_site_free(rs_site *site);
 
@@ -364,6 +372,21 @@ int rs_site_find_camera(const rs_site *site, const char *id);
 bool rs_site_observed_point(double p_enu_m[3], double sigma_enu_m[3], const rs_site *site,
                             const rs_site_observation *o);
 int rs_site_find_landmark(const rs_site *site, const char *id);
+
+// The polyline an `along` pick is on, ENU metres: a pole's base and top (written into
+// pole_vertices_enu_m, (2,3)), or a line's own vertices (a pointer into the site). *vertices_enu_m
+// receives it; returns its number of vertices, 0 for a pick that is not `along`. sigma_enu_m (3,)
+// receives the landmark's survey 1-sigma (sigma_h, sigma_h, sigma_v). No argument may be NULL.
+int rs_site_along_polyline(const double **vertices_enu_m, double pole_vertices_enu_m[6], double sigma_enu_m[3],
+                           const rs_site *site, const rs_site_observation *o);
+
+// The surveyed point a pick is of as a calibrated camera sees it: rs_site_observed_point for a
+// point, a pole's base or top; for an `along` pick, the point of its polyline whose projection
+// through cam is nearest the pick (each segment sampled at 256 points, then a ternary search:
+// to 1e-6 of the segment). Its projection goes to q_px (2,), may be NULL. False when no part of
+// the polyline projects (then p_enu_m and q_px are NaN).
+bool rs_site_seen_point(double p_enu_m[3], double *q_px, const rs_site *site, const rs_site_observation *o,
+                        const rs_camera *cam);
 
 // The value a background has for `key`: its tag `key` if it has one, else its own "name",
 // "file" (as written in site.json) or "synthetic" ("true" / "false"); NULL if none of these.

@@ -44,6 +44,9 @@ typedef struct {
     const double *q_px;         // (N,2) observed pixels
     const double *sigma_px;     // (N,) pixel 1-sigma in use (scaled). May be NULL: 1 px
     const bool *use;            // (N,) landmarks in the adjustment
+    const double *along_c;      // (N,3) direction of a landmark picked along a segment, 0: a point;
+                                //   may be NULL (rs_calib_refine.h)
+    const double *s_along_m;    // (N,) its offset along it: the seen point is p_c + s d
     const mrcal_lensmodel_t *lensmodel;
     const double *intrinsics;         // (Nintrinsics,) at the solution
     const double *intrinsics_nominal; // (Nintrinsics,) the focal scale's reference
@@ -82,6 +85,11 @@ double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i);
 // within a factor 30 of the stated sigma; a group with r < 0.5 keeps log_theta.
 double rs_calib__noise_update(double q, double r, double log_theta, double prior_factor);
 
+// The point landmark i is seen at: p_c_m[i] + s_along_m[i] along_c[i] (p_c_m[i] for a point).
+// Returns whether the landmark slides along a segment (then d receives the direction).
+bool rs_calib__seen_point(double seen[3], double d[3], const double *p_c_m, const double *along_c,
+                          const double *s_along_m, int i);
+
 // ---- the solve's side (rs_calib_noise_model.c; driven by rs_calib.c) ----
 
 // rs_calib_solve's scratch, (N,) arrays unless said.
@@ -89,6 +97,9 @@ typedef struct {
     double *p_survey_c, *p_c, *cov, *block_chi2, *q_pred;
     bool *use;
     double *sigma_px, *sigma_enu;   // (N,), (N,3): the sigmas in use (stated, scaled by the noise model)
+    double *along_c, *s_along;      // (N,3), (N,): landmarks picked along segments (rs_calib_refine.h);
+                                    //   NULL when the problem has none
+    double *share;                  // (N,) how many picks share the landmark's survey error (>= 1)
     double *e, *r, *dpos, *dground; // (N,5), (N,5), (N,5,3), (N,5,2): rs_calib_noise_out
 } rs_calib__work;
 
@@ -96,6 +107,9 @@ typedef struct {
 void rs_calib__scale_sigmas(rs_calib__work *w, const rs_calib_problem *pb, const double log_theta[RS_NOISE_NGROUPS]);
 // The group of an observation component (RS_NOISE_U ... RS_NOISE_UP).
 int rs_calib__noise_group(int component);
+// The redundancy number of landmark i's component j as the variance components count it: a
+// survey component shared by k picks (problem.survey_shared) counts 1/k.
+double rs_calib__vce_redundancy(const rs_calib__work *w, int i, int j);
 // Median of x (n,), using scratch (n,); NAN for n = 0.
 double rs_calib__median(const double *x, int n, double *scratch);
 // 3b of rs_calib_solve: variance components to convergence alternating with Baarda's data
@@ -110,6 +124,19 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
 rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                                 const double rt_c[6], const double log_theta[RS_NOISE_NGROUPS],
                                 const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err);
+// Landmarks picked along poles and lines (rs_calib_along.c). Whether landmark i is one:
+bool rs_calib__is_along(const rs_calib_problem *pb, int i);
+// Checks pb->along (RS_ERR_INVALID naming the landmark); *Npoints: the point landmarks.
+rs_status rs_calib__along_validate(int *Npoints, const rs_calib_problem *pb, rs_err *err);
+// The point landmarks of pb alone (for the initial pose): *sub is pb itself when it has no along
+// picks, else it points into *buffer (owned by the caller, free() it; NULL when not needed).
+rs_status rs_calib__point_problem(rs_calib_problem *sub, double **buffer, const rs_calib_problem *pb, rs_err *err);
+// For each along landmark, the segment its pick is on at the pose rt_c (centred frame, centroid
+// c): sets w's p_survey_c and p_c to the point of the segment nearest the pick's ray, along_c to
+// the segment's direction and s_along to 0.
+void rs_calib__along_choose(rs_calib__work *w, const rs_calib_problem *pb, const double c[3], const double rt_c[6],
+                            const double *intrinsics);
+
 // The 2-dof chi-square of an excluded landmark (rs_calib__noise_excluded_chi2) at the state of w.
 double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib__work *w, const double rt_c[6],
                                const rs_calib_result *res, const rs_calib_options *opt, int i);

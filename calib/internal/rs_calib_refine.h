@@ -35,6 +35,12 @@ typedef struct {
     const double *q_px;         // (N,2) observed pixels
     const double *sigma_px;     // (N,) pixel 1-sigma. May be NULL: 1 px
     const bool *use;            // (N,) which landmarks enter the solve. May be NULL: all
+    // Landmarks picked along a segment (rs_calib_polyline): the point seen is p_i + s_i d_i, with
+    // d_i the segment's unit direction and s_i free (no prior): the pick's residual is then its
+    // distance to the projected line, and the survey prior acts on p_i only.
+    const double *along_c; // (N,3) d_i, unit, or 0 for a point. May be NULL: all points
+    double *s_along_m;     // (N,) in,out: s_i, metres (the solve's state: start -> solution);
+                           //   may be NULL when along_c is
     const mrcal_lensmodel_t *lensmodel;
     const double *intrinsics_nominal; // (Nintrinsics,) centre of the intrinsics priors
     bool has_position_prior;
