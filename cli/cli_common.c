@@ -1,6 +1,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -115,4 +116,28 @@ bool rs_cli_parse_llh(const char *s, rs_llh *out)
     out->lon_deg = v[1];
     out->h_m = v[2];
     return true;
+}
+
+bool rs_cli_parse_int_list(const char *s, long lo, long hi, int *out, int max, int *n)
+{
+    char *list = s ? strdup(s) : NULL, *save = NULL;
+    if (!list) return false;
+    *n = 0;
+    bool ok = true;
+    for (char *t = strtok_r(list, ",", &save); t && ok; t = strtok_r(NULL, ",", &save)) {
+        long v;
+        ok = *n < max && rs_cli_parse_int(t, lo, hi, &v);
+        if (ok) out[(*n)++] = (int)v;
+    }
+    free(list);
+    return ok && *n > 0;
+}
+
+char *rs_cli_scratch_dir(char tmpl[4096], const char *what)
+{
+    const char *t = getenv("TMPDIR");
+    snprintf(tmpl, 4096, "%s/roadside-%s-XXXXXX", t && *t ? t : "/tmp", what);
+    if (mkdtemp(tmpl)) return tmpl;
+    fprintf(stderr, "roadside: %s: cannot create a scratch folder %s: %s\n", what, tmpl, strerror(errno));
+    return NULL;
 }

@@ -39,29 +39,18 @@ int rs_cli_bench_site(int argc, char **argv)
                                              {"dir", required_argument, NULL, O_DIR},
                                              {NULL, 0, NULL, 0}};
     int sizes[MAX_SIZES] = {10000, 100000, 1000000}, Nsizes = 3;
-    long seed = 1, l;
+    long seed = 1;
     const char *csv = NULL, *dir = NULL;
     int c;
     optind = 1;
     opterr = 0;
     while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
         switch (c) {
-        case O_LANDMARKS: {
-            Nsizes = 0;
-            char *list = strdup(optarg), *save = NULL;
-            if (!list) return rs_cli_fail("bench site: out of memory", RS_ERR_NOMEM, NULL);
-            for (char *t = strtok_r(list, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
-                if (Nsizes == MAX_SIZES || !rs_cli_parse_int(t, 4, 100000000, &l)) {
-                    free(list);
-                    return rs_cli_usage_error("bench site", "--landmarks: expected up to %d integers in [4, 1e8]",
-                                              MAX_SIZES);
-                }
-                sizes[Nsizes++] = (int)l;
-            }
-            free(list);
-            if (!Nsizes) return rs_cli_usage_error("bench site", "--landmarks: expected N[,N...]");
+        case O_LANDMARKS:
+            if (!rs_cli_parse_int_list(optarg, 4, 100000000, sizes, MAX_SIZES, &Nsizes))
+                return rs_cli_usage_error("bench site", "--landmarks: expected up to %d integers in [4, 1e8]",
+                                          MAX_SIZES);
             break;
-        }
         case O_SEED:
             if (!rs_cli_parse_int(optarg, 0, 1000000000, &seed))
                 return rs_cli_usage_error("bench site", "--seed: expected an integer >= 0");
@@ -74,15 +63,7 @@ int rs_cli_bench_site(int argc, char **argv)
     if (optind != argc) return rs_cli_usage_error("bench site", "unexpected argument '%s'", argv[optind]);
     char tmpl[4096];
     char *scratch = NULL;
-    if (!dir) {
-        const char *t = getenv("TMPDIR");
-        snprintf(tmpl, sizeof(tmpl), "%s/roadside-bench-site-XXXXXX", t && *t ? t : "/tmp");
-        if (!mkdtemp(tmpl)) {
-            perror("roadside: bench site: mkdtemp");
-            return RS_EXIT_FAIL;
-        }
-        scratch = tmpl;
-    }
+    if (!dir && !(scratch = rs_cli_scratch_dir(tmpl, "bench-site"))) return RS_EXIT_FAIL;
     printf("%10s %9s %8s %8s %8s %9s %9s %9s %7s %9s  %s\n", "landmarks", "file_MiB", "write_s", "check_s", "cpu_s",
            "us/lmk", "peak_MiB", "B/lmk", "errors", "warnings", "found");
     char text[4096];

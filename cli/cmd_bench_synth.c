@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "bench/rs_bench_synth.h"
@@ -21,7 +22,8 @@ static const char bench_synth_usage[] =
     "region rendering), no-shadows (the shadow pass skipped), full-detail (no coarse meshes\n"
     "for vehicles under 40 px). Prints a table: wall and CPU\n"
     "seconds per image (CPU of roadside, its workers and povray), vehicles per image, and\n"
-    "the time 4 cameras x 1000 images would take at that rate.\n"
+    "the time 4 cameras x 1000 images would take at that rate; then the peak resident memory\n"
+    "of roadside and of its largest child process (getrusage).\n"
     "\n"
     "  --calib DIR   calibrated <camera>.cameramodel files\n"
     "  --count N     images per variant (default 48; --quick: 8)\n"
@@ -105,15 +107,7 @@ int rs_cli_bench_synth(int argc, char **argv)
 
     char tmpl[4096];
     char *scratch = NULL;
-    if (!dir) {
-        const char *t = getenv("TMPDIR");
-        snprintf(tmpl, sizeof(tmpl), "%s/roadside-bench-synth-XXXXXX", t && *t ? t : "/tmp");
-        if (!mkdtemp(tmpl)) {
-            perror("roadside: bench synth: mkdtemp");
-            return RS_EXIT_FAIL;
-        }
-        scratch = tmpl;
-    }
+    if (!dir && !(scratch = rs_cli_scratch_dir(tmpl, "bench-synth"))) return RS_EXIT_FAIL;
     rs_bench_synth_row rows[RS_SYNTH_BENCH_VARIANTS];
     rs_bench_synth_variants(rows, J);
     const int Nrows = quick ? 2 : RS_SYNTH_BENCH_VARIANTS;
@@ -143,6 +137,14 @@ int rs_cli_bench_synth(int argc, char **argv)
                           r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
                           r->povray_s / (r->Nimages > 0 ? r->Nimages : 1));
     }
+    // memory: the peak resident set of this process (the run's parent: scene, traffic, COCO
+    // assembly) and of the largest of its finished children (a worker or a povray process),
+    // getrusage(2)'s ru_maxrss in KiB. A leak per image shows as a peak growing with --count.
+    struct rusage self = {0}, kids = {0};
+    getrusage(RUSAGE_SELF, &self);
+    getrusage(RUSAGE_CHILDREN, &kids);
+    printf("\npeak RSS: roadside %.1f MiB, largest child (worker or povray) %.1f MiB, over %d images a variant\n",
+           self.ru_maxrss / 1024.0, kids.ru_maxrss / 1024.0, o.count);
     if (csv && (st = rs_io_write_file(csv, text, (size_t)n, &err))) return rs_cli_fail("bench synth", st, &err);
     return RS_EXIT_OK;
 }

@@ -12,18 +12,21 @@ static void usage(FILE *out)
 {
     fprintf(out, "usage: roadside eval GT.json DETS.json [--center-shift K] [--thresholds LIST]\n"
                  "                     [--max-dets N] [--per-class] [--by KEY] [--json OUT]\n"
-                 "                     [--site SITE --calib DIR [--camera-field KEY]]\n"
+                 "                     [--metres | --site SITE --calib DIR [--camera-field KEY]]\n"
                  "\n"
                  "Average precision of vehicle detections judged by where they are: a detection is a\n"
                  "true positive when its bottom-centre point lies closer than a pixel threshold to the\n"
                  "bottom centre of a ground truth not matched yet (nearest first, highest scores first).\n"
                  "\n"
-                 "  GT.json            COCO ground truth: images, annotations (bbox [x, y, w, h] or\n"
-                 "                     bottom_center [u, v]; iscrowd = 1 marks an ignore region),\n"
-                 "                     categories\n"
+                 "  GT.json            COCO ground truth: images, annotations (footprint_bbox,\n"
+                 "                     bottom_center [u, v] or bbox [x, y, w, h]; iscrowd = 1 marks an\n"
+                 "                     ignore region), categories. roadside synth's own COCO as it is\n"
                  "  DETS.json          COCO results: a list of {image_id, category_id, bbox, score}\n"
                  "  --center-shift K   detection point (x + w/2, y + h/2 + K h) (default 0: the box\n"
-                 "                     centre; 0.5: the bottom edge; the seed paper used 0.35)\n"
+                 "                     centre, right for detectors trained on footprint boxes; for\n"
+                 "                     body boxes 0.5 is the bottom edge; the seed paper used 0.35)\n"
+                 "  Points: an object's point is the centre of its footprint_bbox, else its\n"
+                 "  bottom_center, else its bbox's centre (docs/evaluation.md, rule 1).\n"
                  "  --thresholds LIST  distances in pixels, comma-separated (default 2,5,10,15,20,50)\n"
                  "  --max-dets N       keep the N highest-scoring detections per image (default 100)\n"
                  "  --per-class        also one row per category, matching only within it\n"
@@ -35,6 +38,9 @@ static void usage(FILE *out)
                  "                     'roadside calib', full lens model); thresholds are then metres\n"
                  "                     (default 0.5,1,2,4: nuScenes' centre distances)\n"
                  "  --camera-field KEY the image field naming its camera (default camera)\n"
+                 "  --metres           metric thresholds with the cameras and ground plane the ground\n"
+                 "                     truth records itself (each image's \"calibration\", as roadside\n"
+                 "                     synth writes it: docs/labels.md); checksums checked\n"
                  "\n"
                  "Prints AP at each threshold, mAP (mean AP over the thresholds) and AR (mean final\n"
                  "recall); '-' (null in JSON) where there is no ground truth. The exact rules (ignore\n"
@@ -44,6 +50,7 @@ static void usage(FILE *out)
 
 typedef struct {
     const char *gt, *dets, *json, *by, *site, *calib, *camera_field;
+    bool metres; // the ground truth's recorded calibration
     double center_shift;
     double thresholds[RS_EVAL_MAX_THRESHOLDS];
     int Nthresholds; // 0: the default
@@ -69,7 +76,7 @@ static bool parse_list(const char *s, double *x, int *N)
 static int parse_args(int argc, char **argv, eval_args *a)
 {
     *a = (eval_args){0};
-    enum { O_SHIFT = 256, O_THRESHOLDS, O_MAXDETS, O_PERCLASS, O_BY, O_JSON, O_SITE, O_CALIB, O_CAMFIELD };
+    enum { O_SHIFT = 256, O_THRESHOLDS, O_MAXDETS, O_PERCLASS, O_BY, O_JSON, O_SITE, O_CALIB, O_CAMFIELD, O_METRES };
     static const struct option options[] = {{"center-shift", required_argument, NULL, O_SHIFT},
                                             {"thresholds", required_argument, NULL, O_THRESHOLDS},
                                             {"max-dets", required_argument, NULL, O_MAXDETS},
@@ -79,6 +86,7 @@ static int parse_args(int argc, char **argv, eval_args *a)
                                             {"site", required_argument, NULL, O_SITE},
                                             {"calib", required_argument, NULL, O_CALIB},
                                             {"camera-field", required_argument, NULL, O_CAMFIELD},
+                                            {"metres", no_argument, NULL, O_METRES},
                                             {NULL, 0, NULL, 0}};
     opterr = 0;
     optind = 0; // glibc: full re-initialisation
@@ -106,6 +114,7 @@ static int parse_args(int argc, char **argv, eval_args *a)
         case O_SITE: a->site = optarg; break;
         case O_CALIB: a->calib = optarg; break;
         case O_CAMFIELD: a->camera_field = optarg; break;
+        case O_METRES: a->metres = true; break;
         case ':': return rs_cli_usage_error("eval", "%s needs a value", argv[optind - 1]);
         default: return rs_cli_usage_error("eval", "unknown option '%s'", argv[optind - 1]);
         }
@@ -113,6 +122,9 @@ static int parse_args(int argc, char **argv, eval_args *a)
     if (argc - optind != 2)
         return rs_cli_usage_error("eval", "expected GT.json and DETS.json, got %d file argument(s)", argc - optind);
     if (!a->site != !a->calib) return rs_cli_usage_error("eval", "--site and --calib go together");
+    if (a->metres && a->site)
+        return rs_cli_usage_error("eval", "--metres reads the ground truth's own calibration: "
+                                          "give it or --site/--calib, not both");
     if (a->camera_field && !a->site) return rs_cli_usage_error("eval", "--camera-field needs --site and --calib");
     if (a->site && !a->camera_field) a->camera_field = "camera";
     a->gt = argv[optind];
@@ -169,10 +181,22 @@ int rs_cli_eval(int argc, char **argv)
     rs_err err = {0};
     rs_eval_data *data = NULL;
     rs_eval_result *result = NULL;
-    const rs_eval_load_options lo = {.center_shift = a.center_shift, .group_key = a.by, .camera_key = a.camera_field};
+    const rs_eval_load_options lo = {.center_shift = a.center_shift,
+                                     .group_key = a.by,
+                                     .camera_key = a.camera_field,
+                                     .recorded_calibration = a.metres};
     rs_status st = rs_eval_load(&data, a.gt, a.dets, &lo, &err);
     if (st != RS_OK) return rs_cli_fail("eval", st, &err);
-    if (a.site) {
+    if (a.metres) {
+        size_t missed = 0;
+        st = rs_eval_data_to_ground_recorded(data, &missed, &err);
+        if (st != RS_OK) {
+            rs_eval_data_free(data);
+            return rs_cli_fail("eval", st, &err);
+        }
+        if (missed)
+            fprintf(stderr, "roadside eval: %zu point(s) whose ray misses the ground can match nothing\n", missed);
+    } else if (a.site) {
         rs_site *site = NULL;
         size_t missed = 0;
         st = rs_site_load(&site, a.site, &err);

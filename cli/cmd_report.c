@@ -47,6 +47,8 @@ static const char report_usage[] =
     "                        verdicts are judged against it, as in 'roadside audit'\n"
     "  --max-rms-surveyed-px X, --max-loo-px X, --max-loo-m X, --max-ground-sigma-m X\n"
     "                        the audit's thresholds (default: derived from --need-ground-m)\n"
+    "  --ortho FILE          the orthophoto the site map is drawn on (any georeferenced image,\n"
+    "                        any CRS; default SITE/ortho.tif when there is one: 'roadside ortho')\n"
     "  --no-audit            skip the audit (no leave-one-out, no uncertainty map; every\n"
     "                        camera 'not audited')\n"
     "  -h, --help            this text\n"
@@ -71,6 +73,7 @@ int rs_cli_report(int argc, char **argv)
         {"cell", required_argument, NULL, 'l'},
         {"width", required_argument, NULL, 'w'},
         {"no-audit", no_argument, NULL, 'n'},
+        {"ortho", required_argument, NULL, 'O'},
         {"need-ground-m", required_argument, NULL, 'N'},
         {"max-rms-surveyed-px", required_argument, NULL, '1'},
         {"max-loo-px", required_argument, NULL, '2'},
@@ -92,6 +95,7 @@ int rs_cli_report(int argc, char **argv)
         switch (c) {
         case 'o': out_dir = optarg; break;
         case 'c': opt.calib_dir = optarg; break;
+        case 'O': opt.ortho_path = optarg; break;
         case 'r':
             if (!rs_cli_parse_double(optarg, &x) || !(x > 0))
                 return rs_cli_usage_error("report", "--range: '%s': expected a positive number of metres", optarg);

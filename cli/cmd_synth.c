@@ -10,12 +10,16 @@
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_synth.h"
 #include "synth/rs_synth_dataset.h"
+#include "synth/rs_synth_labels.h"
 
 static const char synth_usage[] =
     "usage: roadside synth SITE --calib DIR --count N -o DATASET [--seed S]\n"
     "                      [--backgrounds TAG=VALUE]... [--shard I/N] [--camera ID]...\n"
     "                      [--size WxH] [--vehicles N] [--split NAME] [--no-shadows]\n"
     "                      [--jobs J] [--separate-processes]\n"
+    "                      [--bbox footprint|body|visible] [--min-visibility V] [--keep-invisible]\n"
+    "                      [--no-junction-traffic] [--val-fraction F] [--val-camera ID]...\n"
+    "                      [--val-backgrounds TAG=VALUE]... [--val-split NAME]\n"
     "       roadside synth merge DATASET... -o OUT\n"
     "\n"
     "Synthesises a labelled dataset (docs/synth.md): image k (0 <= k < N) is seen by camera\n"
@@ -30,7 +34,10 @@ static const char synth_usage[] =
     "finished images after checking their files (a missing or corrupt one is remade, named on\n"
     "stderr). One run per DATASET at a time: a second fails at once, naming the first's pid\n"
     "(DATASET/.lock). Writes DATASET/<split>/*.png, DATASET/annotations/instances_<split>.json\n"
-    "(COCO, YOLOX's layout), DATASET/labels/<split>/*.txt (YOLO), DATASET/label_2/*.txt (KITTI).\n"
+    "(COCO, YOLOX's layout), DATASET/images/<split>, labels/<split>, data.yaml (Ultralytics\n"
+    "YOLO), DATASET/kitti/training/{image_2,label_2,calib} (KITTI), DATASET/cameras/ (the\n"
+    "camera models the labels were made with) and DATASET/run.json (the run's options).\n"
+    "The fields of every file: docs/labels.md.\n"
     "\n"
     "Options:\n"
     "  --calib DIR            calibrated <camera>.cameramodel files (roadside calib -o DIR)\n"
@@ -44,11 +51,23 @@ static const char synth_usage[] =
     "  --size WxH             output size (the camera's intrinsics scaled; same aspect)\n"
     "  --vehicles N           at most N vehicles of traffic per image (default 10)\n"
     "  --split NAME           COCO split (default train2017)\n"
+    "  --val-fraction F       put a share F of the images (drawn per image) in the validation split\n"
+    "  --val-camera ID        put every image of camera ID in the validation split (repeatable)\n"
+    "  --val-backgrounds K=V  put every image over a background whose tag K is V in the\n"
+    "                         validation split (repeatable, all must match; name=... holds out\n"
+    "                         one background)\n"
+    "  --val-split NAME       the validation split's name (default val2017)\n"
+    "  --bbox KIND            the box of COCO's bbox, YOLO and KITTI: footprint (default: what the\n"
+    "                         roadside detector learns), body (amodal) or visible\n"
+    "  --min-visibility V     no label for a vehicle less visible than V in [0, 1] (default 0)\n"
+    "  --keep-invisible       label vehicles with no visible pixel too (default: not)\n"
+    "  --no-junction-traffic  no vehicles on the junction's own lanes (default: turning\n"
+    "                         movements through the junction, docs/traffic.md)\n"
     "  --no-shadows           no differential-rendering shadows (the shadow pass: the sun's\n"
     "                         shadow and the sky's soft one of each vehicle on the background)\n"
-    "  --jobs J               images made at once, in J worker processes (default: 4 per\n"
-    "                         core: povray spends much of its time waiting on itself,\n"
-    "                         docs/benchmarks.md)\n"
+    "  --jobs J               images made at once, in J worker processes (default: the CPUs\n"
+    "                         this process may use: its affinity mask, its cgroup's cpu.max\n"
+    "                         quota and $SLURM_CPUS_PER_TASK, the smallest; never more)\n"
     "  --separate-processes   one povray process per pass (for benchmarks; default: the\n"
     "                         passes of an image are the frames of one povray process)\n"
     "  $ROADSIDE_POVRAY       the povray executable (default: povray on PATH)\n"
@@ -71,8 +90,31 @@ enum {
     OPT_SPLIT,
     OPT_NO_SHADOWS,
     OPT_JOBS,
-    OPT_SEPARATE
+    OPT_SEPARATE,
+    OPT_BBOX,
+    OPT_MIN_VIS,
+    OPT_KEEP_INVISIBLE,
+    OPT_NO_JUNCTION,
+    OPT_VAL_FRACTION,
+    OPT_VAL_CAMERA,
+    OPT_VAL_BG,
+    OPT_VAL_SPLIT
 };
+
+// "TAG=VALUE" -> keys[*N], values[*N] (kv[*N] owns the copy). RS_EXIT_OK or a usage error.
+static int parse_tag(const char *opt_name, const char *arg, char **kv, const char **keys, const char **values, int *N)
+{
+    const char *eq = strchr(arg, '=');
+    if (!eq || eq == arg || !eq[1])
+        return rs_cli_usage_error("synth", "%s: expected TAG=VALUE, got \"%s\"", opt_name, arg);
+    kv[*N] = strdup(arg);
+    if (!kv[*N]) return rs_cli_fail("synth", RS_ERR_NOMEM, NULL);
+    kv[*N][eq - arg] = 0;
+    keys[*N] = kv[*N];
+    values[*N] = kv[*N] + (eq - arg) + 1;
+    (*N)++;
+    return RS_EXIT_OK;
+}
 
 typedef struct {
     double t0;
@@ -165,21 +207,30 @@ int rs_cli_synth(int argc, char **argv)
                                              {"no-shadows", no_argument, NULL, OPT_NO_SHADOWS},
                                              {"jobs", required_argument, NULL, OPT_JOBS},
                                              {"separate-processes", no_argument, NULL, OPT_SEPARATE},
+                                             {"bbox", required_argument, NULL, OPT_BBOX},
+                                             {"min-visibility", required_argument, NULL, OPT_MIN_VIS},
+                                             {"keep-invisible", no_argument, NULL, OPT_KEEP_INVISIBLE},
+                                             {"no-junction-traffic", no_argument, NULL, OPT_NO_JUNCTION},
+                                             {"val-fraction", required_argument, NULL, OPT_VAL_FRACTION},
+                                             {"val-camera", required_argument, NULL, OPT_VAL_CAMERA},
+                                             {"val-backgrounds", required_argument, NULL, OPT_VAL_BG},
+                                             {"val-split", required_argument, NULL, OPT_VAL_SPLIT},
                                              {"output", required_argument, NULL, 'o'},
                                              {"help", no_argument, NULL, 'h'},
                                              {NULL, 0, NULL, 0}};
     rs_synth_dataset_options opt;
     rs_synth_dataset_options_default(&opt);
-    const long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    opt.jobs = cores > 0 ? (int)(4 * (cores < 8 ? cores : 8)) : 4;
+    opt.jobs = rs_synth_dataset_usable_cpus(NULL, 0);
     const size_t n = (size_t)argc + 1;
     const char **cams = calloc(n, sizeof(char *)), **keys = calloc(n, sizeof(char *)),
-               **values = calloc(n, sizeof(char *));
-    char **kv = calloc(n, sizeof(char *));
-    int Nkv = 0, rc = RS_EXIT_OK, c;
+               **values = calloc(n, sizeof(char *)), **val_cams = calloc(n, sizeof(char *)),
+               **val_keys = calloc(n, sizeof(char *)), **val_values = calloc(n, sizeof(char *));
+    char **kv = calloc(n, sizeof(char *)), **val_kv = calloc(n, sizeof(char *));
+    int Nkv = 0, Nval_kv = 0, rc = RS_EXIT_OK, c;
+    double x;
     long l;
     bool have_count = false;
-    if (!cams || !keys || !values || !kv) {
+    if (!cams || !keys || !values || !kv || !val_cams || !val_keys || !val_values || !val_kv) {
         rc = rs_cli_fail("synth", RS_ERR_NOMEM, NULL);
         goto done;
     }
@@ -203,21 +254,26 @@ int rs_cli_synth(int argc, char **argv)
                 rc = rs_cli_usage_error("synth", "--seed: expected an integer >= 0");
             break;
         }
-        case OPT_BG: {
-            char *eq = strchr(optarg, '=');
-            if (!eq || eq == optarg || !eq[1]) {
-                rc = rs_cli_usage_error("synth", "--backgrounds: expected TAG=VALUE, got \"%s\"", optarg);
-                break;
-            }
-            kv[Nkv] = strdup(optarg);
-            if (!kv[Nkv]) {
-                rc = rs_cli_fail("synth", RS_ERR_NOMEM, NULL);
-                break;
-            }
-            kv[Nkv][eq - optarg] = 0;
-            keys[Nkv] = kv[Nkv];
-            values[Nkv] = kv[Nkv] + (eq - optarg) + 1;
-            Nkv++;
+        case OPT_BG: rc = parse_tag("--backgrounds", optarg, kv, keys, values, &Nkv); break;
+        case OPT_VAL_BG: rc = parse_tag("--val-backgrounds", optarg, val_kv, val_keys, val_values, &Nval_kv); break;
+        case OPT_VAL_CAMERA: val_cams[opt.Nval_cameras++] = optarg; break;
+        case OPT_VAL_FRACTION:
+            if (!rs_cli_parse_double(optarg, &x) || x < 0 || x > 1)
+                rc = rs_cli_usage_error("synth", "--val-fraction: expected a number in [0, 1], got \"%s\"", optarg);
+            opt.val_fraction = x;
+            break;
+        case OPT_MIN_VIS:
+            if (!rs_cli_parse_double(optarg, &x) || x < 0 || x > 1)
+                rc = rs_cli_usage_error("synth", "--min-visibility: expected a number in [0, 1], got \"%s\"", optarg);
+            opt.min_visibility = x;
+            break;
+        case OPT_KEEP_INVISIBLE: opt.keep_invisible = true; break;
+        case OPT_NO_JUNCTION: opt.junction_traffic = false; break;
+        case OPT_BBOX: {
+            rs_synth_bbox_kind kind;
+            rs_err e = {0};
+            if (rs_synth_bbox_kind_parse(&kind, optarg, &e) != RS_OK) rc = rs_cli_usage_error("synth", "%s", e.msg);
+            opt.bbox = (int)kind;
             break;
         }
         case OPT_SHARD: {
@@ -252,12 +308,17 @@ int rs_cli_synth(int argc, char **argv)
             opt.vehicles = (int)l;
             break;
         case OPT_SPLIT:
+        case OPT_VAL_SPLIT:
             for (const char *p = optarg; *p; p++)
                 if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_' ||
                       *p == '-'))
-                    rc = rs_cli_usage_error("synth", "--split: use only [A-Za-z0-9_-]");
-            if (!*optarg) rc = rs_cli_usage_error("synth", "--split: empty");
-            opt.split = optarg;
+                    rc = rs_cli_usage_error("synth", "%s: use only [A-Za-z0-9_-]",
+                                            c == OPT_SPLIT ? "--split" : "--val-split");
+            if (!*optarg) rc = rs_cli_usage_error("synth", "%s: empty", c == OPT_SPLIT ? "--split" : "--val-split");
+            if (c == OPT_SPLIT)
+                opt.split = optarg;
+            else
+                opt.val_split = optarg;
             break;
         default: rc = rs_cli_usage_error("synth", "unknown option or missing value: %s", argv[optind - 1]);
         }
@@ -276,6 +337,14 @@ int rs_cli_synth(int argc, char **argv)
     opt.filter_keys = keys;
     opt.filter_values = values;
     opt.Nfilters = Nkv;
+    opt.val_cameras = val_cams;
+    opt.val_bg_keys = val_keys;
+    opt.val_bg_values = val_values;
+    opt.Nval_bg = Nval_kv;
+    if (strcmp(opt.split, opt.val_split) == 0) {
+        rc = rs_cli_usage_error("synth", "--split and --val-split name the same split \"%s\"", opt.split);
+        goto done;
+    }
     progress_state ps = {.t0 = wall_s(), .tty = isatty(2) != 0};
     opt.progress = progress;
     opt.progress_ctx = &ps;
@@ -296,13 +365,22 @@ int rs_cli_synth(int argc, char **argv)
         printf("resume:      %d of the images made were found damaged and remade; %d part files left out of the "
                "COCO file (stderr names each)\n",
                sum.Nremade, sum.Nleft_out);
-    printf("images:      %s/%s/\n", opt.out_dir, opt.split);
-    printf("COCO:        %s/annotations/instances_%s.json\n", opt.out_dir, opt.split);
-    printf("YOLO:        %s/labels/%s/\n", opt.out_dir, opt.split);
-    printf("KITTI:       %s/label_2/\n", opt.out_dir);
+    const bool val = opt.val_fraction > 0 || opt.Nval_cameras > 0 || opt.Nval_bg > 0;
+    printf("images:      %s/%s/%s%s%s\n", opt.out_dir, opt.split, val ? "  and  " : "", val ? opt.val_split : "",
+           val ? "/" : "");
+    printf("COCO:        %s/annotations/instances_%s.json%s%s%s\n", opt.out_dir, opt.split,
+           val ? "  and  instances_" : "", val ? opt.val_split : "", val ? ".json" : "");
+    printf("YOLO:        %s/data.yaml   (images/<split>/, labels/<split>/)\n", opt.out_dir);
+    printf("KITTI:       %s/kitti/training/   (image_2/, label_2/, calib/; kitti/ImageSets/)\n", opt.out_dir);
+    printf("cameras:     %s/cameras/   (the camera models of the labels; eval --metres reads them)\n", opt.out_dir);
 done:
     for (int i = 0; i < Nkv; i++) free(kv[i]);
+    for (int i = 0; i < Nval_kv; i++) free(val_kv[i]);
     free(kv);
+    free(val_kv);
+    free(val_cams);
+    free(val_keys);
+    free(val_values);
     free(cams);
     free(keys);
     free(values);

@@ -29,11 +29,15 @@ int rs_cli_traffic(int argc, char **argv);
 int rs_cli_synth(int argc, char **argv);
 int rs_cli_eval(int argc, char **argv);
 int rs_cli_bench(int argc, char **argv);
+int rs_cli_ortho(int argc, char **argv);
+int rs_cli_pick(int argc, char **argv);
+int rs_cli_dataset(int argc, char **argv);
 // Sub-subcommands living in their own files: `roadside site simulate`, `roadside bench calib`.
 int rs_cli_site_simulate(int argc, char **argv);
 int rs_cli_bench_calib(int argc, char **argv);
 int rs_cli_bench_synth(int argc, char **argv);
 int rs_cli_bench_site(int argc, char **argv);
+int rs_cli_bench_pick(int argc, char **argv);
 
 // Prints "roadside: <what>: <detail or strerror>" on stderr and returns RS_EXIT_FAIL
 // (RS_EXIT_USAGE for RS_ERR_USAGE).
@@ -68,3 +72,11 @@ bool rs_cli_parse_llh(const char *s, rs_llh *out);
 // Parses a finite double / an int in [lo, hi]; false if s is not entirely a number.
 bool rs_cli_parse_double(const char *s, double *out);
 bool rs_cli_parse_int(const char *s, long lo, long hi, long *out);
+
+// A comma-separated list of up to max integers in [lo, hi] (the benches' --landmarks N[,N...]):
+// out (max,) and *n. False (out, *n undefined) when malformed, empty or too long.
+bool rs_cli_parse_int_list(const char *s, long lo, long hi, int *out, int max, int *n);
+
+// A fresh scratch folder under $TMPDIR (else /tmp) named roadside-<what>-XXXXXX, created in
+// tmpl (4096 bytes). Returns tmpl, or NULL (with a message on stderr naming `what`).
+char *rs_cli_scratch_dir(char tmpl[4096], const char *what);

@@ -45,10 +45,14 @@ extern "C" {
 typedef struct rs_eval_data rs_eval_data;
 
 typedef struct {
-    double center_shift;    // K (unitless, fraction of the box height); 0 = the box centre
-    const char *group_key;  // image-level field to group by (`--by`), may be NULL
-    const char *camera_key; // image-level field naming each image's camera (for
-                            //   rs_eval_data_to_ground), may be NULL
+    double center_shift;       // K (unitless, fraction of the box height); 0 = the box centre
+    const char *group_key;     // image-level field to group by (`--by`), may be NULL
+    const char *camera_key;    // image-level field naming each image's camera (for
+                               //   rs_eval_data_to_ground), may be NULL
+    bool recorded_calibration; // read each image's "calibration" (the dataset contract,
+                               //   docs/labels.md: camera model path relative to the ground
+                               //   truth's folder, its SHA-256, the ground plane) for
+                               //   rs_eval_data_to_ground_recorded
 } rs_eval_load_options;
 
 // Reads a COCO ground-truth file and a COCO results file (a JSON list of {image_id,
@@ -88,6 +92,17 @@ rs_status rs_eval_data_to_ground( // in,out
     rs_eval_data *data,
     // in
     const rs_site *site, const char *calib_dir,
+    size_t *Nmissed, // may be NULL: points whose ray misses the ground
+    rs_err *err);
+
+// Metric evaluation from the dataset itself: as rs_eval_data_to_ground, with each image's
+// camera model and ground plane from its recorded "calibration" (data loaded with
+// recorded_calibration). Each model file's SHA-256 is checked against the recorded one.
+// Errors: RS_ERR_INVALID (loaded without recorded_calibration, a checksum that differs),
+// RS_ERR_IO / RS_ERR_PARSE (a model file).
+rs_status rs_eval_data_to_ground_recorded( // in,out
+    rs_eval_data *data,
+    // in
     size_t *Nmissed, // may be NULL: points whose ray misses the ground
     rs_err *err);
 

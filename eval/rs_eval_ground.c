@@ -1,5 +1,7 @@
 // rs_eval_ground.c -- metric thresholds: every point to the ground through its image's camera.
+#include "core/rs_hash.h"
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,17 +14,23 @@
 // opposite sides, so that they match nothing (the distance squared stays finite: 4e300).
 static const double MISSED_DET = 1e150, MISSED_GT = -1e150;
 
-// Replaces q (2,) by its ground (E, N), or by (missed, missed) when the ray misses the ground.
-static bool to_ground(double *q, const rs_camera *cam, const rs_site *site, double missed)
+// Replaces q (2,) by its ground (E, N), or by (missed, missed) when the ray misses the ground
+// plane n . p_enu = offset.
+static bool to_ground_plane(double *q, const rs_camera *cam, const double n_enu[3], double offset_m, double missed)
 {
     double p[3];
-    if (rs_camera_locate_ground(p, cam, q, site->ground_normal_enu, site->ground_offset_m, NULL) != RS_OK) {
+    if (rs_camera_locate_ground(p, cam, q, n_enu, offset_m, NULL) != RS_OK) {
         q[0] = q[1] = missed;
         return false;
     }
     q[0] = p[0];
     q[1] = p[1];
     return true;
+}
+
+static bool to_ground(double *q, const rs_camera *cam, const rs_site *site, double missed)
+{
+    return to_ground_plane(q, cam, site->ground_normal_enu, site->ground_offset_m, missed);
 }
 
 rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const char *calib_dir, size_t *Nmissed,
@@ -66,6 +74,63 @@ rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const cha
     free(cams);
     free(loaded);
     free(cam_of_image);
+    if (Nmissed) *Nmissed = missed;
+    return st;
+}
+
+rs_status rs_eval_data_to_ground_recorded(rs_eval_data *d, size_t *Nmissed, rs_err *err)
+{
+    if (Nmissed) *Nmissed = 0;
+    if (!d->image_model || d->Nrecorded != d->Nimages)
+        return rs_err_set(err, RS_ERR_INVALID, "the ground truth was loaded without its recorded calibration");
+    if (d->metres) return rs_err_set(err, RS_ERR_INVALID, "the points are on the ground already");
+    // one camera per distinct model path, loaded (and its checksum checked) on first use
+    const size_t N = (size_t)(d->Nimages ? d->Nimages : 1);
+    int *cam_of_image = malloc(N * sizeof *cam_of_image);
+    rs_camera *cams = calloc(N, sizeof *cams);
+    int *first_image = malloc(N * sizeof *first_image); // (Ncams) an image of each distinct model
+    int Ncams = 0;
+    rs_status st = cam_of_image && cams && first_image ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; st == RS_OK && i < d->Nimages; i++) {
+        int c = -1; // the distinct models so far (a dataset has a few cameras)
+        for (int j = 0; j < Ncams && c < 0; j++)
+            if (!strcmp(d->image_model[first_image[j]], d->image_model[i])) c = j;
+        if (c < 0) {
+            first_image[Ncams] = i;
+            char hex[65];
+            c = Ncams;
+            if ((st = rs_camera_read(&cams[c], NULL, d->image_model[i], err))) break;
+            Ncams++;
+            if (d->image_model_sha256[i]) {
+                if ((st = rs_hash_sha256_file(hex, NULL, d->image_model[i], err))) break;
+                if (strcmp(hex, d->image_model_sha256[i]) != 0) {
+                    st = rs_err_set(err, RS_ERR_INVALID,
+                                    "image %lld: %s: SHA-256 %s, the ground truth records %s (the file changed "
+                                    "since the dataset was made)",
+                                    d->image_id[i], d->image_model[i], hex, d->image_model_sha256[i]);
+                    break;
+                }
+            }
+        }
+        cam_of_image[i] = c;
+    }
+    size_t missed = 0;
+    if (st == RS_OK) {
+        for (int i = 0; i < d->Nimages; i++)
+            for (size_t a = d->gt_begin[i]; a < d->gt_begin[i + 1]; a++)
+                missed += !to_ground_plane(&d->gt_point[2 * a], &cams[cam_of_image[i]], &d->image_ground[4 * i],
+                                           d->image_ground[4 * i + 3], MISSED_GT);
+        for (size_t k = 0; k < d->Ndets; k++) {
+            const int i = d->det_image[k];
+            missed += !to_ground_plane(&d->det_point[2 * k], &cams[cam_of_image[i]], &d->image_ground[4 * i],
+                                       d->image_ground[4 * i + 3], MISSED_DET);
+        }
+        d->metres = true;
+    }
+    for (int c = 0; c < Ncams; c++) rs_camera_free(&cams[c]);
+    free(cams);
+    free(cam_of_image);
+    free(first_image);
     if (Nmissed) *Nmissed = missed;
     return st;
 }

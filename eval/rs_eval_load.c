@@ -1,4 +1,5 @@
 // rs_eval_load.c -- reading a COCO ground-truth file and a COCO results file into rs_eval_data.
+#define _POSIX_C_SOURCE 200809L // strndup
 #include <cjson/cJSON.h>
 #include <limits.h>
 #include <math.h>
@@ -111,13 +112,18 @@ static rs_status get_numbers(const where *w, const cJSON *v, const char *field, 
     return RS_OK;
 }
 
-// The point of an annotation or detection: bottom_center [u, v] if present, else
-// (x + w/2, y + h/2 + K h) from bbox [x, y, w, h]. A present bbox is checked in either case.
+// The point of an annotation or detection (docs/evaluation.md, rule 1), the same rule for both:
+// the centre of `footprint_bbox` [x, y, w, h] if present (the dataset contract, docs/labels.md:
+// the box the roadside detector is trained on), else `bottom_center` [u, v], else
+// (x + w/2, y + h/2 + K h) from `bbox` (K: the centre shift, detections only). A present bbox is
+// checked in every case.
 static rs_status get_point(const where *w, const cJSON *o, double K, double q[2], rs_err *err)
 {
+    const cJSON *fp = cJSON_GetObjectItemCaseSensitive(o, "footprint_bbox");
     const cJSON *bc = cJSON_GetObjectItemCaseSensitive(o, "bottom_center");
     const cJSON *bb = cJSON_GetObjectItemCaseSensitive(o, "bbox");
     if (cJSON_IsNull(bc)) bc = NULL;
+    if (cJSON_IsNull(fp)) fp = NULL;
     rs_status st;
     if (bb) {
         double b[4];
@@ -127,8 +133,16 @@ static rs_status get_point(const where *w, const cJSON *o, double K, double q[2]
         q[0] = b[0] + 0.5 * b[2];
         q[1] = b[1] + 0.5 * b[3] + K * b[3];
     }
+    if (fp) {
+        double b[4];
+        if ((st = get_numbers(w, fp, "footprint_bbox", 4, b, err))) return st;
+        if (b[2] < 0 || b[3] < 0) return bad(w, err, RS_ERR_INVALID, "footprint_bbox: negative width or height");
+        q[0] = b[0] + 0.5 * b[2];
+        q[1] = b[1] + 0.5 * b[3];
+        return RS_OK;
+    }
     if (bc) return get_numbers(w, bc, "bottom_center", 2, q, err);
-    if (!bb) return bad(w, err, RS_ERR_PARSE, "bbox: missing (and no bottom_center)");
+    if (!bb) return bad(w, err, RS_ERR_PARSE, "bbox: missing (and no footprint_bbox or bottom_center)");
     return RS_OK;
 }
 
@@ -146,7 +160,10 @@ typedef struct {
     where w;
     const char *group_key;
     const char *camera_key;
-    size_t span[3][2]; // images, annotations, categories: [begin, end)
+    bool recorded;       // read each image's recorded calibration (rs_eval_load_options)
+    char *gt_dir;        // owned: the ground truth's folder (recorded camera models are relative to it)
+    size_t cap_recorded; // capacity of d's image_model, image_model_sha256, image_ground
+    size_t span[3][2];   // images, annotations, categories: [begin, end)
     bool has[3];
 
     size_t cap_images;
@@ -201,6 +218,42 @@ static rs_status group_value(const where *w, const cJSON *o, const char *key, ch
     return *out ? RS_OK : nomem(w, err);
 }
 
+// The calibration an image records (docs/labels.md, the dataset contract): "calibration":
+// {"camera_model": path relative to the ground truth's folder, "camera_model_sha256",
+// "ground_normal_enu": [3], "ground_offset_m"}.
+static rs_status recorded_calibration(gt_ctx *c, const cJSON *o, size_t n, rs_err *err)
+{
+    rs_eval_data *d = c->d;
+    size_t cap = c->cap_recorded;
+    if (!grow(&d->image_model, &cap, n, sizeof *d->image_model) ||
+        !grow(&d->image_model_sha256, &(size_t){c->cap_recorded}, n, sizeof *d->image_model_sha256) ||
+        !grow(&d->image_ground, &(size_t){c->cap_recorded}, n, 4 * sizeof *d->image_ground))
+        return nomem(&c->w, err);
+    c->cap_recorded = cap;
+    d->image_model[n] = d->image_model_sha256[n] = NULL;
+    d->Nrecorded = (int)n + 1;
+    const cJSON *cal = cJSON_GetObjectItemCaseSensitive(o, "calibration");
+    if (!cJSON_IsObject(cal))
+        return bad(&c->w, err, RS_ERR_INVALID,
+                   "calibration: missing (--metres needs the dataset's own record of each image's camera: "
+                   "roadside synth writes it; or give --site and --calib)");
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(cal, "camera_model");
+    const cJSON *h = cJSON_GetObjectItemCaseSensitive(cal, "camera_model_sha256");
+    const cJSON *off = cJSON_GetObjectItemCaseSensitive(cal, "ground_offset_m");
+    if (!cJSON_IsString(m) || !*m->valuestring)
+        return bad(&c->w, err, RS_ERR_INVALID, "calibration.camera_model: missing or not a string");
+    if (!cJSON_IsNumber(off) || !isfinite(off->valuedouble))
+        return bad(&c->w, err, RS_ERR_INVALID, "calibration.ground_offset_m: missing or not a number");
+    rs_status st = get_numbers(&c->w, cJSON_GetObjectItemCaseSensitive(cal, "ground_normal_enu"),
+                               "calibration.ground_normal_enu", 3, &d->image_ground[4 * n], err);
+    if (st) return st;
+    d->image_ground[4 * n + 3] = off->valuedouble;
+    d->image_model[n] = m->valuestring[0] == '/' ? strdup(m->valuestring) : rs_io_join(c->gt_dir, m->valuestring);
+    if (!d->image_model[n]) return nomem(&c->w, err);
+    if (cJSON_IsString(h) && !(d->image_model_sha256[n] = strdup(h->valuestring))) return nomem(&c->w, err);
+    return RS_OK;
+}
+
 static rs_status gt_image(void *vctx, size_t index, const cJSON *o, size_t offset, rs_err *err)
 {
     gt_ctx *c = vctx;
@@ -231,6 +284,7 @@ static rs_status gt_image(void *vctx, size_t index, const cJSON *o, size_t offse
                        c->camera_key);
         if (!(d->image_camera[n] = strdup(v->valuestring))) return nomem(&c->w, err);
     }
+    if (c->recorded && (st = recorded_calibration(c, o, n, err))) return st;
     return c->group_key ? group_value(&c->w, o, c->group_key, &c->image_value[n], err) : RS_OK;
 }
 
@@ -526,7 +580,17 @@ rs_status rs_eval_parse(rs_eval_data **data, const char *gt_text, size_t gt_len,
     gt_ctx g = {.d = d,
                 .w = {.text = gt_text, .name = gt_name},
                 .group_key = opt ? opt->group_key : NULL,
-                .camera_key = opt ? opt->camera_key : NULL};
+                .camera_key = opt ? opt->camera_key : NULL,
+                .recorded = opt && opt->recorded_calibration};
+    if (g.recorded) {
+        // the folder of the ground truth file: recorded camera models are relative to it
+        const char *slash = strrchr(gt_name, '/');
+        g.gt_dir = slash ? strndup(gt_name, (size_t)(slash - gt_name + (slash == gt_name))) : strdup(".");
+        if (!g.gt_dir) {
+            free(d);
+            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        }
+    }
     rs_status st = load_gt(&g, gt_len, err);
     if (st == RS_OK) {
         det_ctx c = {.d = d,
@@ -538,6 +602,7 @@ rs_status rs_eval_parse(rs_eval_data **data, const char *gt_text, size_t gt_len,
     }
     free(g.image_map);
     free(g.category_map);
+    free(g.gt_dir);
     gt_ctx_free(&g);
     if (st != RS_OK) {
         rs_eval_data_free(d);
@@ -569,6 +634,13 @@ void rs_eval_data_free(rs_eval_data *d)
     if (d->image_camera)
         for (int i = 0; i < d->Nimages; i++) free(d->image_camera[i]);
     free(d->image_camera);
+    for (int i = 0; i < d->Nrecorded; i++) {
+        free(d->image_model[i]);
+        free(d->image_model_sha256[i]);
+    }
+    free(d->image_model);
+    free(d->image_model_sha256);
+    free(d->image_ground);
     for (int g = 0; g < d->Ngroups; g++) free(d->group_names[g]);
     free(d->group_names);
     free(d->category_id);

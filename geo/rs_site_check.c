@@ -221,14 +221,16 @@ void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam, const 
     }
     if (Nalong == 0) {
         if (cam->Nobservations >= MIN_OBSERVATIONS) return;
-        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1, NULL, NULL,
+        rs_site__diag(r, r->picking ? RS_SITE_WARNING : RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1,
+                      NULL, NULL,
                       "camera '%s' has %d usable observation%s: it needs at least %d landmarks "
                       "picked to be calibrated",
                       cam->id, cam->Nobservations, cam->Nobservations == 1 ? "" : "s", MIN_OBSERVATIONS);
         return;
     }
     if (Nconstraints < 2 * MIN_OBSERVATIONS) {
-        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1, NULL, NULL,
+        rs_site__diag(r, r->picking ? RS_SITE_WARNING : RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1,
+                      NULL, NULL,
                       "camera '%s': its %d picks (%d along a pole or line) fix %d numbers (2 per point, base or top "
                       "pick; 1 per along pick, at most 2 per straight segment): it needs at least %d, as %d points "
                       "give, to be calibrated",

@@ -475,11 +475,12 @@ static void read_site(rs_site **out, rs_site__report *r, const char *dir)
 
 // ---- public ----
 
-rs_status rs_site_load(rs_site **out, const char *dir, rs_err *err)
+static rs_status load(rs_site **out, const char *dir, bool picking, rs_err *err)
 {
     *out = NULL;
     rs_site__report *r = calloc(1, sizeof *r);
     if (!r) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
+    r->picking = picking;
     rs_site *site = NULL;
     read_site(&site, r, dir);
     rs_status st = RS_OK;
@@ -501,6 +502,9 @@ rs_status rs_site_load(rs_site **out, const char *dir, rs_err *err)
         *out = site;
     return st;
 }
+
+rs_status rs_site_load(rs_site **out, const char *dir, rs_err *err) { return load(out, dir, false, err); }
+rs_status rs_site_load_for_picking(rs_site **out, const char *dir, rs_err *err) { return load(out, dir, true, err); }
 
 rs_status rs_site_check(rs_site_report **report, const char *dir, rs_err *err)
 {

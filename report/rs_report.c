@@ -371,6 +371,26 @@ rs_status rs_report_load_cameras(struct rs_report_ctx *rep, const rs_report_opti
     return st;
 }
 
+// The site map's orthophoto (rep->ortho): the one named, else SITE/ortho.tif when the site has
+// one; none otherwise. A file that is there but unreadable is an error naming it.
+static rs_status load_ortho(struct rs_report_ctx *rep, const rs_report_options *opt, rs_err *err)
+{
+    if (opt->ortho_path) {
+        rep->ortho_path = strdup(opt->ortho_path);
+    } else {
+        rep->ortho_path = rs_io_join(rep->site->dir, "ortho.tif");
+        if (rep->ortho_path && access(rep->ortho_path, F_OK) != 0) {
+            free(rep->ortho_path);
+            rep->ortho_path = NULL;
+            return RS_OK;
+        }
+    }
+    if (!rep->ortho_path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = rs_geo_ortho_read(&rep->ortho, rep->ortho_path, &rep->site->origin, 2048, err);
+    if (st) rs_err_prefix(err, "orthophoto");
+    return st;
+}
+
 void rs_report_free_cameras(struct rs_report_ctx *rep)
 {
     for (int c = 0; c < rep->Ncameras; c++) camera_free(&rep->cameras[c]);
@@ -379,6 +399,9 @@ void rs_report_free_cameras(struct rs_report_ctx *rep)
     free(rep->lanes.p_enu_m);
     free(rep->lanes.junction);
     free(rep->best_map.sigma_m);
+    rs_geo_ortho_free(&rep->ortho);
+    free(rep->ortho_path);
+    rep->ortho_path = NULL;
     rep->cameras = NULL;
     rep->Ncameras = 0;
 }
@@ -462,12 +485,17 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
                  "the ground by the best camera seeing it (pose covariance plus %g px detection noise), with "
                  "labelled contours",
                  rep->detection_sigma_px);
+    char ortho[320] = "";
+    if (rep->ortho.rgb)
+        snprintf(ortho, sizeof ortho, " Drawn on the orthophoto %s (%s%s, %.2g m per pixel as drawn).", rep->ortho_path,
+                 rep->ortho.crs_name ? rep->ortho.crs_name : "its CRS",
+                 rep->ortho.warped ? ", reprojected to the site's frame" : "", rep->ortho.grid.cell_m);
     rs_doc_figure(doc, rs_report_draw_site_map, rep, 0.8,
                   "Site map, north up, in the local east-north-up frame: cameras (discs, with a line along the "
                   "heading), the ground each camera sees within %g m (dashed outline%s), surveyed "
-                  "landmarks (dots)%s%s.",
+                  "landmarks (dots)%s%s.%s",
                   rep->range_m, rep->best_map.sigma_m ? "" : ", tinted",
-                  rep->lanes.Nlines ? " and lane lines (yellow)" : "", colour);
+                  rep->lanes.Nlines ? " and lane lines (yellow)" : "", colour, ortho);
 }
 
 static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_report_camera *cam)
@@ -635,19 +663,9 @@ static rs_status write_report(rs_report_summary *summary, const char *out_dir, c
     rep.calib_dir = calib_dir;
     rs_doc doc = {0};
     char *html_path = rs_io_join(out_dir, "report.html"), *pdf_path = rs_io_join(out_dir, "report.pdf");
-    rep.cameras = calloc((size_t)site->Ncameras, sizeof *rep.cameras);
-    rs_status st = calib_dir && html_path && pdf_path && rep.cameras
-                       ? RS_OK
-                       : rs_err_set(err, RS_ERR_NOMEM, "report: out of memory");
-    if (!st) st = read_lanes(&rep.lanes, site, err);
-    for (int c = 0; c < site->Ncameras && !st; c++) {
-        rs_report_camera *cam = &rep.cameras[rep.Ncameras++];
-        cam->rep = &rep;
-        cam->icam = c;
-        cam->colour = c;
-        st = camera_load(cam, site, calib_dir, &opt, err);
-    }
-    if (!st && !rs_report_best_map(&rep)) st = rs_err_set(err, RS_ERR_NOMEM, "report: out of memory");
+    rs_status st = calib_dir && html_path && pdf_path ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "report: out of memory");
+    if (!st) st = rs_report_load_cameras(&rep, &opt, err);
+    if (!st) st = load_ortho(&rep, &opt, err);
     if (!st) {
         doc_site(&doc, &rep, calib_dir);
         for (int c = 0; c < rep.Ncameras; c++) doc_camera(&doc, &rep, &rep.cameras[c]);
@@ -677,12 +695,7 @@ static rs_status write_report(rs_report_summary *summary, const char *out_dir, c
         }
     }
     rs_doc_free(&doc);
-    for (int c = 0; c < rep.Ncameras; c++) camera_free(&rep.cameras[c]);
-    free(rep.cameras);
-    free(rep.lanes.start);
-    free(rep.lanes.p_enu_m);
-    free(rep.lanes.junction);
-    free(rep.best_map.sigma_m);
+    rs_report_free_cameras(&rep);
     free(html_path);
     free(pdf_path);
     free(default_calib);

@@ -60,6 +60,10 @@ typedef struct {
     rs_audit_options audit_options; // (default rs_audit_options_default: need_ground_m 1 m and
                                     //   the thresholds derived from it); its range_m is replaced
                                     //   by range_m above
+    const char *ortho_path;         // the orthophoto the site map is drawn on (any georeferenced
+                                    //   image GDAL reads, any CRS: rs_geo_ortho_read); NULL:
+                                    //   SITE/ortho.tif when there is one (`roadside ortho` writes
+                                    //   it), else none
     const char *version;            // the software version printed on the report; NULL: "unknown"
     long long written_utc_s;        // the date printed, seconds since 1970 UTC; 0: now
 } rs_report_options;

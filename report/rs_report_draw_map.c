@@ -288,7 +288,34 @@ static double map_p90(const rs_audit_map *map)
 
 // The map's colour field (one image pixel per cell, painted at the cells' place) and its
 // contours at 1/5 .. 4/5 of vmax.
-static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, double vmax, double fs)
+// An orthophoto on the ENU grid under the map: its pixel (i, j) centred at (e0 + i cell, n0 - j cell).
+static void map_ortho(cairo_t *cr, const map_view *v, const rs_geo_ortho *o)
+{
+    const rs_geo_grid *g = &o->grid;
+    cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_RGB24, g->width, g->height);
+    cairo_surface_flush(img);
+    unsigned char *data = cairo_image_surface_get_data(img);
+    const int stride = cairo_image_surface_get_stride(img);
+    for (int j = 0; j < g->height && data; j++)
+        for (int i = 0; i < g->width; i++) {
+            const unsigned char *p = &o->rgb[3 * ((size_t)j * (size_t)g->width + (size_t)i)];
+            const uint32_t px = 0xff000000u | (uint32_t)p[0] << 16 | (uint32_t)p[1] << 8 | p[2];
+            memcpy(data + (size_t)j * (size_t)stride + 4 * (size_t)i, &px, 4);
+        }
+    cairo_surface_mark_dirty(img);
+    double x0, y0;
+    map_xy(v, g->e0_m - g->cell_m / 2, g->n0_m + g->cell_m / 2, &x0, &y0);
+    cairo_save(cr);
+    cairo_translate(cr, x0, y0);
+    cairo_scale(cr, v->k * g->cell_m, v->k * g->cell_m);
+    cairo_set_source_surface(cr, img, 0, 0);
+    cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_GOOD);
+    cairo_paint(cr);
+    cairo_restore(cr);
+    cairo_surface_destroy(img);
+}
+
+static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, double alpha, double vmax, double fs)
 {
     cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, map->nx, map->ny);
     cairo_surface_flush(img);
@@ -314,7 +341,7 @@ static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, d
     cairo_scale(cr, v->k * map->cell_m, v->k * map->cell_m);
     cairo_set_source_surface(cr, img, 0, 0);
     cairo_pattern_set_filter(cairo_get_source(cr), CAIRO_FILTER_NEAREST);
-    cairo_paint_with_alpha(cr, 0.85);
+    cairo_paint_with_alpha(cr, alpha);
     cairo_restore(cr);
     cairo_surface_destroy(img);
     for (int k = 1; k <= 4; k++) map_contour(cr, v, map, vmax * k / 5, fs, NULL);
@@ -392,7 +419,7 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
     rs_report_placer_init(&pl, "camera_map", w - cbar_w, h);
     map_furniture(cr, &v, w - cbar_w, h, fs, &pl, true);
     double vmax = map ? rs_report_nice_ceil(fmax(map_p90(map), 1e-3)) : 0;
-    if (map) map_field(cr, &v, map, vmax, fs);
+    if (map) map_field(cr, &v, map, 0.85, vmax, fs);
     map_lanes(cr, &v, &rep->lanes, fs * 0.15);
     map_fov(cr, &v, cam, map ? 0 : 0.15, fs * 0.12);
     map_camera_reserve(&v, cam, fs, &pl);
@@ -438,8 +465,9 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     rs_report_placer pl;
     rs_report_placer_init(&pl, "site_map", wmap, h);
     map_furniture(cr, &v, wmap, h, fs, &pl, true);
+    if (rep->ortho.rgb) map_ortho(cr, &v, &rep->ortho);
     double vmax = best ? rs_report_nice_ceil(fmax(map_p90(best), 1e-3)) : 0;
-    if (best) map_field(cr, &v, best, vmax, fs);
+    if (best) map_field(cr, &v, best, rep->ortho.rgb ? 0.5 : 0.85, vmax, fs);
     // a light ENU graticule
     double step = rs_report_nice_ceil(0.12 * w / v.k);
     cairo_set_source_rgb(cr, 0.8, 0.8, 0.8);

@@ -19,6 +19,7 @@
 #include "core/rs_io.h"
 #include "core/rs_pose.h"
 #include "geo/rs_geo.h"
+#include "geo/rs_geo_raster.h"
 #include "report/internal/rs_report_draw.h"
 
 void rs_report_export_options_default(rs_report_export_options *opt)
@@ -379,83 +380,35 @@ static rs_status write_vector(const char *path, const frame *f, const struct rs_
     return st;
 }
 
-// The site's ENU grid as a CRS: the ellipsoidal orthographic projection at the origin.
-static OGRSpatialReferenceH enu_srs(const rs_site *site)
-{
-    char proj[256];
-    snprintf(proj, sizeof proj, "+proj=ortho +lat_0=%.10f +lon_0=%.10f +x_0=0 +y_0=0 +ellps=WGS84 +units=m +no_defs",
-             site->origin.lat_deg, site->origin.lon_deg);
-    OGRSpatialReferenceH s = OSRNewSpatialReference(NULL);
-    if (s && OSRImportFromProj4(s, proj) != OGRERR_NONE) {
-        OSRDestroySpatialReference(s);
-        return NULL;
-    }
-    return s;
-}
-
-static rs_status write_raster(const char *path, const OGRSpatialReferenceH target, const struct rs_report_ctx *rep,
+// The map as a GeoTIFF on the site's ENU grid, through geo's raster writer (geo/rs_geo_raster.h);
+// crs: the target CRS (NULL: the site's grid CRS).
+static rs_status write_raster(const char *path, const char *crs, const struct rs_report_ctx *rep,
                               rs_report_export_summary *sum, rs_err *err)
 {
     const rs_audit_map *m = &rep->best_map;
     if (!m->sigma_m)
         return rs_err_set(err, RS_ERR_INVALID, "%s: no camera has an uncertainty map (no audit ran)", path);
-    if (!rs_io_has_extension(path, "tif") && !rs_io_has_extension(path, "tiff"))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: expected a .tif (GeoTIFF) file name", path);
-    GDALDriverH mem = GDALGetDriverByName("MEM"), gtiff = GDALGetDriverByName("GTiff");
-    if (!mem || !gtiff) return gdal_fail(err, path, "GDAL has no MEM or GTiff driver");
-    OGRSpatialReferenceH enu = enu_srs(rep->site);
-    if (!enu) return gdal_fail(err, path, "cannot define the site's ENU grid as a CRS");
-    char *enu_wkt = NULL;
-    OSRExportToWkt(enu, &enu_wkt);
-    GDALDatasetH src = GDALCreate(mem, "", m->nx, m->ny, 1, GDT_Float32, NULL);
-    rs_status st = src ? RS_OK : gdal_fail(err, path, "cannot create the grid in memory");
-    float *row = malloc((size_t)m->nx * sizeof *row);
-    if (!st && !row) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-    if (!st) {
-        // row 0 of the image is the northernmost row of cells; cell centres at (e0 + ix c, n0 + iy c)
-        double gt[6] = {m->e0_m - m->cell_m / 2, m->cell_m, 0, m->n0_m + (m->ny - 0.5) * m->cell_m, 0, -m->cell_m};
-        GDALSetGeoTransform(src, gt);
-        GDALSetProjection(src, enu_wkt);
-        GDALRasterBandH b = GDALGetRasterBand(src, 1);
-        GDALSetRasterNoDataValue(b, NAN);
-        GDALSetDescription(b, "1-sigma horizontal ground error, metres");
-        for (int r = 0; r < m->ny && !st; r++) {
-            const double *srow = &m->sigma_m[(size_t)(m->ny - 1 - r) * (size_t)m->nx];
-            for (int x = 0; x < m->nx; x++) row[x] = (float)srow[x];
-            if (GDALRasterIO(b, GF_Write, 0, r, m->nx, 1, row, m->nx, 1, GDT_Float32, 0, 0) != CE_None)
-                st = gdal_fail(err, path, "cannot fill the grid");
-        }
-    }
-    GDALDatasetH out_src = src;
-    if (!st && target) { // warped into the target CRS, nearest neighbour
-        char *dst_wkt = NULL;
-        OSRExportToWkt(target, &dst_wkt);
-        out_src = GDALAutoCreateWarpedVRT(src, enu_wkt, dst_wkt, GRA_NearestNeighbour, 0.0, NULL);
-        CPLFree(dst_wkt);
-        if (!out_src) st = gdal_fail(err, path, "cannot warp the grid into the requested CRS");
-    }
-    rs_io_atomic a = {0};
-    if (!st) st = temp_for_gdal(&a, path, err);
-    if (!st) {
-        char **co = CSLSetNameValue(NULL, "COMPRESS", "DEFLATE");
-        GDALDatasetH out = GDALCreateCopy(gtiff, a.tmp_path, out_src, FALSE, co, NULL, NULL);
-        CSLDestroy(co);
-        if (!out) st = gdal_fail(err, path, "cannot write the GeoTIFF");
-        if (out) {
-            sum->raster_width = GDALGetRasterXSize(out);
-            sum->raster_height = GDALGetRasterYSize(out);
-            CPLErrorReset();
-            GDALClose(out);
-            if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish the GeoTIFF");
-        }
-    }
-    if (!st) st = rs_io_atomic_commit(&a, err);
-    rs_io_atomic_abort(&a);
-    if (out_src && out_src != src) GDALClose(out_src);
-    if (src) GDALClose(src);
-    free(row);
-    CPLFree(enu_wkt);
-    OSRDestroySpatialReference(enu);
+    float *cells = malloc((size_t)m->nx * (size_t)m->ny * sizeof *cells);
+    if (!cells) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+    // row 0 of the image is the northernmost row of cells; cell centres at (e0 + ix c, n0 + iy c)
+    for (int r = 0; r < m->ny; r++)
+        for (int x = 0; x < m->nx; x++)
+            cells[(size_t)r * m->nx + x] = (float)m->sigma_m[(size_t)(m->ny - 1 - r) * (size_t)m->nx + x];
+    const rs_geo_raster raster = {
+        .grid = {.width = m->nx,
+                 .height = m->ny,
+                 .e0_m = m->e0_m,
+                 .n0_m = m->n0_m + (m->ny - 1) * m->cell_m,
+                 .cell_m = m->cell_m},
+        .Nbands = 1,
+        .type = RS_GEO_RASTER_FLOAT32,
+        .data = cells,
+        .nodata_nan = true,
+        .description = "1-sigma horizontal ground error, metres",
+        .crs = crs,
+    };
+    rs_status st = rs_geo_raster_write(&sum->raster_width, &sum->raster_height, path, &rep->site->origin, &raster, err);
+    free(cells);
     return st;
 }
 
@@ -513,7 +466,7 @@ rs_status rs_report_export(rs_report_export_summary *summary, const char *vector
     }
     if (!st) st = rs_report_load_cameras(&rep, &ropt, err);
     if (!st && vector_path) st = write_vector(vector_path, &f, &rep, &sum, err);
-    if (!st && raster_path) st = write_raster(raster_path, target, &rep, &sum, err);
+    if (!st && raster_path) st = write_raster(raster_path, target ? opt.crs : NULL, &rep, &sum, err);
     if (st) { // all or nothing
         if (vector_path) (void)rs_io_remove_if_exists(vector_path, NULL, NULL);
         if (raster_path) (void)rs_io_remove_if_exists(raster_path, NULL, NULL);

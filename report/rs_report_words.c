@@ -10,7 +10,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
-#include <openssl/evp.h>
+#include "core/rs_hash.h"
 
 #include "core/rs_io.h"
 
@@ -150,37 +150,13 @@ void rs_report_stamp(char *buf, size_t size, const struct rs_report_ctx *rep)
     snprintf(buf, size, "Written %s by roadside %s", date, rep->version ? rep->version : "unknown");
 }
 
-// SHA-256 of a file as 64 hex digits into hex (65 bytes); false when it cannot be read.
-static bool sha256_file(char hex[65], long long *bytes, const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return false;
-    EVP_MD_CTX *md = EVP_MD_CTX_new();
-    bool ok = md && EVP_DigestInit_ex(md, EVP_sha256(), NULL) == 1;
-    unsigned char buf[65536];
-    size_t n;
-    *bytes = 0;
-    while (ok && (n = fread(buf, 1, sizeof buf, f)) > 0) {
-        ok = EVP_DigestUpdate(md, buf, n) == 1;
-        *bytes += (long long)n;
-    }
-    ok = ok && !ferror(f);
-    unsigned char digest[EVP_MAX_MD_SIZE];
-    unsigned int len = 0;
-    ok = ok && EVP_DigestFinal_ex(md, digest, &len) == 1 && len == 32;
-    for (unsigned i = 0; ok && i < len; i++) snprintf(hex + 2 * i, 3, "%02x", digest[i]);
-    EVP_MD_CTX_free(md);
-    fclose(f);
-    return ok;
-}
-
 static void input_row(rs_doc *doc, const char *what, const char *path)
 {
     char hex[65];
     long long bytes = 0;
     struct stat sb;
     if (!path || stat(path, &sb) != 0 || !S_ISREG(sb.st_mode)) return;
-    const bool ok = sha256_file(hex, &bytes, path);
+    const bool ok = rs_hash_sha256_file(hex, &bytes, path, NULL) == RS_OK;
     rs_doc_cell(doc, "%s", what);
     rs_doc_cell(doc, "%s", path);
     rs_doc_cell(doc, "%lld", ok ? bytes : (long long)sb.st_size);

@@ -16,6 +16,7 @@
 
 #include "core/rs_io.h"
 #include "geo/rs_site_write.h"
+#include "synth/internal/rs_synth_twin.h"
 #include "synth/rs_synth_camera.h"
 #include "synth/rs_synth_opencv.h"
 #include "synth/rs_synth_render.h"
@@ -294,10 +295,27 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
             "#version 3.7;\n"
             "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
             look->name);
-    if ((st = rs_synth_povcam_write(f, cam, err))) {
+    if ((st = rs_synth_povcam_write(f, cam, err)) ||
+        (st = rs_synth_twin_world_write(f, site, lanes, look->name, sun_az, sun_el, marking_width_m, err))) {
         rs_io_atomic_abort(&a);
         return st;
     }
+    if (ferror(f)) {
+        rs_io_atomic_abort(&a);
+        return rs_err_set(err, RS_ERR_IO, "%s: write error", pov_path);
+    }
+    return rs_io_atomic_commit(&a, err);
+}
+
+rs_status rs_synth_twin_world_write(FILE *f, const rs_site *site, const rs_lanes *lanes, const char *weather,
+                                    double sun_az, double sun_el, double marking_width_m, rs_err *err)
+{
+    const weather_look *look = NULL;
+    for (size_t i = 0; i < sizeof(looks) / sizeof(looks[0]); i++)
+        if (weather && !strcmp(weather, looks[i].name)) look = &looks[i];
+    if (!look)
+        return rs_err_set(err, RS_ERR_INVALID, "weather: '%s' is not one of sunny, cloudy, rain, snow, night",
+                          weather ? weather : "");
     fprintf(f, "background { rgb <%.4g, %.4g, %.4g> }\n", look->sky_rgb[0], look->sky_rgb[1], look->sky_rgb[2]);
     const double d2r = M_PI / 180.0, az = sun_az * d2r, el = sun_el * d2r;
     if (look->sun > 0 && sun_el > 0) {
@@ -325,11 +343,7 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
         }
         fprintf(f, "  texture { pigment { rgb %.4g } finish { ambient 0 diffuse 0.8 } }\n}\n", look->marking);
     }
-    if (ferror(f)) {
-        rs_io_atomic_abort(&a);
-        return rs_err_set(err, RS_ERR_IO, "%s: write error", pov_path);
-    }
-    return rs_io_atomic_commit(&a, err);
+    return ferror(f) ? rs_err_set(err, RS_ERR_IO, "write error") : RS_OK;
 }
 
 // Runs `povray +Itwin.pov +Otwin.png +W +H ...` in work_dir (rs_synth_povray_run).

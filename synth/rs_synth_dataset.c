@@ -5,8 +5,10 @@
 // image), rs_synth_dataset_coco.c (assembly), geo and core/.
 #define _POSIX_C_SOURCE 200809L
 #define _XOPEN_SOURCE   700
+#define _GNU_SOURCE     // sched_getaffinity, CPU_COUNT
 #include <errno.h>
 #include <math.h>
+#include <sched.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,10 +18,13 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "core/rs_hash.h"
+#include <cjson/cJSON.h>
 #include <mrcal/mrcal.h>
 
 #include "core/rs_io.h"
 #include "synth/internal/rs_synth_dataset_internal.h"
+#include "synth/rs_synth_labels.h"
 
 void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
 {
@@ -28,6 +33,9 @@ void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
     opt->shard_count = 1;
     opt->vehicles = 10;
     opt->split = "train2017";
+    opt->val_split = "val2017";
+    opt->bbox = RS_SYNTH_BBOX_FOOTPRINT;
+    opt->junction_traffic = true;
     opt->shadows = true;
     opt->coarse_below_px = 40;
 }
@@ -65,6 +73,72 @@ static rs_status scale_camera(rs_camera *cam, int width, int height, const char 
     return RS_OK;
 }
 
+// ---- the CPUs this process may use ----
+
+// The cgroup v2 quota of this process's cgroup (/proc/self/cgroup "0::/PATH" ->
+// /sys/fs/cgroup/PATH/cpu.max "QUOTA PERIOD"), in CPUs rounded up; 0 when none or unknown.
+static int cgroup_cpus(void)
+{
+    char line[4096], path[4300];
+    FILE *f = fopen("/proc/self/cgroup", "r");
+    if (!f) return 0;
+    int cpus = 0;
+    while (fgets(line, sizeof(line), f)) {
+        if (strncmp(line, "0::", 3) != 0) continue;
+        line[strcspn(line, "\n")] = 0;
+        // the cgroup and its parents: the tightest quota on the way up counts
+        for (char *end = line + strlen(line); end >= line + 3; end--) {
+            if (*end != '/' && *end != 0) continue;
+            const char save = *end;
+            *end = 0;
+            snprintf(path, sizeof(path), "/sys/fs/cgroup%s/cpu.max", line + 3);
+            *end = save;
+            FILE *m = fopen(path, "r");
+            long long quota = 0, period = 0;
+            char q[32] = "";
+            if (m && fscanf(m, "%31s %lld", q, &period) == 2 && strcmp(q, "max") != 0 &&
+                sscanf(q, "%lld", &quota) == 1 && quota > 0 && period > 0) {
+                const int c = (int)((quota + period - 1) / period);
+                if (cpus == 0 || c < cpus) cpus = c;
+            }
+            if (m) fclose(m);
+            if (end == line + 3) break;
+        }
+        break;
+    }
+    fclose(f);
+    return cpus;
+}
+
+int rs_synth_dataset_usable_cpus(char *why, size_t n)
+{
+    int cpus = 0;
+    const char *from = "online CPUs";
+    cpu_set_t set;
+    if (sched_getaffinity(0, sizeof(set), &set) == 0 && CPU_COUNT(&set) > 0) {
+        cpus = CPU_COUNT(&set);
+        from = "affinity mask";
+    } else {
+        const long c = sysconf(_SC_NPROCESSORS_ONLN);
+        cpus = c > 0 ? (int)c : 1;
+    }
+    const int cg = cgroup_cpus();
+    if (cg > 0 && cg < cpus) {
+        cpus = cg;
+        from = "cgroup cpu.max quota";
+    }
+    const char *slurm = getenv("SLURM_CPUS_PER_TASK");
+    char *end = NULL;
+    const long sl = slurm ? strtol(slurm, &end, 10) : 0;
+    if (slurm && end && !*end && sl > 0 && sl < cpus) {
+        cpus = (int)sl;
+        from = "SLURM_CPUS_PER_TASK";
+    }
+    if (cpus < 1) cpus = 1;
+    if (why) snprintf(why, n, "%s: %d CPU%s", from, cpus, cpus == 1 ? "" : "s");
+    return cpus;
+}
+
 // ---- the site's cameras and backgrounds ----
 
 static void dataset_free(rs_synth_dataset__run *d)
@@ -77,11 +151,13 @@ static void dataset_free(rs_synth_dataset__run *d)
         }
         free(d->cams[i].bg);
         free(d->cams[i].canvas_map);
+        free(d->cams[i].calib_path);
     }
     free(d->cams);
     rs_lanes_free(&d->lanes);
     rs_site_free(d->site);
-    free(d->split_dir);
+    free(d->split_dir[0]);
+    free(d->split_dir[1]);
     free(d->parts_dir);
     free(d->work_root);
 }
@@ -151,7 +227,13 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             goto done;
         }
+        c->calib_path = strdup(path);
+        if (!c->calib_path) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            goto done;
+        }
         if ((st = rs_camera_read(&c->cam, NULL, path, err)) ||
+            (st = rs_hash_sha256_file(c->calib_sha256, NULL, path, err)) ||
             (st = scale_camera(&c->cam, opt->width, opt->height, id, err)) ||
             (st = select_backgrounds(c, &d->site->cameras[isite], opt, err)))
             goto done;
@@ -160,6 +242,149 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
 done:
     free(path);
     return st;
+}
+
+// The camera each image's labels were projected with, at the output size, copied into
+// DATASET/cameras/<id>.cameramodel (so that eval reads it from the dataset itself). A copy
+// already there from an earlier run or another shard must be the same file: images made with
+// another calibration or size must not be mixed into one dataset.
+static rs_status write_camera_copies(rs_synth_dataset__run *d, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    char *dir = rs_io_join(opt->out_dir, "cameras");
+    rs_status st = dir ? rs_io_mkdir_p(dir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < d->Ncams && !st; i++) {
+        rs_synth_dataset__camera *c = &d->cams[i];
+        char name[300], tmp_name[360];
+        snprintf(name, sizeof(name), "%.250s.cameramodel", c->id);
+        snprintf(tmp_name, sizeof(tmp_name), ".new.%ld.%s", (long)getpid(), name);
+        snprintf(c->model_rel, sizeof(c->model_rel), "../cameras/%.300s", name);
+        char *path = rs_io_join(dir, name), *tmp = rs_io_join(dir, tmp_name);
+        char have[65] = "";
+        if (!path || !tmp)
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        else if (!(st = rs_camera_write_cameramodel(&c->cam, tmp, err)) &&
+                 !(st = rs_hash_sha256_file(c->model_sha256, NULL, tmp, err))) {
+            if (rs_synth_dataset__file_exists(path) && !rs_hash_sha256_file(have, NULL, path, NULL) &&
+                strcmp(have, c->model_sha256) != 0)
+                st = rs_err_set(err, RS_ERR_INVALID,
+                                "%s: %s holds images made with another camera model of %s (another "
+                                "calibration or --size); use a new output folder",
+                                path, opt->out_dir, c->id);
+            else if (rename(tmp, path) != 0)
+                st = rs_err_set(err, RS_ERR_IO, "%s: %s", path, strerror(errno));
+        }
+        if (tmp) (void)remove(tmp);
+        free(path);
+        free(tmp);
+    }
+    free(dir);
+    return st;
+}
+
+// DATASET/run.json: {"run": every option that decides what an image is or where it goes,
+// with each camera model's SHA-256, "shard": "I/N"}. A folder that holds another run's
+// images (a different "run") is refused: images of different runs must not be mixed (merge
+// refuses them too, rs_synth_dataset_merge).
+static rs_status write_run_record(const rs_synth_dataset__run *d, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    cJSON *doc = cJSON_CreateObject(), *run = cJSON_AddObjectToObject(doc, "run");
+    cJSON_AddStringToObject(run, "contract", RS_SYNTH_DATASET_CONTRACT_VERSION);
+    cJSON_AddNumberToObject(run, "count", opt->count);
+    char seed[32];
+    snprintf(seed, sizeof(seed), "%llu", (unsigned long long)opt->seed);
+    cJSON_AddStringToObject(run, "seed", seed);
+    cJSON_AddNumberToObject(run, "width", d->cams[0].cam.width);
+    cJSON_AddNumberToObject(run, "height", d->cams[0].cam.height);
+    cJSON *cams = cJSON_AddObjectToObject(run, "cameras"); // in image order: id -> model SHA-256
+    cJSON *order = cJSON_AddArrayToObject(run, "camera_order");
+    for (int i = 0; i < d->Ncams; i++) {
+        cJSON_AddStringToObject(cams, d->cams[i].id, d->cams[i].model_sha256);
+        cJSON_AddItemToArray(order, cJSON_CreateString(d->cams[i].id));
+    }
+    cJSON_AddNumberToObject(run, "vehicles", opt->vehicles);
+    cJSON *bg = cJSON_AddArrayToObject(run, "backgrounds");
+    for (int f = 0; f < opt->Nfilters; f++) {
+        char kv[600];
+        snprintf(kv, sizeof(kv), "%s=%s", opt->filter_keys[f], opt->filter_values[f]);
+        cJSON_AddItemToArray(bg, cJSON_CreateString(kv));
+    }
+    cJSON_AddBoolToObject(run, "shadows", opt->shadows);
+    cJSON_AddBoolToObject(run, "junction_traffic", opt->junction_traffic);
+    cJSON_AddNumberToObject(run, "bbox", opt->bbox);
+    cJSON_AddNumberToObject(run, "min_visibility", opt->min_visibility);
+    cJSON_AddBoolToObject(run, "keep_invisible", opt->keep_invisible);
+    cJSON_AddNumberToObject(run, "coarse_below_px", opt->coarse_below_px);
+    cJSON_AddBoolToObject(run, "full_frame", opt->full_frame);
+    cJSON_AddStringToObject(run, "split", opt->split);
+    cJSON_AddStringToObject(run, "val_split", opt->val_split);
+    cJSON_AddNumberToObject(run, "val_fraction", opt->val_fraction);
+    cJSON *vc = cJSON_AddArrayToObject(run, "val_cameras");
+    for (int i = 0; i < opt->Nval_cameras; i++) cJSON_AddItemToArray(vc, cJSON_CreateString(opt->val_cameras[i]));
+    cJSON *vb = cJSON_AddArrayToObject(run, "val_backgrounds");
+    for (int f = 0; f < opt->Nval_bg; f++) {
+        char kv[600];
+        snprintf(kv, sizeof(kv), "%s=%s", opt->val_bg_keys[f], opt->val_bg_values[f]);
+        cJSON_AddItemToArray(vb, cJSON_CreateString(kv));
+    }
+    char shard[64];
+    snprintf(shard, sizeof(shard), "%d/%d", opt->shard_index, opt->shard_count);
+    cJSON *shards = cJSON_AddArrayToObject(doc, "shards"); // every shard run into this folder
+    char *path = rs_io_join(opt->out_dir, "run.json"), *text = NULL, *old = NULL;
+    rs_status st = path ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st && rs_synth_dataset__file_exists(path) && rs_io_read_file(&old, NULL, path, NULL) == RS_OK) {
+        cJSON *prev = cJSON_Parse(old);
+        cJSON *prun = cJSON_GetObjectItemCaseSensitive(prev, "run");
+        const cJSON *x;
+        if (prun && !cJSON_Compare(prun, run, 1))
+            st = rs_err_set(err, RS_ERR_INVALID,
+                            "%s: %s holds the images of another run (other options, seed, size or calibration); "
+                            "use a new output folder",
+                            path, opt->out_dir);
+        cJSON_ArrayForEach(x, cJSON_GetObjectItemCaseSensitive(prev, "shards"))
+        {
+            if (cJSON_IsString(x) && strcmp(x->valuestring, shard) != 0)
+                cJSON_AddItemToArray(shards, cJSON_CreateString(x->valuestring));
+        }
+        cJSON_Delete(prev);
+    }
+    cJSON_AddItemToArray(shards, cJSON_CreateString(shard));
+    if (!st && !(text = cJSON_Print(doc))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) st = rs_io_write_file(path, text, strlen(text), err);
+    free(old);
+    free(path);
+    free(text);
+    cJSON_Delete(doc);
+    return st;
+}
+
+int rs_synth_dataset__image_split(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    if (opt->val_fraction > 0) {
+        // a stream of its own (seed, k, "val"): the images' streams stay as they were
+        const uint64_t h = rs_synth_dataset_image_seed(opt->seed ^ 0x76616c5f73706c74ULL, k);
+        if ((double)(h >> 11) * 0x1.0p-53 < opt->val_fraction) return 1;
+    }
+    for (int i = 0; i < opt->Nval_cameras; i++)
+        if (strcmp(opt->val_cameras[i], c->id) == 0) return 1;
+    if (opt->Nval_bg > 0) {
+        const int b = rs_synth_dataset__image_background(d, k, c);
+        bool all = b >= 0;
+        for (int f = 0; f < opt->Nval_bg && all; f++) {
+            const char *v = rs_site_background_tag(c->bg[b].src, opt->val_bg_keys[f]);
+            all = v && strcmp(v, opt->val_bg_values[f]) == 0;
+        }
+        if (all) return 1;
+    }
+    return 0;
+}
+
+// Whether any image can go to the validation split.
+static bool has_val(const rs_synth_dataset_options *opt)
+{
+    return opt->val_fraction > 0 || opt->Nval_cameras > 0 || opt->Nval_bg > 0;
 }
 
 // ---- the images of a shard: in this process, or in forked workers ----
@@ -210,7 +435,8 @@ static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *
         worker_report rep = {.kind = 's'};
         rs_synth_dataset__state state;
         char why[600];
-        st = rs_synth_dataset__check_finished(&state, why, sizeof(why), d, stem, c, err);
+        st = rs_synth_dataset__check_finished(&state, why, sizeof(why), d, stem, c,
+                                              rs_synth_dataset__image_split(d, k, c), err);
         if (!st && state == RS_SYNTH_DATASET__DAMAGED) {
             // unfinished from now on: an interruption of the remake leaves it to the next run
             (void)remove(part); // (a folder in its place, if not empty, stops the remake's rename)
@@ -309,10 +535,12 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     rs_synth_dataset_summary sum = {0};
     const double t0 = now_s();
     if (!opt || !opt->site_dir || !opt->calib_dir || !opt->out_dir || opt->count < 1 || opt->shard_count < 1 ||
-        opt->shard_index < 0 || opt->shard_index >= opt->shard_count || opt->vehicles < 0 || !opt->split)
+        opt->shard_index < 0 || opt->shard_index >= opt->shard_count || opt->vehicles < 0 || !opt->split ||
+        !opt->val_split || strcmp(opt->split, opt->val_split) == 0 || !(opt->val_fraction >= 0) ||
+        !(opt->val_fraction <= 1) || !(opt->min_visibility >= 0) || !(opt->min_visibility <= 1))
         return rs_err_set(err, RS_ERR_INVALID,
-                          "synth: bad options (count >= 1, shard I/N with "
-                          "0 <= I < N, site, calib and output folders required)");
+                          "synth: bad options (count >= 1, shard I/N with 0 <= I < N, site, calib and "
+                          "output folders required, two different split names, fractions in [0, 1])");
     rs_synth_dataset__run d = {.opt = opt};
     rs_io_lock lock = {0};
     char name[600];
@@ -322,21 +550,35 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     // folders. The lock is taken before anything in DATASET is touched (but DATASET itself).
     if ((st = rs_io_mkdir_p(opt->out_dir, err))) goto done;
     if ((st = rs_io_lock_dir(&lock, opt->out_dir, "roadside synth", err))) goto done;
-    snprintf(name, sizeof(name), "labels/%s", opt->split);
-    d.split_dir = rs_io_join(opt->out_dir, opt->split);
+    d.split[0] = opt->split;
+    d.split[1] = opt->val_split;
     d.parts_dir = rs_io_join(opt->out_dir, "parts");
     d.work_root = rs_io_join(opt->out_dir, "work");
-    char *labels_dir = rs_io_join(opt->out_dir, name);
-    char *annot_dir = rs_io_join(opt->out_dir, "annotations");
-    char *kitti_dir = rs_io_join(opt->out_dir, "label_2");
-    if (!d.split_dir || !d.parts_dir || !d.work_root || !labels_dir || !annot_dir || !kitti_dir)
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    else if (!(st = rs_io_mkdir_p(d.split_dir, err)) && !(st = rs_io_mkdir_p(d.parts_dir, err)) &&
-             !(st = rs_io_mkdir_p(labels_dir, err)) && !(st = rs_io_mkdir_p(annot_dir, err)))
-        st = rs_io_mkdir_p(kitti_dir, err);
-    free(labels_dir);
-    free(annot_dir);
-    free(kitti_dir);
+    if (!d.parts_dir || !d.work_root) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    // the folders of each split that can receive images: COCO's <split>/, YOLO's images/<split>
+    // and labels/<split>, KITTI's kitti/training/{image_2,label_2,calib}
+    for (int s = 0; s < (has_val(opt) ? 2 : 1) && !st; s++) {
+        const char *sub[3] = {"%s", "images/%s", "labels/%s"};
+        for (int j = 0; j < 3 && !st; j++) {
+            snprintf(name, sizeof(name), sub[j], d.split[s]);
+            char *dir = rs_io_join(opt->out_dir, name);
+            st = dir ? rs_io_mkdir_p(dir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            if (j == 0 && !st)
+                d.split_dir[s] = dir;
+            else
+                free(dir);
+        }
+    }
+    const char *const common[] = {
+        "parts",          "annotations", "kitti/training/image_2", "kitti/training/label_2", "kitti/training/calib",
+        "kitti/ImageSets"};
+    for (size_t j = 0; j < sizeof(common) / sizeof(common[0]) && !st; j++) {
+        char *dir = rs_io_join(opt->out_dir, common[j]);
+        st = dir ? rs_io_mkdir_p(dir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(dir);
+    }
+    if (!st) st = write_camera_copies(&d, err);
+    if (!st) st = write_run_record(&d, err);
     if (st) goto done;
     for (int k = opt->shard_index; k < opt->count; k += opt->shard_count) sum.Nimages++;
     st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err) : run_images(&d, &sum, 0, 1, -1, err);

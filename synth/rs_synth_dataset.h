@@ -42,6 +42,7 @@
 // and the fault.
 #pragma once
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "core/rs_status.h"
@@ -62,9 +63,28 @@ typedef struct {
     const char *const *filter_keys;   // (Nfilters,) background tag filters key == value
     const char *const *filter_values; // (Nfilters,)
     int Nfilters;
-    int width, height;       // output size; 0: the camera's own (intrinsics are scaled)
-    int vehicles;            // at most this many vehicles per image's traffic (default 10)
-    const char *split;       // COCO split name (default "train2017")
+    int width, height; // output size; 0: the camera's own (intrinsics are scaled)
+    int vehicles;      // at most this many vehicles per image's traffic (default 10)
+    const char *split; // COCO split name (default "train2017")
+    // Validation split: image k goes to val_split when any of these holds (else to split):
+    //   a uniform draw of its own stream is below val_fraction (0..1; default 0),
+    //   its camera is one of val_cameras, its background matches every val_bg_key = value
+    //   (Nval_bg > 0; rs_site_background_tag, so "name=..." holds a background out).
+    const char *val_split; // default "val2017"
+    double val_fraction;
+    const char *const *val_cameras; // (Nval_cameras,)
+    int Nval_cameras;
+    const char *const *val_bg_keys;   // (Nval_bg,)
+    const char *const *val_bg_values; // (Nval_bg,)
+    int Nval_bg;
+    // Labels (synth/rs_synth_labels.h): which box is COCO's bbox, YOLO's and KITTI's 2D box
+    // (default footprint), the least visibility kept (default 0), and whether a vehicle with no
+    // visible pixel gets a label (default false: it does not).
+    int bbox; // rs_synth_bbox_kind
+    double min_visibility;
+    bool keep_invisible;
+    bool junction_traffic;   // vehicles on the junction's lanes too (turning movements; default
+                             // on): rs_synth_traffic_options.junction_lanes
     bool shadows;            // differential-rendering shadows over backgrounds (default on)
     bool separate_processes; // one povray process per pass (benchmarks; default off)
     bool full_frame;         // no culling, no region: povray renders the whole image
@@ -111,6 +131,12 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary,
                                // in
                                const rs_synth_dataset_options *opt, rs_err *err);
 
+// The CPUs this process may use: the smallest of its affinity mask (sched_getaffinity), its
+// cgroup v2 quota (cpu.max "quota period" of its own cgroup, rounded up; "max" is no limit) and
+// $SLURM_CPUS_PER_TASK when set; at least 1. The default of `roadside synth --jobs`.
+// out: why[n] (may be NULL): which of them decided, e.g. "affinity mask: 2 CPUs"
+int rs_synth_dataset_usable_cpus(char *why, size_t n);
+
 // Splitmix64 mixing of (seed, k): the seed of image k's random stream.
 uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
 
@@ -124,6 +150,74 @@ uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
 rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations,
                                  // in
                                  const char *out_dir, const char *const *inputs, int Ninputs, rs_err *err);
+
+// ---- what a dataset holds (rs_synth_dataset_stats.c) ----
+
+#define RS_SYNTH_STATS_MAX 64 // distinct values counted per field (more are not listed)
+
+typedef struct {
+    char value[96]; // the split, camera, weather or time of day ("(missing)" when absent)
+    int images;
+    int labels; // (splits only)
+} rs_synth_dataset_count;
+
+typedef struct {
+    int images, labels;
+    rs_synth_dataset_count splits[RS_SYNTH_STATS_MAX], cameras[RS_SYNTH_STATS_MAX], weather[RS_SYNTH_STATS_MAX],
+        time_of_day[RS_SYNTH_STATS_MAX];
+    int Nsplits, Ncameras, Nweather, Ntime_of_day;
+    int labels_located; // labels with a bottom_center_enu_m
+    int labels_near;    // of those, closer than radius_m to the centre (east-north distance)
+    double distance_sum_m;
+    int visibility_hist[10]; // labels by visibility in [0, 0.1), .., [0.9, 1]
+    int invisible;           // labels with no visible pixel (visible_pixels 0)
+} rs_synth_dataset_stats_result;
+
+// The junction's centre on the site: the mean of the vertices of the lanes whose kind is
+// "junction" (SITE/lanes.geojson), or the ENU origin when there are none. out: centre (E, N) m.
+rs_status rs_synth_junction_centre(double centre_enu_m[2], const char *site_dir, rs_err *err);
+
+// Counts what DATASET/annotations/instances_*.json hold (docs/labels.md's fields).
+// in: centre_enu_m (2,), radius_m: "near" is an east-north distance below radius_m.
+rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *dataset_dir,
+                                 const double centre_enu_m[2], double radius_m, rs_err *err);
+
+// ---- contact sheets (rs_synth_dataset_view.c, `roadside dataset view`) ----
+
+typedef struct {
+    int max_images;        // the first N images (splits in name order, images in file order); 0: all
+    int per_page;          // images per page (>= 1)
+    int columns;           // tiles per row (>= 1)
+    int max_tile_width_px; // wider images are shrunk to this width (cv::resize, INTER_AREA)
+} rs_synth_view_options;
+
+// Defaults: 48 images, 12 per page, 4 columns, tiles at most 480 px wide.
+void rs_synth_view_options_default(rs_synth_view_options *opt);
+
+typedef struct {
+    int images, labels, pages;
+    double scale;                // tile pixels per image pixel (<= 1)
+    int tile_width, tile_height; // px
+} rs_synth_view_summary;
+
+// Draws DATASET's images with their labels (docs/labels.md) onto contact sheets:
+// OUT/page_001.png, ... (each `per_page` tiles under a legend), OUT/index.html (the pages, a
+// legend and a table of the images) and OUT/index.json (each image's page and tile origin).
+// On each tile, in the tile's pixels (pixel (0,0) the centre of the top-left pixel; a label
+// coordinate x maps to (x + 0.5) s - 0.5 at scale s): the 3D box's 12 edges (straight
+// segments between projected corners), the body and visible boxes, the bottom centre (a dot),
+// the visibility (text above the footprint box) and, drawn last, the footprint box. A box's
+// outline goes through the outermost tile pixels whose centres lie inside the box. Colours:
+// the legend in rs_synth_dataset_view.c (footprint RGB (0, 230, 0)). Files are written
+// atomically; OUT is created. Errors: RS_ERR_IO / RS_ERR_NOT_FOUND (no annotations folder, no
+// instances_*.json, an image file missing), RS_ERR_PARSE ("FILE:LINE: ..." for JSON syntax,
+// "FILE: annotations[i].FIELD: ..." for a malformed field), RS_ERR_INVALID (an image's size
+// differs from its record, or images of different sizes).
+// out: *sum; in: dataset_dir, out_dir, opt
+rs_status rs_synth_dataset_view(rs_synth_view_summary *sum,
+                                // in
+                                const char *dataset_dir, const char *out_dir, const rs_synth_view_options *opt,
+                                rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -92,7 +92,7 @@ static bool image_ok(const char *path, int width, int height, char *why, size_t 
 
 rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char *why, size_t n,
                                            const rs_synth_dataset__run *d, const char *stem,
-                                           const rs_synth_dataset__camera *c, rs_err *err)
+                                           const rs_synth_dataset__camera *c, int split, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     char name[600], file_name[320];
@@ -101,24 +101,36 @@ rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char 
     snprintf(name, sizeof(name), "%s.json", stem);
     char *part = rs_io_join(d->parts_dir, name);
     snprintf(file_name, sizeof(file_name), "%s.png", stem);
-    char *image = rs_io_join(d->split_dir, file_name);
-    snprintf(name, sizeof(name), "labels/%s/%s.txt", opt->split, stem);
-    char *yolo = rs_io_join(opt->out_dir, name);
-    snprintf(name, sizeof(name), "label_2/%s.txt", stem);
-    char *kitti = rs_io_join(opt->out_dir, name);
+    char *image = d->split_dir[split] ? rs_io_join(d->split_dir[split], file_name) : NULL;
+    // the other files of the image: YOLO's image and labels, KITTI's image, labels and calib
+    char *side[5] = {NULL};
+    const int k = atoi(stem); // the stem starts with k, "%06d_<camera>"
+    snprintf(name, sizeof(name), "images/%s/%s.png", d->split[split], stem);
+    side[0] = rs_io_join(opt->out_dir, name);
+    snprintf(name, sizeof(name), "labels/%s/%s.txt", d->split[split], stem);
+    side[1] = rs_io_join(opt->out_dir, name);
+    snprintf(name, sizeof(name), "kitti/training/image_2/%06d.png", k);
+    side[2] = rs_io_join(opt->out_dir, name);
+    snprintf(name, sizeof(name), "kitti/training/label_2/%06d.txt", k);
+    side[3] = rs_io_join(opt->out_dir, name);
+    snprintf(name, sizeof(name), "kitti/training/calib/%06d.txt", k);
+    side[4] = rs_io_join(opt->out_dir, name);
     rs_status st = RS_OK;
     struct stat sb;
-    if (!part || !image || !yolo || !kitti)
+    bool have_all = part && image;
+    for (int i = 0; i < 5; i++) have_all = have_all && side[i];
+    if (!have_all)
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     else if (lstat(part, &sb) != 0 && errno == ENOENT)
         *state = RS_SYNTH_DATASET__ABSENT;
     else if (regular_file(part, why, n) && part_ok(part, file_name, c->cam.width, c->cam.height, why, n) &&
-             image_ok(image, c->cam.width, c->cam.height, why, n) && regular_file(yolo, why, n) &&
-             regular_file(kitti, why, n))
-        *state = RS_SYNTH_DATASET__FINISHED;
+             image_ok(image, c->cam.width, c->cam.height, why, n)) {
+        bool ok = true;
+        for (int i = 0; i < 5 && ok; i++) ok = regular_file(side[i], why, n);
+        if (ok) *state = RS_SYNTH_DATASET__FINISHED;
+    }
     free(part);
     free(image);
-    free(yolo);
-    free(kitti);
+    for (int i = 0; i < 5; i++) free(side[i]);
     return st;
 }

@@ -10,7 +10,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <unistd.h>
+
 #include "core/rs_io.h"
+#include "geo/rs_geo.h"
 #include "synth/internal/rs_synth_dataset_internal.h"
 #include "synth/rs_synth_labels.h"
 #include "synth/rs_synth_opencv.h"
@@ -39,6 +42,13 @@ static uint64_t rng_next(uint64_t *s)
 {
     *s += 0x9e3779b97f4a7c15ULL;
     return mix64(*s);
+}
+
+int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c)
+{
+    if (c->Nbg <= 0) return -1;
+    uint64_t rng = rs_synth_dataset_image_seed(d->opt->seed, k);
+    return (int)(rng_next(&rng) % (uint64_t)c->Nbg); // the stream's first draw
 }
 
 // ---- the background ----
@@ -130,6 +140,32 @@ done:
 
 // ---- one image ----
 
+rs_status rs_synth_dataset__link_into(const rs_synth_dataset__run *d, const char *src, const char *rel, rs_err *err)
+{
+    char *dst = rs_io_join(d->opt->out_dir, rel);
+    char *tmp = dst ? malloc(strlen(dst) + 32) : NULL;
+    rs_status st = RS_OK;
+    if (!dst || !tmp) {
+        free(dst);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    snprintf(tmp, strlen(dst) + 32, "%s.%ld.lnk", dst, (long)getpid());
+    (void)remove(tmp);
+    if (link(src, tmp) != 0) {
+        // another file system: a copy, written atomically
+        char *data = NULL;
+        size_t len = 0;
+        if (!(st = rs_io_read_file(&data, &len, src, err))) st = rs_io_write_file(dst, data, len, err);
+        free(data);
+    } else if (rename(tmp, dst) != 0) {
+        st = rs_err_set(err, RS_ERR_IO, "%s: %s", dst, strerror(errno));
+        (void)remove(tmp);
+    }
+    free(tmp);
+    free(dst);
+    return st;
+}
+
 void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id)
 {
     snprintf(stem, n, "%06d_%s", k, camera_id);
@@ -181,9 +217,9 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     ropt.canvas_map = c->canvas_map;
     ropt.separate_processes = opt->separate_processes;
     ropt.full_frame = opt->full_frame;
-    const uint64_t r_bg = rng_next(&rng);
+    (void)rng_next(&rng); // the background's draw (rs_synth_dataset__image_background)
     if (c->Nbg > 0) {
-        rs_synth_dataset__background *bm = &c->bg[r_bg % (uint64_t)c->Nbg];
+        rs_synth_dataset__background *bm = &c->bg[rs_synth_dataset__image_background(d, k, c)];
         b = bm;
         if ((st = background_fit(bm, c->cam.width, c->cam.height, err))) goto done;
         // the vehicles alone over transparency; composite() puts them onto the background
@@ -204,6 +240,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     rs_synth_traffic_options_default(&topt);
     topt.seed = rng_next(&rng);
     topt.count = 0; // every vehicle that fits; the camera's view picks among them below
+    topt.junction_lanes = opt->junction_traffic;
     if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err))) goto done;
     rs_synth_randomise_options xopt;
     rs_synth_randomise_options_default(&xopt);
@@ -274,30 +311,70 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         meshes[i] = prepared.meshes[prepared.imesh[i]];
     }
     if ((st = rs_synth_labels_compute(&labels, cam, prepared.v, up, N, meshes, r.ids, err))) goto done;
-    char file_name[320];
+    for (int i = 0; i < N; i++) // latitude, longitude of each bottom centre (GeographicLib)
+        if ((st = rs_geo_enu_to_llh(labels[i].bottom_center_llh, &d->site->origin, labels[i].bottom_center_enu_m, 1,
+                                    err)))
+            goto done;
+    const int split = rs_synth_dataset__image_split(d, k, c);
+    const char *split_name = d->split[split];
+    char file_name[320], kitti_name[32];
     snprintf(file_name, sizeof(file_name), "%s.png", stem);
+    snprintf(kitti_name, sizeof(kitti_name), "%06d.png", k); // KITTI's numeric names
+    rs_synth_image_info info = {.index = k,
+                                .camera = c->id,
+                                .background = b ? (b->src->name ? b->src->name : b->src->file) : NULL,
+                                .weather = b ? rs_site_background_tag(b->src, "conditions") : NULL,
+                                .time_iso = b ? b->time_iso : NULL,
+                                .sun_azimuth_deg = ropt.scene.sun_azimuth_deg,
+                                .sun_elevation_deg = ropt.scene.sun_elevation_deg,
+                                .camera_model = c->model_rel,
+                                .camera_model_sha256 = c->model_sha256,
+                                .calib_source = c->calib_path,
+                                .calib_source_sha256 = c->calib_sha256,
+                                .ground_offset_m = d->site->ground_offset_m};
+    memcpy(info.ground_normal_enu, d->site->ground_normal_enu, sizeof(info.ground_normal_enu));
+    info.time_of_day = (b && b->night) || ropt.scene.sun_elevation_deg < -6 ? "night"
+                       : ropt.scene.sun_elevation_deg < 6                   ? "twilight"
+                                                                            : "day";
     const rs_synth_label_image img = {.file_name = file_name,
                                       .width = r.width,
                                       .height = r.height,
                                       .labels = labels,
                                       .Nlabels = N,
-                                      .vehicle_ids = ids};
-    const rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
+                                      .vehicle_ids = ids,
+                                      .info = &info};
+    rs_synth_label_image kimg = img;
+    kimg.file_name = kitti_name;
+    const rs_synth_label_options lopt = {.bbox = (rs_synth_bbox_kind)opt->bbox,
+                                         .min_visibility = opt->min_visibility,
+                                         .drop_invisible = !opt->keep_invisible};
     // YOLO, KITTI and the image, then the per-image COCO file last: it marks the image done.
-    image = rs_io_join(d->split_dir, file_name);
-    snprintf(name, sizeof(name), "annotations/instances_%s.json", opt->split);
+    image = rs_io_join(d->split_dir[split], file_name);
+    snprintf(name, sizeof(name), "annotations/instances_%s.json", split_name);
     part_tmp = rs_io_join(work, name);
     snprintf(name, sizeof(name), "%s.json", stem);
     part = rs_io_join(d->parts_dir, name);
-    if (!image || !part_tmp || !part) {
+    char *kitti_dir = rs_io_join(opt->out_dir, "kitti/training");
+    if (!image || !part_tmp || !part || !kitti_dir) {
+        free(kitti_dir);
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
-    if ((st = rs_synth_labels_write_yolo(opt->out_dir, opt->split, &img, 1, &lopt, err)) ||
-        (st = rs_synth_labels_write_kitti(opt->out_dir, &img, 1, &lopt, err)) ||
-        (st = rs_image_write(image, &r.composite, 8, err)) ||
-        (st = rs_synth_labels_write_coco(work, opt->split, &img, 1, &lopt, err)))
-        goto done;
+    char yolo_image[600], kitti_image[600], kitti_calib[600];
+    snprintf(yolo_image, sizeof(yolo_image), "images/%s/%s", split_name, file_name);
+    snprintf(kitti_image, sizeof(kitti_image), "kitti/training/image_2/%s", kitti_name);
+    snprintf(kitti_calib, sizeof(kitti_calib), "kitti/training/calib/%06d.txt", k);
+    if (!(st = rs_synth_labels_write_yolo(opt->out_dir, split_name, &img, 1, &lopt, err)) &&
+        !(st = rs_synth_labels_write_kitti(kitti_dir, &kimg, 1, &lopt, err)) &&
+        !(st = rs_image_write(image, &r.composite, 8, err)) &&
+        !(st = rs_synth_dataset__link_into(d, image, yolo_image, err)) &&
+        !(st = rs_synth_dataset__link_into(d, image, kitti_image, err))) {
+        char *cp = rs_io_join(opt->out_dir, kitti_calib);
+        st = cp ? rs_synth_labels_write_kitti_calib(cp, cam, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(cp);
+    }
+    free(kitti_dir);
+    if (st || (st = rs_synth_labels_write_coco(work, split_name, &img, 1, &lopt, err))) goto done;
     if (rename(part_tmp, part) != 0) {
         st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
         goto done;

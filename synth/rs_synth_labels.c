@@ -299,6 +299,8 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
     L->footprint_center_px[1] = 0.5 * (L->footprint_box_full_px[1] + L->footprint_box_full_px[3]);
     double o[3] = {0, 0, 0}, fwd[3] = {1, 0, 0}, f_cam[3];
     to_cam(L->bottom_center_cam_m, cam, v, up_m, o);
+    rs_synth_vehicle_to_enu(L->bottom_center_enu_m, v, up_m, o);
+    L->bottom_center_llh[0] = L->bottom_center_llh[1] = L->bottom_center_llh[2] = NAN;
     to_cam(f_cam, cam, v, up_m, fwd);
     for (int i = 0; i < 3; i++) f_cam[i] -= L->bottom_center_cam_m[i];
     L->rotation_y_rad = atan2(-f_cam[2], f_cam[0]);
@@ -383,7 +385,7 @@ rs_status rs_synth_bbox_kind_parse(rs_synth_bbox_kind *kind, const char *name, r
 
 int rs_synth_label_kept(double box[4], const rs_synth_label *L, const rs_synth_label_options *opt)
 {
-    rs_synth_label_options def = {RS_SYNTH_BBOX_FOOTPRINT, 0};
+    rs_synth_label_options def = {RS_SYNTH_BBOX_FOOTPRINT, 0, false};
     if (!opt) opt = &def;
     const double *b = opt->bbox == RS_SYNTH_BBOX_BODY      ? L->body_box_px
                       : opt->bbox == RS_SYNTH_BBOX_VISIBLE ? L->visible_box_px
@@ -391,6 +393,7 @@ int rs_synth_label_kept(double box[4], const rs_synth_label *L, const rs_synth_l
     memcpy(box, b, 4 * sizeof *b);
     if (!L->in_image || !(box[2] > box[0] && box[3] > box[1])) return 0;
     if (opt->min_visibility > 0 && isfinite(L->visibility) && L->visibility < opt->min_visibility) return 0;
+    if (L->visible_px == 0 && opt->drop_invisible) return 0; // (-1: no ID pass, unknown)
     return 1;
 }
 
@@ -448,6 +451,12 @@ static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, i
         cJSON_AddNumberToObject(b3, "yaw_deg", L->yaw_deg);
     }
     cJSON_AddItemToObject(a, "box3d", b3);
+    cJSON_AddItemToObject(a, "bottom_center_enu_m", numbers(L->bottom_center_enu_m, 3));
+    if (isfinite(L->bottom_center_llh[0])) {
+        cJSON_AddNumberToObject(a, "bottom_center_lat_deg", L->bottom_center_llh[0]);
+        cJSON_AddNumberToObject(a, "bottom_center_lon_deg", L->bottom_center_llh[1]);
+        cJSON_AddNumberToObject(a, "bottom_center_h_m", L->bottom_center_llh[2]);
+    }
     cJSON_AddNumberToObject(a, "vehicle_index", L->index);
     if (vehicle_id) cJSON_AddStringToObject(a, "vehicle_id", vehicle_id);
     if (L->visible_px >= 0) {
@@ -457,6 +466,39 @@ static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, i
         cJSON_AddItemToObject(a, "visible_bbox", xywh(L->visible_box_px));
     }
     return a;
+}
+
+static void add_string_or_null(cJSON *o, const char *key, const char *s)
+{
+    cJSON_AddItemToObject(o, key, s ? cJSON_CreateString(s) : cJSON_CreateNull());
+}
+
+static void add_number_or_null(cJSON *o, const char *key, double x)
+{
+    cJSON_AddItemToObject(o, key, isfinite(x) ? cJSON_CreateNumber(x) : cJSON_CreateNull());
+}
+
+// The dataset contract's image fields (docs/labels.md).
+static void add_image_info(cJSON *o, const rs_synth_image_info *in)
+{
+    if (in->index >= 0) cJSON_AddNumberToObject(o, "index", in->index);
+    add_string_or_null(o, "camera", in->camera);
+    add_string_or_null(o, "background", in->background);
+    add_string_or_null(o, "weather", in->weather);
+    add_string_or_null(o, "time_of_day", in->time_of_day);
+    add_string_or_null(o, "time", in->time_iso);
+    add_number_or_null(o, "sun_azimuth_deg", in->sun_azimuth_deg);
+    add_number_or_null(o, "sun_elevation_deg", in->sun_elevation_deg);
+    cJSON *c = cJSON_CreateObject();
+    if (c) {
+        add_string_or_null(c, "camera_model", in->camera_model);
+        add_string_or_null(c, "camera_model_sha256", in->camera_model_sha256);
+        add_string_or_null(c, "source", in->calib_source);
+        add_string_or_null(c, "source_sha256", in->calib_source_sha256);
+        cJSON_AddItemToObject(c, "ground_normal_enu", numbers(in->ground_normal_enu, 3));
+        add_number_or_null(c, "ground_offset_m", in->ground_offset_m);
+    }
+    cJSON_AddItemToObject(o, "calibration", c);
 }
 
 static rs_status check_images(const char *what, const rs_synth_label_image *images, int N, rs_err *err)
@@ -476,6 +518,19 @@ rs_status rs_synth_labels_write_coco(const char *dir, const char *split, const r
     if (st) return st;
     cJSON *root = cJSON_CreateObject(), *jimages = cJSON_CreateArray(), *jann = cJSON_CreateArray(),
           *jcat = cJSON_CreateArray();
+    // info and licenses: pycocotools (which YOLOX's COCO loader calls) copies "info" when it
+    // loads detections; COCO lists both at the top
+    cJSON *info = cJSON_AddObjectToObject(root, "info");
+    cJSON_AddStringToObject(info, "description", "roadside synth: synthetic roadside vehicles (docs/labels.md)");
+    cJSON_AddStringToObject(info, "contributor", "roadside");
+    cJSON_AddStringToObject(info, "version", RS_SYNTH_DATASET_CONTRACT_VERSION);
+    cJSON_AddStringToObject(info, "url", "");
+    cJSON *lic = cJSON_AddArrayToObject(root, "licenses");
+    cJSON *l0 = cJSON_CreateObject();
+    cJSON_AddNumberToObject(l0, "id", 1);
+    cJSON_AddStringToObject(l0, "name", "synthetic: no third-party rights in the rendered vehicles");
+    cJSON_AddStringToObject(l0, "url", "");
+    cJSON_AddItemToArray(lic, l0);
     cJSON_AddItemToObject(root, "images", jimages);
     cJSON_AddItemToObject(root, "annotations", jann);
     cJSON_AddItemToObject(root, "categories", jcat);
@@ -493,6 +548,8 @@ rs_status rs_synth_labels_write_coco(const char *dir, const char *split, const r
         cJSON_AddStringToObject(o, "file_name", images[i].file_name);
         cJSON_AddNumberToObject(o, "width", images[i].width);
         cJSON_AddNumberToObject(o, "height", images[i].height);
+        cJSON_AddNumberToObject(o, "license", 1);
+        if (images[i].info) add_image_info(o, images[i].info);
         cJSON_AddItemToArray(jimages, o);
         for (int l = 0; l < images[i].Nlabels; l++) {
             const rs_synth_label *L = &images[i].labels[l];
@@ -599,4 +656,25 @@ rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_imag
                           : rs_err_set(err, RS_ERR_NOMEM, "KITTI: out of memory");
     free(folder);
     return st;
+}
+
+rs_status rs_synth_labels_write_kitti_calib(const char *path, const rs_camera *cam, rs_err *err)
+{
+    mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(&cam->lensmodel);
+    if (!meta.has_core)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: KITTI calib: lens model without fx, fy, cx, cy", path);
+    const double *f = cam->intrinsics;
+    double R[9];
+    mrcal_R_from_r(R, NULL, cam->rt_cam_enu);
+    const double *t = cam->rt_cam_enu + 3;
+    rs_io_atomic a = {0};
+    rs_status st = rs_io_atomic_open(&a, path, err);
+    if (st) return st;
+    for (int i = 0; i < 4; i++)
+        fprintf(a.f, "P%d: %.12e 0 %.12e 0 0 %.12e %.12e 0 0 0 1 0\n", i, f[0], f[2], f[1], f[3]);
+    fprintf(a.f, "R0_rect: 1 0 0 0 1 0 0 0 1\n");
+    fprintf(a.f, "Tr_velo_to_cam:");
+    for (int r = 0; r < 3; r++) fprintf(a.f, " %.12e %.12e %.12e %.12e", R[3 * r], R[3 * r + 1], R[3 * r + 2], t[r]);
+    fprintf(a.f, "\nTr_imu_to_velo: 1 0 0 0 0 1 0 0 0 0 1 0\n");
+    return rs_io_atomic_commit(&a, err);
 }

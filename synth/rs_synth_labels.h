@@ -17,6 +17,7 @@
 // pinhole (corners are extreme); with distortion the box is too small by at most the sagitta of
 // an edge's image over 1/64 of its length (< 0.01 px for the lenses of tests/synth).
 #pragma once
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "core/rs_camera.h"
@@ -27,6 +28,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+// The version of the dataset contract (docs/labels.md) written in COCO's info.version.
+#define RS_SYNTH_DATASET_CONTRACT_VERSION "2"
 
 #define RS_SYNTH_LABEL_ZMIN_M 0.01 // points nearer than this along the optical axis are clipped
 
@@ -48,6 +52,10 @@ typedef struct {
     double footprint_center_px[2];   // centre of footprint_box_full_px
     double bottom_center_px[2];      // projection of the footprint's centre (NaN if behind)
     double bottom_center_cam_m[3];   // the footprint's centre in the camera frame
+    double bottom_center_enu_m[3];   // the footprint's centre on the ground, site ENU
+    double bottom_center_llh[3];     // the same as latitude, longitude (degrees) and height (m,
+                                     // ellipsoidal); NaN unless the caller fills it (it needs
+                                     // the site's origin: rs_synth_labels_compute leaves NaN)
     double rotation_y_rad;           // KITTI heading: forward_cam = (cos r, ., -sin r) in x-z
     // From the object-ID pass (all -1 / NaN when no ID image was given):
     long visible_px;          // pixels of the ID image holding k + 1
@@ -87,7 +95,32 @@ rs_status rs_synth_bbox_kind_parse(rs_synth_bbox_kind *kind, const char *name, r
 typedef struct {
     rs_synth_bbox_kind bbox;
     double min_visibility; // drop labels whose visibility is below (only with an ID pass); 0 keeps all
+    bool drop_invisible;   // with an ID pass, drop a vehicle with no visible pixel (visible_px 0)
+                           // even when min_visibility is 0 (roadside synth's default)
 } rs_synth_label_options;
+
+// What the COCO writer records of an image beyond its file and size (docs/labels.md, "The
+// dataset contract"): where it was seen from, over what, under which sky, with which
+// calibration. Strings may be NULL (written as null); numbers NaN (null).
+typedef struct {
+    int index;                       // the image's index k in the dataset (-1: not written)
+    const char *camera;              // camera id (site.json)
+    const char *background;          // the background's name (else its file); NULL: the grey ground
+    const char *weather;             // the background's "conditions" tag: sunny, cloudy, rain, snow, night
+    const char *time_of_day;         // "day" (sun above 6 deg), "twilight" (-6..6), "night" (below -6, or
+                                     // the background is tagged night)
+    const char *time_iso;            // the background's "time" tag (ISO 8601), may be NULL
+    double sun_azimuth_deg;          // the sun the vehicles were lit by (clockwise from north)
+    double sun_elevation_deg;        // degrees above the horizon
+    const char *camera_model;        // the camera the labels were projected with, at the image's size,
+                                     // copied into the dataset: a path relative to the COCO file's
+                                     // folder ("../cameras/<id>.cameramodel")
+    const char *camera_model_sha256; // SHA-256 of that file, 64 hex digits
+    const char *calib_source;        // the calibration file it was made from (as given)
+    const char *calib_source_sha256; // SHA-256 of the calibration file
+    double ground_normal_enu[3];     // the site's ground plane n . p_enu = offset
+    double ground_offset_m;
+} rs_synth_image_info;
 
 // One labelled image for the writers.
 typedef struct {
@@ -95,11 +128,12 @@ typedef struct {
     int width, height;            // pixels
     const rs_synth_label *labels; // (Nlabels,)
     int Nlabels;
-    const char *const *vehicle_ids; // (Nvehicles,) vehicle_ids[labels[i].index]; may be NULL
+    const char *const *vehicle_ids;  // (Nvehicles,) vehicle_ids[labels[i].index]; may be NULL
+    const rs_synth_image_info *info; // may be NULL: COCO gets id, file_name, width, height only
 } rs_synth_label_image;
 
 // Which labels a writer keeps: in_image, the chosen box exists with a positive area, visibility
-// >= min_visibility (when known). out: box (4,) the chosen box.
+// >= min_visibility (when known), at least one visible pixel (when known and drop_invisible). out: box (4,) the chosen box.
 int rs_synth_label_kept(double box[4], const rs_synth_label *label, const rs_synth_label_options *opt);
 
 // COCO in YOLOX's layout: writes DIR/annotations/instances_<split>.json (atomically; folders
@@ -124,6 +158,12 @@ rs_status rs_synth_labels_write_yolo(const char *dir, const char *split, const r
 // visibility (0: >= 0.8, 1: >= 0.4, 2: below, 3: unknown).
 rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_image *images, int Nimages,
                                       const rs_synth_label_options *opt, rs_err *err);
+
+// KITTI's calib file of one image (DIR/calib/<stem>.txt): P0..P3 = [K | 0] with K the pinhole
+// core (fx, fy, cx, cy) of cam, R0_rect = I, Tr_velo_to_cam = [R t] of rt_cam_enu (KITTI's
+// "velodyne" frame taken to be the site's ENU frame), Tr_imu_to_velo = [I 0]. A lens with
+// distortion is not representable in KITTI's P: its core is written (docs/labels.md). Atomic.
+rs_status rs_synth_labels_write_kitti_calib(const char *path, const rs_camera *cam, rs_err *err);
 
 #ifdef __cplusplus
 }

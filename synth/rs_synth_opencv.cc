@@ -246,3 +246,97 @@ extern "C" rs_status rs_synth_dnn_translate(rs_image *dst, const char *onnx_path
     if (st) rs_image_free(dst);
     return st;
 }
+
+// ---- drawing (roadside dataset view) ----
+
+namespace {
+
+cv::Scalar colour(const float *rgb) { return cv::Scalar(rgb[0], rgb[1], rgb[2]); }
+
+// Runs f(m) on a cv::Mat over the RGB image img under guarded().
+template <class F> rs_status on_rgb(rs_image *img, const char *what, rs_err *err, F f)
+{
+    if (img->channels != 3 || !img->data)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: needs an RGB image (has %d channels)", what, img->channels);
+    return guarded(what, err, [&]() -> rs_status {
+        cv::Mat m = wrap(img);
+        f(m);
+        return RS_OK;
+    });
+}
+
+const int kShift = 4; // sub-pixel bits of cv::line / cv::circle
+
+cv::Point fixed_point(const double *p)
+{
+    return cv::Point((int)std::lround(p[0] * (1 << kShift)), (int)std::lround(p[1] * (1 << kShift)));
+}
+
+bool drawable(const rs_image *img, const double *p)
+{
+    return std::isfinite(p[0]) && std::isfinite(p[1]) && std::fabs(p[0]) < 1e6 + img->width &&
+           std::fabs(p[1]) < 1e6 + img->height;
+}
+
+} // namespace
+
+extern "C" rs_status rs_synth_draw_rect(rs_image *img, int x0, int y0, int x1, int y1, const float *rgb, int thickness,
+                                        rs_err *err)
+{
+    return on_rgb(img, "draw rectangle", err, [&](cv::Mat &m) {
+        cv::rectangle(m, cv::Point(x0, y0), cv::Point(x1, y1), colour(rgb), thickness < 1 ? 1 : thickness, cv::LINE_8);
+    });
+}
+
+extern "C" rs_status rs_synth_draw_line(rs_image *img, const double *p0_px, const double *p1_px, const float *rgb,
+                                        int thickness, rs_err *err)
+{
+    if (!drawable(img, p0_px) || !drawable(img, p1_px)) return RS_OK;
+    return on_rgb(img, "draw line", err, [&](cv::Mat &m) {
+        cv::line(m, fixed_point(p0_px), fixed_point(p1_px), colour(rgb), thickness < 1 ? 1 : thickness, cv::LINE_8,
+                 kShift);
+    });
+}
+
+extern "C" rs_status rs_synth_draw_dot(rs_image *img, const double *p_px, int radius_px, const float *rgb, rs_err *err)
+{
+    if (!drawable(img, p_px)) return RS_OK;
+    return on_rgb(img, "draw dot", err, [&](cv::Mat &m) {
+        cv::circle(m, fixed_point(p_px), (radius_px < 1 ? 1 : radius_px) << kShift, colour(rgb), cv::FILLED, cv::LINE_8,
+                   kShift);
+    });
+}
+
+extern "C" rs_status rs_synth_draw_text(rs_image *img, int x, int y, const char *text, int height_px, const float *rgb,
+                                        const float *bg_rgb, int *width_px, rs_err *err)
+{
+    if (width_px) *width_px = 0;
+    return on_rgb(img, "draw text", err, [&](cv::Mat &m) {
+        const int font = cv::FONT_HERSHEY_SIMPLEX;
+        // getFontScaleFromHeight gives the scale for a full height (ascent + descent); the cap
+        // height of Hershey simplex is about 0.7 of it
+        const double scale = cv::getFontScaleFromHeight(font, height_px < 4 ? 4 : (int)(height_px / 0.7), 1);
+        int base = 0;
+        const cv::Size sz = cv::getTextSize(text, font, scale, 1, &base);
+        if (bg_rgb)
+            cv::rectangle(m, cv::Point(x - 1, y - sz.height - 1), cv::Point(x + sz.width, y + base - 1), colour(bg_rgb),
+                          cv::FILLED, cv::LINE_8);
+        cv::putText(m, text, cv::Point(x, y), font, scale, colour(rgb), 1, cv::LINE_8);
+        if (width_px) *width_px = sz.width;
+    });
+}
+
+extern "C" rs_status rs_synth_image_resize(rs_image *dst, const rs_image *src, int width, int height, rs_err *err)
+{
+    *dst = rs_image{};
+    rs_status st = rs_image_alloc(dst, width, height, src->channels, err);
+    if (st) return st;
+    st = guarded("resize", err, [&]() -> rs_status {
+        cv::Mat out = wrap(dst);
+        const bool shrink = width < src->width || height < src->height;
+        cv::resize(wrap(src), out, cv::Size(width, height), 0, 0, shrink ? cv::INTER_AREA : cv::INTER_LINEAR);
+        return RS_OK;
+    });
+    if (st) rs_image_free(dst);
+    return st;
+}

@@ -59,6 +59,33 @@ rs_status rs_synth_dnn_translate(rs_image *dst,
                                  // in
                                  const char *onnx_path, const rs_image *src, rs_err *err);
 
+// ---- drawing (roadside dataset view, synth/rs_synth_dataset_view.c) ----
+// On an RGB rs_image in place (other channel counts: RS_ERR_INVALID), colours `rgb` (3,) in the image's
+// [0, 1] values; lines 1 px wide by default, not antialiased (cv::LINE_8: every drawn pixel has
+// exactly the colour). Coordinates are pixel indices (integer centres, pixel (0,0) the top-left);
+// what falls outside the image is clipped. Each returns RS_ERR_EXTERNAL on an OpenCV exception.
+
+// The rectangle through pixel columns x0..x1 and rows y0..y1 (inclusive: its outline covers
+// those pixels; cv::rectangle); thickness >= 1, centred on that outline.
+rs_status rs_synth_draw_rect(rs_image *img, int x0, int y0, int x1, int y1, const float *rgb, int thickness,
+                             rs_err *err);
+// A straight segment between sub-pixel points p0_px, p1_px (2,) (cv::line with 4 bits of
+// sub-pixel shift). Points farther than 1e6 px from the image are refused (not drawn, RS_OK).
+rs_status rs_synth_draw_line(rs_image *img, const double *p0_px, const double *p1_px, const float *rgb, int thickness,
+                             rs_err *err);
+// A filled disc of radius_px (>= 1) at the sub-pixel point p_px (2,) (cv::circle).
+rs_status rs_synth_draw_dot(rs_image *img, const double *p_px, int radius_px, const float *rgb, rs_err *err);
+// Text in Hershey's simplex font (cv::putText), its baseline's left end at pixel (x, y), about
+// height_px tall (cap height); bg_rgb (3,), may be NULL: a filled box behind the text.
+// *width_px (may be NULL): the text's width.
+rs_status rs_synth_draw_text(rs_image *img, int x, int y, const char *text, int height_px, const float *rgb,
+                             const float *bg_rgb, int *width_px, rs_err *err);
+// Resized copy of src to (width, height) (cv::resize, INTER_AREA: the mean over each output
+// pixel's footprint when shrinking; linear when growing). out: *dst allocated.
+rs_status rs_synth_image_resize(rs_image *dst,
+                                // in
+                                const rs_image *src, int width, int height, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

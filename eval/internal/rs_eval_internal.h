@@ -14,6 +14,11 @@ struct rs_eval_data {
     char **group_names;  // (Ngroups) first-appearance order
     char **image_camera; // (Nimages) camera of each image (camera_key), NULL without the key
     bool metres;         // points were mapped to the ground (rs_eval_data_to_ground)
+    // each image's recorded calibration (rs_eval_load_options.recorded_calibration), else NULL:
+    int Nrecorded;             // entries filled (== Nimages after a successful load)
+    char **image_model;        // (Nimages) the camera model's path (resolved)
+    char **image_model_sha256; // (Nimages) its recorded SHA-256, NULL if none recorded
+    double *image_ground;      // (Nimages,4) ground plane n . p_enu = offset: n (3), offset
 
     int Ncategories;
     long long *category_id; // (Ncategories)

@@ -23,7 +23,8 @@
 typedef struct {
     rs_site_report pub;
     int cap;
-    bool nomem; // an allocation failed: the report is incomplete
+    bool nomem;   // an allocation failed: the report is incomplete
+    bool picking; // rs_site_load_for_picking: a camera with too few picks is a warning, not an error
 } rs_site__report;
 
 // Appends one diagnostic (severity RS_SITE_WARNING ignores `status`). On allocation failure

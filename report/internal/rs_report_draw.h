@@ -13,6 +13,7 @@
 
 #include "audit/rs_audit.h"
 #include "calib/rs_calib_site.h"
+#include "geo/rs_geo_raster.h"
 #include "geo/rs_site.h"
 #include "report/rs_report.h"
 
@@ -88,6 +89,9 @@ struct rs_report_ctx {
     const char *calib_dir;                 // where <id>.cameramodel and <id>.json were read
     const char *version;                   // the software version printed ("unknown" if NULL)
     long long written_utc_s;               // the date printed, seconds since 1970 UTC
+    rs_geo_ortho ortho;                    // the site map's orthophoto on the ENU grid (owned; rgb
+                                           //   NULL: none)
+    char *ortho_path;                      // owned: its file, NULL: none
     rs_audit_map best_map;                 // the smallest 1-sigma of the cameras' maps at each cell
                                            //   (owned; sigma_m NULL when no camera has a map)
 };

@@ -41,6 +41,10 @@ typedef struct {
 typedef struct {
     const char *id;
     rs_camera cam;                    // at the output size
+    char *calib_path;                 // owned: the calibration file read (calib_dir/<id>.cameramodel)
+    char calib_sha256[65];            // its SHA-256, hex
+    char model_sha256[65];            // SHA-256 of the copy at the output size, DATASET/cameras/<id>.cameramodel
+    char model_rel[320];              // that copy, relative to a COCO file's folder: "../cameras/<id>.cameramodel"
     rs_synth_dataset__background *bg; // (Nbg,) owned: the backgrounds passing the filters
     int Nbg;
     // cache, filled at first use: the POV-Ray canvas of the lens and its resampling map
@@ -55,8 +59,18 @@ typedef struct {
     rs_lanes lanes;                 // owned
     rs_synth_dataset__camera *cams; // (Ncams,) owned; image k is made for cams[k % Ncams]
     int Ncams;
-    char *split_dir, *parts_dir, *work_root; // owned: DATASET/<split>, parts, work
+    const char *split[2];        // the train and validation split names (opt)
+    char *split_dir[2];          // owned: DATASET/<split> of each
+    char *parts_dir, *work_root; // owned: DATASET/parts, DATASET/work
 } rs_synth_dataset__run;
+
+// Which split image k goes to: 0 (opt->split) or 1 (opt->val_split), from k's own random stream
+// (the fraction), its camera, or the background it is drawn over (the same draw as
+// rs_synth_dataset__make_image's), so it depends on (seed, k) and the options only.
+int rs_synth_dataset__image_split(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c);
+
+// The index of image k's background among c->bg (its stream's first draw), -1 when c has none.
+int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c);
 
 static inline bool rs_synth_dataset__file_exists(const char *path)
 {
@@ -73,6 +87,10 @@ void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
 rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
                                        bool *grey, double *seconds_povray, rs_err *err);
 
+// Hard-links src to DATASET/<rel> (replacing what is there, atomically: a link to a temporary
+// name, then rename), or copies it when linking fails (another file system).
+rs_status rs_synth_dataset__link_into(const rs_synth_dataset__run *d, const char *src, const char *rel, rs_err *err);
+
 // What a rerun finds of an image.
 typedef enum {
     RS_SYNTH_DATASET__ABSENT,   // no parts/<stem>.json: never finished
@@ -82,15 +100,15 @@ typedef enum {
 
 // Whether image `stem` of camera c is finished: parts/<stem>.json is a regular file holding the
 // COCO file of the one image <stem>.png at the camera's (output) size, <split>/<stem>.png is a
-// regular file that OpenCV decodes to that size, labels/<split>/<stem>.txt and
-// label_2/<stem>.txt are regular files. Links count as damage (the run writes none). Cost: one
+// regular file that OpenCV decodes to that size, images/<split>/<stem>.png, labels/<split>/<stem>.txt,
+// kitti/training/{image_2,label_2,calib}/<k>.* are regular files (split: 0 or 1, d->split[]). Links count as damage (the run writes none). Cost: one
 // PNG decode per finished image.
 // out: *state; why[n]: when DAMAGED, the first fault, "FILE: what is wrong"
 // Errors: RS_ERR_NOMEM only (a fault of the files is a state, not an error).
 rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char *why, size_t n,
                                            // in
                                            const rs_synth_dataset__run *d, const char *stem,
-                                           const rs_synth_dataset__camera *c, rs_err *err);
+                                           const rs_synth_dataset__camera *c, int split, rs_err *err);
 
 // Assembles DATASET/annotations/instances_<split>.json from every parts/ file present for k in
 // 0 .. count-1. The images of other shards (made by other runs into this folder) are checked

@@ -11,7 +11,7 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
 from rs_check import check, finish  # noqa: E402
 
-MODULES = ["core", "geo", "calib", "sim", "audit", "report", "eval", "synth", "bench", "cli"]
+MODULES = ["core", "geo", "calib", "sim", "audit", "report", "eval", "synth", "pick", "bench", "cli"]
 # module -> the modules whose public headers it may include (besides its own)
 MAY_INCLUDE = {
     "core": [],
@@ -22,8 +22,9 @@ MAY_INCLUDE = {
     "report": ["core", "geo", "calib", "audit"],
     "eval": ["core", "geo"],
     "synth": ["core", "geo"],
+    "pick": ["core", "geo", "calib", "audit"],
     "bench": ["core", "geo", "calib", "sim", "eval", "synth", "report"],
-    "cli": ["core", "geo", "calib", "sim", "audit", "report", "eval", "synth", "bench"],
+    "cli": ["core", "geo", "calib", "sim", "audit", "report", "eval", "synth", "pick", "bench"],
 }
 # libraries a module's link line must not carry (what it never calls)
 MUST_NOT_LINK = {

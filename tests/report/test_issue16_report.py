@@ -13,6 +13,11 @@ label_placement -- the boxes the drawing code placed (ROADSIDE_REPORT_LABEL_BOXE
   boxes of a figure overlap, none overlaps a reserved box (scale bar, north arrow, a camera's
   disc, a landmark's marker), none is clipped by the figure's edge; every site landmark's id got
   a place on the site map (L006/L007 and L008-L010 overlapped before).
+orthophoto -- the site map is drawn on the site's orthophoto: `roadside ortho` writes SITE/ortho.tif
+  (the digital twin from above) and the report draws it under the map (its caption names the file),
+  the same orthophoto warped by GDAL's own gdalwarp into UTM (EPSG:32632) is reprojected back
+  ("reprojected" in the caption) and draws the same map to within a few grey levels; the map
+  without it differs; a file that is no image is refused naming it, nothing written.
 """
 import hashlib
 import html
@@ -141,6 +146,58 @@ def label_placement():
     shutil.rmtree(tmp)
 
 
+def site_map(out):
+    """The site map (the first figure) of out/report.html, as an image."""
+    import base64
+
+    import cv2
+    import numpy as np
+    text = open(os.path.join(out, "report.html"), encoding="utf-8").read()
+    data = base64.b64decode(re.search(r"data:image/png;base64,([A-Za-z0-9+/=]+)", text).group(1))
+    return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR).astype(float), text
+
+
+def orthophoto():
+    import subprocess
+    with tempfile.TemporaryDirectory() as tmp:
+        site, calib = os.path.join(tmp, "site"), os.path.join(tmp, "calib")
+        shutil.copytree(os.path.join(SOURCE, "sites", "demo"), site)
+        check(run("calib", site, "-o", calib).returncode == 0, "calib")
+        base_out = os.path.join(tmp, "r0")
+        p = run("report", site, "--calib", calib, "-o", base_out, "--no-audit")
+        check(p.returncode == 0, f"report without an orthophoto: {p.stderr}")
+        plain, text = site_map(base_out)
+        check("orthophoto" not in text, "no orthophoto named when the site has none")
+        p = run("ortho", site, "-o", os.path.join(site, "ortho.tif"), "--gsd", "0.5")
+        check(p.returncode == 0, f"roadside ortho: {p.stderr}")
+        maps = {}
+        for name, extra in (("site", []), ("utm", ["--ortho", os.path.join(tmp, "utm.tif")])):
+            if name == "utm":
+                w = subprocess.run(["gdalwarp", "-q", "-t_srs", "EPSG:32632", "-r", "bilinear",
+                                    os.path.join(site, "ortho.tif"), os.path.join(tmp, "utm.tif")],
+                                   capture_output=True, text=True)
+                check(w.returncode == 0, f"gdalwarp: {w.stderr}")
+            out = os.path.join(tmp, "r-" + name)
+            p = run("report", site, "--calib", calib, "-o", out, "--no-audit", *extra)
+            check(p.returncode == 0, f"report with the {name} orthophoto: {p.stderr}")
+            maps[name], text = site_map(out)
+            check("Drawn on the orthophoto" in text and ("utm.tif" in text if name == "utm" else "ortho.tif" in text),
+                  f"{name}: the caption names the orthophoto")
+            check(("reprojected to the site" in text) == (name == "utm"), f"{name}: reprojected said when it was")
+        changed = (abs(maps["site"] - plain).max(axis=2) > 30).mean()
+        same = abs(maps["utm"] - maps["site"]).mean()
+        print(f"site map: {100 * changed:.1f}% of pixels changed by the orthophoto; the UTM copy differs by "
+              f"{same:.2f} grey levels on average")
+        check(changed > 0.2, f"the orthophoto shows on the map ({100 * changed:.1f}% of pixels changed)")
+        check(same < 4, f"the UTM orthophoto, reprojected, draws the same map ({same:.2f} grey levels apart)")
+        bad = os.path.join(tmp, "bad.tif")
+        open(bad, "w").write("not an image\n")
+        out = os.path.join(tmp, "r-bad")
+        p = run("report", site, "--calib", calib, "-o", out, "--no-audit", "--ortho", bad)
+        check(p.returncode == 1 and "bad.tif" in p.stderr, f"an unreadable orthophoto is named: {p.stderr}")
+        check(not os.path.exists(os.path.join(out, "report.html")), "nothing written for it")
+
+
 if __name__ == "__main__":
-    {"verdicts_agree": verdicts_agree, "label_placement": label_placement}[sys.argv[1]]()
+    {"verdicts_agree": verdicts_agree, "label_placement": label_placement, "orthophoto": orthophoto}[sys.argv[1]]()
     finish("issue 16 " + sys.argv[1])

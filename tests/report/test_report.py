@@ -19,6 +19,9 @@ Modes (one meson test each):
             every heading of the HTML (the same content)
   errors    --help, usage errors (exit 2), a missing calibration (exit 1, names the file,
             writes nothing), a malformed lanes.geojson (names file and field)
+With ROADSIDE_DOCS_SHOTS=DIR in the environment, the chromium and pdf modes also save the
+screenshots docs/report.md shows (scripts/docs-screenshots): report_html.png (the top 2000 px of the
+HTML page, 640 px wide) and report_pdf.png (the PDF's pages 1-2 side by side, 40 dpi).
 Exit 77 when a tool the mode needs (chromium, pdfinfo, pdftoppm, pdftotext) is missing.
 """
 import base64
@@ -265,6 +268,13 @@ window.addEventListener('load', function () {
 </script>"""
 
 
+def save_doc_shot(name, image):
+    """Writes image as DIR/name when ROADSIDE_DOCS_SHOTS=DIR (the screenshots of docs/report.md)."""
+    folder = os.environ.get("ROADSIDE_DOCS_SHOTS")
+    if folder:
+        check(cv2.imwrite(os.path.join(folder, name), image, [cv2.IMWRITE_PNG_COMPRESSION, 9]), f"{name} written")
+
+
 def mode_chromium(tmp):
     need("chromium")
     site = make_site(tmp)
@@ -293,6 +303,8 @@ def mode_chromium(tmp):
             nonwhite = (im.min(axis=2) < 200).mean()
             print(f"{os.path.basename(page)}: screenshot std {im.std():.1f}, {100 * nonwhite:.1f}% non-white")
             check(im.std() > 20 and nonwhite > 0.1, "the screenshot is not blank")
+            if not with_probe:
+                save_doc_shot("report_html.png", cv2.resize(im[:2000], (640, 1000), interpolation=cv2.INTER_AREA))
 
 
 def mode_pdf(tmp):
@@ -314,6 +326,9 @@ def mode_pdf(tmp):
         check(im is not None, f"page {k} rendered")
         if im is not None:
             check(im.astype(float).var() > 100, f"page {k} is not blank (variance {im.astype(float).var():.0f})")
+    first = [cv2.imread(os.path.join(tmp, f"page-{k:0{len(str(pages))}d}.png")) for k in (1, 2)]
+    if all(x is not None and x.shape == first[0].shape for x in first):
+        save_doc_shot("report_pdf.png", np.hstack(first))
     text = subprocess.run(["pdftotext", "-layout", pdf, "-"], capture_output=True, text=True).stdout
     norm = " ".join(text.split())
     _, hp = parse(out)

@@ -431,7 +431,7 @@ def main():
     if roadside:
         gt = os.path.join(out, "annotations", "instances_val2017.json")
         dets = [dict(image_id=a["image_id"], category_id=a["category_id"], bbox=a["bbox"],
-                     score=0.9, bottom_center=a["bottom_center"]) for a in coco["annotations"]]
+                     score=0.9) for a in coco["annotations"]]  # the paper's recipe: footprint box
         dfile = os.path.join(tmp, "dets.json")
         with open(dfile, "w") as f:
             json.dump(dets, f)

@@ -80,7 +80,7 @@ int main(int argc, char **argv)
             id_image[i] = (uint16_t)((unsigned char)data[2 * i] | (unsigned char)data[2 * i + 1] << 8);
         free(data);
     }
-    rs_synth_label_options opt = {RS_SYNTH_BBOX_FOOTPRINT, 0};
+    rs_synth_label_options opt = {RS_SYNTH_BBOX_FOOTPRINT, 0, false}; // every label, visible or not
     if (argc > 5 && rs_synth_bbox_kind_parse(&opt.bbox, argv[5], &err)) return fail("bbox", &err);
     if (argc > 6) opt.min_visibility = atof(argv[6]);
     rs_synth_mesh meshes[256];
@@ -126,7 +126,7 @@ int main(int argc, char **argv)
     free(path);
     if (rs_io_atomic_commit(&a, &err)) return fail("labels.json", &err);
 
-    rs_synth_label_image im = {"frame_000001.png", cam.width, cam.height, labels, N, ids};
+    rs_synth_label_image im = {"frame_000001.png", cam.width, cam.height, labels, N, ids, NULL};
     if (rs_synth_labels_write_coco(argv[3], "val2017", &im, 1, &opt, &err)) return fail("coco", &err);
     if (rs_synth_labels_write_yolo(argv[3], "val2017", &im, 1, &opt, &err)) return fail("yolo", &err);
     if (rs_synth_labels_write_kitti(argv[3], &im, 1, &opt, &err)) return fail("kitti", &err);

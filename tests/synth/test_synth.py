@@ -32,7 +32,8 @@ def tree(d):
     for root, _, files in os.walk(d):
         for f in files:
             rel = os.path.relpath(os.path.join(root, f), d)
-            if not rel.startswith("parts" + os.sep):
+            # data.yaml names its dataset's own absolute path (Ultralytics' "path")
+            if not rel.startswith("parts" + os.sep) and rel != "data.yaml":
                 out.append(rel)
     return sorted(out)
 

@@ -1,0 +1,252 @@
+// rs_geo_raster.c -- GeoTIFFs on a site's ENU grid through GDAL's C API (rs_geo_raster.h).
+#include "geo/rs_geo_raster.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_string.h>
+#include <gdal.h>
+#include <gdalwarper.h>
+#include <ogr_srs_api.h>
+
+#include "core/rs_io.h"
+
+static rs_status gdal_fail(rs_err *err, const char *path, const char *what)
+{
+    const char *msg = CPLGetLastErrorMsg();
+    return rs_err_set(err, RS_ERR_EXTERNAL, "%s: %s%s%s", path, what, msg && *msg ? ": " : "", msg ? msg : "");
+}
+
+static OGRSpatialReferenceH enu_srs(const rs_llh *origin)
+{
+    char proj[256];
+    snprintf(proj, sizeof proj, "+proj=ortho +lat_0=%.10f +lon_0=%.10f +x_0=0 +y_0=0 +ellps=WGS84 +units=m +no_defs",
+             origin->lat_deg, origin->lon_deg);
+    OGRSpatialReferenceH s = OSRNewSpatialReference(NULL);
+    if (s && OSRImportFromProj4(s, proj) != OGRERR_NONE) {
+        OSRDestroySpatialReference(s);
+        return NULL;
+    }
+    return s;
+}
+
+char *rs_geo_raster_enu_wkt(const rs_llh *origin)
+{
+    OGRSpatialReferenceH s = enu_srs(origin);
+    if (!s) return NULL;
+    char *wkt = NULL, *copy = NULL;
+    if (OSRExportToWkt(s, &wkt) == OGRERR_NONE && wkt) copy = strdup(wkt);
+    CPLFree(wkt);
+    OSRDestroySpatialReference(s);
+    return copy;
+}
+
+static void grid_geotransform(const rs_geo_grid *g, double gt[6])
+{
+    gt[0] = g->e0_m - g->cell_m / 2, gt[1] = g->cell_m, gt[2] = 0;
+    gt[3] = g->n0_m + g->cell_m / 2, gt[4] = 0, gt[5] = -g->cell_m;
+}
+
+static bool grid_ok(const rs_geo_grid *g)
+{
+    return g->width > 0 && g->height > 0 && g->width <= 65536 && g->height <= 65536 && isfinite(g->e0_m) &&
+           isfinite(g->n0_m) && isfinite(g->cell_m) && g->cell_m > 0;
+}
+
+// A temporary name next to `path` for GDAL's driver to create (rs_io's atomic temporary,
+// emptied: GDAL's drivers create their files themselves).
+static rs_status temp_for_gdal(rs_io_atomic *a, const char *path, rs_err *err)
+{
+    rs_status st = rs_io_atomic_open(a, path, err);
+    if (!st) st = rs_io_atomic_release(a, err);
+    if (!st && unlink(a->tmp_path) != 0) st = rs_err_set(err, RS_ERR_IO, "%s: cannot prepare", a->tmp_path);
+    return st;
+}
+
+rs_status rs_geo_raster_write(int *width_out, int *height_out, const char *path, const rs_llh *origin,
+                              const rs_geo_raster *r, rs_err *err)
+{
+    if (width_out) *width_out = 0;
+    if (height_out) *height_out = 0;
+    if (!rs_io_has_extension(path, "tif") && !rs_io_has_extension(path, "tiff"))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: expected a .tif (GeoTIFF) file name", path);
+    if (!grid_ok(&r->grid) || (r->Nbands != 1 && r->Nbands != 3) || !r->data)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: a raster of %dx%d cells of %g m with %d bands cannot be written",
+                          path, r->grid.width, r->grid.height, r->grid.cell_m, r->Nbands);
+    GDALAllRegister();
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler); // GDAL's messages come back as rs_err
+    GDALDriverH mem = GDALGetDriverByName("MEM"), gtiff = GDALGetDriverByName("GTiff");
+    OGRSpatialReferenceH enu = enu_srs(origin), target = NULL;
+    char *enu_wkt = NULL, *dst_wkt = NULL;
+    GDALDatasetH src = NULL, out_src = NULL;
+    rs_io_atomic a = {0};
+    const int W = r->grid.width, H = r->grid.height, B = r->Nbands;
+    const GDALDataType type = r->type == RS_GEO_RASTER_BYTE ? GDT_Byte : GDT_Float32;
+    const int esize = r->type == RS_GEO_RASTER_BYTE ? 1 : 4;
+    rs_status st = RS_OK;
+    if (!mem || !gtiff) st = gdal_fail(err, path, "GDAL has no MEM or GTiff driver");
+    if (!st && (!enu || OSRExportToWkt(enu, &enu_wkt) != OGRERR_NONE))
+        st = gdal_fail(err, path, "cannot define the site's ENU grid as a CRS");
+    if (!st && r->crs) {
+        target = OSRNewSpatialReference(NULL);
+        if (!target || OSRSetFromUserInput(target, r->crs) != OGRERR_NONE)
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: CRS '%s': not a CRS GDAL knows (try EPSG:4326, EPSG:25832, ...)",
+                            path, r->crs);
+        else
+            OSRExportToWkt(target, &dst_wkt);
+    }
+    if (!st) {
+        src = GDALCreate(mem, "", W, H, B, type, NULL);
+        if (!src) st = gdal_fail(err, path, "cannot create the grid in memory");
+    }
+    if (!st) {
+        double gt[6];
+        grid_geotransform(&r->grid, gt);
+        GDALSetGeoTransform(src, gt);
+        GDALSetProjection(src, enu_wkt);
+        for (int b = 1; b <= B; b++) {
+            GDALRasterBandH band = GDALGetRasterBand(src, b);
+            if (r->nodata_nan && type == GDT_Float32) GDALSetRasterNoDataValue(band, NAN);
+            if (B == 3) GDALSetRasterColorInterpretation(band, (GDALColorInterp)(GCI_RedBand + b - 1));
+            if (b == 1 && r->description) GDALSetDescription(band, r->description);
+        }
+        // pixel-interleaved source: one call for all bands (pixel space B*esize, line space W*B*esize)
+        if (GDALDatasetRasterIO(src, GF_Write, 0, 0, W, H, (void *)r->data, W, H, type, B, NULL, (GSpacing)B * esize,
+                                (GSpacing)W * B * esize, esize) != CE_None)
+            st = gdal_fail(err, path, "cannot fill the grid");
+    }
+    out_src = src;
+    if (!st && dst_wkt) {
+        out_src = GDALAutoCreateWarpedVRT(src, enu_wkt, dst_wkt, GRA_NearestNeighbour, 0.0, NULL);
+        if (!out_src) st = gdal_fail(err, path, "cannot warp the grid into the requested CRS");
+    }
+    if (!st) st = temp_for_gdal(&a, path, err);
+    if (!st) {
+        char **co = CSLSetNameValue(NULL, "COMPRESS", "DEFLATE");
+        if (B == 3) co = CSLSetNameValue(co, "PHOTOMETRIC", "RGB");
+        GDALDatasetH out = GDALCreateCopy(gtiff, a.tmp_path, out_src, FALSE, co, NULL, NULL);
+        CSLDestroy(co);
+        if (!out) st = gdal_fail(err, path, "cannot write the GeoTIFF");
+        if (out) {
+            if (width_out) *width_out = GDALGetRasterXSize(out);
+            if (height_out) *height_out = GDALGetRasterYSize(out);
+            CPLErrorReset();
+            GDALClose(out); // GDAL 3.6's GDALClose returns nothing: its errors are read back
+            if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish the GeoTIFF");
+        }
+    }
+    if (!st) st = rs_io_atomic_commit(&a, err);
+    rs_io_atomic_abort(&a);
+    if (out_src && out_src != src) GDALClose(out_src);
+    if (src) GDALClose(src);
+    CPLFree(enu_wkt);
+    CPLFree(dst_wkt);
+    if (enu) OSRDestroySpatialReference(enu);
+    if (target) OSRDestroySpatialReference(target);
+    CPLPopErrorHandler();
+    return st;
+}
+
+void rs_geo_ortho_free(rs_geo_ortho *o)
+{
+    if (!o) return;
+    free(o->rgb);
+    free(o->crs_name);
+    memset(o, 0, sizeof *o);
+}
+
+rs_status rs_geo_ortho_read(rs_geo_ortho *out, const char *path, const rs_llh *origin, int max_side, rs_err *err)
+{
+    memset(out, 0, sizeof *out);
+    if (max_side < 16 || max_side > 16384)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: max_side %d is not in [16, 16384]", path, max_side);
+    if (access(path, R_OK) != 0) return rs_err_set(err, RS_ERR_IO, "%s: cannot read", path);
+    GDALAllRegister();
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    rs_status st = RS_OK;
+    OGRSpatialReferenceH enu = enu_srs(origin), file_srs = NULL;
+    char *enu_wkt = NULL;
+    GDALDatasetH ds = GDALOpen(path, GA_ReadOnly), view = NULL;
+    unsigned char *buf = NULL;
+    if (!ds) st = rs_err_set(err, RS_ERR_IO, "%s: not an image GDAL reads: %s", path, CPLGetLastErrorMsg());
+    if (!st && (!enu || OSRExportToWkt(enu, &enu_wkt) != OGRERR_NONE))
+        st = gdal_fail(err, path, "cannot define the site's ENU grid as a CRS");
+    const char *wkt = st ? NULL : GDALGetProjectionRef(ds);
+    double gt[6];
+    if (!st && (!wkt || !*wkt))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image has no CRS (an orthophoto needs a georeference)", path);
+    if (!st && GDALGetGeoTransform(ds, gt) != CE_None)
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image has no geotransform (an orthophoto needs a georeference)",
+                        path);
+    const int Nb = st ? 0 : GDALGetRasterCount(ds);
+    if (!st && Nb < 1) st = rs_err_set(err, RS_ERR_INVALID, "%s: no raster band", path);
+    if (!st) {
+        file_srs = OSRNewSpatialReference(wkt);
+        if (!file_srs) st = rs_err_set(err, RS_ERR_INVALID, "%s: its CRS cannot be read", path);
+    }
+    if (!st) {
+        const char *name = OSRGetName(file_srs);
+        out->crs_name = strdup(name ? name : "unnamed CRS");
+        if (!out->crs_name) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    if (!st) {
+        const bool same =
+            OSRIsSame(file_srs, enu) && gt[2] == 0 && gt[4] == 0 && gt[5] < 0 && fabs(gt[1] + gt[5]) <= 1e-9 * gt[1];
+        if (same)
+            view = ds;
+        else {
+            view = GDALAutoCreateWarpedVRT(ds, wkt, enu_wkt, GRA_Bilinear, 0.125, NULL);
+            if (!view)
+                st = rs_err_set(err, RS_ERR_INVALID, "%s: cannot reproject from %s to the site's grid: %s", path,
+                                out->crs_name, CPLGetLastErrorMsg());
+            out->warped = true;
+        }
+    }
+    double vgt[6];
+    int vw = 0, vh = 0;
+    if (!st) {
+        vw = GDALGetRasterXSize(view), vh = GDALGetRasterYSize(view);
+        if (GDALGetGeoTransform(view, vgt) != CE_None || vw < 1 || vh < 1 || !(vgt[1] > 0) ||
+            fabs(vgt[1] + vgt[5]) > 1e-6 * vgt[1])
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: the reprojected image has no square north-up grid", path);
+    }
+    if (!st) {
+        // decimate so that neither side exceeds max_side: cells grow by the factor s
+        const int s = (int)ceil((double)(vw > vh ? vw : vh) / max_side);
+        const int ow = (vw + s - 1) / s, oh = (vh + s - 1) / s;
+        const double cell = vgt[1] * vw / ow; // the read covers the whole view
+        const double cell_n = -vgt[5] * vh / oh;
+        out->grid = (rs_geo_grid){
+            .width = ow, .height = oh, .e0_m = vgt[0] + cell / 2, .n0_m = vgt[3] - cell_n / 2, .cell_m = cell};
+        buf = malloc((size_t)ow * oh * 3);
+        if (!buf) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory for %dx%d", path, ow, oh);
+        int bands[3] = {1, Nb >= 2 ? 2 : 1, Nb >= 3 ? 3 : 1};
+        GDALRasterIOExtraArg extra;
+        INIT_RASTERIO_EXTRA_ARG(extra);
+        extra.eResampleAlg = s > 1 ? GRIORA_Average : GRIORA_NearestNeighbour;
+        if (!st && GDALDatasetRasterIOEx(view, GF_Read, 0, 0, vw, vh, buf, ow, oh, GDT_Byte, 3, bands, 3,
+                                         (GSpacing)ow * 3, 1, &extra) != CE_None)
+            st = gdal_fail(err, path, "cannot read the image");
+    }
+    if (!st) {
+        out->rgb = buf;
+        buf = NULL;
+    }
+    free(buf);
+    if (view && view != ds) GDALClose(view);
+    if (ds) GDALClose(ds);
+    CPLFree(enu_wkt);
+    if (enu) OSRDestroySpatialReference(enu);
+    if (file_srs) OSRDestroySpatialReference(file_srs);
+    CPLPopErrorHandler();
+    if (st) rs_geo_ortho_free(out);
+    return st;
+}

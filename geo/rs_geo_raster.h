@@ -1,0 +1,92 @@
+// rs_geo_raster.h -- georeferenced rasters (GeoTIFF) on a site's ENU grid, both ways, through
+// GDAL's C API (gdal.h, ogr_srs_api.h, gdalwarper.h): the one owner of raster GIS files.
+// `roadside ortho` writes the digital twin's orthophoto with it, `roadside export` the ground
+// uncertainty map, and `roadside pick` reads any orthophoto back onto the site's grid.
+//
+// The grid: north-up, square cells of cell_m metres; pixel (i, j) (column i from the west, row j
+// from the north; pixel (0,0) is the centre of the top-left pixel, docs/conventions.md) has its
+// centre at E = e0_m + i cell_m, N = n0_m - j cell_m. GDAL's geotransform (which names the
+// top-left CORNER) is then {e0 - cell/2, cell, 0, n0 + cell/2, 0, -cell}.
+//
+// The site's ENU grid as a CRS: "+proj=ortho" centred on the site's origin on WGS84 (PROJ's
+// ellipsoidal orthographic projection is the tangent plane at the origin), so its (x, y) are
+// the ENU (E, N) of points on the ellipsoid; for points at the site's height h they differ by
+// about h d / R (9 mm at d = 100 m for h = 560 m), far below a cell of a few centimetres for
+// sites of a few hundred metres.
+//
+// Accuracy of the reader: the file is warped into that grid by GDAL's warper (bilinear), whose
+// approximate transformer keeps within 0.125 px of the exact reprojection (GDAL's default error
+// threshold); a file already in the site's grid CRS is read as it is (no resampling).
+#pragma once
+#include <stdbool.h>
+
+#include "core/rs_status.h"
+#include "geo/rs_geo.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// A north-up grid on the site's ENU (E, N), see above.
+typedef struct {
+    int width, height; // pixels, > 0
+    double e0_m, n0_m; // E, N of the centre of pixel (0,0) (the north-west one), metres
+    double cell_m;     // cell size (ground sampling distance), metres, > 0
+} rs_geo_grid;
+
+typedef enum {
+    RS_GEO_RASTER_BYTE,    // 8-bit unsigned per band
+    RS_GEO_RASTER_FLOAT32, // 32-bit float per band
+} rs_geo_raster_type;
+
+// What to write.
+typedef struct {
+    rs_geo_grid grid;
+    int Nbands;              // 1 (grey or a measurement) or 3 (RGB, written PHOTOMETRIC=RGB)
+    rs_geo_raster_type type; //
+    const void *data;        // (height, width, Nbands) interleaved per pixel, row 0 north: uint8_t
+                             //   or float by `type`
+    bool nodata_nan;         // FLOAT32 only: NaN is the bands' nodata
+    const char *description; // band 1's description (GDAL metadata); may be NULL
+    const char *crs;         // target CRS (any text OSRSetFromUserInput takes, "EPSG:25832");
+                             //   NULL: the site's grid CRS itself (no resampling). Else the grid is
+                             //   warped into it (nearest neighbour)
+} rs_geo_raster;
+
+// The site's grid CRS as WKT (see above). Caller frees with free(). NULL on failure.
+char *rs_geo_raster_enu_wkt(const rs_llh *origin);
+
+// Writes a GeoTIFF (DEFLATE compressed) atomically: under a temporary name, renamed into place.
+// out: width_out, height_out (may be NULL): the size written (other than the grid's when warped)
+// in:  path (.tif / .tiff), origin (the site's ENU origin), r
+// Errors: RS_ERR_INVALID (extension, a bad grid, a CRS GDAL does not know, naming it),
+// RS_ERR_EXTERNAL (GDAL failed: its message), RS_ERR_IO, RS_ERR_NOMEM.
+rs_status rs_geo_raster_write( // out
+    int *width_out, int *height_out,
+    // in
+    const char *path, const rs_llh *origin, const rs_geo_raster *r, rs_err *err);
+
+// An orthophoto read onto the site's grid.
+typedef struct {
+    rs_geo_grid grid;
+    unsigned char *rgb; // (height, width, 3) owned: sRGB as stored (one band: grey repeated;
+                        //   16-bit or float bands are clamped to 0..255 by GDAL)
+    bool warped;        // the file was in another CRS and was reprojected
+    char *crs_name;     // owned: the file's CRS name as GDAL gives it
+} rs_geo_ortho;
+
+// Reads a georeferenced image (any format and CRS GDAL reads: GeoTIFF, JPEG2000, ...) and
+// reprojects it onto the site's grid (bilinear); the result is decimated (GDAL's averaging
+// overview read) so that neither side exceeds max_side pixels.
+// in: path, origin, max_side in [16, 16384]
+// Errors: RS_ERR_IO (unreadable), RS_ERR_INVALID (no georeference or CRS, no transformation to
+// WGS84, naming the file), RS_ERR_EXTERNAL (GDAL), RS_ERR_NOMEM.
+rs_status rs_geo_ortho_read( // out
+    rs_geo_ortho *out,
+    // in
+    const char *path, const rs_llh *origin, int max_side, rs_err *err);
+void rs_geo_ortho_free(rs_geo_ortho *o); // NULL-safe; zeroes *o
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,522 @@
+// rs_pick_session.c -- the picking session: one camera's picks and the site's landmarks edited in
+// memory, re-solved by calib after every change, saved through geo's writers (rs_pick.h).
+#include "pick/rs_pick.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <cjson/cJSON.h>
+#include <mrcal/mrcal.h>
+
+#include "audit/rs_audit.h"
+#include "calib/rs_calib.h"
+#include "calib/rs_calib_site.h"
+#include "core/rs_camera.h"
+#include "geo/rs_geo.h"
+#include "geo/rs_site.h"
+#include "geo/rs_site_write.h"
+#include "pick/internal/rs_pick_internal.h"
+
+// One step back: the camera's observations and how many landmarks there were.
+typedef struct {
+    rs_site_observation *obs; // (Nobs,) owned
+    int Nobs;
+    int Nlandmarks;
+} snapshot;
+
+enum { GROUND_NU = 12, GROUND_NV = 7 }; // the ground uncertainty's samples over the view
+
+struct rs_pick_session {
+    char *site_dir; // owned
+    char *camera_id;
+    rs_site *site; // owned
+    int icam;
+    snapshot *undo; // (Nundo,) owned
+    int Nundo, cap_undo;
+    bool dirty; // changes since the last save
+
+    // the last solve
+    bool solved;
+    rs_status solve_status;
+    char solve_message[sizeof(((rs_err *)0)->msg) + 64];
+    rs_calib_result result; // owned (zeroed when not solved)
+    double *predicted_px;   // (Nlandmarks,2) owned: every landmark's surveyed position projected
+    int Npredicted;
+    double cov_en_m2[4]; // (2,2) of the camera position's E, N
+    double ground_sigma_m[GROUND_NV][GROUND_NU];
+    double solve_ms;
+};
+
+static double now_ms(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+static rs_site_camera *cam_of(rs_pick_session *s) { return &s->site->cameras[s->icam]; }
+
+// The covariance of the camera centre C = -R^T t (the translation of rt_enu_cam) from rt's
+// covariance: J = d C / d rt_cam_enu (3,6) from mrcal_invert_rt's gradients, Sigma_C = J Sigma J^T.
+static void position_covariance(double cov_en[4], const rs_calib_result *r)
+{
+    double rt_in[6], rt_inv[6], dt_dr[9], dt_dt[9];
+    memcpy(rt_in, r->rt_cam_enu, sizeof rt_in);
+    mrcal_invert_rt(rt_inv, dt_dr, dt_dt, rt_in);
+    double J[3][6];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) J[i][j] = dt_dr[3 * i + j], J[i][3 + j] = dt_dt[3 * i + j];
+    double JS[3][6] = {{0}};
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 6; k++)
+            for (int j = 0; j < 6; j++) JS[i][k] += J[i][j] * r->covariance_rt_cam_enu[j * 6 + k];
+    for (int a = 0; a < 2; a++)
+        for (int b = 0; b < 2; b++) {
+            double v = 0;
+            for (int k = 0; k < 6; k++) v += JS[a][k] * J[b][k];
+            cov_en[2 * a + b] = v;
+        }
+}
+
+rs_status rs_pick_session_solve(rs_pick_session *s)
+{
+    const double t0 = now_ms();
+    rs_calib_result_free(&s->result);
+    free(s->predicted_px);
+    s->predicted_px = NULL;
+    s->Npredicted = 0;
+    s->solved = false;
+    s->solve_message[0] = '\0';
+    rs_site_camera *cam = cam_of(s);
+    rs_err err = {0};
+    if (cam->Nobservations < 4) {
+        s->solve_status = RS_ERR_DEGENERATE;
+        snprintf(s->solve_message, sizeof s->solve_message, "%d pick%s: the camera is solved from 4 picks on",
+                 cam->Nobservations, cam->Nobservations == 1 ? "" : "s");
+        s->solve_ms = now_ms() - t0;
+        return s->solve_status;
+    }
+    // exactly as `roadside calib` (cli/cmd_calib.c): the site's problem, the default options
+    rs_calib_site_problem sp;
+    rs_calib_options opt;
+    rs_calib_options_default(&opt);
+    rs_status st = rs_calib_site_problem_init(&sp, s->site, s->icam, &err);
+    if (!st) st = rs_calib_solve(&s->result, &sp.problem, &opt, &err);
+    rs_calib_site_problem_free(&sp);
+    s->solve_status = st;
+    if (st) {
+        rs_calib_result_free(&s->result);
+        snprintf(s->solve_message, sizeof s->solve_message, "%s", err.msg[0] ? err.msg : rs_strerror(st));
+        s->solve_ms = now_ms() - t0;
+        return st;
+    }
+    s->solved = true;
+    // every landmark's surveyed position through the calibrated camera
+    const rs_camera calibrated = rs_calib_result_camera(&cam->camera, &s->result);
+    const int NL = s->site->Nlandmarks;
+    double *p = malloc(sizeof(double) * 3 * (size_t)(NL > 0 ? NL : 1));
+    s->predicted_px = malloc(sizeof(double) * 2 * (size_t)(NL > 0 ? NL : 1));
+    if (p && s->predicted_px) {
+        for (int i = 0; i < NL; i++) memcpy(&p[3 * i], s->site->landmarks[i].p_enu_m, sizeof(double) * 3);
+        rs_camera_project(s->predicted_px, &calibrated, p, NL);
+        s->Npredicted = NL;
+    }
+    free(p);
+    position_covariance(s->cov_en_m2, &s->result);
+    // the ground uncertainty over the view: a vehicle detected to 1 px, located on the ground plane
+    const int W = cam->camera.width > 0 ? cam->camera.width : 1920,
+              H = cam->camera.height > 0 ? cam->camera.height : 1080;
+    for (int j = 0; j < GROUND_NV; j++)
+        for (int i = 0; i < GROUND_NU; i++) {
+            const double q[2] = {(i + 0.5) * W / GROUND_NU - 0.5, (j + 0.5) * H / GROUND_NV - 0.5};
+            double sigma = NAN;
+            if (rs_audit_ground_sigma(&sigma, NULL, NULL, &calibrated, s->result.covariance_rt_cam_enu, q, 1.0,
+                                      s->site->ground_normal_enu, s->site->ground_offset_m, NULL) != RS_OK)
+                sigma = NAN;
+            s->ground_sigma_m[j][i] = sigma;
+        }
+    s->solve_ms = now_ms() - t0;
+    return RS_OK;
+}
+
+rs_status rs_pick_session_open(rs_pick_session **out, const char *site_dir, const char *camera_id, rs_err *err)
+{
+    *out = NULL;
+    rs_pick_session *s = calloc(1, sizeof *s);
+    if (!s) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    s->site_dir = strdup(site_dir);
+    s->camera_id = strdup(camera_id);
+    if (!s->site_dir || !s->camera_id) {
+        rs_pick_session_free(s);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    rs_status st = rs_site_load_for_picking(&s->site, site_dir, err);
+    if (st) {
+        rs_pick_session_free(s);
+        return st;
+    }
+    s->icam = rs_site_find_camera(s->site, camera_id);
+    if (s->icam < 0) {
+        rs_pick_session_free(s);
+        return rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no camera '%s' in site.json", site_dir, camera_id);
+    }
+    (void)rs_pick_session_solve(s);
+    *out = s;
+    return RS_OK;
+}
+
+static void snapshot_free(snapshot *sn)
+{
+    free(sn->obs);
+    memset(sn, 0, sizeof *sn);
+}
+
+void rs_pick_session_free(rs_pick_session *s)
+{
+    if (!s) return;
+    for (int i = 0; i < s->Nundo; i++) snapshot_free(&s->undo[i]);
+    free(s->undo);
+    rs_calib_result_free(&s->result);
+    free(s->predicted_px);
+    rs_site_free(s->site);
+    free(s->site_dir);
+    free(s->camera_id);
+    free(s);
+}
+
+// Pushes the state before a change.
+static rs_status push_undo(rs_pick_session *s, rs_err *err)
+{
+    if (s->Nundo == s->cap_undo) {
+        const int cap = s->cap_undo ? 2 * s->cap_undo : 16;
+        snapshot *u = realloc(s->undo, sizeof *u * (size_t)cap);
+        if (!u) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        s->undo = u;
+        s->cap_undo = cap;
+    }
+    rs_site_camera *cam = cam_of(s);
+    snapshot *sn = &s->undo[s->Nundo];
+    sn->obs = malloc(sizeof *sn->obs * (size_t)(cam->Nobservations > 0 ? cam->Nobservations : 1));
+    if (!sn->obs) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (cam->Nobservations) memcpy(sn->obs, cam->observations, sizeof *sn->obs * (size_t)cam->Nobservations);
+    sn->Nobs = cam->Nobservations;
+    sn->Nlandmarks = s->site->Nlandmarks;
+    s->Nundo++;
+    return RS_OK;
+}
+
+static void landmark_free(rs_site_landmark *l)
+{
+    free(l->id);
+    free(l->kind);
+    free(l->note);
+    free(l->vertices_enu_m);
+    free(l->vertices_llh);
+    free(l->vertices_sigma_v_m);
+    free(l->vertices_given_h_m);
+    memset(l, 0, sizeof *l);
+}
+
+rs_status rs_pick_undo(rs_pick_session *s, rs_err *err)
+{
+    if (s->Nundo == 0) return rs_err_set(err, RS_ERR_NOT_FOUND, "nothing to undo");
+    snapshot *sn = &s->undo[--s->Nundo];
+    rs_site_camera *cam = cam_of(s);
+    free(cam->observations);
+    cam->observations = sn->obs;
+    cam->Nobservations = sn->Nobs;
+    sn->obs = NULL;
+    while (s->site->Nlandmarks > sn->Nlandmarks) landmark_free(&s->site->landmarks[--s->site->Nlandmarks]);
+    s->dirty = true;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+static int find_pick(const rs_site_camera *cam, int il)
+{
+    for (int i = 0; i < cam->Nobservations; i++)
+        if (cam->observations[i].ilandmark == il && cam->observations[i].at != RS_SITE_AT_TOP) return i;
+    return -1;
+}
+
+rs_status rs_pick_set(rs_pick_session *s, const char *id, double u, double v, rs_err *err)
+{
+    const int il = rs_site_find_landmark(s->site, id);
+    if (il < 0) return rs_err_set(err, RS_ERR_NOT_FOUND, "landmark '%s': no such landmark", id);
+    if (s->site->landmarks[il].shape == RS_SITE_LINE)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "landmark '%s': a line is picked along it, which calib does not use yet", id);
+    rs_site_camera *cam = cam_of(s);
+    const double W = cam->camera.width > 0 ? cam->camera.width : 1e5,
+                 H = cam->camera.height > 0 ? cam->camera.height : 1e5;
+    if (!isfinite(u) || !isfinite(v) || u < -W || u > 2 * W || v < -H || v > 2 * H)
+        return rs_err_set(err, RS_ERR_INVALID, "pick (%g, %g): not a pixel of the %gx%g image", u, v, W, H);
+    // the resolution of the observations file (%.6f): what is solved is what is saved
+    char buf[64];
+    snprintf(buf, sizeof buf, "%.6f", u);
+    u = strtod(buf, NULL);
+    snprintf(buf, sizeof buf, "%.6f", v);
+    v = strtod(buf, NULL);
+    rs_status st = push_undo(s, err);
+    if (st) return st;
+    int k = find_pick(cam, il);
+    if (k < 0) {
+        rs_site_observation *o = realloc(cam->observations, sizeof *o * (size_t)(cam->Nobservations + 1));
+        if (!o) {
+            snapshot_free(&s->undo[--s->Nundo]);
+            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        }
+        cam->observations = o;
+        k = cam->Nobservations++;
+        o[k] = (rs_site_observation){.ilandmark = il,
+                                     .sigma_px = 1.0,
+                                     .line = 0,
+                                     .at = s->site->landmarks[il].shape == RS_SITE_POLE ? RS_SITE_AT_BASE
+                                                                                        : RS_SITE_AT_POINT};
+    }
+    cam->observations[k].q_px[0] = u;
+    cam->observations[k].q_px[1] = v;
+    s->dirty = true;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+rs_status rs_pick_delete(rs_pick_session *s, const char *id, rs_err *err)
+{
+    const int il = rs_site_find_landmark(s->site, id);
+    rs_site_camera *cam = cam_of(s);
+    const int k = il < 0 ? -1 : find_pick(cam, il);
+    if (k < 0) return rs_err_set(err, RS_ERR_NOT_FOUND, "landmark '%s': no pick to delete", id);
+    rs_status st = push_undo(s, err);
+    if (st) return st;
+    memmove(&cam->observations[k], &cam->observations[k + 1],
+            sizeof *cam->observations * (size_t)(cam->Nobservations - k - 1));
+    cam->Nobservations--;
+    s->dirty = true;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+rs_status rs_pick_add_landmark(rs_pick_session *s, char id_out[32], double e, double n, rs_err *err)
+{
+    rs_site *site = s->site;
+    const double lim = site->max_landmark_distance_m > 0 ? site->max_landmark_distance_m : 1000;
+    if (!isfinite(e) || !isfinite(n) || hypot(e, n) > lim)
+        return rs_err_set(err, RS_ERR_INVALID, "landmark at (%g, %g) m: not within %g m of the site's origin", e, n,
+                          lim);
+    char id[32];
+    for (int k = 1;; k++) {
+        snprintf(id, sizeof id, "P%d", k);
+        if (rs_site_find_landmark(site, id) < 0) break;
+    }
+    const double *nn = site->ground_normal_enu;
+    const double p[3] = {e, n, (site->ground_offset_m - nn[0] * e - nn[1] * n) / nn[2]};
+    double llh[3];
+    rs_status st = rs_geo_enu_to_llh(llh, &site->origin, p, 1, err);
+    if (st) return st;
+    rs_site_landmark l = {0};
+    l.id = strdup(id);
+    l.kind = strdup("map-pick");
+    l.note = strdup("picked on the orthophoto by roadside pick; height from the site's ground plane");
+    l.vertices_enu_m = malloc(sizeof(double) * 3);
+    l.vertices_llh = malloc(sizeof(rs_llh));
+    l.vertices_sigma_v_m = malloc(sizeof(double));
+    l.vertices_given_h_m = malloc(sizeof(double));
+    rs_site_landmark *ls = realloc(site->landmarks, sizeof *ls * (size_t)(site->Nlandmarks + 1));
+    if (ls) site->landmarks = ls;
+    if (!l.id || !l.kind || !l.note || !l.vertices_enu_m || !l.vertices_llh || !l.vertices_sigma_v_m ||
+        !l.vertices_given_h_m || !ls) {
+        landmark_free(&l);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    if ((st = push_undo(s, err))) {
+        landmark_free(&l);
+        return st;
+    }
+    l.feature = site->Nlandmarks;
+    l.llh = (rs_llh){llh[0], llh[1], llh[2]};
+    memcpy(l.p_enu_m, p, sizeof p);
+    l.sigma_h_m = site->landmark_sigma_h_m;
+    l.sigma_v_m = site->landmark_sigma_v_m;
+    l.height_stated = RS_SITE_HEIGHT_DEFAULT;
+    l.height = RS_SITE_HEIGHT_SURVEYED;
+    l.given_h_m = llh[2];
+    l.given_up_m = p[2];
+    l.given_sigma_v_m = l.sigma_v_m;
+    l.shape = RS_SITE_POINT;
+    l.Nvertices = 1;
+    memcpy(l.vertices_enu_m, p, sizeof p);
+    l.vertices_llh[0] = l.llh;
+    l.vertices_sigma_v_m[0] = l.sigma_v_m;
+    l.vertices_given_h_m[0] = l.given_h_m;
+    site->landmarks[site->Nlandmarks++] = l;
+    if (id_out) snprintf(id_out, 32, "%s", id);
+    s->dirty = true;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+rs_status rs_pick_save(rs_pick_session *s, rs_err *err)
+{
+    rs_site *site = s->site;
+    const rs_site_camera *cam = cam_of(s);
+    // landmarks first, then the observations: each atomic; landmarks are only ever added, so a
+    // stop between the two leaves a consistent site (the old picks, the new landmarks)
+    rs_status st = rs_site_write_landmarks(site->dir, site->landmarks, site->Nlandmarks, site->geoid_undulation_m,
+                                           RS_SITE_LAYOUT_HAND, err);
+    if (!st)
+        st = rs_site_write_observations(cam->observations_path, cam->observations, cam->Nobservations, site->landmarks,
+                                        err);
+    if (st) return st;
+    // read back: the pose shown is the one `roadside calib` will find on these files
+    rs_site *fresh = NULL;
+    if ((st = rs_site_load_for_picking(&fresh, s->site_dir, err))) return st;
+    const int icam = rs_site_find_camera(fresh, s->camera_id);
+    if (icam < 0 || fresh->Nlandmarks != site->Nlandmarks) {
+        rs_site_free(fresh);
+        return rs_err_set(err, RS_ERR_INVALID, "%s: the site read back differs from the one saved", s->site_dir);
+    }
+    rs_site_free(s->site);
+    s->site = fresh;
+    s->icam = icam;
+    s->dirty = false;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+double rs_pick_last_solve_ms(const rs_pick_session *s) { return s->solve_ms; }
+int rs_pick_count(const rs_pick_session *s) { return s->site->cameras[s->icam].Nobservations; }
+
+const rs_site *rs_pick_session_site(const rs_pick_session *s) { return s->site; }
+int rs_pick_session_camera(const rs_pick_session *s) { return s->icam; }
+
+// ---- the state as JSON ----
+
+static cJSON *numbers(const double *x, int n)
+{
+    cJSON *a = cJSON_CreateArray();
+    for (int i = 0; a && i < n; i++)
+        cJSON_AddItemToArray(a, isfinite(x[i]) ? cJSON_CreateNumber(x[i]) : cJSON_CreateNull());
+    return a;
+}
+
+static void add_num(cJSON *o, const char *k, double x)
+{
+    if (isfinite(x))
+        cJSON_AddNumberToObject(o, k, x);
+    else
+        cJSON_AddNullToObject(o, k);
+}
+
+// Why a landmark is flagged, in words ("" when it is not).
+static void flag_reason(char *buf, size_t n, const rs_calib_result *r, int k)
+{
+    buf[0] = '\0';
+    if (!r->inlier[k]) {
+        if (r->w_test && isfinite(r->w_test[k]))
+            snprintf(buf, n, "rejected by data snooping: w = %.2f (critical 3.29); normalised residual %.2f sigma",
+                     r->w_test[k], r->normalised_residual[k]);
+        else
+            snprintf(buf, n, "rejected as an outlier: normalised residual %.2f sigma > 3.717",
+                     r->normalised_residual[k]);
+    } else if (r->redundancy && r->redundancy[k] < 0.1) {
+        snprintf(buf, n, "uncontrolled: redundancy %.2f, an error in this pick would not show", r->redundancy[k]);
+    }
+}
+
+char *rs_pick_state_json(const rs_pick_session *s)
+{
+    const rs_site *site = s->site;
+    const rs_site_camera *cam = &site->cameras[s->icam];
+    cJSON *root = cJSON_CreateObject();
+    if (!root) return NULL;
+    cJSON *c = cJSON_AddObjectToObject(root, "camera");
+    cJSON_AddStringToObject(c, "id", cam->id);
+    cJSON_AddNumberToObject(c, "width", cam->camera.width);
+    cJSON_AddNumberToObject(c, "height", cam->camera.height);
+    cJSON_AddStringToObject(root, "site", site->name ? site->name : "");
+    cJSON_AddBoolToObject(root, "can_undo", s->Nundo > 0);
+    cJSON_AddBoolToObject(root, "unsaved", s->dirty);
+    cJSON_AddNumberToObject(root, "picks", cam->Nobservations);
+    // the pick index of each landmark
+    int *pick_of = calloc((size_t)(site->Nlandmarks > 0 ? site->Nlandmarks : 1), sizeof *pick_of);
+    if (!pick_of) {
+        cJSON_Delete(root);
+        return NULL;
+    }
+    for (int i = 0; i < site->Nlandmarks; i++) pick_of[i] = -1;
+    for (int k = 0; k < cam->Nobservations; k++)
+        if (cam->observations[k].at != RS_SITE_AT_TOP) pick_of[cam->observations[k].ilandmark] = k;
+    const rs_calib_result *r = &s->result;
+    cJSON *ls = cJSON_AddArrayToObject(root, "landmarks");
+    int Nflagged = 0;
+    for (int i = 0; i < site->Nlandmarks; i++) {
+        const rs_site_landmark *l = &site->landmarks[i];
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddItemToArray(ls, o);
+        cJSON_AddStringToObject(o, "id", l->id);
+        cJSON_AddStringToObject(o, "kind", l->kind ? l->kind : "");
+        cJSON_AddStringToObject(o, "shape", rs_site_shape_name(l->shape));
+        cJSON_AddItemToObject(o, "enu_m", numbers(l->p_enu_m, 3));
+        cJSON_AddNumberToObject(o, "sigma_h_m", l->sigma_h_m);
+        const int k = pick_of[i];
+        if (k >= 0)
+            cJSON_AddItemToObject(o, "pick_px", numbers(cam->observations[k].q_px, 2));
+        else
+            cJSON_AddNullToObject(o, "pick_px");
+        if (s->solved && i < s->Npredicted)
+            cJSON_AddItemToObject(o, "predicted_px", numbers(&s->predicted_px[2 * i], 2));
+        else
+            cJSON_AddNullToObject(o, "predicted_px");
+        if (s->solved && k >= 0) {
+            const double res[2] = {s->predicted_px[2 * i] - cam->observations[k].q_px[0],
+                                   s->predicted_px[2 * i + 1] - cam->observations[k].q_px[1]};
+            cJSON_AddItemToObject(o, "residual_px", numbers(res, 2));
+            add_num(o, "residual_norm_px", hypot(res[0], res[1]));
+            add_num(o, "normalised_residual", r->normalised_residual[k]);
+            cJSON_AddBoolToObject(o, "inlier", r->inlier[k]);
+            char why[256];
+            flag_reason(why, sizeof why, r, k);
+            cJSON_AddBoolToObject(o, "flagged", why[0] != '\0');
+            cJSON_AddStringToObject(o, "flag", why);
+            Nflagged += why[0] != '\0';
+        } else {
+            cJSON_AddNullToObject(o, "residual_px");
+            cJSON_AddBoolToObject(o, "flagged", false);
+            cJSON_AddStringToObject(o, "flag", "");
+        }
+    }
+    free(pick_of);
+    cJSON *so = cJSON_AddObjectToObject(root, "solve");
+    cJSON_AddBoolToObject(so, "ok", s->solved);
+    cJSON_AddStringToObject(so, "message", s->solve_message);
+    add_num(so, "time_ms", s->solve_ms);
+    if (s->solved) {
+        cJSON_AddItemToObject(so, "rt_cam_enu", numbers(r->rt_cam_enu, 6));
+        cJSON_AddItemToObject(so, "covariance_rt_cam_enu", numbers(r->covariance_rt_cam_enu, 36));
+        cJSON_AddItemToObject(so, "position_enu_m", numbers(r->position_enu_m, 3));
+        cJSON_AddItemToObject(so, "sigma_position_enu_m", numbers(r->sigma_position_enu_m, 3));
+        cJSON_AddItemToObject(so, "covariance_position_en_m2", numbers(s->cov_en_m2, 4));
+        cJSON_AddItemToObject(so, "yaw_pitch_roll_deg", numbers(r->yaw_pitch_roll_deg, 3));
+        cJSON_AddItemToObject(so, "sigma_yaw_pitch_roll_deg", numbers(r->sigma_yaw_pitch_roll_deg, 3));
+        add_num(so, "rms_surveyed_px", rs_calib_site_rms_surveyed_px(site, s->icam, r, NULL));
+        add_num(so, "rms_adjusted_px", r->rms_px);
+        add_num(so, "variance_factor", r->variance_factor);
+        cJSON_AddNumberToObject(so, "inliers", r->Ninliers);
+        cJSON_AddNumberToObject(so, "flagged", Nflagged);
+        cJSON_AddStringToObject(so, "warnings", r->warnings);
+        cJSON *g = cJSON_AddObjectToObject(root, "ground_uncertainty");
+        cJSON_AddStringToObject(g, "what",
+                                "1-sigma horizontal ground error (m) of a point detected to 1 px, "
+                                "sampled on a grid over the image");
+        cJSON_AddNumberToObject(g, "nu", GROUND_NU);
+        cJSON_AddNumberToObject(g, "nv", GROUND_NV);
+        cJSON_AddItemToObject(g, "sigma_m", numbers(&s->ground_sigma_m[0][0], GROUND_NU * GROUND_NV));
+    }
+    char *text = cJSON_PrintUnformatted(root);
+    cJSON_Delete(root);
+    return text;
+}

@@ -1,0 +1,331 @@
+// roadside pick: the page. Plain JavaScript, no library, no network beyond its own server.
+// Two views: the camera image (pixel (0,0) is the centre of the top-left pixel, docs/conventions.md)
+// and the site from above (site ENU metres, east right, north up). Every change is a POST to the
+// server, which re-solves and answers with the whole state.
+"use strict";
+(function () {
+  const $ = (id) => document.getElementById(id);
+  const st = { state: null, map: null, selected: null, pendingPx: null, pendingEn: null, ground: true,
+               image: null, ortho: null, ready: false };
+  let ARROW_GAIN = 20; // residual arrows magnified: 20x, less when the largest would leave the view
+
+  // ---- a zoomable, pannable view: canvas = offset + scale * world (y flipped for the map) ----
+  function View(canvas, flipY) {
+    this.c = canvas; this.flip = flipY; this.s = 1; this.ox = 0; this.oy = 0;
+  }
+  View.prototype.toCanvas = function (x, y) {
+    return [this.ox + this.s * x, this.flip ? this.oy - this.s * y : this.oy + this.s * y];
+  };
+  View.prototype.toWorld = function (cx, cy) {
+    return [(cx - this.ox) / this.s, this.flip ? (this.oy - cy) / this.s : (cy - this.oy) / this.s];
+  };
+  View.prototype.fit = function (x0, y0, x1, y1) { // world box into the canvas
+    const w = this.c.width, h = this.c.height;
+    this.s = Math.min(w / Math.max(x1 - x0, 1e-9), h / Math.max(y1 - y0, 1e-9)) * 0.95;
+    const cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
+    this.ox = w / 2 - this.s * cx;
+    this.oy = this.flip ? h / 2 + this.s * cy : h / 2 - this.s * cy;
+  };
+  View.prototype.zoom = function (cx, cy, f) {
+    this.ox = cx - (cx - this.ox) * f; this.oy = cy - (cy - this.oy) * f; this.s *= f;
+  };
+
+  const img = new View($("image"), false), map = new View($("map"), true);
+
+  // image-continuous X (pixel i covers [i, i+1)) <-> pixel u = X - 0.5
+  const pxToWorld = (u, v) => [u + 0.5, v + 0.5];
+  const worldToPx = (X, Y) => [X - 0.5, Y - 0.5];
+
+  function camSize() {
+    const c = st.state.camera;
+    return [c.width || (st.image ? st.image.width : 1920), c.height || (st.image ? st.image.height : 1080)];
+  }
+
+  function fitImage() { const [w, h] = camSize(); img.fit(0, 0, w, h); }
+  function fitMap() {
+    let b = [Infinity, Infinity, -Infinity, -Infinity];
+    const grow = (e, n) => { b = [Math.min(b[0], e), Math.min(b[1], n), Math.max(b[2], e), Math.max(b[3], n)]; };
+    for (const l of st.state.landmarks) grow(l.enu_m[0], l.enu_m[1]);
+    for (const l of st.map.lanes) for (const p of l.en_m) grow(p[0], p[1]);
+    if (st.state.solve.ok) grow(st.state.solve.position_enu_m[0], st.state.solve.position_enu_m[1]);
+    if (!isFinite(b[0])) b = [-50, -50, 50, 50];
+    map.fit(b[0] - 5, b[1] - 5, b[2] + 5, b[3] + 5);
+  }
+
+  // ---- the server ----
+  async function getJSON(url) { const r = await fetch(url); if (!r.ok) throw new Error(url + ": " + r.status); return r.json(); }
+  async function rgbCanvas(url, w, h) {
+    const r = await fetch(url);
+    if (!r.ok) return null;
+    const rgb = new Uint8Array(await r.arrayBuffer());
+    if (rgb.length !== w * h * 3) return null;
+    const cv = document.createElement("canvas"); cv.width = w; cv.height = h;
+    const ctx = cv.getContext("2d"), id = ctx.createImageData(w, h);
+    for (let i = 0, j = 0; i < rgb.length; i += 3, j += 4) {
+      id.data[j] = rgb[i]; id.data[j + 1] = rgb[i + 1]; id.data[j + 2] = rgb[i + 2]; id.data[j + 3] = 255;
+    }
+    ctx.putImageData(id, 0, 0);
+    return cv;
+  }
+  async function post(url, body) {
+    status("…");
+    const r = await fetch(url, { method: "POST", headers: { "Content-Type": "application/json" },
+                                 body: JSON.stringify(body || {}) });
+    const j = await r.json();
+    if (!r.ok) { status(j.error || ("error " + r.status), true); return false; }
+    st.state = j; st.pendingPx = null; st.pendingEn = null;
+    status(j.solve.ok ? `solved in ${j.solve.time_ms.toFixed(1)} ms` : j.solve.message);
+    render();
+    return true;
+  }
+  function status(text, bad) { const s = $("status"); s.textContent = text; s.style.color = bad ? "#ff8a80" : ""; }
+
+  // ---- drawing ----
+  function size(canvas) {
+    if (canvas.width !== canvas.clientWidth || canvas.height !== canvas.clientHeight) {
+      canvas.width = canvas.clientWidth; canvas.height = canvas.clientHeight; return true;
+    }
+    return false;
+  }
+  function dot(ctx, x, y, r, fill, stroke) {
+    ctx.beginPath(); ctx.arc(x, y, r, 0, 2 * Math.PI);
+    if (fill) { ctx.fillStyle = fill; ctx.fill(); }
+    if (stroke) { ctx.strokeStyle = stroke; ctx.lineWidth = 1.5; ctx.stroke(); }
+  }
+  function label(ctx, x, y, text, color) {
+    ctx.font = "11px sans-serif"; ctx.lineWidth = 3; ctx.strokeStyle = "rgba(0,0,0,0.7)";
+    ctx.strokeText(text, x, y); ctx.fillStyle = color; ctx.fillText(text, x, y);
+  }
+  const colorOf = (l) => l.flagged ? "#ff1744" : (l.pick_px ? "#00e676" : "#40c4ff");
+
+  function drawImage() {
+    const c = img.c, ctx = c.getContext("2d"), S = st.state;
+    ctx.setTransform(1, 0, 0, 1, 0, 0); ctx.clearRect(0, 0, c.width, c.height);
+    const [w, h] = camSize();
+    const [x0, y0] = img.toCanvas(0, 0);
+    const rmax = Math.max(1e-9, ...S.landmarks.filter((l) => l.residual_px).map((l) => l.residual_norm_px));
+    ARROW_GAIN = Math.max(1, Math.min(20, Math.floor(0.05 * w / rmax)));
+    ctx.imageSmoothingEnabled = img.s < 2;
+    if (st.image) ctx.drawImage(st.image, x0, y0, w * img.s, h * img.s);
+    else { ctx.fillStyle = "#9e9e9e"; ctx.fillRect(x0, y0, w * img.s, h * img.s); }
+    if (st.ground && S.ground_uncertainty) { // the view's ground uncertainty, on its sampling grid
+      const g = S.ground_uncertainty;
+      for (let j = 0; j < g.nv; j++) for (let i = 0; i < g.nu; i++) {
+        const s = g.sigma_m[j * g.nu + i]; if (s === null) continue;
+        const [cx, cy] = img.toCanvas((i + 0.5) * w / g.nu, (j + 0.5) * h / g.nv);
+        label(ctx, cx - 14, cy, s < 10 ? s.toFixed(2) + " m" : ">10 m", s < 0.5 ? "#b9f6ca" : s < 2 ? "#ffe57f" : "#ff8a80");
+      }
+    }
+    for (const l of S.landmarks) {
+      const sel = st.selected === l.id;
+      const pp = l.predicted_px;
+      if (pp && pp[0] !== null && pp[0] > -w && pp[0] < 2 * w && pp[1] > -h && pp[1] < 2 * h) { // every landmark's predicted pixel
+        const [px, py] = img.toCanvas(...pxToWorld(l.predicted_px[0], l.predicted_px[1]));
+        dot(ctx, px, py, sel ? 9 : 5, null, sel ? "#ffff00" : "#40c4ff");
+        if (!l.pick_px) label(ctx, px + 7, py - 5, l.id, "#b3e5fc");
+      }
+      if (!l.pick_px) continue;
+      const [qx, qy] = img.toCanvas(...pxToWorld(l.pick_px[0], l.pick_px[1]));
+      const col = colorOf(l);
+      ctx.strokeStyle = col; ctx.lineWidth = 2;
+      ctx.beginPath(); ctx.moveTo(qx - 6, qy); ctx.lineTo(qx + 6, qy); ctx.moveTo(qx, qy - 6); ctx.lineTo(qx, qy + 6); ctx.stroke();
+      if (sel) dot(ctx, qx, qy, 10, null, "#ffff00");
+      if (l.residual_px) { // the residual arrow, pick -> predicted, magnified
+        const ex = qx + ARROW_GAIN * img.s * l.residual_px[0], ey = qy + ARROW_GAIN * img.s * l.residual_px[1];
+        ctx.beginPath(); ctx.moveTo(qx, qy); ctx.lineTo(ex, ey); ctx.stroke();
+        const a = Math.atan2(ey - qy, ex - qx);
+        ctx.beginPath(); ctx.moveTo(ex, ey); ctx.lineTo(ex - 7 * Math.cos(a - 0.4), ey - 7 * Math.sin(a - 0.4));
+        ctx.lineTo(ex - 7 * Math.cos(a + 0.4), ey - 7 * Math.sin(a + 0.4)); ctx.closePath(); ctx.fillStyle = col; ctx.fill();
+        label(ctx, qx + 8, qy + 14, `${l.id} ${l.residual_norm_px.toFixed(2)} px`, col);
+      } else label(ctx, qx + 8, qy + 14, l.id, col);
+    }
+    if (st.pendingPx) {
+      const [x, y] = img.toCanvas(...pxToWorld(st.pendingPx[0], st.pendingPx[1]));
+      dot(ctx, x, y, 7, null, "#ff00ff");
+    }
+    label(ctx, 6, c.height - 8, `residual arrows x${ARROW_GAIN}`, "#fff");
+  }
+
+  function drawMap() {
+    const c = map.c, ctx = c.getContext("2d"), S = st.state;
+    ctx.setTransform(1, 0, 0, 1, 0, 0); ctx.fillStyle = "#cfd8dc"; ctx.fillRect(0, 0, c.width, c.height);
+    const o = st.map.ortho;
+    if (o && st.ortho) {
+      const [x0, y0] = map.toCanvas(o.e0_m - o.cell_m / 2, o.n0_m + o.cell_m / 2);
+      ctx.imageSmoothingEnabled = map.s * o.cell_m < 2;
+      ctx.drawImage(st.ortho, x0, y0, o.width * o.cell_m * map.s, o.height * o.cell_m * map.s);
+    } else { // a plain drawing of the lanes
+      ctx.lineCap = "round";
+      for (const l of st.map.lanes) {
+        ctx.strokeStyle = l.junction ? "#b0bec5" : "#78909c"; ctx.lineWidth = Math.max(1, l.width_m * map.s);
+        ctx.beginPath();
+        l.en_m.forEach((p, k) => { const [x, y] = map.toCanvas(p[0], p[1]); k ? ctx.lineTo(x, y) : ctx.moveTo(x, y); });
+        ctx.stroke();
+      }
+    }
+    for (const l of S.landmarks) {
+      const [x, y] = map.toCanvas(l.enu_m[0], l.enu_m[1]);
+      dot(ctx, x, y, 5, colorOf(l), "#000");
+      if (st.selected === l.id) dot(ctx, x, y, 10, null, "#ffff00");
+      label(ctx, x + 7, y - 5, l.id, "#fff");
+    }
+    if (S.solve.ok) { // the camera: position, heading, 2-sigma ellipse of its E-N position
+      const p = S.solve.position_enu_m, yaw = S.solve.yaw_pitch_roll_deg[0] * Math.PI / 180;
+      const [x, y] = map.toCanvas(p[0], p[1]);
+      const C = S.solve.covariance_position_en_m2, a = C[0], b = C[1], d = C[3];
+      const tr = (a + d) / 2, disc = Math.sqrt(Math.max(0, (a - d) * (a - d) / 4 + b * b));
+      const l1 = tr + disc, l2 = Math.max(0, tr - disc), ang = 0.5 * Math.atan2(2 * b, a - d); // major axis from east, anticlockwise
+      const r1 = 2 * Math.sqrt(l1), r2 = 2 * Math.sqrt(l2);
+      ctx.save(); ctx.translate(x, y); ctx.rotate(-ang);
+      ctx.beginPath(); ctx.ellipse(0, 0, Math.max(r1 * map.s, 1), Math.max(r2 * map.s, 1), 0, 0, 2 * Math.PI);
+      ctx.strokeStyle = "#ff6d00"; ctx.lineWidth = 2; ctx.stroke(); ctx.restore();
+      ctx.beginPath(); ctx.moveTo(x, y); ctx.lineTo(x + 30 * Math.sin(yaw), y - 30 * Math.cos(yaw));
+      ctx.strokeStyle = "#ff6d00"; ctx.lineWidth = 3; ctx.stroke();
+      dot(ctx, x, y, 6, "#ff6d00", "#000");
+      label(ctx, x + 8, y + 16, `camera, 2σ ${r1.toFixed(2)} × ${r2.toFixed(2)} m`, "#ffd180");
+    }
+    if (st.pendingEn) { const [x, y] = map.toCanvas(...st.pendingEn); dot(ctx, x, y, 7, null, "#ff00ff"); }
+  }
+
+  function drawPanel() {
+    const S = st.state, s = S.solve, f = (x, n) => (x === null || x === undefined) ? "–" : x.toFixed(n);
+    $("title").textContent = `${S.site} · camera ${S.camera.id} · ${S.picks} picks${S.unsaved ? " · unsaved" : ""}`;
+    $("undo").disabled = !S.can_undo;
+    let h;
+    if (s.ok) {
+      const p = s.position_enu_m, sp = s.sigma_position_enu_m, y = s.yaw_pitch_roll_deg, sy = s.sigma_yaw_pitch_roll_deg;
+      h = `<b>pose</b> E ${f(p[0], 3)} ± ${f(sp[0], 3)}, N ${f(p[1], 3)} ± ${f(sp[1], 3)}, U ${f(p[2], 3)} ± ${f(sp[2], 3)} m · ` +
+          `yaw ${f(y[0], 3)} ± ${f(sy[0], 3)}°, pitch ${f(y[1], 3)} ± ${f(sy[1], 3)}°, roll ${f(y[2], 3)} ± ${f(sy[2], 3)}° · ` +
+          `rms (surveyed) ${f(s.rms_surveyed_px, 3)} px · variance factor ${f(s.variance_factor, 2)} · ` +
+          `${s.inliers} inliers, <span class="${s.flagged ? "bad" : ""}">${s.flagged} flagged</span> · solved in ${f(s.time_ms, 1)} ms` +
+          (s.warnings ? `<br><span class="bad">${esc(s.warnings)}</span>` : "") +
+          `<br><span id="rt" data-rt="${s.rt_cam_enu.join(" ")}">rt_cam_enu ${s.rt_cam_enu.map((x) => x.toFixed(6)).join(" ")}</span>`;
+    } else h = `<span class="bad">${esc(s.message)}</span>`;
+    $("solve").innerHTML = h;
+    const tb = document.querySelector("#landmarks tbody");
+    tb.innerHTML = "";
+    for (const l of S.landmarks) {
+      const tr = document.createElement("tr");
+      tr.className = (st.selected === l.id ? "selected " : "") + (l.flagged ? "flagged" : "");
+      tr.dataset.id = l.id;
+      tr.innerHTML = `<td>${esc(l.id)}</td><td>${esc(l.kind)}</td><td>${f(l.enu_m[0], 2)}, ${f(l.enu_m[1], 2)}</td>` +
+        `<td>${l.pick_px ? f(l.pick_px[0], 2) + ", " + f(l.pick_px[1], 2) : ""}</td>` +
+        `<td class="res">${l.residual_px ? f(l.residual_norm_px, 3) : ""}</td>` +
+        `<td>${l.normalised_residual !== undefined && l.normalised_residual !== null ? f(l.normalised_residual, 2) : ""}</td>` +
+        `<td class="flag">${esc(l.flag)}</td>`;
+      tr.onclick = () => { st.selected = l.id; render(); };
+      tb.appendChild(tr);
+    }
+  }
+  const esc = (t) => String(t).replace(/[&<>"]/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", "\"": "&quot;" })[c]);
+
+  function render() {
+    if (!st.state) return;
+    drawImage(); drawMap(); drawPanel();
+  }
+
+  // ---- interaction ----
+  function mouse(view, onClick) {
+    let down = null;
+    const c = view.c;
+    const pos = (e) => { // canvas pixels (the canvas may be scaled by CSS until the next resize)
+      const r = c.getBoundingClientRect(); return [(e.clientX - r.left) * c.width / r.width, (e.clientY - r.top) * c.height / r.height];
+    };
+    c.addEventListener("mousedown", (e) => { down = { p: pos(e), ox: view.ox, oy: view.oy, moved: false }; });
+    c.addEventListener("mousemove", (e) => {
+      if (!down) return;
+      const p = pos(e), dx = p[0] - down.p[0], dy = p[1] - down.p[1];
+      if (Math.hypot(dx, dy) > 4) down.moved = true;
+      if (down.moved) { view.ox = down.ox + dx; view.oy = down.oy + dy; render(); }
+    });
+    c.addEventListener("mouseup", (e) => { if (down && !down.moved) onClick(...view.toWorld(...pos(e))); down = null; });
+    c.addEventListener("mouseleave", () => { down = null; });
+    c.addEventListener("wheel", (e) => { e.preventDefault(); view.zoom(...pos(e), e.deltaY < 0 ? 1.25 : 0.8); render(); },
+                       { passive: false });
+  }
+
+  function nearestLandmark(e, n, radiusPx) {
+    let best = null, bd = radiusPx;
+    for (const l of st.state.landmarks) {
+      const d = Math.hypot(l.enu_m[0] - e, l.enu_m[1] - n) * map.s;
+      if (d < bd) { bd = d; best = l; }
+    }
+    return best;
+  }
+
+  mouse(img, (X, Y) => {
+    const [u, v] = worldToPx(X, Y);
+    if (st.selected) post("/api/pick", { landmark: st.selected, u, v }).then((ok) => { if (ok) st.selected = null; render(); });
+    else if (st.pendingEn) post("/api/landmark", { e: st.pendingEn[0], n: st.pendingEn[1], u, v });
+    else { st.pendingPx = [u, v]; status("now click its place on the map"); render(); }
+  });
+  mouse(map, (e, n) => {
+    const l = nearestLandmark(e, n, 10);
+    if (st.pendingPx) {
+      if (l) post("/api/pick", { landmark: l.id, u: st.pendingPx[0], v: st.pendingPx[1] });
+      else post("/api/landmark", { e, n, u: st.pendingPx[0], v: st.pendingPx[1] });
+    } else if (l) { st.selected = l.id; st.pendingEn = null; status(`${l.id}: now click it in the image`); render(); }
+    else { st.selected = null; st.pendingEn = [e, n]; status("new landmark: now click its place in the image"); render(); }
+  });
+
+  function step(dir) { // the next / previous landmark without a pick
+    const L = st.state.landmarks, k0 = L.findIndex((l) => l.id === st.selected);
+    for (let i = 1; i <= L.length; i++) {
+      const l = L[((k0 + dir * i) % L.length + L.length) % L.length];
+      if (!l.pick_px) { st.selected = l.id; status(`${l.id}: click it in the image`); render(); return; }
+    }
+  }
+  const undo = () => post("/api/undo");
+  const save = () => post("/api/save").then((ok) => ok && status("saved: landmarks.geojson and observations"));
+  const del = () => { if (st.selected) post("/api/delete", { landmark: st.selected }); };
+  $("undo").onclick = undo; $("save").onclick = save; $("delete").onclick = del;
+  $("ground").onchange = (e) => { st.ground = e.target.checked; render(); };
+  document.addEventListener("keydown", (e) => {
+    const k = e.key;
+    if ((e.ctrlKey || e.metaKey) && k === "z") { e.preventDefault(); undo(); }
+    else if ((e.ctrlKey || e.metaKey) && k === "s") { e.preventDefault(); save(); }
+    else if (e.ctrlKey || e.metaKey || e.altKey) return;
+    else if (k === "u") undo();
+    else if (k === "s") save();
+    else if (k === "Delete" || k === "Backspace") del();
+    else if (k === "Escape") { st.selected = null; st.pendingPx = null; st.pendingEn = null; status(""); render(); }
+    else if (k === "n") step(1);
+    else if (k === "p") step(-1);
+    else if (k === "0") { fitImage(); fitMap(); render(); }
+    else if (k === "g") { st.ground = !st.ground; $("ground").checked = st.ground; render(); }
+  });
+  new ResizeObserver(() => { if (size(img.c) | size(map.c)) render(); }).observe(document.body);
+
+  // for tests and scripts: where a pixel or a ground point is on the screen (client coordinates)
+  window.rsPick = {
+    get state() { return st.state; },
+    get ready() { return st.ready; },
+    toScreen(view, a, b) {
+      const v = view === "image" ? img : map, r = v.c.getBoundingClientRect();
+      const [x, y] = view === "image" ? v.toCanvas(...pxToWorld(a, b)) : v.toCanvas(a, b);
+      return { x: r.left + x * r.width / v.c.width, y: r.top + y * r.height / v.c.height };
+    },
+    toWorld(view, x, y) { // client coordinates -> pixel (u, v) or ground (e, n)
+      const v = view === "image" ? img : map, r = v.c.getBoundingClientRect();
+      const w = v.toWorld((x - r.left) * v.c.width / r.width, (y - r.top) * v.c.height / r.height);
+      return view === "image" ? worldToPx(...w) : w;
+    },
+    zoomImage(u, v, s) { // centre pixel (u, v) at s canvas pixels per image pixel
+      img.s = s; const [X, Y] = pxToWorld(u, v); img.ox = img.c.width / 2 - s * X; img.oy = img.c.height / 2 - s * Y; render();
+    },
+  };
+
+  (async function start() {
+    size(img.c); size(map.c);
+    st.state = await getJSON("/api/state");
+    st.map = await getJSON("/api/map");
+    const [w, h] = camSize();
+    st.image = await rgbCanvas("/api/image.rgb", w, h);
+    if (st.map.ortho) st.ortho = await rgbCanvas("/api/ortho.rgb", st.map.ortho.width, st.map.ortho.height);
+    $("mapkind").textContent = st.map.ortho ? `orthophoto (${st.map.ortho.crs}${st.map.ortho.warped ? ", reprojected" : ""}, ` +
+                                             `${st.map.ortho.cell_m.toFixed(3)} m cells)` : "plain map: landmarks and lanes";
+    fitImage(); fitMap(); render();
+    status(st.state.solve.ok ? "solved" : st.state.solve.message);
+    st.ready = true;
+  })().catch((e) => status(String(e), true));
+})();
