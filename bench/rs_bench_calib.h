@@ -97,16 +97,26 @@ rs_status rs_bench_calib_plot(const char *path, const rs_bench_calib_row *rows, 
 // ---- the stress run ----
 
 typedef struct {
-    int Nproblems;           // asked for
-    int Ngenerated;          // problems the simulator produced (the rest: options it refused)
-    int Nok;                 // rs_calib_solve returned a pose
-    int Nerror[16];          // errors, by rs_status code
-    int Nflagged;            // poses whose condition number exceeded the bound (and were warned)
-    int Nnonfinite;          // poses with a NaN/inf anywhere in the result: must be 0
-    int Nunnamed;            // errors without a cause in the message: must be 0
-    int Nunflagged;          // condition number beyond the bound without a warning: must be 0
-    int Nbad;                // poses more than 10 reported sigmas (Mahalanobis) from the truth
-                             //   while not flagged (a confident wrong answer)
+    int Nproblems;  // asked for
+    int Ngenerated; // problems the simulator produced (the rest: options it refused)
+    int Nok;        // rs_calib_solve returned a pose
+    int Nerror[16]; // errors, by rs_status code
+    int Nflagged;   // poses whose condition number exceeded the bound (and were warned)
+    int Nnonfinite; // poses with a NaN/inf anywhere in the result: must be 0
+    int Nunnamed;   // errors without a cause in the message: must be 0
+    int Nunflagged; // condition number beyond the bound without a warning: must be 0
+    int Nbad;       // poses more than 10 reported sigmas (Mahalanobis) from the truth
+                    //   while not flagged (a confident wrong answer)
+    // The same tail measured without the warnings (which speak of much else: an unchecked focal,
+    // a loose rotation): how often the truth lies outside the reported ellipsoid at all.
+    int Nout999;             // poses outside their 99.9% ellipsoid (Mahalanobis^2 > 22.46): 0.1%
+                             //   of Nok when the covariance is exact
+    int Nout999_unwarned;    //   of them, with no warning at all
+    int Nbeyond10;           // poses beyond 10 reported sigmas, warned or not
+    int Nwarned;             // poses that carry any warning
+    int Nbeyond10_bare;      // beyond 10 sigma with no warning but the generic one that the focal,
+                             //   taken as exact, cannot be checked by the landmarks (the stress
+                             //   problems' focal IS exact: that warning does not explain their error)
     double cond_max;         // largest condition number of a returned pose
     uint64_t first_bad_seed; // seed of the first problem counted in Nnonfinite, Nunnamed,
                              //   Nunflagged or Nbad
