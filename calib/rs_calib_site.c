@@ -186,6 +186,32 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     }
     cJSON_AddNumberToObject(root, "landmarks_rejected_by_snooping", r->Nrejected_snooping);
     cJSON_AddBoolToObject(root, "noise_model_wrong", r->noise_model_wrong);
+    { // the intrinsics against the image (rs_calib_intrinsics_check; docs/calibration.md 7a); null: not tested
+        const rs_calib_intrinsics_check *k = &r->intrinsics_check;
+        cJSON *ic = cJSON_AddObjectToObject(root, "intrinsics_check");
+        if (k->focal_tested) {
+            cJSON_AddNumberToObject(ic, "focal_rel", k->focal_rel);
+            cJSON_AddNumberToObject(ic, "sigma_focal_rel", k->sigma_focal_rel);
+            cJSON_AddNumberToObject(ic, "focal_stated_rel", k->focal_stated_rel);
+            cJSON_AddNumberToObject(ic, "chi2_focal", k->chi2_focal);
+            cJSON_AddNumberToObject(ic, "critical_focal", k->critical_focal);
+            cJSON_AddNumberToObject(ic, "focal_mdb_rel", k->focal_mdb_rel);
+            cJSON_AddNumberToObject(ic, "focal_mdb_shift_position_m", k->shift_position_m);
+            cJSON_AddNumberToObject(ic, "focal_mdb_shift_mahalanobis2", k->shift_mahalanobis2);
+        } else {
+            cJSON_AddNullToObject(ic, "focal_rel");
+        }
+        if (k->center_tested) {
+            cJSON_AddItemToObject(ic, "center_px", json_array(k->center_px, 2));
+            cJSON_AddItemToObject(ic, "sigma_center_px", json_array(k->sigma_center_px, 2));
+            cJSON_AddNumberToObject(ic, "center_stated_px", k->center_stated_px);
+            cJSON_AddNumberToObject(ic, "chi2_center", k->chi2_center);
+            cJSON_AddNumberToObject(ic, "critical_center", k->critical_center);
+        } else {
+            cJSON_AddNullToObject(ic, "center_px");
+        }
+        cJSON_AddBoolToObject(ic, "warned", k->warned);
+    }
     cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
     if (r->warnings[0]) {
         char buf[sizeof r->warnings];

@@ -161,6 +161,22 @@ def main():
     left = [f for f in os.listdir(out) if ".tmp." in f]
     check(not left, f"temporary files left behind: {left}")
 
+    # <id>.json says what the image makes of the intrinsics (docs/calibration.md 7a): on a site (30 points) whose
+    # nominal focal is 1.3x the true one, the image's focal_rel agrees with the truth (truth.json:
+    # true / nominal - 1) within 4 of its sigmas, and the camera is warned
+    fsite, fout = os.path.join(tmp, "focal"), os.path.join(tmp, "focal-out")
+    p = run("site", "simulate", fsite, "--seed", "5", "--cameras", "1", "--focal-error", "1.3", "--points", "30")
+    check(p.returncode == 0, f"simulate --focal-error: {p.stderr}")
+    p = run("calib", fsite, "-o", fout)
+    check(p.returncode == 0, f"calib of the focal-error site: {p.stderr}")
+    if p.returncode == 0:
+        ic = json.load(open(os.path.join(fout, "cam1.json")))["intrinsics_check"]
+        tcam = json.load(open(os.path.join(fsite, "truth", "truth.json")))["cameras"][0]
+        want = tcam["intrinsics"][0] / tcam["nominal_intrinsics"][0] - 1
+        check(ic["focal_rel"] is not None and abs(ic["focal_rel"] - want) < 4 * ic["sigma_focal_rel"] and ic["warned"],
+              f"intrinsics_check focal_rel {ic['focal_rel']} +- {ic['sigma_focal_rel']} vs the truth's {want:.4f}, "
+              f"warned {ic['warned']}")
+
     if failures:
         print(f"{len(failures)} failures (seed {SEED}, folder {tmp})")
         return 1
