@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""Issue 13, "What must show", first line, on real data: the GNSS probe vehicle
+(../shared/real/gnss_probe_vehicle) with its RAW heights, calibrated with each of the four sets of
+sigmas the issue names -- (horizontal m, vertical m, pixel px) = (0.5, 1.0, 8), (1.0, 0.3, 3),
+(1.0, 3.0, 3), (2.0, 3.0, 5) -- under the leave-one-out protocol of test_real_gnss.py as a user
+runs it: the site says "landmark_heights": "unreliable" (roadside's ground model replaces the raw
+heights, docs/site-format.md), `roadside calib --refine focal` on 42 fixes, `roadside locate`
+of the left-out box centre, its horizontal distance to the GNSS fix. Prints each set's median,
+mean and worst, and the least-squares ground homography's (test_real_gnss.py, the oracle).
+
+Asserted: every fold calibrates and locates; the sets whose median is under the issue's 1.70 m
+today stay there: (0.5, 1.0, 8), (1.0, 0.3, 3), (1.0, 3.0, 3) (1.674, 1.637, 1.641 m on
+2026-11-24). Not met, printed: (2.0, 3.0, 5), 1.99 m (docs/calibration.md, "Real data").
+Skips (77) when the data is absent.
+"""
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_real_gnss as base  # noqa: E402
+import test_real_gnss_raw_heights as raw  # noqa: E402
+
+SETS = [(0.5, 1.0, 8.0, True), (1.0, 0.3, 3.0, True), (1.0, 3.0, 3.0, True), (2.0, 3.0, 5.0, False)]
+BAR_M = 1.70
+
+
+def main():
+    if not os.path.exists(base.DATA):
+        print(f"SKIP: {base.DATA} is absent (real survey data lives in ../shared/real, never in the repo)")
+        return 77
+    rows = base.load_rows()
+    for i, r in enumerate(rows):
+        r["i"] = i
+    origin = (np.mean([r["lat"] for r in rows]), np.mean([r["lon"] for r in rows]), min(r["h"] for r in rows))
+    p_enu = base.enu_of(rows, origin)
+    q = np.array([[r["u"], r["v"]] for r in rows])
+    failed = False
+    with tempfile.TemporaryDirectory(prefix="roadside-gnss-sets-") as tmp:
+        for h, v, px, asserted in SETS:
+            base.SIGMA_H_M, base.SIGMA_PX = h, px  # what write_site states (the module's constants)
+            errs = []
+            for k in range(len(rows)):
+                d = os.path.join(tmp, f"{h}_{v}_{px}_{k:02d}")
+                raw.write_raw_site(d, [r for r in rows if r["i"] != k], origin, v)
+                err, why = raw.locate_error(d, q[k], p_enu[k])
+                if err is None:
+                    print(f"FAIL: sigmas {h}/{v}/{px}: fold {k}: {why}")
+                    failed = True
+                    err = np.inf
+                errs.append(err)
+            e = np.array(errs)
+            ok = np.median(e) < BAR_M
+            print(f"sigmas {h} m / {v} m / {px:g} px, raw heights \"unreliable\": leave-one-out median "
+                  f"{np.median(e):.3f} m, mean {e[np.isfinite(e)].mean():.3f} m, max {e.max():.3f} m "
+                  f"({'under' if ok else 'NOT under'} {BAR_M} m{'' if asserted else '; not asserted: open'})")
+            if asserted and not ok:
+                print(f"FAIL: sigmas {h}/{v}/{px}: median {np.median(e):.3f} m is not under {BAR_M} m")
+                failed = True
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
