@@ -16,8 +16,9 @@
 static const char ortho_usage[] =
     "usage: roadside ortho SITE -o ORTHO.tif [--gsd M] [--margin M] [--weather W] [--crs CRS]\n"
     "\n"
-    "Renders an orthophoto of the site's digital twin (the ground plane, the lane-edge markings of\n"
-    "SITE/lanes.geojson; the scene of 'roadside site render-backgrounds') with POV-Ray's\n"
+    "Renders an orthophoto of the site's digital twin (textured asphalt, the lane edges, crosswalks,\n"
+    "stop bars and arrows of SITE/lanes.geojson, kerbs, sidewalks and poles; the scene of 'roadside\n"
+    "site render-backgrounds', docs/backgrounds.md) with POV-Ray's\n"
     "orthographic camera looking straight down, and writes it as a georeferenced RGB GeoTIFF\n"
     "through GDAL (docs/pick.md, \"roadside ortho\"). The extent covers the lanes and the\n"
     "landmarks plus --margin. The GeoTIFF's CRS is the site's ENU grid (an orthographic\n"

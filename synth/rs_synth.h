@@ -25,6 +25,8 @@ typedef enum {
     RS_SYNTH_BUS,
     RS_SYNTH_BOX_TRUCK,
     RS_SYNTH_ARTICULATED_TRUCK,
+    RS_SYNTH_MOTORCYCLE, // with its rider (the box holds both)
+    RS_SYNTH_BICYCLE,    // with its rider
     RS_SYNTH_NCLASSES,
     RS_SYNTH_USER_MODEL = 100 // an OBJ mesh given by the user (model_path)
 } rs_synth_class;

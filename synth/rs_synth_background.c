@@ -234,55 +234,8 @@ void rs_synth_twin_options_default(rs_synth_twin_options *opt)
     opt->canvas_scale = 1.0;
 }
 
-// Weather appearance: sky light, sun strength, asphalt colour/finish, marking brightness.
-typedef struct {
-    const char *name;
-    double sky_light, sun, sky_rgb[3], asphalt, asphalt_reflection, marking;
-} weather_look;
-
-static const weather_look looks[] = {
-    {"sunny", 0.35, 1.0, {0.45, 0.62, 0.95}, 0.10, 0.0, 0.80},
-    {"cloudy", 0.80, 0.0, {0.70, 0.72, 0.75}, 0.10, 0.0, 0.80},
-    {"rain", 0.55, 0.0, {0.55, 0.57, 0.60}, 0.06, 0.15, 0.65},
-    {"snow", 0.80, 0.0, {0.80, 0.81, 0.83}, 0.75, 0.0, 0.85},
-    {"night", 0.03, 0.0, {0.01, 0.01, 0.02}, 0.10, 0.0, 0.80},
-};
-
-static void write_pov_point(FILE *f, double e, double n, double up) { fprintf(f, "<%.9g, %.9g, %.9g>", e, up, n); }
-
-// One lane-edge marking along a polyline offset sideways by `offset_m` (left positive), as flat
-// triangles 5 mm above the ground.
-static void write_marking(FILE *f, const rs_lane *lane, double offset_m, double half_w, const rs_site *site)
-{
-    for (int i = 0; i + 1 < lane->Npoints; i++) {
-        const double *a = lane->p_enu_m[i], *b = lane->p_enu_m[i + 1];
-        const double de = b[0] - a[0], dn = b[1] - a[1], len = hypot(de, dn);
-        if (len < 1e-6) continue;
-        const double le = -dn / len, ln = de / len; // left normal
-        double q[4][2];
-        for (int k = 0; k < 4; k++) {
-            const double *p = k < 2 ? a : b;
-            const double s = offset_m + ((k == 0 || k == 3) ? -half_w : half_w);
-            q[k][0] = p[0] + s * le;
-            q[k][1] = p[1] + s * ln;
-        }
-        double up[4];
-        for (int k = 0; k < 4; k++)
-            up[k] = rs_synth_ground_up_m(site->ground_normal_enu, site->ground_offset_m, q[k][0], q[k][1]) + 0.005;
-        for (int t = 0; t < 2; t++) {
-            const int idx[2][3] = {{0, 1, 2}, {0, 2, 3}};
-            fprintf(f, "  triangle { ");
-            for (int k = 0; k < 3; k++) {
-                const int j = idx[t][k];
-                write_pov_point(f, q[j][0], q[j][1], up[j]);
-                fprintf(f, k < 2 ? ", " : " }\n");
-            }
-        }
-    }
-}
-
 static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *cam, const rs_site *site,
-                                  const rs_lanes *lanes, const weather_look *look, double sun_az, double sun_el,
+                                  const rs_lanes *lanes, const char *look, double sun_az, double sun_el,
                                   double marking_width_m, rs_err *err)
 {
     rs_io_atomic a = {0};
@@ -294,9 +247,9 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
             "// POV-Ray world <x, y, z> = <east, up, north>, metres. No include files.\n"
             "#version 3.7;\n"
             "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
-            look->name);
+            look);
     if ((st = rs_synth_povcam_write(f, cam, err)) ||
-        (st = rs_synth_twin_world_write(f, site, lanes, look->name, sun_az, sun_el, marking_width_m, err))) {
+        (st = rs_synth_twin_world_write(f, site, lanes, look, sun_az, sun_el, marking_width_m, true, err))) {
         rs_io_atomic_abort(&a);
         return st;
     }
@@ -305,45 +258,6 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
         return rs_err_set(err, RS_ERR_IO, "%s: write error", pov_path);
     }
     return rs_io_atomic_commit(&a, err);
-}
-
-rs_status rs_synth_twin_world_write(FILE *f, const rs_site *site, const rs_lanes *lanes, const char *weather,
-                                    double sun_az, double sun_el, double marking_width_m, rs_err *err)
-{
-    const weather_look *look = NULL;
-    for (size_t i = 0; i < sizeof(looks) / sizeof(looks[0]); i++)
-        if (weather && !strcmp(weather, looks[i].name)) look = &looks[i];
-    if (!look)
-        return rs_err_set(err, RS_ERR_INVALID, "weather: '%s' is not one of sunny, cloudy, rain, snow, night",
-                          weather ? weather : "");
-    fprintf(f, "background { rgb <%.4g, %.4g, %.4g> }\n", look->sky_rgb[0], look->sky_rgb[1], look->sky_rgb[2]);
-    const double d2r = M_PI / 180.0, az = sun_az * d2r, el = sun_el * d2r;
-    if (look->sun > 0 && sun_el > 0) {
-        fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg\nlight_source { ", sun_az, sun_el);
-        write_pov_point(f, 1e6 * sin(az) * cos(el), 1e6 * cos(az) * cos(el), 1e6 * sin(el));
-        fprintf(f, " color rgb <1.0, 0.97, 0.92> parallel point_at <0, 0, 0> }\n");
-    }
-    fprintf(f, "light_source { <0, 1e6, 0> color rgb %.4g parallel point_at <0, 0, 0> shadowless }\n", look->sky_light);
-    const double *nrm = site->ground_normal_enu;
-    const double nn = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
-    fprintf(f,
-            "plane { <%.17g, %.17g, %.17g>, %.17g\n"
-            "  texture { pigment { granite color_map { [0 rgb %.4g] [1 rgb %.4g] } scale 0.05 }\n"
-            "            finish { ambient 0 diffuse 0.8 reflection %.3g } } }\n",
-            nrm[0] / nn, nrm[2] / nn, nrm[1] / nn, site->ground_offset_m / nn, look->asphalt * 0.8, look->asphalt * 1.2,
-            look->asphalt_reflection);
-    if (lanes && lanes->N > 0) {
-        fprintf(f, "// lane-edge markings (%d lanes)\nmesh {\n", lanes->N);
-        for (int i = 0; i < lanes->N; i++) {
-            if (lanes->lane[i].kind && !strcmp(lanes->lane[i].kind, "junction"))
-                continue; // paths across the junction carry no edge markings
-            const double hw = 0.5 * lanes->lane[i].width_m;
-            write_marking(f, &lanes->lane[i], hw, 0.5 * marking_width_m, site);
-            write_marking(f, &lanes->lane[i], -hw, 0.5 * marking_width_m, site);
-        }
-        fprintf(f, "  texture { pigment { rgb %.4g } finish { ambient 0 diffuse 0.8 } }\n}\n", look->marking);
-    }
-    return ferror(f) ? rs_err_set(err, RS_ERR_IO, "write error") : RS_OK;
 }
 
 // Runs `povray +Itwin.pov +Otwin.png +W +H ...` in work_dir (rs_synth_povray_run).
@@ -378,20 +292,20 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
         rs_synth_twin_options_default(&o);
     const char *povray = o.povray ? o.povray : getenv("ROADSIDE_POVRAY");
     if (!povray || !*povray) povray = "povray";
-    const weather_look *look = NULL;
-    for (size_t i = 0; i < sizeof(looks) / sizeof(looks[0]); i++)
-        if (weather && !strcmp(weather, looks[i].name)) look = &looks[i];
-    if (!look)
+    const char *look = NULL; // a static string: one of rs_synth_background_conditions
+    for (int i = 0; weather && rs_synth_background_conditions[i]; i++)
+        if (!strcmp(weather, rs_synth_background_conditions[i])) look = rs_synth_background_conditions[i];
+    if (!look || !rs_synth_twin_weather_ok(weather))
         return rs_err_set(err, RS_ERR_INVALID, "weather: '%s' is not one of sunny, cloudy, rain, snow, night",
                           weather ? weather : "");
     double az, el;
     rs_status st =
         rs_synth_sun_position_checked(&az, &el, site->origin.lat_deg, site->origin.lon_deg, unix_time_s, err);
     if (st) return st;
-    if (el < -6.0) look = &looks[4]; // night
+    if (el < -6.0) look = rs_synth_background_conditions[4]; // "night"
     if (sun_azimuth_deg) *sun_azimuth_deg = az;
     if (sun_elevation_deg) *sun_elevation_deg = el;
-    if (conditions_out) *conditions_out = look->name;
+    if (conditions_out) *conditions_out = look;
 
     rs_lanes lanes = {0};
     rs_synth_canvas canvas;

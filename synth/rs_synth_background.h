@@ -123,10 +123,13 @@ typedef struct {
 } rs_synth_twin_options;
 void rs_synth_twin_options_default(rs_synth_twin_options *opt);
 
-// Ray-traces the site's ground seen by a calibrated camera: an asphalt plane (the site's ground
-// plane), white lane-edge markings (both edges of every lane of lanes.geojson, marking_width_m
-// wide), a sky, and the sun at the azimuth/elevation rs_synth_sun_position gives for the site's
-// origin and the time. Weather changes the sky light, the sun (none when cloudy, rain or at
+// Ray-traces the site's digital twin seen by a calibrated camera (synth/rs_synth_twin.c,
+// docs/backgrounds.md "What the twin draws"): the site's ground plane as asphalt (grain, bump,
+// patches), the markings lanes.geojson describes (lane edges marking_width_m wide, and where a
+// lane enters a junction path a crosswalk, a stop bar and a turn arrow of its movements, where
+// one leaves it a crosswalk), raised sidewalks with kerbs outside the road, the site's poles, a
+// sky, and the sun at the azimuth/elevation rs_synth_sun_position gives for the site's origin
+// and the time. Weather changes the sky light, the sun (none when cloudy, rain or at
 // night), the asphalt (darker and glossier in rain, white with faint markings in snow).
 // Writes the 8-bit sRGB image to out_png atomically (a distorted lens is rendered on a pinhole
 // canvas and resampled with mrcal's projection, rs_synth_camera.h). Temporary scene files go to

@@ -222,6 +222,17 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         rs_synth_dataset__background *bm = &c->bg[rs_synth_dataset__image_background(d, k, c)];
         b = bm;
         if ((st = background_fit(bm, c->cam.width, c->cam.height, err))) goto done;
+        if (!bm->light_tried) { // issue 18: lighting matched to the background's road (dry roads only)
+            const char *cond = rs_site_background_tag(bm->src, "conditions");
+            bm->light_tried = true;
+            const bool dry = !cond || !strcmp(cond, "sunny") || !strcmp(cond, "cloudy");
+            bm->light_ok = dry && rs_synth_light_from_image(&bm->light, &bm->linear, &c->cam, d->site, &d->lanes, 4,
+                                                            NULL) == RS_OK;
+            double t_s;
+            const bool timed = bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK;
+            bm->sun_ok = !timed && !bm->overcast &&
+                         rs_synth_sun_from_shadows(&bm->sun, &bm->linear, &c->cam, d->site, NULL) == RS_OK;
+        }
         // the vehicles alone over transparency; composite() puts them onto the background
         ropt.scene.ground_visible = false;
         ropt.scene.overcast = b->overcast;
@@ -230,6 +241,10 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         if (b->time_iso && rs_synth_parse_iso8601(&t_s, b->time_iso, "time", NULL) == RS_OK)
             rs_synth_sun_position(&ropt.scene.sun_azimuth_deg, &ropt.scene.sun_elevation_deg, d->site->origin.lat_deg,
                                   d->site->origin.lon_deg, t_s);
+        else if (b->sun_ok) // no time: the sun the poles' shadows show
+            ropt.scene.sun_azimuth_deg = b->sun.azimuth_deg, ropt.scene.sun_elevation_deg = b->sun.elevation_deg;
+        if (b->light_ok)
+            rs_synth_light_match(ropt.scene.light_rgb_scale, &b->light, !b->overcast, ropt.scene.sun_elevation_deg);
         *grey = false;
     } else {
         ropt.scene.ground_visible = true; // neutral grey ground rendered by POV-Ray

@@ -12,20 +12,24 @@
 
 // ---------------------------------------------------------------- classes and ranges
 
-static const char *const class_names[RS_SYNTH_NCLASSES] = {"sedan", "hatchback", "suv",       "pickup",
-                                                           "van",   "bus",       "box_truck", "articulated_truck"};
+static const char *const class_names[RS_SYNTH_NCLASSES] = {
+    "sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck", "articulated_truck", "motorcycle", "bicycle"};
 
-// Length, width, height ranges, metres (docs/fleet.md: estimates from manufacturers' data of
-// common models and SUMO's vehicle-type defaults).
+// Length, width, height: [min, max] and the normal's mean and standard deviation, metres
+// (docs/fleet.md gives the sources: Inovev's 2022 European average car, the Euro car segments'
+// lengths, SUMO's vehicle-type defaults, the EU limits for buses and trucks; the spreads are our
+// estimates). Two-wheelers' boxes hold the rider (height = the rider's head).
 static const rs_synth_class_range class_ranges[RS_SYNTH_NCLASSES] = {
-    {{4.30, 5.00}, {1.72, 1.88}, {1.38, 1.50}},   // sedan
-    {{3.60, 4.40}, {1.62, 1.80}, {1.42, 1.56}},   // hatchback
-    {{4.20, 5.10}, {1.78, 2.00}, {1.60, 1.85}},   // SUV
-    {{5.00, 5.90}, {1.85, 2.05}, {1.75, 1.95}},   // pickup
-    {{4.80, 6.00}, {1.90, 2.05}, {1.95, 2.60}},   // van
-    {{10.50, 13.50}, {2.50, 2.55}, {3.00, 3.40}}, // bus
-    {{6.50, 9.50}, {2.30, 2.55}, {3.00, 3.80}},   // box truck
-    {{15.50, 16.50}, {2.50, 2.55}, {3.80, 4.00}}, // articulated truck (tractor + semi-trailer)
+    {{4.30, 5.00}, {1.72, 1.88}, {1.38, 1.50}, {4.60, 1.81, 1.45}, {0.20, 0.04, 0.03}},   // sedan
+    {{3.60, 4.40}, {1.62, 1.80}, {1.42, 1.56}, {4.05, 1.76, 1.49}, {0.22, 0.04, 0.03}},   // hatchback
+    {{4.20, 5.10}, {1.78, 2.00}, {1.60, 1.85}, {4.45, 1.85, 1.66}, {0.22, 0.05, 0.06}},   // SUV
+    {{5.00, 5.90}, {1.85, 2.05}, {1.75, 1.95}, {5.35, 1.90, 1.83}, {0.25, 0.05, 0.05}},   // pickup
+    {{4.80, 6.00}, {1.90, 2.05}, {1.95, 2.60}, {5.30, 1.99, 2.20}, {0.35, 0.03, 0.20}},   // van
+    {{10.50, 13.50}, {2.50, 2.55}, {3.00, 3.40}, {12.0, 2.53, 3.15}, {0.60, 0.02, 0.10}}, // bus
+    {{6.50, 9.50}, {2.30, 2.55}, {3.00, 3.80}, {8.00, 2.45, 3.40}, {0.80, 0.06, 0.20}},   // box truck
+    {{15.50, 16.50}, {2.50, 2.55}, {3.80, 4.00}, {16.3, 2.53, 3.95}, {0.20, 0.02, 0.05}}, // articulated truck
+    {{1.80, 2.40}, {0.65, 0.95}, {1.30, 1.60}, {2.10, 0.80, 1.45}, {0.12, 0.06, 0.06}},   // motorcycle + rider
+    {{1.55, 1.90}, {0.50, 0.70}, {1.55, 1.90}, {1.72, 0.60, 1.72}, {0.06, 0.04, 0.06}},   // bicycle + rider
 };
 
 const char *rs_synth_class_name(rs_synth_class cls)
@@ -44,7 +48,7 @@ rs_status rs_synth_class_from_name(rs_synth_class *cls, const char *name, rs_err
         }
     return rs_err_set(err, RS_ERR_NOT_FOUND,
                       "class: unknown vehicle class (valid: sedan, hatchback, suv, pickup, van, "
-                      "bus, box_truck, articulated_truck)");
+                      "bus, box_truck, articulated_truck, motorcycle, bicycle)");
 }
 
 rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls, rs_err *err)
@@ -64,9 +68,15 @@ rs_rng rs_synth_fleet_stream(uint64_t variant, int which)
     return rng;
 }
 
-static double uniform_in(rs_rng *rng, const double range[2])
+// Normal(mean, sd) truncated to range: redrawn until inside (the ranges hold >= 68 % of each
+// normal, so 64 draws fail with probability < 1e-30; then the mean, clamped).
+static double truncated_normal(rs_rng *rng, double mean, double sd, const double range[2])
 {
-    return range[0] + (range[1] - range[0]) * rs_rng_uniform(rng);
+    for (int i = 0; i < 64; i++) {
+        double x = mean + sd * rs_rng_normal(rng);
+        if (x >= range[0] && x <= range[1]) return x;
+    }
+    return fmin(fmax(mean, range[0]), range[1]);
 }
 
 // Paint colours and their shares. Shares from Axalta's 2022 Global Automotive Color Popularity
@@ -117,7 +127,7 @@ static void draw_paint(double rgb[3], uint64_t variant)
 }
 
 // Traffic mix of rs_synth_fleet_random (our estimate for urban arterial roads).
-static const double class_mix[RS_SYNTH_NCLASSES] = {0.30, 0.20, 0.22, 0.06, 0.08, 0.03, 0.06, 0.05};
+static const double class_mix[RS_SYNTH_NCLASSES] = {0.28, 0.19, 0.21, 0.06, 0.08, 0.03, 0.06, 0.05, 0.02, 0.02};
 
 rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *in, rs_err *err)
 {
@@ -135,7 +145,7 @@ rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *
         for (int i = 0; i < 3; i++)
             if (*dims[i] == 0) {
                 rs_rng rng = rs_synth_fleet_stream(v.variant, RS_SYNTH_FLEET_STREAM_LENGTH + i);
-                *dims[i] = uniform_in(&rng, ranges[i]);
+                *dims[i] = truncated_normal(&rng, r->mean_m[i], r->sd_m[i], ranges[i]);
             }
     }
     if (!(v.rgb[0] >= 0)) draw_paint(v.rgb, v.variant);
@@ -162,4 +172,27 @@ rs_status rs_synth_fleet_random(rs_synth_vehicle *out, uint64_t seed, rs_err *er
     v.rgb[0] = v.rgb[1] = v.rgb[2] = -1;
     v.variant = seed;
     return rs_synth_fleet_resolve(out, &v, err);
+}
+
+// The paint family of a linear RGB colour, for the metallic share: 0 white, 1 black, 2 grey or
+// silver, 3 chromatic.
+static int paint_family(const double rgb[3])
+{
+    double mx = fmax(rgb[0], fmax(rgb[1], rgb[2])), mn = fmin(rgb[0], fmin(rgb[1], rgb[2]));
+    if (mx - mn > 0.25 * mx + 0.01) return 3;
+    if (mn > 0.6) return 0;
+    if (mx < 0.01) return 1;
+    return 2;
+}
+
+void rs_synth_fleet_look(rs_synth_look *look, const rs_synth_vehicle *v)
+{
+    rs_rng rng = rs_synth_fleet_stream(v->variant, RS_SYNTH_FLEET_STREAM_LOOK);
+    // Shares of metallic finishes per family (our estimates: solid white and metallic greys
+    // are the common finishes; silver is metallic by definition).
+    static const double metallic_share[4] = {0.25, 0.45, 0.85, 0.55};
+    for (int c = 0; c < 3; c++) look->paint_rgb[c] = v->rgb[c];
+    look->metallic = rs_rng_uniform(&rng) < metallic_share[paint_family(v->rgb)] ? 0.5 + 0.5 * rs_rng_uniform(&rng) : 0;
+    double u = rs_rng_uniform(&rng); // dirt: most vehicles nearly clean, a fifth visibly dirty
+    look->dirt = u < 0.8 ? 0.25 * u / 0.8 : 0.25 + 0.75 * (u - 0.8) / 0.2;
 }

@@ -31,20 +31,27 @@ typedef enum {
     RS_SYNTH_PART_TAILLIGHT, // rear lights
     RS_SYNTH_PART_TYRE,      // tyres, black rubber
     RS_SYNTH_PART_RIM,       // wheel rims, grey metal
-    RS_SYNTH_PART_TRIM,      // bumpers, grille, chassis: dark grey plastic
+    RS_SYNTH_PART_TRIM,      // bumpers, grille, chassis, wheel-arch liners: dark plastic
+    RS_SYNTH_PART_PLATE,     // number plates: white retro-reflective
+    RS_SYNTH_PART_CHROME,    // grille bars, exhausts, handlebars: polished metal
+    RS_SYNTH_PART_RIDER,     // a two-wheeler's rider: clothes
     RS_SYNTH_NPARTS
 } rs_synth_part;
 
 // A triangle mesh in the vehicle frame. Triangles are wound counter-clockwise seen from outside
-// (the geometric normal (b-a)x(c-a) points outward). vn is optional: per-vertex normals for
-// smooth shading, same indexing as v (NULL = flat shading). Owned arrays; rs_synth_mesh_free.
+// (the geometric normal (b-a)x(c-a) points outward). vn is optional: unit normals for smooth
+// shading (NULL = flat shading), indexed like v when tri_n is NULL (OBJ models), else by tri_n:
+// corner k of triangle t has the normal vn[tri_n[t][k]] (procedural vehicles: smooth across
+// round surfaces, sharp at creases; rs_synth_fleet_build). Owned arrays; rs_synth_mesh_free.
 typedef struct {
     int Nv;          // number of vertices
     double (*v)[3];  // (Nv,3) vertices, vehicle frame, metres
-    double (*vn)[3]; // (Nv,3) unit normals, or NULL
+    double (*vn)[3]; // (Nv,3) or (Nn,3) unit normals, or NULL
     int Ntri;        // number of triangles
     int (*tri)[3];   // (Ntri,3) vertex indices
     uint8_t *part;   // (Ntri,) rs_synth_part of each triangle
+    int Nn;          // number of normals when tri_n != NULL
+    int (*tri_n)[3]; // (Ntri,3) normal indices, or NULL (then vn is indexed like v)
 } rs_synth_mesh;
 
 void rs_synth_mesh_free(rs_synth_mesh *mesh); // NULL-safe; leaves *mesh zeroed
@@ -54,7 +61,8 @@ void rs_synth_mesh_free(rs_synth_mesh *mesh); // NULL-safe; leaves *mesh zeroed
 void rs_synth_mesh_bounds(double lo[3], double hi[3], const rs_synth_mesh *mesh);
 
 // Class names as used in vehicle files and labels: "sedan", "hatchback", "suv", "pickup", "van",
-// "bus", "box_truck", "articulated_truck" ("model" for RS_SYNTH_USER_MODEL). NULL if unknown.
+// "bus", "box_truck", "articulated_truck", "motorcycle", "bicycle" ("model" for
+// RS_SYNTH_USER_MODEL). NULL if unknown.
 const char *rs_synth_class_name(rs_synth_class cls);
 // Inverse of rs_synth_class_name (exact, lower case). RS_ERR_NOT_FOUND names the valid ones.
 rs_status rs_synth_class_from_name( // out
@@ -62,15 +70,18 @@ rs_status rs_synth_class_from_name( // out
     // in
     const char *name, rs_err *err);
 
-// Realistic dimension ranges of a class, metres (docs/fleet.md gives the sources).
+// Realistic dimensions of a class, metres (docs/fleet.md gives the sources): a drawn dimension is
+// normal with the given mean and standard deviation, truncated to [min, max] (redrawn).
 typedef struct {
     double length_m[2], width_m[2], height_m[2]; // [min, max]
+    double mean_m[3], sd_m[3];                   // length, width, height: before truncation
 } rs_synth_class_range;
 // Returns RS_ERR_INVALID for a class out of range (including RS_SYNTH_USER_MODEL).
 rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls, rs_err *err);
 
 // Fills what a procedural vehicle left to chance, deterministically from in->variant: length,
-// width and height when 0 (uniform in the class range), paint when rgb[0] < 0 (drawn from the
+// width and height when 0 (truncated normal of the class, rs_synth_class_range), paint when
+// rgb[0] < 0 (drawn from the
 // colour mix of docs/fleet.md, linear RGB). Everything else is copied. The same variant always
 // gives the same vehicle; a given dimension or colour does not change the others.
 // User models (RS_SYNTH_USER_MODEL): only the paint is filled; their box comes from the mesh.
@@ -149,6 +160,46 @@ rs_status rs_synth_fleet_write_declare(FILE *f,
                                        // in
                                        const char *name, const rs_synth_mesh *mesh, rs_synth_declare_style style,
                                        const double paint_rgb[3], rs_err *err);
+
+// How a vehicle's surfaces look, drawn from its variant (docs/fleet.md, "Materials").
+typedef struct {
+    double paint_rgb[3]; // linear RGB in [0,1]: the base coat under the clear coat
+    double metallic;     // 0 solid .. 1 metallic flake: highlights tinted by the paint
+    double dirt;         // 0 clean .. 1 dirty: a grey-brown film, densest on the sills
+} rs_synth_look;
+
+// The look of a RESOLVED vehicle (paint = v->rgb; metallic and dirt from v->variant, the
+// metallic share depending on the paint's colour family). Deterministic.
+void rs_synth_fleet_look(rs_synth_look *look, const rs_synth_vehicle *v);
+
+// As rs_synth_fleet_write_declare, TEXTURED with a full look: car paint with a clear coat
+// (Fresnel reflection, ior 1.5, conserve_energy), reflective glass, chrome, plastic trims, dirt.
+// look may be NULL for BARE.
+rs_status rs_synth_fleet_write_declare_look(FILE *f,
+                                            // in
+                                            const char *name, const rs_synth_mesh *mesh, rs_synth_declare_style style,
+                                            const rs_synth_look *look, rs_err *err);
+
+// The scene's shared geometry (issue 18's cost): writes "#declare PREFIX_k = mesh2 {...}" for each
+// part k (rs_synth_part) the mesh uses, without texture, in POV-Ray axes, compact (vertices to
+// 1e-5 m, one line per array) and with smooth normals on the body's paint and glass only (the
+// other parts are a few pixels each and are flat-shaded). Written once per scene, before the
+// passes; each pass then declares its vehicle with rs_synth_fleet_write_instance, which costs no
+// geometry text. prefix: an identifier as for rs_synth_fleet_write_declare, at most 37
+// characters (RS_ERR_INVALID otherwise). Returns RS_ERR_IO when writing fails.
+rs_status rs_synth_fleet_write_parts(FILE *f,
+                                     // in
+                                     const char *prefix, const rs_synth_mesh *mesh, rs_err *err);
+
+// Writes "#declare NAME = union { object { PREFIX_k TEXTURE } ... }" over the parts that
+// rs_synth_fleet_write_parts declared for the same mesh: TEXTURED gives each part its texture
+// as rs_synth_fleet_write_declare_look does (look required), BARE gives none, so that the
+// instance's texture applies to all of it ("#declare NAME = object { PREFIX_k }" when the mesh
+// has one part). The same geometry as rs_synth_fleet_write_declare_look's, so the same pixels.
+rs_status rs_synth_fleet_write_instance(FILE *f,
+                                        // in
+                                        const char *name, const char *prefix, const rs_synth_mesh *mesh,
+                                        rs_synth_declare_style style, const rs_synth_look *look, rs_err *err);
 
 // Writes " rotate <0, YAW, 0> translate <E, UP, N>" (a leading space, no newline): the
 // placement of a declared vehicle whose footprint centre is at (v->e_m, v->n_m, up_m) ENU.

@@ -637,7 +637,8 @@ rs_status rs_synth_labels_write_yolo(const char *dir, const char *split, const r
 static void kitti_line(FILE *f, const rs_synth_label *L, const double b[4], const rs_synth_label_image *im)
 {
     (void)im;
-    static const char *const types[RS_SYNTH_NCLASSES] = {"Car", "Car", "Car", "Car", "Van", "Bus", "Truck", "Truck"};
+    static const char *const types[RS_SYNTH_NCLASSES] = {"Car", "Car",   "Car",   "Car",  "Van",
+                                                         "Bus", "Truck", "Truck", "Misc", "Cyclist"};
     const char *type = (int)L->cls >= 0 && L->cls < RS_SYNTH_NCLASSES ? types[L->cls] : "Misc";
     int occluded = !isfinite(L->visibility) ? 3 : L->visibility >= 0.8 ? 0 : L->visibility >= 0.4 ? 1 : 2;
     const double *x = L->bottom_center_cam_m;

@@ -114,8 +114,9 @@ rs_status rs_synth_ortho_render(rs_image *image, rs_geo_grid *grid, const char *
                     "camera { orthographic location <%.17g, %.17g, %.17g>\n"
                     "  right <%.17g, 0, 0> up <0, 0, %.17g> direction <0, -1, 0> }\n",
                     te, top, tn, tw * c, th * c);
-            // the sun only matters for the sunny look: high in the south, short shadows
-            st = rs_synth_twin_world_write(a.f, site, &lanes, opt.weather, 180, 60, opt.marking_width_m, err);
+            // the sun only matters for the sunny look: high in the south, short shadows; the sky
+            // casts none (an orthophoto for picking: 40% less trace time)
+            st = rs_synth_twin_world_write(a.f, site, &lanes, opt.weather, 180, 60, opt.marking_width_m, false, err);
             if (!st)
                 st = rs_io_atomic_commit(&a, err);
             else

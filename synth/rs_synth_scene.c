@@ -1,4 +1,5 @@
-// rs_synth_scene.c -- the vehicles file, the sun, and the POV-Ray scene writer
+// rs_synth_scene.c -- the vehicle box, the sun, and the POV-Ray scene writer (the vehicles file is
+// read by rs_synth_vehicles_read.c)
 // (rs_synth_scene.h, docs/povray.md).
 #include "synth/rs_synth_scene.h"
 
@@ -23,192 +24,6 @@ static void sanitise(char *out, size_t n, const char *s)
         out[k++] = (isalnum(c) || c == ' ' || c == '_' || c == '.' || c == ':' || c == '-') ? (char)c : '_';
     }
     out[k] = 0;
-}
-
-// ---- the vehicles file ----
-
-static char *list_keep(rs_synth_vehicle_list *list, const char *s)
-{
-    char **grown = realloc(list->strings, (size_t)(list->Nstrings + 1) * sizeof(char *));
-    if (!grown) return NULL;
-    list->strings = grown;
-    char *copy = strdup(s);
-    if (!copy) return NULL;
-    list->strings[list->Nstrings++] = copy;
-    return copy;
-}
-
-void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list)
-{
-    if (!list) return;
-    for (int i = 0; i < list->Nstrings; i++) free(list->strings[i]);
-    free(list->strings);
-    free(list->v);
-    free(list->obj);
-    memset(list, 0, sizeof(*list));
-}
-
-// Reads number member `name` of o into *out. Missing: *out untouched and RS_OK unless required.
-static rs_status get_number(double *out, const cJSON *o, const char *name, bool required, const char *path, int i,
-                            rs_err *err)
-{
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(o, name);
-    if (!m) {
-        if (required) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: missing", path, i, name);
-        return RS_OK;
-    }
-    if (!cJSON_IsNumber(m) || !isfinite(m->valuedouble))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: not a finite number", path, i, name);
-    *out = m->valuedouble;
-    return RS_OK;
-}
-
-static const char *get_string(const cJSON *o, const char *name)
-{
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(o, name);
-    return cJSON_IsString(m) ? m->valuestring : NULL;
-}
-
-static double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
-
-static rs_status parse_colour(double rgb[3], const cJSON *m, const char *path, int i, rs_err *err)
-{
-    if (cJSON_IsString(m)) {
-        const char *s = m->valuestring;
-        unsigned int r, g, b;
-        char tail;
-        if (strlen(s) == 7 && s[0] == '#' && sscanf(s + 1, "%2x%2x%2x%c", &r, &g, &b, &tail) == 3) {
-            rgb[0] = srgb_to_linear(r / 255.0);
-            rgb[1] = srgb_to_linear(g / 255.0);
-            rgb[2] = srgb_to_linear(b / 255.0);
-            return RS_OK;
-        }
-    } else if (cJSON_IsArray(m) && cJSON_GetArraySize(m) == 3) {
-        for (int k = 0; k < 3; k++) {
-            const cJSON *c = cJSON_GetArrayItem(m, k);
-            if (!cJSON_IsNumber(c) || !(c->valuedouble >= 0 && c->valuedouble <= 1)) goto bad;
-            rgb[k] = c->valuedouble;
-        }
-        return RS_OK;
-    }
-bad:
-    return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].colour: expected [r, g, b] in [0,1] (linear) or \"#rrggbb\"", path,
-                      i);
-}
-
-static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir,
-                              rs_err *err)
-{
-    rs_synth_vehicle *v = &list->v[i];
-    rs_synth_obj_spec *obj = &list->obj[i];
-    rs_status st;
-    if (!cJSON_IsObject(o)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object", path, i);
-    memset(v, 0, sizeof(*v));
-    v->rgb[0] = v->rgb[1] = v->rgb[2] = -1;
-    v->variant = (uint64_t)i;
-    const char *cls = get_string(o, "class"), *model = get_string(o, "model");
-    if (!!cls == !!model)
-        return rs_err_set(err, RS_ERR_INVALID,
-                          "%s: [%d]: give exactly one of \"class\" (a "
-                          "string) and \"model\" (an OBJ path)",
-                          path, i);
-    if (cls) {
-        rs_err e2 = {0};
-        rs_synth_class c;
-        if (rs_synth_class_from_name(&c, cls, &e2))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].class: %s", path, i, e2.msg);
-        v->cls = c;
-    } else {
-        v->cls = RS_SYNTH_USER_MODEL;
-        char *joined = rs_io_join(dir, model);
-        if (!joined) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        v->model_path = list_keep(list, joined);
-        free(joined);
-        if (!v->model_path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        obj->path = v->model_path;
-        obj->scale = 1;
-        if ((st = get_number(&obj->scale, o, "scale", false, path, i, err))) return st;
-        const char *fwd = get_string(o, "forward"), *up = get_string(o, "up");
-        obj->forward = list_keep(list, fwd ? fwd : "+x");
-        obj->up = list_keep(list, up ? up : "+z");
-        if (!obj->forward || !obj->up) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    }
-    if ((st = get_number(&v->e_m, o, "e", true, path, i, err)) ||
-        (st = get_number(&v->n_m, o, "n", true, path, i, err)) ||
-        (st = get_number(&v->yaw_deg, o, "yaw_deg", true, path, i, err)) ||
-        (st = get_number(&v->length_m, o, "length", false, path, i, err)) ||
-        (st = get_number(&v->width_m, o, "width", false, path, i, err)) ||
-        (st = get_number(&v->height_m, o, "height", false, path, i, err)))
-        return st;
-    const char *dims[3] = {"length", "width", "height"};
-    const double dval[3] = {v->length_m, v->width_m, v->height_m};
-    for (int k = 0; k < 3; k++)
-        if (cJSON_GetObjectItemCaseSensitive(o, dims[k]) && !(dval[k] > 0))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: must be > 0", path, i, dims[k]);
-    const cJSON *colour = cJSON_GetObjectItemCaseSensitive(o, "colour");
-    if (colour && (st = parse_colour(v->rgb, colour, path, i, err))) return st;
-    const cJSON *variant = cJSON_GetObjectItemCaseSensitive(o, "variant");
-    if (variant) {
-        if (!cJSON_IsNumber(variant) || !(variant->valuedouble >= 0) || variant->valuedouble > 9007199254740992.0 ||
-            variant->valuedouble != floor(variant->valuedouble))
-            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].variant: expected an integer >= 0", path, i);
-        v->variant = (uint64_t)variant->valuedouble;
-    }
-    const cJSON *id = cJSON_GetObjectItemCaseSensitive(o, "id");
-    if (id) {
-        if (!cJSON_IsString(id)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].id: expected a string", path, i);
-        if (!(v->id = list_keep(list, id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    }
-    return RS_OK;
-}
-
-rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, rs_err *err)
-{
-    memset(list, 0, sizeof(*list));
-    char *text = NULL, *dir = NULL;
-    cJSON *root = NULL;
-    rs_status st = rs_io_read_file(&text, NULL, path, err);
-    if (st) return st;
-    root = cJSON_Parse(text);
-    if (!root) {
-        // cJSON points at the failure: count lines up to there
-        const char *at = cJSON_GetErrorPtr();
-        int line = 1;
-        for (const char *c = text; at && c < at && *c; c++) line += *c == '\n';
-        st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: not valid JSON", path, line);
-        goto done;
-    }
-    if (!cJSON_IsArray(root)) {
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of vehicles", path);
-        goto done;
-    }
-    const int N = cJSON_GetArraySize(root);
-    dir = strdup(path);
-    list->v = calloc((size_t)(N > 0 ? N : 1), sizeof(*list->v));
-    list->obj = calloc((size_t)(N > 0 ? N : 1), sizeof(*list->obj));
-    if (!dir || !list->v || !list->obj) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    char *slash = strrchr(dir, '/');
-    if (slash)
-        slash[1] = 0;
-    else
-        strcpy(dir, ".");
-    int i = 0;
-    const cJSON *o;
-    cJSON_ArrayForEach(o, root)
-    {
-        if ((st = read_vehicle(list, i, o, path, dir, err))) goto done;
-        i++;
-    }
-    list->N = N;
-done:
-    cJSON_Delete(root);
-    free(text);
-    free(dir);
-    if (st) rs_synth_vehicle_list_free(list);
-    return st;
 }
 
 // ---- the vehicle box and the ground ----
@@ -373,6 +188,34 @@ void rs_synth_scene_options_default(rs_synth_scene_options *opt)
     opt->pin_radius_px = 3;
 }
 
+void rs_synth_scene_env_default(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3], bool overcast)
+{
+    static const double clear[3][3] = {{0.20, 0.30, 0.55}, {0.50, 0.55, 0.60}, {0.20, 0.19, 0.18}};
+    static const double grey[3][3] = {{0.95, 0.97, 1.00}, {0.80, 0.82, 0.84}, {0.16, 0.16, 0.16}};
+    const double(*e)[3] = overcast ? grey : clear;
+    for (int c = 0; c < 3; c++) zenith_rgb[c] = e[0][c], horizon_rgb[c] = e[1][c], ground_rgb[c] = e[2][c];
+}
+
+// The environment sphere of the colour pass (rs_synth_scene_options.env_*): 50 km round the
+// site origin, hollow, emissive, invisible to the camera (no_image) and casting no shadow; the
+// ground plane cuts it, so below the horizon the vehicles mostly reflect the ground itself.
+static void write_environment(FILE *f, const rs_synth_scene_options *opt)
+{
+    double z[3], h[3], g[3];
+    if (opt->env_given)
+        for (int c = 0; c < 3; c++)
+            z[c] = opt->env_zenith_rgb[c], h[c] = opt->env_horizon_rgb[c], g[c] = opt->env_ground_rgb[c];
+    else
+        rs_synth_scene_env_default(z, h, g, opt->overcast);
+    fprintf(f,
+            "// the environment, seen in reflections only\n"
+            "sphere { 0, 1 hollow\n  texture { pigment { gradient y colour_map { [0 rgb <%.5f, %.5f, %.5f>] "
+            "[0.5 rgb <%.5f, %.5f, %.5f>] [0.52 rgb <%.5f, %.5f, %.5f>] [1 rgb <%.5f, %.5f, %.5f>] } "
+            "scale 2 translate -1*y }\n    finish { emission 1 ambient 0 diffuse 0 specular 0 } }\n"
+            "  scale 50000 no_image no_shadow }\n",
+            g[0], g[1], g[2], g[0], g[1], g[2], h[0], h[1], h[2], z[0], z[1], z[2]);
+}
+
 static void write_vec_enu(FILE *f, const double p_enu[3])
 {
     double p[3];
@@ -435,6 +278,12 @@ int rs_synth_scene_lights(rs_synth_light *lights, const rs_synth_scene_options *
     return n;
 }
 
+// The albedo of the shadow pass's ground. POV-Ray clamps what it writes to [0, 1]: with a white
+// ground, open ground under a clear sky (0.35) and a sun higher than 40.5 deg (sin el + 0.35 > 1)
+// was written as 1 and read back as a lit fraction of 1 / (sin el + 0.35) (0.74 at 90 deg): every
+// open pixel of the background darkened. At 0.25 the sun and the brightest sky (1 + 1) give 0.5.
+#define SHADOW_GROUND_ALBEDO 0.25
+
 double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights, const double ground_normal_enu[3])
 {
     const double *g = ground_normal_enu;
@@ -445,7 +294,7 @@ double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights, co
         const double c = (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn;
         sum += lights[j].irradiance * (c > 0 ? c : 0);
     }
-    return sum;
+    return SHADOW_GROUND_ALBEDO * sum;
 }
 
 static void write_head(FILE *f, const char *what)
@@ -456,6 +305,127 @@ static void write_head(FILE *f, const char *what)
             "#version 3.7;\n"
             "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
             what);
+}
+
+// The meshes of every vehicle some pass includes, declared once for all passes (issue 18's
+// cost: POV-Ray parses a scene's text again for every frame and scans the frames it skips, so
+// each mesh written once instead of once per pass takes two thirds of the text away):
+// "#declare RS_PART_<mesh>_<part> = mesh2 {...}" (rs_synth_fleet_write_parts).
+static rs_status write_geometry(FILE *f, const rs_synth_prepared *vehicles, const rs_synth_scene_options *passes,
+                                int Npasses, rs_err *err)
+{
+    for (int m = 0; m < vehicles->Nmeshes; m++) {
+        bool used = false;
+        for (int i = 0; i < vehicles->N && !used; i++)
+            if (vehicles->imesh[i] == m)
+                for (int k = 0; k < Npasses && !used; k++) used = !passes[k].include || passes[k].include[i];
+        if (!used) continue;
+        char prefix[32];
+        snprintf(prefix, sizeof(prefix), "RS_PART_%d", m);
+        rs_status st = rs_synth_fleet_write_parts(f, prefix, &vehicles->meshes[m], err);
+        if (st) return st;
+    }
+    return RS_OK;
+}
+
+// Andrew's monotone chain (A. M. Andrew, "Another efficient algorithm for convex hulls in two
+// dimensions", Inf. Process. Lett. 9(5), 1979): the convex hull of p[0..n-1] counter-clockwise
+// into h (at most n + 1 points), returns its size. Sorts p.
+static int cmp_xy(const void *a, const void *b)
+{
+    const double *p = a, *q = b;
+    return p[0] < q[0] ? -1 : p[0] > q[0] ? 1 : p[1] < q[1] ? -1 : p[1] > q[1] ? 1 : 0;
+}
+static double turn(const double *o, const double *a, const double *b)
+{
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+static int convex_hull(double (*h)[2], double (*p)[2], int n)
+{
+    qsort(p, (size_t)n, sizeof p[0], cmp_xy);
+    int k = 0;
+    for (int i = 0; i < n; i++) { // lower
+        while (k >= 2 && turn(h[k - 2], h[k - 1], p[i]) <= 0) k--;
+        h[k][0] = p[i][0], h[k][1] = p[i][1], k++;
+    }
+    for (int i = n - 2, lo = k + 1; i >= 0; i--) { // upper
+        while (k >= lo && turn(h[k - 2], h[k - 1], p[i]) <= 0) k--;
+        h[k][0] = p[i][0], h[k][1] = p[i][1], k++;
+    }
+    return k > 1 ? k - 1 : k; // the last point repeats the first
+}
+
+// The shadow pass needs the ground only where a vehicle can darken it (issue 18's cost: every
+// ground pixel traces a shadow ray towards each of the 8 lights, most of them far from any
+// vehicle). So its ground is not the whole plane but one patch per vehicle, in the plane: the
+// convex hull of the box's footprint and of its top corners projected onto the ground along
+// every light more than 3 deg above it (the rule of rs_synth_render's region), widened by 5 cm,
+// as a fan of triangles. A box's shadow along a direction is the hull of its corners'
+// projections, so no shadow is lost; the pixels outside are transparent, which the render reads
+// as fully lit (lit fraction 1), as they were. Lights within 3 deg of the ground are left out
+// here as in the region. Writes "mesh2 { ... " (no closing brace) and returns 1, or writes
+// nothing and returns 0 when no vehicle is included (then the caller writes the plane).
+static int write_shadow_ground(FILE *f, const rs_synth_prepared *vehicles, const rs_synth_scene_options *opt,
+                               const double ground_normal_enu[3], double ground_offset_m)
+{
+    enum { MAXP = 4 + 4 * (RS_SYNTH_SKY_LIGHTS + 1) };
+    rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
+    const int Nlights = rs_synth_scene_lights(lights, opt);
+    const double *g = ground_normal_enu;
+    const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    const int N = vehicles->N;
+    double(*hull)[2] = malloc(sizeof(double[2]) * (size_t)(N > 0 ? N : 1) * (MAXP + 1));
+    int *Nhull = calloc((size_t)(N > 0 ? N : 1), sizeof(int));
+    int Nv = 0, Nt = 0;
+    if (!hull || !Nhull) {
+        free(hull), free(Nhull);
+        return 0; // the plane then: slower, the same shadows
+    }
+    for (int i = 0; i < N; i++) {
+        if (opt->include && !opt->include[i]) continue;
+        double corners[8][3], p[MAXP][2], (*h)[2] = &hull[(size_t)i * (MAXP + 1)];
+        rs_synth_vehicle_corners_enu(corners, &vehicles->v[i], ground_normal_enu, ground_offset_m);
+        int n = 0;
+        for (int k = 0; k < 4; k++) p[n][0] = corners[k][0], p[n][1] = corners[k][1], n++;
+        for (int j = 0; j < Nlights; j++) {
+            const double *d = lights[j].dir_enu;
+            const double nd = (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn;
+            if (!(nd > 0.05)) continue;
+            for (int k = 4; k < 8; k++) {
+                const double *c = corners[k];
+                const double s = ((g[0] * c[0] + g[1] * c[1] + g[2] * c[2]) / gn - ground_offset_m / gn) / nd;
+                p[n][0] = c[0] - s * d[0], p[n][1] = c[1] - s * d[1], n++;
+            }
+        }
+        const int Nh = convex_hull(h, p, n);
+        if (Nh < 3) continue;
+        double ce = 0, cn = 0;
+        for (int k = 0; k < Nh; k++) ce += h[k][0] / Nh, cn += h[k][1] / Nh;
+        for (int k = 0; k < Nh; k++) {
+            const double de = h[k][0] - ce, dn = h[k][1] - cn, r = sqrt(de * de + dn * dn);
+            if (r > 0) h[k][0] += 0.05 * de / r, h[k][1] += 0.05 * dn / r;
+        }
+        Nhull[i] = Nh;
+        Nv += Nh;
+        Nt += Nh - 2;
+    }
+    if (Nt > 0) {
+        // POV-Ray's world <east, up, north>, each point on the ground plane
+        fprintf(f, "mesh2 {\n  vertex_vectors { %d", Nv);
+        for (int i = 0; i < N; i++)
+            for (int k = 0; k < Nhull[i]; k++) {
+                const double *q = hull[(size_t)i * (MAXP + 1) + k];
+                fprintf(f, ",\n    <%.6f, %.6f, %.6f>", q[0],
+                        rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, q[0], q[1]), q[1]);
+            }
+        fprintf(f, " }\n  face_indices { %d", Nt);
+        for (int i = 0, base = 0; i < N; base += Nhull[i], i++)
+            for (int k = 1; k + 1 < Nhull[i]; k++) fprintf(f, ",\n    <%d, %d, %d>", base, base + k, base + k + 1);
+        fprintf(f, " }\n");
+    }
+    free(hull);
+    free(Nhull);
+    return Nt > 0;
 }
 
 static const char *pass_name(rs_synth_pass pass)
@@ -484,13 +454,23 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
                 : opt.overcast ? " (overcast: no sun)"
                                : " (below the horizon)",
                 RS_SYNTH_SKY_LIGHTS, shadow_pass ? ", casting shadows" : ", shadowless");
+        // lighting matched to the background (part B of issue 18): a per-channel scale
+        const double *ls = opt.light_rgb_scale;
+        const bool matched = !shadow_pass && (ls[0] > 0 || ls[1] > 0 || ls[2] > 0);
+        const double k[3] = {matched ? ls[0] : 1, matched ? ls[1] : 1, matched ? ls[2] : 1};
         for (int j = 0; j < Nlights; j++) {
             double p[3];
-            for (int k = 0; k < 3; k++) p[k] = 1e6 * lights[j].dir_enu[k];
+            for (int c = 0; c < 3; c++) p[c] = 1e6 * lights[j].dir_enu[c];
             fprintf(f, "light_source { ");
             write_vec_enu(f, p);
-            if (j < first_sky && !shadow_pass) // the sun, in colour
+            if (j < first_sky && !shadow_pass && !matched) // the sun, in colour
                 fprintf(f, " color rgb <1.0, 0.97, 0.92> parallel point_at <0, 0, 0> }\n");
+            else if (j < first_sky && matched)
+                fprintf(f, " color rgb <%.9g, %.9g, %.9g> parallel point_at <0, 0, 0> }\n", 1.0 * k[0], 0.97 * k[1],
+                        0.92 * k[2]);
+            else if (matched)
+                fprintf(f, " color rgb <%.9g, %.9g, %.9g> parallel point_at <0, 0, 0> shadowless }\n",
+                        lights[j].irradiance * k[0], lights[j].irradiance * k[1], lights[j].irradiance * k[2]);
             else
                 fprintf(f, " color rgb %.9g parallel point_at <0, 0, 0>%s }\n", lights[j].irradiance,
                         j >= first_sky && !shadow_pass ? " shadowless" : "");
@@ -500,17 +480,21 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
     // occluder of value 0 in the ID pass, white in the shadow pass.
     const double n_pov[3] = {ground_normal_enu[0], ground_normal_enu[2], ground_normal_enu[1]};
     const double nn = sqrt(n_pov[0] * n_pov[0] + n_pov[1] * n_pov[1] + n_pov[2] * n_pov[2]);
-    fprintf(f, "plane { <%.17g, %.17g, %.17g>, %.17g\n", n_pov[0] / nn, n_pov[1] / nn, n_pov[2] / nn,
-            ground_offset_m / nn);
+    if (!(shadow_pass && write_shadow_ground(f, vehicles, &opt, ground_normal_enu, ground_offset_m)))
+        fprintf(f, "plane { <%.17g, %.17g, %.17g>, %.17g\n", n_pov[0] / nn, n_pov[1] / nn, n_pov[2] / nn,
+                ground_offset_m / nn);
     if (id_pass)
         fprintf(f, "  texture { pigment { rgb 0 } finish { emission 0 ambient 0 diffuse 0 } }\n");
-    else if (shadow_pass)
-        fprintf(f, "  texture { pigment { rgb 1 } finish { emission 0 ambient 0 diffuse 1 "
-                   "brilliance 1 specular 0 } }\n");
-    else
+    else if (shadow_pass) {
+        fprintf(f,
+                "  texture { pigment { rgb %.2f } finish { emission 0 ambient 0 diffuse 1 "
+                "brilliance 1 specular 0 } }\n",
+                SHADOW_GROUND_ALBEDO);
+    } else
         fprintf(f, "  texture { pigment { rgb 0.18 } finish { ambient 0 diffuse 0.8 } }%s\n",
                 opt.ground_visible ? "" : " no_image");
     fprintf(f, "}\n");
+    if (opt.pass == RS_SYNTH_PASS_COLOUR && !opt.env_off) write_environment(f, &opt);
     // Meshes: textured per vehicle in the colour pass for procedural ones, bare otherwise.
     const int N = vehicles->N;
     for (int m = 0; m < vehicles->Nmeshes; m++) {
@@ -522,11 +506,15 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
             }
         if (first < 0) continue;
         const bool textured = opt.pass == RS_SYNTH_PASS_COLOUR && vehicles->v[first].cls != RS_SYNTH_USER_MODEL;
-        char name[32];
+        char name[32], prefix[32];
         snprintf(name, sizeof(name), "RS_MESH_%d", m);
-        if ((st = rs_synth_fleet_write_declare(f, name, &vehicles->meshes[m],
-                                               textured ? RS_SYNTH_DECLARE_TEXTURED : RS_SYNTH_DECLARE_BARE,
-                                               vehicles->v[first].rgb, err)))
+        snprintf(prefix, sizeof(prefix), "RS_PART_%d", m);
+        rs_synth_look look;
+        rs_synth_fleet_look(&look, &vehicles->v[first]);
+        // the geometry is declared once before the passes (write_geometry): no mesh text here
+        if ((st = rs_synth_fleet_write_instance(f, name, prefix, &vehicles->meshes[m],
+                                                textured ? RS_SYNTH_DECLARE_TEXTURED : RS_SYNTH_DECLARE_BARE, &look,
+                                                err)))
             return st;
     }
     for (int i = 0; i < N; i++) {
@@ -569,7 +557,8 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
     char what[32];
     snprintf(what, sizeof(what), "%s pass", pass_name(opt.pass));
     write_head(f, what);
-    rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &opt, err);
+    rs_status st = write_geometry(f, vehicles, &opt, 1, err);
+    if (!st) st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &opt, err);
     if (!st && ferror(f)) st = rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
     return st;
 }
@@ -587,6 +576,8 @@ rs_status rs_synth_scene_write_frames(FILE *f, const rs_synth_povcam *cam, const
         snprintf(what + len, sizeof(what) - len, " %d %s", k + 1, pass_name(passes[k].pass));
     }
     write_head(f, what);
+    rs_status gst = write_geometry(f, vehicles, passes, Npasses, err);
+    if (gst) return gst;
     fprintf(f, "#switch (frame_number)\n");
     for (int k = 0; k < Npasses; k++) {
         fprintf(f, "#case (%d) // %s pass\n", k + 1, pass_name(passes[k].pass));

@@ -80,8 +80,8 @@ rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char 
 
 // ---- the scene ----
 
-// RS_SYNTH_PASS_SHADOW: what differential rendering needs, as a single pass: the ground white
-// (pigment 1, diffuse 1, no ambient), the vehicles invisible (no_image) but casting shadows,
+// RS_SYNTH_PASS_SHADOW: what differential rendering needs, as a single pass: the ground grey
+// (pigment 0.25 so that nothing saturates, diffuse 1, no ambient), the vehicles invisible (no_image) but casting shadows,
 // lit by the lights of rs_synth_scene_shadow_lights (the sun unless overcast or below the
 // horizon, and a sky of parallel lights that cast shadows too). A pixel's value divided by
 // rs_synth_scene_shadow_unlit() is the fraction of the ground's light reaching that pixel:
@@ -113,6 +113,10 @@ typedef struct {
                             // for compositing over a photograph)
     double sun_azimuth_deg; // sun direction (colour pass)
     double sun_elevation_deg;
+    // Lighting matched to a background (rs_synth_light_match, synth/rs_synth_sun.h): in the
+    // colour pass every light (sun and sky) times light_rgb_scale per channel; all 0 (the
+    // default): 1. The shadow pass is a ratio and stays grey.
+    double light_rgb_scale[3];
     const double *pins_enu_m; // (Npins,3) pin centres, may be NULL
     int Npins;
     double pin_radius_px;   // pins' radius in image pixels at their distance (default 3)
@@ -120,7 +124,18 @@ typedef struct {
     bool boxes;             // draw vehicles as plain boxes (no fleet meshes)
     bool overcast;          // no sun: the sky alone, RS_SYNTH_SKY_OVERCAST (colour and
                             // shadow passes)
+    // The environment the vehicles reflect (colour pass): a sphere round the scene, seen only
+    // in reflections (no_image), glowing from env_ground_rgb below the horizon through
+    // env_horizon_rgb to env_zenith_rgb overhead, linear RGB in the units of the lights (a white
+    // surface under a sun at the zenith is 1). env_given false: rs_synth_scene_env_default's.
+    bool env_given;
+    double env_zenith_rgb[3], env_horizon_rgb[3], env_ground_rgb[3];
+    bool env_off; // no environment at all (reflections show the black background)
 } rs_synth_scene_options;
+
+// The default environment: a clear sky (blue zenith, pale horizon) or an overcast one (grey,
+// as bright as RS_SYNTH_SKY_OVERCAST), over asphalt of albedo 0.18 lit by the sun and sky.
+void rs_synth_scene_env_default(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3], bool overcast);
 
 // The lights of the colour and shadow passes: the sun (irradiance 1, when its elevation is
 // above 0 and the sky is not overcast) first, then the RS_SYNTH_SKY_LIGHTS sky lights scaled

@@ -270,6 +270,8 @@ static const char *vclass_of(rs_synth_class c)
     case RS_SYNTH_BUS: return "bus";
     case RS_SYNTH_BOX_TRUCK: return "truck";
     case RS_SYNTH_ARTICULATED_TRUCK: return "trailer";
+    case RS_SYNTH_MOTORCYCLE: return "motorcycle";
+    case RS_SYNTH_BICYCLE: return "bicycle";
     default: return "passenger";
     }
 }

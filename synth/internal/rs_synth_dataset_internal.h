@@ -23,6 +23,7 @@
 #include "synth/rs_synth_appearance.h"
 #include "synth/rs_synth_camera.h"
 #include "synth/rs_synth_dataset.h"
+#include "synth/rs_synth_sun.h"
 
 // One background an image may be drawn over.
 typedef struct {
@@ -35,6 +36,13 @@ typedef struct {
     rs_image linear; // fitted, decoded from sRGB to linear light
     rs_synth_appearance app;
     bool app_ok; // the appearance could be estimated
+    // issue 18: the light its road shows (rs_synth_light_from_image; dry conditions only: sunny,
+    // cloudy or untagged), matched by the vehicles' lights (rs_synth_light_match)
+    rs_synth_light_estimate light;
+    bool light_tried, light_ok;
+    // issue 18: without a time tag, the sun from the site's poles' shadows (rs_synth_sun_from_shadows)
+    rs_synth_sun_estimate sun;
+    bool sun_ok;
 } rs_synth_dataset__background;
 
 // One camera images are made for.

@@ -20,7 +20,8 @@ enum {
     RS_SYNTH_FLEET_STREAM_HEIGHT,
     RS_SYNTH_FLEET_STREAM_COLOUR,
     RS_SYNTH_FLEET_STREAM_SHAPE,
-    RS_SYNTH_FLEET_STREAM_CLASS
+    RS_SYNTH_FLEET_STREAM_CLASS,
+    RS_SYNTH_FLEET_STREAM_LOOK
 };
 
 // The generator of stream `which` (RS_SYNTH_FLEET_STREAM_*) of a vehicle's variant (or of the
@@ -42,3 +43,12 @@ int rs_synth_fleet_add_v(rs_synth_fleet_builder *b, double x, double y, double z
 
 // Appends the triangle (i, j, k), counter-clockwise seen from outside, of rs_synth_part `part`.
 void rs_synth_fleet_add_t(rs_synth_fleet_builder *b, int i, int j, int k, int part);
+
+// Makes the triangles from t0 on (one closed component) wind outward: reverses them all when
+// their signed volume is negative.
+void rs_synth_fleet_orient(rs_synth_fleet_builder *b, int t0);
+
+// Smooth normals with creases (m.vn, m.tri_n): the normal at a triangle's corner is the
+// area-weighted mean of the normals of the triangles sharing that vertex whose normal is within
+// crease_deg of this triangle's; identical corner normals of a vertex are stored once.
+void rs_synth_fleet_smooth(rs_synth_fleet_builder *b, double crease_deg);

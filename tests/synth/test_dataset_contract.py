@@ -162,8 +162,10 @@ def check_layouts(ds, coco):
     names = re.findall(r"^\s+(\d+):\s*(\S+)\s*$", y, re.M)
     if not os.path.isabs(fields.get("path", "")) or fields.get("train") != "images/train2017":
         u.fail("data.yaml: path/train wrong: %s" % fields)
-    if [int(i) for i, _ in names] != list(range(8)):
-        u.fail("data.yaml: names are not 0..7")
+    # the classes: 0..K-1 in the order of COCO's categories (by id), the same names
+    cat_names = [c["name"] for c in sorted(coco["categories"], key=lambda c: c["id"])]
+    if [int(i) for i, _ in names] != list(range(len(cat_names))) or [n for _, n in names] != cat_names:
+        u.fail("data.yaml: names %s are not COCO's categories %s in order" % (names, cat_names))
     root = fields["path"]
     nlab = 0
     for f in sorted(os.listdir(os.path.join(root, fields["train"]))):
@@ -173,7 +175,7 @@ def check_layouts(ds, coco):
             u.fail("YOLO: no label file where Ultralytics looks: " + lp)
         rows = np.loadtxt(lp, ndmin=2) if os.path.getsize(lp) else np.zeros((0, 5))
         if rows.size and (rows.shape[1] != 5 or rows[:, 1:].min() < 0 or rows[:, 1:].max() > 1
-                          or rows[:, 0].max() > 7 or np.any(rows[:, 0] != np.round(rows[:, 0]))):
+                          or rows[:, 0].max() > len(cat_names) - 1 or np.any(rows[:, 0] != np.round(rows[:, 0]))):
             u.fail("YOLO: %s: not class cx cy w h normalised to [0, 1]" % lp)
         nlab += len(rows)
     if nlab != len(coco["annotations"]):

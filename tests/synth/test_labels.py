@@ -86,7 +86,8 @@ def corners_v(v):
                       Hh if c & 4 else 0] for c in range(8)])
 
 
-CLASSES = ["sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck", "articulated_truck"]
+CLASSES = ["sedan", "hatchback", "suv", "pickup", "van", "bus", "box_truck", "articulated_truck",
+           "motorcycle", "bicycle"]
 FACES = [(0, 2, 6, 4), (1, 5, 7, 3), (0, 4, 5, 1), (2, 3, 7, 6), (0, 1, 3, 2), (4, 6, 7, 5)]
 BOTTOM = (0, 2, 3, 1)
 
@@ -381,7 +382,7 @@ def main():
     check(im["width"] == W and im["height"] == H and im["file_name"] == "frame_000001.png"
           and im["id"] == 1, f"COCO image {im}")
     check([c["name"] for c in coco["categories"]] == CLASSES
-          and [c["id"] for c in coco["categories"]] == list(range(1, 9)), "COCO categories")
+          and [c["id"] for c in coco["categories"]] == list(range(1, len(CLASSES) + 1)), "COCO categories")
     kept = [k for k, l in enumerate(labels) if l["in_image"]]
     check(len(coco["annotations"]) == len(kept), f"COCO: {len(coco['annotations'])} annotations, "
           f"{len(kept)} vehicles in the image")
