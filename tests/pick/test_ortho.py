@@ -6,7 +6,7 @@ Oracle: GDAL's own gdalinfo (the geotransform and the CRS as it reads them back)
 (GeographicLib) or its grid code. At the midpoint of every lane segment, both lane edges carry a
 white marking 0.15 m wide (the twin's scene); the brightness profile across each edge, read from
 the file GDAL wrote, must peak at the predicted position.
-Tolerance: 0.6 cell (0.03 m at the 0.05 m GSD used): the markings are rendered without
+Tolerance: 0.6 cell (0.06 m at the 0.1 m GSD used): the markings are rendered without
 antialiasing, so a stripe's rendered centre can be off by up to half a cell from its true one.
 """
 import json
@@ -22,7 +22,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from rs_check import check, finish, run  # noqa: E402
 
 SRC = os.environ["ROADSIDE_SOURCE_ROOT"]
-GSD = 0.05
+GSD = 0.1
 TOL_CELLS = 0.6
 
 
