@@ -111,19 +111,18 @@ static bool landmark_block(block *b, const columns *cl, const rs_calib_refine_pr
     for (int a = 0; a < 3; a++) {
         const double sa = rp->sigma_enu_m ? rp->sigma_enu_m[3 * i + a] : 0.0;
         if (!(sa > 0)) continue; // held exactly
-        for (int r = 0; r < 2; r++) {
-            double v = 0;
-            for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a];
-            b->B[r][b->k] = v / sp;
-        }
+        const double axis[3] = {a == 0, a == 1, a == 2};
+        double col[2];
+        rs_calib__position_column(col, dq_dpc, dpc_dp, axis, sp);
+        b->B[0][b->k] = col[0], b->B[1][b->k] = col[1];
         b->e[b->m] = (p[a] - rp->p_survey_c_m[3 * i + a]) / sa;
         b->B[b->m][b->k] = 1.0 / sa;
         b->m++, b->k++;
     }
     if (slides) { // s: the pixel rows' dependence on the seen point, along d
-        for (int r = 0; r < 2; r++)
-            for (int j = 0; j < 3; j++)
-                for (int a = 0; a < 3; a++) b->B[r][b->k] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a] * d[a] / sp;
+        double col[2];
+        rs_calib__position_column(col, dq_dpc, dpc_dp, d, sp);
+        b->B[0][b->k] = col[0], b->B[1][b->k] = col[1];
         b->k++;
     }
     return true;

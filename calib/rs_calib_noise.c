@@ -91,6 +91,17 @@ bool rs_calib__seen_point(double seen[3], double d[3], const double *p_c_m, cons
     return slides;
 }
 
+void rs_calib__position_column(double col[2], const mrcal_point3_t dq_dpc[2], const double dpc_dp[9],
+                               const double dir[3], double sigma_px)
+{
+    for (int r = 0; r < 2; r++) {
+        double v = 0;
+        for (int j = 0; j < 3; j++)
+            for (int a = 0; a < 3; a++) v += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a] * dir[a];
+        col[r] = v / sigma_px;
+    }
+}
+
 // One landmark's whitened observations: rows (up to 5: u, v and the free survey axes) of A (nc
 // columns) and B (k <= 4: the free position axes, and s for a landmark picked along a segment),
 // the residuals e, which component each row is.
@@ -130,20 +141,19 @@ static bool landmark_block(block *b, const rs_calib_noise_state *s, const params
     for (int a = 0; a < 3; a++) {
         const double sa = s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0;
         if (!(sa > 0)) continue;
-        for (int r = 0; r < 2; r++) { // the pixel rows' dependence on this axis
-            double v = 0;
-            for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a];
-            b->B[r][b->k] = v / sp;
-        }
+        const double axis[3] = {a == 0, a == 1, a == 2};
+        double col[2]; // the pixel rows' dependence on this axis
+        rs_calib__position_column(col, dq_dpc, dpc_dp, axis, sp);
+        b->B[0][b->k] = col[0], b->B[1][b->k] = col[1];
         b->comp[b->m] = RS_NOISE_E + a;
         b->e[b->m] = (p[a] - s->p_survey_c_m[3 * i + a]) / sa;
         b->B[b->m][b->k] = 1.0 / sa;
         b->m++, b->k++;
     }
     if (slides) { // s: the pixel rows' dependence on the seen point, along d
-        for (int r = 0; r < 2; r++)
-            for (int j = 0; j < 3; j++)
-                for (int a = 0; a < 3; a++) b->B[r][b->k] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a] * d[a] / sp;
+        double col[2];
+        rs_calib__position_column(col, dq_dpc, dpc_dp, d, sp);
+        b->B[0][b->k] = col[0], b->B[1][b->k] = col[1];
         b->k++;
     }
     return true;

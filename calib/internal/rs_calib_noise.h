@@ -90,6 +90,12 @@ double rs_calib__noise_update(double q, double r, double log_theta, double prior
 bool rs_calib__seen_point(double seen[3], double d[3], const double *p_c_m, const double *along_c,
                           const double *s_along_m, int i);
 
+// The whitened pixel rows' derivative (2,) with respect to moving the seen point along dir (3,):
+// (dq/dp_cam dp_cam/dp dir) / sigma_px. One free survey axis (dir a unit axis) or a slide along
+// a segment (dir its direction): a column of a landmark's block B.
+void rs_calib__position_column(double col[2], const mrcal_point3_t dq_dpc[2], const double dpc_dp[9],
+                               const double dir[3], double sigma_px);
+
 // ---- the solve's side (rs_calib_noise_model.c; driven by rs_calib.c) ----
 
 // rs_calib_solve's scratch, (N,) arrays unless said.
