@@ -15,6 +15,7 @@
 #include "core/rs_io.h"
 #include "geo/rs_lanes.h"
 #include "geo/rs_site.h"
+#include "synth/internal/rs_synth_dataset_internal.h"
 #include "synth/rs_synth_dataset.h"
 
 rs_status rs_synth_junction_centre(double centre_enu_m[2], const char *site_dir, rs_err *err)
@@ -62,15 +63,19 @@ static const char *string_of(const cJSON *o, const char *key)
     return cJSON_IsString(v) ? v->valuestring : NULL;
 }
 
-rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *dataset_dir,
-                                 const double centre_enu_m[2], double radius_m, rs_err *err)
+static int cmp_name(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+
+rs_status rs_synth_dataset__splits(char **names, int *Nnames, int max, const char *dataset_dir, rs_err *err)
 {
-    memset(r, 0, sizeof(*r));
+    *Nnames = 0;
     char *adir = rs_io_join(dataset_dir, "annotations");
     if (!adir) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     DIR *dir = opendir(adir);
     if (!dir) {
-        rs_status st = rs_err_set(err, RS_ERR_IO, "%s: %s (not a dataset?)", adir, strerror(errno));
+        rs_status st = rs_err_set(err, RS_ERR_IO,
+                                  "%s: %s (not a dataset made by roadside synth? docs/labels.md, \"The dataset "
+                                  "contract\")",
+                                  adir, strerror(errno));
         free(adir);
         return st;
     }
@@ -80,8 +85,41 @@ rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *d
         const size_t len = strlen(de->d_name);
         if (strncmp(de->d_name, "instances_", 10) != 0 || len <= 15 || strcmp(de->d_name + len - 5, ".json") != 0)
             continue;
-        if (r->Nsplits == RS_SYNTH_STATS_MAX) continue;
-        char *path = rs_io_join(adir, de->d_name), *text = NULL;
+        if (*Nnames == max) {
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: more than %d splits", adir, max);
+            break;
+        }
+        if (!(names[*Nnames] = strndup(de->d_name + 10, len - 15)))
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        else
+            (*Nnames)++;
+    }
+    closedir(dir);
+    qsort(names, (size_t)*Nnames, sizeof(char *), cmp_name);
+    if (!st && *Nnames == 0)
+        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no instances_<split>.json (not a dataset made by roadside synth?)",
+                        adir);
+    free(adir);
+    if (st) {
+        for (int k = 0; k < *Nnames; k++) free(names[k]);
+        *Nnames = 0;
+    }
+    return st;
+}
+
+rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *dataset_dir,
+                                 const double centre_enu_m[2], double radius_m, rs_err *err)
+{
+    memset(r, 0, sizeof(*r));
+    char *names[RS_SYNTH_STATS_MAX];
+    int Nnames = 0;
+    rs_status st = rs_synth_dataset__splits(names, &Nnames, RS_SYNTH_STATS_MAX, dataset_dir, err);
+    char *adir = st ? NULL : rs_io_join(dataset_dir, "annotations");
+    if (!st && !adir) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int k = 0; !st && k < Nnames; k++) {
+        char file[600];
+        snprintf(file, sizeof(file), "instances_%s.json", names[k]);
+        char *path = rs_io_join(adir, file), *text = NULL;
         if (!path) {
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             break;
@@ -94,7 +132,7 @@ rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *d
                 st = rs_err_set(err, RS_ERR_PARSE, "%s: not a COCO file (images, annotations)", path);
             else {
                 rs_synth_dataset_count *sp = &r->splits[r->Nsplits++];
-                snprintf(sp->value, sizeof(sp->value), "%.*s", (int)(len - 15), de->d_name + 10);
+                snprintf(sp->value, sizeof(sp->value), "%s", names[k]);
                 sp->images = cJSON_GetArraySize(images);
                 sp->labels = cJSON_GetArraySize(anns);
                 r->images += sp->images;
@@ -130,9 +168,7 @@ rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *d
         free(text);
         free(path);
     }
-    closedir(dir);
+    for (int k = 0; k < Nnames; k++) free(names[k]);
     free(adir);
-    if (!st && r->Nsplits == 0)
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s/annotations: no instances_<split>.json", dataset_dir);
     return st;
 }

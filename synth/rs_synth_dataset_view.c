@@ -2,7 +2,6 @@
 // their labels drawn (synth/rs_synth_dataset.h, rs_synth_dataset_view). Reads the dataset's own
 // COCO files (the dataset contract, docs/labels.md), draws through the OpenCV shim
 // (synth/rs_synth_opencv.h), reads and writes images through core/rs_image.h.
-#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -14,6 +13,7 @@
 #include "core/rs_image.h"
 #include "core/rs_io.h"
 #include "core/rs_json.h"
+#include "synth/internal/rs_synth_dataset_internal.h"
 #include "synth/rs_synth_dataset.h"
 #include "synth/rs_synth_opencv.h"
 
@@ -70,8 +70,6 @@ static void view_free(view_state *v)
     for (int i = 0; i < v->Nitems; i++) free((void *)v->items[i].ann);
     free(v->items);
 }
-
-static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
 // The number of o[key], or NaN when absent or not a number.
 static double number_of(const cJSON *o, const char *key)
@@ -154,35 +152,9 @@ static rs_status check_annotation(const cJSON *a, int index, const char *path, r
 // max_images images (0: all) with their annotations.
 static rs_status view_load(view_state *v, const char *dataset_dir, int max_images, rs_err *err)
 {
-    char *adir = rs_io_join(dataset_dir, "annotations");
-    if (!adir) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    DIR *dir = opendir(adir);
-    if (!dir) {
-        rs_status st = rs_err_set(err, RS_ERR_IO,
-                                  "%s: %s (not a dataset made by roadside synth? docs/labels.md, \"The dataset "
-                                  "contract\")",
-                                  adir, strerror(errno));
-        free(adir);
-        return st;
-    }
-    rs_status st = RS_OK;
-    struct dirent *de;
-    while (!st && (de = readdir(dir))) {
-        const size_t len = strlen(de->d_name);
-        if (strncmp(de->d_name, "instances_", 10) != 0 || len <= 15 || strcmp(de->d_name + len - 5, ".json") != 0)
-            continue;
-        if (v->Nsplits == 64) break;
-        char *name = strndup(de->d_name + 10, len - 15);
-        if (!name)
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        else
-            v->split_names[v->Nsplits++] = name;
-    }
-    closedir(dir);
-    qsort(v->split_names, (size_t)v->Nsplits, sizeof(char *), cmp_str);
-    if (!st && v->Nsplits == 0)
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no instances_<split>.json (not a dataset made by roadside synth?)",
-                        adir);
+    rs_status st = rs_synth_dataset__splits(v->split_names, &v->Nsplits, 64, dataset_dir, err);
+    char *adir = st ? NULL : rs_io_join(dataset_dir, "annotations");
+    if (!st && !adir) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (int s = 0; !st && s < v->Nsplits; s++) {
         char file[600];
         snprintf(file, sizeof(file), "instances_%s.json", v->split_names[s]);

@@ -125,3 +125,9 @@ rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char 
 // that is not a COCO file or lists an image missing from DATASET/<split>.
 // out: *Nanns, the annotations in it; *Nleft_out, part files left out.
 rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, int *Nleft_out, rs_err *err);
+
+// The splits of a dataset: the <split> of every DATASET/annotations/instances_<split>.json, sorted;
+// names (max,) receives them (owned, free() each), *Nnames their count. Errors: RS_ERR_IO (no
+// annotations folder, named), RS_ERR_NOT_FOUND (no instances file), RS_ERR_INVALID (more than
+// max), RS_ERR_NOMEM; on error nothing is left allocated.
+rs_status rs_synth_dataset__splits(char **names, int *Nnames, int max, const char *dataset_dir, rs_err *err);

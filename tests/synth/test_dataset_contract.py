@@ -212,6 +212,43 @@ def check_layouts(ds, coco):
           % (len(coco["images"]), nlab, nk))
 
 
+def check_stats(ds, coco):
+    """`roadside dataset stats` against counts made here from the COCO file and lanes.geojson: the
+    images, the labels, and the labels whose bottom_center_enu_m lies within 15 m of the mean of
+    the junction lanes' vertices (read here from lanes.geojson, converted to ENU with PROJ's cct)."""
+    import re
+    import subprocess
+    p = u.run(["dataset", "stats", ds, "--site", u.DEMO])
+    if p.returncode != 0:
+        u.fail("dataset stats: exit %d: %s" % (p.returncode, p.stderr))
+        return
+    m = re.search(r"(\d+) images, (\d+) labels", p.stdout)
+    if not m or (int(m.group(1)), int(m.group(2))) != (len(coco["images"]), len(coco["annotations"])):
+        u.fail("dataset stats: images/labels %s vs COCO %d/%d" % (m and m.groups(), len(coco["images"]),
+                                                                 len(coco["annotations"])))
+    site = json.load(open(os.path.join(u.DEMO, "site.json")))
+    o = site["origin"]
+    lanes = json.load(open(os.path.join(u.DEMO, "lanes.geojson")))
+    pts = [c for f in lanes["features"] if f["properties"].get("kind") == "junction"
+           for c in f["geometry"]["coordinates"]]
+    text = "".join("%.12f %.12f %.4f 0\n" % (c[0], c[1], c[2] if len(c) > 2 else o["h"]) for c in pts)
+    pipe = ["cct", "-d", "9", "+proj=pipeline", "+step", "+proj=cart", "+ellps=WGS84", "+step",
+            "+proj=topocentric", "+ellps=WGS84", "+lat_0=%r" % o["lat"], "+lon_0=%r" % o["lon"], "+h_0=%r" % o["h"]]
+    enu = np.array([[float(v) for v in l.split()[:2]] for l in
+                    subprocess.run(pipe, input=text, capture_output=True, text=True, check=True).stdout.splitlines()
+                    if l.strip()])
+    centre = enu.mean(axis=0)
+    b = np.array([a["bottom_center_enu_m"][:2] for a in coco["annotations"] if a.get("bottom_center_enu_m")])
+    near = int((np.hypot(*(b - centre).T) < 15).sum()) if len(b) else 0
+    m = re.search(r"junction:\s+(\d+) of (\d+) labelled vehicles .* of \(E ([-\d.]+), N ([-\d.]+)\)", p.stdout)
+    if not m or (int(m.group(1)), int(m.group(2))) != (near, len(b)) or \
+            abs(float(m.group(3)) - centre[0]) > 0.01 or abs(float(m.group(4)) - centre[1]) > 0.01:
+        u.fail("dataset stats: junction line %r vs %d of %d within 15 m of (%.2f, %.2f)" %
+               (m and m.group(0), near, len(b), centre[0], centre[1]))
+    print("dataset stats: %d of %d labels within 15 m of the junction centre (E %.2f, N %.2f), as counted here" %
+          (near, len(b), centre[0], centre[1]))
+
+
 def main():
     u.need_povray()
     with tempfile.TemporaryDirectory() as tmp:
@@ -229,6 +266,7 @@ def main():
         check_contract(ds, coco, calib)
         check_perfect(tmp, gt, coco)
         check_layouts(ds, coco)
+        check_stats(ds, coco)
     print("test_dataset_contract: ok")
 
 
