@@ -126,16 +126,24 @@ def check_plane(tmp, rows, origin, p_enu, sigma_v):
     return None
 
 
-def main():
+def load_data():
+    """The 43 rows numbered (r["i"]), the ENU origin, their ENU fixes and box centres; None (with a
+    SKIP line) when the data is absent. Shared with test_real_gnss_sigma_sets.py."""
     if not os.path.exists(base.DATA):
         print(f"SKIP: {base.DATA} is absent (real survey data lives in ../shared/real, never in the repo)")
-        return 77
+        return None
     rows = base.load_rows()
     for i, r in enumerate(rows):
         r["i"] = i
     origin = (np.mean([r["lat"] for r in rows]), np.mean([r["lon"] for r in rows]), min(r["h"] for r in rows))
-    p_enu = base.enu_of(rows, origin)
-    q = np.array([[r["u"], r["v"]] for r in rows])
+    return rows, origin, base.enu_of(rows, origin), np.array([[r["u"], r["v"]] for r in rows])
+
+
+def main():
+    data = load_data()
+    if data is None:
+        return 77
+    rows, origin, p_enu, q = data
 
     tmp = tempfile.mkdtemp(prefix="roadside-gnss-raw-")
     try:

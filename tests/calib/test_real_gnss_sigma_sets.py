@@ -28,15 +28,10 @@ BAR_M = 1.70
 
 
 def main():
-    if not os.path.exists(base.DATA):
-        print(f"SKIP: {base.DATA} is absent (real survey data lives in ../shared/real, never in the repo)")
+    data = raw.load_data()
+    if data is None:
         return 77
-    rows = base.load_rows()
-    for i, r in enumerate(rows):
-        r["i"] = i
-    origin = (np.mean([r["lat"] for r in rows]), np.mean([r["lon"] for r in rows]), min(r["h"] for r in rows))
-    p_enu = base.enu_of(rows, origin)
-    q = np.array([[r["u"], r["v"]] for r in rows])
+    rows, origin, p_enu, q = data
     failed = False
     with tempfile.TemporaryDirectory(prefix="roadside-gnss-sets-") as tmp:
         for h, v, px, asserted in SETS:
