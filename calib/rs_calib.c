@@ -35,7 +35,7 @@ void rs_calib_options_default(rs_calib_options *opt)
     opt->condition_warn = 100.0;
     opt->sigma_rotation_warn_deg = 2.0;
     opt->estimate_noise = true;
-    opt->noise_prior_factor = 3.0;
+    opt->noise_prior_factor = 5.0;
     opt->noise_min_redundancy = 2.0;
     opt->snooping_critical = 3.29;
     opt->max_rejected_fraction = 0.25;
@@ -488,8 +488,8 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
             // whatever the stated sigmas (a quarter of gross outliers moves it little)
             // only ever widened here: a median low by chance must not make the coarse test below
             // stricter than the stated sigmas (the variance components and data snooping are
-            // the fine test), and never beyond 30x the stated sigma (as rs_calib__noise_update)
-            const double room = exp(2.0 * log(30.0) - log_theta[0]);
+            // the fine test), and never beyond 30x the stated sigma (RS_NOISE_MAX_FACTOR)
+            const double room = exp(2.0 * log(RS_NOISE_MAX_FACTOR) - log_theta[0]);
             const double f = fmin(room, fmax(1.0, rs_calib__median(w->block_chi2, N, w->q_pred) / 1.3863));
             if (!isfinite(f) || f <= 1.0) break;
             for (int g = 0; g < RS_NOISE_NGROUPS; g++) log_theta[g] += log(f);
@@ -534,23 +534,12 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         if (st != RS_OK) return st;
     }
     const int Ninl = N - Noutliers;
-    // 3c. the variances the pose's covariance is built on: a group with too little redundancy
-    // keeps its stated sigma; an estimated one is used at its posterior mean q / (r - 2) rather
-    // than its mode q / r (an inverse-gamma variance with r degrees of freedom), so that the
-    // covariance carries the estimate's own uncertainty (else too small by r / (r - 2) on
-    // average); log_theta keeps the estimates reported
-    double log_theta_cov[RS_NOISE_NGROUPS];
-    for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
-        double r = 0;
-        for (int i = 0; i < N; i++)
-            for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++)
-                if (rs_calib__noise_group(j) == g) r += rs_calib__vce_redundancy(w, i, j);
-        if (opt->estimate_noise && r < opt->noise_min_redundancy) log_theta[g] = 0.0;
-        log_theta_cov[g] =
-            log_theta[g] +
-            (opt->estimate_noise && r >= opt->noise_min_redundancy ? log(r / fmax(r - 2.0, 0.5 * r)) : 0.0);
-    }
-    if (opt->estimate_noise) rs_calib__scale_sigmas(w, pb, log_theta_cov);
+    // 3c. the pose's covariance is built on the variance factors' posterior mode (where w's
+    // sigmas are), spread over their posterior below. A group with little redundancy is not
+    // estimated from the data: its posterior rests mostly on the prior, its stated sigma (kept
+    // there rather than reset to the statement: on the real GNSS survey the reset made the
+    // leave-one-out median of the sigma set 1.0 m / 0.3 m / 3 px 1.77 m instead of 1.53 m)
+    if (opt->estimate_noise) rs_calib__scale_sigmas(w, pb, log_theta);
 
     // 4. plain weighted least squares on the inliers, with the covariance
     ro.robust_scale = 0.0;
@@ -562,6 +551,10 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         return st;
     }
     res->iterations += sum.iterations;
+    if (opt->estimate_noise) { // the covariance carries the variance factors' own uncertainty
+        st = rs_calib__cov_spread(w, &rp, rt_c, res, log_theta, 6 + Ni, opt, err);
+        if (st != RS_OK) return st;
+    }
 
     // landmarks in front of the camera
     for (int i = 0; i < N; i++) {
@@ -635,6 +628,18 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     if (scale != 1.0) snprintf(focal_desc, sizeof(focal_desc), " + focal-search(x%.3g)", scale);
     snprintf(res->method, sizeof(res->method), "%s%s%s + ceres-wls + covariance(absolute)", init.method, focal_desc,
              robust_desc);
+
+    // a roadside camera looks down at its landmarks: one below them all looking up is the mirror
+    // of the true pose (a pinhole projects points behind it too) or a sign of wrong heights
+    double up_min = INFINITY;
+    for (int i = 0; i < N; i++)
+        if (w->use[i]) up_min = fmin(up_min, res->p_enu_refined_m[3 * i + 2]);
+    if (res->position_enu_m[2] < up_min - 1.0 && res->yaw_pitch_roll_deg[1] > 0.0)
+        return rs_err_set(err, RS_ERR_DEGENERATE,
+                          "the solution has the camera %.3g m below every landmark, looking up (pitch %.3g deg): "
+                          "a mirrored pose (points behind a camera project too) or landmark heights in another "
+                          "datum; check the heights and the picks",
+                          up_min - res->position_enu_m[2], res->yaw_pitch_roll_deg[1]);
 
     // 6. warnings in plain words
     if (Noutliers > 0) {

@@ -141,12 +141,14 @@ typedef struct {
                                   //   pixel picks, the survey's horizontal and vertical coordinates
                                   //   (default true); false: the stated sigmas are taken as exact
     double noise_prior_factor;    // the stated sigmas are right to within this factor (1-sigma, default
-                                  //   3): the prior that keeps a small survey from collapsing. Chosen on
-                                  //   the real GNSS data (leave-one-out 1.59 m; 10: 1.77 m); on
-                                  //   simulated sites a group stated 5x too precise is then estimated
-                                  //   up to 40% off (tests/calib/test_noise_model.c)
-    double noise_min_redundancy;  // a group with less partial redundancy keeps its stated sigma
-                                  //   (default 2)
+                                  //   5): the log-normal prior that keeps a small survey from
+                                  //   collapsing. On the real GNSS data 5 gives leave-one-out medians
+                                  //   of 1.66, 1.53, 1.60 m for the first three sigma sets; on
+                                  //   simulated sites estimates within 12% with groups stated 5x off
+                                  //   (tests/calib/test_noise_model.c, docs/calibration.md 3b)
+    double noise_min_redundancy;  // a group with less partial redundancy is not estimated from the
+                                  //   data: it rests on its prior (the stated sigma) and is not spread
+                                  //   in the covariance (default 2)
     double snooping_critical;     // Baarda's w-test: reject the landmark with the largest |w| above this,
                                   //   one at a time (default 3.29: alpha 0.1% two-sided per observation)
     double max_rejected_fraction; // snooping stops before rejecting more than this fraction of the
@@ -160,12 +162,13 @@ enum { RS_CALIB_NOISE_PIXEL, RS_CALIB_NOISE_SURVEY_H, RS_CALIB_NOISE_SURVEY_V, R
 typedef struct {
     double stated;            // RMS of the stated 1-sigmas of the group's observations in the final
                               //   adjustment (px for pixels, m for the survey)
-    double estimated;         // the 1-sigma used for the pose and its covariance (px or m)
+    double estimated;         // the 1-sigma used for the pose and its covariance (px or m): the
+                              //   posterior mode of the group's variance factor
     double sigma_estimated;   // 1-sigma of `estimated` (from the redundancy and the prior); 0 if kept
     double redundancy;        // the group's partial redundancy: the sum of its redundancy numbers
     int Nobservations;        // its observations (pixel coordinates, or surveyed coordinates not held)
     bool estimated_from_data; // false: redundancy below noise_min_redundancy (or estimation off):
-                              //   the stated sigma is kept
+                              //   `estimated` rests mostly on the prior, the stated sigma
 } rs_calib_noise_group;
 
 // Fills opt with the defaults above. opt must not be NULL.

@@ -214,11 +214,21 @@ static bool solve_ippe(double *rt_cam_c, const double *v, const double *p_c, con
     return n >= 4 && rs_calib_opencv_ippe(rt_cam_c, xy, p_sel, n, NULL) == RS_OK;
 }
 
-// OpenGV's EPnP on the inliers `in`. False if there are too few or the solver fails.
-static bool solve_epnp(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin)
+// OpenGV's EPnP on the inliers `in`. False if there are too few, if they are exactly coplanar
+// (the inliers themselves: Debian's libopengv 1.0 then reads uninitialised memory in the SVD of
+// find_betas_approx_1 -- valgrind, and a crash 12,692 problems into `roadside bench calib
+// --stress`), or if the solver fails. scratch: (Nin,3).
+static bool solve_epnp(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin, double *scratch)
 {
-    double Rt[12];
-    if (Nin < RS_INIT_EPNP_MIN || rs_calib_opengv_epnp(Rt, v, p_c, in, Nin, NULL) != RS_OK) return false;
+    double Rt[12], mean[3] = {0, 0, 0}, s[3];
+    if (Nin < RS_INIT_EPNP_MIN) return false;
+    for (int k = 0; k < Nin; k++)
+        for (int j = 0; j < 3; j++) mean[j] += p_c[3 * in[k] + j] / Nin;
+    for (int k = 0; k < Nin; k++)
+        for (int j = 0; j < 3; j++) scratch[3 * k + j] = p_c[3 * in[k] + j] - mean[j];
+    if (rs_calib_opencv_singular_values3(s, scratch, Nin, NULL) != RS_OK || !(s[2] > RS_INIT_EXACTLY_PLANAR * s[1]))
+        return false;
+    if (rs_calib_opengv_epnp(Rt, v, p_c, in, Nin, NULL) != RS_OK) return false;
     mrcal_rt_from_Rt(rt_cam_c, NULL, Rt);
     return true;
 }
@@ -342,7 +352,7 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
     for (int m = 0; m < 2; m++) {
         double rt[6];
         const bool ok = m == 0 ? try_ippe && solve_ippe(rt, v, p_c, in, Nin, xy, p_sel)
-                               : try_epnp && solve_epnp(rt, v, p_c, in, Nin);
+                               : try_epnp && solve_epnp(rt, v, p_c, in, Nin, p_sel);
         if (!ok) continue;
         const double rms = rms_px_at(rt, in, Nin, &sc, tmp);
         if (rms < rms_best) {

@@ -12,18 +12,7 @@
 #include "calib/rs_calib.h"
 #include "core/rs_pose.h"
 
-enum { NC_MAX = 6 + 1 + 2 + 64 }; // rt, focal scale, centre, distortion
-
-// The camera parameters of the adjustment: rt, then the refined intrinsics. For each, the
-// column of dq/dc it is (a combination of mrcal's dq/dintrinsics) and its prior's weight.
-typedef struct {
-    int nc;
-    int Ni;
-    int kind[NC_MAX];       // -1: rt; -2: the focal scale; j >= 0: intrinsics[j]
-    double prior_w[NC_MAX]; // 1/sigma of the parameter's prior, 0: none
-} params;
-
-static void camera_params(params *pp, const rs_calib_noise_state *s)
+void rs_calib__camera_params(rs_calib__params *pp, const rs_calib_noise_state *s)
 {
     memset(pp, 0, sizeof *pp);
     pp->Ni = mrcal_lensmodel_num_params(s->lensmodel);
@@ -38,10 +27,53 @@ static void camera_params(params *pp, const rs_calib_noise_state *s)
             pp->kind[pp->nc++] = j;
         }
     if (s->refine & RS_CALIB_REFINE_DISTORTION)
-        for (int j = 4; j < pp->Ni && pp->nc < NC_MAX; j++) {
+        for (int j = 4; j < pp->Ni && pp->nc < RS_NOISE_NC_MAX; j++) {
             pp->prior_w[pp->nc] = s->distortion_prior_sigma > 0 ? 1.0 / s->distortion_prior_sigma : 0.0;
             pp->kind[pp->nc++] = j;
         }
+}
+
+void rs_calib__prior_normal(double *S, const rs_calib__params *pp, const rs_calib_noise_state *s)
+{
+    const int nc = pp->nc;
+    for (int c = 0; c < nc; c++) S[c * nc + c] += pp->prior_w[c] * pp->prior_w[c];
+    if (!(s->has_position_prior && s->prior_sigma_m > 0)) return;
+    double C[3], dC_drt[18];
+    rs_pose_position_from_rt(C, dC_drt, s->rt_cam_c);
+    for (int a = 0; a < 6; a++)
+        for (int b = 0; b < 6; b++)
+            for (int k = 0; k < 3; k++)
+                S[a * nc + b] += dC_drt[k * 6 + a] * dC_drt[k * 6 + b] / (s->prior_sigma_m * s->prior_sigma_m);
+}
+
+bool rs_calib__pixel_jacobian(double q_px[2], double *G, double J[6], double dpc_dp[9], mrcal_point3_t dq_dpc[2],
+                              const rs_calib_noise_state *s, const rs_calib__params *pp, const double seen[3],
+                              double *dq_dintr)
+{
+    double pc[3], dpc_drt[18];
+    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, s->rt_cam_c, seen);
+    mrcal_point2_t q;
+    if (!mrcal_project(&q, dq_dpc, dq_dintr, (const mrcal_point3_t *)pc, 1, s->lensmodel, s->intrinsics)) return false;
+    for (int r = 0; r < 2; r++) {
+        q_px[r] = q.xy[r];
+        for (int c = 0; c < pp->nc; c++) {
+            double v = 0;
+            if (pp->kind[c] == -1)
+                for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_drt[j * 6 + c];
+            else if (pp->kind[c] == -2)
+                v = s->intrinsics_nominal[0] * dq_dintr[r * pp->Ni + 0] +
+                    s->intrinsics_nominal[1] * dq_dintr[r * pp->Ni + 1];
+            else
+                v = dq_dintr[r * pp->Ni + pp->kind[c]];
+            G[r * pp->nc + c] = v;
+        }
+        for (int a = 0; a < 3; a++) {
+            double v = 0;
+            for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a];
+            J[r * 3 + a] = v;
+        }
+    }
+    return true;
 }
 
 // The ground point (E, N) of the optical axis on the plane up = 0 of the centred frame (the
@@ -108,43 +140,28 @@ void rs_calib__position_column(double col[2], const mrcal_point3_t dq_dpc[2], co
 typedef struct {
     int m, k;
     int comp[RS_NOISE_NCOMP]; // row -> component
-    double A[RS_NOISE_NCOMP][NC_MAX], B[RS_NOISE_NCOMP][4], e[RS_NOISE_NCOMP];
+    double A[RS_NOISE_NCOMP][RS_NOISE_NC_MAX], B[RS_NOISE_NCOMP][4], e[RS_NOISE_NCOMP];
 } block;
 
-static bool landmark_block(block *b, const rs_calib_noise_state *s, const params *pp, int i, double *dq_dintr)
+static bool landmark_block(block *b, const rs_calib_noise_state *s, const rs_calib__params *pp, int i, double *dq_dintr)
 {
     memset(b, 0, sizeof *b);
     const double *p = &s->p_c_m[3 * i];
-    double pc[3], dpc_drt[18], dpc_dp[9], seen[3], d[3];
-    const bool slides = rs_calib__seen_point(seen, d, s->p_c_m, s->along_c, s->s_along_m, i);
-    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, s->rt_cam_c, seen);
-    mrcal_point2_t q;
+    double seen[3], d[3], q[2], G[2 * RS_NOISE_NC_MAX], J[6], dpc_dp[9];
     mrcal_point3_t dq_dpc[2];
-    if (!mrcal_project(&q, dq_dpc, dq_dintr, (const mrcal_point3_t *)pc, 1, s->lensmodel, s->intrinsics)) return false;
+    const bool slides = rs_calib__seen_point(seen, d, s->p_c_m, s->along_c, s->s_along_m, i);
+    if (!rs_calib__pixel_jacobian(q, G, J, dpc_dp, dq_dpc, s, pp, seen, dq_dintr)) return false;
     const double sp = s->sigma_px ? s->sigma_px[i] : 1.0;
     for (int r = 0; r < 2; r++) {
         b->comp[b->m] = r;
-        b->e[b->m] = (q.xy[r] - s->q_px[2 * i + r]) / sp;
-        for (int c = 0; c < pp->nc; c++) {
-            double v = 0;
-            if (pp->kind[c] == -1)
-                for (int j = 0; j < 3; j++) v += dq_dpc[r].xyz[j] * dpc_drt[j * 6 + c];
-            else if (pp->kind[c] == -2)
-                v = s->intrinsics_nominal[0] * dq_dintr[r * pp->Ni + 0] +
-                    s->intrinsics_nominal[1] * dq_dintr[r * pp->Ni + 1];
-            else
-                v = dq_dintr[r * pp->Ni + pp->kind[c]];
-            b->A[b->m][c] = v / sp;
-        }
+        b->e[b->m] = (q[r] - s->q_px[2 * i + r]) / sp;
+        for (int c = 0; c < pp->nc; c++) b->A[b->m][c] = G[r * pp->nc + c] / sp;
         b->m++;
     }
     for (int a = 0; a < 3; a++) {
         const double sa = s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0;
         if (!(sa > 0)) continue;
-        const double axis[3] = {a == 0, a == 1, a == 2};
-        double col[2]; // the pixel rows' dependence on this axis
-        rs_calib__position_column(col, dq_dpc, dpc_dp, axis, sp);
-        b->B[0][b->k] = col[0], b->B[1][b->k] = col[1];
+        b->B[0][b->k] = J[a] / sp, b->B[1][b->k] = J[3 + a] / sp; // the pixel rows' dependence on this axis
         b->comp[b->m] = RS_NOISE_E + a;
         b->e[b->m] = (p[a] - s->p_survey_c_m[3 * i + a]) / sa;
         b->B[b->m][b->k] = 1.0 / sa;
@@ -160,7 +177,8 @@ static bool landmark_block(block *b, const rs_calib_noise_state *s, const params
 }
 
 // Ã = A - B N^-1 B'A (m x nc) in place into At; Ninv (k x k) out.
-static rs_status reduce(double At[RS_NOISE_NCOMP][NC_MAX], double Ninv[16], const block *b, int nc, rs_err *err)
+static rs_status reduce(double At[RS_NOISE_NCOMP][RS_NOISE_NC_MAX], double Ninv[16], const block *b, int nc,
+                        rs_err *err)
 {
     double N[16] = {0};
     for (int x = 0; x < b->k; x++)
@@ -171,7 +189,7 @@ static rs_status reduce(double At[RS_NOISE_NCOMP][NC_MAX], double Ninv[16], cons
         if (st) return st;
     }
     // M = B'A (k x nc); At = A - B Ninv M
-    double M[4][NC_MAX] = {{0}};
+    double M[4][RS_NOISE_NC_MAX] = {{0}};
     for (int x = 0; x < b->k; x++)
         for (int c = 0; c < nc; c++)
             for (int r = 0; r < b->m; r++) M[x][c] += b->B[r][x] * b->A[r][c];
@@ -188,8 +206,8 @@ static rs_status reduce(double At[RS_NOISE_NCOMP][NC_MAX], double Ninv[16], cons
 rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_calib_noise_state *s, rs_err *err)
 {
     const int N = s->N;
-    params pp;
-    camera_params(&pp, s);
+    rs_calib__params pp;
+    rs_calib__camera_params(&pp, s);
     const int nc = pp.nc;
     for (int i = 0; i < N; i++)
         for (int j = 0; j < RS_NOISE_NCOMP; j++) {
@@ -204,7 +222,7 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
     rs_status st = dq_dintr && S && Q && blocks ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "noise model: out of memory");
 
     // 1. per landmark: the whitened block, Ã_i; S = sum Ã'Ã + priors
-    double(*At)[RS_NOISE_NCOMP][NC_MAX] = NULL;
+    double(*At)[RS_NOISE_NCOMP][RS_NOISE_NC_MAX] = NULL;
     double(*Ninv)[16] = NULL;
     if (st == RS_OK) {
         At = malloc((size_t)(N > 0 ? N : 1) * sizeof *At);
@@ -226,12 +244,7 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
     double C[3];
     rs_pose_position_from_rt(C, dC_drt, s->rt_cam_c);
     if (st == RS_OK) {
-        for (int c = 0; c < nc; c++) S[c * nc + c] += pp.prior_w[c] * pp.prior_w[c];
-        if (s->has_position_prior && s->prior_sigma_m > 0)
-            for (int a = 0; a < 6; a++)
-                for (int b = 0; b < 6; b++)
-                    for (int k = 0; k < 3; k++)
-                        S[a * nc + b] += dC_drt[k * 6 + a] * dC_drt[k * 6 + b] / (s->prior_sigma_m * s->prior_sigma_m);
+        rs_calib__prior_normal(S, &pp, s);
         st = rs_calib_opencv_inverse_spd(Q, S, nc, err);
     }
     double G[12];
@@ -243,7 +256,7 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
         const block *b = &blocks[i];
         for (int r = 0; r < b->m; r++) {
             const int j = RS_NOISE_NCOMP * i + b->comp[r];
-            double dc[NC_MAX], h = 0;
+            double dc[RS_NOISE_NC_MAX], h = 0;
             for (int a = 0; a < nc; a++) {
                 dc[a] = 0;
                 for (int c = 0; c < nc; c++) dc[a] += Q[a * nc + c] * At[i][r][c];
@@ -272,23 +285,6 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
     free(At);
     free(Ninv);
     return st;
-}
-
-double rs_calib__noise_update(double q, double r, double log_theta, double prior_factor)
-{
-    // below half an observation's worth of redundancy the group's residuals say nothing: it
-    // stays where it is (a group stated far too precisely has little redundancy until its
-    // variance grows, so the threshold for moving is lower than the one for reporting)
-    if (!(r >= 0.5) || !(q > 0)) return log_theta;
-    const double data = log_theta + log(q / r); // Förstner: the factor that makes q = r
-    const double var_data = 2.0 / r;            // of log(q/r), to first order
-    const double lp = 2.0 * log(prior_factor);  // the prior's 1-sigma in log variance
-    const double var_prior = lp > 0 ? lp * lp : 1e-12;
-    const double est = data * var_prior / (var_prior + var_data);
-    // within a factor 30 of the stated sigma either way: beyond, the stated sigma was no
-    // statement (and a noise-free simulated survey would drive the variance to 0)
-    const double bound = 2.0 * log(30.0);
-    return fmax(-bound, fmin(bound, est));
 }
 
 double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i)

@@ -104,32 +104,40 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
     const int max_rejected = (int)floor(opt->max_rejected_fraction * N);
     if (*Noutliers > max_rejected) res->noise_model_wrong = true;
     for (int round = 0; round <= N; round++) {
-        for (int it = 0; it < 50; it++) {
+        // variance components (rs_calib_vce.c) on the adjustment linearised at each solution,
+        // alternating with plain solves until the factors move by less than 1% (a tenth of
+        // their own uncertainty at r = 200)
+        for (int it = 0; it < 10; it++) {
             rs_calib_refine_summary sum;
             rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, NULL, NULL, rp, ro, err);
             if (st == RS_ERR_NOCONVERGE && round == 0 && it == 0)
                 return RS_OK; // no noise model on a problem that does not converge: the final
                               // solve reports it (or its cause, such as landmarks behind)
-            if (st == RS_OK) st = rs_calib__noise_redundancy(&out, &ns, err);
             if (st != RS_OK) {
                 rs_err_prefix(err, "noise model");
                 return st;
             }
             res->iterations += sum.iterations;
             if (!opt->estimate_noise) break;
-            double q[RS_NOISE_NGROUPS] = {0}, r[RS_NOISE_NGROUPS] = {0}, change = 0;
-            for (int i = 0; i < N; i++)
-                for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++) {
-                    q[rs_calib__noise_group(j)] += w->e[RS_NOISE_NCOMP * i + j] * w->e[RS_NOISE_NCOMP * i + j];
-                    r[rs_calib__noise_group(j)] += rs_calib__vce_redundancy(w, i, j);
-                }
-            for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
-                const double next = rs_calib__noise_update(q[g], r[g], log_theta[g], opt->noise_prior_factor);
-                change = fmax(change, fabs(next - log_theta[g]));
-                log_theta[g] = next;
+            double next[RS_NOISE_NGROUPS], change = 0;
+            memcpy(next, log_theta, sizeof next);
+            rs_calib__vce *v = NULL;
+            st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
+            if (st == RS_OK) st = rs_calib__vce_estimate(next, NULL, v, opt->noise_prior_factor, err);
+            rs_calib__vce_free(v);
+            if (st != RS_OK) {
+                rs_err_prefix(err, "noise model");
+                return st;
             }
+            for (int g = 0; g < RS_NOISE_NGROUPS; g++) change = fmax(change, fabs(next[g] - log_theta[g]));
+            memcpy(log_theta, next, sizeof next);
             rs_calib__scale_sigmas(w, pb, log_theta);
-            if (change < 1e-2) break; // 1% in a variance: a tenth of its own uncertainty at r = 200
+            if (change < 1e-2) break;
+        }
+        rs_status st = rs_calib__noise_redundancy(&out, &ns, err);
+        if (st != RS_OK) {
+            rs_err_prefix(err, "noise model");
+            return st;
         }
         if (!(opt->robust_scale > 0.0)) break;
         int worst = -1;
@@ -223,4 +231,25 @@ double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
     return rs_calib__noise_excluded_chi2(&ns, i);
+}
+
+rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
+                               const rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
+                               const rs_calib_options *opt, rs_err *err)
+{
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    rs_calib__vce *v = NULL;
+    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
+    const int nc = st == RS_OK ? 6 + rs_calib__vce_Nintrinsics(v) : 0;
+    double *dQ = st == RS_OK ? malloc((size_t)nc * nc * sizeof *dQ) : NULL;
+    if (st == RS_OK && !dQ) st = rs_err_set(err, RS_ERR_NOMEM, "covariance: out of memory");
+    if (st == RS_OK)
+        st = rs_calib__vce_cov_spread(dQ, v, log_theta, opt->noise_prior_factor, opt->noise_min_redundancy, err);
+    if (st == RS_OK) // the pose block (the refined intrinsics are parametrised otherwise here)
+        for (int a = 0; a < 6; a++)
+            for (int b = 0; b < 6; b++) w->cov[a * n + b] += dQ[a * nc + b];
+    free(dQ);
+    rs_calib__vce_free(v);
+    if (st != RS_OK) rs_err_prefix(err, "covariance");
+    return st;
 }

@@ -1,5 +1,7 @@
 // rs_calib_opencv.cc -- the OpenCV shim of the pose solver: planarity (cv::SVD), IPPE
-// (cv::solvePnP) and SPD inverses (cv::invert). Every exception is caught at the boundary and becomes an rs_status.
+// (cv::solvePnP), SPD inverses (cv::invert), their log determinants (cv::determinant) and
+// symmetric eigenproblems (cv::eigen). Every exception is caught at the boundary and becomes an
+// rs_status.
 #include <cmath>
 #include <exception>
 #include <vector>
@@ -64,5 +66,44 @@ extern "C" rs_status rs_calib_opencv_inverse_spd(double *inv, const double *A, i
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV invert threw: %s", e.what());
     } catch (...) {
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV invert threw an unknown exception");
+    }
+}
+
+extern "C" rs_status rs_calib_opencv_inverse_spd_logdet(double *inv, double *logdet, const double *A, int n,
+                                                        rs_err *err)
+{
+    rs_status st = rs_calib_opencv_inverse_spd(inv, A, n, err);
+    if (st != RS_OK) return st;
+    try {
+        // det A = prod(A_ii) det(D^-1/2 A D^-1/2): the scaled matrix has a unit diagonal, so its
+        // determinant lies in (0, 1] and cannot overflow whatever the units of A
+        cv::Mat M(n, n, CV_64F);
+        double sum = 0;
+        for (int a = 0; a < n; a++) sum += std::log(A[a * n + a]);
+        for (int a = 0; a < n; a++)
+            for (int b = 0; b < n; b++) M.at<double>(a, b) = A[a * n + b] / std::sqrt(A[a * n + a] * A[b * n + b]);
+        const double d = cv::determinant(M);
+        if (!(d > 0) || !std::isfinite(sum))
+            return rs_err_set(err, RS_ERR_DEGENERATE, "a %dx%d normal matrix is not positive definite", n, n);
+        *logdet = sum + std::log(d);
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV determinant threw: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV determinant threw an unknown exception");
+    }
+}
+
+extern "C" rs_status rs_calib_opencv_eigen_sym(double *values, double *vectors, const double *A, int n, rs_err *err)
+{
+    try {
+        const cv::Mat M(n, n, CV_64F, const_cast<double *>(A)); // read only
+        cv::Mat w(n, 1, CV_64F, values), V(n, n, CV_64F, vectors);
+        if (!cv::eigen(M, w, V)) return rs_err_set(err, RS_ERR_DEGENERATE, "a %dx%d eigenproblem failed", n, n);
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV eigen threw: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV eigen threw an unknown exception");
     }
 }

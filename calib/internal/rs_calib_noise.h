@@ -67,6 +67,28 @@ typedef struct {
     double *dground_m; // (N,5,2) NAN when the optical axis does not meet the ground
 } rs_calib_noise_out;
 
+// The camera parameters of the adjustment: rt, then the refined intrinsics. For each, the
+// column of dq/dc it is (a combination of mrcal's dq/dintrinsics) and its prior's weight.
+enum { RS_NOISE_NC_MAX = 6 + 1 + 2 + 64 }; // rt, focal scale, centre, distortion
+typedef struct {
+    int nc;
+    int Ni;                          // the lens model's intrinsics
+    int kind[RS_NOISE_NC_MAX];       // -1: rt; -2: the focal scale; j >= 0: intrinsics[j]
+    double prior_w[RS_NOISE_NC_MAX]; // 1/sigma of the parameter's prior, 0: none
+} rs_calib__params;
+void rs_calib__camera_params(rs_calib__params *pp, const rs_calib_noise_state *s);
+
+// Adds the camera priors' normal matrix (the intrinsics' priors, the position prior) to S (nc,nc).
+void rs_calib__prior_normal(double *S, const rs_calib__params *pp, const rs_calib_noise_state *s);
+
+// The pixel q_px (2,) of the point seen (3, centred frame) at the state s, its derivatives with
+// respect to the camera parameters G (2,pp->nc) and to the point J (2,3), and mrcal's
+// intermediate dpc_dp (3,3) and dq_dpc; dq_dintr: scratch (2,pp->Ni). false: it does not
+// project.
+bool rs_calib__pixel_jacobian(double q_px[2], double *G, double J[6], double dpc_dp[9], mrcal_point3_t dq_dpc[2],
+                              const rs_calib_noise_state *s, const rs_calib__params *pp, const double seen[3],
+                              double *dq_dintr);
+
 // Fills out for the state s. Errors: RS_ERR_DEGENERATE (the normal matrix is singular: the
 // camera is not determined), RS_ERR_EXTERNAL (OpenCV threw), RS_ERR_NOMEM.
 rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_calib_noise_state *s, rs_err *err);
@@ -76,14 +98,9 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
 // surveyed position, S its survey variances, J_p = dq/dp. NAN when it does not project.
 double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i);
 
-// One variance-component step for one group (Förstner's estimator with a log-normal prior on the
-// stated sigma): q = the sum of the group's squared whitened residuals, r = the sum of its
-// redundancy numbers, log_theta = the log of its current variance factor (variance in use /
-// stated variance). The data's estimate of the factor is theta q / r with relative variance
-// 2 / r; the prior says the stated sigma is right to within a factor prior_factor (1-sigma, in
-// sigma). Returns the new log factor, the precision-weighted mean of the two in log space,
-// within a factor 30 of the stated sigma; a group with r < 0.5 keeps log_theta.
-double rs_calib__noise_update(double q, double r, double log_theta, double prior_factor);
+// Variance factors stay within this factor of the stated sigma either way: beyond, the stated
+// sigma was no statement (and a noise-free simulated survey would drive its variance to 0).
+#define RS_NOISE_MAX_FACTOR 30.0
 
 // The point landmark i is seen at: p_c_m[i] + s_along_m[i] along_c[i] (p_c_m[i] for a point).
 // Returns whether the landmark slides along a segment (then d receives the direction).
@@ -95,6 +112,37 @@ bool rs_calib__seen_point(double seen[3], double d[3], const double *p_c_m, cons
 // a segment (dir its direction): a column of a landmark's block B.
 void rs_calib__position_column(double col[2], const mrcal_point3_t dq_dpc[2], const double dpc_dp[9],
                                const double dir[3], double sigma_px);
+
+// Variance components by restricted maximum likelihood on the adjustment linearised at the state
+// s (rs_calib_vce.c, which has the model and the references): the landmarks marginalised, each
+// pick with the 2x2 covariance its own sigma and its survey's make.
+typedef struct rs_calib__vce rs_calib__vce;
+// Linearises at s, whose sigmas are the stated ones scaled by exp(log_theta_ref[group]); share
+// (N,) may be NULL (rs_calib__work). *out: free with rs_calib__vce_free.
+rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
+                              const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err);
+// The posterior mode of the log variance factors (log-normal prior: the stated sigma right to a
+// factor prior_factor, 1-sigma), by Fisher scoring from log_theta (in,out). r_out (may be
+// NULL): the groups' redundancy there (shared survey errors once).
+rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double r_out[RS_NOISE_NGROUPS], rs_calib__vce *v,
+                                 double prior_factor, rs_err *err);
+// The camera covariance's spread over the variance factors' own posterior: dQ (nc,nc) =
+// E[Q(theta)] - Q(theta_hat), Q the camera parameters' covariance (S^-1) of the linearised
+// adjustment, the expectation over log theta ~ N(log_theta, (F + prior)^-1) by the unscented
+// transform (Julier & Uhlmann 1997), over the groups with a redundancy of min_redundancy or more
+// (the others are not estimated from the data: they keep their sigma).
+rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
+                                   double prior_factor, double min_redundancy, rs_err *err);
+// The model at log_theta: the restricted log-likelihood (without the prior), q and r per group
+// (r with shared survey errors once), the Fisher information F (3x3) in log theta. For the tests
+// (tests/calib/test_vce.py checks them against the full adjustment with the landmarks as
+// unknowns, in numpy).
+rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS], double *loglik,
+                                 double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
+                                 double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err);
+// The refined intrinsics' coordinates among its camera parameters (nc = 6 + this).
+int rs_calib__vce_Nintrinsics(const rs_calib__vce *v);
+void rs_calib__vce_free(rs_calib__vce *v);
 
 // ---- the solve's side (rs_calib_noise_model.c; driven by rs_calib.c) ----
 
@@ -142,6 +190,12 @@ rs_status rs_calib__point_problem(rs_calib_problem *sub, double **buffer, const 
 // the segment's direction and s_along to 0.
 void rs_calib__along_choose(rs_calib__work *w, const rs_calib_problem *pb, const double c[3], const double rt_c[6],
                             const double *intrinsics);
+
+// Adds to w->cov (n,n: the camera parameters' covariance of the final solve) its spread over the
+// variance factors' posterior (rs_calib__vce_cov_spread) at the state of w.
+rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
+                               const rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
+                               const rs_calib_options *opt, rs_err *err);
 
 // The 2-dof chi-square of an excluded landmark (rs_calib__noise_excluded_chi2) at the state of w.
 double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib__work *w, const double rt_c[6],

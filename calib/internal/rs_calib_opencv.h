@@ -40,6 +40,18 @@ rs_status rs_calib_opencv_inverse_spd( // out
     // in
     const double *A, int n, rs_err *err);
 
+// The same, and the natural log of det A (cv::determinant of A scaled to a unit diagonal): the
+// restricted likelihood of the variance components (rs_calib_vce.c).
+rs_status rs_calib_opencv_inverse_spd_logdet( // out
+    double *inv,                              // (n,n)
+    double *logdet,
+    // in
+    const double *A, int n, rs_err *err);
+
+// The eigenvalues (n,), in descending order, and eigenvectors (n,n: one per row) of the
+// symmetric n x n matrix A (cv::eigen). RS_ERR_EXTERNAL when OpenCV throws.
+rs_status rs_calib_opencv_eigen_sym(double *values, double *vectors, const double *A, int n, rs_err *err);
+
 // Writes a camera in OpenCV's own YAML layout (cv::FileStorage), for users of cv::projectPoints:
 // image_width, image_height (int), camera_matrix (3x3 K from fx fy cx cy),
 // distortion_coefficients (1xNdistortion, OpenCV's order -- mrcal's LENSMODEL_OPENCVn order),

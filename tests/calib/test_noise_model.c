@@ -3,14 +3,17 @@
 // problems (test_solve_gen.h), against the truth the generator drew:
 //   - stated sigmas wrong by 0.2x and 5x, pixel and survey separately: pose errors (RMS over the
 //     trials) within 1.1x of those with the right sigmas, mean NEES of the 6-dof pose in
-//     [0.7, 1.3] x 6 (1.5 x 6 when a group is stated 5x too precise: the issue's 1.3 is not met there), and each group estimated from the data within 20% of the truth (median
+//     [0.7, 1.3] x 6, and each group estimated from the data within 20% of the truth (median
 //     over the trials; 20-30 landmarks each);
 //   - 25% gross outliers (200-500 px, 10+ sigma): at least 95% flagged, at most 2% of the good
-//     landmarks flagged, with the right and with mis-stated sigmas;
+//     landmarks flagged, with the right sigmas and each of the four mis-statements;
 //   - clean data with mis-stated sigmas: at most 3% of the landmarks flagged (the tests run at
-//     0.1% per observation; 2.4% when the survey is stated 5x too precise).
-// The bands below are what the solver achieves today; where looser than the issue's, the line
-// says so.
+//     0.1% per observation; 2.85% when the survey is stated 5x too precise: the gross-outlier test
+//     before the noise is estimated has one scale for all groups, open).
+// The trials are independent: each draws its own xoshiro256** stream (test_solve_gen.h). (Until
+// 2026-11-24 consecutive seeds gave one splitmix64 stream shifted by one draw, so the 100 trials
+// shared their noise and a few unlucky draws counted many times: mean NEES 7.6 with the true
+// sigmas and no estimation, against 6.2 for each geometry alone by Monte Carlo.)
 // Truth: 1 px picks and a 5 cm survey, so that both groups carry redundancy.
 #include <math.h>
 #include <stdio.h>
@@ -135,24 +138,21 @@ int main(void)
         CHECK(s[k].n >= NTRIALS - 2, "%s: %d of %d trials solved", configs[k].name, s[k].n, NTRIALS);
         CHECK(rot <= 1.1 * rot0 && pos <= 1.1 * pos0, "%s: pose errors %.4f deg, %.4f m vs %.4f deg, %.4f m right",
               configs[k].name, rot, pos, rot0, pos0);
-        // the issue's bands are NEES [0.7, 1.3] x 6 and estimates within 20%; with the prior the
-        // real data chose (a factor 3), a group stated 5x too precise ends at NEES 1.6-1.65 x 6
-        // and estimates up to 40% off, one stated 5x too loose at 26% (not met yet: issue 13's note)
-        const bool right = configs[k].px == 1 && configs[k].m == 1, tight = configs[k].px < 1 || configs[k].m < 1;
-        const double nees_hi = tight ? 1.7 : 1.3, est_tol = right ? 0.2 : tight ? 0.45 : 0.3;
-        CHECK(nees >= 0.7 * 6 && nees <= nees_hi * 6, "%s: mean NEES %.2f", configs[k].name, nees);
+        // the issue's bands: mean NEES in [0.7, 1.3] x 6, each group's median estimate within
+        // 20% of the truth
+        CHECK(nees >= 0.7 * 6 && nees <= 1.3 * 6, "%s: mean NEES %.2f", configs[k].name, nees);
         for (int g = 0; g < 3; g++) {
-            // a group stated 5x too precise keeps too little redundancy to be estimated in 2/3 of the trials
+            // a group stated 5x too precise rests on its prior in some trials (little redundancy)
+            const bool tight = configs[k].px < 1 || configs[k].m < 1;
             CHECK(s[k].nratio[g] >= (tight ? NTRIALS / 4 : NTRIALS / 2), "%s: %s estimated in only %d trials",
                   configs[k].name, group[g], s[k].nratio[g]);
-            CHECK(fabs(med[g] - 1) <= est_tol, "%s: %s estimated at %.3f x the truth", configs[k].name, group[g],
-                  med[g]);
+            CHECK(fabs(med[g] - 1) <= 0.2, "%s: %s estimated at %.3f x the truth", configs[k].name, group[g], med[g]);
         }
         CHECK(s[k].good_flagged <= 0.03 * s[k].good_total, "%s: %d of %d clean landmarks flagged", configs[k].name,
               s[k].good_flagged, s[k].good_total);
     }
     // 25% gross outliers, right and mis-stated sigmas
-    for (int k = 0; k < 5; k += 2) {
+    for (int k = 0; k < 5; k++) {
         static stats acc;
         run(&acc, &configs[k], 1);
         printf("%-14s 25%% outliers: %d of %d flagged (%.1f%%), %d of %d good flagged (%.2f%%)\n", configs[k].name,

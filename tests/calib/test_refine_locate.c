@@ -12,14 +12,15 @@ int main(void)
         gen_rng rng;
         gen_seed(&rng, 900 + (uint64_t)lens);
         gen_problem g;
-        if (!gen_make(&g, &rng, (gen_lens)lens, 4, 0.0, 0.0)) return 1;
+        if (!gen_make(&g, &rng, (gen_lens)lens, 40, 0.0, 0.0)) return 1;
         char name[64];
         if (!mrcal_lensmodel_name(name, sizeof(name), &g.lensmodel)) return 1;
         const double ground = g.p_true[2]; // a level plane through the first landmark
         const double n[3] = {0, 0, 1};
         for (int k = 0; k < 40; k++) {
-            // pixels in the lower two thirds of the image: below the horizon for these cameras
-            const double q[2] = {gen_uniform(&rng, 0, g.width - 1), gen_uniform(&rng, g.height / 3.0, g.height - 1)};
+            // the pixels of the simulated landmarks (on the road or on poles up to 4 m, all below
+            // the camera): their rays come down to the plane
+            const double q[2] = {g.q_true[2 * k], g.q_true[2 * k + 1]};
             double p[3];
             rs_err err = {0};
             const rs_camera cam = gen_camera(&g, g.rt_true);

@@ -46,16 +46,9 @@ int gen_end(const char *seeds)
     return 0;
 }
 
-void gen_seed(gen_rng *g, uint64_t seed) { g->s = seed * 0x9E3779B97F4A7C15ull + 12345u; }
-
-// splitmix64 steps of core/rs_rng.h: the stream of its seed sequence
-double gen_uniform(gen_rng *g, double a, double b) { return a + (b - a) * rs_rng_u01(rs_rng_seed_next(&g->s)); }
-double gen_normal(gen_rng *g)
-{ // Box-Muller
-    double u1 = gen_uniform(g, 0, 1), u2 = gen_uniform(g, 0, 1);
-    if (u1 < 1e-300) u1 = 1e-300;
-    return sqrt(-2.0 * log(u1)) * cos(2.0 * M_PI * u2);
-}
+void gen_seed(gen_rng *g, uint64_t seed) { rs_rng_seed(&g->r, seed); }
+double gen_uniform(gen_rng *g, double a, double b) { return rs_rng_uniform_in(&g->r, a, b); }
+double gen_normal(gen_rng *g) { return rs_rng_normal(&g->r); }
 
 static void set_lens(gen_problem *g, gen_lens lens)
 {

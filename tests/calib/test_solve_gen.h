@@ -2,6 +2,7 @@
 // pose, landmarks on a gently uneven road (some on poles), their exact pixels through mrcal,
 // pixel and survey noise, gross outliers. Deterministic from a seed.
 #pragma once
+#include "core/rs_rng.h"
 #include <mrcal/mrcal.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -28,8 +29,10 @@ extern int gen_failures;
 void gen_begin(void);
 int gen_end(const char *seeds);
 
+// core/rs_rng.h's generator (xoshiro256**, seeded through splitmix64): trials seeded with
+// consecutive numbers draw independent streams.
 typedef struct {
-    uint64_t s;
+    rs_rng r;
 } gen_rng;
 void gen_seed(gen_rng *g, uint64_t seed);
 double gen_uniform(gen_rng *g, double a, double b);

@@ -1,0 +1,369 @@
+// rs_calib_vce.c -- variance components of one camera's adjustment by restricted maximum
+// likelihood, on the adjustment linearised at its solution (calib/internal/rs_calib_noise.h).
+//
+// The landmarks are marginalised: landmark i's surveyed position enters its pick as a pixel
+// error J_i e_survey, so that its pick, evaluated at the surveyed position, has the 2x2
+// covariance
+//   C_i(theta) = theta_px V_px,i + theta_h V_h,i + theta_v V_v,i,
+//   V_px,i = sigma_px^2 I,  V_h,i = sum_{a = E, N} sigma_a^2 J_a J_a',  V_v,i = sigma_U^2 J_U J_U'
+// (J = dq/dp, sigmas as stated, widened for shared survey errors; theta: the variance factors).
+// For a linear model this is the same adjustment as the one with the landmarks as unknowns: the
+// surveyed coordinates are a saturated block for p, and eliminating it leaves these picks with
+// the same residuals, redundancy numbers and restricted likelihood (Koch 1999, section 3.7;
+// Searle, Casella & McCulloch, "Variance Components", 1992, chapter 6). A landmark picked along
+// a segment keeps its offset s as a fixed effect: W'_i = W_i - W_i b b' W_i / (b' W_i b), b = dq/ds.
+//
+// With W = blockdiag(W'_i), G_i = dq/dc, S = sum G' W' G (+ the camera priors), Q = S^-1 and
+// P = W - W G Q G' W, the restricted log likelihood is
+//   l(theta) = -1/2 (sum_i log det C_i [+ log b'W b] + log det S + e_hat' W e_hat)
+// and its score and Fisher information in log theta are
+//   dl/dlog theta_g = (q_g - r_g) / 2,  q_g = theta_g e_hat' W V_g W e_hat,  r_g = theta_g tr(P V_g)
+//   F_gh = theta_g theta_h tr(P V_g P V_h) / 2
+// (Förstner's estimator is the fixed point q_g = r_g of the same score: Förstner 1979, Koch
+// 1999, section 3.6.3). Fisher scoring in log theta, with the stated sigmas as a log-normal
+// prior, converges in a few steps where Förstner's iteration crawls: when two groups explain
+// the same residuals, as pixel and survey noise often do on one camera. (Started also from
+// each group 5x noisier than stated, it reached the same mode on every problem of
+// tests/calib/test_noise_model.c: the posterior has one mode there, and one start is kept.)
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_opencv.h"
+#include "core/rs_pose.h"
+
+typedef struct {
+    double e[2];                   // pixel residual at the surveyed (seen) point, predicted - observed
+    double V[RS_NOISE_NGROUPS][3]; // per group, its 2x2 covariance at theta = 1 (xx, xy, yy)
+    double b[2];                   // dq/ds along the segment, when it slides
+    bool slides;
+    double share;                  // picks sharing the survey error (>= 1)
+    double W[3];                   // W'_i at the last evaluation
+    double Z[RS_NOISE_NGROUPS][4]; // W' V_g W' (2x2, row-major)
+} vce_landmark;
+
+struct rs_calib__vce {
+    int n, nc;
+    vce_landmark *lm;                // (n,)
+    double *G;                       // (n,2,nc)
+    double *P;                       // (nc,nc) the camera priors' normal matrix
+    double *gamma;                   // (nc,) the priors' gradient at the solution
+    bool active[RS_NOISE_NGROUPS];   // groups with observations
+    double *S, *Q, *M, *QM, *g, *dc; // scratch: (nc,nc), (nc,nc), (3,nc,nc), (3,nc,nc), (nc,), (nc,)
+};
+
+static void sym2_mul(double out[4], const double a[4], const double b[4])
+{
+    out[0] = a[0] * b[0] + a[1] * b[2], out[1] = a[0] * b[1] + a[1] * b[3];
+    out[2] = a[2] * b[0] + a[3] * b[2], out[3] = a[2] * b[1] + a[3] * b[3];
+}
+
+static void full2(double out[4], const double s[3]) { out[0] = s[0], out[1] = out[2] = s[1], out[3] = s[2]; }
+
+void rs_calib__vce_free(rs_calib__vce *v)
+{
+    if (!v) return;
+    free(v->lm);
+    free(v->G);
+    free(v->P);
+    free(v->gamma);
+    free(v->S);
+    free(v->Q);
+    free(v->M);
+    free(v->QM);
+    free(v->g);
+    free(v->dc);
+    free(v);
+}
+
+// Evaluates the model at log_theta: the restricted log likelihood *loglik, q, r (with shared
+// survey errors counted once), the Fisher information F (3x3, in log theta).
+static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], double *loglik,
+                          double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
+                          double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
+{
+    const int nc = v->nc;
+    double th[RS_NOISE_NGROUPS];
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++) th[g] = exp(L[g]);
+    memcpy(v->S, v->P, (size_t)nc * nc * sizeof *v->S);
+    memset(v->M, 0, (size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->M);
+    memcpy(v->g, v->gamma, (size_t)nc * sizeof *v->g);
+    double ld = 0;
+    for (int i = 0; i < v->n; i++) {
+        vce_landmark *l = &v->lm[i];
+        const double *G = &v->G[2 * nc * i];
+        double C[3] = {0, 0, 0};
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++)
+            for (int k = 0; k < 3; k++) C[k] += th[g] * l->V[g][k];
+        const double det = C[0] * C[2] - C[1] * C[1];
+        if (!(det > 0))
+            return rs_err_set(err, RS_ERR_DEGENERATE, "variance components: a pick's covariance is singular");
+        ld += log(det);
+        double W[3] = {C[2] / det, -C[1] / det, C[0] / det};
+        if (l->slides) {
+            const double Wb[2] = {W[0] * l->b[0] + W[1] * l->b[1], W[1] * l->b[0] + W[2] * l->b[1]};
+            const double bWb = l->b[0] * Wb[0] + l->b[1] * Wb[1];
+            if (!(bWb > 0)) return rs_err_set(err, RS_ERR_DEGENERATE, "variance components: a slide is not seen");
+            ld += log(bWb);
+            W[0] -= Wb[0] * Wb[0] / bWb, W[1] -= Wb[0] * Wb[1] / bWb, W[2] -= Wb[1] * Wb[1] / bWb;
+        }
+        memcpy(l->W, W, sizeof W);
+        double Wf[4], Vf[4], t[4];
+        full2(Wf, W);
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+            full2(Vf, l->V[g]);
+            sym2_mul(t, Wf, Vf);
+            sym2_mul(l->Z[g], t, Wf);
+        }
+        // S += G' W G, g += G' W e, M_g += G' Z_g G
+        for (int a = 0; a < nc; a++) {
+            const double ga[2] = {G[a], G[nc + a]};
+            const double wa[2] = {W[0] * ga[0] + W[1] * ga[1], W[1] * ga[0] + W[2] * ga[1]};
+            v->g[a] += wa[0] * l->e[0] + wa[1] * l->e[1];
+            for (int b = 0; b < nc; b++) v->S[a * nc + b] += wa[0] * G[b] + wa[1] * G[nc + b];
+            for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+                const double *Z = l->Z[g];
+                const double za[2] = {Z[0] * ga[0] + Z[2] * ga[1], Z[1] * ga[0] + Z[3] * ga[1]};
+                double *M = &v->M[(size_t)g * nc * nc + (size_t)a * nc];
+                for (int b = 0; b < nc; b++) M[b] += za[0] * G[b] + za[1] * G[nc + b];
+            }
+        }
+    }
+    double ldS;
+    rs_status st = rs_calib_opencv_inverse_spd_logdet(v->Q, &ldS, v->S, nc, err);
+    if (st != RS_OK) return st;
+    double quad = 0;
+    for (int a = 0; a < nc; a++) {
+        v->dc[a] = 0;
+        for (int b = 0; b < nc; b++) v->dc[a] -= v->Q[a * nc + b] * v->g[b];
+    }
+    for (int a = 0; a < nc; a++) {
+        quad += 2.0 * v->gamma[a] * v->dc[a];
+        for (int b = 0; b < nc; b++) quad += v->dc[a] * v->P[a * nc + b] * v->dc[b];
+    }
+    memset(q, 0, RS_NOISE_NGROUPS * sizeof *q);
+    memset(r, 0, RS_NOISE_NGROUPS * sizeof *r);
+    double T[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS] = {0};
+    for (int i = 0; i < v->n; i++) {
+        const vce_landmark *l = &v->lm[i];
+        const double *G = &v->G[2 * nc * i];
+        double eh[2] = {l->e[0], l->e[1]}, GQ[2][RS_NOISE_NC_MAX];
+        for (int k = 0; k < 2; k++)
+            for (int a = 0; a < nc; a++) {
+                eh[k] += G[k * nc + a] * v->dc[a];
+                GQ[k][a] = 0;
+                for (int b = 0; b < nc; b++) GQ[k][a] += G[k * nc + b] * v->Q[b * nc + a];
+            }
+        double H[4] = {0, 0, 0, 0}; // G Q G'
+        for (int k = 0; k < 2; k++)
+            for (int m = 0; m < 2; m++)
+                for (int a = 0; a < nc; a++) H[2 * k + m] += GQ[k][a] * G[m * nc + a];
+        const double u[2] = {l->W[0] * eh[0] + l->W[1] * eh[1], l->W[1] * eh[0] + l->W[2] * eh[1]};
+        quad += eh[0] * u[0] + eh[1] * u[1];
+        double Wf[4], WV[RS_NOISE_NGROUPS][4], ZH[RS_NOISE_NGROUPS][4];
+        full2(Wf, l->W);
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+            double Vf[4];
+            full2(Vf, l->V[g]);
+            sym2_mul(WV[g], Wf, Vf);
+            sym2_mul(ZH[g], l->Z[g], H);
+            const double Vu[2] = {Vf[0] * u[0] + Vf[1] * u[1], Vf[2] * u[0] + Vf[3] * u[1]};
+            q[g] += th[g] * (u[0] * Vu[0] + u[1] * Vu[1]);
+            const double rg = th[g] * (WV[g][0] + WV[g][3] - ZH[g][0] - ZH[g][3]);
+            r[g] += g == RS_NOISE_PIXEL ? rg : rg / l->share;
+        }
+        // tr(P V_g P V_h) = sum_i [tr(W V_g W V_h) - 2 tr(Z_g H W V_h)] + tr(Q M_g Q M_h): P's
+        // off-diagonal blocks enter only through M_g
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++)
+            for (int h = 0; h < RS_NOISE_NGROUPS; h++) {
+                double t[4], x[4];
+                sym2_mul(t, WV[g], WV[h]);
+                sym2_mul(x, ZH[g], WV[h]);
+                T[g * RS_NOISE_NGROUPS + h] += t[0] + t[3] - 2.0 * (x[0] + x[3]);
+            }
+    }
+    // + tr(Q M_g Q M_h)
+    double *QM = v->QM;
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++)
+        for (int a = 0; a < nc; a++)
+            for (int b = 0; b < nc; b++) {
+                double x = 0;
+                for (int k = 0; k < nc; k++) x += v->Q[a * nc + k] * v->M[(size_t)g * nc * nc + (size_t)k * nc + b];
+                QM[(size_t)g * nc * nc + (size_t)a * nc + b] = x;
+            }
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++)
+        for (int h = 0; h < RS_NOISE_NGROUPS; h++) {
+            double x = 0;
+            for (int a = 0; a < nc; a++)
+                for (int b = 0; b < nc; b++)
+                    x += QM[(size_t)g * nc * nc + (size_t)a * nc + b] * QM[(size_t)h * nc * nc + (size_t)b * nc + a];
+            F[g * RS_NOISE_NGROUPS + h] = 0.5 * th[g] * th[h] * (T[g * RS_NOISE_NGROUPS + h] + x);
+        }
+    *loglik = -0.5 * (ld + ldS + quad);
+    return RS_OK;
+}
+
+rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
+                              const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err)
+{
+    *out = NULL;
+    rs_calib__params pp;
+    rs_calib__camera_params(&pp, s);
+    const int nc = pp.nc;
+    int n = 0;
+    for (int i = 0; i < s->N; i++) n += s->use[i];
+    rs_calib__vce *v = calloc(1, sizeof *v);
+    double *dq_dintr = malloc((size_t)2 * (size_t)pp.Ni * sizeof *dq_dintr);
+    if (v) {
+        v->n = n, v->nc = nc;
+        v->lm = calloc((size_t)(n > 0 ? n : 1), sizeof *v->lm);
+        v->G = malloc((size_t)(n > 0 ? n : 1) * 2 * nc * sizeof *v->G);
+        v->P = calloc((size_t)nc * nc, sizeof *v->P);
+        v->gamma = calloc((size_t)nc, sizeof *v->gamma);
+        v->S = malloc((size_t)nc * nc * sizeof *v->S);
+        v->Q = malloc((size_t)nc * nc * sizeof *v->Q);
+        v->M = malloc((size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->M);
+        v->QM = malloc((size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->QM);
+        v->g = malloc((size_t)nc * sizeof *v->g);
+        v->dc = malloc((size_t)nc * sizeof *v->dc);
+    }
+    if (!v || !dq_dintr || !v->lm || !v->G || !v->P || !v->gamma || !v->S || !v->Q || !v->M || !v->QM || !v->g ||
+        !v->dc) {
+        free(dq_dintr);
+        rs_calib__vce_free(v);
+        return rs_err_set(err, RS_ERR_NOMEM, "variance components: out of memory");
+    }
+    double f[RS_NOISE_NGROUPS]; // in-use sigma -> stated sigma
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++) f[g] = exp(-0.5 * log_theta_ref[g]);
+    for (int i = 0, k = 0; i < s->N; i++) {
+        if (!s->use[i]) continue;
+        vce_landmark *l = &v->lm[k];
+        double *G = &v->G[2 * nc * k];
+        double seen[3], d[3], q[2], J[6], dpc_dp[9];
+        mrcal_point3_t dq_dpc[2];
+        l->slides = rs_calib__seen_point(seen, d, s->p_survey_c_m, s->along_c, s->s_along_m, i);
+        if (!rs_calib__pixel_jacobian(q, G, J, dpc_dp, dq_dpc, s, &pp, seen, dq_dintr)) {
+            free(dq_dintr);
+            rs_calib__vce_free(v);
+            return rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d does not project at the solution", i);
+        }
+        for (int r = 0; r < 2; r++) l->e[r] = q[r] - s->q_px[2 * i + r];
+        const double sp = (s->sigma_px ? s->sigma_px[i] : 1.0) * f[RS_NOISE_PIXEL];
+        l->V[RS_NOISE_PIXEL][0] = l->V[RS_NOISE_PIXEL][2] = sp * sp;
+        for (int a = 0; a < 3; a++) {
+            const int g = a < 2 ? RS_NOISE_SURVEY_H : RS_NOISE_SURVEY_V;
+            const double sa = (s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0) * f[g], s2 = sa * sa;
+            l->V[g][0] += s2 * J[a] * J[a];
+            l->V[g][1] += s2 * J[a] * J[3 + a];
+            l->V[g][2] += s2 * J[3 + a] * J[3 + a];
+        }
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++) v->active[g] |= l->V[g][0] + l->V[g][2] > 0;
+        for (int r = 0; r < 2 && l->slides; r++) l->b[r] = J[3 * r] * d[0] + J[3 * r + 1] * d[1] + J[3 * r + 2] * d[2];
+        l->share = share ? share[i] : 1.0;
+        k++;
+    }
+    free(dq_dintr);
+    rs_calib__prior_normal(v->P, &pp, s);
+    // the priors' gradient: at the solution the whole gradient vanishes, so it is minus the
+    // picks' part at the sigmas the solution was made with
+    double ll, q[RS_NOISE_NGROUPS], r[RS_NOISE_NGROUPS], F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS];
+    rs_status st = evaluate(v, log_theta_ref, &ll, q, r, F, err);
+    if (st != RS_OK) {
+        rs_calib__vce_free(v);
+        return st;
+    }
+    for (int a = 0; a < nc; a++) v->gamma[a] = -v->g[a];
+    *out = v;
+    return RS_OK;
+}
+
+rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double r_out[RS_NOISE_NGROUPS], rs_calib__vce *v,
+                                 double prior_factor, rs_err *err)
+{
+    enum { NG = RS_NOISE_NGROUPS };
+    const double lp = 2.0 * log(prior_factor); // the prior's 1-sigma in log variance
+    if (!(lp > 0)) return RS_OK;               // the stated sigmas are exact
+    const double bound = 2.0 * log(RS_NOISE_MAX_FACTOR);
+    double L[NG], r[NG];
+    memcpy(L, log_theta, sizeof L);
+    for (int it = 0; it < 30; it++) {
+        double ll, q[NG], F[NG * NG];
+        rs_status st = evaluate(v, L, &ll, q, r, F, err);
+        if (st != RS_OK) return st;
+        double grad[NG], H[NG * NG], Hinv[NG * NG], step[NG] = {0};
+        int idx[NG], m = 0;
+        for (int g = 0; g < NG; g++)
+            if (v->active[g]) idx[m++] = g;
+        if (m == 0) break;
+        for (int a = 0; a < m; a++) { // the posterior: the likelihood and the prior N(0, lp^2)
+            grad[a] = 0.5 * (q[idx[a]] - r[idx[a]]) - L[idx[a]] / (lp * lp);
+            for (int b = 0; b < m; b++) H[a * m + b] = F[idx[a] * NG + idx[b]] + (a == b ? 1.0 / (lp * lp) : 0.0);
+        }
+        if ((st = rs_calib_opencv_inverse_spd(Hinv, H, m, err)) != RS_OK) return st;
+        double change = 0;
+        for (int a = 0; a < m; a++) {
+            for (int b = 0; b < m; b++) step[a] += Hinv[a * m + b] * grad[b];
+            step[a] = fmax(-1.0, fmin(1.0, step[a])); // at most a factor e in a variance per step
+            const double next = fmax(-bound, fmin(bound, L[idx[a]] + step[a]));
+            change = fmax(change, fabs(next - L[idx[a]]));
+            L[idx[a]] = next;
+        }
+        if (change < 1e-4) break;
+    }
+    memcpy(log_theta, L, sizeof L);
+    if (r_out) memcpy(r_out, r, sizeof r);
+    return RS_OK;
+}
+
+rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
+                                   double prior_factor, double min_redundancy, rs_err *err)
+{
+    enum { NG = RS_NOISE_NGROUPS };
+    const int nc = v->nc;
+    memset(dQ, 0, (size_t)nc * nc * sizeof *dQ);
+    const double lp = 2.0 * log(prior_factor);
+    if (!(lp > 0)) return RS_OK;
+    double ll, q[NG], r[NG], F[NG * NG];
+    rs_status st = evaluate(v, log_theta, &ll, q, r, F, err);
+    if (st != RS_OK) return st;
+    double *Q0 = malloc((size_t)nc * nc * sizeof *Q0);
+    if (!Q0) return rs_err_set(err, RS_ERR_NOMEM, "variance components: out of memory");
+    memcpy(Q0, v->Q, (size_t)nc * nc * sizeof *Q0);
+    int idx[NG], m = 0; // the groups estimated from the data; the others keep their stated sigma
+    for (int g = 0; g < NG; g++)
+        if (v->active[g] && r[g] >= min_redundancy) idx[m++] = g;
+    double H[NG * NG], C[NG * NG], lam[NG], E[NG * NG];
+    for (int a = 0; a < m; a++)
+        for (int b = 0; b < m; b++) H[a * m + b] = F[idx[a] * NG + idx[b]] + (a == b ? 1.0 / (lp * lp) : 0.0);
+    if (m > 0 && (st = rs_calib_opencv_inverse_spd(C, H, m, err)) == RS_OK)
+        st = rs_calib_opencv_eigen_sym(lam, E, C, m, err);
+    // the unscented transform of Q over log theta's posterior: 2m points, weight 1/(2m) each, at
+    // +-a_k along each eigenvector. The log-normal (Laplace) posterior understates the right
+    // tail of a variance's: for one group with r degrees of freedom the exact posterior mean of
+    // the factor (a scaled inverse chi-square's) is r / (r - 2) times the estimate, and a_k is
+    // chosen so that the points reproduce it, with r_k = 2 / lambda_k the direction's degrees of
+    // freedom (at least 3) -- a_k = acosh(1 + 2m / (r_k - 2)), which is sqrt(2 m lambda_k)
+    // (twice the Laplace variance) for large r_k
+    for (int k = 0; st == RS_OK && k < m; k++) {
+        const double rk = fmax(2.0 / fmax(lam[k], 1e-300), 3.0), ak = acosh(1.0 + 2.0 * m / (rk - 2.0));
+        for (int sign = -1; sign <= 1 && st == RS_OK; sign += 2) {
+            double L[NG];
+            memcpy(L, log_theta, sizeof L);
+            for (int a = 0; a < m; a++) L[idx[a]] += sign * ak * E[k * m + a];
+            if ((st = evaluate(v, L, &ll, q, r, F, err)) != RS_OK) break;
+            for (int j = 0; j < nc * nc; j++) dQ[j] += (v->Q[j] - Q0[j]) / (2.0 * m);
+        }
+    }
+    free(Q0);
+    return st;
+}
+
+int rs_calib__vce_Nintrinsics(const rs_calib__vce *v) { return v->nc - 6; }
+
+rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS], double *loglik,
+                                 double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
+                                 double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
+{
+    return evaluate(v, log_theta, loglik, q, r, F, err);
+}
