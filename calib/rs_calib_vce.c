@@ -77,9 +77,10 @@ void rs_calib__vce_free(rs_calib__vce *v)
     free(v);
 }
 
-// Evaluates the model at log_theta: the restricted log likelihood *loglik, q, r (with shared
-// survey errors counted once), the Fisher information F (3x3, in log theta).
-static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], double *loglik,
+// Evaluates the model at log_theta: S, its inverse Q and the gradient g in v; with `full`, also
+// the restricted log likelihood *loglik, q, r (with shared survey errors counted once) and the
+// Fisher information F (3x3, in log theta) -- without, those outputs are not touched.
+static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bool full, double *loglik,
                           double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
                           double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
 {
@@ -87,7 +88,7 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], do
     double th[RS_NOISE_NGROUPS];
     for (int g = 0; g < RS_NOISE_NGROUPS; g++) th[g] = exp(L[g]);
     memcpy(v->S, v->P, (size_t)nc * nc * sizeof *v->S);
-    memset(v->M, 0, (size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->M);
+    if (full) memset(v->M, 0, (size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->M);
     memcpy(v->g, v->gamma, (size_t)nc * sizeof *v->g);
     double ld = 0;
     for (int i = 0; i < v->n; i++) {
@@ -111,7 +112,7 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], do
         memcpy(l->W, W, sizeof W);
         double Wf[4], Vf[4], t[4];
         full2(Wf, W);
-        for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+        for (int g = 0; g < RS_NOISE_NGROUPS && full; g++) {
             full2(Vf, l->V[g]);
             sym2_mul(t, Wf, Vf);
             sym2_mul(l->Z[g], t, Wf);
@@ -122,7 +123,7 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], do
             const double wa[2] = {W[0] * ga[0] + W[1] * ga[1], W[1] * ga[0] + W[2] * ga[1]};
             v->g[a] += wa[0] * l->e[0] + wa[1] * l->e[1];
             for (int b = 0; b < nc; b++) v->S[a * nc + b] += wa[0] * G[b] + wa[1] * G[nc + b];
-            for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+            for (int g = 0; g < RS_NOISE_NGROUPS && full; g++) {
                 const double *Z = l->Z[g];
                 const double za[2] = {Z[0] * ga[0] + Z[2] * ga[1], Z[1] * ga[0] + Z[3] * ga[1]};
                 double *M = &v->M[(size_t)g * nc * nc + (size_t)a * nc];
@@ -130,9 +131,10 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], do
             }
         }
     }
-    double ldS;
-    rs_status st = rs_calib_opencv_inverse_spd_logdet(v->Q, &ldS, v->S, nc, err);
-    if (st != RS_OK) return st;
+    double ldS = 0;
+    rs_status st = full ? rs_calib_opencv_inverse_spd_logdet(v->Q, &ldS, v->S, nc, err)
+                        : rs_calib_opencv_inverse_spd(v->Q, v->S, nc, err);
+    if (st != RS_OK || !full) return st;
     double quad = 0;
     for (int a = 0; a < nc; a++) {
         v->dc[a] = 0;
@@ -268,7 +270,7 @@ rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s
     // the priors' gradient: at the solution the whole gradient vanishes, so it is minus the
     // picks' part at the sigmas the solution was made with
     double ll, q[RS_NOISE_NGROUPS], r[RS_NOISE_NGROUPS], F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS];
-    rs_status st = evaluate(v, log_theta_ref, &ll, q, r, F, err);
+    rs_status st = evaluate(v, log_theta_ref, false, &ll, q, r, F, err);
     if (st != RS_OK) {
         rs_calib__vce_free(v);
         return st;
@@ -289,7 +291,7 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double r_ou
     memcpy(L, log_theta, sizeof L);
     for (int it = 0; it < 30; it++) {
         double ll, q[NG], F[NG * NG];
-        rs_status st = evaluate(v, L, &ll, q, r, F, err);
+        rs_status st = evaluate(v, L, true, &ll, q, r, F, err);
         if (st != RS_OK) return st;
         double grad[NG], H[NG * NG], Hinv[NG * NG], step[NG] = {0};
         int idx[NG], m = 0;
@@ -309,7 +311,7 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double r_ou
             change = fmax(change, fabs(next - L[idx[a]]));
             L[idx[a]] = next;
         }
-        if (change < 1e-4) break;
+        if (change < 1e-3) break; // 0.1% in a variance
     }
     memcpy(log_theta, L, sizeof L);
     if (r_out) memcpy(r_out, r, sizeof r);
@@ -325,7 +327,7 @@ rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double lo
     const double lp = 2.0 * log(prior_factor);
     if (!(lp > 0)) return RS_OK;
     double ll, q[NG], r[NG], F[NG * NG];
-    rs_status st = evaluate(v, log_theta, &ll, q, r, F, err);
+    rs_status st = evaluate(v, log_theta, true, &ll, q, r, F, err);
     if (st != RS_OK) return st;
     double *Q0 = malloc((size_t)nc * nc * sizeof *Q0);
     if (!Q0) return rs_err_set(err, RS_ERR_NOMEM, "variance components: out of memory");
@@ -351,7 +353,7 @@ rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double lo
             double L[NG];
             memcpy(L, log_theta, sizeof L);
             for (int a = 0; a < m; a++) L[idx[a]] += sign * ak * E[k * m + a];
-            if ((st = evaluate(v, L, &ll, q, r, F, err)) != RS_OK) break;
+            if ((st = evaluate(v, L, false, &ll, q, r, F, err)) != RS_OK) break;
             for (int j = 0; j < nc * nc; j++) dQ[j] += (v->Q[j] - Q0[j]) / (2.0 * m);
         }
     }
@@ -365,5 +367,5 @@ rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOI
                                  double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
                                  double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
 {
-    return evaluate(v, log_theta, loglik, q, r, F, err);
+    return evaluate(v, log_theta, true, loglik, q, r, F, err);
 }
