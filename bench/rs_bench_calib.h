@@ -112,6 +112,8 @@ typedef struct {
     int Nout999;             // poses outside their 99.9% ellipsoid (Mahalanobis^2 > 22.46): 0.1%
                              //   of Nok when the covariance is exact
     int Nout999_unwarned;    //   of them, with no warning at all
+    int Nout999_bare;        //   of them, with no warning but the generic one below (the issue's
+                             //   "a pose outside its 99.9% ellipsoid carries a warning that says so")
     int Nbeyond10;           // poses beyond 10 reported sigmas, warned or not
     int Nwarned;             // poses that carry any warning
     int Nbeyond10_bare;      // beyond 10 sigma with no warning but the generic one that the focal,

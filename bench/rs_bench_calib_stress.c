@@ -159,16 +159,19 @@ static void stress_one(rs_bench_calib_stress_summary *S, uint64_t seed)
         for (int k = 3; k < 6; k++) d[k] = r.rt_cam_enu[k] - P->camera.rt_cam_enu[k];
         const double m2 = mahalanobis2(r.covariance_rt_cam_enu, d);
         S->Nwarned += r.warnings[0] != 0;
-        if (!(m2 <= 22.458)) S->Nout999++, S->Nout999_unwarned += !r.warnings[0] && !flagged;
-        S->Nbeyond10 += !(m2 <= 100.0);
-        if (!(m2 <= 100.0) && !flagged) { // any warning besides the focal-cannot-be-checked one?
-            bool other = false;
-            char buf[sizeof r.warnings], *save = NULL;
-            snprintf(buf, sizeof buf, "%s", r.warnings);
-            for (char *w = strtok_r(buf, ";", &save); w && !other; w = strtok_r(NULL, ";", &save))
-                other = strspn(w, " ") != strlen(w) && !strstr(w, "these landmarks cannot check it");
-            S->Nbeyond10_bare += !other;
+        // a warning besides the generic one that the focal, taken as exact, cannot be checked
+        bool other = flagged;
+        char buf[sizeof r.warnings], *save = NULL;
+        snprintf(buf, sizeof buf, "%s", r.warnings);
+        for (char *w = strtok_r(buf, ";", &save); w && !other; w = strtok_r(NULL, ";", &save))
+            other = strspn(w, " ") != strlen(w) && !strstr(w, "these landmarks cannot check it");
+        if (!(m2 <= 22.458)) {
+            S->Nout999++;
+            S->Nout999_unwarned += !r.warnings[0] && !flagged;
+            S->Nout999_bare += !other;
         }
+        S->Nbeyond10 += !(m2 <= 100.0);
+        S->Nbeyond10_bare += !(m2 <= 100.0) && !other;
         if (!flagged && !r.warnings[0] && !(m2 <= 100.0)) {
             S->Nbad++;
             stress_bad(S, seed, "a confident wrong pose: Mahalanobis distance", sqrt(m2));
