@@ -22,11 +22,10 @@ with two vertical sigmas stated for the raw heights:
          reported) as outliers.
 
 Checks: the heights the reader models lie on numpy's least-squares plane of the points it says it
-rests on (an independent oracle; with 1.0 m, all 43); the 1.0 m arm's leave-one-out median is the
-same as the hand arm's or better (within MEDIAN_TOLERANCE_M), the 0.3 m arm's under issue 13's
-1.70 m (with noise estimated from the data it is 1.64 m, 5 cm behind the hand arm). Prints all
-three. Skips
-(77) when the data is absent.
+rests on (an independent oracle; with 1.0 m, all 43; both arms); the 1.0 m arm's leave-one-out
+median is the same as the hand arm's or better (within MEDIAN_TOLERANCE_M). The 0.3 m arm's
+leave-one-out is test_real_gnss_sigma_sets.py's second set (1.528 m on 2026-11-24, under issue
+13's 1.70 m), not run twice. Prints both medians. Skips (77) when the data is absent.
 """
 import json
 import math
@@ -47,6 +46,9 @@ ROADSIDE = os.environ["ROADSIDE"]
 # vehicle: about 1 m, 1-sigma; their scatter about the road plane is 0.99 m here), and the hand
 # arm's 0.3 m
 RAW_SIGMAS_V_M = (1.0, 0.3)
+# leave-one-out runs only the 1.0 m arm: the 0.3 m arm is the sigma set (1.0 m, 0.3 m, 3 px) of
+# test_real_gnss_sigma_sets.py, which asserts the issue's bar on it (both tests are in suite slow)
+LOO_SIGMAS_V_M = (1.0,)
 MEDIAN_TOLERANCE_M = 0.02  # "the same": leave-one-out medians within 2 cm
 ISSUE_BAR_M = 1.70  # issue 13: leave-one-out median under 1.70 m on raw heights
 
@@ -152,7 +154,7 @@ def main():
             if problem:
                 print("FAIL:", problem)
                 return 1
-        hand, model = [], {s: [] for s in RAW_SIGMAS_V_M}
+        hand, model = [], {s: [] for s in LOO_SIGMAS_V_M}
         for k in range(len(rows)):
             train = [r for r in rows if r["i"] != k]
             ptrain = np.delete(p_enu, k, axis=0)
@@ -160,7 +162,7 @@ def main():
             d_hand = os.path.join(tmp, f"hand{k:02d}")
             base.write_site(d_hand, base.snap_to_plane(train, ptrain, plane, origin), origin, plane)
             arms = [(d_hand, hand)]
-            for s in RAW_SIGMAS_V_M:
+            for s in LOO_SIGMAS_V_M:
                 arms.append((os.path.join(tmp, f"model{s}_{k:02d}"), model[s]))
                 write_raw_site(arms[-1][0], train, origin, s)
             for d, out in arms:
@@ -174,7 +176,7 @@ def main():
         print(f"leave-one-out ground error, heights snapped by hand (test_real_gnss.py), sigma_v 0.3 m: "
               f"median {np.median(hand):.3f} m, mean {hand.mean():.3f} m, max {hand.max():.3f} m")
         failed = False
-        for s in RAW_SIGMAS_V_M:
+        for s in LOO_SIGMAS_V_M:
             e = np.array(model[s])
             print(f"leave-one-out ground error, raw heights \"unreliable\" stated at {s} m (ground model): "
                   f"median {np.median(e):.3f} m, mean {e.mean():.3f} m, max {e.max():.3f} m")
