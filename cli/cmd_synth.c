@@ -18,7 +18,8 @@ static const char synth_usage[] =
     "                      [--size WxH] [--vehicles N] [--split NAME] [--no-shadows]\n"
     "                      [--jobs J] [--separate-processes]\n"
     "                      [--bbox footprint|body|visible] [--min-visibility V] [--keep-invisible]\n"
-    "                      [--no-junction-traffic] [--val-fraction F] [--val-camera ID]...\n"
+    "                      [--no-junction-traffic | --traffic-frames DIR]\n"
+    "                      [--val-fraction F] [--val-camera ID]...\n"
     "                      [--val-backgrounds TAG=VALUE]... [--val-split NAME]\n"
     "       roadside synth merge DATASET... -o OUT\n"
     "\n"
@@ -26,17 +27,18 @@ static const char synth_usage[] =
     "k mod (number of cameras), over a background drawn among the camera's tagged backgrounds\n"
     "(site.json background_images; without any, a neutral grey ground rendered by POV-Ray:\n"
     "make backgrounds first with `roadside site render-backgrounds` or `roadside background`),\n"
-    "with the built-in traffic on SITE/lanes.geojson and domain randomisation, the sun from\n"
-    "the background's time tag, rendered with POV-Ray, shadows cast onto the background by\n"
-    "differential rendering, the vehicles matched to the background's exposure, noise, blur\n"
-    "and JPEG quality, and labelled through mrcal. Image k\n"
-    "depends only on (seed, k): reruns and shard splits give identical files. A rerun skips\n"
-    "finished images after checking their files (a missing or corrupt one is remade, named on\n"
-    "stderr). One run per DATASET at a time: a second fails at once, naming the first's pid\n"
-    "(DATASET/.lock). Writes DATASET/<split>/*.png, DATASET/annotations/instances_<split>.json\n"
-    "(COCO, YOLOX's layout), DATASET/images/<split>, labels/<split>, data.yaml (Ultralytics\n"
-    "YOLO), DATASET/kitti/training/{image_2,label_2,calib} (KITTI), DATASET/cameras/ (the\n"
-    "camera models the labels were made with) and DATASET/run.json (the run's options).\n"
+    "with the built-in traffic on SITE/lanes.geojson and domain randomisation (or SUMO's:\n"
+    "one frame of --traffic-frames DIR per image), the sun from the background's time tag,\n"
+    "rendered with POV-Ray, shadows cast onto the background by differential rendering, the\n"
+    "vehicles matched to the background's exposure, noise, blur and JPEG quality, and\n"
+    "labelled through mrcal. Image k depends only on (seed, k): reruns and shard splits give\n"
+    "identical files. A rerun skips finished images after checking their files (a missing or\n"
+    "corrupt one is remade, named on stderr). One run per DATASET at a time: a second fails\n"
+    "at once, naming the first's pid (DATASET/.lock). Writes DATASET/<split>/*.png,\n"
+    "DATASET/annotations/instances_<split>.json (COCO, YOLOX's layout), DATASET/images/<split>,\n"
+    "labels/<split>, data.yaml (Ultralytics YOLO), DATASET/kitti/training/{image_2,label_2,\n"
+    "calib} (KITTI), DATASET/cameras/ (the camera models the labels were made with) and\n"
+    "DATASET/run.json (the run's options).\n"
     "The fields of every file: docs/labels.md.\n"
     "\n"
     "Options:\n"
@@ -62,7 +64,17 @@ static const char synth_usage[] =
     "  --min-visibility V     no label for a vehicle less visible than V in [0, 1] (default 0)\n"
     "  --keep-invisible       label vehicles with no visible pixel too (default: not)\n"
     "  --no-junction-traffic  no vehicles on the junction's own lanes (default: turning\n"
-    "                         movements through the junction, docs/traffic.md)\n"
+    "                         movements through the junction, docs/traffic.md; built-in\n"
+    "                         traffic only)\n"
+    "  --traffic-frames DIR   SUMO's traffic instead of the built-in one: DIR is a folder written\n"
+    "                         by `roadside traffic SITE --sumo -o DIR` (frames.json and its\n"
+    "                         frame_NNNNNN.json). Image k takes the vehicles of one frame,\n"
+    "                         drawn from (seed, k), where SUMO put them (no positional\n"
+    "                         randomisation here; `roadside traffic` randomised the frames\n"
+    "                         unless --no-randomise), with fresh looks (paint, dirt, shape\n"
+    "                         details) per image; at most --vehicles of those the camera sees.\n"
+    "                         Every frame is read and checked first; run.json records the\n"
+    "                         frames' count and SHA-256, so merge refuses other traffic\n"
     "  --no-shadows           no differential-rendering shadows (the shadow pass: the sun's\n"
     "                         shadow and the sky's soft one of each vehicle on the background)\n"
     "  --jobs J               images made at once, in J worker processes (default: the CPUs\n"
@@ -98,7 +110,8 @@ enum {
     OPT_VAL_FRACTION,
     OPT_VAL_CAMERA,
     OPT_VAL_BG,
-    OPT_VAL_SPLIT
+    OPT_VAL_SPLIT,
+    OPT_TRAFFIC_FRAMES
 };
 
 // "TAG=VALUE" -> keys[*N], values[*N] (kv[*N] owns the copy). RS_EXIT_OK or a usage error.
@@ -215,6 +228,7 @@ int rs_cli_synth(int argc, char **argv)
                                              {"val-camera", required_argument, NULL, OPT_VAL_CAMERA},
                                              {"val-backgrounds", required_argument, NULL, OPT_VAL_BG},
                                              {"val-split", required_argument, NULL, OPT_VAL_SPLIT},
+                                             {"traffic-frames", required_argument, NULL, OPT_TRAFFIC_FRAMES},
                                              {"output", required_argument, NULL, 'o'},
                                              {"help", no_argument, NULL, 'h'},
                                              {NULL, 0, NULL, 0}};
@@ -269,6 +283,10 @@ int rs_cli_synth(int argc, char **argv)
             break;
         case OPT_KEEP_INVISIBLE: opt.keep_invisible = true; break;
         case OPT_NO_JUNCTION: opt.junction_traffic = false; break;
+        case OPT_TRAFFIC_FRAMES:
+            if (!*optarg) rc = rs_cli_usage_error("synth", "--traffic-frames: empty folder name");
+            opt.traffic_frames_dir = optarg;
+            break;
         case OPT_BBOX: {
             rs_synth_bbox_kind kind;
             rs_err e = {0};
@@ -341,6 +359,11 @@ int rs_cli_synth(int argc, char **argv)
     opt.val_bg_keys = val_keys;
     opt.val_bg_values = val_values;
     opt.Nval_bg = Nval_kv;
+    if (opt.traffic_frames_dir && !opt.junction_traffic) {
+        rc =
+            rs_cli_usage_error("synth", "--no-junction-traffic is for the built-in traffic, not with --traffic-frames");
+        goto done;
+    }
     if (strcmp(opt.split, opt.val_split) == 0) {
         rc = rs_cli_usage_error("synth", "--split and --val-split name the same split \"%s\"", opt.split);
         goto done;
@@ -373,6 +396,9 @@ int rs_cli_synth(int argc, char **argv)
     printf("YOLO:        %s/data.yaml   (images/<split>/, labels/<split>/)\n", opt.out_dir);
     printf("KITTI:       %s/kitti/training/   (image_2/, label_2/, calib/; kitti/ImageSets/)\n", opt.out_dir);
     printf("cameras:     %s/cameras/   (the camera models of the labels; eval --metres reads them)\n", opt.out_dir);
+    if (opt.traffic_frames_dir)
+        printf("traffic:     SUMO's frames in %s (run.json: traffic_frames, their count and SHA-256)\n",
+               opt.traffic_frames_dir);
 done:
     for (int i = 0; i < Nkv; i++) free(kv[i]);
     for (int i = 0; i < Nval_kv; i++) free(val_kv[i]);

@@ -196,14 +196,16 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
     if ((st = rs_site_load(&d->site, opt->site_dir, err))) return st;
     path = rs_io_join(opt->site_dir, "lanes.geojson");
     if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    if (!rs_synth_dataset__file_exists(path)) {
+    // the built-in traffic needs the lanes; SUMO's frames do not (the lanes then only help to
+    // find the road in a background, rs_synth_light_from_image)
+    if (!rs_synth_dataset__file_exists(path) && !opt->traffic_frames_dir) {
         st = rs_err_set(err, RS_ERR_INVALID,
                         "%s: missing: the built-in traffic needs the site's "
                         "lanes (docs/traffic.md)",
                         path);
         goto done;
     }
-    if ((st = rs_lanes_read(&d->lanes, path, d->site, err))) goto done;
+    if (rs_synth_dataset__file_exists(path) && (st = rs_lanes_read(&d->lanes, path, d->site, err))) goto done;
     const int Nc = opt->Ncameras > 0 ? opt->Ncameras : d->site->Ncameras;
     d->cams = calloc((size_t)(Nc > 0 ? Nc : 1), sizeof(rs_synth_dataset__camera));
     if (!d->cams) {
@@ -286,7 +288,11 @@ static rs_status write_camera_copies(rs_synth_dataset__run *d, rs_err *err)
 // with each camera model's SHA-256, "shard": "I/N"}. A folder that holds another run's
 // images (a different "run") is refused: images of different runs must not be mixed (merge
 // refuses them too, rs_synth_dataset_merge).
-static rs_status write_run_record(const rs_synth_dataset__run *d, rs_err *err)
+// With SUMO's frames, "traffic_frames": {"frames", "vehicles", "sha256"} (the folder's content,
+// rs_synth_traffic_frames_info) joins the run (so merge refuses shards of other traffic), and
+// the folder's path is noted beside it (not compared: shards may read copies at other paths).
+static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth_traffic_frames_info *frames,
+                                  rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     cJSON *doc = cJSON_CreateObject(), *run = cJSON_AddObjectToObject(doc, "run");
@@ -312,6 +318,13 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, rs_err *err)
     }
     cJSON_AddBoolToObject(run, "shadows", opt->shadows);
     cJSON_AddBoolToObject(run, "junction_traffic", opt->junction_traffic);
+    if (opt->traffic_frames_dir) { // absent for the built-in traffic: older records stay equal
+        cJSON *tf = cJSON_AddObjectToObject(run, "traffic_frames");
+        cJSON_AddNumberToObject(tf, "frames", frames->Nframes);
+        cJSON_AddNumberToObject(tf, "vehicles", (double)frames->Nvehicles);
+        cJSON_AddStringToObject(tf, "sha256", frames->sha256);
+        cJSON_AddStringToObject(doc, "traffic_frames_dir", opt->traffic_frames_dir);
+    }
     cJSON_AddNumberToObject(run, "bbox", opt->bbox);
     cJSON_AddNumberToObject(run, "min_visibility", opt->min_visibility);
     cJSON_AddBoolToObject(run, "keep_invisible", opt->keep_invisible);
@@ -544,7 +557,11 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     rs_synth_dataset__run d = {.opt = opt};
     rs_io_lock lock = {0};
     char name[600];
+    rs_synth_traffic_frames_info frames = {0};
     rs_status st = dataset_load(&d, err);
+    // SUMO's frames, every one read and checked before DATASET is touched
+    if (!st && opt->traffic_frames_dir)
+        st = rs_synth_dataset_traffic_frames_check(&frames, opt->traffic_frames_dir, err);
     if (st) goto done;
     // One run per dataset folder: a second one would remake the same images in the same work/
     // folders. The lock is taken before anything in DATASET is touched (but DATASET itself).
@@ -578,7 +595,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
         free(dir);
     }
     if (!st) st = write_camera_copies(&d, err);
-    if (!st) st = write_run_record(&d, err);
+    if (!st) st = write_run_record(&d, &frames, err);
     if (st) goto done;
     for (int k = opt->shard_index; k < opt->count; k += opt->shard_count) sum.Nimages++;
     st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err) : run_images(&d, &sum, 0, 1, -1, err);

@@ -12,8 +12,11 @@
 //               site's ground plane, lit by the default sun)
 //   sun         from the background's "time" tag and the site's origin (rs_synth_sun.h), else
 //               the scene default (azimuth 135, elevation 45 degrees)
-//   vehicles    the built-in traffic along SITE/lanes.geojson (rs_synth_traffic_place, at most
-//               `vehicles` of them) then domain randomisation (rs_synth_traffic_randomise)
+//   vehicles    the built-in traffic along SITE/lanes.geojson (rs_synth_traffic_place) then
+//               domain randomisation (rs_synth_traffic_randomise); or, with traffic_frames_dir,
+//               the vehicles of one frame of a `roadside traffic --sumo` folder, where SUMO put
+//               them (rs_synth_dataset_traffic_frames_check, below); of those the camera sees, at
+//               most `vehicles`
 //   render      rs_synth_render (culling, region, alpha, composite, ID pass), labels through
 //               mrcal (rs_synth_labels_compute)
 //   shadows     over any background but a night one: differential rendering (the ground with
@@ -83,8 +86,12 @@ typedef struct {
     int bbox; // rs_synth_bbox_kind
     double min_visibility;
     bool keep_invisible;
-    bool junction_traffic;   // vehicles on the junction's lanes too (turning movements; default
-                             // on): rs_synth_traffic_options.junction_lanes
+    bool junction_traffic; // vehicles on the junction's lanes too (turning movements; default
+                           // on): rs_synth_traffic_options.junction_lanes
+    // NULL (default): the built-in traffic. Else a folder written by `roadside traffic --sumo -o
+    // DIR` (frames.json and its frame files): image k takes the vehicles of one frame, drawn from
+    // k's stream, instead (the section "traffic from SUMO's frames" below).
+    const char *traffic_frames_dir;
     bool shadows;            // differential-rendering shadows over backgrounds (default on)
     bool separate_processes; // one povray process per pass (benchmarks; default off)
     bool full_frame;         // no culling, no region: povray renders the whole image
@@ -139,6 +146,39 @@ int rs_synth_dataset_usable_cpus(char *why, size_t n);
 
 // Splitmix64 mixing of (seed, k): the seed of image k's random stream.
 uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k);
+
+// ---- traffic from SUMO's frames (opt->traffic_frames_dir, `roadside synth --traffic-frames`) ----
+//
+// Image k's stream (rs_synth_dataset_image_seed(seed, k), stepped by splitmix64: draw j is
+// rs_rng_seed_derive(image seed, j - 1)) gives, in order: 1 the background; 2 the traffic: the
+// built-in placement's seed, or the frame, draw 2 mod Nframes (index into frames.json); 3 the
+// built-in randomisation's seed, or the frame's looks: vehicle i of the frame (file order) gets
+// variant rs_rng_seed_derive(draw 3, i) >> 11 (paint, metallic, dirt and shape details are drawn
+// from it by the fleet, as for built-in vehicles; a "colour" in the file is kept); 4 the pick
+// among the vehicles the camera sees; 5 the look of the composite. So images depend on (seed,
+// k) and the inputs only. A frame's vehicles are placed exactly where its file says (centre
+// e, n, yaw_deg, length, width, height): no positional randomisation in synth, as `roadside
+// traffic` already randomised the frames it wrote (unless --no-randomise), with no overlaps.
+typedef struct {
+    int Nframes;     // frames listed in DIR/frames.json, >= 1
+    long Nvehicles;  // vehicles in all the frames
+    char sha256[65]; // SHA-256 of the manifest "<sha256 of frames.json>  frames.json\n" then
+                     // "<sha256 of FILE>  FILE\n" per frame in index order: what
+                     // `cd DIR && sha256sum frames.json FILE... | sha256sum` prints
+} rs_synth_traffic_frames_info;
+
+// Reads DIR/frames.json (rs_synth_sumo_frames_index_read) and every frame file it lists
+// (rs_synth_vehicles_read), and checks what synth needs: at least one frame, each file holding
+// the number of vehicles the index states, class vehicles only (no "model"), each with its
+// length, width and height. Reads nothing else and writes nothing (the manifest's hash goes
+// through a temporary file in $TMPDIR, removed).
+// Errors name the file and the field: RS_ERR_NOT_FOUND "DIR/frames.json: missing (...)",
+// RS_ERR_INVALID "DIR/frames.json: no frames", RS_ERR_PARSE "DIR/frame_000003.json:7: not valid
+// JSON", RS_ERR_INVALID "DIR/frame_000003.json: [2].length: missing ...", RS_ERR_IO.
+rs_status rs_synth_dataset_traffic_frames_check( // out
+    rs_synth_traffic_frames_info *info,
+    // in
+    const char *dir, rs_err *err);
 
 // Joins datasets (shards) into one: for every split found (annotations/instances_<split>.json),
 // images from all inputs are sorted by file name (a name present twice is kept once: shards of

@@ -1,7 +1,8 @@
 // rs_synth_dataset_image.c -- one image of `roadside synth` (synth/rs_synth_dataset.h): its
 // random stream, its background (fitted to the camera, with its appearance), the traffic the
-// camera sees, the render, the composite with shadows, the labels and the image's files, the
-// per-image COCO file last. Called by rs_synth_dataset.c; calls the other rooms of synth/
+// camera sees (built-in, or one of SUMO's frames: --traffic-frames, checked here too), the
+// render, the composite with shadows, the labels and the image's files, the per-image COCO
+// file last. Called by rs_synth_dataset.c; calls the other rooms of synth/
 // (traffic, fleet, render, labels, appearance) and core/.
 #include <errno.h>
 #include <math.h>
@@ -12,37 +13,26 @@
 
 #include <unistd.h>
 
+#include "core/rs_hash.h"
 #include "core/rs_io.h"
+#include "core/rs_rng.h"
 #include "geo/rs_geo.h"
 #include "synth/internal/rs_synth_dataset_internal.h"
 #include "synth/rs_synth_labels.h"
 #include "synth/rs_synth_opencv.h"
 #include "synth/rs_synth_render.h"
 #include "synth/rs_synth_scene.h"
+#include "synth/rs_synth_sumo.h"
 #include "synth/rs_synth_sun.h"
 #include "synth/rs_synth_traffic.h"
 
 // ---- the random stream of one image ----
 
-// splitmix64's output function (Steele, Lea, Flood, "Fast splittable pseudorandom number
-// generators", OOPSLA 2014).
-static uint64_t mix64(uint64_t z)
-{
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
+// The stream of image k: splitmix64 (core/rs_rng.h) from rs_rng_seed_derive(seed, k), stepped
+// by rs_rng_seed_next. Its draws, in order: rs_synth_dataset.h ("traffic from SUMO's frames").
+uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k) { return rs_rng_seed_derive(seed, (uint64_t)k); }
 
-uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k)
-{
-    return mix64(seed + 0x9e3779b97f4a7c15ULL * ((uint64_t)k + 1));
-}
-
-static uint64_t rng_next(uint64_t *s)
-{
-    *s += 0x9e3779b97f4a7c15ULL;
-    return mix64(*s);
-}
+static uint64_t rng_next(uint64_t *s) { return rs_rng_seed_next(s); }
 
 int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c)
 {
@@ -138,6 +128,102 @@ done:
     return st;
 }
 
+// ---- traffic from SUMO's frames (--traffic-frames) ----
+
+// Frame i of DIR (index entry e) read as a vehicles file (rs_synth_vehicles_read: the one reader
+// of that format) and checked for what synth needs: the count the index states, class vehicles
+// with their box. On error *list is left empty.
+static rs_status read_frame(rs_synth_vehicle_list *list, const char *dir, const rs_synth_sumo_frame_entry *e, int i,
+                            rs_err *err)
+{
+    memset(list, 0, sizeof(*list));
+    char *path = rs_io_join(dir, e->file);
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = rs_synth_vehicles_read(list, path, err);
+    if (!st && list->N != e->vehicles)
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: %d vehicles, but %s/frames.json [%d].vehicles says %d", path, list->N,
+                        dir, i, e->vehicles);
+    for (int j = 0; !st && j < list->N; j++) {
+        const rs_synth_vehicle *v = &list->v[j];
+        const char *missing = !(v->length_m > 0) ? "length" : !(v->width_m > 0) ? "width" : "height";
+        if (v->cls == RS_SYNTH_USER_MODEL)
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: [%d].model: a traffic frame holds class vehicles only", path, j);
+        else if (!(v->length_m > 0 && v->width_m > 0 && v->height_m > 0))
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: missing (a traffic frame gives every vehicle's box)",
+                            path, j, missing);
+    }
+    if (st) rs_synth_vehicle_list_free(list);
+    free(path);
+    return st;
+}
+
+// DIR/frames.json with at least one frame.
+static rs_status read_index(rs_synth_sumo_frame_entry **entries, int *N, const char *dir, rs_err *err)
+{
+    rs_status st = rs_synth_sumo_frames_index_read(entries, N, dir, err);
+    if (!st && *N == 0)
+        st = rs_err_set(err, RS_ERR_INVALID, "%s/frames.json: no frames (an empty list): no traffic to take", dir);
+    return st;
+}
+
+rs_status rs_synth_dataset_traffic_frames_check(rs_synth_traffic_frames_info *info, const char *dir, rs_err *err)
+{
+    memset(info, 0, sizeof(*info));
+    rs_synth_sumo_frame_entry *e = NULL;
+    int N = 0;
+    rs_status st = read_index(&e, &N, dir, err);
+    if (st) return st;
+    // the manifest, as sha256sum prints it, hashed through a temporary file (core's SHA-256)
+    const char *tmpdir = getenv("TMPDIR");
+    char manifest[4200], hex[65];
+    snprintf(manifest, sizeof(manifest), "%s/roadside-frames-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+    const int fd = mkstemp(manifest);
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+    if (!f) {
+        if (fd >= 0) close(fd), remove(manifest);
+        free(e);
+        return rs_err_set(err, RS_ERR_IO, "%s: %s", manifest, strerror(errno));
+    }
+    char *index = rs_io_join(dir, "frames.json");
+    if (!index) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st && !(st = rs_hash_sha256_file(hex, NULL, index, err))) fprintf(f, "%s  frames.json\n", hex);
+    for (int i = 0; i < N && !st; i++) {
+        rs_synth_vehicle_list list;
+        if ((st = read_frame(&list, dir, &e[i], i, err))) break;
+        info->Nvehicles += list.N;
+        rs_synth_vehicle_list_free(&list);
+        char *path = rs_io_join(dir, e[i].file);
+        st = path ? rs_hash_sha256_file(hex, NULL, path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!st) fprintf(f, "%s  %s\n", hex, e[i].file);
+        free(path);
+    }
+    if (fclose(f) != 0 && !st) st = rs_err_set(err, RS_ERR_IO, "%s: %s", manifest, strerror(errno));
+    if (!st) st = rs_hash_sha256_file(info->sha256, NULL, manifest, err);
+    remove(manifest);
+    if (!st) info->Nframes = N;
+    free(index);
+    free(e);
+    return st;
+}
+
+// The vehicles of image k from DIR: frame r_frame mod Nframes, each vehicle i's variant
+// rs_rng_seed_derive(r_looks, i) >> 11 (53 bits, as the built-in traffic draws them).
+static rs_status frame_vehicles(rs_synth_vehicle_list *list, const char *dir, uint64_t r_frame, uint64_t r_looks,
+                                rs_err *err)
+{
+    rs_synth_sumo_frame_entry *e = NULL;
+    int N = 0;
+    memset(list, 0, sizeof(*list));
+    rs_status st = read_index(&e, &N, dir, err);
+    if (!st) {
+        const int i = (int)(r_frame % (uint64_t)N);
+        st = read_frame(list, dir, &e[i], i, err);
+    }
+    for (int j = 0; !st && j < list->N; j++) list->v[j].variant = rs_rng_seed_derive(r_looks, (uint64_t)j) >> 11;
+    free(e);
+    return st;
+}
+
 // ---- one image ----
 
 rs_status rs_synth_dataset__link_into(const rs_synth_dataset__run *d, const char *src, const char *rel, rs_err *err)
@@ -183,6 +269,8 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     char name[600];
     char *work = NULL, *part_tmp = NULL, *part = NULL, *image = NULL;
     rs_synth_traffic_vehicle *tv = NULL;
+    rs_synth_vehicle *builtin = NULL;  // (N,) the built-in traffic as scene vehicles
+    rs_synth_vehicle_list frame = {0}; // the SUMO frame's vehicles (--traffic-frames)
     rs_synth_vehicle *v = NULL;
     rs_synth_prepared prepared = {0};
     rs_synth_render_result r = {0};
@@ -251,16 +339,42 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         *grey = true;
     }
 
-    rs_synth_traffic_options topt;
-    rs_synth_traffic_options_default(&topt);
-    topt.seed = rng_next(&rng);
-    topt.count = 0; // every vehicle that fits; the camera's view picks among them below
-    topt.junction_lanes = opt->junction_traffic;
-    if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err))) goto done;
-    rs_synth_randomise_options xopt;
-    rs_synth_randomise_options_default(&xopt);
-    xopt.seed = rng_next(&rng);
-    if ((st = rs_synth_traffic_randomise(tv, &N, &xopt, err))) goto done;
+    // the traffic: the built-in one, or one frame of SUMO's (rs_synth_dataset.h gives the draws)
+    const uint64_t r_traffic = rng_next(&rng);
+    const uint64_t r_vary = rng_next(&rng);
+    const rs_synth_vehicle *all = NULL; // (N,) every vehicle of the site, borrowed
+    if (opt->traffic_frames_dir) {
+        if ((st = frame_vehicles(&frame, opt->traffic_frames_dir, r_traffic, r_vary, err))) goto done;
+        all = frame.v;
+        N = frame.N;
+    } else {
+        rs_synth_traffic_options topt;
+        rs_synth_traffic_options_default(&topt);
+        topt.seed = r_traffic;
+        topt.count = 0; // every vehicle that fits; the camera's view picks among them below
+        topt.junction_lanes = opt->junction_traffic;
+        if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err))) goto done;
+        rs_synth_randomise_options xopt;
+        rs_synth_randomise_options_default(&xopt);
+        xopt.seed = r_vary;
+        if ((st = rs_synth_traffic_randomise(tv, &N, &xopt, err))) goto done;
+        if (!(builtin = calloc((size_t)(N > 0 ? N : 1), sizeof(*builtin)))) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            goto done;
+        }
+        for (int i = 0; i < N; i++)
+            builtin[i] = (rs_synth_vehicle){.cls = tv[i].cls,
+                                            .id = tv[i].id,
+                                            .e_m = tv[i].e_m,
+                                            .n_m = tv[i].n_m,
+                                            .yaw_deg = tv[i].yaw_deg,
+                                            .length_m = tv[i].length_m,
+                                            .width_m = tv[i].width_m,
+                                            .height_m = tv[i].height_m,
+                                            .rgb = {-1, -1, -1},
+                                            .variant = tv[i].variant};
+        all = builtin;
+    }
     const size_t n = (size_t)(N > 0 ? N : 1);
     v = calloc(n, sizeof(*v));
     up = malloc(n * sizeof(double));
@@ -276,16 +390,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     // leave most images nearly empty.
     int Nseen = 0;
     for (int i = 0; i < N; i++) {
-        const rs_synth_vehicle vi = {.cls = tv[i].cls,
-                                     .id = tv[i].id,
-                                     .e_m = tv[i].e_m,
-                                     .n_m = tv[i].n_m,
-                                     .yaw_deg = tv[i].yaw_deg,
-                                     .length_m = tv[i].length_m,
-                                     .width_m = tv[i].width_m,
-                                     .height_m = tv[i].height_m,
-                                     .rgb = {-1, -1, -1},
-                                     .variant = tv[i].variant};
+        const rs_synth_vehicle vi = all[i];
         double corners[8][3];
         int rect[4];
         rs_synth_vehicle_corners_enu(corners, &vi, d->site->ground_normal_enu, d->site->ground_offset_m);
@@ -401,6 +506,8 @@ done:
     free(part);
     free(image);
     free(tv);
+    free(builtin);
+    rs_synth_vehicle_list_free(&frame);
     free(v);
     free(up);
     free(meshes);

@@ -130,6 +130,26 @@ rs_status rs_synth_sumo_frames_write( // in
     // out
     int *Nvehicles, rs_err *err);
 
+// One entry of a frames index, DIR/frames.json (rs_synth_sumo_frames_write writes it).
+typedef struct {
+    char file[256]; // the frame's vehicles file: a plain name in DIR ("frame_000012.json")
+    double time_s;  // its SUMO time, seconds
+    int vehicles;   // the vehicles the index says the file holds (>= 0)
+} rs_synth_sumo_frame_entry;
+
+// Reads DIR/frames.json (cJSON): the JSON list of {"file", "time_s", "vehicles"} that
+// rs_synth_sumo_frames_write writes, one reader for the one writer. A file must be a plain name
+// inside DIR (no '/', not "." or ".."). The frames themselves are vehicles files
+// (rs_synth_vehicles_read, synth/rs_synth_scene.h); this does not open them.
+// out: *entries (N,) owned (free()), NULL when *N is 0 (an empty list is not an error here)
+// Errors name the file and the field: RS_ERR_NOT_FOUND "DIR/frames.json: missing (...)",
+// RS_ERR_IO (unreadable), RS_ERR_PARSE "DIR/frames.json:LINE: not valid JSON",
+// RS_ERR_INVALID "DIR/frames.json: [3].vehicles: expected an integer >= 0".
+rs_status rs_synth_sumo_frames_index_read( // out
+    rs_synth_sumo_frame_entry **entries, int *N,
+    // in
+    const char *dir, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

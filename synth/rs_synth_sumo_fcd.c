@@ -1,6 +1,6 @@
 // rs_synth_sumo_fcd.c -- what comes back from SUMO: the network's <location> (net.xml), the
-// floating car data (fcd.xml) as frames of vehicles, and the frames written as vehicles files.
-// See rs_synth_sumo.h and docs/traffic.md.
+// floating car data (fcd.xml) as frames of vehicles, the frames written as vehicles files, and
+// their index (frames.json) written and read back. See rs_synth_sumo.h and docs/traffic.md.
 #include "synth/rs_synth_sumo.h"
 
 #include <errno.h>
@@ -8,6 +8,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+
+#include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
 #include "synth/internal/rs_synth_sumo_xml.h"
@@ -218,4 +221,72 @@ rs_status rs_synth_sumo_frames_write(const char *dir, rs_synth_sumo_frames *fr, 
         return st;
     }
     return rs_io_atomic_commit(&a, err);
+}
+
+rs_status rs_synth_sumo_frames_index_read(rs_synth_sumo_frame_entry **entries, int *N, const char *dir, rs_err *err)
+{
+    *entries = NULL;
+    *N = 0;
+    char *path = rs_io_join(dir, "frames.json"), *text = NULL;
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    cJSON *root = NULL;
+    rs_synth_sumo_frame_entry *e = NULL;
+    rs_status st = RS_OK;
+    struct stat sb;
+    if (stat(path, &sb) != 0 && errno == ENOENT) {
+        st = rs_err_set(err, RS_ERR_NOT_FOUND,
+                        "%s: missing (%s is not a folder written by `roadside traffic --sumo -o DIR`)", path, dir);
+        goto done;
+    }
+    if ((st = rs_io_read_file_max(&text, NULL, path, RS_IO_MAX_SMALL_FILE_BYTES, err))) goto done;
+    if (!(root = cJSON_Parse(text))) {
+        const char *at = cJSON_GetErrorPtr();
+        int line = 1;
+        for (const char *c = text; at && c < at && *c; c++) line += *c == '\n';
+        st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: not valid JSON", path, line);
+        goto done;
+    }
+    if (!cJSON_IsArray(root)) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of {file, time_s, vehicles}", path);
+        goto done;
+    }
+    const int n = cJSON_GetArraySize(root);
+    if (n > 0 && !(e = calloc((size_t)n, sizeof(*e)))) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    int i = 0;
+    const cJSON *o;
+    cJSON_ArrayForEach(o, root)
+    {
+        const cJSON *f = cJSON_GetObjectItemCaseSensitive(o, "file"),
+                    *t = cJSON_GetObjectItemCaseSensitive(o, "time_s"),
+                    *v = cJSON_GetObjectItemCaseSensitive(o, "vehicles");
+        const char *name = cJSON_IsString(f) ? f->valuestring : NULL;
+        if (!cJSON_IsObject(o))
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object {file, time_s, vehicles}", path, i);
+        else if (!name || !*name || strchr(name, '/') || !strcmp(name, ".") || !strcmp(name, "..") ||
+                 strlen(name) >= sizeof(e[i].file))
+            st =
+                rs_err_set(err, RS_ERR_INVALID, "%s: [%d].file: expected the plain name of a file in %s", path, i, dir);
+        else if (!cJSON_IsNumber(t) || !isfinite(t->valuedouble))
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: [%d].time_s: expected a number of seconds", path, i);
+        else if (!cJSON_IsNumber(v) || !(v->valuedouble >= 0) || v->valuedouble > 1e9 ||
+                 v->valuedouble != floor(v->valuedouble))
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: [%d].vehicles: expected an integer >= 0", path, i);
+        if (st) goto done;
+        snprintf(e[i].file, sizeof(e[i].file), "%s", name);
+        e[i].time_s = t->valuedouble;
+        e[i].vehicles = (int)v->valuedouble;
+        i++;
+    }
+    *entries = e;
+    *N = n;
+    e = NULL;
+done:
+    free(e);
+    cJSON_Delete(root);
+    free(text);
+    free(path);
+    return st;
 }
