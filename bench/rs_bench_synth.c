@@ -17,7 +17,7 @@ void rs_bench_synth_variants(rs_bench_synth_row *rows, int J)
     } v[RS_SYNTH_BENCH_VARIANTS] = {
         {"all", "every saving", false, false, false, false, false},
         {"jobs=1", "one image at a time", true, false, false, false, false},
-        {"separate", "one povray process per pass", false, true, false, false, false},
+        {"separate", "the passes' povray processes one after the other", false, true, false, false, false},
         {"full-frame", "no culling, no region: the whole image rendered", false, false, true, false, false},
         {"no-shadows", "the shadow pass skipped", false, false, false, true, false},
         {"full-detail", "every vehicle's mesh in full detail (no coarse meshes)", false, false, false, false, true},

@@ -1,24 +1,19 @@
-// rs_synth_render.c -- running povray on a scene: culling, region, colour and ID passes,
-// resampling into the real lens, compositing (rs_synth_render.h, docs/povray.md).
+// rs_synth_render.c -- rendering a scene with povray: culling, regions, the colour, ID and shadow
+// passes as povray processes at once (synth/rs_synth_povray.c runs them), resampling into the
+// real lens, compositing (rs_synth_render.h, docs/povray.md, docs/fleet.md "Cost").
 #include "synth/rs_synth_render.h"
 
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
-#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/prctl.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
-#include <time.h>
-#include <unistd.h>
+#include <sys/types.h>
 
 #include <mrcal/poseutils.h>
 
 #include "core/rs_io.h"
+#include "synth/internal/rs_synth_povray.h"
+#include "synth/internal/rs_synth_scene_internal.h"
 #include "synth/rs_synth_appearance.h"
-#include "synth/rs_synth_sandbox.h"
 
 void rs_synth_render_options_default(rs_synth_render_options *opt)
 {
@@ -81,173 +76,6 @@ bool rs_synth_vehicle_rect(int rect[4], const double fxycxy[4], int width, int h
     return true;
 }
 
-// ---- running povray ----
-
-// Writes OUT/.povray/3.7/povray.conf, which asks povray to restrict its file I/O to the output
-// folder (povray is run with HOME = OUT so that this is the user configuration it reads).
-// POV-Ray 3.7.0.10 does not enforce it (docs/povray.md): Landlock does (rs_synth_sandbox.h).
-static rs_status write_povray_conf(const char *out_dir, rs_err *err)
-{
-    char *conf_dir = rs_io_join(out_dir, ".povray/3.7");
-    char *conf = conf_dir ? rs_io_join(conf_dir, "povray.conf") : NULL;
-    rs_status st = RS_OK;
-    if (!conf) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    static const char text[] = "; Written by roadside render: asks povray to read and write only this "
-                               "folder, and to run no shell command (POV-Ray 3.7.0.10 does not enforce "
-                               "the first: roadside confines povray with Landlock, docs/povray.md).\n"
-                               "[File I/O Security]\nrestricted\n"
-                               "[Shellout Security]\nforbidden\n"
-                               "[Permitted Paths]\nread+write = .\n";
-    if (!(st = rs_io_mkdir_p(conf_dir, err))) st = rs_io_write_file(conf, text, sizeof(text) - 1, err);
-done:
-    free(conf_dir);
-    free(conf);
-    return st;
-}
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-// The program execvp would run for `name`: itself when it holds a '/', else the first
-// executable regular file "DIR/name" along $PATH's absolute folders (malloc'ed), or NULL.
-static char *find_program(const char *name)
-{
-    if (strchr(name, '/')) return strdup(name);
-    const char *path = getenv("PATH");
-    if (!path || !*path) path = "/usr/local/bin:/usr/bin:/bin";
-    for (const char *p = path; *p;) {
-        const char *colon = strchr(p, ':');
-        const size_t n = colon ? (size_t)(colon - p) : strlen(p);
-        if (n > 0 && p[0] == '/') {
-            char *dir = strndup(p, n), *file = dir ? rs_io_join(dir, name) : NULL;
-            struct stat sb;
-            free(dir);
-            if (file && stat(file, &sb) == 0 && S_ISREG(sb.st_mode) && access(file, X_OK) == 0) return file;
-            free(file);
-        }
-        p += n + (colon ? 1 : 0);
-    }
-    return NULL;
-}
-
-// Writes "roadside: TEXT STEP: errno E\n" to fd with system calls only (a child after fork).
-static void child_say(int fd, const char *text, const char *step, int e)
-{
-    char num[16];
-    int n = 0;
-    do num[sizeof(num) - 1 - n++] = (char)('0' + e % 10);
-    while ((e /= 10) > 0 && n < 15);
-    const char *parts[] = {"roadside: ", text, step, ": errno ", num + sizeof(num) - n, "\n"};
-    for (size_t i = 0; i < sizeof(parts) / sizeof(parts[0]); i++)
-        if (write(fd, parts[i], i == 4 ? (size_t)n : strlen(parts[i])) < 0) return;
-}
-
-rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args, int Nargs, double *seconds,
-                              rs_err *err)
-{
-    const char *argv[32];
-    if (Nargs < 0 || Nargs > 30) return rs_err_set(err, RS_ERR_USAGE, "povray: %d arguments (at most 30)", Nargs);
-    argv[0] = povray;
-    for (int i = 0; i < Nargs; i++) argv[1 + i] = args[i];
-    argv[1 + Nargs] = NULL;
-    rs_synth_sandbox_info box;
-    rs_synth_sandbox_probe(&box);
-    char *log = rs_io_join(dir, "povray.log");
-    char *exe = find_program(povray); // NULL: not found (execvp then fails: "cannot run")
-    if (!log) {
-        free(exe);
-        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    }
-    const double t0 = now_s();
-    const pid_t parent = getpid();
-    pid_t pid = fork();
-    if (pid < 0) {
-        free(log);
-        free(exe);
-        return rs_err_set(err, RS_ERR_EXTERNAL, "fork: %s", strerror(errno));
-    }
-    if (pid == 0) {
-        // povray dies with us (a killed roadside leaves no povray running; kept across exec)
-        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0 || getppid() != parent) _exit(126);
-        int fd = open(log, O_WRONLY | O_CREAT | O_APPEND, 0644);
-        if (fd < 0 || chdir(dir) != 0) _exit(126);
-        // HOME must be absolute for povray's %HOME%: the folder we are now in
-        char cwd[4096];
-        if (!getcwd(cwd, sizeof(cwd)) || setenv("HOME", cwd, 1) != 0) _exit(126);
-        unsetenv("POVINC");
-        unsetenv("POVINI");
-        dup2(fd, 1);
-        dup2(fd, 2);
-        close(fd);
-        // confined to this folder and the system's programs (rs_synth_sandbox.h)
-        const char *step = NULL;
-        const int e = box.abi > 0 ? rs_synth_sandbox_enter(box.abi, exe, &step) : 0;
-        if (e) {
-            child_say(2, "cannot confine povray (Landlock): ", step, e);
-            _exit(125);
-        }
-        if (exe) execv(exe, (char *const *)argv);
-        execvp(povray, (char *const *)argv);
-        _exit(127);
-    }
-    free(exe);
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
-        ;
-    if (seconds) *seconds += now_s() - t0;
-    rs_status st = RS_OK;
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-        char *text = NULL;
-        char last[256] = "";
-        if (rs_io_read_file(&text, NULL, log, NULL) == RS_OK) {
-            // last non-empty line
-            size_t n = strlen(text);
-            while (n > 0 && (text[n - 1] == '\n' || text[n - 1] == '\r')) text[--n] = 0;
-            const char *nl = strrchr(text, '\n');
-            snprintf(last, sizeof(last), "%s", nl ? nl + 1 : text);
-        }
-        free(text);
-        if (WIFEXITED(status) && WEXITSTATUS(status) == 125 && strstr(last, "cannot confine povray"))
-            st = rs_err_set(err, RS_ERR_EXTERNAL,
-                            "%s (see %s); set ROADSIDE_POVRAY_SANDBOX=off to run povray unconfined "
-                            "(docs/povray.md)",
-                            last, log);
-        else if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
-            st = rs_err_set(err, RS_ERR_EXTERNAL,
-                            "cannot run \"%s\": is POV-Ray 3.7 installed (Debian package "
-                            "povray)? Set ROADSIDE_POVRAY to its path",
-                            povray);
-        else
-            st = rs_err_set(err, RS_ERR_EXTERNAL, "povray failed in %s (exit %d): %s (see %s)", dir,
-                            WIFEXITED(status) ? WEXITSTATUS(status) : -1, last, log);
-    }
-    free(log);
-    return st;
-}
-
-// Runs `povray INI region` in out_dir (rs_synth_povray_run).
-static rs_status run_povray(const char *povray, const char *out_dir, const char *ini, const int region[4], int width,
-                            int height, double *seconds, rs_err *err)
-{
-    char sc[32], ec[32], sr[32], er[32];
-    // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
-    // fraction (the whole width), so the region starts at fraction 0.0 in that case and ends at
-    // least at column/row 2.
-    snprintf(sc, sizeof(sc), region[0] == 0 ? "+SC0.0" : "+SC%d", region[0] + 1);
-    snprintf(sr, sizeof(sr), region[1] == 0 ? "+SR0.0" : "+SR%d", region[1] + 1);
-    snprintf(ec, sizeof(ec), "+EC%d", region[2] + 1 < 2 ? (width > 1 ? 2 : 1) : region[2] + 1);
-    snprintf(er, sizeof(er), "+ER%d", region[3] + 1 < 2 ? (height > 1 ? 2 : 1) : region[3] + 1);
-    const char *args[] = {ini, sc, ec, sr, er, "+WT1"};
-    return rs_synth_povray_run(povray, out_dir, args, 6, seconds, err);
-}
-
 // ---- images ----
 
 // Zeroes (transparent) everything outside the rendered rectangle: povray leaves it opaque black.
@@ -260,65 +88,96 @@ static void mask_outside(rs_image *img, const int region[4])
                        sizeof(float) * (size_t)img->channels);
 }
 
-// Renders passes[0..Npasses-1] with ONE povray process: writes NAME.pov and NAME.ini in
-// out_dir, runs povray, reads its images into imgs[0..Npasses-1]: NAME.png for a single pass
-// (rs_synth_scene_write, antialias as given), else the frames NAME1.png .. NAMEn.png
-// (rs_synth_scene_write_frames; no antialiasing, which would blend the IDs).
-static rs_status render_passes(rs_image *imgs, const char *out_dir, const char *name, const char *povray,
-                               const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],
-                               double ground_offset_m, const rs_synth_prepared *vehicles,
-                               const rs_synth_scene_options *passes, int Npasses, int antialias, const int region[4],
-                               double *seconds, rs_err *err)
+// One povray process: one pass of `vehicles` seen by `cam`, rendered in `region` (x0, y0, x1,
+// y1 inclusive, pixels of cam's image) from OUT/NAME.pov into OUT/NAME.png.
+typedef struct {
+    const char *name;
+    const rs_synth_povcam *cam;
+    const rs_synth_prepared *vehicles;
+    const rs_synth_scene_options *pass;
+    int antialias;
+    int region[4];
+    bool ppm;        // 16-bit PPM without alpha (+FP16 -UA) instead of the .ini's PNG
+    const char *log; // povray's output: "povray.log" for the colour pass, NAME.log for others
+    pid_t pid;       // 0: not started
+    double t0;
+} povray_job;
+
+// Starts job j: writes NAME.pov (rs_synth_scene_write) and NAME.ini (the ID pass 8-bit PNG
+// without alpha, the others 16-bit RGBA PNG, or j->ppm), then povray with the region
+// (+SC/+EC/+SR/+ER) and one render thread, without waiting.
+static rs_status job_start(povray_job *j, const char *out_dir, const char *povray, const double fxy[2],
+                           const double ground_normal_enu[3], double ground_offset_m, rs_err *err)
 {
-    char file[64];
-    char *pov = NULL, *ini = NULL;
+    char file[64], sc[32], ec[32], sr[32], er[32];
+    snprintf(file, sizeof(file), "%s.pov", j->name);
+    char *pov = rs_io_join(out_dir, file);
+    snprintf(file, sizeof(file), "%s.ini", j->name);
+    char *ini = rs_io_join(out_dir, file);
     rs_io_atomic a = {0};
     rs_status st = RS_OK;
-    snprintf(file, sizeof(file), "%s.pov", name);
-    pov = rs_io_join(out_dir, file);
-    snprintf(file, sizeof(file), "%s.ini", name);
-    ini = rs_io_join(out_dir, file);
     if (!pov || !ini) {
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
     if ((st = rs_io_atomic_open(&a, pov, err))) goto done;
-    st = Npasses == 1
-             ? rs_synth_scene_write(a.f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &passes[0], err)
-             : rs_synth_scene_write_frames(a.f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, passes, Npasses,
-                                           err);
-    if (st) {
+    if ((st = rs_synth_scene_write(a.f, j->cam, fxy, ground_normal_enu, ground_offset_m, j->vehicles, j->pass, err))) {
         rs_io_atomic_abort(&a);
         goto done;
     }
     if ((st = rs_io_atomic_commit(&a, err)) ||
-        (st = Npasses == 1 ? rs_synth_scene_write_ini(ini, pov, cam, passes[0].pass, antialias, err)
-                           : rs_synth_scene_write_ini_frames(ini, pov, cam, Npasses, 0, err)))
+        (st = rs_synth_scene_write_ini(ini, pov, j->cam, j->pass->pass, j->antialias, err)))
         goto done;
-    snprintf(file, sizeof(file), "%s.ini", name);
-    if ((st = run_povray(povray, out_dir, file, region, cam->width, cam->height, seconds, err))) goto done;
-    for (int k = 0; k < Npasses && !st; k++) {
-        if (Npasses == 1)
-            snprintf(file, sizeof(file), "%s.png", name);
-        else
-            snprintf(file, sizeof(file), "%s%d.png", name, k + 1);
-        char *png = rs_io_join(out_dir, file);
-        if (!png) {
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            break;
-        }
-        if ((st = rs_image_read(&imgs[k], png, err)) == RS_OK &&
-            (imgs[k].width != cam->width || imgs[k].height != cam->height))
-            st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png, imgs[k].width,
-                            imgs[k].height, cam->width, cam->height);
-        else if (!st)
-            mask_outside(&imgs[k], region);
-        free(png);
-    }
+    // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
+    // fraction (the whole width), so the region starts at fraction 0.0 in that case and ends at
+    // least at column/row 2.
+    const int *r = j->region, W = j->cam->width, H = j->cam->height;
+    snprintf(sc, sizeof(sc), r[0] == 0 ? "+SC0.0" : "+SC%d", r[0] + 1);
+    snprintf(sr, sizeof(sr), r[1] == 0 ? "+SR0.0" : "+SR%d", r[1] + 1);
+    snprintf(ec, sizeof(ec), "+EC%d", r[2] + 1 < 2 ? (W > 1 ? 2 : 1) : r[2] + 1);
+    snprintf(er, sizeof(er), "+ER%d", r[3] + 1 < 2 ? (H > 1 ? 2 : 1) : r[3] + 1);
+    snprintf(file, sizeof(file), "%s.ini", j->name);
+    char ppm[64];
+    snprintf(ppm, sizeof(ppm), "+O%s.ppm", j->name);
+    const char *args[] = {file, sc, ec, sr, er, "+WT1", "+FP16", "-UA", ppm};
+    j->t0 = rs_synth_povray_now_s();
+    st = rs_synth_povray_spawn(&j->pid, povray, out_dir, j->log, args, j->ppm ? 9 : 6, err);
 done:
     free(pov);
     free(ini);
     return st;
+}
+
+// Waits for job j (if started), adds its wall time to *seconds and reads NAME.png (.ppm) into
+// *img, transparent (black) outside the region.
+static rs_status job_finish(povray_job *j, rs_image *img, const char *out_dir, const char *povray, double *seconds,
+                            rs_err *err)
+{
+    if (j->pid <= 0) return RS_OK;
+    char file[64];
+    rs_status st = rs_synth_povray_reap(j->pid, povray, out_dir, j->log, err);
+    j->pid = 0;
+    *seconds += rs_synth_povray_now_s() - j->t0;
+    if (st) return st;
+    snprintf(file, sizeof(file), "%s.%s", j->name, j->ppm ? "ppm" : "png");
+    char *png = rs_io_join(out_dir, file);
+    if (!png) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if ((st = rs_image_read(img, png, err)) == RS_OK && (img->width != j->cam->width || img->height != j->cam->height))
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png, img->width, img->height,
+                        j->cam->width, j->cam->height);
+    else if (!st)
+        mask_outside(img, j->region);
+    free(png);
+    return st;
+}
+
+// rect (x0, y0, x1, y1 inclusive; empty when x1 < x0) grown to hold r.
+static void grow(int rect[4], const int r[4])
+{
+    for (int k = 0; k < 4; k++)
+        rect[k] = rect[2] < rect[0] ? r[k]
+                  : k < 2           ? (r[k] < rect[k] ? r[k] : rect[k])
+                                    : (r[k] > rect[k] ? r[k] : rect[k]);
 }
 
 // Widens rect (x0, y0, x1, y1; empty when x1 < x0) by the canvas rectangle of vehicle v's
@@ -342,29 +201,108 @@ static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int
             for (int c = 0; c < 3; c++) pts[4 + k][c] = p[c] - t * d[c];
         }
         int r[4];
-        if (!rs_synth_vehicle_rect(r, fxycxy, width, height, rt_cam_enu, (const double(*)[3])pts, 0.05)) continue;
-        if (rect[2] < rect[0]) {
-            memcpy(rect, r, sizeof(r));
-            continue;
-        }
-        rect[0] = r[0] < rect[0] ? r[0] : rect[0];
-        rect[1] = r[1] < rect[1] ? r[1] : rect[1];
-        rect[2] = r[2] > rect[2] ? r[2] : rect[2];
-        rect[3] = r[3] > rect[3] ? r[3] : rect[3];
+        if (rs_synth_vehicle_rect(r, fxycxy, width, height, rt_cam_enu, (const double(*)[3])pts, 0.05)) grow(rect, r);
     }
 }
 
-// The shadow frame (canvas, RGBA, white ground) as the lit fraction: value / unlit, clamped to
-// [0, 1]; 1 where nothing was rendered (transparent).
-static rs_status shadow_fraction(rs_image *frac, const rs_image *pass, double unlit, rs_err *err)
+// The colour pass read from 16-bit PPM (RGB) made RGBA: alpha 1 where the ID pass (R + 256 G in
+// 8-bit units) shows a vehicle, else 0 (rs_synth_scene_ground_occludes says when that is exact).
+static rs_status alpha_from_ids(rs_image *rgba, const rs_image *ids, rs_err *err)
 {
-    rs_status st = rs_image_alloc(frac, pass->width, pass->height, 1, err);
+    rs_image out = {0};
+    rs_status st = rs_image_alloc(&out, rgba->width, rgba->height, 4, err);
     if (st) return st;
-    const size_t n = (size_t)pass->width * pass->height;
+    const size_t n = (size_t)rgba->width * rgba->height;
     for (size_t i = 0; i < n; i++) {
-        const float *px = &pass->data[(size_t)pass->channels * i];
-        double v = pass->channels >= 4 && px[3] <= 0 ? 1.0 : (unlit > 0 ? px[0] / unlit : 1.0);
-        frac->data[i] = (float)(v < 0 ? 0 : v > 1 ? 1 : v);
+        const float *id = &ids->data[i * (size_t)ids->channels];
+        const bool vehicle = id[0] > 0.5f / 255 || (ids->channels >= 3 && id[1] > 0.5f / 255);
+        for (int c = 0; c < 3; c++) out.data[4 * i + c] = vehicle ? rgba->data[i * (size_t)rgba->channels + c] : 0;
+        out.data[4 * i + 3] = vehicle;
+    }
+    rs_image_free(rgba);
+    *rgba = out;
+    return RS_OK;
+}
+
+// ---- the shadow pass: coarse meshes, half resolution (issue 18's cost, docs/fleet.md) ----
+
+// The shadow pass's vehicles: `in`'s, with each included procedural vehicle's mesh rebuilt
+// coarse (rs_synth_fleet_build_lod: 8 stations along the body instead of 56, octagonal wheels;
+// the box and the roof line exact), user models as they are. out->v and out->imesh are
+// in's (borrowed); out->meshes[m] is owned when owned[m] (free_shadow_vehicles).
+static rs_status shadow_vehicles(rs_synth_prepared *out, uint8_t **owned, const rs_synth_prepared *in,
+                                 const uint8_t *include, rs_err *err)
+{
+    *out = *in;
+    out->meshes = calloc((size_t)(in->Nmeshes > 0 ? in->Nmeshes : 1), sizeof(rs_synth_mesh));
+    *owned = calloc((size_t)(in->Nmeshes > 0 ? in->Nmeshes : 1), 1);
+    if (!out->meshes || !*owned) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int m = 0; m < in->Nmeshes; m++) {
+        int first = -1;
+        for (int i = 0; i < in->N && first < 0; i++)
+            if (in->imesh[i] == m && include[i]) first = i;
+        if (first >= 0 && in->v[first].cls != RS_SYNTH_USER_MODEL) {
+            rs_status st = rs_synth_fleet_build_lod(&out->meshes[m], &in->v[first], true, err);
+            if (st) return st;
+            (*owned)[m] = 1;
+        } else {
+            out->meshes[m] = in->meshes[m]; // shallow: borrowed arrays
+        }
+    }
+    return RS_OK;
+}
+
+static void free_shadow_vehicles(rs_synth_prepared *sv, uint8_t *owned)
+{
+    for (int m = 0; sv->meshes && owned && m < sv->Nmeshes; m++)
+        if (owned[m]) rs_synth_mesh_free(&sv->meshes[m]);
+    free(sv->meshes);
+    free(owned);
+}
+
+// The lit fraction at every canvas pixel from the half-resolution shadow pass `lo` (RGBA: the
+// ground lit as rs_synth_scene_shadow_unlit says, transparent where not rendered, the vehicles
+// green marks): value / unlit clamped to [0, 1], 1 where transparent. lo was rendered through the
+// canvas pinhole scaled by 1/2 (fx/2, fy/2, (cx - 0.5)/2, (cy - 0.5)/2): its pixel i is centred on
+// canvas x = 2 i + 0.5, so canvas pixel x reads it at (x - 0.5)/2, bilinearly (clamped at the
+// borders) over its ground pixels only (the weights of marks dropped, the rest renormalised);
+// with no ground among the 4, the nearest ground pixel within 2, else 1. (Canvas pixels that
+// only marks surround are the vehicles' own, which compositing leaves unshaded.)
+static rs_status shadow_fraction(rs_image *out, rs_image *lo, double unlit, int width, int height, rs_err *err)
+{
+    rs_status st = rs_image_alloc(out, width, height, 1, err);
+    if (st) return st;
+    const int c = lo->channels, Wl = lo->width, Hl = lo->height;
+    if (c < 4) return rs_err_set(err, RS_ERR_EXTERNAL, "the shadow pass has %d channels, not RGBA", c);
+    for (size_t i = 0; i < (size_t)Wl * Hl; i++) { // in place: channel 0 the fraction, 1 ground or not
+        float *px = &lo->data[(size_t)c * i];
+        const double v = px[3] <= 0 ? 1.0 : (unlit > 0 ? px[0] / unlit : 1.0);
+        const bool mark = px[3] > 0 && px[1] - px[0] > 0.5f;
+        px[0] = (float)(v < 0 ? 0 : v > 1 ? 1 : v), px[1] = !mark;
+    }
+    for (int y = 0; y < height; y++) {
+        const double v = fmin(fmax((y - 0.5) / 2, 0), Hl - 1);
+        const int y0 = (int)v, y1 = y0 + 1 < Hl ? y0 + 1 : y0;
+        const float ty = (float)(v - y0);
+        for (int x = 0; x < width; x++) {
+            const double u = fmin(fmax((x - 0.5) / 2, 0), Wl - 1);
+            const int x0 = (int)u, x1 = x0 + 1 < Wl ? x0 + 1 : x0;
+            const float tx = (float)(u - x0), w[4] = {(1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx), ty * tx};
+            const float *p[4] = {&lo->data[((size_t)y0 * Wl + x0) * c], &lo->data[((size_t)y0 * Wl + x1) * c],
+                                 &lo->data[((size_t)y1 * Wl + x0) * c], &lo->data[((size_t)y1 * Wl + x1) * c]};
+            float sum = 0, sw = 0;
+            for (int k = 0; k < 4; k++) sum += w[k] * p[k][1] * p[k][0], sw += w[k] * p[k][1];
+            float f = sw > 1e-6f ? sum / sw : 1;
+            for (int r = 1, best = 99; sw <= 1e-6f && r <= 2; r++) // the nearest ground pixel
+                for (int dy = -r; dy <= r; dy++)
+                    for (int dx = -r; dx <= r; dx++) {
+                        const int yy = y0 + dy, xx = x0 + dx, d = dx * dx + dy * dy;
+                        if (yy < 0 || yy >= Hl || xx < 0 || xx >= Wl || d >= best) continue;
+                        const float *q = &lo->data[((size_t)yy * Wl + xx) * c];
+                        if (q[1] > 0) f = q[0], best = d;
+                    }
+            out->data[(size_t)y * width + x] = f;
+        }
     }
     return RS_OK;
 }
@@ -372,10 +310,22 @@ static rs_status shadow_fraction(rs_image *frac, const rs_image *pass, double un
 // Removes the intermediates of a render (scene files, povray outputs, the conf).
 static void remove_intermediates(const char *out_dir)
 {
-    static const char *const names[] = {
-        "pass_colour.pov", "pass_colour.ini", "pass_colour.png",         "pass_ids.pov", "pass_ids.ini", "pass_ids.png",
-        "pass_shadow.pov", "pass_shadow.ini", "pass_shadow.png",         "passes.pov",   "passes.ini",   "passes1.png",
-        "passes2.png",     "passes3.png",     ".povray/3.7/povray.conf", ".povray/3.7",  ".povray",      "povray.log"};
+    static const char *const names[] = {"pass_colour.pov",
+                                        "pass_colour.ini",
+                                        "pass_colour.png",
+                                        "pass_colour.ppm",
+                                        "pass_ids.pov",
+                                        "pass_ids.ini",
+                                        "pass_ids.png",
+                                        "pass_ids.log",
+                                        "pass_shadow.pov",
+                                        "pass_shadow.ini",
+                                        "pass_shadow.png",
+                                        "pass_shadow.log",
+                                        ".povray/3.7/povray.conf",
+                                        ".povray/3.7",
+                                        ".povray",
+                                        "povray.log"};
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
         char *p = rs_io_join(out_dir, names[i]);
         if (p) (void)remove(p); // a missing file, or a folder someone else used: left as it is
@@ -478,7 +428,8 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
     rs_synth_canvas canvas;
     rs_synth_povcam cam;
     rs_image bg = {0}, rgba = {0}, idimg = {0};
-    uint8_t *include = NULL;
+    uint8_t *include = NULL, *sowned = NULL;
+    rs_synth_prepared svehicles = {0}; // the shadow pass's (shadow_vehicles)
     float *map = NULL;
     rs_status st;
     if (opt.canvas)
@@ -506,10 +457,10 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         goto done;
     }
     if ((st = rs_image_alloc(&out->composite, width, height, 3, err))) goto done;
-    // 1-2. Culling and the region
+    // 1-2. Culling and the regions: the vehicles' boxes (colour and ID), with their shadows
     rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
     const int Nlights = rs_synth_scene_lights(lights, &opt.scene);
-    int region[4] = {canvas.width, canvas.height, -1, -1};
+    int region[4] = {canvas.width, canvas.height, -1, -1}, sregion[4] = {canvas.width, canvas.height, -1, -1};
     for (int i = 0; i < N; i++) {
         double corners[8][3];
         int rect[4];
@@ -520,21 +471,22 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         out->visible[i] = include[i];
         if (!in) continue;
         out->Nrendered++;
-        if (opt.shadow)
-            widen_by_shadows(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, (const double(*)[3])corners,
-                             ground_normal_enu, ground_offset_m, lights, Nlights);
-        region[0] = rect[0] < region[0] ? rect[0] : region[0];
-        region[1] = rect[1] < region[1] ? rect[1] : region[1];
-        region[2] = rect[2] > region[2] ? rect[2] : region[2];
-        region[3] = rect[3] > region[3] ? rect[3] : region[3];
+        grow(region, rect);
+        if (!opt.shadow) continue;
+        widen_by_shadows(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, (const double(*)[3])corners,
+                         ground_normal_enu, ground_offset_m, lights, Nlights);
+        grow(sregion, rect);
     }
     // Pins, and the ground when there is no background to composite onto, are part of the
     // picture too: they widen the region to the whole canvas.
     const bool ground_drawn = !opt.background_path && opt.scene.ground_visible;
-    if (opt.full_frame || opt.scene.Npins > 0 || ground_drawn) {
-        region[0] = region[1] = 0;
-        region[2] = canvas.width - 1;
-        region[3] = canvas.height - 1;
+    for (int pass = 0; pass < 2; pass++) {
+        int *r = pass ? sregion : region;
+        if (opt.full_frame || (!pass && (opt.scene.Npins > 0 || ground_drawn))) {
+            r[0] = r[1] = 0;
+            r[2] = canvas.width - 1;
+            r[3] = canvas.height - 1;
+        }
     }
     if (opt.full_frame) out->Nrendered = N;
     const bool run = out->Nrendered > 0 || opt.scene.Npins > 0 || ground_drawn;
@@ -542,8 +494,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         for (int k = 0; k < 4; k++) out->region[k] = -1;
         if ((st = rs_image_alloc(&out->rgba, width, height, 4, err))) goto done;
     } else {
-        memcpy(out->region, region, sizeof(region));
-        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_povray_conf(out_dir, err))) goto done;
+        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = rs_synth_povray_write_conf(out_dir, err))) goto done;
         // The passes: colour; ID and shadow when vehicles are rendered.
         rs_synth_scene_options passes[3];
         int Npasses = 0, i_id = -1, i_shadow = -1;
@@ -563,26 +514,73 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
                 i_shadow = Npasses++;
             }
         }
+        memcpy(out->region, region, sizeof(region)); // rendered: the union of the regions
+        if (i_shadow >= 0) grow(out->region, sregion);
+        // One povray process per pass (docs/fleet.md, "Cost"): the colour pass; the ID pass on
+        // the same meshes, each merged into one mesh2 without normals; the shadow pass at half
+        // resolution on coarse meshes. They run at once, unless separate_processes (one after
+        // the other: the benchmark's "separate").
+        povray_job jobs[3];
+        rs_synth_povcam scam;
+        const int W2 = (canvas.width + 1) / 2, H2 = (canvas.height + 1) / 2;
+        if (i_shadow >= 0) {
+            const double *f = canvas.fxycxy;
+            const double half[4] = {f[0] / 2, f[1] / 2, (f[2] - 0.5) / 2, (f[3] - 0.5) / 2};
+            if ((st = rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
+                (st = shadow_vehicles(&svehicles, &sowned, vehicles, include, err)))
+                goto done;
+        }
+        // Without pins, drawn ground, antialiasing or a ground hiding part of a vehicle
+        // (rs_synth_scene_ground_occludes) the colour pass covers exactly the ID pass's vehicle
+        // pixels (the same rays meet the same triangles): its alpha is taken from the ID pass and
+        // it is written as 16-bit PPM, 0.05 s cheaper per image than RGBA PNG to write and read.
+        const bool ids_alpha =
+            i_id >= 0 && opt.antialias < 2 && opt.scene.Npins == 0 && !ground_drawn &&
+            !rs_synth_scene_ground_occludes(&cam, vehicles, &passes[i_id], ground_normal_enu, ground_offset_m);
+        static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
+        static const char *const logs[3] = {"povray.log", "pass_ids.log", "pass_shadow.log"};
+        for (int k = 0; k < Npasses; k++) {
+            const bool sh = k == i_shadow;
+            jobs[k] = (povray_job){.name = names[k],
+                                   .cam = sh ? &scam : &cam,
+                                   .vehicles = sh ? &svehicles : vehicles,
+                                   .pass = &passes[k],
+                                   .antialias = k ? 0 : opt.antialias,
+                                   .region = {region[0], region[1], region[2], region[3]},
+                                   .ppm = k == 0 && ids_alpha,
+                                   .log = logs[k]};
+            if (sh) {
+                const int r2[4] = {
+                    (int)fmax(0, floor((sregion[0] - 0.5) / 2)), (int)fmax(0, floor((sregion[1] - 0.5) / 2)),
+                    (int)fmin(W2 - 1, ceil((sregion[2] - 0.5) / 2)), (int)fmin(H2 - 1, ceil((sregion[3] - 0.5) / 2))};
+                memcpy(jobs[k].region, r2, sizeof(r2));
+            }
+        }
         rs_image imgs[3] = {{0}};
         // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
-        const bool colour_alone = opt.antialias >= 2;
-        // Processes: [first, first + count) of the passes each; one for all of them unless
-        // separate or antialiased (then the colour pass alone first).
-        static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
-        for (int first = 0; first < Npasses && !st; out->Npovray++) {
-            const int count = opt.separate_processes || (first == 0 && colour_alone) ? 1 : Npasses - first;
-            st = render_passes(&imgs[first], out_dir, count == 1 ? names[passes[first].pass] : "passes", povray, &cam,
-                               intrinsics, ground_normal_enu, ground_offset_m, vehicles, &passes[first], count,
-                               first == 0 ? opt.antialias : 0, region, &out->seconds_povray, err);
-            first += count;
+        const bool together = !opt.separate_processes;
+        for (int k = 0; k < Npasses; k++) {
+            if (!st) st = job_start(&jobs[k], out_dir, povray, intrinsics, ground_normal_enu, ground_offset_m, err);
+            if (!together) {
+                rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, err);
+                st = st ? st : st2;
+            }
         }
+        for (int k = 0; k < Npasses && together; k++) { // every started one waited for, the first error kept
+            rs_err e2 = {0};
+            rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, st ? &e2 : err);
+            st = st ? st : st2;
+        }
+        out->Npovray = Npasses;
         out->Npasses = Npasses;
         rgba = imgs[0];
         if (i_id >= 0) idimg = imgs[1];
+        if (!st && jobs[0].ppm) st = alpha_from_ids(&rgba, &idimg, err);
         rs_image frac = {0};
         if (!st && i_shadow >= 0)
-            st = shadow_fraction(&frac, &imgs[i_shadow],
-                                 rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu), err);
+            st =
+                shadow_fraction(&frac, &imgs[i_shadow], rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu),
+                                canvas.width, canvas.height, err);
         if (i_shadow >= 0) rs_image_free(&imgs[i_shadow]);
         if (st) {
             rs_image_free(&frac);
@@ -609,12 +607,16 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         out->rgba = rgba;
         rgba = (rs_image){0};
         decode_ids(out, &idimg, N);
+        // the shadow pass does not look under the vehicles (its green marks): 1 on their pixels
+        for (size_t i = 0; out->shadow && i < (size_t)width * height; i++)
+            if (out->ids[i]) out->shadow[i] = 1;
     }
     // 4. Composite
     composite(out, opt.background_path ? &bg : NULL);
     if (opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
 done:
     if (!opt.keep_files) remove_intermediates(out_dir);
+    free_shadow_vehicles(&svehicles, sowned);
     rs_image_free(&bg);
     rs_image_free(&rgba);
     rs_image_free(&idimg);

@@ -9,15 +9,18 @@
 //    vehicle's shadow or reflection, which could fall into the view, is lost.
 // 2. Region: povray renders only the canvas rectangle covered by the remaining vehicles' boxes
 //    (+ 1 px), with +SC/+EC/+SR/+ER; the rest of the canvas stays transparent. Pins, or the
-//    ground drawn when there is no background, make the region the whole canvas. With the
-//    shadow pass the region also covers each vehicle's shadows: its box's top corners
-//    projected onto the ground along every light of the pass.
-// 2b. Processes: the passes (colour, ID, shadow) are the frames of ONE povray process unless
-//    separate_processes is set or the colour pass is antialiased (then it runs alone). Each
-//    povray process spends about 0.35 s waiting between its threads besides its work
-//    (docs/povray.md), each further frame about 0.3 s.
+//    ground drawn when there is no background, make the region the whole canvas. The shadow
+//    pass's region also covers each vehicle's shadows: its box's top corners projected onto
+//    the ground along every light of the pass.
+// 2b. Processes: one povray process per pass (colour, ID, shadow), all started at once (one
+//    after the other with separate_processes). Each povray process spends about 0.6 s waiting
+//    between its threads besides its work (docs/povray.md): at once, an image waits once.
+//    The shadow pass is rendered at half the canvas's resolution on coarse meshes and
+//    interpolated (docs/fleet.md, "Cost"; within 1 px of the full pass's sun-shadow edge).
 // 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
-//    (File_Gamma 1), no antialiasing unless asked; a distorted lens is resampled from the canvas
+//    (File_Gamma 1), no antialiasing unless asked; without pins, drawn ground, antialiasing or
+//    a ground hiding part of a vehicle, 16-bit PPM with the alpha of the ID pass (the same);
+//    a distorted lens is resampled from the canvas
 //    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).
 // 4. Composite: out = fg + (1 - a) bg in linear light (straight alpha: fg = a * colour), the
 //    background decoded from sRGB and the result encoded to sRGB 8-bit.
@@ -65,9 +68,8 @@ typedef struct {
                                    //   computes them once; NULL: computed here
     bool shadow;                   // also the shadow pass (rs_synth_scene.h): out->shadow
     bool write_files;              // write image.png, rgba.png, ids.png (default true)
-    bool separate_processes;       // one povray process per pass (default false: the passes
-                                   // are frames of one process; antialias forces the colour
-                                   // pass into a process of its own)
+    bool separate_processes;       // the passes' povray processes one after the other
+                                   // (default false: all at once)
     rs_synth_scene_options scene;  // sun, pins, ground (pass and include are set per pass)
 } rs_synth_render_options;
 
@@ -85,7 +87,8 @@ typedef struct {
     int region[4];         // canvas rectangle rendered: x0, y0, x1, y1 inclusive (pixels);
                            // all -1 when nothing was rendered
     float *shadow;         // (H, W) owned, when the shadow pass ran (else NULL): the fraction
-                           // of the ground's light reaching each pixel, 1 in the open
+                           // of the ground's light reaching each pixel, 1 in the open and
+                           // on the vehicles' own pixels (ids != 0)
     double seconds_povray; // wall time spent in povray (every pass)
     int Npovray;           // povray processes run
     int Npasses;           // passes rendered

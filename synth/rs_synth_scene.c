@@ -11,6 +11,8 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "synth/internal/rs_synth_fleet_internal.h"
+#include "synth/internal/rs_synth_scene_internal.h"
 
 // ---- strings ----
 
@@ -310,9 +312,12 @@ static void write_head(FILE *f, const char *what)
 // The meshes of every vehicle some pass includes, declared once for all passes (issue 18's
 // cost: POV-Ray parses a scene's text again for every frame and scans the frames it skips, so
 // each mesh written once instead of once per pass takes two thirds of the text away):
-// "#declare RS_PART_<mesh>_<part> = mesh2 {...}" (rs_synth_fleet_write_parts).
+// "#declare RS_PART_<mesh>_<part> = mesh2 {...}" (rs_synth_fleet_write_parts). A scene without
+// a colour pass (`merged`: ID and shadow passes) needs neither the parts' textures nor normals:
+// one bare mesh2 per mesh, "#declare RS_MESH_<mesh> = mesh2 {...}" (rs_synth_fleet_write_merged),
+// the same triangles; it parses and traces about 10 % faster than the union of parts.
 static rs_status write_geometry(FILE *f, const rs_synth_prepared *vehicles, const rs_synth_scene_options *passes,
-                                int Npasses, rs_err *err)
+                                int Npasses, bool merged, rs_err *err)
 {
     for (int m = 0; m < vehicles->Nmeshes; m++) {
         bool used = false;
@@ -321,8 +326,9 @@ static rs_status write_geometry(FILE *f, const rs_synth_prepared *vehicles, cons
                 for (int k = 0; k < Npasses && !used; k++) used = !passes[k].include || passes[k].include[i];
         if (!used) continue;
         char prefix[32];
-        snprintf(prefix, sizeof(prefix), "RS_PART_%d", m);
-        rs_status st = rs_synth_fleet_write_parts(f, prefix, &vehicles->meshes[m], err);
+        snprintf(prefix, sizeof(prefix), merged ? "RS_MESH_%d" : "RS_PART_%d", m);
+        rs_status st = merged ? rs_synth_fleet_write_merged(f, prefix, &vehicles->meshes[m], err)
+                              : rs_synth_fleet_write_parts(f, prefix, &vehicles->meshes[m], err);
         if (st) return st;
     }
     return RS_OK;
@@ -428,15 +434,34 @@ static int write_shadow_ground(FILE *f, const rs_synth_prepared *vehicles, const
     return Nt > 0;
 }
 
+// The ID pass leaves the ground out where it hides nothing (issue 18's cost: the plane is hit by
+// most of the region's pixels, about 0.03 s of an image's 0.15 s ID trace).
+bool rs_synth_scene_ground_occludes(const rs_synth_povcam *cam, const rs_synth_prepared *vehicles,
+                                    const rs_synth_scene_options *opt, const double g[3], double offset)
+{
+    const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    const double *c = cam->location; // POV-Ray world <e, u, n>
+    if (!((g[0] * c[0] + g[1] * c[2] + g[2] * c[1] - offset) / gn > 1e-6)) return true;
+    for (int i = 0; i < vehicles->N; i++) {
+        if (opt->include && !opt->include[i]) continue;
+        double corners[8][3];
+        rs_synth_vehicle_corners_enu(corners, &vehicles->v[i], g, offset);
+        for (int k = 0; k < 4; k++)
+            if ((g[0] * corners[k][0] + g[1] * corners[k][1] + g[2] * corners[k][2] - offset) / gn < -1e-9) return true;
+    }
+    return false;
+}
+
 static const char *pass_name(rs_synth_pass pass)
 {
     return pass == RS_SYNTH_PASS_ID ? "object-ID" : pass == RS_SYNTH_PASS_SHADOW ? "shadow" : "colour";
 }
 
 // Everything of one pass after the head: camera, lights, ground, meshes, vehicles, pins.
+// `merged`: the geometry was declared as RS_MESH_<mesh> itself (write_geometry).
 static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],
                             double ground_offset_m, const rs_synth_prepared *vehicles, const rs_synth_scene_options *o,
-                            rs_err *err)
+                            bool merged, rs_err *err)
 {
     const rs_synth_scene_options opt = *o;
     const bool id_pass = opt.pass == RS_SYNTH_PASS_ID;
@@ -477,27 +502,31 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
         }
     }
     // The ground: grey in the colour pass (left out of the image when compositing), an
-    // occluder of value 0 in the ID pass, white in the shadow pass.
+    // occluder of value 0 in the ID pass where it can hide something, patches of the shadow
+    // pass's albedo round the vehicles in the shadow pass.
     const double n_pov[3] = {ground_normal_enu[0], ground_normal_enu[2], ground_normal_enu[1]};
     const double nn = sqrt(n_pov[0] * n_pov[0] + n_pov[1] * n_pov[1] + n_pov[2] * n_pov[2]);
-    if (!(shadow_pass && write_shadow_ground(f, vehicles, &opt, ground_normal_enu, ground_offset_m)))
+    const bool id_ground =
+        id_pass && rs_synth_scene_ground_occludes(cam, vehicles, &opt, ground_normal_enu, ground_offset_m);
+    if (id_pass && !id_ground)
+        fprintf(f, "// no ground: every vehicle and the camera are above it, it would hide nothing\n");
+    else if (!(shadow_pass && write_shadow_ground(f, vehicles, &opt, ground_normal_enu, ground_offset_m)))
         fprintf(f, "plane { <%.17g, %.17g, %.17g>, %.17g\n", n_pov[0] / nn, n_pov[1] / nn, n_pov[2] / nn,
                 ground_offset_m / nn);
-    if (id_pass)
-        fprintf(f, "  texture { pigment { rgb 0 } finish { emission 0 ambient 0 diffuse 0 } }\n");
+    if (id_ground)
+        fprintf(f, "  texture { pigment { rgb 0 } finish { emission 0 ambient 0 diffuse 0 } }\n}\n");
     else if (shadow_pass) {
         fprintf(f,
                 "  texture { pigment { rgb %.2f } finish { emission 0 ambient 0 diffuse 1 "
-                "brilliance 1 specular 0 } }\n",
+                "brilliance 1 specular 0 } }\n}\n",
                 SHADOW_GROUND_ALBEDO);
-    } else
-        fprintf(f, "  texture { pigment { rgb 0.18 } finish { ambient 0 diffuse 0.8 } }%s\n",
+    } else if (!id_pass)
+        fprintf(f, "  texture { pigment { rgb 0.18 } finish { ambient 0 diffuse 0.8 } }%s\n}\n",
                 opt.ground_visible ? "" : " no_image");
-    fprintf(f, "}\n");
     if (opt.pass == RS_SYNTH_PASS_COLOUR && !opt.env_off) write_environment(f, &opt);
     // Meshes: textured per vehicle in the colour pass for procedural ones, bare otherwise.
     const int N = vehicles->N;
-    for (int m = 0; m < vehicles->Nmeshes; m++) {
+    for (int m = 0; m < vehicles->Nmeshes && !merged; m++) {
         int first = -1, users = 0;
         for (int i = 0; i < N; i++)
             if (vehicles->imesh[i] == m && (!opt.include || opt.include[i])) {
@@ -531,8 +560,9 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
             fprintf(f, "\n  ");
             write_id_texture(f, (unsigned)i + 1u);
             fprintf(f, " no_shadow");
-        } else if (shadow_pass) {
-            fprintf(f, " no_image no_reflection");
+        } else if (shadow_pass) { // seen as a green mark: no shadow rays spent on the ground it hides
+            fprintf(f, "\n  texture { pigment { rgb <0, 1, 0> } finish { emission 1 ambient 0 diffuse 0 specular 0 } }"
+                       " no_reflection");
         } else if (v->cls == RS_SYNTH_USER_MODEL) {
             fprintf(f,
                     "\n  texture { pigment { rgb <%.6f, %.6f, %.6f> } finish { ambient 0 "
@@ -557,8 +587,9 @@ rs_status rs_synth_scene_write(FILE *f, const rs_synth_povcam *cam, const double
     char what[32];
     snprintf(what, sizeof(what), "%s pass", pass_name(opt.pass));
     write_head(f, what);
-    rs_status st = write_geometry(f, vehicles, &opt, 1, err);
-    if (!st) st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &opt, err);
+    const bool merged = opt.pass != RS_SYNTH_PASS_COLOUR;
+    rs_status st = write_geometry(f, vehicles, &opt, 1, merged, err);
+    if (!st) st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &opt, merged, err);
     if (!st && ferror(f)) st = rs_err_set(err, RS_ERR_IO, "writing the scene: stream error");
     return st;
 }
@@ -576,12 +607,14 @@ rs_status rs_synth_scene_write_frames(FILE *f, const rs_synth_povcam *cam, const
         snprintf(what + len, sizeof(what) - len, " %d %s", k + 1, pass_name(passes[k].pass));
     }
     write_head(f, what);
-    rs_status gst = write_geometry(f, vehicles, passes, Npasses, err);
+    bool merged = true;
+    for (int k = 0; k < Npasses; k++) merged = merged && passes[k].pass != RS_SYNTH_PASS_COLOUR;
+    rs_status gst = write_geometry(f, vehicles, passes, Npasses, merged, err);
     if (gst) return gst;
     fprintf(f, "#switch (frame_number)\n");
     for (int k = 0; k < Npasses; k++) {
         fprintf(f, "#case (%d) // %s pass\n", k + 1, pass_name(passes[k].pass));
-        rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &passes[k], err);
+        rs_status st = write_body(f, cam, fxy, ground_normal_enu, ground_offset_m, vehicles, &passes[k], merged, err);
         if (st) return st;
         fprintf(f, "#break\n");
     }

@@ -81,7 +81,8 @@ rs_status rs_synth_parse_iso8601(double *unix_time_s, const char *s, const char 
 // ---- the scene ----
 
 // RS_SYNTH_PASS_SHADOW: what differential rendering needs, as a single pass: the ground grey
-// (pigment 0.25 so that nothing saturates, diffuse 1, no ambient), the vehicles invisible (no_image) but casting shadows,
+// (pigment 0.25 so that nothing saturates, diffuse 1, no ambient), the vehicles casting shadows
+// and seen as flat green marks (emission rgb <0, 1, 0>: no light spent on the ground they hide),
 // lit by the lights of rs_synth_scene_shadow_lights (the sun unless overcast or below the
 // horizon, and a sky of parallel lights that cast shadows too). A pixel's value divided by
 // rs_synth_scene_shadow_unlit() is the fraction of the ground's light reaching that pixel:
