@@ -92,7 +92,7 @@ static struct {
 // The key of road_cache for these inputs (malloc'ed, *n doubles), NULL when out of memory.
 static double *road_key(size_t *n, const rs_camera *cam, const rs_site *site, const rs_lanes *lanes, int step_px)
 {
-    size_t N = (size_t)cam->Nintrinsics + 14;
+    size_t N = (size_t)cam->Nintrinsics + 15; // intrinsics, rt 6, normal 3, offset, width, height, step, Ni, Nlanes
     for (int l = 0; l < lanes->N; l++) N += 2 + 3 * (size_t)lanes->lane[l].Npoints;
     double *k = malloc(N * sizeof(double));
     if (!k) return NULL;
