@@ -388,7 +388,7 @@ static void work_free(rs_calib__work *w)
 }
 
 static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_problem *pb, const rs_calib_options *opt,
-                       unsigned user_refine, int Ni, rs_err *err)
+                       unsigned user_refine, int Ni, const rs_calib__warm *warm, rs_err *err)
 {
     const int N = pb->N;
     rs_status st = validate(pb, opt, Ni, err);
@@ -433,18 +433,24 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
 
     // 1. initial pose
     memcpy(res->intrinsics, pb->camera->intrinsics, (size_t)Ni * sizeof(double));
-    rs_calib_init_result init;
-    double scale = 1.0, *points_buffer = NULL;
-    rs_calib_problem points; // the point landmarks alone: picks along poles and lines come later
-    st = rs_calib__point_problem(&points, &points_buffer, pb, err);
-    if (st == RS_OK) st = initial_pose(&init, res->intrinsics, &scale, &points, opt, Ni, err);
-    free(points_buffer);
-    if (st != RS_OK) {
-        rs_err_prefix(err, "initial pose");
-        return st;
+    rs_calib_init_result init = {.method = "warm-start"};
+    double scale = 1.0, rt_c[6];
+    if (warm) {
+        memcpy(rt_c, warm->rt_c, sizeof rt_c);
+        memcpy(res->intrinsics, warm->intrinsics, (size_t)Ni * sizeof(double));
+        memcpy(w->p_c, warm->p_c, (size_t)N * 3 * sizeof(double));
+    } else {
+        double *points_buffer = NULL;
+        rs_calib_problem points; // the point landmarks alone: picks along poles and lines come later
+        st = rs_calib__point_problem(&points, &points_buffer, pb, err);
+        if (st == RS_OK) st = initial_pose(&init, res->intrinsics, &scale, &points, opt, Ni, err);
+        free(points_buffer);
+        if (st != RS_OK) {
+            rs_err_prefix(err, "initial pose");
+            return st;
+        }
+        rt_centred_from_enu(rt_c, init.rt_cam_enu, c);
     }
-    double rt_c[6];
-    rt_centred_from_enu(rt_c, init.rt_cam_enu, c);
     rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
 
     rs_calib_refine_problem rp = {.N = N,
@@ -567,7 +573,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
                               i, pc[2]);
     }
 
-    if ((st = rs_calib__reliability(res, w, &rp, rt_c, log_theta, pb, opt, err)) != RS_OK) return st;
+    if (!warm && (st = rs_calib__reliability(res, w, &rp, rt_c, log_theta, pb, opt, err)) != RS_OK) return st;
     // ---- hook: the intrinsics against the image (rs_calib_intrinsics.c) ----
     st = rs_calib__intrinsics_check(res, w, &rp, rt_c, w->cov, user_refine, pb, opt, warn, err);
     if (st != RS_OK) return st;
@@ -727,8 +733,8 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     return RS_OK;
 }
 
-rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt_in,
-                         rs_err *err)
+static rs_status solve_timed(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt_in,
+                             const rs_calib__warm *warm, rs_err *err)
 {
     if (!result || !problem) return rs_err_set(err, RS_ERR_INVALID, "rs_calib_solve: NULL result or problem");
     struct timespec t0, t1;
@@ -746,7 +752,7 @@ rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *proble
     if (st != RS_OK) return st;
     // ---- end hook ----
     rs_calib__work w = {0};
-    st = solve(result, &w, problem, &opt, user_refine, Ni, err);
+    st = solve(result, &w, problem, &opt, user_refine, Ni, warm, err);
     work_free(&w);
     if (st != RS_OK) {
         rs_calib_result_free(result);
@@ -755,4 +761,18 @@ rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *proble
     clock_gettime(CLOCK_MONOTONIC, &t1);
     result->time_us = (double)(t1.tv_sec - t0.tv_sec) * 1e6 + (double)(t1.tv_nsec - t0.tv_nsec) * 1e-3;
     return RS_OK;
+}
+
+rs_status rs_calib_solve(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt,
+                         rs_err *err)
+{
+    return solve_timed(result, problem, opt, NULL, err);
+}
+
+rs_status rs_calib__solve_warm(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt,
+                               const rs_calib__warm *from, rs_err *err)
+{
+    if (!from || !from->rt_c || !from->intrinsics || !from->p_c)
+        return rs_err_set(err, RS_ERR_INVALID, "rs_calib__solve_warm: NULL start");
+    return solve_timed(result, problem, opt, from, err);
 }

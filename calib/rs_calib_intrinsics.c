@@ -253,7 +253,8 @@ static double critical(int m, int nu)
 // The focal scale of the solve with the focal free: its value k (f / f_nominal - 1), variance Q
 // and the dof of that fit. The solve is rs_calib_solve itself with the focal refined at the
 // caller's request (so that its own test leaves the focal alone: no recursion).
-static rs_status free_focal(double *k, double *Q, int *dof, const rs_calib_problem *pb, const rs_calib_options *opt)
+static rs_status free_focal(double *k, double *Q, int *dof, const rs_calib_problem *pb, const rs_calib_options *opt,
+                            const rs_calib__warm *from)
 {
     rs_calib_problem p = *pb;
     p.focal_rel_sigma = 0.0;
@@ -263,7 +264,7 @@ static rs_status free_focal(double *k, double *Q, int *dof, const rs_calib_probl
     o.focal_search_min = o.focal_search_max = 1.0;
     rs_calib_result r;
     rs_err e = {0};
-    rs_status st = rs_calib_solve(&r, &p, &o, &e);
+    rs_status st = rs_calib__solve_warm(&r, &p, &o, from, &e);
     if (st == RS_OK) {
         const double f0 = pb->camera->intrinsics[0];
         *k = r.intrinsics[0] / f0 - 1.0;
@@ -385,7 +386,8 @@ rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work 
             // the alternative solved in full: the focal free (--refine focal's weak prior, from the
             // nominal, no search) and the noise model estimated again, so that what a wrong focal
             // left in the residuals is no longer taken for survey noise
-            if (free_focal(&k, &Q, &alt.dof, pb, opt) == RS_OK) {
+            const rs_calib__warm from = {.rt_c = rt_c, .intrinsics = x, .p_c = w->p_c};
+            if (free_focal(&k, &Q, &alt.dof, pb, opt, &from) == RS_OK) {
                 ck->focal_rel = k;
                 ck->sigma_focal_rel = sqrt(Q);
                 ck->critical_focal = critical(1, alt.dof);
