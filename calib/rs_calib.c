@@ -482,6 +482,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     // 2. robust solve on every landmark, with the scale taken from the data; 3. gross outliers
     double log_theta[RS_NOISE_NGROUPS] = {0, 0, 0};
     if (opt->robust_scale > 0.0) {
+        bool rescaled = false; // the sigmas changed since the last solve's block chi2
         for (int pass = 0; pass < 3; pass++) {
             st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
             if (st != RS_OK) {
@@ -489,6 +490,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
                 return st;
             }
             res->iterations += sum.iterations;
+            rescaled = false;
             if (!opt->estimate_noise) break;
             // the median block chi2 of a 2-dof chi-square is 1.386: a robust variance factor,
             // whatever the stated sigmas (a quarter of gross outliers moves it little)
@@ -500,11 +502,12 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
             if (!isfinite(f) || f <= 1.0) break;
             for (int g = 0; g < RS_NOISE_NGROUPS; g++) log_theta[g] += log(f);
             rs_calib__scale_sigmas(w, pb, log_theta);
+            rescaled = true;
             if (fabs(log(f)) < log(2.0)) break; // close enough for the outlier test below
         }
         // the segments the along picks are on, at the robust pose (better than the initial one)
         rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
-        if (opt->estimate_noise || pb->along) { // block chi2 at the scaled sigmas and segments, for the test below
+        if (rescaled || pb->along) { // block chi2 at the scaled sigmas and segments, for the test below
             ro.max_iterations = 0 < opt->max_iterations ? opt->max_iterations : 1;
             st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
             if (st != RS_OK) {
