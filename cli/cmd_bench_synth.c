@@ -1,6 +1,7 @@
 // roadside bench synth -- the time of `roadside synth` with each saving turned off in turn
 // (bench/rs_bench_synth.h). Parses, calls the library, prints.
 #include <getopt.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +15,7 @@
 static const char bench_synth_usage[] =
     "usage: roadside bench synth SITE --calib DIR [--count N] [--size WxH] [--vehicles N]\n"
     "                            [--jobs J] [--seed S] [--csv FILE] [--dir DIR] [--quick]\n"
+    "                            [--variants LIST] [--memory-every N]\n"
     "\n"
     "Times `roadside synth` on SITE (its backgrounds: make them first with `roadside site\n"
     "render-backgrounds`) with every saving, then with each saving turned off in turn, on the\n"
@@ -22,8 +24,10 @@ static const char bench_synth_usage[] =
     "region rendering), no-shadows (the shadow pass skipped), full-detail (no coarse meshes\n"
     "for vehicles under 40 px). Prints a table: wall and CPU\n"
     "seconds per image (CPU of roadside, its workers and povray), vehicles per image, and\n"
-    "the time 4 cameras x 1000 images would take at that rate; then the peak resident memory\n"
-    "of roadside and of its largest child process (getrusage).\n"
+    "the time 4 cameras x 1000 images would take at that rate; memory: the peak resident set\n"
+    "of roadside during the variant (VmHWM) and of its largest finished child so far\n"
+    "(getrusage), and the resident set of the live process tree read from /proc every N\n"
+    "images, with its growth per 100 images (first checkpoint to last).\n"
     "\n"
     "  --calib DIR   calibrated <camera>.cameramodel files\n"
     "  --count N     images per variant (default 48; --quick: 8)\n"
@@ -34,10 +38,12 @@ static const char bench_synth_usage[] =
     "  --csv FILE    write the table as CSV (atomically)\n"
     "  --dir DIR     scratch folder (default: a new folder under $TMPDIR or /tmp, removed)\n"
     "  --quick       8 images, variants all and jobs=1 only (for the test suite)\n"
+    "  --variants LIST  comma-separated variants to run, in the order above (e.g. all)\n"
+    "  --memory-every N  a memory checkpoint every N images (default: a tenth of --count)\n"
     "\n"
     "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/benchmarks.md.\n";
 
-enum { O_CALIB = 3000, O_COUNT, O_SIZE, O_VEHICLES, O_JOBS, O_SEED, O_CSV, O_DIR, O_QUICK };
+enum { O_CALIB = 3000, O_COUNT, O_SIZE, O_VEHICLES, O_JOBS, O_SEED, O_CSV, O_DIR, O_QUICK, O_VARIANTS, O_MEMORY_EVERY };
 
 int rs_cli_bench_synth(int argc, char **argv)
 {
@@ -45,12 +51,18 @@ int rs_cli_bench_synth(int argc, char **argv)
         fputs(bench_synth_usage, stdout);
         return RS_EXIT_OK;
     }
-    static const struct option longopts[] = {
-        {"calib", required_argument, NULL, O_CALIB}, {"count", required_argument, NULL, O_COUNT},
-        {"size", required_argument, NULL, O_SIZE},   {"vehicles", required_argument, NULL, O_VEHICLES},
-        {"jobs", required_argument, NULL, O_JOBS},   {"seed", required_argument, NULL, O_SEED},
-        {"csv", required_argument, NULL, O_CSV},     {"dir", required_argument, NULL, O_DIR},
-        {"quick", no_argument, NULL, O_QUICK},       {NULL, 0, NULL, 0}};
+    static const struct option longopts[] = {{"calib", required_argument, NULL, O_CALIB},
+                                             {"count", required_argument, NULL, O_COUNT},
+                                             {"size", required_argument, NULL, O_SIZE},
+                                             {"vehicles", required_argument, NULL, O_VEHICLES},
+                                             {"jobs", required_argument, NULL, O_JOBS},
+                                             {"seed", required_argument, NULL, O_SEED},
+                                             {"csv", required_argument, NULL, O_CSV},
+                                             {"dir", required_argument, NULL, O_DIR},
+                                             {"quick", no_argument, NULL, O_QUICK},
+                                             {"variants", required_argument, NULL, O_VARIANTS},
+                                             {"memory-every", required_argument, NULL, O_MEMORY_EVERY},
+                                             {NULL, 0, NULL, 0}};
     rs_synth_dataset_options o;
     rs_synth_dataset_options_default(&o);
     o.width = 720;
@@ -59,7 +71,8 @@ int rs_cli_bench_synth(int argc, char **argv)
     const long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int J = cores > 0 ? (int)(4 * (cores < 8 ? cores : 8)) : 4, count = -1;
     bool quick = false;
-    const char *csv = NULL, *dir = NULL;
+    const char *csv = NULL, *dir = NULL, *variants = NULL;
+    int memory_every = 0;
     long l;
     int c;
     optind = 1;
@@ -97,6 +110,12 @@ int rs_cli_bench_synth(int argc, char **argv)
         case O_CSV: csv = optarg; break;
         case O_DIR: dir = optarg; break;
         case O_QUICK: quick = true; break;
+        case O_VARIANTS: variants = optarg; break;
+        case O_MEMORY_EVERY:
+            if (!rs_cli_parse_int(optarg, 1, 1000000, &l))
+                return rs_cli_usage_error("bench synth", "--memory-every: expected an integer >= 1");
+            memory_every = (int)l;
+            break;
         default: return rs_cli_usage_error("bench synth", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
@@ -110,7 +129,35 @@ int rs_cli_bench_synth(int argc, char **argv)
     if (!dir && !(scratch = rs_cli_scratch_dir(tmpl, "bench-synth"))) return RS_EXIT_FAIL;
     rs_bench_synth_row rows[RS_SYNTH_BENCH_VARIANTS];
     rs_bench_synth_variants(rows, J);
-    const int Nrows = quick ? 2 : RS_SYNTH_BENCH_VARIANTS;
+    int Nrows = quick ? 2 : RS_SYNTH_BENCH_VARIANTS;
+    if (variants) { // keep the named rows, in the table's order
+        int kept = 0;
+        for (int k = 0; k < RS_SYNTH_BENCH_VARIANTS; k++) {
+            const size_t len = strlen(rows[k].name);
+            for (const char *p = variants; *p;) {
+                const size_t n = strcspn(p, ",");
+                if (n == len && !strncmp(p, rows[k].name, n)) {
+                    rows[kept++] = rows[k];
+                    break;
+                }
+                p += n + (p[n] == ',');
+            }
+        }
+        for (const char *p = variants; *p;) { // every name must be a variant
+            const size_t n = strcspn(p, ",");
+            bool known = false;
+            for (int k = 0; k < kept; k++) known |= strlen(rows[k].name) == n && !strncmp(p, rows[k].name, n);
+            if (!known)
+                return rs_cli_usage_error("bench synth",
+                                          "--variants: \"%.*s\" is not one of all, jobs=1, separate, full-frame, "
+                                          "no-shadows, full-detail",
+                                          (int)n, p);
+            p += n + (p[n] == ',');
+        }
+        if (!kept) return rs_cli_usage_error("bench synth", "--variants: no variant named");
+        Nrows = kept;
+    }
+    for (int k = 0; k < Nrows; k++) rows[k].memory_every = memory_every;
     printf("roadside bench synth: %s, %d images of %dx%d per variant, at most %d vehicles each, "
            "seed %llu, %ld cores\n",
            o.site_dir, o.count, o.width, o.height, o.vehicles, (unsigned long long)o.seed, cores);
@@ -119,27 +166,82 @@ int rs_cli_bench_synth(int argc, char **argv)
     rs_status st = rs_bench_synth_run(rows, Nrows, &o, dir ? dir : scratch, &err);
     if (scratch) rs_io_remove_tree(scratch);
     if (st) return rs_cli_fail("bench synth", st, &err);
-    printf("\n%-11s %4s %6s %8s %8s %9s %10s %10s %12s  %s\n", "variant", "jobs", "images", "veh/img", "wall_s",
-           "s/image", "cpu_s/img", "4x1000_min", "povray_s/img", "what");
+    printf("\n%-11s %4s %6s %8s %8s %9s %10s %10s %12s %9s %9s %9s %11s  %s\n", "variant", "jobs", "images", "veh/img",
+           "wall_s", "s/image", "cpu_s/img", "4x1000_min", "povray_s/img", "peak_MiB", "child_MiB", "tree_MiB",
+           "MiB/100img", "what");
     char text[8192];
     int n = snprintf(text, sizeof(text),
                      "variant,jobs,images,vehicles_per_image,wall_s,"
-                     "s_per_image,cpu_s_per_image,povray_s_per_image\n");
+                     "s_per_image,cpu_s_per_image,povray_s_per_image,peak_rss_self_mib,peak_rss_children_mib,"
+                     "rss_roadside_first_mib,rss_roadside_last_mib,rss_tree_max_mib,rss_growth_mib_per_100_images,"
+                     "rss_slope_mib_per_100_images,memory_checkpoints\n");
     for (int k = 0; k < Nrows; k++) {
         const rs_bench_synth_row *r = &rows[k];
         const double per = r->wall_s / (r->Nimages > 0 ? r->Nimages : 1);
         const double vpi = (double)r->Nannotations / (r->Nimages > 0 ? r->Nimages : 1);
-        printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f  %s\n", r->name, r->jobs, r->Nimages, vpi,
-               r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1), 4000 * per / 60,
-               r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->what);
+        long tree_max = 0;
+        for (int i = 0; i < r->Ncheckpoints; i++)
+            if (r->cp_rss_tree_kib[i] > tree_max) tree_max = r->cp_rss_tree_kib[i];
+        int last = -1;
+        const double growth = rs_bench_synth_growth_kib_per_100(r, &last, NULL) / 1024;
+        printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f %9.1f %9.1f %9.1f %11.2f  %s\n", r->name, r->jobs,
+               r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1), 4000 * per / 60,
+               r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->peak_self_kib / 1024.0,
+               r->peak_children_kib / 1024.0, tree_max / 1024.0, growth, r->what);
         if (n < (int)sizeof(text))
-            n += snprintf(text + n, sizeof(text) - (size_t)n, "%s,%d,%d,%.3f,%.3f,%.4f,%.4f,%.4f\n", r->name, r->jobs,
+            n += snprintf(text + n, sizeof(text) - (size_t)n,
+                          "%s,%d,%d,%.3f,%.3f,%.4f,%.4f,%.4f,%.1f,%.1f,%.1f,%.1f,%.1f,%.3f,%.3f,%d\n", r->name, r->jobs,
                           r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
-                          r->povray_s / (r->Nimages > 0 ? r->Nimages : 1));
+                          r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->peak_self_kib / 1024.0,
+                          r->peak_children_kib / 1024.0, last >= 0 ? r->cp_rss_roadside_kib[0] / 1024.0 : NAN,
+                          last >= 0 ? r->cp_rss_roadside_kib[last] / 1024.0 : NAN, tree_max / 1024.0, growth,
+                          rs_bench_synth_slope_kib_per_100(r) / 1024, r->Ncheckpoints);
     }
-    // memory: the peak resident set of this process (the run's parent: scene, traffic, COCO
-    // assembly) and of the largest of its finished children (a worker or a povray process),
-    // getrusage(2)'s ru_maxrss in KiB. A leak per image shows as a peak growing with --count.
+    // memory over the run: the sampled resident sets at each checkpoint, and their growth
+    printf("\nmemory: resident set of the live process tree (/proc/PID/statm), MiB, every %d images\n",
+           Nrows > 0 ? rows[0].memory_every : 0);
+    for (int k = 0; k < Nrows; k++) {
+        const rs_bench_synth_row *r = &rows[k];
+        printf("%-11s images   ", r->name);
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7d", r->cp_images[i]);
+        printf("\n%-11s roadside ", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_roadside_kib[i] / 1024.0);
+        printf("\n%-11s tree     ", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_tree_kib[i] / 1024.0);
+        printf("\n%-11s largest  ", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_largest_kib[i] / 1024.0);
+        printf("\n%-11s roadside processes", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %d", r->cp_roadside[i]);
+        printf(", all processes");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %d", r->cp_processes[i]);
+        int last = -1;
+        double largest = NAN;
+        const double growth = rs_bench_synth_growth_kib_per_100(r, &last, &largest) / 1024;
+        if (isfinite(growth))
+            printf("\n%-11s growth per 100 images: roadside %.1f -> %.1f MiB from image %d to %d (%d roadside "
+                   "processes): %+.2f MiB per 100 images; largest process %.1f -> %.1f MiB: %+.2f MiB per 100 "
+                   "images\n",
+                   "", r->cp_rss_roadside_kib[0] / 1024.0, r->cp_rss_roadside_kib[last] / 1024.0, r->cp_images[0],
+                   r->cp_images[last], r->cp_roadside[0], growth, r->cp_rss_largest_kib[0] / 1024.0,
+                   r->cp_rss_largest_kib[last] / 1024.0, largest / 1024);
+        if (isfinite(growth))
+            printf("%-11s least-squares slope through those checkpoints: %+.2f MiB per 100 images\n", "",
+                   rs_bench_synth_slope_kib_per_100(r) / 1024);
+        else
+            printf("\n%-11s growth per 100 images: fewer than 2 checkpoints with every worker alive\n", "");
+        // the later half alone: per-process caches (a background's resampling, estimates) fill
+        // as each worker meets each background, a leak keeps growing
+        int mid = 0;
+        while (last > 0 && mid < last && 2 * r->cp_images[mid] < r->cp_images[last]) mid++;
+        if (isfinite(growth) && mid > 0 && mid < last)
+            printf("%-11s later half: roadside %.1f -> %.1f MiB from image %d to %d: %+.2f MiB per 100 images\n", "",
+                   r->cp_rss_roadside_kib[mid] / 1024.0, r->cp_rss_roadside_kib[last] / 1024.0, r->cp_images[mid],
+                   r->cp_images[last],
+                   100.0 * (r->cp_rss_roadside_kib[last] - r->cp_rss_roadside_kib[mid]) / 1024.0 /
+                       (r->cp_images[last] - r->cp_images[mid]));
+    }
+    // the peaks over the whole bench: this process and the largest of its finished children (a
+    // worker or a povray process), getrusage(2)'s ru_maxrss in KiB
     struct rusage self = {0}, kids = {0};
     getrusage(RUSAGE_SELF, &self);
     getrusage(RUSAGE_CHILDREN, &kids);

@@ -61,16 +61,20 @@ void rs_lane_point(double p_enu_m[2], double *heading_deg, const rs_lane *lane, 
 
 double rs_lane_distance_m(double *heading_deg, const rs_lane *lane, const double p_enu_m[2])
 {
-    double best = INFINITY, h = NAN;
+    double best = INFINITY;
+    int best_i = 0;
     for (int i = 1; i < lane->Npoints; i++) {
         const double *a = lane->p_enu_m[i - 1], *b = lane->p_enu_m[i];
         double de = b[0] - a[0], dn = b[1] - a[1], L2 = de * de + dn * dn;
         double t = L2 > 0 ? ((p_enu_m[0] - a[0]) * de + (p_enu_m[1] - a[1]) * dn) / L2 : 0;
         t = fmax(0.0, fmin(1.0, t));
         double d = hypot(p_enu_m[0] - a[0] - t * de, p_enu_m[1] - a[1] - t * dn);
-        if (d < best) best = d, h = heading_of(de, dn);
+        if (d < best) best = d, best_i = i;
     }
-    if (heading_deg) *heading_deg = h;
+    if (heading_deg) { // the nearest segment's, computed once (atan2 per segment was most of the cost)
+        const double *a = lane->p_enu_m[best_i > 0 ? best_i - 1 : 0], *b = lane->p_enu_m[best_i];
+        *heading_deg = best_i > 0 ? heading_of(b[0] - a[0], b[1] - a[1]) : NAN;
+    }
     return best;
 }
 

@@ -3,6 +3,7 @@
 #include "synth/rs_synth_camera.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 
 #include <mrcal/poseutils.h>
@@ -146,31 +147,119 @@ rs_status rs_synth_canvas_for_lens(rs_synth_canvas *canvas, const mrcal_lensmode
     return RS_OK;
 }
 
+// ---- the resampling map: a grid of unprojections, interpolated, every pixel checked ----
+
+// Catmull-Rom weights of the 4 nodes round a point at fraction t in [0, 1) of the cell between
+// nodes 1 and 2 (the cubic convolution of Keys, IEEE Trans. ASSP 29(6), 1981, a = -0.5).
+static void catmull_rom(double w[4], double t)
+{
+    w[0] = ((-0.5 * t + 1) * t - 0.5) * t;
+    w[1] = (1.5 * t - 2.5) * t * t + 1;
+    w[2] = ((-1.5 * t + 2) * t + 0.5) * t;
+    w[3] = (0.5 * t - 0.5) * t * t;
+}
+
+// Writes map pixel i from the direction (tx, ty, 1) in the camera frame (tx = x/z, ty = y/z).
+static void map_from_tangent(float *map, size_t i, const rs_synth_canvas *canvas, double tx, double ty)
+{
+    map[2 * i] = (float)(canvas->fxycxy[0] * tx + canvas->fxycxy[2]);
+    map[2 * i + 1] = (float)(canvas->fxycxy[1] * ty + canvas->fxycxy[3]);
+}
+
 rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
                               const double *intrinsics, int width, int height, rs_err *err)
 {
     *map_xy = NULL;
-    const size_t Npx = (size_t)width * (size_t)height;
+    if (width <= 0 || height <= 0)
+        return rs_err_set(err, RS_ERR_INVALID, "canvas map: image size must be > 0 (got %dx%d)", width, height);
+    const int S = RS_SYNTH_CANVAS_MAP_STEP;
+    // nodes at pixel (a - 1) S, a = 0 .. Nx - 1 (one before the image, two past its last cell)
+    const int Nx = (width - 1) / S + 4, Ny = (height - 1) / S + 4;
+    const size_t Npx = (size_t)width * (size_t)height, Nnodes = (size_t)Nx * (size_t)Ny;
     float *map = malloc(Npx * 2 * sizeof(float));
-    mrcal_point2_t *q = malloc(Npx * sizeof(*q));
-    mrcal_point3_t *v = malloc(Npx * sizeof(*v));
+    mrcal_point2_t *q = malloc((Nnodes > (size_t)width ? Nnodes : (size_t)width) * sizeof(*q));
+    mrcal_point3_t *v = malloc((Nnodes > (size_t)width ? Nnodes : (size_t)width) * sizeof(*v));
+    double *t_node = malloc(Nnodes * 2 * sizeof(double));    // (Ny, Nx, 2) tx, ty; NaN: no direction
+    double *t_row = malloc((size_t)Nx * 2 * sizeof(double)); // (Nx, 2) one row interpolated in y
+    double *w_col = malloc((size_t)S * 4 * sizeof(double));  // (S, 4) Catmull-Rom weights per x mod S
+    size_t *redo = NULL, Nredo = 0;                          // the pixels unprojected on their own
     rs_status st = RS_OK;
-    if (!map || !q || !v) {
+    if (!map || !q || !v || !t_node || !t_row || !w_col) {
         st = rs_err_set(err, RS_ERR_NOMEM, "canvas map: out of memory");
         goto done;
     }
-    for (int y = 0; y < height; y++)
-        for (int x = 0; x < width; x++) q[(size_t)y * width + x] = (mrcal_point2_t){.x = x, .y = y};
-    if (!mrcal_unproject(v, q, (int)Npx, lensmodel, intrinsics)) {
+    // 1. the nodes, unprojected by mrcal
+    for (int b = 0; b < Ny; b++)
+        for (int a = 0; a < Nx; a++)
+            q[(size_t)b * Nx + a] = (mrcal_point2_t){.x = (double)(a - 1) * S, .y = (double)(b - 1) * S};
+    if (!mrcal_unproject(v, q, (int)Nnodes, lensmodel, intrinsics)) {
         st = rs_err_set(err, RS_ERR_EXTERNAL, "canvas map: mrcal_unproject failed");
         goto done;
     }
-    for (size_t i = 0; i < Npx; i++) {
-        if (v[i].z > 0 && isfinite(v[i].x) && isfinite(v[i].y)) {
-            map[2 * i] = (float)(canvas->fxycxy[0] * v[i].x / v[i].z + canvas->fxycxy[2]);
-            map[2 * i + 1] = (float)(canvas->fxycxy[1] * v[i].y / v[i].z + canvas->fxycxy[3]);
-        } else {
-            map[2 * i] = map[2 * i + 1] = -1e6f; // outside: remap gives 0
+    for (size_t i = 0; i < Nnodes; i++) {
+        const bool ok = v[i].z > 0 && isfinite(v[i].x) && isfinite(v[i].y) && isfinite(v[i].z);
+        t_node[2 * i] = ok ? v[i].x / v[i].z : NAN;
+        t_node[2 * i + 1] = ok ? v[i].y / v[i].z : NAN;
+    }
+    for (int r = 0; r < S; r++) catmull_rom(&w_col[4 * r], (double)r / S);
+    // 2. every pixel interpolated (separable: along y into t_row, then along x), then checked
+    // by projecting its direction back through the lens (closed form, cheap)
+    for (int y = 0; y < height; y++) {
+        const int j = y / S;
+        double wy[4];
+        catmull_rom(wy, (double)(y - j * S) / S);
+        for (int a = 0; a < Nx; a++)
+            for (int c = 0; c < 2; c++) {
+                double s = 0;
+                for (int b = 0; b < 4; b++) s += wy[b] * t_node[2 * ((size_t)(j + b) * Nx + a) + c];
+                t_row[2 * a + c] = s; // NaN when a node is
+            }
+        for (int x = 0; x < width; x++) {
+            const int i = x / S;
+            const double *wx = &w_col[4 * (x - i * S)];
+            double t[2];
+            for (int c = 0; c < 2; c++)
+                t[c] = wx[0] * t_row[2 * i + c] + wx[1] * t_row[2 * (i + 1) + c] + wx[2] * t_row[2 * (i + 2) + c] +
+                       wx[3] * t_row[2 * (i + 3) + c];
+            v[x] = (mrcal_point3_t){.x = isfinite(t[0]) ? t[0] : 0, .y = isfinite(t[1]) ? t[1] : 0, .z = 1};
+            map_from_tangent(map, (size_t)y * width + x, canvas, t[0], t[1]);
+        }
+        if (!mrcal_project(q, NULL, NULL, v, width, lensmodel, intrinsics)) {
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "canvas map: mrcal_project failed");
+            goto done;
+        }
+        for (int x = 0; x < width; x++) {
+            const size_t i = (size_t)y * width + x;
+            const double e = hypot(q[x].x - x, q[x].y - y);
+            if (isfinite(map[2 * i]) && isfinite(map[2 * i + 1]) && e <= RS_SYNTH_CANVAS_MAP_CHECK_PX) continue;
+            if (Nredo % 4096 == 0) {
+                size_t *grown = realloc(redo, (Nredo + 4096) * sizeof(*redo));
+                if (!grown) {
+                    st = rs_err_set(err, RS_ERR_NOMEM, "canvas map: out of memory");
+                    goto done;
+                }
+                redo = grown;
+            }
+            redo[Nredo++] = i;
+        }
+    }
+    // 3. the pixels that failed the check: unprojected on their own, as mrcal does
+    for (size_t k0 = 0; k0 < Nredo; k0 += (size_t)width) {
+        const int n = (int)(Nredo - k0 < (size_t)width ? Nredo - k0 : (size_t)width);
+        for (int k = 0; k < n; k++) {
+            const size_t i = redo[k0 + k];
+            q[k] = (mrcal_point2_t){.x = (double)(i % (size_t)width), .y = (double)(i / (size_t)width)};
+        }
+        if (!mrcal_unproject(v, q, n, lensmodel, intrinsics)) {
+            st = rs_err_set(err, RS_ERR_EXTERNAL, "canvas map: mrcal_unproject failed");
+            goto done;
+        }
+        for (int k = 0; k < n; k++) {
+            const size_t i = redo[k0 + k];
+            if (v[k].z > 0 && isfinite(v[k].x) && isfinite(v[k].y))
+                map_from_tangent(map, i, canvas, v[k].x / v[k].z, v[k].y / v[k].z);
+            else
+                map[2 * i] = map[2 * i + 1] = -1e6f; // outside: remap gives 0
         }
     }
     *map_xy = map;
@@ -179,5 +268,9 @@ done:
     free(map);
     free(q);
     free(v);
+    free(t_node);
+    free(t_row);
+    free(w_col);
+    free(redo);
     return st;
 }

@@ -77,10 +77,27 @@ rs_status rs_synth_canvas_for_lens( // out
     const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width, int height, double scale, rs_err *err);
 
 // The resampling map: for every pixel (u, v) of the real image, the canvas pixel that sees the
-// same direction: mrcal_unproject through the real lens, then the canvas pinhole. Coordinates
-// follow mrcal/OpenCV (pixel (0,0) = centre of the top-left pixel).
+// same direction: its unprojection through the real lens, then the canvas pinhole. Coordinates
+// follow mrcal/OpenCV (pixel (0,0) = centre of the top-left pixel); a pixel without a direction
+// in front of the camera gets (-1e6, -1e6) (remap gives 0 there).
+// Method (issue 18's cost: mrcal_unproject is iterative, 0.28 s for every pixel of 720x480):
+// mrcal_unproject on a grid of nodes every RS_SYNTH_CANVAS_MAP_STEP pixels (from one step
+// before the image to two past it), the direction's tangent-plane coordinates (x/z, y/z)
+// interpolated between them by Catmull-Rom cubic convolution (Keys 1981), separably; then every
+// pixel is checked by projecting its direction back through the lens (mrcal_project, closed
+// form): one that lands more than RS_SYNTH_CANVAS_MAP_CHECK_PX from itself, or whose nodes have
+// no direction, is unprojected on its own by mrcal_unproject.
+// Accuracy: every pixel reprojects within RS_SYNTH_CANVAS_MAP_CHECK_PX (1e-4 px) of itself;
+// against mrcal_unproject pixel by pixel, the map differs by at most 6e-5 canvas px over the
+// demo site's four OPENCV8 cameras at 720x480 (float rounding included), and by less than
+// 0.01 px for the lenses of tests/synth/test_canvas_map.c, which asserts it.
+// Cost: about 0.012 s at 720x480 (5,859 unprojections, 345,600 projections; 0.28 s before).
 // out: *map_xy, (height, width, 2) float, owned by the caller (free())
-rs_status rs_synth_canvas_map( // out
+// in:  canvas (rs_synth_canvas_for_lens), the real lens; width, height > 0
+// Returns RS_ERR_EXTERNAL when mrcal cannot project or unproject with this lens, RS_ERR_NOMEM.
+#define RS_SYNTH_CANVAS_MAP_STEP     8    // pixels between the grid's nodes
+#define RS_SYNTH_CANVAS_MAP_CHECK_PX 1e-4 // a pixel's direction must reproject this close, pixels
+rs_status rs_synth_canvas_map(            // out
     float **map_xy,
     // in
     const rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel, const double *intrinsics, int width, int height,

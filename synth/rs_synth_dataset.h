@@ -173,8 +173,8 @@ typedef struct {
 // length, width and height. Reads nothing else and writes nothing (the manifest's hash goes
 // through a temporary file in $TMPDIR, removed).
 // Errors name the file and the field: RS_ERR_NOT_FOUND "DIR/frames.json: missing (...)",
-// RS_ERR_INVALID "DIR/frames.json: no frames", RS_ERR_PARSE "DIR/frame_000003.json:7: not valid
-// JSON", RS_ERR_INVALID "DIR/frame_000003.json: [2].length: missing ...", RS_ERR_IO.
+// RS_ERR_INVALID "DIR/frames.json: no frames", RS_ERR_PARSE "DIR/frame_000003.json:7: JSON syntax
+// error near ...", RS_ERR_INVALID "DIR/frame_000003.json: [2].length: missing ...", RS_ERR_IO.
 rs_status rs_synth_dataset_traffic_frames_check( // out
     rs_synth_traffic_frames_info *info,
     // in

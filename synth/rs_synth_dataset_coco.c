@@ -1,8 +1,9 @@
 // rs_synth_dataset_coco.c -- the COCO files of `roadside synth` (synth/rs_synth_dataset.h):
-// an accumulator of images and their annotations read from COCO files, assembling DATASET's
-// annotations/instances_<split>.json from the finished images' parts/ files, and merging
-// datasets (shards) into one (rs_synth_dataset_merge), their images hard-linked. Called by
-// rs_synth_dataset.c (and the cli, for merge); calls core/ and cJSON.
+// one writer assembling a COCO file from others as a stream (an index of the images, memory
+// bounded by the largest source: issue 17), used for DATASET's annotations/instances_<split>.json
+// from the finished images' parts/ files, and by merge (rs_synth_dataset_merge.c); and the SUMO
+// frame an image's vehicles came from, added to its own COCO file. Called by rs_synth_dataset.c
+// and rs_synth_dataset_merge.c; calls core/ and cJSON.
 #include <dirent.h>
 #include <errno.h>
 #include <stdio.h>
@@ -14,140 +15,368 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "core/rs_json.h"
 #include "synth/internal/rs_synth_dataset_internal.h"
 #include "synth/rs_synth_fleet.h"
 
-// ---- COCO assembly (run and merge) ----
+// ---- the COCO writer (run and merge): an index, then the file written as a stream ----
+//
+// Assembling a COCO file from many (a run's parts/ files, one image each) or a few large ones
+// (merge's shards) in memory bounded by the largest source file, not their sum:
+//  1. index: each source is parsed in turn and checked; per image the index keeps its sort key
+//     (file_name), where it lives (source, position, id there) and how many annotations name it;
+//     the document is freed before the next is read.
+//  2. the index is sorted by file name (ties: the order added), repeated names are dropped
+//     (the first added stays), images numbered 1.. and annotations 1.. in that order.
+//  3. each source is parsed again, once: its kept images and their annotations are printed
+//     with their new ids (one object a line) into a scratch file (unlinked at once, beside the
+//     output), each image's text remembered as (offset, length).
+//  4. the output is written under a temporary name: info and licenses (from the first source
+//     having them), "images" and "annotations" copied from the scratch file in sorted order,
+//     "categories"; then renamed into place.
+// The values are those of one cJSON document holding everything (as before issue 17's fix):
+// only the whitespace differs.
 
-typedef struct {
-    const char *file_name; // borrowed from image
-    cJSON *image;          // owned
-    cJSON *anns;           // owned array
-} coco_entry;
-
-typedef struct {
-    coco_entry *e;
-    int N, cap;
-    cJSON *categories; // owned, from the first document
-    cJSON *info;       // owned, from the first document (may stay NULL)
-    cJSON *licenses;   // owned, likewise
-} coco_acc;
-
-static void coco_acc_free(coco_acc *a)
+static void coco_index_truncate(rs_synth_dataset__coco_index *x, int first_ref, int first_src)
 {
-    for (int i = 0; i < a->N; i++) {
-        cJSON_Delete(a->e[i].image);
-        cJSON_Delete(a->e[i].anns);
-    }
-    free(a->e);
-    cJSON_Delete(a->categories);
-    cJSON_Delete(a->info);
-    cJSON_Delete(a->licenses);
-    memset(a, 0, sizeof(*a));
+    for (int i = first_ref; i < x->N; i++) free(x->r[i].file_name);
+    if (first_ref < x->N) x->N = first_ref;
+    for (int s = first_src; s < x->Nsrc; s++) free(x->src[s]);
+    if (first_src < x->Nsrc) x->Nsrc = first_src;
 }
 
-// Adds the images (with their annotations) of a COCO file to the accumulator.
-static rs_status coco_add_file(coco_acc *a, const char *path, rs_err *err)
+void rs_synth_dataset__coco_index_free(rs_synth_dataset__coco_index *x)
+{
+    coco_index_truncate(x, 0, 0);
+    free(x->r);
+    free(x->src);
+    cJSON_Delete(x->info);
+    cJSON_Delete(x->licenses);
+    cJSON_Delete(x->categories);
+    memset(x, 0, sizeof(*x));
+}
+
+// Reads and parses a COCO file: images and annotations must be lists. Errors name the file.
+static rs_status coco_parse(cJSON **doc, const cJSON **images, const cJSON **anns, const char *path, rs_err *err)
 {
     char *text = NULL;
+    *doc = NULL;
     rs_status st = rs_io_read_file(&text, NULL, path, err);
     if (st) return st;
-    cJSON *doc = cJSON_Parse(text);
+    *doc = cJSON_Parse(text);
     free(text);
-    const cJSON *images = cJSON_GetObjectItemCaseSensitive(doc, "images");
-    const cJSON *anns = cJSON_GetObjectItemCaseSensitive(doc, "annotations"), *im, *an;
-    if (!cJSON_IsArray(images) || !cJSON_IsArray(anns)) {
-        cJSON_Delete(doc);
-        return rs_err_set(err, RS_ERR_PARSE, "%s: not a COCO file (images, annotations)", path);
+    *images = cJSON_GetObjectItemCaseSensitive(*doc, "images");
+    *anns = cJSON_GetObjectItemCaseSensitive(*doc, "annotations");
+    if (cJSON_IsArray(*images) && cJSON_IsArray(*anns)) return RS_OK;
+    cJSON_Delete(*doc);
+    *doc = NULL;
+    return rs_err_set(err, RS_ERR_PARSE, "%s: not a COCO file (images, annotations)", path);
+}
+
+// (image id, index of its ref) of one source, sorted by id: annotations find their image.
+typedef struct {
+    double id;
+    int ref;
+} coco_id_ref;
+
+static int id_ref_cmp(const void *a, const void *b)
+{
+    const coco_id_ref *x = a, *y = b;
+    return x->id < y->id ? -1 : x->id > y->id ? 1 : x->ref - y->ref;
+}
+
+// The first of the n entries of t whose id is `id`, or n.
+static int id_ref_find(const coco_id_ref *t, int n, double id)
+{
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        const int mid = lo + (hi - lo) / 2;
+        if (t[mid].id < id)
+            lo = mid + 1;
+        else
+            hi = mid;
     }
-    if (!a->categories) a->categories = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "categories"), 1);
-    if (!a->info) a->info = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "info"), 1);
-    if (!a->licenses) a->licenses = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "licenses"), 1);
+    return lo < n && t[lo].id == id ? lo : n;
+}
+
+// Indexes the images of the COCO file at `path` (a new source), each numbered k (k < 0: its
+// "index" member, -1 when absent). The file is parsed, indexed and freed. On error nothing of
+// it stays in the index; errors name the file.
+rs_status rs_synth_dataset__coco_index_add(rs_synth_dataset__coco_index *x, const char *path, int k,
+                                           rs_synth_dataset__coco_each_image each, void *ctx, rs_err *err)
+{
+    cJSON *doc = NULL;
+    const cJSON *images, *anns, *im, *an;
+    rs_status st = coco_parse(&doc, &images, &anns, path, err);
+    if (st) return st;
+    const int first_ref = x->N, first_src = x->Nsrc;
+    if (!x->categories) x->categories = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "categories"), 1);
+    if (!x->info) x->info = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "info"), 1);
+    if (!x->licenses) x->licenses = cJSON_Duplicate(cJSON_GetObjectItemCaseSensitive(doc, "licenses"), 1);
+    if (x->Nsrc == x->cap_src) {
+        const int cap = x->cap_src ? 2 * x->cap_src : 64;
+        char **s = realloc(x->src, (size_t)cap * sizeof(*s));
+        if (s) x->src = s, x->cap_src = cap;
+    }
+    if (x->Nsrc == x->cap_src || !(x->src[x->Nsrc] = strdup(path)))
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    else
+        x->Nsrc++;
+    int pos = 0;
     cJSON_ArrayForEach(im, images)
     {
+        if (st) break;
         const cJSON *id = cJSON_GetObjectItemCaseSensitive(im, "id");
         const cJSON *fn = cJSON_GetObjectItemCaseSensitive(im, "file_name");
+        const cJSON *jk = cJSON_GetObjectItemCaseSensitive(im, "index");
         if (!cJSON_IsNumber(id) || !cJSON_IsString(fn)) {
-            cJSON_Delete(doc);
-            return rs_err_set(err, RS_ERR_PARSE, "%s: images[]: id or file_name missing", path);
+            st = rs_err_set(err, RS_ERR_PARSE, "%s: images[]: id or file_name missing", path);
+            break;
         }
-        if (a->N == a->cap) {
-            int cap = a->cap ? 2 * a->cap : 64;
-            coco_entry *e = realloc(a->e, (size_t)cap * sizeof(*e));
-            if (!e) {
-                cJSON_Delete(doc);
-                return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (x->N == x->cap) {
+            const int cap = x->cap ? 2 * x->cap : 64;
+            rs_synth_dataset__coco_ref *r = realloc(x->r, (size_t)cap * sizeof(*r));
+            if (!r) {
+                st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+                break;
             }
-            a->e = e;
-            a->cap = cap;
+            x->r = r;
+            x->cap = cap;
         }
-        coco_entry *e = &a->e[a->N++];
-        e->image = cJSON_Duplicate(im, 1);
-        e->anns = cJSON_CreateArray();
-        e->file_name = cJSON_GetObjectItemCaseSensitive(e->image, "file_name")->valuestring;
-        cJSON_ArrayForEach(an, anns)
-        {
-            const cJSON *iid = cJSON_GetObjectItemCaseSensitive(an, "image_id");
-            if (cJSON_IsNumber(iid) && iid->valuedouble == id->valuedouble)
-                cJSON_AddItemToArray(e->anns, cJSON_Duplicate(an, 1));
+        rs_synth_dataset__coco_ref *r = &x->r[x->N];
+        *r = (rs_synth_dataset__coco_ref){.file_name = strdup(fn->valuestring),
+                                          .src = first_src,
+                                          .pos = pos++,
+                                          .seq = x->N,
+                                          .id = id->valuedouble,
+                                          .k = k >= 0               ? k
+                                               : cJSON_IsNumber(jk) ? jk->valueint
+                                                                    : -1};
+        if (!r->file_name) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
         }
+        x->N++;
+        if (each) st = each(ctx, im, path, err);
     }
+    // each annotation counts for every image of this file with its image_id
+    const int n = x->N - first_ref;
+    coco_id_ref *t = st || n == 0 ? NULL : malloc((size_t)n * sizeof(*t));
+    if (!st && n > 0 && !t) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; t && i < n; i++) t[i] = (coco_id_ref){x->r[first_ref + i].id, first_ref + i};
+    if (t) qsort(t, (size_t)n, sizeof(*t), id_ref_cmp);
+    cJSON_ArrayForEach(an, anns)
+    {
+        const cJSON *iid = cJSON_GetObjectItemCaseSensitive(an, "image_id");
+        if (!t || !cJSON_IsNumber(iid)) continue;
+        for (int j = id_ref_find(t, n, iid->valuedouble); j < n && t[j].id == iid->valuedouble; j++)
+            x->r[t[j].ref].Nanns++;
+    }
+    free(t);
     cJSON_Delete(doc);
+    if (st) coco_index_truncate(x, first_ref, first_src);
+    return st;
+}
+
+static int ref_name_cmp(const void *a, const void *b)
+{
+    const rs_synth_dataset__coco_ref *x = a, *y = b;
+    const int c = strcmp(x->file_name, y->file_name);
+    return c ? c : x->src != y->src ? x->src - y->src : x->pos - y->pos;
+}
+
+// Appends cJSON's text of `item` (with id and, for an annotation, image_id replaced), then the
+// 4 bytes ",\n\t\t", to the scratch file f. *off, *len: where it went; *len grows (the texts of
+// one image's annotations follow each other).
+static rs_status scratch_put(FILE *f, const cJSON *item, int id, int image_id, long *off, size_t *len, rs_err *err)
+{
+    cJSON *c = cJSON_Duplicate(item, 1);
+    if (c) {
+        cJSON_ReplaceItemInObjectCaseSensitive(c, "id", cJSON_CreateNumber(id));
+        if (image_id > 0) cJSON_ReplaceItemInObjectCaseSensitive(c, "image_id", cJSON_CreateNumber(image_id));
+    }
+    char *text = c ? cJSON_PrintUnformatted(c) : NULL;
+    cJSON_Delete(c);
+    if (!text) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    const size_t n = strlen(text);
+    const long at = ftell(f);
+    const bool ok = at >= 0 && fwrite(text, 1, n, f) == n && fputs(",\n\t\t", f) >= 0;
+    free(text);
+    if (!ok) return rs_err_set(err, RS_ERR_IO, "a COCO file's scratch file: write failed: %s", strerror(errno));
+    if (*len == 0) *off = at;
+    *len += n + 4;
     return RS_OK;
 }
 
-static int entry_cmp(const void *a, const void *b)
+// Step 3: every source parsed once more, its kept images and their annotations printed into f.
+// order (N,): the refs sorted by (src, pos).
+static rs_status render_sources(rs_synth_dataset__coco_index *x, const int *order, FILE *f, rs_err *err)
 {
-    return strcmp(((const coco_entry *)a)->file_name, ((const coco_entry *)b)->file_name);
+    rs_status st = RS_OK;
+    for (int o = 0; o < x->N && !st;) {
+        const int s = x->r[order[o]].src;
+        int end = o;
+        while (end < x->N && x->r[order[end]].src == s) end++;
+        cJSON *doc = NULL;
+        const cJSON *images, *anns, *im, *an;
+        if ((st = coco_parse(&doc, &images, &anns, x->src[s], err))) break;
+        // the images, in the file's order; the annotations of each, in the file's order
+        const int n = end - o;
+        coco_id_ref *t = malloc((size_t)n * sizeof(*t));
+        int *fill = calloc((size_t)n, sizeof(int)), total = 0;
+        int *start = malloc((size_t)n * sizeof(int));
+        if (!t || !fill || !start) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        int i = 0, pos = 0;
+        cJSON_ArrayForEach(im, images)
+        {
+            if (st || i >= n) break;
+            rs_synth_dataset__coco_ref *r = &x->r[order[o + i]];
+            if (pos++ != r->pos) continue;
+            const cJSON *id = cJSON_GetObjectItemCaseSensitive(im, "id");
+            if (!cJSON_IsNumber(id) || id->valuedouble != r->id) {
+                st = rs_err_set(err, RS_ERR_PARSE, "%s: changed while the COCO file was assembled", x->src[s]);
+                break;
+            }
+            t[i] = (coco_id_ref){r->id, i};
+            start[i] = total;
+            total += r->dropped ? 0 : r->Nanns;
+            if (!r->dropped) st = scratch_put(f, im, r->new_id, 0, &r->img_off, &r->img_len, err);
+            i++;
+        }
+        if (!st && i != n)
+            st = rs_err_set(err, RS_ERR_PARSE, "%s: changed while the COCO file was assembled", x->src[s]);
+        const cJSON **mine = st ? NULL : malloc((size_t)(total ? total : 1) * sizeof(*mine));
+        if (!st && !mine) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!st) qsort(t, (size_t)n, sizeof(*t), id_ref_cmp);
+        cJSON_ArrayForEach(an, anns)
+        {
+            const cJSON *iid = cJSON_GetObjectItemCaseSensitive(an, "image_id");
+            if (st || !cJSON_IsNumber(iid)) continue;
+            for (int j = id_ref_find(t, n, iid->valuedouble); j < n && t[j].id == iid->valuedouble; j++) {
+                const rs_synth_dataset__coco_ref *r = &x->r[order[o + t[j].ref]];
+                if (r->dropped) continue;
+                if (fill[t[j].ref] >= r->Nanns) {
+                    st = rs_err_set(err, RS_ERR_PARSE, "%s: changed while the COCO file was assembled", x->src[s]);
+                    break;
+                }
+                mine[start[t[j].ref] + fill[t[j].ref]++] = an;
+            }
+        }
+        for (int j = 0; j < n && !st; j++) {
+            rs_synth_dataset__coco_ref *r = &x->r[order[o + j]];
+            for (int a = 0; a < (r->dropped ? 0 : r->Nanns) && !st; a++)
+                st = scratch_put(f, mine[start[j] + a], r->ann_first + a, r->new_id, &r->ann_off, &r->ann_len, err);
+        }
+        free(mine);
+        free(t);
+        free(fill);
+        free(start);
+        cJSON_Delete(doc);
+        o = end;
+    }
+    return st;
 }
 
-// Sorts by file name, drops repeated names, renumbers, writes `path`. *Nimages, *Nanns out.
-static rs_status coco_write(coco_acc *a, const char *path, int *Nimages, int *Nanns, rs_err *err)
+// Copies len bytes at off of the scratch file (fd) to out.
+static bool copy_range(FILE *out, int fd, long off, size_t len, char *buf, size_t nbuf)
 {
-    qsort(a->e, (size_t)a->N, sizeof(coco_entry), entry_cmp);
-    cJSON *doc = cJSON_CreateObject();
-    if (a->info) cJSON_AddItemToObject(doc, "info", cJSON_Duplicate(a->info, 1));
-    if (a->licenses) cJSON_AddItemToObject(doc, "licenses", cJSON_Duplicate(a->licenses, 1));
-    cJSON *images = cJSON_AddArrayToObject(doc, "images");
-    cJSON *anns = cJSON_AddArrayToObject(doc, "annotations");
-    cJSON_AddItemToObject(doc, "categories", a->categories ? cJSON_Duplicate(a->categories, 1) : cJSON_CreateArray());
+    while (len > 0) {
+        const ssize_t got = pread(fd, buf, len < nbuf ? len : nbuf, (off_t)off);
+        if (got <= 0 || fwrite(buf, 1, (size_t)got, out) != (size_t)got) return false;
+        off += got;
+        len -= (size_t)got;
+    }
+    return true;
+}
+
+// Writes the value of `item` (NULL: `fallback`, or nothing) as member `name`.
+static bool put_member(FILE *f, const char *name, const cJSON *item, const char *fallback, bool last)
+{
+    if (!item && !fallback) return true;
+    char *text = item ? cJSON_PrintUnformatted(item) : NULL;
+    if (item && !text) return false;
+    const bool ok = fprintf(f, "\t\"%s\": %s%s\n", name, text ? text : fallback, last ? "" : ",") > 0;
+    free(text);
+    return ok;
+}
+
+// Steps 2-4: sorts the index, writes `path` atomically. *Nimages, *Nanns grow by what it holds
+// (NULL: not counted); with ks (x->N,) the kept images' k (>= 0) in file-name order, *Nks their
+// count. The index is left sorted, repeated names marked dropped.
+rs_status rs_synth_dataset__coco_index_write(rs_synth_dataset__coco_index *x, const char *path, int *Nimages,
+                                             int *Nanns, int *ks, int *Nks, rs_err *err)
+{
+    if (x->N > 0) qsort(x->r, (size_t)x->N, sizeof(rs_synth_dataset__coco_ref), ref_name_cmp);
     int ni = 0, na = 0;
-    for (int i = 0; i < a->N; i++) {
-        if (i > 0 && strcmp(a->e[i].file_name, a->e[i - 1].file_name) == 0) continue;
-        ni++;
-        cJSON *im = cJSON_Duplicate(a->e[i].image, 1);
-        cJSON_ReplaceItemInObjectCaseSensitive(im, "id", cJSON_CreateNumber(ni));
-        cJSON_AddItemToArray(images, im);
-        cJSON *an;
-        cJSON_ArrayForEach(an, a->e[i].anns)
-        {
-            cJSON *x = cJSON_Duplicate(an, 1);
-            cJSON_ReplaceItemInObjectCaseSensitive(x, "id", cJSON_CreateNumber(++na));
-            cJSON_ReplaceItemInObjectCaseSensitive(x, "image_id", cJSON_CreateNumber(ni));
-            cJSON_AddItemToArray(anns, x);
+    for (int i = 0; i < x->N; i++) {
+        rs_synth_dataset__coco_ref *r = &x->r[i];
+        r->dropped = i > 0 && strcmp(r->file_name, x->r[i - 1].file_name) == 0;
+        if (r->dropped) continue;
+        r->new_id = ++ni;
+        r->ann_first = na + 1;
+        na += r->Nanns;
+        if (ks && r->k >= 0) ks[(*Nks)++] = r->k;
+    }
+    // the scratch file: beside the output, unlinked at once (nothing is left behind)
+    const size_t plen = strlen(path);
+    char *scratch = malloc(plen + sizeof(".scratch.XXXXXX"));
+    int *order = malloc((size_t)(x->N ? x->N : 1) * sizeof(int));
+    char *buf = malloc(1 << 16);
+    FILE *f = NULL;
+    rs_status st = scratch && order && buf ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) {
+        memcpy(scratch, path, plen);
+        memcpy(scratch + plen, ".scratch.XXXXXX", sizeof(".scratch.XXXXXX"));
+        const int fd = mkstemp(scratch);
+        if (fd >= 0) unlink(scratch);
+        if (fd < 0 || !(f = fdopen(fd, "w+b"))) {
+            if (fd >= 0) close(fd);
+            st = rs_err_set(err, RS_ERR_IO, "%s: cannot create its scratch file: %s", path, strerror(errno));
         }
     }
-    char *text = cJSON_Print(doc);
-    cJSON_Delete(doc);
-    if (!text) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    rs_status st = rs_io_write_file(path, text, strlen(text), err);
-    free(text);
-    if (Nimages) *Nimages += ni;
-    if (Nanns) *Nanns += na;
+    // by (src, pos), the order the refs were added in: each source parsed once
+    for (int i = 0; !st && i < x->N; i++) order[x->r[i].seq] = i;
+    if (!st) st = render_sources(x, order, f, err);
+    if (!st && fflush(f) != 0)
+        st = rs_err_set(err, RS_ERR_IO, "%s: its scratch file: write failed: %s", path, strerror(errno));
+    rs_io_atomic a = {0};
+    if (!st) st = rs_io_atomic_open(&a, path, err);
+    if (!st) {
+        const int fd = fileno(f);
+        bool ok = fputs("{\n", a.f) >= 0 && put_member(a.f, "info", x->info, NULL, false) &&
+                  put_member(a.f, "licenses", x->licenses, NULL, false);
+        for (int pass = 0; pass < 2 && ok; pass++) {
+            ok = fprintf(a.f, "\t\"%s\": [", pass == 0 ? "images" : "annotations") > 0;
+            bool any = false;
+            for (int i = 0; i < x->N && ok; i++) {
+                const rs_synth_dataset__coco_ref *r = &x->r[i];
+                const long off = pass == 0 ? r->img_off : r->ann_off;
+                size_t len = pass == 0 ? r->img_len : r->ann_len;
+                if (r->dropped || len == 0) continue;
+                // the separator after the last item of the section is left out
+                ok = (any || fputs("\n\t\t", a.f) >= 0) && (!any || fputs(",\n\t\t", a.f) >= 0) &&
+                     copy_range(a.f, fd, off, len - 4, buf, 1 << 16);
+                any = true;
+            }
+            ok = ok && fputs(any ? "\n\t],\n" : "],\n", a.f) >= 0;
+        }
+        ok = ok && put_member(a.f, "categories", x->categories, "[]", true) && fputs("}\n", a.f) >= 0;
+        if (!ok) {
+            rs_io_atomic_abort(&a);
+            st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+        } else
+            st = rs_io_atomic_commit(&a, err);
+    }
+    if (f) fclose(f);
+    free(scratch);
+    free(order);
+    free(buf);
+    if (!st && Nimages) *Nimages += ni;
+    if (!st && Nanns) *Nanns += na;
     return st;
 }
 
 // ---- assembling DATASET's COCO file ----
-
-// Drops the entries from `first` on (those of a file left out).
-static void coco_acc_truncate(coco_acc *a, int first)
-{
-    for (int i = first; i < a->N; i++) {
-        cJSON_Delete(a->e[i].image);
-        cJSON_Delete(a->e[i].anns);
-    }
-    if (first < a->N) a->N = first;
-}
 
 // Leaves a part file out of the COCO file: counts it, and tells why.
 static void leave_out(const rs_synth_dataset_options *opt, const char *why, int *Nleft_out)
@@ -160,19 +389,21 @@ static void leave_out(const rs_synth_dataset_options *opt, const char *why, int 
     }
 }
 
-// Adds a parts/ file unless it is not a COCO file or lists an image missing from split_dir:
-// then it is left out, with a notice. Errors: RS_ERR_NOMEM only.
-static rs_status add_part(coco_acc *a, const char *part, const char *split_dir, const rs_synth_dataset_options *opt,
-                          int *Nleft_out, rs_err *err)
+// Indexes the parts/ file of image k unless it is not a COCO file or lists an image missing
+// from split_dir: then it is left out, with a notice. *added: it was indexed with an image.
+// Errors: RS_ERR_NOMEM only.
+static rs_status add_part(rs_synth_dataset__coco_index *x, bool *added, const char *part, int k, const char *split_dir,
+                          const rs_synth_dataset_options *opt, int *Nleft_out, rs_err *err)
 {
-    const int first = a->N;
+    const int first_ref = x->N, first_src = x->Nsrc;
     rs_err e = {RS_OK, ""};
     char why[1200] = "";
-    rs_status st = coco_add_file(a, part, &e);
+    *added = false;
+    rs_status st = rs_synth_dataset__coco_index_add(x, part, k, NULL, NULL, &e);
     if (st == RS_ERR_NOMEM) return rs_err_set(err, st, "%s", e.msg);
     if (st) snprintf(why, sizeof(why), "%s", e.msg);
-    for (int i = first; i < a->N && !why[0]; i++) {
-        char *image = rs_io_join(split_dir, a->e[i].file_name);
+    for (int i = first_ref; i < x->N && !why[0]; i++) {
+        char *image = rs_io_join(split_dir, x->r[i].file_name);
         struct stat sb;
         if (!image) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         const bool there = lstat(image, &sb) == 0;
@@ -181,16 +412,19 @@ static rs_status add_part(coco_acc *a, const char *part, const char *split_dir, 
                      !there ? "missing" : "not a regular file");
         free(image);
     }
-    if (!why[0]) return RS_OK;
-    coco_acc_truncate(a, first);
+    if (!why[0]) {
+        *added = x->N > first_ref;
+        return RS_OK;
+    }
+    coco_index_truncate(x, first_ref, first_src);
     leave_out(opt, why, Nleft_out);
     return RS_OK;
 }
 
 // YOLO's data.yaml (Ultralytics: path, train, val, names) and KITTI's ImageSets/<split>.txt
 // (numeric image names, one a line), written atomically beside the COCO files.
-static rs_status write_trainer_files(const char *out_dir, const char *const split[2], int *const *ks, const int *Nks,
-                                     rs_err *err)
+rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char *const split[2], int *const *ks,
+                                                const int *Nks, rs_err *err)
 {
     char *root = realpath(out_dir, NULL);
     if (!root) return rs_err_set(err, RS_ERR_IO, "%s: %s", out_dir, strerror(errno));
@@ -224,10 +458,45 @@ static rs_status write_trainer_files(const char *out_dir, const char *const spli
     return st;
 }
 
+// ---- the SUMO frame of an image (--traffic-frames) ----
+
+rs_status rs_synth_dataset__coco_set_traffic_frame(const char *part_path, const char *file, double time_s, int index,
+                                                   rs_err *err)
+{
+    char *text = NULL;
+    size_t len = 0;
+    cJSON *doc = NULL;
+    rs_status st = rs_io_read_file(&text, &len, part_path, err);
+    if (!st) st = rs_json_parse(&doc, text, 0, len, part_path, err);
+    free(text);
+    if (st) return st;
+    const cJSON *images = cJSON_GetObjectItemCaseSensitive(doc, "images");
+    cJSON *im;
+    if (!cJSON_IsArray(images)) st = rs_err_set(err, RS_ERR_PARSE, "%s: images: expected a list", part_path);
+    cJSON_ArrayForEach(im, images)
+    {
+        cJSON *f = cJSON_CreateObject();
+        if (!f || !cJSON_AddStringToObject(f, "file", file) || !cJSON_AddNumberToObject(f, "time_s", time_s) ||
+            !cJSON_AddNumberToObject(f, "index", index)) {
+            cJSON_Delete(f);
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        cJSON_DeleteItemFromObjectCaseSensitive(im, "traffic_frame");
+        cJSON_AddItemToObject(im, "traffic_frame", f);
+    }
+    char *out = st ? NULL : cJSON_PrintUnformatted(doc); // as rs_synth_labels_write_coco prints it
+    cJSON_Delete(doc);
+    if (!st && !out) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) st = rs_io_write_file(part_path, out, strlen(out), err);
+    free(out);
+    return st;
+}
+
 rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, int *Nleft_out, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
-    coco_acc a[2] = {{0}, {0}};
+    rs_synth_dataset__coco_index a[2] = {{0}, {0}};
     int *ks[2] = {NULL, NULL}, Nks[2] = {0, 0};
     rs_status st = RS_OK;
     char name[600], *path = NULL;
@@ -254,9 +523,9 @@ rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns,
         else if (!st && state == RS_SYNTH_DATASET__DAMAGED)
             leave_out(opt, why, Nleft_out);
         else if (!st && lstat(part, &sb) == 0) {
-            const int before = a[split].N, left = *Nleft_out;
-            st = add_part(&a[split], part, d->split_dir[split], opt, Nleft_out, err);
-            if (!st && *Nleft_out == left && a[split].N > before) ks[split][Nks[split]++] = k;
+            bool added = false;
+            st = add_part(&a[split], &added, part, k, d->split_dir[split], opt, Nleft_out, err);
+            if (!st && added) ks[split][Nks[split]++] = k;
         }
         free(part);
     }
@@ -265,330 +534,13 @@ rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns,
         snprintf(name, sizeof(name), "annotations/instances_%s.json", d->split[s]);
         free(path);
         if (!(path = rs_io_join(opt->out_dir, name))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        if (!st) st = coco_write(&a[s], path, NULL, Nanns, err);
+        if (!st) st = rs_synth_dataset__coco_index_write(&a[s], path, NULL, Nanns, NULL, NULL, err);
     }
-    if (!st) st = write_trainer_files(opt->out_dir, d->split, ks, Nks, err);
+    if (!st) st = rs_synth_dataset__write_trainer_files(opt->out_dir, d->split, ks, Nks, err);
     free(path);
-    coco_acc_free(&a[0]);
-    coco_acc_free(&a[1]);
+    rs_synth_dataset__coco_index_free(&a[0]);
+    rs_synth_dataset__coco_index_free(&a[1]);
     free(ks[0]);
     free(ks[1]);
-    return st;
-}
-
-// ---- merge ----
-
-// Hard-links src to dst (a copy when linking fails), unless dst exists.
-static rs_status link_or_copy(const char *src, const char *dst, rs_err *err)
-{
-    if (rs_synth_dataset__file_exists(dst) || link(src, dst) == 0) return RS_OK;
-    char *data = NULL;
-    size_t len = 0;
-    rs_status st = rs_io_read_file(&data, &len, src, err);
-    if (!st) st = rs_io_write_file(dst, data, len, err);
-    free(data);
-    return st;
-}
-
-// Adds the <split> of every instances_<split>.json in `adir` not yet in splits.
-static rs_status list_splits(const char *adir, char ***splits, int *Nsplits, rs_err *err)
-{
-    DIR *dir = opendir(adir);
-    if (!dir) return rs_err_set(err, RS_ERR_IO, "%s: %s (not a dataset?)", adir, strerror(errno));
-    struct dirent *de;
-    rs_status st = RS_OK;
-    while (!st && (de = readdir(dir))) {
-        const char *n = de->d_name;
-        const size_t len = strlen(n);
-        if (strncmp(n, "instances_", 10) != 0 || len <= 15 || strcmp(n + len - 5, ".json") != 0) continue;
-        char split[256];
-        snprintf(split, sizeof(split), "%.*s", (int)(len - 15), n + 10);
-        bool have = false;
-        for (int s = 0; s < *Nsplits; s++) have = have || strcmp((*splits)[s], split) == 0;
-        if (have) continue;
-        char **grown = realloc(*splits, (size_t)(*Nsplits + 1) * sizeof(char *));
-        if (!grown || !(grown[*Nsplits] = strdup(split))) {
-            if (grown) *splits = grown;
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            break;
-        }
-        *splits = grown;
-        (*Nsplits)++;
-    }
-    closedir(dir);
-    return st;
-}
-
-// ---- merge: one run's shards, every file checked ----
-
-// An input's run.json: its "run" (options) and the shards run into it; marks the images they
-// cover in covered (count,). Errors name the file.
-static rs_status read_run(cJSON **doc, const cJSON **run, unsigned char **covered, int *count, int *N_common,
-                          const char *in, rs_err *err)
-{
-    char *path = rs_io_join(in, "run.json"), *text = NULL;
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    rs_status st = RS_OK;
-    if (!rs_synth_dataset__file_exists(path))
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: %s: missing: %s is not a roadside synth dataset (shard)", path,
-                        in);
-    else if (!(st = rs_io_read_file(&text, NULL, path, err))) {
-        *doc = cJSON_Parse(text);
-        *run = cJSON_GetObjectItemCaseSensitive(*doc, "run");
-        const cJSON *jc = cJSON_GetObjectItemCaseSensitive(*run, "count"), *sh;
-        if (!cJSON_IsObject(*run) || !cJSON_IsNumber(jc) || jc->valueint < 1)
-            st = rs_err_set(err, RS_ERR_PARSE, "merge: %s: not a run record (run, count)", path);
-        else if (!*covered) {
-            *count = jc->valueint;
-            if (!(*covered = calloc((size_t)*count, 1))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        }
-        cJSON_ArrayForEach(sh, cJSON_GetObjectItemCaseSensitive(*doc, "shards"))
-        {
-            int I = 0, N = 0, used = 0;
-            if (st) break;
-            if (!cJSON_IsString(sh) || sscanf(sh->valuestring, "%d/%d%n", &I, &N, &used) != 2 ||
-                sh->valuestring[used] || N < 1 || I < 0 || I >= N) {
-                st = rs_err_set(err, RS_ERR_PARSE, "merge: %s: shards: not \"I/N\"", path);
-                break;
-            }
-            *N_common = *N_common == 0 ? N : *N_common == N ? N : -1;
-            for (int k = I; k < *count && jc->valueint == *count; k += N) (*covered)[k] = 1;
-        }
-    }
-    free(text);
-    free(path);
-    return st;
-}
-
-// The first member where two runs differ, for the message: "count 4 vs 8".
-static void run_difference(char *out, size_t n, const cJSON *a, const cJSON *b)
-{
-    snprintf(out, n, "options differ");
-    const cJSON *x;
-    cJSON_ArrayForEach(x, a)
-    {
-        const cJSON *y = cJSON_GetObjectItemCaseSensitive(b, x->string);
-        if (y && cJSON_Compare(x, y, 1)) continue;
-        char *sx = cJSON_PrintUnformatted(x), *sy = y ? cJSON_PrintUnformatted(y) : NULL;
-        snprintf(out, n, "%s %.200s vs %.200s", x->string, sx ? sx : "?", sy ? sy : "(absent)");
-        free(sx);
-        free(sy);
-        return;
-    }
-    cJSON_ArrayForEach(x, b) if (!cJSON_GetObjectItemCaseSensitive(a, x->string))
-    {
-        snprintf(out, n, "%s only in the second", x->string);
-        return;
-    }
-}
-
-// Width and height from a PNG's IHDR chunk; false when the file is not a PNG.
-static bool png_size(const char *path, int *w, int *h)
-{
-    unsigned char b[24];
-    FILE *f = fopen(path, "rb");
-    if (!f) return false;
-    const bool ok =
-        fread(b, 1, 24, f) == 24 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0 && memcmp(b + 12, "IHDR", 4) == 0;
-    fclose(f);
-    if (!ok) return false;
-    *w = (int)((unsigned)b[16] << 24 | (unsigned)b[17] << 16 | (unsigned)b[18] << 8 | b[19]);
-    *h = (int)((unsigned)b[20] << 24 | (unsigned)b[21] << 16 | (unsigned)b[22] << 8 | b[23]);
-    return true;
-}
-
-// A regular file (not a link) at in/rel; its copy (hard link) into out/rel.
-static rs_status take_file(const char *in, const char *out_dir, const char *rel, const char *listed_in, rs_err *err)
-{
-    char *src = rs_io_join(in, rel), *dst = rs_io_join(out_dir, rel);
-    char *folder = dst ? strdup(dst) : NULL;
-    rs_status st = RS_OK;
-    struct stat sb;
-    if (!src || !dst || !folder)
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    else if (lstat(src, &sb) != 0 || !S_ISREG(sb.st_mode))
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: %s: %s (listed in %s)", src,
-                        lstat(src, &sb) != 0 ? "missing" : "not a regular file", listed_in);
-    else {
-        *strrchr(folder, '/') = 0;
-        if (!(st = rs_io_mkdir_p(folder, err))) st = link_or_copy(src, dst, err);
-    }
-    free(src);
-    free(dst);
-    free(folder);
-    return st;
-}
-
-// Every file of one image of an input (COCO entry e of split), checked and linked into OUT.
-static rs_status take_image(const char *in, const char *out_dir, const char *split, const coco_entry *e,
-                            const char *listed_in, rs_err *err)
-{
-    char rel[1200];
-    const char *fn = e->file_name;
-    const cJSON *jw = cJSON_GetObjectItemCaseSensitive(e->image, "width");
-    const cJSON *jh = cJSON_GetObjectItemCaseSensitive(e->image, "height");
-    const cJSON *jk = cJSON_GetObjectItemCaseSensitive(e->image, "index");
-    const char *dot = strrchr(fn, '.');
-    const int stem = dot ? (int)(dot - fn) : (int)strlen(fn);
-    snprintf(rel, sizeof(rel), "%s/%s", split, fn);
-    char *src = rs_io_join(in, rel);
-    int w = 0, h = 0;
-    if (!src) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    const bool png = png_size(src, &w, &h);
-    rs_status st = RS_OK;
-    if (!png)
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: %s: missing or not a PNG (listed in %s)", src, listed_in);
-    else if (!cJSON_IsNumber(jw) || !cJSON_IsNumber(jh) || w != jw->valueint || h != jh->valueint)
-        st = rs_err_set(err, RS_ERR_INVALID, "merge: %s: %dx%d pixels, %s says otherwise", src, w, h, listed_in);
-    free(src);
-    if (st || (st = take_file(in, out_dir, rel, listed_in, err))) return st;
-    const char *const fmt[2] = {"images/%s/%s", "labels/%s/%.*s.txt"};
-    snprintf(rel, sizeof(rel), fmt[0], split, fn);
-    if ((st = take_file(in, out_dir, rel, listed_in, err))) return st;
-    snprintf(rel, sizeof(rel), fmt[1], split, stem, fn);
-    if ((st = take_file(in, out_dir, rel, listed_in, err))) return st;
-    if (!cJSON_IsNumber(jk)) return rs_err_set(err, RS_ERR_PARSE, "merge: %s: image %s: index missing", listed_in, fn);
-    const char *const kitti[3] = {"kitti/training/image_2/%06d.png", "kitti/training/label_2/%06d.txt",
-                                  "kitti/training/calib/%06d.txt"};
-    for (int i = 0; i < 3 && !st; i++) {
-        snprintf(rel, sizeof(rel), kitti[i], jk->valueint);
-        st = take_file(in, out_dir, rel, listed_in, err);
-    }
-    return st;
-}
-
-rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *out_dir, const char *const *inputs,
-                                 int Ninputs, rs_err *err)
-{
-    if (Nimages) *Nimages = 0;
-    if (Nannotations) *Nannotations = 0;
-    if (!out_dir || Ninputs < 1)
-        return rs_err_set(err, RS_ERR_INVALID, "merge: an output and at least one input needed");
-    // One run: the same run record everywhere, shards 0..N-1 each once.
-    cJSON **docs = calloc((size_t)Ninputs, sizeof(cJSON *));
-    const cJSON **runs = calloc((size_t)Ninputs, sizeof(cJSON *));
-    unsigned char *covered = NULL; // (count,) images some input's shards made
-    int count = 0, N_common = 0;
-    char **splits = NULL;
-    int Nsplits = 0;
-    rs_status st = docs && runs ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    for (int i = 0; i < Ninputs && !st; i++) {
-        if ((st = read_run(&docs[i], &runs[i], &covered, &count, &N_common, inputs[i], err))) break;
-        char diff[600];
-        if (i > 0 && !cJSON_Compare(runs[0], runs[i], 1)) {
-            run_difference(diff, sizeof(diff), runs[0], runs[i]);
-            st = rs_err_set(err, RS_ERR_INVALID, "merge: %s and %s are not shards of one run: %s", inputs[0], inputs[i],
-                            diff);
-        }
-    }
-    if (!st) {
-        // every image of the run made by one of the inputs' shards; else name what is missing
-        char missing[1000] = "";
-        int Nmissing = 0, Nuncovered = 0;
-        for (int k = 0; k < count; k++) {
-            if (covered[k]) continue;
-            Nuncovered++;
-            const size_t len = strlen(missing);
-            // with one shard count N, image k belongs to shard k mod N: name shards, else images
-            if (N_common > 0 && k >= N_common) continue;
-            if (Nmissing++ < 20) {
-                if (N_common > 0)
-                    snprintf(missing + len, sizeof(missing) - len, "%sshard %d/%d", len ? ", " : "", k, N_common);
-                else
-                    snprintf(missing + len, sizeof(missing) - len, "%simage %d", len ? ", " : "", k);
-            }
-        }
-        if (Nmissing)
-            st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: missing: %s%s (the inputs hold %d of the run's %d images)",
-                            missing, Nmissing > 20 ? ", ..." : "", count - Nuncovered, count);
-    }
-    // The splits: every annotations/instances_<split>.json of every input.
-    for (int i = 0; i < Ninputs && !st; i++) {
-        char *adir = rs_io_join(inputs[i], "annotations");
-        st = adir ? list_splits(adir, &splits, &Nsplits, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        free(adir);
-    }
-    // OUT is written by one process at a time (a synth run or another merge into it fails)
-    rs_io_lock lock = {0};
-    if (!st && Nsplits > 0 && !(st = rs_io_mkdir_p(out_dir, err)))
-        st = rs_io_lock_dir(&lock, out_dir, "roadside synth merge", err);
-    int *ks[2] = {NULL, NULL}, Nks[2] = {0, 0};
-    const char *split_names[2] = {NULL, NULL};
-    for (int s = 0; s < Nsplits && !st; s++) {
-        coco_acc a = {0};
-        char rel[600];
-        snprintf(rel, sizeof(rel), "annotations/instances_%s.json", splits[s]);
-        for (int i = 0; i < Ninputs && !st; i++) {
-            char *path = rs_io_join(inputs[i], rel);
-            if (!path)
-                st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            else if (rs_synth_dataset__file_exists(path)) {
-                const int before = a.N;
-                st = coco_add_file(&a, path, err);
-                for (int e = before; e < a.N && !st; e++)
-                    st = take_image(inputs[i], out_dir, splits[s], &a.e[e], path, err);
-            }
-            free(path);
-        }
-        char *out = rs_io_join(out_dir, rel);
-        if (!st && !out) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        if (!st) {
-            char *adir = rs_io_join(out_dir, "annotations");
-            st = adir ? rs_io_mkdir_p(adir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            free(adir);
-        }
-        if (!st) st = coco_write(&a, out, Nimages, Nannotations, err);
-        // KITTI's ImageSets and YOLO's data.yaml: the run's split is "train", any other "val"
-        const cJSON *rs = cJSON_GetObjectItemCaseSensitive(runs[0], "split");
-        const int slot = cJSON_IsString(rs) && !strcmp(rs->valuestring, splits[s]) ? 0 : 1;
-        if (!st && !split_names[slot]) {
-            split_names[slot] = splits[s];
-            ks[slot] = malloc(sizeof(int) * (size_t)(a.N ? a.N : 1));
-            if (!ks[slot]) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            for (int e = 0; e < a.N && !st; e++) {
-                const cJSON *jk = cJSON_GetObjectItemCaseSensitive(a.e[e].image, "index");
-                if (cJSON_IsNumber(jk) && (e == 0 || strcmp(a.e[e].file_name, a.e[e - 1].file_name)))
-                    ks[slot][Nks[slot]++] = jk->valueint;
-            }
-        }
-        free(out);
-        coco_acc_free(&a);
-    }
-    if (!st && Nsplits == 0)
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: no annotations/instances_*.json in the inputs");
-    // the cameras (the same in every shard: their checksums are part of the run) and the run record
-    if (!st) {
-        const cJSON *cams = cJSON_GetObjectItemCaseSensitive(runs[0], "cameras"), *c;
-        cJSON_ArrayForEach(c, cams)
-        {
-            char rel[400];
-            snprintf(rel, sizeof(rel), "cameras/%.300s.cameramodel", c->string);
-            if ((st = take_file(inputs[0], out_dir, rel, "run.json", err))) break;
-        }
-    }
-    if (!st) {
-        if (!split_names[0]) split_names[0] = split_names[1];
-        cJSON *doc = cJSON_CreateObject();
-        cJSON_AddItemToObject(doc, "run", cJSON_Duplicate(runs[0], 1));
-        cJSON_AddItemToArray(cJSON_AddArrayToObject(doc, "shards"), cJSON_CreateString("0/1"));
-        char *text = cJSON_Print(doc), *path = rs_io_join(out_dir, "run.json");
-        char *kdir = rs_io_join(out_dir, "kitti/ImageSets");
-        st = text && path && kdir ? rs_io_mkdir_p(kdir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        if (!st) st = rs_io_write_file(path, text, strlen(text), err);
-        if (!st) st = write_trainer_files(out_dir, split_names, ks, Nks, err);
-        free(text);
-        free(path);
-        free(kdir);
-        cJSON_Delete(doc);
-    }
-    rs_io_unlock(&lock);
-    free(ks[0]);
-    free(ks[1]);
-    for (int s = 0; s < Nsplits; s++) free(splits[s]);
-    free(splits);
-    for (int i = 0; docs && i < Ninputs; i++) cJSON_Delete(docs[i]);
-    free(docs);
-    free(runs);
-    free(covered);
     return st;
 }

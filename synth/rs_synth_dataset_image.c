@@ -43,13 +43,13 @@ int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, co
 
 // ---- the background ----
 
-// The background at the camera's size (linear resampling when it differs) and its appearance
-// (rs_synth_appearance_estimate on the original file: noise, blur, JPEG quality are the
-// camera's), computed at first use and kept.
+// The background at the camera's size (linear resampling when it differs), decoded to linear
+// light, and its appearance (rs_synth_appearance_estimate on the original file: noise, blur,
+// JPEG quality are the camera's), computed at first use and kept. On error nothing is kept.
 static rs_status background_fit(rs_synth_dataset__background *b, int width, int height, rs_err *err)
 {
-    if (b->fitted.data) return RS_OK;
-    rs_image src = {0};
+    if (b->linear.data) return RS_OK;
+    rs_image src = {0}, fitted = {0};
     float *map = NULL;
     rs_status st = rs_image_read(&src, b->src->path, err);
     if (st) return st;
@@ -68,17 +68,49 @@ static rs_status background_fit(rs_synth_dataset__background *b, int width, int 
             map[2 * ((size_t)v * width + u) + 0] = (float)((u + 0.5) * sx - 0.5);
             map[2 * ((size_t)v * width + u) + 1] = (float)((v + 0.5) * sy - 0.5);
         }
-    if ((st = rs_synth_remap(&b->fitted, &src, map, width, height, 1, err)) ||
+    if ((st = rs_synth_remap(&fitted, &src, map, width, height, 1, err)) ||
         (st = rs_image_alloc(&b->linear, width, height, 3, err)))
         goto done;
     for (size_t i = 0; i < (size_t)width * height; i++)
         for (int c = 0; c < 3; c++)
-            b->linear.data[3 * i + c] = (float)rs_synth_srgb_decode(b->fitted.data[(size_t)b->fitted.channels * i + c]);
+            b->linear.data[3 * i + c] = (float)rs_synth_srgb_decode(fitted.data[(size_t)fitted.channels * i + c]);
     b->app_ok = rs_synth_appearance_estimate(&b->app, b->src->path, NULL, NULL) == RS_OK;
 done:
+    if (st) rs_image_free(&b->linear);
     free(map);
+    rs_image_free(&fitted);
     rs_image_free(&src);
     return st;
+}
+
+rs_status rs_synth_dataset__prepare_camera(rs_synth_dataset__camera *c, rs_err *err)
+{
+    if (c->have_canvas) return RS_OK;
+    const rs_camera *cc = &c->cam;
+    rs_status st = rs_synth_canvas_for_lens(&c->canvas, &cc->lensmodel, cc->intrinsics, cc->width, cc->height, 1, err);
+    if (!st && !c->canvas.identity)
+        st =
+            rs_synth_canvas_map(&c->canvas_map, &c->canvas, &cc->lensmodel, cc->intrinsics, cc->width, cc->height, err);
+    c->have_canvas = !st;
+    return st;
+}
+
+rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, rs_synth_dataset__camera *c,
+                                               rs_synth_dataset__background *bm, rs_err *err)
+{
+    rs_status st = background_fit(bm, c->cam.width, c->cam.height, err);
+    if (st || bm->light_tried) return st;
+    // issue 18: lighting matched to the background's road (dry roads only)
+    const char *cond = rs_site_background_tag(bm->src, "conditions");
+    bm->light_tried = true;
+    const bool dry = !cond || !strcmp(cond, "sunny") || !strcmp(cond, "cloudy");
+    bm->light_ok =
+        dry && rs_synth_light_from_image(&bm->light, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL) == RS_OK;
+    double t_s;
+    const bool timed = bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK;
+    bm->sun_ok =
+        !timed && !bm->overcast && rs_synth_sun_from_shadows(&bm->sun, &bm->linear, &c->cam, d->site, NULL) == RS_OK;
+    return RS_OK;
 }
 
 // ---- shadows and appearance over a background ----
@@ -208,8 +240,9 @@ rs_status rs_synth_dataset_traffic_frames_check(rs_synth_traffic_frames_info *in
 
 // The vehicles of image k from DIR: frame r_frame mod Nframes, each vehicle i's variant
 // rs_rng_seed_derive(r_looks, i) >> 11 (53 bits, as the built-in traffic draws them).
-static rs_status frame_vehicles(rs_synth_vehicle_list *list, const char *dir, uint64_t r_frame, uint64_t r_looks,
-                                rs_err *err)
+// out: *which, *iwhich: the frame's frames.json entry and its index there
+static rs_status frame_vehicles(rs_synth_vehicle_list *list, rs_synth_sumo_frame_entry *which, int *iwhich,
+                                const char *dir, uint64_t r_frame, uint64_t r_looks, rs_err *err)
 {
     rs_synth_sumo_frame_entry *e = NULL;
     int N = 0;
@@ -218,6 +251,8 @@ static rs_status frame_vehicles(rs_synth_vehicle_list *list, const char *dir, ui
     if (!st) {
         const int i = (int)(r_frame % (uint64_t)N);
         st = read_frame(list, dir, &e[i], i, err);
+        *which = e[i];
+        *iwhich = i;
     }
     for (int j = 0; !st && j < list->N; j++) list->v[j].variant = rs_rng_seed_derive(r_looks, (uint64_t)j) >> 11;
     free(e);
@@ -271,6 +306,8 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     rs_synth_traffic_vehicle *tv = NULL;
     rs_synth_vehicle *builtin = NULL;  // (N,) the built-in traffic as scene vehicles
     rs_synth_vehicle_list frame = {0}; // the SUMO frame's vehicles (--traffic-frames)
+    rs_synth_sumo_frame_entry frame_entry = {0};
+    int frame_index = -1; // into frames.json
     rs_synth_vehicle *v = NULL;
     rs_synth_prepared prepared = {0};
     rs_synth_render_result r = {0};
@@ -292,15 +329,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     rs_synth_render_options_default(&ropt);
     ropt.povray = opt->povray;
     ropt.write_files = false; // the dataset composites and writes the image itself
-    if (!c->have_canvas) {
-        const rs_camera *cc = &c->cam;
-        if ((st =
-                 rs_synth_canvas_for_lens(&c->canvas, &cc->lensmodel, cc->intrinsics, cc->width, cc->height, 1, err)) ||
-            (!c->canvas.identity && (st = rs_synth_canvas_map(&c->canvas_map, &c->canvas, &cc->lensmodel,
-                                                              cc->intrinsics, cc->width, cc->height, err))))
-            goto done;
-        c->have_canvas = true;
-    }
+    if ((st = rs_synth_dataset__prepare_camera(c, err))) goto done; // done already when the parent did it
     ropt.canvas = &c->canvas;
     ropt.canvas_map = c->canvas_map;
     ropt.separate_processes = opt->separate_processes;
@@ -309,18 +338,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     if (c->Nbg > 0) {
         rs_synth_dataset__background *bm = &c->bg[rs_synth_dataset__image_background(d, k, c)];
         b = bm;
-        if ((st = background_fit(bm, c->cam.width, c->cam.height, err))) goto done;
-        if (!bm->light_tried) { // issue 18: lighting matched to the background's road (dry roads only)
-            const char *cond = rs_site_background_tag(bm->src, "conditions");
-            bm->light_tried = true;
-            const bool dry = !cond || !strcmp(cond, "sunny") || !strcmp(cond, "cloudy");
-            bm->light_ok = dry && rs_synth_light_from_image(&bm->light, &bm->linear, &c->cam, d->site, &d->lanes, 4,
-                                                            NULL) == RS_OK;
-            double t_s;
-            const bool timed = bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK;
-            bm->sun_ok = !timed && !bm->overcast &&
-                         rs_synth_sun_from_shadows(&bm->sun, &bm->linear, &c->cam, d->site, NULL) == RS_OK;
-        }
+        if ((st = rs_synth_dataset__prepare_background(d, c, bm, err))) goto done; // (or the parent did)
         // the vehicles alone over transparency; composite() puts them onto the background
         ropt.scene.ground_visible = false;
         ropt.scene.overcast = b->overcast;
@@ -331,8 +349,14 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
                                   d->site->origin.lon_deg, t_s);
         else if (b->sun_ok) // no time: the sun the poles' shadows show
             ropt.scene.sun_azimuth_deg = b->sun.azimuth_deg, ropt.scene.sun_elevation_deg = b->sun.elevation_deg;
-        if (b->light_ok)
+        if (b->light_ok) {
             rs_synth_light_match(ropt.scene.light_rgb_scale, &b->light, !b->overcast, ropt.scene.sun_elevation_deg);
+            rs_synth_env_estimate env; // the environment the vehicles reflect: the background's own
+            const bool env_ok = !rs_synth_env_from_image(&env, &b->linear, &c->cam, d->site, &d->lanes, 4, NULL);
+            ropt.scene.env_given = true;
+            rs_synth_env_match(ropt.scene.env_zenith_rgb, ropt.scene.env_horizon_rgb, ropt.scene.env_ground_rgb,
+                               env_ok ? &env : NULL, ropt.scene.light_rgb_scale, b->overcast);
+        }
         *grey = false;
     } else {
         ropt.scene.ground_visible = true; // neutral grey ground rendered by POV-Ray
@@ -344,7 +368,8 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     const uint64_t r_vary = rng_next(&rng);
     const rs_synth_vehicle *all = NULL; // (N,) every vehicle of the site, borrowed
     if (opt->traffic_frames_dir) {
-        if ((st = frame_vehicles(&frame, opt->traffic_frames_dir, r_traffic, r_vary, err))) goto done;
+        if ((st = frame_vehicles(&frame, &frame_entry, &frame_index, opt->traffic_frames_dir, r_traffic, r_vary, err)))
+            goto done;
         all = frame.v;
         N = frame.N;
     } else {
@@ -495,6 +520,9 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     }
     free(kitti_dir);
     if (st || (st = rs_synth_labels_write_coco(work, split_name, &img, 1, &lopt, err))) goto done;
+    if (frame_index >= 0 && (st = rs_synth_dataset__coco_set_traffic_frame(part_tmp, frame_entry.file,
+                                                                           frame_entry.time_s, frame_index, err)))
+        goto done;
     if (rename(part_tmp, part) != 0) {
         st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
         goto done;

@@ -218,6 +218,28 @@ static void write_environment(FILE *f, const rs_synth_scene_options *opt)
             g[0], g[1], g[2], g[0], g[1], g[2], h[0], h[1], h[2], z[0], z[1], z[2]);
 }
 
+// The colour pass's irradiance on the ground plane per channel, as its light_source lines give
+// it (write_body): the sun's colour (1, 0.97, 0.92), every light times light_rgb_scale when set.
+static void ground_irradiance_rgb(double e_rgb[3], const rs_synth_scene_options *opt, const double ground_normal_enu[3])
+{
+    rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
+    const int Nlights = rs_synth_scene_lights(lights, opt);
+    const int first_sky = Nlights - RS_SYNTH_SKY_LIGHTS;
+    const double *ls = opt->light_rgb_scale, *g = ground_normal_enu;
+    const bool matched = ls[0] > 0 || ls[1] > 0 || ls[2] > 0;
+    const double sun_rgb[3] = {1.0, 0.97, 0.92};
+    const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    for (int c = 0; c < 3; c++) {
+        e_rgb[c] = 0;
+        for (int j = 0; j < Nlights; j++) {
+            const double *d = lights[j].dir_enu;
+            const double cz = gn > 0 ? (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn : 0;
+            e_rgb[c] += (cz > 0 ? cz : 0) * lights[j].irradiance * (j < first_sky ? sun_rgb[c] : 1);
+        }
+        if (matched) e_rgb[c] *= ls[c];
+    }
+}
+
 static void write_vec_enu(FILE *f, const double p_enu[3])
 {
     double p[3];
@@ -520,6 +542,17 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
                 "  texture { pigment { rgb %.2f } finish { emission 0 ambient 0 diffuse 1 "
                 "brilliance 1 specular 0 } }\n}\n",
                 SHADOW_GROUND_ALBEDO);
+    } else if (!id_pass && opt.env_given && !opt.ground_visible && !opt.env_off) {
+        // compositing over a background with its environment (issue 18): the ground the vehicles
+        // reflect is the photograph's ground, env_ground_rgb, where it is lit as the background
+        // is (shadows, as the vehicles' own, darken it): pigment x 0.8 x the lights' irradiance on
+        // the plane = env_ground_rgb.
+        double e_rgb[3];
+        ground_irradiance_rgb(e_rgb, &opt, ground_normal_enu);
+        double pg[3];
+        for (int c = 0; c < 3; c++) pg[c] = e_rgb[c] > 1e-9 ? opt.env_ground_rgb[c] / (0.8 * e_rgb[c]) : 0;
+        fprintf(f, "  texture { pigment { rgb <%.6f, %.6f, %.6f> } finish { ambient 0 diffuse 0.8 } } no_image\n}\n",
+                pg[0], pg[1], pg[2]);
     } else if (!id_pass)
         fprintf(f, "  texture { pigment { rgb 0.18 } finish { ambient 0 diffuse 0.8 } }%s\n}\n",
                 opt.ground_visible ? "" : " no_image");

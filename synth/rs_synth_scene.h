@@ -129,6 +129,10 @@ typedef struct {
     // in reflections (no_image), glowing from env_ground_rgb below the horizon through
     // env_horizon_rgb to env_zenith_rgb overhead, linear RGB in the units of the lights (a white
     // surface under a sun at the zenith is 1). env_given false: rs_synth_scene_env_default's.
+    // With env_given and ground_visible false (compositing over a photograph), the ground plane
+    // the vehicles reflect also takes env_ground_rgb as its lit radiance (its pigment is
+    // env_ground_rgb / (0.8 x the lights' irradiance on it), so shadows still darken it). From a
+    // background: rs_synth_env_from_image and rs_synth_env_match (synth/rs_synth_sun.h).
     bool env_given;
     double env_zenith_rgb[3], env_horizon_rgb[3], env_ground_rgb[3];
     bool env_off; // no environment at all (reflections show the black background)

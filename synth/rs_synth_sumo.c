@@ -488,11 +488,14 @@ static rs_status write_osm_types(const char *path, rs_err *err)
     if (st) return st;
     fprintf(a.f, "<types>\n");
     for (size_t i = 0; i < sizeof types / sizeof *types; i++)
-        fprintf(a.f,
-                "  <type id=\"highway.%s\" priority=\"%d\" numLanes=\"%d\" speed=\"%.2f\" oneway=\"%s\" "
-                "disallow=\"pedestrian bicycle\"/>\n",
-                types[i].highway, types[i].priority, types[i].lanes, types[i].speed_mps,
-                types[i].oneway ? "true" : "false");
+        fprintf(
+            a.f,
+            "  <type id=\"highway.%s\" priority=\"%d\" numLanes=\"%d\" speed=\"%.2f\" oneway=\"%s\" "
+            "disallow=\"%s\"/>\n",
+            types[i].highway, types[i].priority, types[i].lanes, types[i].speed_mps, types[i].oneway ? "true" : "false",
+            // bicycles (in the default mix) ride on the roads, not on motorways and trunks
+            !strncmp(types[i].highway, "motorway", 8) || !strncmp(types[i].highway, "trunk", 5) ? "pedestrian bicycle"
+                                                                                                : "pedestrian");
     fprintf(a.f, "</types>\n");
     return rs_io_atomic_commit(&a, err);
 }

@@ -143,7 +143,7 @@ typedef struct {
 // (rs_synth_vehicles_read, synth/rs_synth_scene.h); this does not open them.
 // out: *entries (N,) owned (free()), NULL when *N is 0 (an empty list is not an error here)
 // Errors name the file and the field: RS_ERR_NOT_FOUND "DIR/frames.json: missing (...)",
-// RS_ERR_IO (unreadable), RS_ERR_PARSE "DIR/frames.json:LINE: not valid JSON",
+// RS_ERR_IO (unreadable), RS_ERR_PARSE "DIR/frames.json:LINE: JSON syntax error near ...",
 // RS_ERR_INVALID "DIR/frames.json: [3].vehicles: expected an integer >= 0".
 rs_status rs_synth_sumo_frames_index_read( // out
     rs_synth_sumo_frame_entry **entries, int *N,

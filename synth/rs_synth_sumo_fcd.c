@@ -13,6 +13,7 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "core/rs_json.h"
 #include "synth/internal/rs_synth_sumo_xml.h"
 #include "synth/rs_synth_fleet.h"
 
@@ -238,14 +239,10 @@ rs_status rs_synth_sumo_frames_index_read(rs_synth_sumo_frame_entry **entries, i
                         "%s: missing (%s is not a folder written by `roadside traffic --sumo -o DIR`)", path, dir);
         goto done;
     }
-    if ((st = rs_io_read_file_max(&text, NULL, path, RS_IO_MAX_SMALL_FILE_BYTES, err))) goto done;
-    if (!(root = cJSON_Parse(text))) {
-        const char *at = cJSON_GetErrorPtr();
-        int line = 1;
-        for (const char *c = text; at && c < at && *c; c++) line += *c == '\n';
-        st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: not valid JSON", path, line);
-        goto done;
-    }
+    size_t len = 0;
+    if ((st = rs_io_read_file_max(&text, &len, path, RS_IO_MAX_SMALL_FILE_BYTES, err))) goto done;
+    // syntax errors: RS_ERR_PARSE "PATH:LINE: JSON syntax error near '...'" (core/rs_json.h)
+    if ((st = rs_json_parse(&root, text, 0, len, path, err))) goto done;
     if (!cJSON_IsArray(root)) {
         st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of {file, time_s, vehicles}", path);
         goto done;

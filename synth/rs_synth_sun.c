@@ -87,6 +87,10 @@ static struct {
     size_t Nkey;
     size_t *px; // (Npx,) owned: offsets y * width + x, in scan order
     size_t Npx;
+    // the environment's pixels (rs_synth_env_from_image), found in the same pass: ground within
+    // 60 m, sky up to RS_SYNTH_ENV_HORIZON_DEG above the horizon, sky above it. (Nenv[k],) owned.
+    size_t *env[3];
+    size_t Nenv[3];
 } road_cache;
 
 // The key of road_cache for these inputs (malloc'ed, *n doubles), NULL when out of memory.
@@ -117,6 +121,8 @@ static double *road_key(size_t *n, const rs_camera *cam, const rs_site *site, co
 static rs_status road_pixels(const size_t **px, size_t *Npx, const rs_camera *cam, const rs_site *site,
                              const rs_lanes *lanes, int step_px, rs_err *err)
 {
+    // The environment's pixel classes: none, ground (within 60 m), low sky, high sky.
+    enum { ENV_NONE = -1, ENV_GROUND = 0, ENV_HORIZON = 1, ENV_ZENITH = 2 };
     char lens[160];
     size_t Nkey = 0;
     double *key = road_key(&Nkey, cam, site, lanes, step_px);
@@ -133,43 +139,71 @@ static rs_status road_pixels(const size_t **px, size_t *Npx, const rs_camera *ca
     }
     const size_t cap = (size_t)((cam->width + step_px - 1) / step_px) * (size_t)((cam->height + step_px - 1) / step_px);
     size_t *out = malloc(sizeof(size_t) * (cap ? cap : 1)), n = 0;
-    if (!out) {
-        free(key);
+    size_t *env[3] = {malloc(sizeof(size_t) * (cap ? cap : 1)), malloc(sizeof(size_t) * (cap ? cap : 1)),
+                      malloc(sizeof(size_t) * (cap ? cap : 1))},
+           Nenv[3] = {0, 0, 0};
+    if (!out || !env[0] || !env[1] || !env[2]) {
+        free(key), free(out), free(env[0]), free(env[1]), free(env[2]);
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     }
     // the camera's position: where rays start (rt_cam_enu maps ENU into the camera)
     double c_enu[3];
     rs_pose_position_from_rt(c_enu, NULL, cam->rt_cam_enu);
+    const double *g = site->ground_normal_enu;
+    const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    // a plane 10 km above the camera, parallel to the ground: the rays of the sky meet it
+    const double sky_offset_m = (g[0] * c_enu[0] + g[1] * c_enu[1] + g[2] * c_enu[2]) + 1e4 * gn;
+    const double sin_band = sin(RS_SYNTH_ENV_HORIZON_DEG * DEG);
     for (int y = step_px / 2; y < cam->height; y += step_px)
         for (int x = step_px / 2; x < cam->width; x += step_px) {
             const double q[2] = {x, y};
+            const size_t o = (size_t)y * cam->width + x;
             double p[3];
-            if (rs_camera_locate_ground(p, cam, q, site->ground_normal_enu, site->ground_offset_m, NULL)) continue;
+            const rs_status sg = rs_camera_locate_ground(p, cam, q, g, site->ground_offset_m, NULL);
+            if (sg == RS_ERR_DEGENERATE && gn > 0 && !rs_camera_locate_ground(p, cam, q, g, sky_offset_m, NULL)) {
+                // the sky: the ray rises; its elevation above the ground plane's horizon
+                double d[3], dd = 0, up = 0;
+                for (int c = 0; c < 3; c++) d[c] = p[c] - c_enu[c], dd += d[c] * d[c], up += d[c] * g[c] / gn;
+                const int k = up / sqrt(dd) <= sin_band ? ENV_HORIZON : ENV_ZENITH;
+                if (dd > 0) env[k][Nenv[k]++] = o;
+                continue;
+            }
+            if (sg) continue;
             if (hypot(p[0] - c_enu[0], p[1] - c_enu[1]) > 60.0) continue;
+            env[ENV_GROUND][Nenv[ENV_GROUND]++] = o;
             bool road = false;
             for (int l = 0; l < lanes->N && !road; l++)
                 road = rs_lane_distance_m(NULL, &lanes->lane[l], p) <= 0.5 * lanes->lane[l].width_m - 0.4;
-            if (road) out[n++] = (size_t)y * cam->width + x;
+            if (road) out[n++] = o;
         }
+    (void)ENV_NONE;
     free(road_cache.key);
     free(road_cache.px);
+    for (int k = 0; k < 3; k++) free(road_cache.env[k]), road_cache.env[k] = env[k], road_cache.Nenv[k] = Nenv[k];
     snprintf(road_cache.lens, sizeof(road_cache.lens), "%s", lens);
     road_cache.key = key, road_cache.Nkey = Nkey, road_cache.px = out, road_cache.Npx = n;
     *px = out, *Npx = n;
     return RS_OK;
 }
 
+// The road pixels of a background img seen by cam (road_pixels), after checking that img is
+// that camera's RGB image.
+static rs_status background_pixels(const size_t **px, size_t *Npx, const rs_image *img, const rs_camera *cam,
+                                   const rs_site *site, const rs_lanes *lanes, int step_px, rs_err *err)
+{
+    if (img->width != cam->width || img->height != cam->height || img->channels < 3)
+        return rs_err_set(err, RS_ERR_INVALID, "background: %dx%dx%d, the camera is %dx%d (RGB)", img->width,
+                          img->height, img->channels, cam->width, cam->height);
+    return road_pixels(px, Npx, cam, site, lanes, step_px < 1 ? 1 : step_px, err);
+}
+
 rs_status rs_synth_light_from_image(rs_synth_light_estimate *out, const rs_image *img, const rs_camera *cam,
                                     const rs_site *site, const rs_lanes *lanes, int step_px, rs_err *err)
 {
     *out = (rs_synth_light_estimate){0};
-    if (img->width != cam->width || img->height != cam->height || img->channels < 3)
-        return rs_err_set(err, RS_ERR_INVALID, "background: %dx%dx%d, the camera is %dx%d (RGB)", img->width,
-                          img->height, img->channels, cam->width, cam->height);
-    if (step_px < 1) step_px = 1;
     const size_t *px = NULL;
     size_t n = 0;
-    rs_status st = road_pixels(&px, &n, cam, site, lanes, step_px, err);
+    rs_status st = background_pixels(&px, &n, img, cam, site, lanes, step_px, err);
     if (st) return st;
     if (n < 50) return rs_err_set(err, RS_ERR_DEGENERATE, "background: %zu road pixels in view, at least 50 needed", n);
     float *v = malloc(sizeof(float) * 3 * n);
@@ -190,6 +224,46 @@ rs_status rs_synth_light_from_image(rs_synth_light_estimate *out, const rs_image
     out->level = (out->irradiance_rgb[0] + out->irradiance_rgb[1] + out->irradiance_rgb[2]) / 3;
     for (int c = 0; c < 3; c++) out->tint_rgb[c] = out->level > 0 ? out->irradiance_rgb[c] / out->level : 1;
     return RS_OK;
+}
+
+rs_status rs_synth_env_from_image(rs_synth_env_estimate *out, const rs_image *img, const rs_camera *cam,
+                                  const rs_site *site, const rs_lanes *lanes, int step_px, rs_err *err)
+{
+    *out = (rs_synth_env_estimate){0};
+    const size_t *px = NULL;
+    size_t n = 0;
+    rs_status st = background_pixels(&px, &n, img, cam, site, lanes, step_px, err);
+    if (st) return st;
+    double *rgb[3] = {out->ground_rgb, out->horizon_rgb, out->zenith_rgb};
+    int *N[3] = {&out->Nground_px, &out->Nhorizon_px, &out->Nzenith_px};
+    for (int k = 0; k < 3; k++) {
+        double sum[3] = {0, 0, 0};
+        size_t m = 0;
+        for (size_t i = 0; i < road_cache.Nenv[k]; i++) {
+            const float *v = img->data + road_cache.env[k][i] * (size_t)img->channels;
+            if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]))) continue;
+            for (int c = 0; c < 3; c++) sum[c] += v[c];
+            m++;
+        }
+        *N[k] = (int)m;
+        for (int c = 0; c < 3; c++) rgb[k][c] = m ? sum[c] / (double)m : 0;
+    }
+    return RS_OK;
+}
+
+void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3],
+                        const rs_synth_env_estimate *env, const double light_rgb_scale[3], bool overcast)
+{
+    rs_synth_scene_env_default(zenith_rgb, horizon_rgb, ground_rgb, overcast);
+    const double *ls = light_rgb_scale;
+    const bool matched = ls && (ls[0] > 0 || ls[1] > 0 || ls[2] > 0);
+    for (int c = 0; c < 3 && matched; c++) zenith_rgb[c] *= ls[c], horizon_rgb[c] *= ls[c], ground_rgb[c] *= ls[c];
+    if (!env) return;
+    for (int c = 0; c < 3; c++) {
+        if (env->Nground_px >= RS_SYNTH_ENV_MIN_PX) ground_rgb[c] = env->ground_rgb[c];
+        if (env->Nhorizon_px >= RS_SYNTH_ENV_MIN_PX) horizon_rgb[c] = env->horizon_rgb[c];
+        if (env->Nzenith_px >= RS_SYNTH_ENV_MIN_PX) zenith_rgb[c] = env->zenith_rgb[c];
+    }
 }
 
 void rs_synth_light_match(double scale_rgb[3], const rs_synth_light_estimate *est, bool sun, double sun_elevation_deg)

@@ -102,6 +102,59 @@ void rs_synth_light_match(double scale_rgb[3],
                           // in
                           const rs_synth_light_estimate *est, bool sun, double sun_elevation_deg);
 
+// ---- the environment a background shows (what the vehicles reflect) ----
+
+// Sky pixels up to this elevation above the ground plane's horizon are the environment's
+// horizon colour, higher ones its zenith colour.
+#define RS_SYNTH_ENV_HORIZON_DEG 20.0
+// A class of pixels (ground, low sky, high sky) is used when at least this many were sampled.
+#define RS_SYNTH_ENV_MIN_PX      20
+
+// The colours of a background's ground and sky, linear RGB: the radiance the image shows, in the
+// same units as rs_synth_light_from_image's road_rgb (and the scene's: a white surface under a
+// sun at the zenith is 1, to the road-albedo assumption and the camera's exposure).
+typedef struct {
+    double ground_rgb[3];  // mean of the ground pixels (0 when none)
+    int Nground_px;        // ground pixels sampled
+    double horizon_rgb[3]; // mean of the sky pixels 0 .. RS_SYNTH_ENV_HORIZON_DEG above the horizon
+    int Nhorizon_px;
+    double zenith_rgb[3]; // mean of the sky pixels higher than that
+    int Nzenith_px;
+} rs_synth_env_estimate;
+
+// The environment a background shows, for rs_synth_scene_options.env_* (issue 18: the vehicles
+// reflect the scene itself). Pixels of the step_px grid (the same grid and the same per-camera
+// cache as rs_synth_light_from_image, so a worker finds them once per camera):
+//   - ground: the pixel's ray (rs_camera_locate_ground) meets the site's ground plane within
+//     60 m (horizontal) of the camera -- road, markings, kerbs, sidewalks, whatever lies there;
+//   - sky: the ray does not meet the ground plane but rises (it meets a plane parallel to the
+//     ground 10 km above the camera); its elevation above the ground plane's horizon puts it in
+//     the horizon band (<= RS_SYNTH_ENV_HORIZON_DEG) or the zenith band. Buildings and trees
+//     above the horizon count as "sky": they are what a vehicle reflects there.
+// Each colour is the plain per-channel mean of its pixels' linear values (a reflection averages
+// what it sees; no robust trimming). Rays meeting the ground beyond 60 m (the far view) are
+// neither. Exact: it is a mean over a mask (tests/synth/test_env_from_image.py: numpy's mean
+// over the same rule within 1e-6).
+// in: linear_rgb (H, W, >= 3) linear light at the camera's size; cam; site (its ground plane);
+//     lanes (only as the cache's key: pass the lanes given to rs_synth_light_from_image, or
+//     lanes with N = 0); step_px >= 1
+// Returns RS_ERR_INVALID (size), RS_ERR_NOMEM. A class with no pixel in view has N = 0.
+rs_status rs_synth_env_from_image( // out
+    rs_synth_env_estimate *out,
+    // in
+    const rs_image *linear_rgb, const rs_camera *cam, const rs_site *site, const rs_lanes *lanes, int step_px,
+    rs_err *err);
+
+// The environment colours of a scene matched to a background: start from
+// rs_synth_scene_env_default (clear, or overcast) times light_rgb_scale per channel (the lights'
+// match, rs_synth_light_match; NULL or all 0: 1) -- the estimated sky, when the camera does not
+// see it; then each of ground, horizon and zenith that the image shows with at least
+// RS_SYNTH_ENV_MIN_PX pixels replaces it with the image's mean. env may be NULL (the scaled
+// default alone). out: zenith_rgb, horizon_rgb, ground_rgb (3,) each.
+void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3],
+                        // in
+                        const rs_synth_env_estimate *env, const double light_rgb_scale[3], bool overcast);
+
 // ---- the sun's direction from shadows (a background without a time) ----
 
 // The sun's direction that best explains the shadows of the site's poles (landmarks with a

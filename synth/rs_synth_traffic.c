@@ -20,8 +20,18 @@
 
 void rs_synth_class_mix_default(rs_synth_class_mix *mix)
 {
-    static const double w[RS_SYNTH_NCLASSES] = {0.24, 0.22, 0.30, 0.03, 0.10, 0.02, 0.06, 0.03};
-    memcpy(mix->weight, w, sizeof w);
+    // The motor vehicles' assumed mix (docs/traffic.md, "Class mix") scaled by 0.975, and the
+    // two-wheelers' shares of urban road traffic in Great Britain (DfT road traffic estimates,
+    // docs/traffic.md): motorcycles 0.8 %, pedal cycles 1.7 %. The weights sum to 1.
+    static const double motor[RS_SYNTH_MOTORCYCLE] = {0.24, 0.22, 0.30, 0.03, 0.10, 0.02, 0.06, 0.03};
+    for (int c = 0; c < RS_SYNTH_MOTORCYCLE; c++) mix->weight[c] = 0.975 * motor[c];
+    mix->weight[RS_SYNTH_MOTORCYCLE] = 0.008;
+    mix->weight[RS_SYNTH_BICYCLE] = 0.017;
+}
+
+double rs_synth_class_max_speed_mps(rs_synth_class cls)
+{
+    return cls == RS_SYNTH_BICYCLE ? RS_SYNTH_BICYCLE_MAX_SPEED_MPS : INFINITY;
 }
 
 rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs_err *err)
@@ -40,7 +50,7 @@ rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs
         if (nl >= sizeof name || (memcpy(name, p, nl), name[nl] = '\0', rs_synth_class_from_name(&c, name, NULL)))
             return rs_err_set(err, RS_ERR_USAGE,
                               "--mix: item %d: unknown class '%.*s' (sedan, hatchback, suv, pickup, van, bus, "
-                              "box_truck, articulated_truck)",
+                              "box_truck, articulated_truck, motorcycle, bicycle)",
                               item, (int)nl, p);
         char num[64];
         size_t nn = n - (size_t)(eq + 1 - p);
@@ -149,7 +159,9 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
             x.length_m = uniform(&lr, r.length_m[0], r.length_m[1]);
             x.width_m = uniform(&lr, r.width_m[0], r.width_m[1]);
             x.height_m = uniform(&lr, r.height_m[0], r.height_m[1]);
-            x.speed_mps = vmax * uniform(&lr, opt->speed_fraction[0], opt->speed_fraction[1]);
+            // a bicycle rides at its own speed, whatever the lane's limit (SUMO's bicycle default)
+            x.speed_mps = fmin(vmax, rs_synth_class_max_speed_mps(x.cls)) *
+                          uniform(&lr, opt->speed_fraction[0], opt->speed_fraction[1]);
             x.variant = rs_rng_u64(&lr) >> 11; // 53 bits: exact as a JSON number
             double gap = opt->s0_m + x.speed_mps * opt->headway_s *
                                          uniform(&lr, 1.0 - opt->headway_jitter, 1.0 + opt->headway_jitter);

@@ -40,10 +40,19 @@ typedef struct {
     double weight[RS_SYNTH_NCLASSES];
 } rs_synth_class_mix;
 
-// The default mix (docs/traffic.md, "Class mix", gives the reasoning): sedan 0.24,
-// hatchback 0.22, suv 0.30, pickup 0.03, van 0.10, bus 0.02, box_truck 0.06,
-// articulated_truck 0.03.
+// The default mix (docs/traffic.md, "Class mix", gives the reasoning and the sources): the two-
+// wheelers at their shares of urban road traffic in Great Britain (DfT road traffic estimates:
+// motorcycle 0.008, bicycle 0.017), the motor vehicles at an assumed mix scaled by 0.975 (sedan
+// 0.234, hatchback 0.2145, suv 0.2925, pickup 0.02925, van 0.0975, bus 0.0195, box_truck
+// 0.0585, articulated_truck 0.02925). The weights sum to 1.
 void rs_synth_class_mix_default(rs_synth_class_mix *mix);
+
+// A bicycle's top speed in the built-in traffic: 20 km/h, SUMO's default bicycle speed (as we
+// recall DEFAULT_BICYCLE_SPEED; its bicycle-lane type map uses 5.56 m/s; docs/traffic.md).
+#define RS_SYNTH_BICYCLE_MAX_SPEED_MPS 5.56
+// The highest speed of a class in the built-in traffic (m/s): RS_SYNTH_BICYCLE_MAX_SPEED_MPS for a
+// bicycle, INFINITY (the lane's limit) for the others.
+double rs_synth_class_max_speed_mps(rs_synth_class cls);
 
 // Parses "class=weight,class=weight,...": the classes named get these weights, the others 0.
 // RS_ERR_USAGE naming the item at fault (unknown class, bad or negative weight, all zero).
@@ -60,7 +69,8 @@ typedef struct {
     double s0_m;              // standstill gap, bumper to bumper (default 2.0 m)
     double headway_s;         // time headway T (default 1.5 s)
     double headway_jitter;    // the gap's v*T part is scaled by U(1 - j, 1 + j) (default 0.5)
-    double speed_fraction[2]; // each vehicle's speed: U(a, b) x the lane's speed limit
+    double speed_fraction[2]; // each vehicle's speed: U(a, b) x the lane's speed limit (a
+                              //   bicycle's: x rs_synth_class_max_speed_mps when lower)
                               // (default [0, 1]; 13.89 m/s when the lane gives none)
     bool junction_lanes;      // also fill lanes whose kind is "junction" (default false: their
                               // vehicles would cross; SUMO handles junctions)

@@ -10,6 +10,7 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "core/rs_json.h"
 
 // ---- the vehicles file ----
 
@@ -153,17 +154,11 @@ rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, 
     memset(list, 0, sizeof(*list));
     char *text = NULL, *dir = NULL;
     cJSON *root = NULL;
-    rs_status st = rs_io_read_file(&text, NULL, path, err);
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&text, &len, path, err);
     if (st) return st;
-    root = cJSON_Parse(text);
-    if (!root) {
-        // cJSON points at the failure: count lines up to there
-        const char *at = cJSON_GetErrorPtr();
-        int line = 1;
-        for (const char *c = text; at && c < at && *c; c++) line += *c == '\n';
-        st = rs_err_set(err, RS_ERR_PARSE, "%s:%d: not valid JSON", path, line);
-        goto done;
-    }
+    // syntax errors: RS_ERR_PARSE "PATH:LINE: JSON syntax error near '...'" (core/rs_json.h)
+    if ((st = rs_json_parse(&root, text, 0, len, path, err))) goto done;
     if (!cJSON_IsArray(root)) {
         st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of vehicles", path);
         goto done;

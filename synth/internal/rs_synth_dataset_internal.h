@@ -15,6 +15,8 @@
 #include <stddef.h>
 #include <sys/stat.h>
 
+#include <cjson/cJSON.h>
+
 #include "core/rs_camera.h"
 #include "core/rs_image.h"
 #include "core/rs_status.h"
@@ -31,9 +33,9 @@ typedef struct {
     const char *time_iso;          // its "time" tag (borrowed), may be NULL
     bool overcast;                 // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
     bool night;                    // conditions night: no shadow at all
-    // cache, filled at first use: the image at the output size, its appearance
-    rs_image fitted;
-    rs_image linear; // fitted, decoded from sRGB to linear light
+    // cache, filled at first use (rs_synth_dataset__prepare_background): the image at the
+    // output size decoded from sRGB to linear light, its appearance
+    rs_image linear;
     rs_synth_appearance app;
     bool app_ok; // the appearance could be estimated
     // issue 18: the light its road shows (rs_synth_light_from_image; dry conditions only: sunny,
@@ -55,7 +57,8 @@ typedef struct {
     char model_rel[320];              // that copy, relative to a COCO file's folder: "../cameras/<id>.cameramodel"
     rs_synth_dataset__background *bg; // (Nbg,) owned: the backgrounds passing the filters
     int Nbg;
-    // cache, filled at first use: the POV-Ray canvas of the lens and its resampling map
+    // cache, filled at first use (rs_synth_dataset__prepare_camera): the POV-Ray canvas of the
+    // lens and its resampling map
     bool have_canvas;
     rs_synth_canvas canvas;
     float *canvas_map; // owned; NULL when the canvas is the lens itself
@@ -89,6 +92,21 @@ static inline bool rs_synth_dataset__file_exists(const char *path)
 // The file stem of image k: "%06d_<camera>" with every character but [A-Za-z0-9_-] as '_'.
 void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
 
+// What the images of camera c share, computed once and kept in c: its POV-Ray canvas and
+// resampling map (rs_synth_canvas_for_lens, rs_synth_canvas_map). Nothing to do when done
+// already; on error nothing is kept. The parent of forked workers calls it before forking
+// (rs_synth_dataset.c), so that the workers share one copy (copy-on-write) instead of each
+// computing its own; rs_synth_dataset__make_image calls it too (then it costs nothing).
+rs_status rs_synth_dataset__prepare_camera(rs_synth_dataset__camera *c, rs_err *err);
+
+// What the images over background bm of camera c share, computed once and kept in bm: the
+// image at the camera's size in linear light, its appearance, the light its road shows and
+// (without a time tag) the sun its poles' shadows show. As rs_synth_dataset__prepare_camera:
+// nothing to do when done already, nothing kept on error, called by the parent before forking
+// and by rs_synth_dataset__make_image. Memory: 12 bytes per pixel (4.1 MB at 720x480).
+rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, rs_synth_dataset__camera *c,
+                                               rs_synth_dataset__background *bm, rs_err *err);
+
 // Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
 // finished). out: *grey: rendered over the grey ground (no background); *seconds_povray grows
 // by the image's povray time.
@@ -117,6 +135,57 @@ rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char 
                                            // in
                                            const rs_synth_dataset__run *d, const char *stem,
                                            const rs_synth_dataset__camera *c, int split, rs_err *err);
+
+// Adds "traffic_frame": {"file", "time_s", "index"} (the SUMO frame image's vehicles came
+// from: its file in the --traffic-frames folder, its SUMO time in seconds, its index in
+// frames.json) to every image of the COCO file at part_path, rewritten atomically
+// (rs_synth_dataset_coco.c; docs/labels.md).
+rs_status rs_synth_dataset__coco_set_traffic_frame(const char *part_path, const char *file, double time_s, int index,
+                                                   rs_err *err);
+
+// ---- the COCO writer (rs_synth_dataset_coco.c): one for the run's assembly and for merge ----
+
+// One image of the index: its sort key and where it lives.
+typedef struct {
+    char *file_name;       // owned: the sort key
+    int src, pos;          // the source file (rs_synth_dataset__coco_index.src) and the position in its images
+    int seq;               // its place in the index as added: by (src, pos)
+    double id;             // its id there (its annotations' image_id)
+    int k;                 // what the caller numbers the image with (a run's k, merge's "index"), -1 none
+    int Nanns;             // annotations naming it
+    bool dropped;          // a repeated file name
+    int new_id, ann_first; // its id in the output, its first annotation's id
+    long img_off, ann_off; // its text in the scratch file
+    size_t img_len, ann_len;
+} rs_synth_dataset__coco_ref;
+
+typedef struct {
+    rs_synth_dataset__coco_ref *r; // (N,) owned
+    int N, cap;
+    char **src; // (Nsrc,) owned paths
+    int Nsrc, cap_src;
+    cJSON *info, *licenses, *categories; // owned, each from the first source holding it (may stay NULL)
+} rs_synth_dataset__coco_index;
+
+// Called for every image of a source as it is indexed (merge: its files checked and linked).
+typedef rs_status (*rs_synth_dataset__coco_each_image)(void *ctx, const cJSON *image, const char *path, rs_err *err);
+
+// Indexes the images of the COCO file at `path` (a new source), each numbered k (k < 0: its
+// "index" member, -1 when absent); each (may be NULL) is called for every image. The file is
+// parsed, indexed and freed. On error nothing of it stays in the index; errors name the file.
+rs_status rs_synth_dataset__coco_index_add(rs_synth_dataset__coco_index *x, const char *path, int k,
+                                           rs_synth_dataset__coco_each_image each, void *ctx, rs_err *err);
+// Sorts the index by file name (repeated names dropped, the first added kept) and writes the COCO
+// file `path` atomically, as a stream (memory bounded by the largest source). *Nimages, *Nanns
+// grow by what it holds (NULL: not counted); with ks (x->N,) the kept images' k (>= 0) in
+// file-name order, *Nks their count.
+rs_status rs_synth_dataset__coco_index_write(rs_synth_dataset__coco_index *x, const char *path, int *Nimages,
+                                             int *Nanns, int *ks, int *Nks, rs_err *err);
+void rs_synth_dataset__coco_index_free(rs_synth_dataset__coco_index *x);
+// YOLO's data.yaml (Ultralytics: path, train, val, names) and KITTI's ImageSets/<split>.txt for
+// the splits' kept images ks[s] (Nks[s]), written atomically under out_dir.
+rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char *const split[2], int *const *ks,
+                                                const int *Nks, rs_err *err);
 
 // Assembles DATASET/annotations/instances_<split>.json from every parts/ file present for k in
 // 0 .. count-1. The images of other shards (made by other runs into this folder) are checked

@@ -13,6 +13,16 @@ SOURCE = os.environ.get("ROADSIDE_SOURCE_ROOT", os.path.join(os.path.dirname(__f
 DEMO = os.path.join(SOURCE, "sites", "demo")
 
 
+def demo_calib(tmp):
+    """TMP/calib holding the demo's true cam1 model (the calibration the dataset tests use)."""
+    calib = os.path.join(tmp, "calib")
+    os.makedirs(calib)
+    with open(os.path.join(DEMO, "truth", "cam1.cameramodel"), "rb") as src, \
+            open(os.path.join(calib, "cam1.cameramodel"), "wb") as dst:
+        dst.write(src.read())
+    return calib
+
+
 def fail(msg, seed=None):
     print("FAIL: " + msg + ("" if seed is None else " (seed %d)" % seed))
     sys.exit(1)

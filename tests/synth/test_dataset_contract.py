@@ -197,7 +197,7 @@ def check_layouts(ds, coco):
             u.fail("KITTI: calib/%s.txt: P2, R0_rect or Tr_velo_to_cam malformed" % idx)
         for line in open(os.path.join(kt, "label_2", idx + ".txt")):
             f = line.split()
-            if len(f) != 15 or f[0] not in ("Car", "Van", "Bus", "Truck"):
+            if len(f) != 15 or f[0] not in ("Car", "Van", "Bus", "Truck", "Cyclist", "Misc"):
                 u.fail("KITTI: label_2/%s.txt: %r" % (idx, line))
             # the location projects through P2 onto the 2D box's bottom region
             P2 = cal["P2"].reshape(3, 4)

@@ -124,9 +124,7 @@ def check_bad_input(tmp, ds):
 def main():
     u.need_povray()
     with tempfile.TemporaryDirectory() as tmp:
-        calib = os.path.join(tmp, "calib")
-        os.makedirs(calib)
-        shutil.copy(os.path.join(u.DEMO, "truth", "cam1.cameramodel"), calib)
+        calib = u.demo_calib(tmp)
         ds = os.path.join(tmp, "ds")
         u.run(["synth", u.DEMO, "--calib", calib, "--count", "5", "-o", ds, "--seed", str(SEED),
                "--camera", "cam1", "--size", "%dx%d" % (W, H), "--vehicles", "6", "--jobs", "2"])

@@ -9,7 +9,6 @@
 import fcntl
 import json
 import os
-import shutil
 import signal
 import subprocess
 import sys
@@ -70,9 +69,7 @@ def check_dataset(out, count):
 def main():
     u.need_povray()
     with tempfile.TemporaryDirectory() as tmp:
-        calib = os.path.join(tmp, "calib")
-        os.makedirs(calib)
-        shutil.copy(os.path.join(u.DEMO, "truth", "cam1.cameramodel"), calib)
+        calib = u.demo_calib(tmp)
 
         # 1. another holder (Python), having written its line: refused with its pid
         out = os.path.join(tmp, "held")

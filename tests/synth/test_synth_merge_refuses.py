@@ -34,9 +34,7 @@ def refused(args, want):
 def main():
     u.need_povray()
     with tempfile.TemporaryDirectory() as tmp:
-        calib = os.path.join(tmp, "calib")
-        os.makedirs(calib)
-        shutil.copy(os.path.join(u.DEMO, "truth", "cam1.cameramodel"), calib)
+        calib = u.demo_calib(tmp)
         s0, s1 = os.path.join(tmp, "s0"), os.path.join(tmp, "s1")
         # the recipe of docs/scale-out.md: GNU parallel, every option passed, --jobs per shard
         if shutil.which("parallel"):

@@ -57,9 +57,7 @@ def main():
     import cv2
     import numpy as np
     with tempfile.TemporaryDirectory() as tmp:
-        calib = os.path.join(tmp, "calib")
-        os.makedirs(calib)
-        shutil.copy(os.path.join(u.DEMO, "truth", "cam1.cameramodel"), calib)
+        calib = u.demo_calib(tmp)
         ref = os.path.join(tmp, "ref")
         p = synth(calib, ref)
         if p.returncode != 0:

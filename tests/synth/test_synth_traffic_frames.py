@@ -17,8 +17,12 @@
 #  - merge refuses a shard made with the built-in traffic next to one made with the frames,
 #    naming traffic_frames, and a rerun into the frames dataset with the built-in traffic is
 #    refused;
-#  - bad input: no frames.json, a frame file that does not parse, an empty frames.json: exit 1,
-#    a message naming the file (and field), no dataset folder created.
+#  - every COCO image names its frame: "traffic_frame" {"file", "time_s", "index"} equals the
+#    oracle's frame's frames.json entry (time_s within 1e-9); images of the built-in traffic
+#    carry none;
+#  - bad input: no frames.json, a frames.json or a frame file that does not parse (one JSON
+#    error path, core/rs_json.h: "FILE:LINE: JSON syntax error ..."), an empty frames.json:
+#    exit 1, a message naming the file (and line or field), no dataset folder created.
 # Exit 77 without povray, sumo or netconvert.
 import hashlib
 import json
@@ -91,6 +95,12 @@ def check_labels(ds, fr_dir):
         counts.append(len(anns))
         if len(anns) > MAXV:
             u.fail("image %d: %d labels, more than --vehicles %d" % (k, len(anns), MAXV), SEED)
+        # the image names its frame (docs/labels.md "traffic_frame"): the oracle's choice
+        tf = im.get("traffic_frame")
+        if (not isinstance(tf, dict) or tf.get("index") != f or tf.get("file") != index[f]["file"]
+                or not abs(tf.get("time_s", float("nan")) - index[f]["time_s"]) <= TOL):
+            u.fail("image %d: traffic_frame %s, expected frame %d (%s, time_s %s)"
+                   % (k, tf, f, index[f]["file"], index[f]["time_s"]), SEED)
         cal = im["calibration"]
         nrm, off = cal["ground_normal_enu"], cal["ground_offset_m"]
         for a in anns:
@@ -114,6 +124,7 @@ def check_labels(ds, fr_dir):
             worst_en, worst_up, worst_box = max(worst_en, d_en), max(worst_up, d_up), max(worst_box, d_box)
     if sum(counts) < COUNT or max(counts) != MAXV:
         u.fail("labels per image %s: expected some, and the cap %d reached" % (counts, MAXV), SEED)
+    print("traffic_frame: every image names the frame the oracle picks (file, time_s, index)")
     print("labels: %d over %d images (per image %s, cap %d), from %d of %d frames; max |bottom centre - "
           "frame (e, n)| %.3g m, max ground-plane residual %.3g m, max box/yaw difference %.3g"
           % (sum(counts), COUNT, counts, MAXV, len(used), len(frames), worst_en, worst_up, worst_box))
@@ -142,7 +153,12 @@ def bad_input(tmp, fr_dir):
     name = json.load(open(os.path.join(broken, "frames.json")))[1]["file"]
     with open(os.path.join(broken, name), "w") as f:
         f.write('[{"id": "a", "class": "sedan",\n "e": 1, "n": oops}]\n')
-    cases.append((broken, os.path.join(broken, name) + ":2: not valid JSON"))
+    cases.append((broken, os.path.join(broken, name) + ":2: JSON syntax error"))
+    bad_index = os.path.join(tmp, "bad_index")  # frames.json itself does not parse
+    shutil.copytree(fr_dir, bad_index)
+    with open(os.path.join(bad_index, "frames.json"), "w") as f:
+        f.write('[{"file": "frame_000000.json",\n "time_s": 60, "vehicles": }]\n')
+    cases.append((bad_index, os.path.join(bad_index, "frames.json") + ":2: JSON syntax error"))
     zero = os.path.join(tmp, "zero")
     os.makedirs(zero)
     with open(os.path.join(zero, "frames.json"), "w") as f:
@@ -214,6 +230,9 @@ def main():
         # the built-in traffic's shard 1/2 next to the frames' shard 0/2: refused
         builtin = os.path.join(tmp, "builtin")
         synth(builtin, None, ["--shard", "1/2", "--jobs", "2"])
+        bi = json.load(open(os.path.join(builtin, "annotations", "instances_train2017.json")))
+        if not bi["images"] or any("traffic_frame" in im for im in bi["images"]):
+            u.fail("built-in traffic: images should carry no traffic_frame", SEED)
         p = u.run(["synth", "merge", s0, builtin, "-o", os.path.join(tmp, "m_bad")], expect=None)
         if p.returncode != 1 or "traffic_frames" not in p.stderr:
             u.fail("merge of frames and built-in shards: exit %d, %r" % (p.returncode, p.stderr.strip()), SEED)
