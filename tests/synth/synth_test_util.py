@@ -3,6 +3,7 @@
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 
@@ -11,6 +12,15 @@ import numpy as np
 ROADSIDE = os.environ.get("ROADSIDE", "roadside")
 SOURCE = os.environ.get("ROADSIDE_SOURCE_ROOT", os.path.join(os.path.dirname(__file__), "..", ".."))
 DEMO = os.path.join(SOURCE, "sites", "demo")
+
+
+def sanitized():
+    """Whether ROADSIDE is built with AddressSanitizer (scripts/test's build-asan): its allocator
+    keeps freed memory in quarantine and adds shadow memory, so resident-set figures say nothing
+    about the program's own use."""
+    exe = shutil.which(ROADSIDE) or ROADSIDE
+    p = subprocess.run(["ldd", exe], capture_output=True, text=True)
+    return "libasan" in p.stdout
 
 
 def demo_calib(tmp):
@@ -29,7 +39,6 @@ def fail(msg, seed=None):
 
 
 def need_povray():
-    import shutil
     if not shutil.which(os.environ.get("ROADSIDE_POVRAY", "povray")):
         print("SKIP: povray not installed")
         sys.exit(77)
@@ -130,7 +139,6 @@ def box_corners_enu(v, L, W, H):
 
 
 def shutil_which_povray():
-    import shutil
     return shutil.which(os.environ.get("ROADSIDE_POVRAY", "povray"))
 
 

@@ -235,7 +235,10 @@ def main():
         train = open(os.path.join(big, "kitti", "ImageSets", "train.txt")).read().split()
         if train != ["%06d" % im["index"] for im in want["images"]]:
             u.fail("kitti/ImageSets/train.txt does not list the assembled images in order", SEED)
-        if rss_3000 - rss_2 > ASSEMBLE_MIB:
+        if u.sanitized():
+            print("memory bounds not checked: roadside is built with AddressSanitizer (its quarantine "
+                  "keeps freed memory resident)")
+        elif rss_3000 - rss_2 > ASSEMBLE_MIB:
             u.fail("assembling %d parts took %.1f MiB more than 2 (bound %.0f MiB)"
                    % (COUNT_BIG, rss_3000 - rss_2, ASSEMBLE_MIB), SEED)
 
@@ -267,7 +270,7 @@ def main():
         if len(want_m["images"]) != COUNT_BIG - 2:
             u.fail("the merge oracle holds %d images" % len(want_m["images"]))
         same(os.path.join(m, "annotations", "instances_train2017.json"), want_m, "merge of %d inputs" % SHARDS)
-        if rss_merge - rss_small > MERGE_MIB:
+        if rss_merge - rss_small > MERGE_MIB and not u.sanitized():
             u.fail("merging %d images took %.1f MiB more than 2 (bound %.0f MiB)"
                    % (COUNT_BIG - 2, rss_merge - rss_small, MERGE_MIB), SEED)
 
