@@ -13,22 +13,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_pose.h"
 #include "synth/rs_synth_render.h"
 #include "synth/rs_synth_scene.h"
 #include "test_fleet_check.h"
-
-// A camera 5 m up, 12 m south of the vehicles, looking north 15 degrees down (rows of
-// R_cam_enu as in test_labels_render.c).
-static void camera_pose(double rt[6])
-{
-    double p = -15 * M_PI / 180, C[3] = {0, -12, 5};
-    double R[3][3] = {{1, 0, 0}, {0, 0, 0}, {0, cos(p), sin(p)}};
-    R[1][0] = R[2][1] * R[0][2] - R[2][2] * R[0][1];
-    R[1][1] = R[2][2] * R[0][0] - R[2][0] * R[0][2];
-    R[1][2] = R[2][0] * R[0][1] - R[2][1] * R[0][0];
-    mrcal_r_from_R(rt, NULL, &R[0][0]);
-    for (int i = 0; i < 3; i++) rt[3 + i] = -(R[i][0] * C[0] + R[i][1] * C[1] + R[i][2] * C[2]);
-}
 
 static int render(rs_synth_render_result *r, const char *dir, const rs_camera *cam, const rs_synth_prepared *prep,
                   const double *zenith, const double *horizon, const double *ground, int off)
@@ -67,7 +55,8 @@ int main(int argc, char **argv)
     cam.intrinsics = intr;
     cam.Nintrinsics = 4;
     cam.width = 160, cam.height = 120;
-    camera_pose(cam.rt_cam_enu);
+    // a camera 5 m up, 12 m south of the vehicles, looking north 15 degrees down
+    rs_pose_rt_from_ypr(cam.rt_cam_enu, (const double[3]){0, -15, 0}, (const double[3]){0, -12, 5});
     rs_synth_vehicle v[2] = {
         {.cls = RS_SYNTH_SEDAN, .e_m = -1.6, .n_m = 0, .yaw_deg = 60, .variant = 3, .rgb = {0.5, 0.5, 0.5}},
         {.cls = RS_SYNTH_VAN, .e_m = 2.2, .n_m = 2, .yaw_deg = 300, .variant = 4, .rgb = {0.05, 0.05, 0.05}},

@@ -18,24 +18,11 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "core/rs_pose.h"
 #include "synth/rs_synth_labels.h"
 #include "synth/rs_synth_render.h"
 #include "synth/rs_synth_scene.h"
 #include "test_fleet_check.h"
-
-// A camera 8 m up looking north (yaw 10), 20 degrees down: rows of R_cam_enu for yaw y, pitch p
-// (docs/conventions.md with roll 0): x_cam = (cos y, -sin y, 0),
-// z_cam = (sin y cos p, cos y cos p, sin p), y_cam = z_cam x x_cam.
-static void camera_pose(double rt[6], double yaw_deg, double pitch_deg, const double C[3])
-{
-    double y = yaw_deg * M_PI / 180, p = pitch_deg * M_PI / 180;
-    double R[3][3] = {{cos(y), -sin(y), 0}, {0, 0, 0}, {sin(y) * cos(p), cos(y) * cos(p), sin(p)}};
-    R[1][0] = R[2][1] * R[0][2] - R[2][2] * R[0][1];
-    R[1][1] = R[2][2] * R[0][0] - R[2][0] * R[0][2];
-    R[1][2] = R[2][0] * R[0][1] - R[2][1] * R[0][0];
-    mrcal_r_from_R(rt, NULL, &R[0][0]);
-    for (int i = 0; i < 3; i++) rt[3 + i] = -(R[i][0] * C[0] + R[i][1] * C[1] + R[i][2] * C[2]);
-}
 
 static int run(const char *outdir, const char *lens_name, int opencv8)
 {
@@ -46,7 +33,7 @@ static int run(const char *outdir, const char *lens_name, int opencv8)
     cam.Nintrinsics = opencv8 ? 12 : 4;
     cam.width = 320, cam.height = 240;
     double C[3] = {0, 0, 8};
-    camera_pose(cam.rt_cam_enu, 10, -20, C);
+    rs_pose_rt_from_ypr(cam.rt_cam_enu, (const double[3]){10, -20, 0}, C); // 8 m up, yaw 10, 20 deg down
 
     // bus broadside at n = 20; a sedan right behind it (hidden); free vehicles; one cut by the
     // left border

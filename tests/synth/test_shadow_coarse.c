@@ -30,6 +30,7 @@
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "core/rs_pose.h"
 #include "synth/rs_synth_render.h"
 #include "synth/rs_synth_scene.h"
 #include "test_fleet_check.h"
@@ -39,19 +40,6 @@ enum { W = 640, H = 400 };
 #define SUN_EL  35.0
 #define TOL     0.1 // lit fraction: more than a sky light's share (0.074 here)
 #define EDGE_PX 1   // pixels
-
-// A camera 7 m up, 14 m south of the vehicles, looking north 22 degrees down (rows of
-// R_cam_enu as in test_fleet_env.c).
-static void camera_pose(double rt[6])
-{
-    double p = -22 * M_PI / 180, C[3] = {0, -14, 7};
-    double R[3][3] = {{1, 0, 0}, {0, 0, 0}, {0, cos(p), sin(p)}};
-    R[1][0] = R[2][1] * R[0][2] - R[2][2] * R[0][1];
-    R[1][1] = R[2][2] * R[0][0] - R[2][0] * R[0][2];
-    R[1][2] = R[2][0] * R[0][1] - R[2][1] * R[0][0];
-    mrcal_r_from_R(rt, NULL, &R[0][0]);
-    for (int i = 0; i < 3; i++) rt[3 + i] = -(R[i][0] * C[0] + R[i][1] * C[1] + R[i][2] * C[2]);
-}
 
 // Runs povray on DIR/NAME.ini (written by the caller) over the whole image.
 static int run(const char *dir, const char *ini)
@@ -134,7 +122,8 @@ int main(int argc, char **argv)
     cam.intrinsics = intr;
     cam.Nintrinsics = 4;
     cam.width = W, cam.height = H;
-    camera_pose(cam.rt_cam_enu);
+    // a camera 7 m up, 14 m south of the vehicles, looking north 22 degrees down
+    rs_pose_rt_from_ypr(cam.rt_cam_enu, (const double[3]){0, -22, 0}, (const double[3]){0, -14, 7});
     const rs_synth_vehicle v[] = {
         {.cls = RS_SYNTH_SEDAN, .e_m = -5.5, .n_m = -2, .yaw_deg = 90, .variant = 1, .rgb = {0.5, 0.5, 0.5}},
         {.cls = RS_SYNTH_SUV, .e_m = 0.5, .n_m = -2.5, .yaw_deg = 80, .variant = 2, .rgb = {0.2, 0.3, 0.6}},
