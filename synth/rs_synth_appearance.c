@@ -300,20 +300,21 @@ rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact, const char *p
 
 // ---- all together ----
 
-rs_status rs_synth_appearance_estimate(rs_synth_appearance *out, const char *background_path, const rs_image *reference,
-                                       rs_err *err)
+rs_status rs_synth_appearance_estimate(rs_synth_appearance *out, const char *background_path, const rs_image *image,
+                                       const rs_image *reference, rs_err *err)
 {
     memset(out, 0, sizeof(*out));
-    rs_image bg = {0};
+    rs_image read = {0};
+    const rs_image *bg = image ? image : &read;
     int exact;
     rs_status st;
-    if ((st = rs_image_read(&bg, background_path, err)) ||
-        (st = rs_synth_estimate_gain(out->gain, &bg, reference, NULL, err)) ||
-        (st = rs_synth_estimate_noise(&out->noise_sigma, &bg, err)) ||
-        (st = rs_synth_estimate_blur(&out->blur_sigma_px, &bg, err)) ||
+    if ((!image && (st = rs_image_read(&read, background_path, err))) ||
+        (st = rs_synth_estimate_gain(out->gain, bg, reference, NULL, err)) ||
+        (st = rs_synth_estimate_noise(&out->noise_sigma, bg, err)) ||
+        (st = rs_synth_estimate_blur(&out->blur_sigma_px, bg, err)) ||
         (st = rs_synth_estimate_jpeg_quality(&out->jpeg_quality, &exact, background_path, err)))
         rs_err_prefix(err, "%s", background_path);
-    rs_image_free(&bg);
+    rs_image_free(&read);
     return st;
 }
 

@@ -72,12 +72,15 @@ typedef struct {
     int jpeg_quality;     // 0: not a JPEG (no re-encoding)
 } rs_synth_appearance;
 
-// Estimates all of the above from a background image file. reference: an sRGB image of the same
-// view rendered with the nominal light the vehicles are rendered with (e.g. the digital-twin
-// background, rs_synth_background.h) for the exposure; NULL for grey world (colour cast only).
+// Estimates all of the above from a background image file. image: that file as rs_image_read
+// decodes it, when the caller has it already, or NULL (then it is read here); the JPEG quality
+// is always read from the file itself. reference: an sRGB image of the same view rendered with
+// the nominal light the vehicles are rendered with (e.g. the digital-twin background,
+// rs_synth_background.h) for the exposure; NULL for grey world (colour cast only).
 rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
                                        // in
-                                       const char *background_path, const rs_image *reference, rs_err *err);
+                                       const char *background_path, const rs_image *image, const rs_image *reference,
+                                       rs_err *err);
 
 // Applies an appearance to a rendered vehicle layer (linear light, straight alpha, (H,W,4)), in
 // place: colour x gain; then a Gaussian blur of sqrt(max(0, blur^2 - layer_blur^2)) px on the
