@@ -13,7 +13,8 @@
 //    pass's region also covers each vehicle's shadows: its box's top corners projected onto
 //    the ground along every light of the pass.
 // 2b. Processes: one povray process per pass (colour, ID, shadow), all started at once (one
-//    after the other with separate_processes). Each povray process spends about 0.6 s waiting
+//    after the other with separate_processes); the ID pass has none where the ground hides no
+//    part of a vehicle: roadside rasterises it meanwhile (rs_synth_ids.h, the same pixels). Each povray process spends about 0.6 s waiting
 //    between its threads besides its work (docs/povray.md): at once, an image waits once.
 //    The shadow pass is rendered at half the canvas's resolution on coarse meshes and
 //    interpolated (docs/fleet.md, "Cost"; within 1 px of the full pass's sun-shadow edge).
@@ -24,7 +25,8 @@
 //    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).
 // 4. Composite: out = fg + (1 - a) bg in linear light (straight alpha: fg = a * colour), the
 //    background decoded from sRGB and the result encoded to sRGB 8-bit.
-// 5. ID pass: no lights, flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
+// 5. ID pass (rasterised by roadside where the ground hides nothing, else POV-Ray's): no lights,
+//    flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
 //    per-pixel vehicle index 0 = background, k+1 = vehicle k (16-bit); resampled with
 //    nearest-neighbour into the real lens.
 // povray runs in the output folder with HOME set to it (POVINC/POVINI unset), its output going
@@ -70,6 +72,8 @@ typedef struct {
     bool write_files;              // write image.png, rgba.png, ids.png (default true)
     bool separate_processes;       // the passes' povray processes one after the other
                                    // (default false: all at once)
+    bool povray_ids;               // the ID pass rendered by POV-Ray even where roadside
+                                   // rasterises it (rs_synth_ids.h; default false: tests' oracle)
     rs_synth_scene_options scene;  // sun, pins, ground (pass and include are set per pass)
 } rs_synth_render_options;
 
