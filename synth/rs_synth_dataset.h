@@ -24,8 +24,8 @@
 //               the render, rs_synth_scene.h; the background times their ratio on non-vehicle
 //               pixels; docs/synth.md): the sun's shadow when sunny (or untagged) with the
 //               sun up, the sky's soft shadow under and beside each vehicle always
-//   povray      two processes per image, the colour and shadow passes, at once; the ID pass
-//               rasterised meanwhile (rs_synth_ids.h)
+//   povray      one process per image, the colour pass; the ID and shadow passes rasterised
+//               meanwhile (rs_synth_raster.h)
 //   appearance  the vehicle layer matched to the background (rs_synth_appearance.h: gains,
 //               blur, noise, JPEG quality), estimated once per background per process
 // Layout of DATASET (YOLOX's COCO layout plus YOLO and KITTI, docs/labels.md):

@@ -14,7 +14,7 @@
 #include "synth/internal/rs_synth_povray.h"
 #include "synth/internal/rs_synth_scene_internal.h"
 #include "synth/rs_synth_appearance.h"
-#include "synth/rs_synth_ids.h"
+#include "synth/rs_synth_raster.h"
 
 void rs_synth_render_options_default(rs_synth_render_options *opt)
 {
@@ -538,9 +538,11 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         const bool ground_hides = i_id >= 0 && rs_synth_scene_ground_occludes(&cam, vehicles, &passes[i_id],
                                                                               ground_normal_enu, ground_offset_m);
         const bool ids_alpha = i_id >= 0 && opt.antialias < 2 && opt.scene.Npins == 0 && !ground_drawn && !ground_hides;
-        // The ID pass rasterised here rather than by a povray process (rs_synth_ids.h: the same
-        // pixels), unless the ground may hide part of a vehicle or the caller asks for POV-Ray's.
-        const bool ids_here = i_id >= 0 && !ground_hides && !opt.povray_ids;
+        // The ID and shadow passes rasterised here rather than by povray processes
+        // (rs_synth_raster.h), unless the caller asks for POV-Ray's; the ID pass also where the
+        // ground may hide part of a vehicle.
+        const bool ids_here = i_id >= 0 && !ground_hides && !opt.povray_passes;
+        const bool shadow_here = i_shadow >= 0 && !opt.povray_passes;
         static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
         static const char *const logs[3] = {"povray.log", "pass_ids.log", "pass_shadow.log"};
         for (int k = 0; k < Npasses; k++) {
@@ -564,28 +566,31 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
         const bool together = !opt.separate_processes;
         for (int k = 0; k < Npasses; k++) {
-            if (k == i_id && ids_here) continue;
+            if ((k == i_id && ids_here) || (k == i_shadow && shadow_here)) continue;
             if (!st) st = job_start(&jobs[k], out_dir, povray, intrinsics, ground_normal_enu, ground_offset_m, err);
             if (!together) {
                 rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, err);
                 st = st ? st : st2;
             }
         }
-        if (!st && ids_here) // while povray renders the other passes
-            st = rs_synth_ids_raster(&imgs[i_id], canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, vehicles,
+        rs_image frac = {0};
+        if (!st && ids_here) // while povray renders the colour pass
+            st = rs_synth_raster_ids(&imgs[i_id], canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, vehicles,
                                      include, ground_normal_enu, ground_offset_m, region, err);
+        if (!st && shadow_here)
+            st = rs_synth_raster_shadow(&frac, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, &svehicles,
+                                        include, ground_normal_enu, ground_offset_m, lights, Nlights, err);
         for (int k = 0; k < Npasses && together; k++) { // every started one waited for, the first error kept
             rs_err e2 = {0};
             rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, st ? &e2 : err);
             st = st ? st : st2;
         }
-        out->Npovray = Npasses - (ids_here ? 1 : 0);
+        out->Npovray = Npasses - (ids_here ? 1 : 0) - (shadow_here ? 1 : 0);
         out->Npasses = Npasses;
         rgba = imgs[0];
         if (i_id >= 0) idimg = imgs[1];
         if (!st && jobs[0].ppm) st = alpha_from_ids(&rgba, &idimg, err);
-        rs_image frac = {0};
-        if (!st && i_shadow >= 0)
+        if (!st && i_shadow >= 0 && !shadow_here)
             st =
                 shadow_fraction(&frac, &imgs[i_shadow], rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu),
                                 canvas.width, canvas.height, err);

@@ -12,12 +12,13 @@
 //    ground drawn when there is no background, make the region the whole canvas. The shadow
 //    pass's region also covers each vehicle's shadows: its box's top corners projected onto
 //    the ground along every light of the pass.
-// 2b. Processes: one povray process per pass (colour, ID, shadow), all started at once (one
-//    after the other with separate_processes); the ID pass has none where the ground hides no
-//    part of a vehicle: roadside rasterises it meanwhile (rs_synth_ids.h, the same pixels). Each povray process spends about 0.6 s waiting
-//    between its threads besides its work (docs/povray.md): at once, an image waits once.
-//    The shadow pass is rendered at half the canvas's resolution on coarse meshes and
-//    interpolated (docs/fleet.md, "Cost"; within 1 px of the full pass's sun-shadow edge).
+// 2b. Passes: roadside rasterises the ID pass (the pixels POV-Ray would give; by POV-Ray where
+//    the ground may hide part of a vehicle) and the shadow pass (exact at full resolution, on
+//    coarse meshes) while one povray process renders the colour pass (rs_synth_raster.h;
+//    docs/fleet.md, "Cost", D). With povray_passes, one povray process per pass instead, all
+//    started at once (one after the other with separate_processes), the shadow pass at half
+//    the canvas's resolution on coarse meshes, interpolated. Each povray process spends about
+//    0.6 s waiting between its threads besides its work (docs/povray.md).
 // 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
 //    (File_Gamma 1), no antialiasing unless asked; without pins, drawn ground, antialiasing or
 //    a ground hiding part of a vehicle, 16-bit PPM with the alpha of the ID pass (the same);
@@ -72,8 +73,9 @@ typedef struct {
     bool write_files;              // write image.png, rgba.png, ids.png (default true)
     bool separate_processes;       // the passes' povray processes one after the other
                                    // (default false: all at once)
-    bool povray_ids;               // the ID pass rendered by POV-Ray even where roadside
-                                   // rasterises it (rs_synth_ids.h; default false: tests' oracle)
+    bool povray_passes;            // the ID and shadow passes rendered by POV-Ray, which roadside
+                                   // otherwise rasterises (rs_synth_raster.h; default false: the
+                                   // tests' oracle)
     rs_synth_scene_options scene;  // sun, pins, ground (pass and include are set per pass)
 } rs_synth_render_options;
 

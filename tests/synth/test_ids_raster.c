@@ -1,6 +1,6 @@
-// tests/synth/test_ids_raster.c -- the object-ID pass rasterised by roadside (synth/rs_synth_ids.h)
+// tests/synth/test_ids_raster.c -- the object-ID pass rasterised by roadside (synth/rs_synth_raster.h)
 // against the same pass rendered by the real POV-Ray (the oracle: rs_synth_render with
-// povray_ids), on scenes made to be hard: 14 vehicles of every class crowded round the point the
+// povray_passes), on scenes made to be hard: 14 vehicles of every class crowded round the point the
 // camera looks at (they hide one another), random headings, cameras from 1.5 m to 30 m up, a
 // pinhole and a distorted lens (OPENCV8: the canvas and its resampling), a vehicle cut by the
 // image border and one partly behind the camera (the near-plane clipping).
@@ -75,7 +75,7 @@ int main(int argc, char **argv)
         for (int k = 0; k < 2; k++) {
             char dir[4200];
             snprintf(dir, sizeof dir, "%s/ids_raster/%d_%s", out, s, k ? "povray" : "roadside");
-            ropt.povray_ids = k == 1;
+            ropt.povray_passes = k == 1;
             if (rs_synth_render(&r[k], dir, &cam, normal, 0, &prep, &ropt, &err))
                 return fprintf(stderr, "scene %d: render: %s\n", s, err.msg), 1;
         }

@@ -13,15 +13,15 @@
 #   overcast (--overcast) no sun; where the ray towards one of the 6 lights of the sky's lower
 #            band passes through a core the lit fraction is <= 1 - 0.587 / 6 + 0.01 (that
 #            light's share of the sky); open pixels still 1.
-#   Each class is checked without its border pixels (a 3 x 3 erosion): the shadow pass is
-#   rendered at half resolution and interpolated, which mixes values up to 1 px away; and
+#   Each class is checked without its border pixels (a 3 x 3 erosion: the shadow pass's
+#   coarse meshes differ from the boxes by up to a pixel); and
 #   without the vehicles' own pixels (ids.png > 0), where the shadow is 1 (the pass does not
 #   look under the vehicles: they hide the ground as green marks).
-#   at once  the passes' povray processes (colour and shadow; roadside rasterises the ID pass)
-#            run at once (the default) give the same files,
+#   at once  the default (roadside rasterises the ID and shadow passes while povray renders the
+#            colour pass) gives the same files,
 #            bit for bit, as one after the other (--separate-processes), and the region covers
-#            every shadow. (The shadow pass is rendered at half resolution on coarse meshes;
-#            tests/synth/test_shadow_coarse.c compares it with the full pass.)
+#            every shadow. (The shadow pass is rasterised on coarse meshes;
+#            tests/synth/test_shadow_coarse.c compares it with POV-Ray's full pass.)
 import os
 import sys
 import tempfile
@@ -123,9 +123,8 @@ def main():
         for sd in SKY_DIRS:
             near_any |= classify(sd, dilated(BOX))
         def inner(m):
-            """The mask m without its border pixels (a 3 x 3 erosion): the shadow pass is rendered
-            at half resolution and interpolated bilinearly, so a canvas pixel mixes its
-            neighbours' values up to 1 px away."""
+            """The mask m without its border pixels (a 3 x 3 erosion): the shadow pass works on
+            coarse meshes, whose outline differs from the boxes' by up to a pixel."""
             return cv2.erode(m.reshape(H, W).astype(np.uint8), np.ones((3, 3), np.uint8)).reshape(-1) > 0
 
         open_px = inner(down & ~near_any)
@@ -138,7 +137,7 @@ def main():
             p = u.run(common + ["--sun", "%g,%g" % (SUN_AZ, SUN_EL), "-o", out] + extra)
             print(p.stdout.strip())
             w = p.stdout.split()
-            want = "3 processes 2"  # the ID pass rasterised by roadside (rs_synth_ids.h)
+            want = "3 processes 1"  # the ID and shadow passes rasterised by roadside (rs_synth_raster.h)
             if "passes %s" % want not in p.stdout:
                 u.fail("%s: expected 'passes %s' in: %s" % (name, want, p.stdout), SEED)
             runs[name] = out
