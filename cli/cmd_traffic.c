@@ -8,6 +8,7 @@
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
 #include "geo/rs_site.h"
+#include "synth/rs_synth_fleet.h"
 #include "synth/rs_synth_sumo.h"
 #include "synth/rs_synth_traffic.h"
 

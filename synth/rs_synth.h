@@ -31,6 +31,12 @@ typedef enum {
     RS_SYNTH_USER_MODEL = 100 // an OBJ mesh given by the user (model_path)
 } rs_synth_class;
 
+// Class mix: relative weights of the classes (any non-negative numbers, at least one > 0);
+// the default, parsing and drawing: synth/rs_synth_fleet.h.
+typedef struct {
+    double weight[RS_SYNTH_NCLASSES];
+} rs_synth_class_mix;
+
 // One vehicle in a scene. Strings are borrowed (the caller owns them).
 typedef struct {
     rs_synth_class cls;

@@ -1,10 +1,13 @@
-// rs_synth_fleet.c -- the fleet's classes: names, dimension ranges, the traffic mix and the paint
-// colours, and resolving what a vehicle left to chance from its variant. docs/fleet.md gives the
-// sources. The meshes: rs_synth_fleet_build.c (procedural), rs_synth_fleet_obj.c (OBJ models),
-// rs_synth_fleet_pov.c (POV-Ray output); what they share: synth/internal/rs_synth_fleet_internal.h.
+// rs_synth_fleet.c -- the fleet's classes: names, dimension ranges, the class mix (default,
+// parsing, drawing), the paint colours, and resolving what a vehicle left to chance from its
+// variant. docs/fleet.md gives the sources. The meshes: rs_synth_fleet_build.c (procedural),
+// rs_synth_fleet_obj.c (OBJ models), rs_synth_fleet_pov.c (POV-Ray output); what they share:
+// synth/internal/rs_synth_fleet_internal.h.
 #include "synth/rs_synth_fleet.h"
 
+#include <errno.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "core/rs_rng.h"
@@ -126,8 +129,73 @@ static void draw_paint(double rgb[3], uint64_t variant)
     }
 }
 
-// Traffic mix of rs_synth_fleet_random (our estimate for urban arterial roads).
-static const double class_mix[RS_SYNTH_NCLASSES] = {0.28, 0.19, 0.21, 0.06, 0.08, 0.03, 0.06, 0.05, 0.02, 0.02};
+// ---------------------------------------------------------------- class mix
+
+void rs_synth_class_mix_default(rs_synth_class_mix *mix)
+{
+    // The motor vehicles' assumed mix (docs/traffic.md, "Class mix") scaled by 0.975, and the
+    // two-wheelers' shares of urban road traffic in Great Britain (DfT road traffic estimates,
+    // docs/traffic.md): motorcycles 0.8 %, pedal cycles 1.7 %. The weights sum to 1.
+    static const double motor[RS_SYNTH_MOTORCYCLE] = {0.24, 0.22, 0.30, 0.03, 0.10, 0.02, 0.06, 0.03};
+    for (int c = 0; c < RS_SYNTH_MOTORCYCLE; c++) mix->weight[c] = 0.975 * motor[c];
+    mix->weight[RS_SYNTH_MOTORCYCLE] = 0.008;
+    mix->weight[RS_SYNTH_BICYCLE] = 0.017;
+}
+
+rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs_err *err)
+{
+    rs_synth_class_mix m = {{0}};
+    double total = 0;
+    const char *p = text ? text : "";
+    for (int item = 1;; item++) {
+        const char *end = strchr(p, ',');
+        size_t n = end ? (size_t)(end - p) : strlen(p);
+        const char *eq = memchr(p, '=', n);
+        if (!eq) return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d '%.*s': expected CLASS=WEIGHT", item, (int)n, p);
+        char name[32];
+        rs_synth_class c = RS_SYNTH_SEDAN;
+        size_t nl = (size_t)(eq - p);
+        if (nl >= sizeof name || (memcpy(name, p, nl), name[nl] = '\0', rs_synth_class_from_name(&c, name, NULL)))
+            return rs_err_set(err, RS_ERR_USAGE,
+                              "--mix: item %d: unknown class '%.*s' (sedan, hatchback, suv, pickup, van, bus, "
+                              "box_truck, articulated_truck, motorcycle, bicycle)",
+                              item, (int)nl, p);
+        char num[64];
+        size_t nn = n - (size_t)(eq + 1 - p);
+        if (nn == 0 || nn >= sizeof num)
+            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: no weight for '%s'", item, name);
+        memcpy(num, eq + 1, nn);
+        num[nn] = '\0';
+        char *stop;
+        errno = 0;
+        double w = strtod(num, &stop);
+        if (*stop || errno || !isfinite(w) || w < 0)
+            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: weight '%s' of '%s' is not a number >= 0", item, num,
+                              name);
+        m.weight[c] = w;
+        total += w;
+        if (!end) break;
+        p = end + 1;
+    }
+    if (!(total > 0)) return rs_err_set(err, RS_ERR_USAGE, "--mix: all weights are 0");
+    *mix = m;
+    return RS_OK;
+}
+
+rs_synth_class rs_synth_class_mix_draw(const rs_synth_class_mix *mix, double u)
+{
+    double total = 0;
+    for (int k = 0; k < RS_SYNTH_NCLASSES; k++) total += mix->weight[k];
+    u *= total;
+    int last = 0;
+    for (int k = 0; k < RS_SYNTH_NCLASSES; k++) {
+        if (!(mix->weight[k] > 0)) continue;
+        last = k;
+        if (u < mix->weight[k]) return (rs_synth_class)k;
+        u -= mix->weight[k];
+    }
+    return (rs_synth_class)last;
+}
 
 rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *in, rs_err *err)
 {
@@ -159,16 +227,10 @@ rs_status rs_synth_fleet_resolve(rs_synth_vehicle *out, const rs_synth_vehicle *
 rs_status rs_synth_fleet_random(rs_synth_vehicle *out, uint64_t seed, rs_err *err)
 {
     rs_rng rng = rs_synth_fleet_stream(seed, RS_SYNTH_FLEET_STREAM_CLASS);
-    double u = rs_rng_uniform(&rng), acc = 0;
+    rs_synth_class_mix mix;
+    rs_synth_class_mix_default(&mix);
     rs_synth_vehicle v = {0};
-    v.cls = RS_SYNTH_NCLASSES - 1;
-    for (int i = 0; i < RS_SYNTH_NCLASSES; i++) {
-        acc += class_mix[i];
-        if (u < acc) {
-            v.cls = (rs_synth_class)i;
-            break;
-        }
-    }
+    v.cls = rs_synth_class_mix_draw(&mix, rs_rng_uniform(&rng));
     v.rgb[0] = v.rgb[1] = v.rgb[2] = -1;
     v.variant = seed;
     return rs_synth_fleet_resolve(out, &v, err);

@@ -79,6 +79,24 @@ typedef struct {
 // Returns RS_ERR_INVALID for a class out of range (including RS_SYNTH_USER_MODEL).
 rs_status rs_synth_class_range_get(rs_synth_class_range *out, rs_synth_class cls, rs_err *err);
 
+// The default mix (docs/traffic.md, "Class mix", gives the reasoning and the sources): the two-
+// wheelers at their shares of urban road traffic in Great Britain (DfT road traffic estimates:
+// motorcycle 0.008, bicycle 0.017), the motor vehicles at an assumed mix scaled by 0.975 (sedan
+// 0.234, hatchback 0.2145, suv 0.2925, pickup 0.02925, van 0.0975, bus 0.0195, box_truck
+// 0.0585, articulated_truck 0.02925). The weights sum to 1.
+void rs_synth_class_mix_default(rs_synth_class_mix *mix);
+
+// Parses "class=weight,class=weight,...": the classes named get these weights, the others 0.
+// RS_ERR_USAGE naming the item at fault (unknown class, bad or negative weight, all zero).
+rs_status rs_synth_class_mix_parse( // out
+    rs_synth_class_mix *mix,
+    // in
+    const char *text, rs_err *err);
+
+// The class at u in [0, 1) of the mix's cumulative weights (weights normalised by their sum;
+// classes of weight 0 are never returned). rs_synth_fleet_random and the traffic draw with it.
+rs_synth_class rs_synth_class_mix_draw(const rs_synth_class_mix *mix, double u);
+
 // Fills what a procedural vehicle left to chance, deterministically from in->variant: length,
 // width and height when 0 (truncated normal of the class, rs_synth_class_range), paint when
 // rgb[0] < 0 (drawn from the
@@ -92,7 +110,7 @@ rs_status rs_synth_fleet_resolve( // out
     // in
     const rs_synth_vehicle *in, rs_err *err);
 
-// A random procedural vehicle: the class drawn from the traffic mix of docs/fleet.md, then
+// A random procedural vehicle: the class drawn from the default mix (rs_synth_class_mix_default), then
 // resolved (rs_synth_fleet_resolve) with variant = seed; position and yaw are 0. Deterministic.
 rs_status rs_synth_fleet_random( // out
     rs_synth_vehicle *out,

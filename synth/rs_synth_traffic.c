@@ -3,7 +3,6 @@
 #include "synth/rs_synth_traffic.h"
 
 #include <cjson/cJSON.h>
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,60 +17,9 @@
 // ---------------------------------------------------------------------------------------------
 // classes
 
-void rs_synth_class_mix_default(rs_synth_class_mix *mix)
-{
-    // The motor vehicles' assumed mix (docs/traffic.md, "Class mix") scaled by 0.975, and the
-    // two-wheelers' shares of urban road traffic in Great Britain (DfT road traffic estimates,
-    // docs/traffic.md): motorcycles 0.8 %, pedal cycles 1.7 %. The weights sum to 1.
-    static const double motor[RS_SYNTH_MOTORCYCLE] = {0.24, 0.22, 0.30, 0.03, 0.10, 0.02, 0.06, 0.03};
-    for (int c = 0; c < RS_SYNTH_MOTORCYCLE; c++) mix->weight[c] = 0.975 * motor[c];
-    mix->weight[RS_SYNTH_MOTORCYCLE] = 0.008;
-    mix->weight[RS_SYNTH_BICYCLE] = 0.017;
-}
-
 double rs_synth_class_max_speed_mps(rs_synth_class cls)
 {
     return cls == RS_SYNTH_BICYCLE ? RS_SYNTH_BICYCLE_MAX_SPEED_MPS : INFINITY;
-}
-
-rs_status rs_synth_class_mix_parse(rs_synth_class_mix *mix, const char *text, rs_err *err)
-{
-    rs_synth_class_mix m = {{0}};
-    double total = 0;
-    const char *p = text ? text : "";
-    for (int item = 1;; item++) {
-        const char *end = strchr(p, ',');
-        size_t n = end ? (size_t)(end - p) : strlen(p);
-        const char *eq = memchr(p, '=', n);
-        if (!eq) return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d '%.*s': expected CLASS=WEIGHT", item, (int)n, p);
-        char name[32];
-        rs_synth_class c;
-        size_t nl = (size_t)(eq - p);
-        if (nl >= sizeof name || (memcpy(name, p, nl), name[nl] = '\0', rs_synth_class_from_name(&c, name, NULL)))
-            return rs_err_set(err, RS_ERR_USAGE,
-                              "--mix: item %d: unknown class '%.*s' (sedan, hatchback, suv, pickup, van, bus, "
-                              "box_truck, articulated_truck, motorcycle, bicycle)",
-                              item, (int)nl, p);
-        char num[64];
-        size_t nn = n - (size_t)(eq + 1 - p);
-        if (nn == 0 || nn >= sizeof num)
-            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: no weight for '%s'", item, name);
-        memcpy(num, eq + 1, nn);
-        num[nn] = '\0';
-        char *stop;
-        errno = 0;
-        double w = strtod(num, &stop);
-        if (*stop || errno || !isfinite(w) || w < 0)
-            return rs_err_set(err, RS_ERR_USAGE, "--mix: item %d: weight '%s' of '%s' is not a number >= 0", item, num,
-                              name);
-        m.weight[c] = w;
-        total += w;
-        if (!end) break;
-        p = end + 1;
-    }
-    if (!(total > 0)) return rs_err_set(err, RS_ERR_USAGE, "--mix: all weights are 0");
-    *mix = m;
-    return RS_OK;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -89,21 +37,6 @@ void rs_synth_traffic_options_default(rs_synth_traffic_options *opt)
 }
 
 static double uniform(rs_rng *rng, double lo, double hi) { return lo + (hi - lo) * rs_rng_uniform(rng); }
-
-static rs_synth_class draw_class(rs_rng *rng, const rs_synth_class_mix *mix)
-{
-    double total = 0;
-    for (int k = 0; k < RS_SYNTH_NCLASSES; k++) total += mix->weight[k];
-    double u = rs_rng_uniform(rng) * total;
-    int last = 0;
-    for (int k = 0; k < RS_SYNTH_NCLASSES; k++) {
-        if (mix->weight[k] <= 0) continue;
-        last = k;
-        if (u < mix->weight[k]) return (rs_synth_class)k;
-        u -= mix->weight[k];
-    }
-    return (rs_synth_class)last;
-}
 
 static rs_status traffic_options_check(const rs_synth_traffic_options *o, rs_err *err)
 {
@@ -153,7 +86,7 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
         bool first = true;
         for (;;) {
             rs_synth_traffic_vehicle x = {0};
-            x.cls = draw_class(&lr, &opt->mix);
+            x.cls = rs_synth_class_mix_draw(&opt->mix, rs_rng_uniform(&lr));
             rs_synth_class_range r;
             rs_synth_class_range_get(&r, x.cls, NULL); // a class of the mix: always valid
             x.length_m = uniform(&lr, r.length_m[0], r.length_m[1]);

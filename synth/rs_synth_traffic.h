@@ -33,33 +33,12 @@ typedef struct {
     char id[48];                        // "v12" (built-in) or SUMO's vehicle id (truncated, as given)
 } rs_synth_traffic_vehicle;
 
-// Class mix: relative weights of the classes (any non-negative numbers, at least one > 0).
-// Class names and dimension ranges are the fleet's (synth/rs_synth_fleet.h:
-// rs_synth_class_name, rs_synth_class_range_get).
-typedef struct {
-    double weight[RS_SYNTH_NCLASSES];
-} rs_synth_class_mix;
-
-// The default mix (docs/traffic.md, "Class mix", gives the reasoning and the sources): the two-
-// wheelers at their shares of urban road traffic in Great Britain (DfT road traffic estimates:
-// motorcycle 0.008, bicycle 0.017), the motor vehicles at an assumed mix scaled by 0.975 (sedan
-// 0.234, hatchback 0.2145, suv 0.2925, pickup 0.02925, van 0.0975, bus 0.0195, box_truck
-// 0.0585, articulated_truck 0.02925). The weights sum to 1.
-void rs_synth_class_mix_default(rs_synth_class_mix *mix);
-
 // A bicycle's top speed in the built-in traffic: 20 km/h, SUMO's default bicycle speed (as we
 // recall DEFAULT_BICYCLE_SPEED; its bicycle-lane type map uses 5.56 m/s; docs/traffic.md).
 #define RS_SYNTH_BICYCLE_MAX_SPEED_MPS 5.56
 // The highest speed of a class in the built-in traffic (m/s): RS_SYNTH_BICYCLE_MAX_SPEED_MPS for a
 // bicycle, INFINITY (the lane's limit) for the others.
 double rs_synth_class_max_speed_mps(rs_synth_class cls);
-
-// Parses "class=weight,class=weight,...": the classes named get these weights, the others 0.
-// RS_ERR_USAGE naming the item at fault (unknown class, bad or negative weight, all zero).
-rs_status rs_synth_class_mix_parse( // out
-    rs_synth_class_mix *mix,
-    // in
-    const char *text, rs_err *err);
 
 // The built-in traffic model.
 typedef struct {

@@ -3,7 +3,10 @@
 //   - every class: 4000 draws of length, width and height all inside [min, max]; their mean
 //     within 4 standard errors of the closed-form mean of the truncated normal
 //     (mu + sigma (phi(a) - phi(b)) / (Phi(b) - Phi(a))), the oracle;
-//   - the passenger cars (sedan, hatchback, SUV in rs_synth_fleet_random's mix): mean length,
+//   - the classes rs_synth_fleet_random draws (40000 seeds): Pearson's chi-square against the one
+//     default mix of docs/traffic.md ("Class mix", the weights written out below, the same as
+//     the traffic's) below 27.88 (9 degrees of freedom, p = 0.001);
+//   - the passenger cars (sedan, hatchback, SUV in that mix): mean length,
 //     width, height within 0.08, 0.03, 0.05 m of Inovev's 2022 European average car
 //     (4.36 x 1.81 x 1.55 m);
 //   - two-wheelers: within 0.15 m of SUMO's defaults for the box with its rider (bicycle
@@ -60,14 +63,25 @@ int main(void)
                       rs_synth_class_name(c), k, sum[k] / N, want[k]);
         }
     }
-    // passenger cars as rs_synth_fleet_random draws them
-    for (int s = 0; s < 40000; s++) {
+    // passenger cars as rs_synth_fleet_random draws them, and its class shares
+    static const double mix[RS_SYNTH_NCLASSES] = {0.234,  0.2145, 0.2925,  0.02925, 0.0975,
+                                                  0.0195, 0.0585, 0.02925, 0.008,   0.017};
+    int nclass[RS_SYNTH_NCLASSES] = {0};
+    const int Nr = 40000;
+    for (int s = 0; s < Nr; s++) {
         rs_synth_vehicle v;
         CHECK(rs_synth_fleet_random(&v, 5000000 + (uint64_t)s, NULL) == RS_OK, "random %d", s);
+        if ((int)v.cls >= 0 && v.cls < RS_SYNTH_NCLASSES) nclass[v.cls]++;
         if (v.cls != RS_SYNTH_SEDAN && v.cls != RS_SYNTH_HATCHBACK && v.cls != RS_SYNTH_SUV) continue;
         car_mean[0] += v.length_m, car_mean[1] += v.width_m, car_mean[2] += v.height_m;
         ncar++;
     }
+    double chi2_mix = 0;
+    for (int c = 0; c < RS_SYNTH_NCLASSES; c++) chi2_mix += pow(nclass[c] - Nr * mix[c], 2) / (Nr * mix[c]);
+    printf("classes of rs_synth_fleet_random against the default mix: chi-square %.2f (9 dof, p = 0.001 at 27.88); "
+           "motorcycles %d, bicycles %d of %d\n",
+           chi2_mix, nclass[RS_SYNTH_MOTORCYCLE], nclass[RS_SYNTH_BICYCLE], Nr);
+    CHECK(chi2_mix < 27.88, "class shares: chi-square %.2f >= 27.88 (seeds 5000000+)", chi2_mix);
     const double inovev[3] = {4.36, 1.81, 1.55}, tol[3] = {0.08, 0.03, 0.05};
     for (int k = 0; k < 3; k++) {
         car_mean[k] /= ncar;

@@ -15,6 +15,7 @@
 
 #include "core/rs_rng.h"
 #include "sim/rs_simulate.h"
+#include "synth/rs_synth_fleet.h"
 #include "synth/rs_synth_sumo.h"
 #include "synth/rs_synth_traffic.h"
 
