@@ -3,6 +3,7 @@
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_synth.h"
@@ -10,12 +11,13 @@
 #include "synth/rs_synth_labels.h"
 #include "synth/rs_synth_render.h"
 #include "synth/rs_synth_sandbox.h"
+#include "synth/rs_synth_sun.h"
 
 static const char render_usage[] =
     "usage: roadside render SITE --calib DIR --camera ID --vehicles FILE -o OUTDIR\n"
     "                       [--background IMAGE] [--pins] [--sun AZ,EL | --time ISO8601]\n"
     "                       [--full-frame] [--antialias N] [--canvas-scale S] [--keep]\n"
-    "                       [--shadows [--overcast]] [--separate-processes]\n"
+    "                       [--shadows [--overcast]] [--separate-processes] [--no-match-light]\n"
     "                       [--labels [--split NAME] [--bbox KIND] [--min-visibility V]]\n"
     "\n"
     "Renders vehicles seen by a calibrated camera with POV-Ray 3.7 (docs/povray.md):\n"
@@ -40,7 +42,13 @@ static const char render_usage[] =
     "Options (SITE, --calib, --camera, --vehicles, --pins, --sun, --time: see roadside scene):\n"
     "  -o, --output DIR     output folder (created if needed)\n"
     "  --background IMAGE   photograph of the camera's size to composite onto (the ground\n"
-    "                       plane is then left out of the render)\n"
+    "                       plane is then left out of the render). The lights and the\n"
+    "                       environment the vehicles reflect are matched to it, as roadside\n"
+    "                       synth does (docs/fleet.md): the light level and colour from its\n"
+    "                       road (SITE/lanes.geojson; the road assumed dry), the ground and\n"
+    "                       sky they reflect from its pixels; the sun's direction stays the\n"
+    "                       one of --sun or --time\n"
+    "  --no-match-light     keep the default lights and environment over a background\n"
     "  --full-frame         no culling, no region: render the whole image (for comparison)\n"
     "  --antialias N        N x N supersampling of the colour pass (default off)\n"
     "  --canvas-scale S     distorted lenses: canvas pixels per pixel, >= 1 (default 1)\n"
@@ -64,7 +72,8 @@ static const char render_usage[] =
     "                       that needs files of its own)\n"
     "  -h, --help           this text\n"
     "\n"
-    "Prints one line: vehicles, rendered, region, seconds in povray.\n"
+    "Prints one line: vehicles, rendered, region, seconds in povray; over a background whose\n"
+    "light was matched, a second: the road pixels, the lights' factor and the light level.\n"
     "Exit status: 0 rendered, 1 failed (a clear message if povray is missing), 2 usage error.\n";
 
 enum {
@@ -78,6 +87,7 @@ enum {
     OPT_BBOX,
     OPT_MINVIS,
     OPT_SHADOWS,
+    OPT_NOMATCH,
     OPT_OVERCAST,
     OPT_SEPARATE
 };
@@ -109,6 +119,7 @@ int rs_cli_render(int argc, char **argv)
                                              {"overcast", no_argument, NULL, OPT_OVERCAST},
                                              {"separate-processes", no_argument, NULL, OPT_SEPARATE},
                                              {"labels", no_argument, NULL, OPT_LABELS},
+                                             {"no-match-light", no_argument, NULL, OPT_NOMATCH},
                                              {"split", required_argument, NULL, OPT_SPLIT},
                                              {"bbox", required_argument, NULL, OPT_BBOX},
                                              {"min-visibility", required_argument, NULL, OPT_MINVIS},
@@ -118,7 +129,7 @@ int rs_cli_render(int argc, char **argv)
     rs_synth_render_options_default(&ropt);
     int c, rc;
     long aa;
-    bool labels = false, overcast = false;
+    bool labels = false, overcast = false, match_light = true;
     const char *split = "train2017";
     rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
     rs_err perr = {0};
@@ -131,6 +142,7 @@ int rs_cli_render(int argc, char **argv)
         case OPT_KEEP: ropt.keep_files = true; continue;
         case OPT_SHADOWS: ropt.shadow = true; continue;
         case OPT_OVERCAST: overcast = true; continue;
+        case OPT_NOMATCH: match_light = false; continue;
         case OPT_SEPARATE: ropt.separate_processes = true; continue;
         case OPT_LABELS: labels = true; continue;
         case OPT_SPLIT:
@@ -170,9 +182,33 @@ int rs_cli_render(int argc, char **argv)
     ropt.scene = s.scene;
     ropt.scene.overcast = overcast;
     rs_err err = {0};
-    rs_synth_render_result r;
-    rs_status st = rs_synth_render(&r, s.output, &s.camera, s.site->ground_normal_enu, s.site->ground_offset_m,
-                                   &s.prepared, &ropt, &err);
+    rs_synth_render_result r = {0};
+    rs_status st = RS_OK;
+    rs_synth_light_estimate light;
+    bool matched = false;
+    if (ropt.background_path && match_light) {
+        // the background's light and environment (docs/fleet.md, "Reflections of the scene")
+        rs_lanes lanes = {0};
+        char *lanes_path = rs_io_join(s.site_dir, "lanes.geojson");
+        if (!lanes_path)
+            st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
+        else if (access(lanes_path, F_OK) == 0)
+            st = rs_lanes_read(&lanes, lanes_path, s.site, &err);
+        if (!st)
+            st = rs_synth_scene_match_background_file(&ropt.scene, &light, ropt.background_path, &s.camera, s.site,
+                                                      &lanes, &err);
+        if (st == RS_ERR_DEGENERATE) {
+            fprintf(stderr, "render: note: %s: default lights and environment\n", err.msg);
+            st = RS_OK;
+        } else if (!st) {
+            matched = true;
+        }
+        free(lanes_path);
+        rs_lanes_free(&lanes);
+    }
+    if (!st)
+        st = rs_synth_render(&r, s.output, &s.camera, s.site->ground_normal_enu, s.site->ground_offset_m, &s.prepared,
+                             &ropt, &err);
     if (st == RS_OK && labels)
         st = rs_synth_render_write_labels(s.output, &r, split, &lopt, &s.camera, s.site->ground_normal_enu,
                                           s.site->ground_offset_m, &s.prepared, &err);
@@ -182,6 +218,10 @@ int rs_cli_render(int argc, char **argv)
         printf("vehicles %d rendered %d region %d %d %d %d povray_s %.3f passes %d processes %d -> %s\n", r.Nvehicles,
                r.Nrendered, r.region[0], r.region[1], r.region[2], r.region[3], r.seconds_povray, r.Npasses, r.Npovray,
                s.output);
+        if (matched)
+            printf("light matched to the background: %d road pixels, light x %.3f %.3f %.3f (level %.3f)\n",
+                   light.Nroad_px, ropt.scene.light_rgb_scale[0], ropt.scene.light_rgb_scale[1],
+                   ropt.scene.light_rgb_scale[2], light.level);
         rc = RS_EXIT_OK;
     }
     rs_synth_render_result_free(&r);

@@ -350,12 +350,9 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         else if (b->sun_ok) // no time: the sun the poles' shadows show
             ropt.scene.sun_azimuth_deg = b->sun.azimuth_deg, ropt.scene.sun_elevation_deg = b->sun.elevation_deg;
         if (b->light_ok) {
-            rs_synth_light_match(ropt.scene.light_rgb_scale, &b->light, !b->overcast, ropt.scene.sun_elevation_deg);
             rs_synth_env_estimate env; // the environment the vehicles reflect: the background's own
             const bool env_ok = !rs_synth_env_from_image(&env, &b->linear, &c->cam, d->site, &d->lanes, 4, NULL);
-            ropt.scene.env_given = true;
-            rs_synth_env_match(ropt.scene.env_zenith_rgb, ropt.scene.env_horizon_rgb, ropt.scene.env_ground_rgb,
-                               env_ok ? &env : NULL, ropt.scene.light_rgb_scale, b->overcast);
+            rs_synth_scene_match_background(&ropt.scene, &b->light, env_ok ? &env : NULL);
         }
         *grey = false;
     } else {

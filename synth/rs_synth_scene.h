@@ -138,6 +138,27 @@ typedef struct {
     bool env_off; // no environment at all (reflections show the black background)
 } rs_synth_scene_options;
 
+// Matches a scene's lights and environment to its background, from the estimates of synth/rs_synth_sun.h (implemented in rs_synth_sun.c): the
+// lights' per-channel factor (rs_synth_light_match, with a sun unless scene->overcast, at
+// scene->sun_elevation_deg: set the sun first) and the environment the vehicles reflect
+// (rs_synth_env_match; env NULL: the estimated sky alone). Writes scene->light_rgb_scale,
+// env_given and env_zenith/horizon/ground_rgb; nothing else.
+void rs_synth_scene_match_background(rs_synth_scene_options *scene,
+                                     // in
+                                     const rs_synth_light_estimate *light, const rs_synth_env_estimate *env);
+
+// The same from a background file (`roadside render --background`; `roadside synth` keeps its
+// decoded backgrounds and calls the above): the image (8-bit sRGB, the camera's size) decoded
+// to linear light, the light estimated on its road (rs_synth_light_from_image, every 4th pixel;
+// the road assumed dry) and its environment (rs_synth_env_from_image), then matched.
+// out: light (the estimate; may be NULL); scene as above.
+// Returns RS_ERR_DEGENERATE (scene untouched) when fewer than 50 road pixels are in view (no
+// lanes, or none in view), RS_ERR_INVALID (size, not RGB), RS_ERR_IO, RS_ERR_NOMEM.
+rs_status rs_synth_scene_match_background_file(rs_synth_scene_options *scene, rs_synth_light_estimate *light,
+                                               // in
+                                               const char *path, const rs_camera *cam, const rs_site *site,
+                                               const rs_lanes *lanes, rs_err *err);
+
 // The default environment: a clear sky (blue zenith, pale horizon) or an overcast one (grey,
 // as bright as RS_SYNTH_SKY_OVERCAST), over asphalt of albedo 0.18 lit by the sun and sky.
 void rs_synth_scene_env_default(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3], bool overcast);
