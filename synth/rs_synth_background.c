@@ -15,6 +15,7 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "core/rs_pose.h"
 #include "geo/rs_site_write.h"
 #include "synth/internal/rs_synth_twin.h"
 #include "synth/rs_synth_camera.h"
@@ -306,6 +307,18 @@ rs_status rs_synth_background_render_twin(double *sun_azimuth_deg, double *sun_e
     if (sun_azimuth_deg) *sun_azimuth_deg = az;
     if (sun_elevation_deg) *sun_elevation_deg = el;
     if (conditions_out) *conditions_out = look;
+    // A camera at or below the ground plane sees no ground from above: its extrinsics are wrong
+    // (e.g. a camera looking straight down, a half-turn from ENU, written by mrcal 2.2's Python
+    // r_from_R, which returns r = 0 for a half-turn: the model then looks up from underground).
+    double c_enu[3];
+    rs_pose_position_from_rt(c_enu, NULL, rt_cam_enu);
+    const double h_m = c_enu[0] * site->ground_normal_enu[0] + c_enu[1] * site->ground_normal_enu[1] +
+                       c_enu[2] * site->ground_normal_enu[2] - site->ground_offset_m;
+    if (!(h_m > 0))
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "the camera is %.2f m %s the site's ground plane (centre ENU %.2f, %.2f, %.2f m): its "
+                          "extrinsics cannot be a roadside camera's (a rotation by 180 degrees written as r = 0?)",
+                          fabs(h_m), h_m < 0 ? "below" : "on", c_enu[0], c_enu[1], c_enu[2]);
 
     rs_lanes lanes = {0};
     rs_synth_canvas canvas;
@@ -382,8 +395,10 @@ rs_status rs_synth_background_twins(const char *site_dir, const rs_site *site, c
             // render under a temporary name first: the conditions (night?) decide the final name
             snprintf(tmp, sizeof(tmp), "%s/render.png", work);
             if ((st = rs_synth_background_render_twin(&az, &el, &cond, tmp, work, site, lanes, cam, unix_s, weathers[w],
-                                                      opt, err)))
+                                                      opt, err))) {
+                if (st == RS_ERR_INVALID) rs_err_prefix(err, "camera %s (%s)", cam_id, calibration ? calibration : "");
                 break;
+            }
             snprintf(name, sizeof(name), "twin_%s_%s", stamp, cond);
             char *path = rs_synth_background_path(site_dir, cam_id, name);
             cJSON *source = cJSON_CreateObject();

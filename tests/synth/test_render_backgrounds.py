@@ -3,6 +3,10 @@
 # centres, dark asphalt at the lane centres), for a pinhole and an OPENCV8 camera; the images are
 # recorded in site.json as synthetic with time and conditions tags, the site still checks clean,
 # and a time with the sun below -6 degrees gives one "night" image whatever the weathers.
+# A camera looking straight down (a half-turn from ENU: the rotation cv2.Rodrigues writes as
+# r = (pi, 0, 0)) renders the same way, markings where mrcal projects them; the same camera
+# written with mrcal 2.2's Python r_from_R (r = 0 for a half-turn: a camera 30 m underground,
+# looking up; once an all-black image) is refused with a message naming the camera.
 import json
 import os
 import shutil
@@ -148,6 +152,26 @@ def main():
         p = run(["site", "check", site])
         if "0 errors, 0 warnings" not in p.stdout + p.stderr:
             fail("site check: %s %s" % (p.stdout, p.stderr))
+        # straight down over the junction, 30 m up, pinhole 480 x 360
+        R = np.diag([1.0, -1.0, -1.0])
+        C = np.array([0.0, 0.0, 30.0])
+        down = os.path.join(tmp, "calib_down")
+        os.makedirs(down)
+        for name, r in (("good", cv2.Rodrigues(R)[0].ravel()), ("mrcal", mrcal.r_from_R(R))):
+            m = mrcal.cameramodel(intrinsics=("LENSMODEL_PINHOLE", np.array([300.0, 300.0, 239.5, 179.5])),
+                                  imagersize=(480, 360), extrinsics_rt_fromref=np.concatenate([r, -R @ C]))
+            m.write(os.path.join(down, "cam2.cameramodel"))
+            args = ["site", "render-backgrounds", site, "--calib", down, "--camera", "cam2",
+                    "--times", "2024-06-21T10:00:00Z", "--weather", "sunny"]
+            if name == "good":
+                print(run(args).stdout.strip())
+                check_image(os.path.join(site, "backgrounds", "cam2", "twin_20240621T1000Z_sunny.png"), m, marks,
+                            centres, "cam2 straight down")
+            else:
+                p = run(args, expect=1)
+                print("r_from_R's r = %s: %s" % (r, p.stderr.strip()))
+                if "cam2" not in p.stderr or "below the site's ground plane" not in p.stderr:
+                    fail("an underground camera: %r" % p.stderr)
         run(["site", "render-backgrounds", site, "--calib", calib, "--weather", "fog"], expect=2)
         run(["site", "render-backgrounds", site], expect=2)
         run(["site", "render-backgrounds", site, "--calib", calib, "--camera", "cam1",
