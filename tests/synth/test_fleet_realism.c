@@ -9,6 +9,8 @@
 //   - the passenger cars (sedan, hatchback, SUV in that mix): mean length,
 //     width, height within 0.08, 0.03, 0.05 m of Inovev's 2022 European average car
 //     (4.36 x 1.81 x 1.55 m);
+//   - the motorcycle (with rider): within 0.10 m of nuScenes' mean motorcycle box; the bus and
+//     trucks' ranges within the EU's limits on width, height and length;
 //   - two-wheelers: within 0.15 m of SUMO's defaults for the box with its rider (bicycle
 //     1.6 x 0.65 x 1.7 m, motorcycle 2.2 x 0.9 x 1.5 m);
 //   - colours: 20000 vehicles sorted into families by their nearest palette colour; Pearson's
@@ -54,6 +56,22 @@ int main(void)
             CHECK(fabs(got - m) < 4 * se, "%s dimension %d: mean %.4f m, truncated normal %.4f m (se %.4f)",
                   rs_synth_class_name(c), k, got, m, se);
             printf("%-18s dim %d: mean %.3f m (truncated normal %.3f m)\n", rs_synth_class_name(c), k, got, m);
+        }
+        // nuScenes' mean motorcycle box (2.100 x 0.763 x 1.444 m; docs/fleet.md): most are ridden,
+        // the box holding the rider as ours does
+        if (c == RS_SYNTH_MOTORCYCLE) {
+            const double nus[3] = {2.100, 0.763, 1.444};
+            for (int k = 0; k < 3; k++)
+                CHECK(fabs(sum[k] / N - nus[k]) < 0.10, "motorcycle dimension %d: mean %.3f vs nuScenes %.3f m", k,
+                      sum[k] / N, nus[k]);
+        }
+        // the EU limits (Directive 96/53/EC as amended by 2015/719): width 2.55 m, height 4.00 m,
+        // length: two-axle bus 13.5 m, rigid truck 12.0 m, tractor and semi-trailer 16.5 m
+        if (c == RS_SYNTH_BUS || c == RS_SYNTH_BOX_TRUCK || c == RS_SYNTH_ARTICULATED_TRUCK) {
+            const double Lmax = c == RS_SYNTH_BUS ? 13.5 : c == RS_SYNTH_BOX_TRUCK ? 12.0 : 16.5;
+            CHECK(r.length_m[1] <= Lmax && r.width_m[1] <= 2.55 && r.height_m[1] <= 4.00,
+                  "%s: range up to %.2f x %.2f x %.2f m beyond the EU limits (%.1f x 2.55 x 4.00 m)",
+                  rs_synth_class_name(c), r.length_m[1], r.width_m[1], r.height_m[1], Lmax);
         }
         if (c == RS_SYNTH_MOTORCYCLE || c == RS_SYNTH_BICYCLE) {
             const double sumo[2][3] = {{2.2, 0.9, 1.5}, {1.6, 0.65, 1.7}};
