@@ -1,6 +1,7 @@
 #define _XOPEN_SOURCE 700 // nftw()
 #include "core/rs_io.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
@@ -244,6 +245,33 @@ rs_status rs_io_remove_if_exists(const char *path, bool *removed, rs_err *err)
 }
 
 void rs_io_remove_tree(const char *path) { nftw(path, remove_entry, 16, FTW_DEPTH | FTW_PHYS); }
+
+// "<anything>.tmp.XXXXXX" with six characters of mkstemp's alphabet: the temporary name of
+// rs_io_atomic_open.
+static bool is_atomic_temporary(const char *name)
+{
+    const size_t n = strlen(name), k = sizeof ".tmp.XXXXXX" - 1;
+    if (n <= k || memcmp(name + n - k, ".tmp.", 5) != 0) return false;
+    for (const char *p = name + n - 6; *p; p++)
+        if (!isalnum((unsigned char)*p)) return false;
+    return true;
+}
+
+static size_t stale_removed; // nftw passes no user pointer; callers hold the folder's lock
+
+static int remove_temporary(const char *path, const struct stat *sb, int type, struct FTW *ftw)
+{
+    (void)sb;
+    if (type == FTW_F && is_atomic_temporary(path + ftw->base) && unlink(path) == 0) stale_removed++;
+    return 0; // go on with the rest
+}
+
+size_t rs_io_remove_stale_temporaries(const char *dir)
+{
+    stale_removed = 0;
+    nftw(dir, remove_temporary, 16, FTW_PHYS);
+    return stale_removed;
+}
 
 bool rs_io_has_extension(const char *path, const char *ext)
 {

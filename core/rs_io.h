@@ -92,6 +92,12 @@ rs_status rs_io_remove_if_exists(const char *path, bool *removed, rs_err *err);
 // cannot be removed is left. A missing path is not an error.
 void rs_io_remove_tree(const char *path);
 
+// Removes, under dir and its subfolders, every regular file named like rs_io_atomic_open's
+// temporaries ("<name>.tmp.XXXXXX"): what a process killed while writing leaves behind. Only for
+// a folder whose writers are all gone, i.e. one the caller holds rs_io_lock_dir on. Best effort;
+// returns how many were removed. Not thread-safe (nftw has no user pointer).
+size_t rs_io_remove_stale_temporaries(const char *dir);
+
 // ---- folder locks ----
 
 // An exclusive lock on a folder, so that two processes never write one output folder at once

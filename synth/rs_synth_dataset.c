@@ -632,6 +632,8 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     // folders. The lock is taken before anything in DATASET is touched (but DATASET itself).
     if ((st = rs_io_mkdir_p(opt->out_dir, err))) goto done;
     if ((st = rs_io_lock_dir(&lock, opt->out_dir, "roadside synth", err))) goto done;
+    // a run killed while writing a file leaves its temporary; no writer is left to finish it
+    rs_io_remove_stale_temporaries(opt->out_dir);
     d.split[0] = opt->split;
     d.split[1] = opt->val_split;
     d.parts_dir = rs_io_join(opt->out_dir, "parts");

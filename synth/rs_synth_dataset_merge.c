@@ -260,6 +260,7 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
     rs_io_lock lock = {0};
     if (!st && Nsplits > 0 && !(st = rs_io_mkdir_p(out_dir, err)))
         st = rs_io_lock_dir(&lock, out_dir, "roadside synth merge", err);
+    if (!st && lock.path) rs_io_remove_stale_temporaries(out_dir); // a killed writer's leftovers
     int *ks[2] = {NULL, NULL}, Nks[2] = {0, 0};
     const char *split_names[2] = {NULL, NULL};
     for (int s = 0; s < Nsplits && !st; s++) {

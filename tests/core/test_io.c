@@ -1,8 +1,11 @@
 // test_io.c -- core/rs_io.h: the one rule for names that become file names (rs_io_name_problem)
 // case by case against the rule as written, rs_io_child_path refusing what would leave its folder
-// and joining the rest, and rs_io_has_extension.
+// and joining the rest, rs_io_has_extension, and rs_io_remove_stale_temporaries.
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "core/rs_io.h"
 #include "tests/common/rs_test.h"
@@ -60,5 +63,38 @@ int main(void)
     CHECK(rs_io_read_file_max(&data, NULL, "/", 100, &err) == RS_ERR_IO && strstr(err.msg, "a folder"), "/: %s",
           err.msg);
     CHECK(rs_io_check_regular("/dev/null", 100, &err) == RS_ERR_IO, "/dev/null accepted");
+    // a killed writer's temporaries are removed, and only they (the synth CI failure of 2026-11-24:
+    // a run killed while writing labels left "<file>.tmp.XXXXXX" that the rerun kept)
+    char dir[] = "/tmp/rs_test_io_XXXXXX";
+    CHECK(mkdtemp(dir) != NULL, "mkdtemp");
+    static const struct {
+        const char *rel;
+        bool temporary;
+    } files[] = {{"a.json.tmp.Heb7CJ", true},
+                 {"sub/b.txt.tmp.000000", true},
+                 {"a.json", false},
+                 {"c.tmp.Heb7C", false},
+                 {"d.tmp.Heb7C-", false},
+                 {"e.tmp.Heb7CJK", false},
+                 {"sub/.tmp.abcdef", false},
+                 {"f.tmp", false},
+                 {NULL, false}};
+    char path[256];
+    snprintf(path, sizeof path, "%s/sub", dir);
+    CHECK(mkdir(path, 0777) == 0, "mkdir %s", path);
+    int Ntemporary = 0;
+    for (int i = 0; files[i].rel; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, files[i].rel);
+        CHECK(rs_io_write_file(path, "x", 1, &err) == RS_OK, "%s: %s", path, err.msg);
+        Ntemporary += files[i].temporary;
+    }
+    const size_t Nremoved = rs_io_remove_stale_temporaries(dir);
+    CHECK(Nremoved == (size_t)Ntemporary, "%zu temporaries removed, expected %d", Nremoved, Ntemporary);
+    for (int i = 0; files[i].rel; i++) {
+        snprintf(path, sizeof path, "%s/%s", dir, files[i].rel);
+        CHECK((access(path, F_OK) == 0) == !files[i].temporary, "%s: %s", files[i].rel,
+              files[i].temporary ? "left" : "removed");
+    }
+    rs_io_remove_tree(dir);
     return rs_test_end("test_io");
 }

@@ -113,7 +113,14 @@ def check_interrupted(tmp, calib, ref):
                 path = os.path.join(root, f)
                 if f.endswith(".json") and "work" not in root:
                     json.load(open(path))  # complete JSON or an exception
+    # what a kill while a label is being written leaves (CI, 2026-11-24): the rerun removes it
+    stale = os.path.join(out, "labels", "train2017", "000000_cam1.txt.tmp.Heb7CJ")
+    os.makedirs(os.path.dirname(stale), exist_ok=True)
+    with open(stale, "w") as f:
+        f.write("0 0.5 0.5")
     p = u.run(args[1:])
+    if os.path.exists(stale):
+        u.fail("rerun left a killed run's temporary: %s" % stale, SEED)
     same_files(out, ref, "run killed twice then rerun")
     print("interrupted: killed at 1.0 s and 2.5 s, rerun: byte-identical (%s)"
           % p.stdout.splitlines()[0])
