@@ -481,7 +481,14 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
 
     // 2. robust solve on every landmark, with the scale taken from the data; 3. gross outliers
     double log_theta[RS_NOISE_NGROUPS] = {0, 0, 0};
-    if (opt->robust_scale > 0.0) {
+    if (warm && warm->no_gross) { // the first solve found no gross outlier (rs_calib__warm)
+        if (warm->log_theta) {
+            memcpy(log_theta, warm->log_theta, sizeof log_theta);
+            rs_calib__scale_sigmas(w, pb, log_theta);
+        }
+        rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
+        for (int i = 0; i < N; i++) res->w_test[i] = NAN;
+    } else if (opt->robust_scale > 0.0) {
         bool rescaled = false; // the sigmas changed since the last solve's block chi2
         for (int pass = 0; pass < 3; pass++) {
             st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
@@ -543,6 +550,8 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         if (st != RS_OK) return st;
     }
     const int Ninl = N - Noutliers;
+    w->Ngross = Noutliers - res->Nrejected_snooping;
+    memcpy(w->log_theta, log_theta, sizeof log_theta);
     // 3c. the pose's covariance is built on the variance factors' posterior mode (where w's
     // sigmas are), spread over their posterior below. A group with little redundancy is not
     // estimated from the data: its posterior rests mostly on the prior, its stated sigma (kept

@@ -81,13 +81,13 @@ typedef struct {
 } block;
 
 static bool landmark_block(block *b, const columns *cl, const rs_calib_refine_problem *rp, const rs_calib__work *w,
-                           const double rt_c[6], const double *intrinsics, int i, double *dq_dintr)
+                           const rs_pose_prepared *pose, const double *intrinsics, int i, double *dq_dintr)
 {
     memset(b, 0, sizeof *b);
     const double *p = &w->p_c[3 * i];
     double pc[3], dpc_drt[18], dpc_dp[9], seen[3], d[3];
     const bool slides = rs_calib__seen_point(seen, d, w->p_c, w->along_c, w->s_along, i);
-    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, rt_c, seen);
+    rs_pose_prepared_apply(pc, dpc_drt, dpc_dp, pose, seen);
     mrcal_point2_t q;
     mrcal_point3_t dq_dpc[2];
     if (!(pc[2] > 0.0) ||
@@ -351,10 +351,12 @@ rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work 
     rs_err ignore = {0};
     bool ok = st == RS_OK;
     fit f = {0}; // the data's sum of squares and its redundancy, with the landmarks free
+    rs_pose_prepared pose;
+    rs_pose_prepare(&pose, rt_c);
     for (int i = 0; ok && i < N; i++) {
         if (!w->use[i]) continue;
         block b;
-        ok = landmark_block(&b, &cl, rp, w, rt_c, x, i, dq_dintr) && add_landmark(S, g, &b, nc, &ignore) == RS_OK;
+        ok = landmark_block(&b, &cl, rp, w, &pose, x, i, dq_dintr) && add_landmark(S, g, &b, nc, &ignore) == RS_OK;
         for (int r = 0; ok && r < b.m; r++) f.ssr += b.e[r] * b.e[r];
         f.dof += b.m - b.k;
     }
@@ -385,9 +387,12 @@ rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work 
             ck->critical_focal = critical(1, alt.dof);
             // the alternative solved in full: the focal free (--refine focal's weak prior, from the
             // nominal, no search) and the noise model estimated again, so that what a wrong focal
-            // left in the residuals is no longer taken for survey noise
-            const rs_calib__warm from = {.rt_c = rt_c, .intrinsics = x, .p_c = w->p_c};
-            if (free_focal(&k, &Q, &alt.dof, pb, opt, &from) == RS_OK) {
+            // left in the residuals is no longer taken for survey noise. Not with fewer than 3
+            // degrees of freedom left (4 landmarks): the critical value is then t(2)^2 = 999 or
+            // more, only a 31-sigma focal error could pass it, and the linear step stands
+            const rs_calib__warm from = {
+                .rt_c = rt_c, .intrinsics = x, .p_c = w->p_c, .no_gross = w->Ngross == 0, .log_theta = w->log_theta};
+            if (alt.dof >= 3 && free_focal(&k, &Q, &alt.dof, pb, opt, &from) == RS_OK) {
                 ck->focal_rel = k;
                 ck->sigma_focal_rel = sqrt(Q);
                 ck->critical_focal = critical(1, alt.dof);

@@ -16,6 +16,7 @@ void rs_calib__camera_params(rs_calib__params *pp, const rs_calib_noise_state *s
 {
     memset(pp, 0, sizeof *pp);
     pp->Ni = mrcal_lensmodel_num_params(s->lensmodel);
+    rs_pose_prepare(&pp->pose, s->rt_cam_c);
     for (int k = 0; k < 6; k++) pp->kind[pp->nc++] = -1;
     if (s->refine & RS_CALIB_REFINE_FOCAL) {
         pp->prior_w[pp->nc] = s->focal_prior_rel_sigma > 0 ? 1.0 / s->focal_prior_rel_sigma : 0.0;
@@ -51,7 +52,7 @@ bool rs_calib__pixel_jacobian(double q_px[2], double *G, double J[6], double dpc
                               double *dq_dintr)
 {
     double pc[3], dpc_drt[18];
-    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, s->rt_cam_c, seen);
+    rs_pose_prepared_apply(pc, dpc_drt, dpc_dp, &pp->pose, seen);
     mrcal_point2_t q;
     if (!mrcal_project(&q, dq_dpc, dq_dintr, (const mrcal_point3_t *)pc, 1, s->lensmodel, s->intrinsics)) return false;
     for (int r = 0; r < 2; r++) {

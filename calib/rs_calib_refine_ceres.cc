@@ -58,25 +58,12 @@ double inv_or_zero(double sigma) { return sigma > 0.0 ? 1.0 / sigma : 0.0; }
 const double kFailed = 1e100;
 
 // A pose rt, its rotation and the rotation's gradient computed once for all the landmarks.
-struct Pose {
-    double R[9], dR_dr[27], t[3]; // dR_dr (3,3,3): d R[i][j] / d r[k] at [9 i + 3 j + k]
-
-    explicit Pose(const double rt[6])
-    {
-        mrcal_R_from_r(R, dR_dr, rt);
-        for (int k = 0; k < 3; k++) t[k] = rt[3 + k];
-    }
+struct Pose : rs_pose_prepared {
+    explicit Pose(const double rt[6]) { rs_pose_prepare(this, rt); }
     // p_cam = R p + t; dpcam_drt (3,6) row-major, may be NULL
     void apply(double p_cam[3], double *dpcam_drt, const double p[3]) const
     {
-        for (int i = 0; i < 3; i++) p_cam[i] = R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2] + t[i];
-        if (!dpcam_drt) return;
-        for (int i = 0; i < 3; i++)
-            for (int k = 0; k < 3; k++) {
-                dpcam_drt[6 * i + k] =
-                    dR_dr[9 * i + k] * p[0] + dR_dr[9 * i + 3 + k] * p[1] + dR_dr[9 * i + 6 + k] * p[2];
-                dpcam_drt[6 * i + 3 + k] = i == k;
-            }
+        rs_pose_prepared_apply(p_cam, dpcam_drt, nullptr, this, p);
     }
 };
 
@@ -205,12 +192,17 @@ struct SmallQR {
             x[j] = s / diag[j];
         }
     }
-    // b <- (I - J J^+) b: the part of b that the landmark's columns cannot explain
-    void project_out(double b[5]) const
+    // Q (5, n): an orthonormal basis of J's columns (the first n columns of H_0 ... H_{n-1}),
+    // so that (I - J J^+) b = b - Q Q' b: one small product per camera column instead of 2n
+    // reflections each (those were a quarter of a calibration's instructions)
+    void basis(double Q[5][4]) const
     {
-        for (int j = 0; j < n; j++) reflect(j, b);
-        for (int j = 0; j < n; j++) b[j] = 0.0;
-        for (int j = n - 1; j >= 0; j--) reflect(j, b);
+        for (int c = 0; c < n; c++) {
+            double e[5] = {0, 0, 0, 0, 0};
+            e[c] = 1.0;
+            for (int j = n - 1; j >= 0; j--) reflect(j, e);
+            for (int a = 0; a < 5; a++) Q[a][c] = e[a];
+        }
     }
 };
 
@@ -394,10 +386,12 @@ class Reduced {
             }
         }
         if (!J) return true;
-        // J_c (5, nc): rt columns, then the intrinsics' subspace (rows 2..4 zero), each column
-        // with the landmark's columns projected out
+        // J_c (5, nc): rt columns, then the intrinsics' subspace, each column with the landmark's
+        // columns projected out: col - Q (Q' col), where only col's pixel rows 0, 1 are not zero
+        double Q[5][4];
+        if (nf > 0) qr.basis(Q);
         for (int j = 0; j < nc_; j++) {
-            double col[5] = {0, 0, 0, 0, 0};
+            double col[2];
             for (int a = 0; a < 2; a++) {
                 if (j < 6) {
                     col[a] = dr_drt[a * 6 + j];
@@ -407,8 +401,12 @@ class Reduced {
                     col[a] = s;
                 }
             }
-            if (nf > 0) qr.project_out(col);
-            for (int a = 0; a < 5; a++) J[(size_t)j * ld + a] = col[a];
+            double *out = &J[(size_t)j * ld];
+            for (int a = 0; a < 5; a++) out[a] = a < 2 ? col[a] : 0.0;
+            for (int f = 0; f < nf; f++) {
+                const double t = Q[0][f] * col[0] + Q[1][f] * col[1];
+                for (int a = 0; a < 5; a++) out[a] -= Q[a][f] * t;
+            }
         }
         return true;
     }

@@ -124,3 +124,23 @@ void rs_pose_r_from_R(double r[3], const double R[9])
     if (worst <= 1e-12) return;
     rs_pose_eigen_r_from_R(r, R);
 }
+
+void rs_pose_prepare(rs_pose_prepared *pose, const double rt[6])
+{
+    mrcal_R_from_r(pose->R, pose->dR_dr, rt);
+    for (int k = 0; k < 3; k++) pose->t[k] = rt[3 + k];
+}
+
+void rs_pose_prepared_apply(double p_cam[3], double *dpcam_drt, double *dpcam_dp, const rs_pose_prepared *pose,
+                            const double p[3])
+{
+    const double *R = pose->R, *dR = pose->dR_dr;
+    for (int i = 0; i < 3; i++) p_cam[i] = R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2] + pose->t[i];
+    if (dpcam_drt)
+        for (int i = 0; i < 3; i++)
+            for (int k = 0; k < 3; k++) {
+                dpcam_drt[6 * i + k] = dR[9 * i + k] * p[0] + dR[9 * i + 3 + k] * p[1] + dR[9 * i + 6 + k] * p[2];
+                dpcam_drt[6 * i + 3 + k] = i == k;
+            }
+    if (dpcam_dp) memcpy(dpcam_dp, R, 9 * sizeof *R);
+}

@@ -21,6 +21,7 @@
 
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/rs_calib.h"
+#include "core/rs_pose.h"
 #include "core/rs_status.h"
 
 #ifdef __cplusplus
@@ -75,6 +76,7 @@ typedef struct {
     int Ni;                          // the lens model's intrinsics
     int kind[RS_NOISE_NC_MAX];       // -1: rt; -2: the focal scale; j >= 0: intrinsics[j]
     double prior_w[RS_NOISE_NC_MAX]; // 1/sigma of the parameter's prior, 0: none
+    rs_pose_prepared pose;           // the state's rt_cam_c, prepared for many points
 } rs_calib__params;
 void rs_calib__camera_params(rs_calib__params *pp, const rs_calib_noise_state *s);
 
@@ -150,11 +152,13 @@ void rs_calib__vce_free(rs_calib__vce *v);
 typedef struct {
     double *p_survey_c, *p_c, *cov, *block_chi2, *q_pred;
     bool *use;
-    double *sigma_px, *sigma_enu;   // (N,), (N,3): the sigmas in use (stated, scaled by the noise model)
-    double *along_c, *s_along;      // (N,3), (N,): landmarks picked along segments (rs_calib_refine.h);
-                                    //   NULL when the problem has none
-    double *share;                  // (N,) how many picks share the landmark's survey error (>= 1)
-    double *e, *r, *dpos, *dground; // (N,5), (N,5), (N,5,3), (N,5,2): rs_calib_noise_out
+    double *sigma_px, *sigma_enu;       // (N,), (N,3): the sigmas in use (stated, scaled by the noise model)
+    double *along_c, *s_along;          // (N,3), (N,): landmarks picked along segments (rs_calib_refine.h);
+                                        //   NULL when the problem has none
+    double *share;                      // (N,) how many picks share the landmark's survey error (>= 1)
+    double *e, *r, *dpos, *dground;     // (N,5), (N,5), (N,5,3), (N,5,2): rs_calib_noise_out
+    int Ngross;                         // landmarks the robust stage (gross outliers) rejected
+    double log_theta[RS_NOISE_NGROUPS]; // the noise model's variance factors at the solution
 } rs_calib__work;
 
 // A solve started from another solve's adjustment of the same problem (the intrinsics check's
@@ -164,8 +168,13 @@ typedef struct {
 // search); the robust stage, the noise model and data snooping run as in any solve (starting from
 // the first solve's verdict instead lost 54 of 342 significant focal errors in 358 simulated
 // problems: a wrong focal makes the first solve reject good landmarks). No reliability figures.
+// `no_gross`: the first solve's robust stage found no gross outlier, so this one starts its noise
+// model from every landmark without a robust stage (a model with more freedom fits each landmark
+// at least as well), its variance factors from log_theta (RS_NOISE_NGROUPS,) if not NULL.
 typedef struct {
     const double *rt_c, *intrinsics, *p_c;
+    bool no_gross;
+    const double *log_theta;
 } rs_calib__warm;
 // rs_calib_solve from `from` (not NULL). Same contract as rs_calib_solve otherwise.
 rs_status rs_calib__solve_warm(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt,

@@ -112,6 +112,34 @@ static void test_position(void)
     printf("position Jacobian vs central differences: worst relative %.3g (tolerance 1e-6)\n", worst);
 }
 
+// A prepared pose against mrcal_transform_point_rt: the point and both gradients.
+static void test_prepared(void)
+{
+    rs_test_seed = 11;
+    rs_rng rng;
+    rs_rng_seed(&rng, rs_test_seed);
+    double worst = 0;
+    for (int k = 0; k < 200; k++) {
+        double rt[6], p[3];
+        for (int i = 0; i < 3; i++) rt[i] = rs_rng_uniform_in(&rng, -3, 3);
+        for (int i = 3; i < 6; i++) rt[i] = rs_rng_uniform_in(&rng, -100, 100);
+        for (int i = 0; i < 3; i++) p[i] = rs_rng_uniform_in(&rng, -200, 200);
+        rs_pose_prepared pose;
+        rs_pose_prepare(&pose, rt);
+        double pc[3], drt[18], dp[9], pc0[3], drt0[18], dp0[9];
+        rs_pose_prepared_apply(pc, drt, dp, &pose, p);
+        mrcal_transform_point_rt(pc0, drt0, dp0, rt, p);
+        for (int i = 0; i < 3; i++) worst = fmax(worst, fabs(pc[i] - pc0[i]) / fmax(1, fabs(pc0[i])));
+        for (int i = 0; i < 18; i++) worst = fmax(worst, fabs(drt[i] - drt0[i]) / fmax(1, fabs(drt0[i])));
+        for (int i = 0; i < 9; i++) worst = fmax(worst, fabs(dp[i] - dp0[i]));
+        double pc1[3];
+        rs_pose_prepared_apply(pc1, NULL, NULL, &pose, p); // the gradients are optional
+        CHECK(dist3(pc1, pc) == 0, "without gradients: %g", dist3(pc1, pc));
+    }
+    CHECK(worst < 1e-12, "prepared pose vs mrcal_transform_point_rt: %g", worst);
+    printf("prepared pose vs mrcal_transform_point_rt: worst relative %.3g (tolerance 1e-12)\n", worst);
+}
+
 // The 3x3 helpers against brute force, aliasing included.
 static void test_mat3(void)
 {
@@ -142,6 +170,7 @@ int main(void)
     test_ypr_round_trip();
     test_ypr_poles();
     test_position();
+    test_prepared();
     test_mat3();
     return rs_test_end("test_pose");
 }
