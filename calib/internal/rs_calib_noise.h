@@ -169,8 +169,9 @@ typedef struct {
 // the first solve's verdict instead lost 54 of 342 significant focal errors in 358 simulated
 // problems: a wrong focal makes the first solve reject good landmarks). No reliability figures.
 // `no_gross`: the first solve's robust stage found no gross outlier, so this one starts its noise
-// model from every landmark without a robust stage (a model with more freedom fits each landmark
-// at least as well), its variance factors from log_theta (RS_NOISE_NGROUPS,) if not NULL.
+// model from every landmark without a robust stage (a model with one more parameter fits the
+// same landmarks at least as well as a whole; data snooping still runs), its variance factors
+// from log_theta (RS_NOISE_NGROUPS,) if not NULL.
 typedef struct {
     const double *rt_c, *intrinsics, *p_c;
     bool no_gross;
