@@ -569,7 +569,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         return st;
     }
     res->iterations += sum.iterations;
-    if (opt->estimate_noise) { // the covariance carries the variance factors' own uncertainty
+    if (opt->estimate_noise && !warm) { // the covariance carries the variance factors' own uncertainty
         st = rs_calib__cov_spread(w, &rp, rt_c, res, log_theta, 6 + Ni, opt, err);
         if (st != RS_OK) return st;
     }
@@ -587,8 +587,8 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
 
     if (!warm && (st = rs_calib__reliability(res, w, &rp, rt_c, log_theta, pb, opt, err)) != RS_OK) return st;
     // ---- hook: the intrinsics against the image (rs_calib_intrinsics.c) ----
-    st = rs_calib__intrinsics_check(res, w, &rp, rt_c, w->cov, user_refine, pb, opt, warn, err);
-    if (st != RS_OK) return st;
+    if (!warm && (st = rs_calib__intrinsics_check(res, w, &rp, rt_c, w->cov, user_refine, pb, opt, warn, err)) != RS_OK)
+        return st;
     // ---- end hook ----
 
     // 5. outputs in ENU

@@ -387,9 +387,16 @@ class Reduced {
         }
         if (!J) return true;
         // J_c (5, nc): rt columns, then the intrinsics' subspace, each column with the landmark's
-        // columns projected out: col - Q (Q' col), where only col's pixel rows 0, 1 are not zero
-        double Q[5][4];
+        // columns projected out: (I - Q Q') col, where only col's pixel rows 0, 1 are not zero,
+        // so that the projector's first two columns P (5, 2) are all it takes
+        double Q[5][4], P[5][2];
         if (nf > 0) qr.basis(Q);
+        for (int a = 0; a < 5; a++)
+            for (int b = 0; b < 2; b++) {
+                double s = a == b ? 1.0 : 0.0;
+                for (int f = 0; f < nf; f++) s -= Q[a][f] * Q[b][f];
+                P[a][b] = s;
+            }
         for (int j = 0; j < nc_; j++) {
             double col[2];
             for (int a = 0; a < 2; a++) {
@@ -402,11 +409,7 @@ class Reduced {
                 }
             }
             double *out = &J[(size_t)j * ld];
-            for (int a = 0; a < 5; a++) out[a] = a < 2 ? col[a] : 0.0;
-            for (int f = 0; f < nf; f++) {
-                const double t = Q[0][f] * col[0] + Q[1][f] * col[1];
-                for (int a = 0; a < 5; a++) out[a] -= Q[a][f] * t;
-            }
+            for (int a = 0; a < 5; a++) out[a] = P[a][0] * col[0] + P[a][1] * col[1];
         }
         return true;
     }

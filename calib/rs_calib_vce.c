@@ -117,20 +117,26 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
             sym2_mul(t, Wf, Vf);
             sym2_mul(l->Z[g], t, Wf);
         }
-        // S += G' W G, g += G' W e, M_g += G' Z_g G
+        // S += G' W G, g += G' W e, M_g += G' Z_g G: the upper triangles (mirrored below)
         for (int a = 0; a < nc; a++) {
             const double ga[2] = {G[a], G[nc + a]};
             const double wa[2] = {W[0] * ga[0] + W[1] * ga[1], W[1] * ga[0] + W[2] * ga[1]};
             v->g[a] += wa[0] * l->e[0] + wa[1] * l->e[1];
-            for (int b = 0; b < nc; b++) v->S[a * nc + b] += wa[0] * G[b] + wa[1] * G[nc + b];
+            for (int b = a; b < nc; b++) v->S[a * nc + b] += wa[0] * G[b] + wa[1] * G[nc + b];
             for (int g = 0; g < RS_NOISE_NGROUPS && full; g++) {
                 const double *Z = l->Z[g];
                 const double za[2] = {Z[0] * ga[0] + Z[2] * ga[1], Z[1] * ga[0] + Z[3] * ga[1]};
                 double *M = &v->M[(size_t)g * nc * nc + (size_t)a * nc];
-                for (int b = 0; b < nc; b++) M[b] += za[0] * G[b] + za[1] * G[nc + b];
+                for (int b = a; b < nc; b++) M[b] += za[0] * G[b] + za[1] * G[nc + b];
             }
         }
     }
+    for (int a = 0; a < nc; a++)
+        for (int b = 0; b < a; b++) {
+            v->S[a * nc + b] = v->S[b * nc + a];
+            for (int g = 0; g < RS_NOISE_NGROUPS && full; g++)
+                v->M[(size_t)g * nc * nc + (size_t)a * nc + b] = v->M[(size_t)g * nc * nc + (size_t)b * nc + a];
+        }
     double ldS = 0;
     rs_status st = full ? rs_calib_opencv_inverse_spd_logdet(v->Q, &ldS, v->S, nc, err)
                         : rs_calib_opencv_inverse_spd(v->Q, v->S, nc, err);

@@ -167,7 +167,10 @@ typedef struct {
 // adjusted landmarks p_c (N,3) are its start, instead of the initial pose (RANSAC and the focal
 // search); the robust stage, the noise model and data snooping run as in any solve (starting from
 // the first solve's verdict instead lost 54 of 342 significant focal errors in 358 simulated
-// problems: a wrong focal makes the first solve reject good landmarks). No reliability figures.
+// problems: a wrong focal makes the first solve reject good landmarks). No reliability figures,
+// no intrinsics check and no spread of the pose covariance over the variance factors: the check
+// reads only the alternative's intrinsics, their covariance (which that spread leaves alone) and
+// its degrees of freedom.
 // `no_gross`: the first solve's robust stage found no gross outlier, so this one starts its noise
 // model from every landmark without a robust stage (a model with one more parameter fits the
 // same landmarks at least as well as a whole; data snooping still runs), its variance factors
