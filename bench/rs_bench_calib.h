@@ -102,18 +102,22 @@ typedef struct {
     int Nok;        // rs_calib_solve returned a pose
     int Nerror[16]; // errors, by rs_status code
     int Nflagged;   // poses whose condition number exceeded the bound (and were warned)
-    int Nnonfinite; // poses with a NaN/inf anywhere in the result: must be 0
+    int Nnonfinite; // poses with a NaN/inf anywhere in the result (or a 99.9% region below the
+                    //   chi-square 6 dof one): must be 0
     int Nunnamed;   // errors without a cause in the message: must be 0
     int Nunflagged; // condition number beyond the bound without a warning: must be 0
     int Nbad;       // poses more than 10 reported sigmas (Mahalanobis) from the truth
                     //   while not flagged (a confident wrong answer)
     // The same tail measured without the warnings (which speak of much else: an unchecked focal,
     // a loose rotation): how often the truth lies outside the reported ellipsoid at all.
-    int Nout999;             // poses outside their 99.9% ellipsoid (Mahalanobis^2 > 22.46): 0.1%
-                             //   of Nok when the covariance is exact
+    int Nout999;             // poses outside their 99.9% region (Mahalanobis^2 > the result's
+                             //   region_m2: 22.46, chi-square 6 dof, with the noise as stated,
+                             //   6 F(6, pose_dof) when it is estimated): 0.1% of Nok when the
+                             //   covariance is exact
     int Nout999_unwarned;    //   of them, with no warning at all
     int Nout999_bare;        //   of them, with no warning but the generic one below (the issue's
                              //   "a pose outside its 99.9% ellipsoid carries a warning that says so")
+    int Nbare;               // poses with no warning but the generic one: 0.1% of them outside by chance
     int Nbeyond10;           // poses beyond 10 reported sigmas, warned or not
     int Nwarned;             // poses that carry any warning
     int Nbeyond10_bare;      // beyond 10 sigma with no warning but the generic one that the focal,

@@ -138,7 +138,8 @@ static void stress_one(rs_bench_calib_stress_summary *S, uint64_t seed)
         const bool finite = all_finite(r.rt_cam_enu, 6) && all_finite(r.covariance_rt_cam_enu, 36) &&
                             all_finite(r.position_enu_m, 3) && all_finite(r.sigma_position_enu_m, 3) &&
                             all_finite(r.yaw_pitch_roll_deg, 3) && all_finite(r.sigma_yaw_pitch_roll_deg, 3) &&
-                            isfinite(r.rms_px) && isfinite(r.condition_number) && isfinite(r.variance_factor);
+                            isfinite(r.rms_px) && isfinite(r.condition_number) && isfinite(r.variance_factor) &&
+                            r.region_m2 >= 22.45 && isfinite(r.region_m2); // at least chi-square 6 dof's
         bool diag = true;
         for (int k = 0; k < 6; k++) diag = diag && r.covariance_rt_cam_enu[7 * k] > 0;
         if (!finite || !diag) {
@@ -165,7 +166,8 @@ static void stress_one(rs_bench_calib_stress_summary *S, uint64_t seed)
         snprintf(buf, sizeof buf, "%s", r.warnings);
         for (char *w = strtok_r(buf, ";", &save); w && !other; w = strtok_r(NULL, ";", &save))
             other = strspn(w, " ") != strlen(w) && !strstr(w, "these landmarks cannot check it");
-        if (!(m2 <= 22.458)) {
+        S->Nbare += !other;
+        if (!(m2 <= r.region_m2)) {
             S->Nout999++;
             S->Nout999_unwarned += !r.warnings[0] && !flagged;
             S->Nout999_bare += !other;

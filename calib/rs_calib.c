@@ -569,6 +569,8 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         return st;
     }
     res->iterations += sum.iterations;
+    res->pose_dof = INFINITY; // the noise as stated: the pose's 99.9% region is chi-square 6 dof
+    res->region_m2 = rs_calib__pose_region_m2(1e-3, INFINITY, 1.0);
     if (opt->estimate_noise && !warm) { // the covariance carries the variance factors' own uncertainty
         st = rs_calib__cov_spread(w, &rp, rt_c, res, log_theta, 6 + Ni, opt, err);
         if (st != RS_OK) return st;

@@ -200,7 +200,7 @@ typedef struct {
     double focal_mdb_rel;      // the minimal detectable focal error, relative (4.13 sigma)
     double shift_position_m;   //   how far an error of that size moves the camera centre, m
     double shift_mahalanobis2; //   that pose change in the reported covariance (6 dof): above
-                               //   22.46 the pose's 99.9% ellipsoid does not cover it
+                               //   region_m2 the pose's 99.9% region does not cover it
     bool warned;               // the warnings say the pose may be wrong because of the intrinsics
 } rs_calib_intrinsics_check;
 
@@ -229,6 +229,15 @@ typedef struct {
     int dof;                     // residuals - free parameters of the final solve
     double variance_factor;      // chi2/dof: ~1 when the stated sigmas are right
     double condition_number;     // of the equilibrated Jacobian, landmarks eliminated
+    double region_m2;            // the pose's 99.9% confidence region: the true pose lies within
+                                 //   d' C^-1 d <= region_m2 (C = covariance_rt_cam_enu, d the error
+                                 //   of rt_cam_enu) with probability 0.999. 22.46 (chi-square 6
+                                 //   dof) when the noise is as stated; larger when it is estimated
+                                 //   from the data: 6 F(6, pose_dof) over the covariance's widening
+                                 //   for that estimate (docs/calibration.md, "Noise model")
+    double pose_dof;             // the degrees of freedom of the covariance's scale: the
+                                 //   redundancy the estimated noise rests on, as it bears on the
+                                 //   pose (INFINITY when no noise is estimated from the data)
     int iterations;              // Ceres iterations, all solves together
     double time_us;              // wall time of rs_calib_solve, microseconds
     char method[224];            // what was done, e.g. "opengv-p3p ... + ceres-cauchy(2)..."

@@ -438,8 +438,7 @@ rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work 
     // that the landmarks cannot check carries the pose beyond its ellipsoid
     const bool focal_off = ck->focal_tested && ck->chi2_focal > ck->critical_focal;
     const bool center_off = ck->center_tested && ck->chi2_center > ck->critical_center;
-    const bool rests =
-        ck->focal_tested && !(pb->focal_rel_sigma > 0) && !(ck->shift_mahalanobis2 <= RS_CALIB_INTRINSICS_CHI2_6DOF);
+    const bool rests = ck->focal_tested && !(pb->focal_rel_sigma > 0) && !(ck->shift_mahalanobis2 <= res->region_m2);
     if (focal_off) {
         char stated[64] = "stated exact";
         if (pb->focal_rel_sigma > 0)

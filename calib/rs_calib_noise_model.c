@@ -234,7 +234,7 @@ double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib
 }
 
 rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
-                               const rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
+                               rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
                                const rs_calib_options *opt, rs_err *err)
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
@@ -244,7 +244,8 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
     double *dQ = st == RS_OK ? malloc((size_t)nc * nc * sizeof *dQ) : NULL;
     if (st == RS_OK && !dQ) st = rs_err_set(err, RS_ERR_NOMEM, "covariance: out of memory");
     if (st == RS_OK)
-        st = rs_calib__vce_cov_spread(dQ, v, log_theta, opt->noise_prior_factor, opt->noise_min_redundancy, err);
+        st = rs_calib__vce_cov_spread(dQ, &res->pose_dof, &res->region_m2, v, log_theta, opt->noise_prior_factor,
+                                      opt->noise_min_redundancy, err);
     if (st == RS_OK) // the pose block (the refined intrinsics are parametrised otherwise here)
         for (int a = 0; a < 6; a++)
             for (int b = 0; b < 6; b++) w->cov[a * n + b] += dQ[a * nc + b];

@@ -165,6 +165,12 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     cJSON_AddNumberToObject(root, "dof", r->dof);
     cJSON_AddNumberToObject(root, "variance_factor", r->variance_factor);
     cJSON_AddNumberToObject(root, "condition_number", r->condition_number);
+    // the pose's 99.9% region in its covariance, and the degrees of freedom behind its scale
+    cJSON_AddNumberToObject(root, "region999_m2", r->region_m2);
+    if (isfinite(r->pose_dof))
+        cJSON_AddNumberToObject(root, "pose_dof", r->pose_dof);
+    else
+        cJSON_AddNullToObject(root, "pose_dof");
     // the noise model (docs/calibration.md, "Noise model"): each group's stated and estimated
     // 1-sigma, the estimate's own 1-sigma and the redundancy it rests on
     cJSON *noise = cJSON_AddArrayToObject(root, "noise");

@@ -324,12 +324,35 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double r_ou
     return RS_OK;
 }
 
-rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
-                                   double prior_factor, double min_redundancy, rs_err *err)
+// s_g = d log det Q_pp / d log theta_g / 6 (Q_pp the pose's 6x6 block of Q = S^-1): each group's
+// share of the pose covariance's scale (they sum to 1). dS/dlog theta_g = -theta_g M_g, so
+// dQ/dlog theta_g = theta_g Q M_g Q; QM = Q M_g from evaluate(full); Qpp_inv (6,6).
+static void pose_shares(double s[RS_NOISE_NGROUPS], const rs_calib__vce *v, const double L[RS_NOISE_NGROUPS],
+                        const double Qpp_inv[36])
+{
+    const int nc = v->nc;
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+        const double *QM = &v->QM[(size_t)g * nc * nc];
+        double tr = 0;
+        for (int a = 0; a < 6; a++)
+            for (int b = 0; b < 6; b++) {
+                double x = 0; // (Q M_g Q)_ba
+                for (int k = 0; k < nc; k++) x += QM[(size_t)b * nc + k] * v->Q[(size_t)k * nc + a];
+                tr += Qpp_inv[a * 6 + b] * x;
+            }
+        s[g] = exp(L[g]) * tr / 6.0;
+    }
+}
+
+rs_status rs_calib__vce_cov_spread(double *dQ, double *pose_dof, double *region_m2, rs_calib__vce *v,
+                                   const double log_theta[RS_NOISE_NGROUPS], double prior_factor, double min_redundancy,
+                                   rs_err *err)
 {
     enum { NG = RS_NOISE_NGROUPS };
     const int nc = v->nc;
     memset(dQ, 0, (size_t)nc * nc * sizeof *dQ);
+    *pose_dof = INFINITY;
+    *region_m2 = rs_calib__pose_region_m2(1e-3, INFINITY, 1.0);
     const double lp = 2.0 * log(prior_factor);
     if (!(lp > 0)) return RS_OK;
     double ll, q[NG], r[NG], F[NG * NG];
@@ -346,6 +369,21 @@ rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double lo
         for (int b = 0; b < m; b++) H[a * m + b] = F[idx[a] * NG + idx[b]] + (a == b ? 1.0 / (lp * lp) : 0.0);
     if (m > 0 && (st = rs_calib_opencv_inverse_spd(C, H, m, err)) == RS_OK)
         st = rs_calib_opencv_eigen_sym(lam, E, C, m, err);
+    // the degrees of freedom of the pose covariance's scale: var(log of that scale) = s' C s over
+    // the estimated groups, and a scaled inverse chi-square with nu degrees of freedom has
+    // var(log) = 2 / nu (at least 3, as below)
+    double Qpp[36], Qpp_inv[36];
+    for (int a = 0; a < 6; a++)
+        for (int b = 0; b < 6; b++) Qpp[a * 6 + b] = Q0[a * nc + b];
+    rs_err ignore = {0};
+    const bool have_inv = st == RS_OK && m > 0 && rs_calib_opencv_inverse_spd(Qpp_inv, Qpp, 6, &ignore) == RS_OK;
+    if (have_inv) {
+        double sh[NG], var = 0;
+        pose_shares(sh, v, log_theta, Qpp_inv);
+        for (int a = 0; a < m; a++)
+            for (int b = 0; b < m; b++) var += sh[idx[a]] * C[a * m + b] * sh[idx[b]];
+        *pose_dof = var > 0 ? fmax(2.0 / var, 3.0) : INFINITY;
+    }
     // the unscented transform of Q over log theta's posterior: 2m points, weight 1/(2m) each, at
     // +-a_k along each eigenvector. The log-normal (Laplace) posterior understates the right
     // tail of a variance's: for one group with r degrees of freedom the exact posterior mean of
@@ -363,11 +401,48 @@ rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double lo
             for (int j = 0; j < nc * nc; j++) dQ[j] += (v->Q[j] - Q0[j]) / (2.0 * m);
         }
     }
+    // the 99.9% region of the pose in the spread covariance: the pose is then Student-t
+    // distributed with pose_dof degrees of freedom about the solution, its Mahalanobis distance
+    // in Q_pp over 6 an F(6, nu) (Koch 1999, 3.7.3), and the spread widened Q_pp by kappa, the
+    // mean of its eigenvalues relative to Q_pp: tr(Q_pp^-1 (Q_pp + dQ_pp)) / 6
+    if (st == RS_OK && have_inv && isfinite(*pose_dof)) {
+        double kappa = 0;
+        for (int a = 0; a < 6; a++)
+            for (int b = 0; b < 6; b++) kappa += Qpp_inv[a * 6 + b] * (Qpp[b * 6 + a] + dQ[b * nc + a]);
+        *region_m2 = rs_calib__pose_region_m2(1e-3, *pose_dof, fmax(kappa / 6.0, 1.0));
+    }
     free(Q0);
     return st;
 }
 
 int rs_calib__vce_Nintrinsics(const rs_calib__vce *v) { return v->nc - 6; }
+
+// P(F > f) for F ~ F(6, nu): with x = nu / (nu + 6 f) and b = nu / 2, the regularised incomplete
+// beta I_x(b, 3) of an integer second argument is a finite sum (Abramowitz and Stegun 26.5.6 and
+// 26.6.2): x^b (1 + b (1 - x) + b (b + 1) (1 - x)^2 / 2); nu = INFINITY: the chi-square 6 dof of
+// 6 f, e^-t (1 + t + t^2 / 2) with t = 3 f.
+static double f6_survival(double f, double nu)
+{
+    if (!isfinite(nu)) {
+        const double t = 3.0 * f;
+        return exp(-t) * (1.0 + t + 0.5 * t * t);
+    }
+    const double b = 0.5 * nu, y = 6.0 * f / (nu + 6.0 * f); // y = 1 - x
+    return exp(-b * log1p(6.0 * f / nu)) * (1.0 + b * y + 0.5 * b * (b + 1.0) * y * y);
+}
+
+double rs_calib__pose_region_m2(double alpha, double nu, double kappa)
+{
+    double lo = 1e-6, hi = 1e9; // F's quantile, by bisection in log f (the survival falls monotonically)
+    for (int it = 0; it < 200 && hi / lo > 1.0 + 1e-13; it++) {
+        const double mid = sqrt(lo * hi);
+        if (f6_survival(mid, nu) > alpha)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return 6.0 * sqrt(lo * hi) / kappa;
+}
 
 rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS], double *loglik,
                                  double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],

@@ -83,11 +83,11 @@ static int run_stress(long N, bool have_seed, uint64_t seed)
         if (S.Nerror[c]) printf("errors %-28s %d\n", rs_strerror((rs_status)c), S.Nerror[c]);
     printf("findings: non-finite %d, unnamed errors %d, unflagged condition %d, confident wrong poses %d\n",
            S.Nnonfinite, S.Nunnamed, S.Nunflagged, S.Nbad);
-    printf("tail: %d poses (%.3f%%) outside their 99.9%% ellipsoid (%d of them without any warning, %d (%.3f%%) with "
-           "no warning but that the focal cannot be checked), %d beyond 10 sigma (%d of them with no warning but that "
-           "one); %d poses (%.1f%%) carry a warning\n",
+    printf("tail: %d poses (%.3f%%) outside their 99.9%% region (%d of them without any warning, %d with no warning "
+           "but that the focal cannot be checked: %.3f%% of the %d poses without a specific warning, 0.1%% by "
+           "chance), %d beyond 10 sigma (%d of them with no warning but that one); %d poses (%.1f%%) carry a warning\n",
            S.Nout999, 100.0 * S.Nout999 / (S.Nok ? S.Nok : 1), S.Nout999_unwarned, S.Nout999_bare,
-           100.0 * S.Nout999_bare / (S.Nok ? S.Nok : 1), S.Nbeyond10, S.Nbeyond10_bare, S.Nwarned,
+           100.0 * S.Nout999_bare / (S.Nbare ? S.Nbare : 1), S.Nbare, S.Nbeyond10, S.Nbeyond10_bare, S.Nwarned,
            100.0 * S.Nwarned / (S.Nok ? S.Nok : 1));
     if (S.first_bad[0]) printf("first finding: seed %" PRIu64 ": %s\n", S.first_bad_seed, S.first_bad);
     return S.Nnonfinite || S.Nunnamed || S.Nunflagged || S.Nbad ? RS_EXIT_FAIL : RS_EXIT_OK;

@@ -28,8 +28,9 @@
 //    camera's distance trade off (one view of a road). For it the hook also computes Baarda's
 //    external reliability: the minimal detectable focal error 4.13 sigma (alpha 0.1%, power 80%)
 //    and the pose change it causes, B mdb with B = Q_rt,f / Q_ff (the pose's regression on the
-//    focal); when that change lies outside the reported pose's 99.9% ellipsoid (6 dof, 22.46) the
-//    warning says that the pose may be wrong because of the intrinsics.
+//    focal); when that change lies outside the reported pose's 99.9% region (rs_calib_result.
+//    region_m2: 22.46, chi-square 6 dof, with the noise as stated) the warning says that the pose
+//    may be wrong because of the intrinsics.
 #pragma once
 #include <stdbool.h>
 
@@ -45,7 +46,6 @@ extern "C" {
 // The statement's thresholds (alpha 0.1%).
 #define RS_CALIB_INTRINSICS_CHI2_1DOF 10.828 // chi-square 1 dof, 99.9%
 #define RS_CALIB_INTRINSICS_CHI2_2DOF 13.816 // chi-square 2 dof, 99.9%
-#define RS_CALIB_INTRINSICS_CHI2_6DOF 22.458 // chi-square 6 dof, 99.9%
 #define RS_CALIB_INTRINSICS_DELTA0    4.13   // Baarda's non-centrality: alpha 0.1%, power 80%
 
 // Hook 1 (before the solve): the options the solve runs with. in,out: *opt (the caller's options

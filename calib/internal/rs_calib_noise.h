@@ -132,9 +132,19 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double r_ou
 // E[Q(theta)] - Q(theta_hat), Q the camera parameters' covariance (S^-1) of the linearised
 // adjustment, the expectation over log theta ~ N(log_theta, (F + prior)^-1) by the unscented
 // transform (Julier & Uhlmann 1997), over the groups with a redundancy of min_redundancy or more
-// (the others are not estimated from the data: they keep their sigma).
-rs_status rs_calib__vce_cov_spread(double *dQ, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
-                                   double prior_factor, double min_redundancy, rs_err *err);
+// (the others are not estimated from the data: they keep their sigma). *pose_dof: the degrees of
+// freedom of the pose covariance's scale (2 / var of its log over that posterior, at least 3;
+// INFINITY when no group is estimated); *region_m2: the Mahalanobis distance^2 in the spread
+// covariance's pose block within which the pose lies with probability 99.9%
+// (rs_calib__pose_region_m2; 22.46, chi-square 6 dof, when pose_dof is INFINITY).
+rs_status rs_calib__vce_cov_spread(double *dQ, double *pose_dof, double *region_m2, rs_calib__vce *v,
+                                   const double log_theta[RS_NOISE_NGROUPS], double prior_factor, double min_redundancy,
+                                   rs_err *err);
+// The (1 - alpha) region of a 6-parameter estimate whose covariance's scale has nu degrees of
+// freedom (INFINITY: known) and was widened by kappa (>= 1) for that scale's uncertainty:
+// 6 F(6, nu; 1 - alpha) / kappa (Koch 1999, 3.7.3; F by its closed form for an even first
+// degree of freedom, solved to 1e-13 relative). alpha 1e-3, nu INFINITY, kappa 1: 22.458.
+double rs_calib__pose_region_m2(double alpha, double nu, double kappa);
 // The model at log_theta: the restricted log-likelihood (without the prior), q and r per group
 // (r with shared survey errors once), the Fisher information F (3x3) in log theta. For the tests
 // (tests/calib/test_vce.py checks them against the full adjustment with the landmarks as
@@ -220,8 +230,9 @@ void rs_calib__along_choose(rs_calib__work *w, const rs_calib_problem *pb, const
 
 // Adds to w->cov (n,n: the camera parameters' covariance of the final solve) its spread over the
 // variance factors' posterior (rs_calib__vce_cov_spread) at the state of w.
+// Also sets res->pose_dof and res->region_m2 (rs_calib.h).
 rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
-                               const rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
+                               rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
                                const rs_calib_options *opt, rs_err *err);
 
 // The 2-dof chi-square of an excluded landmark (rs_calib__noise_excluded_chi2) at the state of w.

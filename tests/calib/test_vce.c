@@ -3,7 +3,9 @@
 // landmarks as unknowns, dense). One line: the problem (lens, intrinsics, pose, surveyed points,
 // their sigmas, the picks), then per log theta the restricted log-likelihood, q, r and the
 // Fisher information rs_calib__vce_evaluate reports, and the posterior mode
-// rs_calib__vce_estimate finds with the prior factor 5. Seed 7100.
+// rs_calib__vce_estimate finds with the prior factor 5; and the pose's confidence regions
+// rs_calib__pose_region_m2 gives for a few (alpha, nu, kappa). Seed 7100.
+#include <math.h>
 #include <stdio.h>
 
 #include "calib/internal/rs_calib_noise.h"
@@ -92,7 +94,17 @@ int main(void)
     if (rs_calib__vce_estimate(L, NULL, v, 5.0, &err) != RS_OK) return 1;
     printf("], ");
     print_array("mode", L, 3);
-    printf(", \"prior_factor\": 5}\n");
+    // the pose's confidence region (rs_calib__pose_region_m2): alpha, nu (1e300: INFINITY), kappa
+    static const double regions[][3] = {{1e-3, 3, 1},      {1e-3, 5, 1},   {1e-3, 10, 1},    {1e-3, 20, 1},
+                                        {1e-3, 50, 1},     {1e-3, 200, 1}, {1e-3, 1e300, 1}, {0.05, 7.5, 1.25},
+                                        {0.01, 33.3, 1.1}, {1e-3, 1e6, 1}};
+    printf(", \"regions\": [");
+    for (int k = 0; k < (int)(sizeof regions / sizeof regions[0]); k++) {
+        const double nu = regions[k][1] >= 1e300 ? INFINITY : regions[k][1];
+        printf("%s[%.17g, %.17g, %.17g, %.17g]", k ? ", " : "", regions[k][0], regions[k][1], regions[k][2],
+               rs_calib__pose_region_m2(regions[k][0], nu, regions[k][2]));
+    }
+    printf("], \"prior_factor\": 5}\n");
     rs_calib__vce_free(v);
     rs_calib_result_free(&res);
     return 0;

@@ -11,7 +11,8 @@ group's sum of squared whitened residuals) and r_g (the sum of its redundancy nu
 1 - diag(H)), the Fisher information theta_g theta_h tr(P V_g P V_h) / 2, and checks the
 driver's to 1e-6 (relative). The linear term the driver adds for the priors' gradient is the
 same construction (minus the picks' gradient at log theta = 0). At the driver's posterior mode
-the score (q - r)/2 - L / lp^2 vanishes (1e-3). Skips (77) without mrcal's Python module."""
+the score (q - r)/2 - L / lp^2 vanishes (1e-3). The pose's 99.9% region (rs_calib__pose_region_m2)
+against scipy's F quantiles to 1e-9. Skips (77) without mrcal's Python module."""
 import json
 import subprocess
 import sys
@@ -133,6 +134,24 @@ score = 0.5 * (q - r) - Lm / lp ** 2
 print(f"posterior mode {Lm}: score {score}")
 if np.max(np.abs(score)) > 1e-3:
     print("FAIL: the score does not vanish at the driver's mode")
+    fails += 1
+# the pose's confidence region: 6 F(6, nu; 1 - alpha) / kappa, chi-square 6 dof for nu infinite;
+# the oracle is scipy's F and chi-square quantiles (python3-scipy comes with python3-mrcal)
+try:
+    from scipy import stats
+except ImportError:
+    stats = None
+    print("scipy is missing: the confidence regions are not checked")
+for alpha, nu, kappa, got in d.get("regions", []) if stats else []:
+    if nu >= 1e300:
+        want = stats.chi2.ppf(1 - alpha, 6) / kappa
+    else:
+        want = 6 * stats.f.ppf(1 - alpha, 6, nu) / kappa
+    ok = abs(got - want) <= 1e-9 * want
+    print(f"  region alpha {alpha} nu {nu:g} kappa {kappa}: {got:.10g} (scipy {want:.10g}) {'ok' if ok else 'FAIL'}")
+    fails += not ok
+if stats and len(d.get("regions", [])) < 10:
+    print("FAIL: the driver printed no confidence regions")
     fails += 1
 print("all passed" if not fails else f"{fails} failure(s)")
 sys.exit(1 if fails else 0)
