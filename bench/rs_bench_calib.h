@@ -102,8 +102,8 @@ typedef struct {
     int Nok;        // rs_calib_solve returned a pose
     int Nerror[16]; // errors, by rs_status code
     int Nflagged;   // poses whose condition number exceeded the bound (and were warned)
-    int Nnonfinite; // poses with a NaN/inf anywhere in the result (or a 99.9% region below the
-                    //   chi-square 6 dof one): must be 0
+    int Nnonfinite; // poses with a NaN/inf anywhere in the result (or a 99.9% region not
+                    //   positive): must be 0
     int Nunnamed;   // errors without a cause in the message: must be 0
     int Nunflagged; // condition number beyond the bound without a warning: must be 0
     int Nbad;       // poses more than 10 reported sigmas (Mahalanobis) from the truth

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_opencv.h"
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/rs_calib.h"
 
@@ -246,9 +247,24 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
     if (st == RS_OK)
         st = rs_calib__vce_cov_spread(dQ, &res->pose_dof, &res->region_m2, v, log_theta, opt->noise_prior_factor,
                                       opt->noise_min_redundancy, err);
-    if (st == RS_OK) // the pose block (the refined intrinsics are parametrised otherwise here)
-        for (int a = 0; a < 6; a++)
-            for (int b = 0; b < 6; b++) w->cov[a * n + b] += dQ[a * nc + b];
+    // the pose block spread (the refined intrinsics are parametrised otherwise here); it must stay
+    // positive definite (checked on its correlation matrix: OpenCV's Cholesky has an absolute
+    // threshold, and variances of 1e-20 are real at 1e-6 px), which fails only where the final
+    // solve's covariance and the variance components' linearisation disagree
+    double C[36], R[36], Ri[36];
+    bool pd = st == RS_OK;
+    for (int a = 0; st == RS_OK && a < 6; a++)
+        for (int b = 0; b < 6; b++) C[a * 6 + b] = w->cov[a * n + b] + dQ[a * nc + b];
+    for (int a = 0; pd && a < 6; a++) pd = C[a * 6 + a] > 0 && isfinite(C[a * 6 + a]);
+    for (int a = 0; pd && a < 6; a++)
+        for (int b = 0; b < 6; b++) R[a * 6 + b] = C[a * 6 + b] / sqrt(C[a * 6 + a] * C[b * 6 + b]);
+    rs_err ignore = {0};
+    if (st == RS_OK && (!pd || rs_calib_opencv_inverse_spd(Ri, R, 6, &ignore) != RS_OK))
+        st = rs_err_set(err, RS_ERR_DEGENERATE,
+                        "its spread over the estimated noise is not positive definite: the landmarks do not "
+                        "determine the noise (too few of them, or too many outliers)");
+    for (int a = 0; st == RS_OK && a < 6; a++)
+        for (int b = 0; b < 6; b++) w->cov[a * n + b] = C[a * 6 + b];
     free(dQ);
     rs_calib__vce_free(v);
     if (st != RS_OK) rs_err_prefix(err, "covariance");

@@ -7,14 +7,15 @@
 //   p_i = landmark i's position (its free axes, <= 3 each)  -- solved inside each evaluation
 // For a given c every landmark's own small problem
 //   min_p |(q(c, p) - q_obs)/sigma_px|^2 + sum_k ((p_k - p_survey_k)/s_k)^2
-// is solved to convergence (Gauss-Newton on <= 3 unknowns, Householder QR of its 5 x <=3
-// Jacobian J_p, warm-started from the previous evaluation), and the landmark contributes its 5
-// residuals r_i at that optimum, with the Jacobian J_c - J_p (J_p^+ J_c): the landmark's columns
-// projected out. The reduced problem has the joint problem's minimum (at the inner optimum
-// J_p^T r = 0, so the reduced gradient is the joint one), and its Gauss-Newton matrix is the
-// Schur complement of the joint one: (J_red^T J_red)^-1 is exactly the covariance of c with the
-// landmarks marginalised. 6 (+ k) parameters instead of 6 + 3N: for 20 landmarks a solve costs
-// tens of microseconds (`roadside bench calib`, docs/benchmarks.md).
+// is solved to convergence (Gauss-Newton on <= 3 unknowns, warm-started from the previous
+// evaluation: for a point with all three axes free in closed form by the Woodbury identity,
+// PointBlock, otherwise by Householder QR of its 5 x <=4 Jacobian J_p), and the landmark
+// contributes its 5 residuals r_i at that optimum, with the Jacobian J_c - J_p (J_p^+ J_c): the
+// landmark's columns projected out. The reduced problem has the joint problem's minimum (at the
+// inner optimum J_p^T r = 0, so the reduced gradient is the joint one), and its Gauss-Newton
+// matrix is the Schur complement of the joint one: (J_red^T J_red)^-1 is exactly the covariance
+// of c with the landmarks marginalised. 6 (+ k) parameters instead of 6 + 3N: for 20 landmarks a
+// solve costs tens of microseconds (`roadside bench calib`, docs/benchmarks.md).
 //
 // Robust loss: Cauchy rho(s) = a^2 log(1 + s/a^2) on each landmark's block |r_i|^2, applied as
 // the residual r~ = sqrt(rho(|r|^2)) r/|r| (so that |r~|^2 = rho exactly: TinySolver then
@@ -206,6 +207,50 @@ struct SmallQR {
     }
 };
 
+// The common landmark in closed form: a point (no slide) with all three axes free. Its Jacobian
+// is Jp = [A; D] (A = the pixel rows, 2 x 3, D = diag(w_m)), and with B = A D^-1 (2 x 3) and
+// M = I + B B' (2 x 2) the Woodbury identity gives what SmallQR would:
+//   the step        D dx = -(I - B' M^-1 B) g,  g = B' r_px + r_s
+//   the projector   (I - Jp Jp^+)'s first two columns = [M^-1; -B' M^-1]
+// (I - A N^-1 A' = M^-1 and D N^-1 A' = B' M^-1 for N = A'A + D^2). det M = 1 + |b0|^2 + |b1|^2
+// + |b0 x b1|^2 (Lagrange's identity): a sum of squares, without the cancellation of m00 m11 -
+// m01^2 when the two pixel rows are nearly parallel.
+struct PointBlock {
+    double B[2][3], Mi[2][2]; // B, M^-1
+
+    void factor(const double dr_dp[15], const double w_m[3])
+    {
+        for (int a = 0; a < 2; a++)
+            for (int k = 0; k < 3; k++) B[a][k] = dr_dp[a * 3 + k] / w_m[k];
+        const double k00 = B[0][0] * B[0][0] + B[0][1] * B[0][1] + B[0][2] * B[0][2];
+        const double k11 = B[1][0] * B[1][0] + B[1][1] * B[1][1] + B[1][2] * B[1][2];
+        const double k01 = B[0][0] * B[1][0] + B[0][1] * B[1][1] + B[0][2] * B[1][2];
+        const double cx = B[0][1] * B[1][2] - B[0][2] * B[1][1], cy = B[0][2] * B[1][0] - B[0][0] * B[1][2],
+                     cz = B[0][0] * B[1][1] - B[0][1] * B[1][0];
+        const double det = 1.0 + k00 + k11 + cx * cx + cy * cy + cz * cz;
+        Mi[0][0] = (1.0 + k11) / det, Mi[1][1] = (1.0 + k00) / det, Mi[0][1] = Mi[1][0] = -k01 / det;
+    }
+    // dx (3,) = argmin |r + Jp dx| (in the axes' order), and dr = Jp dx (5,)
+    void step(double dx[3], double dr[5], const double r[5], const double w_m[3]) const
+    {
+        double g[3], Bg[2], y[3];
+        for (int k = 0; k < 3; k++) g[k] = B[0][k] * r[0] + B[1][k] * r[1] + r[2 + k];
+        for (int a = 0; a < 2; a++) Bg[a] = B[a][0] * g[0] + B[a][1] * g[1] + B[a][2] * g[2];
+        const double m[2] = {Mi[0][0] * Bg[0] + Mi[0][1] * Bg[1], Mi[1][0] * Bg[0] + Mi[1][1] * Bg[1]};
+        for (int k = 0; k < 3; k++) y[k] = -(g[k] - B[0][k] * m[0] - B[1][k] * m[1]); // y = D dx
+        for (int k = 0; k < 3; k++) dx[k] = y[k] / w_m[k];
+        for (int a = 0; a < 2; a++) dr[a] = B[a][0] * y[0] + B[a][1] * y[1] + B[a][2] * y[2];
+        for (int k = 0; k < 3; k++) dr[2 + k] = y[k];
+    }
+    void projector(double P[5][2]) const
+    {
+        for (int a = 0; a < 2; a++)
+            for (int b = 0; b < 2; b++) P[a][b] = Mi[a][b];
+        for (int k = 0; k < 3; k++)
+            for (int b = 0; b < 2; b++) P[2 + k][b] = -(B[0][k] * Mi[0][b] + B[1][k] * Mi[1][b]);
+    }
+};
+
 // Cauchy's loss on a block: r <- alpha r, J <- alpha J + (f' - alpha) u (u^T J), u = r/|r|,
 // f(x) = sqrt(rho(x^2)), alpha = f(x)/x, with rho(s) = b log(1 + s/b), b = scale^2 (Ceres'
 // CauchyLoss(scale)). J (m,nc) column-major with leading dimension ld, may be NULL.
@@ -356,11 +401,26 @@ class Reduced {
         const bool want_i = J && k_ > 0;
         double dr_drt[30], dr_dp[15], Jp[5][4];
         SmallQR qr;
+        PointBlock pt;
+        const bool closed = L.naxes == 3 && !L.slides; // PointBlock's case
         for (int it = 0;; it++) {
             if (!L.evaluate(r, dr_drt, dr_dp, want_i ? dr_di_.data() : nullptr, dq_di_.data(), lensmodel_, Ni_, pose,
                             intr, p, s))
                 return false;
             if (nf == 0) break;
+            if (closed) {
+                double dx[3], dr[5];
+                pt.factor(dr_dp, L.w_m);
+                pt.step(dx, dr, r, L.w_m);
+                const double step = std::max(std::fabs(dx[0]), std::max(std::fabs(dx[1]), std::fabs(dx[2])));
+                for (int k = 0; k < 3; k++) p[k] += dx[k];
+                if (!std::isfinite(step)) return false;
+                if (step <= inner_tol_ * L.sigma_min || it == 25) {
+                    for (int a = 0; a < 5; a++) r[a] += dr[a];
+                    break;
+                }
+                continue;
+            }
             for (int a = 0; a < 5; a++) {
                 for (int f = 0; f < L.naxes; f++) Jp[a][f] = dr_dp[a * 3 + L.free[f]];
                 if (L.slides) // the pixel rows only: s has no prior
@@ -390,13 +450,17 @@ class Reduced {
         // columns projected out: (I - Q Q') col, where only col's pixel rows 0, 1 are not zero,
         // so that the projector's first two columns P (5, 2) are all it takes
         double Q[5][4], P[5][2];
-        if (nf > 0) qr.basis(Q);
-        for (int a = 0; a < 5; a++)
-            for (int b = 0; b < 2; b++) {
-                double s = a == b ? 1.0 : 0.0;
-                for (int f = 0; f < nf; f++) s -= Q[a][f] * Q[b][f];
-                P[a][b] = s;
-            }
+        if (closed) {
+            pt.projector(P);
+        } else {
+            if (nf > 0) qr.basis(Q);
+            for (int a = 0; a < 5; a++)
+                for (int b = 0; b < 2; b++) {
+                    double s = a == b ? 1.0 : 0.0;
+                    for (int f = 0; f < nf; f++) s -= Q[a][f] * Q[b][f];
+                    P[a][b] = s;
+                }
+        }
         for (int j = 0; j < nc_; j++) {
             double col[2];
             for (int a = 0; a < 2; a++) {

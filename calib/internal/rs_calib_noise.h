@@ -230,7 +230,9 @@ void rs_calib__along_choose(rs_calib__work *w, const rs_calib_problem *pb, const
 
 // Adds to w->cov (n,n: the camera parameters' covariance of the final solve) its spread over the
 // variance factors' posterior (rs_calib__vce_cov_spread) at the state of w.
-// Also sets res->pose_dof and res->region_m2 (rs_calib.h).
+// Also sets res->pose_dof and res->region_m2 (rs_calib.h). RS_ERR_DEGENERATE when the spread
+// pose block is not positive definite (the final solve's covariance and the variance components'
+// linearisation disagree: the landmarks do not determine the noise).
 rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
                                rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
                                const rs_calib_options *opt, rs_err *err);
