@@ -141,9 +141,10 @@ rs_status rs_calib__vce_cov_spread(double *dQ, double *pose_dof, double *region_
                                    const double log_theta[RS_NOISE_NGROUPS], double prior_factor, double min_redundancy,
                                    rs_err *err);
 // The (1 - alpha) region of a 6-parameter estimate whose covariance's scale has nu degrees of
-// freedom (INFINITY: known) and was widened by kappa (>= 1) for that scale's uncertainty:
-// 6 F(6, nu; 1 - alpha) / kappa (Koch 1999, 3.7.3; F by its closed form for an even first
-// degree of freedom, solved to 1e-13 relative). alpha 1e-3, nu INFINITY, kappa 1: 22.458.
+// freedom (INFINITY: known) and was widened by kappa (>= 1; the spread: nu / (nu - 2)) for that
+// scale's uncertainty: 6 F(6, nu; 1 - alpha) / kappa (Koch 1999, 3.7.3; F by its closed form for
+// an even first degree of freedom, solved to 1e-13 relative). alpha 1e-3, nu INFINITY, kappa 1:
+// 22.458.
 double rs_calib__pose_region_m2(double alpha, double nu, double kappa);
 // The model at log_theta: the restricted log-likelihood (without the prior), q and r per group
 // (r with shared survey errors once), the Fisher information F (3x3) in log theta. For the tests
