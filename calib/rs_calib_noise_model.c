@@ -106,8 +106,9 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
     if (*Noutliers > max_rejected) res->noise_model_wrong = true;
     for (int round = 0; round <= N; round++) {
         // variance components (rs_calib_vce.c) on the adjustment linearised at each solution,
-        // alternating with plain solves until the factors move by less than 1% (a tenth of
-        // their own uncertainty at r = 200)
+        // alternating with plain solves until every factor moves by less than 1% or a tenth of
+        // its own posterior 1-sigma (the larger: 1% is a tenth of it at r = 200; a group the data
+        // barely see, 1-sigma 3 in log variance, crept by 0.1 per round)
         for (int it = 0; it < 10; it++) {
             rs_calib_refine_summary sum;
             rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, NULL, NULL, rp, ro, err);
@@ -120,20 +121,22 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
             }
             res->iterations += sum.iterations;
             if (!opt->estimate_noise) break;
-            double next[RS_NOISE_NGROUPS], change = 0;
+            double next[RS_NOISE_NGROUPS], sd[RS_NOISE_NGROUPS];
+            bool settled = true;
             memcpy(next, log_theta, sizeof next);
             rs_calib__vce *v = NULL;
             st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
-            if (st == RS_OK) st = rs_calib__vce_estimate(next, NULL, v, opt->noise_prior_factor, err);
+            if (st == RS_OK) st = rs_calib__vce_estimate(next, sd, v, opt->noise_prior_factor, err);
             rs_calib__vce_free(v);
             if (st != RS_OK) {
                 rs_err_prefix(err, "noise model");
                 return st;
             }
-            for (int g = 0; g < RS_NOISE_NGROUPS; g++) change = fmax(change, fabs(next[g] - log_theta[g]));
+            for (int g = 0; g < RS_NOISE_NGROUPS; g++)
+                settled = settled && fabs(next[g] - log_theta[g]) < fmax(1e-2, 0.1 * sd[g]);
             memcpy(log_theta, next, sizeof next);
             rs_calib__scale_sigmas(w, pb, log_theta);
-            if (change < 1e-2) break;
+            if (settled) break;
         }
         rs_status st = rs_calib__noise_redundancy(&out, &ns, err);
         if (st != RS_OK) {

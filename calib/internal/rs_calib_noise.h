@@ -124,9 +124,10 @@ typedef struct rs_calib__vce rs_calib__vce;
 rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
                               const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err);
 // The posterior mode of the log variance factors (log-normal prior: the stated sigma right to a
-// factor prior_factor, 1-sigma), by Fisher scoring from log_theta (in,out). r_out (may be
-// NULL): the groups' redundancy there (shared survey errors once).
-rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double r_out[RS_NOISE_NGROUPS], rs_calib__vce *v,
+// factor prior_factor, 1-sigma), by Fisher scoring from log_theta (in,out), until every factor
+// moves by less than 1% of its posterior 1-sigma (or 0.1% in a variance). sd_out (may be NULL):
+// each log factor's posterior 1-sigma there (0 for a group without observations).
+rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_out[RS_NOISE_NGROUPS], rs_calib__vce *v,
                                  double prior_factor, rs_err *err);
 // The camera covariance's spread over the variance factors' own posterior: dQ (nc,nc) =
 // E[Q(theta)] - Q(theta_hat), Q the camera parameters' covariance (S^-1) of the linearised

@@ -11,7 +11,7 @@ group's sum of squared whitened residuals) and r_g (the sum of its redundancy nu
 1 - diag(H)), the Fisher information theta_g theta_h tr(P V_g P V_h) / 2, and checks the
 driver's to 1e-6 (relative). The linear term the driver adds for the priors' gradient is the
 same construction (minus the picks' gradient at log theta = 0). At the driver's posterior mode
-the score (q - r)/2 - L / lp^2 vanishes (1e-3). The pose's 99.9% region (rs_calib__pose_region_m2)
+the score (q - r)/2 - L / lp^2 puts it within 3% of a posterior 1-sigma of the exact mode. The pose's 99.9% region (rs_calib__pose_region_m2)
 against scipy's F quantiles to 1e-9. Skips (77) without mrcal's Python module."""
 import json
 import subprocess
@@ -129,11 +129,16 @@ for ev in d["evaluations"]:
 
 lp = 2 * np.log(d["prior_factor"])
 Lm = np.array(d["mode"])
-_, q, r, _ = full(Lm)
+_, q, r, Fm = full(Lm)
 score = 0.5 * (q - r) - Lm / lp ** 2
-print(f"posterior mode {Lm}: score {score}")
-if np.max(np.abs(score)) > 1e-3:
-    print("FAIL: the score does not vanish at the driver's mode")
+# the distance to the exact mode, one Newton step with the posterior information F + 1/lp^2, in
+# posterior 1-sigmas: the driver stops when a step is below 1% of that 1-sigma (Fisher scoring
+# converges linearly, so a few % may remain)
+H = Fm + np.eye(3) / lp ** 2
+dist = np.abs(np.linalg.solve(H, score)) / np.sqrt(np.diag(np.linalg.inv(H)))
+print(f"posterior mode {Lm}: score {score}, {np.max(dist):.4f} posterior sigma from the exact mode")
+if np.max(dist) > 0.03:
+    print("FAIL: the driver's mode is not the posterior mode (to 3% of its 1-sigma)")
     fails += 1
 # the pose's confidence region: 6 F(6, nu; 1 - alpha) / kappa, chi-square 6 dof for nu infinite;
 # the oracle is scipy's F and chi-square quantiles (python3-scipy comes with python3-mrcal)
