@@ -53,6 +53,7 @@ void rs_calib_result_free(rs_calib_result *result)
     free(result->inlier);
     free(result->p_enu_refined_m);
     free(result->w_test);
+    free(result->weight);
     free(result->redundancy);
     free(result->mdb_px);
     free(result->mdb_m);
@@ -357,8 +358,8 @@ static rs_status alloc_result(rs_calib_result *r, int N, int Ni)
     r->normalised_residual = calloc((size_t)N, sizeof(double));
     r->inlier = calloc((size_t)N, sizeof(bool));
     r->p_enu_refined_m = calloc((size_t)N * 3, sizeof(double));
-    double **per_landmark[] = {&r->w_test, &r->redundancy, &r->mdb_px,
-                               &r->mdb_m,  &r->external_m, &r->external_ground_m};
+    double **per_landmark[] = {&r->w_test, &r->redundancy, &r->mdb_px,           &r->mdb_m,
+                               &r->weight, &r->external_m, &r->external_ground_m};
     bool ok = true;
     for (size_t k = 0; k < sizeof per_landmark / sizeof *per_landmark; k++)
         ok = (*per_landmark[k] = calloc((size_t)(N > 0 ? N : 1), sizeof(double))) && ok;
@@ -559,8 +560,9 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     // leave-one-out median of the sigma set 1.0 m / 0.3 m / 3 px 1.77 m instead of 1.53 m)
     if (opt->estimate_noise) rs_calib__scale_sigmas(w, pb, log_theta);
 
-    // 4. plain weighted least squares on the inliers, with the covariance
-    ro.robust_scale = 0.0;
+    // 4. the inliers, still under Cauchy's loss (now at the estimated noise: an M-estimate, each
+    // landmark weighted by 1 / (1 + chi2 / a^2), res->weight), with the covariance
+    ro.robust_scale = opt->robust_scale;
     ro.covariance = true;
     ro.rough = false;
     st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred, &rp, &ro, err);
@@ -634,6 +636,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
             res->residual_px[2 * i + k] = w->q_pred[2 * i + k] - pb->q_px[2 * i + k];
         }
         res->normalised_residual[i] = sqrt(w->block_chi2[i]);
+        res->weight[i] = w->use[i] ? rs_calib_refine_weight(w->block_chi2[i], opt->robust_scale) : 0.0;
         if (w->use[i])
             sse += res->residual_px[2 * i] * res->residual_px[2 * i] +
                    res->residual_px[2 * i + 1] * res->residual_px[2 * i + 1];

@@ -18,8 +18,8 @@
 //      Cauchy loss of scale opt->robust_scale on each landmark's normalised block (pixel +
 //      survey prior). All in coordinates centred on the landmarks' centroid.
 //   3. Outliers: a landmark whose block chi2 (2 dof) exceeds opt->outlier_threshold^2 is
-//      flagged and dropped; the inliers are re-solved WITHOUT the robust loss (plain weighted
-//      least squares).
+//      flagged and dropped; the inliers are re-solved under the same loss at the sigmas in use
+//      (the estimated ones, 3b): an M-estimate whose weights are result.weight.
 //   3b. Noise model (rs_calib_noise.c, docs/calibration.md 3a-3c): the coarse rule of 3 at the
 //      scale the data shows; variance components of the picks, the survey's horizontal and
 //      vertical coordinates (Förstner's iteration on redundancy numbers, the stated sigmas as a
@@ -251,6 +251,8 @@ typedef struct {
                                //   observations (pixel u, v; surveyed E, N, U); for a landmark rejected by
                                //   data snooping, the w it was rejected at; NAN for a gross outlier
     double *redundancy;        // the sum of its observations' redundancy numbers (0..5); 0 when rejected
+    double *weight;            // its weight in the final solve, Cauchy's 1 / (1 + chi2 / robust_scale^2)
+                               //   at the estimated noise (1 without a robust loss); 0 when rejected
     double *mdb_px;            // minimal detectable bias of its pick, px (the larger of u, v); INFINITY
                                //   when uncontrolled (redundancy 0); NAN when rejected
     double *mdb_m;             // of its surveyed position, m (the largest free axis); NAN when all held

@@ -250,6 +250,7 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
         // reliability (docs/calibration.md, "Outliers and reliability"); null where undefined
         cJSON_AddNumberToObject(l, "w_test", r->w_test[i]);
         cJSON_AddNumberToObject(l, "redundancy", r->redundancy[i]);
+        cJSON_AddNumberToObject(l, "weight", r->weight[i]);
         cJSON_AddNumberToObject(l, "mdb_px", r->mdb_px[i]);
         cJSON_AddNumberToObject(l, "mdb_m", r->mdb_m[i]);
         cJSON_AddNumberToObject(l, "external_position_m", r->external_m[i]);

@@ -61,6 +61,13 @@ typedef struct {
                                    //   sigma instead of 1e-6), reaching max_iterations is no error
 } rs_calib_refine_options;
 
+// The weight rho'(s) of a landmark block with chi2 s under Cauchy's loss of scale a (robust_scale
+// below): 1 / (1 + s / a^2); 1 without a loss (a <= 0).
+static inline double rs_calib_refine_weight(double s, double robust_scale)
+{
+    return robust_scale > 0.0 ? 1.0 / (1.0 + s / (robust_scale * robust_scale)) : 1.0;
+}
+
 typedef struct {
     double chi2;           // sum of squared whitened residuals (loss NOT applied)
     int Nresiduals, Nfree; // counts of the solve; dof = Nresiduals - Nfree
