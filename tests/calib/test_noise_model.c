@@ -101,6 +101,12 @@ static void run(stats *s, const config *c, bool outliers)
         const double truth[RS_CALIB_NOISE_NGROUPS] = {TRUE_PX, TRUE_M, TRUE_M};
         for (int k = 0; k < RS_CALIB_NOISE_NGROUPS; k++)
             if (r.noise[k].estimated_from_data) s->ratio[k][s->nratio[k]++] = r.noise[k].estimated / truth[k];
+        for (int i = 0; i < g.N; i++) { // the final M-estimate's weights (rs_calib.h, weight)
+            const double want =
+                r.inlier[i] ? 1.0 / (1.0 + r.normalised_residual[i] * r.normalised_residual[i] / 4.0) : 0;
+            CHECK(fabs(r.weight[i] - want) <= 1e-12, "%s trial %d landmark %d: weight %.15g, want %.15g", c->name, t, i,
+                  r.weight[i], want);
+        }
         for (int i = 0; i < g.N; i++) {
             if (g.outlier[i]) {
                 s->out_total++;
