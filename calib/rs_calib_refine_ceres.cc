@@ -9,7 +9,8 @@
 //   min_p |(q(c, p) - q_obs)/sigma_px|^2 + sum_k ((p_k - p_survey_k)/s_k)^2
 // is solved to convergence (Gauss-Newton on <= 3 unknowns, warm-started from the previous
 // evaluation: for a point with all three axes free in closed form by the Woodbury identity,
-// PointBlock, otherwise by Householder QR of its 5 x <=4 Jacobian J_p), and the landmark
+// otherwise by Householder QR of its 5 x <=4 Jacobian J_p: calib/internal/rs_calib_block.h;
+// started where the last evaluation's linearisation predicts it), and the landmark
 // contributes its 5 residuals r_i at that optimum, with the Jacobian J_c - J_p (J_p^+ J_c): the
 // landmark's columns projected out. The reduced problem has the joint problem's minimum (at the
 // inner optimum J_p^T r = 0, so the reduced gradient is the joint one), and its Gauss-Newton
@@ -17,10 +18,10 @@
 // of c with the landmarks marginalised. 6 (+ k) parameters instead of 6 + 3N: for 20 landmarks a
 // solve costs tens of microseconds (`roadside bench calib`, docs/benchmarks.md).
 //
-// Robust loss: Cauchy rho(s) = a^2 log(1 + s/a^2) on each landmark's block |r_i|^2, applied as
-// the residual r~ = sqrt(rho(|r|^2)) r/|r| (so that |r~|^2 = rho exactly: TinySolver then
-// minimises sum rho) with its exact Jacobian. The inner optimum does not change (rho is
-// monotone).
+// Robust loss: Cauchy rho(s) = a^2 log(1 + s/a^2) on each landmark's block |r_i|^2, given to
+// TinySolver as residuals with the exact gradient and rho's Gauss-Newton Hessian, plus one
+// residual that carries the rest of the cost, so that TinySolver minimises sum rho
+// (rs_calib__cauchy_block). The inner optimum does not change (rho is monotone).
 //
 // Jacobians are analytic (mrcal), not automatic or numeric: the landmark residual is
 // r = (q - q_obs)/sigma_px with q = mrcal_project(p_cam), p_cam = mrcal_transform_point_rt(rt, p),
@@ -40,6 +41,7 @@
 extern "C" {
 #include <mrcal/poseutils.h>
 
+#include "calib/internal/rs_calib_block.h"
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/rs_calib.h"
 #include "core/rs_pose.h"
@@ -141,140 +143,6 @@ struct Landmark {
     }
 };
 
-// Householder QR of one landmark's Jacobian with respect to its own free axes, (5, n), n <= 3:
-// the inner solve's least-squares step and the projection of the camera columns onto the
-// complement of the landmark's columns. By hand because the matrix is tiny and fixed: Eigen's
-// blocked, dynamically sized QR took a third of the solve.
-struct SmallQR {
-    double a[5][4]; // R above the diagonal, and the reflectors' tails below it
-    double v0[4], beta[4], diag[4];
-    int n;
-
-    // false when a column is zero (the axis does not enter the residual: cannot happen with a
-    // survey sigma > 0, whose prior row is that axis's own; a segment seen end-on has a zero s
-    // column)
-    bool factor(const double J[5][4], int n_)
-    {
-        n = n_;
-        std::memcpy(a, J, sizeof a);
-        for (int j = 0; j < n; j++) {
-            double norm2 = 0.0;
-            for (int i = j; i < 5; i++) norm2 += a[i][j] * a[i][j];
-            const double norm = std::sqrt(norm2);
-            if (!(norm > 0.0)) return false;
-            const double alpha = a[j][j] > 0 ? -norm : norm;
-            v0[j] = a[j][j] - alpha; // v = (v0, a[j+1..4][j])
-            const double vtv = v0[j] * v0[j] + norm2 - a[j][j] * a[j][j];
-            beta[j] = vtv > 0.0 ? 2.0 / vtv : 0.0;
-            diag[j] = alpha;
-            for (int k = j + 1; k < n; k++) {
-                double s = v0[j] * a[j][k];
-                for (int i = j + 1; i < 5; i++) s += a[i][j] * a[i][k];
-                s *= beta[j];
-                a[j][k] -= s * v0[j];
-                for (int i = j + 1; i < 5; i++) a[i][k] -= s * a[i][j];
-            }
-        }
-        return true;
-    }
-    void reflect(int j, double b[5]) const
-    {
-        double s = v0[j] * b[j];
-        for (int i = j + 1; i < 5; i++) s += a[i][j] * b[i];
-        s *= beta[j];
-        b[j] -= s * v0[j];
-        for (int i = j + 1; i < 5; i++) b[i] -= s * a[i][j];
-    }
-    // x (n,) = argmin |J x - b|
-    void solve(double x[4], const double b_in[5]) const
-    {
-        double b[5];
-        std::memcpy(b, b_in, sizeof b);
-        for (int j = 0; j < n; j++) reflect(j, b);
-        for (int j = n - 1; j >= 0; j--) {
-            double s = b[j];
-            for (int k = j + 1; k < n; k++) s -= a[j][k] * x[k];
-            x[j] = s / diag[j];
-        }
-    }
-    // Q (5, n): an orthonormal basis of J's columns (the first n columns of H_0 ... H_{n-1}),
-    // so that (I - J J^+) b = b - Q Q' b: one small product per camera column instead of 2n
-    // reflections each (those were a quarter of a calibration's instructions)
-    void basis(double Q[5][4]) const
-    {
-        for (int c = 0; c < n; c++) {
-            double e[5] = {0, 0, 0, 0, 0};
-            e[c] = 1.0;
-            for (int j = n - 1; j >= 0; j--) reflect(j, e);
-            for (int a = 0; a < 5; a++) Q[a][c] = e[a];
-        }
-    }
-};
-
-// The common landmark in closed form: a point (no slide) with all three axes free. Its Jacobian
-// is Jp = [A; D] (A = the pixel rows, 2 x 3, D = diag(w_m)), and with B = A D^-1 (2 x 3) and
-// M = I + B B' (2 x 2) the Woodbury identity gives what SmallQR would:
-//   the step        D dx = -(I - B' M^-1 B) g,  g = B' r_px + r_s
-//   the projector   (I - Jp Jp^+)'s first two columns = [M^-1; -B' M^-1]
-// (I - A N^-1 A' = M^-1 and D N^-1 A' = B' M^-1 for N = A'A + D^2). det M = 1 + |b0|^2 + |b1|^2
-// + |b0 x b1|^2 (Lagrange's identity): a sum of squares, without the cancellation of m00 m11 -
-// m01^2 when the two pixel rows are nearly parallel.
-struct PointBlock {
-    double B[2][3], Mi[2][2]; // B, M^-1
-
-    void factor(const double dr_dp[15], const double w_m[3])
-    {
-        for (int a = 0; a < 2; a++)
-            for (int k = 0; k < 3; k++) B[a][k] = dr_dp[a * 3 + k] / w_m[k];
-        const double k00 = B[0][0] * B[0][0] + B[0][1] * B[0][1] + B[0][2] * B[0][2];
-        const double k11 = B[1][0] * B[1][0] + B[1][1] * B[1][1] + B[1][2] * B[1][2];
-        const double k01 = B[0][0] * B[1][0] + B[0][1] * B[1][1] + B[0][2] * B[1][2];
-        const double cx = B[0][1] * B[1][2] - B[0][2] * B[1][1], cy = B[0][2] * B[1][0] - B[0][0] * B[1][2],
-                     cz = B[0][0] * B[1][1] - B[0][1] * B[1][0];
-        const double det = 1.0 + k00 + k11 + cx * cx + cy * cy + cz * cz;
-        Mi[0][0] = (1.0 + k11) / det, Mi[1][1] = (1.0 + k00) / det, Mi[0][1] = Mi[1][0] = -k01 / det;
-    }
-    // dx (3,) = argmin |r + Jp dx| (in the axes' order), and dr = Jp dx (5,)
-    void step(double dx[3], double dr[5], const double r[5], const double w_m[3]) const
-    {
-        double g[3], Bg[2], y[3];
-        for (int k = 0; k < 3; k++) g[k] = B[0][k] * r[0] + B[1][k] * r[1] + r[2 + k];
-        for (int a = 0; a < 2; a++) Bg[a] = B[a][0] * g[0] + B[a][1] * g[1] + B[a][2] * g[2];
-        const double m[2] = {Mi[0][0] * Bg[0] + Mi[0][1] * Bg[1], Mi[1][0] * Bg[0] + Mi[1][1] * Bg[1]};
-        for (int k = 0; k < 3; k++) y[k] = -(g[k] - B[0][k] * m[0] - B[1][k] * m[1]); // y = D dx
-        for (int k = 0; k < 3; k++) dx[k] = y[k] / w_m[k];
-        for (int a = 0; a < 2; a++) dr[a] = B[a][0] * y[0] + B[a][1] * y[1] + B[a][2] * y[2];
-        for (int k = 0; k < 3; k++) dr[2 + k] = y[k];
-    }
-    void projector(double P[5][2]) const
-    {
-        for (int a = 0; a < 2; a++)
-            for (int b = 0; b < 2; b++) P[a][b] = Mi[a][b];
-        for (int k = 0; k < 3; k++)
-            for (int b = 0; b < 2; b++) P[2 + k][b] = -(B[0][k] * Mi[0][b] + B[1][k] * Mi[1][b]);
-    }
-};
-
-// Cauchy's loss on a block: r <- alpha r, J <- alpha J + (f' - alpha) u (u^T J), u = r/|r|,
-// f(x) = sqrt(rho(x^2)), alpha = f(x)/x, with rho(s) = b log(1 + s/b), b = scale^2 (Ceres'
-// CauchyLoss(scale)). J (m,nc) column-major with leading dimension ld, may be NULL.
-void cauchy_block(double *r, int m, double *J, int ld, int nc, double b)
-{
-    double s = 0.0;
-    for (int a = 0; a < m; a++) s += r[a] * r[a];
-    if (!(s > 1e-300)) return; // alpha = f' = 1 at 0
-    const double rho = b * std::log1p(s / b), x = std::sqrt(s);
-    const double alpha = std::sqrt(rho / s), fprime = 1.0 / (alpha * (1.0 + s / b));
-    if (J)
-        for (int j = 0; j < nc; j++) {
-            double *col = &J[(size_t)j * ld];
-            double ut = 0.0;
-            for (int a = 0; a < m; a++) ut += r[a] / x * col[a];
-            for (int a = 0; a < m; a++) col[a] = alpha * col[a] + (fprime - alpha) * (r[a] / x) * ut;
-        }
-    for (int a = 0; a < m; a++) r[a] *= alpha;
-}
-
 // The reduced problem (variable projection) in TinySolver's interface.
 class Reduced {
   public:
@@ -302,7 +170,8 @@ class Reduced {
         }
         subspace(opt);
         nc_ = 6 + k_;
-        nres_ = 5 * (int)used_.size() + (pb->has_position_prior ? 3 : 0) + (int)priors_.size();
+        carrier_ = robust_b_ > 0.0;
+        nres_ = 5 * (int)used_.size() + (pb->has_position_prior ? 3 : 0) + (int)priors_.size() + (carrier_ ? 1 : 0);
         intr_.resize((size_t)Ni_);
         dq_di_.resize(2 * (size_t)Ni_);
         dr_di_.resize(5 * (size_t)Ni_);
@@ -324,6 +193,14 @@ class Reduced {
     const std::vector<double> &basis() const { return B_; }
     void set_robust(bool on, double b) { robust_b_ = on ? b : 0.0; }
     bool failed() const { return failed_; }
+    // the carrier row's share of the cost: a constant (half its residual's offset) that keeps it
+    // real whatever rs_calib__cauchy_block returns; 0 when there is no row or the loss is off
+    bool carrier() const { return carrier_; }
+    double carrier_cost() const
+    {
+        return carrier_ && robust_b_ > 0.0 ? 0.5 * (double)used_.size() * robust_b_ / RS_CALIB_CAUCHY_MIN_CURVATURE
+                                           : 0.0;
+    }
 
     // The intrinsics at c: i0 + B c[6..].
     const double *intrinsics(const double *c) const
@@ -364,11 +241,13 @@ class Reduced {
         int row = 0;
         const bool predict = lin_valid_;
         lin_valid_ = false; // until every landmark below has its linearisation at c
+        double carried = 0.0;
         for (int i : used_) {
             if (!inner(i, c, predict, pose, intr, &residuals[row], jacobian ? &jacobian[row] : nullptr, nres_))
                 return fail(residuals);
             if (robust_b_ > 0.0)
-                cauchy_block(&residuals[row], 5, jacobian ? &jacobian[row] : nullptr, nres_, nc_, robust_b_);
+                carried += rs_calib__cauchy_block(&residuals[row], 5, jacobian ? &jacobian[row] : nullptr, nres_, nc_,
+                                                  robust_b_);
             row += 5;
         }
         if (pb_->has_position_prior) {
@@ -388,6 +267,12 @@ class Reduced {
             if (jacobian)
                 for (int j = 0; j < nc_; j++)
                     jacobian[(size_t)j * nres_ + row] = j < 6 ? 0.0 : B_[(size_t)(j - 6) * Ni_ + pr.index] * pr.weight;
+            row++;
+        }
+        if (carrier_) { // rs_calib__cauchy_block's cost, carried (0 when the loss is off)
+            residuals[row] = robust_b_ > 0.0 ? std::sqrt(std::max(0.0, 2.0 * carrier_cost() + carried)) : 0.0;
+            if (jacobian)
+                for (int j = 0; j < nc_; j++) jacobian[(size_t)j * nres_ + row] = 0.0;
             row++;
         }
         if (jacobian) {
@@ -417,9 +302,9 @@ class Reduced {
         double *p = &p_[3 * (size_t)i], &s = s_[(size_t)i];
         const bool want_i = J && k_ > 0;
         double dr_drt[30], dr_dp[15], Jp[5][4];
-        SmallQR qr;
-        PointBlock pt;
-        const bool closed = L.naxes == 3 && !L.slides; // PointBlock's case
+        rs_calib__qr5 qr;
+        rs_calib__point_block pt;
+        const bool closed = L.naxes == 3 && !L.slides; // rs_calib__point_block's case
         // the last linearisation: p, s, G = -Jp^+'s pixel columns (4, 2), Jc's pixel rows (2, nc)
         double *lin = &lin_x_[(size_t)i * (12 + 2 * (size_t)nc_)];
         const double p_kept[3] = {p[0], p[1], p[2]}, s_kept = s;
@@ -455,8 +340,8 @@ class Reduced {
             if (nf == 0) break;
             if (closed) {
                 double dx[3], dr[5];
-                pt.factor(dr_dp, L.w_m);
-                pt.step(dx, dr, r, L.w_m);
+                rs_calib__point_block_factor(&pt, dr_dp, L.w_m);
+                rs_calib__point_block_step(&pt, dx, dr, r, L.w_m);
                 const double step = std::max(std::fabs(dx[0]), std::max(std::fabs(dx[1]), std::fabs(dx[2])));
                 for (int k = 0; k < 3; k++) p[k] += dx[k];
                 if (!std::isfinite(step)) return false;
@@ -472,10 +357,10 @@ class Reduced {
                     Jp[a][L.naxes] =
                         a < 2 ? dr_dp[a * 3] * L.d[0] + dr_dp[a * 3 + 1] * L.d[1] + dr_dp[a * 3 + 2] * L.d[2] : 0.0;
             }
-            if (!qr.factor(Jp, nf)) return false;
+            if (!rs_calib__qr5_factor(&qr, Jp, nf)) return false;
             double dx[4], minus_r[5], step = 0.0;
             for (int a = 0; a < 5; a++) minus_r[a] = -r[a];
-            qr.solve(dx, minus_r);
+            rs_calib__qr5_solve(&qr, dx, minus_r);
             for (int f = 0; f < nf; f++) {
                 if (f < L.naxes)
                     p[L.free[f]] += dx[f];
@@ -496,9 +381,9 @@ class Reduced {
         // so that the projector's first two columns P (5, 2) are all it takes
         double Q[5][4], P[5][2];
         if (closed) {
-            pt.projector(P);
+            rs_calib__point_block_projector(&pt, P);
         } else {
-            if (nf > 0) qr.basis(Q);
+            if (nf > 0) rs_calib__qr5_basis(&qr, Q);
             for (int a = 0; a < 5; a++)
                 for (int b = 0; b < 2; b++) {
                     double s = a == b ? 1.0 : 0.0;
@@ -512,11 +397,11 @@ class Reduced {
             if (closed) {
                 const double e[5] = {b == 0 ? 1.0 : 0.0, b == 1 ? 1.0 : 0.0, 0, 0, 0};
                 double dr[5];
-                pt.step(dx, dr, e, L.w_m);
+                rs_calib__point_block_step(&pt, dx, dr, e, L.w_m);
                 for (int k = 0; k < 3; k++) g[k] = dx[k];
             } else if (nf > 0) {
                 const double e[5] = {b == 0 ? -1.0 : 0.0, b == 1 ? -1.0 : 0.0, 0, 0, 0};
-                qr.solve(dx, e);
+                rs_calib__qr5_solve(&qr, dx, e);
                 for (int f = 0; f < nf; f++) g[f < L.naxes ? L.free[f] : 3] = dx[f];
             }
             for (int a = 0; a < 4; a++) lin[4 + 2 * a + b] = g[a];
@@ -596,7 +481,8 @@ class Reduced {
     std::vector<Landmark> landmarks_;
     std::vector<int> used_;
     double robust_b_;
-    double inner_tol_; // the inner solve's last step, in sigmas
+    bool carrier_ = false; // a last residual row for rs_calib__cauchy_block's cost
+    double inner_tol_;     // the inner solve's last step, in sigmas
     // state of the evaluations: the landmarks' positions (warm start of the next inner solve)
     // and scratch
     mutable std::vector<double> p_, s_, intr_, dq_di_, dr_di_;
@@ -655,7 +541,7 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     Vec r0(nres);
     if (!f(c.data(), r0.data(), nullptr))
         return rs_err_set(err, RS_ERR_DEGENERATE, "refine: a landmark cannot be projected at the starting pose");
-    const double cost0 = 0.5 * r0.squaredNorm();
+    const double cost0 = 0.5 * r0.squaredNorm() - f.carrier_cost();
 
     ceres::TinySolver<Reduced> solver;
     solver.options.max_num_iterations = opt->max_iterations > 0 ? opt->max_iterations : 100;
@@ -684,7 +570,7 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     for (int j = 0; j < 6; j++) rt[j] = c(j);
     std::memcpy(intrinsics, f.intrinsics(c.data()), sizeof(double) * (size_t)Ni);
     summary->chi2 = r.squaredNorm(); // includes the position and intrinsics priors
-    int Nfree = 6 + f.k(), Nresiduals = nres - 3 * (int)f.used().size();
+    int Nfree = 6 + f.k(), Nresiduals = nres - 3 * (int)f.used().size() - (f.carrier() ? 1 : 0);
     std::vector<bool> used((size_t)pb->N, false);
     for (int i : f.used()) {
         used[(size_t)i] = true;
