@@ -550,8 +550,10 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         st = rs_calib__noise_model(res, w, &rp, &ro, rt_c, log_theta, &Noutliers, pb, opt, err);
         if (st != RS_OK) return st;
     }
-    const int Ninl = N - Noutliers;
-    w->Ngross = Noutliers - res->Nrejected_snooping;
+    if (opt->estimate_noise) { // 3b'. the coarse test's rejections at the estimated noise
+        st = rs_calib__readmit(res, w, &rp, &ro, rt_c, log_theta, &Noutliers, pb, opt, err);
+        if (st != RS_OK) return st;
+    }
     memcpy(w->log_theta, log_theta, sizeof log_theta);
     // 3c. the pose's covariance is built on the variance factors' posterior mode (where w's
     // sigmas are), spread over their posterior below. A group with little redundancy is not
@@ -561,32 +563,33 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     if (opt->estimate_noise) rs_calib__scale_sigmas(w, pb, log_theta);
 
     // 4. the inliers, still under Cauchy's loss (now at the estimated noise: an M-estimate, each
-    // landmark weighted by 1 / (1 + chi2 / a^2), res->weight), with the covariance
+    // landmark weighted by 1 / (1 + chi2 / a^2), res->weight), with the covariance. A landmark
+    // seen only behind the camera is a blunder (rs_calib__reject_behind): it leaves (named in the
+    // outlier warning), and the solve runs again (twice at most; then, or below 4, an error)
     ro.robust_scale = opt->robust_scale;
     ro.covariance = true;
     ro.rough = false;
-    st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred, &rp, &ro, err);
-    if (st != RS_OK) {
-        rs_err_prefix(err, "refinement");
-        return st;
+    int Nbehind = 0;
+    for (int pass = 0;; pass++) {
+        st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, w->cov, w->block_chi2, w->q_pred, &rp, &ro, err);
+        if (st != RS_OK) {
+            rs_err_prefix(err, "refinement");
+            return st;
+        }
+        res->iterations += sum.iterations;
+        int n = 0;
+        st = rs_calib__reject_behind(&n, res, w, rt_c, N - Noutliers, pass == 2, err);
+        if (st != RS_OK) return st;
+        if (n == 0) break;
+        Noutliers += n, Nbehind += n;
     }
-    res->iterations += sum.iterations;
+    const int Ninl = N - Noutliers;
+    w->Ngross = Noutliers - res->Nrejected_snooping;
     res->pose_dof = INFINITY; // the noise as stated: the pose's 99.9% region is chi-square 6 dof
     res->region_m2 = rs_calib__pose_region_m2(1e-3, INFINITY, 1.0);
     if (opt->estimate_noise && !warm) { // the covariance carries the variance factors' own uncertainty
         st = rs_calib__cov_spread(w, &rp, rt_c, res, log_theta, 6 + Ni, opt, err);
         if (st != RS_OK) return st;
-    }
-
-    // landmarks in front of the camera
-    for (int i = 0; i < N; i++) {
-        if (!w->use[i]) continue;
-        double pc[3], seen[3], d[3];
-        rs_calib__seen_point(seen, d, w->p_c, w->along_c, w->s_along, i);
-        mrcal_transform_point_rt(pc, NULL, NULL, rt_c, seen);
-        if (!(pc[2] > 0.0))
-            return rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d: behind the camera at the solution (z_cam = %.3g m)",
-                              i, pc[2]);
     }
 
     if (!warm && (st = rs_calib__reliability(res, w, &rp, rt_c, log_theta, pb, opt, err)) != RS_OK) return st;
@@ -670,8 +673,10 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         size_t len = 0;
         for (int i = 0; i < N && len + 12 < sizeof(list); i++)
             if (!w->use[i]) len += (size_t)snprintf(list + len, sizeof(list) - len, "%s%d", len ? "," : "", i);
-        warn(res, "%d of %d landmarks flagged as outliers and dropped (index %s; %d by data snooping)", Noutliers, N,
-             list, res->Nrejected_snooping);
+        char behind[64] = "";
+        if (Nbehind > 0) snprintf(behind, sizeof behind, ", %d seen only behind the camera", Nbehind);
+        warn(res, "%d of %d landmarks flagged as outliers and dropped (index %s; %d by data snooping%s)", Noutliers, N,
+             list, res->Nrejected_snooping, behind);
     }
     if (res->condition_number > opt->condition_warn)
         warn(res,

@@ -164,6 +164,45 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
     return RS_OK;
 }
 
+rs_status rs_calib__readmit(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                            const rs_calib_refine_options *ro, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
+                            int *Noutliers, const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
+{
+    int back = 0;
+    const double limit = RS_CALIB_READMIT_FACTOR * opt->outlier_threshold * opt->outlier_threshold;
+    for (int i = 0; i < pb->N; i++) {
+        if (w->use[i] || !isnan(res->w_test[i])) continue; // in, or rejected by the snooping
+        if (rs_calib__excluded_chi2(rp, w, rt_c, res, opt, i) <= limit) {
+            w->use[i] = true;
+            back++;
+        }
+    }
+    if (back == 0) return RS_OK;
+    *Noutliers -= back;
+    res->noise_model_wrong = false; // judged again on what is left
+    return rs_calib__noise_model(res, w, rp, ro, rt_c, log_theta, Noutliers, pb, opt, err);
+}
+
+rs_status rs_calib__reject_behind(int *Nbehind, const rs_calib_result *res, rs_calib__work *w, const double rt_c[6],
+                                  int Ninliers, bool last, rs_err *err)
+{
+    *Nbehind = 0;
+    for (int i = 0; i < res->N; i++) {
+        if (!w->use[i]) continue;
+        double pc[3], seen[3], d[3];
+        rs_calib__seen_point(seen, d, w->p_c, w->along_c, w->s_along, i);
+        mrcal_transform_point_rt(pc, NULL, NULL, rt_c, seen);
+        if (pc[2] > 0.0) continue;
+        if (last || Ninliers - *Nbehind - 1 < 4)
+            return rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d: behind the camera at the solution (z_cam = %.3g m)",
+                              i, pc[2]);
+        (*Nbehind)++;
+        w->use[i] = false;
+        memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
+    }
+    return RS_OK;
+}
+
 // The noise groups and each landmark's reliability at the final adjustment (rs_calib.h).
 rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                                 const double rt_c[6], const double log_theta[RS_NOISE_NGROUPS],

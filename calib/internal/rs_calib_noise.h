@@ -212,6 +212,24 @@ double rs_calib__median(const double *x, int n, double *scratch);
 rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                                 const rs_calib_refine_options *ro, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
                                 int *Noutliers, const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err);
+// The coarse outlier test's rejections (step 3 of rs_calib_solve), tested again at the noise the
+// model estimated: that test had one scale for every group and cannot tell whose noise a
+// residual is (a survey stated 5x too precise lost 2.85% of its good landmarks there), and a noise
+// estimated without them is low (their tails are cut). A landmark whose 2-dof chi-square
+// (rs_calib__excluded_chi2) is now below RS_CALIB_READMIT_FACTOR times the coarse limit (twice
+// its sigma multiple: 7.4 sigma) comes back, and rs_calib__noise_model, whose data snooping is
+// the fine test, runs again and decides. in,out as rs_calib__noise_model's.
+#define RS_CALIB_READMIT_FACTOR 4.0
+rs_status rs_calib__readmit(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                            const rs_calib_refine_options *ro, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
+                            int *Noutliers, const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err);
+// The landmarks in use that lie behind the camera at rt_c (their adjusted, seen positions): each
+// leaves (use false, back at its survey), counted in *Nbehind; an
+// error instead when `last` or when fewer than 4 of the Ninliers would remain. A pick and a
+// survey that agree only behind the camera are a blunder: a large survey sigma lets the
+// adjustment move the landmark there, where points project too.
+rs_status rs_calib__reject_behind(int *Nbehind, const rs_calib_result *res, rs_calib__work *w, const double rt_c[6],
+                                  int Ninliers, bool last, rs_err *err);
 // The noise groups (res->noise) and each landmark's w, redundancy, MDBs and external
 // reliability at the final adjustment.
 rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
