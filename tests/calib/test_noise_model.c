@@ -154,7 +154,11 @@ int main(void)
                   configs[k].name, group[g], s[k].nratio[g]);
             CHECK(fabs(med[g] - 1) <= 0.2, "%s: %s estimated at %.3f x the truth", configs[k].name, group[g], med[g]);
         }
-        CHECK(s[k].good_flagged <= 0.03 * s[k].good_total, "%s: %d of %d clean landmarks flagged", configs[k].name,
+        // the bar: no more than the nominal false-alarm rate, about 0.6% of the landmarks
+        // (0.1% for the coarse test, 0.1% per tested observation of the snooping; 0.08-0.28%
+        // measured, 2.85% with the survey stated 5x too precise before the coarse test's
+        // rejections were tested again at the estimated noise, docs/calibration.md 3c)
+        CHECK(s[k].good_flagged <= 0.006 * s[k].good_total, "%s: %d of %d clean landmarks flagged", configs[k].name,
               s[k].good_flagged, s[k].good_total);
     }
     // 25% gross outliers, right and mis-stated sigmas
