@@ -218,7 +218,8 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
 // estimated without them is low (their tails are cut). A landmark whose 2-dof chi-square
 // (rs_calib__excluded_chi2) is now below RS_CALIB_READMIT_FACTOR times the coarse limit (twice
 // its sigma multiple: 7.4 sigma) comes back, and rs_calib__noise_model, whose data snooping is
-// the fine test, runs again and decides. in,out as rs_calib__noise_model's.
+// the fine test, runs again and decides; not when more than opt->max_rejected_fraction are out
+// (the snooping could not reject them again). in,out as rs_calib__noise_model's.
 #define RS_CALIB_READMIT_FACTOR 4.0
 rs_status rs_calib__readmit(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                             const rs_calib_refine_options *ro, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
