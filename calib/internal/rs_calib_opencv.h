@@ -32,7 +32,7 @@ rs_status rs_calib_opencv_ippe( // out
     rs_err *err); // may be NULL
 
 // The inverse of the symmetric positive definite n x n matrix A (row-major) by OpenCV's
-// Cholesky (cv::invert, DECOMP_CHOLESKY): the normal matrices of the noise model
+// Cholesky (cv::hal::Cholesky64f; cv::invert for n <= 3): the normal matrices of the noise model
 // (rs_calib_noise.c). RS_ERR_DEGENERATE when A is not positive definite, RS_ERR_EXTERNAL when
 // OpenCV throws. inv may not alias A.
 rs_status rs_calib_opencv_inverse_spd( // out
@@ -40,7 +40,8 @@ rs_status rs_calib_opencv_inverse_spd( // out
     // in
     const double *A, int n, rs_err *err);
 
-// The same, and the natural log of det A (cv::determinant of A scaled to a unit diagonal): the
+// The same, and the natural log of det A (from the Cholesky factor; for n <= 3 cv::determinant of
+// A scaled to a unit diagonal): the
 // restricted likelihood of the variance components (rs_calib_vce.c).
 rs_status rs_calib_opencv_inverse_spd_logdet( // out
     double *inv,                              // (n,n)
