@@ -171,19 +171,23 @@ rs_status rs_calib__readmit(rs_calib_result *res, rs_calib__work *w, const rs_ca
     // not past the quarter the snooping may reject: it could not reject them again (bench calib,
     // 50% outliers: position 1.09x -> 1.26x the CRB when they came back)
     if (*Noutliers > (int)floor(opt->max_rejected_fraction * pb->N)) return RS_OK;
-    int back = 0;
     const double limit = RS_CALIB_READMIT_FACTOR * opt->outlier_threshold * opt->outlier_threshold;
-    for (int i = 0; i < pb->N; i++) {
-        if (w->use[i] || !isnan(res->w_test[i])) continue; // in, or rejected by the snooping
-        if (rs_calib__excluded_chi2(rp, w, rt_c, res, opt, i) <= limit) {
-            w->use[i] = true;
-            back++;
+    for (int round = 0; round < RS_CALIB_READMIT_ROUNDS; round++) { // the noise rises as they come back
+        int back = 0;
+        for (int i = 0; i < pb->N; i++) {
+            if (w->use[i] || !isnan(res->w_test[i])) continue; // in, or rejected by the snooping
+            if (rs_calib__excluded_chi2(rp, w, rt_c, res, opt, i) <= limit) {
+                w->use[i] = true;
+                back++;
+            }
         }
+        if (back == 0) return RS_OK;
+        *Noutliers -= back;
+        res->noise_model_wrong = false; // judged again on what is left
+        rs_status st = rs_calib__noise_model(res, w, rp, ro, rt_c, log_theta, Noutliers, pb, opt, err);
+        if (st != RS_OK) return st;
     }
-    if (back == 0) return RS_OK;
-    *Noutliers -= back;
-    res->noise_model_wrong = false; // judged again on what is left
-    return rs_calib__noise_model(res, w, rp, ro, rt_c, log_theta, Noutliers, pb, opt, err);
+    return RS_OK;
 }
 
 rs_status rs_calib__reject_behind(int *Nbehind, const rs_calib_result *res, rs_calib__work *w, const double rt_c[6],

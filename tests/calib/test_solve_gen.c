@@ -138,10 +138,12 @@ bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_p
     return true;
 }
 
-void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout)
+void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout) { gen_add_outliers_px(g, rng, Nout, 200.0, 500.0); }
+
+void gen_add_outliers_px(gen_problem *g, gen_rng *rng, int Nout, double lo_px, double hi_px)
 {
     for (int i = g->N - Nout; i < g->N; i++) {
-        const double a = gen_uniform(rng, 0, 2 * M_PI), r = gen_uniform(rng, 200.0, 500.0);
+        const double a = gen_uniform(rng, 0, 2 * M_PI), r = gen_uniform(rng, lo_px, hi_px);
         g->q_obs[2 * i] = g->q_true[2 * i] + r * cos(a);
         g->q_obs[2 * i + 1] = g->q_true[2 * i + 1] + r * sin(a);
         g->outlier[i] = true;

@@ -62,6 +62,8 @@ bool gen_make(gen_problem *g, gen_rng *rng, gen_lens lens, int N, double sigma_p
 
 // Replaces the pixels of the last Nout landmarks by gross mistakes, 200-500 px away.
 void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout);
+// The same with the pixel offset drawn from [lo_px, hi_px] instead of 200-500 px.
+void gen_add_outliers_px(gen_problem *g, gen_rng *rng, int Nout, double lo_px, double hi_px);
 
 // Appends Nout gross outliers (new landmarks 12-150 m away whose clicked pixel is 200-500 px off).
 void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m);
