@@ -129,7 +129,6 @@ static void stress_one(rs_bench_calib_stress_summary *S, uint64_t seed)
     const rs_status st = rs_calib_solve(&r, &cp, &opt, &e);
     if (st != RS_OK) {
         S->Nerror[(unsigned)st < 16 ? st : 15]++;
-        if (getenv("RS_STRESSDBG")) fprintf(stderr, "ERR seed %llu: %s\n", (unsigned long long)seed, e.msg);
         if (strlen(e.msg) < 8) {
             S->Nunnamed++;
             stress_bad(S, seed, "an error without a message, status", st);
