@@ -383,6 +383,7 @@ static void work_free(rs_calib__work *w)
     free(w->r);
     free(w->dpos);
     free(w->dground);
+    free(w->chi2_excluded);
     free(w->along_c);
     free(w->share);
     free(w->s_along);
@@ -407,15 +408,17 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
     w->r = malloc((size_t)N * RS_NOISE_NCOMP * sizeof(double));
     w->dpos = malloc((size_t)N * RS_NOISE_NCOMP * 3 * sizeof(double));
     w->dground = malloc((size_t)N * RS_NOISE_NCOMP * 2 * sizeof(double));
+    w->chi2_excluded = malloc((size_t)N * sizeof(double));
     w->share = malloc((size_t)(N > 0 ? N : 1) * sizeof(double));
     if (pb->along) {
         w->along_c = calloc((size_t)N * 3, sizeof(double));
         w->s_along = calloc((size_t)N, sizeof(double));
     }
     if (!w->p_survey_c || !w->p_c || !w->cov || !w->block_chi2 || !w->q_pred || !w->use || !w->sigma_px ||
-        !w->sigma_enu || !w->e || !w->r || !w->dpos || !w->dground || !w->share ||
+        !w->sigma_enu || !w->e || !w->r || !w->dpos || !w->dground || !w->chi2_excluded || !w->share ||
         (pb->along && (!w->along_c || !w->s_along)))
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < N; i++) w->chi2_excluded[i] = NAN;
     for (int i = 0; i < N; i++) { // picks sharing a survey error (quadratic: N is tens)
         w->share[i] = 1;
         for (int j = 0; j < N && pb->survey_shared && pb->survey_shared[i] >= 0; j++)
@@ -490,51 +493,9 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
         for (int i = 0; i < N; i++) res->w_test[i] = NAN;
     } else if (opt->robust_scale > 0.0) {
-        bool rescaled = false; // the sigmas changed since the last solve's block chi2
-        for (int pass = 0; pass < 3; pass++) {
-            st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
-            if (st != RS_OK) {
-                rs_err_prefix(err, "robust refinement");
-                return st;
-            }
-            res->iterations += sum.iterations;
-            rescaled = false;
-            if (!opt->estimate_noise) break;
-            // the median block chi2 of a 2-dof chi-square is 1.386: a robust variance factor,
-            // whatever the stated sigmas (a quarter of gross outliers moves it little)
-            // only ever widened here: a median low by chance must not make the coarse test below
-            // stricter than the stated sigmas (the variance components and data snooping are
-            // the fine test), and never beyond 30x the stated sigma (RS_NOISE_MAX_FACTOR)
-            const double room = exp(2.0 * log(RS_NOISE_MAX_FACTOR) - log_theta[0]);
-            const double f = fmin(room, fmax(1.0, rs_calib__median(w->block_chi2, N, w->q_pred) / 1.3863));
-            if (!isfinite(f) || f <= 1.0) break;
-            for (int g = 0; g < RS_NOISE_NGROUPS; g++) log_theta[g] += log(f);
-            rs_calib__scale_sigmas(w, pb, log_theta);
-            rescaled = true;
-            if (fabs(log(f)) < log(2.0)) break; // close enough for the outlier test below
-        }
-        // the segments the along picks are on, at the robust pose (better than the initial one)
-        rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
-        if (rescaled || pb->along) { // block chi2 at the scaled sigmas and segments, for the test below
-            ro.max_iterations = 0 < opt->max_iterations ? opt->max_iterations : 1;
-            st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, &rp, &ro, err);
-            if (st != RS_OK) {
-                rs_err_prefix(err, "robust refinement");
-                return st;
-            }
-            res->iterations += sum.iterations;
-        }
-        const double thr2 = opt->outlier_threshold * opt->outlier_threshold;
-        for (int i = 0; i < N; i++) {
-            w->use[i] = w->block_chi2[i] <= thr2;
-            res->w_test[i] = NAN;
-            if (!w->use[i]) {
-                Noutliers++;
-                memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
-            }
-        }
-        snprintf(robust_desc, sizeof(robust_desc), " + ceres-cauchy(%g) + outliers>%g sigma%s", opt->robust_scale,
-                 opt->outlier_threshold, opt->estimate_noise ? " of the data" : "");
+        st = rs_calib__robust_stage(&Noutliers, log_theta, rt_c, res, w, &rp, &ro, pb, opt, c, robust_desc,
+                                    sizeof robust_desc, err);
+        if (st != RS_OK) return st;
     }
     if (N - Noutliers < 4)
         return rs_err_set(err, RS_ERR_DEGENERATE,

@@ -204,12 +204,16 @@ static rs_status reduce(double At[RS_NOISE_NCOMP][RS_NOISE_NC_MAX], double Ninv[
     return RS_OK;
 }
 
+static double excluded_chi2(const rs_calib_noise_state *s, const rs_calib__params *pp, const double *Q, int i,
+                            double *dq_dintr);
+
 rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_calib_noise_state *s, rs_err *err)
 {
     const int N = s->N;
     rs_calib__params pp;
     rs_calib__camera_params(&pp, s);
     const int nc = pp.nc;
+    for (int i = 0; i < N && out->chi2_excluded; i++) out->chi2_excluded[i] = NAN;
     for (int i = 0; i < N; i++)
         for (int j = 0; j < RS_NOISE_NCOMP; j++) {
             if (out->e) out->e[RS_NOISE_NCOMP * i + j] = 0;
@@ -251,8 +255,9 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
     double G[12];
     const bool have_ground = st == RS_OK && axis_ground_jacobian(G, s->rt_cam_c);
 
-    // 2. per observation: H_jj, r = 1 - H_jj, the camera's response
+    // 2. per observation: H_jj, r = 1 - H_jj, the camera's response; the landmarks out: their test
     for (int i = 0; st == RS_OK && i < N; i++) {
+        if (!s->use[i] && out->chi2_excluded) out->chi2_excluded[i] = excluded_chi2(s, &pp, Q, i, dq_dintr);
         if (!s->use[i]) continue;
         const block *b = &blocks[i];
         for (int r = 0; r < b->m; r++) {
@@ -288,38 +293,38 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
     return st;
 }
 
-double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i)
+// The 2-dof chi-square of landmark i's pick when it is not in the adjustment (rs_calib_noise.h,
+// chi2_excluded): its pixel residual at its surveyed position against the covariance of that
+// prediction, sigma_px^2 I + J_p S J_p' + G Q_cc G' (Q_cc (nc,nc): the camera's covariance).
+static double excluded_chi2(const rs_calib_noise_state *s, const rs_calib__params *pp, const double *Q, int i,
+                            double *dq_dintr)
 {
-    double p[3], d[3];
-    const bool slides = rs_calib__seen_point(p, d, s->p_survey_c_m, s->along_c, s->s_along_m, i);
-    double pc[3], dpc_dp[9];
-    mrcal_transform_point_rt(pc, NULL, dpc_dp, s->rt_cam_c, p);
-    mrcal_point2_t q;
+    double p[3], d[3], q[2], G[2 * RS_NOISE_NC_MAX], J[6], dpc_dp[9];
     mrcal_point3_t dq_dpc[2];
-    if (!(pc[2] > 0) || !mrcal_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, s->lensmodel, s->intrinsics))
-        return NAN;
+    const bool slides = rs_calib__seen_point(p, d, s->p_survey_c_m, s->along_c, s->s_along_m, i);
+    double pc[3];
+    mrcal_transform_point_rt(pc, NULL, NULL, s->rt_cam_c, p);
+    if (!(pc[2] > 0) || !rs_calib__pixel_jacobian(q, G, J, dpc_dp, dq_dpc, s, pp, p, dq_dintr)) return NAN;
     const double sp = s->sigma_px ? s->sigma_px[i] : 1.0;
+    const int nc = pp->nc;
     double C[4] = {sp * sp, 0, 0, sp * sp};
-    for (int a = 0; a < 3; a++) {
-        const double sa = s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0;
-        double J[2];
-        for (int r = 0; r < 2; r++) {
-            J[r] = 0;
-            for (int j = 0; j < 3; j++) J[r] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a];
+    for (int r = 0; r < 2; r++)
+        for (int c = 0; c < 2; c++) {
+            for (int a = 0; a < 3; a++) {
+                const double sa = s->sigma_enu_m ? s->sigma_enu_m[3 * i + a] : 0.0;
+                C[2 * r + c] += J[3 * r + a] * sa * sa * J[3 * c + a];
+            }
+            for (int a = 0; a < nc; a++)
+                for (int b = 0; b < nc; b++) C[2 * r + c] += G[r * nc + a] * Q[a * nc + b] * G[c * nc + b];
         }
-        for (int r = 0; r < 2; r++)
-            for (int c = 0; c < 2; c++) C[2 * r + c] += J[r] * sa * sa * J[c];
-    }
     if (slides) { // anywhere along the segment: its image direction carries no information
-        double J[2] = {0, 0};
+        double col[2];
+        rs_calib__position_column(col, dq_dpc, dpc_dp, d, 1.0);
+        const double big = 1e6 * (C[0] + C[3]) / (col[0] * col[0] + col[1] * col[1] + 1e-300);
         for (int r = 0; r < 2; r++)
-            for (int j = 0; j < 3; j++)
-                for (int a = 0; a < 3; a++) J[r] += dq_dpc[r].xyz[j] * dpc_dp[j * 3 + a] * d[a];
-        const double big = 1e6 * (C[0] + C[3]) / (J[0] * J[0] + J[1] * J[1] + 1e-300);
-        for (int r = 0; r < 2; r++)
-            for (int c = 0; c < 2; c++) C[2 * r + c] += J[r] * big * J[c];
+            for (int c = 0; c < 2; c++) C[2 * r + c] += col[r] * big * col[c];
     }
-    const double e[2] = {q.xy[0] - s->q_px[2 * i], q.xy[1] - s->q_px[2 * i + 1]};
+    const double e[2] = {q[0] - s->q_px[2 * i], q[1] - s->q_px[2 * i + 1]};
     const double det = C[0] * C[3] - C[1] * C[2];
     if (!(det > 0)) return NAN;
     return (C[3] * e[0] * e[0] - (C[1] + C[2]) * e[0] * e[1] + C[0] * e[1] * e[1]) / det;

@@ -74,17 +74,13 @@ static rs_calib_noise_state noise_state(const rs_calib_refine_problem *rp, const
                                   .prior_sigma_m = rp->prior_sigma_m};
 }
 
-// An observation with a smaller redundancy number is all but uncontrolled: its w would be
-// noise over noise (its minimal detectable bias is over 18 sigma); it is not tested.
-#define MIN_TESTABLE_R 0.05
-
-// Baarda's w of landmark i: the largest |e| / sqrt(r) among its observations (r > MIN_TESTABLE_R).
+// Baarda's w of landmark i: the largest |e| / sqrt(r) among its observations (r > RS_CALIB_MIN_TESTABLE_R).
 static double landmark_w(const rs_calib__work *w, int i)
 {
     double m = 0;
     for (int j = 0; j < RS_NOISE_NCOMP; j++) {
         const double r = w->r[RS_NOISE_NCOMP * i + j];
-        if (r > MIN_TESTABLE_R) m = fmax(m, fabs(w->e[RS_NOISE_NCOMP * i + j]) / sqrt(r));
+        if (r > RS_CALIB_MIN_TESTABLE_R) m = fmax(m, fabs(w->e[RS_NOISE_NCOMP * i + j]) / sqrt(r));
     }
     return m;
 }
@@ -101,7 +97,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
 {
     const int N = pb->N;
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
-    const rs_calib_noise_out out = {.e = w->e, .r = w->r};
+    const rs_calib_noise_out out = {.e = w->e, .r = w->r, .chi2_excluded = w->chi2_excluded};
     const int max_rejected = (int)floor(opt->max_rejected_fraction * N);
     if (*Noutliers > max_rejected) res->noise_model_wrong = true;
     for (int round = 0; round <= N; round++) {
@@ -124,10 +120,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
             double next[RS_NOISE_NGROUPS], sd[RS_NOISE_NGROUPS];
             bool settled = true;
             memcpy(next, log_theta, sizeof next);
-            rs_calib__vce *v = NULL;
-            st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
-            if (st == RS_OK) st = rs_calib__vce_estimate(next, sd, v, opt->noise_prior_factor, err);
-            rs_calib__vce_free(v);
+            st = rs_calib__vce_at(next, sd, res, w, rp, rt_c, log_theta, opt, err);
             if (st != RS_OK) {
                 rs_err_prefix(err, "noise model");
                 return st;
@@ -176,7 +169,7 @@ rs_status rs_calib__readmit(rs_calib_result *res, rs_calib__work *w, const rs_ca
         int back = 0;
         for (int i = 0; i < pb->N; i++) {
             if (w->use[i] || !isnan(res->w_test[i])) continue; // in, or rejected by the snooping
-            if (rs_calib__excluded_chi2(rp, w, rt_c, res, opt, i) <= limit) {
+            if (w->chi2_excluded[i] <= limit) {                // at the noise model's last state
                 w->use[i] = true;
                 back++;
             }
@@ -241,7 +234,7 @@ rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const r
             stated2[rs_calib__noise_group(j)] += stated * stated;
             rsum += w->r[k];
             const double delta = w->r[k] > 1e-9 ? delta0 / sqrt(w->r[k]) : INFINITY; // in sigmas
-            if (w->r[k] > MIN_TESTABLE_R) wmax = fmax(wmax, fabs(w->e[k]) / sqrt(w->r[k]));
+            if (w->r[k] > RS_CALIB_MIN_TESTABLE_R) wmax = fmax(wmax, fabs(w->e[k]) / sqrt(w->r[k]));
             if (pixel)
                 mdb_px = fmax(mdb_px, delta * sigma);
             else
@@ -276,11 +269,24 @@ rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const r
     return RS_OK;
 }
 
-double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib__work *w, const double rt_c[6],
-                               const rs_calib_result *res, const rs_calib_options *opt, int i)
+rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                  const double rt_c[6], const rs_calib_options *opt, rs_err *err)
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
-    return rs_calib__noise_excluded_chi2(&ns, i);
+    const rs_calib_noise_out out = {.e = w->e, .r = w->r};
+    return rs_calib__noise_redundancy(&out, &ns, err);
+}
+
+rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGROUPS], const rs_calib_result *res,
+                           const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
+                           const double log_theta[RS_NOISE_NGROUPS], const rs_calib_options *opt, rs_err *err)
+{
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    rs_calib__vce *v = NULL;
+    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
+    if (st == RS_OK) st = rs_calib__vce_estimate(next, sd, v, opt->noise_prior_factor, err);
+    rs_calib__vce_free(v);
+    return st;
 }
 
 rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],

@@ -18,6 +18,7 @@
 #pragma once
 #include <mrcal/mrcal.h>
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/rs_calib.h"
@@ -61,11 +62,17 @@ typedef struct {
 // adjusted value over its sigma, as used), the redundancy number r in [0, 1], and the shift of
 // the camera position (3, metres) and of the ground point on the optical axis (2, E N metres)
 // per unit whitened error of that observation (an error of one sigma). Unused landmarks and held
-// axes: all 0. Any output may be NULL.
+// axes: all 0. Per landmark NOT in the adjustment, chi2_excluded: the 2-dof chi-square of its pick
+// against the adjusted camera, r' (sigma_px^2 I + J_p S J_p' + G Q_cc G')^-1 r with r the pixel
+// residual at its surveyed position, S its survey variances, J_p = dq/dp, G = dq/dc and Q_cc the
+// camera's covariance: the test of a landmark against a model fitted without it (Baarda's w^2
+// of its pick were it in, 2 dof; Koch 1999, 4.4); NAN where it does not project and for the
+// landmarks in. Any output may be NULL.
 typedef struct {
-    double *e, *r;     // (N,5)
-    double *dpos_m;    // (N,5,3)
-    double *dground_m; // (N,5,2) NAN when the optical axis does not meet the ground
+    double *e, *r;         // (N,5)
+    double *dpos_m;        // (N,5,3)
+    double *dground_m;     // (N,5,2) NAN when the optical axis does not meet the ground
+    double *chi2_excluded; // (N,)
 } rs_calib_noise_out;
 
 // The camera parameters of the adjustment: rt, then the refined intrinsics. For each, the
@@ -94,11 +101,6 @@ bool rs_calib__pixel_jacobian(double q_px[2], double *G, double J[6], double dpc
 // Fills out for the state s. Errors: RS_ERR_DEGENERATE (the normal matrix is singular: the
 // camera is not determined), RS_ERR_EXTERNAL (OpenCV threw), RS_ERR_NOMEM.
 rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_calib_noise_state *s, rs_err *err);
-
-// The 2-dof chi-square of landmark i's pick against the adjusted camera when the landmark is
-// NOT in the adjustment: r' (sigma_px^2 I + J_p S J_p')^-1 r with r the pixel residual at its
-// surveyed position, S its survey variances, J_p = dq/dp. NAN when it does not project.
-double rs_calib__noise_excluded_chi2(const rs_calib_noise_state *s, int i);
 
 // Variance factors stay within this factor of the stated sigma either way: beyond, the stated
 // sigma was no statement (and a noise-free simulated survey would drive its variance to 0).
@@ -169,6 +171,7 @@ typedef struct {
                                         //   NULL when the problem has none
     double *share;                      // (N,) how many picks share the landmark's survey error (>= 1)
     double *e, *r, *dpos, *dground;     // (N,5), (N,5), (N,5,3), (N,5,2): rs_calib_noise_out
+    double *chi2_excluded;              // (N,): rs_calib_noise_out, at the noise model's last state
     int Ngross;                         // landmarks the robust stage (gross outliers) rejected
     double log_theta[RS_NOISE_NGROUPS]; // the noise model's variance factors at the solution
 } rs_calib__work;
@@ -216,7 +219,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
 // model estimated: that test had one scale for every group and cannot tell whose noise a
 // residual is (a survey stated 5x too precise lost 2.85% of its good landmarks there), and a noise
 // estimated without them is low (their tails are cut). A landmark whose 2-dof chi-square
-// (rs_calib__excluded_chi2) is now below RS_CALIB_READMIT_FACTOR times the coarse limit comes
+// (chi2_excluded, rs_calib_noise_out) is now below RS_CALIB_READMIT_FACTOR times the coarse limit comes
 // back, rs_calib__noise_model, whose data snooping is the fine test, runs again and decides, and
 // so on while landmarks come back (RS_CALIB_READMIT_ROUNDS at most: the noise estimate rises as
 // they do). Not when more than opt->max_rejected_fraction are out (the snooping could not reject
@@ -262,9 +265,34 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
                                rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
                                const rs_calib_options *opt, rs_err *err);
 
-// The 2-dof chi-square of an excluded landmark (rs_calib__noise_excluded_chi2) at the state of w.
-double rs_calib__excluded_chi2(const rs_calib_refine_problem *rp, const rs_calib__work *w, const double rt_c[6],
-                               const rs_calib_result *res, const rs_calib_options *opt, int i);
+// The variance factors' posterior mode (rs_calib__vce_estimate) on the landmarks in w->use at the
+// state of w, whose sigmas are the stated ones scaled by log_theta: next (in: the start, out),
+// sd (may be NULL) as rs_calib__vce_estimate's.
+rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGROUPS], const rs_calib_result *res,
+                           const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
+                           const double log_theta[RS_NOISE_NGROUPS], const rs_calib_options *opt, rs_err *err);
+
+// w->e and w->r (rs_calib_noise_out) at the state of w.
+rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                  const double rt_c[6], const rs_calib_options *opt, rs_err *err);
+// An observation with a smaller redundancy number is all but uncontrolled: its w would be
+// noise over noise (its minimal detectable bias is over 18 sigma); it is neither tested nor
+// counted in a robust scale.
+#define RS_CALIB_MIN_TESTABLE_R 0.05
+
+// Steps 2 and 3 of rs_calib_solve (rs_calib_robust.c): the robust solve (ro, Cauchy's loss) on
+// every landmark from rt_c; with opt->estimate_noise, the variance factors log_theta (in,out) from
+// the data -- a common one from the median block chi2, then each group's from the variance
+// components of the landmarks that agree at that scale, corrected for the trimming, the robust
+// solve again at those sigmas, until they settle; then the coarse test: a landmark whose block
+// chi2 exceeds opt->outlier_threshold^2 leaves (w->use false, back at its survey, w_test NAN),
+// counted in *Noutliers. Along picks choose their segment (c: the centred frame's origin) at the
+// robust pose. desc (desc_size): the method's description of this stage.
+rs_status rs_calib__robust_stage(int *Noutliers, double log_theta[RS_NOISE_NGROUPS], double rt_c[6],
+                                 rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                 const rs_calib_refine_options *ro, const rs_calib_problem *pb,
+                                 const rs_calib_options *opt, const double c[3], char *desc, size_t desc_size,
+                                 rs_err *err);
 
 #ifdef __cplusplus
 }

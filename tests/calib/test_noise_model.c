@@ -10,7 +10,8 @@
 //   - clean data with mis-stated sigmas: at most the nominal 0.6% of the landmarks flagged (0.1%
 //     for the coarse test, 0.1% per tested observation; 2.85% with the survey stated 5x too
 //     precise until the coarse test's rejections were tested again at the estimated noise);
-//   - 25% moderate outliers (20-40 px, 10-20 sigma): printed, guarded at 90% (below).
+//   - 25% moderate outliers (20-40 px): those of 10+ sigma of the pick's whole noise flagged, 95%
+//     (85% with the survey stated 5x too loose; below).
 // The trials are independent: each draws its own xoshiro256** stream (test_solve_gen.h). (Until
 // 2026-11-24 consecutive seeds gave one splitmix64 stream shifted by one draw, so the 100 trials
 // shared their noise and a few unlucky draws counted many times: mean NEES 7.6 with the true
@@ -40,6 +41,7 @@ typedef struct {
     double ratio[RS_CALIB_NOISE_NGROUPS][NTRIALS];
     int nratio[RS_CALIB_NOISE_NGROUPS];
     int out_total, out_flagged, good_total, good_flagged;
+    int out10_total, out10_flagged; // outliers of 10 sigma or more (gen_pick_sigmas)
 } stats;
 
 static double rotation_error_deg(const double *r_est, const double *r_true)
@@ -84,6 +86,8 @@ static void run(stats *s, const config *c, double outlier_px)
             gen_add_outliers(&g, &rng, N / 4);
         else if (outlier_px > 0)
             gen_add_outliers_px(&g, &rng, N / 4, outlier_px, 2 * outlier_px);
+        bool ten[GEN_MAXN]; // 10 sigma or more of the pick's whole noise, at the true sigmas
+        for (int i = 0; i < g.N; i++) ten[i] = g.outlier[i] && gen_pick_sigmas(&g, i) >= 10.0;
         for (int i = 0; i < g.N; i++) {
             g.sigma_px[i] *= c->px;
             for (int k = 0; k < 3; k++) g.sigma_enu[3 * i + k] *= c->m;
@@ -117,6 +121,8 @@ static void run(stats *s, const config *c, double outlier_px)
             if (g.outlier[i]) {
                 s->out_total++;
                 s->out_flagged += !r.inlier[i];
+                s->out10_total += ten[i];
+                s->out10_flagged += ten[i] && !r.inlier[i];
             } else {
                 s->good_total++;
                 s->good_flagged += !r.inlier[i];
@@ -179,22 +185,28 @@ int main(void)
         CHECK(acc.good_flagged <= 0.02 * acc.good_total, "%s: %d of %d good landmarks flagged", configs[k].name,
               acc.good_flagged, acc.good_total);
     }
-    // 25% moderate outliers, 20-40 px: 20-40 sigma of the 1 px picks, about 10-20 of a pick's whole
-    // noise (the 5 cm survey adds up to 2 px at 25 m). The issue asks 95% flagged at 10+ sigma.
-    // Measured: 94.4% with the right sigmas, 93.6% / 96.1% with the pixels / the survey stated 5x
-    // too precise, 88.1% / 49.8% stated 5x too loose (the coarse test is never narrower than the
-    // statement, and a quarter of outliers inflate the noise that the snooping tests against):
-    // not met but for the survey stated too precise; guarded at 90% where the statement is not
-    // too loose (docs/calibration.md 3c)
+    // 25% moderate outliers, 20-40 px: 20-40 sigma of the 1 px picks, but the 5 cm survey adds up
+    // to 8 px to a pick's whole noise on a near landmark: 352 of the 590 are 10 sigma or more of it
+    // (gen_pick_sigmas, at the true sigmas). The issue asks 95% flagged at 10+ sigma. Measured
+    // (2026-11-25, the coarse test at the noise's scale from the data, rs_calib_robust.c): 100% /
+    // 100% / 99.7% / 100% with the right sigmas, pixels 5x too precise, 5x too loose, survey 5x too
+    // precise; 90.1% with the survey stated 5x too loose (the vertical group has too few testable
+    // observations to be narrowed on: 71.6% before). Guarded at 95% (85% for that one); all of
+    // them, 90% where the statement is not too loose (docs/calibration.md 3a)
     for (int k = 0; k < 5; k++) {
         static stats acc;
         run(&acc, &configs[k], 20);
-        printf("%-14s 25%% outliers 20-40 px: %d of %d flagged (%.1f%%), %d of %d good flagged (%.2f%%)\n",
+        printf("%-14s 25%% outliers 20-40 px: %d of %d flagged (%.1f%%; 10+ sigma %d of %d, %.1f%%), %d of %d good "
+               "flagged (%.2f%%)\n",
                configs[k].name, acc.out_flagged, acc.out_total, 100.0 * acc.out_flagged / acc.out_total,
-               acc.good_flagged, acc.good_total, 100.0 * acc.good_flagged / acc.good_total);
+               acc.out10_flagged, acc.out10_total, 100.0 * acc.out10_flagged / acc.out10_total, acc.good_flagged,
+               acc.good_total, 100.0 * acc.good_flagged / acc.good_total);
         if (configs[k].px <= 1 && configs[k].m <= 1)
             CHECK(acc.out_flagged >= 0.90 * acc.out_total, "%s: only %d of %d moderate outliers flagged",
                   configs[k].name, acc.out_flagged, acc.out_total);
+        const double bar = configs[k].m > 1 ? 0.85 : 0.95;
+        CHECK(acc.out10_flagged >= bar * acc.out10_total, "%s: only %d of %d outliers of 10+ sigma flagged",
+              configs[k].name, acc.out10_flagged, acc.out10_total);
         CHECK(acc.good_flagged <= 0.02 * acc.good_total, "%s: %d of %d good landmarks flagged", configs[k].name,
               acc.good_flagged, acc.good_total);
     }

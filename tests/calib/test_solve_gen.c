@@ -150,6 +150,27 @@ void gen_add_outliers_px(gen_problem *g, gen_rng *rng, int Nout, double lo_px, d
     }
 }
 
+double gen_pick_sigmas(const gen_problem *g, int i)
+{
+    // C = sigma_px^2 I + J S J', J = dq/dp by central differences (1 mm: q is smooth there)
+    double C[4] = {g->sigma_px[i] * g->sigma_px[i], 0, 0, g->sigma_px[i] * g->sigma_px[i]};
+    for (int a = 0; a < 3; a++) {
+        double p[3], qp[2], qm[2];
+        memcpy(p, &g->p_true[3 * i], sizeof p);
+        p[a] += 1e-3;
+        const bool ok = project(qp, g, p);
+        p[a] -= 2e-3;
+        if (!ok || !project(qm, g, p)) return NAN;
+        const double J[2] = {(qp[0] - qm[0]) / 2e-3, (qp[1] - qm[1]) / 2e-3},
+                     s2 = g->sigma_enu[3 * i + a] * g->sigma_enu[3 * i + a];
+        for (int r = 0; r < 2; r++)
+            for (int c = 0; c < 2; c++) C[2 * r + c] += J[r] * s2 * J[c];
+    }
+    const double e[2] = {g->q_obs[2 * i] - g->q_true[2 * i], g->q_obs[2 * i + 1] - g->q_true[2 * i + 1]};
+    const double det = C[0] * C[3] - C[1] * C[2];
+    return sqrt((C[3] * e[0] * e[0] - 2 * C[1] * e[0] * e[1] + C[0] * e[1] * e[1]) / det);
+}
+
 void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m)
 {
     // new landmarks: copies of random existing ones moved along the road by 2-10 m

@@ -65,6 +65,11 @@ void gen_add_outliers(gen_problem *g, gen_rng *rng, int Nout);
 // The same with the pixel offset drawn from [lo_px, hi_px] instead of 200-500 px.
 void gen_add_outliers_px(gen_problem *g, gen_rng *rng, int Nout, double lo_px, double hi_px);
 
+// The size of landmark i's pick error (q_obs - q_true) in sigmas of the pick's whole noise at
+// g's sigmas: its Mahalanobis length against sigma_px^2 I + J S J' (S the survey variances, J =
+// dq/dp at the truth). NAN where the landmark does not project.
+double gen_pick_sigmas(const gen_problem *g, int i);
+
 // Appends Nout gross outliers (new landmarks 12-150 m away whose clicked pixel is 200-500 px off).
 void gen_append_outliers(gen_problem *g, gen_rng *rng, int Nout, double sigma_m);
 

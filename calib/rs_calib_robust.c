@@ -1,0 +1,127 @@
+// rs_calib_robust.c -- steps 2 and 3 of rs_calib_solve: the robust solve on every landmark, the
+// noise's scale per group taken from the landmarks that agree with it, and the coarse outlier
+// test (calib/internal/rs_calib_noise.h, docs/calibration.md 3a).
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_refine.h"
+#include "calib/rs_calib.h"
+
+// A group's variance factor from the data: the median of x = e^2 / r over its observations, a
+// chi-square(1) times the factor where the model holds (median CHI2_1_MEDIAN). The log of the
+// median of n has the standard deviation SCALE_SD / sqrt(n) (1 / (2 f(m) sqrt(n)) for the
+// median m of the density f, relative to m; 2.28 and 2.31 by Monte Carlo at n 20 and 50); a
+// quarter of 10-20 sigma outliers make it 0.6 high (the 67% quantile of the rest).
+#define CHI2_1_MEDIAN    0.45494
+#define SCALE_SD         2.33
+// The coarse test is narrower than stated only on SCALE_NARROW_OBS or more testable observations
+// of the group, and only by what the median shows at SCALE_MARGIN of its sigmas: a small survey
+// whose residuals are small by chance must not lose the landmark that disagrees with them
+// (tests/calib/test_calib_focal_error.c, focal errors drawn from a stated 10%: on 2 of 240
+// cameras of 12 landmarks, narrowed on 20 survey observations, the landmark that showed the
+// focal error left and the pose became confident and wrong; mean NEES 7.26 -> 9.1).
+#define SCALE_NARROW_OBS 30
+#define SCALE_MARGIN     2.0
+// A group's scale is its own with this many testable observations or more.
+#define SCALE_MIN_OBS    5
+// The scale settles when no group's log variance factor moves by more than this (10% in sigma).
+#define SCALE_SETTLED    0.2
+#define SCALE_PASSES     4
+
+static rs_status robust_run(rs_calib_result *res, rs_calib__work *w, double rt_c[6], const rs_calib_refine_problem *rp,
+                            const rs_calib_refine_options *ro, rs_err *err)
+{
+    rs_calib_refine_summary sum;
+    rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, rp, ro, err);
+    if (st != RS_OK) {
+        rs_err_prefix(err, "robust refinement");
+        return st;
+    }
+    res->iterations += sum.iterations;
+    return RS_OK;
+}
+
+// The scale of the noise from the data, per group (the robust start of a geodetic adjustment:
+// Koch, "Parameter Estimation and Hypothesis Testing in Linear Models", 1999, 3.8; Hampel et al.,
+// "Robust Statistics", 1986, 2.3): the median of e^2 / r over the group's observations (whitened
+// residual e, redundancy number r > RS_CALIB_MIN_TESTABLE_R, every landmark in, at the robust
+// solution), then the robust solve again at the sigmas so scaled, until they settle (SCALE_PASSES
+// at most). Wider than stated as the median says, up to the common factor of the median block
+// chi2 (a group's median is the more contaminated: an outlier pick drags its landmark, and both
+// survey components show it; roadside bench calib, 25% outliers: 2 wrong poses in 50 without
+// the cap); narrower as above. A group without enough
+// testable observations (picks whose survey is loose have none: the landmark moves to them) keeps
+// its scale, widened only, with the others, by the median block chi2. The variance components on
+// every landmark would let outliers set the scale instead (a quarter of 10-20 sigma outliers hid
+// 28% of themselves where the survey was stated 5x too loose), and the stated sigmas alone cannot
+// test anything finer than the statement. Scratch: w->dpos, w->q_pred.
+static rs_status data_scale(rs_calib_result *res, rs_calib__work *w, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
+                            const rs_calib_refine_problem *rp, const rs_calib_refine_options *ro,
+                            const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
+{
+    const int N = pb->N;
+    const double lim = 2.0 * log(RS_NOISE_MAX_FACTOR);
+    double *x = w->dpos, *scratch = w->dpos + (size_t)N * RS_NOISE_NCOMP; // (N,5,3): room for two (N,5)
+    for (int pass = 0; pass < SCALE_PASSES; pass++) {
+        rs_status st = rs_calib__redundancy_at(res, w, rp, rt_c, opt, err);
+        if (st != RS_OK) {
+            rs_err_prefix(err, "robust refinement");
+            return st;
+        }
+        double next[RS_NOISE_NGROUPS];
+        // the common factor: the median block chi2 against a 2-dof chi-square's median 1.3863
+        // (a group without testable observations keeps its scale, widened only by it)
+        const double widen = fmax(0.0, log(rs_calib__median(w->block_chi2, N, w->q_pred) / 1.3863));
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+            int n = 0;
+            for (int k = 0; k < N * RS_NOISE_NCOMP; k++)
+                if (rs_calib__noise_group(k % RS_NOISE_NCOMP) == g && w->r[k] > RS_CALIB_MIN_TESTABLE_R)
+                    x[n++] = w->e[k] * w->e[k] / w->r[k];
+            next[g] = log_theta[g] + widen;
+            if (n >= SCALE_MIN_OBS) {
+                next[g] = log_theta[g] + fmin(widen, log(rs_calib__median(x, n, scratch) / CHI2_1_MEDIAN));
+                if (next[g] < 0.0)
+                    next[g] = n < SCALE_NARROW_OBS ? 0.0 : fmin(0.0, next[g] + SCALE_MARGIN * SCALE_SD / sqrt(n));
+            }
+            next[g] = fmin(lim, fmax(-lim, next[g]));
+        }
+        bool settled = true;
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++) settled = settled && fabs(next[g] - log_theta[g]) < SCALE_SETTLED;
+        if (settled) break; // the block chi2 are those of the last solve at sigmas within 10%
+        memcpy(log_theta, next, sizeof next);
+        rs_calib__scale_sigmas(w, pb, log_theta);
+        if ((st = robust_run(res, w, rt_c, rp, ro, err)) != RS_OK) return st;
+    }
+    return RS_OK;
+}
+
+rs_status rs_calib__robust_stage(int *Noutliers, double log_theta[RS_NOISE_NGROUPS], double rt_c[6],
+                                 rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
+                                 const rs_calib_refine_options *ro, const rs_calib_problem *pb,
+                                 const rs_calib_options *opt, const double c[3], char *desc, size_t desc_size,
+                                 rs_err *err)
+{
+    const int N = pb->N;
+    *Noutliers = 0;
+    rs_status st = robust_run(res, w, rt_c, rp, ro, err);
+    if (st == RS_OK && opt->estimate_noise) st = data_scale(res, w, rt_c, log_theta, rp, ro, pb, opt, err);
+    if (st != RS_OK) return st;
+    if (pb->along) { // the segments the along picks are on, at the robust pose (better than the initial one)
+        rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
+        if ((st = robust_run(res, w, rt_c, rp, ro, err)) != RS_OK) return st;
+    }
+    const double thr2 = opt->outlier_threshold * opt->outlier_threshold;
+    for (int i = 0; i < N; i++) {
+        w->use[i] = w->block_chi2[i] <= thr2;
+        res->w_test[i] = NAN;
+        if (!w->use[i]) {
+            (*Noutliers)++;
+            memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
+        }
+    }
+    snprintf(desc, desc_size, " + ceres-cauchy(%g) + outliers>%g sigma%s", opt->robust_scale, opt->outlier_threshold,
+             opt->estimate_noise ? " of the data" : "");
+    return RS_OK;
+}
