@@ -24,12 +24,8 @@
 #define RS_INIT_DUPLICATE_REL   1e-9
 // RANSAC stops once an outlier-free sample has been drawn with this probability.
 #define RS_INIT_CONFIDENCE      0.999
-// OpenGV's EPnP wants a few more points than the minimum.
-#define RS_INIT_EPNP_MIN        6
-// Landmarks with s3/s2 below this are exactly coplanar (0.1 mm of relief across 100 m).
-#define RS_INIT_EXACTLY_PLANAR  1e-6
-// IPPE needs bearings clearly in front of the camera to form x/z, y/z.
-#define RS_INIT_IPPE_MIN_VZ     1e-6
+// IPPE and SQPnP need bearings clearly in front of the camera to form x/z, y/z.
+#define RS_INIT_MIN_VZ          1e-6
 
 void rs_calib_init_options_default(rs_calib_init_options *opt)
 {
@@ -199,38 +195,21 @@ static void uncentre(double *rt_cam_enu, const double *rt_cam_c, const double *c
 
 // OpenCV's IPPE on the inliers `in` whose bearings are clearly in front (normalised image
 // coordinates x/z, y/z). xy (Nin,2) and p_sel (Nin,3) are scratch. False if the solver refuses.
-static bool solve_ippe(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin, double *xy,
-                       double *p_sel)
+// OpenCV's IPPE or SQPnP (rs_calib_opencv_pnp) on the inliers `in` seen in front of the camera.
+// xy (Nin,2), p_sel (Nin,3): scratch.
+static bool solve_opencv(double *rt_cam_c, rs_calib_opencv_pnp_method method, const double *v, const double *p_c,
+                         const int *in, int Nin, double *xy, double *p_sel)
 {
     int n = 0;
     for (int k = 0; k < Nin; k++) {
         const double *vi = &v[3 * in[k]];
-        if (!(vi[2] > RS_INIT_IPPE_MIN_VZ)) continue;
+        if (!(vi[2] > RS_INIT_MIN_VZ)) continue;
         xy[2 * n] = vi[0] / vi[2];
         xy[2 * n + 1] = vi[1] / vi[2];
         memcpy(&p_sel[3 * n], &p_c[3 * in[k]], 3 * sizeof(double));
         n++;
     }
-    return n >= 4 && rs_calib_opencv_ippe(rt_cam_c, xy, p_sel, n, NULL) == RS_OK;
-}
-
-// OpenGV's EPnP on the inliers `in`. False if there are too few, if they are exactly coplanar
-// (the inliers themselves: Debian's libopengv 1.0 then reads uninitialised memory in the SVD of
-// find_betas_approx_1 -- valgrind, and a crash 12,692 problems into `roadside bench calib
-// --stress`), or if the solver fails. scratch: (Nin,3).
-static bool solve_epnp(double *rt_cam_c, const double *v, const double *p_c, const int *in, int Nin, double *scratch)
-{
-    double Rt[12], mean[3] = {0, 0, 0}, s[3];
-    if (Nin < RS_INIT_EPNP_MIN) return false;
-    for (int k = 0; k < Nin; k++)
-        for (int j = 0; j < 3; j++) mean[j] += p_c[3 * in[k] + j] / Nin;
-    for (int k = 0; k < Nin; k++)
-        for (int j = 0; j < 3; j++) scratch[3 * k + j] = p_c[3 * in[k] + j] - mean[j];
-    if (rs_calib_opencv_singular_values3(s, scratch, Nin, NULL) != RS_OK || !(s[2] > RS_INIT_EXACTLY_PLANAR * s[1]))
-        return false;
-    if (rs_calib_opengv_epnp(Rt, v, p_c, in, Nin, NULL) != RS_OK) return false;
-    mrcal_rt_from_Rt(rt_cam_c, NULL, Rt);
-    return true;
+    return n >= 4 && rs_calib_opencv_pnp(rt_cam_c, xy, p_sel, n, method, NULL) == RS_OK;
 }
 
 rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const mrcal_lensmodel_t *lensmodel,
@@ -342,23 +321,22 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
     double rms_best = rms_px_at(rt_best, in, Nin, &sc, tmp);
     snprintf(result->method, sizeof(result->method), "opengv-p3p-%s-ransac", Nfallback ? "kneip+gao" : "kneip");
 
-    // 4. non-minimal solves on the inliers; keep whichever fits the inliers best. IPPE is
-    // exact for coplanar landmarks but biased by any relief, EPnP the reverse: on landmarks
-    // judged planar both are tried, unless they are exactly coplanar (OpenGV's EPnP then
-    // prints to stderr, and could not win anyway).
-    const bool try_ippe = result->planar;
-    const bool try_epnp = !result->planar || s[2] > RS_INIT_EXACTLY_PLANAR * s[1];
+    // 4. non-minimal solves on the inliers; keep whichever fits the inliers best: SQPnP (the
+    // global minimum of the object-space error, any configuration) and, on landmarks judged
+    // planar, IPPE (exact for coplanar landmarks, biased by any relief). SQPnP replaced OpenGV's
+    // EPnP here: 11% of a baseline calibration's time went to EPnP's dynamic-size SVDs, and
+    // Debian's libopengv 1.0 read uninitialised memory on exactly coplanar landmarks.
     const char *best_name = NULL;
     for (int m = 0; m < 2; m++) {
         double rt[6];
-        const bool ok = m == 0 ? try_ippe && solve_ippe(rt, v, p_c, in, Nin, xy, p_sel)
-                               : try_epnp && solve_epnp(rt, v, p_c, in, Nin, p_sel);
-        if (!ok) continue;
+        if (m == 0 && !result->planar) continue;
+        if (!solve_opencv(rt, m == 0 ? RS_CALIB_OPENCV_IPPE : RS_CALIB_OPENCV_SQPNP, v, p_c, in, Nin, xy, p_sel))
+            continue;
         const double rms = rms_px_at(rt, in, Nin, &sc, tmp);
         if (rms < rms_best) {
             rms_best = rms;
             memcpy(rt_best, rt, sizeof(rt_best));
-            best_name = m == 0 ? "opencv-ippe" : "opengv-epnp";
+            best_name = m == 0 ? "opencv-ippe" : "opencv-sqpnp";
         }
     }
     if (best_name) {

@@ -10,6 +10,7 @@
 #include "calib/internal/rs_calib_opencv.h"
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/rs_calib.h"
+#include "core/rs_pose.h"
 
 // The sigmas in use: the stated ones scaled by the variance factors exp(log_theta[group]).
 void rs_calib__scale_sigmas(rs_calib__work *w, const rs_calib_problem *pb, const double log_theta[RS_NOISE_NGROUPS])
@@ -51,7 +52,7 @@ int rs_calib__noise_group(int component)
 }
 
 static rs_calib_noise_state noise_state(const rs_calib_refine_problem *rp, const rs_calib__work *w,
-                                        const double rt_c[6], const rs_calib_result *res, const rs_calib_options *opt)
+                                        const double rt_c[6], const double *intrinsics, const rs_calib_options *opt)
 {
     return (rs_calib_noise_state){.N = rp->N,
                                   .rt_cam_c = rt_c,
@@ -64,14 +65,15 @@ static rs_calib_noise_state noise_state(const rs_calib_refine_problem *rp, const
                                   .along_c = w->along_c,
                                   .s_along_m = w->s_along,
                                   .lensmodel = rp->lensmodel,
-                                  .intrinsics = res->intrinsics,
+                                  .intrinsics = intrinsics,
                                   .intrinsics_nominal = rp->intrinsics_nominal,
                                   .refine = opt->refine,
                                   .focal_prior_rel_sigma = opt->focal_prior_rel_sigma,
                                   .center_prior_sigma_px = opt->center_prior_sigma_px,
                                   .distortion_prior_sigma = opt->distortion_prior_sigma,
                                   .has_position_prior = rp->has_position_prior,
-                                  .prior_sigma_m = rp->prior_sigma_m};
+                                  .prior_sigma_m = rp->prior_sigma_m,
+                                  .prior_position_c_m = rp->prior_position_c_m};
 }
 
 // Baarda's w of landmark i: the largest |e| / sqrt(r) among its observations (r > RS_CALIB_MIN_TESTABLE_R).
@@ -96,7 +98,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
                                 int *Noutliers, const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
 {
     const int N = pb->N;
-    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     const rs_calib_noise_out out = {.e = w->e, .r = w->r, .chi2_excluded = w->chi2_excluded};
     const int max_rejected = (int)floor(opt->max_rejected_fraction * N);
     if (*Noutliers > max_rejected) res->noise_model_wrong = true;
@@ -209,7 +211,7 @@ rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const r
                                 const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
 {
     const int N = pb->N;
-    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     const rs_calib_noise_out out = {.e = w->e, .r = w->r, .dpos_m = w->dpos, .dground_m = w->dground};
     rs_status st = rs_calib__noise_redundancy(&out, &ns, err);
     if (st != RS_OK) {
@@ -272,7 +274,7 @@ rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const r
 rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                                   const double rt_c[6], const rs_calib_options *opt, rs_err *err)
 {
-    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     const rs_calib_noise_out out = {.e = w->e, .r = w->r};
     return rs_calib__noise_redundancy(&out, &ns, err);
 }
@@ -281,7 +283,7 @@ rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGR
                            const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
                            const double log_theta[RS_NOISE_NGROUPS], const rs_calib_options *opt, rs_err *err)
 {
-    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
     rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
     if (st == RS_OK) st = rs_calib__vce_estimate(next, sd, v, opt->noise_prior_factor, err);
@@ -293,7 +295,7 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
                                rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
                                const rs_calib_options *opt, rs_err *err)
 {
-    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res, opt);
+    const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
     rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
     const int nc = st == RS_OK ? 6 + rs_calib__vce_Nintrinsics(v) : 0;
@@ -323,5 +325,72 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
     free(dQ);
     rs_calib__vce_free(v);
     if (st != RS_OK) rs_err_prefix(err, "covariance");
+    return st;
+}
+
+// The camera priors' gradient (nc,) at the state s with intrinsics x: the position prior's and
+// each refined intrinsic's, w^2 (x - nominal) (the focal scale's in relative units).
+static void prior_gradient(double *gamma, const rs_calib_noise_state *s, const double *x)
+{
+    rs_calib__params pp;
+    rs_calib__camera_params(&pp, s);
+    for (int a = 0; a < pp.nc; a++) {
+        const double w2 = pp.prior_w[a] * pp.prior_w[a];
+        gamma[a] = pp.kind[a] == -1   ? 0.0
+                   : pp.kind[a] == -2 ? w2 * (x[0] / s->intrinsics_nominal[0] - 1.0)
+                                      : w2 * (x[pp.kind[a]] - s->intrinsics_nominal[pp.kind[a]]);
+    }
+    if (!(s->has_position_prior && s->prior_sigma_m > 0)) return;
+    double C[3], dC_drt[18];
+    rs_pose_position_from_rt(C, dC_drt, s->rt_cam_c);
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 6; a++)
+            gamma[a] += dC_drt[k * 6 + a] * (C[k] - s->prior_position_c_m[k]) / (s->prior_sigma_m * s->prior_sigma_m);
+}
+
+rs_status rs_calib__focal_alternative(double *k_rel, double *Q_rel, const rs_calib_result *res, const rs_calib__work *w,
+                                      const rs_calib_refine_problem *rp, const double rt_c[6],
+                                      const rs_calib_options *opt, rs_err *err)
+{
+    const int Ni = res->Nintrinsics;
+    const double *nominal = rp->intrinsics_nominal;
+    rs_calib_options o = *opt;
+    o.refine |= RS_CALIB_REFINE_FOCAL;
+    o.focal_prior_rel_sigma = 1.0; // rs_calib_options_default's: weak
+    double rt[6], L[RS_NOISE_NGROUPS], gamma[RS_NOISE_NC_MAX], dc[RS_NOISE_NC_MAX];
+    double *x = malloc((size_t)Ni * sizeof *x), *Q = malloc((size_t)RS_NOISE_NC_MAX * RS_NOISE_NC_MAX * sizeof *Q);
+    rs_status st = x && Q ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "intrinsics test: out of memory");
+    if (st == RS_OK) {
+        memcpy(rt, rt_c, sizeof rt);
+        memcpy(x, res->intrinsics, (size_t)Ni * sizeof *x);
+        memcpy(L, w->log_theta, sizeof L);
+    }
+    for (int it = 0; st == RS_OK; it++) {
+        if (it == RS_CALIB_ALTERNATIVE_ITERATIONS) {
+            st = rs_err_set(err, RS_ERR_NOCONVERGE, "the focal left free: no convergence in %d steps", it);
+            break;
+        }
+        const rs_calib_noise_state ns = noise_state(rp, w, rt, x, &o);
+        rs_calib__vce *v = NULL;
+        if ((st = rs_calib__vce_build(&v, &ns, w->share, w->log_theta, err)) != RS_OK) break;
+        const int nc = 6 + rs_calib__vce_Nintrinsics(v);
+        prior_gradient(gamma, &ns, x);
+        rs_calib__vce_set_prior_gradient(v, gamma);
+        if (opt->estimate_noise) st = rs_calib__vce_estimate(L, NULL, v, opt->noise_prior_factor, err);
+        if (st == RS_OK) st = rs_calib__vce_step(dc, Q, v, L, err);
+        rs_calib__vce_free(v);
+        if (st != RS_OK) break;
+        for (int a = 0; a < 6; a++) rt[a] += dc[a];
+        for (int a = 0; a < 2; a++) x[a] += nominal[a] * dc[6];
+        *k_rel = x[0] / nominal[0] - 1.0;
+        *Q_rel = Q[6 * nc + 6];
+        if (!(*Q_rel > 0) || !isfinite(*k_rel)) {
+            st = rs_err_set(err, RS_ERR_DEGENERATE, "the focal left free is not determined");
+            break;
+        }
+        if (fabs(dc[6]) <= RS_CALIB_ALTERNATIVE_TOL * sqrt(*Q_rel)) break;
+    }
+    free(x);
+    free(Q);
     return st;
 }

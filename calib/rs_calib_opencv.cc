@@ -1,5 +1,5 @@
 // rs_calib_opencv.cc -- the OpenCV shim of the pose solver: planarity (cv::SVD), IPPE
-// (cv::solvePnP), SPD inverses (cv::hal::Cholesky64f, cv::invert), their log determinants and
+// and SQPnP (cv::solvePnP), SPD inverses (cv::hal::Cholesky64f, cv::invert), their log determinants and
 // symmetric eigenproblems (cv::eigen). Every exception is caught at the boundary and becomes an
 // rs_status.
 #include <algorithm>
@@ -30,26 +30,28 @@ extern "C" rs_status rs_calib_opencv_singular_values3(double *s, const double *p
     }
 }
 
-extern "C" rs_status rs_calib_opencv_ippe(double *rt_cam_ref, const double *xy, const double *p_ref, int N, rs_err *err)
+extern "C" rs_status rs_calib_opencv_pnp(double *rt_cam_ref, const double *xy, const double *p_ref, int N,
+                                         rs_calib_opencv_pnp_method method, rs_err *err)
 {
+    const char *name = method == RS_CALIB_OPENCV_IPPE ? "IPPE" : "SQPnP";
     try {
         const cv::Mat object(N, 3, CV_64F, const_cast<double *>(p_ref)); // read only
         const cv::Mat image(N, 2, CV_64F, const_cast<double *>(xy));     // read only
         cv::Mat rvec, tvec;
         if (!cv::solvePnP(object, image, cv::Mat::eye(3, 3, CV_64F), cv::noArray(), rvec, tvec, false,
-                          cv::SOLVEPNP_IPPE))
-            return rs_err_set(err, RS_ERR_DEGENERATE, "IPPE found no pose");
+                          method == RS_CALIB_OPENCV_IPPE ? cv::SOLVEPNP_IPPE : cv::SOLVEPNP_SQPNP))
+            return rs_err_set(err, RS_ERR_DEGENERATE, "%s found no pose", name);
         for (int i = 0; i < 3; i++) {
             rt_cam_ref[i] = rvec.at<double>(i);
             rt_cam_ref[3 + i] = tvec.at<double>(i);
         }
         for (int i = 0; i < 6; i++)
-            if (!std::isfinite(rt_cam_ref[i])) return rs_err_set(err, RS_ERR_DEGENERATE, "IPPE: non-finite pose");
+            if (!std::isfinite(rt_cam_ref[i])) return rs_err_set(err, RS_ERR_DEGENERATE, "%s: non-finite pose", name);
         return RS_OK;
     } catch (const std::exception &e) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV IPPE threw: %s", e.what());
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw: %s", name, e.what());
     } catch (...) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV IPPE threw an unknown exception");
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw an unknown exception", name);
     }
 }
 

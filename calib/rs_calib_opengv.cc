@@ -172,29 +172,6 @@ extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier
     }
 }
 
-extern "C" rs_status rs_calib_opengv_epnp(double *Rt_cam_ref, const double *v_cam, const double *p_ref,
-                                          const int *indices, int Nindices, rs_err *err)
-{
-    QuietStreams quiet;
-    try {
-        // The adapter spans the highest index used; the others are never read.
-        int N = 0;
-        for (int k = 0; k < Nindices; k++)
-            if (indices[k] + 1 > N) N = indices[k] + 1;
-        Correspondences c(v_cam, p_ref, N);
-        opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
-        const opengv::transformation_t T =
-            opengv::absolute_pose::epnp(adapter, std::vector<int>(indices, indices + Nindices));
-        if (!T.allFinite()) return rs_err_set(err, RS_ERR_DEGENERATE, "EPnP: non-finite pose");
-        model_to_Rt(Rt_cam_ref, T);
-        return RS_OK;
-    } catch (const std::exception &e) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV EPnP threw: %s", e.what());
-    } catch (...) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenGV EPnP threw an unknown exception");
-    }
-}
-
 extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_cam, const double *p_ref, int N,
                                           rs_calib_opengv_pose_method method, double threshold_rad, int max_iterations,
                                           rs_err *err)

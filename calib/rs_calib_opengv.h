@@ -54,18 +54,6 @@ rs_status rs_calib_opengv_ransac_p3p( // out
     uint64_t seed, rs_calib_opengv_score_fn *score, void *cookie,
     rs_err *err); // may be NULL
 
-// OpenGV's EPnP (Lepetit, Moreno-Noguer, Fua, IJCV 2009) on the observations `indices`
-// (Nindices >= 6 advised; non-coplanar landmarks).
-// Returns RS_ERR_DEGENERATE if the result is not finite, RS_ERR_EXTERNAL if OpenGV threw.
-rs_status rs_calib_opengv_epnp( // out
-    double *Rt_cam_ref,         // (4,3)
-    // in
-    const double *v_cam, // (N,3) unit bearing vectors
-    const double *p_ref, // (N,3) landmarks, metres
-    const int *indices,  // (Nindices,)
-    int Nindices,
-    rs_err *err); // may be NULL
-
 // ---- pose solvers side by side (roadside bench calib, issue 5) ----
 // One calling convention for the OpenGV methods the benchmark compares, used as OpenGV's own
 // examples use them: stock sample-consensus problem (angular threshold, OpenGV's fixed seed).

@@ -63,6 +63,8 @@ const double kFailed = 1e100;
 // from (Reduced::inner): at 1 an outlier of test_noise_model (survey stated 5x too loose) ended
 // behind the camera; 0.3 keeps that test's and test_stress_random's outcomes and the saving
 const double kPredictMax = 0.3;
+// The inner solve's last step, in the landmark's smallest survey sigma (Reduced::inner).
+const double kInnerTol = 1e-3;
 
 // A pose rt, its rotation and the rotation's gradient computed once for all the landmarks.
 struct Pose : rs_pose_prepared {
@@ -159,7 +161,7 @@ class Reduced {
         : pb_(pb), lensmodel_(pb->lensmodel), Ni_(mrcal_lensmodel_num_params(pb->lensmodel)),
           i0_(intrinsics_start, intrinsics_start + Ni_),
           robust_b_(opt->robust_scale > 0.0 ? opt->robust_scale * opt->robust_scale : 0.0),
-          inner_tol_(opt->rough ? 1e-3 : 1e-6), p_(p_start, p_start + 3 * (size_t)pb->N), s_((size_t)pb->N, 0.0)
+          p_(p_start, p_start + 3 * (size_t)pb->N), s_((size_t)pb->N, 0.0)
     {
         for (int i = 0; i < pb->N; i++) {
             landmarks_.emplace_back(&pb->q_px[2 * i], pb->sigma_px ? pb->sigma_px[i] : 1.0, &pb->p_survey_c_m[3 * i],
@@ -285,10 +287,11 @@ class Reduced {
   public:
     // Landmark i's residuals at its own optimum for the pose and intrinsics (p_ updated), and if
     // J is not NULL its reduced Jacobian (5, nc) column-major with leading dimension ld. Gauss-
-    // Newton from the previous position: a step below inner_tol_ x the landmark's smallest
+    // Newton from the previous position: a step below kInnerTol x the landmark's smallest
     // survey sigma ends it, applied to p and to r linearly. The error left is second order in
-    // that step: about |dq/dp| step^2 / z, for a step of 1e-3 sigma (a rough pass) at 20 m with
-    // f/sigma_px = 1000 px/px and sigma 0.3 m 2e-7 of a sigma, for 1e-6 (a tight pass) nothing.
+    // that step: about |dq/dp| step^2 / z, for a step of 1e-3 sigma at 20 m with f/sigma_px =
+    // 1000 px/px and sigma 0.3 m 2e-7 of a sigma (the final pass used to go on to 1e-6: 19% of
+    // its time, for nothing the tests or `roadside bench calib` could see).
     // False if the landmark does not project.
     // With predict, the solve starts where the last evaluation's linearisation puts the landmark
     // for c (its position there plus dp/dc (c - c_last), dp/dc = -Jp^+ Jc, the implicit function
@@ -345,7 +348,7 @@ class Reduced {
                 const double step = std::max(std::fabs(dx[0]), std::max(std::fabs(dx[1]), std::fabs(dx[2])));
                 for (int k = 0; k < 3; k++) p[k] += dx[k];
                 if (!std::isfinite(step)) return false;
-                if (step <= inner_tol_ * L.sigma_min || it == 25) {
+                if (step <= kInnerTol * L.sigma_min || it == 25) {
                     for (int a = 0; a < 5; a++) r[a] += dr[a];
                     break;
                 }
@@ -369,7 +372,7 @@ class Reduced {
                 step = std::max(step, std::fabs(dx[f]));
             }
             if (!std::isfinite(step)) return false;
-            if (step <= inner_tol_ * L.sigma_min || it == 25) {
+            if (step <= kInnerTol * L.sigma_min || it == 25) {
                 for (int a = 0; a < 5; a++)
                     for (int f = 0; f < nf; f++) r[a] += Jp[a][f] * dx[f];
                 break;
@@ -482,7 +485,6 @@ class Reduced {
     std::vector<int> used_;
     double robust_b_;
     bool carrier_ = false; // a last residual row for rs_calib__cauchy_block's cost
-    double inner_tol_;     // the inner solve's last step, in sigmas
     // state of the evaluations: the landmarks' positions (warm start of the next inner solve)
     // and scratch
     mutable std::vector<double> p_, s_, intr_, dq_di_, dr_di_;

@@ -453,3 +453,23 @@ rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOI
 {
     return evaluate(v, log_theta, true, loglik, q, r, F, err);
 }
+
+void rs_calib__vce_set_prior_gradient(rs_calib__vce *v, const double *gamma)
+{
+    memcpy(v->gamma, gamma, (size_t)v->nc * sizeof *gamma);
+}
+
+rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
+                             rs_err *err)
+{
+    double ll, q[RS_NOISE_NGROUPS], r[RS_NOISE_NGROUPS], F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS];
+    rs_status st = evaluate(v, log_theta, false, &ll, q, r, F, err);
+    if (st != RS_OK) return st;
+    const int nc = v->nc;
+    for (int a = 0; a < nc; a++) {
+        dc[a] = 0;
+        for (int b = 0; b < nc; b++) dc[a] -= v->Q[a * nc + b] * v->g[b];
+    }
+    memcpy(Q, v->Q, (size_t)nc * nc * sizeof *Q);
+    return RS_OK;
+}

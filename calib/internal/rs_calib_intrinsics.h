@@ -47,6 +47,10 @@ extern "C" {
 #define RS_CALIB_INTRINSICS_CHI2_1DOF 10.828 // chi-square 1 dof, 99.9%
 #define RS_CALIB_INTRINSICS_CHI2_2DOF 13.816 // chi-square 2 dof, 99.9%
 #define RS_CALIB_INTRINSICS_DELTA0    4.13   // Baarda's non-centrality: alpha 0.1%, power 80%
+// The linearised alternative (rs_calib__focal_alternative) decides the focal test where its
+// chi-square is this factor or more from the critical value; nearer, the full solve does
+// (rs_calib_intrinsics.c: the two differed by up to 2x in chi-square).
+#define RS_CALIB_ALTERNATIVE_MARGIN   4.0
 
 // Hook 1 (before the solve): the options the solve runs with. in,out: *opt (the caller's options
 // on entry). A stated focal sigma adds RS_CALIB_REFINE_FOCAL with focal_prior_rel_sigma = the

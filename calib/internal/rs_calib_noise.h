@@ -56,6 +56,7 @@ typedef struct {
     double focal_prior_rel_sigma, center_prior_sigma_px, distortion_prior_sigma; // 0: no prior
     bool has_position_prior;
     double prior_sigma_m;
+    const double *prior_position_c_m; // (3,) the position prior's centre
 } rs_calib_noise_state;
 
 // Per landmark and component (N, RS_NOISE_NCOMP): the whitened residual e (observation minus
@@ -156,6 +157,14 @@ double rs_calib__pose_region_m2(double alpha, double nu, double kappa);
 rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS], double *loglik,
                                  double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
                                  double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err);
+// The priors' gradient (nc,) in the model, minus the picks' at the state it was built at (the
+// solution is a stationary point of the whole) unless set here: for a model with a parameter
+// freed or a prior changed, whose picks' gradient is the signal (rs_calib__focal_alternative).
+void rs_calib__vce_set_prior_gradient(rs_calib__vce *v, const double *gamma);
+// At log_theta: the Gauss-Newton step dc (nc,) of the camera parameters from the state the model
+// was built at, and their covariance Q (nc,nc) = S^-1.
+rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
+                             rs_err *err);
 // The refined intrinsics' coordinates among its camera parameters (nc = 6 + this).
 int rs_calib__vce_Nintrinsics(const rs_calib__vce *v);
 void rs_calib__vce_free(rs_calib__vce *v);
@@ -272,6 +281,18 @@ rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGR
                            const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
                            const double log_theta[RS_NOISE_NGROUPS], const rs_calib_options *opt, rs_err *err);
 
+// The intrinsics check's alternative (rs_calib_intrinsics.c): the model of the solution at rt_c
+// and res->intrinsics, on the landmarks in w->use, with the focal free (a weak prior, 100%) and
+// the variance factors estimated again (so that what a wrong focal left in the residuals is not
+// taken for survey noise), solved by Gauss-Newton on the adjustment linearised at the surveyed
+// landmarks (rs_calib_vce.c), relinearised until the focal's step is below
+// RS_CALIB_ALTERNATIVE_TOL of its sigma. *k_rel: the focal relative to the nominal, minus 1;
+// *Q_rel: its variance. RS_ERR_NOCONVERGE, RS_ERR_DEGENERATE (the focal is not determined).
+#define RS_CALIB_ALTERNATIVE_ITERATIONS 20
+#define RS_CALIB_ALTERNATIVE_TOL        1e-2
+rs_status rs_calib__focal_alternative(double *k_rel, double *Q_rel, const rs_calib_result *res, const rs_calib__work *w,
+                                      const rs_calib_refine_problem *rp, const double rt_c[6],
+                                      const rs_calib_options *opt, rs_err *err);
 // w->e and w->r (rs_calib_noise_out) at the state of w.
 rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                                   const double rt_c[6], const rs_calib_options *opt, rs_err *err);

@@ -18,17 +18,22 @@ rs_status rs_calib_opencv_singular_values3( // out
     int N,           // >= 1
     rs_err *err);    // may be NULL
 
-// Pose from N >= 4 coplanar landmarks by OpenCV's IPPE (Collins & Bartoli, "Infinitesimal
-// Plane-Based Pose Estimation", IJCV 2014) -- cv::solvePnP(SOLVEPNP_IPPE) with K = identity on
-// normalised image coordinates xy = (v_x/v_z, v_y/v_z) of bearings in front of the camera.
-// Returns RS_ERR_EXTERNAL when OpenCV refuses the input (e.g. points not coplanar enough) or
-// throws, RS_ERR_DEGENERATE when it returns no pose or a non-finite one.
-rs_status rs_calib_opencv_ippe( // out
-    double *rt_cam_ref,         // (6,)
+// Pose from N landmarks by cv::solvePnP with K = identity on normalised image coordinates
+// xy = (v_x/v_z, v_y/v_z) of bearings in front of the camera:
+// - RS_CALIB_OPENCV_IPPE: N >= 4 coplanar landmarks (Collins & Bartoli, "Infinitesimal
+//   Plane-Based Pose Estimation", IJCV 2014);
+// - RS_CALIB_OPENCV_SQPNP: N >= 3 landmarks in any configuration, the global minimum of the
+//   squared object-space error (Terzakis & Lourakis, "A Consistently Fast and Globally Optimal
+//   Solution to the Perspective-n-Point Problem", ECCV 2020).
+// Returns RS_ERR_EXTERNAL when OpenCV refuses the input (e.g. points not coplanar enough for
+// IPPE) or throws, RS_ERR_DEGENERATE when it returns no pose or a non-finite one.
+typedef enum { RS_CALIB_OPENCV_IPPE, RS_CALIB_OPENCV_SQPNP } rs_calib_opencv_pnp_method;
+rs_status rs_calib_opencv_pnp( // out
+    double *rt_cam_ref,        // (6,)
     // in
     const double *xy,    // (N,2) normalised image coordinates
-    const double *p_ref, // (N,3) coplanar landmarks, metres
-    int N,
+    const double *p_ref, // (N,3) landmarks, metres
+    int N, rs_calib_opencv_pnp_method method,
     rs_err *err); // may be NULL
 
 // The inverse of the symmetric positive definite n x n matrix A (row-major) by OpenCV's
