@@ -1,5 +1,6 @@
-// rs_calib_init.c -- initial camera pose: bearings, degeneracy checks, RANSAC over P3P scored
-// in pixels, non-minimal solve on the inliers. See rs_calib_init.h and
+// rs_calib_init.c -- initial camera pose: bearings, degeneracy checks, the non-minimal solves on
+// every landmark, and where they do not all agree RANSAC over P3P scored in pixels, non-minimal
+// solves on its inliers. See rs_calib_init.h and
 // docs/calibration-init.md. The solvers themselves are OpenGV's and OpenCV's, behind the shims
 // rs_calib_opengv.h and calib/internal/rs_calib_opencv.h; this file holds the logic.
 #include "calib/rs_calib_init.h"
@@ -193,8 +194,6 @@ static void uncentre(double *rt_cam_enu, const double *rt_cam_c, const double *c
     mrcal_compose_rt(rt_cam_enu, NULL, NULL, NULL, NULL, rt_cam_c, rt_c_enu);
 }
 
-// OpenCV's IPPE on the inliers `in` whose bearings are clearly in front (normalised image
-// coordinates x/z, y/z). xy (Nin,2) and p_sel (Nin,3) are scratch. False if the solver refuses.
 // OpenCV's IPPE or SQPnP (rs_calib_opencv_pnp) on the inliers `in` seen in front of the camera.
 // xy (Nin,2), p_sel (Nin,3): scratch.
 static bool solve_opencv(double *rt_cam_c, rs_calib_opencv_pnp_method method, const double *v, const double *p_c,
@@ -210,6 +209,30 @@ static bool solve_opencv(double *rt_cam_c, rs_calib_opencv_pnp_method method, co
         n++;
     }
     return n >= 4 && rs_calib_opencv_pnp(rt_cam_c, xy, p_sel, n, method, NULL) == RS_OK;
+}
+
+// The non-minimal solves on the observations `in`: SQPnP (the global minimum of the object-space
+// error, any configuration) and, on landmarks judged planar, IPPE (exact for coplanar landmarks,
+// biased by any relief). The one with the smallest RMS pixel error over `in` replaces rt_best
+// if it fits better than *rms_best (in,out); returns its name, or NULL when neither did. xy
+// (Nin,2), p_sel (Nin,3), tmp (Nin,): scratch.
+static const char *nonminimal(double *rt_best, double *rms_best, bool planar, const double *v, const double *p_c,
+                              const int *in, int Nin, const scorer *sc, double *xy, double *p_sel, double *tmp)
+{
+    const char *best_name = NULL;
+    for (int m = 0; m < 2; m++) {
+        double rt[6];
+        if (m == 0 && !planar) continue;
+        if (!solve_opencv(rt, m == 0 ? RS_CALIB_OPENCV_IPPE : RS_CALIB_OPENCV_SQPNP, v, p_c, in, Nin, xy, p_sel))
+            continue;
+        const double rms = rms_px_at(rt, in, Nin, sc, tmp);
+        if (rms < *rms_best) {
+            *rms_best = rms;
+            memcpy(rt_best, rt, 6 * sizeof(double));
+            best_name = m == 0 ? "opencv-ippe" : "opencv-sqpnp";
+        }
+    }
+    return best_name;
 }
 
 rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const mrcal_lensmodel_t *lensmodel,
@@ -280,7 +303,7 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
     if ((st = check_geometry(v, usable, Nusable, s, err))) goto done;
     result->planar = s[2] < opt->planarity_ratio * s[1];
 
-    // 3. RANSAC over P3P, scored in pixels
+    // the pixel scores: sc plain, sc_ransac with each landmark's survey noise in the test
     const scorer sc = {lensmodel, intrinsics, p_c, q_px, NULL, opt->ransac_threshold_px};
     scorer sc_ransac = sc;
     const mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(lensmodel);
@@ -293,6 +316,32 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
         }
         sc_ransac.ks_px = ks;
     }
+    // 3. every usable landmark at once (step 4's solvers): where that pose puts every one of them
+    // within the threshold, it is the consensus RANSAC would find, and RANSAC does not run (a
+    // survey without blunders: 8% of a 20-landmark calibration's time went to RANSAC there)
+    double rt_best[6], rms_best = INFINITY;
+    const char *best_name =
+        nonminimal(rt_best, &rms_best, result->planar, v, p_c, usable, Nusable, &sc, xy, p_sel, tmp);
+    if (best_name) {
+        double Rt[12];
+        mrcal_Rt_from_rt(Rt, NULL, rt_best);
+        pixel_errors(tmp, Rt, usable, Nusable, (void *)&sc_ransac);
+        int Nagree = 0;
+        for (int k = 0; k < Nusable; k++) Nagree += tmp[k] < opt->ransac_threshold_px;
+        if (Nagree == Nusable) {
+            for (int i = 0; i < N; i++) is_in[i] = false;
+            for (int k = 0; k < Nusable; k++) is_in[usable[k]] = true;
+            snprintf(result->method, sizeof(result->method), "%s on every landmark", best_name);
+            uncentre(result->rt_cam_enu, rt_best, centroid);
+            result->Ninliers = Nusable;
+            result->rms_px = rms_best;
+            if (inlier) memcpy(inlier, is_in, (size_t)N * sizeof(bool));
+            st = RS_OK;
+            goto done;
+        }
+    }
+
+    // 4. RANSAC over P3P, scored in pixels
     double Rt_cam_c[12];
     int Niterations = 0, Nfallback = 0;
     st = rs_calib_opengv_ransac_p3p(Rt_cam_c, is_in, &Niterations, &Nfallback, v, p_c, N, usable, Nusable,
@@ -316,29 +365,12 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
         goto done;
     }
     if (st) goto done;
-    double rt_best[6];
     mrcal_rt_from_Rt(rt_best, NULL, Rt_cam_c);
-    double rms_best = rms_px_at(rt_best, in, Nin, &sc, tmp);
+    rms_best = rms_px_at(rt_best, in, Nin, &sc, tmp);
     snprintf(result->method, sizeof(result->method), "opengv-p3p-%s-ransac", Nfallback ? "kneip+gao" : "kneip");
 
-    // 4. non-minimal solves on the inliers; keep whichever fits the inliers best: SQPnP (the
-    // global minimum of the object-space error, any configuration) and, on landmarks judged
-    // planar, IPPE (exact for coplanar landmarks, biased by any relief). SQPnP replaced OpenGV's
-    // EPnP here: 11% of a baseline calibration's time went to EPnP's dynamic-size SVDs, and
-    // Debian's libopengv 1.0 read uninitialised memory on exactly coplanar landmarks.
-    const char *best_name = NULL;
-    for (int m = 0; m < 2; m++) {
-        double rt[6];
-        if (m == 0 && !result->planar) continue;
-        if (!solve_opencv(rt, m == 0 ? RS_CALIB_OPENCV_IPPE : RS_CALIB_OPENCV_SQPNP, v, p_c, in, Nin, xy, p_sel))
-            continue;
-        const double rms = rms_px_at(rt, in, Nin, &sc, tmp);
-        if (rms < rms_best) {
-            rms_best = rms;
-            memcpy(rt_best, rt, sizeof(rt_best));
-            best_name = m == 0 ? "opencv-ippe" : "opencv-sqpnp";
-        }
-    }
+    // 5. the non-minimal solves on the inliers; whichever fits them best
+    best_name = nonminimal(rt_best, &rms_best, result->planar, v, p_c, in, Nin, &sc, xy, p_sel, tmp);
     if (best_name) {
         const size_t len = strlen(result->method);
         snprintf(result->method + len, sizeof(result->method) - len, " + %s", best_name);

@@ -253,7 +253,7 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
         st = rs_calib_opencv_inverse_spd(Q, S, nc, err);
     }
     double G[12];
-    const bool have_ground = st == RS_OK && axis_ground_jacobian(G, s->rt_cam_c);
+    const bool have_ground = st == RS_OK && out->dground_m && axis_ground_jacobian(G, s->rt_cam_c);
 
     // 2. per observation: H_jj, r = 1 - H_jj, the camera's response; the landmarks out: their test
     for (int i = 0; st == RS_OK && i < N; i++) {

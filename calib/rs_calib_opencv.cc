@@ -58,16 +58,25 @@ extern "C" rs_status rs_calib_opencv_pnp(double *rt_cam_ref, const double *xy, c
 namespace {
 // inv = A^-1 by cv::hal::Cholesky64f, the routine cv::invert(DECOMP_CHOLESKY) calls for n > 3,
 // without cv::invert's cv::Mat set-up (most of its cost for these 4x4 to 9x9 matrices: 18% of a
-// 4-landmark calibration). For n <= 3 cv::invert itself (closed forms, no absolute pivot
-// threshold). *logdet (may be NULL; n > 3 only): ln det A = 2 sum ln L_ii from a factorisation
+// 4-landmark calibration). For n <= 3 the closed forms cv::invert uses there, through
+// cv::Matx::inv (no absolute pivot threshold: only a zero determinant fails). *logdet (may be NULL; n > 3 only): ln det A = 2 sum ln L_ii from a factorisation
 // without right-hand side, whose diagonal is L's in both of OpenCV's implementations (its own
 // stores 1/L_ii when it also solves; the LAPACK one of Debian's build does not).
 bool inverse_spd(double *inv, double *logdet, const double *A, int n)
 {
-    if (n <= 3) {
-        const cv::Mat M(n, n, CV_64F, const_cast<double *>(A)); // read only
-        cv::Mat out(n, n, CV_64F, inv);
-        return cv::invert(M, out, cv::DECOMP_CHOLESKY) != 0;
+    if (n <= 3) { // fixed-size: no cv::Mat set-up (a third of rs_calib__noise_redundancy's time)
+        bool ok = false;
+        if (n == 1) {
+            ok = A[0] != 0.0;
+            inv[0] = 1.0 / A[0];
+        } else if (n == 2) {
+            const cv::Matx22d I = cv::Matx22d(A).inv(cv::DECOMP_LU, &ok);
+            std::copy(I.val, I.val + 4, inv);
+        } else {
+            const cv::Matx33d I = cv::Matx33d(A).inv(cv::DECOMP_LU, &ok);
+            std::copy(I.val, I.val + 9, inv);
+        }
+        return ok;
     }
     const size_t nn = (size_t)n * (size_t)n, step = (size_t)n * sizeof(double);
     std::vector<double> L(A, A + nn);
