@@ -25,6 +25,10 @@
 #define RS_INIT_DUPLICATE_REL   1e-9
 // RANSAC stops once an outlier-free sample has been drawn with this probability.
 #define RS_INIT_CONFIDENCE      0.999
+// SQPnP is tried on this many observations or more: on fewer, RANSAC's P3P has tried every
+// sample or nearly, and SQPnP's search costs more than it gains (a harness of 50 problems of 4
+// landmarks: 141 us per calibration with it, 99 us without).
+#define RS_INIT_SQPNP_MIN       6
 // IPPE and SQPnP need bearings clearly in front of the camera to form x/z, y/z.
 #define RS_INIT_MIN_VZ          1e-6
 
@@ -222,7 +226,7 @@ static const char *nonminimal(double *rt_best, double *rms_best, bool planar, co
     const char *best_name = NULL;
     for (int m = 0; m < 2; m++) {
         double rt[6];
-        if (m == 0 && !planar) continue;
+        if ((m == 0 && !planar) || (m == 1 && Nin < RS_INIT_SQPNP_MIN)) continue;
         if (!solve_opencv(rt, m == 0 ? RS_CALIB_OPENCV_IPPE : RS_CALIB_OPENCV_SQPNP, v, p_c, in, Nin, xy, p_sel))
             continue;
         const double rms = rms_px_at(rt, in, Nin, sc, tmp);
