@@ -77,9 +77,9 @@ void rs_calib__vce_free(rs_calib__vce *v)
     free(v);
 }
 
-// Evaluates the model at log_theta: S, its inverse Q and the gradient g in v; with `full`, also
-// the restricted log likelihood *loglik, q, r (with shared survey errors counted once) and the
-// Fisher information F (3x3, in log theta) -- without, those outputs are not touched.
+// Evaluates the model at log_theta: S, its inverse Q, the gradient g and the step dc = -Q g in v;
+// with `full`, also the restricted log likelihood *loglik, q, r (with shared survey errors counted
+// once) and the Fisher information F (3x3, in log theta) -- without, those are not touched.
 static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bool full, double *loglik,
                           double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
                           double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
@@ -140,12 +140,13 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
     double ldS = 0;
     rs_status st = full ? rs_calib_opencv_inverse_spd_logdet(v->Q, &ldS, v->S, nc, err)
                         : rs_calib_opencv_inverse_spd(v->Q, v->S, nc, err);
-    if (st != RS_OK || !full) return st;
-    double quad = 0;
-    for (int a = 0; a < nc; a++) {
+    if (st != RS_OK) return st;
+    for (int a = 0; a < nc; a++) { // the Gauss-Newton step from the state the model was built at
         v->dc[a] = 0;
         for (int b = 0; b < nc; b++) v->dc[a] -= v->Q[a * nc + b] * v->g[b];
     }
+    if (!full) return RS_OK;
+    double quad = 0;
     for (int a = 0; a < nc; a++) {
         quad += 2.0 * v->gamma[a] * v->dc[a];
         for (int b = 0; b < nc; b++) quad += v->dc[a] * v->P[a * nc + b] * v->dc[b];
@@ -466,10 +467,7 @@ rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const doub
     rs_status st = evaluate(v, log_theta, false, &ll, q, r, F, err);
     if (st != RS_OK) return st;
     const int nc = v->nc;
-    for (int a = 0; a < nc; a++) {
-        dc[a] = 0;
-        for (int b = 0; b < nc; b++) dc[a] -= v->Q[a * nc + b] * v->g[b];
-    }
+    memcpy(dc, v->dc, (size_t)nc * sizeof *dc);
     memcpy(Q, v->Q, (size_t)nc * nc * sizeof *Q);
     return RS_OK;
 }
