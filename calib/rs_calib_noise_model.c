@@ -99,30 +99,42 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
 {
     const int N = pb->N;
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
-    const rs_calib_noise_out out = {.e = w->e, .r = w->r, .chi2_excluded = w->chi2_excluded};
+    const rs_calib_noise_out out = {
+        .e = w->e, .r = w->r, .dpos_m = w->dpos, .dground_m = w->dground, .chi2_excluded = w->chi2_excluded};
     const int max_rejected = (int)floor(opt->max_rejected_fraction * N);
     if (*Noutliers > max_rejected) res->noise_model_wrong = true;
+    w->snooped = false;
     for (int round = 0; round <= N; round++) {
         // variance components (rs_calib_vce.c) on the adjustment linearised at each solution,
         // alternating with plain solves until every factor moves by less than 1% or a tenth of
         // its own posterior 1-sigma (the larger: 1% is a tenth of it at r = 200; a group the data
-        // barely see, 1-sigma 3 in log variance, crept by 0.1 per round)
-        for (int it = 0; it < 10; it++) {
-            rs_calib_refine_summary sum;
-            rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, NULL, NULL, rp, ro, err);
-            if (st == RS_ERR_NOCONVERGE && round == 0 && it == 0)
-                return RS_OK; // no noise model on a problem that does not converge: the final
-                              // solve reports it (or its cause, such as landmarks behind)
-            if (st != RS_OK) {
-                rs_err_prefix(err, "noise model");
-                return st;
+        // barely see, 1-sigma 3 in log variance, crept by 0.1 per round), RS_CALIB_NOISE_SOLVES
+        // solves at most. The first estimate of each round is made ahead of the solve, on the
+        // adjustment linearised at the state as it is (the robust solution, or the last one with
+        // the landmark just rejected still in) and stepped to its solution there: the solve that
+        // follows is then at sigmas all but final, and the estimate at its solution settles
+        // (where a solve at the robust stage's sigmas came first, it took one solve more: 6% of a
+        // calibration). It settles nothing by itself; if it fails, the solve comes first.
+        for (int it = 0; it < RS_CALIB_NOISE_SOLVES + 1; it++) { // the first, ahead, solves nothing
+            const bool ahead = it == 0 && opt->estimate_noise;
+            if (!ahead) {
+                rs_calib_refine_summary sum;
+                rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, NULL, NULL, rp, ro, err);
+                if (st == RS_ERR_NOCONVERGE && round == 0 && it <= 1)
+                    return RS_OK; // no noise model on a problem that does not converge: the final
+                                  // solve reports it (or its cause, such as landmarks behind)
+                if (st != RS_OK) {
+                    rs_err_prefix(err, "noise model");
+                    return st;
+                }
+                res->iterations += sum.iterations;
             }
-            res->iterations += sum.iterations;
             if (!opt->estimate_noise) break;
             double next[RS_NOISE_NGROUPS], sd[RS_NOISE_NGROUPS];
-            bool settled = true;
+            bool settled = !ahead;
             memcpy(next, log_theta, sizeof next);
-            st = rs_calib__vce_at(next, sd, res, w, rp, rt_c, log_theta, opt, err);
+            rs_status st = rs_calib__vce_at(next, sd, res, w, rp, rt_c, log_theta, !ahead, opt, err);
+            if (st != RS_OK && ahead) continue; // the solve first, then the estimate at its solution
             if (st != RS_OK) {
                 rs_err_prefix(err, "noise model");
                 return st;
@@ -138,6 +150,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
             rs_err_prefix(err, "noise model");
             return st;
         }
+        w->snooped = true;
         if (!(opt->robust_scale > 0.0)) break;
         int worst = -1;
         double wmax = 0;
@@ -151,6 +164,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
             break;
         }
         w->use[worst] = false;
+        w->snooped = false;
         res->w_test[worst] = wmax;
         memcpy(&w->p_c[3 * worst], &w->p_survey_c[3 * worst], 3 * sizeof(double));
         (*Noutliers)++;
@@ -200,12 +214,15 @@ rs_status rs_calib__reject_behind(int *Nbehind, const rs_calib_result *res, rs_c
                               i, pc[2]);
         (*Nbehind)++;
         w->use[i] = false;
+        w->snooped = false;
         memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
     }
     return RS_OK;
 }
 
-// The noise groups and each landmark's reliability at the final adjustment (rs_calib.h).
+// The noise groups and each landmark's reliability (rs_calib.h): in the least-squares adjustment
+// at the estimated noise where data snooping stopped (w->snooped: the w-tests are those the
+// snooping read), else at the final adjustment.
 rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                                 const double rt_c[6], const double log_theta[RS_NOISE_NGROUPS],
                                 const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
@@ -213,7 +230,7 @@ rs_status rs_calib__reliability(rs_calib_result *res, rs_calib__work *w, const r
     const int N = pb->N;
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     const rs_calib_noise_out out = {.e = w->e, .r = w->r, .dpos_m = w->dpos, .dground_m = w->dground};
-    rs_status st = rs_calib__noise_redundancy(&out, &ns, err);
+    rs_status st = w->snooped ? RS_OK : rs_calib__noise_redundancy(&out, &ns, err);
     if (st != RS_OK) {
         rs_err_prefix(err, "reliability");
         return st;
@@ -279,13 +296,21 @@ rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w,
     return rs_calib__noise_redundancy(&out, &ns, err);
 }
 
+static void prior_gradient(double *gamma, const rs_calib_noise_state *s, const double *x);
+
 rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGROUPS], const rs_calib_result *res,
                            const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
-                           const double log_theta[RS_NOISE_NGROUPS], const rs_calib_options *opt, rs_err *err)
+                           const double log_theta[RS_NOISE_NGROUPS], bool at_solution, const rs_calib_options *opt,
+                           rs_err *err)
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
     rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
+    if (st == RS_OK && !at_solution) { // the priors' own gradient: the model then steps to its solution
+        double gamma[RS_NOISE_NC_MAX];
+        prior_gradient(gamma, &ns, res->intrinsics);
+        rs_calib__vce_set_prior_gradient(v, gamma);
+    }
     if (st == RS_OK) st = rs_calib__vce_estimate(next, sd, v, opt->noise_prior_factor, err);
     rs_calib__vce_free(v);
     return st;

@@ -180,6 +180,8 @@ class Reduced {
         cached_c_.resize((size_t)nc_);
         cached_r_.resize((size_t)nres_);
         cached_J_.resize((size_t)nres_ * (size_t)nc_);
+        raw_r_.resize((size_t)nres_);
+        raw_J_.resize((size_t)nres_ * (size_t)nc_);
         lin_c_.resize((size_t)nc_);
         lin_x_.resize((size_t)pb->N * (12 + 2 * (size_t)nc_));
     }
@@ -234,6 +236,21 @@ class Reduced {
         return cached_ok_;
     }
 
+    // The residuals and Jacobian without the robust loss at c, where the last evaluation was:
+    // kept by it before the loss reshaped them (the landmarks at the same inner optimum), so that
+    // the statistics of a robust solve's solution cost no evaluation of their own (one in five
+    // or six of a robust solve's). False when the last evaluation was elsewhere or failed: then
+    // evaluate with the loss off.
+    bool unrobust_at(const double *c, double *residuals, double *jacobian) const
+    {
+        if (!cached_ || !cached_ok_ || !(cached_robust_b_ > 0.0) ||
+            std::memcmp(c, cached_c_.data(), sizeof(double) * (size_t)nc_) != 0)
+            return false;
+        std::memcpy(residuals, raw_r_.data(), sizeof(double) * (size_t)nres_);
+        std::memcpy(jacobian, raw_J_.data(), sizeof(double) * (size_t)nres_ * (size_t)nc_);
+        return true;
+    }
+
   private:
     bool evaluate_all(const double *c, double *residuals, double *jacobian) const
     {
@@ -247,9 +264,11 @@ class Reduced {
         for (int i : used_) {
             if (!inner(i, c, predict, pose, intr, &residuals[row], jacobian ? &jacobian[row] : nullptr, nres_))
                 return fail(residuals);
-            if (robust_b_ > 0.0)
+            if (robust_b_ > 0.0) {
+                keep_raw(row, 5, residuals, jacobian);
                 carried += rs_calib__cauchy_block(&residuals[row], 5, jacobian ? &jacobian[row] : nullptr, nres_, nc_,
                                                   robust_b_);
+            }
             row += 5;
         }
         if (pb_->has_position_prior) {
@@ -271,10 +290,12 @@ class Reduced {
                     jacobian[(size_t)j * nres_ + row] = j < 6 ? 0.0 : B_[(size_t)(j - 6) * Ni_ + pr.index] * pr.weight;
             row++;
         }
+        if (robust_b_ > 0.0) keep_raw(5 * (int)used_.size(), row - 5 * (int)used_.size(), residuals, jacobian);
         if (carrier_) { // rs_calib__cauchy_block's cost, carried (0 when the loss is off)
             residuals[row] = robust_b_ > 0.0 ? std::sqrt(std::max(0.0, 2.0 * carrier_cost() + carried)) : 0.0;
             if (jacobian)
                 for (int j = 0; j < nc_; j++) jacobian[(size_t)j * nres_ + row] = 0.0;
+            if (robust_b_ > 0.0) keep_raw(row, 1, residuals, jacobian); // 0 without the loss
             row++;
         }
         if (jacobian) {
@@ -436,6 +457,19 @@ class Reduced {
     }
 
   private:
+    // rows [row, row + m) of the residuals and the Jacobian (column-major, nres_ rows; NULL: not
+    // evaluated) as they are without the loss, for unrobust_at; the carrier row (m = 1 at its
+    // row) is 0 there
+    void keep_raw(int row, int m, const double *residuals, const double *jacobian) const
+    {
+        const bool carrier_row = carrier_ && row == nres_ - 1;
+        for (int a = row; a < row + m; a++) raw_r_[(size_t)a] = carrier_row ? 0.0 : residuals[a];
+        if (!jacobian) return;
+        for (int j = 0; j < nc_; j++)
+            for (int a = row; a < row + m; a++)
+                raw_J_[(size_t)j * nres_ + a] = carrier_row ? 0.0 : jacobian[(size_t)j * nres_ + a];
+    }
+
     bool fail(double *residuals) const
     {
         failed_ = true;
@@ -489,6 +523,7 @@ class Reduced {
     // and scratch
     mutable std::vector<double> p_, s_, intr_, dq_di_, dr_di_;
     mutable std::vector<double> cached_c_, cached_r_, cached_J_; // the last evaluation
+    mutable std::vector<double> raw_r_, raw_J_;                  // the same without the loss
     mutable bool cached_ = false, cached_ok_ = false;
     mutable double cached_robust_b_ = 0.0;
     mutable bool failed_ = false;
@@ -564,10 +599,11 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
         return rs_err_set(err, RS_ERR_NOCONVERGE, "refine: no convergence in %d iterations", summary->iterations);
 
     // The solution, unrobust: residuals, reduced Jacobian, per-landmark statistics.
-    f.set_robust(false, 0.0);
     Vec r(nres);
     Mat J(nres, nc);
-    if (!f(c.data(), r.data(), J.data()) || !r.allFinite())
+    const bool kept = f.unrobust_at(c.data(), r.data(), J.data());
+    f.set_robust(false, 0.0);
+    if ((!kept && !f(c.data(), r.data(), J.data())) || !r.allFinite())
         return rs_err_set(err, RS_ERR_NOCONVERGE, "refine: the solution does not project every landmark");
     for (int j = 0; j < 6; j++) rt[j] = c(j);
     std::memcpy(intrinsics, f.intrinsics(c.data()), sizeof(double) * (size_t)Ni);
