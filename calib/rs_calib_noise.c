@@ -137,16 +137,22 @@ void rs_calib__position_column(double col[2], const mrcal_point3_t dq_dpc[2], co
 
 // One landmark's whitened observations: rows (up to 5: u, v and the free survey axes) of A (nc
 // columns) and B (k <= 4: the free position axes, and s for a landmark picked along a segment),
-// the residuals e, which component each row is.
+// the residuals e, which component each row is. A (m, nc) row-major lies in the caller's array
+// of every landmark's (sized by nc, not RS_NOISE_NC_MAX: at that size the arrays of 200
+// landmarks went to fresh pages from the kernel at every call, 40% of a calibration's time).
 typedef struct {
     int m, k;
     int comp[RS_NOISE_NCOMP]; // row -> component
-    double A[RS_NOISE_NCOMP][RS_NOISE_NC_MAX], B[RS_NOISE_NCOMP][4], e[RS_NOISE_NCOMP];
+    double B[RS_NOISE_NCOMP][4], e[RS_NOISE_NCOMP];
+    double *A;
 } block;
 
-static bool landmark_block(block *b, const rs_calib_noise_state *s, const rs_calib__params *pp, int i, double *dq_dintr)
+static bool landmark_block(block *b, double *A, const rs_calib_noise_state *s, const rs_calib__params *pp, int i,
+                           double *dq_dintr)
 {
-    memset(b, 0, sizeof *b);
+    b->m = b->k = 0;
+    b->A = A;
+    memset(b->B, 0, sizeof b->B);
     const double *p = &s->p_c_m[3 * i];
     double seen[3], d[3], q[2], G[2 * RS_NOISE_NC_MAX], J[6], dpc_dp[9];
     mrcal_point3_t dq_dpc[2];
@@ -156,7 +162,7 @@ static bool landmark_block(block *b, const rs_calib_noise_state *s, const rs_cal
     for (int r = 0; r < 2; r++) {
         b->comp[b->m] = r;
         b->e[b->m] = (q[r] - s->q_px[2 * i + r]) / sp;
-        for (int c = 0; c < pp->nc; c++) b->A[b->m][c] = G[r * pp->nc + c] / sp;
+        for (int c = 0; c < pp->nc; c++) A[b->m * pp->nc + c] = G[r * pp->nc + c] / sp;
         b->m++;
     }
     for (int a = 0; a < 3; a++) {
@@ -166,6 +172,7 @@ static bool landmark_block(block *b, const rs_calib_noise_state *s, const rs_cal
         b->comp[b->m] = RS_NOISE_E + a;
         b->e[b->m] = (p[a] - s->p_survey_c_m[3 * i + a]) / sa;
         b->B[b->m][b->k] = 1.0 / sa;
+        for (int c = 0; c < pp->nc; c++) A[b->m * pp->nc + c] = 0.0; // a survey row: no camera
         b->m++, b->k++;
     }
     if (slides) { // s: the pixel rows' dependence on the seen point, along d
@@ -177,9 +184,8 @@ static bool landmark_block(block *b, const rs_calib_noise_state *s, const rs_cal
     return true;
 }
 
-// Ã = A - B N^-1 B'A (m x nc) in place into At; Ninv (k x k) out.
-static rs_status reduce(double At[RS_NOISE_NCOMP][RS_NOISE_NC_MAX], double Ninv[16], const block *b, int nc,
-                        rs_err *err)
+// Ã = A - B N^-1 B'A (m x nc, row-major) into At; Ninv (k x k) out.
+static rs_status reduce(double *At, double Ninv[16], const block *b, int nc, rs_err *err)
 {
     double N[16] = {0};
     for (int x = 0; x < b->k; x++)
@@ -190,16 +196,18 @@ static rs_status reduce(double At[RS_NOISE_NCOMP][RS_NOISE_NC_MAX], double Ninv[
         if (st) return st;
     }
     // M = B'A (k x nc); At = A - B Ninv M
-    double M[4][RS_NOISE_NC_MAX] = {{0}};
+    double M[4][RS_NOISE_NC_MAX];
     for (int x = 0; x < b->k; x++)
-        for (int c = 0; c < nc; c++)
-            for (int r = 0; r < b->m; r++) M[x][c] += b->B[r][x] * b->A[r][c];
+        for (int c = 0; c < nc; c++) {
+            M[x][c] = 0;
+            for (int r = 0; r < b->m; r++) M[x][c] += b->B[r][x] * b->A[r * nc + c];
+        }
     for (int r = 0; r < b->m; r++)
         for (int c = 0; c < nc; c++) {
-            double v = b->A[r][c];
+            double v = b->A[r * nc + c];
             for (int x = 0; x < b->k; x++)
                 for (int y = 0; y < b->k; y++) v -= b->B[r][x] * Ninv[x * b->k + y] * M[y][c];
-            At[r][c] = v;
+            At[r * nc + c] = v;
         }
     return RS_OK;
 }
@@ -227,23 +235,26 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
     rs_status st = dq_dintr && S && Q && blocks ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "noise model: out of memory");
 
     // 1. per landmark: the whitened block, Ã_i; S = sum Ã'Ã + priors
-    double(*At)[RS_NOISE_NCOMP][RS_NOISE_NC_MAX] = NULL;
+    const size_t per = (size_t)RS_NOISE_NCOMP * (size_t)nc; // one landmark's rows of A and At
+    double *A = NULL, *At = NULL;
     double(*Ninv)[16] = NULL;
     if (st == RS_OK) {
-        At = malloc((size_t)(N > 0 ? N : 1) * sizeof *At);
+        A = malloc((size_t)(N > 0 ? N : 1) * per * sizeof *A);
+        At = malloc((size_t)(N > 0 ? N : 1) * per * sizeof *At);
         Ninv = malloc((size_t)(N > 0 ? N : 1) * sizeof *Ninv);
-        if (!At || !Ninv) st = rs_err_set(err, RS_ERR_NOMEM, "noise model: out of memory");
+        if (!A || !At || !Ninv) st = rs_err_set(err, RS_ERR_NOMEM, "noise model: out of memory");
     }
     for (int i = 0; st == RS_OK && i < N; i++) {
         if (!s->use[i]) continue;
-        if (!landmark_block(&blocks[i], s, &pp, i, dq_dintr)) {
+        if (!landmark_block(&blocks[i], &A[i * per], s, &pp, i, dq_dintr)) {
             st = rs_err_set(err, RS_ERR_DEGENERATE, "landmark %d does not project at the solution", i);
             break;
         }
-        if ((st = reduce(At[i], Ninv[i], &blocks[i], nc, err))) break;
+        const double *Ai = &At[i * per];
+        if ((st = reduce(&At[i * per], Ninv[i], &blocks[i], nc, err))) break;
         for (int r = 0; r < blocks[i].m; r++)
             for (int a = 0; a < nc; a++)
-                for (int b = 0; b < nc; b++) S[a * nc + b] += At[i][r][a] * At[i][r][b];
+                for (int b = 0; b < nc; b++) S[a * nc + b] += Ai[r * nc + a] * Ai[r * nc + b];
     }
     double dC_drt[18];
     double C[3];
@@ -260,13 +271,14 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
         if (!s->use[i] && out->chi2_excluded) out->chi2_excluded[i] = excluded_chi2(s, &pp, Q, i, dq_dintr);
         if (!s->use[i]) continue;
         const block *b = &blocks[i];
+        const double *Ai = &At[i * per];
         for (int r = 0; r < b->m; r++) {
             const int j = RS_NOISE_NCOMP * i + b->comp[r];
             double dc[RS_NOISE_NC_MAX], h = 0;
             for (int a = 0; a < nc; a++) {
                 dc[a] = 0;
-                for (int c = 0; c < nc; c++) dc[a] += Q[a * nc + c] * At[i][r][c];
-                h += At[i][r][a] * dc[a];
+                for (int c = 0; c < nc; c++) dc[a] += Q[a * nc + c] * Ai[r * nc + c];
+                h += Ai[r * nc + a] * dc[a];
             }
             for (int x = 0; x < b->k; x++)
                 for (int y = 0; y < b->k; y++) h += b->B[r][x] * Ninv[i][x * b->k + y] * b->B[r][y];
@@ -288,6 +300,7 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
     free(S);
     free(Q);
     free(blocks);
+    free(A);
     free(At);
     free(Ninv);
     return st;
