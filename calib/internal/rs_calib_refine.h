@@ -57,8 +57,9 @@ typedef struct {
     double distortion_prior_sigma; // 0: no prior
     bool covariance;               // compute the covariance and the condition number
     bool rough;                    // an intermediate pass (robust, or the noise model's): looser
-                                   //   tolerances (the landmarks' inner solves to 1e-3 of their
-                                   //   sigma instead of 1e-6), reaching max_iterations is no error
+                                   //   parameter and gradient tolerances, and reaching
+                                   //   max_iterations is no error (every pass stops after a step
+                                   //   of 1e-2 sigma: rs_calib_refine_ceres.cc)
 } rs_calib_refine_options;
 
 // The weight rho'(s) of a landmark block with chi2 s under Cauchy's loss of scale a (robust_scale
