@@ -47,6 +47,23 @@ void rs_calib__prior_normal(double *S, const rs_calib__params *pp, const rs_cali
                 S[a * nc + b] += dC_drt[k * 6 + a] * dC_drt[k * 6 + b] / (s->prior_sigma_m * s->prior_sigma_m);
 }
 
+void rs_calib__prior_gradient(double *gamma, const rs_calib__params *pp, const rs_calib_noise_state *s)
+{
+    const double *x = s->intrinsics;
+    for (int a = 0; a < pp->nc; a++) {
+        const double w2 = pp->prior_w[a] * pp->prior_w[a];
+        gamma[a] = pp->kind[a] == -1   ? 0.0
+                   : pp->kind[a] == -2 ? w2 * (x[0] / s->intrinsics_nominal[0] - 1.0)
+                                       : w2 * (x[pp->kind[a]] - s->intrinsics_nominal[pp->kind[a]]);
+    }
+    if (!(s->has_position_prior && s->prior_sigma_m > 0)) return;
+    double C[3], dC_drt[18];
+    rs_pose_position_from_rt(C, dC_drt, s->rt_cam_c);
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 6; a++)
+            gamma[a] += dC_drt[k * 6 + a] * (C[k] - s->prior_position_c_m[k]) / (s->prior_sigma_m * s->prior_sigma_m);
+}
+
 bool rs_calib__pixel_jacobian(double q_px[2], double *G, double J[6], double dpc_dp[9], mrcal_point3_t dq_dpc[2],
                               const rs_calib_noise_state *s, const rs_calib__params *pp, const double seen[3],
                               double *dq_dintr)

@@ -296,8 +296,6 @@ rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w,
     return rs_calib__noise_redundancy(&out, &ns, err);
 }
 
-static void prior_gradient(double *gamma, const rs_calib_noise_state *s, const double *x);
-
 rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGROUPS], const rs_calib_result *res,
                            const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
                            const double log_theta[RS_NOISE_NGROUPS], bool at_solution, const rs_calib_options *opt,
@@ -305,12 +303,7 @@ rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGR
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
-    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
-    if (st == RS_OK && !at_solution) { // the priors' own gradient: the model then steps to its solution
-        double gamma[RS_NOISE_NC_MAX];
-        prior_gradient(gamma, &ns, res->intrinsics);
-        rs_calib__vce_set_prior_gradient(v, gamma);
-    }
+    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, at_solution, err);
     if (st == RS_OK) st = rs_calib__vce_estimate(next, sd, v, opt->noise_prior_factor, err);
     rs_calib__vce_free(v);
     return st;
@@ -322,7 +315,7 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
-    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
+    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, true, err);
     const int nc = st == RS_OK ? 6 + rs_calib__vce_Nintrinsics(v) : 0;
     double *dQ = st == RS_OK ? malloc((size_t)nc * nc * sizeof *dQ) : NULL;
     if (st == RS_OK && !dQ) st = rs_err_set(err, RS_ERR_NOMEM, "covariance: out of memory");
@@ -353,26 +346,6 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
     return st;
 }
 
-// The camera priors' gradient (nc,) at the state s with intrinsics x: the position prior's and
-// each refined intrinsic's, w^2 (x - nominal) (the focal scale's in relative units).
-static void prior_gradient(double *gamma, const rs_calib_noise_state *s, const double *x)
-{
-    rs_calib__params pp;
-    rs_calib__camera_params(&pp, s);
-    for (int a = 0; a < pp.nc; a++) {
-        const double w2 = pp.prior_w[a] * pp.prior_w[a];
-        gamma[a] = pp.kind[a] == -1   ? 0.0
-                   : pp.kind[a] == -2 ? w2 * (x[0] / s->intrinsics_nominal[0] - 1.0)
-                                      : w2 * (x[pp.kind[a]] - s->intrinsics_nominal[pp.kind[a]]);
-    }
-    if (!(s->has_position_prior && s->prior_sigma_m > 0)) return;
-    double C[3], dC_drt[18];
-    rs_pose_position_from_rt(C, dC_drt, s->rt_cam_c);
-    for (int k = 0; k < 3; k++)
-        for (int a = 0; a < 6; a++)
-            gamma[a] += dC_drt[k * 6 + a] * (C[k] - s->prior_position_c_m[k]) / (s->prior_sigma_m * s->prior_sigma_m);
-}
-
 rs_status rs_calib__focal_alternative(double *k_rel, double *Q_rel, const rs_calib_result *res, const rs_calib__work *w,
                                       const rs_calib_refine_problem *rp, const double rt_c[6],
                                       const rs_calib_options *opt, rs_err *err)
@@ -382,7 +355,7 @@ rs_status rs_calib__focal_alternative(double *k_rel, double *Q_rel, const rs_cal
     rs_calib_options o = *opt;
     o.refine |= RS_CALIB_REFINE_FOCAL;
     o.focal_prior_rel_sigma = 1.0; // rs_calib_options_default's: weak
-    double rt[6], L[RS_NOISE_NGROUPS], gamma[RS_NOISE_NC_MAX], dc[RS_NOISE_NC_MAX];
+    double rt[6], L[RS_NOISE_NGROUPS], dc[RS_NOISE_NC_MAX];
     double *x = malloc((size_t)Ni * sizeof *x), *Q = malloc((size_t)RS_NOISE_NC_MAX * RS_NOISE_NC_MAX * sizeof *Q);
     rs_status st = x && Q ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "intrinsics test: out of memory");
     if (st == RS_OK) {
@@ -397,10 +370,9 @@ rs_status rs_calib__focal_alternative(double *k_rel, double *Q_rel, const rs_cal
         }
         const rs_calib_noise_state ns = noise_state(rp, w, rt, x, &o);
         rs_calib__vce *v = NULL;
-        if ((st = rs_calib__vce_build(&v, &ns, w->share, w->log_theta, err)) != RS_OK) break;
+        // the focal freed: not the solution of this model, the priors' own gradient
+        if ((st = rs_calib__vce_build(&v, &ns, w->share, w->log_theta, false, err)) != RS_OK) break;
         const int nc = 6 + rs_calib__vce_Nintrinsics(v);
-        prior_gradient(gamma, &ns, x);
-        rs_calib__vce_set_prior_gradient(v, gamma);
         if (opt->estimate_noise) st = rs_calib__vce_estimate(L, NULL, v, opt->noise_prior_factor, err);
         if (st == RS_OK) st = rs_calib__vce_step(dc, Q, v, L, err);
         rs_calib__vce_free(v);

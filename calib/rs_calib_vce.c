@@ -214,7 +214,7 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
 }
 
 rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
-                              const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err)
+                              const double log_theta_ref[RS_NOISE_NGROUPS], bool at_solution, rs_err *err)
 {
     *out = NULL;
     rs_calib__params pp;
@@ -274,6 +274,11 @@ rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s
     }
     free(dq_dintr);
     rs_calib__prior_normal(v->P, &pp, s);
+    if (!at_solution) {
+        rs_calib__prior_gradient(v->gamma, &pp, s);
+        *out = v;
+        return RS_OK;
+    }
     // the priors' gradient: at the solution the whole gradient vanishes, so it is minus the
     // picks' part at the sigmas the solution was made with
     double ll, q[RS_NOISE_NGROUPS], r[RS_NOISE_NGROUPS], F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS];
@@ -474,11 +479,6 @@ rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOI
                                  double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
 {
     return evaluate(v, log_theta, true, loglik, q, r, F, err);
-}
-
-void rs_calib__vce_set_prior_gradient(rs_calib__vce *v, const double *gamma)
-{
-    memcpy(v->gamma, gamma, (size_t)v->nc * sizeof *gamma);
 }
 
 rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],

@@ -90,6 +90,9 @@ void rs_calib__camera_params(rs_calib__params *pp, const rs_calib_noise_state *s
 
 // Adds the camera priors' normal matrix (the intrinsics' priors, the position prior) to S (nc,nc).
 void rs_calib__prior_normal(double *S, const rs_calib__params *pp, const rs_calib_noise_state *s);
+// The camera priors' gradient gamma (nc,) at the state s: the position prior's and each refined
+// intrinsic's, w^2 (x - nominal) (the focal scale's in relative units).
+void rs_calib__prior_gradient(double *gamma, const rs_calib__params *pp, const rs_calib_noise_state *s);
 
 // The pixel q_px (2,) of the point seen (3, centred frame) at the state s, its derivatives with
 // respect to the camera parameters G (2,pp->nc) and to the point J (2,3), and mrcal's
@@ -123,9 +126,13 @@ void rs_calib__position_column(double col[2], const mrcal_point3_t dq_dpc[2], co
 // pick with the 2x2 covariance its own sigma and its survey's make.
 typedef struct rs_calib__vce rs_calib__vce;
 // Linearises at s, whose sigmas are the stated ones scaled by exp(log_theta_ref[group]); share
-// (N,) may be NULL (rs_calib__work). *out: free with rs_calib__vce_free.
+// (N,) may be NULL (rs_calib__work). at_solution: s is the adjustment's solution at those sigmas,
+// so the priors' gradient in the model is minus the picks' there (the whole gradient vanishes);
+// otherwise it is the priors' own (rs_calib__prior_gradient), and the model steps from s to its
+// solution at each theta (a state that is not a solution: a parameter freed, a prior changed, a
+// robust solution). *out: free with rs_calib__vce_free.
 rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
-                              const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err);
+                              const double log_theta_ref[RS_NOISE_NGROUPS], bool at_solution, rs_err *err);
 // The posterior mode of the log variance factors (log-normal prior: the stated sigma right to a
 // factor prior_factor, 1-sigma), by Fisher scoring from log_theta (in,out), until every factor
 // moves by less than 1% of its posterior 1-sigma (or 0.1% in a variance). sd_out (may be NULL):
@@ -157,10 +164,6 @@ double rs_calib__pose_region_m2(double alpha, double nu, double kappa);
 rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS], double *loglik,
                                  double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
                                  double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err);
-// The priors' gradient (nc,) in the model, minus the picks' at the state it was built at (the
-// solution is a stationary point of the whole) unless set here: for a model with a parameter
-// freed or a prior changed, whose picks' gradient is the signal (rs_calib__focal_alternative).
-void rs_calib__vce_set_prior_gradient(rs_calib__vce *v, const double *gamma);
 // At log_theta: the Gauss-Newton step dc (nc,) of the camera parameters from the state the model
 // was built at, and their covariance Q (nc,nc) = S^-1.
 rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
