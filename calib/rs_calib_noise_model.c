@@ -133,7 +133,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
             double next[RS_NOISE_NGROUPS], sd[RS_NOISE_NGROUPS];
             bool settled = !ahead;
             memcpy(next, log_theta, sizeof next);
-            rs_status st = rs_calib__vce_at(next, sd, res, w, rp, rt_c, log_theta, !ahead, opt, err);
+            rs_status st = rs_calib__vce_at(next, sd, res, w, rp, rt_c, log_theta, opt, err);
             if (st != RS_OK && ahead) continue; // the solve first, then the estimate at its solution
             if (st != RS_OK) {
                 rs_err_prefix(err, "noise model");
@@ -298,12 +298,11 @@ rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w,
 
 rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGROUPS], const rs_calib_result *res,
                            const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
-                           const double log_theta[RS_NOISE_NGROUPS], bool at_solution, const rs_calib_options *opt,
-                           rs_err *err)
+                           const double log_theta[RS_NOISE_NGROUPS], const rs_calib_options *opt, rs_err *err)
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
-    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, at_solution, err);
+    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
     if (st == RS_OK) st = rs_calib__vce_estimate(next, sd, v, opt->noise_prior_factor, err);
     rs_calib__vce_free(v);
     return st;
@@ -315,7 +314,7 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
 {
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
-    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, true, err);
+    rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);
     const int nc = st == RS_OK ? 6 + rs_calib__vce_Nintrinsics(v) : 0;
     double *dQ = st == RS_OK ? malloc((size_t)nc * nc * sizeof *dQ) : NULL;
     if (st == RS_OK && !dQ) st = rs_err_set(err, RS_ERR_NOMEM, "covariance: out of memory");
@@ -371,7 +370,7 @@ rs_status rs_calib__focal_alternative(double *k_rel, double *Q_rel, const rs_cal
         const rs_calib_noise_state ns = noise_state(rp, w, rt, x, &o);
         rs_calib__vce *v = NULL;
         // the focal freed: not the solution of this model, the priors' own gradient
-        if ((st = rs_calib__vce_build(&v, &ns, w->share, w->log_theta, false, err)) != RS_OK) break;
+        if ((st = rs_calib__vce_build(&v, &ns, w->share, w->log_theta, err)) != RS_OK) break;
         const int nc = 6 + rs_calib__vce_Nintrinsics(v);
         if (opt->estimate_noise) st = rs_calib__vce_estimate(L, NULL, v, opt->noise_prior_factor, err);
         if (st == RS_OK) st = rs_calib__vce_step(dc, Q, v, L, err);

@@ -48,7 +48,7 @@ struct rs_calib__vce {
     vce_landmark *lm;                // (n,)
     double *G;                       // (n,2,nc)
     double *P;                       // (nc,nc) the camera priors' normal matrix
-    double *gamma;                   // (nc,) the priors' gradient at the solution
+    double *gamma;                   // (nc,) the priors' gradient at the state
     bool active[RS_NOISE_NGROUPS];   // groups with observations
     double *S, *Q, *M, *QM, *g, *dc; // scratch: (nc,nc), (nc,nc), (3,nc,nc), (3,nc,nc), (nc,), (nc,)
 };
@@ -214,7 +214,7 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
 }
 
 rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
-                              const double log_theta_ref[RS_NOISE_NGROUPS], bool at_solution, rs_err *err)
+                              const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err)
 {
     *out = NULL;
     rs_calib__params pp;
@@ -274,20 +274,7 @@ rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s
     }
     free(dq_dintr);
     rs_calib__prior_normal(v->P, &pp, s);
-    if (!at_solution) {
-        rs_calib__prior_gradient(v->gamma, &pp, s);
-        *out = v;
-        return RS_OK;
-    }
-    // the priors' gradient: at the solution the whole gradient vanishes, so it is minus the
-    // picks' part at the sigmas the solution was made with
-    double ll, q[RS_NOISE_NGROUPS], r[RS_NOISE_NGROUPS], F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS];
-    rs_status st = evaluate(v, log_theta_ref, false, &ll, q, r, F, err);
-    if (st != RS_OK) {
-        rs_calib__vce_free(v);
-        return st;
-    }
-    for (int a = 0; a < nc; a++) v->gamma[a] = -v->g[a];
+    rs_calib__prior_gradient(v->gamma, &pp, s);
     *out = v;
     return RS_OK;
 }

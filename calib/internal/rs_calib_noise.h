@@ -126,13 +126,12 @@ void rs_calib__position_column(double col[2], const mrcal_point3_t dq_dpc[2], co
 // pick with the 2x2 covariance its own sigma and its survey's make.
 typedef struct rs_calib__vce rs_calib__vce;
 // Linearises at s, whose sigmas are the stated ones scaled by exp(log_theta_ref[group]); share
-// (N,) may be NULL (rs_calib__work). at_solution: s is the adjustment's solution at those sigmas,
-// so the priors' gradient in the model is minus the picks' there (the whole gradient vanishes);
-// otherwise it is the priors' own (rs_calib__prior_gradient), and the model steps from s to its
-// solution at each theta (a state that is not a solution: a parameter freed, a prior changed, a
-// robust solution). *out: free with rs_calib__vce_free.
+// (N,) may be NULL (rs_calib__work). The priors' gradient in the model is their own at s
+// (rs_calib__prior_gradient), and the model steps from s to its solution at each theta: s need
+// not be a solution (a parameter freed, a prior changed, a robust solution, a rough solve).
+// *out: free with rs_calib__vce_free.
 rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
-                              const double log_theta_ref[RS_NOISE_NGROUPS], bool at_solution, rs_err *err);
+                              const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err);
 // The posterior mode of the log variance factors (log-normal prior: the stated sigma right to a
 // factor prior_factor, 1-sigma), by Fisher scoring from log_theta (in,out), until every factor
 // moves by less than 1% of its posterior 1-sigma (or 0.1% in a variance). sd_out (may be NULL):
@@ -288,13 +287,11 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
 
 // The variance factors' posterior mode (rs_calib__vce_estimate) on the landmarks in w->use at the
 // state of w, whose sigmas are the stated ones scaled by log_theta: next (in: the start, out),
-// sd (may be NULL) as rs_calib__vce_estimate's. at_solution: the state is the adjustment's
-// solution at those sigmas (the model's own gradient there is the priors'); otherwise the model
-// takes the priors' gradient as it is and steps from the state to its solution at each theta.
+// sd (may be NULL) as rs_calib__vce_estimate's; the state need not be a solution
+// (rs_calib__vce_build).
 rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGROUPS], const rs_calib_result *res,
                            const rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
-                           const double log_theta[RS_NOISE_NGROUPS], bool at_solution, const rs_calib_options *opt,
-                           rs_err *err);
+                           const double log_theta[RS_NOISE_NGROUPS], const rs_calib_options *opt, rs_err *err);
 
 // The intrinsics check's alternative (rs_calib_intrinsics.c): the model of the solution at rt_c
 // and res->intrinsics, on the landmarks in w->use, with the focal free (a weak prior, 100%) and

@@ -54,7 +54,7 @@ int main(void)
                                     .intrinsics_nominal = g.intrinsics};
     const double L0[3] = {0, 0, 0};
     rs_calib__vce *v = NULL;
-    if (rs_calib__vce_build(&v, &s, NULL, L0, true, &err) != RS_OK) {
+    if (rs_calib__vce_build(&v, &s, NULL, L0, &err) != RS_OK) {
         printf("{\"error\": \"%s\"}\n", err.msg);
         return 1;
     }
