@@ -50,6 +50,7 @@ struct rs_calib__vce {
     double *P;                       // (nc,nc) the camera priors' normal matrix
     double *gamma;                   // (nc,) the priors' gradient at the state
     bool active[RS_NOISE_NGROUPS];   // groups with observations
+    int ng, grp[RS_NOISE_NGROUPS];   // the active groups: the full evaluation skips the others
     double *S, *Q, *M, *QM, *g, *dc; // scratch: (nc,nc), (nc,nc), (3,nc,nc), (3,nc,nc), (nc,), (nc,)
 };
 
@@ -88,7 +89,8 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
     double th[RS_NOISE_NGROUPS];
     for (int g = 0; g < RS_NOISE_NGROUPS; g++) th[g] = exp(L[g]);
     memcpy(v->S, v->P, (size_t)nc * nc * sizeof *v->S);
-    if (full) memset(v->M, 0, (size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->M);
+    for (int a = 0; a < v->ng && full; a++)
+        memset(&v->M[(size_t)v->grp[a] * nc * nc], 0, (size_t)nc * nc * sizeof *v->M);
     memcpy(v->g, v->gamma, (size_t)nc * sizeof *v->g);
     double ld = 0;
     for (int i = 0; i < v->n; i++) {
@@ -112,7 +114,8 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
         memcpy(l->W, W, sizeof W);
         double Wf[4], Vf[4], t[4];
         full2(Wf, W);
-        for (int g = 0; g < RS_NOISE_NGROUPS && full; g++) {
+        for (int ga = 0; ga < v->ng && full; ga++) {
+            const int g = v->grp[ga];
             full2(Vf, l->V[g]);
             sym2_mul(t, Wf, Vf);
             sym2_mul(l->Z[g], t, Wf);
@@ -123,7 +126,8 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
             const double wa[2] = {W[0] * ga[0] + W[1] * ga[1], W[1] * ga[0] + W[2] * ga[1]};
             v->g[a] += wa[0] * l->e[0] + wa[1] * l->e[1];
             for (int b = a; b < nc; b++) v->S[a * nc + b] += wa[0] * G[b] + wa[1] * G[nc + b];
-            for (int g = 0; g < RS_NOISE_NGROUPS && full; g++) {
+            for (int k = 0; k < v->ng && full; k++) {
+                const int g = v->grp[k];
                 const double *Z = l->Z[g];
                 const double za[2] = {Z[0] * ga[0] + Z[2] * ga[1], Z[1] * ga[0] + Z[3] * ga[1]};
                 double *M = &v->M[(size_t)g * nc * nc + (size_t)a * nc];
@@ -134,8 +138,10 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
     for (int a = 0; a < nc; a++)
         for (int b = 0; b < a; b++) {
             v->S[a * nc + b] = v->S[b * nc + a];
-            for (int g = 0; g < RS_NOISE_NGROUPS && full; g++)
+            for (int ga = 0; ga < v->ng && full; ga++) {
+                const int g = v->grp[ga];
                 v->M[(size_t)g * nc * nc + (size_t)a * nc + b] = v->M[(size_t)g * nc * nc + (size_t)b * nc + a];
+            }
         }
     double ldS = 0;
     rs_status st = full ? rs_calib_opencv_inverse_spd_logdet(v->Q, &ldS, v->S, nc, err)
@@ -153,7 +159,9 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
     }
     memset(q, 0, RS_NOISE_NGROUPS * sizeof *q);
     memset(r, 0, RS_NOISE_NGROUPS * sizeof *r);
-    double T[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS] = {0};
+    memset(F, 0, RS_NOISE_NGROUPS * RS_NOISE_NGROUPS * sizeof *F);
+    const int ng = v->ng, *grp = v->grp;
+    double T[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS] = {0}; // (ng,ng), the active groups'
     for (int i = 0; i < v->n; i++) {
         const vce_landmark *l = &v->lm[i];
         const double *G = &v->G[2 * nc * i];
@@ -172,7 +180,8 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
         quad += eh[0] * u[0] + eh[1] * u[1];
         double Wf[4], WV[RS_NOISE_NGROUPS][4], ZH[RS_NOISE_NGROUPS][4];
         full2(Wf, l->W);
-        for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
+        for (int ga = 0; ga < ng; ga++) {
+            const int g = grp[ga];
             double Vf[4];
             full2(Vf, l->V[g]);
             sym2_mul(WV[g], Wf, Vf);
@@ -183,31 +192,33 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
             r[g] += g == RS_NOISE_PIXEL ? rg : rg / l->share;
         }
         // tr(P V_g P V_h) = sum_i [tr(W V_g W V_h) - 2 tr(Z_g H W V_h)] + tr(Q M_g Q M_h): P's
-        // off-diagonal blocks enter only through M_g
-        for (int g = 0; g < RS_NOISE_NGROUPS; g++)
-            for (int h = 0; h < RS_NOISE_NGROUPS; h++) {
+        // off-diagonal blocks enter only through M_g (symmetric in g, h: the upper triangle)
+        for (int ga = 0; ga < ng; ga++)
+            for (int ha = ga; ha < ng; ha++) {
+                const int g = grp[ga], h = grp[ha];
                 double t[4], x[4];
                 sym2_mul(t, WV[g], WV[h]);
                 sym2_mul(x, ZH[g], WV[h]);
-                T[g * RS_NOISE_NGROUPS + h] += t[0] + t[3] - 2.0 * (x[0] + x[3]);
+                T[ga * ng + ha] += t[0] + t[3] - 2.0 * (x[0] + x[3]);
             }
     }
     // + tr(Q M_g Q M_h)
     double *QM = v->QM;
-    for (int g = 0; g < RS_NOISE_NGROUPS; g++)
-        for (int a = 0; a < nc; a++)
+    for (int ga = 0; ga < ng; ga++)
+        for (int a = 0, g = grp[ga]; a < nc; a++)
             for (int b = 0; b < nc; b++) {
                 double x = 0;
                 for (int k = 0; k < nc; k++) x += v->Q[a * nc + k] * v->M[(size_t)g * nc * nc + (size_t)k * nc + b];
                 QM[(size_t)g * nc * nc + (size_t)a * nc + b] = x;
             }
-    for (int g = 0; g < RS_NOISE_NGROUPS; g++)
-        for (int h = 0; h < RS_NOISE_NGROUPS; h++) {
+    for (int ga = 0; ga < ng; ga++)
+        for (int ha = ga; ha < ng; ha++) {
+            const int g = grp[ga], h = grp[ha];
             double x = 0;
             for (int a = 0; a < nc; a++)
                 for (int b = 0; b < nc; b++)
                     x += QM[(size_t)g * nc * nc + (size_t)a * nc + b] * QM[(size_t)h * nc * nc + (size_t)b * nc + a];
-            F[g * RS_NOISE_NGROUPS + h] = 0.5 * th[g] * th[h] * (T[g * RS_NOISE_NGROUPS + h] + x);
+            F[g * RS_NOISE_NGROUPS + h] = F[h * RS_NOISE_NGROUPS + g] = 0.5 * th[g] * th[h] * (T[ga * ng + ha] + x);
         }
     *loglik = -0.5 * (ld + ldS + quad);
     return RS_OK;
@@ -233,7 +244,7 @@ rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s
         v->S = malloc((size_t)nc * nc * sizeof *v->S);
         v->Q = malloc((size_t)nc * nc * sizeof *v->Q);
         v->M = malloc((size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->M);
-        v->QM = malloc((size_t)RS_NOISE_NGROUPS * nc * nc * sizeof *v->QM);
+        v->QM = calloc((size_t)RS_NOISE_NGROUPS * nc * nc, sizeof *v->QM); // 0 for an inactive group
         v->g = malloc((size_t)nc * sizeof *v->g);
         v->dc = malloc((size_t)nc * sizeof *v->dc);
     }
@@ -273,6 +284,8 @@ rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s
         k++;
     }
     free(dq_dintr);
+    for (int g = 0; g < RS_NOISE_NGROUPS; g++)
+        if (v->active[g]) v->grp[v->ng++] = g;
     rs_calib__prior_normal(v->P, &pp, s);
     rs_calib__prior_gradient(v->gamma, &pp, s);
     *out = v;
