@@ -108,12 +108,15 @@ double rs_calib__cauchy_block(double *r, int m, double *J, int ld, int nc, doubl
     const double t = s / b, rho = b * log1p(t), d1 = 1.0 / (1.0 + t), x = sqrt(s);
     const double h = fmax((1.0 - t) * d1 * d1, RS_CALIB_CAUCHY_MIN_CURVATURE * d1);
     const double sq = sqrt(d1), c = sqrt(h) - sq, k = d1 / sqrt(h);
+    double u[RS_CALIB_BLOCK_MAX_ROWS]; // r / |r| once (r may alias J: the compiler cannot hoist it)
+    for (int a = 0; a < m; a++) u[a] = r[a] / x;
     if (J)
         for (int j = 0; j < nc; j++) {
             double *col = &J[(size_t)j * (size_t)ld];
             double ut = 0.0;
-            for (int a = 0; a < m; a++) ut += r[a] / x * col[a];
-            for (int a = 0; a < m; a++) col[a] = sq * col[a] + c * (r[a] / x) * ut;
+            for (int a = 0; a < m; a++) ut += u[a] * col[a];
+            const double cut = c * ut;
+            for (int a = 0; a < m; a++) col[a] = sq * col[a] + cut * u[a];
         }
     for (int a = 0; a < m; a++) r[a] *= k;
     return rho - k * k * s;

@@ -75,16 +75,18 @@ struct Correspondences {
 
 // OpenGV's P3P sample-consensus problem with three changes: the sampler is seeded from the
 // caller's seed, the distances are the caller's pixel errors, and a sample on which the chosen
-// P3P solver finds nothing is retried with the other one.
+// P3P solver finds nothing is retried with the other one (made when first needed).
+// The engine takes the seed folded to one word, by its own seeding recurrence: std::seed_seq
+// over its 624 words of state, and a second problem made for the rare fallback (another engine
+// seeded), were half of a 4-landmark RANSAC's time.
 class PixelP3pProblem : public AbsolutePoseSacProblem {
   public:
     PixelP3pProblem(adapter_t &adapter, algorithm_t primary, const std::vector<int> &indices, uint64_t seed,
                     rs_calib_opengv_score_fn *score, void *cookie)
-        : AbsolutePoseSacProblem(adapter, primary, indices, false),
-          fallback_(adapter, primary == KNEIP ? GAO : KNEIP, indices, false), score_(score), cookie_(cookie)
+        : AbsolutePoseSacProblem(adapter, primary, indices, false), adapter_(adapter),
+          other_(primary == KNEIP ? GAO : KNEIP), indices_(indices), score_(score), cookie_(cookie)
     {
-        std::seed_seq seq{(uint32_t)(seed & 0xffffffffu), (uint32_t)(seed >> 32)};
-        rng_alg_.seed(seq);
+        rng_alg_.seed((uint32_t)(seed ^ (seed >> 32)));
         // OpenGV's generator binds a copy of rng_alg_: rebind it to the reseeded engine.
         rng_gen_.reset(new std::function<int()>(std::bind(*rng_dist_, rng_alg_)));
     }
@@ -93,7 +95,8 @@ class PixelP3pProblem : public AbsolutePoseSacProblem {
     {
         if (AbsolutePoseSacProblem::computeModelCoefficients(indices, model) && model.allFinite()) return true;
         ++Nfallback;
-        return fallback_.computeModelCoefficients(indices, model) && model.allFinite();
+        if (!fallback_) fallback_.reset(new AbsolutePoseSacProblem(adapter_, other_, indices_, false));
+        return fallback_->computeModelCoefficients(indices, model) && model.allFinite();
     }
 
     void getSelectedDistancesToModel(const model_t &model, const std::vector<int> &indices,
@@ -109,7 +112,10 @@ class PixelP3pProblem : public AbsolutePoseSacProblem {
     mutable int Nfallback = 0;
 
   private:
-    AbsolutePoseSacProblem fallback_;
+    adapter_t &adapter_;
+    algorithm_t other_;
+    std::vector<int> indices_;
+    mutable std::unique_ptr<AbsolutePoseSacProblem> fallback_;
     rs_calib_opengv_score_fn *score_;
     void *cookie_;
 };

@@ -46,7 +46,7 @@ void rs_calib__point_block_step(const rs_calib__point_block *pt, double dx[3], d
                                 const double w_m[3]);
 void rs_calib__point_block_projector(const rs_calib__point_block *pt, double P[5][2]);
 
-// Cauchy's loss rho(s) = b log(1 + s/b) on a block r (m,) of squared norm s, with its Jacobian J
+// Cauchy's loss rho(s) = b log(1 + s/b) on a block r (m <= RS_CALIB_BLOCK_MAX_ROWS) of squared norm s, with its Jacobian J
 // (m, nc) column-major, leading dimension ld, may be NULL (b = scale^2: Ceres' CauchyLoss(scale)).
 // TinySolver minimises half the squared norm of what it is given and steps with that Jacobian's
 // J'J, so the block is given as r~ = k r, J~ = (sqrt(rho') I + c u u') J (u = r/|r|) such that
@@ -60,6 +60,7 @@ void rs_calib__point_block_projector(const rs_calib__point_block *pt, double P[5
 // Gauss-Newton on sqrt(rho) r / |r|, the previous form here, converged linearly (the error
 // shrinking to a third per step: the final solve took 9 iterations to 1e-4 sigma, now 4).
 #define RS_CALIB_CAUCHY_MIN_CURVATURE 0.1
+#define RS_CALIB_BLOCK_MAX_ROWS       8
 double rs_calib__cauchy_block(double *r, int m, double *J, int ld, int nc, double b);
 
 #ifdef __cplusplus
