@@ -157,12 +157,14 @@ rs_status rs_calib__vce_cov_spread(double *dQ, double *pose_dof, double *region_
 // 22.458.
 double rs_calib__pose_region_m2(double alpha, double nu, double kappa);
 // The model at log_theta: the restricted log-likelihood (without the prior), q and r per group
-// (r with shared survey errors once), the Fisher information F (3x3) in log theta. For the tests
+// (r with shared survey errors once), the Fisher information F and the observed information O
+// (3x3 each) in log theta. For the tests
 // (tests/calib/test_vce.py checks them against the full adjustment with the landmarks as
 // unknowns, in numpy).
 rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS], double *loglik,
                                  double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
-                                 double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err);
+                                 double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS],
+                                 double O[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err);
 // At log_theta: the Gauss-Newton step dc (nc,) of the camera parameters from the state the model
 // was built at, and their covariance Q (nc,nc) = S^-1.
 rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],

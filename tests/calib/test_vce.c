@@ -1,8 +1,8 @@
 // test_vce.c -- driver for test_vce.py: the variance components' model (calib/rs_calib_vce.c)
 // on a simulated problem, printed as JSON for numpy to check against the full adjustment (the
 // landmarks as unknowns, dense). One line: the problem (lens, intrinsics, pose, surveyed points,
-// their sigmas, the picks), then per log theta the restricted log-likelihood, q, r and the
-// Fisher information rs_calib__vce_evaluate reports, and the posterior mode
+// their sigmas, the picks), then per log theta the restricted log-likelihood, q, r, the Fisher
+// and the observed information rs_calib__vce_evaluate reports, and the posterior mode
 // rs_calib__vce_estimate finds with the prior factor 5; and the pose's confidence regions
 // rs_calib__pose_region_m2 gives for a few (alpha, nu, kappa). Seed 7100.
 #include <math.h>
@@ -75,8 +75,8 @@ int main(void)
     printf(", \"evaluations\": [");
     static const double Ls[][3] = {{0, 0, 0}, {0.7, -0.4, 1.1}, {-1.2, 2.0, 0.3}, {2.5, -1.5, -2.0}};
     for (int k = 0; k < 4; k++) {
-        double ll, q[3], r[3], F[9];
-        if (rs_calib__vce_evaluate(v, Ls[k], &ll, q, r, F, &err) != RS_OK) {
+        double ll, q[3], r[3], F[9], O[9];
+        if (rs_calib__vce_evaluate(v, Ls[k], &ll, q, r, F, O, &err) != RS_OK) {
             printf("]}\n");
             return 1;
         }
@@ -88,6 +88,8 @@ int main(void)
         print_array("r", r, 3);
         printf(", ");
         print_array("F", F, 9);
+        printf(", ");
+        print_array("O", O, 9);
         printf("}");
     }
     double L[3] = {0, 0, 0};

@@ -8,7 +8,8 @@ pose rt (6) and every landmark's position (3 each), Jacobians from mrcal's Pytho
 (transform_point_rt, project with gradients), dense. For each log theta the driver printed it
 computes the restricted log-likelihood -1/2 (log det Sigma + log det X'WX + e'We), q_g (the
 group's sum of squared whitened residuals) and r_g (the sum of its redundancy numbers
-1 - diag(H)), the Fisher information theta_g theta_h tr(P V_g P V_h) / 2, and checks the
+1 - diag(H)), the Fisher information theta_g theta_h tr(P V_g P V_h) / 2 and the observed
+information (minus the score's derivative, by central differences of numpy's), and checks the
 driver's to 1e-6 (relative). The problem has no camera priors, so the model's linear term for
 their gradient is zero here as in the driver, and the step dx from the state (the driver's
 solution, not exactly a minimum) is the model's own. At the driver's posterior mode
@@ -117,6 +118,17 @@ for ev in d["evaluations"]:
     close(ev["q"], q, 1e-6, "q (squared whitened residuals per group)")
     close(ev["r"], r, 1e-6, "r (redundancy per group)")
     close(np.array(ev["F"]).reshape(3, 3), F, 1e-6, "Fisher information")
+    # the observed information: minus the derivative of the score (q - r) / 2, by central
+    # differences of numpy's (step 1e-5 in log theta: truncation ~1e-10, rounding ~1e-9)
+    O = np.zeros((3, 3))
+    for h in range(3):
+        Lp, Lm_ = np.array(ev["L"], float), np.array(ev["L"], float)
+        Lp[h] += 1e-5
+        Lm_[h] -= 1e-5
+        _, qp, rp, _ = full(Lp)
+        _, qm, rm, _ = full(Lm_)
+        O[:, h] = -0.5 * ((qp - rp) - (qm - rm)) / 2e-5
+    close(np.array(ev["O"]).reshape(3, 3), O, 1e-5, "observed information (central differences)")
 
 lp = 2 * np.log(d["prior_factor"])
 Lm = np.array(d["mode"])
