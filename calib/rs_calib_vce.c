@@ -41,6 +41,7 @@ typedef struct {
     double share;                  // picks sharing the survey error (>= 1)
     double W[3];                   // W'_i at the last evaluation
     double Z[RS_NOISE_NGROUPS][4]; // W' V_g W' (2x2, row-major)
+    double u[2];                   // W' e_hat at the last full evaluation (P y)
 } vce_landmark;
 
 struct rs_calib__vce {
@@ -80,16 +81,11 @@ void rs_calib__vce_free(rs_calib__vce *v)
 
 // Evaluates the model at log_theta: S, its inverse Q, the gradient g and the step dc = -Q g in v;
 // with `full`, also the restricted log likelihood *loglik, q, r (with shared survey errors counted
-// once) and the Fisher information F (3x3, in log theta) -- without, those are not touched -- and,
-// where O is not NULL, the observed information in log theta (3x3):
-//   O_gh = A_gh - F_gh + (r_g - q_g) / 2 [g = h],  A_gh = theta_g theta_h y' P V_g P V_h P y
-// (minus the score's derivative: dq_g/dlog theta_h = [g = h] q_g - 2 A_gh, dr_g/dlog theta_h =
-// [g = h] r_g - 2 F_gh; A / 2 is the "average information" of Gilmour, Thompson & Cullis,
-// Biometrics 51, 1995). Groups without observations are skipped (zeros).
+// once) and the Fisher information F (3x3, in log theta) -- without, those are not touched.
+// Groups without observations are skipped (zeros).
 static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bool full, double *loglik,
                           double q[RS_NOISE_NGROUPS], double r[RS_NOISE_NGROUPS],
-                          double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], double O[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS],
-                          rs_err *err)
+                          double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
 {
     const int nc = v->nc;
     double th[RS_NOISE_NGROUPS];
@@ -166,14 +162,10 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
     memset(q, 0, RS_NOISE_NGROUPS * sizeof *q);
     memset(r, 0, RS_NOISE_NGROUPS * sizeof *r);
     memset(F, 0, RS_NOISE_NGROUPS * RS_NOISE_NGROUPS * sizeof *F);
-    if (O) memset(O, 0, RS_NOISE_NGROUPS * RS_NOISE_NGROUPS * sizeof *O);
     const int ng = v->ng, *grp = v->grp;
     double T[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS] = {0}; // (ng,ng), the active groups'
-    // A's parts (P y = W e_hat): y_g = theta_g V_g W e_hat per pick, Y = y_g' W y_h summed, and
-    // b_g = sum G' W y_g (P = W - W G Q G' W: A_gh = Y_gh - b_g' Q b_h)
-    double Y[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS] = {0}, b[RS_NOISE_NGROUPS][RS_NOISE_NC_MAX] = {{0}};
     for (int i = 0; i < v->n; i++) {
-        const vce_landmark *l = &v->lm[i];
+        vce_landmark *l = &v->lm[i];
         const double *G = &v->G[2 * nc * i];
         double eh[2] = {l->e[0], l->e[1]}, GQ[2][RS_NOISE_NC_MAX];
         for (int k = 0; k < 2; k++)
@@ -186,9 +178,10 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
         for (int k = 0; k < 2; k++)
             for (int m = 0; m < 2; m++)
                 for (int a = 0; a < nc; a++) H[2 * k + m] += GQ[k][a] * G[m * nc + a];
-        const double u[2] = {l->W[0] * eh[0] + l->W[1] * eh[1], l->W[1] * eh[0] + l->W[2] * eh[1]};
+        const double *u = l->u;
+        l->u[0] = l->W[0] * eh[0] + l->W[1] * eh[1], l->u[1] = l->W[1] * eh[0] + l->W[2] * eh[1];
         quad += eh[0] * u[0] + eh[1] * u[1];
-        double Wf[4], WV[RS_NOISE_NGROUPS][4], ZH[RS_NOISE_NGROUPS][4], y[RS_NOISE_NGROUPS][2];
+        double Wf[4], WV[RS_NOISE_NGROUPS][4], ZH[RS_NOISE_NGROUPS][4];
         full2(Wf, l->W);
         for (int ga = 0; ga < ng; ga++) {
             const int g = grp[ga];
@@ -198,12 +191,6 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
             sym2_mul(ZH[g], l->Z[g], H);
             const double Vu[2] = {Vf[0] * u[0] + Vf[1] * u[1], Vf[2] * u[0] + Vf[3] * u[1]};
             q[g] += th[g] * (u[0] * Vu[0] + u[1] * Vu[1]);
-            if (O) {
-                y[ga][0] = th[g] * Vu[0], y[ga][1] = th[g] * Vu[1];
-                const double wy[2] = {l->W[0] * y[ga][0] + l->W[1] * y[ga][1], l->W[1] * y[ga][0] + l->W[2] * y[ga][1]};
-                for (int a = 0; a < nc; a++) b[ga][a] += G[a] * wy[0] + G[nc + a] * wy[1];
-                for (int ha = 0; ha <= ga; ha++) Y[ha * ng + ga] += y[ha][0] * wy[0] + y[ha][1] * wy[1];
-            }
             const double rg = th[g] * (WV[g][0] + WV[g][3] - ZH[g][0] - ZH[g][3]);
             r[g] += g == RS_NOISE_PIXEL ? rg : rg / l->share;
         }
@@ -235,15 +222,48 @@ static rs_status evaluate(rs_calib__vce *v, const double L[RS_NOISE_NGROUPS], bo
                 for (int b = 0; b < nc; b++)
                     x += QM[(size_t)g * nc * nc + (size_t)a * nc + b] * QM[(size_t)h * nc * nc + (size_t)b * nc + a];
             F[g * RS_NOISE_NGROUPS + h] = F[h * RS_NOISE_NGROUPS + g] = 0.5 * th[g] * th[h] * (T[ga * ng + ha] + x);
-            if (!O) continue;
-            double bQb = 0;
-            for (int a = 0; a < nc; a++)
-                for (int c = 0; c < nc; c++) bQb += b[ga][a] * v->Q[a * nc + c] * b[ha][c];
-            O[g * RS_NOISE_NGROUPS + h] = O[h * RS_NOISE_NGROUPS + g] =
-                Y[ga * ng + ha] - bQb - F[g * RS_NOISE_NGROUPS + h] + (g == h ? 0.5 * (r[g] - q[g]) : 0.0);
         }
     *loglik = -0.5 * (ld + ldS + quad);
     return RS_OK;
+}
+
+// The observed information in log theta (3x3) at the last full evaluation (q, r, F its):
+//   O_gh = A_gh - F_gh + [g = h] (r_g - q_g) / 2,  A_gh = theta_g theta_h y' P V_g P V_h P y
+// (minus the score's derivative: dq_g/dlog theta_h = [g = h] q_g - 2 A_gh, dr_g/dlog theta_h =
+// [g = h] r_g - 2 F_gh; A / 2 is the "average information" of Gilmour, Thompson & Cullis,
+// Biometrics 51, 1995). With P y = W e_hat (u) and P = W - W G Q G' W: A_gh = sum y_g' W y_h -
+// b_g' Q b_h, y_g = theta_g V_g u per pick, b_g = sum G' W y_g. Zero for inactive groups.
+static void observed(double O[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], const rs_calib__vce *v,
+                     const double L[RS_NOISE_NGROUPS], const double q[RS_NOISE_NGROUPS],
+                     const double r[RS_NOISE_NGROUPS], const double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS])
+{
+    enum { NG = RS_NOISE_NGROUPS };
+    const int nc = v->nc, ng = v->ng, *grp = v->grp;
+    double th[NG], Y[NG * NG] = {0}, b[NG][RS_NOISE_NC_MAX] = {{0}};
+    for (int g = 0; g < NG; g++) th[g] = exp(L[g]);
+    for (int i = 0; i < v->n; i++) {
+        const vce_landmark *l = &v->lm[i];
+        const double *G = &v->G[2 * nc * i];
+        double y[NG][2];
+        for (int ga = 0; ga < ng; ga++) {
+            const double *V = l->V[grp[ga]];
+            y[ga][0] = th[grp[ga]] * (V[0] * l->u[0] + V[1] * l->u[1]);
+            y[ga][1] = th[grp[ga]] * (V[1] * l->u[0] + V[2] * l->u[1]);
+            const double wy[2] = {l->W[0] * y[ga][0] + l->W[1] * y[ga][1], l->W[1] * y[ga][0] + l->W[2] * y[ga][1]};
+            for (int a = 0; a < nc; a++) b[ga][a] += G[a] * wy[0] + G[nc + a] * wy[1];
+            for (int ha = 0; ha <= ga; ha++) Y[ha * ng + ga] += y[ha][0] * wy[0] + y[ha][1] * wy[1];
+        }
+    }
+    memset(O, 0, NG * NG * sizeof *O);
+    for (int ga = 0; ga < ng; ga++)
+        for (int ha = ga; ha < ng; ha++) {
+            const int g = grp[ga], h = grp[ha];
+            double bQb = 0;
+            for (int a = 0; a < nc; a++)
+                for (int c = 0; c < nc; c++) bQb += b[ga][a] * v->Q[a * nc + c] * b[ha][c];
+            O[g * NG + h] = O[h * NG + g] =
+                Y[ga * ng + ha] - bQb - F[g * NG + h] + (g == h ? 0.5 * (r[g] - q[g]) : 0.0);
+        }
 }
 
 rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
@@ -329,7 +349,7 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_o
     memcpy(L, log_theta, sizeof L);
     for (int it = 0, halvings = 0; it < 30; it++) {
         double ll, q[NG], F[NG * NG], O[NG * NG];
-        rs_status st = evaluate(v, L, true, &ll, q, r, F, O, err);
+        rs_status st = evaluate(v, L, true, &ll, q, r, F, err);
         if (st != RS_OK) return st;
         double post = ll; // the log posterior: the likelihood and the prior N(0, lp^2)
         for (int g = 0; g < NG; g++)
@@ -352,11 +372,7 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_o
         if (m == 0) break;
         for (int a = 0; a < m; a++) {
             grad[a] = 0.5 * (q[idx[a]] - r[idx[a]]) - L[idx[a]] / (lp * lp);
-            for (int b = 0; b < m; b++) {
-                const double pr = a == b ? 1.0 / (lp * lp) : 0.0;
-                H[a * m + b] = F[idx[a] * NG + idx[b]] + pr;
-                HN[a * m + b] = O[idx[a] * NG + idx[b]] + pr;
-            }
+            for (int b = 0; b < m; b++) H[a * m + b] = F[idx[a] * NG + idx[b]] + (a == b ? 1.0 / (lp * lp) : 0.0);
         }
         if ((st = rs_calib_opencv_inverse_spd(Hinv, H, m, err)) != RS_OK) return st;
         // Newton's step with the observed information where it is positive definite and Fisher's
@@ -366,12 +382,21 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_o
         // most). Not from farther: there the posterior can have another mode (test_noise_model,
         // pixel sigma stated 5x too small, from 1-sigma on: the pixel noise at 0.6x the truth).
         double fisher[NG], newton[NG], worst = 0;
+        bool small = true; // Fisher's step within the convergence test below: no Newton's needed
         for (int a = 0; a < m; a++) {
             fisher[a] = 0;
             for (int b = 0; b < m; b++) fisher[a] += Hinv[a * m + b] * grad[b];
-            worst = fmax(worst, fabs(fisher[a]) / sqrt(Hinv[a * m + a]));
+            const double sd_a = sqrt(Hinv[a * m + a]);
+            worst = fmax(worst, fabs(fisher[a]) / sd_a);
+            small = small && fabs(fisher[a]) < fmax(1e-3, 0.01 * sd_a);
         }
-        const bool use_newton = worst < NEWTON_NEAR && rs_calib_opencv_inverse_spd(HNinv, HN, m, NULL) == RS_OK;
+        bool use_newton = worst < NEWTON_NEAR && !small;
+        if (use_newton) {
+            observed(O, v, L, q, r, F);
+            for (int a = 0; a < m; a++)
+                for (int b = 0; b < m; b++) HN[a * m + b] = O[idx[a] * NG + idx[b]] + (a == b ? 1.0 / (lp * lp) : 0.0);
+            use_newton = rs_calib_opencv_inverse_spd(HNinv, HN, m, NULL) == RS_OK;
+        }
         for (int a = 0; a < m; a++) {
             newton[a] = 0;
             for (int b = 0; b < m && use_newton; b++) newton[a] += HNinv[a * m + b] * grad[b];
@@ -433,7 +458,7 @@ rs_status rs_calib__vce_cov_spread(double *dQ, double *pose_dof, double *region_
     const double lp = 2.0 * log(prior_factor);
     if (!(lp > 0)) return RS_OK;
     double ll, q[NG], r[NG], F[NG * NG];
-    rs_status st = evaluate(v, log_theta, true, &ll, q, r, F, NULL, err);
+    rs_status st = evaluate(v, log_theta, true, &ll, q, r, F, err);
     if (st != RS_OK) return st;
     double *Q0 = malloc((size_t)nc * nc * sizeof *Q0);
     if (!Q0) return rs_err_set(err, RS_ERR_NOMEM, "variance components: out of memory");
@@ -473,7 +498,7 @@ rs_status rs_calib__vce_cov_spread(double *dQ, double *pose_dof, double *region_
             double L[NG];
             memcpy(L, log_theta, sizeof L);
             for (int a = 0; a < m; a++) L[idx[a]] += sign * ak * E[k * m + a];
-            if ((st = evaluate(v, L, false, &ll, q, r, F, NULL, err)) != RS_OK) break;
+            if ((st = evaluate(v, L, false, &ll, q, r, F, err)) != RS_OK) break;
             for (int j = 0; j < nc * nc; j++) dQ[j] += (v->Q[j] - Q0[j]) / (2.0 * m);
         }
     }
@@ -524,14 +549,16 @@ rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOI
                                  double F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS],
                                  double O[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS], rs_err *err)
 {
-    return evaluate(v, log_theta, true, loglik, q, r, F, O, err);
+    rs_status st = evaluate(v, log_theta, true, loglik, q, r, F, err);
+    if (st == RS_OK) observed(O, v, log_theta, q, r, F);
+    return st;
 }
 
 rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
                              rs_err *err)
 {
     double ll, q[RS_NOISE_NGROUPS], r[RS_NOISE_NGROUPS], F[RS_NOISE_NGROUPS * RS_NOISE_NGROUPS];
-    rs_status st = evaluate(v, log_theta, false, &ll, q, r, F, NULL, err);
+    rs_status st = evaluate(v, log_theta, false, &ll, q, r, F, err);
     if (st != RS_OK) return st;
     const int nc = v->nc;
     memcpy(dc, v->dc, (size_t)nc * sizeof *dc);
