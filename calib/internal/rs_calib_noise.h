@@ -133,7 +133,8 @@ typedef struct rs_calib__vce rs_calib__vce;
 rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s, const double *share,
                               const double log_theta_ref[RS_NOISE_NGROUPS], rs_err *err);
 // The posterior mode of the log variance factors (log-normal prior: the stated sigma right to a
-// factor prior_factor, 1-sigma), by Fisher scoring from log_theta (in,out), until every factor
+// factor prior_factor, 1-sigma), by Fisher scoring from log_theta (in,out), with Newton's steps
+// (the observed information) once within 0.3 of a posterior 1-sigma of it, until every factor
 // moves by less than 1% of its posterior 1-sigma (or 0.1% in a variance). sd_out (may be NULL):
 // each log factor's posterior 1-sigma there (0 for a group without observations).
 rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_out[RS_NOISE_NGROUPS], rs_calib__vce *v,
