@@ -563,6 +563,45 @@ double reduced_condition(Mat *cov, Mat J)
     return smax / smin;
 }
 
+// Reduced seen by TinySolver with P parameters: P = 6 (no refined intrinsics) gives TinySolver
+// fixed-size normal equations and step (its per-step algebra was as costly as the evaluations
+// on 20 landmarks), Eigen::Dynamic any other count.
+template <int P> struct Sized {
+    using Scalar = double;
+    enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = P };
+    const Reduced &f;
+    int NumResiduals() const { return f.NumResiduals(); }
+    int NumParameters() const { return f.NumParameters(); }
+    bool operator()(const double *c, double *residuals, double *jacobian) const { return f(c, residuals, jacobian); }
+};
+
+// Levenberg-Marquardt (TinySolver) on f from c (in,out).
+template <int P>
+void solve_lm(int *iterations, bool *hit_max, const Reduced &f, Vec &c, const rs_calib_refine_options *opt)
+{
+    using Solver = ceres::TinySolver<Sized<P>>;
+    Solver solver;
+    solver.options.max_num_iterations = opt->max_iterations > 0 ? opt->max_iterations : 100;
+    // TinySolver's function tolerance is an absolute change of the whitened chi-square (twice
+    // its cost), and a Gauss-Newton step to the minimum changes it by the step's squared
+    // Mahalanobis length: every pass stops after a step of 1e-2 of the parameters' own sigma,
+    // which leaves less than half that (Cauchy's loss converges linearly, the error shrinking to
+    // a third per step or faster; with noise-free data Gauss-Newton converges quadratically and
+    // leaves nothing: the truth to 1e-9). It used to go on to steps of 1e-4 sigma in the final
+    // pass and 5e-4 in the others: one evaluation in six more, for a thousandth of a sigma that
+    // no figure of tests/calib or `roadside bench calib` showed.
+    solver.options.function_tolerance = 1e-4;
+    solver.options.parameter_tolerance = opt->rough ? 1e-8 : 1e-12;
+    solver.options.gradient_tolerance = opt->rough ? 1e-10 : 1e-16;
+    solver.options.cost_threshold = 0.0;
+    typename Solver::Parameters x = c;
+    const Sized<P> sized{f};
+    const auto &sum = solver.Solve(sized, &x);
+    c = x;
+    *iterations = std::max(sum.iterations, 0);
+    *hit_max = sum.status == Solver::HIT_MAX_ITERATIONS;
+}
+
 rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_summary *summary, double *cov,
                  double *block_chi2, double *q_pred, const rs_calib_refine_problem *pb,
                  const rs_calib_refine_options *opt, rs_err *err)
@@ -579,24 +618,15 @@ rs_status refine(double rt[6], double *intrinsics, double *p_c, rs_calib_refine_
     if (!f(c.data(), r0.data(), nullptr))
         return rs_err_set(err, RS_ERR_DEGENERATE, "refine: a landmark cannot be projected at the starting pose");
 
-    ceres::TinySolver<Reduced> solver;
-    solver.options.max_num_iterations = opt->max_iterations > 0 ? opt->max_iterations : 100;
-    // TinySolver's function tolerance is an absolute change of the whitened chi-square (twice
-    // its cost), and a Gauss-Newton step to the minimum changes it by the step's squared
-    // Mahalanobis length: every pass stops after a step of 1e-2 of the parameters' own sigma,
-    // which leaves less than half that (Cauchy's loss converges linearly, the error shrinking to
-    // a third per step or faster; with noise-free data Gauss-Newton converges quadratically and
-    // leaves nothing: the truth to 1e-9). It used to go on to steps of 1e-4 sigma in the final
-    // pass and 5e-4 in the others: one evaluation in six more, for a thousandth of a sigma that
-    // no figure of tests/calib or `roadside bench calib` showed.
-    solver.options.function_tolerance = 1e-4;
-    solver.options.parameter_tolerance = opt->rough ? 1e-8 : 1e-12;
-    solver.options.gradient_tolerance = opt->rough ? 1e-10 : 1e-16;
-    solver.options.cost_threshold = 0.0;
-    const auto &sum = solver.Solve(f, &c);
-    summary->iterations = std::max(sum.iterations, 0);
+    int iterations = 0;
+    bool hit_max = false;
+    if (nc == 6) // no refined intrinsics (the common case): Eigen's fixed-size 6 x 6 algebra
+        solve_lm<6>(&iterations, &hit_max, f, c, opt);
+    else
+        solve_lm<Eigen::Dynamic>(&iterations, &hit_max, f, c, opt);
+    summary->iterations = iterations;
     summary->condition_number = NAN;
-    if (sum.status == ceres::TinySolver<Reduced>::HIT_MAX_ITERATIONS && !opt->rough)
+    if (hit_max && !opt->rough)
         return rs_err_set(err, RS_ERR_NOCONVERGE, "refine: no convergence in %d iterations", summary->iterations);
 
     // The solution, unrobust: residuals, reduced Jacobian, per-landmark statistics.
