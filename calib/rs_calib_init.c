@@ -361,11 +361,11 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
     if (st == RS_ERR_DEGENERATE || (st == RS_OK && Nin < Nneeded)) {
         st = rs_err_set(err, RS_ERR_DEGENERATE,
                         "q_px: no pose puts %d or more of the %d usable landmarks in front of the "
-                        "camera within %g px of their pixels%s (best: %d, after %d RANSAC "
-                        "iterations): landmarks behind the camera, or too many pixels not "
-                        "matching their landmarks",
+                        "camera within %g px of their pixels%s (best: %d, after %d %s): landmarks behind the "
+                        "camera, or too many pixels not matching their landmarks",
                         Nneeded, Nusable, opt->ransac_threshold_px,
-                        sc_ransac.ks_px ? " (widened by their survey sigmas)" : "", st == RS_OK ? Nin : 0, Niterations);
+                        sc_ransac.ks_px ? " (widened by their survey sigmas)" : "", st == RS_OK ? Nin : 0, Niterations,
+                        Nusable <= RS_CALIB_OPENGV_EXHAUSTIVE_MAX ? "triples of landmarks" : "RANSAC iterations");
         goto done;
     }
     if (st) goto done;

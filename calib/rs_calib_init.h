@@ -13,7 +13,8 @@
 //   3. RANSAC (OpenGV's sac::Ransac) over OpenGV's P3P (Kneip, Scaramuzza, Siegwart, CVPR 2011;
 //      Gao's solver on samples where Kneip's finds nothing), scored by reprojection error in
 //      PIXELS through mrcal_project(); landmarks behind the camera never count. OpenGV's sampler
-//      is reseeded from opt->seed: same input and seed, same answer, bit for bit. The best pose
+//      is reseeded from opt->seed: same input and seed, same answer, bit for bit. With 6 usable
+//      observations or fewer, every triple is tried instead (rs_calib_opengv.h). The best pose
 //      must be supported by a majority of the usable observations (and by 4 at least).
 //   4. Non-minimal solves on the inliers: OpenCV's IPPE (Collins & Bartoli, IJCV 2014) if the
 //      landmarks are coplanar (s3/s2 < planarity_ratio), OpenGV's EPnP (Lepetit et al.,

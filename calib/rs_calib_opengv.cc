@@ -2,6 +2,7 @@
 //
 // Only the glue lives here: adapters, the seeded sampler, the pose layout conversion. The
 // pixel scoring is the caller's (rs_calib_init.c), through a callback.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -143,6 +144,53 @@ struct UpnpSolutions {
     UpnpSolutions &operator=(const UpnpSolutions &) = delete;
 };
 
+// Every triple of the usable observations through P3P (the other solver where the chosen one
+// finds nothing), each solution scored on all of them: the most inliers win, ties to the
+// smaller truncated sum of squares (MSAC). Stops at a solution every observation agrees with.
+// For few observations, where a random sampler's setup (seeding std::mt19937) cost more than
+// the samples; see rs_calib_opengv.h.
+bool exhaustive_p3p(double *Rt_best, bool *inlier, int *Ntried, int *Nfallback,
+                    const opengv::absolute_pose::CentralAbsoluteAdapter &adapter, int N, const int *usable, int Nusable,
+                    rs_calib_opengv_p3p method, double threshold_px, rs_calib_opengv_score_fn *score, void *cookie)
+{
+    std::vector<double> err((size_t)Nusable);
+    int best_count = -1;
+    double best_cost = INFINITY, Rt[12];
+    *Ntried = *Nfallback = 0;
+    for (int a = 0; a < Nusable && best_count < Nusable; a++)
+        for (int b = a + 1; b < Nusable && best_count < Nusable; b++)
+            for (int c = b + 1; c < Nusable && best_count < Nusable; c++) {
+                const size_t i0 = (size_t)usable[a], i1 = (size_t)usable[b], i2 = (size_t)usable[c];
+                const bool kneip = method == RS_CALIB_OPENGV_P3P_KNEIP;
+                opengv::transformations_t Ts = kneip ? opengv::absolute_pose::p3p_kneip(adapter, i0, i1, i2)
+                                                     : opengv::absolute_pose::p3p_gao(adapter, i0, i1, i2);
+                (*Ntried)++;
+                if (Ts.empty()) {
+                    (*Nfallback)++;
+                    Ts = kneip ? opengv::absolute_pose::p3p_gao(adapter, i0, i1, i2)
+                               : opengv::absolute_pose::p3p_kneip(adapter, i0, i1, i2);
+                }
+                for (const opengv::transformation_t &T : Ts) {
+                    if (!T.allFinite()) continue;
+                    model_to_Rt(Rt, T);
+                    score(err.data(), Rt, usable, Nusable, cookie);
+                    int count = 0;
+                    double cost = 0;
+                    for (int k = 0; k < Nusable; k++) {
+                        count += err[(size_t)k] < threshold_px;
+                        cost += std::fmin(err[(size_t)k] * err[(size_t)k], threshold_px * threshold_px);
+                    }
+                    if (count > best_count || (count == best_count && cost < best_cost)) {
+                        best_count = count, best_cost = cost;
+                        std::copy(Rt, Rt + 12, Rt_best);
+                        for (int i = 0; i < N; i++) inlier[i] = false;
+                        for (int k = 0; k < Nusable; k++) inlier[usable[k]] = err[(size_t)k] < threshold_px;
+                    }
+                }
+            }
+    return best_count >= 0;
+}
+
 } // namespace
 
 extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier, int *Niterations, int *Nfallback,
@@ -155,6 +203,15 @@ extern "C" rs_status rs_calib_opengv_ransac_p3p(double *Rt_cam_ref, bool *inlier
     try {
         Correspondences c(v_cam, p_ref, N);
         opengv::absolute_pose::CentralAbsoluteAdapter adapter(c.v, c.p);
+        if (Nusable <= RS_CALIB_OPENGV_EXHAUSTIVE_MAX) {
+            int Ntried = 0, Nfb = 0;
+            const bool ok = exhaustive_p3p(Rt_cam_ref, inlier, &Ntried, &Nfb, adapter, N, usable, Nusable, method,
+                                           threshold_px, score, cookie);
+            if (Niterations) *Niterations = Ntried;
+            if (Nfallback) *Nfallback = Nfb;
+            if (!ok) return rs_err_set(err, RS_ERR_DEGENERATE, "P3P: no triple of observations gave a pose");
+            return RS_OK;
+        }
         const std::vector<int> indices(usable, usable + Nusable);
         auto problem = std::make_shared<PixelP3pProblem>(
             adapter, method == RS_CALIB_OPENGV_P3P_GAO ? AbsolutePoseSacProblem::GAO : AbsolutePoseSacProblem::KNEIP,

@@ -144,6 +144,49 @@ static void test_outliers(void)
            n ? percentile(pos, n, 50) : 0, n ? percentile(pos, n, 95) : 0, Nnonminimal);
 }
 
+// 2b. Few landmarks, where every triple is tried instead of RANSAC's samples
+// (RS_CALIB_OPENGV_EXHAUSTIVE_MAX): N = 5 with 1 gross outlier and N = 6 with 2, 1 px noise,
+// 1800 trials. A pose from 4 good landmarks is a poor one (e_model is 1.5x-2x that of 20), and
+// a gross error can sit where a wrong pose puts it: at most 0.5% of the trials may flag a
+// landmark wrongly (OpenGV's RANSAC, sampling 4 at a time: 1.0%; every triple: 0.17%), at most
+// 0.2% may find no pose (no triple's pose puts the 4 good landmarks within 8 px: 1 of 1800),
+// and the median e_model must be below 2 px.
+static void test_outliers_few(void)
+{
+    enum { TRIALS = 100 };
+    static double emodel[2 * TG_NLENS * NTERRAIN * TRIALS];
+    int n = 0, Nwrong = 0, Nfail = 0;
+    for (int N = 5; N <= 6; N++)
+        for (int lens = 0; lens < TG_NLENS; lens++)
+            for (int terrain = 0; terrain < NTERRAIN; terrain++)
+                for (uint64_t seed = 7001; seed < 7001 + TRIALS; seed++) {
+                    tg_problem pb;
+                    if (!make(&pb, "few outliers", seed, (tg_lens)lens, terrain_relief_m[terrain], N, 1.0,
+                              N == 5 ? 0.2 : 0.3))
+                        continue;
+                    rs_calib_init_result res;
+                    bool inl[TG_NMAX];
+                    rs_err err = {0};
+                    const rs_status st = tg_init_pose(&res, inl, &pb, seed, &err);
+                    CHECK(st == RS_OK || st == RS_ERR_DEGENERATE, "few outliers N %d seed %llu %s %s: status %d: %s", N,
+                          (unsigned long long)seed, tg_lens_name(lens), terrain_name[terrain], st, err.msg);
+                    Nfail += st != RS_OK;
+                    if (st) continue;
+                    int wrong = 0;
+                    for (int i = 0; i < N; i++) wrong += inl[i] == pb.outlier[i];
+                    Nwrong += wrong > 0;
+                    emodel[n++] = tg_model_error_px(&pb, res.rt_cam_enu, pb.rt_cam_enu);
+                }
+    const double med = n ? percentile(emodel, n, 50) : INFINITY;
+    CHECK(n >= 1700, "few outliers: only %d trials", n);
+    CHECK(Nfail <= 0.002 * (n + Nfail), "few outliers: %d of %d trials found no pose (> 0.2%%)", Nfail, n + Nfail);
+    CHECK(Nwrong <= 0.005 * n, "few outliers: %d of %d trials flag a landmark wrongly (> 0.5%%)", Nwrong, n);
+    CHECK(med < 2.0, "few outliers: median e_model %.3g px >= 2 px", med);
+    printf("few outliers (N = 5 with 1, N = 6 with 2; every triple tried): %d trials, %d without a pose, %d with a "
+           "wrong flag; e_model median %.3g px, 95%% %.3g px\n",
+           n + Nfail, Nfail, Nwrong, med, n ? percentile(emodel, n, 95) : 0);
+}
+
 static void expect_error(const char *what, rs_status want, const char *needle, const tg_problem *pb, const double *p,
                          const double *q, int N)
 {
@@ -302,6 +345,7 @@ int main(void)
     }
     test_noise_free();
     test_outliers();
+    test_outliers_few();
     test_degenerate();
     test_deterministic();
     time_calls();
