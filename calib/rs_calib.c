@@ -424,6 +424,7 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         for (int j = 0; j < N && pb->survey_shared && pb->survey_shared[i] >= 0; j++)
             w->share[i] += j != i && pb->survey_shared[j] == pb->survey_shared[i];
     }
+    w->scale_free = rs_calib__scale_free(pb, opt);
     const double log_theta0[RS_NOISE_NGROUPS] = {0, 0, 0};
     rs_calib__scale_sigmas(w, pb, log_theta0);
 
@@ -493,8 +494,8 @@ static rs_status solve(rs_calib_result *res, rs_calib__work *w, const rs_calib_p
         rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
         for (int i = 0; i < N; i++) res->w_test[i] = NAN;
     } else if (opt->robust_scale > 0.0) {
-        st = rs_calib__robust_stage(&Noutliers, log_theta, rt_c, res, w, &rp, &ro, pb, opt, c, robust_desc,
-                                    sizeof robust_desc, err);
+        st = rs_calib__robust_stage(&Noutliers, log_theta, rt_c, res, w, &rp, &ro, pb, opt, c,
+                                    !warm && init.Ninliers == N, robust_desc, sizeof robust_desc, err);
         if (st != RS_OK) return st;
     }
     if (N - Noutliers < 4)

@@ -25,6 +25,14 @@ void rs_calib__scale_sigmas(rs_calib__work *w, const rs_calib_problem *pb, const
     }
 }
 
+bool rs_calib__scale_free(const rs_calib_problem *pb, const rs_calib_options *opt)
+{
+    if (opt->refine != RS_CALIB_REFINE_NONE || pb->has_position_prior || pb->along) return false;
+    for (int k = 0; k < 3 * pb->N && pb->sigma_enu_m; k++)
+        if (pb->sigma_enu_m[k] > 0) return false;
+    return true;
+}
+
 double rs_calib__vce_redundancy(const rs_calib__work *w, int i, int j)
 {
     const double r = w->r[RS_NOISE_NCOMP * i + j];
@@ -115,9 +123,15 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
         // follows is then at sigmas all but final, and the estimate at its solution settles
         // (where a solve at the robust stage's sigmas came first, it took one solve more: 6% of a
         // calibration). It settles nothing by itself; if it fails, the solve comes first.
-        for (int it = 0; it < RS_CALIB_NOISE_SOLVES + 1; it++) { // the first, ahead, solves nothing
+        // Scale-free (w->scale_free): the solution does not depend on the variance factor, so
+        // one solve (none where it is w->rt_ls, every landmark in) and one estimate at it.
+        bool all_in = true;
+        for (int i = 0; i < N; i++) all_in = all_in && w->use[i];
+        const bool have_ls = w->scale_free && w->ls_valid && all_in;
+        if (have_ls) memcpy(rt_c, w->rt_ls, 6 * sizeof(double));
+        for (int it = w->scale_free; it < RS_CALIB_NOISE_SOLVES + 1; it++) { // the first, ahead, solves nothing
             const bool ahead = it == 0 && opt->estimate_noise;
-            if (!ahead) {
+            if (!ahead && !have_ls) {
                 rs_calib_refine_summary sum;
                 rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, NULL, NULL, rp, ro, err);
                 if (st == RS_ERR_NOCONVERGE && round == 0 && it <= 1)
@@ -143,7 +157,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
                 settled = settled && fabs(next[g] - log_theta[g]) < fmax(1e-2, 0.1 * sd[g]);
             memcpy(log_theta, next, sizeof next);
             rs_calib__scale_sigmas(w, pb, log_theta);
-            if (settled) break;
+            if (settled || w->scale_free) break;
         }
         rs_status st = rs_calib__noise_redundancy(&out, &ns, err);
         if (st != RS_OK) {

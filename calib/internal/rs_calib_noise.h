@@ -190,7 +190,19 @@ typedef struct {
                                         //   snooping stopped, on the landmarks in use
     int Ngross;                         // landmarks the robust stage (gross outliers) rejected
     double log_theta[RS_NOISE_NGROUPS]; // the noise model's variance factors at the solution
+    // One noise group and no camera priors (the survey exact, no intrinsics refined, no
+    // position prior, no picks along segments): the least-squares solution does not depend on
+    // the variance factor (rs_calib__scale_free). Then, where the initial pose agreed with
+    // every landmark, the robust stage starts from that solution (ls_valid, rt_ls: found on
+    // every landmark), and the noise model takes it instead of solving again.
+    bool scale_free, ls_valid;
+    double rt_ls[6];
 } rs_calib__work;
+
+// True when pb's least-squares solution does not depend on the variance factors: one noise
+// group (the pixels: every survey sigma 0), no intrinsics refined, no position prior, no picks
+// along segments.
+bool rs_calib__scale_free(const rs_calib_problem *pb, const rs_calib_options *opt);
 
 // A solve started from another solve's adjustment of the same problem (the intrinsics check's
 // alternative with the focal free, rs_calib_intrinsics.c): the pose rt_c (6,) in the centred
@@ -324,11 +336,13 @@ rs_status rs_calib__redundancy_at(const rs_calib_result *res, rs_calib__work *w,
 // chi2 exceeds opt->outlier_threshold^2 leaves (w->use false, back at its survey, w_test NAN),
 // counted in *Noutliers. Along picks choose their segment (c: the centred frame's origin) at the
 // robust pose. desc (desc_size): the method's description of this stage.
+// With w->scale_free and init_all (the initial pose agreed with every landmark), the robust
+// solve starts from the least-squares solution on every landmark, kept in w->rt_ls.
 rs_status rs_calib__robust_stage(int *Noutliers, double log_theta[RS_NOISE_NGROUPS], double rt_c[6],
                                  rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
                                  const rs_calib_refine_options *ro, const rs_calib_problem *pb,
-                                 const rs_calib_options *opt, const double c[3], char *desc, size_t desc_size,
-                                 rs_err *err);
+                                 const rs_calib_options *opt, const double c[3], bool init_all, char *desc,
+                                 size_t desc_size, rs_err *err);
 
 #ifdef __cplusplus
 }
