@@ -102,10 +102,10 @@ bool rs_calib__pixel_jacobian(double q_px[2], double *G, double J[6], double dpc
 // landmarks' mean height), and G (2,6) = d ground / d rt; false (G NAN) when the axis does not
 // come down to it. With C the camera's position and d = R' (0, 0, 1) the axis in the world
 // (R's third row): g = C + lambda d, lambda = -C_U / d_U, so
-// dg = dC + dlambda d + lambda dd, dlambda = (-dC_U + lambda dd_U) / d_U.
+// dg = dC + dlambda d + lambda dd, dlambda = -(dC_U + lambda dd_U) / d_U.
 // (Central differences of g over the 6 parameters, 12 rotations, were a third of the redundancy
 // numbers' time on 4 landmarks.)
-static bool axis_ground_jacobian(double G[12], const double rt[6])
+bool rs_calib__axis_ground(double g[2], double G[12], const double rt[6])
 {
     double C[3], dC[18], R[9], dR[27];
     rs_pose_position_from_rt(C, dC, rt);
@@ -116,6 +116,7 @@ static bool axis_ground_jacobian(double G[12], const double rt[6])
         for (int j = 0; j < 12; j++) G[j] = NAN;
         return false;
     }
+    for (int a = 0; a < 2; a++) g[a] = C[a] + lambda * d[a];
     for (int k = 0; k < 6; k++) {
         double dd[3] = {0, 0, 0}; // d d / d rt_k: the rotation only
         for (int j = 0; j < 3 && k < 3; j++) dd[j] = dR[9 * 2 + 3 * j + k];
@@ -277,7 +278,8 @@ rs_status rs_calib__noise_redundancy(const rs_calib_noise_out *out, const rs_cal
         st = rs_calib_opencv_inverse_spd(Q, S, nc, err);
     }
     double G[12];
-    const bool have_ground = st == RS_OK && out->dground_m && axis_ground_jacobian(G, s->rt_cam_c);
+    double g_axis[2];
+    const bool have_ground = st == RS_OK && out->dground_m && rs_calib__axis_ground(g_axis, G, s->rt_cam_c);
 
     // 2. per observation: H_jj, r = 1 - H_jj, the camera's response; the landmarks out: their test
     for (int i = 0; st == RS_OK && i < N; i++) {

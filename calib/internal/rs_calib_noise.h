@@ -94,6 +94,12 @@ void rs_calib__prior_normal(double *S, const rs_calib__params *pp, const rs_cali
 // intrinsic's, w^2 (x - nominal) (the focal scale's in relative units).
 void rs_calib__prior_gradient(double *gamma, const rs_calib__params *pp, const rs_calib_noise_state *s);
 
+// The ground point g (E, N) of the optical axis on the plane up = 0 of the centred frame, and
+// G (2,6) = dg/drt (analytic); false (G NAN) when the axis does not come down to it. The
+// external reliability on the ground (rs_calib_result.external_ground_m) is G times the
+// camera's response. (tests/calib/test_axis_ground.c checks G against central differences.)
+bool rs_calib__axis_ground(double g[2], double G[12], const double rt[6]);
+
 // The pixel q_px (2,) of the point seen (3, centred frame) at the state s, its derivatives with
 // respect to the camera parameters G (2,pp->nc) and to the point J (2,3), and mrcal's
 // intermediate dpc_dp (3,3) and dq_dpc; dq_dintr: scratch (2,pp->Ni). false: it does not
