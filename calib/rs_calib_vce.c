@@ -349,6 +349,7 @@ rs_status rs_calib__vce_build(rs_calib__vce **out, const rs_calib_noise_state *s
 
 // rs_calib__vce_estimate's Newton steps: where Fisher's step is within this of a posterior 1-sigma
 #define NEWTON_NEAR 0.3
+#define NEWTON_LAST 0.1
 
 rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_out[RS_NOISE_NGROUPS], rs_calib__vce *v,
                                  double prior_factor, rs_err *err)
@@ -418,7 +419,12 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_o
         // in a variance): Fisher scoring converges only linearly where the expected information
         // differs from the observed, and a group of little redundancy (posterior 1-sigma 1.5 in
         // log variance at r = 1) then crept by 1e-3 per step for ten steps
-        bool converged = true;
+        // A Newton step within NEWTON_LAST of every factor's 1-sigma ends it too: Newton's error
+        // after it is second order, about (0.1 sigma)^2 / sigma = 0.01 sigma, the tolerance
+        // below, so the evaluation that would confirm it is skipped (on 4 landmarks, one of
+        // about three per estimate).
+        bool converged = true, last = use_newton;
+        for (int a = 0; a < m && last; a++) last = fabs(newton[a]) < NEWTON_LAST * sqrt(Hinv[a * m + a]);
         memcpy(from, L, sizeof from);
         post_from = post, slope = 0;
         memset(step, 0, sizeof step);
@@ -432,7 +438,7 @@ rs_status rs_calib__vce_estimate(double log_theta[RS_NOISE_NGROUPS], double sd_o
             slope += grad[a] * step[idx[a]];
             L[idx[a]] = next;
         }
-        if (converged) break;
+        if (converged || last) break;
     }
     memcpy(log_theta, L, sizeof L);
     if (sd_out) memcpy(sd_out, sd, sizeof sd);
