@@ -326,6 +326,22 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
                                rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
                                const rs_calib_options *opt, rs_err *err)
 {
+    if (w->scale_free) { // one group, no priors: rs_calib__vce_cov_spread in closed form
+        // The covariance is exactly proportional to the one factor, the group's redundancy is
+        // r = 2 N_in - 6 and its Fisher information r / 2, so nu = r + 2 / lp^2 (at least 3), and
+        // the unscented points at +-acosh(1 + 2 / (nu - 2)) widen the pose block by nu / (nu - 2);
+        // tests/calib/test_scale_free.c checks it against the general path
+        int used = 0;
+        for (int i = 0; i < rp->N; i++) used += w->use[i];
+        const double lp = 2.0 * log(opt->noise_prior_factor), r = 2.0 * used - 6.0;
+        if (!(lp > 0) || !(r >= opt->noise_min_redundancy)) return RS_OK;
+        const double nu = fmax(r + 2.0 / (lp * lp), 3.0);
+        for (int a = 0; a < 6; a++)
+            for (int b = 0; b < 6; b++) w->cov[a * n + b] *= nu / (nu - 2.0);
+        res->pose_dof = nu;
+        res->region_m2 = rs_calib__pose_region_m2(1e-3, nu, nu / (nu - 2.0));
+        return RS_OK;
+    }
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;
     rs_status st = rs_calib__vce_build(&v, &ns, w->share, log_theta, err);

@@ -32,7 +32,8 @@ int main(void)
 {
     gen_begin();
     double worst = 0;
-    int n = 0, Nsnooped = 0;
+    int n = 0, Nsnooped = 0, Nspread = 0;
+    double worst_spread = 0;
     for (int stated = 1; stated <= 3; stated += 2)
         for (uint64_t seed = 1; seed <= 40; seed++) {
             rs_simulate_camera_options o;
@@ -74,6 +75,30 @@ int main(void)
                       "(%+.2f%%)",
                       (unsigned long long)seed, stated, got, expect, 100 * rel);
             }
+            // the closed-form spread (rs_calib__cov_spread) against the general path: the same
+            // problem with survey sigmas of 1 nm is not scale-free, and differs by nothing visible
+            double sigma_enu[3 * 64];
+            for (int i = 0; i < 3 * N; i++) sigma_enu[i] = 1e-9;
+            rs_calib_problem pg = pb;
+            pg.sigma_enu_m = sigma_enu;
+            rs_calib_result rg;
+            const rs_status sg = sr == RS_OK ? rs_calib_solve(&rg, &pg, NULL, &e) : RS_ERR_INVALID;
+            CHECK(sr != RS_OK || sg == RS_OK, "seed %llu: the general path: %s", (unsigned long long)seed, e.msg);
+            if (sr == RS_OK && sg == RS_OK && rg.Ninliers == res.Ninliers) {
+                double d = fabs(res.pose_dof / rg.pose_dof - 1.0);
+                d = fmax(d, fabs(res.region_m2 / rg.region_m2 - 1.0));
+                for (int k = 0; k < 3; k++) {
+                    d = fmax(d, fabs(res.sigma_position_enu_m[k] / rg.sigma_position_enu_m[k] - 1.0));
+                    d = fmax(d, fabs(res.sigma_yaw_pitch_roll_deg[k] / rg.sigma_yaw_pitch_roll_deg[k] - 1.0));
+                }
+                worst_spread = fmax(worst_spread, d);
+                Nspread++;
+                CHECK(d < 1e-3,
+                      "seed %llu, stated %d px: closed-form spread against the general path: %.3g relative "
+                      "(pose dof %.6g against %.6g, region %.6g against %.6g)",
+                      (unsigned long long)seed, stated, d, res.pose_dof, rg.pose_dof, res.region_m2, rg.region_m2);
+            }
+            if (sg == RS_OK) rs_calib_result_free(&rg);
             if (sr == RS_OK) rs_calib_result_free(&res);
             rs_simulate_problem_free(s);
         }
@@ -81,5 +106,9 @@ int main(void)
            "pixel sigma against sqrt(chi2 / (2N - 6)) at OpenCV's least-squares pose: worst %.3f%%\n",
            n, Nsnooped, 100 * worst);
     CHECK(n >= 72, "only %d problems compared", n);
+    printf("closed-form spread of the pose covariance against the general path (survey sigmas 1 nm): %d problems, "
+           "worst %.3g relative (pose dof, region, sigmas of position and yaw/pitch/roll)\n",
+           Nspread, worst_spread);
+    CHECK(Nspread >= 72, "only %d spreads compared", Nspread);
     return gen_end("1-40");
 }
