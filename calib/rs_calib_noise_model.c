@@ -124,10 +124,12 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
         // (where a solve at the robust stage's sigmas came first, it took one solve more: 6% of a
         // calibration). It settles nothing by itself; if it fails, the solve comes first.
         // Scale-free (w->scale_free): the solution does not depend on the variance factor, so
-        // one solve (none where it is w->rt_ls, every landmark in) and one estimate at it.
-        bool all_in = true;
-        for (int i = 0; i < N; i++) all_in = all_in && w->use[i];
-        const bool have_ls = w->scale_free && w->ls_valid && all_in;
+        // one solve (none where it is w->rt_ls, every landmark in) and one estimate at it, in
+        // closed form from its chi-square (rs_calib__vce_one).
+        int used = 0;
+        for (int i = 0; i < N; i++) used += w->use[i];
+        const bool have_ls = w->scale_free && w->ls_valid && used == N;
+        double chi2_0 = have_ls ? w->chi2_ls0 : NAN; // the solution's chi-square at the stated sigmas
         if (have_ls) memcpy(rt_c, w->rt_ls, 6 * sizeof(double));
         for (int it = w->scale_free; it < RS_CALIB_NOISE_SOLVES + 1; it++) { // the first, ahead, solves nothing
             const bool ahead = it == 0 && opt->estimate_noise;
@@ -142,12 +144,18 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
                     return st;
                 }
                 res->iterations += sum.iterations;
+                chi2_0 = sum.chi2 * exp(log_theta[RS_NOISE_PIXEL]);
             }
             if (!opt->estimate_noise) break;
             double next[RS_NOISE_NGROUPS], sd[RS_NOISE_NGROUPS];
             bool settled = !ahead;
             memcpy(next, log_theta, sizeof next);
-            rs_status st = rs_calib__vce_at(next, sd, res, w, rp, rt_c, log_theta, opt, err);
+            rs_status st = RS_OK;
+            if (w->scale_free)
+                next[RS_NOISE_PIXEL] =
+                    rs_calib__vce_one(&sd[RS_NOISE_PIXEL], chi2_0, 2.0 * used - 6.0, opt->noise_prior_factor);
+            else
+                st = rs_calib__vce_at(next, sd, res, w, rp, rt_c, log_theta, opt, err);
             if (st != RS_OK && ahead) continue; // the solve first, then the estimate at its solution
             if (st != RS_OK) {
                 rs_err_prefix(err, "noise model");

@@ -132,6 +132,7 @@ rs_status rs_calib__robust_stage(int *Noutliers, double log_theta[RS_NOISE_NGROU
         rs_calib_refine_summary sum;
         if (rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, NULL, NULL, rp, &plain, err) == RS_OK) {
             memcpy(w->rt_ls, rt_c, sizeof w->rt_ls);
+            w->chi2_ls0 = sum.chi2 * exp(log_theta[RS_NOISE_PIXEL]); // at the stated sigmas
             w->ls_valid = true;
             res->iterations += sum.iterations;
         }

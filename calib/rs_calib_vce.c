@@ -534,6 +534,23 @@ rs_status rs_calib__vce_cov_spread(double *dQ, double *pose_dof, double *region_
     return st;
 }
 
+double rs_calib__vce_one(double *sd, double chi2_0, double r, double prior_factor)
+{
+    const double lp = 2.0 * log(prior_factor), bound = 2.0 * log(RS_NOISE_MAX_FACTOR);
+    *sd = 0.0;
+    if (!(lp > 0) || !(chi2_0 > 0) || !(r > 0)) return 0.0;
+    double L = 0.0;
+    for (int it = 0; it < 50; it++) {
+        const double grad = 0.5 * (chi2_0 * exp(-L) - r) - L / (lp * lp);
+        const double curv = 0.5 * chi2_0 * exp(-L) + 1.0 / (lp * lp);
+        const double step = fmax(-1.0, fmin(1.0, grad / curv));
+        L = fmax(-bound, fmin(bound, L + step));
+        if (fabs(step) < 1e-10) break;
+    }
+    *sd = 1.0 / sqrt(0.5 * r + 1.0 / (lp * lp));
+    return L;
+}
+
 int rs_calib__vce_Nintrinsics(const rs_calib__vce *v) { return v->nc - 6; }
 
 // P(F > f) for F ~ F(6, nu): with x = nu / (nu + 6 f) and b = nu / 2, the regularised incomplete

@@ -176,6 +176,14 @@ rs_status rs_calib__vce_evaluate(rs_calib__vce *v, const double log_theta[RS_NOI
 // was built at, and their covariance Q (nc,nc) = S^-1.
 rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const double log_theta[RS_NOISE_NGROUPS],
                              rs_err *err);
+// One group without camera priors (rs_calib__scale_free): the posterior mode of its log variance
+// factor L, given the chi-square chi2_0 of the least-squares solution at L = 0 (which does not
+// depend on L) and the group's redundancy r. The restricted log-likelihood of a linear model
+// with one variance factor is -(r L + chi2_0 e^-L) / 2 (Koch 1999, 3.6.3; what rs_calib__vce_estimate
+// maximises, for one group), the prior -L^2 / (2 lp^2), lp = 2 log(prior_factor): concave, so
+// Newton's steps (at most 1 each) from 0 reach the mode; within +-2 log(RS_NOISE_MAX_FACTOR).
+// *sd: the posterior 1-sigma, 1 / sqrt(r / 2 + 1 / lp^2). 0 (sd 0) when prior_factor <= 1.
+double rs_calib__vce_one(double *sd, double chi2_0, double r, double prior_factor);
 // The refined intrinsics' coordinates among its camera parameters (nc = 6 + this).
 int rs_calib__vce_Nintrinsics(const rs_calib__vce *v);
 void rs_calib__vce_free(rs_calib__vce *v);
@@ -202,7 +210,7 @@ typedef struct {
     // every landmark, the robust stage starts from that solution (ls_valid, rt_ls: found on
     // every landmark), and the noise model takes it instead of solving again.
     bool scale_free, ls_valid;
-    double rt_ls[6];
+    double rt_ls[6], chi2_ls0; // and its chi-square at the stated sigmas
 } rs_calib__work;
 
 // True when pb's least-squares solution does not depend on the variance factors: one noise
