@@ -147,7 +147,7 @@ rs_status rs_calib__noise_model(rs_calib_result *res, rs_calib__work *w, const r
                 chi2_0 = sum.chi2 * exp(log_theta[RS_NOISE_PIXEL]);
             }
             if (!opt->estimate_noise) break;
-            double next[RS_NOISE_NGROUPS], sd[RS_NOISE_NGROUPS];
+            double next[RS_NOISE_NGROUPS], sd[RS_NOISE_NGROUPS] = {0};
             bool settled = !ahead;
             memcpy(next, log_theta, sizeof next);
             rs_status st = RS_OK;

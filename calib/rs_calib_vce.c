@@ -538,7 +538,7 @@ double rs_calib__vce_one(double *sd, double chi2_0, double r, double prior_facto
 {
     const double lp = 2.0 * log(prior_factor), bound = 2.0 * log(RS_NOISE_MAX_FACTOR);
     *sd = 0.0;
-    if (!(lp > 0) || !(chi2_0 > 0) || !(r > 0)) return 0.0;
+    if (!(lp > 0) || !(chi2_0 >= 0) || !(r > 0)) return 0.0;
     double L = 0.0;
     for (int it = 0; it < 50; it++) {
         const double grad = 0.5 * (chi2_0 * exp(-L) - r) - L / (lp * lp);

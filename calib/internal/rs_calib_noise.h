@@ -182,7 +182,8 @@ rs_status rs_calib__vce_step(double *dc, double *Q, rs_calib__vce *v, const doub
 // with one variance factor is -(r L + chi2_0 e^-L) / 2 (Koch 1999, 3.6.3; what rs_calib__vce_estimate
 // maximises, for one group), the prior -L^2 / (2 lp^2), lp = 2 log(prior_factor): concave, so
 // Newton's steps (at most 1 each) from 0 reach the mode; within +-2 log(RS_NOISE_MAX_FACTOR).
-// *sd: the posterior 1-sigma, 1 / sqrt(r / 2 + 1 / lp^2). 0 (sd 0) when prior_factor <= 1.
+// *sd: the posterior 1-sigma, 1 / sqrt(r / 2 + 1 / lp^2). 0 (sd 0) when prior_factor <= 1, r <= 0
+// or chi2_0 is not a number.
 double rs_calib__vce_one(double *sd, double chi2_0, double r, double prior_factor);
 // The refined intrinsics' coordinates among its camera parameters (nc = 6 + this).
 int rs_calib__vce_Nintrinsics(const rs_calib__vce *v);
