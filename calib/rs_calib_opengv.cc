@@ -121,18 +121,18 @@ class PixelP3pProblem : public AbsolutePoseSacProblem {
     void *cookie_;
 };
 
-// The solutions of OpenGV's upnp(), a vector allocated inside libopengv with plain malloc
-// (glibc's 16-byte alignment is Eigen's default). Under AddressSanitizer, Eigen switches THIS
-// translation unit to its hand-made aligned allocator (Eigen/src/Core/util/Memory.h defines no
-// EIGEN_MALLOC_ALREADY_ALIGNED with __SANITIZE_ADDRESS__), whose free() would not match; so
-// there the buffer goes back to free() directly. Elsewhere the vector is destroyed as usual.
-struct UpnpSolutions {
+// The solutions of one of OpenGV's solvers (upnp(), p3p_kneip(), p3p_gao()), a vector allocated
+// inside libopengv with plain malloc (glibc's 16-byte alignment is Eigen's default). Under
+// AddressSanitizer, Eigen switches THIS translation unit to its hand-made aligned allocator
+// (Eigen/src/Core/util/Memory.h defines no EIGEN_MALLOC_ALREADY_ALIGNED with
+// __SANITIZE_ADDRESS__), whose free() would not match; so there the buffer goes back to free()
+// directly. Elsewhere the vector is destroyed as usual. `solve` returns the vector: it is moved
+// in, never copied or reallocated here.
+struct Solutions {
     alignas(opengv::transformations_t) unsigned char raw[sizeof(opengv::transformations_t)];
     opengv::transformations_t &Ts;
-    explicit UpnpSolutions(const opengv::absolute_pose::AbsoluteAdapterBase &adapter)
-        : Ts(*new (raw) opengv::transformations_t(opengv::absolute_pose::upnp(adapter)))
-    {}
-    ~UpnpSolutions()
+    template <class Solve> explicit Solutions(Solve solve) : Ts(*new (raw) opengv::transformations_t(solve())) {}
+    ~Solutions()
     {
 #if defined(__SANITIZE_ADDRESS__)
         std::free(Ts.data());
@@ -140,8 +140,8 @@ struct UpnpSolutions {
         Ts.~vector();
 #endif
     }
-    UpnpSolutions(const UpnpSolutions &) = delete;
-    UpnpSolutions &operator=(const UpnpSolutions &) = delete;
+    Solutions(const Solutions &) = delete;
+    Solutions &operator=(const Solutions &) = delete;
 };
 
 // Every triple of the usable observations through P3P (the other solver where the chosen one
@@ -162,15 +162,18 @@ bool exhaustive_p3p(double *Rt_best, bool *inlier, int *Ntried, int *Nfallback,
             for (int c = b + 1; c < Nusable && best_count < Nusable; c++) {
                 const size_t i0 = (size_t)usable[a], i1 = (size_t)usable[b], i2 = (size_t)usable[c];
                 const bool kneip = method == RS_CALIB_OPENGV_P3P_KNEIP;
-                opengv::transformations_t Ts = kneip ? opengv::absolute_pose::p3p_kneip(adapter, i0, i1, i2)
-                                                     : opengv::absolute_pose::p3p_gao(adapter, i0, i1, i2);
+                auto p3p = [&](bool k) { // each a prvalue: built in place, in Solutions' storage
+                    if (k) return opengv::absolute_pose::p3p_kneip(adapter, i0, i1, i2);
+                    return opengv::absolute_pose::p3p_gao(adapter, i0, i1, i2);
+                };
+                Solutions first([&] { return p3p(kneip); });
                 (*Ntried)++;
-                if (Ts.empty()) {
-                    (*Nfallback)++;
-                    Ts = kneip ? opengv::absolute_pose::p3p_gao(adapter, i0, i1, i2)
-                               : opengv::absolute_pose::p3p_kneip(adapter, i0, i1, i2);
-                }
-                for (const opengv::transformation_t &T : Ts) {
+                (*Nfallback) += first.Ts.empty();
+                Solutions other([&] {
+                    if (first.Ts.empty()) return p3p(!kneip);
+                    return opengv::transformations_t();
+                });
+                for (const opengv::transformation_t &T : first.Ts.empty() ? other.Ts : first.Ts) {
                     if (!T.allFinite()) continue;
                     model_to_Rt(Rt, T);
                     score(err.data(), Rt, usable, Nusable, cookie);
@@ -261,7 +264,7 @@ extern "C" rs_status rs_calib_opengv_pose(double *Rt_cam_ref, const double *v_ca
                 return rs_err_set(err, RS_ERR_DEGENERATE, "OpenGV %s: no sample gave a pose", name);
             T = ransac.model_coefficients_;
         } else if (method == RS_CALIB_OPENGV_POSE_UPNP) {
-            UpnpSolutions sol(adapter);
+            Solutions sol([&] { return opengv::absolute_pose::upnp(adapter); });
             const opengv::transformations_t &Ts = sol.Ts;
             double best = INFINITY;
             for (const opengv::transformation_t &Ti : Ts) {
