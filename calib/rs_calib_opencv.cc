@@ -55,6 +55,29 @@ extern "C" rs_status rs_calib_opencv_pnp(double *rt_cam_ref, const double *xy, c
     }
 }
 
+extern "C" rs_status rs_calib_opencv_undistort(double *xy, const double *q_px, int N, const double *intrinsics,
+                                               int Ndistortion, rs_err *err)
+{
+    if (Ndistortion != 4 && Ndistortion != 5 && Ndistortion != 8 && Ndistortion != 12)
+        return rs_err_set(err, RS_ERR_INVALID, "OpenCV undistortion: %d distortion coefficients (4, 5, 8 or 12)",
+                          Ndistortion);
+    try {
+        const cv::Matx33d K(intrinsics[0], 0, intrinsics[2], 0, intrinsics[1], intrinsics[3], 0, 0, 1);
+        const cv::Mat D(1, Ndistortion, CV_64F, const_cast<double *>(intrinsics + 4)); // read only
+        const cv::Mat src(N, 1, CV_64FC2, const_cast<double *>(q_px));                 // read only
+        cv::Mat dst(N, 1, CV_64FC2, xy); // written in place: OpenCV keeps a buffer of the right size
+        cv::undistortPoints(src, dst, K, D, cv::noArray(), cv::noArray(),
+                            cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 20, 1e-9));
+        if (dst.data != reinterpret_cast<uchar *>(xy)) // cannot happen: the size and type are OpenCV's own
+            return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV undistortPoints reallocated its output");
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV undistortPoints threw: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV undistortPoints threw an unknown exception");
+    }
+}
+
 namespace {
 // inv = A^-1 by cv::hal::Cholesky64f, the routine cv::invert(DECOMP_CHOLESKY) calls for n > 3,
 // without cv::invert's cv::Mat set-up (most of its cost for these 4x4 to 9x9 matrices: 18% of a

@@ -36,6 +36,22 @@ rs_status rs_calib_opencv_pnp( // out
     int N, rs_calib_opencv_pnp_method method,
     rs_err *err); // may be NULL
 
+// Normalised image coordinates xy = (x/z, y/z) of N pixels through OpenCV's distortion model, by
+// cv::undistortPoints' fixed-point iteration (at most 20 iterations; it stops where its own
+// reprojection error is below 1e-9 px). mrcal's LENSMODEL_OPENCV4/5/8/12 are OpenCV's model with
+// OpenCV's coefficients in OpenCV's order: intrinsics = (fx, fy, cx, cy, k1, k2, p1, p2[, k3[, k4,
+// k5, k6[, s1..s4]]]), Ndistortion = 4, 5, 8 or 12. The iteration reports no failure (a pixel far
+// outside a strongly distorting lens's valid region can end anywhere): the caller checks the
+// result by projecting it again (rs_calib_init.c, through mrcal). RS_ERR_INVALID for another
+// Ndistortion, RS_ERR_EXTERNAL when OpenCV throws.
+rs_status rs_calib_opencv_undistort( // out
+    double *xy,                      // (N,2)
+    // in
+    const double *q_px,       // (N,2)
+    int N,                    // >= 1
+    const double *intrinsics, // (4 + Ndistortion,)
+    int Ndistortion, rs_err *err);
+
 // The inverse of the symmetric positive definite n x n matrix A (row-major) by OpenCV's
 // Cholesky (cv::hal::Cholesky64f; cv::invert for n <= 3): the normal matrices of the noise model
 // (rs_calib_noise.c). RS_ERR_DEGENERATE when A is not positive definite, RS_ERR_EXTERNAL when
