@@ -401,19 +401,21 @@ rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work 
             // landmark, the alternative is solved in full from every landmark (free_focal): a
             // wrong focal makes the solution reject good landmarks, and the alternative with the
             // solution's verdict lost a third of the significant x1.3 warnings there.
-            // Scale-free (w->scale_free: the pixels the one noise group, no priors), the linear
-            // step is already the alternative's first Gauss-Newton step, its variance factor that
-            // of the fit with the focal free (no survey group for a focal error to hide in): where
-            // its chi-square is RS_CALIB_ALTERNATIVE_MARGIN or more below the critical value it
-            // stands (the iterated alternative took about a tenth of an exact survey's
-            // calibration; tests/calib/test_scale_free.c compares the two paths).
+            // Scale-free (w->scale_free: the pixels the one noise group, no priors) and every
+            // landmark kept, the linear step is already the alternative's first Gauss-Newton
+            // step, its variance factor that of the fit with the focal free (no survey group for
+            // a focal error to hide in): where its chi-square is RS_CALIB_ALTERNATIVE_MARGIN or
+            // more below the critical value it stands (the iterated alternative took about a
+            // tenth of an exact survey's calibration; tests/calib/test_scale_free.c compares the
+            // two paths).
             double k_alt, Q_alt;
             rs_status st_alt = RS_ERR_DEGENERATE;
-            const bool linear_stands = w->scale_free && chi2_of(&k, &Q, pb->focal_rel_sigma, 1) <=
-                                                            critical(1, alt.dof) / RS_CALIB_ALTERNATIVE_MARGIN;
+            bool all_in = true;
+            for (int i = 0; i < N; i++) all_in = all_in && w->use[i];
+            const bool linear_stands =
+                w->scale_free && all_in &&
+                chi2_of(&k, &Q, pb->focal_rel_sigma, 1) <= critical(1, alt.dof) / RS_CALIB_ALTERNATIVE_MARGIN;
             if (alt.dof >= 3 && !linear_stands) {
-                bool all_in = true;
-                for (int i = 0; i < N; i++) all_in = all_in && w->use[i];
                 rs_err e_alt = {0};
                 if (all_in) st_alt = rs_calib__focal_alternative(&k_alt, &Q_alt, res, w, rp, rt_c, opt, &e_alt);
                 const double crit = critical(1, alt.dof), c2 = chi2_of(&k_alt, &Q_alt, pb->focal_rel_sigma, 1);
