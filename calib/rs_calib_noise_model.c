@@ -330,6 +330,10 @@ rs_status rs_calib__vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGR
     return st;
 }
 
+// How far below noise_min_redundancy every group's redundancy must be for the spread to be
+// skipped without building its model (the redundancy numbers are data snooping's, a solve ago)
+#define RS_CALIB_SPREAD_MARGIN 0.1
+
 rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem *rp, const double rt_c[6],
                                rs_calib_result *res, const double log_theta[RS_NOISE_NGROUPS], int n,
                                const rs_calib_options *opt, rs_err *err)
@@ -349,6 +353,21 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
         res->pose_dof = nu;
         res->region_m2 = rs_calib__pose_region_m2(1e-3, nu, nu / (nu - 2.0));
         return RS_OK;
+    }
+    // No group estimated from the data, none spread: where the redundancy numbers at which data
+    // snooping stopped (w->snooped; the final solve moved the state by a fraction of a sigma)
+    // leave every group RS_CALIB_SPREAD_MARGIN or more below noise_min_redundancy, the model
+    // (which would find the same, rs_calib__vce_cov_spread) is not built: on 4 landmarks, whose
+    // 2 N - 6 = 2 are shared among the groups, that was 7% of the calibration
+    if (w->snooped) {
+        double rg[RS_NOISE_NGROUPS] = {0};
+        for (int i = 0; i < rp->N; i++)
+            for (int j = 0; j < RS_NOISE_NCOMP && w->use[i]; j++)
+                rg[rs_calib__noise_group(j)] += rs_calib__vce_redundancy(w, i, j);
+        bool none = true;
+        for (int g = 0; g < RS_NOISE_NGROUPS; g++)
+            none = none && rg[g] < opt->noise_min_redundancy - RS_CALIB_SPREAD_MARGIN;
+        if (none) return RS_OK; // res->pose_dof INFINITY, the region 22.46 (rs_calib.c sets them)
     }
     const rs_calib_noise_state ns = noise_state(rp, w, rt_c, res->intrinsics, opt);
     rs_calib__vce *v = NULL;

@@ -538,8 +538,8 @@ const double kConditionSingular = 1e7;
 
 // Condition number and covariance from the reduced Jacobian J (m, nc), column-major: its
 // columns scaled to unit norm (so the number does not depend on units, radians against metres),
-// Householder QR, then the SVD of the (nc, nc) triangle: sigma_max / sigma_min (inf when
-// singular), and cov = S V Sigma^-2 V^T S. No normal equations are formed (pixel sigmas of
+// Householder QR, then the singular values of the (nc, nc) triangle R: sigma_max / sigma_min
+// (inf when singular), and cov = S R^-1 R^-T S. No normal equations are formed (pixel sigmas of
 // 1e-3 px against survey sigmas of metres would lose every digit in them).
 template <int P> double reduced_condition_sized(Mat *cov, Mat J)
 {
@@ -556,12 +556,14 @@ template <int P> double reduced_condition_sized(Mat *cov, Mat J)
     }
     Eigen::HouseholderQR<Eigen::Matrix<double, Eigen::Dynamic, P>> qr(J);
     const Square R = qr.matrixQR().topRows(nc).template triangularView<Eigen::Upper>();
-    Eigen::JacobiSVD<Square> svd(R, Eigen::ComputeFullV);
-    const Column &sv = svd.singularValues();
-    const double smax = sv(0), smin = sv(nc - 1);
+    const Column sv = Eigen::JacobiSVD<Square>(R).singularValues(); // no singular vectors: the
+    const double smax = sv(0), smin = sv(nc - 1);                   // covariance needs none
     if (!(smin > 0.0) || !std::isfinite(smax)) return INFINITY;
-    const Square W = svd.matrixV() * sv.cwiseInverse().asDiagonal();
-    *cov = scale.asDiagonal() * (W * W.transpose()) * scale.asDiagonal();
+    // (J'J)^-1 = R^-1 R^-T: R^-1 by back substitution on the triangle, instead of the SVD's
+    // V Sigma^-2 V' (its vectors cost more than the triangle's inverse: the bench's exact
+    // surveys, each one's best of 20 calibrations, 112.7 -> 106.3 us in the median)
+    const Square Rinv = R.template triangularView<Eigen::Upper>().solve(Square::Identity(nc, nc));
+    *cov = scale.asDiagonal() * (Rinv * Rinv.transpose()) * scale.asDiagonal();
     return smax / smin;
 }
 
