@@ -358,7 +358,8 @@ rs_status rs_calib__cov_spread(rs_calib__work *w, const rs_calib_refine_problem 
     // snooping stopped (w->snooped; the final solve moved the state by a fraction of a sigma)
     // leave every group RS_CALIB_SPREAD_MARGIN or more below noise_min_redundancy, the model
     // (which would find the same, rs_calib__vce_cov_spread) is not built: on 4 landmarks, whose
-    // 2 N - 6 = 2 are shared among the groups, that was 7% of the calibration
+    // 2 N - 6 = 2 are shared among the groups, that was about 5% of the calibration (harness of the
+    // bench's 4-landmark problems: 67.7 -> 64 us)
     if (w->snooped) {
         double rg[RS_NOISE_NGROUPS] = {0};
         for (int i = 0; i < rp->N; i++)
