@@ -32,7 +32,7 @@
 #include <stdbool.h>
 
 #include "core/rs_status.h"
-#include "synth/rs_synth_dataset.h"
+#include "synth/dataset/rs_synth_dataset.h"
 
 #define RS_BENCH_SYNTH_MAX_CHECKPOINTS 128
 

@@ -1,6 +1,6 @@
 // roadside background / roadside site render-backgrounds -- backgrounds of a camera's view: the
 // temporal median of video frames or images, and digital-twin grounds ray-traced with POV-Ray,
-// stored in the site with tags (synth/rs_synth_background.h, docs/backgrounds.md).
+// stored in the site with tags (synth/backdrop/rs_synth_background.h, docs/backgrounds.md).
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,10 +11,10 @@
 #include "core/rs_camera.h"
 #include "core/rs_io.h"
 #include "geo/rs_site.h"
-#include "synth/rs_synth_background.h"
-#include "synth/rs_synth_opencv.h"
-#include "synth/rs_synth_scene.h"
-#include "synth/rs_synth_sun.h"
+#include "synth/backdrop/rs_synth_background.h"
+#include "synth/backdrop/rs_synth_opencv.h"
+#include "synth/povray/rs_synth_scene.h"
+#include "synth/backdrop/rs_synth_sun.h"
 
 enum { MAX_TAGS = 64 };
 
@@ -184,7 +184,7 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
     rs_err err = {0};
     rs_status st = rs_camera_read(&cam, NULL, model, &err);
     if (st == RS_OK)
-        st = rs_synth_background_twins(site_dir, site, cam_id, &cam, model, lanes, (const char *const *)times, Ntimes,
+        st = rs_synth_twin_backgrounds(site_dir, site, cam_id, &cam, model, lanes, (const char *const *)times, Ntimes,
                                        (const char *const *)weathers, Nweathers, opt, twin_done, NULL, &err);
     rs_camera_free(&cam);
     return st ? rs_cli_fail(WHAT, st, &err) : RS_EXIT_OK;

@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "cli/rs_cli.h"
-#include "synth/rs_synth_dataset.h"
+#include "synth/dataset/rs_synth_dataset.h"
 
 static const char dataset_usage[] =
     "usage: roadside dataset stats DATASET [--site SITE] [--radius M]\n"

@@ -1,4 +1,4 @@
-// roadside ortho: parse arguments, render the digital twin's orthophoto (synth/rs_synth_ortho.h),
+// roadside ortho: parse arguments, render the digital twin's orthophoto (synth/povray/rs_synth_ortho.h),
 // write it as a GeoTIFF (geo/rs_geo_raster.h), print its grid.
 #include <getopt.h>
 #include <math.h>
@@ -11,7 +11,7 @@
 #include "core/rs_io.h"
 #include "geo/rs_geo_raster.h"
 #include "geo/rs_site.h"
-#include "synth/rs_synth_ortho.h"
+#include "synth/povray/rs_synth_ortho.h"
 
 static const char ortho_usage[] =
     "usage: roadside ortho SITE -o ORTHO.tif [--gsd M] [--margin M] [--weather W] [--crs CRS]\n"

@@ -8,7 +8,7 @@
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_synth.h"
 #include "core/rs_io.h"
-#include "synth/rs_synth_camera.h"
+#include "synth/povray/rs_synth_camera.h"
 
 static const char scene_usage[] =
     "usage: roadside scene SITE --calib DIR --camera ID --vehicles FILE -o OUT.pov\n"

@@ -8,7 +8,7 @@
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
 #include "geo/rs_site.h"
-#include "synth/rs_synth_traffic.h"
+#include "synth/traffic/rs_synth_traffic.h"
 
 static void usage(FILE *out)
 {

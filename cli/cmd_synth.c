@@ -9,8 +9,8 @@
 
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_synth.h"
-#include "synth/rs_synth_dataset.h"
-#include "synth/rs_synth_labels.h"
+#include "synth/dataset/rs_synth_dataset.h"
+#include "synth/labels/rs_synth_labels.h"
 
 static const char synth_usage[] =
     "usage: roadside synth SITE --calib DIR --count N -o DATASET [--seed S]\n"

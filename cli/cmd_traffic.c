@@ -1,6 +1,6 @@
 // roadside traffic -- vehicles along a site's lanes (built-in, or from SUMO), randomised without
-// overlaps, written as vehicles files for `roadside scene` (synth/rs_synth_traffic.h,
-// synth/rs_synth_sumo.h, docs/traffic.md).
+// overlaps, written as vehicles files for `roadside scene` (synth/traffic/rs_synth_traffic.h,
+// synth/traffic/rs_synth_sumo.h, docs/traffic.md).
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,9 +8,9 @@
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
 #include "geo/rs_site.h"
-#include "synth/rs_synth_fleet.h"
-#include "synth/rs_synth_sumo.h"
-#include "synth/rs_synth_traffic.h"
+#include "synth/fleet/rs_synth_fleet.h"
+#include "synth/traffic/rs_synth_sumo.h"
+#include "synth/traffic/rs_synth_traffic.h"
 
 static const char *const CMD = "traffic";
 

@@ -6,7 +6,7 @@
 
 #include "core/rs_camera.h"
 #include "geo/rs_site.h"
-#include "synth/rs_synth_scene.h"
+#include "synth/povray/rs_synth_scene.h"
 
 typedef struct {
     // options
@@ -54,6 +54,6 @@ int rs_cli_synth_load(rs_cli_synth_args *s, const char *command, int argc, char 
 void rs_cli_synth_free(rs_cli_synth_args *s); // NULL-safe
 
 // Prints "COMMAND: note: povray runs unconfined: WHY ..." on stderr when Linux Landlock cannot
-// confine povray here (synth/rs_synth_sandbox.h); nothing otherwise. Implemented in
+// confine povray here (synth/povray/rs_synth_sandbox.h); nothing otherwise. Implemented in
 // cmd_render.c; used by `roadside render` and `roadside synth`.
 void rs_cli_synth_sandbox_note(const char *command);

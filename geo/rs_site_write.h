@@ -117,7 +117,7 @@ char *rs_site_background_file(const char *camera_id, const char *name);
 // to "backgrounds/<camera_id>" when it has none. Tags are set in the order given, a key given
 // twice keeping the last value (moved to the end). Everything else in site.json is kept as it
 // was (member order included); the file is rewritten in RS_SITE_LAYOUT_TOOL.
-// Validating names and tag values is the caller's (synth/rs_synth_background.h).
+// Validating names and tag values is the caller's (synth/backdrop/rs_synth_background.h).
 // in: keys, values (Ntags,) text; source_json: how the image was made, any JSON value as text,
 //     may be NULL (no "source")
 // Returns RS_ERR_IO / RS_ERR_PARSE for site.json (or a source_json that is not JSON),

@@ -34,6 +34,17 @@ MUST_NOT_LINK = {
     "sim": ["ceres", "cairo", "opengv", "opencv_dnn"],
 }
 # a test executable per module whose link line shows what the module's dependency brings
+# synth/ is one library built from component folders (docs/architecture.md, "Inside synth/"):
+# component -> the components whose headers it may include (besides its own). Every synth file
+# lives in a component folder; a component's internal/ headers stay inside it.
+SYNTH_COMPONENTS = {
+    "fleet": [],
+    "traffic": ["fleet"],
+    "labels": ["fleet"],
+    "backdrop": ["fleet"],
+    "povray": ["fleet", "traffic", "labels", "backdrop"],
+    "dataset": ["fleet", "traffic", "labels", "backdrop", "povray"],
+}
 LINK_PROBE = {"eval": "test_eval_api", "synth": "test_srgb", "geo": "test_geo_api", "sim": "test_simulate_problem"}
 MAX_LINES = 800
 SIZE_REASON = "Longer than 800 lines because"
@@ -45,6 +56,57 @@ def sources(root, module):
         for f in sorted(fn):
             if f.endswith((".c", ".h", ".cc")):
                 yield os.path.join(dp, f)
+
+
+def doc_text(root):
+    return open(os.path.join(root, "docs", "architecture.md"), encoding="utf-8").read()
+
+
+def synth_component(rel):
+    """The component of a path under synth/ ("synth/povray/x.c" -> "povray"), None outside."""
+    parts = rel.split("/")
+    return parts[1] if len(parts) >= 3 and parts[0] == "synth" else None
+
+
+def check_synth_components(root, include_re, doc):
+    """Each synth file in a component folder; includes only down the order SYNTH_COMPONENTS gives;
+    internal headers only within their component; docs/architecture.md's table says the same."""
+    n = 0
+    for dp, _, fn in os.walk(root):
+        if "/.git" in dp or "/build" in dp or "/node_modules" in dp:
+            continue
+        for f in sorted(fn):
+            if not f.endswith((".c", ".h", ".cc")):
+                continue
+            path = os.path.join(dp, f)
+            rel = os.path.relpath(path, root)
+            mine = synth_component(rel)
+            if rel.startswith("synth/"):
+                check(mine in SYNTH_COMPONENTS, f"{rel}: synth/ files live in a component folder ({', '.join(SYNTH_COMPONENTS)})")
+            text = open(path, encoding="utf-8", errors="replace").read()
+            for inc in include_re.findall(text):
+                if not inc.startswith("synth/"):
+                    continue
+                n += 1
+                theirs = synth_component(inc)
+                check(theirs in SYNTH_COMPONENTS, f"{rel}: #include \"{inc}\" names no synth component")
+                internal = "internal" in inc.split("/")[2:-1]
+                if mine is None:
+                    # outside synth (cli, bench, tests): public headers only
+                    check(not internal, f"{rel}: includes synth's internal header \"{inc}\"")
+                    continue
+                if theirs == mine or theirs not in SYNTH_COMPONENTS:
+                    continue
+                check(theirs in SYNTH_COMPONENTS.get(mine, []),
+                      f"{rel}: synth/{mine}/ may not include synth/{theirs}/ (\"{inc}\"): the order is {' < '.join(SYNTH_COMPONENTS)}")
+                check(not internal, f"{rel}: includes another component's internal header \"{inc}\"")
+    for comp, allowed in SYNTH_COMPONENTS.items():
+        m = re.search(r"^\|\s*`synth/%s/`\s*\|[^|]*\|\s*([^|]*)\|" % comp, doc, re.M)
+        check(m is not None, f"docs/architecture.md: no row for `synth/{comp}/` in the table of synth's components")
+        if m:
+            listed = sorted(re.findall(r"`([a-z]+)`", m.group(1)))
+            check(listed == sorted(allowed), f"docs/architecture.md: `synth/{comp}/` may include {listed}, the test says {sorted(allowed)}")
+    print(f"{n} synth includes checked against the component order {' < '.join(SYNTH_COMPONENTS)}")
 
 
 def main():
@@ -75,6 +137,7 @@ def main():
                 check("extern \"C\"" in text and "catch" in text,
                       f"{rel}: a C++ shim must expose C entry points (extern \"C\") and catch at the boundary")
     print(f"{n_includes} includes checked in {len(MODULES)} modules")
+    check_synth_components(root, include_re, doc_text(root))
 
     # docs/architecture.md states the same table
     doc = open(os.path.join(root, "docs", "architecture.md"), encoding="utf-8").read()

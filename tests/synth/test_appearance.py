@@ -1,4 +1,4 @@
-# Appearance estimators (synth/rs_synth_appearance.h) against known synthetic truths, made here
+# Appearance estimators (synth/backdrop/rs_synth_appearance.h) against known synthetic truths, made here
 # with numpy/OpenCV: noise sigma added to a flat image; Gaussian blur of a known sigma on step
 # edges; per-channel linear gains; JPEG quality written by OpenCV (libjpeg); and the application
 # to a vehicle layer: the layer's blur and noise then match the background's; an ONNX model made

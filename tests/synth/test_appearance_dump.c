@@ -1,4 +1,4 @@
-// test_appearance_dump -- runs one appearance estimator (synth/rs_synth_appearance.h) on an image
+// test_appearance_dump -- runs one appearance estimator (synth/backdrop/rs_synth_appearance.h) on an image
 // file and prints the result, for tests/synth/test_appearance.py (which makes the images with a
 // known truth).
 //   test_appearance_dump noise FILE | blur FILE | gain FILE [REF] | jpeg FILE
@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "synth/rs_synth_appearance.h"
+#include "synth/backdrop/rs_synth_appearance.h"
 
 static int fail(const rs_err *err)
 {

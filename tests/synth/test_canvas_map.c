@@ -22,7 +22,7 @@
 
 #include <mrcal/mrcal.h>
 
-#include "synth/rs_synth_camera.h"
+#include "synth/povray/rs_synth_camera.h"
 #include "tests/common/rs_test.h"
 
 #define TOL_PX 0.01

@@ -9,8 +9,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "synth/rs_synth_fleet.h"
-#include "synth/rs_synth_traffic.h"
+#include "synth/fleet/rs_synth_fleet.h"
+#include "synth/traffic/rs_synth_traffic.h"
 
 int main(int argc, char **argv)
 {

@@ -3,7 +3,7 @@
 # merge`) held every image and annotation as cJSON trees, then duplicated them into one document
 # and printed it whole: roadside's peak grew by about 0.15 MiB per image (docs/benchmarks.md).
 # Now both index the sources (file name, where it lives) and write the file as a stream
-# (synth/rs_synth_dataset_coco.c).
+# (synth/dataset/rs_synth_dataset_coco.c).
 #
 # Oracles:
 #  - the COCO files equal, value for value (json.load), an independent assembly in Python of

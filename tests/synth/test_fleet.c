@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "synth/rs_synth_fleet.h"
+#include "synth/fleet/rs_synth_fleet.h"
 #include "test_fleet_check.h"
 
 // Parses every "vertex_vectors { N, <a, b, c>, ... }" of a POV-Ray text and returns the bounds

@@ -14,8 +14,8 @@
 #include <string.h>
 
 #include "core/rs_pose.h"
-#include "synth/rs_synth_render.h"
-#include "synth/rs_synth_scene.h"
+#include "synth/povray/rs_synth_render.h"
+#include "synth/povray/rs_synth_scene.h"
 #include "test_fleet_check.h"
 
 static int render(rs_synth_render_result *r, const char *dir, const rs_camera *cam, const rs_synth_prepared *prep,

@@ -19,7 +19,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "synth/rs_synth_fleet.h"
+#include "synth/fleet/rs_synth_fleet.h"
 #include "test_fleet_check.h"
 
 static double phi(double x) { return exp(-0.5 * x * x) / sqrt(2 * M_PI); }

@@ -1,4 +1,4 @@
-// tests/synth/test_ids_raster.c -- the object-ID pass rasterised by roadside (synth/rs_synth_raster.h)
+// tests/synth/test_ids_raster.c -- the object-ID pass rasterised by roadside (synth/povray/rs_synth_raster.h)
 // against the same pass rendered by the real POV-Ray (the oracle: rs_synth_render with
 // povray_passes), on scenes made to be hard: 14 vehicles of every class crowded round the point the
 // camera looks at (they hide one another), random headings, cameras from 1.5 m to 30 m up, a
@@ -19,7 +19,7 @@
 
 #include "core/rs_pose.h"
 #include "core/rs_rng.h"
-#include "synth/rs_synth_render.h"
+#include "synth/povray/rs_synth_render.h"
 #include "test_fleet_check.h"
 
 enum { W = 480, H = 320, NV = 14, NSCENES = 6 };

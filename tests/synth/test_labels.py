@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""tests/synth/test_labels.py -- labels (synth/rs_synth_labels.h) against independent oracles:
+"""tests/synth/test_labels.py -- labels (synth/labels/rs_synth_labels.h) against independent oracles:
 
 - boxes: brute force with mrcal's Python: every face of the 3D box clipped to z_cam >= 0.01 m
   (numpy), sampled densely on its edges AND its interior, projected with mrcal.project. Pinhole:

@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "core/rs_io.h"
-#include "synth/rs_synth_labels.h"
+#include "synth/labels/rs_synth_labels.h"
 
 static void num(FILE *f, double x)
 {

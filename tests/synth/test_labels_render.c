@@ -19,9 +19,9 @@
 #include <unistd.h>
 
 #include "core/rs_pose.h"
-#include "synth/rs_synth_labels.h"
-#include "synth/rs_synth_render.h"
-#include "synth/rs_synth_scene.h"
+#include "synth/labels/rs_synth_labels.h"
+#include "synth/povray/rs_synth_render.h"
+#include "synth/povray/rs_synth_scene.h"
 #include "test_fleet_check.h"
 
 static int run(const char *outdir, const char *lens_name, int opencv8)

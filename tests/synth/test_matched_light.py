@@ -18,7 +18,7 @@
 # NOAA code). Tolerance: 3 degrees for each background's joint fit, 15 for each image's own
 # (measured: joint -1.9 and -1.4 degrees; images up to -12; a box is not a car's shape). Six
 # images per background, not three: with the shadow pass rasterised at full resolution
-# (synth/rs_synth_raster.h) the three first images' joint fit moved from -1.4 to -3.4 degrees at
+# (synth/povray/rs_synth_raster.h) the three first images' joint fit moved from -1.4 to -3.4 degrees at
 # 15:00 (their own errors -4.4, -1.4, -5.4), the estimator's noise; over six, -1.4.
 # The camera: the demo's cam1 position is oblique (8 m high, vehicles 20 - 40 m away) and hides
 # most of a shadow that falls away from it behind the vehicle, so the test uses its own steep

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 # Issue 14, finding 8: what confines povray. `render --help` said povray's file I/O was
 # restricted to OUTDIR; POV-Ray 3.7.0.10 enforces none of the povray.conf roadside writes. Now
-# povray runs under Linux Landlock (synth/rs_synth_sandbox.h, docs/povray.md "Confinement").
+# povray runs under Linux Landlock (synth/povray/rs_synth_sandbox.h, docs/povray.md "Confinement").
 #
 # Checked, with povray run exactly as roadside runs it (rs_synth_povray_run, through
 # test_povray_sandbox_run) in an OUTDIR that `roadside render --keep` made (its povray.conf):

@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "synth/rs_synth_render.h"
-#include "synth/rs_synth_sandbox.h"
+#include "synth/povray/rs_synth_render.h"
+#include "synth/povray/rs_synth_sandbox.h"
 
 int main(int argc, char **argv)
 {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-# The shadow pass of differential rendering (roadside render --shadows, synth/rs_synth_scene.h)
+# The shadow pass of differential rendering (roadside render --shadows, synth/povray/rs_synth_scene.h)
 # with the real POV-Ray, against ray casting in this test: every ground pixel's centre is
 # unprojected with mrcal onto the ground, and rays from there towards the sun and towards each
 # sky light are tested against each vehicle's box (slab test).

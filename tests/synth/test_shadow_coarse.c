@@ -9,7 +9,7 @@
 //           mesh, the vehicles invisible (rs_synth_scene_write, then the vehicles' green marks
 //           made no_image again), turned into the lit fraction as rs_synth_render does.
 //           rs_synth_render's shadow (rasterised by roadside on the coarse meshes at full
-//           resolution, synth/rs_synth_raster.h; before, POV-Ray's pass at half resolution,
+//           resolution, synth/povray/rs_synth_raster.h; before, POV-Ray's pass at half resolution,
 //           interpolated) must agree with it: no pixel changes side of the sun's shadow more
 //           than 1 px from the reference's boundary; the sun's shadow covers the same area
 //           within 1 %; more than 2 px from that boundary at most 0.05 % of the ground pixels
@@ -25,7 +25,7 @@
 //   ids     the ID pass rendered on the union of each vehicle's parts with normals, as a frame
 //           after the colour pass (rs_synth_scene_write_frames, 16-bit PNG), with the ground
 //           plane as an occluder: rs_synth_render's ID pass (rasterised by roadside from the
-//           same triangles, synth/rs_synth_raster.h) must be identical, pixel for pixel.
+//           same triangles, synth/povray/rs_synth_raster.h) must be identical, pixel for pixel.
 // Exit 77 when povray is missing. usage: test_shadow_coarse OUTDIR
 #include <math.h>
 #include <stdbool.h>
@@ -35,8 +35,8 @@
 
 #include "core/rs_io.h"
 #include "core/rs_pose.h"
-#include "synth/rs_synth_render.h"
-#include "synth/rs_synth_scene.h"
+#include "synth/povray/rs_synth_render.h"
+#include "synth/povray/rs_synth_scene.h"
 #include "test_fleet_check.h"
 
 enum { W = 640, H = 400 };

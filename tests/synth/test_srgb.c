@@ -5,7 +5,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "synth/rs_synth_appearance.h"
+#include "synth/backdrop/rs_synth_appearance.h"
 
 static double dec(double v) { return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4); }
 static double enc(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055; }

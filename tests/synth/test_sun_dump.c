@@ -4,7 +4,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "synth/rs_synth_sun.h"
+#include "synth/backdrop/rs_synth_sun.h"
 
 int main(void)
 {

@@ -16,7 +16,7 @@ import json, math, os, shutil, subprocess, sys
 sys.path.insert(0, os.path.dirname(__file__))
 from traffic_common import *
 
-# The fleet's class ranges (synth/rs_synth_fleet.c, docs/fleet.md), copied here as the expectation.
+# The fleet's class ranges (synth/fleet/rs_synth_fleet.c, docs/fleet.md), copied here as the expectation.
 RANGES = {"sedan": [(4.30, 5.00), (1.72, 1.88), (1.38, 1.50)], "hatchback": [(3.60, 4.40), (1.62, 1.80), (1.42, 1.56)],
           "suv": [(4.20, 5.10), (1.78, 2.00), (1.60, 1.85)], "pickup": [(5.00, 5.90), (1.85, 2.05), (1.75, 1.95)],
           "van": [(4.80, 6.00), (1.90, 2.05), (1.95, 2.60)], "bus": [(10.5, 13.5), (2.50, 2.55), (3.00, 3.40)],

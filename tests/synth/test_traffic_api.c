@@ -1,4 +1,4 @@
-// test_traffic_api -- C-level checks of synth/rs_synth_traffic.h and rs_synth_sumo.h.
+// test_traffic_api -- C-level checks of synth/traffic/rs_synth_traffic.h and rs_synth_sumo.h.
 //   test_traffic_api sat
 //       rs_synth_footprints_overlap against a brute force (both rectangles rasterised on a 2 cm
 //       grid: overlap iff some cell centre lies inside both, up to cells on the boundary) for
@@ -15,9 +15,9 @@
 
 #include "core/rs_rng.h"
 #include "sim/rs_simulate.h"
-#include "synth/rs_synth_fleet.h"
-#include "synth/rs_synth_sumo.h"
-#include "synth/rs_synth_traffic.h"
+#include "synth/fleet/rs_synth_fleet.h"
+#include "synth/traffic/rs_synth_sumo.h"
+#include "synth/traffic/rs_synth_traffic.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 

@@ -1,0 +1,367 @@
+// rs_synth_appearance.c -- exposure, white balance, noise, blur and JPEG quality of a background,
+// applied to a rendered vehicle layer (rs_synth_appearance.h, docs/appearance.md).
+#include "synth/backdrop/rs_synth_appearance.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/rs_io.h"
+#include "core/rs_rng.h"
+
+static double srgb_decode_formula(double v) { return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4); }
+
+static double srgb_encode_formula(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055; }
+
+#define SRGB_TABLE 65536 // intervals over [0, 1]
+static double srgb_dec[SRGB_TABLE + 1], srgb_enc[SRGB_TABLE + 1];
+static pthread_once_t srgb_once = PTHREAD_ONCE_INIT;
+
+static void srgb_fill(void)
+{
+    for (int i = 0; i <= SRGB_TABLE; i++) {
+        srgb_dec[i] = srgb_decode_formula((double)i / SRGB_TABLE);
+        srgb_enc[i] = srgb_encode_formula((double)i / SRGB_TABLE);
+    }
+}
+
+static double srgb_lookup(const double *table, double v)
+{
+    pthread_once(&srgb_once, srgb_fill);
+    if (!(v > 0)) return table[0]; // also NaN
+    if (v >= 1) return table[SRGB_TABLE];
+    const double x = v * SRGB_TABLE;
+    const int i = (int)x;
+    const double f = x - i;
+    return table[i] + f * (table[i + 1] - table[i]);
+}
+
+double rs_synth_srgb_decode(double v) { return srgb_lookup(srgb_dec, v); }
+
+double rs_synth_srgb_encode(double v) { return srgb_lookup(srgb_enc, v); }
+
+// The k-th smallest of v[0..n-1] (0-based, k < n), v reordered: Hoare's selection with a
+// median-of-three pivot, O(n) on average (a full sort of a 6-megapixel image's values was most
+// of the appearance estimate's time).
+static float select_f(float *v, size_t n, size_t k)
+{
+    size_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        float a = v[lo], b = v[mid], c = v[hi];
+        const float pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
+        size_t i = lo, j = hi;
+        while (i <= j) {
+            while (v[i] < pivot) i++;
+            while (v[j] > pivot) j--;
+            if (i <= j) {
+                const float t = v[i];
+                v[i] = v[j];
+                v[j] = t;
+                i++;
+                if (j == 0) break;
+                j--;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            return v[k];
+    }
+    return v[k];
+}
+
+// Median of v[0..n-1] (reordered), n >= 1.
+static double median_f(float *v, size_t n)
+{
+    const double upper = select_f(v, n, n / 2);
+    if (n % 2) return upper;
+    // the lower middle is the largest of the part left of n / 2
+    float lower = v[0];
+    for (size_t i = 1; i < n / 2; i++)
+        if (v[i] > lower) lower = v[i];
+    return 0.5 * (lower + upper);
+}
+
+rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *err)
+{
+    static const double M[9] = {1, -2, 1, -2, 4, -2, 1, -2, 1};
+    *sigma = NAN;
+    const int W = img->width, H = img->height, C = img->channels < 4 ? img->channels : 3;
+    if (W < 3 || H < 3) return rs_err_set(err, RS_ERR_DEGENERATE, "noise: image smaller than 3x3");
+    rs_image f = {0};
+    rs_status st = rs_synth_image_filter(&f, img, M, 3, 3, err);
+    if (st) return st;
+    float *v = malloc(sizeof(float) * (size_t)(W - 2) * (H - 2) * C);
+    if (!v) {
+        rs_image_free(&f);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    size_t n = 0;
+    for (int y = 1; y < H - 1; y++)
+        for (int x = 1; x < W - 1; x++)
+            for (int c = 0; c < C; c++) v[n++] = fabsf(f.data[((size_t)y * W + x) * img->channels + c]);
+    *sigma = 1.482602218505602 * median_f(v, n) / 6.0;
+    free(v);
+    rs_image_free(&f);
+    return RS_OK;
+}
+
+// Luma (mean of the first three channels, or the only one) as a 1-channel image.
+static rs_status luma(rs_image *out, const rs_image *img, rs_err *err)
+{
+    rs_status st = rs_image_alloc(out, img->width, img->height, 1, err);
+    if (st) return st;
+    const int C = img->channels, Cm = C >= 3 ? 3 : 1;
+    for (size_t p = 0; p < (size_t)img->width * img->height; p++) {
+        double s = 0;
+        for (int c = 0; c < Cm; c++) s += img->data[p * C + c];
+        out->data[p] = (float)(s / Cm);
+    }
+    return RS_OK;
+}
+
+// Gradient magnitude by central differences (kernel [-1/2, 0, 1/2] in x and y).
+static rs_status gradient(rs_image *mag, const rs_image *g, rs_err *err)
+{
+    static const double kx[3] = {-0.5, 0, 0.5};
+    rs_image gx = {0}, gy = {0};
+    rs_status st;
+    if ((st = rs_synth_image_filter(&gx, g, kx, 3, 1, err)) || (st = rs_synth_image_filter(&gy, g, kx, 1, 3, err)) ||
+        (st = rs_image_alloc(mag, g->width, g->height, 1, err)))
+        goto done;
+    for (size_t p = 0; p < (size_t)g->width * g->height; p++) mag->data[p] = hypotf(gx.data[p], gy.data[p]);
+    // keep the dominant axis in the sign: > 0 mostly horizontal gradient, stored separately below
+    for (size_t p = 0; p < (size_t)g->width * g->height; p++)
+        if (fabsf(gy.data[p]) > fabsf(gx.data[p])) mag->data[p] = -mag->data[p];
+done:
+    rs_image_free(&gx);
+    rs_image_free(&gy);
+    return st;
+}
+
+rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *err)
+{
+    const double sr = 2.0;
+    *sigma_px = NAN;
+    const int W = img->width, H = img->height;
+    rs_image g = {0}, gb = {0}, m = {0}, mb = {0};
+    float *sel = NULL, *est = NULL;
+    rs_status st;
+    if ((st = luma(&g, img, err)) || (st = rs_synth_image_blur(&gb, &g, sr, err)) || (st = gradient(&m, &g, err)) ||
+        (st = gradient(&mb, &gb, err)))
+        goto done;
+    const size_t N = (size_t)W * H;
+    sel = malloc(sizeof(float) * N);
+    est = malloc(sizeof(float) * N);
+    if (!sel || !est) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    for (size_t p = 0; p < N; p++) sel[p] = fabsf(m.data[p]);
+    const float thr = 0.2f * select_f(sel, N, (size_t)(0.99 * (N - 1)));
+    size_t n = 0;
+    const int margin = 10;
+    for (int y = margin; y < H - margin; y++)
+        for (int x = margin; x < W - margin; x++) {
+            const size_t p = (size_t)y * W + x;
+            const float a = fabsf(m.data[p]);
+            if (!(a > thr) || a <= 0) continue;
+            const size_t d = m.data[p] > 0 ? 1 : (size_t)W; // along the dominant axis
+            if (a < fabsf(m.data[p - d]) || a < fabsf(m.data[p + d])) continue;
+            const double R = a / fabsf(mb.data[p]);
+            if (!(R > 1.0 + 1e-6)) continue;
+            const double s2 = sr * sr / (R * R - 1) - 1.0 / 3.0;
+            est[n++] = (float)(s2 > 0 ? sqrt(s2) : 0);
+        }
+    if (n < 20) {
+        st = rs_err_set(err, RS_ERR_DEGENERATE, "blur: only %zu edge pixels (need 20)", n);
+        goto done;
+    }
+    *sigma_px = median_f(est, n);
+done:
+    free(sel);
+    free(est);
+    rs_image_free(&g);
+    rs_image_free(&gb);
+    rs_image_free(&m);
+    rs_image_free(&mb);
+    return st;
+}
+
+rs_status rs_synth_estimate_gain(double gain[3], const rs_image *t, const rs_image *ref, const uint8_t *mask,
+                                 rs_err *err)
+{
+    gain[0] = gain[1] = gain[2] = NAN;
+    if (t->channels < 3 || (ref && (ref->channels < 3 || ref->width != t->width || ref->height != t->height)))
+        return rs_err_set(err, RS_ERR_INVALID, "gain: images must be RGB(A) of the same size (%dx%dx%d vs %dx%dx%d)",
+                          t->width, t->height, t->channels, ref ? ref->width : 0, ref ? ref->height : 0,
+                          ref ? ref->channels : 0);
+    double st[3] = {0, 0, 0}, sr[3] = {0, 0, 0};
+    size_t n = 0;
+    for (size_t p = 0; p < (size_t)t->width * t->height; p++) {
+        if (mask && !mask[p]) continue;
+        const float *a = t->data + p * t->channels, *b = ref ? ref->data + p * ref->channels : a;
+        bool ok = true;
+        for (int c = 0; c < 3; c++) ok = ok && a[c] > 0.02f && a[c] < 0.98f && b[c] > 0.02f && b[c] < 0.98f;
+        if (!ok) continue;
+        for (int c = 0; c < 3; c++) {
+            st[c] += rs_synth_srgb_decode(a[c]);
+            sr[c] += rs_synth_srgb_decode(b[c]);
+        }
+        n++;
+    }
+    if (n < 100) return rs_err_set(err, RS_ERR_DEGENERATE, "gain: only %zu unclipped pixels (need 100)", n);
+    const double grey = (st[0] + st[1] + st[2]) / 3.0;
+    for (int c = 0; c < 3; c++) gain[c] = ref ? st[c] / sr[c] : st[c] / grey;
+    return RS_OK;
+}
+
+// ---- JPEG quality ----
+
+// Natural (row-major) index of the k-th coefficient in zigzag order (ITU-T T.81 figure 5).
+static const unsigned char zigzag[64] = {0,  1,  8,  16, 9,  2,  3,  10, 17, 24, 32, 25, 18, 11, 4,  5,
+                                         12, 19, 26, 33, 40, 48, 41, 34, 27, 20, 13, 6,  7,  14, 21, 28,
+                                         35, 42, 49, 56, 57, 50, 43, 36, 29, 22, 15, 23, 30, 37, 44, 51,
+                                         58, 59, 52, 45, 38, 31, 39, 46, 53, 60, 61, 54, 47, 55, 62, 63};
+
+// ITU-T T.81 Annex K, tables K.1 (luminance) and K.2 (chrominance), natural order.
+static const unsigned char std_table[2][64] = {
+    {16, 11,  10,  16, 24, 40, 51, 61, 12,  12,  14,  19,  26, 58, 60, 55,  14,  13,  16,  24, 40, 57,
+     69, 56,  14,  17, 22, 29, 51, 87, 80,  62,  18,  22,  37, 56, 68, 109, 103, 77,  24,  35, 55, 64,
+     81, 104, 113, 92, 49, 64, 78, 87, 103, 121, 120, 101, 72, 92, 95, 98,  112, 100, 103, 99},
+    {17, 18, 24, 47, 99, 99, 99, 99, 18, 21, 26, 66, 99, 99, 99, 99, 24, 26, 56, 99, 99, 99,
+     99, 99, 47, 66, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99,
+     99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99, 99}};
+
+// IJG's table entry at quality q (libjpeg's jpeg_quality_scaling + jpeg_add_quant_table,
+// force_baseline).
+static int ijg_entry(int std, int q)
+{
+    const long scale = q < 50 ? 5000 / q : 200 - 2 * q;
+    long v = (std * scale + 50) / 100;
+    return v < 1 ? 1 : v > 255 ? 255 : (int)v;
+}
+
+rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact, const char *path, rs_err *err)
+{
+    *quality = 0;
+    *exact = 0;
+    char *data = NULL;
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&data, &len, path, err);
+    if (st) return st;
+    const unsigned char *b = (const unsigned char *)data;
+    if (len < 4 || b[0] != 0xFF || b[1] != 0xD8) {
+        free(data);
+        return RS_OK; // not a JPEG
+    }
+    int table[4][64];
+    int have[4] = {0, 0, 0, 0};
+    size_t p = 2;
+    while (p + 4 <= len && b[p] == 0xFF) {
+        const int marker = b[p + 1];
+        const size_t seg = ((size_t)b[p + 2] << 8) | b[p + 3];
+        if (marker == 0xDA || marker == 0xD9 || seg < 2 || p + 2 + seg > len) break; // start of scan: all tables seen
+        if (marker == 0xDB) {
+            size_t q = p + 4;
+            while (q < p + 2 + seg) {
+                const int prec = b[q] >> 4, id = b[q] & 15, sz = prec ? 2 : 1;
+                if (id > 3 || q + 1 + 64 * sz > p + 2 + seg) break;
+                for (int k = 0; k < 64; k++)
+                    table[id][zigzag[k]] = prec ? (b[q + 1 + 2 * k] << 8 | b[q + 2 + 2 * k]) : b[q + 1 + k];
+                have[id] = 1;
+                q += 1 + 64 * sz;
+            }
+        }
+        p += 2 + seg;
+    }
+    free(data);
+    if (!have[0]) return rs_err_set(err, RS_ERR_PARSE, "%s: a JPEG without a quantisation table (DQT)", path);
+    long best = -1;
+    for (int q = 1; q <= 100; q++) {
+        long d = 0;
+        for (int t = 0; t < 2; t++)
+            if (have[t])
+                for (int k = 0; k < 64; k++) d += labs((long)table[t][k] - ijg_entry(std_table[t][k], q));
+        if (best < 0 || d < best) {
+            best = d;
+            *quality = q;
+        }
+    }
+    *exact = best == 0;
+    return RS_OK;
+}
+
+// ---- all together ----
+
+rs_status rs_synth_appearance_estimate(rs_synth_appearance *out, const char *background_path, const rs_image *image,
+                                       const rs_image *reference, rs_err *err)
+{
+    memset(out, 0, sizeof(*out));
+    rs_image read = {0};
+    const rs_image *bg = image ? image : &read;
+    int exact;
+    rs_status st;
+    if ((!image && (st = rs_image_read(&read, background_path, err))) ||
+        (st = rs_synth_estimate_gain(out->gain, bg, reference, NULL, err)) ||
+        (st = rs_synth_estimate_noise(&out->noise_sigma, bg, err)) ||
+        (st = rs_synth_estimate_blur(&out->blur_sigma_px, bg, err)) ||
+        (st = rs_synth_estimate_jpeg_quality(&out->jpeg_quality, &exact, background_path, err)))
+        rs_err_prefix(err, "%s", background_path);
+    rs_image_free(&read);
+    return st;
+}
+
+rs_status rs_synth_appearance_apply(rs_image *img, const rs_synth_appearance *a, double layer_blur_sigma_px,
+                                    uint64_t seed, rs_err *err)
+{
+    if (img->channels != 4)
+        return rs_err_set(err, RS_ERR_INVALID, "appearance: the layer must be RGBA (has %d)", img->channels);
+    const size_t N = (size_t)img->width * img->height;
+    float *d = img->data;
+    // gain, and premultiply for the blur
+    for (size_t p = 0; p < N; p++)
+        for (int c = 0; c < 3; c++) d[4 * p + c] *= (float)(a->gain[c] * d[4 * p + 3]);
+    const double s2 = a->blur_sigma_px * a->blur_sigma_px - layer_blur_sigma_px * layer_blur_sigma_px;
+    if (s2 > 1e-6) {
+        rs_image b = {0};
+        rs_status st = rs_synth_image_blur(&b, img, sqrt(s2), err);
+        if (st) return st;
+        memcpy(d, b.data, sizeof(float) * 4 * N);
+        rs_image_free(&b);
+    }
+    rs_rng rng;
+    rs_rng_seed(&rng, seed);
+    for (size_t p = 0; p < N; p++) {
+        const float al = d[4 * p + 3];
+        for (int c = 0; c < 3; c++) {
+            float v = al > 0 ? d[4 * p + c] / al : 0; // back to straight alpha
+            if (al > 0 && a->noise_sigma > 0) {
+                // sigma in stored units -> linear light at this value: dDecode/dv
+                const double e = rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v), h = 1e-3;
+                const double slope = (rs_synth_srgb_decode(fmin(1, e + h)) - rs_synth_srgb_decode(fmax(0, e - h))) /
+                                     (fmin(1, e + h) - fmax(0, e - h));
+                v += (float)(a->noise_sigma * slope * rs_rng_normal(&rng));
+            }
+            d[4 * p + c] = v < 0 ? 0 : v;
+        }
+    }
+    return RS_OK;
+}
+
+rs_status rs_synth_appearance_jpeg(rs_image *srgb, const rs_synth_appearance *a, rs_err *err)
+{
+    if (a->jpeg_quality <= 0) return RS_OK;
+    rs_image out = {0};
+    rs_status st = rs_synth_image_jpeg_roundtrip(&out, srgb, a->jpeg_quality, err);
+    if (st) return st;
+    rs_image_free(srgb);
+    *srgb = out;
+    return RS_OK;
+}

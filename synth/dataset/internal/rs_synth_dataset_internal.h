@@ -1,0 +1,202 @@
+// rs_synth_dataset_internal.h -- what the files of `roadside synth` share
+// (synth/dataset/rs_synth_dataset.h). Not installed, not for other modules.
+//
+// The files, each calling only those below it:
+//
+//   rs_synth_dataset.c          the run: options, the site's cameras and backgrounds (from the
+//                               site geo loaded), this shard's images here or in forked workers
+//     rs_synth_dataset_check.c    resume: whether an image found finished is intact
+//     rs_synth_dataset_image.c    one image: its random stream, background, traffic, render,
+//                                 composite, labels and files
+//     rs_synth_dataset_coco.c     COCO: assembling DATASET's annotations from the finished
+//                                 images, merging datasets (shards)
+#pragma once
+#include <stdbool.h>
+#include <stddef.h>
+#include <sys/stat.h>
+
+#include <cjson/cJSON.h>
+
+#include "core/rs_camera.h"
+#include "core/rs_image.h"
+#include "core/rs_status.h"
+#include "geo/rs_lanes.h"
+#include "geo/rs_site.h"
+#include "synth/backdrop/rs_synth_appearance.h"
+#include "synth/povray/rs_synth_camera.h"
+#include "synth/dataset/rs_synth_dataset.h"
+#include "synth/backdrop/rs_synth_sun.h"
+
+// One background an image may be drawn over.
+typedef struct {
+    const rs_site_background *src; // the site's record (borrowed from the dataset's site)
+    const char *time_iso;          // its "time" tag (borrowed), may be NULL
+    bool overcast;                 // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
+    bool night;                    // conditions night: no shadow at all
+    // cache, filled at first use (rs_synth_dataset__prepare_background): the image at the
+    // output size decoded from sRGB to linear light, its appearance
+    rs_image linear;
+    rs_synth_appearance app;
+    bool app_ok; // the appearance could be estimated
+    // issue 18: the light its road shows (rs_synth_light_from_image; dry conditions only: sunny,
+    // cloudy or untagged), matched by the vehicles' lights (rs_synth_light_match)
+    rs_synth_light_estimate light;
+    bool light_tried, light_ok;
+    // issue 18: without a time tag, the sun from the site's poles' shadows (rs_synth_sun_from_shadows)
+    rs_synth_sun_estimate sun;
+    bool sun_ok;
+} rs_synth_dataset__background;
+
+// One camera images are made for.
+typedef struct {
+    const char *id;
+    rs_camera cam;                    // at the output size
+    char *calib_path;                 // owned: the calibration file read (calib_dir/<id>.cameramodel)
+    char calib_sha256[65];            // its SHA-256, hex
+    char model_sha256[65];            // SHA-256 of the copy at the output size, DATASET/cameras/<id>.cameramodel
+    char model_rel[320];              // that copy, relative to a COCO file's folder: "../cameras/<id>.cameramodel"
+    rs_synth_dataset__background *bg; // (Nbg,) owned: the backgrounds passing the filters
+    int Nbg;
+    // cache, filled at first use (rs_synth_dataset__prepare_camera): the POV-Ray canvas of the
+    // lens and its resampling map
+    bool have_canvas;
+    rs_synth_canvas canvas;
+    float *canvas_map; // owned; NULL when the canvas is the lens itself
+} rs_synth_dataset__camera;
+
+typedef struct {
+    const rs_synth_dataset_options *opt;
+    rs_site *site;                  // owned
+    rs_lanes lanes;                 // owned
+    rs_synth_dataset__camera *cams; // (Ncams,) owned; image k is made for cams[k % Ncams]
+    int Ncams;
+    const char *split[2];        // the train and validation split names (opt)
+    char *split_dir[2];          // owned: DATASET/<split> of each
+    char *parts_dir, *work_root; // owned: DATASET/parts, DATASET/work
+} rs_synth_dataset__run;
+
+// Which split image k goes to: 0 (opt->split) or 1 (opt->val_split), from k's own random stream
+// (the fraction), its camera, or the background it is drawn over (the same draw as
+// rs_synth_dataset__make_image's), so it depends on (seed, k) and the options only.
+int rs_synth_dataset__image_split(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c);
+
+// The index of image k's background among c->bg (its stream's first draw), -1 when c has none.
+int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c);
+
+static inline bool rs_synth_dataset__file_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+// The file stem of image k: "%06d_<camera>" with every character but [A-Za-z0-9_-] as '_'.
+void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
+
+// What the images of camera c share, computed once and kept in c: its POV-Ray canvas and
+// resampling map (rs_synth_canvas_for_lens, rs_synth_canvas_map). Nothing to do when done
+// already; on error nothing is kept. The parent of forked workers calls it before forking
+// (rs_synth_dataset.c), so that the workers share one copy (copy-on-write) instead of each
+// computing its own; rs_synth_dataset__make_image calls it too (then it costs nothing).
+rs_status rs_synth_dataset__prepare_camera(rs_synth_dataset__camera *c, rs_err *err);
+
+// What the images over background bm of camera c share, computed once and kept in bm: the
+// image at the camera's size in linear light, its appearance, the light its road shows and
+// (without a time tag) the sun its poles' shadows show. As rs_synth_dataset__prepare_camera:
+// nothing to do when done already, nothing kept on error, called by the parent before forking
+// and by rs_synth_dataset__make_image. Memory: 12 bytes per pixel (4.1 MB at 720x480).
+rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, rs_synth_dataset__camera *c,
+                                               rs_synth_dataset__background *bm, rs_err *err);
+
+// Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
+// finished). out: *grey: rendered over the grey ground (no background); *seconds_povray grows
+// by the image's povray time.
+rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
+                                       bool *grey, double *seconds_povray, rs_err *err);
+
+// Hard-links src to DATASET/<rel> (replacing what is there, atomically: a link to a temporary
+// name, then rename), or copies it when linking fails (another file system).
+rs_status rs_synth_dataset__link_into(const rs_synth_dataset__run *d, const char *src, const char *rel, rs_err *err);
+
+// What a rerun finds of an image.
+typedef enum {
+    RS_SYNTH_DATASET__ABSENT,   // no parts/<stem>.json: never finished
+    RS_SYNTH_DATASET__FINISHED, // finished and intact: skipped
+    RS_SYNTH_DATASET__DAMAGED,  // its parts/ file is there, but a file of the image is missing or corrupt
+} rs_synth_dataset__state;
+
+// Whether image `stem` of camera c is finished: parts/<stem>.json is a regular file holding the
+// COCO file of the one image <stem>.png at the camera's (output) size, <split>/<stem>.png is a
+// regular file that OpenCV decodes to that size, images/<split>/<stem>.png, labels/<split>/<stem>.txt,
+// kitti/training/{image_2,label_2,calib}/<k>.* are regular files (split: 0 or 1, d->split[]). Links count as damage (the run writes none). Cost: one
+// PNG decode per finished image.
+// out: *state; why[n]: when DAMAGED, the first fault, "FILE: what is wrong"
+// Errors: RS_ERR_NOMEM only (a fault of the files is a state, not an error).
+rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char *why, size_t n,
+                                           // in
+                                           const rs_synth_dataset__run *d, const char *stem,
+                                           const rs_synth_dataset__camera *c, int split, rs_err *err);
+
+// Adds "traffic_frame": {"file", "time_s", "index"} (the SUMO frame image's vehicles came
+// from: its file in the --traffic-frames folder, its SUMO time in seconds, its index in
+// frames.json) to every image of the COCO file at part_path, rewritten atomically
+// (rs_synth_dataset_coco.c; docs/labels.md).
+rs_status rs_synth_dataset__coco_set_traffic_frame(const char *part_path, const char *file, double time_s, int index,
+                                                   rs_err *err);
+
+// ---- the COCO writer (rs_synth_dataset_coco.c): one for the run's assembly and for merge ----
+
+// One image of the index: its sort key and where it lives.
+typedef struct {
+    char *file_name;       // owned: the sort key
+    int src, pos;          // the source file (rs_synth_dataset__coco_index.src) and the position in its images
+    int seq;               // its place in the index as added: by (src, pos)
+    double id;             // its id there (its annotations' image_id)
+    int k;                 // what the caller numbers the image with (a run's k, merge's "index"), -1 none
+    int Nanns;             // annotations naming it
+    bool dropped;          // a repeated file name
+    int new_id, ann_first; // its id in the output, its first annotation's id
+    long img_off, ann_off; // its text in the scratch file
+    size_t img_len, ann_len;
+} rs_synth_dataset__coco_ref;
+
+typedef struct {
+    rs_synth_dataset__coco_ref *r; // (N,) owned
+    int N, cap;
+    char **src; // (Nsrc,) owned paths
+    int Nsrc, cap_src;
+    cJSON *info, *licenses, *categories; // owned, each from the first source holding it (may stay NULL)
+} rs_synth_dataset__coco_index;
+
+// Called for every image of a source as it is indexed (merge: its files checked and linked).
+typedef rs_status (*rs_synth_dataset__coco_each_image)(void *ctx, const cJSON *image, const char *path, rs_err *err);
+
+// Indexes the images of the COCO file at `path` (a new source), each numbered k (k < 0: its
+// "index" member, -1 when absent); each (may be NULL) is called for every image. The file is
+// parsed, indexed and freed. On error nothing of it stays in the index; errors name the file.
+rs_status rs_synth_dataset__coco_index_add(rs_synth_dataset__coco_index *x, const char *path, int k,
+                                           rs_synth_dataset__coco_each_image each, void *ctx, rs_err *err);
+// Sorts the index by file name (repeated names dropped, the first added kept) and writes the COCO
+// file `path` atomically, as a stream (memory bounded by the largest source). *Nimages, *Nanns
+// grow by what it holds (NULL: not counted); with ks (x->N,) the kept images' k (>= 0) in
+// file-name order, *Nks their count.
+rs_status rs_synth_dataset__coco_index_write(rs_synth_dataset__coco_index *x, const char *path, int *Nimages,
+                                             int *Nanns, int *ks, int *Nks, rs_err *err);
+void rs_synth_dataset__coco_index_free(rs_synth_dataset__coco_index *x);
+// YOLO's data.yaml (Ultralytics: path, train, val, names) and KITTI's ImageSets/<split>.txt for
+// the splits' kept images ks[s] (Nks[s]), written atomically under out_dir.
+rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char *const split[2], int *const *ks,
+                                                const int *Nks, rs_err *err);
+
+// Assembles DATASET/annotations/instances_<split>.json from every parts/ file present for k in
+// 0 .. count-1. The images of other shards (made by other runs into this folder) are checked
+// with rs_synth_dataset__check_finished (this shard's were, or were just made); a damaged one
+// is left out, with a notice (opt->notice) naming the file and the fault, and so is a part file
+// that is not a COCO file or lists an image missing from DATASET/<split>.
+// out: *Nanns, the annotations in it; *Nleft_out, part files left out.
+rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, int *Nleft_out, rs_err *err);
+
+// The splits of a dataset: the <split> of every DATASET/annotations/instances_<split>.json, sorted;
+// names (max,) receives them (owned, free() each), *Nnames their count. Errors: RS_ERR_IO (no
+// annotations folder, named), RS_ERR_NOT_FOUND (no instances file), RS_ERR_INVALID (more than
+// max), RS_ERR_NOMEM; on error nothing is left allocated.
+rs_status rs_synth_dataset__splits(char **names, int *Nnames, int max, const char *dataset_dir, rs_err *err);

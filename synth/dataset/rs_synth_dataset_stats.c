@@ -1,0 +1,174 @@
+// rs_synth_dataset_stats.c -- what a dataset holds (synth/dataset/rs_synth_dataset.h,
+// rs_synth_dataset_stats): images and labels per split, camera, weather and time of day, the
+// labels' visibility, and how many labelled vehicles stand near the junction, read from the
+// dataset's own COCO files (the dataset contract, docs/labels.md). Called by the cli
+// (`roadside dataset stats`); calls core/, geo/ and cJSON.
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "core/rs_io.h"
+#include "geo/rs_lanes.h"
+#include "geo/rs_site.h"
+#include "synth/dataset/internal/rs_synth_dataset_internal.h"
+#include "synth/dataset/rs_synth_dataset.h"
+
+rs_status rs_synth_junction_centre(double centre_enu_m[2], const char *site_dir, rs_err *err)
+{
+    rs_site *site = NULL;
+    rs_lanes lanes = {0};
+    rs_status st = rs_site_load(&site, site_dir, err);
+    char *path = st ? NULL : rs_io_join(site_dir, "lanes.geojson");
+    if (!st && !path) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) st = rs_lanes_read(&lanes, path, site, err);
+    double se = 0, sn = 0;
+    long n = 0;
+    for (int i = 0; !st && i < lanes.N; i++) {
+        const rs_lane *l = &lanes.lane[i];
+        if (!l->kind || strcmp(l->kind, "junction") != 0) continue;
+        for (int p = 0; p < l->Npoints; p++, n++) {
+            se += l->p_enu_m[p][0];
+            sn += l->p_enu_m[p][1];
+        }
+    }
+    centre_enu_m[0] = n ? se / (double)n : 0;
+    centre_enu_m[1] = n ? sn / (double)n : 0;
+    rs_lanes_free(&lanes);
+    rs_site_free(site);
+    free(path);
+    return st;
+}
+
+static void count_value(rs_synth_dataset_count *c, int *N, int cap, const char *value)
+{
+    if (!value) value = "(missing)";
+    for (int i = 0; i < *N; i++)
+        if (!strcmp(c[i].value, value)) {
+            c[i].images++;
+            return;
+        }
+    if (*N == cap) return;
+    snprintf(c[*N].value, sizeof(c[*N].value), "%s", value);
+    c[(*N)++].images = 1;
+}
+
+static const char *string_of(const cJSON *o, const char *key)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
+    return cJSON_IsString(v) ? v->valuestring : NULL;
+}
+
+static int cmp_name(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+
+rs_status rs_synth_dataset__splits(char **names, int *Nnames, int max, const char *dataset_dir, rs_err *err)
+{
+    *Nnames = 0;
+    char *adir = rs_io_join(dataset_dir, "annotations");
+    if (!adir) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    DIR *dir = opendir(adir);
+    if (!dir) {
+        rs_status st = rs_err_set(err, RS_ERR_IO,
+                                  "%s: %s (not a dataset made by roadside synth? docs/labels.md, \"The dataset "
+                                  "contract\")",
+                                  adir, strerror(errno));
+        free(adir);
+        return st;
+    }
+    rs_status st = RS_OK;
+    struct dirent *de;
+    while (!st && (de = readdir(dir))) {
+        const size_t len = strlen(de->d_name);
+        if (strncmp(de->d_name, "instances_", 10) != 0 || len <= 15 || strcmp(de->d_name + len - 5, ".json") != 0)
+            continue;
+        if (*Nnames == max) {
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: more than %d splits", adir, max);
+            break;
+        }
+        if (!(names[*Nnames] = strndup(de->d_name + 10, len - 15)))
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        else
+            (*Nnames)++;
+    }
+    closedir(dir);
+    qsort(names, (size_t)*Nnames, sizeof(char *), cmp_name);
+    if (!st && *Nnames == 0)
+        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no instances_<split>.json (not a dataset made by roadside synth?)",
+                        adir);
+    free(adir);
+    if (st) {
+        for (int k = 0; k < *Nnames; k++) free(names[k]);
+        *Nnames = 0;
+    }
+    return st;
+}
+
+rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *dataset_dir,
+                                 const double centre_enu_m[2], double radius_m, rs_err *err)
+{
+    memset(r, 0, sizeof(*r));
+    char *names[RS_SYNTH_STATS_MAX];
+    int Nnames = 0;
+    rs_status st = rs_synth_dataset__splits(names, &Nnames, RS_SYNTH_STATS_MAX, dataset_dir, err);
+    char *adir = st ? NULL : rs_io_join(dataset_dir, "annotations");
+    if (!st && !adir) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int k = 0; !st && k < Nnames; k++) {
+        char file[600];
+        snprintf(file, sizeof(file), "instances_%s.json", names[k]);
+        char *path = rs_io_join(adir, file), *text = NULL;
+        if (!path) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        if (!(st = rs_io_read_file(&text, NULL, path, err))) {
+            cJSON *doc = cJSON_Parse(text);
+            const cJSON *images = cJSON_GetObjectItemCaseSensitive(doc, "images");
+            const cJSON *anns = cJSON_GetObjectItemCaseSensitive(doc, "annotations"), *x;
+            if (!cJSON_IsArray(images) || !cJSON_IsArray(anns))
+                st = rs_err_set(err, RS_ERR_PARSE, "%s: not a COCO file (images, annotations)", path);
+            else {
+                rs_synth_dataset_count *sp = &r->splits[r->Nsplits++];
+                snprintf(sp->value, sizeof(sp->value), "%s", names[k]);
+                sp->images = cJSON_GetArraySize(images);
+                sp->labels = cJSON_GetArraySize(anns);
+                r->images += sp->images;
+                cJSON_ArrayForEach(x, images)
+                {
+                    count_value(r->cameras, &r->Ncameras, RS_SYNTH_STATS_MAX, string_of(x, "camera"));
+                    count_value(r->weather, &r->Nweather, RS_SYNTH_STATS_MAX, string_of(x, "weather"));
+                    count_value(r->time_of_day, &r->Ntime_of_day, RS_SYNTH_STATS_MAX, string_of(x, "time_of_day"));
+                }
+                cJSON_ArrayForEach(x, anns)
+                {
+                    r->labels++;
+                    const cJSON *p = cJSON_GetObjectItemCaseSensitive(x, "bottom_center_enu_m");
+                    if (cJSON_IsArray(p) && cJSON_GetArraySize(p) == 3) {
+                        const double de_m = cJSON_GetArrayItem(p, 0)->valuedouble - centre_enu_m[0];
+                        const double dn_m = cJSON_GetArrayItem(p, 1)->valuedouble - centre_enu_m[1];
+                        const double d = hypot(de_m, dn_m);
+                        r->labels_located++;
+                        r->labels_near += d < radius_m;
+                        r->distance_sum_m += d;
+                    }
+                    const cJSON *v = cJSON_GetObjectItemCaseSensitive(x, "visibility");
+                    if (cJSON_IsNumber(v)) {
+                        const double vis = v->valuedouble;
+                        r->visibility_hist[vis >= 1 ? 9 : vis <= 0 ? 0 : (int)(vis * 10)]++;
+                        r->invisible += cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(x, "visible_pixels")) &&
+                                        cJSON_GetObjectItemCaseSensitive(x, "visible_pixels")->valuedouble <= 0;
+                    }
+                }
+            }
+            cJSON_Delete(doc);
+        }
+        free(text);
+        free(path);
+    }
+    for (int k = 0; k < Nnames; k++) free(names[k]);
+    free(adir);
+    return st;
+}

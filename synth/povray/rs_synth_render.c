@@ -1,0 +1,687 @@
+// rs_synth_render.c -- rendering a scene with povray: culling, regions, the colour, ID and shadow
+// passes as povray processes at once (synth/povray/rs_synth_povray.c runs them), resampling into the
+// real lens, compositing (rs_synth_render.h, docs/povray.md, docs/fleet.md "Cost").
+#include "synth/povray/rs_synth_render.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+
+#include <mrcal/poseutils.h>
+
+#include "core/rs_io.h"
+#include "synth/povray/internal/rs_synth_povray.h"
+#include "synth/povray/internal/rs_synth_scene_internal.h"
+#include "synth/backdrop/rs_synth_appearance.h"
+#include "synth/povray/rs_synth_raster.h"
+
+void rs_synth_render_options_default(rs_synth_render_options *opt)
+{
+    memset(opt, 0, sizeof(*opt));
+    opt->canvas_scale = 1;
+    opt->write_files = true;
+    rs_synth_scene_options_default(&opt->scene);
+}
+
+void rs_synth_render_result_free(rs_synth_render_result *r)
+{
+    if (!r) return;
+    rs_image_free(&r->rgba);
+    rs_image_free(&r->composite);
+    free(r->ids);
+    free(r->visible);
+    free(r->shadow);
+    memset(r, 0, sizeof(*r));
+}
+
+// ---- culling ----
+
+bool rs_synth_vehicle_rect(int rect[4], const double fxycxy[4], int width, int height, const double rt_cam_enu[6],
+                           const double corners_enu_m[8][3], double near_m)
+{
+    double p[8][3];
+    for (int k = 0; k < 8; k++) mrcal_transform_point_rt(p[k], NULL, NULL, rt_cam_enu, corners_enu_m[k]);
+    // The box clipped to z >= near is the convex hull of its corners in front and of the
+    // crossings of its 12 edges with the plane z = near: their projections bound its image.
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    int Nin = 0;
+    for (int a = 0; a < 8; a++) {
+        for (int b = a; b < 8; b++) {
+            const int diff = a ^ b;
+            double q[3];
+            if (a == b) {
+                if (!(p[a][2] >= near_m)) continue;
+                memcpy(q, p[a], sizeof(q));
+            } else if (diff == 1 || diff == 2 || diff == 4) {
+                const double za = p[a][2] - near_m, zb = p[b][2] - near_m;
+                if (!((za < 0 && zb > 0) || (za > 0 && zb < 0))) continue;
+                const double t = za / (za - zb);
+                for (int k = 0; k < 3; k++) q[k] = p[a][k] + t * (p[b][k] - p[a][k]);
+                q[2] = near_m;
+            } else {
+                continue;
+            }
+            const double u = fxycxy[0] * q[0] / q[2] + fxycxy[2], v = fxycxy[1] * q[1] / q[2] + fxycxy[3];
+            lo[0] = fmin(lo[0], u), hi[0] = fmax(hi[0], u);
+            lo[1] = fmin(lo[1], v), hi[1] = fmax(hi[1], v);
+            Nin++;
+        }
+    }
+    if (Nin == 0 || hi[0] < -0.5 || hi[1] < -0.5 || lo[0] > width - 0.5 || lo[1] > height - 0.5) return false;
+    // Pixel k covers [k - 0.5, k + 0.5]; one pixel of margin on each side.
+    rect[0] = (int)fmax(0, floor(lo[0] + 0.5) - 1);
+    rect[1] = (int)fmax(0, floor(lo[1] + 0.5) - 1);
+    rect[2] = (int)fmin(width - 1, floor(hi[0] + 0.5) + 1);
+    rect[3] = (int)fmin(height - 1, floor(hi[1] + 0.5) + 1);
+    return true;
+}
+
+// ---- images ----
+
+// Zeroes (transparent) everything outside the rendered rectangle: povray leaves it opaque black.
+static void mask_outside(rs_image *img, const int region[4])
+{
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++)
+            if (x < region[0] || x > region[2] || y < region[1] || y > region[3])
+                memset(&img->data[((size_t)y * img->width + x) * img->channels], 0,
+                       sizeof(float) * (size_t)img->channels);
+}
+
+// One povray process: one pass of `vehicles` seen by `cam`, rendered in `region` (x0, y0, x1,
+// y1 inclusive, pixels of cam's image) from OUT/NAME.pov into OUT/NAME.png.
+typedef struct {
+    const char *name;
+    const rs_synth_povcam *cam;
+    const rs_synth_prepared *vehicles;
+    const rs_synth_scene_options *pass;
+    int antialias;
+    int region[4];
+    bool ppm;        // 16-bit PPM without alpha (+FP16 -UA) instead of the .ini's PNG
+    const char *log; // povray's output: "povray.log" for the colour pass, NAME.log for others
+    pid_t pid;       // 0: not started
+    double t0;
+} povray_job;
+
+// Starts job j: writes NAME.pov (rs_synth_scene_write) and NAME.ini (the ID pass 8-bit PNG
+// without alpha, the others 16-bit RGBA PNG, or j->ppm), then povray with the region
+// (+SC/+EC/+SR/+ER) and one render thread, without waiting.
+static rs_status job_start(povray_job *j, const char *out_dir, const char *povray, const double fxy[2],
+                           const double ground_normal_enu[3], double ground_offset_m, rs_err *err)
+{
+    char file[64], sc[32], ec[32], sr[32], er[32];
+    snprintf(file, sizeof(file), "%s.pov", j->name);
+    char *pov = rs_io_join(out_dir, file);
+    snprintf(file, sizeof(file), "%s.ini", j->name);
+    char *ini = rs_io_join(out_dir, file);
+    rs_io_atomic a = {0};
+    rs_status st = RS_OK;
+    if (!pov || !ini) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if ((st = rs_io_atomic_open(&a, pov, err))) goto done;
+    if ((st = rs_synth_scene_write(a.f, j->cam, fxy, ground_normal_enu, ground_offset_m, j->vehicles, j->pass, err))) {
+        rs_io_atomic_abort(&a);
+        goto done;
+    }
+    if ((st = rs_io_atomic_commit(&a, err)) ||
+        (st = rs_synth_scene_write_ini(ini, pov, j->cam, j->pass->pass, j->antialias, err)))
+        goto done;
+    // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
+    // fraction (the whole width), so the region starts at fraction 0.0 in that case and ends at
+    // least at column/row 2.
+    const int *r = j->region, W = j->cam->width, H = j->cam->height;
+    snprintf(sc, sizeof(sc), r[0] == 0 ? "+SC0.0" : "+SC%d", r[0] + 1);
+    snprintf(sr, sizeof(sr), r[1] == 0 ? "+SR0.0" : "+SR%d", r[1] + 1);
+    snprintf(ec, sizeof(ec), "+EC%d", r[2] + 1 < 2 ? (W > 1 ? 2 : 1) : r[2] + 1);
+    snprintf(er, sizeof(er), "+ER%d", r[3] + 1 < 2 ? (H > 1 ? 2 : 1) : r[3] + 1);
+    snprintf(file, sizeof(file), "%s.ini", j->name);
+    char ppm[64];
+    snprintf(ppm, sizeof(ppm), "+O%s.ppm", j->name);
+    const char *args[] = {file, sc, ec, sr, er, "+WT1", "+FP16", "-UA", ppm};
+    j->t0 = rs_synth_povray_now_s();
+    st = rs_synth_povray_spawn(&j->pid, povray, out_dir, j->log, args, j->ppm ? 9 : 6, err);
+done:
+    free(pov);
+    free(ini);
+    return st;
+}
+
+// Waits for job j (if started), adds its wall time to *seconds and reads NAME.png (.ppm) into
+// *img, transparent (black) outside the region.
+static rs_status job_finish(povray_job *j, rs_image *img, const char *out_dir, const char *povray, double *seconds,
+                            rs_err *err)
+{
+    if (j->pid <= 0) return RS_OK;
+    char file[64];
+    rs_status st = rs_synth_povray_reap(j->pid, povray, out_dir, j->log, err);
+    j->pid = 0;
+    *seconds += rs_synth_povray_now_s() - j->t0;
+    if (st) return st;
+    snprintf(file, sizeof(file), "%s.%s", j->name, j->ppm ? "ppm" : "png");
+    char *png = rs_io_join(out_dir, file);
+    if (!png) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if ((st = rs_image_read(img, png, err)) == RS_OK && (img->width != j->cam->width || img->height != j->cam->height))
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png, img->width, img->height,
+                        j->cam->width, j->cam->height);
+    else if (!st)
+        mask_outside(img, j->region);
+    free(png);
+    return st;
+}
+
+// rect (x0, y0, x1, y1 inclusive; empty when x1 < x0) grown to hold r.
+static void grow(int rect[4], const int r[4])
+{
+    for (int k = 0; k < 4; k++)
+        rect[k] = rect[2] < rect[0] ? r[k]
+                  : k < 2           ? (r[k] < rect[k] ? r[k] : rect[k])
+                                    : (r[k] > rect[k] ? r[k] : rect[k]);
+}
+
+// Widens rect (x0, y0, x1, y1; empty when x1 < x0) by the canvas rectangle of vehicle v's
+// shadows: its bottom corners and its top corners projected onto the ground along each light
+// higher than 3 deg above the ground.
+static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int height, const double rt_cam_enu[6],
+                             const double corners[8][3], const double ground_normal_enu[3], double ground_offset_m,
+                             const rs_synth_light *lights, int Nlights)
+{
+    const double *g = ground_normal_enu;
+    const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    for (int j = 0; j < Nlights; j++) {
+        const double *d = lights[j].dir_enu;
+        const double nd = (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn;
+        if (!(nd > 0.05)) continue;
+        double pts[8][3];
+        for (int k = 0; k < 4; k++) {
+            memcpy(pts[k], corners[k], sizeof(pts[k]));
+            const double *p = corners[4 + k];
+            const double t = ((g[0] * p[0] + g[1] * p[1] + g[2] * p[2]) / gn - ground_offset_m / gn) / nd;
+            for (int c = 0; c < 3; c++) pts[4 + k][c] = p[c] - t * d[c];
+        }
+        int r[4];
+        if (rs_synth_vehicle_rect(r, fxycxy, width, height, rt_cam_enu, (const double(*)[3])pts, 0.05)) grow(rect, r);
+    }
+}
+
+// The colour pass read from 16-bit PPM (RGB) made RGBA: alpha 1 where the ID pass (R + 256 G in
+// 8-bit units) shows a vehicle, else 0 (rs_synth_scene_ground_occludes says when that is exact).
+static rs_status alpha_from_ids(rs_image *rgba, const rs_image *ids, rs_err *err)
+{
+    rs_image out = {0};
+    rs_status st = rs_image_alloc(&out, rgba->width, rgba->height, 4, err);
+    if (st) return st;
+    const size_t n = (size_t)rgba->width * rgba->height;
+    for (size_t i = 0; i < n; i++) {
+        const float *id = &ids->data[i * (size_t)ids->channels];
+        const bool vehicle = id[0] > 0.5f / 255 || (ids->channels >= 3 && id[1] > 0.5f / 255);
+        for (int c = 0; c < 3; c++) out.data[4 * i + c] = vehicle ? rgba->data[i * (size_t)rgba->channels + c] : 0;
+        out.data[4 * i + 3] = vehicle;
+    }
+    rs_image_free(rgba);
+    *rgba = out;
+    return RS_OK;
+}
+
+// ---- the shadow pass: coarse meshes, half resolution (issue 18's cost, docs/fleet.md) ----
+
+// The shadow pass's vehicles: `in`'s, with each included procedural vehicle's mesh rebuilt
+// coarse (rs_synth_fleet_build_lod: 8 stations along the body instead of 56, octagonal wheels;
+// the box and the roof line exact), user models as they are. out->v and out->imesh are
+// in's (borrowed); out->meshes[m] is owned when owned[m] (free_shadow_vehicles).
+static rs_status shadow_vehicles(rs_synth_prepared *out, uint8_t **owned, const rs_synth_prepared *in,
+                                 const uint8_t *include, rs_err *err)
+{
+    *out = *in;
+    out->meshes = calloc((size_t)(in->Nmeshes > 0 ? in->Nmeshes : 1), sizeof(rs_synth_mesh));
+    *owned = calloc((size_t)(in->Nmeshes > 0 ? in->Nmeshes : 1), 1);
+    if (!out->meshes || !*owned) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int m = 0; m < in->Nmeshes; m++) {
+        int first = -1;
+        for (int i = 0; i < in->N && first < 0; i++)
+            if (in->imesh[i] == m && include[i]) first = i;
+        if (first >= 0 && in->v[first].cls != RS_SYNTH_USER_MODEL) {
+            rs_status st = rs_synth_fleet_build_lod(&out->meshes[m], &in->v[first], true, err);
+            if (st) return st;
+            (*owned)[m] = 1;
+        } else {
+            out->meshes[m] = in->meshes[m]; // shallow: borrowed arrays
+        }
+    }
+    return RS_OK;
+}
+
+static void free_shadow_vehicles(rs_synth_prepared *sv, uint8_t *owned)
+{
+    for (int m = 0; sv->meshes && owned && m < sv->Nmeshes; m++)
+        if (owned[m]) rs_synth_mesh_free(&sv->meshes[m]);
+    free(sv->meshes);
+    free(owned);
+}
+
+// The lit fraction at every canvas pixel from the half-resolution shadow pass `lo` (RGBA: the
+// ground lit as rs_synth_scene_shadow_unlit says, transparent where not rendered, the vehicles
+// green marks): value / unlit clamped to [0, 1], 1 where transparent. lo was rendered through the
+// canvas pinhole scaled by 1/2 (fx/2, fy/2, (cx - 0.5)/2, (cy - 0.5)/2): its pixel i is centred on
+// canvas x = 2 i + 0.5, so canvas pixel x reads it at (x - 0.5)/2, bilinearly (clamped at the
+// borders) over its ground pixels only (the weights of marks dropped, the rest renormalised);
+// with no ground among the 4, the nearest ground pixel within 2, else 1. (Canvas pixels that
+// only marks surround are the vehicles' own, which compositing leaves unshaded.)
+static rs_status shadow_fraction(rs_image *out, rs_image *lo, double unlit, int width, int height, rs_err *err)
+{
+    rs_status st = rs_image_alloc(out, width, height, 1, err);
+    if (st) return st;
+    const int c = lo->channels, Wl = lo->width, Hl = lo->height;
+    if (c < 4) return rs_err_set(err, RS_ERR_EXTERNAL, "the shadow pass has %d channels, not RGBA", c);
+    for (size_t i = 0; i < (size_t)Wl * Hl; i++) { // in place: channel 0 the fraction, 1 ground or not
+        float *px = &lo->data[(size_t)c * i];
+        const double v = px[3] <= 0 ? 1.0 : (unlit > 0 ? px[0] / unlit : 1.0);
+        const bool mark = px[3] > 0 && px[1] - px[0] > 0.5f;
+        px[0] = (float)(v < 0 ? 0 : v > 1 ? 1 : v), px[1] = !mark;
+    }
+    for (int y = 0; y < height; y++) {
+        const double v = fmin(fmax((y - 0.5) / 2, 0), Hl - 1);
+        const int y0 = (int)v, y1 = y0 + 1 < Hl ? y0 + 1 : y0;
+        const float ty = (float)(v - y0);
+        for (int x = 0; x < width; x++) {
+            const double u = fmin(fmax((x - 0.5) / 2, 0), Wl - 1);
+            const int x0 = (int)u, x1 = x0 + 1 < Wl ? x0 + 1 : x0;
+            const float tx = (float)(u - x0), w[4] = {(1 - ty) * (1 - tx), (1 - ty) * tx, ty * (1 - tx), ty * tx};
+            const float *p[4] = {&lo->data[((size_t)y0 * Wl + x0) * c], &lo->data[((size_t)y0 * Wl + x1) * c],
+                                 &lo->data[((size_t)y1 * Wl + x0) * c], &lo->data[((size_t)y1 * Wl + x1) * c]};
+            float sum = 0, sw = 0;
+            for (int k = 0; k < 4; k++) sum += w[k] * p[k][1] * p[k][0], sw += w[k] * p[k][1];
+            float f = sw > 1e-6f ? sum / sw : 1;
+            for (int r = 1, best = 99; sw <= 1e-6f && r <= 2; r++) // the nearest ground pixel
+                for (int dy = -r; dy <= r; dy++)
+                    for (int dx = -r; dx <= r; dx++) {
+                        const int yy = y0 + dy, xx = x0 + dx, d = dx * dx + dy * dy;
+                        if (yy < 0 || yy >= Hl || xx < 0 || xx >= Wl || d >= best) continue;
+                        const float *q = &lo->data[((size_t)yy * Wl + xx) * c];
+                        if (q[1] > 0) f = q[0], best = d;
+                    }
+            out->data[(size_t)y * width + x] = f;
+        }
+    }
+    return RS_OK;
+}
+
+// Removes the intermediates of a render (scene files, povray outputs, the conf).
+static void remove_intermediates(const char *out_dir)
+{
+    static const char *const names[] = {"pass_colour.pov",
+                                        "pass_colour.ini",
+                                        "pass_colour.png",
+                                        "pass_colour.ppm",
+                                        "pass_ids.pov",
+                                        "pass_ids.ini",
+                                        "pass_ids.png",
+                                        "pass_ids.log",
+                                        "pass_shadow.pov",
+                                        "pass_shadow.ini",
+                                        "pass_shadow.png",
+                                        "pass_shadow.log",
+                                        ".povray/3.7/povray.conf",
+                                        ".povray/3.7",
+                                        ".povray",
+                                        "povray.log"};
+    for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
+        char *p = rs_io_join(out_dir, names[i]);
+        if (p) (void)remove(p); // a missing file, or a folder someone else used: left as it is
+        free(p);
+    }
+}
+
+// Resamples the canvas passes into the real lens: colour through premultiplied linear
+// interpolation, IDs nearest-neighbour.
+static rs_status to_lens(rs_image *rgba, rs_image *ids, const float *map, int width, int height, rs_err *err)
+{
+    const size_t Nc = (size_t)rgba->width * rgba->height;
+    for (size_t i = 0; i < Nc; i++)
+        for (int k = 0; k < 3; k++) rgba->data[4 * i + k] *= rgba->data[4 * i + 3];
+    rs_image out_rgba = {0}, out_ids = {0};
+    rs_status st = rs_synth_remap(&out_rgba, rgba, map, width, height, 1, err);
+    if (!st) st = rs_synth_remap(&out_ids, ids, map, width, height, 0, err);
+    if (st) {
+        rs_image_free(&out_rgba);
+        return st;
+    }
+    const size_t N = (size_t)width * height;
+    for (size_t i = 0; i < N; i++) {
+        const float a = out_rgba.data[4 * i + 3];
+        for (int k = 0; k < 3; k++) out_rgba.data[4 * i + k] = a > 0 ? out_rgba.data[4 * i + k] / a : 0;
+    }
+    rs_image_free(rgba);
+    rs_image_free(ids);
+    *rgba = out_rgba;
+    *ids = out_ids;
+    return RS_OK;
+}
+
+// Decodes the ID pass (R + 256 G in 8-bit units) into out->ids; values above N become 0.
+static void decode_ids(rs_synth_render_result *out, const rs_image *ids, int N)
+{
+    const size_t Npx = (size_t)out->width * out->height;
+    for (size_t i = 0; i < Npx; i++) {
+        const float *px = &ids->data[i * (size_t)ids->channels];
+        const long v = lroundf(px[0] * 255.0f) + 256 * lroundf(px[1] * 255.0f);
+        out->ids[i] = (uint16_t)(v >= 0 && v <= N ? v : 0);
+    }
+}
+
+// out->composite = rgba over the background (or black), in linear light, sRGB-encoded.
+static void composite(rs_synth_render_result *out, const rs_image *bg)
+{
+    const size_t Npx = (size_t)out->width * out->height;
+    for (size_t i = 0; i < Npx; i++) {
+        const float *c = &out->rgba.data[4 * i];
+        for (int k = 0; k < 3; k++) {
+            double b = bg ? rs_synth_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]) : 0;
+            if (out->shadow && out->ids[i] == 0) b *= out->shadow[i];
+            out->composite.data[3 * i + k] = (float)rs_synth_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
+        }
+    }
+}
+
+static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out, rs_err *err)
+{
+    rs_image ids = {0};
+    rs_status st = rs_image_alloc(&ids, out->width, out->height, 1, err);
+    if (st) return st;
+    const size_t Npx = (size_t)out->width * out->height;
+    for (size_t i = 0; i < Npx; i++) ids.data[i] = out->ids[i] / 65535.0f;
+    const char *names[3] = {"image.png", "rgba.png", "ids.png"};
+    const rs_image *imgs[3] = {&out->composite, &out->rgba, &ids};
+    const int bits[3] = {8, 16, 16};
+    for (int k = 0; k < 3 && !st; k++) {
+        char *p = rs_io_join(out_dir, names[k]);
+        st = p ? rs_image_write(p, imgs[k], bits[k], err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(p);
+    }
+    if (!st && out->shadow) {
+        const rs_image sh = {.width = out->width, .height = out->height, .channels = 1, .data = out->shadow};
+        char *p = rs_io_join(out_dir, "shadow.png");
+        st = p ? rs_image_write(p, &sh, 16, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(p);
+    }
+    rs_image_free(&ids);
+    return st;
+}
+
+rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, const rs_camera *camera,
+                          const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *vehicles,
+                          const rs_synth_render_options *opt_in, rs_err *err)
+{
+    memset(out, 0, sizeof(*out));
+    const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
+    const double *intrinsics = camera->intrinsics, *rt_cam_enu = camera->rt_cam_enu;
+    const int width = camera->width, height = camera->height;
+    rs_synth_render_options opt;
+    if (opt_in)
+        opt = *opt_in;
+    else
+        rs_synth_render_options_default(&opt);
+    const char *povray = opt.povray ? opt.povray : getenv("ROADSIDE_POVRAY");
+    if (!povray || !*povray) povray = "povray";
+    const int N = vehicles->N;
+    rs_synth_canvas canvas;
+    rs_synth_povcam cam;
+    rs_image bg = {0}, rgba = {0}, idimg = {0};
+    uint8_t *include = NULL, *sowned = NULL;
+    rs_synth_prepared svehicles = {0}; // the shadow pass's (shadow_vehicles)
+    float *map = NULL;
+    rs_status st;
+    if (opt.canvas)
+        canvas = *opt.canvas;
+    else if ((st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
+                                            opt.canvas_scale > 1 ? opt.canvas_scale : 1, err)))
+        return st;
+    if ((st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, err))) return st;
+    if (opt.background_path) {
+        if ((st = rs_image_read(&bg, opt.background_path, err))) return st;
+        if (bg.width != width || bg.height != height) {
+            rs_image_free(&bg);
+            return rs_err_set(err, RS_ERR_INVALID, "%s: the background is %dx%d, the camera %dx%d", opt.background_path,
+                              bg.width, bg.height, width, height);
+        }
+    }
+    out->width = width;
+    out->height = height;
+    out->Nvehicles = N;
+    out->ids = calloc((size_t)width * height, sizeof(uint16_t));
+    out->visible = calloc((size_t)(N > 0 ? N : 1), 1);
+    include = calloc((size_t)(N > 0 ? N : 1), 1);
+    if (!out->ids || !out->visible || !include) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    if ((st = rs_image_alloc(&out->composite, width, height, 3, err))) goto done;
+    // 1-2. Culling and the regions: the vehicles' boxes (colour and ID), with their shadows
+    rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
+    const int Nlights = rs_synth_scene_lights(lights, &opt.scene);
+    int region[4] = {canvas.width, canvas.height, -1, -1}, sregion[4] = {canvas.width, canvas.height, -1, -1};
+    for (int i = 0; i < N; i++) {
+        double corners[8][3];
+        int rect[4];
+        rs_synth_vehicle_corners_enu(corners, &vehicles->v[i], ground_normal_enu, ground_offset_m);
+        const bool in =
+            rs_synth_vehicle_rect(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, corners, 0.05);
+        include[i] = opt.full_frame || in;
+        out->visible[i] = include[i];
+        if (!in) continue;
+        out->Nrendered++;
+        grow(region, rect);
+        if (!opt.shadow) continue;
+        widen_by_shadows(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, (const double(*)[3])corners,
+                         ground_normal_enu, ground_offset_m, lights, Nlights);
+        grow(sregion, rect);
+    }
+    // Pins, and the ground when there is no background to composite onto, are part of the
+    // picture too: they widen the region to the whole canvas.
+    const bool ground_drawn = !opt.background_path && opt.scene.ground_visible;
+    for (int pass = 0; pass < 2; pass++) {
+        int *r = pass ? sregion : region;
+        if (opt.full_frame || (!pass && (opt.scene.Npins > 0 || ground_drawn))) {
+            r[0] = r[1] = 0;
+            r[2] = canvas.width - 1;
+            r[3] = canvas.height - 1;
+        }
+    }
+    if (opt.full_frame) out->Nrendered = N;
+    const bool run = out->Nrendered > 0 || opt.scene.Npins > 0 || ground_drawn;
+    if (!run) {
+        for (int k = 0; k < 4; k++) out->region[k] = -1;
+        if ((st = rs_image_alloc(&out->rgba, width, height, 4, err))) goto done;
+    } else {
+        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = rs_synth_povray_write_conf(out_dir, err))) goto done;
+        // The passes: colour; ID and shadow when vehicles are rendered.
+        rs_synth_scene_options passes[3];
+        int Npasses = 0, i_id = -1, i_shadow = -1;
+        passes[Npasses] = opt.scene;
+        passes[Npasses].include = include;
+        passes[Npasses].pass = RS_SYNTH_PASS_COLOUR;
+        passes[Npasses].ground_visible = opt.background_path ? false : opt.scene.ground_visible;
+        Npasses++;
+        if (out->Nrendered > 0) {
+            passes[Npasses] = passes[0];
+            passes[Npasses].pass = RS_SYNTH_PASS_ID;
+            passes[Npasses].Npins = 0;
+            i_id = Npasses++;
+            if (opt.shadow) {
+                passes[Npasses] = passes[i_id];
+                passes[Npasses].pass = RS_SYNTH_PASS_SHADOW;
+                i_shadow = Npasses++;
+            }
+        }
+        memcpy(out->region, region, sizeof(region)); // rendered: the union of the regions
+        if (i_shadow >= 0) grow(out->region, sregion);
+        // One povray process per pass (docs/fleet.md, "Cost"): the colour pass; the ID pass on
+        // the same meshes, each merged into one mesh2 without normals; the shadow pass at half
+        // resolution on coarse meshes. They run at once, unless separate_processes (one after
+        // the other: the benchmark's "separate").
+        povray_job jobs[3];
+        rs_synth_povcam scam;
+        const int W2 = (canvas.width + 1) / 2, H2 = (canvas.height + 1) / 2;
+        if (i_shadow >= 0) {
+            const double *f = canvas.fxycxy;
+            const double half[4] = {f[0] / 2, f[1] / 2, (f[2] - 0.5) / 2, (f[3] - 0.5) / 2};
+            if ((st = rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
+                (st = shadow_vehicles(&svehicles, &sowned, vehicles, include, err)))
+                goto done;
+        }
+        // Without pins, drawn ground, antialiasing or a ground hiding part of a vehicle
+        // (rs_synth_scene_ground_occludes) the colour pass covers exactly the ID pass's vehicle
+        // pixels (the same rays meet the same triangles): its alpha is taken from the ID pass and
+        // it is written as 16-bit PPM, 0.05 s cheaper per image than RGBA PNG to write and read.
+        const bool ground_hides = i_id >= 0 && rs_synth_scene_ground_occludes(&cam, vehicles, &passes[i_id],
+                                                                              ground_normal_enu, ground_offset_m);
+        const bool ids_alpha = i_id >= 0 && opt.antialias < 2 && opt.scene.Npins == 0 && !ground_drawn && !ground_hides;
+        // The ID and shadow passes rasterised here rather than by povray processes
+        // (rs_synth_raster.h), unless the caller asks for POV-Ray's; the ID pass also where the
+        // ground may hide part of a vehicle.
+        const bool ids_here = i_id >= 0 && !ground_hides && !opt.povray_passes;
+        const bool shadow_here = i_shadow >= 0 && !opt.povray_passes;
+        static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
+        static const char *const logs[3] = {"povray.log", "pass_ids.log", "pass_shadow.log"};
+        for (int k = 0; k < Npasses; k++) {
+            const bool sh = k == i_shadow;
+            jobs[k] = (povray_job){.name = names[k],
+                                   .cam = sh ? &scam : &cam,
+                                   .vehicles = sh ? &svehicles : vehicles,
+                                   .pass = &passes[k],
+                                   .antialias = k ? 0 : opt.antialias,
+                                   .region = {region[0], region[1], region[2], region[3]},
+                                   .ppm = k == 0 && ids_alpha,
+                                   .log = logs[k]};
+            if (sh) {
+                const int r2[4] = {
+                    (int)fmax(0, floor((sregion[0] - 0.5) / 2)), (int)fmax(0, floor((sregion[1] - 0.5) / 2)),
+                    (int)fmin(W2 - 1, ceil((sregion[2] - 0.5) / 2)), (int)fmin(H2 - 1, ceil((sregion[3] - 0.5) / 2))};
+                memcpy(jobs[k].region, r2, sizeof(r2));
+            }
+        }
+        rs_image imgs[3] = {{0}};
+        // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
+        const bool together = !opt.separate_processes;
+        for (int k = 0; k < Npasses; k++) {
+            if ((k == i_id && ids_here) || (k == i_shadow && shadow_here)) continue;
+            if (!st) st = job_start(&jobs[k], out_dir, povray, intrinsics, ground_normal_enu, ground_offset_m, err);
+            if (!together) {
+                rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, err);
+                st = st ? st : st2;
+            }
+        }
+        rs_image frac = {0};
+        if (!st && ids_here) // while povray renders the colour pass
+            st = rs_synth_raster_ids(&imgs[i_id], canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, vehicles,
+                                     include, ground_normal_enu, ground_offset_m, region, err);
+        if (!st && shadow_here)
+            st = rs_synth_raster_shadow(&frac, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, &svehicles,
+                                        include, ground_normal_enu, ground_offset_m, lights, Nlights, err);
+        for (int k = 0; k < Npasses && together; k++) { // every started one waited for, the first error kept
+            rs_err e2 = {0};
+            rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, st ? &e2 : err);
+            st = st ? st : st2;
+        }
+        out->Npovray = Npasses - (ids_here ? 1 : 0) - (shadow_here ? 1 : 0);
+        out->Npasses = Npasses;
+        rgba = imgs[0];
+        if (i_id >= 0) idimg = imgs[1];
+        if (!st && jobs[0].ppm) st = alpha_from_ids(&rgba, &idimg, err);
+        if (!st && i_shadow >= 0 && !shadow_here)
+            st =
+                shadow_fraction(&frac, &imgs[i_shadow], rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu),
+                                canvas.width, canvas.height, err);
+        if (i_shadow >= 0) rs_image_free(&imgs[i_shadow]);
+        if (st) {
+            rs_image_free(&frac);
+            goto done;
+        }
+        if (i_id < 0 && (st = rs_image_alloc(&idimg, canvas.width, canvas.height, 3, err))) goto done;
+        // 3. Into the real lens
+        if (!canvas.identity) {
+            if ((!opt.canvas_map &&
+                 (st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics, width, height, err))) ||
+                (st = to_lens(&rgba, &idimg, opt.canvas_map ? opt.canvas_map : map, width, height, err))) {
+                rs_image_free(&frac);
+                goto done;
+            }
+            if (frac.data) {
+                rs_image lens = {0};
+                st = rs_synth_remap(&lens, &frac, opt.canvas_map ? opt.canvas_map : map, width, height, 1, err);
+                rs_image_free(&frac);
+                frac = lens;
+                if (st) goto done;
+            }
+        }
+        out->shadow = frac.data; // owned by out now
+        out->rgba = rgba;
+        rgba = (rs_image){0};
+        decode_ids(out, &idimg, N);
+        // the shadow pass does not look under the vehicles (its green marks): 1 on their pixels
+        for (size_t i = 0; out->shadow && i < (size_t)width * height; i++)
+            if (out->ids[i]) out->shadow[i] = 1;
+    }
+    // 4. Composite
+    composite(out, opt.background_path ? &bg : NULL);
+    if (opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
+done:
+    if (!opt.keep_files) remove_intermediates(out_dir);
+    free_shadow_vehicles(&svehicles, sowned);
+    rs_image_free(&bg);
+    rs_image_free(&rgba);
+    rs_image_free(&idimg);
+    free(include);
+    free(map);
+    if (st) rs_synth_render_result_free(out);
+    return st;
+}
+
+rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_render_result *r, const char *split,
+                                       const rs_synth_label_options *lopt, const rs_camera *cam,
+                                       const double ground_normal_enu[3], double ground_offset_m,
+                                       const rs_synth_prepared *prepared, rs_err *err)
+{
+    const int N = prepared->N;
+    const size_t n = (size_t)(N > 0 ? N : 1);
+    double *up = malloc(n * sizeof(double));
+    rs_synth_mesh *meshes = malloc(n * sizeof(rs_synth_mesh));
+    const char **ids = malloc(n * sizeof(char *));
+    rs_synth_label *labels = NULL;
+    char *folder = NULL, *image = NULL;
+    rs_status st = RS_OK;
+    if (!up || !meshes || !ids) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    for (int i = 0; i < N; i++) {
+        const rs_synth_vehicle *v = &prepared->v[i];
+        up[i] = rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, v->e_m, v->n_m);
+        meshes[i] = prepared->meshes[prepared->imesh[i]]; // shallow: borrowed arrays
+        ids[i] = v->id ? v->id : "";
+    }
+    if ((st = rs_synth_labels_compute(&labels, cam, prepared->v, up, N, meshes, r->ids, err))) goto done;
+    const rs_synth_label_image img = {.file_name = "image.png",
+                                      .width = r->width,
+                                      .height = r->height,
+                                      .labels = labels,
+                                      .Nlabels = N,
+                                      .vehicle_ids = ids};
+    if ((st = rs_synth_labels_write_coco(out_dir, split, &img, 1, lopt, err)) ||
+        (st = rs_synth_labels_write_yolo(out_dir, split, &img, 1, lopt, err)) ||
+        (st = rs_synth_labels_write_kitti(out_dir, &img, 1, lopt, err)))
+        goto done;
+    folder = rs_io_join(out_dir, split);
+    image = folder ? rs_io_join(folder, "image.png") : NULL;
+    st = image ? rs_image_write(image, &r->composite, 8, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+done:
+    free(up);
+    free(meshes);
+    free(ids);
+    free(labels);
+    free(folder);
+    free(image);
+    return st;
+}

@@ -1,0 +1,154 @@
+// rs_synth_render.h -- rendering a scene with the real POV-Ray: culling, region rendering,
+// compositing onto a background, the object-ID pass (`roadside render`).
+//
+// Steps (docs/povray.md):
+// 1. Frustum culling: each vehicle's bounding box is clipped to z_cam >= 0.05 m and projected
+//    through the canvas pinhole (rs_synth_camera.h); a vehicle whose projection misses the canvas
+//    is left out. With no vehicle left (and no pins), povray is not run when compositing onto a
+//    background: the image is the background and the ID image is all 0. Limitation: a culled
+//    vehicle's shadow or reflection, which could fall into the view, is lost.
+// 2. Region: povray renders only the canvas rectangle covered by the remaining vehicles' boxes
+//    (+ 1 px), with +SC/+EC/+SR/+ER; the rest of the canvas stays transparent. Pins, or the
+//    ground drawn when there is no background, make the region the whole canvas. The shadow
+//    pass's region also covers each vehicle's shadows: its box's top corners projected onto
+//    the ground along every light of the pass.
+// 2b. Passes: roadside rasterises the ID pass (the pixels POV-Ray would give; by POV-Ray where
+//    the ground may hide part of a vehicle) and the shadow pass (exact at full resolution, on
+//    coarse meshes) while one povray process renders the colour pass (rs_synth_raster.h;
+//    docs/fleet.md, "Cost", D). With povray_passes, one povray process per pass instead, all
+//    started at once (one after the other with separate_processes), the shadow pass at half
+//    the canvas's resolution on coarse meshes, interpolated. Each povray process spends about
+//    0.6 s waiting between its threads besides its work (docs/povray.md).
+// 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
+//    (File_Gamma 1), no antialiasing unless asked; without pins, drawn ground, antialiasing or
+//    a ground hiding part of a vehicle, 16-bit PPM with the alpha of the ID pass (the same);
+//    a distorted lens is resampled from the canvas
+//    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).
+// 4. Composite: out = fg + (1 - a) bg in linear light (straight alpha: fg = a * colour), the
+//    background decoded from sRGB and the result encoded to sRGB 8-bit.
+// 5. ID pass (rasterised by roadside where the ground hides nothing, else POV-Ray's): no lights,
+//    flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
+//    per-pixel vehicle index 0 = background, k+1 = vehicle k (16-bit); resampled with
+//    nearest-neighbour into the real lens.
+// povray runs in the output folder with HOME set to it (POVINC/POVINI unset), its output going
+// to OUT/povray.log. What confines it (docs/povray.md, "Confinement"):
+//  1. the scene text: roadside's scenes hold no file operation and no input text outside
+//     sanitised comments (rs_synth_scene.h; tests/synth/test_scene_cli.py,
+//     test_povray_sandbox.py);
+//  2. Linux Landlock (rs_synth_sandbox.h): povray may read the system's files under /usr,
+//     /etc/povray, and read and write only the folder it runs in; everything else is refused
+//     by the kernel. Where Landlock is unavailable povray runs unconfined (the cli says so).
+// The OUT/.povray/3.7/povray.conf written there ("restricted", only "." permitted) is NOT a
+// defence: measured with Debian 12's POV-Ray 3.7.0.10, reads anywhere and writes to /tmp,
+// /var/tmp and OUT/.. pass through it (tests/synth/test_povray_sandbox.py shows both).
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+
+#include <mrcal/mrcal.h>
+
+#include "core/rs_camera.h"
+#include "core/rs_status.h"
+#include "synth/fleet/rs_synth_vehicle.h"
+#include "synth/labels/rs_synth_labels.h"
+#include "synth/backdrop/rs_synth_opencv.h"
+#include "synth/povray/rs_synth_scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct {
+    const char *povray;            // executable; NULL: $ROADSIDE_POVRAY, else "povray" on PATH
+    const char *background_path;   // image of the camera's size to composite onto; may be NULL
+    bool full_frame;               // no culling, no region: render the whole canvas (benchmarks)
+    bool keep_files;               // keep the .pov/.ini/.png intermediates in the output folder
+    int antialias;                 // 0: none; n >= 2: +A0 +AM1 +R(n) on the colour pass only
+    double canvas_scale;           // distorted lenses: canvas pixels per core pixel (default 1)
+    const rs_synth_canvas *canvas; // precomputed for this lens, size and canvas_scale
+    const float *canvas_map;       //   (rs_synth_canvas_for_lens, rs_synth_canvas_map; both
+                                   //   borrowed): a caller rendering many images of one camera
+                                   //   computes them once; NULL: computed here
+    bool shadow;                   // also the shadow pass (rs_synth_scene.h): out->shadow
+    bool write_files;              // write image.png, rgba.png, ids.png (default true)
+    bool separate_processes;       // the passes' povray processes one after the other
+                                   // (default false: all at once)
+    bool povray_passes;            // the ID and shadow passes rendered by POV-Ray, which roadside
+                                   // otherwise rasterises (rs_synth_raster.h; default false: the
+                                   // tests' oracle)
+    rs_synth_scene_options scene;  // sun, pins, ground (pass and include are set per pass)
+} rs_synth_render_options;
+
+void rs_synth_render_options_default(rs_synth_render_options *opt);
+
+// A rendered view. Images are in the real camera's size.
+typedef struct {
+    int width, height;
+    rs_image rgba;      // (H, W, 4): the colour pass, linear light, straight alpha
+    rs_image composite; // (H, W, 3) sRGB-encoded [0,1]: over the background (or black)
+    uint16_t *ids;      // (H, W) owned: 0 = background, k+1 = vehicle k
+    uint8_t *visible;   // (Nvehicles,) owned: 1 = survived culling (may still be hidden)
+    int Nvehicles;
+    int Nrendered;         // vehicles sent to povray (0: povray was not run)
+    int region[4];         // canvas rectangle rendered: x0, y0, x1, y1 inclusive (pixels);
+                           // all -1 when nothing was rendered
+    float *shadow;         // (H, W) owned, when the shadow pass ran (else NULL): the fraction
+                           // of the ground's light reaching each pixel, 1 in the open and
+                           // on the vehicles' own pixels (ids != 0)
+    double seconds_povray; // wall time spent in povray (every pass)
+    int Npovray;           // povray processes run
+    int Npasses;           // passes rendered
+} rs_synth_render_result;
+
+void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroes *r
+
+// Renders N vehicles seen by the camera into out_dir (created if missing). Writes
+//   out_dir/image.png  the composite (8-bit sRGB; with the shadow pass the background is
+//   shaded by it on non-vehicle pixels),  out_dir/rgba.png  the colour pass
+//   (16-bit linear RGBA, real lens),  out_dir/ids.png  the ID pass (16-bit grey, value k+1),
+//   out_dir/shadow.png  with the shadow pass, the lit fraction (16-bit grey, 1 = open ground),
+// each atomically; with keep_files also the scene files and povray's own outputs.
+// in: camera: the calibrated camera (core/rs_camera.h); ground plane; the prepared vehicles
+//     (rs_synth_scene.h); opt may be NULL (defaults)
+// Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
+// last line), RS_ERR_IO for the files.
+// Runs the real POV-Ray: `povray ARGS...` (no shell) in folder `dir`, with HOME = dir (so that
+// dir/.povray/3.7/povray.conf, if written, is the configuration it reads) and POVINC/POVINI
+// unset, confined by Landlock to reading the system's files and reading and writing `dir`
+// (rs_synth_sandbox.h; unconfined where Landlock is unavailable); its output is appended to
+// dir/povray.log. seconds (may be NULL) accumulates the wall time. Errors: RS_ERR_EXTERNAL
+// "cannot run" when the program is missing (exit 127), "cannot confine povray" when Landlock is
+// there but fails (povray is then not run), else the exit status and the log's last line.
+rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args,
+                              int Nargs,       // (Nargs,) at most 30
+                              double *seconds, // may be NULL
+                              rs_err *err);
+
+rs_status rs_synth_render( // out
+    rs_synth_render_result *out,
+    // in
+    const char *out_dir,
+    const rs_camera *camera, // calibrated: lens, intrinsics, size, pose
+    const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *vehicles,
+    const rs_synth_render_options *opt, rs_err *err);
+
+// The canvas rectangle (x0, y0, x1, y1 inclusive, clipped to the canvas) covered by vehicle v's
+// bounding box clipped to z_cam >= near_m; returns false if it misses the canvas or lies behind.
+bool rs_synth_vehicle_rect( // out
+    int rect[4],
+    // in
+    const double fxycxy[4], int width, int height, const double rt_cam_enu[6], const double corners_enu_m[8][3],
+    double near_m);
+
+// The labels of a rendered image (synth/labels/rs_synth_labels.h): every prepared vehicle's label
+// computed through `cam` with its visibility from r->ids, written as COCO and YOLO under
+// out_dir/<split> and KITTI under out_dir, and the composite copied to
+// out_dir/<split>/image.png. Each file is written atomically. `roadside render --labels`.
+rs_status rs_synth_render_write_labels( // in
+    const char *out_dir, const rs_synth_render_result *r, const char *split, const rs_synth_label_options *lopt,
+    const rs_camera *cam, const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *prepared,
+    rs_err *err);
+
+#ifdef __cplusplus
+}
+#endif

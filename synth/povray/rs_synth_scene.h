@@ -1,0 +1,149 @@
+// rs_synth_scene.h -- POV-Ray scenes of vehicles seen by a calibrated camera: the scene writer
+// (`roadside scene`) and its lights matched to a background.
+//
+// A scene is self-contained: camera (rs_synth_camera.h), a sun (a parallel light from azimuth and
+// elevation) and sky light, the site's ground plane n . p_enu = offset, the vehicles and optional
+// pins, all in POV-Ray's world <e, u, n>. No #include, no file reads, no strings from input files
+// except as sanitised comments (only [A-Za-z0-9 _.:-] kept, everything else becomes '_'), so an
+// input can never inject a POV-Ray directive.
+//
+// Vehicles: each procedural vehicle and each distinct user model is declared once by
+// rs_synth_fleet_write_declare (synth/fleet/rs_synth_fleet.h, POV-Ray axes of a vehicle at the ENU
+// origin facing north) and placed with rs_synth_fleet_write_placement (rotate by yaw about the
+// up axis, translate to the footprint centre on the ground plane).
+//
+// Passes: the colour pass (lit, textured) and the ID pass (no lights, every vehicle a flat
+// emissive colour encoding its index: value k+1 = R + 256 G in 8-bit units, written by povray with
+// File_Gamma 1 and no antialiasing, so that the values are exact).
+#pragma once
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "core/rs_status.h"
+#include "synth/backdrop/rs_synth_light.h"
+#include "synth/fleet/rs_synth_prepare.h"
+#include "synth/povray/rs_synth_camera.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// ---- the scene ----
+
+// The light model (the sun, RS_SYNTH_SKY_LIGHTS sky lights, the environment) is
+// synth/backdrop/rs_synth_light.h's; vehicles ready for a scene are synth/fleet/rs_synth_prepare.h's.
+
+// RS_SYNTH_PASS_SHADOW: what differential rendering needs, as a single pass: the ground grey
+// (pigment 0.25 so that nothing saturates, diffuse 1, no ambient), the vehicles casting shadows
+// and seen as flat green marks (emission rgb <0, 1, 0>: no light spent on the ground they hide),
+// lit by the lights of rs_synth_scene_shadow_lights (the sun unless overcast or below the
+// horizon, and a sky of parallel lights that cast shadows too). A pixel's value divided by
+// rs_synth_scene_shadow_unlit() is the fraction of the ground's light reaching that pixel:
+// 1 in the open, sky/(sun+sky) in a sun shadow, less under and beside a vehicle (the soft
+// sky-light shadow). The ground alone needs no pass: lit by parallel lights, it is uniform.
+typedef enum { RS_SYNTH_PASS_COLOUR = 0, RS_SYNTH_PASS_ID = 1, RS_SYNTH_PASS_SHADOW = 2 } rs_synth_pass;
+
+typedef struct {
+    rs_synth_pass pass;
+    bool ground_visible;    // colour pass: draw the ground (false: the ground is left out,
+                            // for compositing over a photograph)
+    double sun_azimuth_deg; // sun direction (colour pass)
+    double sun_elevation_deg;
+    // Lighting matched to a background (rs_synth_light_match, synth/backdrop/rs_synth_sun.h): in the
+    // colour pass every light (sun and sky) times light_rgb_scale per channel; all 0 (the
+    // default): 1. The shadow pass is a ratio and stays grey.
+    double light_rgb_scale[3];
+    const double *pins_enu_m; // (Npins,3) pin centres, may be NULL
+    int Npins;
+    double pin_radius_px;   // pins' radius in image pixels at their distance (default 3)
+    const uint8_t *include; // (Nvehicles,) 0 = leave vehicle out (culled), may be NULL = all
+    bool boxes;             // draw vehicles as plain boxes (no fleet meshes)
+    bool overcast;          // no sun: the sky alone, RS_SYNTH_SKY_OVERCAST (colour and
+                            // shadow passes)
+    // The environment the vehicles reflect (colour pass): a sphere round the scene, seen only
+    // in reflections (no_image), glowing from env_ground_rgb below the horizon through
+    // env_horizon_rgb to env_zenith_rgb overhead, linear RGB in the units of the lights (a white
+    // surface under a sun at the zenith is 1). env_given false: rs_synth_env_default's.
+    // With env_given and ground_visible false (compositing over a photograph), the ground plane
+    // the vehicles reflect also takes env_ground_rgb as its lit radiance (its pigment is
+    // env_ground_rgb / (0.8 x the lights' irradiance on it), so shadows still darken it). From a
+    // background: rs_synth_env_from_image and rs_synth_env_match (synth/backdrop/rs_synth_sun.h).
+    bool env_given;
+    double env_zenith_rgb[3], env_horizon_rgb[3], env_ground_rgb[3];
+    bool env_off; // no environment at all (reflections show the black background)
+} rs_synth_scene_options;
+
+// Matches a scene's lights and environment to its background, from the estimates of synth/backdrop/rs_synth_sun.h (implemented in rs_synth_sun.c): the
+// lights' per-channel factor (rs_synth_light_match, with a sun unless scene->overcast, at
+// scene->sun_elevation_deg: set the sun first) and the environment the vehicles reflect
+// (rs_synth_env_match; env NULL: the estimated sky alone). Writes scene->light_rgb_scale,
+// env_given and env_zenith/horizon/ground_rgb; nothing else.
+void rs_synth_scene_match_background(rs_synth_scene_options *scene,
+                                     // in
+                                     const rs_synth_light_estimate *light, const rs_synth_env_estimate *env);
+
+// The same from a background file (`roadside render --background`; `roadside synth` keeps its
+// decoded backgrounds and calls the above): the image (8-bit sRGB, the camera's size) decoded
+// to linear light, the light estimated on its road (rs_synth_light_from_image, every 4th pixel;
+// the road assumed dry) and its environment (rs_synth_env_from_image), then matched.
+// out: light (the estimate; may be NULL); scene as above.
+// Returns RS_ERR_DEGENERATE (scene untouched) when fewer than 50 road pixels are in view (no
+// lanes, or none in view), RS_ERR_INVALID (size, not RGB), RS_ERR_IO, RS_ERR_NOMEM.
+rs_status rs_synth_scene_match_background_file(rs_synth_scene_options *scene, rs_synth_light_estimate *light,
+                                               // in
+                                               const char *path, const rs_camera *cam, const rs_site *site,
+                                               const rs_lanes *lanes, rs_err *err);
+
+// The lights of the colour and shadow passes: the sun (irradiance 1, when its elevation is
+// above 0 and the sky is not overcast) first, then the RS_SYNTH_SKY_LIGHTS sky lights scaled
+// to RS_SYNTH_SKY_CLEAR (or RS_SYNTH_SKY_OVERCAST) on horizontal ground. out: lights
+// (RS_SYNTH_SKY_LIGHTS + 1,); returns how many were written.
+int rs_synth_scene_lights(rs_synth_light *lights, const rs_synth_scene_options *opt);
+
+// What the shadow pass shows on open ground, nothing in the way: sum of irradiance *
+// max(0, n . dir) over the lights, n the unit ground normal (ENU, any length given).
+double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights, const double ground_normal_enu[3]);
+
+// Defaults: colour pass, ground visible, sun at azimuth 135, elevation 45, no pins, radius 3 px.
+void rs_synth_scene_options_default(rs_synth_scene_options *opt);
+
+// Writes the .pov text of a scene to f.
+// in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
+//     (for sizing pins); ground plane; the prepared vehicles
+// Returns RS_ERR_IO on a stream error.
+// Several passes in one file, for one povray process rendering them as the frames of an
+// animation (+KFI1 +KFF<Nframes>; rs_synth_scene_write_ini_frames): `#switch (frame_number)`,
+// frame k + 1 being passes[k]. Each frame re-parses the file, but povray starts once (its
+// start-up and shut-down cost about 0.35 s of waiting, measured in docs/povray.md).
+rs_status rs_synth_scene_write_frames(FILE *f,
+                                      // in
+                                      const rs_synth_povcam *cam, const double fxy[2],
+                                      const double ground_normal_enu[3], double ground_offset_m,
+                                      const rs_synth_prepared *vehicles, const rs_synth_scene_options *passes,
+                                      int Npasses, rs_err *err);
+
+rs_status rs_synth_scene_write(FILE *f,
+                               // in
+                               const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],
+                               double ground_offset_m, const rs_synth_prepared *vehicles,
+                               const rs_synth_scene_options *opt, rs_err *err);
+
+// Writes the .ini matching a scene, atomically: Input_File_Name (the .pov's base name, same
+// folder; it may only use [A-Za-z0-9_.-]), Output_File_Name (the same with .png), Width/Height,
+// File_Gamma 1 (linear output), 16-bit RGBA for the colour pass, 8-bit RGB for the ID pass.
+// antialias: 0 none; n >= 2: n x n non-adaptive supersampling without jitter (+A0 +AM1 +Rn,
+// colour pass only).
+rs_status rs_synth_scene_write_ini(const char *ini_path, const char *pov_path, const rs_synth_povcam *cam,
+                                   rs_synth_pass pass, int antialias, rs_err *err);
+
+// The .ini of a file of Nframes passes (rs_synth_scene_write_frames): 16-bit RGBA with
+// File_Gamma 1 for every frame (ID values stay exact: 257 x the 8-bit value), frames 1..Nframes
+// written as <name>1.png, <name>2.png, ... (Nframes <= 9). antialias as above applies to
+// every frame: give it only to a colour pass alone.
+rs_status rs_synth_scene_write_ini_frames(const char *ini_path, const char *pov_path, const rs_synth_povcam *cam,
+                                          int Nframes, int antialias, rs_err *err);
+
+#ifdef __cplusplus
+}
+#endif

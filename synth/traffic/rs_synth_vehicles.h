@@ -1,0 +1,39 @@
+// rs_synth_vehicles.h -- the vehicles file `roadside scene` and `roadside render` read
+// (--vehicles), as `roadside traffic` writes it (rs_synth_traffic_write_json).
+#pragma once
+#include "core/rs_status.h"
+#include "synth/fleet/rs_synth_fleet.h"
+#include "synth/fleet/rs_synth_vehicle.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// A vehicles file read into memory. `v[i]`'s strings point into this list's storage.
+typedef struct {
+    rs_synth_vehicle *v; // (N,) owned
+    int N;
+    char **strings; // owned: every string v[] points to
+    int Nstrings;
+    rs_synth_obj_spec *obj; // (N,) owned: user models' specs (obj[i].path == v[i].model_path)
+} rs_synth_vehicle_list;
+
+// Reads a vehicles file: a JSON list of objects
+//   {"class": "sedan" (rs_synth_class_name) | "model": "path.obj" (with "scale": metres per
+//    unit, default 1, "forward": "+x".."-z", default "+x", "up", default "+z"),
+//    "e": m, "n": m, "yaw_deg": deg,
+//    "length": m, "width": m, "height": m,   (optional, > 0; default: drawn from the class)
+//    "colour": [r, g, b] linear in [0,1] or "#rrggbb" sRGB (optional; default: drawn),
+//    "variant": integer >= 0 (optional, default: the index), "id": string (optional)}
+// yaw_deg is the compass heading of the vehicle's forward axis, clockwise from north.
+// A relative "model" path is taken relative to the vehicles file's folder.
+// Errors name the file, the list index and the field: "FILE: [3].yaw_deg: not a number".
+rs_status rs_synth_vehicles_read( // out
+    rs_synth_vehicle_list *list,
+    // in
+    const char *path, rs_err *err);
+void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list); // NULL-safe
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,193 @@
+// rs_synth_vehicles_read.c -- the vehicles file (`roadside scene --vehicles`, rs_synth_scene.h:
+// rs_synth_vehicles_read), read with cJSON; every problem named by file, vehicle index and field.
+#include "synth/povray/rs_synth_scene.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
+#include "core/rs_io.h"
+#include "core/rs_json.h"
+
+// ---- the vehicles file ----
+
+static char *list_keep(rs_synth_vehicle_list *list, const char *s)
+{
+    char **grown = realloc(list->strings, (size_t)(list->Nstrings + 1) * sizeof(char *));
+    if (!grown) return NULL;
+    list->strings = grown;
+    char *copy = strdup(s);
+    if (!copy) return NULL;
+    list->strings[list->Nstrings++] = copy;
+    return copy;
+}
+
+void rs_synth_vehicle_list_free(rs_synth_vehicle_list *list)
+{
+    if (!list) return;
+    for (int i = 0; i < list->Nstrings; i++) free(list->strings[i]);
+    free(list->strings);
+    free(list->v);
+    free(list->obj);
+    memset(list, 0, sizeof(*list));
+}
+
+// Reads number member `name` of o into *out. Missing: *out untouched and RS_OK unless required.
+static rs_status get_number(double *out, const cJSON *o, const char *name, bool required, const char *path, int i,
+                            rs_err *err)
+{
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(o, name);
+    if (!m) {
+        if (required) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: missing", path, i, name);
+        return RS_OK;
+    }
+    if (!cJSON_IsNumber(m) || !isfinite(m->valuedouble))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: not a finite number", path, i, name);
+    *out = m->valuedouble;
+    return RS_OK;
+}
+
+static const char *get_string(const cJSON *o, const char *name)
+{
+    const cJSON *m = cJSON_GetObjectItemCaseSensitive(o, name);
+    return cJSON_IsString(m) ? m->valuestring : NULL;
+}
+
+static double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
+
+static rs_status parse_colour(double rgb[3], const cJSON *m, const char *path, int i, rs_err *err)
+{
+    if (cJSON_IsString(m)) {
+        const char *s = m->valuestring;
+        unsigned int r, g, b;
+        char tail;
+        if (strlen(s) == 7 && s[0] == '#' && sscanf(s + 1, "%2x%2x%2x%c", &r, &g, &b, &tail) == 3) {
+            rgb[0] = srgb_to_linear(r / 255.0);
+            rgb[1] = srgb_to_linear(g / 255.0);
+            rgb[2] = srgb_to_linear(b / 255.0);
+            return RS_OK;
+        }
+    } else if (cJSON_IsArray(m) && cJSON_GetArraySize(m) == 3) {
+        for (int k = 0; k < 3; k++) {
+            const cJSON *c = cJSON_GetArrayItem(m, k);
+            if (!cJSON_IsNumber(c) || !(c->valuedouble >= 0 && c->valuedouble <= 1)) goto bad;
+            rgb[k] = c->valuedouble;
+        }
+        return RS_OK;
+    }
+bad:
+    return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].colour: expected [r, g, b] in [0,1] (linear) or \"#rrggbb\"", path,
+                      i);
+}
+
+static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir,
+                              rs_err *err)
+{
+    rs_synth_vehicle *v = &list->v[i];
+    rs_synth_obj_spec *obj = &list->obj[i];
+    rs_status st;
+    if (!cJSON_IsObject(o)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object", path, i);
+    memset(v, 0, sizeof(*v));
+    v->rgb[0] = v->rgb[1] = v->rgb[2] = -1;
+    v->variant = (uint64_t)i;
+    const char *cls = get_string(o, "class"), *model = get_string(o, "model");
+    if (!!cls == !!model)
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "%s: [%d]: give exactly one of \"class\" (a "
+                          "string) and \"model\" (an OBJ path)",
+                          path, i);
+    if (cls) {
+        rs_err e2 = {0};
+        rs_synth_class c;
+        if (rs_synth_class_from_name(&c, cls, &e2))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].class: %s", path, i, e2.msg);
+        v->cls = c;
+    } else {
+        v->cls = RS_SYNTH_USER_MODEL;
+        char *joined = rs_io_join(dir, model);
+        if (!joined) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        v->model_path = list_keep(list, joined);
+        free(joined);
+        if (!v->model_path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        obj->path = v->model_path;
+        obj->scale = 1;
+        if ((st = get_number(&obj->scale, o, "scale", false, path, i, err))) return st;
+        const char *fwd = get_string(o, "forward"), *up = get_string(o, "up");
+        obj->forward = list_keep(list, fwd ? fwd : "+x");
+        obj->up = list_keep(list, up ? up : "+z");
+        if (!obj->forward || !obj->up) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    if ((st = get_number(&v->e_m, o, "e", true, path, i, err)) ||
+        (st = get_number(&v->n_m, o, "n", true, path, i, err)) ||
+        (st = get_number(&v->yaw_deg, o, "yaw_deg", true, path, i, err)) ||
+        (st = get_number(&v->length_m, o, "length", false, path, i, err)) ||
+        (st = get_number(&v->width_m, o, "width", false, path, i, err)) ||
+        (st = get_number(&v->height_m, o, "height", false, path, i, err)))
+        return st;
+    const char *dims[3] = {"length", "width", "height"};
+    const double dval[3] = {v->length_m, v->width_m, v->height_m};
+    for (int k = 0; k < 3; k++)
+        if (cJSON_GetObjectItemCaseSensitive(o, dims[k]) && !(dval[k] > 0))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: must be > 0", path, i, dims[k]);
+    const cJSON *colour = cJSON_GetObjectItemCaseSensitive(o, "colour");
+    if (colour && (st = parse_colour(v->rgb, colour, path, i, err))) return st;
+    const cJSON *variant = cJSON_GetObjectItemCaseSensitive(o, "variant");
+    if (variant) {
+        if (!cJSON_IsNumber(variant) || !(variant->valuedouble >= 0) || variant->valuedouble > 9007199254740992.0 ||
+            variant->valuedouble != floor(variant->valuedouble))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].variant: expected an integer >= 0", path, i);
+        v->variant = (uint64_t)variant->valuedouble;
+    }
+    const cJSON *id = cJSON_GetObjectItemCaseSensitive(o, "id");
+    if (id) {
+        if (!cJSON_IsString(id)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].id: expected a string", path, i);
+        if (!(v->id = list_keep(list, id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    return RS_OK;
+}
+
+rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, rs_err *err)
+{
+    memset(list, 0, sizeof(*list));
+    char *text = NULL, *dir = NULL;
+    cJSON *root = NULL;
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&text, &len, path, err);
+    if (st) return st;
+    // syntax errors: RS_ERR_PARSE "PATH:LINE: JSON syntax error near '...'" (core/rs_json.h)
+    if ((st = rs_json_parse(&root, text, 0, len, path, err))) goto done;
+    if (!cJSON_IsArray(root)) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of vehicles", path);
+        goto done;
+    }
+    const int N = cJSON_GetArraySize(root);
+    dir = strdup(path);
+    list->v = calloc((size_t)(N > 0 ? N : 1), sizeof(*list->v));
+    list->obj = calloc((size_t)(N > 0 ? N : 1), sizeof(*list->obj));
+    if (!dir || !list->v || !list->obj) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    char *slash = strrchr(dir, '/');
+    if (slash)
+        slash[1] = 0;
+    else
+        strcpy(dir, ".");
+    int i = 0;
+    const cJSON *o;
+    cJSON_ArrayForEach(o, root)
+    {
+        if ((st = read_vehicle(list, i, o, path, dir, err))) goto done;
+        i++;
+    }
+    list->N = N;
+done:
+    cJSON_Delete(root);
+    free(text);
+    free(dir);
+    if (st) rs_synth_vehicle_list_free(list);
+    return st;
+}
