@@ -13,8 +13,8 @@
 #include "geo/rs_site.h"
 #include "synth/backdrop/rs_synth_background.h"
 #include "synth/backdrop/rs_synth_opencv.h"
-#include "synth/povray/rs_synth_scene.h"
 #include "synth/backdrop/rs_synth_sun.h"
+#include "synth/povray/rs_synth_twin.h"
 
 enum { MAX_TAGS = 64 };
 

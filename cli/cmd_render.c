@@ -8,10 +8,10 @@
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_synth.h"
 #include "core/rs_io.h"
+#include "synth/backdrop/rs_synth_sun.h"
 #include "synth/labels/rs_synth_labels.h"
 #include "synth/povray/rs_synth_render.h"
 #include "synth/povray/rs_synth_sandbox.h"
-#include "synth/backdrop/rs_synth_sun.h"
 
 static const char render_usage[] =
     "usage: roadside render SITE --calib DIR --camera ID --vehicles FILE -o OUTDIR\n"

@@ -177,7 +177,7 @@ int rs_cli_traffic(int argc, char **argv)
     if (st) return rs_cli_fail(t.site_dir, st, &err);
     char *lanes_path = t.lanes_path ? strdup(t.lanes_path) : rs_io_join(t.site_dir, "lanes.geojson");
     rs_lanes lanes = {0};
-    rs_synth_traffic_vehicle *v = NULL;
+    rs_synth_vehicle *v = NULL;
     rs_synth_sumo_frames frames = {0};
     int N = 0;
     const char *what = "traffic";

@@ -6,7 +6,9 @@
 
 #include "core/rs_camera.h"
 #include "geo/rs_site.h"
+#include "synth/backdrop/rs_synth_sun.h"
 #include "synth/povray/rs_synth_scene.h"
+#include "synth/traffic/rs_synth_vehicles.h"
 
 typedef struct {
     // options

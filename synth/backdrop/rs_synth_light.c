@@ -4,6 +4,7 @@
 #include "synth/backdrop/rs_synth_light.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 

@@ -40,7 +40,6 @@ typedef struct {
 // as bright as RS_SYNTH_SKY_OVERCAST), over asphalt of albedo 0.18 lit by the sun and sky.
 void rs_synth_env_default(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3], bool overcast);
 
-
 // ---- the light a background shows (docs/backgrounds.md, "Lighting matched to the background") ----
 
 // The road's effective reflectance as POV-Ray renders it (pigment x diffuse): radiance = this x

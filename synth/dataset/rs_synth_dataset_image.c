@@ -17,14 +17,15 @@
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
 #include "geo/rs_geo.h"
+#include "synth/backdrop/rs_synth_opencv.h"
+#include "synth/backdrop/rs_synth_sun.h"
 #include "synth/dataset/internal/rs_synth_dataset_internal.h"
 #include "synth/labels/rs_synth_labels.h"
-#include "synth/backdrop/rs_synth_opencv.h"
 #include "synth/povray/rs_synth_render.h"
 #include "synth/povray/rs_synth_scene.h"
 #include "synth/traffic/rs_synth_sumo.h"
-#include "synth/backdrop/rs_synth_sun.h"
 #include "synth/traffic/rs_synth_traffic.h"
+#include "synth/traffic/rs_synth_vehicles.h"
 
 // ---- the random stream of one image ----
 
@@ -303,8 +304,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     uint64_t rng = rs_synth_dataset_image_seed(opt->seed, k);
     char name[600];
     char *work = NULL, *part_tmp = NULL, *part = NULL, *image = NULL;
-    rs_synth_traffic_vehicle *tv = NULL;
-    rs_synth_vehicle *builtin = NULL;  // (N,) the built-in traffic as scene vehicles
+    rs_synth_vehicle *tv = NULL;       // (N,) the built-in traffic
     rs_synth_vehicle_list frame = {0}; // the SUMO frame's vehicles (--traffic-frames)
     rs_synth_sumo_frame_entry frame_entry = {0};
     int frame_index = -1; // into frames.json
@@ -380,22 +380,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         rs_synth_randomise_options_default(&xopt);
         xopt.seed = r_vary;
         if ((st = rs_synth_traffic_randomise(tv, &N, &xopt, err))) goto done;
-        if (!(builtin = calloc((size_t)(N > 0 ? N : 1), sizeof(*builtin)))) {
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            goto done;
-        }
-        for (int i = 0; i < N; i++)
-            builtin[i] = (rs_synth_vehicle){.cls = tv[i].cls,
-                                            .id = tv[i].id,
-                                            .e_m = tv[i].e_m,
-                                            .n_m = tv[i].n_m,
-                                            .yaw_deg = tv[i].yaw_deg,
-                                            .length_m = tv[i].length_m,
-                                            .width_m = tv[i].width_m,
-                                            .height_m = tv[i].height_m,
-                                            .rgb = {-1, -1, -1},
-                                            .variant = tv[i].variant};
-        all = builtin;
+        all = tv;
     }
     const size_t n = (size_t)(N > 0 ? N : 1);
     v = calloc(n, sizeof(*v));
@@ -531,7 +516,6 @@ done:
     free(part);
     free(image);
     free(tv);
-    free(builtin);
     rs_synth_vehicle_list_free(&frame);
     free(v);
     free(up);

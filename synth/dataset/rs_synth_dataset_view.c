@@ -13,9 +13,9 @@
 #include "core/rs_image.h"
 #include "core/rs_io.h"
 #include "core/rs_json.h"
+#include "synth/backdrop/rs_synth_opencv.h"
 #include "synth/dataset/internal/rs_synth_dataset_internal.h"
 #include "synth/dataset/rs_synth_dataset.h"
-#include "synth/backdrop/rs_synth_opencv.h"
 
 // The colours of the legend (8-bit RGB / 255: exact in an 8-bit PNG).
 #define C8(r, g, b)                              \

@@ -197,6 +197,12 @@ rs_status rs_synth_fleet_write_declare_look(FILE *f,
                                             // in
                                             const char *name, const rs_synth_mesh *mesh, rs_synth_declare_style style,
                                             const rs_synth_look *look, rs_err *err);
+// Writes "#declare NAME = mesh2 {...}": every triangle of `mesh` in ONE bare mesh2, compact
+// (vertices to 1e-5 m), without normals: the geometry of the shadow pass, where neither the
+// parts' textures nor smooth shading matter and one mesh2 traces faster than a union of one per
+// part (issue 18's cost, docs/fleet.md). NAME as rs_synth_fleet_write_declare's.
+// Returns RS_ERR_INVALID (name, empty mesh), RS_ERR_NOMEM, RS_ERR_IO.
+rs_status rs_synth_fleet_write_merged(FILE *f, const char *name, const rs_synth_mesh *mesh, rs_err *err);
 
 // The scene's shared geometry (issue 18's cost): writes "#declare PREFIX_k = mesh2 {...}" for each
 // part k (rs_synth_part) the mesh uses, without texture, in POV-Ray axes, compact (vertices to

@@ -80,7 +80,7 @@ rs_status rs_synth_prepare_lod(rs_synth_prepared *out, const rs_synth_vehicle *v
         rs_status st = prepare_one(out, i, vehicles, obj, coarse && coarse[i], err);
         if (st) {
             char id[64];
-            rs_synth_safe_text(id, sizeof(id), vehicles[i].id ? vehicles[i].id : "");
+            rs_synth_safe_text(id, sizeof(id), vehicles[i].id);
             rs_err_prefix(err, "vehicle %d (id \"%s\")", i, id);
             rs_synth_prepared_free(out);
             return st;
@@ -88,4 +88,3 @@ rs_status rs_synth_prepare_lod(rs_synth_prepared *out, const rs_synth_vehicle *v
     }
     return RS_OK;
 }
-

@@ -20,6 +20,11 @@ void rs_synth_safe_text(char *out, size_t n, const char *s)
     out[k] = 0;
 }
 
+rs_synth_vehicle rs_synth_vehicle_init(rs_synth_class cls)
+{
+    return (rs_synth_vehicle){.cls = cls, .rgb = {-1, -1, -1}, .lane = -1};
+}
+
 // ---- the vehicle box and the ground ----
 
 double rs_synth_ground_up_m(const double ground_normal_enu[3], double ground_offset_m, double e_m, double n_m)
@@ -37,4 +42,3 @@ void rs_synth_vehicle_corners_enu(double corners_enu_m[8][3], const rs_synth_veh
         rs_synth_vehicle_to_enu(corners_enu_m[k], v, up, p_v);
     }
 }
-

@@ -39,17 +39,28 @@ typedef struct {
     double weight[RS_SYNTH_NCLASSES];
 } rs_synth_class_mix;
 
-// One vehicle in a scene. Strings are borrowed (the caller owns them).
+// One vehicle: the one type the synthesis carries from the traffic (built-in, SUMO or a vehicles
+// file) through the scene and the render to the labels. model_path is borrowed (the caller owns
+// it); everything else is held by value. rs_synth_vehicle_init gives the defaults.
 typedef struct {
     rs_synth_class cls;
     const char *model_path;             // OBJ file when cls == RS_SYNTH_USER_MODEL, else NULL
-    const char *id;                     // free-form label from the input (never trusted in scene text)
+    char id[48];                        // free-form label: "v12" (built-in traffic), SUMO's vehicle
+                                        //   id, a vehicles file's "id" (truncated to 47 bytes; never
+                                        //   trusted in scene text: rs_synth_safe_text)
     double e_m, n_m;                    // footprint centre, site ENU, metres
     double yaw_deg;                     // compass heading of the forward axis, clockwise from north
     double length_m, width_m, height_m; // bounding box; 0 = drawn from the class's ranges
     double rgb[3];                      // paint in linear [0,1]; negative = drawn from the colour mix
+    double speed_mps;                   // speed (built-in traffic: the one its gap was drawn for;
+                                        //   SUMO: FCD speed; a vehicles file: 0)
+    int lane;                           // index of the lane it was placed on, -1 if unknown
     uint64_t variant;                   // seeds the procedural shape and any drawn value
 } rs_synth_vehicle;
+
+// A vehicle of class cls with nothing else known: no model, empty id, dimensions and paint to be
+// drawn (0 and -1), speed 0, lane -1, variant 0.
+rs_synth_vehicle rs_synth_vehicle_init(rs_synth_class cls);
 
 // ---- the vehicle on the ground ----
 

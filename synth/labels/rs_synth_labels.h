@@ -22,8 +22,8 @@
 
 #include "core/rs_camera.h"
 #include "core/rs_status.h"
-#include "synth/fleet/rs_synth_vehicle.h"
 #include "synth/fleet/rs_synth_fleet.h"
+#include "synth/fleet/rs_synth_vehicle.h"
 
 #ifdef __cplusplus
 extern "C" {

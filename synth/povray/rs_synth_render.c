@@ -11,9 +11,9 @@
 #include <mrcal/poseutils.h>
 
 #include "core/rs_io.h"
+#include "synth/backdrop/rs_synth_appearance.h"
 #include "synth/povray/internal/rs_synth_povray.h"
 #include "synth/povray/internal/rs_synth_scene_internal.h"
-#include "synth/backdrop/rs_synth_appearance.h"
 #include "synth/povray/rs_synth_raster.h"
 
 void rs_synth_render_options_default(rs_synth_render_options *opt)
@@ -660,7 +660,7 @@ rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_rende
         const rs_synth_vehicle *v = &prepared->v[i];
         up[i] = rs_synth_ground_up_m(ground_normal_enu, ground_offset_m, v->e_m, v->n_m);
         meshes[i] = prepared->meshes[prepared->imesh[i]]; // shallow: borrowed arrays
-        ids[i] = v->id ? v->id : "";
+        ids[i] = v->id;
     }
     if ((st = rs_synth_labels_compute(&labels, cam, prepared->v, up, N, meshes, r->ids, err))) goto done;
     const rs_synth_label_image img = {.file_name = "image.png",

@@ -49,9 +49,9 @@
 
 #include "core/rs_camera.h"
 #include "core/rs_status.h"
+#include "synth/backdrop/rs_synth_opencv.h"
 #include "synth/fleet/rs_synth_vehicle.h"
 #include "synth/labels/rs_synth_labels.h"
-#include "synth/backdrop/rs_synth_opencv.h"
 #include "synth/povray/rs_synth_scene.h"
 
 #ifdef __cplusplus

@@ -11,7 +11,6 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
-#include "synth/fleet/internal/rs_synth_fleet_internal.h"
 #include "synth/povray/internal/rs_synth_scene_internal.h"
 
 // ---- the scene ----
@@ -411,7 +410,7 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
         if (opt.include && !opt.include[i]) continue;
         const rs_synth_vehicle *v = &vehicles->v[i];
         char id[64];
-        rs_synth_safe_text(id, sizeof(id), v->id ? v->id : "");
+        rs_synth_safe_text(id, sizeof(id), v->id);
         fprintf(f, "// vehicle %d: %s, id \"%s\"\nobject { RS_MESH_%d", i,
                 rs_synth_class_name(v->cls) ? rs_synth_class_name(v->cls) : "?", id, vehicles->imesh[i]);
         if ((st = rs_synth_fleet_write_placement(

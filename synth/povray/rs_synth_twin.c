@@ -10,6 +10,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 #include "core/rs_io.h"
 #include "core/rs_pose.h"
 #include "synth/backdrop/rs_synth_background.h"
@@ -69,11 +71,10 @@ static rs_status run_twin_povray(const char *povray, const char *work_dir, int w
     return rs_synth_povray_run(povray, work_dir, args, (int)(sizeof(args) / sizeof(args[0])), NULL, err);
 }
 
-rs_status rs_synth_twin_render(double *sun_azimuth_deg, double *sun_elevation_deg,
-                                          const char **conditions_out, const char *out_png, const char *work_dir,
-                                          const rs_site *site, const char *lanes_path, const rs_camera *camera,
-                                          double unix_time_s, const char *weather, const rs_synth_twin_options *opt,
-                                          rs_err *err)
+rs_status rs_synth_twin_render(double *sun_azimuth_deg, double *sun_elevation_deg, const char **conditions_out,
+                               const char *out_png, const char *work_dir, const rs_site *site, const char *lanes_path,
+                               const rs_camera *camera, double unix_time_s, const char *weather,
+                               const rs_synth_twin_options *opt, rs_err *err)
 {
     const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
     const double *intrinsics = camera->intrinsics, *rt_cam_enu = camera->rt_cam_enu;
@@ -186,8 +187,8 @@ rs_status rs_synth_twin_backgrounds(const char *site_dir, const rs_site *site, c
             if (w > 0 && el0 < -6.0) continue; // night whatever the weather: one image per time (rendered at w = 0)
             // render under a temporary name first: the conditions (night?) decide the final name
             snprintf(tmp, sizeof(tmp), "%s/render.png", work);
-            if ((st = rs_synth_twin_render(&az, &el, &cond, tmp, work, site, lanes, cam, unix_s, weathers[w],
-                                                      opt, err))) {
+            if ((st = rs_synth_twin_render(&az, &el, &cond, tmp, work, site, lanes, cam, unix_s, weathers[w], opt,
+                                           err))) {
                 if (st == RS_ERR_INVALID) rs_err_prefix(err, "camera %s (%s)", cam_id, calibration ? calibration : "");
                 break;
             }
@@ -232,4 +233,3 @@ rs_status rs_synth_twin_backgrounds(const char *site_dir, const rs_site *site, c
     }
     return st;
 }
-

@@ -18,8 +18,8 @@
 
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
-#include "synth/traffic/internal/rs_synth_sumo_xml.h"
 #include "synth/fleet/rs_synth_fleet.h"
+#include "synth/traffic/internal/rs_synth_sumo_xml.h"
 
 extern char **environ;
 

@@ -56,7 +56,7 @@ rs_status rs_synth_sumo_read_location( // out
 // One FCD time step.
 typedef struct {
     double time_s;
-    rs_synth_traffic_vehicle *v; // (N,) owned
+    rs_synth_vehicle *v; // (N,) owned
     int N;
 } rs_synth_sumo_frame;
 

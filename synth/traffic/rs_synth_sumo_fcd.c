@@ -14,8 +14,8 @@
 
 #include "core/rs_io.h"
 #include "core/rs_json.h"
-#include "synth/traffic/internal/rs_synth_sumo_xml.h"
 #include "synth/fleet/rs_synth_fleet.h"
+#include "synth/traffic/internal/rs_synth_sumo_xml.h"
 
 #define DEG (3.14159265358979323846 / 180.0)
 
@@ -125,14 +125,13 @@ static void fcd_vehicle(fcd_ctx *c, const XML_Char **a)
     rs_synth_sumo_frame *fr = &c->out->frame[c->out->N - 1];
     if (fr->N == c->vcap) {
         int cap = c->vcap ? 2 * c->vcap : 32;
-        rs_synth_traffic_vehicle *g = realloc(fr->v, sizeof *g * (size_t)cap);
+        rs_synth_vehicle *g = realloc(fr->v, sizeof *g * (size_t)cap);
         if (!g) return rs_synth_sumo_xml_fail(&c->x, RS_ERR_NOMEM, "vehicle", "out of memory", NULL);
         fr->v = g;
         c->vcap = cap;
     }
-    rs_synth_traffic_vehicle *v = &fr->v[fr->N++];
-    memset(v, 0, sizeof *v);
-    v->cls = t->cls;
+    rs_synth_vehicle *v = &fr->v[fr->N++];
+    *v = rs_synth_vehicle_init(t->cls);
     v->length_m = t->length_m;
     v->width_m = t->width_m;
     v->height_m = t->height_m;

@@ -59,7 +59,7 @@ static rs_status traffic_options_check(const rs_synth_traffic_options *o, rs_err
     return RS_OK;
 }
 
-rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, const rs_lanes *lanes,
+rs_status rs_synth_traffic_place(rs_synth_vehicle **vehicles, int *N, const rs_lanes *lanes,
                                  const rs_synth_traffic_options *opt, rs_err *err)
 {
     *vehicles = NULL;
@@ -68,7 +68,7 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
     if (st) return st;
     rs_rng rng;
     rs_rng_seed(&rng, opt->seed);
-    rs_synth_traffic_vehicle *v = NULL;
+    rs_synth_vehicle *v = NULL;
     int n = 0, cap = 0;
     for (int i = 0; i < lanes->N; i++) {
         const rs_lane *lane = &lanes->lane[i];
@@ -85,8 +85,7 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
         double front = L; // arc length of the next vehicle's front bumper, in travel direction
         bool first = true;
         for (;;) {
-            rs_synth_traffic_vehicle x = {0};
-            x.cls = rs_synth_class_mix_draw(&opt->mix, rs_rng_uniform(&lr));
+            rs_synth_vehicle x = rs_synth_vehicle_init(rs_synth_class_mix_draw(&opt->mix, rs_rng_uniform(&lr)));
             rs_synth_class_range r;
             rs_synth_class_range_get(&r, x.cls, NULL); // a class of the mix: always valid
             x.length_m = uniform(&lr, r.length_m[0], r.length_m[1]);
@@ -113,7 +112,7 @@ rs_status rs_synth_traffic_place(rs_synth_traffic_vehicle **vehicles, int *N, co
             front = rear;
             if (n == cap) {
                 int c2 = cap ? 2 * cap : 64;
-                rs_synth_traffic_vehicle *g = realloc(v, sizeof *g * (size_t)c2);
+                rs_synth_vehicle *g = realloc(v, sizeof *g * (size_t)c2);
                 if (!g) {
                     free(v);
                     return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
@@ -150,7 +149,7 @@ void rs_synth_randomise_options_default(rs_synth_randomise_options *opt)
 }
 
 // Footprint corners (4, 2) in ENU, counter-clockwise seen from above.
-static void footprint(double c[4][2], const rs_synth_traffic_vehicle *v)
+static void footprint(double c[4][2], const rs_synth_vehicle *v)
 {
     double f[2] = {sin(v->yaw_deg * DEG), cos(v->yaw_deg * DEG)}, l[2] = {-f[1], f[0]};
     static const double sx[4] = {1, -1, -1, 1}, sy[4] = {-1, -1, 1, 1};
@@ -159,7 +158,7 @@ static void footprint(double c[4][2], const rs_synth_traffic_vehicle *v)
             c[k][a] = (a ? v->n_m : v->e_m) + sx[k] * 0.5 * v->length_m * f[a] + sy[k] * 0.5 * v->width_m * l[a];
 }
 
-bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_synth_traffic_vehicle *b)
+bool rs_synth_footprints_overlap(const rs_synth_vehicle *a, const rs_synth_vehicle *b)
 {
     double ca[4][2], cb[4][2];
     footprint(ca, a);
@@ -183,7 +182,7 @@ bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_syn
     return true;
 }
 
-rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N, const rs_synth_randomise_options *opt,
+rs_status rs_synth_traffic_randomise(rs_synth_vehicle *vehicles, int *N, const rs_synth_randomise_options *opt,
                                      rs_err *err)
 {
     if (!(opt->sigma_along_m >= 0 && opt->sigma_across_m >= 0 && opt->yaw_range_deg >= 0 && opt->yaw_range_deg <= 180 &&
@@ -194,10 +193,10 @@ rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N,
     rs_rng_seed(&rng, opt->seed);
     int kept = 0;
     for (int i = 0; i < *N; i++) {
-        const rs_synth_traffic_vehicle x0 = vehicles[i];
+        const rs_synth_vehicle x0 = vehicles[i];
         double f[2] = {sin(x0.yaw_deg * DEG), cos(x0.yaw_deg * DEG)};
         bool ok = false;
-        rs_synth_traffic_vehicle x = x0;
+        rs_synth_vehicle x = x0;
         for (int t = 0; t < opt->tries && !ok; t++) {
             double da = opt->sigma_along_m * rs_rng_normal(&rng);
             double dc = opt->sigma_across_m * rs_rng_normal(&rng); // to the left
@@ -220,12 +219,12 @@ rs_status rs_synth_traffic_randomise(rs_synth_traffic_vehicle *vehicles, int *N,
 
 static double round_to(double x, double q) { return round(x / q) * q + 0.0; }
 
-rs_status rs_synth_traffic_write_json(const char *path, const rs_synth_traffic_vehicle *vehicles, int N, rs_err *err)
+rs_status rs_synth_traffic_write_json(const char *path, const rs_synth_vehicle *vehicles, int N, rs_err *err)
 {
     cJSON *j = cJSON_CreateArray();
     if (!j) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (int i = 0; i < N; i++) {
-        const rs_synth_traffic_vehicle *v = &vehicles[i];
+        const rs_synth_vehicle *v = &vehicles[i];
         const char *name = v->cls < RS_SYNTH_NCLASSES ? rs_synth_class_name(v->cls) : NULL;
         if (!name) {
             cJSON_Delete(j);

@@ -21,17 +21,9 @@ extern "C" {
 
 // ---- vehicles ----
 
-// A vehicle of generated traffic (built-in or SUMO). The placement follows synth/fleet/rs_synth_vehicle.h.
-typedef struct {
-    rs_synth_class cls;
-    double e_m, n_m;                    // footprint centre, site ENU, metres
-    double yaw_deg;                     // heading, clockwise from north, [0, 360)
-    double length_m, width_m, height_m; // bounding box, > 0
-    double speed_mps;                   // speed (built-in: the one its gap was drawn for; SUMO: FCD speed)
-    int lane;                           // index of the lane it was placed on, -1 if unknown (SUMO)
-    uint64_t variant;                   // seeds the fleet's shape and paint (rs_synth_vehicle.variant)
-    char id[48];                        // "v12" (built-in) or SUMO's vehicle id (truncated, as given)
-} rs_synth_traffic_vehicle;
+// Vehicles of the traffic are synth/fleet/rs_synth_vehicle.h's rs_synth_vehicle: the built-in
+// traffic and SUMO fill cls, e_m, n_m, yaw_deg (in [0, 360)), length/width/height (> 0),
+// speed_mps, lane, variant and id, and leave the paint to be drawn (rgb -1) and model_path NULL.
 
 // A bicycle's top speed in the built-in traffic: 20 km/h, SUMO's default bicycle speed (as we
 // recall DEFAULT_BICYCLE_SPEED; its bicycle-lane type map uses 5.56 m/s; docs/traffic.md).
@@ -69,7 +61,7 @@ void rs_synth_traffic_options_default(rs_synth_traffic_options *opt);
 // With count > 0, a uniformly drawn subset of count vehicles is kept (in placement order).
 // out: *vehicles (N,) owned (free()), *N. Returns RS_ERR_INVALID for bad options, RS_ERR_NOMEM.
 rs_status rs_synth_traffic_place( // out
-    rs_synth_traffic_vehicle **vehicles, int *N,
+    rs_synth_vehicle **vehicles, int *N,
     // in
     const rs_lanes *lanes, const rs_synth_traffic_options *opt, rs_err *err);
 
@@ -92,14 +84,14 @@ void rs_synth_randomise_options_default(rs_synth_randomise_options *opt);
 // 0.707 m; docs/traffic.md.) The kept vehicles are compacted to the front in their order.
 // in,out: vehicles (N,), *N (the number kept)
 rs_status rs_synth_traffic_randomise( // in,out
-    rs_synth_traffic_vehicle *vehicles, int *N,
+    rs_synth_vehicle *vehicles, int *N,
     // in
     const rs_synth_randomise_options *opt, rs_err *err);
 
 // Whether the footprints (oriented rectangles length x width at (e, n), yaw) of two vehicles
 // overlap: separating axis theorem over the four edge normals; rectangles that only touch do
 // not overlap.
-bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_synth_traffic_vehicle *b);
+bool rs_synth_footprints_overlap(const rs_synth_vehicle *a, const rs_synth_vehicle *b);
 
 // ---- output ----
 
@@ -109,7 +101,7 @@ bool rs_synth_footprints_overlap(const rs_synth_traffic_vehicle *a, const rs_syn
 // atomically (core/rs_io.h).
 rs_status rs_synth_traffic_write_json(const char *path,
                                       // in
-                                      const rs_synth_traffic_vehicle *vehicles, int N, rs_err *err);
+                                      const rs_synth_vehicle *vehicles, int N, rs_err *err);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,6 @@
 // rs_synth_vehicles_read.c -- the vehicles file (`roadside scene --vehicles`, rs_synth_scene.h:
 // rs_synth_vehicles_read), read with cJSON; every problem named by file, vehicle index and field.
-#include "synth/povray/rs_synth_scene.h"
+#include "synth/traffic/rs_synth_vehicles.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -90,8 +90,7 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
     rs_synth_obj_spec *obj = &list->obj[i];
     rs_status st;
     if (!cJSON_IsObject(o)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object", path, i);
-    memset(v, 0, sizeof(*v));
-    v->rgb[0] = v->rgb[1] = v->rgb[2] = -1;
+    *v = rs_synth_vehicle_init(RS_SYNTH_SEDAN); // the class is set below
     v->variant = (uint64_t)i;
     const char *cls = get_string(o, "class"), *model = get_string(o, "model");
     if (!!cls == !!model)
@@ -144,7 +143,7 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
     const cJSON *id = cJSON_GetObjectItemCaseSensitive(o, "id");
     if (id) {
         if (!cJSON_IsString(id)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].id: expected a string", path, i);
-        if (!(v->id = list_keep(list, id->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        snprintf(v->id, sizeof v->id, "%s", id->valuestring);
     }
     return RS_OK;
 }

@@ -27,7 +27,7 @@ int main(int argc, char **argv)
         rs_synth_traffic_options opt;
         rs_synth_traffic_options_default(&opt);
         opt.seed = (uint64_t)s;
-        rs_synth_traffic_vehicle *v = NULL;
+        rs_synth_vehicle *v = NULL;
         int N = 0;
         rs_err err = {0};
         if (rs_synth_traffic_place(&v, &N, &lanes, &opt, &err)) {

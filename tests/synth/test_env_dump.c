@@ -15,9 +15,9 @@
 #include "geo/rs_lanes.h"
 #include "geo/rs_site.h"
 #include "synth/backdrop/rs_synth_appearance.h"
+#include "synth/backdrop/rs_synth_sun.h"
 #include "synth/povray/rs_synth_render.h"
 #include "synth/povray/rs_synth_scene.h"
-#include "synth/backdrop/rs_synth_sun.h"
 
 int main(int argc, char **argv)
 {

@@ -22,7 +22,7 @@
 #define DEG (3.14159265358979323846 / 180.0)
 
 // Inside the footprint rectangle of v, with a margin (negative: strictly inside by -margin).
-static int inside(const rs_synth_traffic_vehicle *v, double e, double n, double margin)
+static int inside(const rs_synth_vehicle *v, double e, double n, double margin)
 {
     double f[2] = {sin(v->yaw_deg * DEG), cos(v->yaw_deg * DEG)};
     double de = e - v->e_m, dn = n - v->n_m;
@@ -38,7 +38,7 @@ static int test_sat(void)
     const double h = 0.02;
     int fails = 0, Noverlap = 0, Nambiguous = 0;
     for (int t = 0; t < 20000; t++) {
-        rs_synth_traffic_vehicle a = {0}, b = {0};
+        rs_synth_vehicle a = {0}, b = {0};
         a.length_m = 1 + 5 * rs_rng_uniform(&rng);
         a.width_m = 0.5 + 2 * rs_rng_uniform(&rng);
         a.yaw_deg = 360 * rs_rng_uniform(&rng);
@@ -114,7 +114,7 @@ int main(int argc, char **argv)
         }
         for (int i = 0; i < fr.N; i++)
             for (int k = 0; k < fr.frame[i].N; k++) {
-                const rs_synth_traffic_vehicle *v = &fr.frame[i].v[k];
+                const rs_synth_vehicle *v = &fr.frame[i].v[k];
                 printf("%s %.6f %.6f %.6f\n", v->id, v->e_m, v->n_m, v->yaw_deg);
             }
         rs_synth_sumo_frames_free(&fr);

@@ -23,9 +23,10 @@
 #include "geo/rs_lanes.h"
 #include "geo/rs_site.h"
 #include "synth/backdrop/rs_synth_appearance.h"
-#include "synth/povray/rs_synth_camera.h"
-#include "synth/dataset/rs_synth_dataset.h"
+#include "synth/backdrop/rs_synth_light.h"
 #include "synth/backdrop/rs_synth_sun.h"
+#include "synth/dataset/rs_synth_dataset.h"
+#include "synth/povray/rs_synth_camera.h"
 
 // One background an image may be drawn over.
 typedef struct {

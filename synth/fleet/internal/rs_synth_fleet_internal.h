@@ -52,10 +52,3 @@ void rs_synth_fleet_orient(rs_synth_fleet_builder *b, int t0);
 // area-weighted mean of the normals of the triangles sharing that vertex whose normal is within
 // crease_deg of this triangle's; identical corner normals of a vertex are stored once.
 void rs_synth_fleet_smooth(rs_synth_fleet_builder *b, double crease_deg);
-
-// Writes "#declare NAME = mesh2 {...}": every triangle of `mesh` in ONE bare mesh2, compact
-// (vertices to 1e-5 m), without normals: the geometry of the shadow pass, where neither the
-// parts' textures nor smooth shading matter and one mesh2 traces faster than a union of one per
-// part (issue 18's cost, docs/fleet.md). NAME as rs_synth_fleet_write_declare's.
-// Returns RS_ERR_INVALID (name, empty mesh), RS_ERR_NOMEM, RS_ERR_IO.
-rs_status rs_synth_fleet_write_merged(FILE *f, const char *name, const rs_synth_mesh *mesh, rs_err *err);
