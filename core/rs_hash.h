@@ -3,6 +3,8 @@
 // library of its own (core_hash_dep in core/meson.build), so that only the rooms that call it
 // link libcrypto.
 #pragma once
+#include <stddef.h>
+
 #include "core/rs_status.h"
 
 #ifdef __cplusplus
@@ -16,6 +18,13 @@ rs_status rs_hash_sha256_file( // out
     char hex[65], long long *bytes,
     // in
     const char *path, rs_err *err);
+
+// SHA-256 of n bytes at data (NULL allowed when n == 0), as rs_hash_sha256_file gives it:
+// `printf ... | sha256sum` prints the same. Errors: RS_ERR_EXTERNAL (OpenSSL).
+rs_status rs_hash_sha256_buffer( // out
+    char hex[65],
+    // in
+    const void *data, size_t n, rs_err *err);
 
 #ifdef __cplusplus
 }

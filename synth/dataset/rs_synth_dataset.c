@@ -153,6 +153,7 @@ static void dataset_free(rs_synth_dataset__run *d)
         free(d->cams[i].calib_path);
     }
     free(d->cams);
+    free(d->frames);
     rs_lanes_free(&d->lanes);
     rs_site_free(d->site);
     free(d->split_dir[0]);
@@ -369,28 +370,6 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
     free(text);
     cJSON_Delete(doc);
     return st;
-}
-
-int rs_synth_dataset__image_split(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c)
-{
-    const rs_synth_dataset_options *opt = d->opt;
-    if (opt->val_fraction > 0) {
-        // a stream of its own (seed, k, "val"): the images' streams stay as they were
-        const uint64_t h = rs_synth_dataset_image_seed(opt->seed ^ 0x76616c5f73706c74ULL, k);
-        if ((double)(h >> 11) * 0x1.0p-53 < opt->val_fraction) return 1;
-    }
-    for (int i = 0; i < opt->Nval_cameras; i++)
-        if (strcmp(opt->val_cameras[i], c->id) == 0) return 1;
-    if (opt->Nval_bg > 0) {
-        const int b = rs_synth_dataset__image_background(d, k, c);
-        bool all = b >= 0;
-        for (int f = 0; f < opt->Nval_bg && all; f++) {
-            const char *v = rs_site_background_tag(c->bg[b].src, opt->val_bg_keys[f]);
-            all = v && strcmp(v, opt->val_bg_values[f]) == 0;
-        }
-        if (all) return 1;
-    }
-    return 0;
 }
 
 // Whether any image can go to the validation split.
@@ -625,8 +604,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     rs_synth_traffic_frames_info frames = {0};
     rs_status st = dataset_load(&d, err);
     // SUMO's frames, every one read and checked before DATASET is touched
-    if (!st && opt->traffic_frames_dir)
-        st = rs_synth_dataset_traffic_frames_check(&frames, opt->traffic_frames_dir, err);
+    if (!st && opt->traffic_frames_dir) st = rs_synth_dataset__frames_load(&d, &frames, err);
     if (st) goto done;
     // One run per dataset folder: a second one would remake the same images in the same work/
     // folders. The lock is taken before anything in DATASET is touched (but DATASET itself).

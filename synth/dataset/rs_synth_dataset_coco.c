@@ -458,41 +458,6 @@ rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char 
     return st;
 }
 
-// ---- the SUMO frame of an image (--traffic-frames) ----
-
-rs_status rs_synth_dataset__coco_set_traffic_frame(const char *part_path, const char *file, double time_s, int index,
-                                                   rs_err *err)
-{
-    char *text = NULL;
-    size_t len = 0;
-    cJSON *doc = NULL;
-    rs_status st = rs_io_read_file(&text, &len, part_path, err);
-    if (!st) st = rs_json_parse(&doc, text, 0, len, part_path, err);
-    free(text);
-    if (st) return st;
-    const cJSON *images = cJSON_GetObjectItemCaseSensitive(doc, "images");
-    cJSON *im;
-    if (!cJSON_IsArray(images)) st = rs_err_set(err, RS_ERR_PARSE, "%s: images: expected a list", part_path);
-    cJSON_ArrayForEach(im, images)
-    {
-        cJSON *f = cJSON_CreateObject();
-        if (!f || !cJSON_AddStringToObject(f, "file", file) || !cJSON_AddNumberToObject(f, "time_s", time_s) ||
-            !cJSON_AddNumberToObject(f, "index", index)) {
-            cJSON_Delete(f);
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-            break;
-        }
-        cJSON_DeleteItemFromObjectCaseSensitive(im, "traffic_frame");
-        cJSON_AddItemToObject(im, "traffic_frame", f);
-    }
-    char *out = st ? NULL : cJSON_PrintUnformatted(doc); // as rs_synth_labels_write_coco prints it
-    cJSON_Delete(doc);
-    if (!st && !out) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    if (!st) st = rs_io_write_file(part_path, out, strlen(out), err);
-    free(out);
-    return st;
-}
-
 rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns, int *Nleft_out, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;

@@ -27,21 +27,6 @@
 #include "synth/traffic/rs_synth_traffic.h"
 #include "synth/traffic/rs_synth_vehicles.h"
 
-// ---- the random stream of one image ----
-
-// The stream of image k: splitmix64 (core/rs_rng.h) from rs_rng_seed_derive(seed, k), stepped
-// by rs_rng_seed_next. Its draws, in order: rs_synth_dataset.h ("traffic from SUMO's frames").
-uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k) { return rs_rng_seed_derive(seed, (uint64_t)k); }
-
-static uint64_t rng_next(uint64_t *s) { return rs_rng_seed_next(s); }
-
-int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c)
-{
-    if (c->Nbg <= 0) return -1;
-    uint64_t rng = rs_synth_dataset_image_seed(d->opt->seed, k);
-    return (int)(rng_next(&rng) % (uint64_t)c->Nbg); // the stream's first draw
-}
-
 // ---- the background ----
 
 // The background at the camera's size (linear resampling when it differs), decoded to linear
@@ -161,105 +146,6 @@ done:
     return st;
 }
 
-// ---- traffic from SUMO's frames (--traffic-frames) ----
-
-// Frame i of DIR (index entry e) read as a vehicles file (rs_synth_vehicles_read: the one reader
-// of that format) and checked for what synth needs: the count the index states, class vehicles
-// with their box. On error *list is left empty.
-static rs_status read_frame(rs_synth_vehicle_list *list, const char *dir, const rs_synth_sumo_frame_entry *e, int i,
-                            rs_err *err)
-{
-    memset(list, 0, sizeof(*list));
-    char *path = rs_io_join(dir, e->file);
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    rs_status st = rs_synth_vehicles_read(list, path, err);
-    if (!st && list->N != e->vehicles)
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: %d vehicles, but %s/frames.json [%d].vehicles says %d", path, list->N,
-                        dir, i, e->vehicles);
-    for (int j = 0; !st && j < list->N; j++) {
-        const rs_synth_vehicle *v = &list->v[j];
-        const char *missing = !(v->length_m > 0) ? "length" : !(v->width_m > 0) ? "width" : "height";
-        if (v->cls == RS_SYNTH_USER_MODEL)
-            st = rs_err_set(err, RS_ERR_INVALID, "%s: [%d].model: a traffic frame holds class vehicles only", path, j);
-        else if (!(v->length_m > 0 && v->width_m > 0 && v->height_m > 0))
-            st = rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: missing (a traffic frame gives every vehicle's box)",
-                            path, j, missing);
-    }
-    if (st) rs_synth_vehicle_list_free(list);
-    free(path);
-    return st;
-}
-
-// DIR/frames.json with at least one frame.
-static rs_status read_index(rs_synth_sumo_frame_entry **entries, int *N, const char *dir, rs_err *err)
-{
-    rs_status st = rs_synth_sumo_frames_index_read(entries, N, dir, err);
-    if (!st && *N == 0)
-        st = rs_err_set(err, RS_ERR_INVALID, "%s/frames.json: no frames (an empty list): no traffic to take", dir);
-    return st;
-}
-
-rs_status rs_synth_dataset_traffic_frames_check(rs_synth_traffic_frames_info *info, const char *dir, rs_err *err)
-{
-    memset(info, 0, sizeof(*info));
-    rs_synth_sumo_frame_entry *e = NULL;
-    int N = 0;
-    rs_status st = read_index(&e, &N, dir, err);
-    if (st) return st;
-    // the manifest, as sha256sum prints it, hashed through a temporary file (core's SHA-256)
-    const char *tmpdir = getenv("TMPDIR");
-    char manifest[4200], hex[65];
-    snprintf(manifest, sizeof(manifest), "%s/roadside-frames-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
-    const int fd = mkstemp(manifest);
-    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
-    if (!f) {
-        if (fd >= 0) close(fd), remove(manifest);
-        free(e);
-        return rs_err_set(err, RS_ERR_IO, "%s: %s", manifest, strerror(errno));
-    }
-    char *index = rs_io_join(dir, "frames.json");
-    if (!index) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    if (!st && !(st = rs_hash_sha256_file(hex, NULL, index, err))) fprintf(f, "%s  frames.json\n", hex);
-    for (int i = 0; i < N && !st; i++) {
-        rs_synth_vehicle_list list;
-        if ((st = read_frame(&list, dir, &e[i], i, err))) break;
-        info->Nvehicles += list.N;
-        rs_synth_vehicle_list_free(&list);
-        char *path = rs_io_join(dir, e[i].file);
-        st = path ? rs_hash_sha256_file(hex, NULL, path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        if (!st) fprintf(f, "%s  %s\n", hex, e[i].file);
-        free(path);
-    }
-    if (fclose(f) != 0 && !st) st = rs_err_set(err, RS_ERR_IO, "%s: %s", manifest, strerror(errno));
-    if (!st) st = rs_hash_sha256_file(info->sha256, NULL, manifest, err);
-    remove(manifest);
-    if (!st) info->Nframes = N;
-    free(index);
-    free(e);
-    return st;
-}
-
-// The vehicles of image k from DIR: frame r_frame mod Nframes, each vehicle i's variant
-// rs_rng_seed_derive(r_looks, i) >> 11 (53 bits, as the built-in traffic draws them).
-// out: *which, *iwhich: the frame's frames.json entry and its index there
-static rs_status frame_vehicles(rs_synth_vehicle_list *list, rs_synth_sumo_frame_entry *which, int *iwhich,
-                                const char *dir, uint64_t r_frame, uint64_t r_looks, rs_err *err)
-{
-    rs_synth_sumo_frame_entry *e = NULL;
-    int N = 0;
-    memset(list, 0, sizeof(*list));
-    rs_status st = read_index(&e, &N, dir, err);
-    if (!st) {
-        const int i = (int)(r_frame % (uint64_t)N);
-        st = read_frame(list, dir, &e[i], i, err);
-        *which = e[i];
-        *iwhich = i;
-    }
-    for (int j = 0; !st && j < list->N; j++) list->v[j].variant = rs_rng_seed_derive(r_looks, (uint64_t)j) >> 11;
-    free(e);
-    return st;
-}
-
 // ---- one image ----
 
 rs_status rs_synth_dataset__link_into(const rs_synth_dataset__run *d, const char *src, const char *rel, rs_err *err)
@@ -288,181 +174,280 @@ rs_status rs_synth_dataset__link_into(const rs_synth_dataset__run *d, const char
     return st;
 }
 
-void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id)
-{
-    snprintf(stem, n, "%06d_%s", k, camera_id);
-    for (char *p = stem; *p; p++)
-        if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_' ||
-              *p == '-'))
-            *p = '_';
-}
-
-rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
-                                       bool *grey, double *seconds_povray, rs_err *err)
+// The render options of image k: the camera's canvas, and over a background the sun of its time
+// tag (or of its poles' shadows) and the lights and environment matched to it. Consumes the
+// stream's first draw (the background's). out: *ropt, *b (the background, NULL: the grey
+// ground).
+static rs_status image_render_options(rs_synth_render_options *ropt, const rs_synth_dataset__background **b,
+                                      rs_synth_dataset__run *d, int k, rs_synth_dataset__camera *c, uint64_t *rng,
+                                      rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
-    uint64_t rng = rs_synth_dataset_image_seed(opt->seed, k);
-    char name[600];
-    char *work = NULL, *part_tmp = NULL, *part = NULL, *image = NULL;
-    rs_synth_vehicle *tv = NULL;       // (N,) the built-in traffic
-    rs_synth_vehicle_list frame = {0}; // the SUMO frame's vehicles (--traffic-frames)
-    rs_synth_sumo_frame_entry frame_entry = {0};
-    int frame_index = -1; // into frames.json
-    rs_synth_vehicle *v = NULL;
-    rs_synth_prepared prepared = {0};
-    rs_synth_render_result r = {0};
-    const rs_synth_dataset__background *b = NULL;
-    rs_synth_label *labels = NULL;
-    double *up = NULL;
-    rs_synth_mesh *meshes = NULL;
-    const char **ids = NULL;
-    uint8_t *coarse = NULL; // (N,) vehicle i gets the coarse mesh
-    int N = 0;
+    rs_synth_render_options_default(ropt);
+    ropt->povray = opt->povray;
+    ropt->write_files = false;                               // the dataset composites and writes the image itself
+    rs_status st = rs_synth_dataset__prepare_camera(c, err); // done already when the parent did it
+    if (st) return st;
+    ropt->canvas = &c->canvas;
+    ropt->canvas_map = c->canvas_map;
+    ropt->separate_processes = opt->separate_processes;
+    ropt->full_frame = opt->full_frame;
+    (void)rs_rng_seed_next(rng); // the background's draw (rs_synth_dataset__image_background)
+    *b = NULL;
+    if (c->Nbg <= 0) {
+        ropt->scene.ground_visible = true; // neutral grey ground rendered by POV-Ray
+        return RS_OK;
+    }
+    rs_synth_dataset__background *bm = &c->bg[rs_synth_dataset__image_background(d, k, c)];
+    if ((st = rs_synth_dataset__prepare_background(d, c, bm, err))) return st; // (or the parent did)
+    *b = bm;
+    // the vehicles alone over transparency; composite() puts them onto the background
+    ropt->scene.ground_visible = false;
+    ropt->scene.overcast = bm->overcast;
+    ropt->shadow = opt->shadows && !bm->night;
+    double t_s;
+    if (bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK)
+        rs_synth_sun_position(&ropt->scene.sun_azimuth_deg, &ropt->scene.sun_elevation_deg, d->site->origin.lat_deg,
+                              d->site->origin.lon_deg, t_s);
+    else if (bm->sun_ok) // no time: the sun the poles' shadows show
+        ropt->scene.sun_azimuth_deg = bm->sun.azimuth_deg, ropt->scene.sun_elevation_deg = bm->sun.elevation_deg;
+    if (bm->light_ok) {
+        rs_synth_env_estimate env; // the environment the vehicles reflect: the background's own
+        const bool env_ok = !rs_synth_env_from_image(&env, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL);
+        rs_synth_scene_match_background(&ropt->scene, &bm->light, env_ok ? &env : NULL);
+    }
+    return RS_OK;
+}
+
+// The vehicles of one image: the site's traffic (the built-in one, or one frame of SUMO's:
+// rs_synth_dataset.h gives the draws), of which those the camera sees (their box meets the
+// canvas: culled here, once; render takes their rectangles as they are), at most opt->vehicles
+// of them, a uniformly drawn subset kept in placement order: the traffic of the whole site
+// would leave most images nearly empty.
+typedef struct {
+    rs_synth_vehicle *v; // (N,) owned: the vehicles rendered
+    int (*rect)[4];      // (N,) owned: each one's canvas rectangle (rs_synth_vehicle_rect)
+    uint8_t *coarse;     // (N,) owned: 1 = the coarse mesh (smaller than opt->coarse_below_px)
+    int N;
+    int iframe; // the SUMO frame's index in frames.json, -1 for the built-in traffic
+} image_traffic;
+
+static void image_traffic_free(image_traffic *t)
+{
+    free(t->v);
+    free(t->rect);
+    free(t->coarse);
+    memset(t, 0, sizeof(*t));
+}
+
+// The site's vehicles before the camera picks among them. out: *all (N,) owned by *owned_list
+// (SUMO) or *owned (built-in)
+static rs_status site_traffic(const rs_synth_vehicle **all, int *N, rs_synth_vehicle_list *owned_list,
+                              rs_synth_vehicle **owned, int *iframe, const rs_synth_dataset__run *d, uint64_t *rng,
+                              rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    const uint64_t r_traffic = rs_rng_seed_next(rng);
+    const uint64_t r_vary = rs_rng_seed_next(rng);
     rs_status st;
-
-    work = rs_io_join(d->work_root, stem);
-    if (!work) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    rs_io_remove_tree(work); // a previous, interrupted attempt
-    if ((st = rs_io_mkdir_p(work, err))) goto done;
-
-    rs_synth_render_options ropt;
-    rs_synth_render_options_default(&ropt);
-    ropt.povray = opt->povray;
-    ropt.write_files = false; // the dataset composites and writes the image itself
-    if ((st = rs_synth_dataset__prepare_camera(c, err))) goto done; // done already when the parent did it
-    ropt.canvas = &c->canvas;
-    ropt.canvas_map = c->canvas_map;
-    ropt.separate_processes = opt->separate_processes;
-    ropt.full_frame = opt->full_frame;
-    (void)rng_next(&rng); // the background's draw (rs_synth_dataset__image_background)
-    if (c->Nbg > 0) {
-        rs_synth_dataset__background *bm = &c->bg[rs_synth_dataset__image_background(d, k, c)];
-        b = bm;
-        if ((st = rs_synth_dataset__prepare_background(d, c, bm, err))) goto done; // (or the parent did)
-        // the vehicles alone over transparency; composite() puts them onto the background
-        ropt.scene.ground_visible = false;
-        ropt.scene.overcast = b->overcast;
-        ropt.shadow = opt->shadows && !b->night;
-        double t_s;
-        if (b->time_iso && rs_synth_parse_iso8601(&t_s, b->time_iso, "time", NULL) == RS_OK)
-            rs_synth_sun_position(&ropt.scene.sun_azimuth_deg, &ropt.scene.sun_elevation_deg, d->site->origin.lat_deg,
-                                  d->site->origin.lon_deg, t_s);
-        else if (b->sun_ok) // no time: the sun the poles' shadows show
-            ropt.scene.sun_azimuth_deg = b->sun.azimuth_deg, ropt.scene.sun_elevation_deg = b->sun.elevation_deg;
-        if (b->light_ok) {
-            rs_synth_env_estimate env; // the environment the vehicles reflect: the background's own
-            const bool env_ok = !rs_synth_env_from_image(&env, &b->linear, &c->cam, d->site, &d->lanes, 4, NULL);
-            rs_synth_scene_match_background(&ropt.scene, &b->light, env_ok ? &env : NULL);
-        }
-        *grey = false;
-    } else {
-        ropt.scene.ground_visible = true; // neutral grey ground rendered by POV-Ray
-        *grey = true;
-    }
-
-    // the traffic: the built-in one, or one frame of SUMO's (rs_synth_dataset.h gives the draws)
-    const uint64_t r_traffic = rng_next(&rng);
-    const uint64_t r_vary = rng_next(&rng);
-    const rs_synth_vehicle *all = NULL; // (N,) every vehicle of the site, borrowed
     if (opt->traffic_frames_dir) {
-        if ((st = frame_vehicles(&frame, &frame_entry, &frame_index, opt->traffic_frames_dir, r_traffic, r_vary, err)))
-            goto done;
-        all = frame.v;
-        N = frame.N;
-    } else {
-        rs_synth_traffic_options topt;
-        rs_synth_traffic_options_default(&topt);
-        topt.seed = r_traffic;
-        topt.count = 0; // every vehicle that fits; the camera's view picks among them below
-        topt.junction_lanes = opt->junction_traffic;
-        if ((st = rs_synth_traffic_place(&tv, &N, &d->lanes, &topt, err))) goto done;
-        rs_synth_randomise_options xopt;
-        rs_synth_randomise_options_default(&xopt);
-        xopt.seed = r_vary;
-        if ((st = rs_synth_traffic_randomise(tv, &N, &xopt, err))) goto done;
-        all = tv;
+        if ((st = rs_synth_dataset__frame_vehicles(owned_list, iframe, d, r_traffic, r_vary, err))) return st;
+        *all = owned_list->v;
+        *N = owned_list->N;
+        return RS_OK;
     }
+    rs_synth_traffic_options topt;
+    rs_synth_traffic_options_default(&topt);
+    topt.seed = r_traffic;
+    topt.count = 0; // every vehicle that fits; the camera's view picks among them below
+    topt.junction_lanes = opt->junction_traffic;
+    if ((st = rs_synth_traffic_place(owned, N, &d->lanes, &topt, err))) return st;
+    rs_synth_randomise_options xopt;
+    rs_synth_randomise_options_default(&xopt);
+    xopt.seed = r_vary;
+    if ((st = rs_synth_traffic_randomise(*owned, N, &xopt, err))) return st;
+    *all = *owned;
+    return RS_OK;
+}
+
+static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d, const rs_synth_dataset__camera *c,
+                                uint64_t *rng, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    memset(t, 0, sizeof(*t));
+    t->iframe = -1;
+    rs_synth_vehicle_list frame = {0};
+    rs_synth_vehicle *builtin = NULL;
+    const rs_synth_vehicle *all = NULL;
+    int N = 0;
+    rs_status st = site_traffic(&all, &N, &frame, &builtin, &t->iframe, d, rng, err);
     const size_t n = (size_t)(N > 0 ? N : 1);
-    v = calloc(n, sizeof(*v));
-    up = malloc(n * sizeof(double));
-    meshes = malloc(n * sizeof(rs_synth_mesh));
-    ids = malloc(n * sizeof(char *));
-    coarse = calloc(n, 1);
-    if (!v || !up || !meshes || !ids || !coarse) {
+    if (!st &&
+        (!(t->v = calloc(n, sizeof(*t->v))) || !(t->rect = calloc(n, sizeof(*t->rect))) || !(t->coarse = calloc(n, 1))))
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    // The vehicles the camera sees (their box meets the image), at most opt->vehicles of them,
-    // a uniformly drawn subset kept in placement order: the traffic of the whole site would
-    // leave most images nearly empty.
     int Nseen = 0;
-    for (int i = 0; i < N; i++) {
-        const rs_synth_vehicle vi = all[i];
+    for (int i = 0; i < N && !st; i++) {
         double corners[8][3];
-        int rect[4];
-        rs_synth_vehicle_corners_enu(corners, &vi, d->site->ground_normal_enu, d->site->ground_offset_m);
-        if (rs_synth_vehicle_rect(rect, c->canvas.fxycxy, c->canvas.width, c->canvas.height, c->cam.rt_cam_enu,
-                                  (const double(*)[3])corners, 0.05)) {
-            coarse[Nseen] = rect[3] - rect[1] + 1 < opt->coarse_below_px;
-            v[Nseen++] = vi;
+        rs_synth_vehicle_corners_enu(corners, &all[i], d->site->ground_normal_enu, d->site->ground_offset_m);
+        if (rs_synth_vehicle_rect(t->rect[Nseen], c->canvas.fxycxy, c->canvas.width, c->canvas.height,
+                                  c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
+            t->coarse[Nseen] = t->rect[Nseen][3] - t->rect[Nseen][1] + 1 < opt->coarse_below_px;
+            t->v[Nseen++] = all[i];
         }
     }
-    const uint64_t r_pick = rng_next(&rng);
-    if (Nseen > opt->vehicles) {
+    const uint64_t r_pick = st ? 0 : rs_rng_seed_next(rng);
+    if (!st && Nseen > opt->vehicles) {
         // selection sampling (Knuth, TAOCP vol. 2, Algorithm S): keep each with probability
         // (still needed) / (still left), in order
         uint64_t s_pick = r_pick;
         int kept = 0;
         for (int i = 0; i < Nseen && kept < opt->vehicles; i++) {
-            const double u01 = (double)(rng_next(&s_pick) >> 11) * 0x1.0p-53;
+            const double u01 = (double)(rs_rng_seed_next(&s_pick) >> 11) * 0x1.0p-53;
             if (u01 * (Nseen - i) < opt->vehicles - kept) {
-                coarse[kept] = coarse[i];
-                v[kept++] = v[i];
+                t->coarse[kept] = t->coarse[i];
+                memcpy(t->rect[kept], t->rect[i], sizeof(t->rect[i]));
+                t->v[kept++] = t->v[i];
             }
         }
         Nseen = kept;
     }
-    N = Nseen;
-    for (int i = 0; i < N; i++) ids[i] = v[i].id;
-    if ((st = rs_synth_prepare_lod(&prepared, v, NULL, N, coarse, err))) goto done;
-    const rs_camera *cam = &c->cam;
-    if ((st = rs_synth_render(&r, work, cam, d->site->ground_normal_enu, d->site->ground_offset_m, &prepared, &ropt,
-                              err)))
-        goto done;
-    *seconds_povray += r.seconds_povray;
-    const uint64_t r_look = rng_next(&rng);
-    if (b && (st = composite(&r, b, r_look, err))) goto done;
-    for (int i = 0; i < N; i++) {
-        up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m, prepared.v[i].e_m,
-                                     prepared.v[i].n_m);
-        meshes[i] = prepared.meshes[prepared.imesh[i]];
-    }
-    if ((st = rs_synth_labels_compute(&labels, cam, prepared.v, up, N, meshes, r.ids, err))) goto done;
-    for (int i = 0; i < N; i++) // latitude, longitude of each bottom centre (GeographicLib)
-        if ((st = rs_geo_enu_to_llh(labels[i].bottom_center_llh, &d->site->origin, labels[i].bottom_center_enu_m, 1,
-                                    err)))
-            goto done;
-    const int split = rs_synth_dataset__image_split(d, k, c);
-    const char *split_name = d->split[split];
-    char file_name[320], kitti_name[32];
-    snprintf(file_name, sizeof(file_name), "%s.png", stem);
-    snprintf(kitti_name, sizeof(kitti_name), "%06d.png", k); // KITTI's numeric names
+    t->N = Nseen;
+    rs_synth_vehicle_list_free(&frame);
+    free(builtin);
+    if (st) image_traffic_free(t);
+    return st;
+}
+
+// What the COCO writer records of image k (rs_synth_image_info; docs/labels.md).
+static rs_synth_image_info image_info(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c,
+                                      const rs_synth_dataset__background *b, const rs_synth_render_options *ropt,
+                                      int iframe)
+{
     rs_synth_image_info info = {.index = k,
                                 .camera = c->id,
                                 .background = b ? (b->src->name ? b->src->name : b->src->file) : NULL,
                                 .weather = b ? rs_site_background_tag(b->src, "conditions") : NULL,
                                 .time_iso = b ? b->time_iso : NULL,
-                                .sun_azimuth_deg = ropt.scene.sun_azimuth_deg,
-                                .sun_elevation_deg = ropt.scene.sun_elevation_deg,
+                                .sun_azimuth_deg = ropt->scene.sun_azimuth_deg,
+                                .sun_elevation_deg = ropt->scene.sun_elevation_deg,
                                 .camera_model = c->model_rel,
                                 .camera_model_sha256 = c->model_sha256,
                                 .calib_source = c->calib_path,
                                 .calib_source_sha256 = c->calib_sha256,
                                 .ground_offset_m = d->site->ground_offset_m};
     memcpy(info.ground_normal_enu, d->site->ground_normal_enu, sizeof(info.ground_normal_enu));
-    info.time_of_day = (b && b->night) || ropt.scene.sun_elevation_deg < -6 ? "night"
-                       : ropt.scene.sun_elevation_deg < 6                   ? "twilight"
-                                                                            : "day";
+    info.time_of_day = (b && b->night) || ropt->scene.sun_elevation_deg < -6 ? "night"
+                       : ropt->scene.sun_elevation_deg < 6                   ? "twilight"
+                                                                             : "day";
+    if (iframe >= 0) {
+        info.traffic_frame_file = d->frames[iframe].file;
+        info.traffic_frame_time_s = d->frames[iframe].time_s;
+        info.traffic_frame_index = iframe;
+    }
+    return info;
+}
+
+// Image k's files: YOLO, KITTI and the image, then the per-image COCO file last (written in
+// work, renamed into parts/<stem>.json): it marks the image done.
+static rs_status image_files(const rs_synth_dataset__run *d, int k, const char *stem, const char *work,
+                             const rs_synth_dataset__camera *c, const rs_synth_render_result *r,
+                             const rs_synth_label_image *img, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    const int split = rs_synth_dataset__image_split(d, k, c);
+    const char *split_name = d->split[split];
+    char name[600], kitti_name[32];
+    snprintf(kitti_name, sizeof(kitti_name), "%06d.png", k); // KITTI's numeric names
+    rs_synth_label_image kimg = *img;
+    kimg.file_name = kitti_name;
+    const rs_synth_label_options lopt = {.bbox = (rs_synth_bbox_kind)opt->bbox,
+                                         .min_visibility = opt->min_visibility,
+                                         .drop_invisible = !opt->keep_invisible};
+    char *image = rs_io_join(d->split_dir[split], img->file_name);
+    snprintf(name, sizeof(name), "annotations/instances_%s.json", split_name);
+    char *part_tmp = rs_io_join(work, name);
+    snprintf(name, sizeof(name), "%s.json", stem);
+    char *part = rs_io_join(d->parts_dir, name);
+    char *kitti_dir = rs_io_join(opt->out_dir, "kitti/training");
+    char yolo_image[600], kitti_image[600], kitti_calib[600];
+    snprintf(yolo_image, sizeof(yolo_image), "images/%s/%s", split_name, img->file_name);
+    snprintf(kitti_image, sizeof(kitti_image), "kitti/training/image_2/%s", kitti_name);
+    snprintf(kitti_calib, sizeof(kitti_calib), "kitti/training/calib/%06d.txt", k);
+    char *kitti_calib_path = rs_io_join(opt->out_dir, kitti_calib);
+    rs_status st = RS_OK;
+    if (!image || !part_tmp || !part || !kitti_dir || !kitti_calib_path)
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st && !(st = rs_synth_labels_write_yolo(opt->out_dir, split_name, img, 1, &lopt, err)) &&
+        !(st = rs_synth_labels_write_kitti(kitti_dir, &kimg, 1, &lopt, err)) &&
+        !(st = rs_image_write(image, &r->composite, 8, err)) &&
+        !(st = rs_synth_dataset__link_into(d, image, yolo_image, err)) &&
+        !(st = rs_synth_dataset__link_into(d, image, kitti_image, err)) &&
+        !(st = rs_synth_labels_write_kitti_calib(kitti_calib_path, &c->cam, err)) &&
+        !(st = rs_synth_labels_write_coco(work, split_name, img, 1, &lopt, err)) && rename(part_tmp, part) != 0)
+        st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
+    free(kitti_calib_path);
+    free(kitti_dir);
+    free(part);
+    free(part_tmp);
+    free(image);
+    return st;
+}
+
+rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
+                                       bool *grey, double *seconds_povray, rs_err *err)
+{
+    uint64_t rng = rs_synth_dataset_image_seed(d->opt->seed, k);
+    image_traffic t = {0};
+    rs_synth_prepared prepared = {0};
+    rs_synth_render_result r = {0};
+    rs_synth_label *labels = NULL;
+    const rs_synth_dataset__background *b = NULL;
+    rs_synth_render_options ropt;
+    double *up = NULL;
+    rs_synth_mesh *meshes = NULL;
+    const char **ids = NULL;
+    char *work = rs_io_join(d->work_root, stem);
+    if (!work) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_io_remove_tree(work); // a previous, interrupted attempt
+    rs_status st = rs_io_mkdir_p(work, err);
+    if (!st) st = image_render_options(&ropt, &b, d, k, c, &rng, err);
+    if (st) goto done;
+    *grey = b == NULL;
+    if ((st = image_vehicles(&t, d, c, &rng, err))) goto done;
+    const int N = t.N;
+    const size_t n = (size_t)(N > 0 ? N : 1);
+    up = malloc(n * sizeof(double));
+    meshes = malloc(n * sizeof(rs_synth_mesh));
+    ids = malloc(n * sizeof(char *));
+    if (!up || !meshes || !ids) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    for (int i = 0; i < N; i++) ids[i] = t.v[i].id;
+    if ((st = rs_synth_prepare_lod(&prepared, t.v, NULL, N, t.coarse, err))) goto done;
+    ropt.vehicle_rects = (const int(*)[4])t.rect;
+    if ((st = rs_synth_render(&r, work, &c->cam, d->site->ground_normal_enu, d->site->ground_offset_m, &prepared, &ropt,
+                              err)))
+        goto done;
+    *seconds_povray += r.seconds_povray;
+    const uint64_t r_look = rs_rng_seed_next(&rng);
+    if (b && (st = composite(&r, b, r_look, err))) goto done;
+    for (int i = 0; i < N; i++) {
+        up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m, prepared.v[i].e_m,
+                                     prepared.v[i].n_m);
+        meshes[i] = prepared.meshes[prepared.imesh[i]];
+    }
+    const rs_synth_label_input lin = {.cam = &c->cam,
+                                      .vehicles = prepared.v,
+                                      .Nvehicles = N,
+                                      .up_m = up,
+                                      .meshes = meshes,
+                                      .id_image = r.ids,
+                                      .origin = &d->site->origin};
+    if ((st = rs_synth_labels_compute(&labels, &lin, err))) goto done;
+    char file_name[320];
+    snprintf(file_name, sizeof(file_name), "%s.png", stem);
+    const rs_synth_image_info info = image_info(d, k, c, b, &ropt, t.iframe);
     const rs_synth_label_image img = {.file_name = file_name,
                                       .width = r.width,
                                       .height = r.height,
@@ -470,58 +455,14 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
                                       .Nlabels = N,
                                       .vehicle_ids = ids,
                                       .info = &info};
-    rs_synth_label_image kimg = img;
-    kimg.file_name = kitti_name;
-    const rs_synth_label_options lopt = {.bbox = (rs_synth_bbox_kind)opt->bbox,
-                                         .min_visibility = opt->min_visibility,
-                                         .drop_invisible = !opt->keep_invisible};
-    // YOLO, KITTI and the image, then the per-image COCO file last: it marks the image done.
-    image = rs_io_join(d->split_dir[split], file_name);
-    snprintf(name, sizeof(name), "annotations/instances_%s.json", split_name);
-    part_tmp = rs_io_join(work, name);
-    snprintf(name, sizeof(name), "%s.json", stem);
-    part = rs_io_join(d->parts_dir, name);
-    char *kitti_dir = rs_io_join(opt->out_dir, "kitti/training");
-    if (!image || !part_tmp || !part || !kitti_dir) {
-        free(kitti_dir);
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    char yolo_image[600], kitti_image[600], kitti_calib[600];
-    snprintf(yolo_image, sizeof(yolo_image), "images/%s/%s", split_name, file_name);
-    snprintf(kitti_image, sizeof(kitti_image), "kitti/training/image_2/%s", kitti_name);
-    snprintf(kitti_calib, sizeof(kitti_calib), "kitti/training/calib/%06d.txt", k);
-    if (!(st = rs_synth_labels_write_yolo(opt->out_dir, split_name, &img, 1, &lopt, err)) &&
-        !(st = rs_synth_labels_write_kitti(kitti_dir, &kimg, 1, &lopt, err)) &&
-        !(st = rs_image_write(image, &r.composite, 8, err)) &&
-        !(st = rs_synth_dataset__link_into(d, image, yolo_image, err)) &&
-        !(st = rs_synth_dataset__link_into(d, image, kitti_image, err))) {
-        char *cp = rs_io_join(opt->out_dir, kitti_calib);
-        st = cp ? rs_synth_labels_write_kitti_calib(cp, cam, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        free(cp);
-    }
-    free(kitti_dir);
-    if (st || (st = rs_synth_labels_write_coco(work, split_name, &img, 1, &lopt, err))) goto done;
-    if (frame_index >= 0 && (st = rs_synth_dataset__coco_set_traffic_frame(part_tmp, frame_entry.file,
-                                                                           frame_entry.time_s, frame_index, err)))
-        goto done;
-    if (rename(part_tmp, part) != 0) {
-        st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
-        goto done;
-    }
+    if ((st = image_files(d, k, stem, work, c, &r, &img, err))) goto done;
     rs_io_remove_tree(work);
 done:
     free(work);
-    free(part_tmp);
-    free(part);
-    free(image);
-    free(tv);
-    rs_synth_vehicle_list_free(&frame);
-    free(v);
+    image_traffic_free(&t);
     free(up);
     free(meshes);
     free(ids);
-    free(coarse);
     free(labels);
     rs_synth_prepared_free(&prepared);
     rs_synth_render_result_free(&r);

@@ -10,6 +10,7 @@
 #include <mrcal/mrcal.h>
 
 #include "core/rs_io.h"
+#include "geo/rs_geo.h"
 
 #define EDGE_SAMPLES 64
 #define MAXPOLY      16
@@ -321,10 +322,14 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
     return RS_OK;
 }
 
-rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam, const rs_synth_vehicle *vehicles,
-                                  const double *up_m, int Nvehicles, const rs_synth_mesh *meshes,
-                                  const uint16_t *id_image, rs_err *err)
+rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_synth_label_input *in, rs_err *err)
 {
+    const rs_camera *cam = in->cam;
+    const rs_synth_vehicle *vehicles = in->vehicles;
+    const double *up_m = in->up_m;
+    const int Nvehicles = in->Nvehicles;
+    const rs_synth_mesh *meshes = in->meshes;
+    const uint16_t *id_image = in->id_image;
     *labels = NULL;
     if (Nvehicles < 0 || (Nvehicles > 0 && (!vehicles || !up_m)) || cam->width <= 0 || cam->height <= 0)
         return rs_err_set(err, RS_ERR_INVALID, "labels: bad vehicle count, arrays or image size");
@@ -362,6 +367,8 @@ rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_camera *cam,
             L->visibility = L->full_px > 0 ? fmin(1.0, (double)L->visible_px / L->full_px) : 0;
         }
     }
+    for (int k = 0; k < Nvehicles && !st && in->origin; k++) // latitude, longitude of each bottom centre
+        st = rs_geo_enu_to_llh(out[k].bottom_center_llh, in->origin, out[k].bottom_center_enu_m, 1, err);
     if (st) {
         free(out);
         return st;
@@ -499,6 +506,12 @@ static void add_image_info(cJSON *o, const rs_synth_image_info *in)
         add_number_or_null(c, "ground_offset_m", in->ground_offset_m);
     }
     cJSON_AddItemToObject(o, "calibration", c);
+    if (in->traffic_frame_file) {
+        cJSON *f = cJSON_AddObjectToObject(o, "traffic_frame");
+        cJSON_AddStringToObject(f, "file", in->traffic_frame_file);
+        cJSON_AddNumberToObject(f, "time_s", in->traffic_frame_time_s);
+        cJSON_AddNumberToObject(f, "index", in->traffic_frame_index);
+    }
 }
 
 static rs_status check_images(const char *what, const rs_synth_label_image *images, int N, rs_err *err)

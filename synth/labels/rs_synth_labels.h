@@ -22,6 +22,7 @@
 
 #include "core/rs_camera.h"
 #include "core/rs_status.h"
+#include "geo/rs_geo.h"
 #include "synth/fleet/rs_synth_fleet.h"
 #include "synth/fleet/rs_synth_vehicle.h"
 
@@ -65,22 +66,29 @@ typedef struct {
     double visible_box_px[4]; // box of the visible pixels (pixel squares), NaN if none
 } rs_synth_label;
 
+// What the labels of one image are computed from.
+typedef struct {
+    const rs_camera *cam;             // the camera (lens, intrinsics, image size, rt_cam_enu)
+    const rs_synth_vehicle *vehicles; // (Nvehicles,) RESOLVED (rs_synth_fleet_resolve; user
+    int Nvehicles;                    //   models with their box)
+    const double *up_m;               // (Nvehicles,) ground height under each footprint centre, ENU m
+    const rs_synth_mesh *meshes;      // (Nvehicles,) the meshes rendered, vehicle frame; may be NULL
+                                      //   (full_px then counts the 3D box's pixels); a mesh with
+                                      //   Ntri == 0 also means "use the box"
+    const uint16_t *id_image;         // (height, width) row-major object-ID pass: 0 = no vehicle,
+                                      //   k + 1 = vehicle k; may be NULL (no visibility)
+    const rs_llh *origin;             // the site's origin: bottom_center_llh through GeographicLib
+                                      //   (geo/rs_geo.h); may be NULL (bottom_center_llh NaN)
+} rs_synth_label_input;
+
 // Computes the labels of every vehicle (out[k] for vehicle k, in_image or not).
 // out:  labels: (Nvehicles,) owned by the caller (free())
-// in:   cam: the camera (lens, intrinsics, image size, rt_cam_enu)
-//       vehicles: (Nvehicles,) RESOLVED (rs_synth_fleet_resolve; user models with their box)
-//       up_m: (Nvehicles,) ground height under each footprint centre, ENU metres
-//       meshes: (Nvehicles,) the meshes rendered, vehicle frame; may be NULL (full_px then
-//               counts the 3D box's pixels); a mesh with Ntri == 0 also means "use the box"
-//       id_image: (height, width) row-major object-ID pass: 0 = no vehicle, k + 1 = vehicle k;
-//                 may be NULL (no visibility)
 // Errors: RS_ERR_INVALID (unresolved dimensions, non-finite input, an ID value > Nvehicles),
-// RS_ERR_EXTERNAL (mrcal could not project), RS_ERR_NOMEM.
+// RS_ERR_EXTERNAL (mrcal could not project), RS_ERR_NOMEM; geo's errors for the origin.
 rs_status rs_synth_labels_compute( // out
     rs_synth_label **labels,
     // in
-    const rs_camera *cam, const rs_synth_vehicle *vehicles, const double *up_m, int Nvehicles,
-    const rs_synth_mesh *meshes, const uint16_t *id_image, rs_err *err);
+    const rs_synth_label_input *in, rs_err *err);
 
 // Which box a writer puts in `bbox` (COCO), the YOLO line and KITTI's 2D box.
 typedef enum {
@@ -120,6 +128,11 @@ typedef struct {
     const char *calib_source_sha256; // SHA-256 of the calibration file
     double ground_normal_enu[3];     // the site's ground plane n . p_enu = offset
     double ground_offset_m;
+    // the SUMO frame the image's vehicles came from (roadside synth --traffic-frames): its file
+    // in that folder, SUMO's time in seconds, its index in frames.json; NULL file: none
+    const char *traffic_frame_file;
+    double traffic_frame_time_s;
+    int traffic_frame_index;
 } rs_synth_image_info;
 
 // One labelled image for the writers.

@@ -47,8 +47,7 @@ rs_status rs_synth_ortho_render(rs_image *image, rs_geo_grid *grid, const char *
     if (!(opt.margin_m >= 0 && opt.margin_m <= 1000))
         return rs_err_set(err, RS_ERR_INVALID, "margin: %g m is not in [0, 1000]", opt.margin_m);
     if (opt.max_side < 16) opt.max_side = 16;
-    const char *povray = opt.povray ? opt.povray : getenv("ROADSIDE_POVRAY");
-    if (!povray || !*povray) povray = "povray";
+    const char *povray = rs_synth_povray_exe(opt.povray);
 
     rs_lanes lanes = {0};
     rs_status st = lanes_path ? rs_lanes_read(&lanes, lanes_path, site, err) : RS_OK;

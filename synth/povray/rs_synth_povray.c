@@ -204,6 +204,13 @@ rs_status rs_synth_povray_reap(pid_t pid, const char *povray, const char *dir, c
     return st;
 }
 
+const char *rs_synth_povray_exe(const char *given)
+{
+    if (given) return *given ? given : "povray";
+    const char *env = getenv("ROADSIDE_POVRAY");
+    return env && *env ? env : "povray";
+}
+
 rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args, int Nargs, double *seconds,
                               rs_err *err)
 {

@@ -410,231 +410,305 @@ static rs_status write_outputs(const char *out_dir, const rs_synth_render_result
     return st;
 }
 
-rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, const rs_camera *camera,
-                          const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *vehicles,
-                          const rs_synth_render_options *opt_in, rs_err *err)
-{
-    memset(out, 0, sizeof(*out));
-    const mrcal_lensmodel_t *lensmodel = &camera->lensmodel;
-    const double *intrinsics = camera->intrinsics, *rt_cam_enu = camera->rt_cam_enu;
-    const int width = camera->width, height = camera->height;
+// The state of one rs_synth_render call, shared by its stages.
+typedef struct {
     rs_synth_render_options opt;
-    if (opt_in)
-        opt = *opt_in;
-    else
-        rs_synth_render_options_default(&opt);
-    const char *povray = opt.povray ? opt.povray : getenv("ROADSIDE_POVRAY");
-    if (!povray || !*povray) povray = "povray";
-    const int N = vehicles->N;
+    const char *out_dir, *povray;
+    const rs_camera *camera;
+    const double *ground_normal_enu;
+    double ground_offset_m;
+    const rs_synth_prepared *vehicles;
     rs_synth_canvas canvas;
     rs_synth_povcam cam;
-    rs_image bg = {0}, rgba = {0}, idimg = {0};
-    uint8_t *include = NULL, *sowned = NULL;
-    rs_synth_prepared svehicles = {0}; // the shadow pass's (shadow_vehicles)
-    float *map = NULL;
-    rs_status st;
-    if (opt.canvas)
-        canvas = *opt.canvas;
-    else if ((st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
-                                            opt.canvas_scale > 1 ? opt.canvas_scale : 1, err)))
-        return st;
-    if ((st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, err))) return st;
-    if (opt.background_path) {
-        if ((st = rs_image_read(&bg, opt.background_path, err))) return st;
-        if (bg.width != width || bg.height != height) {
-            rs_image_free(&bg);
-            return rs_err_set(err, RS_ERR_INVALID, "%s: the background is %dx%d, the camera %dx%d", opt.background_path,
-                              bg.width, bg.height, width, height);
+    rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
+    int Nlights;
+    uint8_t *include;            // (N,) owned: 0 = culled
+    int region[4], sregion[4];   // canvas rectangles of the colour/ID and the shadow passes
+    bool ground_drawn;           // the ground is drawn (no background to composite onto)
+    rs_synth_prepared svehicles; // the shadow pass's (shadow_vehicles)
+    uint8_t *sowned;
+} render_state;
+
+// 1-2. Culling and the regions: the vehicles' boxes (colour and ID), with their shadows. The
+// caller's rectangles (opt.vehicle_rects) stand for the test when given.
+static void render_cull(render_state *s, rs_synth_render_result *out)
+{
+    const rs_synth_render_options *opt = &s->opt;
+    const rs_synth_canvas *canvas = &s->canvas;
+    const double *rt_cam_enu = s->camera->rt_cam_enu;
+    const int N = s->vehicles->N;
+    s->Nlights = rs_synth_scene_lights(s->lights, &opt->scene);
+    for (int k = 0; k < 2; k++) {
+        int *r = k ? s->sregion : s->region;
+        r[0] = canvas->width, r[1] = canvas->height, r[2] = r[3] = -1;
+    }
+    for (int i = 0; i < N; i++) {
+        double corners[8][3];
+        int rect[4];
+        rs_synth_vehicle_corners_enu(corners, &s->vehicles->v[i], s->ground_normal_enu, s->ground_offset_m);
+        bool in;
+        if (opt->vehicle_rects) {
+            memcpy(rect, opt->vehicle_rects[i], sizeof(rect));
+            in = true;
+        } else {
+            in = rs_synth_vehicle_rect(rect, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu,
+                                       (const double(*)[3])corners, 0.05);
         }
+        s->include[i] = opt->full_frame || in;
+        out->visible[i] = s->include[i];
+        if (!in) continue;
+        out->Nrendered++;
+        grow(s->region, rect);
+        if (!opt->shadow) continue;
+        widen_by_shadows(rect, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu, (const double(*)[3])corners,
+                         s->ground_normal_enu, s->ground_offset_m, s->lights, s->Nlights);
+        grow(s->sregion, rect);
+    }
+    // Pins, and the ground when there is no background to composite onto, are part of the
+    // picture too: they widen the region to the whole canvas.
+    s->ground_drawn = !opt->background_path && opt->scene.ground_visible;
+    for (int pass = 0; pass < 2; pass++) {
+        int *r = pass ? s->sregion : s->region;
+        if (opt->full_frame || (!pass && (opt->scene.Npins > 0 || s->ground_drawn))) {
+            r[0] = r[1] = 0;
+            r[2] = canvas->width - 1;
+            r[3] = canvas->height - 1;
+        }
+    }
+    if (opt->full_frame) out->Nrendered = N;
+}
+
+// The passes: colour; ID and shadow when vehicles are rendered. out: passes (3,), *i_id and
+// *i_shadow (-1: none); returns their count.
+static int render_passes(rs_synth_scene_options passes[3], int *i_id, int *i_shadow, const render_state *s,
+                         const rs_synth_render_result *out)
+{
+    int Npasses = 0;
+    *i_id = *i_shadow = -1;
+    passes[Npasses] = s->opt.scene;
+    passes[Npasses].include = s->include;
+    passes[Npasses].pass = RS_SYNTH_PASS_COLOUR;
+    passes[Npasses].ground_visible = s->opt.background_path ? false : s->opt.scene.ground_visible;
+    Npasses++;
+    if (out->Nrendered > 0) {
+        passes[Npasses] = passes[0];
+        passes[Npasses].pass = RS_SYNTH_PASS_ID;
+        passes[Npasses].Npins = 0;
+        *i_id = Npasses++;
+        if (s->opt.shadow) {
+            passes[Npasses] = passes[*i_id];
+            passes[Npasses].pass = RS_SYNTH_PASS_SHADOW;
+            *i_shadow = Npasses++;
+        }
+    }
+    return Npasses;
+}
+
+// The passes rendered on the canvas: one povray process per pass (docs/fleet.md, "Cost"): the
+// colour pass; the ID pass on the same meshes, each merged into one mesh2 without normals; the
+// shadow pass at half resolution on coarse meshes. They run at once, unless
+// separate_processes (one after the other: the benchmark's "separate"). The ID and shadow
+// passes are rasterised here instead (rs_synth_raster.h) unless the caller asks for POV-Ray's.
+// out: *rgba, *idimg (the canvas's; idimg empty without an ID pass), *frac (the lit fraction,
+// empty without a shadow pass)
+static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, render_state *s,
+                               rs_synth_render_result *out, rs_err *err)
+{
+    const rs_synth_render_options *opt = &s->opt;
+    const rs_synth_canvas *canvas = &s->canvas;
+    const double *rt_cam_enu = s->camera->rt_cam_enu;
+    rs_synth_scene_options passes[3];
+    int i_id, i_shadow;
+    const int Npasses = render_passes(passes, &i_id, &i_shadow, s, out);
+    memcpy(out->region, s->region, sizeof(s->region)); // rendered: the union of the regions
+    if (i_shadow >= 0) grow(out->region, s->sregion);
+    povray_job jobs[3];
+    rs_synth_povcam scam;
+    const int W2 = (canvas->width + 1) / 2, H2 = (canvas->height + 1) / 2;
+    rs_status st = RS_OK;
+    if (i_shadow >= 0) {
+        const double *f = canvas->fxycxy;
+        const double half[4] = {f[0] / 2, f[1] / 2, (f[2] - 0.5) / 2, (f[3] - 0.5) / 2};
+        if ((st = rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
+            (st = shadow_vehicles(&s->svehicles, &s->sowned, s->vehicles, s->include, err)))
+            return st;
+    }
+    // Without pins, drawn ground, antialiasing or a ground hiding part of a vehicle
+    // (rs_synth_scene_ground_occludes) the colour pass covers exactly the ID pass's vehicle
+    // pixels (the same rays meet the same triangles): its alpha is taken from the ID pass and
+    // it is written as 16-bit PPM, 0.05 s cheaper per image than RGBA PNG to write and read.
+    const bool ground_hides = i_id >= 0 && rs_synth_scene_ground_occludes(&s->cam, s->vehicles, &passes[i_id],
+                                                                          s->ground_normal_enu, s->ground_offset_m);
+    const bool ids_alpha =
+        i_id >= 0 && opt->antialias < 2 && opt->scene.Npins == 0 && !s->ground_drawn && !ground_hides;
+    // The ID pass is POV-Ray's too where the ground may hide part of a vehicle.
+    const bool ids_here = i_id >= 0 && !ground_hides && !opt->povray_passes;
+    const bool shadow_here = i_shadow >= 0 && !opt->povray_passes;
+    static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
+    static const char *const logs[3] = {"povray.log", "pass_ids.log", "pass_shadow.log"};
+    for (int k = 0; k < Npasses; k++) {
+        const bool sh = k == i_shadow;
+        jobs[k] = (povray_job){.name = names[k],
+                               .cam = sh ? &scam : &s->cam,
+                               .vehicles = sh ? &s->svehicles : s->vehicles,
+                               .pass = &passes[k],
+                               .antialias = k ? 0 : opt->antialias,
+                               .region = {s->region[0], s->region[1], s->region[2], s->region[3]},
+                               .ppm = k == 0 && ids_alpha,
+                               .log = logs[k]};
+        if (sh) {
+            const int *sr = s->sregion;
+            const int r2[4] = {(int)fmax(0, floor((sr[0] - 0.5) / 2)), (int)fmax(0, floor((sr[1] - 0.5) / 2)),
+                               (int)fmin(W2 - 1, ceil((sr[2] - 0.5) / 2)), (int)fmin(H2 - 1, ceil((sr[3] - 0.5) / 2))};
+            memcpy(jobs[k].region, r2, sizeof(r2));
+        }
+    }
+    rs_image imgs[3] = {{0}};
+    // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
+    const bool together = !opt->separate_processes;
+    for (int k = 0; k < Npasses; k++) {
+        if ((k == i_id && ids_here) || (k == i_shadow && shadow_here)) continue;
+        if (!st)
+            st = job_start(&jobs[k], s->out_dir, s->povray, s->camera->intrinsics, s->ground_normal_enu,
+                           s->ground_offset_m, err);
+        if (!together) {
+            rs_status st2 = job_finish(&jobs[k], &imgs[k], s->out_dir, s->povray, &out->seconds_povray, err);
+            st = st ? st : st2;
+        }
+    }
+    if (!st && ids_here) // while povray renders the colour pass
+        st = rs_synth_raster_ids(&imgs[i_id], canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu, s->vehicles,
+                                 s->include, s->ground_normal_enu, s->ground_offset_m, s->region, err);
+    if (!st && shadow_here)
+        st = rs_synth_raster_shadow(frac, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu, &s->svehicles,
+                                    s->include, s->ground_normal_enu, s->ground_offset_m, s->lights, s->Nlights, err);
+    for (int k = 0; k < Npasses && together; k++) { // every started one waited for, the first error kept
+        rs_err e2 = {0};
+        rs_status st2 = job_finish(&jobs[k], &imgs[k], s->out_dir, s->povray, &out->seconds_povray, st ? &e2 : err);
+        st = st ? st : st2;
+    }
+    out->Npovray = Npasses - (ids_here ? 1 : 0) - (shadow_here ? 1 : 0);
+    out->Npasses = Npasses;
+    *rgba = imgs[0];
+    if (i_id >= 0) *idimg = imgs[1];
+    if (!st && jobs[0].ppm) st = alpha_from_ids(rgba, idimg, err);
+    if (!st && i_shadow >= 0 && !shadow_here)
+        st = shadow_fraction(frac, &imgs[i_shadow],
+                             rs_synth_scene_shadow_unlit(s->lights, s->Nlights, s->ground_normal_enu), canvas->width,
+                             canvas->height, err);
+    if (i_shadow >= 0) rs_image_free(&imgs[i_shadow]);
+    if (!st && i_id < 0) st = rs_image_alloc(idimg, canvas->width, canvas->height, 3, err);
+    return st;
+}
+
+// 3. From the canvas into the real lens: the passes resampled (a distorted lens), the IDs
+// decoded, the shadow fraction handed to out. rgba, idimg and frac are consumed.
+static rs_status render_into_lens(rs_synth_render_result *out, rs_image *rgba, rs_image *idimg, rs_image *frac,
+                                  const render_state *s, rs_err *err)
+{
+    const rs_camera *camera = s->camera;
+    const int width = camera->width, height = camera->height;
+    float *map = NULL;
+    const float *use = s->opt.canvas_map;
+    rs_status st = RS_OK;
+    if (!s->canvas.identity) {
+        if (!use &&
+            !(st = rs_synth_canvas_map(&map, &s->canvas, &camera->lensmodel, camera->intrinsics, width, height, err)))
+            use = map;
+        if (!st) st = to_lens(rgba, idimg, use, width, height, err);
+        if (!st && frac->data) {
+            rs_image lens = {0};
+            st = rs_synth_remap(&lens, frac, use, width, height, 1, err);
+            rs_image_free(frac);
+            *frac = lens;
+        }
+    }
+    free(map);
+    if (st) {
+        rs_image_free(frac);
+        return st;
+    }
+    out->shadow = frac->data; // owned by out now
+    *frac = (rs_image){0};
+    out->rgba = *rgba;
+    *rgba = (rs_image){0};
+    decode_ids(out, idimg, s->vehicles->N);
+    // the shadow pass does not look under the vehicles (its green marks): 1 on their pixels
+    for (size_t i = 0; out->shadow && i < (size_t)width * height; i++)
+        if (out->ids[i]) out->shadow[i] = 1;
+    return RS_OK;
+}
+
+// The state's camera, canvas, background and buffers. out: *bg (the background, may stay empty)
+static rs_status render_setup(render_state *s, rs_image *bg, rs_synth_render_result *out, rs_err *err)
+{
+    const rs_camera *camera = s->camera;
+    const int width = camera->width, height = camera->height, N = s->vehicles->N;
+    rs_status st;
+    if (s->opt.canvas)
+        s->canvas = *s->opt.canvas;
+    else if ((st = rs_synth_canvas_for_lens(&s->canvas, &camera->lensmodel, camera->intrinsics, width, height,
+                                            s->opt.canvas_scale > 1 ? s->opt.canvas_scale : 1, err)))
+        return st;
+    if ((st = rs_synth_povcam_init(&s->cam, s->canvas.fxycxy, s->canvas.width, s->canvas.height, camera->rt_cam_enu,
+                                   err)))
+        return st;
+    if (s->opt.background_path) {
+        if ((st = rs_image_read(bg, s->opt.background_path, err))) return st;
+        if (bg->width != width || bg->height != height)
+            return rs_err_set(err, RS_ERR_INVALID, "%s: the background is %dx%d, the camera %dx%d",
+                              s->opt.background_path, bg->width, bg->height, width, height);
     }
     out->width = width;
     out->height = height;
     out->Nvehicles = N;
     out->ids = calloc((size_t)width * height, sizeof(uint16_t));
     out->visible = calloc((size_t)(N > 0 ? N : 1), 1);
-    include = calloc((size_t)(N > 0 ? N : 1), 1);
-    if (!out->ids || !out->visible || !include) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    if ((st = rs_image_alloc(&out->composite, width, height, 3, err))) goto done;
-    // 1-2. Culling and the regions: the vehicles' boxes (colour and ID), with their shadows
-    rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
-    const int Nlights = rs_synth_scene_lights(lights, &opt.scene);
-    int region[4] = {canvas.width, canvas.height, -1, -1}, sregion[4] = {canvas.width, canvas.height, -1, -1};
-    for (int i = 0; i < N; i++) {
-        double corners[8][3];
-        int rect[4];
-        rs_synth_vehicle_corners_enu(corners, &vehicles->v[i], ground_normal_enu, ground_offset_m);
-        const bool in =
-            rs_synth_vehicle_rect(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, corners, 0.05);
-        include[i] = opt.full_frame || in;
-        out->visible[i] = include[i];
-        if (!in) continue;
-        out->Nrendered++;
-        grow(region, rect);
-        if (!opt.shadow) continue;
-        widen_by_shadows(rect, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, (const double(*)[3])corners,
-                         ground_normal_enu, ground_offset_m, lights, Nlights);
-        grow(sregion, rect);
-    }
-    // Pins, and the ground when there is no background to composite onto, are part of the
-    // picture too: they widen the region to the whole canvas.
-    const bool ground_drawn = !opt.background_path && opt.scene.ground_visible;
-    for (int pass = 0; pass < 2; pass++) {
-        int *r = pass ? sregion : region;
-        if (opt.full_frame || (!pass && (opt.scene.Npins > 0 || ground_drawn))) {
-            r[0] = r[1] = 0;
-            r[2] = canvas.width - 1;
-            r[3] = canvas.height - 1;
-        }
-    }
-    if (opt.full_frame) out->Nrendered = N;
-    const bool run = out->Nrendered > 0 || opt.scene.Npins > 0 || ground_drawn;
+    s->include = calloc((size_t)(N > 0 ? N : 1), 1);
+    if (!out->ids || !out->visible || !s->include) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    return rs_image_alloc(&out->composite, width, height, 3, err);
+}
+
+rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, const rs_camera *camera,
+                          const double ground_normal_enu[3], double ground_offset_m, const rs_synth_prepared *vehicles,
+                          const rs_synth_render_options *opt_in, rs_err *err)
+{
+    memset(out, 0, sizeof(*out));
+    render_state s = {.out_dir = out_dir,
+                      .camera = camera,
+                      .ground_normal_enu = ground_normal_enu,
+                      .ground_offset_m = ground_offset_m,
+                      .vehicles = vehicles};
+    if (opt_in)
+        s.opt = *opt_in;
+    else
+        rs_synth_render_options_default(&s.opt);
+    s.povray = rs_synth_povray_exe(s.opt.povray);
+    rs_image bg = {0}, rgba = {0}, idimg = {0}, frac = {0};
+    rs_status st = render_setup(&s, &bg, out, err);
+    if (st) goto done;
+    render_cull(&s, out);
+    const bool run = out->Nrendered > 0 || s.opt.scene.Npins > 0 || s.ground_drawn;
     if (!run) {
         for (int k = 0; k < 4; k++) out->region[k] = -1;
-        if ((st = rs_image_alloc(&out->rgba, width, height, 4, err))) goto done;
+        if ((st = rs_image_alloc(&out->rgba, camera->width, camera->height, 4, err))) goto done;
     } else {
-        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = rs_synth_povray_write_conf(out_dir, err))) goto done;
-        // The passes: colour; ID and shadow when vehicles are rendered.
-        rs_synth_scene_options passes[3];
-        int Npasses = 0, i_id = -1, i_shadow = -1;
-        passes[Npasses] = opt.scene;
-        passes[Npasses].include = include;
-        passes[Npasses].pass = RS_SYNTH_PASS_COLOUR;
-        passes[Npasses].ground_visible = opt.background_path ? false : opt.scene.ground_visible;
-        Npasses++;
-        if (out->Nrendered > 0) {
-            passes[Npasses] = passes[0];
-            passes[Npasses].pass = RS_SYNTH_PASS_ID;
-            passes[Npasses].Npins = 0;
-            i_id = Npasses++;
-            if (opt.shadow) {
-                passes[Npasses] = passes[i_id];
-                passes[Npasses].pass = RS_SYNTH_PASS_SHADOW;
-                i_shadow = Npasses++;
-            }
-        }
-        memcpy(out->region, region, sizeof(region)); // rendered: the union of the regions
-        if (i_shadow >= 0) grow(out->region, sregion);
-        // One povray process per pass (docs/fleet.md, "Cost"): the colour pass; the ID pass on
-        // the same meshes, each merged into one mesh2 without normals; the shadow pass at half
-        // resolution on coarse meshes. They run at once, unless separate_processes (one after
-        // the other: the benchmark's "separate").
-        povray_job jobs[3];
-        rs_synth_povcam scam;
-        const int W2 = (canvas.width + 1) / 2, H2 = (canvas.height + 1) / 2;
-        if (i_shadow >= 0) {
-            const double *f = canvas.fxycxy;
-            const double half[4] = {f[0] / 2, f[1] / 2, (f[2] - 0.5) / 2, (f[3] - 0.5) / 2};
-            if ((st = rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
-                (st = shadow_vehicles(&svehicles, &sowned, vehicles, include, err)))
-                goto done;
-        }
-        // Without pins, drawn ground, antialiasing or a ground hiding part of a vehicle
-        // (rs_synth_scene_ground_occludes) the colour pass covers exactly the ID pass's vehicle
-        // pixels (the same rays meet the same triangles): its alpha is taken from the ID pass and
-        // it is written as 16-bit PPM, 0.05 s cheaper per image than RGBA PNG to write and read.
-        const bool ground_hides = i_id >= 0 && rs_synth_scene_ground_occludes(&cam, vehicles, &passes[i_id],
-                                                                              ground_normal_enu, ground_offset_m);
-        const bool ids_alpha = i_id >= 0 && opt.antialias < 2 && opt.scene.Npins == 0 && !ground_drawn && !ground_hides;
-        // The ID and shadow passes rasterised here rather than by povray processes
-        // (rs_synth_raster.h), unless the caller asks for POV-Ray's; the ID pass also where the
-        // ground may hide part of a vehicle.
-        const bool ids_here = i_id >= 0 && !ground_hides && !opt.povray_passes;
-        const bool shadow_here = i_shadow >= 0 && !opt.povray_passes;
-        static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
-        static const char *const logs[3] = {"povray.log", "pass_ids.log", "pass_shadow.log"};
-        for (int k = 0; k < Npasses; k++) {
-            const bool sh = k == i_shadow;
-            jobs[k] = (povray_job){.name = names[k],
-                                   .cam = sh ? &scam : &cam,
-                                   .vehicles = sh ? &svehicles : vehicles,
-                                   .pass = &passes[k],
-                                   .antialias = k ? 0 : opt.antialias,
-                                   .region = {region[0], region[1], region[2], region[3]},
-                                   .ppm = k == 0 && ids_alpha,
-                                   .log = logs[k]};
-            if (sh) {
-                const int r2[4] = {
-                    (int)fmax(0, floor((sregion[0] - 0.5) / 2)), (int)fmax(0, floor((sregion[1] - 0.5) / 2)),
-                    (int)fmin(W2 - 1, ceil((sregion[2] - 0.5) / 2)), (int)fmin(H2 - 1, ceil((sregion[3] - 0.5) / 2))};
-                memcpy(jobs[k].region, r2, sizeof(r2));
-            }
-        }
-        rs_image imgs[3] = {{0}};
-        // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
-        const bool together = !opt.separate_processes;
-        for (int k = 0; k < Npasses; k++) {
-            if ((k == i_id && ids_here) || (k == i_shadow && shadow_here)) continue;
-            if (!st) st = job_start(&jobs[k], out_dir, povray, intrinsics, ground_normal_enu, ground_offset_m, err);
-            if (!together) {
-                rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, err);
-                st = st ? st : st2;
-            }
-        }
-        rs_image frac = {0};
-        if (!st && ids_here) // while povray renders the colour pass
-            st = rs_synth_raster_ids(&imgs[i_id], canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, vehicles,
-                                     include, ground_normal_enu, ground_offset_m, region, err);
-        if (!st && shadow_here)
-            st = rs_synth_raster_shadow(&frac, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, &svehicles,
-                                        include, ground_normal_enu, ground_offset_m, lights, Nlights, err);
-        for (int k = 0; k < Npasses && together; k++) { // every started one waited for, the first error kept
-            rs_err e2 = {0};
-            rs_status st2 = job_finish(&jobs[k], &imgs[k], out_dir, povray, &out->seconds_povray, st ? &e2 : err);
-            st = st ? st : st2;
-        }
-        out->Npovray = Npasses - (ids_here ? 1 : 0) - (shadow_here ? 1 : 0);
-        out->Npasses = Npasses;
-        rgba = imgs[0];
-        if (i_id >= 0) idimg = imgs[1];
-        if (!st && jobs[0].ppm) st = alpha_from_ids(&rgba, &idimg, err);
-        if (!st && i_shadow >= 0 && !shadow_here)
-            st =
-                shadow_fraction(&frac, &imgs[i_shadow], rs_synth_scene_shadow_unlit(lights, Nlights, ground_normal_enu),
-                                canvas.width, canvas.height, err);
-        if (i_shadow >= 0) rs_image_free(&imgs[i_shadow]);
-        if (st) {
-            rs_image_free(&frac);
+        if ((st = rs_io_mkdir_p(out_dir, err)) || (st = rs_synth_povray_write_conf(out_dir, err)) ||
+            (st = render_canvas(&rgba, &idimg, &frac, &s, out, err)) ||
+            (st = render_into_lens(out, &rgba, &idimg, &frac, &s, err)))
             goto done;
-        }
-        if (i_id < 0 && (st = rs_image_alloc(&idimg, canvas.width, canvas.height, 3, err))) goto done;
-        // 3. Into the real lens
-        if (!canvas.identity) {
-            if ((!opt.canvas_map &&
-                 (st = rs_synth_canvas_map(&map, &canvas, lensmodel, intrinsics, width, height, err))) ||
-                (st = to_lens(&rgba, &idimg, opt.canvas_map ? opt.canvas_map : map, width, height, err))) {
-                rs_image_free(&frac);
-                goto done;
-            }
-            if (frac.data) {
-                rs_image lens = {0};
-                st = rs_synth_remap(&lens, &frac, opt.canvas_map ? opt.canvas_map : map, width, height, 1, err);
-                rs_image_free(&frac);
-                frac = lens;
-                if (st) goto done;
-            }
-        }
-        out->shadow = frac.data; // owned by out now
-        out->rgba = rgba;
-        rgba = (rs_image){0};
-        decode_ids(out, &idimg, N);
-        // the shadow pass does not look under the vehicles (its green marks): 1 on their pixels
-        for (size_t i = 0; out->shadow && i < (size_t)width * height; i++)
-            if (out->ids[i]) out->shadow[i] = 1;
     }
     // 4. Composite
-    composite(out, opt.background_path ? &bg : NULL);
-    if (opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
+    composite(out, s.opt.background_path ? &bg : NULL);
+    if (s.opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
 done:
-    if (!opt.keep_files) remove_intermediates(out_dir);
-    free_shadow_vehicles(&svehicles, sowned);
+    if (!s.opt.keep_files) remove_intermediates(out_dir);
+    free_shadow_vehicles(&s.svehicles, s.sowned);
     rs_image_free(&bg);
     rs_image_free(&rgba);
     rs_image_free(&idimg);
-    free(include);
-    free(map);
+    rs_image_free(&frac);
+    free(s.include);
     if (st) rs_synth_render_result_free(out);
     return st;
 }
@@ -662,7 +736,9 @@ rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_rende
         meshes[i] = prepared->meshes[prepared->imesh[i]]; // shallow: borrowed arrays
         ids[i] = v->id;
     }
-    if ((st = rs_synth_labels_compute(&labels, cam, prepared->v, up, N, meshes, r->ids, err))) goto done;
+    const rs_synth_label_input lin = {
+        .cam = cam, .vehicles = prepared->v, .Nvehicles = N, .up_m = up, .meshes = meshes, .id_image = r->ids};
+    if ((st = rs_synth_labels_compute(&labels, &lin, err))) goto done;
     const rs_synth_label_image img = {.file_name = "image.png",
                                       .width = r->width,
                                       .height = r->height,

@@ -77,6 +77,10 @@ typedef struct {
                                    // otherwise rasterises (rs_synth_raster.h; default false: the
                                    // tests' oracle)
     rs_synth_scene_options scene;  // sun, pins, ground (pass and include are set per pass)
+    const int (*vehicle_rects)[4]; // (Nvehicles,) each vehicle's canvas rectangle
+                                   // (rs_synth_vehicle_rect on opt->canvas, near 0.05 m), all in
+                                   // view: a caller that culled them already (roadside synth)
+                                   // gives them and render does not cull again; NULL: culled here
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);
@@ -119,6 +123,11 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 // dir/povray.log. seconds (may be NULL) accumulates the wall time. Errors: RS_ERR_EXTERNAL
 // "cannot run" when the program is missing (exit 127), "cannot confine povray" when Landlock is
 // there but fails (povray is then not run), else the exit status and the log's last line.
+// The povray executable to run: `given` when not NULL, else $ROADSIDE_POVRAY when set and not
+// empty, else "povray" (found on PATH). The one place that reads $ROADSIDE_POVRAY; every
+// option struct's NULL `povray` means this.
+const char *rs_synth_povray_exe(const char *given);
+
 rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args,
                               int Nargs,       // (Nargs,) at most 30
                               double *seconds, // may be NULL

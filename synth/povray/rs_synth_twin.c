@@ -84,8 +84,7 @@ rs_status rs_synth_twin_render(double *sun_azimuth_deg, double *sun_elevation_de
         o = *opt;
     else
         rs_synth_twin_options_default(&o);
-    const char *povray = o.povray ? o.povray : getenv("ROADSIDE_POVRAY");
-    if (!povray || !*povray) povray = "povray";
+    const char *povray = rs_synth_povray_exe(o.povray);
     const char *look = NULL; // a static string: one of rs_synth_background_conditions
     for (int i = 0; weather && rs_synth_background_conditions[i]; i++)
         if (!strcmp(weather, rs_synth_background_conditions[i])) look = rs_synth_background_conditions[i];

@@ -88,7 +88,14 @@ int main(int argc, char **argv)
     for (int k = 0; with_mesh && k < N; k++)
         if (rs_synth_fleet_build(&meshes[k], &v[k], &err)) return fail("build", &err);
     rs_synth_label *labels = NULL;
-    if (rs_synth_labels_compute(&labels, &cam, v, up, N, with_mesh ? meshes : NULL, id_image, &err))
+    if (rs_synth_labels_compute(&labels,
+                                &(rs_synth_label_input){.cam = &cam,
+                                                        .vehicles = v,
+                                                        .Nvehicles = N,
+                                                        .up_m = up,
+                                                        .meshes = with_mesh ? meshes : NULL,
+                                                        .id_image = id_image},
+                                &err))
         return fail("labels", &err);
 
     char *path = rs_io_join(argv[3], "labels.json");

@@ -85,7 +85,11 @@ static int run(const char *outdir, const char *lens_name, int opencv8)
         return 1;
     }
     rs_synth_label *labels = NULL;
-    st = rs_synth_labels_compute(&labels, &cam, prep.v, up, N, meshes, r.ids, &err);
+    st = rs_synth_labels_compute(
+        &labels,
+        &(rs_synth_label_input){
+            .cam = &cam, .vehicles = prep.v, .Nvehicles = N, .up_m = up, .meshes = meshes, .id_image = r.ids},
+        &err);
     CHECK(st == RS_OK, "labels: %s", err.msg);
     for (int k = 0; k < N && labels; k++) {
         const rs_synth_label *L = &labels[k];

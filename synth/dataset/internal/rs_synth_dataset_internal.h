@@ -1,15 +1,21 @@
 // rs_synth_dataset_internal.h -- what the files of `roadside synth` share
 // (synth/dataset/rs_synth_dataset.h). Not installed, not for other modules.
 //
-// The files, each calling only those below it:
+// The files of a run, each calling only those below it (and none above):
 //
 //   rs_synth_dataset.c          the run: options, the site's cameras and backgrounds (from the
 //                               site geo loaded), this shard's images here or in forked workers
-//     rs_synth_dataset_check.c    resume: whether an image found finished is intact
-//     rs_synth_dataset_image.c    one image: its random stream, background, traffic, render,
-//                                 composite, labels and files
-//     rs_synth_dataset_coco.c     COCO: assembling DATASET's annotations from the finished
-//                                 images, merging datasets (shards)
+//   rs_synth_dataset_coco.c     COCO: assembling DATASET's annotations from the finished
+//                               images (and merge's index and writer)
+//   rs_synth_dataset_check.c    resume: whether an image found finished is intact
+//   rs_synth_dataset_image.c    one image: background, traffic, render, composite, labels, files
+//   rs_synth_dataset_frames.c   SUMO's frames (--traffic-frames): the index read once, checked
+//   rs_synth_dataset_draws.c    what image k is from (seed, k) alone: its stream, background,
+//                               split and file stem
+//
+// Beside them, each calling only rs_synth_dataset_coco.c and rs_synth_dataset_draws.c:
+// rs_synth_dataset_merge.c (roadside synth merge), rs_synth_dataset_stats.c and
+// rs_synth_dataset_view.c (roadside dataset stats / view).
 #pragma once
 #include <stdbool.h>
 #include <stddef.h>
@@ -27,6 +33,8 @@
 #include "synth/backdrop/rs_synth_sun.h"
 #include "synth/dataset/rs_synth_dataset.h"
 #include "synth/povray/rs_synth_camera.h"
+#include "synth/traffic/rs_synth_sumo.h"
+#include "synth/traffic/rs_synth_vehicles.h"
 
 // One background an image may be drawn over.
 typedef struct {
@@ -71,10 +79,24 @@ typedef struct {
     rs_lanes lanes;                 // owned
     rs_synth_dataset__camera *cams; // (Ncams,) owned; image k is made for cams[k % Ncams]
     int Ncams;
-    const char *split[2];        // the train and validation split names (opt)
-    char *split_dir[2];          // owned: DATASET/<split> of each
-    char *parts_dir, *work_root; // owned: DATASET/parts, DATASET/work
+    const char *split[2];              // the train and validation split names (opt)
+    char *split_dir[2];                // owned: DATASET/<split> of each
+    char *parts_dir, *work_root;       // owned: DATASET/parts, DATASET/work
+    rs_synth_sumo_frame_entry *frames; // (Nframes,) owned: --traffic-frames' frames.json, read
+    int Nframes;                       //   once (rs_synth_dataset__frames_load); NULL without
 } rs_synth_dataset__run;
+
+// ---- SUMO's frames (rs_synth_dataset_frames.c) ----
+
+// Reads opt->traffic_frames_dir's frames.json into d->frames once for the run and checks every
+// frame as rs_synth_dataset_traffic_frames_check does (out: *info, its figures).
+rs_status rs_synth_dataset__frames_load(rs_synth_dataset__run *d, rs_synth_traffic_frames_info *info, rs_err *err);
+
+// The vehicles of an image from the loaded frames: frame r_frame mod Nframes (out: *iframe, its
+// index in frames.json), each vehicle j's variant rs_rng_seed_derive(r_looks, j) >> 11 (53
+// bits, as the built-in traffic draws them). On error *list is left empty.
+rs_status rs_synth_dataset__frame_vehicles(rs_synth_vehicle_list *list, int *iframe, const rs_synth_dataset__run *d,
+                                           uint64_t r_frame, uint64_t r_looks, rs_err *err);
 
 // Which split image k goes to: 0 (opt->split) or 1 (opt->val_split), from k's own random stream
 // (the fraction), its camera, or the background it is drawn over (the same draw as
@@ -136,13 +158,6 @@ rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char 
                                            // in
                                            const rs_synth_dataset__run *d, const char *stem,
                                            const rs_synth_dataset__camera *c, int split, rs_err *err);
-
-// Adds "traffic_frame": {"file", "time_s", "index"} (the SUMO frame image's vehicles came
-// from: its file in the --traffic-frames folder, its SUMO time in seconds, its index in
-// frames.json) to every image of the COCO file at part_path, rewritten atomically
-// (rs_synth_dataset_coco.c; docs/labels.md).
-rs_status rs_synth_dataset__coco_set_traffic_frame(const char *part_path, const char *file, double time_s, int index,
-                                                   rs_err *err);
 
 // ---- the COCO writer (rs_synth_dataset_coco.c): one for the run's assembly and for merge ----
 
