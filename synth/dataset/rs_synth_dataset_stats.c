@@ -63,50 +63,6 @@ static const char *string_of(const cJSON *o, const char *key)
     return cJSON_IsString(v) ? v->valuestring : NULL;
 }
 
-static int cmp_name(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
-
-rs_status rs_synth_dataset__splits(char **names, int *Nnames, int max, const char *dataset_dir, rs_err *err)
-{
-    *Nnames = 0;
-    char *adir = rs_io_join(dataset_dir, "annotations");
-    if (!adir) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    DIR *dir = opendir(adir);
-    if (!dir) {
-        rs_status st = rs_err_set(err, RS_ERR_IO,
-                                  "%s: %s (not a dataset made by roadside synth? docs/labels.md, \"The dataset "
-                                  "contract\")",
-                                  adir, strerror(errno));
-        free(adir);
-        return st;
-    }
-    rs_status st = RS_OK;
-    struct dirent *de;
-    while (!st && (de = readdir(dir))) {
-        const size_t len = strlen(de->d_name);
-        if (strncmp(de->d_name, "instances_", 10) != 0 || len <= 15 || strcmp(de->d_name + len - 5, ".json") != 0)
-            continue;
-        if (*Nnames == max) {
-            st = rs_err_set(err, RS_ERR_INVALID, "%s: more than %d splits", adir, max);
-            break;
-        }
-        if (!(names[*Nnames] = strndup(de->d_name + 10, len - 15)))
-            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        else
-            (*Nnames)++;
-    }
-    closedir(dir);
-    qsort(names, (size_t)*Nnames, sizeof(char *), cmp_name);
-    if (!st && *Nnames == 0)
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no instances_<split>.json (not a dataset made by roadside synth?)",
-                        adir);
-    free(adir);
-    if (st) {
-        for (int k = 0; k < *Nnames; k++) free(names[k]);
-        *Nnames = 0;
-    }
-    return st;
-}
-
 rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *dataset_dir,
                                  const double centre_enu_m[2], double radius_m, rs_err *err)
 {

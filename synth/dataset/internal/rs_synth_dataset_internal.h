@@ -13,7 +13,7 @@
 //   rs_synth_dataset_draws.c    what image k is from (seed, k) alone: its stream, background,
 //                               split and file stem
 //
-// Beside them, each calling only rs_synth_dataset_coco.c and rs_synth_dataset_draws.c:
+// Beside them, each calling only rs_synth_dataset_coco.c (and nothing of the run above it):
 // rs_synth_dataset_merge.c (roadside synth merge), rs_synth_dataset_stats.c and
 // rs_synth_dataset_view.c (roadside dataset stats / view).
 #pragma once
