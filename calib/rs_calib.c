@@ -15,9 +15,11 @@
 // API and method: rs_calib.h; docs/calibration.md. The pose helpers (yaw/pitch/roll, camera
 // position, ground intersection) are core's: core/rs_pose.h, core/rs_camera.h.
 //
-// Layering: a file calls only the files listed below it, never one above (every stage also uses
-// rs_calib_solve_state.c, the state, and rs_calib_refine_ceres.cc, one refinement):
-//   rs_calib.c                 the orchestrator             -> every file below
+// Layering: a file calls only the files listed below it, never one above (the stages also use
+// rs_calib_solve_state.c, the state, rs_calib_refine_ceres.cc, one refinement, and the OpenCV shim's
+// small dense algebra; rs_calib_site*.c, a site's cameras in and files out, use rs_calib.h alone):
+//   rs_calib.c                 the orchestrator             -> intrinsics, robust, result,
+//                                                           noise_model, vce, along, init
 //   rs_calib_intrinsics.c      the intrinsics hooks         -> noise_model, noise, result
 //   rs_calib_robust.c          the robust stage             -> noise_model, along, noise
 //   rs_calib_result.c          the result and its warnings  -> noise
