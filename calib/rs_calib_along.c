@@ -9,8 +9,8 @@
 // observation, and the survey error along the segment does not matter. Which segment, and p on
 // it, are chosen here from the pose at hand: the point of each segment nearest the pick's viewing
 // ray (closest points of two lines, the segment's parameter clamped to [0, 1]), the segment whose
-// point projects nearest the pick. rs_calib.c chooses after the initial pose and again after the
-// robust solve. A polyline's corners are thereby linearised per segment; the survey errors of
+// point projects nearest the pick. rs_calib.c chooses after the initial pose and rs_calib_robust.c again
+// after the robust solve. A polyline's corners are thereby linearised per segment; the survey errors of
 // picks along the same line are taken as independent (they share the line's vertices: a
 // simplification that matters only where the survey sigma rivals the pixel's footprint).
 #include <math.h>
@@ -20,7 +20,8 @@
 #include <mrcal/mrcal.h>
 #include <mrcal/poseutils.h>
 
-#include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_along.h"
+#include "calib/internal/rs_calib_solve_state.h"
 #include "calib/rs_calib.h"
 #include "core/rs_pose.h"
 
@@ -91,9 +92,10 @@ static double nearest_on_segment(const double o[3], const double r[3], const dou
     return t;
 }
 
-void rs_calib__along_choose(rs_calib__work *w, const rs_calib_problem *pb, const double c[3], const double rt_c[6],
-                            const double *intrinsics)
+void rs_calib__along_choose(rs_calib_solve_state *s)
 {
+    const rs_calib_problem *pb = s->pb;
+    const double *c = s->centroid_enu_m, *rt_c = s->rt_c, *intrinsics = s->res->intrinsics;
     if (!pb->along) return;
     const mrcal_lensmodel_t *lm = &pb->camera->lensmodel;
     double C[3], R[9];
@@ -130,10 +132,10 @@ void rs_calib__along_choose(rs_calib__work *w, const rs_calib_problem *pb, const
                 for (int k = 0; k < 3; k++) best_p[k] = p[k], best_d[k] = u[k] / len;
             }
         }
-        memcpy(&w->p_survey_c[3 * i], best_p, sizeof best_p);
-        memcpy(&w->p_c[3 * i], best_p, sizeof best_p);
-        memcpy(&w->along_c[3 * i], best_d, sizeof best_d);
-        w->s_along[i] = 0.0;
+        memcpy(&s->p_survey_c[3 * i], best_p, sizeof best_p);
+        memcpy(&s->p_c[3 * i], best_p, sizeof best_p);
+        memcpy(&s->along_c[3 * i], best_d, sizeof best_d);
+        s->s_along[i] = 0.0;
     }
 }
 

@@ -259,6 +259,31 @@ static const char *nonminimal(double *rt_best, double *rms_best, bool planar, co
     return best_name;
 }
 
+// Each landmark's survey sigma as pixels for the RANSAC test, ks (N,): opt->survey_sigmas times the
+// larger focal length (px) times its largest survey sigma (opt->sigma_enu_m, (N,3), not NULL).
+static void survey_widths_px(double *ks, const rs_calib_init_options *opt, const double *intrinsics, int N)
+{
+    const double f = intrinsics[0] > intrinsics[1] ? intrinsics[0] : intrinsics[1];
+    for (int i = 0; i < N; i++) {
+        const double *si = &opt->sigma_enu_m[3 * i];
+        const double smax = fmax(si[0], fmax(si[1], si[2]));
+        ks[i] = opt->survey_sigmas * fabs(f) * smax;
+    }
+}
+
+// Whether the pose rt (6, centred frame) puts every usable landmark (usable, (Nusable,)) within
+// threshold_px of its pick as sc scores it. tmp: scratch (Nusable,).
+static bool all_agree(const double rt[6], const int *usable, int Nusable, const scorer *sc, double threshold_px,
+                      double *tmp)
+{
+    double Rt[12];
+    mrcal_Rt_from_rt(Rt, NULL, rt);
+    pixel_errors(tmp, Rt, usable, Nusable, (void *)sc);
+    int Nagree = 0;
+    for (int k = 0; k < Nusable; k++) Nagree += tmp[k] < threshold_px;
+    return Nagree == Nusable;
+}
+
 rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const mrcal_lensmodel_t *lensmodel,
                              const double *intrinsics, const double *p_enu_m, const double *q_px, int N,
                              const rs_calib_init_options *opt, rs_err *err)
@@ -335,12 +360,7 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
     scorer sc_ransac = sc;
     const mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(lensmodel);
     if (opt->sigma_enu_m && opt->survey_sigmas > 0.0 && meta.has_core) {
-        const double f = intrinsics[0] > intrinsics[1] ? intrinsics[0] : intrinsics[1];
-        for (int i = 0; i < N; i++) {
-            const double *si = &opt->sigma_enu_m[3 * i];
-            const double smax = fmax(si[0], fmax(si[1], si[2]));
-            ks[i] = opt->survey_sigmas * fabs(f) * smax;
-        }
+        survey_widths_px(ks, opt, intrinsics, N);
         sc_ransac.ks_px = ks;
     }
     // 3. every usable landmark at once (step 4's solvers): where that pose puts every one of them
@@ -350,12 +370,7 @@ rs_status rs_calib_init_pose(rs_calib_init_result *result, bool *inlier, const m
     const char *best_name =
         nonminimal(rt_best, &rms_best, result->planar, v, p_c, usable, Nusable, &sc, xy, p_sel, tmp);
     if (best_name) {
-        double Rt[12];
-        mrcal_Rt_from_rt(Rt, NULL, rt_best);
-        pixel_errors(tmp, Rt, usable, Nusable, (void *)&sc_ransac);
-        int Nagree = 0;
-        for (int k = 0; k < Nusable; k++) Nagree += tmp[k] < opt->ransac_threshold_px;
-        if (Nagree == Nusable) {
+        if (all_agree(rt_best, usable, Nusable, &sc_ransac, opt->ransac_threshold_px, tmp)) {
             for (int i = 0; i < N; i++) is_in[i] = false;
             for (int k = 0; k < Nusable; k++) is_in[usable[k]] = true;
             snprintf(result->method, sizeof(result->method), "%s on every landmark", best_name);

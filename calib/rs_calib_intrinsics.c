@@ -10,7 +10,11 @@
 
 #include <mrcal/poseutils.h>
 
+#include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_noise_model.h"
 #include "calib/internal/rs_calib_opencv.h"
+#include "calib/internal/rs_calib_result.h"
+#include "calib/internal/rs_calib_solve_state.h"
 #include "core/rs_pose.h"
 
 // ---------------------------------------------------------------- hook 1: the options
@@ -80,9 +84,10 @@ typedef struct {
     double A[5][NC_MAX], B[5][4], e[5]; // B: up to 3 axes, and s for a landmark picked along a segment
 } block;
 
-static bool landmark_block(block *b, const columns *cl, const rs_calib_refine_problem *rp, const rs_calib__work *w,
-                           const rs_pose_prepared *pose, const double *intrinsics, int i, double *dq_dintr)
+static bool landmark_block(block *b, const columns *cl, const rs_calib_solve_state *w, const rs_pose_prepared *pose,
+                           const double *intrinsics, int i, double *dq_dintr)
 {
+    const rs_calib_refine_problem *rp = &w->rp;
     memset(b, 0, sizeof *b);
     const double *p = &w->p_c[3 * i];
     double pc[3], dpc_drt[18], dpc_dp[9], seen[3], d[3];
@@ -250,32 +255,6 @@ static double critical(int m, int nu)
     return t * t;
 }
 
-// The focal scale of the solve with the focal free: its value k (f / f_nominal - 1), variance Q
-// and the dof of that fit. The solve is rs_calib_solve itself with the focal refined at the
-// caller's request (so that its own test leaves the focal alone: no recursion).
-static rs_status free_focal(double *k, double *Q, int *dof, const rs_calib_problem *pb, const rs_calib_options *opt,
-                            const rs_calib__warm *from)
-{
-    rs_calib_problem p = *pb;
-    p.focal_rel_sigma = 0.0;
-    rs_calib_options o = *opt;
-    o.refine |= RS_CALIB_REFINE_FOCAL;
-    o.focal_prior_rel_sigma = 1.0; // rs_calib_options_default's: weak
-    o.focal_search_min = o.focal_search_max = 1.0;
-    rs_calib_result r;
-    rs_err e = {0};
-    rs_status st = rs_calib__solve_warm(&r, &p, &o, from, &e);
-    if (st == RS_OK) {
-        const double f0 = pb->camera->intrinsics[0];
-        *k = r.intrinsics[0] / f0 - 1.0;
-        *Q = r.covariance_intrinsics[0] / (f0 * f0);
-        *dof = r.dof;
-        if (!(*Q > 0) || !isfinite(*k)) st = RS_ERR_DEGENERATE;
-    }
-    rs_calib_result_free(&r);
-    return st;
-}
-
 // d' (Q + s^2 I)^-1 d for n = 1 or 2.
 static double chi2_of(const double *d, const double *Q, double s, int n)
 {
@@ -314,151 +293,204 @@ static double position_shift(const double rt[6], const double d_rt[6])
     return sqrt(s);
 }
 
-rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work *w, const rs_calib_refine_problem *rp,
-                                     const double rt_c[6], const double *cov, unsigned user_refine,
-                                     const rs_calib_problem *pb, const rs_calib_options *opt,
-                                     void (*warn)(rs_calib_result *, const char *, ...), rs_err *err)
+// The columns of the check at the solution x (Ni,), nominal (Ni,): rt, then the focal and the
+// centre where tested or refined, the distortion where refined.
+static void check_columns(columns *cl, const rs_calib_solve_state *s, bool test_focal, bool test_center)
 {
-    rs_calib_intrinsics_check *ck = &res->intrinsics_check;
-    memset(ck, 0, sizeof *ck);
-    ck->focal_stated_rel = pb->focal_rel_sigma;
-    ck->center_stated_px = pb->center_sigma_px;
-    if (!mrcal_lensmodel_metadata(rp->lensmodel).has_core) return RS_OK;
-    const double *nominal = rp->intrinsics_nominal, *x = res->intrinsics;
-    if (!(nominal[0] > 0.0 && nominal[1] > 0.0)) return RS_OK;
-    const bool test_focal = !(user_refine & RS_CALIB_REFINE_FOCAL);
-    const bool test_center = !(user_refine & RS_CALIB_REFINE_CENTER);
-    if (!test_focal && !test_center) return RS_OK;
-
-    columns cl = {.Ni = res->Nintrinsics};
-    for (int k = 0; k < 6; k++) add_column(&cl, -1, G_NONE, false, 0, 0);
+    const rs_calib_options *opt = s->opt;
+    const double *nominal = s->rp.intrinsics_nominal, *x = s->res->intrinsics;
+    *cl = (columns){.Ni = s->res->Nintrinsics};
+    for (int k = 0; k < 6; k++) add_column(cl, -1, G_NONE, false, 0, 0);
     if (test_focal || (opt->refine & RS_CALIB_REFINE_FOCAL))
-        add_column(&cl, -2, test_focal ? G_FOCAL : G_NONE, opt->refine & RS_CALIB_REFINE_FOCAL,
+        add_column(cl, -2, test_focal ? G_FOCAL : G_NONE, opt->refine & RS_CALIB_REFINE_FOCAL,
                    opt->focal_prior_rel_sigma, x[0] / nominal[0] - 1.0);
     if (test_center || (opt->refine & RS_CALIB_REFINE_CENTER))
         for (int j = 2; j < 4; j++)
-            add_column(&cl, j, test_center ? G_CENTER : G_NONE, opt->refine & RS_CALIB_REFINE_CENTER,
+            add_column(cl, j, test_center ? G_CENTER : G_NONE, opt->refine & RS_CALIB_REFINE_CENTER,
                        opt->center_prior_sigma_px, x[j] - nominal[j]);
     if (opt->refine & RS_CALIB_REFINE_DISTORTION)
-        for (int j = 4; j < cl.Ni && cl.nc < NC_MAX; j++)
-            add_column(&cl, j, G_NONE, true, opt->distortion_prior_sigma, x[j] - nominal[j]);
+        for (int j = 4; j < cl->Ni && cl->nc < NC_MAX; j++)
+            add_column(cl, j, G_NONE, true, opt->distortion_prior_sigma, x[j] - nominal[j]);
+}
 
-    // the data's normal matrix and gradient, landmarks eliminated
-    const int nc = cl.nc, N = pb->N;
-    double *S = calloc((size_t)nc * (size_t)nc, sizeof *S), *g = calloc((size_t)nc, sizeof *g);
-    double *dq_dintr = malloc((size_t)2 * (size_t)(cl.Ni > 0 ? cl.Ni : 1) * sizeof *dq_dintr);
-    rs_status st = S && g && dq_dintr ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "intrinsics test: out of memory");
+// The data's normal matrix S (nc,nc, zeroed) and gradient g (nc, zeroed) at the solution of s,
+// the landmarks eliminated, and *f the data's sum of squares and redundancy with the landmarks
+// free. dq_dintr: scratch (2,Ni). false: a landmark in use does not project.
+static bool check_normal(double *S, double *g, fit *f, const columns *cl, const rs_calib_solve_state *s,
+                         double *dq_dintr)
+{
+    const rs_calib_refine_problem *rp = &s->rp;
+    const int nc = cl->nc;
     rs_err ignore = {0};
-    bool ok = st == RS_OK;
-    fit f = {0}; // the data's sum of squares and its redundancy, with the landmarks free
+    bool ok = true;
     rs_pose_prepared pose;
-    rs_pose_prepare(&pose, rt_c);
-    for (int i = 0; ok && i < N; i++) {
-        if (!w->use[i]) continue;
+    rs_pose_prepare(&pose, s->rt_c);
+    for (int i = 0; ok && i < s->pb->N; i++) {
+        if (!s->use[i]) continue;
         block b;
-        ok = landmark_block(&b, &cl, rp, w, &pose, x, i, dq_dintr) && add_landmark(S, g, &b, nc, &ignore) == RS_OK;
-        for (int r = 0; ok && r < b.m; r++) f.ssr += b.e[r] * b.e[r];
-        f.dof += b.m - b.k;
+        ok = landmark_block(&b, cl, s, &pose, s->res->intrinsics, i, dq_dintr) &&
+             add_landmark(S, g, &b, nc, &ignore) == RS_OK;
+        for (int r = 0; ok && r < b.m; r++) f->ssr += b.e[r] * b.e[r];
+        f->dof += b.m - b.k;
     }
     if (ok && rp->has_position_prior && rp->prior_sigma_m > 0) { // the camera position's prior
         double C[3], dC_drt[18];
-        rs_pose_position_from_rt(C, dC_drt, rt_c);
+        rs_pose_position_from_rt(C, dC_drt, s->rt_c);
         const double wp = 1.0 / rp->prior_sigma_m;
         for (int k = 0; k < 3; k++) {
             const double e = (C[k] - rp->prior_position_c_m[k]) * wp;
-            f.ssr += e * e;
-            f.dof++;
+            f->ssr += e * e;
+            f->dof++;
             for (int a = 0; a < 6; a++) {
                 g[a] += dC_drt[k * 6 + a] * wp * e;
                 for (int b = 0; b < 6; b++) S[a * nc + b] += dC_drt[k * 6 + a] * dC_drt[k * 6 + b] * wp * wp;
             }
         }
     }
-    double B_focal[6] = {0}, B_center[6] = {0};
-    if (ok && test_focal) {
-        double k, Q;
-        int n;
-        fit alt = f;
-        if (group_step(&k, &Q, B_focal, &n, &alt, &cl, S, g, G_FOCAL, &ignore) == RS_OK && n == 1 && Q > 0) {
-            Q *= variance_factor(&alt);
-            ck->focal_tested = true;
-            ck->focal_rel = k;
-            ck->sigma_focal_rel = sqrt(Q);
-            ck->critical_focal = critical(1, alt.dof);
-            // the alternative: the focal free (--refine focal's weak prior) and the noise model
-            // estimated again, so that what a wrong focal left in the residuals is no longer taken
-            // for survey noise. Not with fewer than 3 degrees of freedom left (4 landmarks): the
-            // critical value is then t(2)^2 = 999 or more, only a 31-sigma focal error could pass
-            // it, and the linear step stands.
-            // Where the solution kept every landmark, first by Gauss-Newton on the adjustment
-            // linearised at the surveyed landmarks (rs_calib__focal_alternative: tens of
-            // microseconds instead of a whole solve), which decides where its chi-square is a
-            // factor RS_CALIB_ALTERNATIVE_MARGIN or more from the critical value. The full solve
-            // is a Cauchy M-estimate, the linearised one least squares: on 248 cameras of
-            // tests/calib/test_calib_focal_error.c their focals differed by up to 1.4 of the
-            // full solve's sigmas, their sigmas by up to 1.7x, chi-squares by up to 2x. Near the
-            // critical value, where that does not converge, and where the solution rejected a
-            // landmark, the alternative is solved in full from every landmark (free_focal): a
-            // wrong focal makes the solution reject good landmarks, and the alternative with the
-            // solution's verdict lost a third of the significant x1.3 warnings there.
-            // Scale-free (w->scale_free: the pixels the one noise group, no priors) and every
-            // landmark kept, the linear step is already the alternative's first Gauss-Newton
-            // step, its variance factor that of the fit with the focal free (no survey group for
-            // a focal error to hide in): where its chi-square is RS_CALIB_ALTERNATIVE_MARGIN or
-            // more below the critical value it stands (the iterated alternative took about a
-            // tenth of an exact survey's calibration; tests/calib/test_scale_free.c compares the
-            // two paths).
-            double k_alt, Q_alt;
-            rs_status st_alt = RS_ERR_DEGENERATE;
-            bool all_in = true;
-            for (int i = 0; i < N; i++) all_in = all_in && w->use[i];
-            const bool linear_stands =
-                w->scale_free && all_in &&
-                chi2_of(&k, &Q, pb->focal_rel_sigma, 1) <= critical(1, alt.dof) / RS_CALIB_ALTERNATIVE_MARGIN;
-            if (alt.dof >= 3 && !linear_stands) {
-                rs_err e_alt = {0};
-                if (all_in) st_alt = rs_calib__focal_alternative(&k_alt, &Q_alt, res, w, rp, rt_c, opt, &e_alt);
-                const double crit = critical(1, alt.dof), c2 = chi2_of(&k_alt, &Q_alt, pb->focal_rel_sigma, 1);
-                if (st_alt == RS_OK && !(c2 <= crit / RS_CALIB_ALTERNATIVE_MARGIN) &&
-                    !(c2 >= crit * RS_CALIB_ALTERNATIVE_MARGIN))
-                    st_alt = RS_ERR_NOCONVERGE; // near the critical value
-                const rs_calib__warm from = {.rt_c = rt_c,
-                                             .intrinsics = x,
-                                             .p_c = w->p_c,
-                                             .no_gross = w->Ngross == 0,
-                                             .log_theta = w->log_theta};
-                if (st_alt != RS_OK) st_alt = free_focal(&k_alt, &Q_alt, &alt.dof, pb, opt, &from);
-            }
-            if (st_alt == RS_OK) {
-                k = k_alt, Q = Q_alt;
-                ck->focal_rel = k;
-                ck->sigma_focal_rel = sqrt(Q);
-                ck->critical_focal = critical(1, alt.dof);
-            }
-            ck->chi2_focal = chi2_of(&ck->focal_rel, &Q, pb->focal_rel_sigma, 1);
+    return ok;
+}
+
+// The focal's test, linearised (group_step), and where that does not decide, its alternative
+// (the focal free, the noise model estimated again; rs_calib_intrinsics.h): fills t and
+// res->intrinsics_check's focal figures, except where the alternative is to be solved in full
+// (t->need_full: rs_calib__intrinsics_verdict finishes them).
+static void check_focal(rs_calib_intrinsics_test *t, const columns *cl, const double *S, const double *g, const fit *f,
+                        const rs_calib_solve_state *s)
+{
+    rs_calib_intrinsics_check *ck = &s->res->intrinsics_check;
+    const rs_calib_problem *pb = s->pb;
+    rs_err ignore = {0};
+    double k, Q;
+    int n;
+    fit alt = *f;
+    if (group_step(&k, &Q, t->B_focal, &n, &alt, cl, S, g, G_FOCAL, &ignore) != RS_OK || n != 1 || !(Q > 0)) return;
+    Q *= variance_factor(&alt);
+    ck->focal_tested = true;
+    ck->focal_rel = k;
+    ck->sigma_focal_rel = sqrt(Q);
+    ck->critical_focal = critical(1, alt.dof);
+    // the alternative: the focal free (--refine focal's weak prior) and the noise model
+    // estimated again, so that what a wrong focal left in the residuals is no longer taken
+    // for survey noise. Not with fewer than 3 degrees of freedom left (4 landmarks): the
+    // critical value is then t(2)^2 = 999 or more, only a 31-sigma focal error could pass
+    // it, and the linear step stands.
+    // Where the solution kept every landmark, first by Gauss-Newton on the adjustment
+    // linearised at the surveyed landmarks (rs_calib__focal_alternative: tens of
+    // microseconds instead of a whole solve), which decides where its chi-square is a
+    // factor RS_CALIB_ALTERNATIVE_MARGIN or more from the critical value. The full solve
+    // is a Cauchy M-estimate, the linearised one least squares: on 248 cameras of
+    // tests/calib/test_calib_focal_error.c their focals differed by up to 1.4 of the
+    // full solve's sigmas, their sigmas by up to 1.7x, chi-squares by up to 2x. Near the
+    // critical value, where that does not converge, and where the solution rejected a
+    // landmark, the alternative is solved in full from every landmark (t->need_full, solved by
+    // rs_calib.c): a wrong focal makes the solution reject good landmarks, and the alternative
+    // with the solution's verdict lost a third of the significant x1.3 warnings there.
+    // Scale-free (s->scale_free: the pixels the one noise group, no priors) and every
+    // landmark kept, the linear step is already the alternative's first Gauss-Newton
+    // step, its variance factor that of the fit with the focal free (no survey group for
+    // a focal error to hide in): where its chi-square is RS_CALIB_ALTERNATIVE_MARGIN or
+    // more below the critical value it stands (the iterated alternative took about a
+    // tenth of an exact survey's calibration; tests/calib/test_scale_free.c compares the
+    // two paths).
+    double k_alt, Q_alt;
+    rs_status st_alt = RS_ERR_DEGENERATE;
+    bool all_in = true;
+    for (int i = 0; i < pb->N; i++) all_in = all_in && s->use[i];
+    const bool linear_stands =
+        s->scale_free && all_in &&
+        chi2_of(&k, &Q, pb->focal_rel_sigma, 1) <= critical(1, alt.dof) / RS_CALIB_ALTERNATIVE_MARGIN;
+    if (alt.dof >= 3 && !linear_stands) {
+        rs_err e_alt = {0};
+        if (all_in) st_alt = rs_calib__focal_alternative(&k_alt, &Q_alt, s, &e_alt);
+        const double crit = critical(1, alt.dof), c2 = chi2_of(&k_alt, &Q_alt, pb->focal_rel_sigma, 1);
+        if (st_alt == RS_OK && !(c2 <= crit / RS_CALIB_ALTERNATIVE_MARGIN) &&
+            !(c2 >= crit * RS_CALIB_ALTERNATIVE_MARGIN))
+            st_alt = RS_ERR_NOCONVERGE; // near the critical value
+        if (st_alt != RS_OK) {          // solved in full (rs_calib.c), then rs_calib__intrinsics_verdict
+            t->need_full = true;
+            t->Q_focal = Q;
+            return;
         }
     }
-    if (ok && test_center) {
-        double k[2], Q[4];
-        int n;
-        fit alt = f;
-        if (group_step(k, Q, B_center, &n, &alt, &cl, S, g, G_CENTER, &ignore) == RS_OK && n == 2 && Q[0] > 0 &&
-            Q[3] > 0) {
-            const double v = variance_factor(&alt);
-            for (int a = 0; a < 4; a++) Q[a] *= v;
-            ck->critical_center = critical(2, alt.dof);
-            ck->center_tested = true;
-            for (int a = 0; a < 2; a++) {
-                ck->center_px[a] = k[a];
-                ck->sigma_center_px[a] = sqrt(Q[3 * a]);
-            }
-            ck->chi2_center = chi2_of(k, Q, pb->center_sigma_px, 2);
-        }
+    if (st_alt == RS_OK) {
+        k = k_alt, Q = Q_alt;
+        ck->focal_rel = k;
+        ck->sigma_focal_rel = sqrt(Q);
+        ck->critical_focal = critical(1, alt.dof);
     }
+    ck->chi2_focal = chi2_of(&ck->focal_rel, &Q, pb->focal_rel_sigma, 1);
+}
+
+// The centre's test, linearised (group_step): res->intrinsics_check's centre figures.
+static void check_center(const columns *cl, const double *S, const double *g, const fit *f,
+                         const rs_calib_solve_state *s)
+{
+    rs_calib_intrinsics_check *ck = &s->res->intrinsics_check;
+    rs_err ignore = {0};
+    double k[2], Q[4], B_center[6];
+    int n;
+    fit alt = *f;
+    if (group_step(k, Q, B_center, &n, &alt, cl, S, g, G_CENTER, &ignore) == RS_OK && n == 2 && Q[0] > 0 && Q[3] > 0) {
+        const double v = variance_factor(&alt);
+        for (int a = 0; a < 4; a++) Q[a] *= v;
+        ck->critical_center = critical(2, alt.dof);
+        ck->center_tested = true;
+        for (int a = 0; a < 2; a++) {
+            ck->center_px[a] = k[a];
+            ck->sigma_center_px[a] = sqrt(Q[3 * a]);
+        }
+        ck->chi2_center = chi2_of(k, Q, s->pb->center_sigma_px, 2);
+    }
+}
+
+rs_status rs_calib__intrinsics_test(rs_calib_intrinsics_test *t, const rs_calib_solve_state *s, rs_err *err)
+{
+    rs_calib_result *res = s->res;
+    const rs_calib_problem *pb = s->pb;
+    memset(t, 0, sizeof *t);
+    rs_calib_intrinsics_check *ck = &res->intrinsics_check;
+    memset(ck, 0, sizeof *ck);
+    ck->focal_stated_rel = pb->focal_rel_sigma;
+    ck->center_stated_px = pb->center_sigma_px;
+    if (!mrcal_lensmodel_metadata(s->rp.lensmodel).has_core) return RS_OK;
+    const double *nominal = s->rp.intrinsics_nominal;
+    if (!(nominal[0] > 0.0 && nominal[1] > 0.0)) return RS_OK;
+    const bool test_focal = !(s->user_refine & RS_CALIB_REFINE_FOCAL);
+    const bool test_center = !(s->user_refine & RS_CALIB_REFINE_CENTER);
+    if (!test_focal && !test_center) return RS_OK;
+
+    columns cl;
+    check_columns(&cl, s, test_focal, test_center);
+    // the data's normal matrix and gradient, landmarks eliminated
+    const int nc = cl.nc;
+    double *S = calloc((size_t)nc * (size_t)nc, sizeof *S), *g = calloc((size_t)nc, sizeof *g);
+    double *dq_dintr = malloc((size_t)2 * (size_t)(cl.Ni > 0 ? cl.Ni : 1) * sizeof *dq_dintr);
+    rs_status st = S && g && dq_dintr ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "intrinsics test: out of memory");
+    fit f = {0}; // the data's sum of squares and its redundancy, with the landmarks free
+    const bool ok = st == RS_OK && check_normal(S, g, &f, &cl, s, dq_dintr);
+    if (ok && test_focal) check_focal(t, &cl, S, g, &f, s);
+    if (ok && test_center) check_center(&cl, S, g, &f, s);
     free(S);
     free(g);
     free(dq_dintr);
-    if (st) return st;
+    return st;
+}
+
+void rs_calib__intrinsics_verdict(rs_calib_solve_state *s, const rs_calib_intrinsics_test *t)
+{
+    rs_calib_result *res = s->res;
+    const rs_calib_problem *pb = s->pb;
+    rs_calib_intrinsics_check *ck = &res->intrinsics_check;
+    if (t->need_full) { // the alternative solved in full (rs_calib.c)
+        double Q = t->Q_focal;
+        if (t->full_status == RS_OK) {
+            Q = t->Q_full;
+            ck->focal_rel = t->k_full;
+            ck->sigma_focal_rel = sqrt(Q);
+            ck->critical_focal = critical(1, t->dof_full);
+        }
+        ck->chi2_focal = chi2_of(&ck->focal_rel, &Q, pb->focal_rel_sigma, 1);
+    }
 
     // how far the pose rests on a focal held exact: Baarda's external reliability of the focal,
     // the pose change that its minimal detectable error (alpha 0.1%, power 80%) would cause
@@ -466,11 +498,10 @@ rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work 
     if (ck->focal_tested && !(pb->focal_rel_sigma > 0)) {
         ck->focal_mdb_rel = RS_CALIB_INTRINSICS_DELTA0 * ck->sigma_focal_rel;
         double d_rt[6];
-        for (int a = 0; a < 6; a++) d_rt[a] = B_focal[a] * ck->focal_mdb_rel;
-        ck->shift_position_m = position_shift(rt_c, d_rt);
-        ck->shift_mahalanobis2 = mahalanobis6(d_rt, cov, ld);
+        for (int a = 0; a < 6; a++) d_rt[a] = t->B_focal[a] * ck->focal_mdb_rel;
+        ck->shift_position_m = position_shift(s->rt_c, d_rt);
+        ck->shift_mahalanobis2 = mahalanobis6(d_rt, s->cov, ld);
     }
-    (void)B_center;
 
     // the warnings: the image says the intrinsics are off (significant), or a focal taken as exact
     // that the landmarks cannot check carries the pose beyond its ellipsoid
@@ -481,32 +512,34 @@ rs_status rs_calib__intrinsics_check(rs_calib_result *res, const rs_calib__work 
         char stated[64] = "stated exact";
         if (pb->focal_rel_sigma > 0)
             snprintf(stated, sizeof stated, "beyond its stated %.3g%%", 100 * pb->focal_rel_sigma);
-        warn(res,
-             "the pose may be wrong because of the intrinsics: the image says the focal length is %.0f%% (+-%.0f%%) "
-             "%s than the nominal (%s; chi-square %.1f > %.2f, alpha 0.1%%): run with --refine focal, or state the "
-             "camera's intrinsics_sigma%s",
-             100 * fabs(ck->focal_rel), 100 * ck->sigma_focal_rel, ck->focal_rel >= 0 ? "longer" : "shorter", stated,
-             ck->chi2_focal, ck->critical_focal, pb->focal_rel_sigma > 0 ? " larger" : "");
+        rs_calib__warn(
+            res,
+            "the pose may be wrong because of the intrinsics: the image says the focal length is %.0f%% (+-%.0f%%) "
+            "%s than the nominal (%s; chi-square %.1f > %.2f, alpha 0.1%%): run with --refine focal, or state the "
+            "camera's intrinsics_sigma%s",
+            100 * fabs(ck->focal_rel), 100 * ck->sigma_focal_rel, ck->focal_rel >= 0 ? "longer" : "shorter", stated,
+            ck->chi2_focal, ck->critical_focal, pb->focal_rel_sigma > 0 ? " larger" : "");
         ck->warned = true;
     } else if (rests) {
-        warn(res,
-             "the pose may be wrong because of the intrinsics: the focal length is taken as exact, but these "
-             "landmarks cannot check it: an error of %.0f%% would go unnoticed (alpha 0.1%%, power 80%%) and would "
-             "move the camera %.2g m, outside the pose's 99.9%% ellipsoid: state the camera's intrinsics_sigma (the "
-             "covariance then includes it), or run with --refine focal",
-             100 * ck->focal_mdb_rel, ck->shift_position_m);
+        rs_calib__warn(
+            res,
+            "the pose may be wrong because of the intrinsics: the focal length is taken as exact, but these "
+            "landmarks cannot check it: an error of %.0f%% would go unnoticed (alpha 0.1%%, power 80%%) and would "
+            "move the camera %.2g m, outside the pose's 99.9%% ellipsoid: state the camera's intrinsics_sigma (the "
+            "covariance then includes it), or run with --refine focal",
+            100 * ck->focal_mdb_rel, ck->shift_position_m);
         ck->warned = true;
     }
     if (center_off) {
         char stated[64] = "stated exact";
         if (pb->center_sigma_px > 0) snprintf(stated, sizeof stated, "beyond its stated %.3g px", pb->center_sigma_px);
-        warn(res,
-             "the pose may be wrong because of the intrinsics: the image says the principal point is (%+.0f, %+.0f) "
-             "px (+-%.0f, +-%.0f) from the nominal (%s; chi-square %.1f > %.2f, alpha 0.1%%): run with --refine "
-             "center, or state the camera's intrinsics_sigma%s",
-             ck->center_px[0], ck->center_px[1], ck->sigma_center_px[0], ck->sigma_center_px[1], stated,
-             ck->chi2_center, ck->critical_center, pb->center_sigma_px > 0 ? " larger" : "");
+        rs_calib__warn(
+            res,
+            "the pose may be wrong because of the intrinsics: the image says the principal point is (%+.0f, %+.0f) "
+            "px (+-%.0f, +-%.0f) from the nominal (%s; chi-square %.1f > %.2f, alpha 0.1%%): run with --refine "
+            "center, or state the camera's intrinsics_sigma%s",
+            ck->center_px[0], ck->center_px[1], ck->sigma_center_px[0], ck->sigma_center_px[1], stated, ck->chi2_center,
+            ck->critical_center, pb->center_sigma_px > 0 ? " larger" : "");
         ck->warned = true;
     }
-    return RS_OK;
 }

@@ -357,3 +357,8 @@ static double excluded_chi2(const rs_calib_noise_state *s, const rs_calib__param
     if (!(det > 0)) return NAN;
     return (C[3] * e[0] * e[0] - (C[1] + C[2]) * e[0] * e[1] + C[0] * e[1] * e[1]) / det;
 }
+
+int rs_calib__noise_group(int component)
+{
+    return component < RS_NOISE_E ? RS_NOISE_PIXEL : component < RS_NOISE_UP ? RS_NOISE_SURVEY_H : RS_NOISE_SURVEY_V;
+}

@@ -1,12 +1,19 @@
 // rs_calib_robust.c -- steps 2 and 3 of rs_calib_solve: the robust solve on every landmark, the
 // noise's scale per group taken from the landmarks that agree with it, and the coarse outlier
-// test (calib/internal/rs_calib_noise.h, docs/calibration.md 3a).
+// test (calib/internal/rs_calib_robust.h, docs/calibration.md 3a).
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "calib/internal/rs_calib_robust.h"
+
+#include <stdlib.h>
+
+#include "calib/internal/rs_calib_along.h"
 #include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_noise_model.h"
 #include "calib/internal/rs_calib_refine.h"
+#include "calib/internal/rs_calib_solve_state.h"
 #include "calib/rs_calib.h"
 
 // A group's variance factor from the data: the median of x = e^2 / r over its observations, a
@@ -34,11 +41,29 @@
 #define SCALE_SETTLED    0.2
 #define SCALE_PASSES     4
 
-static rs_status robust_run(rs_calib_result *res, rs_calib__work *w, double rt_c[6], const rs_calib_refine_problem *rp,
-                            const rs_calib_refine_options *ro, rs_err *err)
+static int cmp_double(const void *a, const void *b)
 {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+// Median of x (n,), using scratch (n,); NAN for n = 0.
+static double median(const double *x, int n, double *scratch)
+{
+    if (n <= 0) return NAN;
+    memcpy(scratch, x, (size_t)n * sizeof *x);
+    qsort(scratch, (size_t)n, sizeof *scratch, cmp_double);
+    return n % 2 ? scratch[n / 2] : 0.5 * (scratch[n / 2 - 1] + scratch[n / 2]);
+}
+
+// One robust solve (s->ro) of s from s->rt_c: s->rt_c, the landmarks and s->block_chi2 at its
+// solution; res->iterations counts its iterations.
+static rs_status robust_run(rs_calib_solve_state *s, rs_err *err)
+{
+    rs_calib_result *res = s->res;
     rs_calib_refine_summary sum;
-    rs_status st = rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, rp, ro, err);
+    rs_status st =
+        rs_calib_refine_run(s->rt_c, res->intrinsics, s->p_c, &sum, NULL, s->block_chi2, NULL, &s->rp, &s->ro, err);
     if (st != RS_OK) {
         rs_err_prefix(err, "robust refinement");
         return st;
@@ -62,16 +87,15 @@ static rs_status robust_run(rs_calib_result *res, rs_calib__work *w, double rt_c
 // 28% of themselves where the survey was stated 5x too loose), and the stated sigmas alone cannot
 // test anything finer than the statement. fixed: rt_c is a least-squares solution with one
 // noise group (rs_calib__robust_stage): one pass, its chi-squares scaled, no solve. Scratch:
-// w->dpos, w->q_pred.
-static rs_status data_scale(rs_calib_result *res, rs_calib__work *w, double rt_c[6], double log_theta[RS_NOISE_NGROUPS],
-                            const rs_calib_refine_problem *rp, const rs_calib_refine_options *ro,
-                            const rs_calib_problem *pb, const rs_calib_options *opt, bool fixed, rs_err *err)
+// s->dpos, s->q_pred.
+static rs_status data_scale(rs_calib_solve_state *s, bool fixed, rs_err *err)
 {
-    const int N = pb->N;
+    const int N = s->pb->N;
+    double *log_theta = s->log_theta;
     const double lim = 2.0 * log(RS_NOISE_MAX_FACTOR);
-    double *x = w->dpos, *scratch = w->dpos + (size_t)N * RS_NOISE_NCOMP; // (N,5,3): room for two (N,5)
+    double *x = s->dpos, *scratch = s->dpos + (size_t)N * RS_NOISE_NCOMP; // (N,5,3): room for two (N,5)
     for (int pass = 0; pass < SCALE_PASSES; pass++) {
-        rs_status st = rs_calib__redundancy_at(res, w, rp, rt_c, opt, err);
+        rs_status st = rs_calib__redundancy_at(s, err);
         if (st != RS_OK) {
             rs_err_prefix(err, "robust refinement");
             return st;
@@ -79,17 +103,17 @@ static rs_status data_scale(rs_calib_result *res, rs_calib__work *w, double rt_c
         double next[RS_NOISE_NGROUPS];
         // the common factor: the median block chi2 against a 2-dof chi-square's median 1.3863
         // (a group without testable observations keeps its scale, widened only by it)
-        const double widen = fmax(0.0, log(rs_calib__median(w->block_chi2, N, w->q_pred) / 1.3863));
+        const double widen = fmax(0.0, log(median(s->block_chi2, N, s->q_pred) / 1.3863));
         int nobs[RS_NOISE_NGROUPS];
         for (int g = 0; g < RS_NOISE_NGROUPS; g++) {
             int n = 0;
             for (int k = 0; k < N * RS_NOISE_NCOMP; k++)
-                if (rs_calib__noise_group(k % RS_NOISE_NCOMP) == g && w->r[k] > RS_CALIB_MIN_TESTABLE_R)
-                    x[n++] = w->e[k] * w->e[k] / w->r[k];
+                if (rs_calib__noise_group(k % RS_NOISE_NCOMP) == g && s->r[k] > RS_CALIB_MIN_TESTABLE_R)
+                    x[n++] = s->e[k] * s->e[k] / s->r[k];
             nobs[g] = n;
             next[g] = log_theta[g] + widen;
             if (n >= SCALE_MIN_OBS) {
-                next[g] = log_theta[g] + fmin(widen, log(rs_calib__median(x, n, scratch) / CHI2_1_MEDIAN));
+                next[g] = log_theta[g] + fmin(widen, log(median(x, n, scratch) / CHI2_1_MEDIAN));
                 if (next[g] < 0.0) { // narrower: only by what the median shows at SCALE_MARGIN
                     const double upper = next[g] + SCALE_MARGIN * SCALE_SD / sqrt(n);
                     next[g] = n >= SCALE_NARROW_OBS || g == RS_NOISE_SURVEY_V ? fmin(0.0, upper) : 0.0;
@@ -107,42 +131,41 @@ static rs_status data_scale(rs_calib_result *res, rs_calib__work *w, double rt_c
         for (int g = 0; g < RS_NOISE_NGROUPS; g++) settled = settled && fabs(next[g] - log_theta[g]) < SCALE_SETTLED;
         if (settled) break; // the block chi2 are those of the last solve at sigmas within 10%
         if (fixed) {        // the least-squares solution, every chi-square scaled with the one factor
-            for (int i = 0; i < N; i++) w->block_chi2[i] *= exp(log_theta[RS_NOISE_PIXEL] - next[RS_NOISE_PIXEL]);
+            for (int i = 0; i < N; i++) s->block_chi2[i] *= exp(log_theta[RS_NOISE_PIXEL] - next[RS_NOISE_PIXEL]);
             memcpy(log_theta, next, sizeof next);
-            rs_calib__scale_sigmas(w, pb, log_theta);
+            rs_calib__scale_sigmas(s, log_theta);
             break;
         }
         memcpy(log_theta, next, sizeof next);
-        rs_calib__scale_sigmas(w, pb, log_theta);
-        if ((st = robust_run(res, w, rt_c, rp, ro, err)) != RS_OK) return st;
+        rs_calib__scale_sigmas(s, log_theta);
+        if ((st = robust_run(s, err)) != RS_OK) return st;
     }
     return RS_OK;
 }
 
-rs_status rs_calib__robust_stage(int *Noutliers, double log_theta[RS_NOISE_NGROUPS], double rt_c[6],
-                                 rs_calib_result *res, rs_calib__work *w, const rs_calib_refine_problem *rp,
-                                 const rs_calib_refine_options *ro, const rs_calib_problem *pb,
-                                 const rs_calib_options *opt, const double c[3], bool init_all, char *desc,
-                                 size_t desc_size, rs_err *err)
+rs_status rs_calib__robust_stage(rs_calib_solve_state *s, bool init_all, rs_err *err)
 {
+    rs_calib_result *res = s->res;
+    const rs_calib_problem *pb = s->pb;
+    const rs_calib_options *opt = s->opt;
     const int N = pb->N;
-    *Noutliers = 0;
+    s->Noutliers = 0;
     rs_status st = RS_OK;
-    w->ls_valid = false;
-    if (w->scale_free && init_all) {
+    s->ls_valid = false;
+    if (s->scale_free && init_all) {
         // Cauchy's loss from the initial pose (a linear or minimal solution, about a pixel off)
         // overshoots: on the bench's exact surveys its solve took 13 evaluations, rejected
         // steps and then a linear crawl. From the least-squares solution (3 evaluations from
         // the initial pose, Gauss-Newton converging quadratically) it takes 4, and the noise
         // model needs that solution anyway.
-        rs_calib_refine_options plain = *ro;
+        rs_calib_refine_options plain = s->ro;
         plain.robust_scale = 0.0;
         rs_calib_refine_summary sum;
-        if (rs_calib_refine_run(rt_c, res->intrinsics, w->p_c, &sum, NULL, w->block_chi2, NULL, rp, &plain, err) ==
-            RS_OK) {
-            memcpy(w->rt_ls, rt_c, sizeof w->rt_ls);
-            w->chi2_ls0 = sum.chi2 * exp(log_theta[RS_NOISE_PIXEL]); // at the stated sigmas
-            w->ls_valid = true;
+        if (rs_calib_refine_run(s->rt_c, res->intrinsics, s->p_c, &sum, NULL, s->block_chi2, NULL, &s->rp, &plain,
+                                err) == RS_OK) {
+            memcpy(s->rt_ls, s->rt_c, sizeof s->rt_ls);
+            s->chi2_ls0 = sum.chi2 * exp(s->log_theta[RS_NOISE_PIXEL]); // at the stated sigmas
+            s->ls_valid = true;
             res->iterations += sum.iterations;
         }
     }
@@ -154,24 +177,24 @@ rs_status rs_calib__robust_stage(int *Noutliers, double log_theta[RS_NOISE_NGROU
     // solve would have down-weighted, and the final solve is the same M-estimate, started from
     // here (stage timers on the bench's 50 exact-survey problems: the robust stage 48 -> 30 us
     // in the median, the final solve 28 -> 35 us; roadside bench calib's error figures the same).
-    const bool fixed = w->ls_valid && opt->estimate_noise;
-    if (!fixed) st = robust_run(res, w, rt_c, rp, ro, err);
-    if (st == RS_OK && opt->estimate_noise) st = data_scale(res, w, rt_c, log_theta, rp, ro, pb, opt, fixed, err);
+    const bool fixed = s->ls_valid && opt->estimate_noise;
+    if (!fixed) st = robust_run(s, err);
+    if (st == RS_OK && opt->estimate_noise) st = data_scale(s, fixed, err);
     if (st != RS_OK) return st;
     if (pb->along) { // the segments the along picks are on, at the robust pose (better than the initial one)
-        rs_calib__along_choose(w, pb, c, rt_c, res->intrinsics);
-        if ((st = robust_run(res, w, rt_c, rp, ro, err)) != RS_OK) return st;
+        rs_calib__along_choose(s);
+        if ((st = robust_run(s, err)) != RS_OK) return st;
     }
     const double thr2 = opt->outlier_threshold * opt->outlier_threshold;
     for (int i = 0; i < N; i++) {
-        w->use[i] = w->block_chi2[i] <= thr2;
+        s->use[i] = s->block_chi2[i] <= thr2;
         res->w_test[i] = NAN;
-        if (!w->use[i]) {
-            (*Noutliers)++;
-            memcpy(&w->p_c[3 * i], &w->p_survey_c[3 * i], 3 * sizeof(double));
+        if (!s->use[i]) {
+            s->Noutliers++;
+            memcpy(&s->p_c[3 * i], &s->p_survey_c[3 * i], 3 * sizeof(double));
         }
     }
-    snprintf(desc, desc_size, " + ceres-cauchy(%g) + outliers>%g sigma%s", opt->robust_scale, opt->outlier_threshold,
-             opt->estimate_noise ? " of the data" : "");
+    snprintf(s->robust_desc, sizeof s->robust_desc, " + ceres-cauchy(%g) + outliers>%g sigma%s", opt->robust_scale,
+             opt->outlier_threshold, opt->estimate_noise ? " of the data" : "");
     return RS_OK;
 }

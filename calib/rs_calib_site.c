@@ -113,6 +113,58 @@ static const char *lensmodel_name(char *buf, int size, const mrcal_lensmodel_t *
     return buf;
 }
 
+// The noise model (docs/calibration.md, "Noise model") as root's "noise": each group's stated and
+// estimated 1-sigma, the estimate's own 1-sigma and the redundancy it rests on.
+static void json_noise(cJSON *root, const rs_calib_result *r)
+{
+    cJSON *noise = cJSON_AddArrayToObject(root, "noise");
+    static const char *const groups[RS_CALIB_NOISE_NGROUPS] = {"pixel", "survey_horizontal", "survey_vertical"};
+    static const char *const units[RS_CALIB_NOISE_NGROUPS] = {"px", "m", "m"};
+    for (int g = 0; g < RS_CALIB_NOISE_NGROUPS; g++) {
+        const rs_calib_noise_group *n = &r->noise[g];
+        if (!n->Nobservations) continue;
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "group", groups[g]);
+        cJSON_AddStringToObject(o, "unit", units[g]);
+        cJSON_AddNumberToObject(o, "stated", n->stated);
+        cJSON_AddNumberToObject(o, "estimated", n->estimated);
+        cJSON_AddNumberToObject(o, "sigma_estimated", n->sigma_estimated);
+        cJSON_AddNumberToObject(o, "redundancy", n->redundancy);
+        cJSON_AddNumberToObject(o, "observations", n->Nobservations);
+        cJSON_AddBoolToObject(o, "estimated_from_data", n->estimated_from_data);
+        cJSON_AddItemToArray(noise, o);
+    }
+}
+
+// The intrinsics against the image (rs_calib_intrinsics_check; docs/calibration.md 7a) as root's
+// "intrinsics_check"; null figures: not tested.
+static void json_intrinsics_check(cJSON *root, const rs_calib_intrinsics_check *k)
+{
+    cJSON *ic = cJSON_AddObjectToObject(root, "intrinsics_check");
+    if (k->focal_tested) {
+        cJSON_AddNumberToObject(ic, "focal_rel", k->focal_rel);
+        cJSON_AddNumberToObject(ic, "sigma_focal_rel", k->sigma_focal_rel);
+        cJSON_AddNumberToObject(ic, "focal_stated_rel", k->focal_stated_rel);
+        cJSON_AddNumberToObject(ic, "chi2_focal", k->chi2_focal);
+        cJSON_AddNumberToObject(ic, "critical_focal", k->critical_focal);
+        cJSON_AddNumberToObject(ic, "focal_mdb_rel", k->focal_mdb_rel);
+        cJSON_AddNumberToObject(ic, "focal_mdb_shift_position_m", k->shift_position_m);
+        cJSON_AddNumberToObject(ic, "focal_mdb_shift_mahalanobis2", k->shift_mahalanobis2);
+    } else {
+        cJSON_AddNullToObject(ic, "focal_rel");
+    }
+    if (k->center_tested) {
+        cJSON_AddItemToObject(ic, "center_px", json_array(k->center_px, 2));
+        cJSON_AddItemToObject(ic, "sigma_center_px", json_array(k->sigma_center_px, 2));
+        cJSON_AddNumberToObject(ic, "center_stated_px", k->center_stated_px);
+        cJSON_AddNumberToObject(ic, "chi2_center", k->chi2_center);
+        cJSON_AddNumberToObject(ic, "critical_center", k->critical_center);
+    } else {
+        cJSON_AddNullToObject(ic, "center_px");
+    }
+    cJSON_AddBoolToObject(ic, "warned", k->warned);
+}
+
 char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_result *r)
 {
     const rs_site_camera *cam = &site->cameras[icam];
@@ -171,53 +223,10 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
         cJSON_AddNumberToObject(root, "pose_dof", r->pose_dof);
     else
         cJSON_AddNullToObject(root, "pose_dof");
-    // the noise model (docs/calibration.md, "Noise model"): each group's stated and estimated
-    // 1-sigma, the estimate's own 1-sigma and the redundancy it rests on
-    cJSON *noise = cJSON_AddArrayToObject(root, "noise");
-    static const char *const groups[RS_CALIB_NOISE_NGROUPS] = {"pixel", "survey_horizontal", "survey_vertical"};
-    static const char *const units[RS_CALIB_NOISE_NGROUPS] = {"px", "m", "m"};
-    for (int g = 0; g < RS_CALIB_NOISE_NGROUPS; g++) {
-        const rs_calib_noise_group *n = &r->noise[g];
-        if (!n->Nobservations) continue;
-        cJSON *o = cJSON_CreateObject();
-        cJSON_AddStringToObject(o, "group", groups[g]);
-        cJSON_AddStringToObject(o, "unit", units[g]);
-        cJSON_AddNumberToObject(o, "stated", n->stated);
-        cJSON_AddNumberToObject(o, "estimated", n->estimated);
-        cJSON_AddNumberToObject(o, "sigma_estimated", n->sigma_estimated);
-        cJSON_AddNumberToObject(o, "redundancy", n->redundancy);
-        cJSON_AddNumberToObject(o, "observations", n->Nobservations);
-        cJSON_AddBoolToObject(o, "estimated_from_data", n->estimated_from_data);
-        cJSON_AddItemToArray(noise, o);
-    }
+    json_noise(root, r);
     cJSON_AddNumberToObject(root, "landmarks_rejected_by_snooping", r->Nrejected_snooping);
     cJSON_AddBoolToObject(root, "noise_model_wrong", r->noise_model_wrong);
-    { // the intrinsics against the image (rs_calib_intrinsics_check; docs/calibration.md 7a); null: not tested
-        const rs_calib_intrinsics_check *k = &r->intrinsics_check;
-        cJSON *ic = cJSON_AddObjectToObject(root, "intrinsics_check");
-        if (k->focal_tested) {
-            cJSON_AddNumberToObject(ic, "focal_rel", k->focal_rel);
-            cJSON_AddNumberToObject(ic, "sigma_focal_rel", k->sigma_focal_rel);
-            cJSON_AddNumberToObject(ic, "focal_stated_rel", k->focal_stated_rel);
-            cJSON_AddNumberToObject(ic, "chi2_focal", k->chi2_focal);
-            cJSON_AddNumberToObject(ic, "critical_focal", k->critical_focal);
-            cJSON_AddNumberToObject(ic, "focal_mdb_rel", k->focal_mdb_rel);
-            cJSON_AddNumberToObject(ic, "focal_mdb_shift_position_m", k->shift_position_m);
-            cJSON_AddNumberToObject(ic, "focal_mdb_shift_mahalanobis2", k->shift_mahalanobis2);
-        } else {
-            cJSON_AddNullToObject(ic, "focal_rel");
-        }
-        if (k->center_tested) {
-            cJSON_AddItemToObject(ic, "center_px", json_array(k->center_px, 2));
-            cJSON_AddItemToObject(ic, "sigma_center_px", json_array(k->sigma_center_px, 2));
-            cJSON_AddNumberToObject(ic, "center_stated_px", k->center_stated_px);
-            cJSON_AddNumberToObject(ic, "chi2_center", k->chi2_center);
-            cJSON_AddNumberToObject(ic, "critical_center", k->critical_center);
-        } else {
-            cJSON_AddNullToObject(ic, "center_px");
-        }
-        cJSON_AddBoolToObject(ic, "warned", k->warned);
-    }
+    json_intrinsics_check(root, &r->intrinsics_check);
     cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
     if (r->warnings[0]) {
         char buf[sizeof r->warnings];

@@ -1,5 +1,5 @@
 // rs_calib_vce.c -- variance components of one camera's adjustment by restricted maximum
-// likelihood, on the adjustment linearised at its solution (calib/internal/rs_calib_noise.h).
+// likelihood, on the adjustment linearised at its solution (calib/internal/rs_calib_vce.h).
 //
 // The landmarks are marginalised: landmark i's surveyed position enters its pick as a pixel
 // error J_i e_survey, so that its pick, evaluated at the surveyed position, has the 2x2
@@ -30,8 +30,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "calib/internal/rs_calib_noise.h"
 #include "calib/internal/rs_calib_opencv.h"
+#include "calib/internal/rs_calib_vce.h"
 #include "core/rs_pose.h"
 
 typedef struct {

@@ -44,6 +44,8 @@ void rs_calib__point_block_factor(rs_calib__point_block *pt, const double dr_dp[
 // dx (3,) = argmin |r + Jp dx| (in the axes' order), and dr = Jp dx (5,)
 void rs_calib__point_block_step(const rs_calib__point_block *pt, double dx[3], double dr[5], const double r[5],
                                 const double w_m[3]);
+// P (5,2): the pixel columns of the block's residual projector I - Jp (Jp'Jp)^-1 Jp' (the one that
+// removes the point's share; rows u, v, then the survey axes), in closed form: M^-1 over -B' M^-1.
 void rs_calib__point_block_projector(const rs_calib__point_block *pt, double P[5][2]);
 
 // Cauchy's loss rho(s) = b log(1 + s/b) on a block r (m <= RS_CALIB_BLOCK_MAX_ROWS) of squared norm s, with its Jacobian J

@@ -11,12 +11,17 @@
 extern "C" {
 #endif
 
+// The 3 singular values s (descending; 0 past the N-th) of the N points p (N,3; the caller centres
+// them), by cv::SVD: the planarity test's. Errors: RS_ERR_EXTERNAL (OpenCV threw).
 rs_status rs_calib_opencv_singular_values3( // out
     double *s,                              // (3,)
     // in
     const double *p, // (N,3)
     int N,           // >= 1
     rs_err *err);    // may be NULL
+
+// The pose solvers of rs_calib_opencv_pnp.
+typedef enum { RS_CALIB_OPENCV_IPPE, RS_CALIB_OPENCV_SQPNP } rs_calib_opencv_pnp_method;
 
 // Pose from N landmarks by cv::solvePnP with K = identity on normalised image coordinates
 // xy = (v_x/v_z, v_y/v_z) of bearings in front of the camera:
@@ -27,7 +32,6 @@ rs_status rs_calib_opencv_singular_values3( // out
 //   Solution to the Perspective-n-Point Problem", ECCV 2020).
 // Returns RS_ERR_EXTERNAL when OpenCV refuses the input (e.g. points not coplanar enough for
 // IPPE) or throws, RS_ERR_DEGENERATE when it returns no pose or a non-finite one.
-typedef enum { RS_CALIB_OPENCV_IPPE, RS_CALIB_OPENCV_SQPNP } rs_calib_opencv_pnp_method;
 rs_status rs_calib_opencv_pnp( // out
     double *rt_cam_ref,        // (6,)
     // in

@@ -15,7 +15,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "calib/internal/rs_calib_noise.h"
+#include "calib/internal/rs_calib_vce.h"
 #include "calib/rs_calib.h"
 #include "test_solve_gen.h"
 
