@@ -6,7 +6,7 @@
 // intrinsics held by pointer rather than as a flexible array, so that a camera can sit inside
 // other structs and be copied by value as a view; the reference frame is always the site ENU
 // frame, hence rt_cam_enu. .cameramodel files are read and written by mrcal itself; OpenCV-style
-// YAML/JSON by cv::FileStorage (core/rs_camera_opencv.cc). This file owns both formats: no
+// YAML/JSON by cv::FileStorage (core/rs_opencv.cc). This file owns both formats: no
 // other module reads or writes them.
 //
 // Conventions (docs/conventions.md): rt_cam_enu = mrcal Rodrigues r + translation t (metres),

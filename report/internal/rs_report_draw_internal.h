@@ -1,6 +1,6 @@
 // rs_report_draw_internal.h -- drawing helpers shared by the report's figures
 // (report/rs_report_draw*.c): number rounding for scales, palettes, text and markers.
-// Internal to report; the figures' API is report/rs_report_draw.h.
+// Internal to report; the figures' API is report/internal/rs_report_draw.h.
 //
 //   rs_report_draw.c        these helpers; the cameras' figure geometry (rs_report_camera_geometry)
 //   rs_report_draw_image.c  the camera's image (rs_report_draw_camera)
