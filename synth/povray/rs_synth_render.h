@@ -109,7 +109,7 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 //   out_dir/shadow.png  with the shadow pass, the lit fraction (16-bit grey, 1 = open ground),
 // each atomically; with keep_files also the scene files and povray's own outputs.
 // in: camera: the calibrated camera (core/rs_camera.h); ground plane; the prepared vehicles
-//     (rs_synth_scene.h); opt may be NULL (defaults)
+//     (synth/fleet/rs_synth_prepare.h); opt may be NULL (defaults)
 // Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
 // last line), RS_ERR_IO for the files.
 // Runs the real POV-Ray: `povray ARGS...` (no shell) in folder `dir`, with HOME = dir (so that
