@@ -76,8 +76,6 @@ rs_status rs_camera_read( // out
     // in
     const char *path, rs_err *err);
 
-// An mrcal .cameramodel held in memory (text, len bytes; it need not be NUL-terminated), checked
-// as rs_camera_read does. `path` names it in messages.
 // What makes `text` (len bytes) unfit for mrcal's .cameramodel reader, with *line where; NULL
 // when it has the shape of one: a Python-literal dict of quoted keys and values that are quoted
 // one-line strings, numbers, lists and dicts (8 deep at most), comments, nothing after the '}'.
@@ -85,6 +83,8 @@ rs_status rs_camera_read( // out
 // first. Exported for the site reader's messages (file and line).
 const char *rs_camera_cameramodel_problem(const char *text, size_t len, int *line);
 
+// An mrcal .cameramodel held in memory (text, len bytes; it need not be NUL-terminated), checked
+// as rs_camera_read does. `path` names it in messages.
 rs_status rs_camera_read_cameramodel_text( // out
     rs_camera *cam,
     // in

@@ -51,6 +51,7 @@ typedef struct {
     const char *figure; // the figure's name, for the boxes file
 } rs_report_placer;
 
+// Starts an empty placer for figure `figure` of size w x h user units (logs "begin" to the boxes file).
 void rs_report_placer_init(rs_report_placer *p, const char *figure, double w, double h);
 void rs_report_placer_free(rs_report_placer *p);
 // Reserves a box (furniture): later labels avoid it.

@@ -108,10 +108,6 @@ double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights, co
 // Defaults: colour pass, ground visible, sun at azimuth 135, elevation 45, no pins, radius 3 px.
 void rs_synth_scene_options_default(rs_synth_scene_options *opt);
 
-// Writes the .pov text of a scene to f.
-// in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
-//     (for sizing pins); ground plane; the prepared vehicles
-// Returns RS_ERR_IO on a stream error.
 // Several passes in one file, for one povray process rendering them as the frames of an
 // animation (+KFI1 +KFF<Nframes>; rs_synth_scene_write_ini_frames): `#switch (frame_number)`,
 // frame k + 1 being passes[k]. Each frame re-parses the file, but povray starts once (its
@@ -123,6 +119,10 @@ rs_status rs_synth_scene_write_frames(FILE *f,
                                       const rs_synth_prepared *vehicles, const rs_synth_scene_options *passes,
                                       int Npasses, rs_err *err);
 
+// Writes the .pov text of a scene to f.
+// in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
+//     (for sizing pins); ground plane; the prepared vehicles
+// Returns RS_ERR_IO on a stream error.
 rs_status rs_synth_scene_write(FILE *f,
                                // in
                                const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],

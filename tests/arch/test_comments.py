@@ -33,6 +33,7 @@ the top meson.build; and the whole text of docs/*.md and README.md.
    (another function's prototype put between them, or a blank line), this is what shows it.
    Ownership and defaults helpers (`*_free`, `*_options_default`), named in the comments of the
    types and functions they go with, are exempt.
+4. A file's opening line that names a file (`// rs_synth_twin.c -- what it holds`) names itself.
 
 Usage: test_comments.py SOURCE_ROOT"""
 import ast
@@ -202,11 +203,30 @@ def check_paths(root, texts, by_name):
     return n
 
 
+def joined(texts):
+    """texts with the comments and doc lines on consecutive lines of a file joined (a name and
+    its header may sit on two lines of one comment)."""
+    out = []
+    for rel, ln, c in texts:
+        if out and out[-1][0] == rel and out[-1][3] + 1 == ln:
+            out[-1][2] += "\n" + c
+            out[-1][3] = ln + c.count("\n")
+        else:
+            out.append([rel, ln, c, ln + c.count("\n")])
+    return [(rel, ln, c) for rel, ln, c, _ in out]
+
+
 def check_pairs(root, texts, by_name):
     n = 0
     codes = {}
-    for rel, ln, c in texts:
-        c = re.sub(r"\s+", " ", c.replace("`", ""))
+    for rel, ln0, text in joined(texts):
+        # backquotes dropped, every run of white space one blank; lines[k]: the line of c[k]
+        c, lines = "", []
+        for k, ch in enumerate(text):
+            if ch == "`" or (ch.isspace() and c.endswith(" ")):
+                continue
+            c += " " if ch.isspace() else ch
+            lines.append(ln0 + text.count("\n", 0, k))
         for k, pat in enumerate(PAIR_RES):
             for m in pat.finditer(c):
                 name, f = (m.group(1), m.group(2)) if k == 0 else (m.group(2), m.group(1))
@@ -221,7 +241,7 @@ def check_pairs(root, texts, by_name):
                     if x not in codes:
                         codes[x] = code_of(open(os.path.join(root, x), encoding="utf-8", errors="replace").read())
                 found = any(re.search(r"\b%s\b" % re.escape(name), codes[x]) for x in cands)
-                check(found, f"{rel}:{ln}: `{name}` is named with {f}, which does not declare it")
+                check(found, f"{rel}:{lines[m.start()]}: `{name}` is named with {f}, which does not declare it")
     return n
 
 
@@ -252,6 +272,21 @@ def check_doc_comments(root, by_name):
     return n
 
 
+def check_opening_lines(root, by_name):
+    n = 0
+    opening = re.compile(r'^(?://|#|""")\s*([\w./-]+\.(?:c|h|cc|py))\s+--')
+    for rel in sorted(r for rs in by_name.values() for r in rs if r.endswith((".c", ".h", ".cc", ".py"))):
+        if rel.split("/")[0] not in CODE_DIRS:
+            continue
+        with open(os.path.join(root, rel), encoding="utf-8", errors="replace") as f:
+            head = [f.readline() for _ in range(3)]
+        m = next((opening.match(line) for line in head if opening.match(line)), None)
+        if m:
+            n += 1
+            check(os.path.basename(m.group(1)) == os.path.basename(rel), f"{rel}: its opening line names {m.group(1)}")
+    return n
+
+
 def main():
     root = sys.argv[1]
     texts = comment_texts(root)
@@ -262,6 +297,8 @@ def main():
     print(f"{n_pairs} functions named with a header checked")
     n_protos = check_doc_comments(root, by_name)
     print(f"{n_protos} prototypes in headers checked for a doc comment directly above")
+    n_open = check_opening_lines(root, by_name)
+    print(f"{n_open} opening lines checked to name their own file")
     finish("test_comments")
 
 
