@@ -67,27 +67,18 @@ PROTO_RE = re.compile(r"^(?!typedef\b|return\b|static\b|extern\b|#|//|/\*|\s)[A-
 EXEMPT_RE = re.compile(r"_free$|_options_default$")
 
 
+C_TOKEN_RE = re.compile(r"//[^\n]*|/\*.*?(?:\*/|\Z)|\"(?:\\.|[^\"\\\n])*\"?|'(?:\\.|[^'\\\n])*'?", re.S)
+
+
 def c_comments(text):
     """[(line, text)] of the // and /* */ comments of C, C++ or header text (string and character
     literals skipped)."""
-    out, i, n, line = [], 0, len(text), 1
-    while i < n:
-        c = text[i]
-        if text.startswith("//", i) or text.startswith("/*", i):
-            j = text.find("\n", i) if text[i + 1] == "/" else text.find("*/", i + 2) + 2
-            j = n if j < 2 or j < i else j
-            out.append((line, text[i:j]))
-            line += text.count("\n", i, j)
-            i = j
-            continue
-        if c in "\"'":
-            j = i + 1
-            while j < n and text[j] != c and text[j] != "\n":
-                j += 2 if text[j] == "\\" else 1
-            i = j + 1
-            continue
-        line += c == "\n"
-        i += 1
+    out, line, pos = [], 1, 0
+    for m in C_TOKEN_RE.finditer(text):
+        if m.group(0)[0] == "/":
+            line += text.count("\n", pos, m.start())
+            pos = m.start()
+            out.append((line, m.group(0)))
     return out
 
 
@@ -221,12 +212,15 @@ def check_pairs(root, texts, by_name):
     codes = {}
     for rel, ln0, text in joined(texts):
         # backquotes dropped, every run of white space one blank; lines[k]: the line of c[k]
-        c, lines = "", []
-        for k, ch in enumerate(text):
-            if ch == "`" or (ch.isspace() and c.endswith(" ")):
+        chars, lines, line = [], [], ln0
+        for ch in text:
+            if ch == "`" or (ch.isspace() and chars and chars[-1] == " "):
+                line += ch == "\n"
                 continue
-            c += " " if ch.isspace() else ch
-            lines.append(ln0 + text.count("\n", 0, k))
+            chars.append(" " if ch.isspace() else ch)
+            lines.append(line)
+            line += ch == "\n"
+        c = "".join(chars)
         for k, pat in enumerate(PAIR_RES):
             for m in pat.finditer(c):
                 name, f = (m.group(1), m.group(2)) if k == 0 else (m.group(2), m.group(1))
