@@ -31,7 +31,7 @@
 //     Cov(g) = A^-1 (B C_rt B^T + sigma_det^2 I) A^-T
 //   with C_rt the 6x6 pose covariance of rs_calib_solve and sigma_det the detection noise (px,
 //   per axis). The map holds sqrt(trace Cov(g)) = sqrt(sigma_E^2 + sigma_N^2), the 1-sigma
-//   horizontal radial error (first-order; tests/calib/test_audit.c checks it against a Monte
+//   horizontal radial error (first-order; tests/audit/test_audit.c checks it against a Monte
 //   Carlo run of rs_camera_locate_ground with poses drawn from C_rt: within 10%).
 //   Moved camera (--against): new picks q_new of the landmarks against the picks q_old the
 //   calibration was made from. If the camera did not move, q_new - q_old ~ N(0, (s_old^2 +

@@ -1,4 +1,4 @@
-// rs_synth_bench.c -- `roadside bench synth` (rs_synth_bench.h).
+// rs_bench_synth.c -- `roadside bench synth` (rs_bench_synth.h).
 #include "bench/rs_bench_synth.h"
 
 #include <ctype.h>

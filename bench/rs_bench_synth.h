@@ -1,4 +1,4 @@
-// rs_synth_bench.h -- `roadside bench synth`: the time of `roadside synth` on a site, with each of
+// rs_bench_synth.h -- `roadside bench synth`: the time of `roadside synth` on a site, with each of
 // its savings turned off in turn, so that what each brings is measured on the same images
 // (docs/benchmarks.md).
 //

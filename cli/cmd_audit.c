@@ -114,6 +114,106 @@ static void print_details(const rs_site *site, int icam, const rs_audit_result *
                r->external.consistent ? "its parts agree" : r->external.consistency);
 }
 
+// What rs_cli_audit parsed and prepared for the run.
+typedef struct {
+    const rs_site *site;
+    const char *site_dir, *out_dir, *calib, *against;
+    bool against_dir, json, out_existed;
+    const char **only;
+    int Nonly;
+    const rs_audit_options *opt;
+    const rs_calib_site_outputs *outputs;
+    rs_calib_site_run_camera *runs; // (site->Ncameras,) filled here
+    char **errors;                  // (site->Ncameras,) filled here, owned by the caller
+} audit_run;
+
+// Audits the selected cameras and prints the table (or the JSON), then writes the run record and
+// prints what was written. Returns the count of failures.
+static int audit_cameras(const audit_run *a)
+{
+    const rs_site *site = a->site;
+    const char *out_dir = a->out_dir, *against = a->against, **only = a->only;
+    const int Nonly = a->Nonly;
+    const bool against_dir = a->against_dir, json = a->json;
+    const rs_audit_options *opt = a->opt;
+    const rs_calib_site_outputs *outputs = a->outputs;
+    rs_calib_site_run_camera *runs = a->runs;
+    char **errors = a->errors;
+    rs_err err = {0};
+    rs_status st;
+    int failed = 0, written = 0;
+    bool first = true;
+    if (json)
+        printf("[\n");
+    else
+        print_header();
+    for (int icam = 0; icam < site->Ncameras; icam++) {
+        const char *id = site->cameras[icam].id;
+        bool selected = Nonly == 0;
+        for (int i = 0; i < Nonly; i++) selected |= !strcmp(only[i], id);
+        runs[icam] = (rs_calib_site_run_camera){.id = id, .status = RS_CALIB_SITE_RUN_NOT_SELECTED};
+        if (!selected) continue;
+        char *obs = NULL;
+        if (against_dir) {
+            char name[512];
+            snprintf(name, sizeof name, "%s.csv", id);
+            obs = rs_io_join(against, name);
+            struct stat osb;
+            if (obs && stat(obs, &osb) != 0) {
+                free(obs); // this camera was not re-picked
+                obs = NULL;
+            }
+        }
+        rs_audit_result r;
+        err.msg[0] = '\0';
+        st = rs_audit_site_camera(&r, site, icam, a->calib, against_dir ? obs : against, opt, &err);
+        if (st == RS_OK) st = rs_audit_site_write(out_dir, site, icam, &r, opt, &err);
+        free(obs);
+        if (st) {
+            // not audited: an earlier run's <id>.audit.json would look like this run's
+            unsigned removed = 0;
+            char why[sizeof err.msg];
+            snprintf(why, sizeof why, "%s", err.msg[0] ? err.msg : rs_strerror(st));
+            rs_err rerr = {0};
+            if (rs_calib_site_outputs_remove(&removed, out_dir, id, outputs, &rerr))
+                rs_err_set(&err, st, "%s; and %s", why, rerr.msg);
+            failed++;
+            errors[icam] = strdup(err.msg[0] ? err.msg : rs_strerror(st));
+            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_FAILED, removed, errors[icam]};
+            fprintf(stderr, "roadside audit: camera %s: %s\n", id, err.msg[0] ? err.msg : rs_strerror(st));
+        } else {
+            written++;
+            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_WRITTEN, 1u, NULL};
+            failed += !r.pass;
+            if (json) {
+                char *text = rs_audit_result_json(site, icam, &r, opt);
+                if (text) printf("%s%s", first ? "" : ",\n", text);
+                free(text);
+                first = false;
+            } else {
+                print_row(id, &r);
+                print_details(site, icam, &r);
+            }
+        }
+        rs_audit_result_free(&r);
+    }
+    if (json) printf("\n]\n");
+    // the run record, last; a folder this run created and left empty is removed instead
+    if (written || a->out_existed) {
+        st = rs_calib_site_run_write(out_dir, outputs, a->site_dir, NULL, runs, site->Ncameras, &err);
+        if (st) {
+            fprintf(stderr, "roadside audit: %s\n", err.msg);
+            failed++;
+        }
+    } else
+        (void)rmdir(out_dir);
+    // what was written and what was not: on stdout under the table, on stderr after --json
+    char *summary = rs_calib_site_run_summary(out_dir, outputs, runs, site->Ncameras);
+    if (summary) fputs(summary, json ? stderr : stdout);
+    free(summary);
+    return failed;
+}
+
 int rs_cli_audit(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -226,76 +326,21 @@ int rs_cli_audit(int argc, char **argv)
         return usage;
     }
 
-    int failed = 0, written = 0;
-    bool first = true;
-    if (json)
-        printf("[\n");
-    else
-        print_header();
-    for (int icam = 0; icam < site->Ncameras; icam++) {
-        const char *id = site->cameras[icam].id;
-        bool selected = Nonly == 0;
-        for (int i = 0; i < Nonly; i++) selected |= !strcmp(only[i], id);
-        runs[icam] = (rs_calib_site_run_camera){.id = id, .status = RS_CALIB_SITE_RUN_NOT_SELECTED};
-        if (!selected) continue;
-        char *obs = NULL;
-        if (against_dir) {
-            char name[512];
-            snprintf(name, sizeof name, "%s.csv", id);
-            obs = rs_io_join(against, name);
-            struct stat osb;
-            if (obs && stat(obs, &osb) != 0) {
-                free(obs); // this camera was not re-picked
-                obs = NULL;
-            }
-        }
-        rs_audit_result r;
-        err.msg[0] = '\0';
-        st = rs_audit_site_camera(&r, site, icam, calib, against_dir ? obs : against, &opt, &err);
-        if (st == RS_OK) st = rs_audit_site_write(out_dir, site, icam, &r, &opt, &err);
-        free(obs);
-        if (st) {
-            // not audited: an earlier run's <id>.audit.json would look like this run's
-            unsigned removed = 0;
-            char why[sizeof err.msg];
-            snprintf(why, sizeof why, "%s", err.msg[0] ? err.msg : rs_strerror(st));
-            rs_err rerr = {0};
-            if (rs_calib_site_outputs_remove(&removed, out_dir, id, outputs, &rerr))
-                rs_err_set(&err, st, "%s; and %s", why, rerr.msg);
-            failed++;
-            errors[icam] = strdup(err.msg[0] ? err.msg : rs_strerror(st));
-            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_FAILED, removed, errors[icam]};
-            fprintf(stderr, "roadside audit: camera %s: %s\n", id, err.msg[0] ? err.msg : rs_strerror(st));
-        } else {
-            written++;
-            runs[icam] = (rs_calib_site_run_camera){id, RS_CALIB_SITE_RUN_WRITTEN, 1u, NULL};
-            failed += !r.pass;
-            if (json) {
-                char *text = rs_audit_result_json(site, icam, &r, &opt);
-                if (text) printf("%s%s", first ? "" : ",\n", text);
-                free(text);
-                first = false;
-            } else {
-                print_row(id, &r);
-                print_details(site, icam, &r);
-            }
-        }
-        rs_audit_result_free(&r);
-    }
-    if (json) printf("\n]\n");
-    // the run record, last; a folder this run created and left empty is removed instead
-    if (written || out_existed) {
-        st = rs_calib_site_run_write(out_dir, outputs, site_dir, NULL, runs, site->Ncameras, &err);
-        if (st) {
-            fprintf(stderr, "roadside audit: %s\n", err.msg);
-            failed++;
-        }
-    } else
-        (void)rmdir(out_dir);
-    // what was written and what was not: on stdout under the table, on stderr after --json
-    char *summary = rs_calib_site_run_summary(out_dir, outputs, runs, site->Ncameras);
-    if (summary) fputs(summary, json ? stderr : stdout);
-    free(summary);
+    audit_run run = {.site = site,
+                     .site_dir = site_dir,
+                     .out_dir = out_dir,
+                     .calib = calib,
+                     .against = against,
+                     .against_dir = against_dir,
+                     .json = json,
+                     .out_existed = out_existed,
+                     .only = only,
+                     .Nonly = Nonly,
+                     .opt = &opt,
+                     .outputs = outputs,
+                     .runs = runs,
+                     .errors = errors};
+    const int failed = audit_cameras(&run);
     for (int icam = 0; icam < site->Ncameras; icam++) free(errors[icam]);
     free(errors);
     free(runs);

@@ -45,6 +45,91 @@ static const char bench_synth_usage[] =
 
 enum { O_CALIB = 3000, O_COUNT, O_SIZE, O_VEHICLES, O_JOBS, O_SEED, O_CSV, O_DIR, O_QUICK, O_VARIANTS, O_MEMORY_EVERY };
 
+// The table of the variants on stdout and, in text (size bytes), the same as CSV; returns the
+// CSV's length (snprintf's: may exceed size).
+static int print_table(const rs_bench_synth_row *rows, int Nrows, char *text, size_t size)
+{
+    printf("\n%-11s %4s %6s %8s %8s %9s %10s %10s %12s %9s %9s %9s %11s  %s\n", "variant", "jobs", "images", "veh/img",
+           "wall_s", "s/image", "cpu_s/img", "4x1000_min", "povray_s/img", "peak_MiB", "child_MiB", "tree_MiB",
+           "MiB/100img", "what");
+    int n = snprintf(text, size,
+                     "variant,jobs,images,vehicles_per_image,wall_s,"
+                     "s_per_image,cpu_s_per_image,povray_s_per_image,peak_rss_self_mib,peak_rss_children_mib,"
+                     "rss_roadside_first_mib,rss_roadside_last_mib,rss_tree_max_mib,rss_growth_mib_per_100_images,"
+                     "rss_slope_mib_per_100_images,memory_checkpoints\n");
+    for (int k = 0; k < Nrows; k++) {
+        const rs_bench_synth_row *r = &rows[k];
+        const double per = r->wall_s / (r->Nimages > 0 ? r->Nimages : 1);
+        const double vpi = (double)r->Nannotations / (r->Nimages > 0 ? r->Nimages : 1);
+        long tree_max = 0;
+        for (int i = 0; i < r->Ncheckpoints; i++)
+            if (r->cp_rss_tree_kib[i] > tree_max) tree_max = r->cp_rss_tree_kib[i];
+        int last = -1;
+        const double growth = rs_bench_synth_growth_kib_per_100(r, &last, NULL) / 1024;
+        printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f %9.1f %9.1f %9.1f %11.2f  %s\n", r->name, r->jobs,
+               r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1), 4000 * per / 60,
+               r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->peak_self_kib / 1024.0,
+               r->peak_children_kib / 1024.0, tree_max / 1024.0, growth, r->what);
+        if (n < (int)size)
+            n += snprintf(text + n, size - (size_t)n,
+                          "%s,%d,%d,%.3f,%.3f,%.4f,%.4f,%.4f,%.1f,%.1f,%.1f,%.1f,%.1f,%.3f,%.3f,%d\n", r->name, r->jobs,
+                          r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
+                          r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->peak_self_kib / 1024.0,
+                          r->peak_children_kib / 1024.0, last >= 0 ? r->cp_rss_roadside_kib[0] / 1024.0 : NAN,
+                          last >= 0 ? r->cp_rss_roadside_kib[last] / 1024.0 : NAN, tree_max / 1024.0, growth,
+                          rs_bench_synth_slope_kib_per_100(r) / 1024, r->Ncheckpoints);
+    }
+    return n;
+}
+
+// The memory checkpoints of each variant and their growth per 100 images.
+static void print_memory(const rs_bench_synth_row *rows, int Nrows)
+{
+    // memory over the run: the sampled resident sets at each checkpoint, and their growth
+    printf("\nmemory: resident set of the live process tree (/proc/PID/statm), MiB, every %d images\n",
+           Nrows > 0 ? rows[0].memory_every : 0);
+    for (int k = 0; k < Nrows; k++) {
+        const rs_bench_synth_row *r = &rows[k];
+        printf("%-11s images   ", r->name);
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7d", r->cp_images[i]);
+        printf("\n%-11s roadside ", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_roadside_kib[i] / 1024.0);
+        printf("\n%-11s tree     ", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_tree_kib[i] / 1024.0);
+        printf("\n%-11s largest  ", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_largest_kib[i] / 1024.0);
+        printf("\n%-11s roadside processes", "");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %d", r->cp_roadside[i]);
+        printf(", all processes");
+        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %d", r->cp_processes[i]);
+        int last = -1;
+        double largest = NAN;
+        const double growth = rs_bench_synth_growth_kib_per_100(r, &last, &largest) / 1024;
+        if (isfinite(growth))
+            printf("\n%-11s growth per 100 images: roadside %.1f -> %.1f MiB from image %d to %d (%d roadside "
+                   "processes): %+.2f MiB per 100 images; largest process %.1f -> %.1f MiB: %+.2f MiB per 100 "
+                   "images\n",
+                   "", r->cp_rss_roadside_kib[0] / 1024.0, r->cp_rss_roadside_kib[last] / 1024.0, r->cp_images[0],
+                   r->cp_images[last], r->cp_roadside[0], growth, r->cp_rss_largest_kib[0] / 1024.0,
+                   r->cp_rss_largest_kib[last] / 1024.0, largest / 1024);
+        if (isfinite(growth))
+            printf("%-11s least-squares slope through those checkpoints: %+.2f MiB per 100 images\n", "",
+                   rs_bench_synth_slope_kib_per_100(r) / 1024);
+        else
+            printf("\n%-11s growth per 100 images: fewer than 2 checkpoints with every worker alive\n", "");
+        // the later half alone: per-process caches (a background's resampling, estimates) fill
+        // as each worker meets each background, a leak keeps growing
+        int mid = 0;
+        while (last > 0 && mid < last && 2 * r->cp_images[mid] < r->cp_images[last]) mid++;
+        if (isfinite(growth) && mid > 0 && mid < last)
+            printf("%-11s later half: roadside %.1f -> %.1f MiB from image %d to %d: %+.2f MiB per 100 images\n", "",
+                   r->cp_rss_roadside_kib[mid] / 1024.0, r->cp_rss_roadside_kib[last] / 1024.0, r->cp_images[mid],
+                   r->cp_images[last],
+                   100.0 * (r->cp_rss_roadside_kib[last] - r->cp_rss_roadside_kib[mid]) / 1024.0 /
+                       (r->cp_images[last] - r->cp_images[mid]));
+    }
+}
+
 int rs_cli_bench_synth(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -166,80 +251,9 @@ int rs_cli_bench_synth(int argc, char **argv)
     rs_status st = rs_bench_synth_run(rows, Nrows, &o, dir ? dir : scratch, &err);
     if (scratch) rs_io_remove_tree(scratch);
     if (st) return rs_cli_fail("bench synth", st, &err);
-    printf("\n%-11s %4s %6s %8s %8s %9s %10s %10s %12s %9s %9s %9s %11s  %s\n", "variant", "jobs", "images", "veh/img",
-           "wall_s", "s/image", "cpu_s/img", "4x1000_min", "povray_s/img", "peak_MiB", "child_MiB", "tree_MiB",
-           "MiB/100img", "what");
     char text[8192];
-    int n = snprintf(text, sizeof(text),
-                     "variant,jobs,images,vehicles_per_image,wall_s,"
-                     "s_per_image,cpu_s_per_image,povray_s_per_image,peak_rss_self_mib,peak_rss_children_mib,"
-                     "rss_roadside_first_mib,rss_roadside_last_mib,rss_tree_max_mib,rss_growth_mib_per_100_images,"
-                     "rss_slope_mib_per_100_images,memory_checkpoints\n");
-    for (int k = 0; k < Nrows; k++) {
-        const rs_bench_synth_row *r = &rows[k];
-        const double per = r->wall_s / (r->Nimages > 0 ? r->Nimages : 1);
-        const double vpi = (double)r->Nannotations / (r->Nimages > 0 ? r->Nimages : 1);
-        long tree_max = 0;
-        for (int i = 0; i < r->Ncheckpoints; i++)
-            if (r->cp_rss_tree_kib[i] > tree_max) tree_max = r->cp_rss_tree_kib[i];
-        int last = -1;
-        const double growth = rs_bench_synth_growth_kib_per_100(r, &last, NULL) / 1024;
-        printf("%-11s %4d %6d %8.1f %8.1f %9.3f %10.3f %10.1f %12.3f %9.1f %9.1f %9.1f %11.2f  %s\n", r->name, r->jobs,
-               r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1), 4000 * per / 60,
-               r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->peak_self_kib / 1024.0,
-               r->peak_children_kib / 1024.0, tree_max / 1024.0, growth, r->what);
-        if (n < (int)sizeof(text))
-            n += snprintf(text + n, sizeof(text) - (size_t)n,
-                          "%s,%d,%d,%.3f,%.3f,%.4f,%.4f,%.4f,%.1f,%.1f,%.1f,%.1f,%.1f,%.3f,%.3f,%d\n", r->name, r->jobs,
-                          r->Nimages, vpi, r->wall_s, per, r->cpu_s / (r->Nimages > 0 ? r->Nimages : 1),
-                          r->povray_s / (r->Nimages > 0 ? r->Nimages : 1), r->peak_self_kib / 1024.0,
-                          r->peak_children_kib / 1024.0, last >= 0 ? r->cp_rss_roadside_kib[0] / 1024.0 : NAN,
-                          last >= 0 ? r->cp_rss_roadside_kib[last] / 1024.0 : NAN, tree_max / 1024.0, growth,
-                          rs_bench_synth_slope_kib_per_100(r) / 1024, r->Ncheckpoints);
-    }
-    // memory over the run: the sampled resident sets at each checkpoint, and their growth
-    printf("\nmemory: resident set of the live process tree (/proc/PID/statm), MiB, every %d images\n",
-           Nrows > 0 ? rows[0].memory_every : 0);
-    for (int k = 0; k < Nrows; k++) {
-        const rs_bench_synth_row *r = &rows[k];
-        printf("%-11s images   ", r->name);
-        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7d", r->cp_images[i]);
-        printf("\n%-11s roadside ", "");
-        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_roadside_kib[i] / 1024.0);
-        printf("\n%-11s tree     ", "");
-        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_tree_kib[i] / 1024.0);
-        printf("\n%-11s largest  ", "");
-        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %7.1f", r->cp_rss_largest_kib[i] / 1024.0);
-        printf("\n%-11s roadside processes", "");
-        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %d", r->cp_roadside[i]);
-        printf(", all processes");
-        for (int i = 0; i < r->Ncheckpoints; i++) printf(" %d", r->cp_processes[i]);
-        int last = -1;
-        double largest = NAN;
-        const double growth = rs_bench_synth_growth_kib_per_100(r, &last, &largest) / 1024;
-        if (isfinite(growth))
-            printf("\n%-11s growth per 100 images: roadside %.1f -> %.1f MiB from image %d to %d (%d roadside "
-                   "processes): %+.2f MiB per 100 images; largest process %.1f -> %.1f MiB: %+.2f MiB per 100 "
-                   "images\n",
-                   "", r->cp_rss_roadside_kib[0] / 1024.0, r->cp_rss_roadside_kib[last] / 1024.0, r->cp_images[0],
-                   r->cp_images[last], r->cp_roadside[0], growth, r->cp_rss_largest_kib[0] / 1024.0,
-                   r->cp_rss_largest_kib[last] / 1024.0, largest / 1024);
-        if (isfinite(growth))
-            printf("%-11s least-squares slope through those checkpoints: %+.2f MiB per 100 images\n", "",
-                   rs_bench_synth_slope_kib_per_100(r) / 1024);
-        else
-            printf("\n%-11s growth per 100 images: fewer than 2 checkpoints with every worker alive\n", "");
-        // the later half alone: per-process caches (a background's resampling, estimates) fill
-        // as each worker meets each background, a leak keeps growing
-        int mid = 0;
-        while (last > 0 && mid < last && 2 * r->cp_images[mid] < r->cp_images[last]) mid++;
-        if (isfinite(growth) && mid > 0 && mid < last)
-            printf("%-11s later half: roadside %.1f -> %.1f MiB from image %d to %d: %+.2f MiB per 100 images\n", "",
-                   r->cp_rss_roadside_kib[mid] / 1024.0, r->cp_rss_roadside_kib[last] / 1024.0, r->cp_images[mid],
-                   r->cp_images[last],
-                   100.0 * (r->cp_rss_roadside_kib[last] - r->cp_rss_roadside_kib[mid]) / 1024.0 /
-                       (r->cp_images[last] - r->cp_images[mid]));
-    }
+    int n = print_table(rows, Nrows, text, sizeof(text));
+    print_memory(rows, Nrows);
     // the peaks over the whole bench: this process and the largest of its finished children (a
     // worker or a povray process), getrusage(2)'s ru_maxrss in KiB
     struct rusage self = {0}, kids = {0};

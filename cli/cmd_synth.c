@@ -201,6 +201,46 @@ static int synth_merge(int argc, char **argv)
     return RS_EXIT_OK;
 }
 
+// What `roadside synth` made and where: a line of counts and times, then the dataset's files.
+static void print_summary(const rs_synth_dataset_options *opt, const rs_synth_dataset_summary *sum)
+{
+    printf("synth: shard %d/%d: %d images (%d made, %d already done, %d over the grey ground), "
+           "%d annotations in the dataset, %.1f s (%.1f s in povray, %.3f s/image)\n",
+           opt->shard_index, opt->shard_count, sum->Nimages, sum->Nmade, sum->Nskipped, sum->Ngrey, sum->Nannotations,
+           sum->seconds, sum->seconds_povray, sum->Nmade > 0 ? sum->seconds / sum->Nmade : 0.0);
+    if (sum->Nremade > 0 || sum->Nleft_out > 0)
+        printf("resume:      %d of the images made were found damaged and remade; %d part files left out of the "
+               "COCO file (stderr names each)\n",
+               sum->Nremade, sum->Nleft_out);
+    const bool val = opt->val_fraction > 0 || opt->Nval_cameras > 0 || opt->Nval_bg > 0;
+    printf("images:      %s/%s/%s%s%s\n", opt->out_dir, opt->split, val ? "  and  " : "", val ? opt->val_split : "",
+           val ? "/" : "");
+    printf("COCO:        %s/annotations/instances_%s.json%s%s%s\n", opt->out_dir, opt->split,
+           val ? "  and  instances_" : "", val ? opt->val_split : "", val ? ".json" : "");
+    printf("YOLO:        %s/data.yaml   (images/<split>/, labels/<split>/)\n", opt->out_dir);
+    printf("KITTI:       %s/kitti/training/   (image_2/, label_2/, calib/; kitti/ImageSets/)\n", opt->out_dir);
+    printf("cameras:     %s/cameras/   (the camera models of the labels; eval --metres reads them)\n", opt->out_dir);
+    if (opt->traffic_frames_dir)
+        printf("traffic:     SUMO's frames in %s (run.json: traffic_frames, their count and SHA-256)\n",
+               opt->traffic_frames_dir);
+}
+
+// Runs the dataset pipeline with a progress line on stderr, then prints its summary.
+static int synth_run(rs_synth_dataset_options *opt)
+{
+    progress_state ps = {.t0 = wall_s(), .tty = isatty(2) != 0};
+    opt->progress = progress;
+    opt->progress_ctx = &ps;
+    opt->notice = notice;
+    rs_synth_dataset_summary sum;
+    rs_err err = {0};
+    rs_cli_synth_sandbox_note("synth");
+    rs_status st = rs_synth_dataset_run(&sum, opt, &err);
+    if (st) return rs_cli_fail("synth", st, &err);
+    print_summary(opt, &sum);
+    return RS_EXIT_OK;
+}
+
 int rs_cli_synth(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -368,37 +408,7 @@ int rs_cli_synth(int argc, char **argv)
         rc = rs_cli_usage_error("synth", "--split and --val-split name the same split \"%s\"", opt.split);
         goto done;
     }
-    progress_state ps = {.t0 = wall_s(), .tty = isatty(2) != 0};
-    opt.progress = progress;
-    opt.progress_ctx = &ps;
-    opt.notice = notice;
-    rs_synth_dataset_summary sum;
-    rs_err err = {0};
-    rs_cli_synth_sandbox_note("synth");
-    rs_status st = rs_synth_dataset_run(&sum, &opt, &err);
-    if (st) {
-        rc = rs_cli_fail("synth", st, &err);
-        goto done;
-    }
-    printf("synth: shard %d/%d: %d images (%d made, %d already done, %d over the grey ground), "
-           "%d annotations in the dataset, %.1f s (%.1f s in povray, %.3f s/image)\n",
-           opt.shard_index, opt.shard_count, sum.Nimages, sum.Nmade, sum.Nskipped, sum.Ngrey, sum.Nannotations,
-           sum.seconds, sum.seconds_povray, sum.Nmade > 0 ? sum.seconds / sum.Nmade : 0.0);
-    if (sum.Nremade > 0 || sum.Nleft_out > 0)
-        printf("resume:      %d of the images made were found damaged and remade; %d part files left out of the "
-               "COCO file (stderr names each)\n",
-               sum.Nremade, sum.Nleft_out);
-    const bool val = opt.val_fraction > 0 || opt.Nval_cameras > 0 || opt.Nval_bg > 0;
-    printf("images:      %s/%s/%s%s%s\n", opt.out_dir, opt.split, val ? "  and  " : "", val ? opt.val_split : "",
-           val ? "/" : "");
-    printf("COCO:        %s/annotations/instances_%s.json%s%s%s\n", opt.out_dir, opt.split,
-           val ? "  and  instances_" : "", val ? opt.val_split : "", val ? ".json" : "");
-    printf("YOLO:        %s/data.yaml   (images/<split>/, labels/<split>/)\n", opt.out_dir);
-    printf("KITTI:       %s/kitti/training/   (image_2/, label_2/, calib/; kitti/ImageSets/)\n", opt.out_dir);
-    printf("cameras:     %s/cameras/   (the camera models of the labels; eval --metres reads them)\n", opt.out_dir);
-    if (opt.traffic_frames_dir)
-        printf("traffic:     SUMO's frames in %s (run.json: traffic_frames, their count and SHA-256)\n",
-               opt.traffic_frames_dir);
+    rc = synth_run(&opt);
 done:
     for (int i = 0; i < Nkv; i++) free(kv[i]);
     for (int i = 0; i < Nval_kv; i++) free(val_kv[i]);

@@ -6,7 +6,7 @@
 // intrinsics held by pointer rather than as a flexible array, so that a camera can sit inside
 // other structs and be copied by value as a view; the reference frame is always the site ENU
 // frame, hence rt_cam_enu. .cameramodel files are read and written by mrcal itself; OpenCV-style
-// YAML/JSON by cv::FileStorage (core/rs_camera_opencv.cc). This file owns both formats: no
+// YAML/JSON by cv::FileStorage (core/rs_opencv.cc). This file owns both formats: no
 // other module reads or writes them.
 //
 // Conventions (docs/conventions.md): rt_cam_enu = mrcal Rodrigues r + translation t (metres),
@@ -76,8 +76,6 @@ rs_status rs_camera_read( // out
     // in
     const char *path, rs_err *err);
 
-// An mrcal .cameramodel held in memory (text, len bytes; it need not be NUL-terminated), checked
-// as rs_camera_read does. `path` names it in messages.
 // What makes `text` (len bytes) unfit for mrcal's .cameramodel reader, with *line where; NULL
 // when it has the shape of one: a Python-literal dict of quoted keys and values that are quoted
 // one-line strings, numbers, lists and dicts (8 deep at most), comments, nothing after the '}'.
@@ -85,6 +83,8 @@ rs_status rs_camera_read( // out
 // first. Exported for the site reader's messages (file and line).
 const char *rs_camera_cameramodel_problem(const char *text, size_t len, int *line);
 
+// An mrcal .cameramodel held in memory (text, len bytes; it need not be NUL-terminated), checked
+// as rs_camera_read does. `path` names it in messages.
 rs_status rs_camera_read_cameramodel_text( // out
     rs_camera *cam,
     // in

@@ -13,7 +13,7 @@
 //
 // Accuracy: yaw/pitch/roll -> R -> yaw/pitch/roll within 1e-12 deg away from |pitch| = 90
 // (tests/core/test_pose.c); rs_pose_r_from_R within 1e-12 in the matrix for every rotation,
-// half-turns included (tests/calib/test_r_from_R_halfturn.c).
+// half-turns included (tests/core/test_r_from_R_halfturn.c).
 #pragma once
 
 #ifdef __cplusplus

@@ -1,6 +1,6 @@
 // rs_report_draw_internal.h -- drawing helpers shared by the report's figures
 // (report/rs_report_draw*.c): number rounding for scales, palettes, text and markers.
-// Internal to report; the figures' API is report/rs_report_draw.h.
+// Internal to report; the figures' API is report/internal/rs_report_draw.h.
 //
 //   rs_report_draw.c        these helpers; the cameras' figure geometry (rs_report_camera_geometry)
 //   rs_report_draw_image.c  the camera's image (rs_report_draw_camera)
@@ -51,6 +51,7 @@ typedef struct {
     const char *figure; // the figure's name, for the boxes file
 } rs_report_placer;
 
+// Starts an empty placer for figure `figure` of size w x h user units (logs "begin" to the boxes file).
 void rs_report_placer_init(rs_report_placer *p, const char *figure, double w, double h);
 void rs_report_placer_free(rs_report_placer *p);
 // Reserves a box (furniture): later labels avoid it.

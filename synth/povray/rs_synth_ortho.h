@@ -1,5 +1,5 @@
 // rs_synth_ortho.h -- an orthophoto of the site's digital twin (`roadside ortho`): the twin's
-// world (the ground, the lane-edge markings, the sky light; rs_synth_background.h's twin scene,
+// world (the ground, the lane-edge markings, the sky light; rs_synth_twin.h's twin scene,
 // the same scene code) seen from straight above by POV-Ray's orthographic camera.
 //
 // Method (rendered in tiles of at most 1024 pixels a side, one povray run each, each tile its own

@@ -106,16 +106,6 @@ typedef struct {
 
 void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroes *r
 
-// Renders N vehicles seen by the camera into out_dir (created if missing). Writes
-//   out_dir/image.png  the composite (8-bit sRGB; with the shadow pass the background is
-//   shaded by it on non-vehicle pixels),  out_dir/rgba.png  the colour pass
-//   (16-bit linear RGBA, real lens),  out_dir/ids.png  the ID pass (16-bit grey, value k+1),
-//   out_dir/shadow.png  with the shadow pass, the lit fraction (16-bit grey, 1 = open ground),
-// each atomically; with keep_files also the scene files and povray's own outputs.
-// in: camera: the calibrated camera (core/rs_camera.h); ground plane; the prepared vehicles
-//     (rs_synth_scene.h); opt may be NULL (defaults)
-// Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
-// last line), RS_ERR_IO for the files.
 // Runs the real POV-Ray: `povray ARGS...` (no shell) in folder `dir`, with HOME = dir (so that
 // dir/.povray/3.7/povray.conf, if written, is the configuration it reads) and POVINC/POVINI
 // unset, confined by Landlock to reading the system's files and reading and writing `dir`
@@ -133,6 +123,16 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
                               double *seconds, // may be NULL
                               rs_err *err);
 
+// Renders N vehicles seen by the camera into out_dir (created if missing). Writes
+//   out_dir/image.png  the composite (8-bit sRGB; with the shadow pass the background is
+//   shaded by it on non-vehicle pixels),  out_dir/rgba.png  the colour pass
+//   (16-bit linear RGBA, real lens),  out_dir/ids.png  the ID pass (16-bit grey, value k+1),
+//   out_dir/shadow.png  with the shadow pass, the lit fraction (16-bit grey, 1 = open ground),
+// each atomically; with keep_files also the scene files and povray's own outputs.
+// in: camera: the calibrated camera (core/rs_camera.h); ground plane; the prepared vehicles
+//     (synth/fleet/rs_synth_prepare.h); opt may be NULL (defaults)
+// Returns RS_ERR_EXTERNAL when povray is missing or fails (the message quotes povray.log's
+// last line), RS_ERR_IO for the files.
 rs_status rs_synth_render( // out
     rs_synth_render_result *out,
     // in

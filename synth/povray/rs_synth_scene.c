@@ -1,4 +1,4 @@
-// rs_synth_scene.c -- the vehicle box, the sun, and the POV-Ray scene writer (the vehicles file is
+// rs_synth_scene.c -- the sun and sky lights, and the POV-Ray scene writer (the vehicles file is
 // read by rs_synth_vehicles_read.c)
 // (rs_synth_scene.h, docs/povray.md).
 #include "synth/povray/rs_synth_scene.h"

@@ -50,7 +50,7 @@ typedef struct {
                             // for compositing over a photograph)
     double sun_azimuth_deg; // sun direction (colour pass)
     double sun_elevation_deg;
-    // Lighting matched to a background (rs_synth_light_match, synth/backdrop/rs_synth_sun.h): in the
+    // Lighting matched to a background (rs_synth_light_match, synth/backdrop/rs_synth_light.h): in the
     // colour pass every light (sun and sky) times light_rgb_scale per channel; all 0 (the
     // default): 1. The shadow pass is a ratio and stays grey.
     double light_rgb_scale[3];
@@ -68,13 +68,13 @@ typedef struct {
     // With env_given and ground_visible false (compositing over a photograph), the ground plane
     // the vehicles reflect also takes env_ground_rgb as its lit radiance (its pigment is
     // env_ground_rgb / (0.8 x the lights' irradiance on it), so shadows still darken it). From a
-    // background: rs_synth_env_from_image and rs_synth_env_match (synth/backdrop/rs_synth_sun.h).
+    // background: rs_synth_env_from_image and rs_synth_env_match (synth/backdrop/rs_synth_light.h).
     bool env_given;
     double env_zenith_rgb[3], env_horizon_rgb[3], env_ground_rgb[3];
     bool env_off; // no environment at all (reflections show the black background)
 } rs_synth_scene_options;
 
-// Matches a scene's lights and environment to its background, from the estimates of synth/backdrop/rs_synth_sun.h (implemented in rs_synth_sun.c): the
+// Matches a scene's lights and environment to its background, from the estimates of synth/backdrop/rs_synth_light.h (implemented in rs_synth_scene_match.c): the
 // lights' per-channel factor (rs_synth_light_match, with a sun unless scene->overcast, at
 // scene->sun_elevation_deg: set the sun first) and the environment the vehicles reflect
 // (rs_synth_env_match; env NULL: the estimated sky alone). Writes scene->light_rgb_scale,
@@ -108,10 +108,6 @@ double rs_synth_scene_shadow_unlit(const rs_synth_light *lights, int Nlights, co
 // Defaults: colour pass, ground visible, sun at azimuth 135, elevation 45, no pins, radius 3 px.
 void rs_synth_scene_options_default(rs_synth_scene_options *opt);
 
-// Writes the .pov text of a scene to f.
-// in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
-//     (for sizing pins); ground plane; the prepared vehicles
-// Returns RS_ERR_IO on a stream error.
 // Several passes in one file, for one povray process rendering them as the frames of an
 // animation (+KFI1 +KFF<Nframes>; rs_synth_scene_write_ini_frames): `#switch (frame_number)`,
 // frame k + 1 being passes[k]. Each frame re-parses the file, but povray starts once (its
@@ -123,6 +119,10 @@ rs_status rs_synth_scene_write_frames(FILE *f,
                                       const rs_synth_prepared *vehicles, const rs_synth_scene_options *passes,
                                       int Npasses, rs_err *err);
 
+// Writes the .pov text of a scene to f.
+// in: cam: the POV-Ray camera (the canvas camera for a distorted lens); fxy: its focal lengths
+//     (for sizing pins); ground plane; the prepared vehicles
+// Returns RS_ERR_IO on a stream error.
 rs_status rs_synth_scene_write(FILE *f,
                                // in
                                const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],

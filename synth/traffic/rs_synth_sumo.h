@@ -140,7 +140,7 @@ typedef struct {
 // Reads DIR/frames.json (cJSON): the JSON list of {"file", "time_s", "vehicles"} that
 // rs_synth_sumo_frames_write writes, one reader for the one writer. A file must be a plain name
 // inside DIR (no '/', not "." or ".."). The frames themselves are vehicles files
-// (rs_synth_vehicles_read, synth/povray/rs_synth_scene.h); this does not open them.
+// (rs_synth_vehicles_read, synth/traffic/rs_synth_vehicles.h); this does not open them.
 // out: *entries (N,) owned (free()), NULL when *N is 0 (an empty list is not an error here)
 // Errors name the file and the field: RS_ERR_NOT_FOUND "DIR/frames.json: missing (...)",
 // RS_ERR_IO (unreadable), RS_ERR_PARSE "DIR/frames.json:LINE: JSON syntax error near ...",

@@ -95,7 +95,7 @@ bool rs_synth_footprints_overlap(const rs_synth_vehicle *a, const rs_synth_vehic
 
 // ---- output ----
 
-// Writes the vehicles file `roadside scene` reads (synth/povray/rs_synth_scene.h,
+// Writes the vehicles file `roadside scene` reads (synth/traffic/rs_synth_vehicles.h,
 // rs_synth_vehicles_read): a JSON list of {"id", "class", "e", "n", "yaw_deg", "length",
 // "width", "height", "variant", "speed_mps"}, lengths to 1e-4 m, angles to 1e-4 degree. Written
 // atomically (core/rs_io.h).

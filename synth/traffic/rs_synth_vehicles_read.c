@@ -1,4 +1,4 @@
-// rs_synth_vehicles_read.c -- the vehicles file (`roadside scene --vehicles`, rs_synth_scene.h:
+// rs_synth_vehicles_read.c -- the vehicles file (`roadside scene --vehicles`, rs_synth_vehicles.h:
 // rs_synth_vehicles_read), read with cJSON; every problem named by file, vehicle index and field.
 #include "synth/traffic/rs_synth_vehicles.h"
 

@@ -63,7 +63,7 @@ def doc_text(root):
 
 
 def synth_component(rel):
-    """The component of a path under synth/ ("synth/povray/x.c" -> "povray"), None outside."""
+    """The component of a path under synth/ ("synth/povray/rs_synth_scene.c" -> "povray"), None outside."""
     parts = rel.split("/")
     return parts[1] if len(parts) >= 3 and parts[0] == "synth" else None
 

@@ -39,6 +39,7 @@ typedef struct {
     bool outlier[TG_NMAX];         // (N,) gross mistakes
 } tg_problem;
 
+// Random draws (tg_seed sets the state; tg_uniform: in [a, b]; tg_gauss: N(0, 1), Box-Muller), a lens's name.
 void tg_seed(tg_rng *r, uint64_t seed);
 double tg_uniform(tg_rng *r, double a, double b);
 double tg_gauss(tg_rng *r);

@@ -129,7 +129,7 @@ def ground_vehicles(model, N, seed, v_range=(0.45, 0.95), u_range=(0.05, 0.95)):
 
 
 def box_corners_enu(v, L, W, H):
-    """(8,3) corners of a vehicle's box on the ground up = 0 (rs_synth.h's frame)."""
+    """(8,3) corners of a vehicle's box on the ground up = 0 (synth/fleet/rs_synth_vehicle.h's frame)."""
     y = np.radians(v["yaw_deg"])
     f = np.array([np.sin(y), np.cos(y), 0.0])
     l = np.array([-np.cos(y), np.sin(y), 0.0])

@@ -5,7 +5,7 @@
 # .cameramodel files (5 m above a level ground, looking north 15 degrees down: a sliver of sky;
 # 10 degrees up: ground, low sky and high sky).
 # Oracle: numpy's own mask, computed here from the camera's ray of each pixel of the step grid
-# (K^-1 q rotated into ENU, from cv2.Rodrigues of the pose), with the rule of synth/backdrop/rs_synth_sun.h
+# (K^-1 q rotated into ENU, from cv2.Rodrigues of the pose), with the rule of synth/backdrop/rs_synth_light.h
 # (ground: meets the plane up = 0 within 60 m horizontally; sky: rises, elevation <= 20 degrees
 # horizon band, above it zenith band), and numpy's mean of the sRGB-decoded 8-bit values over it:
 # the counts must be equal and the means within 1e-5 (printed to 7 decimals). Then the real

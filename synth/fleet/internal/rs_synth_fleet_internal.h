@@ -1,4 +1,4 @@
-// rs_synth_fleet_internal.h -- what the fleet's files share (synth/rs_synth_fleet*.c): the
+// rs_synth_fleet_internal.h -- what the fleet's files share (synth/fleet/rs_synth_fleet*.c): the
 // variant's random streams and the growing mesh the procedural builder and the OBJ reader fill.
 // Internal to synth; the API is synth/fleet/rs_synth_fleet.h.
 //

@@ -1,6 +1,6 @@
-// rs_synth_twin.h -- the digital twin's world, shared by the camera backgrounds
-// (rs_synth_background.c) and the orthophoto (rs_synth_ortho.c): one scene, two cameras.
-// Written by rs_synth_twin.c; docs/backgrounds.md ("What the twin draws").
+// rs_synth_twin_world.h -- the digital twin's world, shared by the camera backgrounds
+// (rs_synth_twin.c) and the orthophoto (rs_synth_ortho.c): one scene, two cameras.
+// Written by rs_synth_twin_world.c; docs/backgrounds.md ("What the twin draws").
 #pragma once
 #include <stdbool.h>
 #include <stdio.h>
