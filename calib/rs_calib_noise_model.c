@@ -82,7 +82,7 @@ static rs_status vce_at(double next[RS_NOISE_NGROUPS], double sd[RS_NOISE_NGROUP
 }
 
 // 3b. The noise model, alternating with plain solves: variance components to convergence
-// (Förstner's estimator, rs_calib__noise_update), then Baarda's data snooping -- the landmark
+// (Förstner's estimator, rs_calib__vce_estimate), then Baarda's data snooping -- the landmark
 // with the largest |w| above opt->snooping_critical leaves the adjustment, one at a time -- and
 // again, until no w exceeds it or a quarter of the landmarks would be gone (then it stops and
 // says that the noise model is wrong). in,out: rt_c, the landmarks and the sigmas in w,

@@ -106,6 +106,11 @@ typedef struct {
 
 void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroes *r
 
+// The povray executable to run: `given` when not NULL (an empty one: "povray"), else $ROADSIDE_POVRAY when set and not
+// empty, else "povray" (found on PATH). The one place that reads $ROADSIDE_POVRAY; every
+// option struct's NULL `povray` means this.
+const char *rs_synth_povray_exe(const char *given);
+
 // Runs the real POV-Ray: `povray ARGS...` (no shell) in folder `dir`, with HOME = dir (so that
 // dir/.povray/3.7/povray.conf, if written, is the configuration it reads) and POVINC/POVINI
 // unset, confined by Landlock to reading the system's files and reading and writing `dir`
@@ -113,11 +118,6 @@ void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroe
 // dir/povray.log. seconds (may be NULL) accumulates the wall time. Errors: RS_ERR_EXTERNAL
 // "cannot run" when the program is missing (exit 127), "cannot confine povray" when Landlock is
 // there but fails (povray is then not run), else the exit status and the log's last line.
-// The povray executable to run: `given` when not NULL, else $ROADSIDE_POVRAY when set and not
-// empty, else "povray" (found on PATH). The one place that reads $ROADSIDE_POVRAY; every
-// option struct's NULL `povray` means this.
-const char *rs_synth_povray_exe(const char *given);
-
 rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *const *args,
                               int Nargs,       // (Nargs,) at most 30
                               double *seconds, // may be NULL
