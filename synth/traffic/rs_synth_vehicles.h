@@ -13,7 +13,7 @@ extern "C" {
 typedef struct {
     rs_synth_vehicle *v; // (N,) owned
     int N;
-    char **strings; // owned: every string v[] points to
+    char **strings; // owned: every string v[] points to (the user models' paths)
     int Nstrings;
     rs_synth_obj_spec *obj; // (N,) owned: user models' specs (obj[i].path == v[i].model_path)
 } rs_synth_vehicle_list;
@@ -24,7 +24,8 @@ typedef struct {
 //    "e": m, "n": m, "yaw_deg": deg,
 //    "length": m, "width": m, "height": m,   (optional, > 0; default: drawn from the class)
 //    "colour": [r, g, b] linear in [0,1] or "#rrggbb" sRGB (optional; default: drawn),
-//    "variant": integer >= 0 (optional, default: the index), "id": string (optional)}
+//    "variant": integer >= 0 (optional, default: the index), "id": string (optional; kept to
+//    its first 47 bytes, rs_synth_vehicle.id)}
 // yaw_deg is the compass heading of the vehicle's forward axis, clockwise from north.
 // A relative "model" path is taken relative to the vehicles file's folder.
 // Errors name the file, the list index and the field: "FILE: [3].yaw_deg: not a number".
