@@ -14,8 +14,9 @@
 #include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
 #include "core/rs_pose.h"
+#include "core/rs_stats.h"
+#include "core/rs_units.h"
 
-#define DEG (180.0 / M_PI)
 
 void rs_audit_options_default(rs_audit_options *opt)
 {
@@ -78,8 +79,6 @@ __attribute__((format(printf, 3, 4))) static void append(char *buf, size_t size,
     va_end(ap);
 }
 
-static int cmp_double(const void *a, const void *b);
-
 // ---- small geometry ----
 
 // The angle of R(ra) R(rb)^T, degrees (mrcal_compose_r: accurate for tiny angles too).
@@ -87,7 +86,7 @@ static double rotation_between_deg(const double ra[3], const double rb[3])
 {
     double minus_rb[3] = {-rb[0], -rb[1], -rb[2]}, r[3];
     mrcal_compose_r(r, NULL, NULL, ra, minus_rb);
-    return sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) * DEG;
+    return sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) * RS_DEG_PER_RAD;
 }
 
 // Projects ENU points through a pose and lens; false if mrcal refuses.
@@ -160,11 +159,7 @@ static double pixels_per_metre(const rs_calib_problem *pb, const double n[3], co
         }
         if (ok) v[c++] = sqrt(fabs(J[0][0] * J[1][1] - J[0][1] * J[1][0]));
     }
-    double med = NAN;
-    if (c) {
-        qsort(v, (size_t)c, sizeof *v, cmp_double);
-        med = c % 2 ? v[c / 2] : 0.5 * (v[c / 2 - 1] + v[c / 2]);
-    }
+    const double med = rs_stats_median(v, c);
     free(v);
     return med;
 }
@@ -203,7 +198,7 @@ static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *
             double d[3] = {c[0] - s->position_enu_m[0], c[1] - s->position_enu_m[1], c[2] - s->position_enu_m[2]};
             double dn = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             double dot = fabs(Vt[6] * d[0] + Vt[7] * d[1] + Vt[8] * d[2]) / dn;
-            r->head_on_deg = acos(dot > 1 ? 1 : dot) * DEG;
+            r->head_on_deg = acos(dot > 1 ? 1 : dot) * RS_DEG_PER_RAD;
         }
     }
     char *w = r->warnings;
@@ -330,12 +325,6 @@ static void subset_fill(subset *s, const rs_calib_problem *from, int skip, const
 
 // ---- leave-one-out ----
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, const double n[3],
                                const rs_audit_options *opt, rs_err *err)
 {
@@ -389,15 +378,13 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
     }
     r->loo_count = c;
     r->loo_rms_px = c ? sqrt(ss / c) : NAN;
-    qsort(m, (size_t)c, sizeof *m, cmp_double);
-    r->loo_median_m = c == 0 ? NAN : c % 2 ? m[c / 2] : 0.5 * (m[c / 2 - 1] + m[c / 2]);
+    r->loo_median_m = rs_stats_median(m, c);
     if (!c) r->loo_max_px = r->loo_max_m = NAN;
     // influence relative to the others
     int ci = 0;
     for (int i = 0; i < N; i++)
         if (r->landmarks[i].loo_ok) m[ci++] = r->landmarks[i].influence_m;
-    qsort(m, (size_t)ci, sizeof *m, cmp_double);
-    double med_inf = ci ? m[ci / 2] : NAN;
+    const double med_inf = rs_stats_median(m, ci);
     free(m);
     for (int i = 0; i < N; i++) {
         rs_audit_landmark *L = &r->landmarks[i];

@@ -17,9 +17,10 @@
 #include "calib/rs_calib_init.h"
 #include "calib/rs_calib_opengv.h"
 #include "core/rs_pose.h"
+#include "core/rs_stats.h"
+#include "core/rs_units.h"
 #include "sim/rs_simulate.h"
 
-#define DEG (180.0 / M_PI)
 
 // ---- the methods ----
 
@@ -137,7 +138,7 @@ static double rotation_error_deg(const double *r_est, const double *r_true, doub
     const double r_inv[3] = {-r_true[0], -r_true[1], -r_true[2]};
     double e[3];
     mrcal_compose_r(e, de_dr, NULL, r_est, r_inv);
-    return DEG * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    return RS_DEG_PER_RAD * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
 static void fill_problem(rs_calib_problem *cp, const bench_trial *T, const double *p, const double *q, int N,
@@ -272,21 +273,6 @@ typedef struct {
     char failure[120];
 } bench_acc;
 
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double quantile(double *v, int n, double p)
-{
-    if (n <= 0) return NAN;
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    const double k = p * (n - 1);
-    const int i = (int)floor(k);
-    return i + 1 < n ? v[i] + (k - i) * (v[i + 1] - v[i]) : v[n - 1];
-}
-
 static void trial_method(bench_acc *A, int m, bench_trial *T, double scale_m)
 {
     const rs_simulate_problem *P = T->P;
@@ -387,7 +373,7 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
     free(T.sigma_px);
     free(T.v_cam);
 
-    const double crb_rot = Ncrb ? DEG * sqrt(ss_crb_rot / Ncrb) : NAN;
+    const double crb_rot = Ncrb ? RS_DEG_PER_RAD * sqrt(ss_crb_rot / Ncrb) : NAN;
     const double crb_pos = Ncrb ? sqrt(ss_crb_pos / Ncrb) : NAN;
     for (int m = 0; m < RS_BENCH_CALIB_NMETHODS; m++) {
         bench_acc *A = &acc[m];
@@ -398,8 +384,8 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
         snprintf(r->method, sizeof r->method, "%s", rs_bench_calib_methods[m].name);
         r->trials = Ngen;
         r->failures = A->Nfail;
-        r->time_med_us = quantile(A->time_us, A->Ncalls, 0.5);
-        r->time_p90_us = quantile(A->time_us, A->Ncalls, 0.9);
+        r->time_med_us = rs_stats_median(A->time_us, A->Ncalls);
+        r->time_p90_us = rs_stats_quantile(A->time_us, A->Ncalls, 0.9);
         r->rot_rms_deg = A->Nok ? sqrt(A->ss_rot / A->Nok) : NAN;
         r->pos_rms_m = A->Nok ? sqrt(A->ss_pos / A->Nok) : NAN;
         r->ground_rms_m = A->Nground ? sqrt(A->ss_ground / A->Nground) : NAN;
@@ -407,7 +393,7 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
         r->crb_pos_m = crb_pos;
         r->rot_ratio = r->rot_rms_deg / crb_rot;
         r->pos_ratio = r->pos_rms_m / crb_pos;
-        r->cond_median = quantile(A->cond, A->Ncond, 0.5);
+        r->cond_median = rs_stats_median(A->cond, A->Ncond);
         snprintf(r->failure, sizeof r->failure, "%s", Ngen ? A->failure : genfail);
     }
     return RS_OK;

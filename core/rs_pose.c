@@ -7,9 +7,8 @@
 #include <mrcal/poseutils.h>
 
 #include "core/internal/rs_pose_eigen.h"
+#include "core/rs_units.h"
 
-#define RAD_PER_DEG (M_PI / 180.0)
-#define DEG_PER_RAD (180.0 / M_PI)
 
 // A level camera looking north: columns x_cam -> east, y_cam -> down, z_cam -> north.
 static const double R_enu_cam0[9] = {1, 0, 0, 0, 0, 1, 0, -1, 0};
@@ -47,11 +46,11 @@ void rs_pose_Rz(double R[9], double a)
 void rs_pose_R_from_ypr(double R_cam_enu[9], const double ypr_deg[3])
 {
     double A[9], B[9], R[9];
-    rs_pose_Rz(A, -ypr_deg[0] * RAD_PER_DEG);
-    rs_pose_Rx(B, ypr_deg[1] * RAD_PER_DEG);
+    rs_pose_Rz(A, -ypr_deg[0] * RS_RAD_PER_DEG);
+    rs_pose_Rx(B, ypr_deg[1] * RS_RAD_PER_DEG);
     rs_pose_mat3_mul(R, A, B);
     rs_pose_mat3_mul(R, R, R_enu_cam0);
-    rs_pose_Rz(A, ypr_deg[2] * RAD_PER_DEG);
+    rs_pose_Rz(A, ypr_deg[2] * RS_RAD_PER_DEG);
     rs_pose_mat3_mul(R, R, A); // R_enu_cam
     rs_pose_mat3_transpose(R_cam_enu, R);
 }
@@ -74,12 +73,12 @@ void rs_pose_ypr_from_R(double ypr_deg[3], const double R_cam_enu[9])
     rs_pose_mat3_transpose(A, A);
     rs_pose_mat3_mul(M, A, R_enu_cam);
     const double roll = atan2(M[3], M[0]);
-    double yaw_deg = yaw * DEG_PER_RAD, roll_deg = roll * DEG_PER_RAD;
+    double yaw_deg = yaw * RS_DEG_PER_RAD, roll_deg = roll * RS_DEG_PER_RAD;
     if (yaw_deg < 0.0) yaw_deg += 360.0;
     if (yaw_deg >= 360.0) yaw_deg -= 360.0;
     if (roll_deg <= -180.0) roll_deg += 360.0;
     ypr_deg[0] = yaw_deg;
-    ypr_deg[1] = pitch * DEG_PER_RAD;
+    ypr_deg[1] = pitch * RS_DEG_PER_RAD;
     ypr_deg[2] = roll_deg;
 }
 

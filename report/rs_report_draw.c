@@ -3,6 +3,7 @@
 // (rs_report_camera_geometry). The figures: rs_report_draw_image.c, rs_report_draw_map.c.
 #include "report/internal/rs_report_draw.h"
 #include "core/rs_pose.h"
+#include "core/rs_stats.h"
 #include "report/internal/rs_report_doc.h"
 #include "report/internal/rs_report_draw_internal.h"
 
@@ -160,16 +161,7 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
         const double *d = cam->landmarks[i].residual_surveyed_px;
         if (cam->landmarks[i].inlier && isfinite(d[0]) && isfinite(d[1])) r[Nr++] = hypot(d[0], d[1]);
     }
-    double med = 0;
-    if (Nr) {
-        for (int i = 1; i < Nr; i++) // insertion sort: a few dozen values
-            for (int j = i; j > 0 && r[j] < r[j - 1]; j--) {
-                double tmp = r[j];
-                r[j] = r[j - 1];
-                r[j - 1] = tmp;
-            }
-        med = r[Nr / 2];
-    }
+    const double med = Nr ? rs_stats_median(r, Nr) : 0;
     free(r);
     double target = 0.015 * W;
     cam->magnification = med > 1e-6 ? rs_report_nice_ceil(target / med) / 2 : 1;

@@ -25,6 +25,7 @@
 #include <mrcal/poseutils.h>
 
 #include "calib/rs_calib.h"
+#include "core/rs_stats.h"
 #include "test_solve_gen.h"
 
 #define NTRIALS 100
@@ -56,19 +57,6 @@ static double rotation_error_deg(const double *r_est, const double *r_true)
         }
     const double c = fmax(-1.0, fmin(1.0, 0.5 * (d[0] + d[4] + d[8] - 1.0)));
     return acos(c) * 180.0 / M_PI;
-}
-
-static int cmp(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *x, int n)
-{
-    if (n == 0) return NAN;
-    qsort(x, (size_t)n, sizeof *x, cmp);
-    return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
 }
 
 // outlier_px: the last quarter of the landmarks picked off by 200-500 px (outlier_px >= 200) or
@@ -150,7 +138,7 @@ int main(void)
         const double nees = s[k].nees_sum / s[k].n;
         if (k == 0) rot0 = rot, pos0 = pos;
         double med[3];
-        for (int g = 0; g < 3; g++) med[g] = median(s[k].ratio[g], s[k].nratio[g]);
+        for (int g = 0; g < 3; g++) med[g] = rs_stats_median(s[k].ratio[g], s[k].nratio[g]);
         printf("%-14s %9.4f %9.4f %7.2f %9.3f %9.3f %9.3f %7.2f%%\n", configs[k].name, rot, pos, nees, med[0], med[1],
                med[2], 100.0 * s[k].good_flagged / s[k].good_total);
         CHECK(s[k].n >= NTRIALS - 2, "%s: %d of %d trials solved", configs[k].name, s[k].n, NTRIALS);
