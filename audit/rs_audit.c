@@ -81,14 +81,6 @@ __attribute__((format(printf, 3, 4))) static void append(char *buf, size_t size,
 
 // ---- small geometry ----
 
-// The angle of R(ra) R(rb)^T, degrees (mrcal_compose_r: accurate for tiny angles too).
-static double rotation_between_deg(const double ra[3], const double rb[3])
-{
-    double minus_rb[3] = {-rb[0], -rb[1], -rb[2]}, r[3];
-    mrcal_compose_r(r, NULL, NULL, ra, minus_rb);
-    return sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) * RS_DEG_PER_RAD;
-}
-
 // Projects ENU points through a pose and lens; false if mrcal refuses.
 static bool project_enu(double q[2], const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6],
                         const double p_enu[3])
@@ -356,7 +348,7 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
             L->loo_normalised = loo_sigmas(&pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu,
                                            lr.covariance_rt_cam_enu, pi, s_enu, pb->sigma_px ? pb->sigma_px[i] : 1, d);
             L->influence_m = rs_audit__dist3(lr.position_enu_m, r->solve.position_enu_m);
-            L->influence_deg = rotation_between_deg(lr.rt_cam_enu, r->solve.rt_cam_enu);
+            L->influence_deg = rs_pose_rotation_between(NULL, NULL, lr.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
         }
         rs_calib_result_free(&lr);
     }
@@ -481,7 +473,7 @@ static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, co
     a->p_value = chi2_even_sf(T, M);
     a->moved = a->p_value < opt->alpha;
     a->rms_shift_px = sqrt(ss / M);
-    a->rotation_deg = rotation_between_deg(a->rt_cam_enu_new, rt_stored);
+    a->rotation_deg = rs_pose_rotation_between(NULL, NULL, a->rt_cam_enu_new, rt_stored) * RS_DEG_PER_RAD;
     double pos_new[3];
     rs_pose_position_from_rt(pos_new, NULL, a->rt_cam_enu_new);
     for (int c = 0; c < 3; c++) a->shift_enu_m[c] = pos_new[c] - pos_stored[c];
@@ -507,7 +499,7 @@ static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const
     const int N = pb->N;
     x->rms_surveyed_px = surveyed_residuals(x->residual_surveyed_px, &x->max_px, pb, &cal->camera.lensmodel,
                                             cal->camera.intrinsics, cal->camera.rt_cam_enu, r->solve.inlier);
-    x->rotation_deg = rotation_between_deg(cal->camera.rt_cam_enu, r->solve.rt_cam_enu);
+    x->rotation_deg = rs_pose_rotation_between(NULL, NULL, cal->camera.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
     double pos[3];
     rs_pose_position_from_rt(pos, NULL, cal->camera.rt_cam_enu);
     x->shift_m = rs_audit__dist3(pos, r->solve.position_enu_m);

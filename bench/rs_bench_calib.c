@@ -132,15 +132,6 @@ typedef struct {
     int Ngrid;
 } bench_trial;
 
-// Rotation error vector e = r_est o r_true^-1 (mrcal_compose_r), and optionally de/dr_est.
-static double rotation_error_deg(const double *r_est, const double *r_true, double *de_dr)
-{
-    const double r_inv[3] = {-r_true[0], -r_true[1], -r_true[2]};
-    double e[3];
-    mrcal_compose_r(e, de_dr, NULL, r_est, r_inv);
-    return RS_DEG_PER_RAD * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-}
-
 static void fill_problem(rs_calib_problem *cp, const bench_trial *T, const double *p, const double *q, int N,
                          bool survey_exact)
 {
@@ -226,7 +217,7 @@ static bool crb(double *tr_rot_rad2, double *tr_pos_m2, bench_trial *T)
         rs_calib_result res;
         if (rs_calib_solve(&res, &cp, &opt, NULL) == RS_OK) {
             double D[9], C[9];
-            rotation_error_deg(res.rt_cam_enu, P->camera.rt_cam_enu, D);
+            rs_pose_rotation_between(NULL, D, res.rt_cam_enu, P->camera.rt_cam_enu); // D = de/dr_est
             *tr_rot_rad2 = 0.0;
             for (int a = 0; a < 3; a++) {
                 for (int b = 0; b < 3; b++) {
@@ -296,7 +287,7 @@ static void trial_method(bench_acc *A, int m, bench_trial *T, double scale_m)
     }
     double C[3];
     rs_pose_position_from_rt(C, NULL, rt);
-    const double drot = rotation_error_deg(rt, P->camera.rt_cam_enu, NULL);
+    const double drot = RS_DEG_PER_RAD * rs_pose_rotation_between(NULL, NULL, rt, P->camera.rt_cam_enu);
     const double dpos = hypot(hypot(C[0] - P->p_cam_enu_m[0], C[1] - P->p_cam_enu_m[1]), C[2] - P->p_cam_enu_m[2]);
     if (!(drot <= 5.0 && dpos <= 0.2 * scale_m)) {
         A->Nfail++;

@@ -143,3 +143,25 @@ void rs_pose_prepared_apply(double p_cam[3], double *dpcam_drt, double *dpcam_dp
             }
     if (dpcam_dp) memcpy(dpcam_dp, R, 9 * sizeof *R);
 }
+
+double rs_pose_rotation_between(double r_ab[3], double dr_ab_dr_a[9], const double r_a[3], const double r_b[3])
+{
+    const double minus_r_b[3] = {-r_b[0], -r_b[1], -r_b[2]};
+    double r[3], J[9];
+    mrcal_compose_r(r, dr_ab_dr_a ? J : NULL, NULL, r_a, minus_r_b);
+    const double norm = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    // mrcal_compose_r returns |r| in [0, 2 pi): beyond pi it is the turn of 2 pi - |r| about -r,
+    // r' = s r with s = 1 - 2 pi / |r|, dr'/dr = s I + (2 pi / |r|^3) r r^T
+    const bool wrap = norm > M_PI;
+    const double s = wrap ? 1 - 2 * M_PI / norm : 1, g = wrap ? 2 * M_PI / (norm * norm * norm) : 0;
+    if (r_ab)
+        for (int i = 0; i < 3; i++) r_ab[i] = s * r[i];
+    if (dr_ab_dr_a)
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double d = 0;
+                for (int k = 0; k < 3; k++) d += ((i == k) * s + g * r[i] * r[k]) * J[3 * k + j];
+                dr_ab_dr_a[3 * i + j] = d;
+            }
+    return wrap ? 2 * M_PI - norm : norm;
+}

@@ -14,6 +14,7 @@
 
 #include "calib/rs_calib_init.h"
 #include "core/rs_stats.h"
+#include "core/rs_units.h"
 #include "test_init_gen.h"
 #include "tests/common/rs_test.h"
 
@@ -113,7 +114,7 @@ static void test_outliers(void)
                     }
                 }
                 emodel[n] = tg_model_error_px(&pb, res.rt_cam_enu, pb.rt_cam_enu);
-                rot[n] = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu) * 180 / M_PI;
+                rot[n] = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu) * RS_DEG_PER_RAD;
                 pos[n] = tg_position_error_m(res.rt_cam_enu, pb.rt_cam_enu) / pb.range_m;
                 CHECK(emodel[n] < 5.0,
                       "outliers seed %llu %s %s: e_model %.3g px >= 5 px "

@@ -10,7 +10,6 @@
 //  - our median e_model is at most 2x OpenCV's: OpenCV polishes its pose by LM on the inliers
 //    (close to maximum likelihood), ours is linear/minimal and is polished later by Ceres; a
 //    linear solution on 14 well-spread inliers costs well under a factor 2 in e_model.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -25,7 +25,9 @@
 #include <mrcal/poseutils.h>
 
 #include "calib/rs_calib.h"
+#include "core/rs_pose.h"
 #include "core/rs_stats.h"
+#include "core/rs_units.h"
 #include "test_solve_gen.h"
 
 #define NTRIALS 100
@@ -44,20 +46,6 @@ typedef struct {
     int out_total, out_flagged, good_total, good_flagged;
     int out10_total, out10_flagged; // outliers of 10 sigma or more (gen_pick_sigmas)
 } stats;
-
-static double rotation_error_deg(const double *r_est, const double *r_true)
-{
-    double Re[9], Rt[9], d[9];
-    mrcal_R_from_r(Re, NULL, r_est);
-    mrcal_R_from_r(Rt, NULL, r_true);
-    for (int a = 0; a < 3; a++)
-        for (int b = 0; b < 3; b++) {
-            d[3 * a + b] = 0;
-            for (int k = 0; k < 3; k++) d[3 * a + b] += Re[3 * a + k] * Rt[3 * b + k];
-        }
-    const double c = fmax(-1.0, fmin(1.0, 0.5 * (d[0] + d[4] + d[8] - 1.0)));
-    return acos(c) * 180.0 / M_PI;
-}
 
 // outlier_px: the last quarter of the landmarks picked off by 200-500 px (outlier_px >= 200) or
 // by outlier_px to 2 outlier_px; 0: none
@@ -86,7 +74,7 @@ static void run(stats *s, const config *c, double outlier_px)
         const rs_status st = rs_calib_solve(&r, &pb, NULL, &e);
         CHECK(st == RS_OK, "%s trial %d: %s", c->name, t, e.msg);
         if (st != RS_OK) continue;
-        const double drot = rotation_error_deg(r.rt_cam_enu, g.rt_true);
+        const double drot = RS_DEG_PER_RAD * rs_pose_rotation_between(NULL, NULL, r.rt_cam_enu, g.rt_true);
         const double dpos =
             hypot(hypot(r.position_enu_m[0] - g.position_true[0], r.position_enu_m[1] - g.position_true[1]),
                   r.position_enu_m[2] - g.position_true[2]);
