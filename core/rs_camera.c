@@ -5,6 +5,7 @@
 #include <cjson/cJSON.h>
 #include <ctype.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -570,5 +571,15 @@ bool rs_camera_nearest_on_polyline(double p_enu_m[3], double q_px[2], const rs_c
     if (isfinite(best)) return true;
     p_enu_m[0] = p_enu_m[1] = p_enu_m[2] = NAN;
     q_px[0] = q_px[1] = NAN;
+    return false;
+}
+
+bool rs_camera_path(char *out, size_t n, const char *dir, const char *id, const char *ext)
+{
+    size_t nd = dir ? strlen(dir) : 0;
+    while (nd > 1 && dir[nd - 1] == '/') nd--;
+    const int len = nd ? snprintf(out, n, "%.*s/%s%s", (int)nd, dir, id, ext) : snprintf(out, n, "%s%s", id, ext);
+    if (len >= 0 && (size_t)len < n) return true;
+    if (n) out[0] = 0;
     return false;
 }

@@ -43,6 +43,19 @@ typedef struct {
     double P[12];        // (3,4) row-major, as given
 } rs_camera_extra;
 
+// The file names of a camera: "<id><ext>" in a folder. .cameramodel (mrcal) and .opencv.yaml
+// (OpenCV's FileStorage layout) are this file's formats; other modules name their own per-camera
+// files with the same function (calib/rs_calib_site.h: <id>.json, <id>.homography.json;
+// geo/rs_site.h: observations/<id>.csv).
+#define RS_CAMERA_EXT_CAMERAMODEL ".cameramodel"
+#define RS_CAMERA_EXT_OPENCV_YAML ".opencv.yaml"
+
+// The path "<dir>/<id><ext>" of camera `id`'s file into out (n bytes), joined as rs_io_join does
+// (trailing '/' of dir dropped; dir NULL or "": "<id><ext>"). ext includes its dot
+// (RS_CAMERA_EXT_CAMERAMODEL). Returns false, with out empty, when the path needs more than
+// n - 1 bytes.
+bool rs_camera_path(char *out, size_t n, const char *dir, const char *id, const char *ext);
+
 // Frees the intrinsics and zeroes the camera. Accepts NULL.
 void rs_camera_free(rs_camera *cam);
 

@@ -330,8 +330,8 @@ static void check_coincident(rs_site__report *r, const rs_site *site, const char
 
 void rs_site__check_site(rs_site__report *r, const rs_site *site)
 {
-    char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson");
-    char *site_path = rs_io_join(site->dir, "site.json");
+    char *landmarks_path = rs_io_join(site->dir, RS_SITE_LANDMARKS);
+    char *site_path = rs_io_join(site->dir, RS_SITE_JSON);
     if (!landmarks_path || !site_path) {
         r->nomem = true;
         goto done;

@@ -449,7 +449,7 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
     for (int i = 0; i < site->Nlandmarks; i++) Nmodel += modelled(&site->landmarks[i]) && usable(&site->landmarks[i]);
     if (Nmodel == 0) return;
 
-    char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson"), *site_path = rs_io_join(site->dir, "site.json");
+    char *landmarks_path = rs_io_join(site->dir, RS_SITE_LANDMARKS), *site_path = rs_io_join(site->dir, RS_SITE_JSON);
     const int N = site->Nlandmarks;
     size_t Nv = 0; // every vertex of every landmark: the most candidates there can be
     for (int i = 0; i < N; i++) Nv += (size_t)nvertices(&site->landmarks[i]);

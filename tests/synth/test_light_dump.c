@@ -36,7 +36,7 @@ int main(int argc, char **argv)
     rs_camera cam = {0};
     rs_image img = {0};
     rs_synth_light_estimate est;
-    char *lanes_path = rs_io_join(argv[1], "lanes.geojson");
+    char *lanes_path = rs_io_join(argv[1], RS_SITE_LANES);
     rs_status st = rs_site_load(&site, argv[1], &err);
     if (!st) st = rs_lanes_read(&lanes, lanes_path, site, &err);
     if (!st) st = rs_camera_read(&cam, NULL, argv[2], &err);
