@@ -81,19 +81,6 @@ __attribute__((format(printf, 3, 4))) static void append(char *buf, size_t size,
 
 // ---- small geometry ----
 
-// Projects ENU points through a pose and lens; false if mrcal refuses.
-static bool project_enu(double q[2], const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6],
-                        const double p_enu[3])
-{
-    mrcal_point3_t pc;
-    mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt, p_enu);
-    mrcal_point2_t qq;
-    if (!mrcal_project(&qq, NULL, NULL, &pc, 1, lm, intrinsics)) return false;
-    q[0] = qq.x;
-    q[1] = qq.y;
-    return isfinite(q[0]) && isfinite(q[1]);
-}
-
 // rms_surveyed_px (rs_audit.h): each landmark's SURVEYED position projected through (lm,
 // intrinsics, rt) minus its pick into residual_px (N,2; NaN where it does not project); returns
 // the RMS over the inliers (NaN when none projects), and the largest such error in *max_px (NaN
@@ -136,6 +123,8 @@ static double pixels_per_metre(const rs_calib_problem *pb, const double n[3], co
     if (!v) return NAN;
     int c = 0;
     const double h = 0.05;
+    const rs_camera cal = rs_calib_result_camera(pb->camera, s);
+    const double max_tan = rs_camera_max_tan(&cal);
     for (int i = 0; i < pb->N; i++) {
         if (!s->inlier[i]) continue;
         double J[2][2];
@@ -145,8 +134,7 @@ static double pixels_per_metre(const rs_calib_problem *pb, const double n[3], co
             double d[3] = {k == 0 ? h : 0, k == 1 ? h : 0, 0}, pp[3], pm[3], qp[2], qm[2];
             d[2] = -(n[0] * d[0] + n[1] * d[1]) / n[2];
             for (int j = 0; j < 3; j++) pp[j] = pb->p_enu_m[3 * i + j] + d[j], pm[j] = pb->p_enu_m[3 * i + j] - d[j];
-            ok = project_enu(qp, &pb->camera->lensmodel, s->intrinsics, s->rt_cam_enu, pp) &&
-                 project_enu(qm, &pb->camera->lensmodel, s->intrinsics, s->rt_cam_enu, pm);
+            ok = rs_camera_project_visible(qp, &cal, max_tan, pp) && rs_camera_project_visible(qm, &cal, max_tan, pm);
             if (ok) J[0][k] = (qp[0] - qm[0]) / (2 * h), J[1][k] = (qp[1] - qm[1]) / (2 * h);
         }
         if (ok) v[c++] = sqrt(fabs(J[0][0] * J[1][1] - J[0][1] * J[1][0]));

@@ -104,17 +104,7 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
     const rs_site *site = cam->rep->site;
     double W = m->width, H = m->height;
 
-    // off-axis guard: the widest image corner, plus 15%
-    double corners[4][2] = {{-0.5, -0.5}, {W - 0.5, -0.5}, {-0.5, H - 0.5}, {W - 0.5, H - 0.5}};
-    cam->max_tan = 0;
-    for (int i = 0; i < 4; i++) {
-        mrcal_point2_t q = {.x = corners[i][0], .y = corners[i][1]};
-        mrcal_point3_t v;
-        double t = 1e3;
-        if (mrcal_unproject(&v, &q, 1, &m->lensmodel, m->intrinsics) && v.z > 1e-9) t = hypot(v.x, v.y) / v.z;
-        if (t > cam->max_tan) cam->max_tan = t;
-    }
-    cam->max_tan = cam->max_tan * 1.15 + 0.02;
+    cam->max_tan = rs_camera_max_tan(m); // the lens's valid field (core/rs_camera.h)
 
     // field of view on the ground: the image border's rays, cut at range_m horizontally
     enum { PER_SIDE = 48 };
