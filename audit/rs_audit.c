@@ -17,7 +17,6 @@
 #include "core/rs_stats.h"
 #include "core/rs_units.h"
 
-
 void rs_audit_options_default(rs_audit_options *opt)
 {
     memset(opt, 0, sizeof *opt);
@@ -336,7 +335,8 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
             L->loo_normalised = loo_sigmas(&pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu,
                                            lr.covariance_rt_cam_enu, pi, s_enu, pb->sigma_px ? pb->sigma_px[i] : 1, d);
             L->influence_m = rs_audit__dist3(lr.position_enu_m, r->solve.position_enu_m);
-            L->influence_deg = rs_pose_rotation_between(NULL, NULL, lr.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
+            L->influence_deg =
+                rs_pose_rotation_between(NULL, NULL, lr.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
         }
         rs_calib_result_free(&lr);
     }
@@ -487,7 +487,8 @@ static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const
     const int N = pb->N;
     x->rms_surveyed_px = surveyed_residuals(x->residual_surveyed_px, &x->max_px, pb, &cal->camera.lensmodel,
                                             cal->camera.intrinsics, cal->camera.rt_cam_enu, r->solve.inlier);
-    x->rotation_deg = rs_pose_rotation_between(NULL, NULL, cal->camera.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
+    x->rotation_deg =
+        rs_pose_rotation_between(NULL, NULL, cal->camera.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
     double pos[3];
     rs_pose_position_from_rt(pos, NULL, cal->camera.rt_cam_enu);
     x->shift_m = rs_audit__dist3(pos, r->solve.position_enu_m);

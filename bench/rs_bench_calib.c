@@ -21,7 +21,6 @@
 #include "core/rs_units.h"
 #include "sim/rs_simulate.h"
 
-
 // ---- the methods ----
 
 const rs_bench_calib_method rs_bench_calib_methods[RS_BENCH_CALIB_NMETHODS] = {

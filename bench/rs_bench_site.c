@@ -48,13 +48,15 @@ static rs_status write_site(const char *dir, int N, uint64_t seed, rs_err *err)
         l[i].sigma_h_m = l[i].sigma_v_m = NAN;
     }
     char *cameras = rs_io_join(dir, RS_SITE_CAMERAS_DIR), *observations = rs_io_join(dir, RS_SITE_OBSERVATIONS_DIR);
-    char *model = rs_io_join(dir, RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL), *csv = rs_io_join(dir, RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT);
+    char *model = rs_io_join(dir, RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL),
+         *csv = rs_io_join(dir, RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT);
     if (st == RS_OK && !(cameras && observations && model && csv))
         st = rs_err_set(err, RS_ERR_NOMEM, "bench site: out of memory");
     if (st == RS_OK && (mkdir(dir, 0777) || mkdir(cameras, 0777) || mkdir(observations, 0777)))
         st = rs_err_set(err, RS_ERR_IO, "%s: cannot create the folder", dir);
-    const rs_site_spec_camera cam = {
-        .id = "cam1", .model = RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL, .observations = RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT};
+    const rs_site_spec_camera cam = {.id = "cam1",
+                                     .model = RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL,
+                                     .observations = RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT};
     const rs_site_spec spec = {.name = "bench",
                                .origin = origin,
                                .landmark_sigma_h_m = 0.3,

@@ -34,7 +34,6 @@ static const char bench_pick_usage[] =
 
 enum { O_LANDMARKS = 3200, O_CLICKS, O_SEED, O_CSV, O_DIR, MAX_SIZES = 16 };
 
-
 // The picked landmarks' ids and pixels, from the session's state.
 static rs_status one_size(double *median_ms, double *p90_ms, int *Npicks, int *Nfailed, const char *dir, int N, int K,
                           uint64_t seed, rs_err *err)

@@ -584,7 +584,8 @@ bool rs_camera_nearest_on_polyline(double p_enu_m[3], double q_px[2], const rs_c
         double lo = fmax(0.0, (kbest - 1.0) / SAMPLES), hi = fmin(1.0, (kbest + 1.0) / SAMPLES);
         while (hi - lo > 1e-6) {
             const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
-            if (seen_distance2(q, p, m1, a, b, q_pick_px, cam, max_tan) < seen_distance2(q, p, m2, a, b, q_pick_px, cam, max_tan))
+            if (seen_distance2(q, p, m1, a, b, q_pick_px, cam, max_tan) <
+                seen_distance2(q, p, m2, a, b, q_pick_px, cam, max_tan))
                 hi = m2;
             else
                 lo = m1;

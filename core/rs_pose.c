@@ -9,7 +9,6 @@
 #include "core/internal/rs_pose_eigen.h"
 #include "core/rs_units.h"
 
-
 // A level camera looking north: columns x_cam -> east, y_cam -> down, z_cam -> north.
 static const double R_enu_cam0[9] = {1, 0, 0, 0, 0, 1, 0, -1, 0};
 

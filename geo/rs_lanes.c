@@ -12,7 +12,6 @@
 #include "core/rs_units.h"
 #include "geo/internal/rs_site_json.h"
 
-
 void rs_lanes_free(rs_lanes *lanes)
 {
     if (!lanes) return;

@@ -19,7 +19,8 @@
 
 // The files and folders of a skeleton, relative to the site folder, in creation order.
 static const char *const skeleton_dirs[] = {"cameras", "observations", "backgrounds", "backgrounds/cam1"};
-static const char *const skeleton_files[] = {RS_SITE_JSON, RS_SITE_LANDMARKS, RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT, "README.md"};
+static const char *const skeleton_files[] = {RS_SITE_JSON, RS_SITE_LANDMARKS,
+                                             RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT, "README.md"};
 enum {
     NDIRS = sizeof skeleton_dirs / sizeof skeleton_dirs[0],
     NFILES = sizeof skeleton_files / sizeof skeleton_files[0]

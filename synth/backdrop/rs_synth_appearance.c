@@ -8,9 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_color.h"
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
-#include "core/rs_color.h"
 
 // The k-th smallest of v[0..n-1] (0-based, k < n), v reordered: Hoare's selection with a
 // median-of-three pivot, O(n) on average (a full sort of a 6-megapixel image's values was most

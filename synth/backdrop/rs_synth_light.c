@@ -13,7 +13,6 @@
 #include "synth/backdrop/rs_synth_appearance.h"
 #include "synth/fleet/rs_synth_vehicle.h"
 
-
 // ---- the light model ----
 
 void rs_synth_env_default(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3], bool overcast)

@@ -13,10 +13,10 @@
 
 #include <unistd.h>
 
+#include "core/rs_color.h"
 #include "core/rs_hash.h"
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
-#include "core/rs_color.h"
 #include "geo/rs_geo.h"
 #include "synth/backdrop/rs_synth_opencv.h"
 #include "synth/backdrop/rs_synth_sun.h"

@@ -10,8 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "core/rs_rng.h"
 #include "core/rs_color.h"
+#include "core/rs_rng.h"
 #include "synth/fleet/internal/rs_synth_fleet_internal.h"
 
 // ---------------------------------------------------------------- classes and ranges

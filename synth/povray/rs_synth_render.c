@@ -10,8 +10,8 @@
 
 #include <mrcal/poseutils.h>
 
-#include "core/rs_io.h"
 #include "core/rs_color.h"
+#include "core/rs_io.h"
 #include "synth/backdrop/rs_synth_appearance.h"
 #include "synth/povray/internal/rs_synth_povray.h"
 #include "synth/povray/internal/rs_synth_scene_internal.h"

@@ -2,8 +2,8 @@
 // estimates of synth/backdrop/rs_synth_light.h (synth/povray/rs_synth_scene.h).
 #include "synth/povray/rs_synth_scene.h"
 
-#include "synth/backdrop/rs_synth_appearance.h"
 #include "core/rs_color.h"
+#include "synth/backdrop/rs_synth_appearance.h"
 
 void rs_synth_scene_match_background(rs_synth_scene_options *scene, const rs_synth_light_estimate *light,
                                      const rs_synth_env_estimate *env)

@@ -24,7 +24,6 @@
 
 extern char **environ;
 
-
 void rs_synth_sumo_options_default(rs_synth_sumo_options *opt)
 {
     memset(opt, 0, sizeof *opt);

@@ -18,7 +18,6 @@
 #include "synth/fleet/rs_synth_fleet.h"
 #include "synth/traffic/internal/rs_synth_sumo_xml.h"
 
-
 void rs_synth_sumo_frames_free(rs_synth_sumo_frames *frames)
 {
     if (!frames) return;

@@ -13,7 +13,6 @@
 #include "core/rs_units.h"
 #include "synth/fleet/rs_synth_fleet.h"
 
-
 // ---------------------------------------------------------------------------------------------
 // classes
 

@@ -9,9 +9,9 @@
 
 #include <cjson/cJSON.h>
 
+#include "core/rs_color.h"
 #include "core/rs_io.h"
 #include "core/rs_json.h"
-#include "core/rs_color.h"
 
 // ---- the vehicles file ----
 
@@ -56,7 +56,6 @@ static const char *get_string(const cJSON *o, const char *name)
     const cJSON *m = cJSON_GetObjectItemCaseSensitive(o, name);
     return cJSON_IsString(m) ? m->valuestring : NULL;
 }
-
 
 static rs_status parse_colour(double rgb[3], const cJSON *m, const char *path, int i, rs_err *err)
 {

@@ -32,9 +32,9 @@ int main(void)
     CHECK(worst_dec <= 1e-6 && worst_enc <= 1e-6, "tables beyond 1e-6: %.3g, %.3g", worst_dec, worst_enc);
     CHECK(worst_exact == 0, "exact differs from the formula by %.3g", worst_exact);
     CHECK(worst_round <= 1e-12, "decode(encode(v)) off by %.3g", worst_round);
-    CHECK(rs_color_srgb_encode(-0.5) == 0 && rs_color_srgb_encode(1.5) == enc(1.0) &&
-              rs_color_srgb_decode(NAN) == 0 && rs_color_srgb_decode_exact(NAN) == 0 &&
-              rs_color_srgb_decode_exact(1.5) == dec(1.0) && rs_color_srgb_encode_exact(-1) == 0,
+    CHECK(rs_color_srgb_encode(-0.5) == 0 && rs_color_srgb_encode(1.5) == enc(1.0) && rs_color_srgb_decode(NAN) == 0 &&
+              rs_color_srgb_decode_exact(NAN) == 0 && rs_color_srgb_decode_exact(1.5) == dec(1.0) &&
+              rs_color_srgb_encode_exact(-1) == 0,
           "outside [0, 1] not clamped");
     return rs_test_end("core_color");
 }

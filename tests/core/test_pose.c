@@ -181,11 +181,11 @@ static void test_rotation_between(void)
         double u[3], n2 = 0, r_b[3];
         for (int i = 0; i < 3; i++) u[i] = rs_rng_uniform_in(&rng, -1, 1), n2 += u[i] * u[i];
         for (int i = 0; i < 3; i++) u[i] /= sqrt(n2), r_b[i] = rs_rng_uniform_in(&rng, -1.8, 1.8);
-        const double theta = k < 500    ? M_PI - 1e-3 * rs_rng_uniform(&rng)
-                             : k < 1000 ? 1e-6 * rs_rng_uniform(&rng)
+        const double theta = k < 500     ? M_PI - 1e-3 * rs_rng_uniform(&rng)
+                             : k < 1000  ? 1e-6 * rs_rng_uniform(&rng)
                              : k == 1000 ? M_PI
                              : k == 1001 ? 0
-                                        : M_PI * rs_rng_uniform(&rng);
+                                         : M_PI * rs_rng_uniform(&rng);
         const double r_turn[3] = {theta * u[0], theta * u[1], theta * u[2]};
         double R_turn[9], R_b[9], R_a[9], r_a[3], R_ab[9], Rt_b[9];
         mrcal_R_from_r(R_turn, NULL, r_turn);

@@ -40,7 +40,8 @@ int main(void)
             x[i] = ties ? floor(rs_rng_uniform(&rng) * 5) : rs_rng_uniform_in(&rng, -100.0, 100.0);
         Neven += n % 2 == 0;
         // median: the middle order statistic, or the mean of the two middle ones
-        const double want = n % 2 ? order_stat(x, n, n / 2) : 0.5 * (order_stat(x, n, n / 2 - 1) + order_stat(x, n, n / 2));
+        const double want =
+            n % 2 ? order_stat(x, n, n / 2) : 0.5 * (order_stat(x, n, n / 2 - 1) + order_stat(x, n, n / 2));
         memcpy(work, x, sizeof(double) * (size_t)n);
         const double got = rs_stats_median(work, n);
         CHECK(got == want, "n %d: median %.17g, brute force %.17g", n, got, want);

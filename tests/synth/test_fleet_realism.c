@@ -19,13 +19,12 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/rs_color.h"
 #include "synth/fleet/rs_synth_fleet.h"
 #include "test_fleet_check.h"
-#include "core/rs_color.h"
 
 static double phi(double x) { return exp(-0.5 * x * x) / sqrt(2 * M_PI); }
 static double Phi(double x) { return 0.5 * erfc(-x / sqrt(2)); }
-
 
 int main(void)
 {

@@ -13,9 +13,9 @@
 #include <string.h>
 
 #include "core/rs_camera.h"
+#include "core/rs_color.h"
 #include "core/rs_image.h"
 #include "core/rs_io.h"
-#include "core/rs_color.h"
 #include "geo/rs_lanes.h"
 #include "geo/rs_site.h"
 #include "synth/backdrop/rs_synth_appearance.h"

@@ -20,7 +20,6 @@
 #include "synth/traffic/rs_synth_sumo.h"
 #include "synth/traffic/rs_synth_traffic.h"
 
-
 // Inside the footprint rectangle of v, with a margin (negative: strictly inside by -margin).
 static int inside(const rs_synth_vehicle *v, double e, double n, double margin)
 {
