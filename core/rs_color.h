@@ -18,9 +18,11 @@
 extern "C" {
 #endif
 
+// The formulas above, with pow(): sRGB -> linear and linear -> sRGB.
 double rs_color_srgb_decode_exact(double v);
 double rs_color_srgb_encode_exact(double v);
 
+// The same from the tables (within 1e-6): for images, a value per pixel and channel.
 double rs_color_srgb_decode(double v);
 double rs_color_srgb_encode(double v);
 
