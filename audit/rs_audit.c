@@ -14,8 +14,8 @@
 #include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
 #include "core/rs_pose.h"
-
-#define DEG (180.0 / M_PI)
+#include "core/rs_stats.h"
+#include "core/rs_units.h"
 
 void rs_audit_options_default(rs_audit_options *opt)
 {
@@ -78,30 +78,7 @@ __attribute__((format(printf, 3, 4))) static void append(char *buf, size_t size,
     va_end(ap);
 }
 
-static int cmp_double(const void *a, const void *b);
-
 // ---- small geometry ----
-
-// The angle of R(ra) R(rb)^T, degrees (mrcal_compose_r: accurate for tiny angles too).
-static double rotation_between_deg(const double ra[3], const double rb[3])
-{
-    double minus_rb[3] = {-rb[0], -rb[1], -rb[2]}, r[3];
-    mrcal_compose_r(r, NULL, NULL, ra, minus_rb);
-    return sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) * DEG;
-}
-
-// Projects ENU points through a pose and lens; false if mrcal refuses.
-static bool project_enu(double q[2], const mrcal_lensmodel_t *lm, const double *intrinsics, const double rt[6],
-                        const double p_enu[3])
-{
-    mrcal_point3_t pc;
-    mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt, p_enu);
-    mrcal_point2_t qq;
-    if (!mrcal_project(&qq, NULL, NULL, &pc, 1, lm, intrinsics)) return false;
-    q[0] = qq.x;
-    q[1] = qq.y;
-    return isfinite(q[0]) && isfinite(q[1]);
-}
 
 // rms_surveyed_px (rs_audit.h): each landmark's SURVEYED position projected through (lm,
 // intrinsics, rt) minus its pick into residual_px (N,2; NaN where it does not project); returns
@@ -145,6 +122,8 @@ static double pixels_per_metre(const rs_calib_problem *pb, const double n[3], co
     if (!v) return NAN;
     int c = 0;
     const double h = 0.05;
+    const rs_camera cal = rs_calib_result_camera(pb->camera, s);
+    const double max_tan = rs_camera_max_tan(&cal);
     for (int i = 0; i < pb->N; i++) {
         if (!s->inlier[i]) continue;
         double J[2][2];
@@ -154,17 +133,12 @@ static double pixels_per_metre(const rs_calib_problem *pb, const double n[3], co
             double d[3] = {k == 0 ? h : 0, k == 1 ? h : 0, 0}, pp[3], pm[3], qp[2], qm[2];
             d[2] = -(n[0] * d[0] + n[1] * d[1]) / n[2];
             for (int j = 0; j < 3; j++) pp[j] = pb->p_enu_m[3 * i + j] + d[j], pm[j] = pb->p_enu_m[3 * i + j] - d[j];
-            ok = project_enu(qp, &pb->camera->lensmodel, s->intrinsics, s->rt_cam_enu, pp) &&
-                 project_enu(qm, &pb->camera->lensmodel, s->intrinsics, s->rt_cam_enu, pm);
+            ok = rs_camera_project_visible(qp, &cal, max_tan, pp) && rs_camera_project_visible(qm, &cal, max_tan, pm);
             if (ok) J[0][k] = (qp[0] - qm[0]) / (2 * h), J[1][k] = (qp[1] - qm[1]) / (2 * h);
         }
         if (ok) v[c++] = sqrt(fabs(J[0][0] * J[1][1] - J[0][1] * J[1][0]));
     }
-    double med = NAN;
-    if (c) {
-        qsort(v, (size_t)c, sizeof *v, cmp_double);
-        med = c % 2 ? v[c / 2] : 0.5 * (v[c / 2 - 1] + v[c / 2]);
-    }
+    const double med = rs_stats_median(v, c);
     free(v);
     return med;
 }
@@ -203,7 +177,7 @@ static rs_status compute_degeneracy(rs_audit_result *r, const rs_calib_problem *
             double d[3] = {c[0] - s->position_enu_m[0], c[1] - s->position_enu_m[1], c[2] - s->position_enu_m[2]};
             double dn = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             double dot = fabs(Vt[6] * d[0] + Vt[7] * d[1] + Vt[8] * d[2]) / dn;
-            r->head_on_deg = acos(dot > 1 ? 1 : dot) * DEG;
+            r->head_on_deg = acos(dot > 1 ? 1 : dot) * RS_DEG_PER_RAD;
         }
     }
     char *w = r->warnings;
@@ -330,12 +304,6 @@ static void subset_fill(subset *s, const rs_calib_problem *from, int skip, const
 
 // ---- leave-one-out ----
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, const double n[3],
                                const rs_audit_options *opt, rs_err *err)
 {
@@ -367,7 +335,8 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
             L->loo_normalised = loo_sigmas(&pb->camera->lensmodel, lr.intrinsics, lr.rt_cam_enu,
                                            lr.covariance_rt_cam_enu, pi, s_enu, pb->sigma_px ? pb->sigma_px[i] : 1, d);
             L->influence_m = rs_audit__dist3(lr.position_enu_m, r->solve.position_enu_m);
-            L->influence_deg = rotation_between_deg(lr.rt_cam_enu, r->solve.rt_cam_enu);
+            L->influence_deg =
+                rs_pose_rotation_between(NULL, NULL, lr.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
         }
         rs_calib_result_free(&lr);
     }
@@ -389,15 +358,13 @@ static rs_status leave_one_out(rs_audit_result *r, const rs_calib_problem *pb, c
     }
     r->loo_count = c;
     r->loo_rms_px = c ? sqrt(ss / c) : NAN;
-    qsort(m, (size_t)c, sizeof *m, cmp_double);
-    r->loo_median_m = c == 0 ? NAN : c % 2 ? m[c / 2] : 0.5 * (m[c / 2 - 1] + m[c / 2]);
+    r->loo_median_m = rs_stats_median(m, c);
     if (!c) r->loo_max_px = r->loo_max_m = NAN;
     // influence relative to the others
     int ci = 0;
     for (int i = 0; i < N; i++)
         if (r->landmarks[i].loo_ok) m[ci++] = r->landmarks[i].influence_m;
-    qsort(m, (size_t)ci, sizeof *m, cmp_double);
-    double med_inf = ci ? m[ci / 2] : NAN;
+    const double med_inf = rs_stats_median(m, ci);
     free(m);
     for (int i = 0; i < N; i++) {
         rs_audit_landmark *L = &r->landmarks[i];
@@ -494,7 +461,7 @@ static rs_status against_test(rs_audit_result *r, const rs_calib_problem *pb, co
     a->p_value = chi2_even_sf(T, M);
     a->moved = a->p_value < opt->alpha;
     a->rms_shift_px = sqrt(ss / M);
-    a->rotation_deg = rotation_between_deg(a->rt_cam_enu_new, rt_stored);
+    a->rotation_deg = rs_pose_rotation_between(NULL, NULL, a->rt_cam_enu_new, rt_stored) * RS_DEG_PER_RAD;
     double pos_new[3];
     rs_pose_position_from_rt(pos_new, NULL, a->rt_cam_enu_new);
     for (int c = 0; c < 3; c++) a->shift_enu_m[c] = pos_new[c] - pos_stored[c];
@@ -520,7 +487,8 @@ static void external_check(rs_audit_result *r, const rs_calib_problem *pb, const
     const int N = pb->N;
     x->rms_surveyed_px = surveyed_residuals(x->residual_surveyed_px, &x->max_px, pb, &cal->camera.lensmodel,
                                             cal->camera.intrinsics, cal->camera.rt_cam_enu, r->solve.inlier);
-    x->rotation_deg = rotation_between_deg(cal->camera.rt_cam_enu, r->solve.rt_cam_enu);
+    x->rotation_deg =
+        rs_pose_rotation_between(NULL, NULL, cal->camera.rt_cam_enu, r->solve.rt_cam_enu) * RS_DEG_PER_RAD;
     double pos[3];
     rs_pose_position_from_rt(pos, NULL, cal->camera.rt_cam_enu);
     x->shift_m = rs_audit__dist3(pos, r->solve.position_enu_m);

@@ -11,6 +11,7 @@
 #include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
 #include "audit/rs_audit.h"
+#include "core/rs_stats.h"
 
 double rs_audit__dist3(const double *a, const double *b)
 {
@@ -171,12 +172,6 @@ rs_status rs_audit__compute_map(rs_audit_result *r, const rs_calib_problem *pb, 
     return RS_OK;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 // Image hull share, and the ground hull share over the map's seen cells.
 rs_status rs_audit__compute_coverage(rs_audit_result *r, const rs_calib_problem *pb, rs_err *err)
 {
@@ -232,9 +227,9 @@ rs_status rs_audit__compute_coverage(rs_audit_result *r, const rs_calib_problem 
                     j++;
                 }
             if (c) {
-                qsort(cells, (size_t)c, sizeof *cells, cmp_double);
-                r->ground_sigma_inside_median_m = c % 2 ? cells[c / 2] : 0.5 * (cells[c / 2 - 1] + cells[c / 2]);
-                r->ground_sigma_inside_p90_m = cells[(int)floor(0.9 * (c - 1))];
+                rs_stats_sort(cells, c);
+                r->ground_sigma_inside_median_m = rs_stats_median_sorted(cells, c);
+                r->ground_sigma_inside_p90_m = rs_stats_quantile_sorted(cells, c, 0.9);
             }
         }
         free(cells);

@@ -52,17 +52,18 @@ static char *find_calibration(const char *calib_path, const char *id, rs_err *er
         if (!p) rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         return p;
     }
-    static const char *const ext[] = {".cameramodel", ".opencv.yaml", ".yaml", ".yml", ".json"};
+    static const char *const ext[] = {RS_CAMERA_EXT_CAMERAMODEL, RS_CAMERA_EXT_OPENCV_YAML, ".yaml", ".yml", ".json"};
     for (size_t k = 0; k < sizeof ext / sizeof ext[0]; k++) {
-        char name[512];
-        snprintf(name, sizeof name, "%s%s", id, ext[k]);
-        char *p = rs_io_join(calib_path, name);
-        if (!p) {
-            rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        char p[4096];
+        if (!rs_camera_path(p, sizeof p, calib_path, id, ext[k])) {
+            rs_err_set(err, RS_ERR_INVALID, "%s: path too long", calib_path);
             return NULL;
         }
-        if (stat(p, &sb) == 0 && S_ISREG(sb.st_mode)) return p;
-        free(p);
+        if (stat(p, &sb) == 0 && S_ISREG(sb.st_mode)) {
+            char *found = strdup(p);
+            if (!found) rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            return found;
+        }
     }
     rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no %s.cameramodel, %s.opencv.yaml, %s.yaml, %s.yml or %s.json", calib_path,
                id, id, id, id, id);

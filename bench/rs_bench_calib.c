@@ -17,9 +17,9 @@
 #include "calib/rs_calib_init.h"
 #include "calib/rs_calib_opengv.h"
 #include "core/rs_pose.h"
+#include "core/rs_stats.h"
+#include "core/rs_units.h"
 #include "sim/rs_simulate.h"
-
-#define DEG (180.0 / M_PI)
 
 // ---- the methods ----
 
@@ -131,15 +131,6 @@ typedef struct {
     int Ngrid;
 } bench_trial;
 
-// Rotation error vector e = r_est o r_true^-1 (mrcal_compose_r), and optionally de/dr_est.
-static double rotation_error_deg(const double *r_est, const double *r_true, double *de_dr)
-{
-    const double r_inv[3] = {-r_true[0], -r_true[1], -r_true[2]};
-    double e[3];
-    mrcal_compose_r(e, de_dr, NULL, r_est, r_inv);
-    return DEG * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-}
-
 static void fill_problem(rs_calib_problem *cp, const bench_trial *T, const double *p, const double *q, int N,
                          bool survey_exact)
 {
@@ -225,7 +216,7 @@ static bool crb(double *tr_rot_rad2, double *tr_pos_m2, bench_trial *T)
         rs_calib_result res;
         if (rs_calib_solve(&res, &cp, &opt, NULL) == RS_OK) {
             double D[9], C[9];
-            rotation_error_deg(res.rt_cam_enu, P->camera.rt_cam_enu, D);
+            rs_pose_rotation_between(NULL, D, res.rt_cam_enu, P->camera.rt_cam_enu); // D = de/dr_est
             *tr_rot_rad2 = 0.0;
             for (int a = 0; a < 3; a++) {
                 for (int b = 0; b < 3; b++) {
@@ -272,21 +263,6 @@ typedef struct {
     char failure[120];
 } bench_acc;
 
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double quantile(double *v, int n, double p)
-{
-    if (n <= 0) return NAN;
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    const double k = p * (n - 1);
-    const int i = (int)floor(k);
-    return i + 1 < n ? v[i] + (k - i) * (v[i + 1] - v[i]) : v[n - 1];
-}
-
 static void trial_method(bench_acc *A, int m, bench_trial *T, double scale_m)
 {
     const rs_simulate_problem *P = T->P;
@@ -310,7 +286,7 @@ static void trial_method(bench_acc *A, int m, bench_trial *T, double scale_m)
     }
     double C[3];
     rs_pose_position_from_rt(C, NULL, rt);
-    const double drot = rotation_error_deg(rt, P->camera.rt_cam_enu, NULL);
+    const double drot = RS_DEG_PER_RAD * rs_pose_rotation_between(NULL, NULL, rt, P->camera.rt_cam_enu);
     const double dpos = hypot(hypot(C[0] - P->p_cam_enu_m[0], C[1] - P->p_cam_enu_m[1]), C[2] - P->p_cam_enu_m[2]);
     if (!(drot <= 5.0 && dpos <= 0.2 * scale_m)) {
         A->Nfail++;
@@ -387,7 +363,7 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
     free(T.sigma_px);
     free(T.v_cam);
 
-    const double crb_rot = Ncrb ? DEG * sqrt(ss_crb_rot / Ncrb) : NAN;
+    const double crb_rot = Ncrb ? RS_DEG_PER_RAD * sqrt(ss_crb_rot / Ncrb) : NAN;
     const double crb_pos = Ncrb ? sqrt(ss_crb_pos / Ncrb) : NAN;
     for (int m = 0; m < RS_BENCH_CALIB_NMETHODS; m++) {
         bench_acc *A = &acc[m];
@@ -398,8 +374,8 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
         snprintf(r->method, sizeof r->method, "%s", rs_bench_calib_methods[m].name);
         r->trials = Ngen;
         r->failures = A->Nfail;
-        r->time_med_us = quantile(A->time_us, A->Ncalls, 0.5);
-        r->time_p90_us = quantile(A->time_us, A->Ncalls, 0.9);
+        r->time_med_us = rs_stats_median(A->time_us, A->Ncalls);
+        r->time_p90_us = rs_stats_quantile(A->time_us, A->Ncalls, 0.9);
         r->rot_rms_deg = A->Nok ? sqrt(A->ss_rot / A->Nok) : NAN;
         r->pos_rms_m = A->Nok ? sqrt(A->ss_pos / A->Nok) : NAN;
         r->ground_rms_m = A->Nground ? sqrt(A->ss_ground / A->Nground) : NAN;
@@ -407,7 +383,7 @@ static rs_status run_config(rs_bench_calib_row *rows, const bench_config *c, int
         r->crb_pos_m = crb_pos;
         r->rot_ratio = r->rot_rms_deg / crb_rot;
         r->pos_ratio = r->pos_rms_m / crb_pos;
-        r->cond_median = quantile(A->cond, A->Ncond, 0.5);
+        r->cond_median = rs_stats_median(A->cond, A->Ncond);
         snprintf(r->failure, sizeof r->failure, "%s", Ngen ? A->failure : genfail);
     }
     return RS_OK;

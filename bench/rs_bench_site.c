@@ -47,14 +47,16 @@ static rs_status write_site(const char *dir, int N, uint64_t seed, rs_err *err)
         l[i].llh = (rs_llh){llh[3 * i], llh[3 * i + 1], llh[3 * i + 2]};
         l[i].sigma_h_m = l[i].sigma_v_m = NAN;
     }
-    char *cameras = rs_io_join(dir, "cameras"), *observations = rs_io_join(dir, "observations");
-    char *model = rs_io_join(dir, "cameras/cam1.cameramodel"), *csv = rs_io_join(dir, "observations/cam1.csv");
+    char *cameras = rs_io_join(dir, RS_SITE_CAMERAS_DIR), *observations = rs_io_join(dir, RS_SITE_OBSERVATIONS_DIR);
+    char *model = rs_io_join(dir, RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL),
+         *csv = rs_io_join(dir, RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT);
     if (st == RS_OK && !(cameras && observations && model && csv))
         st = rs_err_set(err, RS_ERR_NOMEM, "bench site: out of memory");
     if (st == RS_OK && (mkdir(dir, 0777) || mkdir(cameras, 0777) || mkdir(observations, 0777)))
         st = rs_err_set(err, RS_ERR_IO, "%s: cannot create the folder", dir);
-    const rs_site_spec_camera cam = {
-        .id = "cam1", .model = "cameras/cam1.cameramodel", .observations = "observations/cam1.csv"};
+    const rs_site_spec_camera cam = {.id = "cam1",
+                                     .model = RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL,
+                                     .observations = RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT};
     const rs_site_spec spec = {.name = "bench",
                                .origin = origin,
                                .landmark_sigma_h_m = 0.3,
@@ -80,12 +82,12 @@ static rs_status write_site(const char *dir, int N, uint64_t seed, rs_err *err)
 
 static void remove_site(const char *dir)
 {
-    static const char *const files[] = {"site.json",
-                                        "landmarks.geojson",
-                                        "cameras/cam1.cameramodel",
-                                        "observations/cam1.csv",
-                                        "cameras",
-                                        "observations",
+    static const char *const files[] = {RS_SITE_JSON,
+                                        RS_SITE_LANDMARKS,
+                                        RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL,
+                                        RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT,
+                                        RS_SITE_CAMERAS_DIR,
+                                        RS_SITE_OBSERVATIONS_DIR,
                                         NULL};
     for (int k = 0; files[k]; k++) {
         char *f = rs_io_join(dir, files[k]);
@@ -143,7 +145,7 @@ rs_status rs_bench_site_run(rs_bench_site_row *row, int N, uint64_t seed, const 
     if (N < 4) return rs_err_set(err, RS_ERR_USAGE, "bench site: at least 4 landmarks");
     char name[64];
     snprintf(name, sizeof name, "site-%d", N);
-    char *dir = rs_io_join(work_dir, name), *geojson = dir ? rs_io_join(dir, "landmarks.geojson") : NULL;
+    char *dir = rs_io_join(work_dir, name), *geojson = dir ? rs_io_join(dir, RS_SITE_LANDMARKS) : NULL;
     if (!dir || !geojson) {
         free(dir);
         return rs_err_set(err, RS_ERR_NOMEM, "bench site: out of memory");

@@ -15,6 +15,7 @@
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/internal/rs_calib_solve_state.h"
 #include "calib/rs_calib.h"
+#include "core/rs_stats.h"
 
 // A group's variance factor from the data: the median of x = e^2 / r over its observations, a
 // chi-square(1) times the factor where the model holds (median CHI2_1_MEDIAN). The log of the
@@ -41,19 +42,11 @@
 #define SCALE_SETTLED    0.2
 #define SCALE_PASSES     4
 
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-// Median of x (n,), using scratch (n,); NAN for n = 0.
+// Median of x (n,) (core/rs_stats.h), using scratch (n,); NAN for n = 0.
 static double median(const double *x, int n, double *scratch)
 {
-    if (n <= 0) return NAN;
-    memcpy(scratch, x, (size_t)n * sizeof *x);
-    qsort(scratch, (size_t)n, sizeof *scratch, cmp_double);
-    return n % 2 ? scratch[n / 2] : 0.5 * (scratch[n / 2 - 1] + scratch[n / 2]);
+    if (n > 0) memcpy(scratch, x, (size_t)n * sizeof *x);
+    return rs_stats_median(scratch, n);
 }
 
 // One robust solve (s->ro) of s from s->rt_c: s->rt_c, the landmarks and s->block_chi2 at its

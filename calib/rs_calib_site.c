@@ -285,7 +285,8 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
 
 // ---------------------------------------------------------------- files
 
-static const char *const calib_suffixes[] = {".cameramodel", ".json", ".opencv.yaml", ".homography.json"};
+static const char *const calib_suffixes[] = {RS_CAMERA_EXT_CAMERAMODEL, RS_CALIB_SITE_EXT_JSON,
+                                             RS_CAMERA_EXT_OPENCV_YAML, RS_CALIB_SITE_EXT_HOMOGRAPHY};
 enum { F_MODEL, F_JSON, F_YAML, F_HOMOGRAPHY, NFILES };
 const rs_calib_site_outputs rs_calib_site_calib_outputs = {"calib.run.json", "roadside calib", calib_suffixes, NFILES};
 

@@ -91,7 +91,11 @@ typedef struct {
     int Nsuffixes;               // <= 16
 } rs_calib_site_outputs;
 
-// roadside calib's: .cameramodel, .json, .opencv.yaml, .homography.json; record calib.run.json
+// roadside calib's: .cameramodel, .json, .opencv.yaml, .homography.json; record calib.run.json.
+// The two that are this module's own formats (the camera files are core's: RS_CAMERA_EXT_*);
+// a path is rs_camera_path(out, n, calib_dir, id, RS_CALIB_SITE_EXT_JSON).
+#define RS_CALIB_SITE_EXT_JSON       ".json"
+#define RS_CALIB_SITE_EXT_HOMOGRAPHY ".homography.json"
 extern const rs_calib_site_outputs rs_calib_site_calib_outputs;
 
 typedef enum {

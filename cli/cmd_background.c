@@ -179,10 +179,11 @@ static int render_camera(const char *site_dir, const rs_site *site, const char *
 {
     static const char *const WHAT = "site render-backgrounds";
     char model[4096];
-    snprintf(model, sizeof(model), "%s/%s.cameramodel", calib_dir, cam_id);
     rs_camera cam = {0};
     rs_err err = {0};
-    rs_status st = rs_camera_read(&cam, NULL, model, &err);
+    rs_status st = rs_camera_path(model, sizeof model, calib_dir, cam_id, RS_CAMERA_EXT_CAMERAMODEL)
+                       ? rs_camera_read(&cam, NULL, model, &err)
+                       : rs_err_set(&err, RS_ERR_INVALID, "%s: path too long", calib_dir);
     if (st == RS_OK)
         st = rs_synth_twin_backgrounds(site_dir, site, cam_id, &cam, model, lanes, (const char *const *)times, Ntimes,
                                        (const char *const *)weathers, Nweathers, opt, twin_done, NULL, &err);
@@ -259,7 +260,7 @@ int rs_cli_site_render_backgrounds(int argc, char **argv)
         }
         Ntimes = 3;
     }
-    char *lanes = lanes_opt ? strdup(lanes_opt) : rs_io_join(site_dir, "lanes.geojson");
+    char *lanes = lanes_opt ? strdup(lanes_opt) : rs_io_join(site_dir, RS_SITE_LANES);
     if (!lanes) {
         rs_site_free(site);
         return rs_cli_fail(CMD, RS_ERR_NOMEM, NULL);

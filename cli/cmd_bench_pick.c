@@ -10,6 +10,7 @@
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
+#include "core/rs_stats.h"
 #include "pick/rs_pick.h"
 #include "sim/rs_simulate.h"
 
@@ -32,12 +33,6 @@ static const char bench_pick_usage[] =
     "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/pick.md.\n";
 
 enum { O_LANDMARKS = 3200, O_CLICKS, O_SEED, O_CSV, O_DIR, MAX_SIZES = 16 };
-
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
 // The picked landmarks' ids and pixels, from the session's state.
 static rs_status one_size(double *median_ms, double *p90_ms, int *Npicks, int *Nfailed, const char *dir, int N, int K,
@@ -87,9 +82,9 @@ static rs_status one_size(double *median_ms, double *p90_ms, int *Npicks, int *N
     }
     if (!st && n == 0) st = rs_err_set(err, RS_ERR_DEGENERATE, "%s: no pick found in the session's state", dir);
     if (!st) {
-        qsort(ms, (size_t)K, sizeof *ms, cmp_double);
-        *median_ms = ms[K / 2];
-        *p90_ms = ms[(int)floor(0.9 * (K - 1))];
+        rs_stats_sort(ms, K);
+        *median_ms = rs_stats_median_sorted(ms, K);
+        *p90_ms = rs_stats_quantile_sorted(ms, K, 0.9);
     }
     free(text);
     free(ms);

@@ -312,12 +312,11 @@ int rs_cli_locate(int argc, char **argv)
     }
     char *default_dir = calib_dir ? NULL : rs_io_join(site_dir, "calib");
     if (!calib_dir) calib_dir = default_dir;
-    char name[512];
-    snprintf(name, sizeof name, "%s.cameramodel", camera);
-    char *path = rs_io_join(calib_dir, name);
+    char path[4096];
     rs_camera cam;
-    rs_status st = path ? rs_camera_read(&cam, NULL, path, &err) : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
-    free(path);
+    rs_status st = rs_camera_path(path, sizeof path, calib_dir, camera, RS_CAMERA_EXT_CAMERAMODEL)
+                       ? rs_camera_read(&cam, NULL, path, &err)
+                       : rs_err_set(&err, RS_ERR_INVALID, "%s: path too long", calib_dir);
     free(default_dir);
     if (st) {
         rs_site_free(site);

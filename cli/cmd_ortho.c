@@ -80,7 +80,7 @@ int rs_cli_ortho(int argc, char **argv)
     rs_status lst = rs_site_load_for_picking(&site, site_dir, &err);
     if (lst) return rs_cli_fail("ortho", lst, &err);
 
-    char *lanes = rs_io_join(site_dir, "lanes.geojson");
+    char *lanes = rs_io_join(site_dir, RS_SITE_LANES);
     if (lanes && access(lanes, F_OK) != 0) {
         fprintf(stderr, "roadside ortho: %s: none; the orthophoto shows the ground only\n", lanes);
         free(lanes);

@@ -189,7 +189,7 @@ int rs_cli_render(int argc, char **argv)
     if (ropt.background_path && match_light) {
         // the background's light and environment (docs/fleet.md, "Reflections of the scene")
         rs_lanes lanes = {0};
-        char *lanes_path = rs_io_join(s.site_dir, "lanes.geojson");
+        char *lanes_path = rs_io_join(s.site_dir, RS_SITE_LANES);
         if (!lanes_path)
             st = rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
         else if (access(lanes_path, F_OK) == 0)

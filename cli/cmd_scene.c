@@ -86,17 +86,11 @@ static int synth_load(rs_cli_synth_args *s, const char *command)
     if ((st = rs_site_load(&s->site, s->site_dir, &err))) return rs_cli_fail(command, st, &err);
     if (rs_site_find_camera(s->site, s->camera_id) < 0)
         return rs_cli_usage_error(command, "--camera: no camera \"%s\" in %s", s->camera_id, s->site_dir);
-    char name[512];
-    snprintf(name, sizeof(name), "%s.cameramodel", s->camera_id);
-    char *model = rs_io_join(s->calib_dir, name);
-    if (!model) return rs_cli_fail("out of memory", RS_ERR_NOMEM, NULL);
+    char model[4096];
+    if (!rs_camera_path(model, sizeof model, s->calib_dir, s->camera_id, RS_CAMERA_EXT_CAMERAMODEL))
+        return rs_cli_usage_error(command, "--calib: path too long");
     st = rs_camera_read(&s->camera, NULL, model, &err);
-    if (st) {
-        int rc = rs_cli_fail(command, st, &err);
-        free(model);
-        return rc;
-    }
-    free(model);
+    if (st) return rs_cli_fail(command, st, &err);
     if ((st = rs_synth_vehicles_read(&s->list, s->vehicles_path, &err))) return rs_cli_fail(command, st, &err);
     if ((st = rs_synth_prepare(&s->prepared, s->list.v, s->list.obj, s->list.N, &err)))
         return rs_cli_fail(command, st, &err);

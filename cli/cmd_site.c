@@ -118,7 +118,7 @@ static int cmd_check(int argc, char **argv)
     // lanes.geojson, if present, once the site itself loads (its origin places the lanes): the
     // first problem of the lanes file as one more error.
     int Nerrors = report->Nerrors;
-    char *lanes_path = rs_io_join(argv[1], "lanes.geojson");
+    char *lanes_path = rs_io_join(argv[1], RS_SITE_LANES);
     if (lanes_path && access(lanes_path, F_OK) == 0 && Nerrors == 0) {
         rs_site *site = NULL;
         if (rs_site_load(&site, argv[1], NULL) == RS_OK) {

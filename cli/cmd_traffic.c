@@ -175,7 +175,7 @@ int rs_cli_traffic(int argc, char **argv)
     rs_site *site = NULL;
     rs_status st = rs_site_load(&site, t.site_dir, &err);
     if (st) return rs_cli_fail(t.site_dir, st, &err);
-    char *lanes_path = t.lanes_path ? strdup(t.lanes_path) : rs_io_join(t.site_dir, "lanes.geojson");
+    char *lanes_path = t.lanes_path ? strdup(t.lanes_path) : rs_io_join(t.site_dir, RS_SITE_LANES);
     rs_lanes lanes = {0};
     rs_synth_vehicle *v = NULL;
     rs_synth_sumo_frames frames = {0};

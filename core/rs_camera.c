@@ -5,6 +5,7 @@
 #include <cjson/cJSON.h>
 #include <ctype.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -428,19 +429,46 @@ rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs
     return st;
 }
 
+double rs_camera_max_tan(const rs_camera *cam)
+{
+    if (cam->width < 1 || cam->height < 1) return INFINITY; // no image size: no corners to go by
+    const double W = cam->width, H = cam->height;
+    const double corners[4][2] = {{-0.5, -0.5}, {W - 0.5, -0.5}, {-0.5, H - 0.5}, {W - 0.5, H - 0.5}};
+    double max_tan = 0;
+    for (int i = 0; i < 4; i++) {
+        mrcal_point2_t q = {.x = corners[i][0], .y = corners[i][1]};
+        mrcal_point3_t v;
+        double t = 1e3;
+        if (mrcal_unproject(&v, &q, 1, &cam->lensmodel, cam->intrinsics) && v.z > 1e-9) t = hypot(v.x, v.y) / v.z;
+        if (!isfinite(t)) t = 1e3; // mrcal "succeeds" with NaN where the distortion never reaches the corner
+        if (t > max_tan) max_tan = t;
+    }
+    return max_tan * 1.15 + 0.02;
+}
+
+bool rs_camera_in_field(const double p_cam[3], double max_tan)
+{
+    return p_cam[2] > 0 && !(hypot(p_cam[0], p_cam[1]) / p_cam[2] > max_tan);
+}
+
+bool rs_camera_project_visible(double q_px[2], const rs_camera *cam, double max_tan, const double p_enu_m[3])
+{
+    mrcal_point3_t pc;
+    mrcal_point2_t q;
+    mrcal_transform_point_rt(pc.xyz, NULL, NULL, cam->rt_cam_enu, p_enu_m);
+    const bool ok = rs_camera_in_field(pc.xyz, max_tan) &&
+                    mrcal_project(&q, NULL, NULL, &pc, 1, &cam->lensmodel, cam->intrinsics) && isfinite(q.x) &&
+                    isfinite(q.y);
+    q_px[0] = ok ? q.x : NAN;
+    q_px[1] = ok ? q.y : NAN;
+    return ok;
+}
+
 int rs_camera_project(double *q_px, const rs_camera *cam, const double *p_enu_m, int N)
 {
+    const double max_tan = rs_camera_max_tan(cam);
     int n = 0;
-    for (int i = 0; i < N; i++) {
-        mrcal_point3_t pc;
-        mrcal_point2_t q;
-        mrcal_transform_point_rt(pc.xyz, NULL, NULL, cam->rt_cam_enu, &p_enu_m[3 * i]);
-        const bool ok = pc.z > 0 && mrcal_project(&q, NULL, NULL, &pc, 1, &cam->lensmodel, cam->intrinsics) &&
-                        isfinite(q.x) && isfinite(q.y);
-        q_px[2 * i] = ok ? q.x : NAN;
-        q_px[2 * i + 1] = ok ? q.y : NAN;
-        n += ok;
-    }
+    for (int i = 0; i < N; i++) n += rs_camera_project_visible(&q_px[2 * i], cam, max_tan, &p_enu_m[3 * i]);
     return n;
 }
 
@@ -530,10 +558,10 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
 // The squared pixel distance from q of the point a + t (b - a), its projection in qt; INFINITY
 // when it does not project.
 static double seen_distance2(double qt[2], double p[3], double t, const double a[3], const double b[3],
-                             const double q[2], const rs_camera *cam)
+                             const double q[2], const rs_camera *cam, double max_tan)
 {
     for (int k = 0; k < 3; k++) p[k] = a[k] + t * (b[k] - a[k]);
-    if (rs_camera_project(qt, cam, p, 1) != 1) return INFINITY;
+    if (!rs_camera_project_visible(qt, cam, max_tan, p)) return INFINITY;
     return (qt[0] - q[0]) * (qt[0] - q[0]) + (qt[1] - q[1]) * (qt[1] - q[1]);
 }
 
@@ -541,13 +569,14 @@ bool rs_camera_nearest_on_polyline(double p_enu_m[3], double q_px[2], const rs_c
                                    const double *vertices_enu_m, int Nvertices, const double q_pick_px[2])
 {
     enum { SAMPLES = 256 };
+    const double max_tan = rs_camera_max_tan(cam);
     double best = INFINITY, p[3], q[2];
     for (int s = 0; s + 1 < Nvertices; s++) {
         const double *a = &vertices_enu_m[3 * s], *b = &vertices_enu_m[3 * s + 3];
         int kbest = -1;
         double dbest = INFINITY;
         for (int k = 0; k <= SAMPLES; k++) {
-            const double d = seen_distance2(q, p, (double)k / SAMPLES, a, b, q_pick_px, cam);
+            const double d = seen_distance2(q, p, (double)k / SAMPLES, a, b, q_pick_px, cam, max_tan);
             if (d < dbest) dbest = d, kbest = k;
         }
         if (kbest < 0) continue;
@@ -555,12 +584,13 @@ bool rs_camera_nearest_on_polyline(double p_enu_m[3], double q_px[2], const rs_c
         double lo = fmax(0.0, (kbest - 1.0) / SAMPLES), hi = fmin(1.0, (kbest + 1.0) / SAMPLES);
         while (hi - lo > 1e-6) {
             const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
-            if (seen_distance2(q, p, m1, a, b, q_pick_px, cam) < seen_distance2(q, p, m2, a, b, q_pick_px, cam))
+            if (seen_distance2(q, p, m1, a, b, q_pick_px, cam, max_tan) <
+                seen_distance2(q, p, m2, a, b, q_pick_px, cam, max_tan))
                 hi = m2;
             else
                 lo = m1;
         }
-        const double d = seen_distance2(q, p, 0.5 * (lo + hi), a, b, q_pick_px, cam);
+        const double d = seen_distance2(q, p, 0.5 * (lo + hi), a, b, q_pick_px, cam, max_tan);
         if (d < best) {
             best = d;
             memcpy(p_enu_m, p, sizeof p);
@@ -570,5 +600,15 @@ bool rs_camera_nearest_on_polyline(double p_enu_m[3], double q_px[2], const rs_c
     if (isfinite(best)) return true;
     p_enu_m[0] = p_enu_m[1] = p_enu_m[2] = NAN;
     q_px[0] = q_px[1] = NAN;
+    return false;
+}
+
+bool rs_camera_path(char *out, size_t n, const char *dir, const char *id, const char *ext)
+{
+    size_t nd = dir ? strlen(dir) : 0;
+    while (nd > 1 && dir[nd - 1] == '/') nd--;
+    const int len = nd ? snprintf(out, n, "%.*s/%s%s", (int)nd, dir, id, ext) : snprintf(out, n, "%s%s", id, ext);
+    if (len >= 0 && (size_t)len < n) return true;
+    if (n) out[0] = 0;
     return false;
 }

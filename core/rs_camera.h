@@ -43,6 +43,19 @@ typedef struct {
     double P[12];        // (3,4) row-major, as given
 } rs_camera_extra;
 
+// The file names of a camera: "<id><ext>" in a folder. .cameramodel (mrcal) and .opencv.yaml
+// (OpenCV's FileStorage layout) are this file's formats; other modules name their own per-camera
+// files with the same function (calib/rs_calib_site.h: <id>.json, <id>.homography.json;
+// geo/rs_site.h: observations/<id>.csv).
+#define RS_CAMERA_EXT_CAMERAMODEL ".cameramodel"
+#define RS_CAMERA_EXT_OPENCV_YAML ".opencv.yaml"
+
+// The path "<dir>/<id><ext>" of camera `id`'s file into out (n bytes), joined as rs_io_join does
+// (trailing '/' of dir dropped; dir NULL or "": "<id><ext>"). ext includes its dot
+// (RS_CAMERA_EXT_CAMERAMODEL). Returns false, with out empty, when the path needs more than
+// n - 1 bytes.
+bool rs_camera_path(char *out, size_t n, const char *dir, const char *id, const char *ext);
+
 // Frees the intrinsics and zeroes the camera. Accepts NULL.
 void rs_camera_free(rs_camera *cam);
 
@@ -107,9 +120,39 @@ bool rs_camera_has_opencv_equivalent(const rs_camera *cam);
 // equivalent; RS_ERR_IO, RS_ERR_EXTERNAL (OpenCV threw).
 rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs_err *err);
 
-// Projects N points of the site ENU frame through the camera (mrcal_transform_point_rt, then
-// mrcal_project). q_px (N,2); a point mrcal cannot project gets NaN. Returns the number of
-// points projected (finite results in front of the camera, z > 0).
+// ---- projection: the one "does this point project" rule ----
+//
+// A point p_cam = (x, y, z) of the camera frame projects (is visible) when
+//   1. it is in front of the camera: z > 0, and
+//   2. it is within the lens's valid field: its angle from the optical axis has
+//      tan = hypot(x, y) / z <= max_tan, max_tan = rs_camera_max_tan(cam): the widest ray of the
+//      image's four corners (mrcal_unproject of (-0.5, -0.5) ... (W-0.5, H-0.5)), times 1.15,
+//      plus 0.02. A lens model is fitted to what the image shows; beyond its corners a distortion
+//      polynomial can fold far off-axis points back into the image, at pixels that mean nothing.
+//      The margin keeps lines that leave the image drawable up to its border.
+//   3. mrcal projects it to finite pixel coordinates.
+// The pixel may lie outside the image: "inside the image" (u in [-0.5, W-0.5], v in
+// [-0.5, H-0.5], pixel (0,0) the centre of the top-left pixel) is the caller's further test
+// where it needs one. docs/conventions.md, "Projection", says the same.
+
+// The tangent of the lens's valid field (rule 2 above): 4 unprojections, so compute it once per
+// camera for many points. A corner mrcal cannot unproject, or one at 90 degrees or more off
+// axis (a fisheye), or one the distortion never reaches (mrcal returns NaN), counts as tan
+// 1000 (no limit in practice); a camera without an image size
+// (width or height 0: an OpenCV file that gives none) has no limit (INFINITY).
+double rs_camera_max_tan(const rs_camera *cam);
+
+// Rules 1 and 2 for a point of the camera frame.
+bool rs_camera_in_field(const double p_cam[3], double max_tan);
+
+// Projects one point of the site ENU frame (mrcal_transform_point_rt, mrcal_project) if it is
+// visible by the rules above with the given max_tan (rs_camera_max_tan(cam)); false, and q_px
+// NaN, if not.
+bool rs_camera_project_visible(double q_px[2], const rs_camera *cam, double max_tan, const double p_enu_m[3]);
+
+// Projects N points of the site ENU frame through the camera: rs_camera_project_visible with
+// rs_camera_max_tan(cam) computed once. q_px (N,2); a point that does not project gets NaN.
+// Returns the number of points projected.
 int rs_camera_project( // out
     double *q_px,      // (N,2)
     // in

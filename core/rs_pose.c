@@ -7,9 +7,7 @@
 #include <mrcal/poseutils.h>
 
 #include "core/internal/rs_pose_eigen.h"
-
-#define RAD_PER_DEG (M_PI / 180.0)
-#define DEG_PER_RAD (180.0 / M_PI)
+#include "core/rs_units.h"
 
 // A level camera looking north: columns x_cam -> east, y_cam -> down, z_cam -> north.
 static const double R_enu_cam0[9] = {1, 0, 0, 0, 0, 1, 0, -1, 0};
@@ -47,11 +45,11 @@ void rs_pose_Rz(double R[9], double a)
 void rs_pose_R_from_ypr(double R_cam_enu[9], const double ypr_deg[3])
 {
     double A[9], B[9], R[9];
-    rs_pose_Rz(A, -ypr_deg[0] * RAD_PER_DEG);
-    rs_pose_Rx(B, ypr_deg[1] * RAD_PER_DEG);
+    rs_pose_Rz(A, -ypr_deg[0] * RS_RAD_PER_DEG);
+    rs_pose_Rx(B, ypr_deg[1] * RS_RAD_PER_DEG);
     rs_pose_mat3_mul(R, A, B);
     rs_pose_mat3_mul(R, R, R_enu_cam0);
-    rs_pose_Rz(A, ypr_deg[2] * RAD_PER_DEG);
+    rs_pose_Rz(A, ypr_deg[2] * RS_RAD_PER_DEG);
     rs_pose_mat3_mul(R, R, A); // R_enu_cam
     rs_pose_mat3_transpose(R_cam_enu, R);
 }
@@ -74,12 +72,12 @@ void rs_pose_ypr_from_R(double ypr_deg[3], const double R_cam_enu[9])
     rs_pose_mat3_transpose(A, A);
     rs_pose_mat3_mul(M, A, R_enu_cam);
     const double roll = atan2(M[3], M[0]);
-    double yaw_deg = yaw * DEG_PER_RAD, roll_deg = roll * DEG_PER_RAD;
+    double yaw_deg = yaw * RS_DEG_PER_RAD, roll_deg = roll * RS_DEG_PER_RAD;
     if (yaw_deg < 0.0) yaw_deg += 360.0;
     if (yaw_deg >= 360.0) yaw_deg -= 360.0;
     if (roll_deg <= -180.0) roll_deg += 360.0;
     ypr_deg[0] = yaw_deg;
-    ypr_deg[1] = pitch * DEG_PER_RAD;
+    ypr_deg[1] = pitch * RS_DEG_PER_RAD;
     ypr_deg[2] = roll_deg;
 }
 
@@ -143,4 +141,26 @@ void rs_pose_prepared_apply(double p_cam[3], double *dpcam_drt, double *dpcam_dp
                 dpcam_drt[6 * i + 3 + k] = i == k;
             }
     if (dpcam_dp) memcpy(dpcam_dp, R, 9 * sizeof *R);
+}
+
+double rs_pose_rotation_between(double r_ab[3], double dr_ab_dr_a[9], const double r_a[3], const double r_b[3])
+{
+    const double minus_r_b[3] = {-r_b[0], -r_b[1], -r_b[2]};
+    double r[3], J[9];
+    mrcal_compose_r(r, dr_ab_dr_a ? J : NULL, NULL, r_a, minus_r_b);
+    const double norm = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    // mrcal_compose_r returns |r| in [0, 2 pi): beyond pi it is the turn of 2 pi - |r| about -r,
+    // r' = s r with s = 1 - 2 pi / |r|, dr'/dr = s I + (2 pi / |r|^3) r r^T
+    const bool wrap = norm > M_PI;
+    const double s = wrap ? 1 - 2 * M_PI / norm : 1, g = wrap ? 2 * M_PI / (norm * norm * norm) : 0;
+    if (r_ab)
+        for (int i = 0; i < 3; i++) r_ab[i] = s * r[i];
+    if (dr_ab_dr_a)
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) {
+                double d = 0;
+                for (int k = 0; k < 3; k++) d += ((i == k) * s + g * r[i] * r[k]) * J[3 * k + j];
+                dr_ab_dr_a[3 * i + j] = d;
+            }
+    return wrap ? 2 * M_PI - norm : norm;
 }

@@ -84,6 +84,23 @@ void rs_pose_prepared_apply(double p_cam[3], double *dpcam_drt, double *dpcam_dp
 // in: R (3,3) row-major rotation; out: r (3,) radians.
 void rs_pose_r_from_R(double r[3], const double R[9]);
 
+// The rotation between two orientations: R_ab = R(r_a) R(r_b)^T, the turn that takes b's
+// orientation to a's (for two poses of one camera, rt_cam_enu's r of each: how far the camera
+// turned). Returns its angle in radians, in [0, pi]: |r_ab|, equal to
+// acos((trace(R_ab) - 1) / 2) but computed by mrcal_compose_r(r_a, -r_b), which stays accurate
+// for tiny angles (where acos loses half the digits) and up to a half-turn.
+// Accuracy: within 2e-12 rad of the constructed angle over [0, pi] (tests/core/test_pose.c;
+// within 1e-7 rad of acos((trace - 1) / 2), which itself is that coarse near 0 and pi).
+// (mrcal_compose_r itself may return a vector of norm up to 2 pi, the same rotation as the one of
+// norm 2 pi - |r| about the opposite axis: r_ab is always that shorter one, |r_ab| <= pi.)
+// out: r_ab (3,) Rodrigues vector of R_ab, |r_ab| <= pi, may be NULL; dr_ab_dr_a (3,3) row-major,
+//      d r_ab / d r_a, may be NULL
+// in:  r_a, r_b (3,) Rodrigues vectors, radians
+double rs_pose_rotation_between( // out
+    double r_ab[3], double dr_ab_dr_a[9],
+    // in
+    const double r_a[3], const double r_b[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -53,11 +53,10 @@ rs_status rs_eval_data_to_ground(rs_eval_data *d, const rs_site *site, const cha
         }
         cam_of_image[i] = c;
         if (loaded[c]) continue;
-        char name[512];
-        snprintf(name, sizeof name, "%s.cameramodel", site->cameras[c].id);
-        char *path = rs_io_join(calib_dir, name);
-        st = path ? rs_camera_read(&cams[c], NULL, path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        free(path);
+        char path[4096];
+        st = rs_camera_path(path, sizeof path, calib_dir, site->cameras[c].id, RS_CAMERA_EXT_CAMERAMODEL)
+                 ? rs_camera_read(&cams[c], NULL, path, err)
+                 : rs_err_set(err, RS_ERR_INVALID, "%s: path too long", calib_dir);
         loaded[c] = st == RS_OK;
     }
     size_t missed = 0;

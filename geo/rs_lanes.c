@@ -9,9 +9,8 @@
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "core/rs_units.h"
 #include "geo/internal/rs_site_json.h"
-
-#define DEG (3.14159265358979323846 / 180.0)
 
 void rs_lanes_free(rs_lanes *lanes)
 {
@@ -37,7 +36,7 @@ double rs_lane_length_m(const rs_lane *lane)
 
 static double heading_of(double de, double dn)
 {
-    double h = atan2(de, dn) / DEG;
+    double h = atan2(de, dn) / RS_RAD_PER_DEG;
     if (h < 0) h += 360.0;
     return h >= 360.0 ? h - 360.0 : h;
 }

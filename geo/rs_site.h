@@ -58,6 +58,17 @@
 extern "C" {
 #endif
 
+// The names of a site's files and folders (docs/site-format.md), relative to the site folder:
+// everyone outside geo/ joins these (rs_io_join(site_dir, RS_SITE_LANES)), never spells them.
+// A camera's picks are RS_SITE_OBSERVATIONS_DIR/<id>RS_SITE_OBSERVATIONS_EXT and its nominal
+// model, by default, RS_SITE_CAMERAS_DIR/<id>.cameramodel (rs_camera_path, core/rs_camera.h).
+#define RS_SITE_JSON             "site.json"
+#define RS_SITE_LANDMARKS        "landmarks.geojson"
+#define RS_SITE_LANES            "lanes.geojson"
+#define RS_SITE_CAMERAS_DIR      "cameras"
+#define RS_SITE_OBSERVATIONS_DIR "observations"
+#define RS_SITE_OBSERVATIONS_EXT ".csv"
+
 // What a site may state, checked by the reader (rs_site_check refuses values outside, naming the
 // landmark and field): physical ranges, not tuning. A survey sigma under 1 mm is better than any
 // survey of a road feature and one over 100 m is no survey; a pick sigma under 0.01 px is beyond

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "core/rs_units.h"
 #include "geo/internal/rs_site_internal.h"
 
 // A camera needs at least this many landmarks picked: the fewest that determine a pose without
@@ -103,11 +104,10 @@ bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *
                           have_d ? " from the origin" : "", dist, fixed);
             return false;
         }
-        const double deg = 180.0 / M_PI;
         double dr, pr[3];
-        if (distance_from_origin(&dr, pr, site, lat * deg, lon * deg, h_ell) && dr <= max_m) {
+        if (distance_from_origin(&dr, pr, site, lat * RS_DEG_PER_RAD, lon * RS_DEG_PER_RAD, h_ell) && dr <= max_m) {
             format_distance(dist, sizeof dist, dr);
-            format_position(fixed, sizeof fixed, geojson_order, lat * deg, lon * deg, h);
+            format_position(fixed, sizeof fixed, geojson_order, lat * RS_DEG_PER_RAD, lon * RS_DEG_PER_RAD, h);
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, 0, feature, feature_id, field,
                           "looks like radians (as given: %s%s; converted to degrees: %s from the "
                           "origin): should it be %s?",
@@ -330,8 +330,8 @@ static void check_coincident(rs_site__report *r, const rs_site *site, const char
 
 void rs_site__check_site(rs_site__report *r, const rs_site *site)
 {
-    char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson");
-    char *site_path = rs_io_join(site->dir, "site.json");
+    char *landmarks_path = rs_io_join(site->dir, RS_SITE_LANDMARKS);
+    char *site_path = rs_io_join(site->dir, RS_SITE_JSON);
     if (!landmarks_path || !site_path) {
         r->nomem = true;
         goto done;

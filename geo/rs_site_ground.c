@@ -12,6 +12,7 @@
 
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
+#include "core/rs_stats.h"
 #include "geo/internal/rs_site_internal.h"
 
 // The robust start tries every triple of up to ALL_TRIPLES_MAX points, else DRAWN_TRIPLES triples
@@ -28,42 +29,6 @@ static const uint64_t SEED = 0x67726f756e64ULL; // "ground"
 #define SITE_PLANE_NZ_MIN  0.1
 
 // ---- small numerics ----
-
-// The k-th smallest of a[0..n) (quickselect; a is reordered).
-static double select_kth(double *a, int n, int k)
-{
-    int lo = 0, hi = n - 1;
-    while (lo < hi) {
-        const double pivot = a[lo + (hi - lo) / 2];
-        int i = lo, j = hi;
-        while (i <= j) {
-            while (a[i] < pivot) i++;
-            while (a[j] > pivot) j--;
-            if (i <= j) {
-                const double t = a[i];
-                a[i++] = a[j];
-                a[j--] = t;
-            }
-        }
-        if (k <= j)
-            hi = j;
-        else if (k >= i)
-            lo = i;
-        else
-            return a[k];
-    }
-    return a[k];
-}
-
-// The median of a[0..n), n > 0 (the mean of the two middle values for even n; a is reordered).
-static double median(double *a, int n)
-{
-    const double hi = select_kth(a, n, n / 2);
-    if (n % 2) return hi;
-    double lo = a[0];
-    for (int i = 1; i < n / 2; i++) lo = fmax(lo, a[i]); // after selection a[0..n/2) <= hi
-    return 0.5 * (lo + hi);
-}
 
 // Inverse of a symmetric positive definite 3x3 (row-major) by cofactors; false if singular.
 static bool inverse3(double out[9], const double m[9])
@@ -207,7 +172,7 @@ static int robust_fit(plane_fit *f, bool *keep, const double *p, const double *f
                 const double d = q[2] - plane_up(&g, q);
                 work[i] = d * d;
             }
-            const double m = median(work, nscore);
+            const double m = rs_stats_median(work, nscore);
             if (m < best) best = m, start = g;
         }
         if (isfinite(best)) { // Rousseeuw's scale of the LMedS residuals, small-sample corrected
@@ -235,7 +200,7 @@ static int robust_fit(plane_fit *f, bool *keep, const double *p, const double *f
         if (n == 3) break;
         for (int i = 0; i < n; i++) work[i] = r[i] = fabs(p[3 * i + 2] - plane_up(f, &p[3 * i]));
         // the residuals of a least-squares plane are shrunk by sqrt((n - 3) / n): undone
-        const double sigma = 1.4826 * median(work, n) * sqrt((double)n / (n - 3));
+        const double sigma = 1.4826 * rs_stats_median(work, n) * sqrt((double)n / (n - 3));
         int k = 0;
         bool same = true;
         for (int i = 0; i < n; i++) {
@@ -484,7 +449,7 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
     for (int i = 0; i < site->Nlandmarks; i++) Nmodel += modelled(&site->landmarks[i]) && usable(&site->landmarks[i]);
     if (Nmodel == 0) return;
 
-    char *landmarks_path = rs_io_join(site->dir, "landmarks.geojson"), *site_path = rs_io_join(site->dir, "site.json");
+    char *landmarks_path = rs_io_join(site->dir, RS_SITE_LANDMARKS), *site_path = rs_io_join(site->dir, RS_SITE_JSON);
     const int N = site->Nlandmarks;
     size_t Nv = 0; // every vertex of every landmark: the most candidates there can be
     for (int i = 0; i < N; i++) Nv += (size_t)nvertices(&site->landmarks[i]);

@@ -19,7 +19,8 @@
 
 // The files and folders of a skeleton, relative to the site folder, in creation order.
 static const char *const skeleton_dirs[] = {"cameras", "observations", "backgrounds", "backgrounds/cam1"};
-static const char *const skeleton_files[] = {"site.json", "landmarks.geojson", "observations/cam1.csv", "README.md"};
+static const char *const skeleton_files[] = {RS_SITE_JSON, RS_SITE_LANDMARKS,
+                                             RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT, "README.md"};
 enum {
     NDIRS = sizeof skeleton_dirs / sizeof skeleton_dirs[0],
     NFILES = sizeof skeleton_files / sizeof skeleton_files[0]
@@ -103,8 +104,8 @@ static const char *const readme_format =
 // The example camera of the skeleton.
 static const rs_site_spec_camera example_camera = {
     .id = "cam1",
-    .model = "cameras/cam1.cameramodel",
-    .observations = "observations/cam1.csv",
+    .model = RS_SITE_CAMERAS_DIR "/cam1" RS_CAMERA_EXT_CAMERAMODEL,
+    .observations = RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT,
     .backgrounds = "backgrounds/cam1",
     .note = "example camera: rename it, add its model and its picks (README.md)",
 };

@@ -376,7 +376,7 @@ static void json_syntax_error(rs_site__reader *c, const rs_err *e)
 static void read_landmarks(rs_site__reader *c)
 {
     rs_site *site = c->site;
-    char *path = rs_site__join(c, site->dir, "landmarks.geojson");
+    char *path = rs_site__join(c, site->dir, RS_SITE_LANDMARKS);
     if (!path) return;
     c->file = path;
     size_t len = 0;

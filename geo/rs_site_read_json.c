@@ -257,7 +257,7 @@ void rs_site__read_site_json(rs_site__reader *c)
     rs_site *site = c->site;
     char *path = NULL;
     cJSON *root =
-        rs_site__read_json_file(c, &path, "site.json", "every site has one; 'roadside site init' writes a skeleton",
+        rs_site__read_json_file(c, &path, RS_SITE_JSON, "every site has one; 'roadside site init' writes a skeleton",
                                 RS_IO_MAX_SMALL_FILE_BYTES);
     if (!root) goto done;
     if (!cJSON_IsObject(root)) {

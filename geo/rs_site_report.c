@@ -153,7 +153,7 @@ bool rs_site__file_exists(rs_site__reader *c, const char *why)
 {
     struct stat sb;
     if (!rs_site__inside(c, c->file)) { // said of site.json, which names it: nothing outside is a diagnostic's file
-        char *site_json = rs_io_join(c->site->dir, "site.json");
+        char *site_json = rs_io_join(c->site->dir, RS_SITE_JSON);
         if (!site_json) c->r->nomem = true;
         if (site_json)
             rs_site__diag(c->r, RS_SITE_ERROR, RS_ERR_INVALID, site_json, 0, -1, NULL, NULL,

@@ -283,7 +283,7 @@ rs_status rs_site_write_json(const char *dir, const rs_site_spec *spec, rs_site_
         else if (!add_item(j, spec->extra_name, extra))
             st = rs_err_set(err, RS_ERR_NOMEM, "%s/site.json: out of memory", dir);
     }
-    if (!st) st = write_document(dir, "site.json", j, layout, err);
+    if (!st) st = write_document(dir, RS_SITE_JSON, j, layout, err);
     cJSON_Delete(j);
     return st;
 }
@@ -365,7 +365,7 @@ rs_status rs_site_write_landmarks(const char *dir, const rs_site_landmark *landm
         ok = f && cJSON_AddItemToArray(features, f);
         if (!ok) cJSON_Delete(f);
     }
-    rs_status st = write_document(dir, "landmarks.geojson", ok ? j : NULL, layout, err);
+    rs_status st = write_document(dir, RS_SITE_LANDMARKS, ok ? j : NULL, layout, err);
     cJSON_Delete(j);
     return st;
 }
@@ -422,7 +422,7 @@ rs_status rs_site_record_background(const char *dir, const char *camera_id, cons
                                     const char *const *keys, const char *const *values, int Ntags,
                                     const char *source_json, rs_err *err)
 {
-    char *path = rs_io_join(dir, "site.json"), *text = NULL, *file = NULL;
+    char *path = rs_io_join(dir, RS_SITE_JSON), *text = NULL, *file = NULL;
     cJSON *root = NULL, *source = NULL;
     rs_status st = RS_OK;
     if (!path || !(file = rs_site_background_file(camera_id, name))) {

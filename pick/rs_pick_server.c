@@ -285,7 +285,7 @@ static char *map_json(const rs_site *site, const rs_geo_ortho *ortho)
         cJSON_AddNullToObject(root, "ortho");
     }
     cJSON *la = cJSON_AddArrayToObject(root, "lanes");
-    char *path = rs_io_join(site->dir, "lanes.geojson");
+    char *path = rs_io_join(site->dir, RS_SITE_LANES);
     rs_lanes lanes = {0};
     if (path && access(path, F_OK) == 0 && rs_lanes_read(&lanes, path, site, NULL) == RS_OK) {
         for (int i = 0; i < lanes.N; i++) {

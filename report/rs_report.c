@@ -157,8 +157,8 @@ static rs_status lanes_add_feature(rs_report_lanes *lanes, const cJSON *coords, 
 
 static rs_status read_lanes(rs_report_lanes *lanes, const rs_site *site, rs_err *err)
 {
-    char *path = rs_io_join(site->dir, "lanes.geojson");
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "lanes.geojson: out of memory");
+    char *path = rs_io_join(site->dir, RS_SITE_LANES);
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, RS_SITE_LANES ": out of memory");
     FILE *f = fopen(path, "rb");
     if (!f) { // optional
         free(path);
@@ -317,12 +317,11 @@ static rs_status camera_load(rs_report_camera *cam, const rs_site *site, const c
                              const rs_report_options *opt, rs_err *err)
 {
     const char *id = site->cameras[cam->icam].id;
-    char name[600];
-    snprintf(name, sizeof name, "%s.cameramodel", id);
-    char *model_path = rs_io_join(calib_dir, name);
-    snprintf(name, sizeof name, "%s.json", id);
-    char *json_path = rs_io_join(calib_dir, name);
-    rs_status st = model_path && json_path ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", calib_dir);
+    char model_path[4096], json_path[4096];
+    rs_status st = rs_camera_path(model_path, sizeof model_path, calib_dir, id, RS_CAMERA_EXT_CAMERAMODEL) &&
+                           rs_camera_path(json_path, sizeof json_path, calib_dir, id, RS_CALIB_SITE_EXT_JSON)
+                       ? RS_OK
+                       : rs_err_set(err, RS_ERR_INVALID, "%s: path too long", calib_dir);
     if (!st) {
         FILE *f = fopen(json_path, "rb");
         if (!f)
@@ -350,8 +349,6 @@ static rs_status camera_load(rs_report_camera *cam, const rs_site *site, const c
         }
     } else if (!st)
         snprintf(cam->audit_error, sizeof cam->audit_error, "the audit was not requested");
-    free(model_path);
-    free(json_path);
     return st;
 }
 

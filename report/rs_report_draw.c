@@ -3,6 +3,7 @@
 // (rs_report_camera_geometry). The figures: rs_report_draw_image.c, rs_report_draw_map.c.
 #include "report/internal/rs_report_draw.h"
 #include "core/rs_pose.h"
+#include "core/rs_stats.h"
 #include "report/internal/rs_report_doc.h"
 #include "report/internal/rs_report_draw_internal.h"
 
@@ -103,17 +104,7 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
     const rs_site *site = cam->rep->site;
     double W = m->width, H = m->height;
 
-    // off-axis guard: the widest image corner, plus 15%
-    double corners[4][2] = {{-0.5, -0.5}, {W - 0.5, -0.5}, {-0.5, H - 0.5}, {W - 0.5, H - 0.5}};
-    cam->max_tan = 0;
-    for (int i = 0; i < 4; i++) {
-        mrcal_point2_t q = {.x = corners[i][0], .y = corners[i][1]};
-        mrcal_point3_t v;
-        double t = 1e3;
-        if (mrcal_unproject(&v, &q, 1, &m->lensmodel, m->intrinsics) && v.z > 1e-9) t = hypot(v.x, v.y) / v.z;
-        if (t > cam->max_tan) cam->max_tan = t;
-    }
-    cam->max_tan = cam->max_tan * 1.15 + 0.02;
+    cam->max_tan = rs_camera_max_tan(m); // the lens's valid field (core/rs_camera.h)
 
     // field of view on the ground: the image border's rays, cut at range_m horizontally
     enum { PER_SIDE = 48 };
@@ -160,16 +151,7 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
         const double *d = cam->landmarks[i].residual_surveyed_px;
         if (cam->landmarks[i].inlier && isfinite(d[0]) && isfinite(d[1])) r[Nr++] = hypot(d[0], d[1]);
     }
-    double med = 0;
-    if (Nr) {
-        for (int i = 1; i < Nr; i++) // insertion sort: a few dozen values
-            for (int j = i; j > 0 && r[j] < r[j - 1]; j--) {
-                double tmp = r[j];
-                r[j] = r[j - 1];
-                r[j - 1] = tmp;
-            }
-        med = r[Nr / 2];
-    }
+    const double med = Nr ? rs_stats_median(r, Nr) : 0;
     free(r);
     double target = 0.015 * W;
     cam->magnification = med > 1e-6 ? rs_report_nice_ceil(target / med) / 2 : 1;

@@ -12,20 +12,11 @@
 
 // ---- projection ----
 
-// ENU point -> pixel through the camera's full lens model. False when behind the camera or
-// farther off-axis than the model can be trusted (distortion polynomials fold back there).
+// ENU point -> pixel through the camera's full lens model, core's rule (rs_camera_project_visible):
+// false when behind the camera or beyond the lens's valid field.
 static bool project(const rs_report_camera *cam, const double p_enu[3], double q[2])
 {
-    mrcal_point3_t pc;
-    mrcal_transform_point_rt(pc.xyz, NULL, NULL, cam->model.rt_cam_enu, p_enu);
-    if (!(pc.z > 1e-6)) return false;
-    if (hypot(pc.x, pc.y) / pc.z > cam->max_tan) return false;
-    mrcal_point2_t qq;
-    if (!mrcal_project(&qq, NULL, NULL, &pc, 1, &cam->model.lensmodel, cam->model.intrinsics)) return false;
-    if (!isfinite(qq.x) || !isfinite(qq.y)) return false;
-    q[0] = qq.x;
-    q[1] = qq.y;
-    return true;
+    return rs_camera_project_visible(q, &cam->model, cam->max_tan, p_enu);
 }
 
 // Draws the ENU polyline p (Np,3) into the image (drawing scale s: pixel (u,v) is drawn at

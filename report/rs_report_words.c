@@ -178,7 +178,7 @@ void rs_report_doc_inputs(rs_doc *doc, const struct rs_report_ctx *rep)
     rs_doc_cell(doc, "file");
     rs_doc_cell(doc, "bytes");
     rs_doc_cell(doc, "SHA-256");
-    static const char *const site_files[] = {"site.json", "landmarks.geojson", "lanes.geojson"};
+    static const char *const site_files[] = {RS_SITE_JSON, RS_SITE_LANDMARKS, RS_SITE_LANES};
     for (size_t k = 0; k < sizeof site_files / sizeof site_files[0]; k++) {
         char *path = rs_io_join(site->dir, site_files[k]);
         input_row(doc, "site", path);
@@ -187,18 +187,16 @@ void rs_report_doc_inputs(rs_doc *doc, const struct rs_report_ctx *rep)
     for (int c = 0; c < rep->Ncameras; c++) {
         const rs_report_camera *cam = &rep->cameras[c];
         const rs_site_camera *sc = &site->cameras[cam->icam];
-        char what[300], name[300];
+        char what[300], path[4096];
         snprintf(what, sizeof what, "%s nominal model", sc->id);
         input_row(doc, what, sc->model_path);
         snprintf(what, sizeof what, "%s picks", sc->id);
         input_row(doc, what, sc->observations_path);
-        static const char *const suffixes[] = {".cameramodel", ".json"};
+        static const char *const suffixes[] = {RS_CAMERA_EXT_CAMERAMODEL, RS_CALIB_SITE_EXT_JSON};
         for (int k = 0; k < 2; k++) {
-            snprintf(name, sizeof name, "%s%s", sc->id, suffixes[k]);
-            char *path = rep->calib_dir ? rs_io_join(rep->calib_dir, name) : NULL;
+            const bool ok = rep->calib_dir && rs_camera_path(path, sizeof path, rep->calib_dir, sc->id, suffixes[k]);
             snprintf(what, sizeof what, "%s calibration", sc->id);
-            input_row(doc, what, path);
-            free(path);
+            input_row(doc, what, ok ? path : NULL);
         }
         snprintf(what, sizeof what, "%s image", sc->id);
         input_row(doc, what, cam->background_path);

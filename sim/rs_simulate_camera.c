@@ -48,7 +48,7 @@ rs_status rs_simulate__camera_field_of_view(rs_simulate__camera *c, rs_err *err)
         double cz = n > 0 && isfinite(n) ? v[i].z / n : -1.0;
         if (cz < cos_min) cos_min = cz;
     }
-    double theta = acos(cos_min) + 1.0 * DEG;
+    double theta = acos(cos_min) + 1.0 * RS_RAD_PER_DEG;
     c->cos_max = theta >= M_PI ? -1.0 : cos(theta);
     return RS_OK;
 }
@@ -59,9 +59,9 @@ void rs_simulate__camera_look_at(rs_simulate__camera *c, const double p_cam[3], 
                                  double yaw_offset_deg, double roll_deg)
 {
     double d[3] = {target[0] - p_cam[0], target[1] - p_cam[1], target[2] - p_cam[2]};
-    double yaw = atan2(d[0], d[1]) / DEG + yaw_offset_deg;
-    double below = atan((0.62 * (c->cam.height - 1) - c->cam.intrinsics[3]) / c->cam.intrinsics[1]) / DEG;
-    double pitch = atan2(d[2], hypot(d[0], d[1])) / DEG + below;
+    double yaw = atan2(d[0], d[1]) / RS_RAD_PER_DEG + yaw_offset_deg;
+    double below = atan((0.62 * (c->cam.height - 1) - c->cam.intrinsics[3]) / c->cam.intrinsics[1]) / RS_RAD_PER_DEG;
+    double pitch = atan2(d[2], hypot(d[0], d[1])) / RS_RAD_PER_DEG + below;
     const double ypr[3] = {yaw, pitch, roll_deg};
     double R[9];
     rs_pose_R_from_ypr(R, ypr);
@@ -236,7 +236,7 @@ rs_status rs_simulate_camera_problem(rs_simulate_problem **problem, const rs_sim
     st = rs_simulate__camera_field_of_view(&c, err);
     if (st) goto fail;
 
-    double yaw = o->yaw_deg * DEG;
+    double yaw = o->yaw_deg * RS_RAD_PER_DEG;
     double p_cam[3] = {-o->distance_m * sin(yaw), -o->distance_m * cos(yaw), o->camera_height_m};
     double target[3] = {0, 0, 0};
     if (o->distance_m == 0) { // looking straight down: aim a hair north of the foot of the pole

@@ -223,9 +223,9 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
     s->Ncameras = K;
 
     // The roads: one along the road frame's x axis, one along its y axis, turned by up to 30 deg.
-    double theta = rs_rng_uniform_in(&rng, -30.0, 30.0) * DEG;
+    double theta = rs_rng_uniform_in(&rng, -30.0, 30.0) * RS_RAD_PER_DEG;
     double R_road[4] = {cos(theta), -sin(theta), sin(theta), cos(theta)};
-    s->road_azimuth_deg = fmod(90.0 - theta / DEG + 360.0, 180.0);
+    s->road_azimuth_deg = fmod(90.0 - theta / RS_RAD_PER_DEG + 360.0, 180.0);
     memcpy(s->R_road, R_road, sizeof R_road);
     if ((st = build_intersection(&s->cand, &rng, R_road, err))) return st;
     int Nc = s->cand.N;
@@ -266,7 +266,7 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
             return rs_err_set(err, RS_ERR_DEGENERATE, "camera %d: sees %d landmarks of the intersection, needs 4",
                               k + 1, Nvisible);
         double d = hypot(c->p_cam_enu_m[0], c->p_cam_enu_m[1]);
-        double az = atan2(c->p_cam_enu_m[0], c->p_cam_enu_m[1]) / DEG;
+        double az = atan2(c->p_cam_enu_m[0], c->p_cam_enu_m[1]) / RS_RAD_PER_DEG;
         snprintf(s->note[k], sizeof s->note[k], "simulated camera on a %.1f m pole %.1f m %s of the centre",
                  c->p_cam_enu_m[2], d, compass_name(az));
     }

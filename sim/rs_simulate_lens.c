@@ -60,7 +60,7 @@ rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel, double **intrinsics, in
     double *p = calloc((size_t)N, sizeof *p);
     if (!p) return rs_err_set(err, RS_ERR_NOMEM, "lens: out of memory");
 
-    double half = 0.5 * hfov_deg * DEG, f;
+    double half = 0.5 * hfov_deg * RS_RAD_PER_DEG, f;
     switch (family_of(lensmodel->type)) {
     case FAMILY_STEREOGRAPHIC: f = 0.5 * width_px / (2.0 * tan(0.5 * half)); break;
     case FAMILY_ANGULAR: f = 0.5 * width_px / half; break;

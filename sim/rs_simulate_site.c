@@ -101,9 +101,9 @@ typedef struct {
 static void camera_files_of(camera_files *f, int k)
 {
     rs_simulate__camera_id(f->id, k);
-    snprintf(f->model, sizeof f->model, "cameras/%s.cameramodel", f->id);
-    snprintf(f->observations, sizeof f->observations, "observations/%s.csv", f->id);
-    snprintf(f->truth_model, sizeof f->truth_model, "truth/%s.cameramodel", f->id);
+    rs_camera_path(f->model, sizeof f->model, RS_SITE_CAMERAS_DIR, f->id, RS_CAMERA_EXT_CAMERAMODEL);
+    rs_camera_path(f->observations, sizeof f->observations, RS_SITE_OBSERVATIONS_DIR, f->id, RS_SITE_OBSERVATIONS_EXT);
+    rs_camera_path(f->truth_model, sizeof f->truth_model, "truth", f->id, RS_CAMERA_EXT_CAMERAMODEL);
 }
 
 // Writes camera c's lens and size with the given intrinsics and pose (core's writer: atomic).
@@ -468,7 +468,7 @@ static rs_status write_truth_json(const char *dir, const rs_simulate__site *s, c
 static rs_status write_site(const char *dir, const rs_simulate__site *s, const rs_simulate_site_options *o, rs_err *err)
 {
     rs_status st;
-    static const char *const folders[3] = {"cameras", "observations", "truth"};
+    static const char *const folders[3] = {RS_SITE_CAMERAS_DIR, RS_SITE_OBSERVATIONS_DIR, "truth"};
     for (int i = 0; i < 3; i++) {
         char *p = rs_io_join(dir, folders[i]);
         st = p ? rs_io_mkdir_p(p, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
@@ -480,7 +480,7 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
     line_vertices lv = {0};
     const int Nall = s->Nlandmarks + s->Npoles + s->Nlines;
     rs_lanes lanes = {0};
-    char *lanes_path = rs_io_join(dir, "lanes.geojson");
+    char *lanes_path = rs_io_join(dir, RS_SITE_LANES);
     if (!lanes_path)
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     else if (!(st = write_site_json(dir, s, o, err)) && !(st = site_landmarks(&landmarks, &ids, &lv, s, o, err)) &&
@@ -527,7 +527,7 @@ static int target_state(const char *dir)
         }
     closedir(d);
     if (empty) return 1;
-    char *site = rs_io_join(dir, "site.json");
+    char *site = rs_io_join(dir, RS_SITE_JSON);
     bool is_site = site && stat(site, &sb) == 0 && S_ISREG(sb.st_mode);
     free(site);
     return is_site ? 2 : 3;

@@ -65,7 +65,7 @@ typedef struct {
     char **warnings;               // (Nwarnings,) owned strings
     int Nwarnings;
     // derived for the figures
-    double max_tan;   // guard: points farther off-axis than this are not drawn
+    double max_tan;   // rs_camera_max_tan(&model): points beyond the lens's valid field are not drawn
     double *fov_en_m; // (Nfov,2) ground seen within range, polygon (owned)
     int Nfov;
     double magnification;        // residual vectors drawn this many times longer

@@ -19,10 +19,9 @@
 #include "core/rs_camera.h"
 #include "core/rs_rng.h"
 #include "core/rs_status.h"
+#include "core/rs_units.h"
 #include "geo/rs_lanes.h"
 #include "sim/rs_simulate.h"
-
-#define DEG (M_PI / 180.0)
 
 // Rounds to a multiple of `quantum` (a power of ten below 1): the nearest double to that
 // decimal, so that printing it with as many decimals and parsing it back gives the same double.

@@ -3,45 +3,14 @@
 #include "synth/backdrop/rs_synth_appearance.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_color.h"
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
-
-static double srgb_decode_formula(double v) { return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4); }
-
-static double srgb_encode_formula(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055; }
-
-#define SRGB_TABLE 65536 // intervals over [0, 1]
-static double srgb_dec[SRGB_TABLE + 1], srgb_enc[SRGB_TABLE + 1];
-static pthread_once_t srgb_once = PTHREAD_ONCE_INIT;
-
-static void srgb_fill(void)
-{
-    for (int i = 0; i <= SRGB_TABLE; i++) {
-        srgb_dec[i] = srgb_decode_formula((double)i / SRGB_TABLE);
-        srgb_enc[i] = srgb_encode_formula((double)i / SRGB_TABLE);
-    }
-}
-
-static double srgb_lookup(const double *table, double v)
-{
-    pthread_once(&srgb_once, srgb_fill);
-    if (!(v > 0)) return table[0]; // also NaN
-    if (v >= 1) return table[SRGB_TABLE];
-    const double x = v * SRGB_TABLE;
-    const int i = (int)x;
-    const double f = x - i;
-    return table[i] + f * (table[i + 1] - table[i]);
-}
-
-double rs_synth_srgb_decode(double v) { return srgb_lookup(srgb_dec, v); }
-
-double rs_synth_srgb_encode(double v) { return srgb_lookup(srgb_enc, v); }
 
 // The k-th smallest of v[0..n-1] (0-based, k < n), v reordered: Hoare's selection with a
 // median-of-three pivot, O(n) on average (a full sort of a 6-megapixel image's values was most
@@ -211,8 +180,8 @@ rs_status rs_synth_estimate_gain(double gain[3], const rs_image *t, const rs_ima
         for (int c = 0; c < 3; c++) ok = ok && a[c] > 0.02f && a[c] < 0.98f && b[c] > 0.02f && b[c] < 0.98f;
         if (!ok) continue;
         for (int c = 0; c < 3; c++) {
-            st[c] += rs_synth_srgb_decode(a[c]);
-            sr[c] += rs_synth_srgb_decode(b[c]);
+            st[c] += rs_color_srgb_decode(a[c]);
+            sr[c] += rs_color_srgb_decode(b[c]);
         }
         n++;
     }
@@ -344,8 +313,8 @@ rs_status rs_synth_appearance_apply(rs_image *img, const rs_synth_appearance *a,
             float v = al > 0 ? d[4 * p + c] / al : 0; // back to straight alpha
             if (al > 0 && a->noise_sigma > 0) {
                 // sigma in stored units -> linear light at this value: dDecode/dv
-                const double e = rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v), h = 1e-3;
-                const double slope = (rs_synth_srgb_decode(fmin(1, e + h)) - rs_synth_srgb_decode(fmax(0, e - h))) /
+                const double e = rs_color_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v), h = 1e-3;
+                const double slope = (rs_color_srgb_decode(fmin(1, e + h)) - rs_color_srgb_decode(fmax(0, e - h))) /
                                      (fmin(1, e + h) - fmax(0, e - h));
                 v += (float)(a->noise_sigma * slope * rs_rng_normal(&rng));
             }

@@ -4,7 +4,7 @@
 //
 // Images are rs_image (synth/backdrop/rs_synth_opencv.h): floats in [0,1]. "sRGB" images hold the
 // stored (gamma-encoded) values of a photograph; "linear" ones linear light (IEC 61966-2-1
-// transfer function). Filters go through OpenCV (rs_synth_image_filter / _blur).
+// transfer function, core/rs_color.h). Filters go through OpenCV (rs_synth_image_filter / _blur).
 #pragma once
 #include "core/rs_status.h"
 #include "synth/backdrop/rs_synth_opencv.h"
@@ -12,13 +12,6 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-// IEC 61966-2-1 sRGB transfer function, scalar, [0,1] -> [0,1] (inputs outside are clamped).
-// Tabulated: 65,537 values of the formula with linear interpolation between them, within 1e-6
-// of pow() over [0,1] (tests/synth/test_srgb.c, 10^7 points); the tables are filled once
-// (pthread_once) at first use. A per-pixel pow() was a quarter of `roadside synth`'s own CPU.
-double rs_synth_srgb_decode(double v);
-double rs_synth_srgb_encode(double v);
 
 // Sensor noise: 1-sigma of additive white noise in the image's stored values (units of [0,1]).
 // Method: J. Immerkaer, "Fast noise variance estimation", CVIU 64(2), 1996: the kernel

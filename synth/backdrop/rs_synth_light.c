@@ -9,10 +9,9 @@
 #include <string.h>
 
 #include "core/rs_pose.h"
+#include "core/rs_units.h"
 #include "synth/backdrop/rs_synth_appearance.h"
 #include "synth/fleet/rs_synth_vehicle.h"
-
-#define DEG (3.14159265358979323846 / 180.0)
 
 // ---- the light model ----
 
@@ -112,7 +111,7 @@ static rs_status road_pixels(const size_t **px, size_t *Npx, const rs_camera *ca
     const double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
     // a plane 10 km above the camera, parallel to the ground: the rays of the sky meet it
     const double sky_offset_m = (g[0] * c_enu[0] + g[1] * c_enu[1] + g[2] * c_enu[2]) + 1e4 * gn;
-    const double sin_band = sin(RS_SYNTH_ENV_HORIZON_DEG * DEG);
+    const double sin_band = sin(RS_SYNTH_ENV_HORIZON_DEG * RS_RAD_PER_DEG);
     for (int y = step_px / 2; y < cam->height; y += step_px)
         for (int x = step_px / 2; x < cam->width; x += step_px) {
             const double q[2] = {x, y};
@@ -228,7 +227,7 @@ void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double grou
 void rs_synth_light_match(double scale_rgb[3], const rs_synth_light_estimate *est, bool sun, double sun_elevation_deg)
 {
     static const double sun_rgb[3] = {1.0, 0.97, 0.92}; // the scene's sun colour (rs_synth_scene.c)
-    const double s = sun && sun_elevation_deg > 0 ? sin(sun_elevation_deg * DEG) : 0;
+    const double s = sun && sun_elevation_deg > 0 ? sin(sun_elevation_deg * RS_RAD_PER_DEG) : 0;
     const double sky = s > 0 ? RS_SYNTH_SKY_CLEAR : RS_SYNTH_SKY_OVERCAST;
     for (int c = 0; c < 3; c++) scale_rgb[c] = est->irradiance_rgb[c] / (s * sun_rgb[c] + sky);
 }
@@ -308,7 +307,7 @@ rs_status rs_synth_sun_from_shadows(rs_synth_sun_estimate *out, const rs_image *
         double *s = S + (size_t)np * SH_NAZ * (SH_NT + 1);
         int *c = C + (size_t)np * SH_NAZ * (SH_NT + 1), seen = 0;
         for (int a = 0; a < SH_NAZ; a++) {
-            const double az = a * DEG; // the sun's azimuth; the shadow runs the other way
+            const double az = a * RS_RAD_PER_DEG; // the sun's azimuth; the shadow runs the other way
             const double de = -sin(az), dn = -cos(az);
             s[a * (SH_NT + 1)] = 0, c[a * (SH_NT + 1)] = 0;
             for (int k = 0; k < SH_NT; k++) {
@@ -336,7 +335,7 @@ rs_status rs_synth_sun_from_shadows(rs_synth_sun_estimate *out, const rs_image *
             double sum = 0;
             int used = 0;
             for (int p = 0; p < np; p++) {
-                const double len = h[p] / tan(el * DEG);
+                const double len = h[p] / tan(el * RS_RAD_PER_DEG);
                 if (len > SH_NT * SH_DT - 1.5) continue; // the shadow runs out of the window
                 const int k0 = 5, k1 = (int)lround(len / SH_DT), k2 = (int)lround((len + 1.5) / SH_DT);
                 if (k1 < 25) continue; // shadows shorter than 2.5 m are not read

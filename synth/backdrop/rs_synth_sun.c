@@ -8,9 +8,8 @@
 #include <string.h>
 
 #include "core/rs_pose.h"
+#include "core/rs_units.h"
 #include "synth/fleet/rs_synth_vehicle.h"
-
-#define DEG (3.14159265358979323846 / 180.0)
 
 void rs_synth_sun_position(double *azimuth_deg, double *elevation_deg, double lat_deg, double lon_deg,
                            double unix_time_s)
@@ -21,33 +20,34 @@ void rs_synth_sun_position(double *azimuth_deg, double *elevation_deg, double la
         // 0.0008 degree).
         double jd = unix_time_s / 86400.0 + 2440587.5;
         double T = (jd - 2451545.0) / 36525.0;
-        double L0 = fmod(280.46646 + T * (36000.76983 + T * 0.0003032), 360.0); // mean longitude
-        double M = 357.52911 + T * (35999.05029 - 0.0001537 * T);               // mean anomaly
-        double e = 0.016708634 - T * (0.000042037 + 0.0000001267 * T);          // eccentricity
-        double C = sin(M * DEG) * (1.914602 - T * (0.004817 + 0.000014 * T)) +  // equation of
-                   sin(2 * M * DEG) * (0.019993 - 0.000101 * T) +               // the centre
-                   sin(3 * M * DEG) * 0.000289;
-        double omega = 125.04 - 1934.136 * T;                          // lunar node
-        double lambda = L0 + C - 0.00569 - 0.00478 * sin(omega * DEG); // apparent long.
+        double L0 = fmod(280.46646 + T * (36000.76983 + T * 0.0003032), 360.0);           // mean longitude
+        double M = 357.52911 + T * (35999.05029 - 0.0001537 * T);                         // mean anomaly
+        double e = 0.016708634 - T * (0.000042037 + 0.0000001267 * T);                    // eccentricity
+        double C = sin(M * RS_RAD_PER_DEG) * (1.914602 - T * (0.004817 + 0.000014 * T)) + // equation of
+                   sin(2 * M * RS_RAD_PER_DEG) * (0.019993 - 0.000101 * T) +              // the centre
+                   sin(3 * M * RS_RAD_PER_DEG) * 0.000289;
+        double omega = 125.04 - 1934.136 * T;                                     // lunar node
+        double lambda = L0 + C - 0.00569 - 0.00478 * sin(omega * RS_RAD_PER_DEG); // apparent long.
         double eps0 = 23.0 + (26.0 + (21.448 - T * (46.815 + T * (0.00059 - T * 0.001813))) / 60.0) / 60.0;
-        double eps = eps0 + 0.00256 * cos(omega * DEG); // obliquity
-        double decl = asin(sin(eps * DEG) * sin(lambda * DEG));
+        double eps = eps0 + 0.00256 * cos(omega * RS_RAD_PER_DEG); // obliquity
+        double decl = asin(sin(eps * RS_RAD_PER_DEG) * sin(lambda * RS_RAD_PER_DEG));
         // Equation of time (Meeus eq. 28.3, in minutes).
-        double y = tan(eps * DEG / 2) * tan(eps * DEG / 2);
-        double eot = 4.0 / DEG *
-                     (y * sin(2 * L0 * DEG) - 2 * e * sin(M * DEG) + 4 * e * y * sin(M * DEG) * cos(2 * L0 * DEG) -
-                      0.5 * y * y * sin(4 * L0 * DEG) - 1.25 * e * e * sin(2 * M * DEG));
+        double y = tan(eps * RS_RAD_PER_DEG / 2) * tan(eps * RS_RAD_PER_DEG / 2);
+        double eot = 4.0 / RS_RAD_PER_DEG *
+                     (y * sin(2 * L0 * RS_RAD_PER_DEG) - 2 * e * sin(M * RS_RAD_PER_DEG) +
+                      4 * e * y * sin(M * RS_RAD_PER_DEG) * cos(2 * L0 * RS_RAD_PER_DEG) -
+                      0.5 * y * y * sin(4 * L0 * RS_RAD_PER_DEG) - 1.25 * e * e * sin(2 * M * RS_RAD_PER_DEG));
         // True solar time in minutes of the UTC day, then the hour angle (0 at local noon).
         double utc_min = fmod(unix_time_s, 86400.0) / 60.0;
         double tst = utc_min + eot + 4.0 * lon_deg;
-        double H = (tst / 4.0 - 180.0) * DEG;
-        double phi = lat_deg * DEG;
+        double H = (tst / 4.0 - 180.0) * RS_RAD_PER_DEG;
+        double phi = lat_deg * RS_RAD_PER_DEG;
         // Sun direction in the local east-north-up frame.
         double east = -cos(decl) * sin(H);
         double north = sin(decl) * cos(phi) - cos(decl) * sin(phi) * cos(H);
         double up = sin(decl) * sin(phi) + cos(decl) * cos(phi) * cos(H);
-        el = asin(fmax(-1.0, fmin(1.0, up))) / DEG;
-        az = atan2(east, north) / DEG;
+        el = asin(fmax(-1.0, fmin(1.0, up))) / RS_RAD_PER_DEG;
+        az = atan2(east, north) / RS_RAD_PER_DEG;
         if (az < 0) az += 360.0;
         if (az >= 360.0) az -= 360.0;
     }

@@ -194,7 +194,7 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
     rs_status st;
     char *path = NULL;
     if ((st = rs_site_load(&d->site, opt->site_dir, err))) return st;
-    path = rs_io_join(opt->site_dir, "lanes.geojson");
+    path = rs_io_join(opt->site_dir, RS_SITE_LANES);
     if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     // the built-in traffic needs the lanes; SUMO's frames do not (the lanes then only help to
     // find the road in a background, rs_synth_light_from_image)
@@ -222,7 +222,7 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
         rs_synth_dataset__camera *c = &d->cams[d->Ncams++];
         c->id = id;
         char name[512];
-        snprintf(name, sizeof(name), "%s.cameramodel", id);
+        rs_camera_path(name, sizeof(name), NULL, id, RS_CAMERA_EXT_CAMERAMODEL);
         free(path);
         path = rs_io_join(opt->calib_dir, name);
         if (!path) {
@@ -258,7 +258,7 @@ static rs_status write_camera_copies(rs_synth_dataset__run *d, rs_err *err)
     for (int i = 0; i < d->Ncams && !st; i++) {
         rs_synth_dataset__camera *c = &d->cams[i];
         char name[300], tmp_name[360];
-        snprintf(name, sizeof(name), "%.250s.cameramodel", c->id);
+        snprintf(name, sizeof(name), "%.250s" RS_CAMERA_EXT_CAMERAMODEL, c->id);
         snprintf(tmp_name, sizeof(tmp_name), ".new.%ld.%s", (long)getpid(), name);
         snprintf(c->model_rel, sizeof(c->model_rel), "../cameras/%.300s", name);
         char *path = rs_io_join(dir, name), *tmp = rs_io_join(dir, tmp_name);

@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include "core/rs_color.h"
 #include "core/rs_hash.h"
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
@@ -59,7 +60,7 @@ static rs_status background_fit(rs_synth_dataset__background *b, int width, int 
         goto done;
     for (size_t i = 0; i < (size_t)width * height; i++)
         for (int c = 0; c < 3; c++)
-            b->linear.data[3 * i + c] = (float)rs_synth_srgb_decode(fitted.data[(size_t)fitted.channels * i + c]);
+            b->linear.data[3 * i + c] = (float)rs_color_srgb_decode(fitted.data[(size_t)fitted.channels * i + c]);
     b->app_ok = rs_synth_appearance_estimate(&b->app, b->src->path, &src, NULL, NULL) == RS_OK;
 done:
     if (st) rs_image_free(&b->linear);
@@ -137,7 +138,7 @@ static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__ba
         const double a = r->rgba.data[4 * i + 3];
         for (int c = 0; c < 3; c++) {
             const double v = a * r->rgba.data[4 * i + c] + (1 - a) * lin.data[3 * i + c];
-            r->composite.data[3 * i + c] = (float)rs_synth_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
+            r->composite.data[3 * i + c] = (float)rs_color_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
         }
     }
     rs_image_free(&lin);

@@ -310,7 +310,7 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
         cJSON_ArrayForEach(c, cams)
         {
             char rel[400];
-            snprintf(rel, sizeof(rel), "cameras/%.300s.cameramodel", c->string);
+            snprintf(rel, sizeof(rel), "cameras/%.300s" RS_CAMERA_EXT_CAMERAMODEL, c->string);
             if ((st = take_file(inputs[0], out_dir, rel, "run.json", err))) break;
         }
     }

@@ -23,7 +23,7 @@ rs_status rs_synth_junction_centre(double centre_enu_m[2], const char *site_dir,
     rs_site *site = NULL;
     rs_lanes lanes = {0};
     rs_status st = rs_site_load(&site, site_dir, err);
-    char *path = st ? NULL : rs_io_join(site_dir, "lanes.geojson");
+    char *path = st ? NULL : rs_io_join(site_dir, RS_SITE_LANES);
     if (!st && !path) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st) st = rs_lanes_read(&lanes, path, site, err);
     double se = 0, sn = 0;

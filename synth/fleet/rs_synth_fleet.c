@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_color.h"
 #include "core/rs_rng.h"
 #include "synth/fleet/internal/rs_synth_fleet_internal.h"
 
@@ -104,12 +105,6 @@ static const paint paints[] = {
     {0.01, {0.85, 0.70, 0.10}, 0.06}, // yellow / orange
 };
 
-static double srgb_to_linear(double c)
-{
-    c = c < 0 ? 0 : c > 1 ? 1 : c;
-    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
-}
-
 static void draw_paint(double rgb[3], uint64_t variant)
 {
     rs_rng rng = rs_synth_fleet_stream(variant, RS_SYNTH_FLEET_STREAM_COLOUR);
@@ -125,7 +120,7 @@ static void draw_paint(double rgb[3], uint64_t variant)
     double d = (2 * rs_rng_uniform(&rng) - 1) * paints[k].jitter; // brightness
     for (int c = 0; c < 3; c++) {
         double e = (2 * rs_rng_uniform(&rng) - 1) * paints[k].jitter * 0.3; // hue
-        rgb[c] = srgb_to_linear(paints[k].srgb[c] + d + e);
+        rgb[c] = rs_color_srgb_decode_exact(paints[k].srgb[c] + d + e);
     }
 }
 

@@ -10,6 +10,7 @@
 
 #include <mrcal/poseutils.h>
 
+#include "core/rs_color.h"
 #include "core/rs_io.h"
 #include "synth/backdrop/rs_synth_appearance.h"
 #include "synth/povray/internal/rs_synth_povray.h"
@@ -378,9 +379,9 @@ static void composite(rs_synth_render_result *out, const rs_image *bg)
     for (size_t i = 0; i < Npx; i++) {
         const float *c = &out->rgba.data[4 * i];
         for (int k = 0; k < 3; k++) {
-            double b = bg ? rs_synth_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]) : 0;
+            double b = bg ? rs_color_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]) : 0;
             if (out->shadow && out->ids[i] == 0) b *= out->shadow[i];
-            out->composite.data[3 * i + k] = (float)rs_synth_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
+            out->composite.data[3 * i + k] = (float)rs_color_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
         }
     }
 }

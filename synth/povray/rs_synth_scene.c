@@ -11,6 +11,7 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "core/rs_units.h"
 #include "synth/povray/internal/rs_synth_scene_internal.h"
 
 // ---- the scene ----
@@ -109,20 +110,19 @@ static void write_pins(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
 
 int rs_synth_scene_lights(rs_synth_light *lights, const rs_synth_scene_options *opt)
 {
-    const double d2r = M_PI / 180.0;
     int n = 0;
     if (opt->sun_elevation_deg > 0 && !opt->overcast) {
-        const double az = opt->sun_azimuth_deg * d2r, el = opt->sun_elevation_deg * d2r;
+        const double az = opt->sun_azimuth_deg * RS_RAD_PER_DEG, el = opt->sun_elevation_deg * RS_RAD_PER_DEG;
         lights[n++] = (rs_synth_light){{sin(az) * cos(el), cos(az) * cos(el), sin(el)}, 1.0};
     }
     const double sky = opt->overcast ? RS_SYNTH_SKY_OVERCAST : RS_SYNTH_SKY_CLEAR;
     // band shares of a uniform sky's irradiance on the ground: sin^2 of the band's edges
-    const double edge = sin(40.0 * d2r) * sin(40.0 * d2r);
+    const double edge = sin(40.0 * RS_RAD_PER_DEG) * sin(40.0 * RS_RAD_PER_DEG);
     const double zenith_deg[2] = {0, 60}, share[2] = {edge, 1.0 - edge};
     const int count[2] = {1, 6};
     for (int b = 0; b < 2; b++)
         for (int k = 0; k < count[b]; k++) {
-            const double z = zenith_deg[b] * d2r, az = 60.0 * k * d2r;
+            const double z = zenith_deg[b] * RS_RAD_PER_DEG, az = 60.0 * k * RS_RAD_PER_DEG;
             lights[n++] =
                 (rs_synth_light){{sin(az) * sin(z), cos(az) * sin(z), cos(z)}, sky * share[b] / count[b] / cos(z)};
         }

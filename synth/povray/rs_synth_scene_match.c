@@ -2,6 +2,7 @@
 // estimates of synth/backdrop/rs_synth_light.h (synth/povray/rs_synth_scene.h).
 #include "synth/povray/rs_synth_scene.h"
 
+#include "core/rs_color.h"
 #include "synth/backdrop/rs_synth_appearance.h"
 
 void rs_synth_scene_match_background(rs_synth_scene_options *scene, const rs_synth_light_estimate *light,
@@ -30,7 +31,7 @@ rs_status rs_synth_scene_match_background_file(rs_synth_scene_options *scene, rs
     if (!st) {
         for (size_t i = 0; i < (size_t)src.width * (size_t)src.height; i++)
             for (int c = 0; c < 3; c++)
-                lin.data[3 * i + c] = (float)rs_synth_srgb_decode(src.data[(size_t)src.channels * i + c]);
+                lin.data[3 * i + c] = (float)rs_color_srgb_decode(src.data[(size_t)src.channels * i + c]);
         rs_synth_light_estimate est;
         rs_synth_env_estimate env;
         if (!(st = rs_synth_light_from_image(&est, &lin, cam, site, lanes, 4, err))) {

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_units.h"
 #include "synth/povray/rs_synth_scene.h"
 
 // Weather appearance: sky light, sun strength, asphalt colour/finish, marking brightness,
@@ -496,7 +497,7 @@ rs_status rs_synth_twin_world_write(FILE *f, const rs_site *site, const rs_lanes
         return rs_err_set(err, RS_ERR_INVALID, "weather: '%s' is not one of sunny, cloudy, rain, snow, night",
                           weather ? weather : "");
     fprintf(f, "background { rgb <%.4g, %.4g, %.4g> }\n", look->sky_rgb[0], look->sky_rgb[1], look->sky_rgb[2]);
-    const double d2r = M_PI / 180.0, az = sun_az * d2r, el = sun_el * d2r;
+    const double az = sun_az * RS_RAD_PER_DEG, el = sun_el * RS_RAD_PER_DEG;
     if (look->sun > 0 && sun_el > 0) {
         fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg\nlight_source { ", sun_az, sun_el);
         pov_point(f, 1e6 * sin(az) * cos(el), 1e6 * cos(az) * cos(el), 1e6 * sin(el));
@@ -506,13 +507,13 @@ rs_status rs_synth_twin_world_write(FILE *f, const rs_site *site, const rs_lanes
     // zenith 60 deg, 0.413 and 0.587 of the irradiance on the ground), casting shadows, so that
     // kerbs get the soft shadow of a sky. Their irradiance on horizontal ground sums to sky_light.
     {
-        const double edge = sin(40.0 * d2r) * sin(40.0 * d2r);
+        const double edge = sin(40.0 * RS_RAD_PER_DEG) * sin(40.0 * RS_RAD_PER_DEG);
         const double zen[2] = {0, 60}, share[2] = {edge, 1.0 - edge};
         const int count[2] = {1, 6};
         fprintf(f, "// sky: %.4g on horizontal ground, %d parallel lights\n", look->sky_light, RS_SYNTH_SKY_LIGHTS);
         for (int b = 0; b < 2; b++)
             for (int k = 0; k < count[b]; k++) {
-                const double z = zen[b] * d2r, a = 60.0 * k * d2r;
+                const double z = zen[b] * RS_RAD_PER_DEG, a = 60.0 * k * RS_RAD_PER_DEG;
                 fprintf(f, "light_source { ");
                 pov_point(f, 1e6 * sin(a) * sin(z), 1e6 * cos(a) * sin(z), 1e6 * cos(z));
                 fprintf(f, " color rgb %.6g parallel point_at <0, 0, 0>%s }\n",

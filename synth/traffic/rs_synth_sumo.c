@@ -18,12 +18,11 @@
 
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
+#include "core/rs_units.h"
 #include "synth/fleet/rs_synth_fleet.h"
 #include "synth/traffic/internal/rs_synth_sumo_xml.h"
 
 extern char **environ;
-
-#define DEG (3.14159265358979323846 / 180.0)
 
 void rs_synth_sumo_options_default(rs_synth_sumo_options *opt)
 {

@@ -14,10 +14,9 @@
 
 #include "core/rs_io.h"
 #include "core/rs_json.h"
+#include "core/rs_units.h"
 #include "synth/fleet/rs_synth_fleet.h"
 #include "synth/traffic/internal/rs_synth_sumo_xml.h"
-
-#define DEG (3.14159265358979323846 / 180.0)
 
 void rs_synth_sumo_frames_free(rs_synth_sumo_frames *frames)
 {
@@ -136,8 +135,8 @@ static void fcd_vehicle(fcd_ctx *c, const XML_Char **a)
     v->width_m = t->width_m;
     v->height_m = t->height_m;
     v->yaw_deg = b;
-    v->e_m = front[0] - 0.5 * t->length_m * sin(b * DEG);
-    v->n_m = front[1] - 0.5 * t->length_m * cos(b * DEG);
+    v->e_m = front[0] - 0.5 * t->length_m * sin(b * RS_RAD_PER_DEG);
+    v->n_m = front[1] - 0.5 * t->length_m * cos(b * RS_RAD_PER_DEG);
     v->speed_mps = speed;
     v->variant = hash_id(id);
     v->lane = -1;

@@ -10,9 +10,8 @@
 
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
+#include "core/rs_units.h"
 #include "synth/fleet/rs_synth_fleet.h"
-
-#define DEG (3.14159265358979323846 / 180.0)
 
 // ---------------------------------------------------------------------------------------------
 // classes
@@ -151,7 +150,7 @@ void rs_synth_randomise_options_default(rs_synth_randomise_options *opt)
 // Footprint corners (4, 2) in ENU, counter-clockwise seen from above.
 static void footprint(double c[4][2], const rs_synth_vehicle *v)
 {
-    double f[2] = {sin(v->yaw_deg * DEG), cos(v->yaw_deg * DEG)}, l[2] = {-f[1], f[0]};
+    double f[2] = {sin(v->yaw_deg * RS_RAD_PER_DEG), cos(v->yaw_deg * RS_RAD_PER_DEG)}, l[2] = {-f[1], f[0]};
     static const double sx[4] = {1, -1, -1, 1}, sy[4] = {-1, -1, 1, 1};
     for (int k = 0; k < 4; k++)
         for (int a = 0; a < 2; a++)
@@ -194,7 +193,7 @@ rs_status rs_synth_traffic_randomise(rs_synth_vehicle *vehicles, int *N, const r
     int kept = 0;
     for (int i = 0; i < *N; i++) {
         const rs_synth_vehicle x0 = vehicles[i];
-        double f[2] = {sin(x0.yaw_deg * DEG), cos(x0.yaw_deg * DEG)};
+        double f[2] = {sin(x0.yaw_deg * RS_RAD_PER_DEG), cos(x0.yaw_deg * RS_RAD_PER_DEG)};
         bool ok = false;
         rs_synth_vehicle x = x0;
         for (int t = 0; t < opt->tries && !ok; t++) {

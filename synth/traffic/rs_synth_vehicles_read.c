@@ -9,6 +9,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "core/rs_color.h"
 #include "core/rs_io.h"
 #include "core/rs_json.h"
 
@@ -56,8 +57,6 @@ static const char *get_string(const cJSON *o, const char *name)
     return cJSON_IsString(m) ? m->valuestring : NULL;
 }
 
-static double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
-
 static rs_status parse_colour(double rgb[3], const cJSON *m, const char *path, int i, rs_err *err)
 {
     if (cJSON_IsString(m)) {
@@ -65,9 +64,9 @@ static rs_status parse_colour(double rgb[3], const cJSON *m, const char *path, i
         unsigned int r, g, b;
         char tail;
         if (strlen(s) == 7 && s[0] == '#' && sscanf(s + 1, "%2x%2x%2x%c", &r, &g, &b, &tail) == 3) {
-            rgb[0] = srgb_to_linear(r / 255.0);
-            rgb[1] = srgb_to_linear(g / 255.0);
-            rgb[2] = srgb_to_linear(b / 255.0);
+            rgb[0] = rs_color_srgb_decode_exact(r / 255.0);
+            rgb[1] = rs_color_srgb_decode_exact(g / 255.0);
+            rgb[2] = rs_color_srgb_decode_exact(b / 255.0);
             return RS_OK;
         }
     } else if (cJSON_IsArray(m) && cJSON_GetArraySize(m) == 3) {

@@ -45,7 +45,7 @@ SYNTH_COMPONENTS = {
     "povray": ["fleet", "traffic", "labels", "backdrop"],
     "dataset": ["fleet", "traffic", "labels", "backdrop", "povray"],
 }
-LINK_PROBE = {"eval": "test_eval_api", "synth": "test_srgb", "geo": "test_geo_api", "sim": "test_simulate_problem"}
+LINK_PROBE = {"eval": "test_eval_api", "synth": "test_traffic_api", "geo": "test_geo_api", "sim": "test_simulate_problem"}
 MAX_LINES = 800
 SIZE_REASON = "Longer than 800 lines because"
 

@@ -13,6 +13,7 @@
 #include "calib/rs_calib.h"
 #include "calib/rs_calib_opengv.h"
 #include "core/rs_pose.h"
+#include "core/rs_units.h"
 #include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
 
@@ -35,11 +36,9 @@ static void check_pose(const char *name, rs_status st, const rs_err *e, const do
 {
     CHECK(st == RS_OK, "%s: %s: %s", name, rs_strerror(st), e->msg);
     if (st != RS_OK) return;
-    double C[3], r_err[3];
-    const double r_inv[3] = {-s->camera.rt_cam_enu[0], -s->camera.rt_cam_enu[1], -s->camera.rt_cam_enu[2]};
-    mrcal_compose_r(r_err, NULL, NULL, rt, r_inv);
+    double C[3];
     rs_pose_position_from_rt(C, NULL, rt);
-    const double drot = sqrt(r_err[0] * r_err[0] + r_err[1] * r_err[1] + r_err[2] * r_err[2]) * 180 / M_PI;
+    const double drot = rs_pose_rotation_between(NULL, NULL, rt, s->camera.rt_cam_enu) * RS_DEG_PER_RAD;
     const double dpos = hypot(hypot(C[0] - s->p_cam_enu_m[0], C[1] - s->p_cam_enu_m[1]), C[2] - s->p_cam_enu_m[2]);
     printf("%-22s rotation error %.3g deg, position error %.3g m\n", name, drot, dpos);
     CHECK(drot < tol && dpos < tol, "%s: rotation %.3g deg, position %.3g m (tolerance %g)", name, drot, dpos, tol);

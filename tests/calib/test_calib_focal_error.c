@@ -164,8 +164,9 @@ static void run_site(tally *t, const char *dir, uint64_t seed, double focal_erro
     CHECK(st == RS_OK, "load: %s", err.msg);
     for (int c = 0; site && c < site->Ncameras; c++) {
         site->cameras[c].focal_rel_sigma = focal_rel_sigma;
-        char path[512];
-        snprintf(path, sizeof path, "%s/truth/%s.cameramodel", dir, site->cameras[c].id);
+        char truth_dir[512], path[512];
+        snprintf(truth_dir, sizeof truth_dir, "%s/truth", dir);
+        rs_camera_path(path, sizeof path, truth_dir, site->cameras[c].id, RS_CAMERA_EXT_CAMERAMODEL);
         rs_camera truth = {0};
         st = rs_camera_read(&truth, NULL, path, &err);
         CHECK(st == RS_OK, "truth: %s", err.msg);

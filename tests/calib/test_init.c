@@ -13,6 +13,8 @@
 #include <mrcal/poseutils.h>
 
 #include "calib/rs_calib_init.h"
+#include "core/rs_stats.h"
+#include "core/rs_units.h"
 #include "test_init_gen.h"
 #include "tests/common/rs_test.h"
 
@@ -30,17 +32,8 @@ static bool make(tg_problem *pb, const char *what, uint64_t seed, tg_lens lens, 
     return ok;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double percentile(double *x, int n, double pc)
-{
-    qsort(x, (size_t)n, sizeof(double), cmp_double);
-    return x[(int)fmin(n - 1, floor(pc / 100.0 * n))];
-}
+// The pc-th percentile of x (n,) (core/rs_stats.h: linear between order statistics; x is sorted).
+static double percentile(double *x, int n, double pc) { return rs_stats_quantile(x, n, pc / 100.0); }
 
 // 1. Noise-free: the truth comes back to 1e-6 (rotation in rad, position relative to range),
 // every observation an inlier, RMS ~ 0; 200 seeds x 3 lenses x 3 terrains, N = 4..30.
@@ -121,7 +114,7 @@ static void test_outliers(void)
                     }
                 }
                 emodel[n] = tg_model_error_px(&pb, res.rt_cam_enu, pb.rt_cam_enu);
-                rot[n] = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu) * 180 / M_PI;
+                rot[n] = tg_rotation_error_rad(res.rt_cam_enu, pb.rt_cam_enu) * RS_DEG_PER_RAD;
                 pos[n] = tg_position_error_m(res.rt_cam_enu, pb.rt_cam_enu) / pb.range_m;
                 CHECK(emodel[n] < 5.0,
                       "outliers seed %llu %s %s: e_model %.3g px >= 5 px "

@@ -1,5 +1,6 @@
 // test_init_gen.c -- see test_init_gen.h.
 #include "test_init_gen.h"
+#include "core/rs_pose.h"
 #include "core/rs_rng.h"
 
 #include <math.h>
@@ -174,10 +175,7 @@ rs_status tg_init_pose(rs_calib_init_result *res, bool *inlier, const tg_problem
 
 double tg_rotation_error_rad(const double *rt_a, const double *rt_b)
 {
-    const double rb_inv[3] = {-rt_b[0], -rt_b[1], -rt_b[2]};
-    double r[3];
-    mrcal_compose_r(r, NULL, NULL, rt_a, rb_inv);
-    return sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    return rs_pose_rotation_between(NULL, NULL, rt_a, rt_b);
 }
 
 double tg_position_error_m(const double *rt_a, const double *rt_b)

@@ -10,7 +10,6 @@
 //  - our median e_model is at most 2x OpenCV's: OpenCV polishes its pose by LM on the inliers
 //    (close to maximum likelihood), ours is linear/minimal and is polished later by Ceres; a
 //    linear solution on 14 well-spread inliers costs well under a factor 2 in e_model.
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +21,7 @@
 extern "C" {
 #include <mrcal/poseutils.h>
 
+#include "core/rs_stats.h"
 #include "test_init_gen.h"
 }
 
@@ -29,12 +29,7 @@ namespace {
 
 int Nfail = 0;
 
-double median(std::vector<double> x)
-{
-    if (x.empty()) return NAN;
-    std::sort(x.begin(), x.end());
-    return x[x.size() / 2];
-}
+double median(std::vector<double> x) { return rs_stats_median(x.data(), (int)x.size()); }
 
 // OpenCV's RANSAC pose, run on landmarks centred like ours, mapped back to ENU.
 bool opencv_pose(double *rt_cam_enu, std::vector<bool> &inlier, const tg_problem &pb)

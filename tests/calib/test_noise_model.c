@@ -25,6 +25,9 @@
 #include <mrcal/poseutils.h>
 
 #include "calib/rs_calib.h"
+#include "core/rs_pose.h"
+#include "core/rs_stats.h"
+#include "core/rs_units.h"
 #include "test_solve_gen.h"
 
 #define NTRIALS 100
@@ -43,33 +46,6 @@ typedef struct {
     int out_total, out_flagged, good_total, good_flagged;
     int out10_total, out10_flagged; // outliers of 10 sigma or more (gen_pick_sigmas)
 } stats;
-
-static double rotation_error_deg(const double *r_est, const double *r_true)
-{
-    double Re[9], Rt[9], d[9];
-    mrcal_R_from_r(Re, NULL, r_est);
-    mrcal_R_from_r(Rt, NULL, r_true);
-    for (int a = 0; a < 3; a++)
-        for (int b = 0; b < 3; b++) {
-            d[3 * a + b] = 0;
-            for (int k = 0; k < 3; k++) d[3 * a + b] += Re[3 * a + k] * Rt[3 * b + k];
-        }
-    const double c = fmax(-1.0, fmin(1.0, 0.5 * (d[0] + d[4] + d[8] - 1.0)));
-    return acos(c) * 180.0 / M_PI;
-}
-
-static int cmp(const void *a, const void *b)
-{
-    const double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *x, int n)
-{
-    if (n == 0) return NAN;
-    qsort(x, (size_t)n, sizeof *x, cmp);
-    return n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
-}
 
 // outlier_px: the last quarter of the landmarks picked off by 200-500 px (outlier_px >= 200) or
 // by outlier_px to 2 outlier_px; 0: none
@@ -98,7 +74,7 @@ static void run(stats *s, const config *c, double outlier_px)
         const rs_status st = rs_calib_solve(&r, &pb, NULL, &e);
         CHECK(st == RS_OK, "%s trial %d: %s", c->name, t, e.msg);
         if (st != RS_OK) continue;
-        const double drot = rotation_error_deg(r.rt_cam_enu, g.rt_true);
+        const double drot = RS_DEG_PER_RAD * rs_pose_rotation_between(NULL, NULL, r.rt_cam_enu, g.rt_true);
         const double dpos =
             hypot(hypot(r.position_enu_m[0] - g.position_true[0], r.position_enu_m[1] - g.position_true[1]),
                   r.position_enu_m[2] - g.position_true[2]);
@@ -150,7 +126,7 @@ int main(void)
         const double nees = s[k].nees_sum / s[k].n;
         if (k == 0) rot0 = rot, pos0 = pos;
         double med[3];
-        for (int g = 0; g < 3; g++) med[g] = median(s[k].ratio[g], s[k].nratio[g]);
+        for (int g = 0; g < 3; g++) med[g] = rs_stats_median(s[k].ratio[g], s[k].nratio[g]);
         printf("%-14s %9.4f %9.4f %7.2f %9.3f %9.3f %9.3f %7.2f%%\n", configs[k].name, rot, pos, nees, med[0], med[1],
                med[2], 100.0 * s[k].good_flagged / s[k].good_total);
         CHECK(s[k].n >= NTRIALS - 2, "%s: %d of %d trials solved", configs[k].name, s[k].n, NTRIALS);

@@ -165,6 +165,71 @@ static void test_mat3(void)
     CHECK(e < 1e-15, "mat3 helpers off by %g", e);
 }
 
+// rs_pose_rotation_between against two oracles: the angle theta the test built R_a from
+// (R_a = R(theta u) R_b, u a random unit axis, r_a from the matrix by rs_pose_r_from_R), within
+// 2e-12 rad over [0, pi] with 500 angles within 1e-3 rad of pi and 500 under 1e-6 rad; and
+// acos((trace(R_a R_b^T) - 1) / 2), within 1e-7 rad (acos loses half the digits near 0 and pi).
+// Also r_ab against R_a R_b^T (1e-12 per element) and dr_ab/dr_a against central differences.
+static void test_rotation_between(void)
+{
+    rs_test_seed = 4242;
+    rs_rng rng;
+    rs_rng_seed(&rng, rs_test_seed);
+    double worst_theta = 0, worst_acos = 0, worst_R = 0, worst_J = 0;
+    enum { N = 6000 };
+    for (int k = 0; k < N; k++) {
+        double u[3], n2 = 0, r_b[3];
+        for (int i = 0; i < 3; i++) u[i] = rs_rng_uniform_in(&rng, -1, 1), n2 += u[i] * u[i];
+        for (int i = 0; i < 3; i++) u[i] /= sqrt(n2), r_b[i] = rs_rng_uniform_in(&rng, -1.8, 1.8);
+        const double theta = k < 500     ? M_PI - 1e-3 * rs_rng_uniform(&rng)
+                             : k < 1000  ? 1e-6 * rs_rng_uniform(&rng)
+                             : k == 1000 ? M_PI
+                             : k == 1001 ? 0
+                                         : M_PI * rs_rng_uniform(&rng);
+        const double r_turn[3] = {theta * u[0], theta * u[1], theta * u[2]};
+        double R_turn[9], R_b[9], R_a[9], r_a[3], R_ab[9], Rt_b[9];
+        mrcal_R_from_r(R_turn, NULL, r_turn);
+        mrcal_R_from_r(R_b, NULL, r_b);
+        rs_pose_mat3_mul(R_a, R_turn, R_b);
+        rs_pose_r_from_R(r_a, R_a);
+        double r_ab[3], J[9];
+        const double got = rs_pose_rotation_between(r_ab, J, r_a, r_b);
+        CHECK(got >= 0 && got <= M_PI, "k %d: angle %.17g outside [0, pi]", k, got);
+        worst_theta = fmax(worst_theta, fabs(got - theta));
+        CHECK(fabs(got - theta) < 2e-12, "k %d: angle %.17g, built %.17g", k, got, theta);
+        // acos oracle on the matrices
+        mrcal_R_from_r(R_a, NULL, r_a);
+        rs_pose_mat3_transpose(Rt_b, R_b);
+        rs_pose_mat3_mul(R_ab, R_a, Rt_b);
+        const double c = fmax(-1.0, fmin(1.0, 0.5 * (R_ab[0] + R_ab[4] + R_ab[8] - 1)));
+        worst_acos = fmax(worst_acos, fabs(got - acos(c)));
+        CHECK(fabs(got - acos(c)) < 1e-7, "k %d: angle %.17g, acos %.17g", k, got, acos(c));
+        // r_ab is the rotation R_a R_b^T (compared as matrices: r is ambiguous at pi)
+        double R_from[9];
+        mrcal_R_from_r(R_from, NULL, r_ab);
+        for (int i = 0; i < 9; i++) worst_R = fmax(worst_R, fabs(R_from[i] - R_ab[i]));
+        // dr_ab/dr_a by central differences, away from pi (r wraps there)
+        if (theta < M_PI - 0.1)
+            for (int j = 0; j < 3; j++) {
+                const double h = 1e-6;
+                double rp[3], rm[3], qp[3], qm[3];
+                memcpy(rp, r_a, sizeof rp), memcpy(rm, r_a, sizeof rm);
+                rp[j] += h, rm[j] -= h;
+                rs_pose_rotation_between(qp, NULL, rp, r_b);
+                rs_pose_rotation_between(qm, NULL, rm, r_b);
+                for (int i = 0; i < 3; i++) worst_J = fmax(worst_J, fabs((qp[i] - qm[i]) / (2 * h) - J[3 * i + j]));
+            }
+    }
+    CHECK(worst_R < 1e-12, "r_ab: R(r_ab) differs from R_a R_b^T by %.3g", worst_R);
+    CHECK(worst_J < 1e-6, "dr_ab/dr_a: %.3g from central differences", worst_J);
+    CHECK(rs_pose_rotation_between(NULL, NULL, (const double[3]){0.3, -0.2, 0.1}, (const double[3]){0.3, -0.2, 0.1}) ==
+              0,
+          "the angle of a rotation to itself is not 0");
+    printf("rotation_between: %d rotations (500 within 1e-3 rad of pi, 500 under 1e-6 rad): worst %.3g rad from the "
+           "built angle, %.3g from acos((trace - 1) / 2), R(r_ab) %.3g, Jacobian %.3g\n",
+           N, worst_theta, worst_acos, worst_R, worst_J);
+}
+
 int main(void)
 {
     test_ypr_round_trip();
@@ -172,5 +237,6 @@ int main(void)
     test_position();
     test_prepared();
     test_mat3();
+    test_rotation_between();
     return rs_test_end("test_pose");
 }

@@ -11,5 +11,5 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    return rs_fuzz_site_input("landmarks.geojson", data, size);
+    return rs_fuzz_site_input(RS_SITE_LANDMARKS, data, size);
 }

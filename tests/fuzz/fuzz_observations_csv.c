@@ -12,5 +12,5 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    return rs_fuzz_site_input("observations/cam1.csv", data, size);
+    return rs_fuzz_site_input(RS_SITE_OBSERVATIONS_DIR "/cam1" RS_SITE_OBSERVATIONS_EXT, data, size);
 }

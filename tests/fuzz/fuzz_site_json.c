@@ -9,4 +9,4 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) { return rs_fuzz_site_input("site.json", data, size); }
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) { return rs_fuzz_site_input(RS_SITE_JSON, data, size); }

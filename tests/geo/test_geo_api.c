@@ -8,12 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_units.h"
 #include "geo/rs_geo.h"
 #include "tests/common/rs_test.h"
 
 enum { SEED = 20261122 };
 
-static const double deg = M_PI / 180;
 static const double a_m = 6378137.0, f_wgs84 = 1 / 298.257223563;
 
 static double uniform(double lo, double hi) { return lo + (hi - lo) * drand48(); }
@@ -30,10 +30,10 @@ static void track(double *worst, double e) { *worst = fmax(*worst, isnan(e) ? IN
 // Closed-form geodetic -> ECEF, the oracle of rs_geo_llh_to_ecef.
 static void ecef_closed_form(const double llh[3], double p[3])
 {
-    double e2 = f_wgs84 * (2 - f_wgs84), s = sin(llh[0] * deg), c = cos(llh[0] * deg);
+    double e2 = f_wgs84 * (2 - f_wgs84), s = sin(llh[0] * RS_RAD_PER_DEG), c = cos(llh[0] * RS_RAD_PER_DEG);
     double n = a_m / sqrt(1 - e2 * s * s);
-    p[0] = (n + llh[2]) * c * cos(llh[1] * deg);
-    p[1] = (n + llh[2]) * c * sin(llh[1] * deg);
+    p[0] = (n + llh[2]) * c * cos(llh[1] * RS_RAD_PER_DEG);
+    p[1] = (n + llh[2]) * c * sin(llh[1] * RS_RAD_PER_DEG);
     p[2] = (n * (1 - e2) + llh[2]) * s;
 }
 
@@ -105,7 +105,7 @@ static void test_enu_frame(void)
         ecef_closed_form(llh_o, o_ref);
         track(&worst_enu, dist3(o_ecef, o_ref));
         // columns: east = (-sin lon, cos lon, 0), up = the ellipsoid normal, north = up x east
-        double la = o->lat_deg * deg, lo = o->lon_deg * deg;
+        double la = o->lat_deg * RS_RAD_PER_DEG, lo = o->lon_deg * RS_RAD_PER_DEG;
         double east[3] = {-sin(lo), cos(lo), 0}, up[3] = {cos(la) * cos(lo), cos(la) * sin(lo), sin(la)};
         double north[3] = {up[1] * east[2] - up[2] * east[1], up[2] * east[0] - up[0] * east[2],
                            up[0] * east[1] - up[1] * east[0]};
@@ -162,7 +162,7 @@ static void test_convergence(void)
         CHECK(rs_geo_llh_to_utm(enh + 3, NULL, NULL, zone, north, llh + 3, 2, &err) == RS_OK, "llh_to_utm: %s",
               err.msg);
         CHECK(rs_geo_utm_convergence_deg(&gamma, -1, true, llh, 1, &err) == RS_OK, "convergence: %s", err.msg);
-        double fd = -atan2(enh[6] - enh[3], enh[7] - enh[4]) / deg;
+        double fd = -atan2(enh[6] - enh[3], enh[7] - enh[4]) / RS_RAD_PER_DEG;
         track(&worst, fabs(gamma - fd));
         if (k == 0) CHECK(gamma > 1, "gamma %.17g east of the central meridian at lat 45 should be ~ +1.4", gamma);
     }

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "core/rs_camera.h"
+#include "core/rs_color.h"
 #include "core/rs_image.h"
 #include "geo/rs_lanes.h"
 #include "geo/rs_site.h"
@@ -42,7 +43,7 @@ int main(int argc, char **argv)
     if (!st) st = rs_image_read(&img, argv[2], &err);
     if (!st) {
         const size_t n = (size_t)img.width * img.height * img.channels;
-        for (size_t i = 0; i < n; i++) img.data[i] = (float)rs_synth_srgb_decode(img.data[i]);
+        for (size_t i = 0; i < n; i++) img.data[i] = (float)rs_color_srgb_decode(img.data[i]);
         st = rs_synth_env_from_image(&env, &img, &cam, &site, &lanes, atoi(argv[3]), &err);
     }
     double z[3], h[3], g[3];

@@ -19,13 +19,12 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/rs_color.h"
 #include "synth/fleet/rs_synth_fleet.h"
 #include "test_fleet_check.h"
 
 static double phi(double x) { return exp(-0.5 * x * x) / sqrt(2 * M_PI); }
 static double Phi(double x) { return 0.5 * erfc(-x / sqrt(2)); }
-
-static double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4); }
 
 int main(void)
 {
@@ -123,7 +122,7 @@ int main(void)
         for (int k = 0; k < 9; k++) {
             double d = 0;
             for (int ch = 0; ch < 3; ch++)
-                d += pow(pow(v.rgb[ch], 1 / 2.2) - pow(srgb_to_linear(srgb[k][ch]), 1 / 2.2), 2);
+                d += pow(pow(v.rgb[ch], 1 / 2.2) - pow(rs_color_srgb_decode_exact(srgb[k][ch]), 1 / 2.2), 2);
             if (d < bd) bd = d, best = k;
         }
         count[best]++;

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "core/rs_camera.h"
+#include "core/rs_color.h"
 #include "core/rs_image.h"
 #include "core/rs_io.h"
 #include "geo/rs_lanes.h"
@@ -36,14 +37,14 @@ int main(int argc, char **argv)
     rs_camera cam = {0};
     rs_image img = {0};
     rs_synth_light_estimate est;
-    char *lanes_path = rs_io_join(argv[1], "lanes.geojson");
+    char *lanes_path = rs_io_join(argv[1], RS_SITE_LANES);
     rs_status st = rs_site_load(&site, argv[1], &err);
     if (!st) st = rs_lanes_read(&lanes, lanes_path, site, &err);
     if (!st) st = rs_camera_read(&cam, NULL, argv[2], &err);
     if (!st) st = rs_image_read(&img, argv[3], &err);
     if (!st) {
         const size_t n = (size_t)img.width * img.height * img.channels;
-        for (size_t i = 0; i < n; i++) img.data[i] = (float)rs_synth_srgb_decode(img.data[i]);
+        for (size_t i = 0; i < n; i++) img.data[i] = (float)rs_color_srgb_decode(img.data[i]);
         if (sun) {
             rs_synth_sun_estimate se;
             st = rs_synth_sun_from_shadows(&se, &img, &cam, site, &err);

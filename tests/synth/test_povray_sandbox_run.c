@@ -25,12 +25,12 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: test_povray_sandbox_run probe | run DIR SCENE\n");
         return 2;
     }
-    const char *povray = getenv("ROADSIDE_POVRAY");
+    const char *povray = rs_synth_povray_exe(NULL);
     char input[1100];
     snprintf(input, sizeof(input), "+I%s", argv[3]);
     const char *args[] = {input, "+Oprobe.png", "+W8", "+H8", "-D", "+WT1"};
     rs_err err = {RS_OK, ""};
-    const rs_status st = rs_synth_povray_run(povray && *povray ? povray : "povray", argv[2], args, 6, NULL, &err);
+    const rs_status st = rs_synth_povray_run(povray, argv[2], args, 6, NULL, &err);
     if (st) {
         printf("%s\n", err.msg);
         return 1;

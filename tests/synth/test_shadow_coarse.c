@@ -48,10 +48,10 @@ enum { W = 640, H = 400 };
 // Runs povray on DIR/NAME.ini (written by the caller) over the whole image.
 static int run(const char *dir, const char *ini)
 {
-    const char *povray = getenv("ROADSIDE_POVRAY");
+    const char *povray = rs_synth_povray_exe(NULL);
     const char *args[] = {ini, "+WT1"};
     rs_err err = {0};
-    if (rs_synth_povray_run(povray && *povray ? povray : "povray", dir, args, 2, NULL, &err)) {
+    if (rs_synth_povray_run(povray, dir, args, 2, NULL, &err)) {
         fprintf(stderr, "povray: %s\n", err.msg);
         return 1;
     }

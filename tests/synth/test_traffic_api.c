@@ -14,17 +14,16 @@
 #include <string.h>
 
 #include "core/rs_rng.h"
+#include "core/rs_units.h"
 #include "sim/rs_simulate.h"
 #include "synth/fleet/rs_synth_fleet.h"
 #include "synth/traffic/rs_synth_sumo.h"
 #include "synth/traffic/rs_synth_traffic.h"
 
-#define DEG (3.14159265358979323846 / 180.0)
-
 // Inside the footprint rectangle of v, with a margin (negative: strictly inside by -margin).
 static int inside(const rs_synth_vehicle *v, double e, double n, double margin)
 {
-    double f[2] = {sin(v->yaw_deg * DEG), cos(v->yaw_deg * DEG)};
+    double f[2] = {sin(v->yaw_deg * RS_RAD_PER_DEG), cos(v->yaw_deg * RS_RAD_PER_DEG)};
     double de = e - v->e_m, dn = n - v->n_m;
     double x = de * f[0] + dn * f[1], y = -de * f[1] + dn * f[0];
     return fabs(x) <= 0.5 * v->length_m + margin && fabs(y) <= 0.5 * v->width_m + margin;

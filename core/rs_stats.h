@@ -1,0 +1,38 @@
+// rs_stats.h -- the one median and quantile (order statistics of a sample of doubles).
+//
+// Definitions, for a sample x of n values sorted ascending into s[0] <= ... <= s[n-1]:
+//   median:      s[(n-1)/2] for odd n; for even n the mean of the two middle values,
+//                0.5 * (s[n/2 - 1] + s[n/2]) (never the upper or lower one alone).
+//   quantile p:  linear interpolation between the order statistics at the position
+//                k = p (n - 1): with i = floor(k), s[i] + (k - i) (s[i+1] - s[i]) (s[n-1] when
+//                i = n - 1). Hyndman & Fan's definition 7, the default of numpy.quantile
+//                ("linear"), R's quantile() and Excel's PERCENTILE.INC; p = 0 gives the
+//                minimum, p = 1 the maximum, p = 0.5 the median (to one rounding: the median's
+//                own formula above is the one to quote).
+// Preconditions: no NaN among the values (their order would be undefined); p in [0, 1].
+// Returns NaN for n <= 0 (and for p outside [0, 1]).
+// Accuracy: the median is exact up to the rounding of one addition and one halving; a quantile
+// up to that of one subtraction, one multiplication and one addition (tests/core/test_stats.c
+// against brute force on 20,000 random samples of 1..40 values, ties included: 0 ulp median,
+// 1e-15 relative quantile).
+#pragma once
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// Sorts x (n,) ascending in place (qsort). n <= 0 does nothing.
+void rs_stats_sort(double *x, int n);
+
+// Median and quantile of x (n,), which they sort in place (the caller's order is lost: pass a
+// copy to keep it).
+double rs_stats_median(double *x, int n);
+double rs_stats_quantile(double *x, int n, double p);
+
+// The same of x (n,) already sorted ascending (several quantiles of one sample sort it once).
+double rs_stats_median_sorted(const double *x, int n);
+double rs_stats_quantile_sorted(const double *x, int n, double p);
+
+#ifdef __cplusplus
+}
+#endif
