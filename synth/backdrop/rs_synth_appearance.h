@@ -18,7 +18,7 @@ extern "C" {
 // [1 -2 1; -2 4 -2; 1 -2 1] cancels locally linear image content and has gain 6 on white noise;
 // made robust with the median absolute value (sigma = 1.4826 median|M * I| / 6, over every
 // channel's interior pixels), so that edges and texture (a minority of pixels) do not count.
-// Accuracy: within 3% on a flat image with sigma in [0.005, 0.05] (tests/synth/test_appearance.py);
+// Accuracy: within 3% on a flat image with sigma in [0.005, 0.05] (tests/synth/backdrop/test_appearance.py);
 // texture covering most pixels biases it upwards.
 rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *err);
 

@@ -69,7 +69,7 @@ typedef struct {
 // The road is assumed dry: a wet road mirrors the sky and a snowy one is white (the digital
 // twin's rain reads 1.45 for a sky of 0.55), so callers use it for sunny, cloudy or untagged
 // backgrounds only.
-// Accuracy (tests/synth/test_light_estimate.py, digital-twin renders of the demo site): the
+// Accuracy (tests/synth/backdrop/test_light_estimate.py, digital-twin renders of the demo site): the
 // level within 5% of the rendered sky (overcast) or sun + sky (sunny), the tint within 1% of
 // a tint applied to the image; for photographs it holds to the albedo assumption above.
 // in: linear_rgb: (H, W, >= 3) linear light, the camera's size; cam; site (its ground plane);
@@ -121,7 +121,7 @@ typedef struct {
 //     above the horizon count as "sky": they are what a vehicle reflects there.
 // Each colour is the plain per-channel mean of its pixels' linear values (a reflection averages
 // what it sees; no robust trimming). Rays meeting the ground beyond 60 m (the far view) are
-// neither. Exact: it is a mean over a mask (tests/synth/test_env_from_image.py: numpy's mean
+// neither. Exact: it is a mean over a mask (tests/synth/backdrop/test_env_from_image.py: numpy's mean
 // over the same rule within 1e-6).
 // in: linear_rgb (H, W, >= 3) linear light at the camera's size; cam; site (its ground plane);
 //     lanes (only as the cache's key: pass the lanes given to rs_synth_light_from_image, or
@@ -160,7 +160,7 @@ void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double grou
 // best of the 1-degree grid (elevations 1..85) wins.
 // Flat ground is assumed near each pole (the site's ground plane gives the height).
 // Shadows shorter than 2.5 m are not read; a best score under 0.55 is no sun shadow.
-// Accuracy (tests/synth/test_light_estimate.py: digital-twin renders of the demo site with
+// Accuracy (tests/synth/backdrop/test_light_estimate.py: digital-twin renders of the demo site with
 // four 6..8 m poles, cam1 at 720x405): within 0.5 degree in azimuth and 1.4 in elevation at
 // 2024-06-21 08:00, 12:00, 15:00 UTC (elevations 44, 64, 40; tested to 2 degrees), within 1
 // degree at elevations 29 and 26; refused (DEGENERATE) when the shadows leave the view

@@ -14,7 +14,7 @@
 // degree is ignored). Against an independent formulation (Blanco-Muriel et al., "Computing the
 // solar vector", Solar Energy 70(5), 2001, the "PSA" algorithm, itself within 0.0083 degree of
 // the ephemeris) the angle between the two sun directions is at most 0.012 degree over
-// 2000..2050 at latitudes -89..89 (tests/synth/test_sun.py). NOAA states its equations are valid
+// 2000..2050 at latitudes -89..89 (tests/synth/backdrop/test_sun.py). NOAA states its equations are valid
 // for 1901..2099.
 //
 // Azimuth is clockwise from north in [0, 360) (a compass bearing, like yaw_deg and

@@ -5,7 +5,7 @@
 // as POV-Ray is. The camera is written with explicit location, right, up and direction vectors
 // (never look_at or angle) so that an off-centre principal point and fx != fy are exact.
 //
-// Method (docs/povray.md derives it and tests/synth/test_pins.py checks it with the real povray):
+// Method (docs/povray.md derives it and tests/synth/povray/test_pins.py checks it with the real povray):
 // POV-Ray 3.7's perspective camera shoots, for the pixel in column i (0..W-1, left to right) and
 // row j (0..H-1, top to bottom), without antialiasing, the ray
 //     D = direction + x_s right + y_s up,  x_s = (i + 0.5)/W - 0.5,  y_s = 0.5 - (j + 0.5)/H.
@@ -90,7 +90,7 @@ rs_status rs_synth_canvas_for_lens( // out
 // Accuracy: every pixel reprojects within RS_SYNTH_CANVAS_MAP_CHECK_PX (1e-4 px) of itself;
 // against mrcal_unproject pixel by pixel, the map differs by at most 6e-5 canvas px over the
 // demo site's four OPENCV8 cameras at 720x480 (float rounding included), and by less than
-// 0.01 px for the lenses of tests/synth/test_canvas_map.c, which asserts it.
+// 0.01 px for the lenses of tests/synth/povray/test_canvas_map.c, which asserts it.
 // Cost: about 0.012 s at 720x480 (5,859 unprojections, 345,600 projections; 0.28 s before).
 // out: *map_xy, (height, width, 2) float, owned by the caller (free())
 // in:  canvas (rs_synth_canvas_for_lens), the real lens; width, height > 0

@@ -11,7 +11,7 @@
 // z_cam >= 1e-6 m, projected through the same pinhole and filled at the pixel centres inside it
 // (edges inclusive), the nearest surface winning (1/z interpolated in the image, exact for a
 // plane). The two agree except where a pixel centre lies within rounding (about 1e-10 px) of a
-// silhouette edge, or two vehicles' surfaces are equally near: tests/synth/test_ids_raster.c
+// silhouette edge, or two vehicles' surfaces are equally near: tests/synth/povray/test_ids_raster.c
 // compares them with the real POV-Ray. No ground: where the ground can hide part of a vehicle
 // (rs_synth_scene_ground_occludes) the caller has POV-Ray render the pass, with the ground plane.
 //

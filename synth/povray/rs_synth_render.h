@@ -33,14 +33,14 @@
 // povray runs in the output folder with HOME set to it (POVINC/POVINI unset), its output going
 // to OUT/povray.log. What confines it (docs/povray.md, "Confinement"):
 //  1. the scene text: roadside's scenes hold no file operation and no input text outside
-//     sanitised comments (rs_synth_scene.h; tests/synth/test_scene_cli.py,
+//     sanitised comments (rs_synth_scene.h; tests/synth/povray/test_scene_cli.py,
 //     test_povray_sandbox.py);
 //  2. Linux Landlock (rs_synth_sandbox.h): povray may read the system's files under /usr,
 //     /etc/povray, and read and write only the folder it runs in; everything else is refused
 //     by the kernel. Where Landlock is unavailable povray runs unconfined (the cli says so).
 // The OUT/.povray/3.7/povray.conf written there ("restricted", only "." permitted) is NOT a
 // defence: measured with Debian 12's POV-Ray 3.7.0.10, reads anywhere and writes to /tmp,
-// /var/tmp and OUT/.. pass through it (tests/synth/test_povray_sandbox.py shows both).
+// /var/tmp and OUT/.. pass through it (tests/synth/povray/test_povray_sandbox.py shows both).
 #pragma once
 #include <stdbool.h>
 #include <stdint.h>

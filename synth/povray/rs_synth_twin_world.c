@@ -1,7 +1,7 @@
 // rs_synth_twin_world.c -- the digital twin's world (synth/povray/internal/rs_synth_twin_world.h): sky, sun and sky
 // lights, asphalt, raised sidewalks with kerbs, and the road markings the site's lanes describe
 // (lane edges, stop bars, crosswalks, turn arrows). docs/backgrounds.md describes what is drawn
-// and where; tests/synth/test_twin_markings.py checks it against lanes.geojson read by numpy.
+// and where; tests/synth/povray/test_twin_markings.py checks it against lanes.geojson read by numpy.
 #include "synth/povray/internal/rs_synth_twin_world.h"
 
 #include <math.h>

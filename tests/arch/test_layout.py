@@ -100,6 +100,17 @@ def check_synth_components(root, include_re, doc):
                 check(theirs in SYNTH_COMPONENTS.get(mine, []),
                       f"{rel}: synth/{mine}/ may not include synth/{theirs}/ (\"{inc}\"): the order is {' < '.join(SYNTH_COMPONENTS)}")
                 check(not internal, f"{rel}: includes another component's internal header \"{inc}\"")
+    # tests/synth mirrors the components: a folder each, the shared helpers alone at its top
+    shared = {"meson.build", "synth_test_util.py", "test_fleet_check.h"}
+    tdir = os.path.join(root, "tests", "synth")
+    for name in sorted(os.listdir(tdir)):
+        if name == "__pycache__":
+            continue
+        isdir = os.path.isdir(os.path.join(tdir, name))
+        check((isdir and name in SYNTH_COMPONENTS) or (not isdir and name in shared),
+              f"tests/synth/{name}: synth's tests live in a folder per component ({', '.join(SYNTH_COMPONENTS)})")
+    for comp in SYNTH_COMPONENTS:
+        check(os.path.isdir(os.path.join(tdir, comp)), f"tests/synth/{comp}/: missing (synth/{comp}/ has no tests folder)")
     for comp, allowed in SYNTH_COMPONENTS.items():
         m = re.search(r"^\|\s*`synth/%s/`\s*\|[^|]*\|\s*([^|]*)\|" % comp, doc, re.M)
         check(m is not None, f"docs/architecture.md: no row for `synth/{comp}/` in the table of synth's components")
