@@ -19,6 +19,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "geo/rs_site.h" // the site's file names (RS_SITE_JSON, ...)
+
 // Writes data[0, size) as the file `rel` (e.g. "site.json") of the per-process site folder,
 // reads the site and checks it as above. The folder is made (mkdtemp under $TMPDIR, else /tmp)
 // and filled on the first call, and removed at exit. Returns 0 (libFuzzer's "keep going").
