@@ -263,13 +263,14 @@ static double seg_dist(const double q[2], const double a[2], const double b[2])
     return hypot(q[0] - a[0] - t * dx, q[1] - a[1] - t * dy);
 }
 
-// The luminance of the ground point (e, n) seen by cam; NaN when not in view or within
-// pole_r_px of the pole's image (pole_q: base and top pixels).
-static double ground_lum(const rs_image *img, const rs_camera *cam, const rs_site *site, double e, double n,
-                         const double pole_q[2][2], double pole_r_px)
+// The luminance of the ground point (e, n) seen by cam (max_tan: rs_camera_max_tan(cam), computed
+// once: this runs a million times); NaN when not in view or within pole_r_px of the pole's image
+// (pole_q: base and top pixels).
+static double ground_lum(const rs_image *img, const rs_camera *cam, double max_tan, const rs_site *site, double e,
+                         double n, const double pole_q[2][2], double pole_r_px)
 {
     double p[3] = {e, n, rs_synth_ground_up_m(site->ground_normal_enu, site->ground_offset_m, e, n)}, q[2];
-    if (rs_camera_project(q, cam, p, 1) != 1 || !isfinite(q[0] + q[1])) return NAN;
+    if (!rs_camera_project_visible(q, cam, max_tan, p) || !isfinite(q[0] + q[1])) return NAN;
     if (seg_dist(q, pole_q[0], pole_q[1]) < pole_r_px) return NAN;
     return luminance(img, q[0], q[1]);
 }
@@ -292,6 +293,7 @@ rs_status rs_synth_sun_from_shadows(rs_synth_sun_estimate *out, const rs_image *
         free(S), free(C), free(h);
         return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     }
+    const double max_tan = rs_camera_max_tan(cam);
     int np = 0;
     for (int i = 0; i < site->Nlandmarks; i++) {
         const rs_site_landmark *L = &site->landmarks[i];
@@ -312,9 +314,9 @@ rs_status rs_synth_sun_from_shadows(rs_synth_sun_estimate *out, const rs_image *
             s[a * (SH_NT + 1)] = 0, c[a * (SH_NT + 1)] = 0;
             for (int k = 0; k < SH_NT; k++) {
                 const double t = (k + 0.5) * SH_DT, e = b[0] + t * de, n = b[1] + t * dn;
-                const double on = ground_lum(img, cam, site, e, n, pq, r_px);
-                const double l1 = ground_lum(img, cam, site, e - 0.6 * dn, n + 0.6 * de, pq, r_px);
-                const double l2 = ground_lum(img, cam, site, e + 0.6 * dn, n - 0.6 * de, pq, r_px);
+                const double on = ground_lum(img, cam, max_tan, site, e, n, pq, r_px);
+                const double l1 = ground_lum(img, cam, max_tan, site, e - 0.6 * dn, n + 0.6 * de, pq, r_px);
+                const double l2 = ground_lum(img, cam, max_tan, site, e + 0.6 * dn, n - 0.6 * de, pq, r_px);
                 // darker than both sides: the lesser side (an edge between road and sidewalk is
                 // no shadow); one side when the other is not in view
                 double side = isfinite(l1) && isfinite(l2) ? fmin(l1, l2) : isfinite(l1) ? l1 : l2;
