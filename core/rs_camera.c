@@ -273,20 +273,12 @@ rs_status rs_camera_read_cameramodel_text(rs_camera *cam, const char *text, size
     return st;
 }
 
-// OpenCV K and distortion -> the mrcal model with the same projection (LENSMODEL_OPENCVn keeps
-// OpenCV's coefficient order; no coefficients, or all zero: LENSMODEL_PINHOLE).
-static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_camera_opencv_file *f, const char *path,
-                             rs_err *err)
+// OpenCV's ordinary (pinhole) distortion -> the mrcal model with the same projection
+// (LENSMODEL_OPENCVn keeps OpenCV's coefficient order; no coefficients, or all zero:
+// LENSMODEL_PINHOLE).
+static rs_status from_opencv_distortion(rs_camera *cam, const double core[4], const rs_camera_opencv_file *f,
+                                        const char *path, rs_err *err)
 {
-    const double *K = f->K;
-    if (K[3] != 0 || K[6] != 0 || K[7] != 0 || K[8] != 1)
-        return rs_err_set(err, RS_ERR_INVALID, "%s: camera_matrix: not of the form [fx 0 cx; 0 fy cy; 0 0 1]", path);
-    if (!(K[0] > 0 && K[4] > 0))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: camera_matrix: fx = %g, fy = %g: both must be > 0", path, K[0],
-                          K[4]);
-    if (K[1] != 0)
-        return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: camera_matrix: skew %g: mrcal lens models have no skew term",
-                          path, K[1]);
     int Nd = f->Ndist;
     if (Nd == 14) {
         if (f->dist[12] != 0 || f->dist[13] != 0)
@@ -299,17 +291,43 @@ static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_ca
     bool any = false;
     for (int i = 0; i < Nd; i++) any = any || f->dist[i] != 0;
     if (!any) Nd = 0;
-    if (f->has_rotation != f->has_t)
-        return rs_err_set(err, RS_ERR_INVALID, "%s: %s: missing, a pose needs both the rotation and the translation",
-                          path, f->has_rotation ? "tvec (or t)" : "R (or rvec)");
     const mrcal_lensmodel_t lm = {.type = Nd == 0   ? MRCAL_LENSMODEL_PINHOLE
                                           : Nd == 4 ? MRCAL_LENSMODEL_OPENCV4
                                           : Nd == 5 ? MRCAL_LENSMODEL_OPENCV5
                                           : Nd == 8 ? MRCAL_LENSMODEL_OPENCV8
                                                     : MRCAL_LENSMODEL_OPENCV12};
-    double intrinsics[16] = {K[0], K[4], K[2], K[5]};
+    double intrinsics[16] = {core[0], core[1], core[2], core[3]};
     memcpy(intrinsics + 4, f->dist, (size_t)Nd * sizeof(double));
-    rs_status st = rs_camera_init(cam, &lm, intrinsics, f->width, f->height, err);
+    return rs_camera_init(cam, &lm, intrinsics, f->width, f->height, err);
+}
+
+// OpenCV K and distortion -> the mrcal model with the same projection: the ordinary model
+// above, or a fisheye distortion_model through rs_camera_init_kannala_brandt.
+static rs_status from_opencv(rs_camera *cam, rs_camera_extra *extra, const rs_camera_opencv_file *f, const char *path,
+                             rs_err *err)
+{
+    const double *K = f->K;
+    if (K[3] != 0 || K[6] != 0 || K[7] != 0 || K[8] != 1)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: camera_matrix: not of the form [fx 0 cx; 0 fy cy; 0 0 1]", path);
+    if (!(K[0] > 0 && K[4] > 0))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: camera_matrix: fx = %g, fy = %g: both must be > 0", path, K[0],
+                          K[4]);
+    if (K[1] != 0)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: camera_matrix: skew %g: mrcal lens models have no skew term",
+                          path, K[1]);
+    if (f->has_rotation != f->has_t)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: %s: missing, a pose needs both the rotation and the translation",
+                          path, f->has_rotation ? "tvec (or t)" : "R (or rvec)");
+    const double core[4] = {K[0], K[4], K[2], K[5]};
+    rs_status st;
+    if (f->fisheye && f->Ndist != 4)
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "%s: distortion_coefficients: %d values, a fisheye distortion_model needs 4 (k1 k2 k3 k4)",
+                          path, f->Ndist);
+    if (f->fisheye)
+        st = rs_camera_init_kannala_brandt(cam, NULL, core, f->dist, f->width, f->height, path, err);
+    else
+        st = from_opencv_distortion(cam, core, f, path, err);
     if (st) return st;
     if (f->has_rotation) {
         memcpy(cam->rt_cam_enu, f->rvec, 3 * sizeof(double));
@@ -355,6 +373,46 @@ static rs_status opencv_text_check(const char *text, size_t len, const char *pat
                : RS_OK;
 }
 
+// A number member of a JSON object into *out: false when absent; an error when not a finite number.
+static rs_status json_number(double *out, bool *found, const cJSON *obj, const char *key, const char *path, rs_err *err)
+{
+    const cJSON *it = cJSON_GetObjectItemCaseSensitive(obj, key);
+    *found = it != NULL;
+    if (!it) return RS_OK;
+    if (!cJSON_IsNumber(it) || !isfinite(it->valuedouble))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: %s: not a finite number", path, key);
+    *out = it->valuedouble;
+    return RS_OK;
+}
+
+// The equidistant fisheye triple {"f": 340.0, "x0": 640, "y0": 480} (optionally image_width and
+// image_height) of a .json without camera_matrix or K: *triple tells whether the text is one.
+static rs_status read_equidistant_triple(rs_camera *cam, bool *triple, const char *text, size_t len, const char *path,
+                                         rs_err *err)
+{
+    cJSON *j = cJSON_ParseWithLength(text, len);
+    *triple = j && cJSON_IsObject(j) && cJSON_GetObjectItemCaseSensitive(j, "f") &&
+              !cJSON_GetObjectItemCaseSensitive(j, "camera_matrix") && !cJSON_GetObjectItemCaseSensitive(j, "K");
+    double v[5] = {NAN, NAN, NAN, 0, 0};
+    static const char *const keys[5] = {"f", "x0", "y0", "image_width", "image_height"};
+    rs_status st = RS_OK;
+    for (int i = 0; *triple && i < 5 && st == RS_OK; i++) {
+        bool found;
+        st = json_number(&v[i], &found, j, keys[i], path, err);
+        if (st == RS_OK && !found && i < 3)
+            st = rs_err_set(err, RS_ERR_PARSE, "%s: %s: missing (an equidistant fisheye is {\"f\", \"x0\", \"y0\"})",
+                            path, keys[i]);
+        if (st == RS_OK && i >= 3 && !(v[i] >= 0 && v[i] <= MAX_IMAGE_SIDE_PX && v[i] == floor(v[i])))
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: %s: %g is not a whole number of pixels", path, keys[i], v[i]);
+    }
+    cJSON_Delete(j);
+    if (*triple && st == RS_OK && !(v[0] > 0))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: f: %g: must be > 0", path, v[0]);
+    if (*triple && st == RS_OK) st = rs_camera_init_equidistant(cam, v[0], v[1], v[2], (int)v[3], (int)v[4], err);
+    if (*triple && st == RS_OK) st = rs_camera_check(cam, path, err);
+    return st;
+}
+
 rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *path, rs_err *err)
 {
     memset(cam, 0, sizeof *cam);
@@ -365,10 +423,13 @@ rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *pat
         char *text = NULL;
         size_t len = 0;
         st = rs_io_read_file_max(&text, &len, path, RS_IO_MAX_SMALL_FILE_BYTES, err); // a regular file, bounded
-        if (st == RS_OK) st = opencv_text_check(text, len, path, err);
+        bool triple = false;
+        if (st == RS_OK && rs_io_has_extension(path, "json"))
+            st = read_equidistant_triple(cam, &triple, text, len, path, err);
+        if (st == RS_OK && !triple) st = opencv_text_check(text, len, path, err);
         free(text);
-        if (st == RS_OK) st = rs_camera_opencv_read(&f, path, err);
-        if (st == RS_OK) st = from_opencv(cam, extra, &f, path, err);
+        if (st == RS_OK && !triple) st = rs_camera_opencv_read(&f, path, err);
+        if (st == RS_OK && !triple) st = from_opencv(cam, extra, &f, path, err);
     } else {
         char *text = NULL;
         size_t len = 0;

@@ -71,9 +71,12 @@ rs_status rs_camera_init( // out
 rs_status rs_camera_copy(rs_camera *out, const rs_camera *in, rs_err *err);
 
 // Reads a camera file: an mrcal .cameramodel (by mrcal; extrinsics = rt_cam_enu), or, for a
+// .json holding "f" and no camera_matrix or K, the equidistant fisheye triple {"f", "x0", "y0"}
+// (optionally image_width, image_height; rs_camera_init_equidistant), or, for a
 // name ending in .yaml, .yml or .json, an OpenCV-style file read by cv::FileStorage:
 // image_width, image_height; camera_matrix or K (3,3); distortion_coefficients, D or dist (0, 4,
-// 5, 8, 12 or 14 values; absent or empty: none); optionally the pose as R or R_cam_enu (3,3; its
+// 5, 8, 12 or 14 values; absent or empty: none; with distortion_model "fisheye", "equidistant" or
+// "kannala_brandt", 4 values: OpenCV's fisheye, rs_camera_init_kannala_brandt); optionally the pose as R or R_cam_enu (3,3; its
 // nearest rotation is used) or rvec or r (3), with tvec or t (3); optionally P (3,4). Matrices
 // may be OpenCV matrices ({rows, cols, dt, data} / !!opencv-matrix) or nested number lists.
 // out:  *cam (zeroed on failure); *extra (may be NULL): what else an OpenCV file said (all false
@@ -119,6 +122,39 @@ bool rs_camera_has_opencv_equivalent(const rs_camera *cam);
 // into the camera) and R_cam_enu (3x3). RS_ERR_UNSUPPORTED when the lens has no OpenCV
 // equivalent; RS_ERR_IO, RS_ERR_EXTERNAL (OpenCV threw).
 rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs_err *err);
+
+// ---- fisheye lenses (core/rs_camera_fisheye.c; docs/conventions.md, "Fisheye lenses") ----
+//
+// Both are mrcal's LENSMODEL_CAHVORE_linearity=0.00 with alpha = beta = 0 and e0 = e1 = e2 = 0,
+// whose pixel is (fx, fy) * theta (1 + r0 + r1 theta^2 + r2 theta^4) * (x, y) / hypot(x, y) +
+// (cx, cy) for a ray theta off the optical axis. (mrcal 2.2 projects it without gradients only and
+// cannot unproject it.)
+
+// The worst pixel error over the image's angles that a fitted OpenCV fisheye may keep.
+#define RS_CAMERA_FISHEYE_FIT_MAX_PX 0.01
+
+// The equidistant fisheye of the triple {f, x0, y0}: pixel radius r = f theta about (x0, y0),
+// exactly (intrinsics f f x0 y0 0 0 0 0 0 0 0 0). *cam is zeroed first.
+// Errors: RS_ERR_INVALID (f not > 0, non-finite), RS_ERR_NOMEM.
+rs_status rs_camera_init_equidistant( // out
+    rs_camera *cam,
+    // in
+    double f_px, double x0_px, double y0_px, int width, int height, rs_err *err);
+
+// OpenCV's fisheye model (cv::fisheye, Kannala-Brandt: theta_d = theta (1 + k1 theta^2 + k2
+// theta^4 + k3 theta^6 + k4 theta^8), pixel = (fx theta_d x / r + cx, fy theta_d y / r + cy)).
+// k3 = k4 = 0: exactly CAHVORE with r0 = 0, r1 = k1, r2 = k2. Otherwise (r0, r1, r2) are fitted by
+// least squares to the pixel radius over theta in [0, the widest angle the image's corners show]
+// (90 degrees without an image size), and accepted only if the fit's worst pixel error there is
+// at most RS_CAMERA_FISHEYE_FIT_MAX_PX.
+// out: *cam (zeroed first); *fit_error_px (may be NULL): that worst error, 0 when exact
+// in:  core (4,) fx fy cx cy; k (4,) k1..k4; path names the file in messages
+// Errors: RS_ERR_UNSUPPORTED ("PATH: distortion_coefficients: k3 = ..., k4 = ...: ... off by up to
+// E px ..."), RS_ERR_NOMEM.
+rs_status rs_camera_init_kannala_brandt( // out
+    rs_camera *cam, double *fit_error_px,
+    // in
+    const double core[4], const double k[4], int width, int height, const char *path, rs_err *err);
 
 // ---- projection: the one "does this point project" rule ----
 //

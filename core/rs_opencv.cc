@@ -2,6 +2,7 @@
 // cv::FileStorage, both ways (core/internal/rs_opencv.h), and image files (core/rs_image.h). C++ stays here; every exception is caught at the boundary and
 // becomes an rs_status.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -71,6 +72,20 @@ rs_status read_numbers(std::vector<double> &v, bool *found, const cv::FileStorag
     return RS_OK;
 }
 
+// distortion_model: OpenCV's fisheye under its names (OpenCV, ROS's "equidistant", others'
+// "kannala_brandt"), any case, sets f->fisheye; other text (ROS's "plumb_bob", ...) is the
+// ordinary model.
+rs_status read_fisheye(rs_camera_opencv_file *f, const cv::FileStorage &fs, const char *path, rs_err *err)
+{
+    const cv::FileNode node = fs["distortion_model"];
+    if (node.empty()) return RS_OK;
+    if (!node.isString()) return rs_err_set(err, RS_ERR_PARSE, "%s: distortion_model: not a text", path);
+    std::string name = (std::string)node;
+    std::transform(name.begin(), name.end(), name.begin(), [](unsigned char c) { return (char)std::tolower(c); });
+    f->fisheye = name == "fisheye" || name == "equidistant" || name == "kannala_brandt";
+    return RS_OK;
+}
+
 rs_status read_file(rs_camera_opencv_file *f, const char *path, rs_err *err)
 {
     cv::FileStorage fs;
@@ -99,6 +114,7 @@ rs_status read_file(rs_camera_opencv_file *f, const char *path, rs_err *err)
                               sizes[i], d);
         *size_out[i] = (int)d;
     }
+    if ((st = read_fisheye(f, fs, path, err))) return st;
     if ((st = read_numbers(v, &found, fs, {"camera_matrix", "K"}, {9}, "9 (3x3)", path, err))) return st;
     if (!found) return rs_err_set(err, RS_ERR_PARSE, "%s: camera_matrix: missing", path);
     std::copy(v.begin(), v.end(), f->K);

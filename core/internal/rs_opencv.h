@@ -16,6 +16,8 @@ typedef struct {
     double dist[14];
     int Ndist;         // 0, 4, 5, 8, 12 or 14
     int width, height; // 0 when absent
+    bool fisheye;      // distortion_model "fisheye", "equidistant" or "kannala_brandt": the 4
+                       //   coefficients are OpenCV's fisheye k1..k4 (rs_camera_init_kannala_brandt)
     bool has_rotation; // R or rvec given
     bool has_R;        // R given: rvec is the Rodrigues vector of its nearest rotation
     double R[9];       // as given, row-major
