@@ -13,6 +13,7 @@
 
 #include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 #include "core/rs_stats.h"
 #include "core/rs_units.h"
@@ -224,7 +225,7 @@ static double loo_sigmas(const mrcal_lensmodel_t *lm, const double *intrinsics, 
     mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, rt, p);
     mrcal_point2_t q;
     mrcal_point3_t dq_dpc[2];
-    if (!mrcal_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics)) return NAN;
+    if (!rs_lens_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics)) return NAN;
     double Jp[6] = {0}, Jr[12] = {0};
     for (int i = 0; i < 2; i++)
         for (int j = 0; j < 3; j++) {

@@ -11,6 +11,7 @@
 #include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
 #include "audit/rs_audit.h"
+#include "core/rs_lens.h"
 #include "core/rs_stats.h"
 
 double rs_audit__dist3(const double *a, const double *b)
@@ -29,7 +30,7 @@ static bool ground_cov(double cov[4], double q_out[2], const mrcal_lensmodel_t *
     if (!(pc[2] > 0)) return false;
     mrcal_point2_t q;
     mrcal_point3_t dq_dpc[2];
-    if (!mrcal_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics)) return false;
+    if (!rs_lens_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics)) return false;
     if (q_out) q_out[0] = q.x, q_out[1] = q.y;
     const double dp_dg[6] = {1, 0, 0, 1, -n[0] / n[2], -n[1] / n[2]}; // (3,2)
     double A[4] = {0}, B[12] = {0};                                   // (2,2), (2,6)

@@ -16,6 +16,7 @@
 #include "calib/rs_calib.h"
 #include "calib/rs_calib_init.h"
 #include "calib/rs_calib_opengv.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 #include "core/rs_stats.h"
 #include "core/rs_units.h"
@@ -175,8 +176,8 @@ static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, r
         return rs_bench_opencv_pnp(rt, NULL, P->p_enu_survey_m, P->q_px, P->Npoints, P->camera.intrinsics,
                                    P->camera.Nintrinsics - 4, (rs_bench_opencv_pnp_method)bm->variant, bm->refine_lm,
                                    8.0, err);
-    if (!mrcal_unproject((mrcal_point3_t *)T->v_cam, (const mrcal_point2_t *)P->q_px, P->Npoints, &P->camera.lensmodel,
-                         P->camera.intrinsics))
+    if (!rs_lens_unproject((mrcal_point3_t *)T->v_cam, (const mrcal_point2_t *)P->q_px, P->Npoints,
+                           &P->camera.lensmodel, P->camera.intrinsics))
         return rs_err_set(err, RS_ERR_EXTERNAL, "mrcal_unproject failed");
     for (int i = 0; i < P->Npoints; i++) {
         double *v = &T->v_cam[3 * i];

@@ -31,6 +31,7 @@
 //   rs_calib_init.c            the initial pose's RANSAC    -> the OpenGV and OpenCV shims
 //   rs_calib_refine_ceres.cc   one refinement (Ceres)       -> rs_calib_block.c
 #include "calib/rs_calib.h"
+#include "core/rs_lens.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -78,9 +79,6 @@ void rs_calib_options_default(rs_calib_options *opt)
 static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *opt, int Ni, rs_err *err)
 {
     if (!pb->camera || !pb->camera->intrinsics) return rs_err_set(err, RS_ERR_INVALID, "lensmodel/intrinsics: NULL");
-    if ((&pb->camera->lensmodel)->type == MRCAL_LENSMODEL_CAHVORE)
-        return rs_err_set(err, RS_ERR_UNSUPPORTED,
-                          "lensmodel: CAHVORE has no projection gradients in mrcal; not supported");
     if (Ni <= 0) return rs_err_set(err, RS_ERR_INVALID, "lensmodel: invalid");
     if (!rs_calib__all_finite(pb->camera->intrinsics, Ni))
         return rs_err_set(err, RS_ERR_INVALID, "intrinsics: not finite");
@@ -166,7 +164,7 @@ static double msac_cost(const double rt_cam_enu[6], const double *intrinsics, co
         mrcal_point2_t q;
         mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt_cam_enu, &pb->p_enu_m[3 * i]);
         double e2 = T * T;
-        if (pc.z > 0.0 && mrcal_project(&q, NULL, NULL, &pc, 1, (&pb->camera->lensmodel), intrinsics)) {
+        if (pc.z > 0.0 && rs_lens_project(&q, NULL, NULL, &pc, 1, (&pb->camera->lensmodel), intrinsics)) {
             const double dx = q.x - pb->q_px[2 * i], dy = q.y - pb->q_px[2 * i + 1];
             if (dx * dx + dy * dy < e2) e2 = dx * dx + dy * dy;
         }

@@ -14,7 +14,7 @@
 //      calib/rs_calib_refine_ceres.cc): parameters are rt (6), every landmark's ENU
 //      position (3, held to its survey by a prior (p - p_survey)/sigma per axis; sigma 0 holds
 //      that axis exactly) and optionally a subset of the intrinsics (with priors). Residual
-//      (mrcal_project(transform_rt(p)) - q_obs) / sigma_px with analytic Jacobians from mrcal.
+//      (rs_lens_project(transform_rt(p)) - q_obs) / sigma_px with analytic Jacobians from mrcal.
 //      Cauchy loss of scale opt->robust_scale on each landmark's normalised block (pixel +
 //      survey prior). All in coordinates centred on the landmarks' centroid.
 //   3. Outliers: a landmark whose block chi2 (2 dof) exceeds opt->outlier_threshold^2 is

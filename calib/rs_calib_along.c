@@ -23,6 +23,7 @@
 #include "calib/internal/rs_calib_along.h"
 #include "calib/internal/rs_calib_solve_state.h"
 #include "calib/rs_calib.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 
 bool rs_calib__is_along(const rs_calib_problem *pb, int i) { return pb->along && pb->along[i].Nvertices > 0; }
@@ -107,7 +108,7 @@ void rs_calib__along_choose(rs_calib_solve_state *s)
         mrcal_point3_t v_cam;
         const mrcal_point2_t q = {.x = pb->q_px[2 * i], .y = pb->q_px[2 * i + 1]};
         double ray[3] = {0, 0, 0}; // R' v: the pick's viewing direction in the centred frame
-        const bool have_ray = mrcal_unproject(&v_cam, &q, 1, lm, intrinsics);
+        const bool have_ray = rs_lens_unproject(&v_cam, &q, 1, lm, intrinsics);
         for (int k = 0; k < 3 && have_ray; k++)
             ray[k] = R[k] * v_cam.xyz[0] + R[3 + k] * v_cam.xyz[1] + R[6 + k] * v_cam.xyz[2];
         double best = INFINITY, best_p[3], best_d[3];
@@ -125,7 +126,7 @@ void rs_calib__along_choose(rs_calib_solve_state *s)
             mrcal_transform_point_rt(pc, NULL, NULL, rt_c, p);
             mrcal_point2_t qp;
             double e = INFINITY;
-            if (pc[2] > 0 && mrcal_project(&qp, NULL, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics))
+            if (pc[2] > 0 && rs_lens_project(&qp, NULL, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics))
                 e = hypot(qp.x - q.x, qp.y - q.y);
             if (e < best || (v == 0 && !isfinite(best))) {
                 best = e;

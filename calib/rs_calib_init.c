@@ -4,6 +4,7 @@
 // docs/calibration-init.md. The solvers themselves are OpenGV's and OpenCV's, behind the shims
 // rs_calib_opengv.h and calib/internal/rs_calib_opencv.h; this file holds the logic.
 #include "calib/rs_calib_init.h"
+#include "core/rs_lens.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -69,7 +70,7 @@ static void pixel_errors(double *err_px, const double *Rt_cam_c, const int *indi
         mrcal_transform_point_Rt(p_cam.xyz, NULL, NULL, Rt_cam_c, p.xyz);
         err_px[k] = INFINITY;
         if (!(p_cam.z > 0.0)) continue;
-        if (!mrcal_project(&q, NULL, NULL, &p_cam, 1, s->lensmodel, s->intrinsics)) continue;
+        if (!rs_lens_project(&q, NULL, NULL, &p_cam, 1, s->lensmodel, s->intrinsics)) continue;
         double e = hypot(q.x - s->q_px[2 * i], q.y - s->q_px[2 * i + 1]);
         if (s->ks_px) {
             const double a = s->ks_px[i] / p_cam.z;
@@ -111,11 +112,11 @@ static bool unproject(mrcal_point3_t *v, const double *xy_cv, const mrcal_point2
     if (xy_cv && isfinite(xy_cv[0]) && isfinite(xy_cv[1])) {
         *v = (mrcal_point3_t){.xyz = {xy_cv[0], xy_cv[1], 1.0}};
         mrcal_point2_t q_back;
-        if (mrcal_project(&q_back, NULL, NULL, v, 1, lensmodel, intrinsics) &&
+        if (rs_lens_project(&q_back, NULL, NULL, v, 1, lensmodel, intrinsics) &&
             hypot(q_back.x - q->x, q_back.y - q->y) <= RS_INIT_UNDISTORT_TOL_PX)
             return true;
     }
-    return mrcal_unproject(v, q, 1, lensmodel, intrinsics);
+    return rs_lens_unproject(v, q, 1, lensmodel, intrinsics);
 }
 
 static rs_status check_arguments(const rs_calib_init_result *result, const mrcal_lensmodel_t *lensmodel,
@@ -143,8 +144,6 @@ static rs_status check_arguments(const rs_calib_init_result *result, const mrcal
                                   i / 3, i / 3, opt->sigma_enu_m[i]);
     if (!(opt->planarity_ratio >= 0.0 && opt->planarity_ratio < 1.0))
         return rs_err_set(err, RS_ERR_INVALID, "planarity_ratio: %g is not in [0,1)", opt->planarity_ratio);
-    if (lensmodel->type == MRCAL_LENSMODEL_CAHVORE)
-        return rs_err_set(err, RS_ERR_UNSUPPORTED, "lensmodel: mrcal cannot unproject through LENSMODEL_CAHVORE");
     const int Nintrinsics = mrcal_lensmodel_num_params(lensmodel);
     if (Nintrinsics <= 0)
         return rs_err_set(err, RS_ERR_INVALID, "lensmodel: not a valid mrcal lens model (type %d)",

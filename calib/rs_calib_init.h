@@ -5,7 +5,7 @@
 // model. The refinement, not this step, is what makes the pose accurate.
 //
 // Method (docs/calibration-init.md has the details and references):
-//   1. Every pixel q_px is unprojected through the lens model with mrcal_unproject() and
+//   1. Every pixel q_px is unprojected through the lens model with rs_lens_unproject() and
 //      normalised to a unit bearing vector in the camera frame. For LENSMODEL_OPENCVn (OpenCV's
 //      own model) OpenCV's cv::undistortPoints goes first, and its answer is kept where mrcal
 //      projects it back within 1e-6 px of the pixel (tests/calib/test_undistort.c).
@@ -14,7 +14,7 @@
 //      bearings within 0.2 deg of each other (every pixel in a tiny image patch).
 //   3. RANSAC (OpenGV's sac::Ransac) over OpenGV's P3P (Kneip, Scaramuzza, Siegwart, CVPR 2011;
 //      Gao's solver on samples where Kneip's finds nothing), scored by reprojection error in
-//      PIXELS through mrcal_project(); landmarks behind the camera never count. OpenGV's sampler
+//      PIXELS through rs_lens_project(); landmarks behind the camera never count. OpenGV's sampler
 //      is reseeded from opt->seed: same input and seed, same answer, bit for bit. With 6 usable
 //      observations or fewer, every triple is tried instead (rs_calib_opengv.h). The best pose
 //      must be supported by a majority of the usable observations (and by 4 at least).

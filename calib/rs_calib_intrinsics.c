@@ -15,6 +15,7 @@
 #include "calib/internal/rs_calib_opencv.h"
 #include "calib/internal/rs_calib_result.h"
 #include "calib/internal/rs_calib_solve_state.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 
 // ---------------------------------------------------------------- hook 1: the options
@@ -96,7 +97,7 @@ static bool landmark_block(block *b, const columns *cl, const rs_calib_solve_sta
     mrcal_point2_t q;
     mrcal_point3_t dq_dpc[2];
     if (!(pc[2] > 0.0) ||
-        !mrcal_project(&q, dq_dpc, dq_dintr, (const mrcal_point3_t *)pc, 1, rp->lensmodel, intrinsics))
+        !rs_lens_project(&q, dq_dpc, dq_dintr, (const mrcal_point3_t *)pc, 1, rp->lensmodel, intrinsics))
         return false;
     const double sp = rp->sigma_px ? rp->sigma_px[i] : 1.0;
     const double *nominal = rp->intrinsics_nominal;

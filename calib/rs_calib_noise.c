@@ -10,6 +10,7 @@
 
 #include "calib/internal/rs_calib_opencv.h"
 #include "calib/rs_calib.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 
 void rs_calib__camera_params(rs_calib__params *pp, const rs_calib_noise_state *s)
@@ -73,8 +74,8 @@ bool rs_calib__pixel_jacobian(double q_px[2], double *G, double J[6], double dpc
     mrcal_point2_t q;
     bool intrinsics = false; // their gradient only where a column needs it (it cost a third of the projection)
     for (int c = 0; c < pp->nc; c++) intrinsics = intrinsics || pp->kind[c] != -1;
-    if (!mrcal_project(&q, dq_dpc, intrinsics ? dq_dintr : NULL, (const mrcal_point3_t *)pc, 1, s->lensmodel,
-                       s->intrinsics))
+    if (!rs_lens_project(&q, dq_dpc, intrinsics ? dq_dintr : NULL, (const mrcal_point3_t *)pc, 1, s->lensmodel,
+                         s->intrinsics))
         return false;
     for (int r = 0; r < 2; r++) {
         q_px[r] = q.xy[r];

@@ -24,7 +24,7 @@
 // (rs_calib__cauchy_block). The inner optimum does not change (rho is monotone).
 //
 // Jacobians are analytic (mrcal), not automatic or numeric: the landmark residual is
-// r = (q - q_obs)/sigma_px with q = mrcal_project(p_cam), p_cam = mrcal_transform_point_rt(rt, p),
+// r = (q - q_obs)/sigma_px with q = rs_lens_project(p_cam), p_cam = mrcal_transform_point_rt(rt, p),
 // so dr/drt = dq_dpcam dpcam_drt / sigma, dr/dp = dq_dpcam dpcam_dp / sigma and
 // dr/dintrinsics = dq_dintrinsics / sigma (mrcal 2.2 reports dq_dintrinsics densely, (2,Nintr)
 // per point; tests/calib/test_solve.c checks the chain against differences).
@@ -44,6 +44,7 @@ extern "C" {
 #include "calib/internal/rs_calib_block.h"
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/rs_calib.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 }
 
@@ -118,7 +119,7 @@ struct Landmark {
         pose.apply(p_cam.xyz, dr_drt ? dpcam_drt : nullptr, seen);
         mrcal_point2_t q;
         mrcal_point3_t dq_dpcam[2];
-        if (!mrcal_project(&q, dq_dpcam, dr_di ? dq_di : nullptr, &p_cam, 1, lensmodel, intrinsics)) return false;
+        if (!rs_lens_project(&q, dq_dpcam, dr_di ? dq_di : nullptr, &p_cam, 1, lensmodel, intrinsics)) return false;
         r[0] = (q.x - q_obs[0]) * w_px;
         r[1] = (q.y - q_obs[1]) * w_px;
         for (int k = 0; k < 3; k++) r[2 + k] = (p[k] - p_survey[k]) * w_m[k];

@@ -14,6 +14,7 @@
 
 #include "core/internal/rs_opencv.h"
 #include "core/rs_io.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 
 #define MAX_IMAGE_SIDE_PX 1000000
@@ -500,7 +501,7 @@ double rs_camera_max_tan(const rs_camera *cam)
         mrcal_point2_t q = {.x = corners[i][0], .y = corners[i][1]};
         mrcal_point3_t v;
         double t = 1e3;
-        if (mrcal_unproject(&v, &q, 1, &cam->lensmodel, cam->intrinsics) && v.z > 1e-9) t = hypot(v.x, v.y) / v.z;
+        if (rs_lens_unproject(&v, &q, 1, &cam->lensmodel, cam->intrinsics) && v.z > 1e-9) t = hypot(v.x, v.y) / v.z;
         if (!isfinite(t)) t = 1e3; // mrcal "succeeds" with NaN where the distortion never reaches the corner
         if (t > max_tan) max_tan = t;
     }
@@ -518,7 +519,7 @@ bool rs_camera_project_visible(double q_px[2], const rs_camera *cam, double max_
     mrcal_point2_t q;
     mrcal_transform_point_rt(pc.xyz, NULL, NULL, cam->rt_cam_enu, p_enu_m);
     const bool ok = rs_camera_in_field(pc.xyz, max_tan) &&
-                    mrcal_project(&q, NULL, NULL, &pc, 1, &cam->lensmodel, cam->intrinsics) && isfinite(q.x) &&
+                    rs_lens_project(&q, NULL, NULL, &pc, 1, &cam->lensmodel, cam->intrinsics) && isfinite(q.x) &&
                     isfinite(q.y);
     q_px[0] = ok ? q.x : NAN;
     q_px[1] = ok ? q.y : NAN;
@@ -556,7 +557,7 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
 
     mrcal_point2_t q = {.x = q_px[0], .y = q_px[1]};
     mrcal_point3_t v;
-    if (!mrcal_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z))
+    if (!rs_lens_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z))
         return rs_err_set(err, RS_ERR_UNSUPPORTED, "pixel (%g, %g): mrcal cannot unproject it with this lens model",
                           q_px[0], q_px[1]);
     double R[9], C[3], d[3];
@@ -575,7 +576,7 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
     double p[3];
     for (int i = 0; i < 3; i++) p[i] = C[i] + lambda * d[i];
 
-    // Polish: mrcal_unproject() is iterative; a few Gauss-Newton steps on mrcal_project() within
+    // Polish: rs_lens_unproject() is iterative; a few Gauss-Newton steps on rs_lens_project() within
     // the plane (basis u, w) bring the reprojection error to the last bits.
     double u[3], w[3];
     {
@@ -595,7 +596,7 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
         mrcal_point2_t qp;
         double dpc_dp[9];
         mrcal_transform_point_rt(pc.xyz, NULL, dpc_dp, rt_cam_enu, p);
-        if (!mrcal_project(&qp, dq_dpc, NULL, &pc, 1, lensmodel, intrinsics)) break;
+        if (!rs_lens_project(&qp, dq_dpc, NULL, &pc, 1, lensmodel, intrinsics)) break;
         const double e0 = qp.x - q.x, e1 = qp.y - q.y;
         double J[4]; // (2,2): dq/d(a,b)
         for (int r = 0; r < 2; r++) {

@@ -2,6 +2,7 @@
 // (report/internal/rs_report_draw_internal.h) and the cameras' figure geometry
 // (rs_report_camera_geometry). The figures: rs_report_draw_image.c, rs_report_draw_map.c.
 #include "report/internal/rs_report_draw.h"
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 #include "core/rs_stats.h"
 #include "report/internal/rs_report_doc.h"
@@ -125,7 +126,7 @@ bool rs_report_camera_geometry(rs_report_camera *cam)
             default: q.x = -0.5, q.y = H - 0.5 - t * H; break;
             }
             mrcal_point3_t v;
-            if (!mrcal_unproject(&v, &q, 1, &m->lensmodel, m->intrinsics)) continue;
+            if (!rs_lens_unproject(&v, &q, 1, &m->lensmodel, m->intrinsics)) continue;
             double d[3];
             mrcal_rotate_point_r_inverted(d, NULL, NULL, m->rt_cam_enu, v.xyz);
             double dh = hypot(d[0], d[1]);

@@ -12,7 +12,7 @@
 //                                 a four-approach intersection watched by cameras on poles at
 //                                 its corners.
 //
-// Method: points are projected with mrcal_project() through the TRUE lens model and pose; the
+// Method: points are projected with rs_lens_project() through the TRUE lens model and pose; the
 // picked pixel is that projection plus isotropic Gaussian noise (redrawn until it lies inside
 // the image), or, for a gross outlier, a uniformly random pixel at least outlier_min_px away
 // from the true one. Surveyed positions are the true ENU positions plus Gaussian noise (sigma_h

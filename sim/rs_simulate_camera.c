@@ -5,24 +5,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_lens.h"
 #include "core/rs_pose.h"
 #include "sim/internal/rs_simulate_internal.h"
 
 // ---------------------------------------------------------------------------------------------
 // one camera: pose, field of view, projection, picks
-
-// Unprojects pixels through the lens. mrcal 2.2 cannot unproject CAHVORE; its rays come from
-// the pinhole core instead, which is close for the mild distortion drawn here: callers project
-// the points they place with the true model again (camera_sees), so only the spread of the
-// points depends on this approximation, never their pixels.
-static bool camera_unproject(const rs_simulate__camera *c, mrcal_point3_t *v, const mrcal_point2_t *q, int N)
-{
-    if (c->cam.lensmodel.type == MRCAL_LENSMODEL_CAHVORE) {
-        mrcal_unproject_pinhole(v, NULL, q, N, c->cam.intrinsics);
-        return true;
-    }
-    return mrcal_unproject(v, q, N, &c->cam.lensmodel, c->cam.intrinsics);
-}
 
 // The widest angle off the optical axis that the image shows (its corners), for rejecting points
 // that a distortion polynomial would fold back into the image from outside the field of view.
@@ -39,7 +27,7 @@ rs_status rs_simulate__camera_field_of_view(rs_simulate__camera *c, rs_err *err)
         {.x = c->cam.width - 0.5, .y = 0.5 * c->cam.height},
     };
     mrcal_point3_t v[8];
-    if (!camera_unproject(c, v, q, 8))
+    if (!rs_lens_unproject(v, q, 8, &c->cam.lensmodel, c->cam.intrinsics))
         return rs_err_set(err, RS_ERR_UNSUPPORTED, "lens: mrcal cannot unproject through %s",
                           mrcal_lensmodel_name_unconfigured(&c->cam.lensmodel));
     double cos_min = 1.0;
@@ -86,7 +74,7 @@ bool rs_simulate__camera_sees(const rs_simulate__camera *c, double q_px[2], cons
     mrcal_transform_point_rt(pc.xyz, NULL, NULL, c->cam.rt_cam_enu, p_enu);
     double n = sqrt(pc.x * pc.x + pc.y * pc.y + pc.z * pc.z);
     if (!(pc.z > 0.5) || pc.z < c->cos_max * n) return false;
-    if (!mrcal_project(&q, NULL, NULL, &pc, 1, &c->cam.lensmodel, c->cam.intrinsics)) return false;
+    if (!rs_lens_project(&q, NULL, NULL, &pc, 1, &c->cam.lensmodel, c->cam.intrinsics)) return false;
     q_px[0] = q.x;
     q_px[1] = q.y;
     return isfinite(q.x) && isfinite(q.y) && q.x >= margin_px && q.y >= margin_px &&
@@ -206,7 +194,7 @@ static bool place_landmark(rs_rng *rng, double p_enu[3], double q_true_px[2], co
                         .y = rs_rng_uniform_in(rng, o->margin_px, c->cam.height - 1 - o->margin_px)};
     double h = elevated ? rs_rng_uniform_in(rng, o->elevated_min_m, o->elevated_max_m) : 0.0;
     mrcal_point3_t v;
-    if (!camera_unproject(c, &v, &q, 1)) return false;
+    if (!rs_lens_unproject(&v, &q, 1, &c->cam.lensmodel, c->cam.intrinsics) || !isfinite(v.x)) return false;
     double d[3];
     mrcal_rotate_point_R_inverted(d, NULL, NULL, c->R_cam_enu, v.xyz);
     if (fabs(d[2]) < 1e-12) return false;

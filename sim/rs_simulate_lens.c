@@ -7,7 +7,7 @@
 
 #include "sim/internal/rs_simulate_internal.h"
 
-typedef enum { FAMILY_PINHOLE, FAMILY_STEREOGRAPHIC, FAMILY_ANGULAR } lens_family;
+typedef enum { FAMILY_PINHOLE, FAMILY_STEREOGRAPHIC, FAMILY_ANGULAR, FAMILY_CAHVORE } lens_family;
 
 static lens_family family_of(mrcal_lensmodel_type_t t)
 {
@@ -16,6 +16,7 @@ static lens_family family_of(mrcal_lensmodel_type_t t)
     case MRCAL_LENSMODEL_SPLINED_STEREOGRAPHIC: return FAMILY_STEREOGRAPHIC;
     case MRCAL_LENSMODEL_LONLAT:
     case MRCAL_LENSMODEL_LATLON: return FAMILY_ANGULAR;
+    case MRCAL_LENSMODEL_CAHVORE: return FAMILY_CAHVORE;
     default: return FAMILY_PINHOLE;
     }
 }
@@ -43,6 +44,8 @@ rs_status rs_simulate__lens_check(mrcal_lensmodel_t *lm, const char *name, int W
     if (W < 64 || H < 64 || W > 20000 || H > 20000)
         return rs_err_set(err, RS_ERR_USAGE, "image: %dx%d is outside 64x64 .. 20000x20000", W, H);
     double max_hfov = family_of(lm->type) == FAMILY_PINHOLE ? 170.0 : 340.0;
+    if (family_of(lm->type) == FAMILY_CAHVORE) // theta |linearity| < 90 degrees
+        max_hfov = fmin(340.0, 170.0 / fmax(1e-9, fabs(lm->LENSMODEL_CAHVORE__config.linearity)));
     if (!(hfov_deg >= 1.0 && hfov_deg <= max_hfov))
         return rs_err_set(err, RS_ERR_USAGE, "hfov_deg: %g is outside [1, %g] for %s", hfov_deg, max_hfov, name);
     return RS_OK;
@@ -64,6 +67,12 @@ rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel, double **intrinsics, in
     switch (family_of(lensmodel->type)) {
     case FAMILY_STEREOGRAPHIC: f = 0.5 * width_px / (2.0 * tan(0.5 * half)); break;
     case FAMILY_ANGULAR: f = 0.5 * width_px / half; break;
+    case FAMILY_CAHVORE: { // the image's half width is chi(half): core/rs_lens.h
+        const double L = lensmodel->LENSMODEL_CAHVORE__config.linearity;
+        const double chi = fabs(L) < 1e-15 ? half : L > 0 ? tan(L * half) / L : sin(L * half) / L;
+        f = 0.5 * width_px / chi;
+        break;
+    }
     default: f = 0.5 * width_px / tan(half); break;
     }
     f *= 1.0 + 0.002 * rs_rng_normal(rng);
@@ -81,6 +90,10 @@ rs_status rs_simulate_lens(mrcal_lensmodel_t *lensmodel, double **intrinsics, in
             if (N > 8) p[8] = -0.005 + 0.002 * rs_rng_normal(rng);         // k3
             if (N > 9) p[9] = 0.01 * rs_rng_normal(rng);                   // k4 (k5, k6 = 0)
             for (int i = 12; i < N; i++) p[i] = 1e-4 * rs_rng_normal(rng); // s1..s4
+        } else if (t == MRCAL_LENSMODEL_CAHVORE && fabs(lensmodel->LENSMODEL_CAHVORE__config.linearity) < 1e-15) {
+            // a fisheye: Kannala-Brandt's k1, k2 (r1, r2 at linearity 0; docs/conventions.md)
+            p[7] = 0.02 + 0.01 * rs_rng_normal(rng);    // r1 = k1
+            p[8] = -0.004 + 0.002 * rs_rng_normal(rng); // r2 = k2
         } else if (t == MRCAL_LENSMODEL_CAHVOR || t == MRCAL_LENSMODEL_CAHVORE) {
             p[4] = 1e-3 * rs_rng_normal(rng);         // alpha
             p[5] = 1e-3 * rs_rng_normal(rng);         // beta

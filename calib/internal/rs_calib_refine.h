@@ -8,7 +8,7 @@
 //   minimise  sum_i rho( |(q(i) - q_obs_i)/sigma_px_i|^2 + sum_k ((p_ik - p_survey_ik)/s_ik)^2 )
 //           + |(C - C_prior)/sigma_prior|^2                       (optional camera position prior)
 //           + sum_j ((x_j - x_nominal_j)/sigma_j)^2               (priors of refined intrinsics)
-//   q(i) = mrcal_project(mrcal_transform_point_rt(rt_cam_c, p_i), intrinsics)
+//   q(i) = rs_lens_project(mrcal_transform_point_rt(rt_cam_c, p_i), intrinsics)
 // over rt_cam_c (6), the landmarks p_i (3 each; axis k with s_ik = 0 is held exactly) and the
 // refined intrinsics. rho is Cauchy's loss a^2 log(1 + s/a^2), a = robust_scale, on each landmark's
 // block (none when robust_scale <= 0). The landmarks are solved for inside each evaluation

@@ -10,6 +10,7 @@
 #include <mrcal/mrcal.h>
 
 #include "core/rs_io.h"
+#include "core/rs_lens.h"
 #include "geo/rs_geo.h"
 
 #define EDGE_SAMPLES 64
@@ -48,7 +49,7 @@ static rs_status projector_init(projector *pr, const rs_camera *cam, rs_err *err
         q[2 * S + k] = (mrcal_point2_t){.x = W - 0.5 - f * W, .y = H - 0.5};
         q[3 * S + k] = (mrcal_point2_t){.x = -0.5, .y = H - 0.5 - f * H};
     }
-    if (!mrcal_unproject(v, q, 4 * S, &cam->lensmodel, cam->intrinsics))
+    if (!rs_lens_unproject(v, q, 4 * S, &cam->lensmodel, cam->intrinsics))
         return rs_err_set(err, RS_ERR_EXTERNAL, "labels: mrcal_unproject of the image border failed");
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (int i = 0; i < 4 * S; i++) {
@@ -123,7 +124,7 @@ static rs_status grow_by_polygon(double box[4], const projector *pr, const doubl
             for (int k = 0; k < 3; k++) p[N].xyz[k] = c[i][k] + t * (c[(i + 1) % m][k] - c[i][k]);
             N++;
         }
-    if (!mrcal_project(q, NULL, NULL, p, N, &pr->cam->lensmodel, pr->cam->intrinsics))
+    if (!rs_lens_project(q, NULL, NULL, p, N, &pr->cam->lensmodel, pr->cam->intrinsics))
         return rs_err_set(err, RS_ERR_EXTERNAL, "labels: mrcal_project failed");
     for (int i = 0; i < N; i++) {
         if (!isfinite(q[i].x) || !isfinite(q[i].y)) continue;
@@ -194,7 +195,7 @@ static rs_status raster_triangle3(raster *r, const projector *pr, const double t
     mrcal_point3_t p[MAXPOLY];
     mrcal_point2_t q[MAXPOLY];
     for (int i = 0; i < m; i++) memcpy(p[i].xyz, c[i], sizeof c[i]);
-    if (!mrcal_project(q, NULL, NULL, p, m, &pr->cam->lensmodel, pr->cam->intrinsics))
+    if (!rs_lens_project(q, NULL, NULL, p, m, &pr->cam->lensmodel, pr->cam->intrinsics))
         return rs_err_set(err, RS_ERR_EXTERNAL, "labels: mrcal_project failed");
     for (int i = 1; i + 1 < m; i++) raster_triangle(r, q[0].xy, q[i].xy, q[i + 1].xy);
     return RS_OK;
@@ -270,7 +271,7 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
         if (corners[c][2] >= RS_SYNTH_LABEL_ZMIN_M) {
             mrcal_point2_t q;
             mrcal_point3_t p = {{corners[c][0], corners[c][1], corners[c][2]}};
-            if (!mrcal_project(&q, NULL, NULL, &p, 1, &cam->lensmodel, cam->intrinsics))
+            if (!rs_lens_project(&q, NULL, NULL, &p, 1, &cam->lensmodel, cam->intrinsics))
                 return rs_err_set(err, RS_ERR_EXTERNAL, "vehicle %d: mrcal_project failed", k);
             L->corners_px[c][0] = q.x, L->corners_px[c][1] = q.y;
         }
@@ -310,7 +311,7 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
         mrcal_point3_t p;
         mrcal_point2_t q;
         memcpy(p.xyz, L->bottom_center_cam_m, sizeof p.xyz);
-        if (!mrcal_project(&q, NULL, NULL, &p, 1, &cam->lensmodel, cam->intrinsics))
+        if (!rs_lens_project(&q, NULL, NULL, &p, 1, &cam->lensmodel, cam->intrinsics))
             return rs_err_set(err, RS_ERR_EXTERNAL, "vehicle %d: mrcal_project failed", k);
         L->bottom_center_px[0] = q.x, L->bottom_center_px[1] = q.y;
     }

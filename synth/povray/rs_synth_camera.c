@@ -1,6 +1,7 @@
 // rs_synth_camera.c -- the POV-Ray camera of a calibrated camera; the pinhole canvas of a
 // distorted lens. See rs_synth_camera.h and docs/povray.md.
 #include "synth/povray/rs_synth_camera.h"
+#include "core/rs_lens.h"
 
 #include <math.h>
 #include <stdbool.h>
@@ -73,7 +74,7 @@ static void lens_to_pinhole(double q_out[2], int *ok, const double q_in[2], cons
     mrcal_point2_t q = {.x = q_in[0], .y = q_in[1]};
     mrcal_point3_t v;
     *ok = 0;
-    if (!mrcal_unproject(&v, &q, 1, lensmodel, intrinsics)) return;
+    if (!rs_lens_unproject(&v, &q, 1, lensmodel, intrinsics)) return;
     if (!(v.z > 0) || !isfinite(v.x) || !isfinite(v.y)) return;
     const double tx = v.x / v.z, ty = v.y / v.z;
     if (hypot(tx, ty) > max_tan) return;
@@ -192,7 +193,7 @@ rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, con
     for (int b = 0; b < Ny; b++)
         for (int a = 0; a < Nx; a++)
             q[(size_t)b * Nx + a] = (mrcal_point2_t){.x = (double)(a - 1) * S, .y = (double)(b - 1) * S};
-    if (!mrcal_unproject(v, q, (int)Nnodes, lensmodel, intrinsics)) {
+    if (!rs_lens_unproject(v, q, (int)Nnodes, lensmodel, intrinsics)) {
         st = rs_err_set(err, RS_ERR_EXTERNAL, "canvas map: mrcal_unproject failed");
         goto done;
     }
@@ -224,7 +225,7 @@ rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, con
             v[x] = (mrcal_point3_t){.x = isfinite(t[0]) ? t[0] : 0, .y = isfinite(t[1]) ? t[1] : 0, .z = 1};
             map_from_tangent(map, (size_t)y * width + x, canvas, t[0], t[1]);
         }
-        if (!mrcal_project(q, NULL, NULL, v, width, lensmodel, intrinsics)) {
+        if (!rs_lens_project(q, NULL, NULL, v, width, lensmodel, intrinsics)) {
             st = rs_err_set(err, RS_ERR_EXTERNAL, "canvas map: mrcal_project failed");
             goto done;
         }
@@ -250,7 +251,7 @@ rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, con
             const size_t i = redo[k0 + k];
             q[k] = (mrcal_point2_t){.x = (double)(i % (size_t)width), .y = (double)(i / (size_t)width)};
         }
-        if (!mrcal_unproject(v, q, n, lensmodel, intrinsics)) {
+        if (!rs_lens_unproject(v, q, n, lensmodel, intrinsics)) {
             st = rs_err_set(err, RS_ERR_EXTERNAL, "canvas map: mrcal_unproject failed");
             goto done;
         }

@@ -11,6 +11,7 @@ import sys
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
 from rs_check import check, finish  # noqa: E402
 
+LENS_HOME = "core/rs_lens.c"  # the only caller of mrcal_project and mrcal_unproject
 MODULES = ["core", "geo", "calib", "sim", "audit", "report", "eval", "synth", "pick", "bench", "cli"]
 # module -> the modules whose public headers it may include (besides its own)
 MAY_INCLUDE = {
@@ -139,6 +140,10 @@ def main():
                 if target != module:
                     check(target in MAY_INCLUDE[module], f"{rel}: {module}/ may not include {target}/ (\"{inc}\")")
                     check("internal" not in parts[1:-1], f"{rel}: includes another module's internal header \"{inc}\"")
+            # one home for projection: CAHVORE's gradients and unprojection live in core/rs_lens.c
+            if re.search(r"\bmrcal_(project|unproject)\s*\(", re.sub(r"//[^\n]*", "", text)):
+                check(rel == LENS_HOME, f"{rel}: calls mrcal_project/mrcal_unproject; project through "
+                      f"rs_lens_project/rs_lens_unproject ({LENS_HOME}), which add CAHVORE's gradients and unprojection")
             if "<cairo" in text:
                 check(module == "report", f"{rel}: includes cairo; the report is the only cairo user")
             lines = text.count("\n")

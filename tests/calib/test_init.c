@@ -271,10 +271,7 @@ static void test_degenerate(void)
     }
     expect_error("behind the camera", RS_ERR_DEGENERATE, "in front of the camera", &pb, p, q, 12);
 
-    // an unsupported lens model and a bad option
-    tg_problem bad = pb;
-    bad.lensmodel.type = MRCAL_LENSMODEL_CAHVORE;
-    expect_error("CAHVORE", RS_ERR_UNSUPPORTED, "CAHVORE", &bad, pb.p_enu_m, pb.q_px, 12);
+    // a bad option
     rs_calib_init_options opt;
     rs_calib_init_options_default(&opt);
     opt.ransac_threshold_px = NAN;
