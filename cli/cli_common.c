@@ -141,3 +141,15 @@ char *rs_cli_scratch_dir(char tmpl[4096], const char *what)
     fprintf(stderr, "roadside: %s: cannot create a scratch folder %s: %s\n", what, tmpl, strerror(errno));
     return NULL;
 }
+
+bool rs_cli_parse_pair(const char *s, char sep, double *a, double *b)
+{
+    const char *mid = strchr(s, sep);
+    if (!mid) return false;
+    char first[64];
+    size_t n = (size_t)(mid - s);
+    if (n == 0 || n >= sizeof first) return false;
+    memcpy(first, s, n);
+    first[n] = '\0';
+    return rs_cli_parse_double(first, a) && rs_cli_parse_double(mid + 1, b);
+}

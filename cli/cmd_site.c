@@ -15,6 +15,7 @@ static void usage(FILE *out)
     fprintf(out, "usage: roadside site check SITE\n"
                  "       roadside site describe [--landmarks] SITE\n"
                  "       roadside site init NAME --origin LAT,LON,H [--orthometric N] [--name TEXT]\n"
+                 "       roadside site import DIR --points FILE ...   (see 'roadside site import --help')\n"
                  "       roadside site simulate ...   (see 'roadside site simulate --help')\n"
                  "       roadside site render-backgrounds ...   (see its --help)\n"
                  "\n"
@@ -45,6 +46,8 @@ static void usage(FILE *out)
                  "            --orthometric N     heights are orthometric, N = geoid undulation in\n"
                  "                                metres (h_ell = h + N); default: ellipsoidal\n"
                  "            --name TEXT         the site's name (default: the folder's last part)\n"
+                 "  import    builds a site from point pairs (a point-pair JSON, or a CSV of lat,lon,u,v\n"
+                 "            or e,n,u,v in any CRS) and intrinsics or an image size (see its --help).\n"
                  "  simulate  makes a synthetic site with known cameras (see its --help).\n"
                  "  render-backgrounds  ray-traces synthetic backgrounds of the site's ground.\n"
                  "\n"
@@ -314,6 +317,7 @@ int rs_cli_site(int argc, char **argv)
     }
     const char *sub = argv[1];
     if (!strcmp(sub, "simulate")) return rs_cli_site_simulate(argc - 1, argv + 1);
+    if (!strcmp(sub, "import")) return rs_cli_site_import(argc - 1, argv + 1);
     if (!strcmp(sub, "render-backgrounds")) return rs_cli_site_render_backgrounds(argc - 1, argv + 1);
     if (!strcmp(sub, "-h") || !strcmp(sub, "--help") || rs_cli_wants_help(argc - 1, argv + 1)) {
         usage(stdout);
@@ -322,6 +326,6 @@ int rs_cli_site(int argc, char **argv)
     if (!strcmp(sub, "check")) return cmd_check(argc - 1, argv + 1);
     if (!strcmp(sub, "describe")) return cmd_describe(argc - 1, argv + 1);
     if (!strcmp(sub, "init")) return cmd_init(argc - 1, argv + 1);
-    return rs_cli_usage_error("site", "unknown subcommand '%s': check, describe, init, simulate or render-backgrounds",
-                              sub);
+    return rs_cli_usage_error(
+        "site", "unknown subcommand '%s': check, describe, init, import, simulate or render-backgrounds", sub);
 }

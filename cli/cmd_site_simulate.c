@@ -64,19 +64,6 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             d->origin.lat_deg, d->origin.lon_deg, d->origin.h_m);
 }
 
-// Parses "A<sep>B" into two numbers.
-static bool parse_pair(const char *s, char sep, double *a, double *b)
-{
-    const char *mid = strchr(s, sep);
-    if (!mid) return false;
-    char first[64];
-    size_t n = (size_t)(mid - s);
-    if (n == 0 || n >= sizeof first) return false;
-    memcpy(first, s, n);
-    first[n] = '\0';
-    return rs_cli_parse_double(first, a) && rs_cli_parse_double(mid + 1, b);
-}
-
 int rs_cli_site_simulate(int argc, char **argv)
 {
     rs_simulate_site_options o;
@@ -124,7 +111,7 @@ int rs_cli_site_simulate(int argc, char **argv)
         } else if (strcmp(a, "--lens") == 0) {
             o.lensmodel = v;
         } else if (strcmp(a, "--image") == 0) {
-            if (!parse_pair(v, 'x', &x, &y) || x != (int)x || y != (int)y)
+            if (!rs_cli_parse_pair(v, 'x', &x, &y) || x != (int)x || y != (int)y)
                 return rs_cli_usage_error(CMD, "--image: '%s' is not WIDTHxHEIGHT in pixels", v);
             o.width_px = (int)x;
             o.height_px = (int)y;
@@ -135,7 +122,7 @@ int rs_cli_site_simulate(int argc, char **argv)
             if (!rs_cli_parse_double(v, &o.pixel_sigma_px))
                 return rs_cli_usage_error(CMD, "--pixel-sigma: '%s' is not a number", v);
         } else if (strcmp(a, "--survey-sigma") == 0) {
-            if (!parse_pair(v, ',', &o.survey_sigma_h_m, &o.survey_sigma_v_m))
+            if (!rs_cli_parse_pair(v, ',', &o.survey_sigma_h_m, &o.survey_sigma_v_m))
                 return rs_cli_usage_error(CMD, "--survey-sigma: '%s' is not H,V in metres", v);
         } else if (strcmp(a, "--outliers") == 0) {
             if (!rs_cli_parse_double(v, &o.outlier_fraction))

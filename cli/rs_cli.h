@@ -32,8 +32,10 @@ int rs_cli_bench(int argc, char **argv);
 int rs_cli_ortho(int argc, char **argv);
 int rs_cli_pick(int argc, char **argv);
 int rs_cli_dataset(int argc, char **argv);
-// Sub-subcommands living in their own files: `roadside site simulate`, `roadside bench calib`.
+// Sub-subcommands living in their own files: `roadside site simulate`, `roadside site import`,
+// `roadside bench calib`.
 int rs_cli_site_simulate(int argc, char **argv);
+int rs_cli_site_import(int argc, char **argv);
 int rs_cli_bench_calib(int argc, char **argv);
 int rs_cli_bench_synth(int argc, char **argv);
 int rs_cli_bench_site(int argc, char **argv);
@@ -72,6 +74,9 @@ bool rs_cli_parse_llh(const char *s, rs_llh *out);
 // Parses a finite double / an int in [lo, hi]; false if s is not entirely a number.
 bool rs_cli_parse_double(const char *s, double *out);
 bool rs_cli_parse_int(const char *s, long lo, long hi, long *out);
+
+// Parses "A<sep>B" (1920x1080, 0.05,0.08) into two finite numbers; false when malformed.
+bool rs_cli_parse_pair(const char *s, char sep, double *a, double *b);
 
 // A comma-separated list of up to max integers in [lo, hi] (the benches' --landmarks N[,N...]):
 // out (max,) and *n. False (out, *n undefined) when malformed, empty or too long.

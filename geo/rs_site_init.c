@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "core/rs_io.h"
+#include "geo/internal/rs_site_internal.h"
 #include "geo/rs_site.h"
 #include "geo/rs_site_write.h"
 
@@ -142,8 +143,7 @@ static rs_status write_skeleton(const char *tmp, const char *dir, const char *na
     return st;
 }
 
-// 0: `dir` does not exist or is an empty folder; else an error naming why it cannot be used.
-static rs_status check_target(const char *dir, bool *exists, rs_err *err)
+rs_status rs_site__check_target(const char *dir, bool *exists, rs_err *err)
 {
     struct stat sb;
     *exists = false;
@@ -179,6 +179,35 @@ static void remove_skeleton(const char *tmp)
     rmdir(tmp);
 }
 
+rs_status rs_site__make_tmp(char **tmp_out, const char *dir, rs_err *err)
+{
+    *tmp_out = NULL;
+    size_t n = strlen(dir);
+    while (n > 1 && dir[n - 1] == '/') n--;
+    char *tmp = malloc(n + sizeof ".tmp.XXXXXX");
+    if (!tmp) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
+    memcpy(tmp, dir, n);
+    memcpy(tmp + n, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
+    rs_status st = RS_OK;
+    char *slash = strrchr(tmp, '/');
+    if (slash && slash != tmp) {
+        *slash = '\0';
+        st = rs_io_mkdir_p(tmp, err);
+        *slash = '/';
+    }
+    if (st == RS_OK && !mkdtemp(tmp))
+        st = rs_err_set(err, RS_ERR_IO, "%s: cannot create a temporary folder next to it: %s", dir, strerror(errno));
+    if (st != RS_OK) {
+        free(tmp);
+        return st;
+    }
+    mode_t mask = umask(0); // mkdtemp makes 0700; a site is an ordinary folder
+    umask(mask);
+    chmod(tmp, 0777 & ~mask);
+    *tmp_out = tmp;
+    return RS_OK;
+}
+
 rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin, const double *geoid_undulation_m,
                        rs_err *err)
 {
@@ -192,35 +221,13 @@ rs_status rs_site_init(const char *dir, const char *name, const rs_llh *origin, 
                           *geoid_undulation_m);
     if (!name || !*name) return rs_err_set(err, RS_ERR_INVALID, "name: empty");
     bool exists;
-    rs_status st = check_target(dir, &exists, err);
+    rs_status st = rs_site__check_target(dir, &exists, err);
     if (st != RS_OK) return st;
 
     // Build under "<dir>.tmp.XXXXXX" in the same parent, then rename: rename(2) replaces an
     // empty folder atomically.
-    size_t n = strlen(dir);
-    while (n > 1 && dir[n - 1] == '/') n--;
-    char *tmp = malloc(n + sizeof ".tmp.XXXXXX");
-    if (!tmp) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", dir);
-    memcpy(tmp, dir, n);
-    memcpy(tmp + n, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
-    char *slash = strrchr(tmp, '/');
-    if (slash && slash != tmp) {
-        *slash = '\0';
-        st = rs_io_mkdir_p(tmp, err);
-        *slash = '/';
-        if (st != RS_OK) {
-            free(tmp);
-            return st;
-        }
-    }
-    if (!mkdtemp(tmp)) {
-        st = rs_err_set(err, RS_ERR_IO, "%s: cannot create a temporary folder next to it: %s", dir, strerror(errno));
-        free(tmp);
-        return st;
-    }
-    mode_t mask = umask(0); // mkdtemp makes 0700; a site is an ordinary folder
-    umask(mask);
-    chmod(tmp, 0777 & ~mask);
+    char *tmp = NULL;
+    if ((st = rs_site__make_tmp(&tmp, dir, err)) != RS_OK) return st;
 
     char *path = NULL;
     for (int i = 0; i < NDIRS && st == RS_OK; i++) {

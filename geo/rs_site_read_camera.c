@@ -61,9 +61,7 @@ done:
 
 // ---- observations/<id>.csv ----
 
-// Splits one CSV line in place into fields (RFC 4180 quoting, surrounding blanks trimmed).
-// Stores at most maxf fields; returns how many there are, or -1 for malformed quoting.
-static int split_csv(char *s, char **fields, int maxf)
+int rs_site__split_csv(char *s, char **fields, int maxf)
 {
     int n = 0;
     for (;;) {
@@ -96,10 +94,7 @@ static int split_csv(char *s, char **fields, int maxf)
     }
 }
 
-// A plain decimal number: [+-] digits [. digits] [(e|E) [+-] digits], with a digit on at least
-// one side of the point. strtod alone also takes hexadecimal ("0x620" would be 1568), "inf",
-// "nan" and "1e" prefixes of them; a pixel written so is a mistake, not a number.
-static bool is_decimal(const char *t)
+bool rs_site__is_decimal(const char *t)
 {
     if (*t == '+' || *t == '-') t++;
     int digits = 0;
@@ -124,7 +119,7 @@ static bool parse_csv_number(rs_site__reader *c, int line, const char *field, co
         ERR_AT(c, RS_ERR_INVALID, line, field, "not finite ('%s')", text);
         return false;
     }
-    if (!is_decimal(text)) {
+    if (!rs_site__is_decimal(text)) {
         const bool hex = strchr(text, 'x') || strchr(text, 'X'), comma = strchr(text, ',');
         ERR_AT(c, RS_ERR_PARSE, line, field, "not a number ('%.40s')%s", text,
                hex     ? ": only decimal numbers are read (write 1568, not 0x620)"
@@ -267,7 +262,7 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
         while (isspace((unsigned char)*s)) s++;
         if (!*s || *s == '#') continue; // blank lines and comments
         char *fields[MAXFIELDS];
-        int n = split_csv(s, fields, MAXFIELDS);
+        int n = rs_site__split_csv(s, fields, MAXFIELDS);
         if (n < 0) {
             ERR_AT(c, RS_ERR_PARSE, line, NULL, "malformed quoting (a \" that is not closed, or text after it)");
             continue;

@@ -184,3 +184,25 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i);
 // Reads camera i's observations CSV (cam->observations_path) into cam->observations, matching
 // landmark ids against c->site's landmarks (when c->landmarks_ok) and checking each pick.
 void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i);
+
+// ---- CSV, shared by the observations reader (rs_site_read_camera.c) and the importer
+// (rs_site_import_read.c) ----
+
+// Splits one CSV line in place into fields (RFC 4180 quoting, surrounding blanks trimmed).
+// Stores at most maxf fields; returns how many there are, or -1 for malformed quoting.
+int rs_site__split_csv(char *s, char **fields, int maxf);
+
+// A plain decimal number: [+-] digits [. digits] [(e|E) [+-] digits], with a digit on at least
+// one side of the point. strtod alone also takes hexadecimal ("0x620" would be 1568), "inf",
+// "nan" and "1e" prefixes of them; a coordinate or pixel written so is a mistake, not a number.
+bool rs_site__is_decimal(const char *t);
+
+// ---- building a site folder under a temporary name (rs_site_init.c; also the importer's) ----
+
+// RS_OK when `dir` does not exist (*exists false) or is an empty folder (*exists true); else
+// RS_ERR_INVALID ("DIR: exists and is not empty: not overwriting it") or RS_ERR_IO.
+rs_status rs_site__check_target(const char *dir, bool *exists, rs_err *err);
+
+// Creates the folder "<dir>.tmp.XXXXXX" next to dir (and dir's parent if need be), with the
+// permissions of an ordinary folder. out: *tmp, malloc'ed (caller frees). RS_ERR_IO, RS_ERR_NOMEM.
+rs_status rs_site__make_tmp(char **tmp, const char *dir, rs_err *err);
