@@ -190,6 +190,12 @@ static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, r
         rs_calib_result_free(&res);
         return st;
     }
+    if (bm->lib == RS_BENCH_CALIB_LIB_OPENCV && P->camera.lensmodel.type == MRCAL_LENSMODEL_CAHVORE) {
+        // a fisheye (docs/conventions.md, "Fisheye lenses"): k1, k2 = r1, r2
+        const double *in = P->camera.intrinsics, kb[8] = {in[0], in[1], in[2], in[3], in[7], in[8], 0, 0};
+        return rs_bench_opencv_pnp_fisheye(rt, NULL, P->p_enu_survey_m, P->q_px, P->Npoints, kb,
+                                           (rs_bench_opencv_pnp_method)bm->variant, bm->refine_lm, 8.0, err);
+    }
     if (bm->lib == RS_BENCH_CALIB_LIB_OPENCV)
         return rs_bench_opencv_pnp(rt, NULL, P->p_enu_survey_m, P->q_px, P->Npoints, P->camera.intrinsics,
                                    P->camera.Nintrinsics - 4, (rs_bench_opencv_pnp_method)bm->variant, bm->refine_lm,
