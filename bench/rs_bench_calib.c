@@ -100,6 +100,24 @@ static int make_configs(bench_config *c, bool quick)
         c[n - 1].sim.max_range_m = fmax(80.0, 2.0 * dist_full[i]);
     }
 #undef ADD
+    // fisheye: one overhead camera over the junction, 1280x960, 20 ground points (issue 38)
+    static const char *const fisheye[2] = {"equidistant", "kannala-brandt"};
+    for (int i = 0; i < 2; i++) {
+        c[n].family = "fisheye";
+        snprintf(c[n].config, sizeof c[n].config, "%s", fisheye[i]);
+        baseline(&c[n].sim);
+        rs_simulate_camera_options *s = &c[n].sim;
+        s->lensmodel = "LENSMODEL_CAHVORE_linearity=0.00";
+        s->width_px = 1280;
+        s->height_px = 960;
+        s->hfov_deg = 216; // f = 640 px / (108 deg in radians) = 340 px
+        s->distortion = i == 1;
+        s->camera_height_m = 10;
+        s->distance_m = 3;
+        s->max_range_m = 40;
+        s->elevated_fraction = 0;
+        n++;
+    }
     return n;
 }
 
@@ -171,6 +189,12 @@ static rs_status run_method(double rt[6], double *cond, int m, bench_trial *T, r
         }
         rs_calib_result_free(&res);
         return st;
+    }
+    if (bm->lib == RS_BENCH_CALIB_LIB_OPENCV && P->camera.lensmodel.type == MRCAL_LENSMODEL_CAHVORE) {
+        // a fisheye (docs/conventions.md, "Fisheye lenses"): k1, k2 = r1, r2
+        const double *in = P->camera.intrinsics, kb[8] = {in[0], in[1], in[2], in[3], in[7], in[8], 0, 0};
+        return rs_bench_opencv_pnp_fisheye(rt, NULL, P->p_enu_survey_m, P->q_px, P->Npoints, kb,
+                                           (rs_bench_opencv_pnp_method)bm->variant, bm->refine_lm, 8.0, err);
     }
     if (bm->lib == RS_BENCH_CALIB_LIB_OPENCV)
         return rs_bench_opencv_pnp(rt, NULL, P->p_enu_survey_m, P->q_px, P->Npoints, P->camera.intrinsics,

@@ -13,21 +13,14 @@ extern "C" {
 #include "bench/rs_bench_opencv.h"
 }
 
-extern "C" rs_status rs_bench_opencv_pnp(double *rt_cam_ref, bool *inlier, const double *p_ref, const double *q_px,
-                                         int N, const double *intrinsics, int Ndistortion,
-                                         rs_bench_opencv_pnp_method method, bool refine_lm, double ransac_threshold_px,
-                                         rs_err *err)
+namespace {
+// The pose from landmarks `object` (N,3) and pixels `image` (N,2) through K and D (OpenCV's
+// distortion, may be empty), as rs_bench_opencv_pnp documents. May throw.
+rs_status pnp(double *rt_cam_ref, bool *inlier, const cv::Mat &object, const cv::Mat &image, int N,
+              const cv::Matx33d &K, const cv::Mat &D, rs_bench_opencv_pnp_method method, bool refine_lm,
+              double ransac_threshold_px, const char *name, rs_err *err)
 {
-    static const char *const names[] = {"ITERATIVE", "EPNP", "SQPNP", "IPPE", "RANSAC"};
-    const char *name = (unsigned)method < 5 ? names[method] : "?";
-    try {
-        if (Ndistortion < 0 || Ndistortion > 14 || (unsigned)method >= 5)
-            return rs_err_set(err, RS_ERR_USAGE, "OpenCV %s: Ndistortion = %d", name, Ndistortion);
-        const cv::Mat object(N, 3, CV_64F, const_cast<double *>(p_ref)); // read only
-        const cv::Mat image(N, 2, CV_64F, const_cast<double *>(q_px));   // read only
-        const cv::Matx33d K(intrinsics[0], 0, intrinsics[2], 0, intrinsics[1], intrinsics[3], 0, 0, 1);
-        const cv::Mat D =
-            Ndistortion > 0 ? cv::Mat(1, Ndistortion, CV_64F, const_cast<double *>(intrinsics + 4)) : cv::Mat();
+    {
         cv::Mat rvec, tvec;
         std::vector<int> inliers;
         bool ok;
@@ -69,11 +62,63 @@ extern "C" rs_status rs_bench_opencv_pnp(double *rt_cam_ref, bool *inlier, const
                 if (i >= 0 && i < N) inlier[i] = true;
         }
         return RS_OK;
-    } catch (const cv::Exception &e) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw: %s", name, e.err.c_str());
-    } catch (const std::exception &e) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw: %s", name, e.what());
-    } catch (...) {
-        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw an unknown exception", name);
     }
+}
+
+const char *method_name(rs_bench_opencv_pnp_method method)
+{
+    static const char *const names[] = {"ITERATIVE", "EPNP", "SQPNP", "IPPE", "RANSAC"};
+    return (unsigned)method < 5 ? names[method] : "?";
+}
+} // namespace
+
+#define RS_BENCH_OPENCV_CATCH(name)                                                          \
+    catch (const cv::Exception &e)                                                           \
+    {                                                                                        \
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw: %s", name, e.err.c_str()); \
+    }                                                                                        \
+    catch (const std::exception &e)                                                          \
+    {                                                                                        \
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw: %s", name, e.what());      \
+    }                                                                                        \
+    catch (...) { return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV %s threw an unknown exception", name); }
+
+extern "C" rs_status rs_bench_opencv_pnp(double *rt_cam_ref, bool *inlier, const double *p_ref, const double *q_px,
+                                         int N, const double *intrinsics, int Ndistortion,
+                                         rs_bench_opencv_pnp_method method, bool refine_lm, double ransac_threshold_px,
+                                         rs_err *err)
+{
+    const char *name = method_name(method);
+    try {
+        if (Ndistortion < 0 || Ndistortion > 14 || (unsigned)method >= 5)
+            return rs_err_set(err, RS_ERR_USAGE, "OpenCV %s: Ndistortion = %d", name, Ndistortion);
+        const cv::Mat object(N, 3, CV_64F, const_cast<double *>(p_ref)); // read only
+        const cv::Mat image(N, 2, CV_64F, const_cast<double *>(q_px));   // read only
+        const cv::Matx33d K(intrinsics[0], 0, intrinsics[2], 0, intrinsics[1], intrinsics[3], 0, 0, 1);
+        const cv::Mat D =
+            Ndistortion > 0 ? cv::Mat(1, Ndistortion, CV_64F, const_cast<double *>(intrinsics + 4)) : cv::Mat();
+        return pnp(rt_cam_ref, inlier, object, image, N, K, D, method, refine_lm, ransac_threshold_px, name, err);
+    }
+    RS_BENCH_OPENCV_CATCH(name)
+}
+
+extern "C" rs_status rs_bench_opencv_pnp_fisheye(double *rt_cam_ref, bool *inlier, const double *p_ref,
+                                                 const double *q_px, int N, const double *intrinsics,
+                                                 rs_bench_opencv_pnp_method method, bool refine_lm,
+                                                 double ransac_threshold_px, rs_err *err)
+{
+    const char *name = method_name(method);
+    try {
+        if ((unsigned)method >= 5) return rs_err_set(err, RS_ERR_USAGE, "OpenCV fisheye: method %d", (int)method);
+        const cv::Mat object(N, 3, CV_64F, const_cast<double *>(p_ref)); // read only
+        const cv::Mat image(N, 1, CV_64FC2, const_cast<double *>(q_px)); // read only
+        const cv::Matx33d K(intrinsics[0], 0, intrinsics[2], 0, intrinsics[1], intrinsics[3], 0, 0, 1);
+        const cv::Vec4d D(intrinsics[4], intrinsics[5], intrinsics[6], intrinsics[7]);
+        cv::Mat xy; // normalised image coordinates (x/z, y/z)
+        cv::fisheye::undistortPoints(image, xy, K, D);
+        const double f = 0.5 * (intrinsics[0] + intrinsics[1]);
+        return pnp(rt_cam_ref, inlier, object, xy.reshape(1, N), N, cv::Matx33d::eye(), cv::Mat(), method, refine_lm,
+                   ransac_threshold_px / f, name, err);
+    }
+    RS_BENCH_OPENCV_CATCH(name)
 }

@@ -40,6 +40,18 @@ rs_status rs_bench_opencv_pnp( // out
     double ransac_threshold_px, // RANSAC only, pixels
     rs_err *err);               // may be NULL
 
+// The same for a fisheye camera, as OpenCV users calibrate one: the pixels are undistorted by
+// cv::fisheye::undistortPoints (Kannala-Brandt, intrinsics (8,) = fx fy cx cy k1 k2 k3 k4), then
+// `method` runs on the normalised coordinates (K = I, no distortion; RANSAC's threshold divided
+// by the mean focal length). Points more than 90 degrees off the axis cannot be used this way.
+rs_status rs_bench_opencv_pnp_fisheye( // out
+    double *rt_cam_ref,                // (6,)
+    bool *inlier,                      // (N,) may be NULL
+    // in
+    const double *p_ref, const double *q_px, int N,
+    const double *intrinsics, // (8,) fx fy cx cy k1 k2 k3 k4
+    rs_bench_opencv_pnp_method method, bool refine_lm, double ransac_threshold_px, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -4,7 +4,7 @@
 // Purpose: given N landmarks surveyed in the site's ENU frame (each with its own survey sigma)
 // and the pixels where they are seen, return the camera's pose rt_cam_enu, its 6x6 covariance,
 // the camera position and yaw/pitch/roll with sigmas, the outliers, and plain-words warnings
-// when the geometry is weak. Works for any mrcal lens model with gradients (not CAHVORE).
+// when the geometry is weak. Works for every mrcal lens model (CAHVORE's gradients from core/rs_lens.h).
 //
 // Method (docs/calibration.md has it end to end, with references):
 //   1. Initial pose: rs_calib_init_pose() (RANSAC over P3P, then EPnP or planar IPPE). When
@@ -98,8 +98,7 @@ typedef struct {
                                     //   solver widens the survey sigmas of k sharing picks by
                                     //   sqrt(k) (an upper bound of the true covariance) and counts
                                     //   them once in the variance components
-    const rs_camera *camera;        // the lens model (CAHVORE is not supported: no
-                                    //   gradients), its NOMINAL intrinsics and the image
+    const rs_camera *camera;        // the lens model, its NOMINAL intrinsics and the image
                                     //   size (for warnings; may be 0: unknown); its pose is
                                     //   not used
     bool has_position_prior;        // a surveyed camera position (a pole) is known
@@ -270,8 +269,7 @@ typedef struct {
 // always left either zeroed or filled). Errors, with the cause in err:
 //   RS_ERR_INVALID     non-finite input or sigma (the index and field are named), N < 0,
 //                      NULL arrays, bad options
-//   RS_ERR_UNSUPPORTED a lens model without gradients (CAHVORE) or intrinsics refinement on a
-//                      model without a core
+//   RS_ERR_UNSUPPORTED intrinsics refinement on a model without a core
 //   RS_ERR_DEGENERATE  fewer than 4 usable landmarks, collinear landmarks, all in a tiny image
 //                      patch, landmarks behind the camera, too many outliers, or a pose the
 //                      data cannot determine (rank-deficient covariance)

@@ -78,7 +78,7 @@ typedef struct {
 // for NaN/inf input naming the index.
 // Also: RS_ERR_DEGENERATE for fewer than 4 distinct landmark positions and when no pose is supported by a majority
 // of the observations; RS_ERR_INVALID for bad options or non-finite intrinsics;
-// RS_ERR_UNSUPPORTED for LENSMODEL_CAHVORE (mrcal cannot unproject it); RS_ERR_USAGE for NULL
+// RS_ERR_USAGE for NULL
 // arguments; RS_ERR_EXTERNAL if OpenGV/OpenCV threw. On any error `result` is not filled and
 // every inlier flag is false. Thread-safe (no global state); never prints.
 rs_status rs_calib_init_pose( // out

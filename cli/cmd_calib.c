@@ -261,8 +261,11 @@ static bool locate_one(const rs_site *site, const rs_camera *cam, const double q
     rs_status st = rs_camera_locate_ground(p, cam, q, site->ground_normal_enu, site->ground_offset_m, &err);
     if (st == RS_OK) st = rs_geo_enu_to_llh(llh, &site->origin, p, 1, &err);
     if (st) {
-        fprintf(stderr, "roadside locate: %s: pixel (%g, %g): %s\n", where, q[0], q[1],
-                err.msg[0] ? err.msg : rs_strerror(st));
+        if (strncmp(err.msg, "pixel (", 7) == 0) // the message names the pixel already
+            fprintf(stderr, "roadside locate: %s: %s\n", where, err.msg);
+        else
+            fprintf(stderr, "roadside locate: %s: pixel (%g, %g): %s\n", where, q[0], q[1],
+                    err.msg[0] ? err.msg : rs_strerror(st));
         return false;
     }
     printf("%.4f %.4f %.4f %.10f %.10f %.4f\n", p[0], p[1], p[2], llh[0], llh[1], llh[2]);

@@ -33,6 +33,10 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "                            picked 3 times along its visible part\n"
             "  --lens MODEL              any mrcal lens model name [%s]; configured models in\n"
             "                            full, e.g. LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=100\n"
+            "  --fisheye KIND            every camera an overhead fisheye on a mast over the junction\n"
+            "                            (8-11 m up): equidistant (r = f theta) or kannala-brandt\n"
+            "                            (k1, k2 drawn), as mrcal's LENSMODEL_CAHVORE_linearity=0.00;\n"
+            "                            image 1280x960 and --hfov-deg 216 (f = 340 px) unless given\n"
             "  --image WxH               image size in pixels [%dx%d]\n"
             "  --hfov-deg D              horizontal field of view, degrees [%g]\n"
             "  --pixel-sigma PX          pixel noise of the picks, pixels [%g]\n"
@@ -73,7 +77,7 @@ int rs_cli_site_simulate(int argc, char **argv)
         return RS_EXIT_OK;
     }
     const char *dir = NULL;
-    bool have_seed = false;
+    bool have_seed = false, have_image = false, have_hfov = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (strcmp(a, "--force") == 0) {
@@ -110,14 +114,23 @@ int rs_cli_site_simulate(int argc, char **argv)
             o.lines_per_camera = (int)n;
         } else if (strcmp(a, "--lens") == 0) {
             o.lensmodel = v;
+        } else if (strcmp(a, "--fisheye") == 0) {
+            if (strcmp(v, "equidistant") == 0)
+                o.fisheye = RS_SIMULATE_FISHEYE_EQUIDISTANT;
+            else if (strcmp(v, "kannala-brandt") == 0)
+                o.fisheye = RS_SIMULATE_FISHEYE_KANNALA_BRANDT;
+            else
+                return rs_cli_usage_error(CMD, "--fisheye: '%s' is not equidistant or kannala-brandt", v);
         } else if (strcmp(a, "--image") == 0) {
             if (!rs_cli_parse_pair(v, 'x', &x, &y) || x != (int)x || y != (int)y)
                 return rs_cli_usage_error(CMD, "--image: '%s' is not WIDTHxHEIGHT in pixels", v);
             o.width_px = (int)x;
             o.height_px = (int)y;
+            have_image = true;
         } else if (strcmp(a, "--hfov-deg") == 0) {
             if (!rs_cli_parse_double(v, &o.hfov_deg))
                 return rs_cli_usage_error(CMD, "--hfov-deg: '%s' is not a number", v);
+            have_hfov = true;
         } else if (strcmp(a, "--pixel-sigma") == 0) {
             if (!rs_cli_parse_double(v, &o.pixel_sigma_px))
                 return rs_cli_usage_error(CMD, "--pixel-sigma: '%s' is not a number", v);
@@ -150,6 +163,13 @@ int rs_cli_site_simulate(int argc, char **argv)
         }
     }
     if (!dir) return rs_cli_usage_error(CMD, "no site folder given");
+    if (o.fisheye != RS_SIMULATE_FISHEYE_NONE) { // a GridSmart-style overhead camera
+        if (!have_image) {
+            o.width_px = 1280;
+            o.height_px = 960;
+        }
+        if (!have_hfov) o.hfov_deg = 216;
+    }
     if (!have_seed) return rs_cli_usage_error(CMD, "--seed is required (the same seed gives the same site)");
     rs_err err = {0};
     rs_status st = rs_simulate_site_options_check(&o, &err);

@@ -558,8 +558,9 @@ rs_status rs_camera_locate_ground(double p_enu_m[3], const rs_camera *cam, const
     mrcal_point2_t q = {.x = q_px[0], .y = q_px[1]};
     mrcal_point3_t v;
     if (!rs_lens_unproject(&v, &q, 1, lensmodel, intrinsics) || !isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z))
-        return rs_err_set(err, RS_ERR_UNSUPPORTED, "pixel (%g, %g): mrcal cannot unproject it with this lens model",
-                          q_px[0], q_px[1]);
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "pixel (%g, %g): the lens model gives it no ray (outside what the lens sees)", q_px[0],
+                          q_px[1]);
     double R[9], C[3], d[3];
     mrcal_R_from_r(R, NULL, rt_cam_enu);
     rs_pose_position_from_rt(C, NULL, rt_cam_enu);

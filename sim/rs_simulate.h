@@ -133,25 +133,40 @@ void rs_simulate_problem_free(rs_simulate_problem *problem);
 
 // ---- a whole site ----
 
+// The fisheye lenses a site may be simulated with (rs_simulate_site_options.fisheye).
+#define RS_SIMULATE_FISHEYE_LENS "LENSMODEL_CAHVORE_linearity=0.00"
+typedef enum {
+    RS_SIMULATE_FISHEYE_NONE,
+    RS_SIMULATE_FISHEYE_EQUIDISTANT,
+    RS_SIMULATE_FISHEYE_KANNALA_BRANDT
+} rs_simulate_fisheye;
+
 typedef struct {
-    uint64_t seed;             // default 1; at most 2^53 (it is written to JSON)
-    int Ncameras;              // 1..16 (default 4): the first 4 on the corners, then along
-                               // the approaches
-    int landmarks_per_camera;  // 0..100 (default 12): each camera sees about this many points
-                               //   (at least 4 unless poles or lines are asked for)
-    const char *lensmodel;     // mrcal lens model name (default "LENSMODEL_OPENCV8")
-    int width_px, height_px;   // default 1920 x 1080
-    double hfov_deg;           // default 60
-    double pixel_sigma_px;     // default 1
-    double survey_sigma_h_m;   // default 0.3
-    double survey_sigma_v_m;   // default 0.5
-    double outlier_fraction;   // default 0.05, in [0, 0.9]
-    double focal_error;        // nominal focal length = true * this (default 1: exact), [0.5, 2]
-    double pole_prior_sigma_m; // > 0: each camera gets a position prior, its true position
-                               // plus N(0, this) per axis; 0 (default): no prior
-    double elevated_fraction;  // share of each camera's landmarks above the ground (0.25)
-    rs_llh origin;             // default 48.1374, 11.5755, 560 (ellipsoidal)
-    bool force;                // replace an existing site folder (default false)
+    uint64_t seed;               // default 1; at most 2^53 (it is written to JSON)
+    int Ncameras;                // 1..16 (default 4): the first 4 on the corners, then along
+                                 // the approaches
+    int landmarks_per_camera;    // 0..100 (default 12): each camera sees about this many points
+                                 //   (at least 4 unless poles or lines are asked for)
+    const char *lensmodel;       // mrcal lens model name (default "LENSMODEL_OPENCV8")
+    int width_px, height_px;     // default 1920 x 1080
+    double hfov_deg;             // default 60
+    double pixel_sigma_px;       // default 1
+    double survey_sigma_h_m;     // default 0.3
+    double survey_sigma_v_m;     // default 0.5
+    double outlier_fraction;     // default 0.05, in [0, 0.9]
+    double focal_error;          // nominal focal length = true * this (default 1: exact), [0.5, 2]
+    double pole_prior_sigma_m;   // > 0: each camera gets a position prior, its true position
+                                 // plus N(0, this) per axis; 0 (default): no prior
+    double elevated_fraction;    // share of each camera's landmarks above the ground (0.25)
+    rs_simulate_fisheye fisheye; // NONE (default): cameras on poles at the corners with
+                                 //   `lensmodel`; otherwise every camera is an overhead fisheye
+                                 //   (LENSMODEL_CAHVORE_linearity=0.00, docs/conventions.md "Fisheye
+                                 //   lenses") on a mast over the junction, 8-11 m up, within 3 m
+                                 //   of its centre, tilted so the centre shows at 62% of the
+                                 //   image height: EQUIDISTANT (r = f theta) or KANNALA_BRANDT
+                                 //   (k1, k2 drawn); `lensmodel` is then ignored
+    rs_llh origin;               // default 48.1374, 11.5755, 560 (ellipsoidal)
+    bool force;                  // replace an existing site folder (default false)
 
     // Heights a survey does not have (docs/site-format.md): both default to what sites always
     // were, nothing written and no noise.

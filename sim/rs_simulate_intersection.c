@@ -132,6 +132,15 @@ static void pole_position(rs_rng *rng, double p_enu[3], int k, const double R_ro
     p_enu[2] = rs_rng_uniform_in(rng, 5.0, 12.0);
 }
 
+// An overhead fisheye's position: 8-11 m up, within 3 m of the junction's centre.
+static void overhead_position(rs_rng *rng, double p_enu[3])
+{
+    const double r = 3.0 * sqrt(rs_rng_uniform(rng)), a = rs_rng_uniform_in(rng, 0, 2 * M_PI);
+    p_enu[0] = r * sin(a);
+    p_enu[1] = r * cos(a);
+    p_enu[2] = rs_rng_uniform_in(rng, 8.0, 11.0);
+}
+
 // Shuffles idx[0..n) (Fisher-Yates).
 static void shuffle(rs_rng *rng, int *idx, int n)
 {
@@ -243,15 +252,20 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
         rs_simulate__camera *c = &s->cam[k];
         c->cam.width = o->width_px;
         c->cam.height = o->height_px;
-        if ((st = rs_simulate_lens(&c->cam.lensmodel, &c->cam.intrinsics, &c->cam.Nintrinsics, &rng, o->lensmodel,
-                                   o->width_px, o->height_px, o->hfov_deg, true, err)))
+        const bool fisheye = o->fisheye != RS_SIMULATE_FISHEYE_NONE;
+        if ((st = rs_simulate_lens(&c->cam.lensmodel, &c->cam.intrinsics, &c->cam.Nintrinsics, &rng,
+                                   fisheye ? RS_SIMULATE_FISHEYE_LENS : o->lensmodel, o->width_px, o->height_px,
+                                   o->hfov_deg, o->fisheye != RS_SIMULATE_FISHEYE_EQUIDISTANT, err)))
             return st;
         if ((st = rs_simulate__camera_field_of_view(c, err))) return rs_err_prefix(err, "camera %d", k + 1);
         // Draw the pole and the aim until the camera sees at least 4 candidates.
         int Nvisible = 0;
         for (int tries = 0; tries < 50 && Nvisible < 4; tries++) {
             double p_cam[3], centre[3] = {0, 0, 0};
-            pole_position(&rng, p_cam, k, R_road);
+            if (fisheye) // on a mast arm over the junction
+                overhead_position(&rng, p_cam);
+            else
+                pole_position(&rng, p_cam, k, R_road);
             double roll = fmax(-3.0, fmin(3.0, rs_rng_normal(&rng)));
             rs_simulate__camera_look_at(c, p_cam, centre, rs_rng_uniform_in(&rng, -10.0, 10.0), roll);
             Nvisible = 0;
@@ -267,8 +281,9 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
                               k + 1, Nvisible);
         double d = hypot(c->p_cam_enu_m[0], c->p_cam_enu_m[1]);
         double az = atan2(c->p_cam_enu_m[0], c->p_cam_enu_m[1]) / RS_RAD_PER_DEG;
-        snprintf(s->note[k], sizeof s->note[k], "simulated camera on a %.1f m pole %.1f m %s of the centre",
-                 c->p_cam_enu_m[2], d, compass_name(az));
+        snprintf(s->note[k], sizeof s->note[k], "simulated %s %.1f m %s %.1f m %s of the centre",
+                 fisheye ? "overhead fisheye" : "camera on a", c->p_cam_enu_m[2], fisheye ? "up," : "pole", d,
+                 compass_name(az));
     }
     if ((st = select_landmarks(s, &rng, o, err))) return st;
 

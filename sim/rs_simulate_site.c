@@ -85,7 +85,10 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
     CHECK_OPTION(isfinite(o->origin.h_m) && fabs(o->origin.h_m) <= 10000.0, "origin", "height %g (-10000..10000 m)",
                  o->origin.h_m);
     mrcal_lensmodel_t lm;
-    rs_status st = rs_simulate__lens_check(&lm, o->lensmodel, o->width_px, o->height_px, o->hfov_deg, err);
+    CHECK_OPTION(o->fisheye >= RS_SIMULATE_FISHEYE_NONE && o->fisheye <= RS_SIMULATE_FISHEYE_KANNALA_BRANDT, "fisheye",
+                 "%d", (int)o->fisheye);
+    rs_status st = rs_simulate__lens_check(&lm, o->fisheye ? RS_SIMULATE_FISHEYE_LENS : o->lensmodel, o->width_px,
+                                           o->height_px, o->hfov_deg, err);
     if (st) return st;
     // The pixel sizes must leave room for the 20 px margin and the 30 px outliers.
     return RS_OK;
@@ -138,7 +141,10 @@ static cJSON *json_options(const rs_simulate_site_options *o)
     cJSON_AddNumberToObject(j, "seed", (double)o->seed);
     cJSON_AddNumberToObject(j, "cameras", o->Ncameras);
     cJSON_AddNumberToObject(j, "landmarks_per_camera", o->landmarks_per_camera);
-    cJSON_AddStringToObject(j, "lens", o->lensmodel);
+    cJSON_AddStringToObject(j, "lens", o->fisheye ? RS_SIMULATE_FISHEYE_LENS : o->lensmodel);
+    if (o->fisheye)
+        cJSON_AddStringToObject(j, "fisheye",
+                                o->fisheye == RS_SIMULATE_FISHEYE_EQUIDISTANT ? "equidistant" : "kannala-brandt");
     double image[2] = {o->width_px, o->height_px};
     cJSON_AddItemToObject(j, "image", json_array(image, 2));
     cJSON_AddNumberToObject(j, "hfov_deg", o->hfov_deg);

@@ -107,6 +107,28 @@ int main(void)
         check_pose(gv[i].name, st, &e, rt, s3d, gv[i].tol);
     }
 
+    // the fisheye adapter (cv::fisheye::undistortPoints, then SQPnP) on an overhead Kannala-Brandt
+    // camera (CAHVORE at linearity 0, r1 = k1, r2 = k2): the true pose from exact data
+    {
+        rs_simulate_camera_options o;
+        rs_simulate_camera_options_default(&o);
+        o.seed = SEED, o.Nlandmarks = 20, o.pixel_sigma_px = 0, o.outlier_fraction = 0;
+        o.survey_sigma_h_m = o.survey_sigma_v_m = 0, o.elevated_fraction = 0.25;
+        o.lensmodel = "LENSMODEL_CAHVORE_linearity=0.00", o.width_px = 1280, o.height_px = 960, o.hfov_deg = 216;
+        o.camera_height_m = 10, o.distance_m = 3, o.max_range_m = 40;
+        rs_simulate_problem *sf = NULL;
+        rs_err ef = {0};
+        CHECK(rs_simulate_camera_problem(&sf, &o, &ef) == RS_OK, "fisheye simulator: %s", ef.msg);
+        if (sf) {
+            const double *in = sf->camera.intrinsics, kb[8] = {in[0], in[1], in[2], in[3], in[7], in[8], 0, 0};
+            double rtf[6] = {0};
+            const rs_status stf = rs_bench_opencv_pnp_fisheye(rtf, NULL, sf->p_enu_true_m, sf->q_true_px, sf->Npoints,
+                                                              kb, RS_BENCH_OPENCV_PNP_SQPNP, true, 8.0, &ef);
+            check_pose("cv-sqpnp+lm (fisheye)", stf, &ef, rtf, sf, 1e-6);
+        }
+        rs_simulate_problem_free(sf);
+    }
+
     // refusals: IPPE on landmarks that are not coplanar, OpenGV with 3 points, bad distortion
     double rt[6], Rt[12];
     rs_err e = {0};

@@ -19,29 +19,6 @@
 
 #define NTRIALS 240
 
-// pose error in the estimate's chart: rt_est - rt_true, with r_true replaced by its equivalent
-// r_true (1 + 2 pi k/|r_true|), k in {-1, 0, 1}, nearest to r_est (rotation vectors near
-// |r| = pi have two representatives)
-static void pose_error(double e[6], const rs_calib_result *r, const gen_problem *g)
-{
-    const double *rt = g->rt_true;
-    const double th = sqrt(rt[0] * rt[0] + rt[1] * rt[1] + rt[2] * rt[2]);
-    double best = INFINITY;
-    for (int k = -1; k <= 1; k++) {
-        const double s = th > 0 ? 1.0 + 2.0 * M_PI * k / th : 1.0;
-        double d[3], n2 = 0;
-        for (int i = 0; i < 3; i++) {
-            d[i] = r->rt_cam_enu[i] - s * rt[i];
-            n2 += d[i] * d[i];
-        }
-        if (n2 < best) {
-            best = n2;
-            memcpy(e, d, sizeof(d));
-        }
-    }
-    for (int k = 3; k < 6; k++) e[k] = r->rt_cam_enu[k] - rt[k];
-}
-
 int main(void)
 {
     gen_begin();
@@ -67,7 +44,7 @@ int main(void)
         CHECK(st == RS_OK, "seed %llu: %s", (unsigned long long)seed, err.msg);
         if (st != RS_OK) continue;
         double e[6];
-        pose_error(e, &res, &g);
+        gen_pose_error(e, res.rt_cam_enu, g.rt_true);
         const double nees = gen_nees(e, res.covariance_rt_cam_enu, 6);
         CHECK(isfinite(nees), "seed %llu: NEES not finite", (unsigned long long)seed);
         if (isfinite(nees)) {
@@ -120,7 +97,7 @@ int main(void)
                 if (!res.inlier[i]) false_flags++;
             }
         }
-        pose_error(e, &res, &g);
+        gen_pose_error(e, res.rt_cam_enu, g.rt_true);
         for (int k = 0; k < 3; k++) dC[k] = res.position_enu_m[k] - g.position_true[k];
         sse_rot_out += e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
         sse_pos_out += dC[0] * dC[0] + dC[1] * dC[1] + dC[2] * dC[2];
