@@ -127,8 +127,7 @@ rs_status rs_camera_write_opencv_yaml(const rs_camera *cam, const char *path, rs
 //
 // Both are mrcal's LENSMODEL_CAHVORE_linearity=0.00 with alpha = beta = 0 and e0 = e1 = e2 = 0,
 // whose pixel is (fx, fy) * theta (1 + r0 + r1 theta^2 + r2 theta^4) * (x, y) / hypot(x, y) +
-// (cx, cy) for a ray theta off the optical axis. (mrcal 2.2 projects it without gradients only and
-// cannot unproject it.)
+// (cx, cy) for a ray theta off the optical axis (projected and unprojected by core/rs_lens.h).
 
 // The worst pixel error over the image's angles that a fitted OpenCV fisheye may keep.
 #define RS_CAMERA_FISHEYE_FIT_MAX_PX 0.01

@@ -14,6 +14,8 @@ Cases (argv[1]):
 - csv_latlon: a lat,lon,u,v,h CSV (survey heights) of a pinhole whose focal is the image width,
   --image-size: heights surveyed, ENU (all three) within 1 mm of cct, `calib --refine focal`
   recovers the position within 0.01 m.
+- readme: README.md's two commands (import, calib) on sites/import/gate.json, run as written:
+  calib recovers the position sites/import/README.md states within 0.01 m.
 - bad_input: missing field, bad EPSG, a NUL byte, a value that is not a number, and more: each
   exits non-zero with "FILE:LINE: FIELD: what" (or the option at fault) and leaves no folder, not
   even a temporary one; an existing site is replaced only with --force.
@@ -229,6 +231,26 @@ def case_aalborg(tmp):
               f"{res['intrinsics'][0]:.0f} px, rms_surveyed {res['rms_surveyed_px']:.1f} px")
 
 
+def case_readme(tmp):
+    root = os.environ.get("ROADSIDE_SOURCE_ROOT", os.path.join(os.path.dirname(__file__), "..", ".."))
+    readme = open(os.path.join(root, "README.md")).read()
+    cmds = [line.split("#")[0].split() for line in readme.splitlines()
+            if line.startswith(("roadside site import out/gate", "roadside calib out/gate"))]
+    check(len(cmds) == 2, f"readme: the two commands not found in README.md: {cmds}")
+    os.chdir(tmp)
+    os.symlink(os.path.join(root, "sites"), "sites")
+    for cmd in cmds:
+        r = run(*cmd[1:])
+        print(" ".join(cmd), "->", r.returncode)
+        check(r.returncode == 0, f"readme: {' '.join(cmd)}: {r.stdout} {r.stderr}")
+    path = os.path.join("out", "gate", "calib", "gate.json")
+    if os.path.isfile(path):
+        truth = cct(topocentric(*site_origin(os.path.join("out", "gate"))), [(-79.945596426, 40.442147901, 7.0)])[0]
+        d = np.linalg.norm(np.array(json.load(open(path))["position_enu_m"]) - truth)
+        print(f"readme: calibrated position {d:.3g} m from sites/import/README.md's camera")
+        check(d <= 0.01, f"readme: position {d} m from the truth")
+
+
 # ---- bad input ----
 
 GOOD_ROWS = [(40.44231, -79.94562, 412, 380), (40.44241, -79.94552, 612, 420), (40.44221, -79.94572, 212, 500),
@@ -314,6 +336,8 @@ def main():
             case_json_fisheye(tmp, rng)
         elif case == "csv_latlon":
             case_csv_latlon(tmp, rng)
+        elif case == "readme":
+            case_readme(tmp)
         elif case == "bad_input":
             case_bad_input(tmp)
         else:
