@@ -349,8 +349,9 @@ static rs_status check_dir(bool *exists, const char *dir, bool force, rs_err *er
     rs_err e = {0};
     rs_status st = rs_site__check_target(dir, exists, &e);
     if (st != RS_ERR_INVALID) return st == RS_OK ? RS_OK : rs_err_set(err, st, "%s", e.msg);
-    char *json = rs_io_join(dir, RS_SITE_JSON);
     struct stat sb;
+    if (stat(dir, &sb) != 0 || !S_ISDIR(sb.st_mode)) return rs_err_set(err, st, "%s", e.msg); // not a folder
+    char *json = rs_io_join(dir, RS_SITE_JSON);
     const bool site = json && stat(json, &sb) == 0 && S_ISREG(sb.st_mode);
     free(json);
     *exists = true;

@@ -24,6 +24,17 @@ def check(cond, what):
     return cond
 
 
+def need(*modules):
+    """Imports the named modules (a test's oracles: cv2, mrcal, numpy) and returns them in order, or
+    exits 77 (skipped) naming the one that is missing."""
+    import importlib
+    try:
+        return [importlib.import_module(m) for m in modules]
+    except ImportError as e:
+        print("skipped: %s" % e)
+        sys.exit(77)
+
+
 def run(*args, stdin=None, env=None, timeout=300):
     """roadside ARGS..., text in and out captured; stdin: text for its standard input."""
     return subprocess.run([ROADSIDE, *args], input=stdin, capture_output=True, text=True,

@@ -18,16 +18,10 @@ import subprocess
 import sys
 import tempfile
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-from rs_check import check, finish  # noqa: E402
+from rs_check import check, finish, need  # noqa: E402
 
-try:
-    import cv2
-except ImportError as e:
-    print("skipped: %s" % e)
-    sys.exit(77)
+cv2, np = need("cv2", "numpy")
 
 SEED = 38
 W, H = 1280, 960

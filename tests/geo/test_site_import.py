@@ -29,15 +29,9 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
-from rs_check import check, finish, run  # noqa: E402
+from rs_check import check, finish, need, run  # noqa: E402
 
-try:
-    import cv2
-    import mrcal
-    import numpy as np
-except ImportError as e:
-    print("skipped: %s" % e)
-    sys.exit(77)
+cv2, mrcal, np = need("cv2", "mrcal", "numpy")
 
 SEED = 38
 TOL_M = 1e-3
