@@ -7,8 +7,10 @@
 #include <cpl_error.h>
 #include <ogr_srs_api.h>
 
-rs_status rs_geo_crs_to_llh(double *llh, bool *geographic, const char *crs, const double *xyh, int N, rs_err *err)
+rs_status rs_geo_crs_to_llh(double *llh, bool *geographic, int *bad_row, const char *crs, const double *xyh, int N,
+                            rs_err *err)
 {
+    if (bad_row) *bad_row = -1;
     if (N < 0 || (N > 0 && (!llh || !xyh)) || !crs)
         return rs_err_set(err, RS_ERR_USAGE, "rs_geo_crs_to_llh: bad arguments");
     OGRSpatialReferenceH from = OSRNewSpatialReference(NULL), wgs84 = OSRNewSpatialReference(NULL);
@@ -36,9 +38,11 @@ rs_status rs_geo_crs_to_llh(double *llh, bool *geographic, const char *crs, cons
     if (st == RS_OK && N > 0 && !OCTTransformEx(t, N, x, y, NULL, ok))
         for (int i = 0; i < N; i++) ok[i] = ok[i] && isfinite(x[i]) && isfinite(y[i]);
     for (int i = 0; st == RS_OK && i < N; i++) {
-        if (!ok[i] || !isfinite(x[i]) || !isfinite(y[i]) || fabs(y[i]) > 90)
-            st = rs_err_set(err, RS_ERR_INVALID, "row %d: (%.17g, %.17g) of %s: PROJ cannot transform it to WGS84",
-                            i + 1, xyh[3 * i], xyh[3 * i + 1], crs);
+        if (!ok[i] || !isfinite(x[i]) || !isfinite(y[i]) || fabs(y[i]) > 90) {
+            st = rs_err_set(err, RS_ERR_INVALID, "(%.17g, %.17g) of %s: PROJ cannot transform it to WGS84", xyh[3 * i],
+                            xyh[3 * i + 1], crs);
+            if (bad_row) *bad_row = i;
+        }
         llh[3 * i] = y[i], llh[3 * i + 1] = x[i], llh[3 * i + 2] = xyh[3 * i + 2];
     }
     if (t) OCTDestroyCoordinateTransformation(t);

@@ -25,12 +25,14 @@ extern "C" {
 // Converts N points of `crs` (any text OSRSetFromUserInput takes: "EPSG:25832", a WKT, a PROJ
 // string) into WGS84.
 // out: llh (N,3) lat_deg, lon_deg, h_m; *geographic (may be NULL): whether `crs` is a geographic
-//      CRS (its x, y are longitude, latitude) rather than a projected one
+//      CRS (its x, y are longitude, latitude) rather than a projected one, set once the CRS is
+//      known even when a point then fails; *bad_row (may be NULL): the row (from 0) PROJ could not
+//      transform, -1 when none
 // in:  xyh (N,3) x, y (traditional GIS order, the CRS's units) and h (metres, passed through)
-// Errors: RS_ERR_INVALID ("--crs CRS: not a CRS GDAL knows", a point PROJ cannot transform: "row
-// I: ..."), RS_ERR_EXTERNAL (GDAL could not make the transformation), RS_ERR_NOMEM.
+// Errors: RS_ERR_INVALID ("--crs CRS: not a CRS GDAL knows", a point PROJ cannot transform: "(x, y)
+// of CRS: PROJ cannot transform it", with *bad_row), RS_ERR_EXTERNAL (GDAL could not make the transformation), RS_ERR_NOMEM.
 rs_status rs_geo_crs_to_llh( // out
-    double *llh, bool *geographic,
+    double *llh, bool *geographic, int *bad_row,
     // in
     const char *crs, const double *xyh, int N, rs_err *err);
 

@@ -88,18 +88,22 @@ static rs_status to_llh(double *llh, const importer *im, int c, rs_err *err)
     for (int i = 0; i < f->N; i++)
         xyh[3 * i] = f->points[i].x, xyh[3 * i + 1] = f->points[i].y, xyh[3 * i + 2] = f->points[i].h_m;
     rs_status st = RS_OK;
-    bool geographic = true;
-    if (crs) {
-        rs_err e = {0};
-        if ((st = rs_geo_crs_to_llh(llh, &geographic, crs, xyh, f->N, &e))) rs_err_set(err, st, "%s: %s", path, e.msg);
-    } else {
+    bool geographic = f->geographic;
+    int bad = -1;
+    rs_err e = {0};
+    if (crs)
+        st = rs_geo_crs_to_llh(llh, &geographic, &bad, crs, xyh, f->N, &e);
+    else
         for (int i = 0; i < f->N; i++)
             llh[3 * i] = xyh[3 * i + 1], llh[3 * i + 1] = xyh[3 * i], llh[3 * i + 2] = xyh[3 * i + 2];
-    }
-    if (st == RS_OK && geographic != f->geographic)
+    if (geographic != f->geographic) // the columns and the CRS disagree: that, before what PROJ made of it
         st = rs_err_set(err, RS_ERR_INVALID, "%s: header: %s columns, but --crs %s is a %s CRS (its columns are %s)",
                         path, f->geographic ? "lat,lon" : "e,n", crs, geographic ? "geographic" : "projected",
                         geographic ? "lat,lon" : "e,n");
+    else if (st && bad >= 0)
+        rs_err_set(err, st, "%s:%d: %s: %s", path, f->points[bad].line, f->geographic ? "lat,lon" : "e,n", e.msg);
+    else if (st)
+        rs_err_set(err, st, "%s: %s", path, e.msg);
     free(xyh);
     return st;
 }
