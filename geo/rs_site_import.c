@@ -387,6 +387,9 @@ static void say_assumptions(importer *im)
                                                          : "used as given");
     fprintf(im->say, "landmark sigmas: %g m horizontal, %g m vertical (%s%s: %s)\n", im->sigma_h_m, im->sigma_v_m,
             o->sigma_h_m > 0 || o->sigma_v_m > 0 ? "given, else " : "", "source", source_words[o->source]);
+    if (o->Ncameras > 1)
+        fprintf(im->say, "landmark ids: <camera>:<id> (each file's ids are its own: a landmark two cameras see is "
+                         "two landmarks, which site check names as at the same position)\n");
     fprintf(im->say,
             "picks: sigma %g px where a row gives none; pixels as given, (0, 0) the centre of the top-left "
             "pixel\n",

@@ -11,6 +11,9 @@ Cases (argv[1]):
   {f, x0, y0}: 14 ground points seen by a known CAHVORE camera (mrcal.project, linearity 0), their
   lat/lng made by cct from ENU; the camera file is the triple (f f x0 y0 and 8 zeros); ENU within
   1 mm of cct; `calib` recovers the camera's position within 0.01 m.
+- kb_two_cameras: two point-pair JSONs and one OpenCV fisheye YAML (distortion_model fisheye, k1,
+  k2): ids prefixed by camera, both camera files CAHVORE (fx fy cx cy 0 0 0 k1 k2 0 0 0), both
+  positions recovered within 0.01 m.
 - csv_latlon: a lat,lon,u,v,h CSV (survey heights) of a pinhole whose focal is the image width,
   --image-size: heights surveyed, ENU (all three) within 1 mm of cct, `calib --refine focal`
   recovers the position within 0.01 m.
@@ -120,18 +123,19 @@ def calibrate(site, cam, label, *args):
 
 # ---- a synthetic camera over ground points near ORIGIN ----
 
-def synthetic(lens, intrinsics, size, rng):
-    """14 ground points (ENU up 0) in view of a camera at (2, -18, 7) looking north, pitch -25 deg:
-    (ids, lon/lat/h rows from cct, pixels from mrcal.project, the camera's position)."""
-    yaw, pitch = 0.0, math.radians(-25)
+def synthetic(lens, intrinsics, size, rng, C=(2.0, -18.0, 7.0), yaw_deg=0.0, area=((-12, 14), (-8, 25))):
+    """14 ground points (ENU up 0) in view of a camera at C (default (2, -18, 7)) looking yaw_deg from
+    north, pitch -25 deg, drawn in area ((e0, e1), (n0, n1)): (ids, lon/lat/h rows from cct, pixels
+    from mrcal.project, the camera's position)."""
+    yaw, pitch = math.radians(yaw_deg), math.radians(-25)
     f = np.array([math.sin(yaw) * math.cos(pitch), math.cos(yaw) * math.cos(pitch), math.sin(pitch)])
-    x = np.array([1.0, 0, 0])
+    x = np.array([math.cos(yaw), -math.sin(yaw), 0])
     y = np.cross(f, x)
     R_cam_enu = np.stack([x, y, f])
-    C = np.array([2.0, -18.0, 7.0])
+    C = np.array(C)
     pts, q = [], []
     while len(pts) < 14:
-        p = np.array([rng.uniform(-12, 14), rng.uniform(-8, 25), 0.0])
+        p = np.array([rng.uniform(*area[0]), rng.uniform(*area[1]), 0.0])
         pc = R_cam_enu @ (p - C)
         if pc[2] <= 1:
             continue
@@ -167,6 +171,42 @@ def case_json_fisheye(tmp, rng):
         d = np.linalg.norm(np.array(res["position_enu_m"]) - C)
         print(f"json_fisheye: calibrated position {res['position_enu_m']}, truth {C.tolist()}: {d:.3g} m apart")
         check(d <= 0.01, f"json_fisheye: position {d} m from the truth (seed {SEED})")
+
+
+def case_kb_two_cameras(tmp, rng):
+    """Two cameras, one OpenCV fisheye YAML (Kannala-Brandt, k3 = k4 = 0) for both: the camera files
+    are CAHVORE (fx, fy, cx, cy, 0, 0, 0, k1, k2, 0, 0, 0), ids prefixed, both poses recovered."""
+    K, D = np.array([[352.5, 0, 641.5], [0, 350.25, 478.5], [0, 0, 1.0]]), [0.021, -0.0035, 0.0, 0.0]
+    intr = np.array([352.5, 350.25, 641.5, 478.5, 0, 0, 0, D[0], D[1], 0, 0, 0])
+    fs = cv2.FileStorage(os.path.join(tmp, "lens.yaml"), cv2.FILE_STORAGE_WRITE)
+    for k, v in (("image_width", 1280), ("image_height", 960), ("camera_matrix", K),
+                 ("distortion_coefficients", np.array(D).reshape(1, 4)), ("distortion_model", "fisheye")):
+        fs.write(k, v)
+    fs.release()
+    args, truth = [], {}
+    for name, C, yaw in (("east", (18.0, 1.0, 8.0), 270.0), ("south", (-1.0, -17.0, 6.5), 0.0)):
+        ids, llh, q, C = synthetic("LENSMODEL_CAHVORE_linearity=0.00", intr, (1280, 960), rng, C, yaw,
+                                   ((-25, 25), (-25, 25)))
+        pairs = {"results": [{"x": float(q[i][0]), "y": float(q[i][1]), "lat": float(llh[i][1]),
+                              "lng": float(llh[i][0]), "id": i} for i in range(len(ids))]}
+        json.dump(pairs, open(os.path.join(tmp, name + ".json"), "w"))
+        args += ["--points", os.path.join(tmp, name + ".json")]
+        truth[name] = C
+    site = os.path.join(tmp, "site")
+    import_site([site, *args, "--intrinsics", os.path.join(tmp, "lens.yaml")], "kb_two_cameras")
+    site_check(site, "kb_two_cameras")
+    ids = [f["properties"]["id"] for f in json.load(open(os.path.join(site, "landmarks.geojson")))["features"]]
+    check(ids[0] == "east:0" and ids[-1] == "south:13", f"kb_two_cameras: ids {ids[:2]} ... {ids[-2:]}")
+    for name, C in truth.items():
+        lens, got = mrcal.cameramodel(os.path.join(site, "cameras", name + ".cameramodel")).intrinsics()
+        check(lens == "LENSMODEL_CAHVORE_linearity=0.00" and np.array_equal(got, intr),
+              f"kb_two_cameras: {name}'s camera file {lens} {got}")
+    calibrate(site, "east", "kb_two_cameras")
+    for name, C in truth.items():
+        res = json.load(open(os.path.join(site, "calib", name + ".json")))
+        d = np.linalg.norm(np.array(res["position_enu_m"]) - in_site_frame(site, C))
+        print(f"kb_two_cameras: {name}: calibrated position {d:.3g} m from the truth")
+        check(d <= 0.01, f"kb_two_cameras: {name}: position {d} m from the truth (seed {SEED})")
 
 
 def case_csv_latlon(tmp, rng):
@@ -332,6 +372,8 @@ def main():
             case_aalborg(tmp)
         elif case == "json_fisheye":
             case_json_fisheye(tmp, rng)
+        elif case == "kb_two_cameras":
+            case_kb_two_cameras(tmp, rng)
         elif case == "csv_latlon":
             case_csv_latlon(tmp, rng)
         elif case == "readme":
