@@ -38,6 +38,7 @@ typedef struct {
     const rs_site_import_options *opt;
     rs_site__import_points *files; // (Ncameras,)
     char **camera_ids;             // (Ncameras,) owned
+    char **images;                 // (Ncameras,) owned: camera c's frame, NULL when none
     rs_camera *cameras;            // (Ncameras,)
     rs_site_landmark *landmarks;   // (Nlandmarks,) id owned
     int Nlandmarks;
@@ -55,11 +56,12 @@ static void importer_free(importer *im)
     for (int c = 0; c < im->opt->Ncameras; c++) {
         if (im->files) rs_site__import_points_free(&im->files[c]);
         if (im->camera_ids) free(im->camera_ids[c]);
+        if (im->images) free(im->images[c]);
         if (im->cameras) rs_camera_free(&im->cameras[c]);
         if (im->obs) free(im->obs[c]);
     }
     for (int i = 0; i < im->Nlandmarks; i++) free(im->landmarks[i].id);
-    free(im->files), free(im->camera_ids), free(im->cameras), free(im->obs), free(im->landmarks);
+    free(im->files), free(im->camera_ids), free(im->images), free(im->cameras), free(im->obs), free(im->landmarks);
     if (im->say) fclose(im->say);
     free(im->said);
 }
@@ -197,6 +199,7 @@ static rs_status make_camera(importer *im, int c, rs_err *err)
     int w, h;
     rs_status st = image_size(&w, &h, image, sizeof image, im, c, err);
     if (st) return st;
+    if (image[0] && !(im->images[c] = strdup(image))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     rs_camera *cam = &im->cameras[c];
     const char *intr = im->opt->intrinsics, *id = im->camera_ids[c];
     if (!intr) {
@@ -229,26 +232,51 @@ static rs_status make_camera(importer *im, int c, rs_err *err)
 
 // ---- writing ----
 
-// Camera c's files, relative to the site folder ("cameras/<id>.cameramodel",
-// "observations/<id>.csv"), into model and obs (n bytes each).
-static bool camera_files(char *model, char *obs, size_t n, const char *id)
+// Camera c's files, relative to the site folder, into f[0..2] (n bytes each):
+// "cameras/<id>.cameramodel", "observations/<id>.csv", "backgrounds/<id>".
+static bool camera_files(char f[3][1024], const char *id)
 {
-    return rs_camera_path(model, n, RS_SITE_CAMERAS_DIR, id, RS_CAMERA_EXT_CAMERAMODEL) &&
-           rs_camera_path(obs, n, RS_SITE_OBSERVATIONS_DIR, id, RS_SITE_OBSERVATIONS_EXT);
+    return rs_camera_path(f[0], 1024, RS_SITE_CAMERAS_DIR, id, RS_CAMERA_EXT_CAMERAMODEL) &&
+           rs_camera_path(f[1], 1024, RS_SITE_OBSERVATIONS_DIR, id, RS_SITE_OBSERVATIONS_EXT) &&
+           rs_camera_path(f[2], 1024, "backgrounds", id, "");
+}
+
+// The camera's frame copied to "backgrounds/<id>/frame.<ext>" (a PNG or JPEG: what the report
+// shows; other images are not copied): *copied says whether it was.
+static rs_status copy_frame(bool *copied, const char *image, const char *tmp, const char *bg_dir, rs_err *err)
+{
+    *copied = false;
+    const char *ext = strrchr(image, '.'), *slash = strrchr(image, '/');
+    if (!ext || (slash && ext < slash) ||
+        !(rs_io_has_extension(image, "png") || rs_io_has_extension(image, "jpg") || rs_io_has_extension(image, "jpeg")))
+        return RS_OK;
+    char rel[1100];
+    snprintf(rel, sizeof rel, "%s/frame%s", bg_dir, ext);
+    char *dir = rs_io_join(tmp, bg_dir), *out = rs_io_join(tmp, rel), *data = NULL;
+    size_t len = 0;
+    rs_status st = dir && out ? rs_io_mkdir_p(dir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (st == RS_OK) st = rs_io_read_file_max(&data, &len, image, RS_IO_MAX_FILE_BYTES, err);
+    if (st == RS_OK) st = rs_io_write_file(out, data, len, err);
+    *copied = st == RS_OK;
+    free(dir), free(out), free(data);
+    return st;
 }
 
 static rs_status write_site_json(const importer *im, const char *tmp, const char *name, rs_err *err)
 {
     const int Nc = im->opt->Ncameras;
     rs_site_spec_camera *cams = calloc((size_t)Nc, sizeof *cams);
-    char(*files)[2][1024] = calloc((size_t)Nc, sizeof *files), (*notes)[1200] = calloc((size_t)Nc, sizeof *notes);
+    char(*files)[3][1024] = calloc((size_t)Nc, sizeof *files), (*notes)[1200] = calloc((size_t)Nc, sizeof *notes);
     rs_status st = cams && files && notes ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (int c = 0; st == RS_OK && c < Nc; c++) {
-        if (!camera_files(files[c][0], files[c][1], sizeof files[c][0], im->camera_ids[c]))
+        if (!camera_files(files[c], im->camera_ids[c]))
             st = rs_err_set(err, RS_ERR_INVALID, "camera '%s': id too long for a file name", im->camera_ids[c]);
         snprintf(notes[c], sizeof notes[c], "imported from %s", im->opt->cameras[c].points);
-        cams[c] = (rs_site_spec_camera){
-            .id = im->camera_ids[c], .model = files[c][0], .observations = files[c][1], .note = notes[c]};
+        cams[c] = (rs_site_spec_camera){.id = im->camera_ids[c],
+                                        .model = files[c][0],
+                                        .observations = files[c][1],
+                                        .backgrounds = im->images[c] ? files[c][2] : NULL,
+                                        .note = notes[c]};
     }
     const rs_site_spec spec = {.name = name,
                                .origin = im->origin,
@@ -263,7 +291,7 @@ static rs_status write_site_json(const importer *im, const char *tmp, const char
     return st;
 }
 
-static rs_status write_site(const importer *im, const char *tmp, const char *name, rs_err *err)
+static rs_status write_site(importer *im, const char *tmp, const char *name, rs_err *err)
 {
     rs_status st = RS_OK;
     const char *const dirs[2] = {RS_SITE_CAMERAS_DIR, RS_SITE_OBSERVATIONS_DIR};
@@ -276,13 +304,18 @@ static rs_status write_site(const importer *im, const char *tmp, const char *nam
     if (st == RS_OK)
         st = rs_site_write_landmarks(tmp, im->landmarks, im->Nlandmarks, im->N_m, RS_SITE_LAYOUT_HAND, err);
     for (int c = 0; st == RS_OK && c < im->opt->Ncameras; c++) {
-        char model[1024], obs[1024];
-        camera_files(model, obs, sizeof model, im->camera_ids[c]);
-        char *pm = rs_io_join(tmp, model), *po = rs_io_join(tmp, obs);
+        char f[3][1024];
+        camera_files(f, im->camera_ids[c]);
+        char *pm = rs_io_join(tmp, f[0]), *po = rs_io_join(tmp, f[1]);
         st = pm && po ? rs_camera_write_cameramodel(&im->cameras[c], pm, err)
                       : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         if (st == RS_OK) st = rs_site_write_observations(po, im->obs[c], im->files[c].N, im->landmarks, err);
         free(pm), free(po);
+        bool copied = false;
+        if (st == RS_OK && im->images[c]) st = copy_frame(&copied, im->images[c], tmp, f[2], err);
+        if (copied)
+            fprintf(im->say, "camera '%s': its frame %s copied into %s/ (the report shows it)\n", im->camera_ids[c],
+                    im->images[c], f[2]);
     }
     return st;
 }
@@ -450,6 +483,7 @@ rs_status rs_site_import(char **summary, const char *dir, const rs_site_import_o
     importer im = {.opt = opt,
                    .files = calloc((size_t)Nc, sizeof *im.files),
                    .camera_ids = calloc((size_t)Nc, sizeof *im.camera_ids),
+                   .images = calloc((size_t)Nc, sizeof *im.images),
                    .cameras = calloc((size_t)Nc, sizeof *im.cameras),
                    .obs = calloc((size_t)Nc, sizeof *im.obs),
                    .sigma_h_m = opt->sigma_h_m > 0 ? opt->sigma_h_m : source_sigma_m[opt->source][0],
@@ -457,7 +491,7 @@ rs_status rs_site_import(char **summary, const char *dir, const rs_site_import_o
                    .sigma_px = opt->sigma_px > 0 ? opt->sigma_px : RS_SITE_IMPORT_SIGMA_PX,
                    .N_m = opt->geoid_undulation_m ? *opt->geoid_undulation_m : 0};
     im.say = open_memstream(&im.said, &im.said_len);
-    rs_status st = im.files && im.camera_ids && im.cameras && im.obs && im.say
+    rs_status st = im.files && im.camera_ids && im.images && im.cameras && im.obs && im.say
                        ? import_into(&im, dir, err)
                        : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (st == RS_OK) say_assumptions(&im);

@@ -6,7 +6,8 @@ Cases (argv[1]):
   here into an e,n,u,v CSV in EPSG:25832, its frame beside it; skipped, 77, when absent): `site
   check` passes; every landmark's ENU against PROJ (cs2cs EPSG:25832 -> EPSG:4326, then cct's
   topocentric pipeline at the site origin) within 1 mm; the camera is the nominal pinhole (f = the
-  width, the image's centre, 1920 x 1080); `roadside calib --refine focal` writes a pose.
+  width, the image's centre, 1920 x 1080); the frame is copied into backgrounds/aalborg/ (for the
+  report); `roadside calib --refine focal` writes a pose.
 - json_fisheye: a point-pair JSON with an image beside it and the equidistant triple
   {f, x0, y0}: 14 ground points seen by a known CAHVORE camera (mrcal.project, linearity 0), their
   lat/lng made by cct from ENU; the camera file is the triple (f f x0 y0 and 8 zeros); ENU within
@@ -255,6 +256,9 @@ def case_aalborg(tmp):
     latlon = [[float(x) for x in line.split()[:2]] for line in p.stdout.splitlines()]
     check(p.returncode == 0 and len(latlon) == len(utm), f"aalborg: cs2cs failed: {p.stderr}")
     check_enu("aalborg", site, [f"P{i + 1}" for i in range(len(utm))], [(lon, lat, 0.0) for lat, lon in latlon], False)
+    frame = os.path.join(site, "backgrounds", "aalborg", "frame.jpg")
+    check(os.path.isfile(frame) and open(frame, "rb").read() == open(os.path.join(real, "frame.jpg"), "rb").read(),
+          "aalborg: the frame beside the points is not backgrounds/aalborg/frame.jpg")
     model = mrcal.cameramodel(os.path.join(site, "cameras", "aalborg.cameramodel"))
     lens, intr = model.intrinsics()
     check(lens == "LENSMODEL_PINHOLE" and list(intr) == [1920, 1920, 959.5, 539.5] and
