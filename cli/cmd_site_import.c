@@ -14,7 +14,7 @@ static void usage(FILE *out)
     fprintf(out,
             "usage: roadside site import DIR --points FILE [--camera ID] [--image IMG]\n"
             "                            [--points FILE [--camera ID] [--image IMG] ...]\n"
-            "                            [--crs EPSG:NNNN] [--intrinsics FILE | --image-size WxH]\n"
+            "                            [--crs EPSG:NNNN] [--intrinsics FILE] [--image-size WxH]\n"
             "                            [--source map|gnss|survey] [--sigma-px S] [--sigma-h-m S]\n"
             "                            [--sigma-v-m S] [--orthometric N] [--name TEXT] [--force]\n"
             "\n"
@@ -38,7 +38,8 @@ static void usage(FILE *out)
             "                    (pinhole, or distortion_model fisheye), or the equidistant fisheye\n"
             "                    {\"f\": 340.0, \"x0\": 640, \"y0\": 480} (.json, r = f theta). Without it:\n"
             "                    a nominal pinhole, f = the image width; calibrate with --refine focal\n"
-            "  --image-size WxH  the image size, pixels (without an image)\n"
+            "  --image-size WxH  the image size, pixels, without an image (with --intrinsics: it must\n"
+            "                    agree with the file's, or give the size a file lacks)\n"
             "  --source S        where the coordinates come from, which sets the landmark sigmas\n"
             "                    (horizontal, vertical): map (picked on a map or orthophoto: 0.5 m,\n"
             "                    0.5 m; the default), gnss (RTK: 0.05 m, 0.10 m), survey (0.01 m, 0.02 m)\n"
@@ -133,7 +134,6 @@ int rs_cli_site_import(int argc, char **argv)
     }
     if (!dir) return rs_cli_usage_error(CMD, "missing DIR (the site folder to create)");
     if (!o.Ncameras) return rs_cli_usage_error(CMD, "missing --points FILE");
-    if (o.intrinsics && o.width) return rs_cli_usage_error(CMD, "--intrinsics or --image-size, not both");
     char *summary = NULL;
     rs_err err = {0};
     rs_status st = rs_site_import(&summary, dir, &o, &err);

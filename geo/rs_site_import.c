@@ -174,7 +174,8 @@ static void image_beside(char *out, size_t n, const char *points)
     out[0] = '\0';
 }
 
-// Camera c's image size: --image-size, else its image (given or beside its points), else 0 x 0.
+// Camera c's image size: its image's (given or beside its points; --image-size must agree), else
+// --image-size, else 0 x 0.
 static rs_status image_size(int *w, int *h, char *image, size_t n, const importer *im, int c, rs_err *err)
 {
     const rs_site_import_camera *cam = &im->opt->cameras[c];
@@ -183,13 +184,16 @@ static rs_status image_size(int *w, int *h, char *image, size_t n, const importe
         snprintf(image, n, "%s", cam->image);
     else
         image_beside(image, n, cam->points);
-    if (*w > 0 || !image[0]) return RS_OK;
+    if (!image[0]) return RS_OK;
     rs_image img;
     rs_status st = rs_image_read(&img, image, err);
     if (st) return st;
+    if (*w > 0 && (img.width != *w || img.height != *h))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image is %d x %d px, --image-size says %d x %d", image, img.width,
+                        img.height, *w, *h);
     *w = img.width, *h = img.height;
     rs_image_free(&img);
-    return RS_OK;
+    return st;
 }
 
 // Camera c's lens: the intrinsics file, or a nominal pinhole; its image size checked.

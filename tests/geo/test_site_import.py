@@ -157,6 +157,10 @@ def case_json_fisheye(tmp, rng):
     json.dump(pairs, open(os.path.join(tmp, "gate.json"), "w"), indent=1)
     cv2.imwrite(os.path.join(tmp, "gate.png"), np.zeros((size[1], size[0]), np.uint8))
     json.dump({"f": 340.0, "x0": 640, "y0": 480}, open(os.path.join(tmp, "lens.json"), "w"))
+    r = run("site", "import", os.path.join(tmp, "other"), "--points", os.path.join(tmp, "gate.json"), "--intrinsics",
+            os.path.join(tmp, "lens.json"), "--image-size", "1280x720")
+    check(r.returncode == 1 and "gate.png: the image is 1280 x 960 px, --image-size says 1280 x 720" in r.stderr,
+          f"json_fisheye: a size the image disagrees with: {r.stderr}")
     site = os.path.join(tmp, "site")
     import_site([site, "--points", os.path.join(tmp, "gate.json"), "--intrinsics", os.path.join(tmp, "lens.json")],
                 "json_fisheye")
