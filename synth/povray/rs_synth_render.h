@@ -143,11 +143,12 @@ rs_status rs_synth_render( // out
 
 // The canvas rectangle (x0, y0, x1, y1 inclusive, clipped to the canvas) covered by vehicle v's
 // bounding box clipped to z_cam >= near_m; returns false if it misses the canvas or lies behind.
+// A fisheye canvas (rs_synth_camera.h): the box's edges sampled, with a margin, and no near plane;
+// a box reaching out of the canvas's angle gets the whole canvas.
 bool rs_synth_vehicle_rect( // out
     int rect[4],
     // in
-    const double fxycxy[4], int width, int height, const double rt_cam_enu[6], const double corners_enu_m[8][3],
-    double near_m);
+    const rs_synth_canvas *canvas, const double rt_cam_enu[6], const double corners_enu_m[8][3], double near_m);
 
 // The labels of a rendered image (synth/labels/rs_synth_labels.h): every prepared vehicle's label
 // computed through `cam` with its visibility from r->ids, written as COCO and YOLO under
