@@ -21,17 +21,17 @@ static bool clip_rect(int rect[4], const double lo[2], const double hi[2], doubl
     return true;
 }
 
-// A fisheye canvas's rectangle of the box with camera-frame corners p: its silhouette is made of
-// its edges, each sampled at 33 points (their curvature between samples is covered by a margin of
-// 2 px plus 2 % of the rectangle's size); a box reaching out of the canvas's angle gets the whole
-// canvas.
+// A fisheye canvas's rectangle of the convex hull of the 8 camera-frame points p (a box, or a
+// shadow's corners on the ground): its outline is made of segments between them, so every pair
+// is sampled at 33 points (the segments' curvature between samples is covered by a margin of
+// 2 px plus 2 % of the rectangle's size); a hull reaching out of the canvas's angle gets the
+// whole canvas.
 static bool fisheye_rect(int rect[4], const rs_synth_canvas *canvas, const double p[8][3])
 {
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     int Nin = 0, Nout = 0;
     for (int a = 0; a < 8; a++)
-        for (int b = a + 1; b < 8; b++) {
-            if ((a ^ b) != 1 && (a ^ b) != 2 && (a ^ b) != 4) continue;
+        for (int b = a + 1; b < 8; b++)
             for (int k = 0; k <= 32; k++) {
                 double v[3], q[2];
                 for (int c = 0; c < 3; c++) v[c] = p[a][c] + k / 32.0 * (p[b][c] - p[a][c]);
@@ -43,7 +43,6 @@ static bool fisheye_rect(int rect[4], const rs_synth_canvas *canvas, const doubl
                 lo[0] = fmin(lo[0], q[0]), hi[0] = fmax(hi[0], q[0]);
                 lo[1] = fmin(lo[1], q[1]), hi[1] = fmax(hi[1], q[1]);
             }
-        }
     if (Nin == 0) return false;
     if (Nout > 0) {
         lo[0] = lo[1] = 0;
