@@ -56,7 +56,7 @@ rs_status rs_synth_povcam_init( // out
 // right = x_cam, up = -y_cam, direction = z_cam, the pixel in column i, row j is traced along
 //     x0 = 2 ((i + 0.5)/size - 0.5),  y0 = 2 (0.5 - (j + 0.5)/size),  rad = |(x0, y0)| <= 1
 //     theta = rad angle/2,  v = sin(theta) (x0, y0)/rad . (right, up) + cos(theta) direction,
-// i.e. the equidistant lens (fisheye_canvas_pixel) with f = size / angle (radians) and the centre
+// i.e. the equidistant lens (rs_synth_canvas_project) with f = size / angle (radians) and the centre
 // ((size - 1)/2, (size - 1)/2); pixels with rad > 1 are not traced (transparent).
 // in:  angle_deg in (0, 360]; size > 0; rt_cam_enu (6,)
 rs_status rs_synth_povcam_init_fisheye( // out
@@ -99,9 +99,10 @@ rs_status rs_synth_povcam_for_canvas( // out
 // pixels. For LENSMODEL_PINHOLE with scale 1 the canvas is the camera itself (identity = 1).
 // A lens that maps part of the image more than 80 degrees off its axis (or behind the camera:
 // a fisheye) gets a fisheye canvas instead: its angle twice the largest angle off the axis of
-// the image's pixels (its border and a grid every 4 pixels; pixels outside a fisheye's circle
-// have none) plus 3 canvas pixels, its f the largest of scale fx, scale fy and scale times the
-// lens's radial pixels per radian over those pixels, its size even.
+// the image's pixels (its border and a grid every 8 pixels; 180 degrees when a pixel has no
+// direction: the lens's circle lies inside the image) plus 3 canvas pixels, at most 360; its f
+// the largest of scale fx, scale fy and scale times the lens's radial pixels per radian over
+// those pixels, its size even (docs/povray.md, "Fisheye lenses").
 // in:  lensmodel, intrinsics (Nintrinsics,), width, height: the real camera
 //      scale: canvas pixels per core pixel, >= 1 (1 is fine for the test suite; 2 gives sharper
 //      resampling)

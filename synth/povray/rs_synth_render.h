@@ -3,7 +3,8 @@
 //
 // Steps (docs/povray.md):
 // 1. Frustum culling: each vehicle's bounding box is clipped to z_cam >= 0.05 m and projected
-//    through the canvas pinhole (rs_synth_camera.h); a vehicle whose projection misses the canvas
+//    through the canvas pinhole (rs_synth_camera.h; a fisheye canvas: the box's sampled
+//    segments, rs_synth_vehicle_rect); a vehicle whose projection misses the canvas
 //    is left out. With no vehicle left (and no pins), povray is not run when compositing onto a
 //    background: the image is the background and the ID image is all 0. Limitation: a culled
 //    vehicle's shadow or reflection, which could fall into the view, is lost.
@@ -17,7 +18,8 @@
 //    coarse meshes) while one povray process renders the colour pass (rs_synth_raster.h;
 //    docs/fleet.md, "Cost", D). With povray_passes, one povray process per pass instead, all
 //    started at once (one after the other with separate_processes), the shadow pass at half
-//    the canvas's resolution on coarse meshes, interpolated. Each povray process spends about
+//    the canvas's resolution on coarse meshes, interpolated. A fisheye canvas has both passes
+//    rendered by POV-Ray (the rasteriser draws straight edges). Each povray process spends about
 //    0.6 s waiting between its threads besides its work (docs/povray.md).
 // 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
 //    (File_Gamma 1), no antialiasing unless asked; without pins, drawn ground, antialiasing or
