@@ -290,8 +290,7 @@ static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d
     for (int i = 0; i < N && !st; i++) {
         double corners[8][3];
         rs_synth_vehicle_corners_enu(corners, &all[i], d->site->ground_normal_enu, d->site->ground_offset_m);
-        if (rs_synth_vehicle_rect(t->rect[Nseen], c->canvas.fxycxy, c->canvas.width, c->canvas.height,
-                                  c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
+        if (rs_synth_vehicle_rect(t->rect[Nseen], &c->canvas, c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
             t->coarse[Nseen] = t->rect[Nseen][3] - t->rect[Nseen][1] + 1 < opt->coarse_below_px;
             t->v[Nseen++] = all[i];
         }

@@ -28,12 +28,55 @@ typedef struct {
 typedef struct {
     const rs_camera *cam;
     clip_planes planes;
+    double max_theta; // a lens that sees behind (rs_lens_sees_behind): no planes; a point is
+                      // projected when it lies RS_SYNTH_LABEL_ZMIN_M or more from the camera and
+                      // at most max_theta off the axis (else 0: the planes decide)
 } projector;
+
+// A fisheye's field for the labels: the largest angle off the axis of the image's border and of a
+// grid every 16 pixels, plus 5 degrees (at most 180; 180 when a pixel has no direction: the
+// lens's circle lies inside the image). Beyond it a distortion polynomial may fold points back
+// into the image, where the render (which samples the lens's directions) never puts them.
+static rs_status fisheye_field(projector *pr, const rs_camera *cam, rs_err *err)
+{
+    const int S = 16, Nx = (cam->width - 1) / S + 2, Ny = (cam->height - 1) / S + 2, N = Nx * Ny;
+    mrcal_point2_t *q = malloc((size_t)N * sizeof(*q));
+    mrcal_point3_t *v = malloc((size_t)N * sizeof(*v));
+    rs_status st = q && v ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "labels: out of memory");
+    for (int j = 0; !st && j < Ny; j++)
+        for (int i = 0; i < Nx; i++)
+            q[j * Nx + i] =
+                (mrcal_point2_t){.x = fmin(i * S - 0.5, cam->width - 0.5), .y = fmin(j * S - 0.5, cam->height - 0.5)};
+    if (!st && !rs_lens_unproject(v, q, N, &cam->lensmodel, cam->intrinsics))
+        st = rs_err_set(err, RS_ERR_EXTERNAL, "labels: the lens cannot unproject its image");
+    double theta = 0;
+    for (int k = 0; !st && k < N; k++) {
+        const double t = atan2(hypot(v[k].x, v[k].y), v[k].z);
+        theta = isfinite(t) ? fmax(theta, t) : M_PI;
+    }
+    pr->max_theta = fmin(M_PI, theta + 5 * M_PI / 180);
+    free(q), free(v);
+    return st;
+}
+
+// True when the camera-frame point p may be projected (the planes aside): always for a lens
+// that does not see behind (the planes clip it), else within the fisheye's field.
+static bool projectable(const projector *pr, const double p[3])
+{
+    if (!(pr->max_theta > 0)) return true;
+    const double s = hypot(p[0], p[1]);
+    return hypot(s, p[2]) >= RS_SYNTH_LABEL_ZMIN_M && atan2(s, p[2]) <= pr->max_theta;
+}
 
 static rs_status projector_init(projector *pr, const rs_camera *cam, rs_err *err)
 {
     pr->cam = cam;
+    pr->max_theta = 0;
     clip_planes *c = &pr->planes;
+    if (rs_lens_sees_behind(&cam->lensmodel)) { // z <= 0 may be in view: no planes
+        c->N = 0;
+        return fisheye_field(pr, cam, err);
+    }
     c->N = 1;
     c->n[0][0] = c->n[0][1] = 0, c->n[0][2] = 1, c->d[0] = RS_SYNTH_LABEL_ZMIN_M;
     if (cam->lensmodel.type == MRCAL_LENSMODEL_PINHOLE) return RS_OK;
@@ -122,7 +165,7 @@ static rs_status grow_by_polygon(double box[4], const projector *pr, const doubl
         for (int s = 0; s < EDGE_SAMPLES; s++) {
             double t = (double)s / EDGE_SAMPLES;
             for (int k = 0; k < 3; k++) p[N].xyz[k] = c[i][k] + t * (c[(i + 1) % m][k] - c[i][k]);
-            N++;
+            if (projectable(pr, p[N].xyz)) N++;
         }
     if (!rs_lens_project(q, NULL, NULL, p, N, &pr->cam->lensmodel, pr->cam->intrinsics))
         return rs_err_set(err, RS_ERR_EXTERNAL, "labels: mrcal_project failed");
@@ -194,7 +237,10 @@ static rs_status raster_triangle3(raster *r, const projector *pr, const double t
     if (m < 3) return RS_OK;
     mrcal_point3_t p[MAXPOLY];
     mrcal_point2_t q[MAXPOLY];
-    for (int i = 0; i < m; i++) memcpy(p[i].xyz, c[i], sizeof c[i]);
+    for (int i = 0; i < m; i++) {
+        memcpy(p[i].xyz, c[i], sizeof c[i]);
+        if (!projectable(pr, c[i])) return RS_OK; // out of a fisheye's field: not in the image
+    }
     if (!rs_lens_project(q, NULL, NULL, p, m, &pr->cam->lensmodel, pr->cam->intrinsics))
         return rs_err_set(err, RS_ERR_EXTERNAL, "labels: mrcal_project failed");
     for (int i = 1; i + 1 < m; i++) raster_triangle(r, q[0].xy, q[i].xy, q[i + 1].xy);
@@ -268,7 +314,7 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
         double p_v[3] = {c & 1 ? Lm / 2 : -Lm / 2, c & 2 ? Wm / 2 : -Wm / 2, c & 4 ? Hm : 0};
         to_cam(corners[c], cam, v, up_m, p_v);
         L->corners_px[c][0] = L->corners_px[c][1] = NAN;
-        if (corners[c][2] >= RS_SYNTH_LABEL_ZMIN_M) {
+        if (pr->max_theta > 0 ? projectable(pr, corners[c]) : corners[c][2] >= RS_SYNTH_LABEL_ZMIN_M) {
             mrcal_point2_t q;
             mrcal_point3_t p = {{corners[c][0], corners[c][1], corners[c][2]}};
             if (!rs_lens_project(&q, NULL, NULL, &p, 1, &cam->lensmodel, cam->intrinsics))
@@ -307,7 +353,8 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
     for (int i = 0; i < 3; i++) f_cam[i] -= L->bottom_center_cam_m[i];
     L->rotation_y_rad = atan2(-f_cam[2], f_cam[0]);
     L->bottom_center_px[0] = L->bottom_center_px[1] = NAN;
-    if (L->bottom_center_cam_m[2] >= RS_SYNTH_LABEL_ZMIN_M) {
+    if (pr->max_theta > 0 ? projectable(pr, L->bottom_center_cam_m)
+                          : L->bottom_center_cam_m[2] >= RS_SYNTH_LABEL_ZMIN_M) {
         mrcal_point3_t p;
         mrcal_point2_t q;
         memcpy(p.xyz, L->bottom_center_cam_m, sizeof p.xyz);

@@ -49,21 +49,74 @@ rs_status rs_synth_povcam_init(rs_synth_povcam *cam, const double fxycxy[4], int
     rs_synth_enu_to_pov(cam->direction, dir_enu);
     cam->width = width;
     cam->height = height;
+    cam->fisheye_deg = 0;
     return RS_OK;
+}
+
+rs_status rs_synth_povcam_init_fisheye(rs_synth_povcam *cam, double angle_deg, int size, const double rt_cam_enu[6],
+                                       rs_err *err)
+{
+    for (int i = 0; i < 6; i++)
+        if (!isfinite(rt_cam_enu[i])) return rs_err_set(err, RS_ERR_INVALID, "rt_cam_enu[%d]: not finite", i);
+    if (!(angle_deg > 0 && angle_deg <= 360))
+        return rs_err_set(err, RS_ERR_INVALID, "fisheye angle: must be in (0, 360] degrees (got %g)", angle_deg);
+    if (size <= 0) return rs_err_set(err, RS_ERR_INVALID, "image size: must be > 0 (got %d)", size);
+    double R_cam_enu[9], centre_enu[3], up_enu[3];
+    mrcal_R_from_r(R_cam_enu, NULL, rt_cam_enu);
+    for (int k = 0; k < 3; k++) {
+        centre_enu[k] =
+            -(R_cam_enu[0 + k] * rt_cam_enu[3] + R_cam_enu[3 + k] * rt_cam_enu[4] + R_cam_enu[6 + k] * rt_cam_enu[5]);
+        up_enu[k] = -R_cam_enu[3 + k];
+    }
+    rs_synth_enu_to_pov(cam->location, centre_enu);
+    rs_synth_enu_to_pov(cam->right, &R_cam_enu[0]);
+    rs_synth_enu_to_pov(cam->up, up_enu);
+    rs_synth_enu_to_pov(cam->direction, &R_cam_enu[6]);
+    cam->width = cam->height = size;
+    cam->fisheye_deg = angle_deg;
+    return RS_OK;
+}
+
+rs_status rs_synth_povcam_for_canvas(rs_synth_povcam *cam, const rs_synth_canvas *canvas, const double rt_cam_enu[6],
+                                     rs_err *err)
+{
+    if (canvas->fisheye_deg > 0)
+        return rs_synth_povcam_init_fisheye(cam, canvas->fisheye_deg, canvas->width, rt_cam_enu, err);
+    return rs_synth_povcam_init(cam, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu, err);
 }
 
 rs_status rs_synth_povcam_write(FILE *f, const rs_synth_povcam *cam, rs_err *err)
 {
     fprintf(f,
-            "camera {\n  perspective\n"
+            "camera {\n  %s\n"
             "  location  <%.17g, %.17g, %.17g>\n"
             "  right     <%.17g, %.17g, %.17g>\n"
             "  up        <%.17g, %.17g, %.17g>\n"
-            "  direction <%.17g, %.17g, %.17g>\n}\n",
-            cam->location[0], cam->location[1], cam->location[2], cam->right[0], cam->right[1], cam->right[2],
-            cam->up[0], cam->up[1], cam->up[2], cam->direction[0], cam->direction[1], cam->direction[2]);
+            "  direction <%.17g, %.17g, %.17g>\n",
+            cam->fisheye_deg > 0 ? "fisheye" : "perspective", cam->location[0], cam->location[1], cam->location[2],
+            cam->right[0], cam->right[1], cam->right[2], cam->up[0], cam->up[1], cam->up[2], cam->direction[0],
+            cam->direction[1], cam->direction[2]);
+    if (cam->fisheye_deg > 0) fprintf(f, "  angle %.17g\n", cam->fisheye_deg);
+    fprintf(f, "}\n");
     if (ferror(f)) return rs_err_set(err, RS_ERR_IO, "writing the camera: stream error");
     return RS_OK;
+}
+
+bool rs_synth_canvas_project(double q[2], const rs_synth_canvas *canvas, const double v[3])
+{
+    const double *k = canvas->fxycxy;
+    if (!(canvas->fisheye_deg > 0)) {
+        if (!(v[2] > 0)) return false;
+        q[0] = k[0] * (v[0] / v[2]) + k[2];
+        q[1] = k[1] * (v[1] / v[2]) + k[3];
+        return isfinite(q[0]) && isfinite(q[1]);
+    }
+    const double s = hypot(v[0], v[1]), theta = atan2(s, v[2]);
+    if (!(theta <= canvas->fisheye_deg * (M_PI / 360))) return false;
+    const double g = s > 0 ? theta / s : 0;
+    q[0] = k[0] * g * v[0] + k[2];
+    q[1] = k[1] * g * v[1] + k[3];
+    return isfinite(q[0]) && isfinite(q[1]);
 }
 
 // Unprojects one pixel through the real lens and projects the ray through the canvas pinhole
@@ -83,15 +136,62 @@ static void lens_to_pinhole(double q_out[2], int *ok, const double q_in[2], cons
     *ok = 1;
 }
 
-rs_status rs_synth_canvas_for_lens(rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
-                                   const double *intrinsics, int width, int height, double scale, rs_err *err)
+// The fisheye canvas of a wide lens (rs_synth_canvas_for_lens).
+static rs_status fisheye_canvas(rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
+                                int width, int height, double scale, rs_err *err)
 {
-    if (!(scale >= 1) || !isfinite(scale))
-        return rs_err_set(err, RS_ERR_INVALID, "canvas scale: must be >= 1 (got %g)", scale);
-    if (width <= 0 || height <= 0)
-        return rs_err_set(err, RS_ERR_INVALID, "image size: must be > 0 (got %dx%d)", width, height);
+    const int S = 8, Nx = (width - 1) / S + 1, Ny = (height - 1) / S + 1;
+    const int Nborder = 2 * (width + 1) + 2 * (height + 1), N = Nborder + Nx * Ny;
+    mrcal_point2_t *q = malloc((size_t)N * sizeof(*q));
+    mrcal_point3_t *v = malloc((size_t)N * sizeof(*v));
+    if (!q || !v) {
+        free(q), free(v);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    for (int k = 0; k < Nborder; k++) {
+        int t = k;
+        if (t < 2 * (width + 1))
+            q[k] = (mrcal_point2_t){.x = t / 2 - 0.5, .y = (t % 2) ? height - 0.5 : -0.5};
+        else
+            t -= 2 * (width + 1), q[k] = (mrcal_point2_t){.x = (t % 2) ? width - 0.5 : -0.5, .y = t / 2 - 0.5};
+    }
+    for (int j = 0; j < Ny; j++)
+        for (int i = 0; i < Nx; i++)
+            q[Nborder + j * Nx + i] =
+                (mrcal_point2_t){.x = i == Nx - 1 ? width - 1 : i * S, .y = j == Ny - 1 ? height - 1 : j * S};
+    const bool ok = rs_lens_unproject(v, q, N, lensmodel, intrinsics);
+    double theta_max = 0, ppr = fmax(intrinsics[0], intrinsics[1]); // radial pixels per radian
+    for (int k = 0; ok && k < N; k++) {
+        const double s = hypot(v[k].x, v[k].y), theta = atan2(s, v[k].z);
+        if (!isfinite(theta)) {
+            theta_max = M_PI; // the lens's circle lies inside the image: everything it sees
+            continue;
+        }
+        theta_max = fmax(theta_max, theta);
+        if (theta > 1e-3) ppr = fmax(ppr, hypot(q[k].x - intrinsics[2], q[k].y - intrinsics[3]) / theta);
+    }
+    free(q), free(v);
+    if (!ok) return rs_err_set(err, RS_ERR_EXTERNAL, "fisheye canvas: the lens cannot unproject");
+    const double f = scale * ppr, theta_c = fmin(M_PI, theta_max + 3 / f);
+    const double size = 2 * ceil(f * theta_c);
+    if (size > 16384)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "the fisheye canvas would be %.0fx%.0f pixels (limit 16384)", size,
+                          size);
+    canvas->width = canvas->height = (int)size;
+    canvas->fxycxy[0] = canvas->fxycxy[1] = size / (2 * theta_c);
+    canvas->fxycxy[2] = canvas->fxycxy[3] = (size - 1) / 2;
+    canvas->scale = scale;
+    canvas->identity = 0;
+    canvas->fisheye_deg = 2 * theta_c * (180 / M_PI);
+    return RS_OK;
+}
+
+// The pinhole canvas (rs_synth_canvas_for_lens); RS_ERR_UNSUPPORTED when it cannot hold the lens.
+static rs_status pinhole_canvas(rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel, const double *intrinsics,
+                                int width, int height, double scale, rs_err *err)
+{
     const double fxy[2] = {intrinsics[0] * scale, intrinsics[1] * scale};
-    if (!(fxy[0] > 0) || !(fxy[1] > 0)) return rs_err_set(err, RS_ERR_INVALID, "fx, fy: must be > 0");
+    canvas->fisheye_deg = 0;
     if (lensmodel->type == MRCAL_LENSMODEL_PINHOLE && scale == 1) {
         for (int i = 0; i < 4; i++) canvas->fxycxy[i] = intrinsics[i];
         canvas->width = width;
@@ -148,6 +248,23 @@ rs_status rs_synth_canvas_for_lens(rs_synth_canvas *canvas, const mrcal_lensmode
     return RS_OK;
 }
 
+rs_status rs_synth_canvas_for_lens(rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
+                                   const double *intrinsics, int width, int height, double scale, rs_err *err)
+{
+    if (!(scale >= 1) || !isfinite(scale))
+        return rs_err_set(err, RS_ERR_INVALID, "canvas scale: must be >= 1 (got %g)", scale);
+    if (width <= 0 || height <= 0)
+        return rs_err_set(err, RS_ERR_INVALID, "image size: must be > 0 (got %dx%d)", width, height);
+    if (!(intrinsics[0] > 0) || !(intrinsics[1] > 0)) return rs_err_set(err, RS_ERR_INVALID, "fx, fy: must be > 0");
+    rs_err e2 = {0};
+    const rs_status st = pinhole_canvas(canvas, lensmodel, intrinsics, width, height, scale, &e2);
+    if (st != RS_ERR_UNSUPPORTED) {
+        if (st && err) *err = e2;
+        return st;
+    }
+    return fisheye_canvas(canvas, lensmodel, intrinsics, width, height, scale, err);
+}
+
 // ---- the resampling map: a grid of unprojections, interpolated, every pixel checked ----
 
 // Catmull-Rom weights of the 4 nodes round a point at fraction t in [0, 1) of the cell between
@@ -160,11 +277,14 @@ static void catmull_rom(double w[4], double t)
     w[3] = (0.5 * t - 0.5) * t * t;
 }
 
-// Writes map pixel i from the direction (tx, ty, 1) in the camera frame (tx = x/z, ty = y/z).
-static void map_from_tangent(float *map, size_t i, const rs_synth_canvas *canvas, double tx, double ty)
+// Writes map pixel i from the camera-frame direction v (a pinhole canvas: v = (x/z, y/z, 1)):
+// NaN where the canvas does not see it.
+static void map_from_direction(float *map, size_t i, const rs_synth_canvas *canvas, const double v[3])
 {
-    map[2 * i] = (float)(canvas->fxycxy[0] * tx + canvas->fxycxy[2]);
-    map[2 * i + 1] = (float)(canvas->fxycxy[1] * ty + canvas->fxycxy[3]);
+    double q[2];
+    const bool ok = rs_synth_canvas_project(q, canvas, v);
+    map[2 * i] = ok ? (float)q[0] : NAN;
+    map[2 * i + 1] = ok ? (float)q[1] : NAN;
 }
 
 rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, const mrcal_lensmodel_t *lensmodel,
@@ -180,8 +300,10 @@ rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, con
     float *map = malloc(Npx * 2 * sizeof(float));
     mrcal_point2_t *q = malloc((Nnodes > (size_t)width ? Nnodes : (size_t)width) * sizeof(*q));
     mrcal_point3_t *v = malloc((Nnodes > (size_t)width ? Nnodes : (size_t)width) * sizeof(*v));
-    double *t_node = malloc(Nnodes * 2 * sizeof(double));    // (Ny, Nx, 2) tx, ty; NaN: no direction
-    double *t_row = malloc((size_t)Nx * 2 * sizeof(double)); // (Nx, 2) one row interpolated in y
+    // a node's direction: (x/z, y/z, 1) on a pinhole canvas, the unit vector on a fisheye one
+    const bool fisheye = canvas->fisheye_deg > 0;
+    double *t_node = malloc(Nnodes * 3 * sizeof(double));    // (Ny, Nx, 3); NaN: no direction
+    double *t_row = malloc((size_t)Nx * 3 * sizeof(double)); // (Nx, 3) one row interpolated in y
     double *w_col = malloc((size_t)S * 4 * sizeof(double));  // (S, 4) Catmull-Rom weights per x mod S
     size_t *redo = NULL, Nredo = 0;                          // the pixels unprojected on their own
     rs_status st = RS_OK;
@@ -198,9 +320,11 @@ rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, con
         goto done;
     }
     for (size_t i = 0; i < Nnodes; i++) {
-        const bool ok = v[i].z > 0 && isfinite(v[i].x) && isfinite(v[i].y) && isfinite(v[i].z);
-        t_node[2 * i] = ok ? v[i].x / v[i].z : NAN;
-        t_node[2 * i + 1] = ok ? v[i].y / v[i].z : NAN;
+        const bool ok = (fisheye || v[i].z > 0) && isfinite(v[i].x) && isfinite(v[i].y) && isfinite(v[i].z);
+        const double n = fisheye ? sqrt(v[i].x * v[i].x + v[i].y * v[i].y + v[i].z * v[i].z) : v[i].z;
+        t_node[3 * i] = ok ? v[i].x / n : NAN;
+        t_node[3 * i + 1] = ok ? v[i].y / n : NAN;
+        t_node[3 * i + 2] = ok ? (fisheye ? v[i].z / n : 1) : NAN;
     }
     for (int r = 0; r < S; r++) catmull_rom(&w_col[4 * r], (double)r / S);
     // 2. every pixel interpolated (separable: along y into t_row, then along x), then checked
@@ -210,20 +334,22 @@ rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, con
         double wy[4];
         catmull_rom(wy, (double)(y - j * S) / S);
         for (int a = 0; a < Nx; a++)
-            for (int c = 0; c < 2; c++) {
+            for (int c = 0; c < 3; c++) {
                 double s = 0;
-                for (int b = 0; b < 4; b++) s += wy[b] * t_node[2 * ((size_t)(j + b) * Nx + a) + c];
-                t_row[2 * a + c] = s; // NaN when a node is
+                for (int b = 0; b < 4; b++) s += wy[b] * t_node[3 * ((size_t)(j + b) * Nx + a) + c];
+                t_row[3 * a + c] = s; // NaN when a node is
             }
         for (int x = 0; x < width; x++) {
             const int i = x / S;
             const double *wx = &w_col[4 * (x - i * S)];
-            double t[2];
-            for (int c = 0; c < 2; c++)
-                t[c] = wx[0] * t_row[2 * i + c] + wx[1] * t_row[2 * (i + 1) + c] + wx[2] * t_row[2 * (i + 2) + c] +
-                       wx[3] * t_row[2 * (i + 3) + c];
-            v[x] = (mrcal_point3_t){.x = isfinite(t[0]) ? t[0] : 0, .y = isfinite(t[1]) ? t[1] : 0, .z = 1};
-            map_from_tangent(map, (size_t)y * width + x, canvas, t[0], t[1]);
+            double t[3];
+            for (int c = 0; c < 3; c++)
+                t[c] = wx[0] * t_row[3 * i + c] + wx[1] * t_row[3 * (i + 1) + c] + wx[2] * t_row[3 * (i + 2) + c] +
+                       wx[3] * t_row[3 * (i + 3) + c];
+            if (!fisheye && isfinite(t[2])) t[2] = 1;
+            const bool finite = isfinite(t[0]) && isfinite(t[1]) && isfinite(t[2]);
+            v[x] = finite ? (mrcal_point3_t){.x = t[0], .y = t[1], .z = t[2]} : (mrcal_point3_t){.z = 1};
+            map_from_direction(map, (size_t)y * width + x, canvas, t);
         }
         if (!rs_lens_project(q, NULL, NULL, v, width, lensmodel, intrinsics)) {
             st = rs_err_set(err, RS_ERR_EXTERNAL, "canvas map: mrcal_project failed");
@@ -257,9 +383,9 @@ rs_status rs_synth_canvas_map(float **map_xy, const rs_synth_canvas *canvas, con
         }
         for (int k = 0; k < n; k++) {
             const size_t i = redo[k0 + k];
-            if (v[k].z > 0 && isfinite(v[k].x) && isfinite(v[k].y))
-                map_from_tangent(map, i, canvas, v[k].x / v[k].z, v[k].y / v[k].z);
-            else
+            const double d[3] = {v[k].x, v[k].y, v[k].z};
+            if (isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2])) map_from_direction(map, i, canvas, d);
+            if (!isfinite(map[2 * i]) || !isfinite(map[2 * i + 1]) || !isfinite(d[0]))
                 map[2 * i] = map[2 * i + 1] = -1e6f; // outside: remap gives 0
         }
     }

@@ -27,13 +27,15 @@
 extern "C" {
 #endif
 
-// A POV-Ray perspective camera, vectors in POV-Ray's world <e, u, n>, metres.
+// A POV-Ray camera, vectors in POV-Ray's world <e, u, n>, metres: perspective (fisheye_deg = 0),
+// or POV-Ray's fisheye (rs_synth_povcam_init_fisheye).
 typedef struct {
     double location[3];  // (3,) camera centre
     double right[3];     // (3,) see above
     double up[3];        // (3,)
     double direction[3]; // (3,)
     int width, height;   // image size the vectors were derived for, pixels
+    double fisheye_deg;  // 0: perspective; > 0: POV-Ray's fisheye camera of this full angle
 } rs_synth_povcam;
 
 // ENU <-> POV-Ray world: p_pov = (e, u, n). In-place safe.
@@ -49,24 +51,58 @@ rs_status rs_synth_povcam_init( // out
     // in
     const double fxycxy[4], int width, int height, const double rt_cam_enu[6], rs_err *err);
 
-// Writes "camera { perspective location ... right ... up ... direction ... }" with 17 significant
-// digits. Returns RS_ERR_IO if the stream reports an error.
+// POV-Ray 3.7's fisheye camera looking along the camera's z axis, for a size x size image.
+// Method (POV-Ray 3.7's tracepixel.cpp, checked by tests/synth/povray/test_pins.py): with unit
+// right = x_cam, up = -y_cam, direction = z_cam, the pixel in column i, row j is traced along
+//     x0 = 2 ((i + 0.5)/size - 0.5),  y0 = 2 (0.5 - (j + 0.5)/size),  rad = |(x0, y0)| <= 1
+//     theta = rad angle/2,  v = sin(theta) (x0, y0)/rad . (right, up) + cos(theta) direction,
+// i.e. the equidistant lens (rs_synth_canvas_project) with f = size / angle (radians) and the centre
+// ((size - 1)/2, (size - 1)/2); pixels with rad > 1 are not traced (transparent).
+// in:  angle_deg in (0, 360]; size > 0; rt_cam_enu (6,)
+rs_status rs_synth_povcam_init_fisheye( // out
+    rs_synth_povcam *cam,
+    // in
+    double angle_deg, int size, const double rt_cam_enu[6], rs_err *err);
+
+// Writes "camera { perspective location ... right ... up ... direction ... }" (or "fisheye" with
+// its "angle") with 17 significant digits. Returns RS_ERR_IO if the stream reports an error.
 rs_status rs_synth_povcam_write(FILE *f, const rs_synth_povcam *cam, rs_err *err);
 
-// The pinhole canvas that a distorted lens is rendered on before it is resampled into the lens.
+// The canvas that a distorted lens is rendered on before it is resampled into the lens: a pinhole,
+// or for a lens that sees 80 degrees or more off its axis an equidistant fisheye (POV-Ray's
+// fisheye camera, rs_synth_povcam_init_fisheye): pixel q = c + f theta (v_x, v_y)/|(v_x, v_y)| for
+// a camera-frame direction v at theta off the axis, f = fxycxy[0] = fxycxy[1], c = fxycxy[2..3].
 typedef struct {
-    double fxycxy[4];  // (4,) canvas pinhole: the lens's fx, fy times `scale`; its own cx, cy
-    int width, height; // canvas size, pixels
-    double scale;      // canvas pixels per pinhole-core pixel (>= 1: supersampled)
-    int identity;      // 1 if the lens is LENSMODEL_PINHOLE and scale = 1: no resampling needed
+    double fxycxy[4];   // (4,) canvas pinhole: the lens's fx, fy times `scale`; its own cx, cy
+                        // (fisheye: f, f, (size - 1)/2, (size - 1)/2)
+    int width, height;  // canvas size, pixels
+    double scale;       // canvas pixels per pinhole-core pixel (>= 1: supersampled)
+    int identity;       // 1 if the lens is LENSMODEL_PINHOLE and scale = 1: no resampling needed
+    double fisheye_deg; // 0: a pinhole canvas; > 0: a fisheye canvas of this full angle, degrees
 } rs_synth_canvas;
 
-// Chooses the canvas that covers every pixel of the real lens: unprojects (mrcal_unproject) the
+// The canvas pixel that sees the camera-frame direction v (any length): false when the canvas
+// does not (behind a pinhole canvas, more than fisheye_deg/2 off a fisheye canvas's axis).
+// out: q (2,); in: canvas, v (3,)
+bool rs_synth_canvas_project(double q[2], const rs_synth_canvas *canvas, const double v[3]);
+
+// The POV-Ray camera that renders `canvas` from the pose rt_cam_enu: perspective
+// (rs_synth_povcam_init) or fisheye (rs_synth_povcam_init_fisheye).
+rs_status rs_synth_povcam_for_canvas( // out
+    rs_synth_povcam *cam,
+    // in
+    const rs_synth_canvas *canvas, const double rt_cam_enu[6], rs_err *err);
+
+// Chooses the canvas that covers every pixel of the real lens: unprojects (rs_lens_unproject) the
 // border of the width x height image densely (every pixel along the four edges, plus the
 // centre) and takes the bounding box of their pinhole projections with a margin of 2 canvas
 // pixels. For LENSMODEL_PINHOLE with scale 1 the canvas is the camera itself (identity = 1).
-// Precondition: the lens maps the whole image to directions in front of the camera (z > 0)
-// within 80 degrees of the axis (RS_ERR_UNSUPPORTED otherwise: wide fisheyes need a cube map).
+// A lens that maps part of the image more than 80 degrees off its axis (or behind the camera:
+// a fisheye) gets a fisheye canvas instead: its angle twice the largest angle off the axis of
+// the image's pixels (its border and a grid every 8 pixels; 180 degrees when a pixel has no
+// direction: the lens's circle lies inside the image) plus 3 canvas pixels, at most 360; its f
+// the largest of scale fx, scale fy and scale times the lens's radial pixels per radian over
+// those pixels, its size even (docs/povray.md, "Fisheye lenses").
 // in:  lensmodel, intrinsics (Nintrinsics,), width, height: the real camera
 //      scale: canvas pixels per core pixel, >= 1 (1 is fine for the test suite; 2 gives sharper
 //      resampling)
@@ -79,7 +115,8 @@ rs_status rs_synth_canvas_for_lens( // out
 // The resampling map: for every pixel (u, v) of the real image, the canvas pixel that sees the
 // same direction: its unprojection through the real lens, then the canvas pinhole. Coordinates
 // follow mrcal/OpenCV (pixel (0,0) = centre of the top-left pixel); a pixel without a direction
-// in front of the camera gets (-1e6, -1e6) (remap gives 0 there).
+// the canvas sees gets (-1e6, -1e6) (remap gives 0 there). A fisheye canvas interpolates the
+// unit direction (x, y, z) instead of (x/z, y/z).
 // Method (issue 18's cost: mrcal_unproject is iterative, 0.28 s for every pixel of 720x480):
 // mrcal_unproject on a grid of nodes every RS_SYNTH_CANVAS_MAP_STEP pixels (from one step
 // before the image to two past it), the direction's tangent-plane coordinates (x/z, y/z)

@@ -36,47 +36,7 @@ void rs_synth_render_result_free(rs_synth_render_result *r)
     memset(r, 0, sizeof(*r));
 }
 
-// ---- culling ----
-
-bool rs_synth_vehicle_rect(int rect[4], const double fxycxy[4], int width, int height, const double rt_cam_enu[6],
-                           const double corners_enu_m[8][3], double near_m)
-{
-    double p[8][3];
-    for (int k = 0; k < 8; k++) mrcal_transform_point_rt(p[k], NULL, NULL, rt_cam_enu, corners_enu_m[k]);
-    // The box clipped to z >= near is the convex hull of its corners in front and of the
-    // crossings of its 12 edges with the plane z = near: their projections bound its image.
-    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
-    int Nin = 0;
-    for (int a = 0; a < 8; a++) {
-        for (int b = a; b < 8; b++) {
-            const int diff = a ^ b;
-            double q[3];
-            if (a == b) {
-                if (!(p[a][2] >= near_m)) continue;
-                memcpy(q, p[a], sizeof(q));
-            } else if (diff == 1 || diff == 2 || diff == 4) {
-                const double za = p[a][2] - near_m, zb = p[b][2] - near_m;
-                if (!((za < 0 && zb > 0) || (za > 0 && zb < 0))) continue;
-                const double t = za / (za - zb);
-                for (int k = 0; k < 3; k++) q[k] = p[a][k] + t * (p[b][k] - p[a][k]);
-                q[2] = near_m;
-            } else {
-                continue;
-            }
-            const double u = fxycxy[0] * q[0] / q[2] + fxycxy[2], v = fxycxy[1] * q[1] / q[2] + fxycxy[3];
-            lo[0] = fmin(lo[0], u), hi[0] = fmax(hi[0], u);
-            lo[1] = fmin(lo[1], v), hi[1] = fmax(hi[1], v);
-            Nin++;
-        }
-    }
-    if (Nin == 0 || hi[0] < -0.5 || hi[1] < -0.5 || lo[0] > width - 0.5 || lo[1] > height - 0.5) return false;
-    // Pixel k covers [k - 0.5, k + 0.5]; one pixel of margin on each side.
-    rect[0] = (int)fmax(0, floor(lo[0] + 0.5) - 1);
-    rect[1] = (int)fmax(0, floor(lo[1] + 0.5) - 1);
-    rect[2] = (int)fmin(width - 1, floor(hi[0] + 0.5) + 1);
-    rect[3] = (int)fmin(height - 1, floor(hi[1] + 0.5) + 1);
-    return true;
-}
+// ---- culling: rs_synth_vehicle_rect (synth/povray/rs_synth_render_cull.c) ----
 
 // ---- images ----
 
@@ -185,7 +145,7 @@ static void grow(int rect[4], const int r[4])
 // Widens rect (x0, y0, x1, y1; empty when x1 < x0) by the canvas rectangle of vehicle v's
 // shadows: its bottom corners and its top corners projected onto the ground along each light
 // higher than 3 deg above the ground.
-static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int height, const double rt_cam_enu[6],
+static void widen_by_shadows(int rect[4], const rs_synth_canvas *canvas, const double rt_cam_enu[6],
                              const double corners[8][3], const double ground_normal_enu[3], double ground_offset_m,
                              const rs_synth_light *lights, int Nlights)
 {
@@ -203,7 +163,7 @@ static void widen_by_shadows(int rect[4], const double fxycxy[4], int width, int
             for (int c = 0; c < 3; c++) pts[4 + k][c] = p[c] - t * d[c];
         }
         int r[4];
-        if (rs_synth_vehicle_rect(r, fxycxy, width, height, rt_cam_enu, (const double(*)[3])pts, 0.05)) grow(rect, r);
+        if (rs_synth_vehicle_rect(r, canvas, rt_cam_enu, (const double(*)[3])pts, 0.05)) grow(rect, r);
     }
 }
 
@@ -452,8 +412,7 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
             memcpy(rect, opt->vehicle_rects[i], sizeof(rect));
             in = true;
         } else {
-            in = rs_synth_vehicle_rect(rect, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu,
-                                       (const double(*)[3])corners, 0.05);
+            in = rs_synth_vehicle_rect(rect, canvas, rt_cam_enu, (const double(*)[3])corners, 0.05);
         }
         s->include[i] = opt->full_frame || in;
         out->visible[i] = s->include[i];
@@ -461,8 +420,8 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
         out->Nrendered++;
         grow(s->region, rect);
         if (!opt->shadow) continue;
-        widen_by_shadows(rect, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu, (const double(*)[3])corners,
-                         s->ground_normal_enu, s->ground_offset_m, s->lights, s->Nlights);
+        widen_by_shadows(rect, canvas, rt_cam_enu, (const double(*)[3])corners, s->ground_normal_enu,
+                         s->ground_offset_m, s->lights, s->Nlights);
         grow(s->sregion, rect);
     }
     // Pins, and the ground when there is no background to composite onto, are part of the
@@ -528,9 +487,12 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     const int W2 = (canvas->width + 1) / 2, H2 = (canvas->height + 1) / 2;
     rs_status st = RS_OK;
     if (i_shadow >= 0) {
+        // (a fisheye canvas's size is even: the same angle on half the size has the same relation)
         const double *f = canvas->fxycxy;
         const double half[4] = {f[0] / 2, f[1] / 2, (f[2] - 0.5) / 2, (f[3] - 0.5) / 2};
-        if ((st = rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
+        if ((st = canvas->fisheye_deg > 0
+                      ? rs_synth_povcam_init_fisheye(&scam, canvas->fisheye_deg, W2, rt_cam_enu, err)
+                      : rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
             (st = shadow_vehicles(&s->svehicles, &s->sowned, s->vehicles, s->include, err)))
             return st;
     }
@@ -542,9 +504,11 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
                                                                           s->ground_normal_enu, s->ground_offset_m);
     const bool ids_alpha =
         i_id >= 0 && opt->antialias < 2 && opt->scene.Npins == 0 && !s->ground_drawn && !ground_hides;
-    // The ID pass is POV-Ray's too where the ground may hide part of a vehicle.
-    const bool ids_here = i_id >= 0 && !ground_hides && !opt->povray_passes;
-    const bool shadow_here = i_shadow >= 0 && !opt->povray_passes;
+    // The ID pass is POV-Ray's too where the ground may hide part of a vehicle; both are
+    // POV-Ray's on a fisheye canvas (the rasteriser draws straight edges: a pinhole's).
+    const bool fisheye = canvas->fisheye_deg > 0;
+    const bool ids_here = i_id >= 0 && !ground_hides && !opt->povray_passes && !fisheye;
+    const bool shadow_here = i_shadow >= 0 && !opt->povray_passes && !fisheye;
     static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
     static const char *const logs[3] = {"povray.log", "pass_ids.log", "pass_shadow.log"};
     for (int k = 0; k < Npasses; k++) {
@@ -651,9 +615,7 @@ static rs_status render_setup(render_state *s, rs_image *bg, rs_synth_render_res
     else if ((st = rs_synth_canvas_for_lens(&s->canvas, &camera->lensmodel, camera->intrinsics, width, height,
                                             s->opt.canvas_scale > 1 ? s->opt.canvas_scale : 1, err)))
         return st;
-    if ((st = rs_synth_povcam_init(&s->cam, s->canvas.fxycxy, s->canvas.width, s->canvas.height, camera->rt_cam_enu,
-                                   err)))
-        return st;
+    if ((st = rs_synth_povcam_for_canvas(&s->cam, &s->canvas, camera->rt_cam_enu, err))) return st;
     if (s->opt.background_path) {
         if ((st = rs_image_read(bg, s->opt.background_path, err))) return st;
         if (bg->width != width || bg->height != height)

@@ -3,7 +3,8 @@
 //
 // Steps (docs/povray.md):
 // 1. Frustum culling: each vehicle's bounding box is clipped to z_cam >= 0.05 m and projected
-//    through the canvas pinhole (rs_synth_camera.h); a vehicle whose projection misses the canvas
+//    through the canvas pinhole (rs_synth_camera.h; a fisheye canvas: the box's sampled
+//    segments, rs_synth_vehicle_rect); a vehicle whose projection misses the canvas
 //    is left out. With no vehicle left (and no pins), povray is not run when compositing onto a
 //    background: the image is the background and the ID image is all 0. Limitation: a culled
 //    vehicle's shadow or reflection, which could fall into the view, is lost.
@@ -17,7 +18,8 @@
 //    coarse meshes) while one povray process renders the colour pass (rs_synth_raster.h;
 //    docs/fleet.md, "Cost", D). With povray_passes, one povray process per pass instead, all
 //    started at once (one after the other with separate_processes), the shadow pass at half
-//    the canvas's resolution on coarse meshes, interpolated. Each povray process spends about
+//    the canvas's resolution on coarse meshes, interpolated. A fisheye canvas has both passes
+//    rendered by POV-Ray (the rasteriser draws straight edges). Each povray process spends about
 //    0.6 s waiting between its threads besides its work (docs/povray.md).
 // 3. Colour pass with alpha over a transparent background (+UA), 16-bit linear PNG
 //    (File_Gamma 1), no antialiasing unless asked; without pins, drawn ground, antialiasing or
@@ -143,11 +145,12 @@ rs_status rs_synth_render( // out
 
 // The canvas rectangle (x0, y0, x1, y1 inclusive, clipped to the canvas) covered by vehicle v's
 // bounding box clipped to z_cam >= near_m; returns false if it misses the canvas or lies behind.
+// A fisheye canvas (rs_synth_camera.h): the box's edges sampled, with a margin, and no near plane;
+// a box reaching out of the canvas's angle gets the whole canvas.
 bool rs_synth_vehicle_rect( // out
     int rect[4],
     // in
-    const double fxycxy[4], int width, int height, const double rt_cam_enu[6], const double corners_enu_m[8][3],
-    double near_m);
+    const rs_synth_canvas *canvas, const double rt_cam_enu[6], const double corners_enu_m[8][3], double near_m);
 
 // The labels of a rendered image (synth/labels/rs_synth_labels.h): every prepared vehicle's label
 // computed through `cam` with its visibility from r->ids, written as COCO and YOLO under

@@ -98,8 +98,10 @@ static void write_pins(FILE *f, const rs_synth_povcam *cam, const double fxy[2],
     for (int i = 0; i < opt->Npins; i++) {
         double p[3];
         rs_synth_enu_to_pov(p, &opt->pins_enu_m[3 * i]);
-        const double depth =
-            (p[0] - cam->location[0]) * z[0] + (p[1] - cam->location[1]) * z[1] + (p[2] - cam->location[2]) * z[2];
+        const double dp[3] = {p[0] - cam->location[0], p[1] - cam->location[1], p[2] - cam->location[2]};
+        // a fisheye sees behind its image plane: its pins are sized by their distance
+        const double depth = cam->fisheye_deg > 0 ? sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2])
+                                                  : dp[0] * z[0] + dp[1] * z[1] + dp[2] * z[2];
         if (!(depth > 0)) continue; // behind the camera
         fprintf(f,
                 "sphere { <%.17g, %.17g, %.17g>, %.9g\n  texture { pigment { rgb 1 } finish { "

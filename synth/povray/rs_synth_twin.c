@@ -127,7 +127,7 @@ rs_status rs_synth_twin_render(double *sun_azimuth_deg, double *sun_elevation_de
     if ((st = rs_io_mkdir_p(work_dir, err)) ||
         (st = rs_synth_canvas_for_lens(&canvas, lensmodel, intrinsics, width, height,
                                        o.canvas_scale >= 1 ? o.canvas_scale : 1, err)) ||
-        (st = rs_synth_povcam_init(&cam, canvas.fxycxy, canvas.width, canvas.height, rt_cam_enu, err)) ||
+        (st = rs_synth_povcam_for_canvas(&cam, &canvas, rt_cam_enu, err)) ||
         (st = write_twin_scene(pov, &cam, site, &lanes, look, az, el, o.marking_width_m, err)) ||
         (st = run_twin_povray(povray, work_dir, canvas.width, canvas.height, o.antialias, err)) ||
         (st = rs_image_read(&img, png, err)))

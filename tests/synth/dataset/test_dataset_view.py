@@ -9,6 +9,8 @@
 #    centres lie in it: columns ceil(x0) and floor(x1), rows ceil(y0) and floor(y1) of the
 #    COCO footprint_bbox [x0, y0, x1 - x0, y1 - y0] (docs/labels.md conventions); the four
 #    corner pixels on the page are exactly the footprint colour RGB (0, 230, 0);
+#  - the same pages and footprint corners for a fisheye dataset (issue 38: 5 images of 320x240
+#    through a Kannala-Brandt fisheye at cam1's pose, rendered on the fisheye canvas);
 #  - bad input (no dataset, a JSON syntax error, a malformed box, a missing image, no -o) gives
 #    a message naming the file (and line or field) and exit 1 (2 for usage), never a crash.
 import json
@@ -28,7 +30,7 @@ W, H = 160, 90
 FOOTPRINT_RGB = (0, 230, 0)
 
 
-def check_pages(ds, out):
+def check_pages(ds, out, W=W, H=H):
     p = u.run(["dataset", "view", ds, "-o", out, "--per-page", "2"])
     print(p.stdout.strip())
     for k in (1, 2, 3):
@@ -130,6 +132,14 @@ def main():
                "--camera", "cam1", "--size", "%dx%d" % (W, H), "--vehicles", "6", "--jobs", "2"])
         check_pages(ds, os.path.join(tmp, "view"))
         check_bad_input(tmp, ds)
+        # issue 38: the same on a fisheye (1280x960 Kannala-Brandt at cam1's pose, made 320x240)
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "povray"))
+        from test_pins import fisheye_camera
+        fisheye_camera(os.path.join(tmp, "calib_fisheye"), (0.02, -0.004), 0)
+        ds = os.path.join(tmp, "ds_fisheye")
+        u.run(["synth", u.DEMO, "--calib", os.path.join(tmp, "calib_fisheye"), "--count", "5", "-o", ds,
+               "--seed", str(SEED), "--camera", "cam1", "--size", "320x240", "--vehicles", "6", "--jobs", "2"])
+        check_pages(ds, os.path.join(tmp, "view_fisheye"), 320, 240)
     print("test_dataset_view: ok")
 
 
