@@ -1,62 +1,25 @@
 // fuzz_camera_opencv.c -- libFuzzer harness of the OpenCV-style camera reader of core
 // (rs_camera_read, core/rs_camera.h, with cv::FileStorage underneath): the input is written to a
-// per-process temporary file and read back, as cam.json when its first non-blank byte is '{'
-// and as cam.yaml otherwise (the name picks the reader). Corpus: tests/fuzz/corpus/camera_opencv/.
+// per-process temporary file (tests/fuzz/fuzz_scratch.h) and read back, as cam.json when its
+// first non-blank byte is '{' and as cam.yaml otherwise (the name picks the reader). Corpus:
+// tests/fuzz/corpus/camera_opencv/.
 //
 // Held to the header's contract, a breach aborting: a camera that reads passes rs_camera_check;
 // each side of the image, when given, is 1..10^6 pixels; a rotation matrix R is part of a pose
 // only with a translation (extra.has_R implies extra.has_pose); a failed read leaves the camera
 // zeroed and says why.
-#include <ctype.h>
-#include <stdbool.h>
 #include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 
 #include "core/rs_camera.h"
-#include "core/rs_io.h"
+#include "fuzz_scratch.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static char *dir, *yaml_path, *json_path; // the per-process folder and its two file names
-
-static void breach(const char *what, const char *detail)
-{
-    fprintf(stderr, "fuzz_camera_opencv: contract broken: %s%s%s\n", what, detail ? ": " : "", detail ? detail : "");
-    abort();
-}
-
-static void remove_dir(void)
-{
-    if (dir) rs_io_remove_tree(dir);
-    free(dir);
-    free(yaml_path);
-    free(json_path);
-    dir = yaml_path = json_path = NULL;
-}
-
-static void make_dir(void)
-{
-    const char *tmp = getenv("TMPDIR");
-    dir = rs_io_join(tmp && *tmp ? tmp : "/tmp", "roadside-fuzz-XXXXXX");
-    if (!dir || !mkdtemp(dir)) breach("cannot make a temporary folder", dir);
-    atexit(remove_dir);
-    yaml_path = rs_io_join(dir, "cam.yaml");
-    json_path = rs_io_join(dir, "cam.json");
-    if (!yaml_path || !json_path) breach("out of memory", NULL);
-}
+static void breach(const char *what, const char *detail) { fuzz_breach("fuzz_camera_opencv", what, detail); }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (!dir) make_dir();
-    size_t i = 0;
-    while (i < size && isspace(data[i])) i++;
-    const char *path = i < size && data[i] == '{' ? json_path : yaml_path;
-    // A scratch input rewritten for every run: plain stdio (an atomic write would fsync each time).
-    FILE *f = fopen(path, "wb");
-    if (!f || (size && fwrite(data, 1, size, f) != size) || fclose(f) != 0) breach("cannot write", path);
-
+    const char *path = fuzz_scratch_write("fuzz_camera_opencv", data, size, "cam.json", "cam.yaml");
     rs_camera cam;
     rs_camera_extra extra;
     rs_err err = {0};

@@ -1,50 +1,24 @@
 // fuzz_import_points.c -- libFuzzer harness of `site import`'s point-file reader
 // (rs_site__import_read, geo/internal/rs_site_import_points.h, in geo/rs_site_import_read.c): the
-// input is written to a per-process temporary file and read back, as points.json when its first
-// non-blank byte is '{' and as points.csv otherwise (the name picks the reader). Corpus:
-// tests/fuzz/corpus/import_points/.
+// input is written to a per-process temporary file (tests/fuzz/fuzz_scratch.h) and read back, as
+// points.json when its first non-blank byte is '{' and as points.csv otherwise (the name picks the
+// reader). Corpus: tests/fuzz/corpus/import_points/.
 //
 // Held to the header's contract, a breach aborting: points that read are at least 4, each with a
 // unique id that follows rs_io_name_problem, a finite position (a latitude within [-90, 90] and a
 // longitude within [-180, 180] when geographic), finite pixels, a height and a sigma_px each NAN or
 // finite, and a line from 1; a failed read says why.
-#include <ctype.h>
 #include <math.h>
 #include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "fuzz_scratch.h"
 #include "geo/internal/rs_site_import_points.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static char *dir, *json_path, *csv_path; // the per-process folder and its two file names
-
-static void breach(const char *what, const char *detail)
-{
-    fprintf(stderr, "fuzz_import_points: contract broken: %s%s%s\n", what, detail ? ": " : "", detail ? detail : "");
-    abort();
-}
-
-static void remove_dir(void)
-{
-    if (dir) rs_io_remove_tree(dir);
-    free(dir), free(json_path), free(csv_path);
-    dir = json_path = csv_path = NULL;
-}
-
-static void make_dir(void)
-{
-    const char *tmp = getenv("TMPDIR");
-    dir = rs_io_join(tmp && *tmp ? tmp : "/tmp", "roadside-fuzz-XXXXXX");
-    if (!dir || !mkdtemp(dir)) breach("cannot make a temporary folder", dir);
-    atexit(remove_dir);
-    json_path = rs_io_join(dir, "points.json");
-    csv_path = rs_io_join(dir, "points.csv");
-    if (!json_path || !csv_path) breach("out of memory", NULL);
-}
+static void breach(const char *what, const char *detail) { fuzz_breach("fuzz_import_points", what, detail); }
 
 static void check_points(const rs_site__import_points *pts)
 {
@@ -65,14 +39,7 @@ static void check_points(const rs_site__import_points *pts)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    if (!dir) make_dir();
-    size_t i = 0;
-    while (i < size && isspace(data[i])) i++;
-    const char *path = i < size && data[i] == '{' ? json_path : csv_path;
-    // A scratch input rewritten for every run: plain stdio (an atomic write would fsync each time).
-    FILE *f = fopen(path, "wb");
-    if (!f || (size && fwrite(data, 1, size, f) != size) || fclose(f) != 0) breach("cannot write", path);
-
+    const char *path = fuzz_scratch_write("fuzz_import_points", data, size, "points.json", "points.csv");
     rs_site__import_points pts;
     rs_err err = {0};
     if (rs_site__import_read(&pts, path, &err) == RS_OK)
