@@ -11,7 +11,8 @@ Cases (argv[1]):
 - json_fisheye: a point-pair JSON with an image beside it and the equidistant triple
   {f, x0, y0}: 14 ground points seen by a known CAHVORE camera (mrcal.project, linearity 0), their
   lat/lng made by cct from ENU; the camera file is the triple (f f x0 y0 and 8 zeros); ENU within
-  1 mm of cct; `calib` recovers the camera's position within 0.01 m.
+  1 mm of cct; `calib --refine focal` recovers the camera's position within 0.01 m and f within
+  0.01 px.
 - kb_two_cameras: two point-pair JSONs and one OpenCV fisheye YAML (distortion_model fisheye, k1,
   k2): ids prefixed by camera, both camera files CAHVORE (fx fy cx cy 0 0 0 k1 k2 0 0 0), both
   positions recovered within 0.01 m.
@@ -170,12 +171,14 @@ def case_json_fisheye(tmp, rng):
     check(lens == "LENSMODEL_CAHVORE_linearity=0.00" and np.array_equal(got, intr) and
           list(model.imagersize()) == list(size), f"json_fisheye: camera file {lens} {got} {model.imagersize()}")
     check_enu("json_fisheye", site, ids, [(r[0], r[1], 0.0) for r in llh], False)
-    res = calibrate(site, "gate", "json_fisheye")
+    res = calibrate(site, "gate", "json_fisheye", "--refine", "focal")
     if res:
         C = in_site_frame(site, C)
         d = np.linalg.norm(np.array(res["position_enu_m"]) - C)
-        print(f"json_fisheye: calibrated position {res['position_enu_m']}, truth {C.tolist()}: {d:.3g} m apart")
-        check(d <= 0.01, f"json_fisheye: position {d} m from the truth (seed {SEED})")
+        print(f"json_fisheye: calibrated position {res['position_enu_m']}, truth {C.tolist()}: {d:.3g} m apart; "
+              f"focal {res['intrinsics'][0]:.6f} px (truth 340)")
+        check(d <= 0.01 and abs(res["intrinsics"][0] - 340) <= 0.01,
+              f"json_fisheye: position {d} m from the truth, focal {res['intrinsics'][0]} (seed {SEED})")
 
 
 def case_kb_two_cameras(tmp, rng):
