@@ -323,7 +323,7 @@ static void test_obj(const char *dir)
             for (int k = 0; k < 3; k++)
                 if (fabs(m.v[m.tri[t][k]][0] - 2) < 1e-9 && fabs(m.vn[m.tri[t][k]][0] - 1) < 1e-9) goto found;
         CHECK(0, "obj: front face (OBJ z = 0) not at x_v = +2 with normal +x_v");
-    found:
+    found:; // (a label is followed by a statement in C11)
         // winding agrees with the OBJ's normals (outward)
         int inward = 0;
         for (int t = 0; t < m.Ntri; t++) {
