@@ -314,14 +314,14 @@ typedef struct {
     double mean_given_minus_model_m; // over the given UNRELIABLE heights (NAN when none): an
                                      //   offset here means heights in another system
     double max_abs_given_minus_model_m;
-    // Heights nobody declared (no landmark_heights, no properties.height) judged unreliable
-    // against the plane they show (docs/site-format.md, "Heights nobody declared"); the numbers
-    // of that judgement (NAN when there was none): the heights' RMS about the plane, their
-    // stated sigma (RMS), the plane's own RMS predictive sigma at them, the chi-square of their
-    // residuals at the statement and its 99.9 % quantile.
+    // Heights nobody declared (no landmark_heights, no properties.height, no ground_plane)
+    // judged unreliable: the plane they show predicts them decisively better than they are
+    // stated (docs/site-format.md, "Heights nobody declared"); the numbers of that judgement
+    // (NAN when there was none): the heights' RMS about the plane, their stated sigma (RMS), the
+    // plane's own RMS predictive sigma at them, the chi-square of their residuals at the
+    // statement and its 99.9 % quantile.
     bool heights_judged_unreliable;
-    bool judged_scattered; // by the chi-square test (else: the plane the more precise)
-    int judged_Nheights;   // the heights on the ground the plane rests on
+    int judged_Nheights; // the heights on the ground the plane rests on
     double judged_rms_m, judged_stated_m, judged_model_m, judged_chi2, judged_chi2_limit;
 } rs_site_ground_model;
 

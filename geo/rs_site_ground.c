@@ -437,12 +437,12 @@ static void report_disagreement(rs_site__report *r, rs_site *site, const char *l
 
 // The judgement needs this many heights on the ground (7 degrees of freedom about the plane).
 enum { JUDGE_MIN_HEIGHTS = 10 };
-// The statement is rejected at one-sided alpha 0.1 %, the standard normal's 99.9 % point: the
-// level of the calibration's own outlier tests (docs/calibration.md, section 3).
+// The heights' statement is tested at one-sided alpha 0.1 %, the standard normal's 99.9 % point:
+// the level of the calibration's own outlier tests (docs/calibration.md, section 3).
 #define JUDGE_Z               3.090
-// Heights the site gives no ground_plane for yield to the plane they show only when it predicts
-// them this many times more precisely than they are stated (four times their weight): the
-// plane's errors are shared by every landmark, which calibration takes as independent.
+// Heights yield to the plane they show only when it predicts them this many times more precisely
+// than they are stated (four times their weight): the plane's errors are shared by every
+// landmark, which calibration takes as independent.
 #define JUDGE_PRECISION_RATIO 2.0
 
 const char *rs_site_heights_judgement(char *buf, size_t n, const rs_site_ground_model *g)
@@ -450,20 +450,13 @@ const char *rs_site_heights_judgement(char *buf, size_t n, const rs_site_ground_
     if (n == 0) return buf;
     buf[0] = 0;
     if (!g->heights_judged_unreliable) return buf;
-    static const char silence[] = "taken from the ground model; declare \"landmark_heights\": \"unreliable\" to "
-                                  "silence this, or \"surveyed\" to keep them as given";
-    if (g->judged_scattered)
-        snprintf(buf, n,
-                 "the landmark heights scatter by %.2f m (RMS) about the plane %d of them on the ground show, "
-                 "against a stated %.2g m (chi-square %.0f > %.0f, its 99.9%% quantile with %d degrees of "
-                 "freedom): %s",
-                 g->judged_rms_m, g->judged_Nheights, g->judged_stated_m, g->judged_chi2, g->judged_chi2_limit,
-                 g->judged_Nheights - 3, silence);
-    else
-        snprintf(buf, n,
-                 "the plane %d landmark heights on the ground show predicts them to %.2f m (RMS), more than %g "
-                 "times better than their stated %.2g m, and the site gives no ground_plane: %s",
-                 g->judged_Nheights, g->judged_model_m, JUDGE_PRECISION_RATIO, g->judged_stated_m, silence);
+    snprintf(buf, n,
+             "the plane %d landmark heights on the ground show (RMS %.2f m about it; chi-square %.0f at their stated "
+             "%.2g m, within its 99.9%% quantile %.0f) predicts them to %.2f m (RMS), more than %g times better than "
+             "their stated %.2g m, and the site gives no ground_plane: taken from the ground model; declare "
+             "\"landmark_heights\": \"unreliable\" to silence this, or \"surveyed\" to keep them as given",
+             g->judged_Nheights, g->judged_rms_m, g->judged_chi2, g->judged_stated_m, g->judged_chi2_limit,
+             g->judged_model_m, JUDGE_PRECISION_RATIO, g->judged_stated_m);
     return buf;
 }
 
@@ -477,22 +470,24 @@ static bool heights_undeclared(const rs_site *site)
     return true;
 }
 
-// Heights nobody declared, judged against the plane fitted robustly to those on the ground
-// (docs/site-format.md, "Heights nobody declared"). They are unreliable when
-//   (a) their residuals reject the statement: sum r^2 / (stated^2 + SCATTER_MIN^2) beyond the
-//       99.9 % quantile of chi-square(Nused - 3), the road's least scatter about a plane
-//       allowed for; or
-//   (b) the site gives no ground_plane and the plane predicts them JUDGE_PRECISION_RATIO times
-//       better than stated (RMS over the points used of sqrt(plane^2 + scatter^2), the sigma
-//       a modelled height gets).
-// Then the heights of the landmarks the plane rests on become UNRELIABLE (the model that follows
-// gives them, as for a site that says "landmark_heights": "unreliable"; those it left out keep
-// theirs: a wrong height, or a point above the ground, as the fit's warnings say) and a warning at
-// site.json says why, with the numbers (also in site->ground). Scratch: idx, vtx, local, p, floor_m, keep, as
-// rs_site__ground_model's. Returns 1 when judged unreliable, 0 when not, -1 when out of memory.
+// Heights nobody declared, on a site that gives no ground_plane, judged against the plane fitted
+// robustly to those on the ground (docs/site-format.md, "Heights nobody declared"). They are
+// unreliable when the plane predicts them JUDGE_PRECISION_RATIO times better than they are
+// stated (the RMS over the points used of sqrt(plane^2 + scatter^2), the sigma a modelled height
+// gets) and their residuals about it are consistent with that statement: sum r^2 / (stated^2 +
+// SCATTER_MIN^2) within the 99.9 % quantile of chi-square(Nused - 3), the road's least scatter
+// about a plane allowed for. (Residuals beyond it are noisier heights or points above the
+// ground nobody declared, sign tops, which the heights alone cannot tell apart: they stay as
+// given.) Then the heights of the landmarks the plane rests on become UNRELIABLE (the model
+// that follows gives them, as for a site that says "landmark_heights": "unreliable"; those it
+// left out keep theirs: a wrong height, or a point above the ground, as the fit's warnings say)
+// and a warning at site.json says why, with the numbers (also in site->ground). Scratch: idx,
+// vtx, local, p, floor_m, keep, as rs_site__ground_model's. Returns 1 when judged unreliable, 0
+// when not, -1 when out of memory.
 static int judge_heights(rs_site__report *r, rs_site *site, const char *site_path, int *idx, int *vtx, int *local,
                          double *p, double *floor_m, bool *keep)
 {
+    if (site->ground_plane_given) return 0;
     const int n = candidates(idx, vtx, p, floor_m, site, RS_SITE_HEIGHT_SURVEYED);
     for (int i = 0; i < n; i++) local[i] = i;
     if (n < JUDGE_MIN_HEIGHTS || !spread_ok(p, local, n)) return 0;
@@ -511,12 +506,10 @@ static int judge_heights(rs_site__report *r, rs_site *site, const char *site_pat
         rs_site_ground_predict(NULL, &sigma_plane, &m, p[3 * i], p[3 * i + 1]);
         model2 += (sigma_plane * sigma_plane + m.scatter_m * m.scatter_m) / m.Nused;
     }
-    const bool scattered = chi2 > limit;
-    const bool imprecise = !site->ground_plane_given && JUDGE_PRECISION_RATIO * sqrt(model2) < m.stated_sigma_m;
-    if (!scattered && !imprecise) return 0;
+    if (!(chi2 <= limit && JUDGE_PRECISION_RATIO * sqrt(model2) < m.stated_sigma_m)) return 0;
     rs_site_ground_model *g = &site->ground;
     g->heights_judged_unreliable = true;
-    g->judged_scattered = scattered, g->judged_Nheights = m.Nused;
+    g->judged_Nheights = m.Nused;
     g->judged_rms_m = m.rms_m, g->judged_stated_m = m.stated_sigma_m, g->judged_model_m = sqrt(model2);
     g->judged_chi2 = chi2, g->judged_chi2_limit = limit;
     for (int i = 0; i < n; i++) // the heights the plane rests on; those it left out may be above the ground
