@@ -460,17 +460,17 @@ const char *rs_site_heights_judgement(char *buf, size_t n, const rs_site_ground_
     return buf;
 }
 
-// True when the site says nothing of how far its heights can be trusted: no landmark_heights in
-// site.json, no properties.height on any landmark.
+// True when the site says nothing of how far its heights can be trusted (no landmark_heights in
+// site.json, no properties.height on any landmark) nor where its ground is (no ground_plane).
 static bool heights_undeclared(const rs_site *site)
 {
-    if (site->landmark_heights_given || site->Nlandmarks == 0) return false;
+    if (site->landmark_heights_given || site->ground_plane_given || site->Nlandmarks == 0) return false;
     for (int i = 0; i < site->Nlandmarks; i++)
         if (site->landmarks[i].height_stated != RS_SITE_HEIGHT_DEFAULT) return false;
     return true;
 }
 
-// Heights nobody declared, on a site that gives no ground_plane, judged against the plane fitted
+// Heights nobody declared (heights_undeclared), judged against the plane fitted
 // robustly to those on the ground (docs/site-format.md, "Heights nobody declared"). They are
 // unreliable when the plane predicts them JUDGE_PRECISION_RATIO times better than they are
 // stated (the RMS over the points used of sqrt(plane^2 + scatter^2), the sigma a modelled height
@@ -487,7 +487,6 @@ static bool heights_undeclared(const rs_site *site)
 static int judge_heights(rs_site__report *r, rs_site *site, const char *site_path, int *idx, int *vtx, int *local,
                          double *p, double *floor_m, bool *keep)
 {
-    if (site->ground_plane_given) return 0;
     const int n = candidates(idx, vtx, p, floor_m, site, RS_SITE_HEIGHT_SURVEYED);
     for (int i = 0; i < n; i++) local[i] = i;
     if (n < JUDGE_MIN_HEIGHTS || !spread_ok(p, local, n)) return 0;
