@@ -14,6 +14,7 @@
 #include "calib/internal/rs_calib_refine.h"
 #include "calib/internal/rs_calib_solve_state.h"
 #include "core/rs_pose.h"
+#include "core/rs_stats.h"
 
 void rs_calib_result_free(rs_calib_result *result)
 {
@@ -174,14 +175,6 @@ static void ypr_sigma(double sigma_deg[3], const double rt[6], const double cov_
     for (int i = 0; i < 3; i++) sigma_deg[i] = sqrt(C[i * 3 + i]);
 }
 
-// Wilson-Hilferty approximation of the chi-square quantile with k dof at standard normal z.
-static double chi2_quantile(int k, double z)
-{
-    const double a = 2.0 / (9.0 * k);
-    const double b = 1.0 - a + z * sqrt(a);
-    return k * b * b * b;
-}
-
 rs_status rs_calib__result_pose(rs_calib_solve_state *s, rs_err *err)
 {
     rs_calib_result *res = s->res;
@@ -320,8 +313,8 @@ void rs_calib__result_warnings(rs_calib_solve_state *s)
             "trusting this pose",
             100 * opt->max_rejected_fraction, N - Ninl, N);
     if (res->dof > 0 && !opt->estimate_noise) {
-        const double lo = chi2_quantile(res->dof, -2.576) / res->dof;
-        const double hi = chi2_quantile(res->dof, 2.576) / res->dof;
+        const double lo = rs_stats_chi2_quantile(res->dof, -2.576) / res->dof;
+        const double hi = rs_stats_chi2_quantile(res->dof, 2.576) / res->dof;
         if (res->variance_factor > hi)
             rs_calib__warn(res,
                            "residuals larger than the stated sigmas allow (variance factor %.3g, 99%% "

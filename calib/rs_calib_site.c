@@ -228,6 +228,9 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     cJSON_AddBoolToObject(root, "noise_model_wrong", r->noise_model_wrong);
     json_intrinsics_check(root, &r->intrinsics_check);
     cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
+    char judged[512]; // the site's heights, nobody having declared them, taken from its ground model
+    if (rs_site_heights_judgement(judged, sizeof judged, &site->ground)[0])
+        cJSON_AddItemToArray(warnings, cJSON_CreateString(judged));
     if (r->warnings[0]) {
         char buf[sizeof r->warnings];
         memcpy(buf, r->warnings, sizeof buf);

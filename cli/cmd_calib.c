@@ -164,6 +164,9 @@ int rs_cli_calib(int argc, char **argv)
         free(default_out);
         return RS_EXIT_FAIL;
     }
+    char judged[512]; // heights nobody declared, taken from the ground model: said once, for every camera
+    if (rs_site_heights_judgement(judged, sizeof judged, &site->ground)[0])
+        fprintf(stderr, "roadside calib: %s/site.json: warning: %s\n", site_dir, judged);
     rs_status st = RS_OK;
     int usage = rs_cli_check_cameras("calib", site, only, Nonly);
     struct stat sb;

@@ -40,3 +40,10 @@ double rs_stats_quantile(double *x, int n, double p)
     rs_stats_sort(x, n);
     return rs_stats_quantile_sorted(x, n, p);
 }
+
+double rs_stats_chi2_quantile(int k, double z)
+{
+    const double a = 2.0 / (9.0 * k);
+    const double b = 1.0 - a + z * sqrt(a);
+    return k * b * b * b;
+}

@@ -314,6 +314,15 @@ typedef struct {
     double mean_given_minus_model_m; // over the given UNRELIABLE heights (NAN when none): an
                                      //   offset here means heights in another system
     double max_abs_given_minus_model_m;
+    // Heights nobody declared (no landmark_heights, no properties.height, no ground_plane)
+    // judged unreliable: the plane they show predicts them decisively better than they are
+    // stated (docs/site-format.md, "Heights nobody declared"); the numbers of that judgement
+    // (NAN when there was none): the heights' RMS about the plane, their stated sigma (RMS), the
+    // plane's own RMS predictive sigma at them, the chi-square of their residuals at the
+    // statement and its 99.9 % quantile.
+    bool heights_judged_unreliable;
+    int judged_Nheights; // the heights on the ground the plane rests on
+    double judged_rms_m, judged_stated_m, judged_model_m, judged_chi2, judged_chi2_limit;
 } rs_site_ground_model;
 
 // The ground model's up at (east, north) and the 1-sigma of the plane there (its prediction
@@ -324,6 +333,14 @@ void rs_site_ground_predict( // out
     double *up_m, double *sigma_plane_m,
     // in
     const rs_site_ground_model *model, double e_m, double n_m);
+
+// The judgement of heights nobody declared (model->heights_judged_unreliable) in words: what
+// was found, with its numbers, that the heights were taken from the ground model and how to
+// silence it; "" when there was none. out: buf (n chars, NUL-terminated). Returns buf.
+const char *rs_site_heights_judgement( // out
+    char *buf, size_t n,
+    // in
+    const rs_site_ground_model *model);
 
 typedef struct {
     char *dir;                       // owned; the site folder as given
@@ -339,6 +356,7 @@ typedef struct {
     bool ground_plane_given;         // site.json states the ground_plane
     double max_landmark_distance_m;  // check warns about landmarks farther (default 1000)
     rs_site_height landmark_heights; // site.json "landmark_heights" (SURVEYED when absent)
+    bool landmark_heights_given;     // site.json states landmark_heights
     rs_site_ground_model ground;     // where modelled heights come from (source NONE: none is)
 
     rs_site_landmark *landmarks; // owned, (Nlandmarks,) in file order

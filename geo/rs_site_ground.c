@@ -433,6 +433,92 @@ static void report_disagreement(rs_site__report *r, rs_site *site, const char *l
                       m->max_abs_given_minus_model_m);
 }
 
+// ---- heights nobody declared ----
+
+// The judgement needs this many heights on the ground (7 degrees of freedom about the plane).
+enum { JUDGE_MIN_HEIGHTS = 10 };
+// The heights' statement is tested at one-sided alpha 0.1 %, the standard normal's 99.9 % point:
+// the level of the calibration's own outlier tests (docs/calibration.md, section 3).
+#define JUDGE_Z               3.090
+// Heights yield to the plane they show only when it predicts them this many times more precisely
+// than they are stated (four times their weight): the plane's errors are shared by every
+// landmark, which calibration takes as independent.
+#define JUDGE_PRECISION_RATIO 2.0
+
+const char *rs_site_heights_judgement(char *buf, size_t n, const rs_site_ground_model *g)
+{
+    if (n == 0) return buf;
+    buf[0] = 0;
+    if (!g->heights_judged_unreliable) return buf;
+    snprintf(buf, n,
+             "the plane %d landmark heights on the ground show (RMS %.2f m about it; chi-square %.0f at their stated "
+             "%.2g m, within its 99.9%% quantile %.0f) predicts them to %.2f m (RMS), more than %g times better than "
+             "their stated %.2g m, and the site gives no ground_plane: taken from the ground model; declare "
+             "\"landmark_heights\": \"unreliable\" to silence this, or \"surveyed\" to keep them as given",
+             g->judged_Nheights, g->judged_rms_m, g->judged_chi2, g->judged_stated_m, g->judged_chi2_limit,
+             g->judged_model_m, JUDGE_PRECISION_RATIO, g->judged_stated_m);
+    return buf;
+}
+
+// True when the site says nothing of how far its heights can be trusted (no landmark_heights in
+// site.json, no properties.height on any landmark) nor where its ground is (no ground_plane).
+static bool heights_undeclared(const rs_site *site)
+{
+    if (site->landmark_heights_given || site->ground_plane_given || site->Nlandmarks == 0) return false;
+    for (int i = 0; i < site->Nlandmarks; i++)
+        if (site->landmarks[i].height_stated != RS_SITE_HEIGHT_DEFAULT) return false;
+    return true;
+}
+
+// Heights nobody declared (heights_undeclared), judged against the plane fitted
+// robustly to those on the ground (docs/site-format.md, "Heights nobody declared"). They are
+// unreliable when the plane predicts them JUDGE_PRECISION_RATIO times better than they are
+// stated (the RMS over the points used of sqrt(plane^2 + scatter^2), the sigma a modelled height
+// gets) and their residuals about it are consistent with that statement: sum r^2 / (stated^2 +
+// SCATTER_MIN^2) within the 99.9 % quantile of chi-square(Nused - 3), the road's least scatter
+// about a plane allowed for. (Residuals beyond it are noisier heights or points above the
+// ground nobody declared, sign tops, which the heights alone cannot tell apart: they stay as
+// given.) Then the heights of the landmarks the plane rests on become UNRELIABLE (the model
+// that follows gives them, as for a site that says "landmark_heights": "unreliable"; those it
+// left out keep theirs: a wrong height, or a point above the ground, as the fit's warnings say)
+// and a warning at site.json says why, with the numbers (also in site->ground). Scratch: idx,
+// vtx, local, p, floor_m, keep, as rs_site__ground_model's. Returns 1 when judged unreliable, 0
+// when not, -1 when out of memory.
+static int judge_heights(rs_site__report *r, rs_site *site, const char *site_path, int *idx, int *vtx, int *local,
+                         double *p, double *floor_m, bool *keep)
+{
+    const int n = candidates(idx, vtx, p, floor_m, site, RS_SITE_HEIGHT_SURVEYED);
+    for (int i = 0; i < n; i++) local[i] = i;
+    if (n < JUDGE_MIN_HEIGHTS || !spread_ok(p, local, n)) return 0;
+    rs_site_ground_model m = {.source = RS_SITE_GROUND_FIT_SURVEYED};
+    const int ok = fit_model(&m, keep, site, idx, p, floor_m, n);
+    for (int i = 0; i < site->Nlandmarks; i++) site->landmarks[i].ground_used = false; // a trial fit
+    if (ok <= 0 || m.Nused < JUDGE_MIN_HEIGHTS) return ok < 0 ? -1 : 0;
+    const int dof = m.Nused - 3;
+    const double floor2 = RS_SITE_GROUND_SCATTER_MIN_M * RS_SITE_GROUND_SCATTER_MIN_M;
+    const double chi2 = dof * m.rms_m * m.rms_m / (m.stated_sigma_m * m.stated_sigma_m + floor2);
+    const double limit = rs_stats_chi2_quantile(dof, JUDGE_Z);
+    double model2 = 0;
+    for (int i = 0; i < n; i++) {
+        if (!keep[i]) continue;
+        double sigma_plane;
+        rs_site_ground_predict(NULL, &sigma_plane, &m, p[3 * i], p[3 * i + 1]);
+        model2 += (sigma_plane * sigma_plane + m.scatter_m * m.scatter_m) / m.Nused;
+    }
+    if (!(chi2 <= limit && JUDGE_PRECISION_RATIO * sqrt(model2) < m.stated_sigma_m)) return 0;
+    rs_site_ground_model *g = &site->ground;
+    g->heights_judged_unreliable = true;
+    g->judged_Nheights = m.Nused;
+    g->judged_rms_m = m.rms_m, g->judged_stated_m = m.stated_sigma_m, g->judged_model_m = sqrt(model2);
+    g->judged_chi2 = chi2, g->judged_chi2_limit = limit;
+    for (int i = 0; i < n; i++) // the heights the plane rests on; those it left out may be above the ground
+        if (keep[i]) site->landmarks[idx[i]].height = RS_SITE_HEIGHT_UNRELIABLE;
+    char msg[512];
+    rs_site__diag(r, RS_SITE_WARNING, RS_OK, site_path, 0, -1, NULL, "landmark_heights", "%s",
+                  rs_site_heights_judgement(msg, sizeof msg, g));
+    return 1;
+}
+
 void rs_site__ground_model(rs_site__report *r, rs_site *site)
 {
     rs_site_ground_model *m = &site->ground;
@@ -444,10 +530,16 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
                                 .sigma_min_m = NAN,
                                 .sigma_max_m = NAN,
                                 .mean_given_minus_model_m = NAN,
-                                .max_abs_given_minus_model_m = NAN};
+                                .max_abs_given_minus_model_m = NAN,
+                                .judged_rms_m = NAN,
+                                .judged_stated_m = NAN,
+                                .judged_model_m = NAN,
+                                .judged_chi2 = NAN,
+                                .judged_chi2_limit = NAN};
     int Nmodel = 0;
     for (int i = 0; i < site->Nlandmarks; i++) Nmodel += modelled(&site->landmarks[i]) && usable(&site->landmarks[i]);
-    if (Nmodel == 0) return;
+    const bool undeclared = heights_undeclared(site);
+    if (Nmodel == 0 && !undeclared) return;
 
     char *landmarks_path = rs_io_join(site->dir, RS_SITE_LANDMARKS), *site_path = rs_io_join(site->dir, RS_SITE_JSON);
     const int N = site->Nlandmarks;
@@ -460,10 +552,20 @@ void rs_site__ground_model(rs_site__report *r, rs_site *site)
         r->nomem = true;
         goto done;
     }
+    int judged = 0; // heights nobody declared judged unreliable: the model rests on them, not on those left out
+    if (undeclared) {
+        judged = judge_heights(r, site, site_path, idx, vtx, local, p, floor_m, keep);
+        if (judged < 0) {
+            r->nomem = true;
+            goto done;
+        }
+        for (int i = 0; judged && i < N; i++) Nmodel += modelled(&site->landmarks[i]) && usable(&site->landmarks[i]);
+        if (Nmodel == 0) goto done;
+    }
     static const rs_site_height tiers[2] = {RS_SITE_HEIGHT_SURVEYED, RS_SITE_HEIGHT_UNRELIABLE};
     static const rs_site_ground_source sources[2] = {RS_SITE_GROUND_FIT_SURVEYED, RS_SITE_GROUND_FIT_UNRELIABLE};
     int n = 0, Nheights = 0;
-    for (int t = 0; t < 2 && m->source == RS_SITE_GROUND_NONE; t++) {
+    for (int t = judged; t < 2 && m->source == RS_SITE_GROUND_NONE; t++) {
         n = candidates(idx, vtx, p, floor_m, site, tiers[t]);
         Nheights += n;
         for (int i = 0; i < n; i++) local[i] = i;

@@ -318,6 +318,7 @@ void rs_site__read_site_json(rs_site__reader *c)
         rs_site__get_in_range(c, sigma, "landmark_sigma_m", "vertical", true, RS_SITE_SURVEY_SIGMA_MIN_M,
                               RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &site->landmark_sigma_v_m);
     }
+    site->landmark_heights_given = cJSON_GetObjectItemCaseSensitive(root, "landmark_heights") != NULL;
     rs_site__read_height_trust(c, root, NULL, "landmark_heights", &site->landmark_heights);
     read_ground_plane(c, root);
     rs_site__get_positive(c, root, NULL, "max_landmark_distance_m", false, &site->max_landmark_distance_m);

@@ -71,6 +71,20 @@ int main(void)
     CHECK(rs_stats_median(e4, 4) == 2.5, "median {1,2,3,4} = %g, not 2.5", rs_stats_median(e4, 4));
     CHECK(fabs(rs_stats_quantile(e4, 4, 0.9) - 3.7) < 1e-15, "quantile 0.9 of {1,2,3,4} = %.17g, not 3.7",
           rs_stats_quantile(e4, 4, 0.9));
+    // the chi-square quantile (Wilson-Hilferty) against scipy.stats.chi2.ppf(norm.cdf(z), k), to
+    // the accuracy rs_stats.h states: upper tail 1.2 % for k >= 5, 0.3 % for k >= 20; lower tail
+    // (z = -2.576) 3 % for k >= 10
+    static const struct {
+        int k;
+        double z, want, tol;
+    } chi2[] = {{5, 3.090, 20.513, 0.012},  {7, 3.090, 24.320, 0.012},    {20, 3.090, 45.312, 0.003},
+                {40, 3.090, 73.399, 0.003}, {100, 3.090, 149.445, 0.003}, {10, 2.576, 25.190, 0.012},
+                {10, -2.576, 2.156, 0.03},  {40, -2.576, 20.706, 0.03}};
+    for (size_t i = 0; i < sizeof chi2 / sizeof *chi2; i++) {
+        const double got = rs_stats_chi2_quantile(chi2[i].k, chi2[i].z);
+        CHECK(fabs(got / chi2[i].want - 1) <= chi2[i].tol, "chi-square quantile k %d z %g: %.4f, scipy %.3f", chi2[i].k,
+              chi2[i].z, got, chi2[i].want);
+    }
     printf("stats: %d samples of 1..%d values (%d even counts, half with ties): median exact, quantile worst "
            "%.2g relative\n",
            NSAMPLES, NMAX, Neven, worst_q);
