@@ -98,9 +98,26 @@ rs_status rs_io_read_file_max(char **data, size_t *len, const char *path, size_t
     return RS_OK;
 }
 
+// Opens an existing device or FIFO `path` for writing straight into it (a->tmp_path NULL).
+static rs_status open_special(rs_io_atomic *a, const char *path, rs_err *err)
+{
+    a->path = strdup(path);
+    const int fd = a->path ? open(path, O_WRONLY | O_CLOEXEC) : -1;
+    a->f = fd >= 0 ? fdopen(fd, "wb") : NULL;
+    if (a->f) return RS_OK;
+    const int saved = errno;
+    if (fd >= 0) close(fd);
+    rs_io_atomic_abort(a);
+    return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, strerror(saved));
+}
+
 rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err)
 {
     memset(a, 0, sizeof *a);
+    struct stat sb;
+    if (stat(path, &sb) == 0 && S_ISDIR(sb.st_mode))
+        return rs_err_set(err, RS_ERR_IO, "%s: cannot write: is a folder", path);
+    if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode)) return open_special(a, path, err);
     size_t n = strlen(path);
     a->path = strdup(path);
     a->tmp_path = malloc(n + sizeof ".tmp.XXXXXX");
@@ -146,7 +163,9 @@ rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err)
     rs_status st = RS_OK;
     int bad = 0, saved = 0;
     if (a->f) {
-        bad = ferror(a->f) || fflush(a->f) != 0 || fsync(fileno(a->f)) != 0;
+        // (a device or FIFO cannot be synced: EINVAL, ESPIPE are not failures)
+        bad = ferror(a->f) || fflush(a->f) != 0 ||
+              (fsync(fileno(a->f)) != 0 && !(!a->tmp_path && (errno == EINVAL || errno == ESPIPE)));
         saved = errno;
         if (fclose(a->f) != 0 && !bad) {
             bad = 1;
@@ -156,9 +175,9 @@ rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err)
     }
     if (bad)
         st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(saved));
-    else if (rename(a->tmp_path, a->path) != 0)
+    else if (a->tmp_path && rename(a->tmp_path, a->path) != 0)
         st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename into place: %s", a->path, strerror(errno));
-    if (st != RS_OK) remove(a->tmp_path);
+    if (st != RS_OK && a->tmp_path) remove(a->tmp_path);
     free(a->tmp_path);
     free(a->path);
     a->tmp_path = a->path = NULL;
@@ -236,6 +255,9 @@ static int remove_entry(const char *path, const struct stat *sb, int type, struc
 rs_status rs_io_remove_if_exists(const char *path, bool *removed, rs_err *err)
 {
     if (removed) *removed = false;
+    struct stat sb;
+    if (lstat(path, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISLNK(sb.st_mode)) // never a device or FIFO
+        return rs_err_set(err, RS_ERR_IO, "%s: not removed: not a regular file", path);
     if (unlink(path) == 0) {
         if (removed) *removed = true;
         return RS_OK;

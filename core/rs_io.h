@@ -41,12 +41,15 @@ rs_status rs_io_check_regular(const char *path, size_t max_bytes, rs_err *err);
 // An output file being written under a temporary name in the same folder as `path`.
 typedef struct {
     FILE *f;        // write here
-    char *tmp_path; // owned
+    char *tmp_path; // owned; NULL when writing straight into a device or FIFO
     char *path;     // owned: the final name
 } rs_io_atomic;
 
 // Opens `path` for atomic writing. On success a->f is open and must be finished with
-// rs_io_atomic_commit() or rs_io_atomic_abort().
+// rs_io_atomic_commit() or rs_io_atomic_abort(). A `path` that exists and is not a regular file
+// -- /dev/null, /dev/stdout, a FIFO -- is written straight into (renaming a file over it would
+// replace the device: as root, `-o /dev/null` once turned /dev/null into a regular file); a folder
+// is refused (RS_ERR_IO, "is a folder").
 rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err);
 // Flushes, fsyncs, closes and renames into place. Frees a's strings whatever the outcome; on
 // failure removes the temporary file.
@@ -84,7 +87,7 @@ const char *rs_io_name_problem(const char *name);
 char *rs_io_child_path(const char *dir, const char *name, const char *suffix, rs_err *err);
 
 // Removes the file `path` if there is one (unlink: a folder is never removed; a link is removed,
-// not what it points to). *removed (may be NULL) says whether a file was removed. A missing path
+// not what it points to; a device, FIFO or socket is never removed: RS_ERR_IO). *removed (may be NULL) says whether a file was removed. A missing path
 // is RS_OK with *removed false; any other failure is RS_ERR_IO naming the path.
 rs_status rs_io_remove_if_exists(const char *path, bool *removed, rs_err *err);
 

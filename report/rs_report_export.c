@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cpl_conv.h>
@@ -425,6 +426,14 @@ rs_status rs_report_export(rs_report_export_summary *summary, const char *vector
         rs_report_export_options_default(&opt);
     if (!vector_path && !raster_path) return rs_err_set(err, RS_ERR_INVALID, "export: nothing to write");
     if (!(opt.range_m > 0)) return rs_err_set(err, RS_ERR_INVALID, "export: range_m = %g: must be > 0", opt.range_m);
+    // outputs are files: a device (-o /dev/null), FIFO or folder there is refused, never replaced
+    const char *paths[2] = {vector_path, raster_path};
+    for (int i = 0; i < 2; i++) {
+        struct stat sb;
+        if (paths[i] && stat(paths[i], &sb) == 0 && !S_ISREG(sb.st_mode))
+            return rs_err_set(err, RS_ERR_IO,
+                              "%s: exists and is not a regular file (a device, FIFO or folder): not written", paths[i]);
+    }
     // stale outputs first: an earlier export under these names is not this run's
     if (vector_path) (void)rs_io_remove_if_exists(vector_path, NULL, NULL);
     if (raster_path) (void)rs_io_remove_if_exists(raster_path, NULL, NULL);

@@ -63,6 +63,17 @@ int main(void)
     CHECK(rs_io_read_file_max(&data, NULL, "/", 100, &err) == RS_ERR_IO && strstr(err.msg, "a folder"), "/: %s",
           err.msg);
     CHECK(rs_io_check_regular("/dev/null", 100, &err) == RS_ERR_IO, "/dev/null accepted");
+    // an output named /dev/null is written into, never renamed over (as root that replaced the
+    // device by a regular file); a folder as output is refused
+    struct stat sb;
+    if (stat("/dev/null", &sb) == 0 && S_ISCHR(sb.st_mode)) {
+        CHECK(rs_io_write_file("/dev/null", "x\n", 2, &err) == RS_OK, "write /dev/null: %s", err.msg);
+        CHECK(stat("/dev/null", &sb) == 0 && S_ISCHR(sb.st_mode), "/dev/null is no longer a device");
+        bool removed = true;
+        CHECK(rs_io_remove_if_exists("/dev/null", &removed, &err) == RS_ERR_IO && !removed, "/dev/null removed");
+        CHECK(stat("/dev/null", &sb) == 0 && S_ISCHR(sb.st_mode), "/dev/null is gone");
+    }
+    CHECK(rs_io_write_file("/tmp", "x", 1, &err) == RS_ERR_IO && strstr(err.msg, "is a folder"), "/tmp: %s", err.msg);
     // a killed writer's temporaries are removed, and only they (the synth CI failure of 2026-11-24:
     // a run killed while writing labels left "<file>.tmp.XXXXXX" that the rerun kept)
     char dir[] = "/tmp/rs_test_io_XXXXXX";
