@@ -262,6 +262,17 @@ typedef struct {
     bool noise_model_wrong;    // snooping would have rejected more than max_rejected_fraction: it
                                //   stopped there, and the warnings say so
     rs_calib_intrinsics_check intrinsics_check; // the intrinsics against the image (above)
+    // A focal refined that the landmarks cannot tell from the camera's distance (issue 38): its
+    // sigma above 25% of it, or no solve with it free gave a pose (it is then held at the best
+    // start's value, the warnings say so). The pose is still the best the data defends; what they
+    // do determine is the ground mapping, recorded here as the least-squares homography of the
+    // inliers' picks (undistorted through the final intrinsics, pinhole core) to their surveyed
+    // (E, N) (rs_calib_homography_fit), with its scatter. All zero when focal_undetermined is false.
+    bool focal_undetermined;
+    bool focal_held;                // no solve with the focal free gave a pose: held at intrinsics[0]
+    double H_ground_from_px_fit[9]; // (3,3) row-major, undistorted px -> (E, N) m, H[8] = 1
+    double sigma_ground_fit_m;      // its residuals' RMS on the ground, m (2n - 8 dof; NaN for n = 4)
+    int Nground_fit;                // landmarks it was fitted to (0: none could be fitted)
 } rs_calib_result;
 
 // Solves one camera's pose (see the method above).
