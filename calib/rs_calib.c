@@ -1,8 +1,9 @@
 // rs_calib.c -- rs_calib_solve, the orchestrator: it checks the problem, owns the state of one
 // solve (calib/internal/rs_calib_solve_state.h) and runs the stages on it in turn:
 //   1.  the initial pose: RANSAC over the minimal solvers (rs_calib_init.h) with its threshold
-//       escalated and, with the focal refined, a search over the focal's scale (here); or a warm
-//       start
+//       escalated and, with the focal refined, a search over the focal's scale (rs_calib_starts.c);
+//       or a warm start; with the focal refined on few landmarks, the whole solve from every
+//       alternative start, the best kept (solve_multistart)
 //   2.  the robust stage: Cauchy's loss on every landmark, the noise's scale from the data, and
 //   3.  the coarse outlier test (rs_calib_robust.c)
 //   3b. the noise model: variance components and data snooping, the coarse test's rejections
@@ -19,7 +20,7 @@
 // rs_calib_solve_state.c, the state, rs_calib_refine_ceres.cc, one refinement, and the OpenCV shim's
 // small dense algebra; rs_calib_site*.c, a site's cameras in and files out, use rs_calib.h alone):
 //   rs_calib.c                 the orchestrator             -> intrinsics, robust, result,
-//                                                           noise_model, vce, along, init
+//                                                           noise_model, vce, along, starts
 //   rs_calib_intrinsics.c      the intrinsics hooks         -> noise_model, noise, result
 //   rs_calib_robust.c          the robust stage             -> noise_model, along, noise
 //   rs_calib_result.c          the result and its warnings  -> noise
@@ -28,6 +29,7 @@
 //   rs_calib_noise.c           redundancy numbers
 //   rs_calib_along.c           picks along poles and lines
 //   rs_calib_solve_state.c     the state: set-up, the sigmas in use
+//   rs_calib_starts.c          starts, focal search, score  -> init, the OpenCV shim (homography)
 //   rs_calib_init.c            the initial pose's RANSAC    -> the OpenGV and OpenCV shims
 //   rs_calib_refine_ceres.cc   one refinement (Ceres)       -> rs_calib_block.c
 #include "calib/rs_calib.h"
@@ -48,7 +50,9 @@
 #include "calib/internal/rs_calib_result.h"
 #include "calib/internal/rs_calib_robust.h"
 #include "calib/internal/rs_calib_solve_state.h"
+#include "calib/internal/rs_calib_starts.h"
 #include "calib/internal/rs_calib_vce.h"
+#include "core/rs_pose.h"
 
 void rs_calib_options_default(rs_calib_options *opt)
 {
@@ -131,99 +135,6 @@ static rs_status validate(const rs_calib_problem *pb, const rs_calib_options *op
 
 // ---------------------------------------------------------------- 1. the initial pose
 
-// rs_calib_init_pose() with its pixel threshold doubled up to 4 times while it finds no
-// consensus: a survey sigma of 0.3 m on a landmark 12 m away is 30 px at f = 1200 px, so the
-// user's threshold (default 8 px) can be too tight for the near landmarks. *T_used receives the
-// threshold that worked. Invalid input is not retried.
-static rs_status init_escalating(rs_calib_init_result *init, double *T_used, const double *intrinsics,
-                                 const rs_calib_problem *pb, const rs_calib_options *opt, rs_err *err)
-{
-    rs_calib_init_options io = opt->init;
-    if (!(io.ransac_threshold_px > 0.0)) io.ransac_threshold_px = 8.0;
-    io.sigma_enu_m = pb->sigma_enu_m;
-    rs_status st = RS_ERR_DEGENERATE;
-    rs_err e = {RS_OK, ""};
-    for (int k = 0; k < 5; k++, io.ransac_threshold_px *= 2.0) {
-        st =
-            rs_calib_init_pose(init, NULL, (&pb->camera->lensmodel), intrinsics, pb->p_enu_m, pb->q_px, pb->N, &io, &e);
-        *T_used = io.ransac_threshold_px;
-        if (st != RS_ERR_DEGENERATE) break;
-    }
-    if (st != RS_OK && err) *err = e;
-    return st;
-}
-
-// MSAC cost (Torr & Zisserman 2000) of a pose over ALL landmarks: sum_i min(e_i^2, T^2), e_i the
-// reprojection error in pixels through the given intrinsics; a landmark behind the camera or
-// that does not project costs T^2.
-static double msac_cost(const double rt_cam_enu[6], const double *intrinsics, const rs_calib_problem *pb, double T)
-{
-    double cost = 0.0;
-    for (int i = 0; i < pb->N; i++) {
-        mrcal_point3_t pc;
-        mrcal_point2_t q;
-        mrcal_transform_point_rt(pc.xyz, NULL, NULL, rt_cam_enu, &pb->p_enu_m[3 * i]);
-        double e2 = T * T;
-        if (pc.z > 0.0 && rs_lens_project(&q, NULL, NULL, &pc, 1, (&pb->camera->lensmodel), intrinsics)) {
-            const double dx = q.x - pb->q_px[2 * i], dy = q.y - pb->q_px[2 * i + 1];
-            if (dx * dx + dy * dy < e2) e2 = dx * dx + dy * dy;
-        }
-        cost += e2;
-    }
-    return cost;
-}
-
-// Initial pose in the ENU frame. With focal refinement, a 1-D search over a focal scale s
-// (quarter-octave steps over [focal_search_min, focal_search_max]) runs the initial pose at
-// fx s, fy s and keeps the s whose pose has the smallest MSAC cost over all landmarks, with
-// one truncation for every s: T = 4 x the RANSAC threshold (32 px by default), so that poses
-// found at different escalated thresholds compare fairly. intrinsics receives the chosen scale.
-static rs_status initial_pose(rs_calib_init_result *init, double *intrinsics, double *scale_out,
-                              const rs_calib_problem *pb, const rs_calib_options *opt, int Ni, rs_err *err)
-{
-    const bool search = (opt->refine & RS_CALIB_REFINE_FOCAL) && opt->focal_search_max > opt->focal_search_min;
-    double T;
-    *scale_out = 1.0;
-    if (!search) return init_escalating(init, &T, intrinsics, pb, opt, err);
-    const int K = 1 + (int)ceil(4.0 * log2(opt->focal_search_max / opt->focal_search_min));
-    const double T_score = 4.0 * (opt->init.ransac_threshold_px > 0.0 ? opt->init.ransac_threshold_px : 8.0);
-    double best = INFINITY;
-    rs_status last = RS_ERR_DEGENERATE;
-    rs_err e_last = {RS_OK, ""};
-    double *trial = malloc((size_t)Ni * sizeof(double));
-    if (!trial) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    for (int k = 0; k < K; k++) {
-        const double s =
-            opt->focal_search_min * pow(opt->focal_search_max / opt->focal_search_min, (double)k / (K - 1));
-        memcpy(trial, pb->camera->intrinsics, (size_t)Ni * sizeof(double));
-        trial[0] *= s;
-        trial[1] *= s;
-        rs_calib_init_result r;
-        rs_err e = {RS_OK, ""};
-        const rs_status st = init_escalating(&r, &T, trial, pb, opt, &e);
-        if (st != RS_OK) {
-            last = st;
-            e_last = e;
-            if (st != RS_ERR_DEGENERATE) break; // the input, not the scale, is at fault
-            continue;
-        }
-        const double cost = msac_cost(r.rt_cam_enu, trial, pb, T_score);
-        if (cost < best) {
-            best = cost;
-            *init = r;
-            *scale_out = s;
-        }
-    }
-    free(trial);
-    if (!isfinite(best)) {
-        if (err) *err = e_last;
-        return last;
-    }
-    intrinsics[0] = pb->camera->intrinsics[0] * *scale_out;
-    intrinsics[1] = pb->camera->intrinsics[1] * *scale_out;
-    return RS_OK;
-}
-
 // rt_c in the centred frame (p_c = p_enu - c) from rt_enu: t_c = t_enu + R c.
 static void rt_centred_from_enu(double rt_c[6], const double rt_enu[6], const double c[3])
 {
@@ -263,8 +174,10 @@ static rs_status rs_calib__solve_warm(rs_calib_result *result, const rs_calib_pr
 
 // 1. The initial pose in the centred frame (s->rt_c, s->init, s->focal_scale, res->intrinsics at
 // the chosen focal), from the point landmarks alone (picks along poles and lines come later); or
-// warm's start. Then the along picks choose their segment at it.
-static rs_status stage_start(rs_calib_solve_state *s, const rs_calib__warm *warm, rs_err *err)
+// warm's start; or `start` (rs_calib_starts.h: one of the alternatives solve_multistart runs).
+// Then the along picks choose their segment at it.
+static rs_status stage_start(rs_calib_solve_state *s, const rs_calib__warm *warm, const rs_calib__start *start,
+                             rs_err *err)
 {
     rs_calib_result *res = s->res;
     const rs_calib_problem *pb = s->pb;
@@ -275,11 +188,18 @@ static rs_status stage_start(rs_calib_solve_state *s, const rs_calib__warm *warm
         memcpy(s->rt_c, warm->rt_c, sizeof s->rt_c);
         memcpy(res->intrinsics, warm->intrinsics, (size_t)Ni * sizeof(double));
         memcpy(s->p_c, warm->p_c, (size_t)N * 3 * sizeof(double));
+    } else if (start) {
+        s->init = start->init;
+        s->focal_scale = start->focal_scale;
+        res->intrinsics[0] *= start->focal_scale;
+        res->intrinsics[1] *= start->focal_scale;
+        rt_centred_from_enu(s->rt_c, s->init.rt_cam_enu, s->centroid_enu_m);
     } else {
         double *points_buffer = NULL;
         rs_calib_problem points; // the point landmarks alone: picks along poles and lines come later
         rs_status st = rs_calib__point_problem(&points, &points_buffer, pb, err);
-        if (st == RS_OK) st = initial_pose(&s->init, res->intrinsics, &s->focal_scale, &points, s->opt, Ni, err);
+        if (st == RS_OK)
+            st = rs_calib__initial_pose(&s->init, res->intrinsics, &s->focal_scale, &points, s->opt, Ni, err);
         free(points_buffer);
         if (st != RS_OK) {
             rs_err_prefix(err, "initial pose");
@@ -432,16 +352,17 @@ static rs_status stage_intrinsics_check(rs_calib_solve_state *s, rs_err *err)
 }
 
 // One solve of pb with opt (those the solve runs with; user_refine: the caller's own refine) into
-// res, on the state s (zeroed; the caller frees it); warm: its start, or NULL for the initial pose.
+// res, on the state s (zeroed; the caller frees it); warm: its start, or NULL; start: the initial
+// pose to start from, or NULL for the initial pose (stage_start).
 static rs_status solve(rs_calib_solve_state *s, rs_calib_result *res, const rs_calib_problem *pb,
                        const rs_calib_options *opt, unsigned user_refine, int Ni, const rs_calib__warm *warm,
-                       rs_err *err)
+                       const rs_calib__start *start, rs_err *err)
 {
     rs_status st = validate(pb, opt, Ni, err);
     if (st != RS_OK) return st;
     if (rs_calib__result_alloc(res, pb->N, Ni) != RS_OK) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if ((st = rs_calib__state_init(s, res, pb, opt, user_refine, Ni, err)) != RS_OK) return st;
-    if ((st = stage_start(s, warm, err)) != RS_OK) return st;
+    if ((st = stage_start(s, warm, start, err)) != RS_OK) return st;
     if ((st = stage_robust(s, warm, err)) != RS_OK) return st;
     double rt_robust[6]; // the robust stage's solution (rs_calib__scale_free: the final solve's start)
     memcpy(rt_robust, s->rt_c, sizeof rt_robust);
@@ -453,6 +374,134 @@ static rs_status solve(rs_calib_solve_state *s, rs_calib_result *res, const rs_c
     if ((st = rs_calib__result_landmarks(s, err)) != RS_OK) return st;
     rs_calib__result_warnings(s);
     return RS_OK;
+}
+
+// One solve (solve()) on a state of its own, freed; result freed on failure.
+static rs_status solve_once(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt,
+                            unsigned user_refine, int Ni, const rs_calib__warm *warm, const rs_calib__start *start,
+                            rs_err *err)
+{
+    rs_calib_solve_state s = {0};
+    memset(result, 0, sizeof(*result));
+    rs_status st = solve(&s, result, problem, opt, user_refine, Ni, warm, start, err);
+    rs_calib__state_free(&s);
+    if (st != RS_OK) rs_calib_result_free(result);
+    return st;
+}
+
+// A focal nobody knows and few landmarks (issue 38): the focal search's best start need not be
+// the right basin (the MSAC cost of a few landmarks with metres of survey noise hardly tells the
+// scales apart), and a solve from the wrong one ends with a landmark behind the camera, no
+// consensus, or a worse pose than a homography's. So the solve runs from every start
+// (rs_calib__starts: the initial pose at each scale of the grid, the ground homography's
+// decomposition) as well as from the usual one, and the solution with the smallest score
+// (rs_calib__score: every landmark's surveyed position reprojected in the stated noise, Cauchy's
+// loss) is kept. Only where the focal is refined and at most RS_CALIB_MULTISTART_MAX_N landmarks;
+// elsewhere the usual solve alone.
+#define RS_CALIB_MULTISTART_MAX_N  12
+#define RS_CALIB_MULTISTART_STARTS 40
+// The best solve so far of solve_multistart: the problem and options it is scored by.
+typedef struct {
+    rs_calib_result *result; // the best so far (filled when best is finite)
+    double best;             // its score (rs_calib__score); INFINITY: none yet
+    const rs_calib_problem *problem;
+    const rs_calib_options *opt;
+    unsigned user_refine;
+    int Ni;
+} multistart;
+
+// The solve of pb with o from start; kept in m when it scores better (on m's problem and options).
+static void try_start(multistart *m, const rs_calib_problem *pb, const rs_calib_options *o,
+                      const rs_calib__start *start)
+{
+    rs_calib_result r;
+    if (solve_once(&r, pb, o, m->user_refine, m->Ni, NULL, start, NULL) != RS_OK) return;
+    const double score = rs_calib__score(r.rt_cam_enu, r.intrinsics, m->problem, m->opt);
+    if (!(score < m->best)) {
+        rs_calib_result_free(&r);
+        return;
+    }
+    if (isfinite(m->best)) rs_calib_result_free(m->result);
+    *m->result = r;
+    m->best = score;
+}
+
+static rs_status solve_multistart(rs_calib_result *result, const rs_calib_problem *problem, const rs_calib_options *opt,
+                                  unsigned user_refine, int Ni, rs_err *err)
+{
+    rs_calib__start starts[RS_CALIB_MULTISTART_STARTS];
+    int Nstarts = 0;
+    double *points_buffer = NULL;
+    rs_calib_problem points;
+    rs_status st = rs_calib__point_problem(&points, &points_buffer, problem, err);
+    if (st == RS_OK) st = rs_calib__starts(starts, &Nstarts, RS_CALIB_MULTISTART_STARTS, &points, opt, Ni, err);
+    free(points_buffer);
+    if (st != RS_OK) return st;
+    multistart m = {result, INFINITY, problem, opt, user_refine, Ni};
+    for (int k = 0; k < Nstarts; k++) try_start(&m, problem, opt, &starts[k]);
+    if (isfinite(m.best)) return RS_OK;
+    // no start gave a pose with the focal free: the data cannot tell it from the distance. The
+    // best pose with it held at each start's value instead (the warnings say so)
+    rs_calib_options held = *opt;
+    held.refine &= ~(unsigned)RS_CALIB_REFINE_FOCAL;
+    for (int k = 0; k < Nstarts; k++) try_start(&m, problem, &held, &starts[k]);
+    if (isfinite(m.best)) {
+        result->focal_held = true;
+        return RS_OK;
+    }
+    // still none (every solve ended below the landmarks, looking up: the mirror a few noisy
+    // coplanar landmarks cannot rule out): the camera held above them by a weak prior on its
+    // position, at each start's twin above (rs_calib__starts), 1-sigma its distance to them
+    double c[3] = {0, 0, 0};
+    for (int i = 0; i < problem->N; i++)
+        for (int j = 0; j < 3; j++) c[j] += problem->p_enu_m[3 * i + j] / problem->N;
+    for (int k = 0; k < Nstarts && !problem->has_position_prior; k++) {
+        if (!starts[k].twin) continue;
+        rs_calib_problem above = *problem;
+        above.has_position_prior = true;
+        double *C = above.prior_position_enu_m;
+        rs_pose_position_from_rt(C, NULL, starts[k].init.rt_cam_enu);
+        above.prior_sigma_m =
+            sqrt((c[0] - C[0]) * (c[0] - C[0]) + (c[1] - C[1]) * (c[1] - C[1]) + (c[2] - C[2]) * (c[2] - C[2]));
+        try_start(&m, &above, opt, &starts[k]);
+    }
+    if (isfinite(m.best)) {
+        rs_calib__warn(result,
+                       "every solve put the camera below the landmarks, looking up (the mirror image a few "
+                       "coplanar landmarks cannot rule out): it is held above them by a weak prior on its position "
+                       "(1-sigma its distance to them); check the pose against the site");
+        return RS_OK;
+    }
+    // nothing gave a pose: the usual solve, for its error
+    return solve_once(result, problem, opt, user_refine, Ni, NULL, NULL, err);
+}
+
+// A focal refined at the caller's request that the landmarks cannot determine (rs_calib_result.
+// focal_undetermined): said in the warnings, with the ground mapping they do determine.
+#define RS_CALIB_FOCAL_UNDETERMINED_REL 0.25
+static void focal_verdict(rs_calib_result *res, const rs_calib_problem *pb)
+{
+    const double rel = res->sigma_intrinsics[0] / res->intrinsics[0];
+    if (!res->focal_held && !(rel > RS_CALIB_FOCAL_UNDETERMINED_REL)) return;
+    res->focal_undetermined = true;
+    rs_calib__ground_fit(res, pb);
+    char fit[160] = "no homography could be fitted to the picks";
+    if (res->Nground_fit > 0)
+        snprintf(fit, sizeof fit,
+                 "the least-squares homography of the %d picks to the ground (scatter %.2g m), recorded beside the "
+                 "pose",
+                 res->Nground_fit, res->sigma_ground_fit_m);
+    if (res->focal_held)
+        rs_calib__warn(res,
+                       "the landmarks cannot tell the focal length from the camera's distance: no solve with the "
+                       "focal free gave a pose, so it is held at %.4g px (the best start's); the pose rests on that "
+                       "value; what the data determine is the ground mapping: %s",
+                       res->intrinsics[0], fit);
+    else
+        rs_calib__warn(res,
+                       "the landmarks cannot tell the focal length from the camera's distance (focal sigma %.0f%%): "
+                       "the pose slides along that trade-off; what the data determine is the ground mapping: %s",
+                       100.0 * rel, fit);
 }
 
 // rs_calib_solve (warm NULL) or rs_calib__solve_warm: the options completed, the solve timed.
@@ -474,13 +523,12 @@ static rs_status solve_timed(rs_calib_result *result, const rs_calib_problem *pr
     rs_status st = rs_calib__intrinsics_options(&opt, problem, err);
     if (st != RS_OK) return st;
     // ---- end hook ----
-    rs_calib_solve_state s = {0};
-    st = solve(&s, result, problem, &opt, user_refine, Ni, warm, err);
-    rs_calib__state_free(&s);
-    if (st != RS_OK) {
-        rs_calib_result_free(result);
-        return st;
-    }
+    const bool multistart = !warm && (user_refine & RS_CALIB_REFINE_FOCAL) &&
+                            opt.focal_search_max > opt.focal_search_min && problem->N <= RS_CALIB_MULTISTART_MAX_N;
+    st = multistart ? solve_multistart(result, problem, &opt, user_refine, Ni, err)
+                    : solve_once(result, problem, &opt, user_refine, Ni, warm, NULL, err);
+    if (st != RS_OK) return st;
+    if (!warm && (user_refine & RS_CALIB_REFINE_FOCAL)) focal_verdict(result, problem);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     result->time_us = (double)(t1.tv_sec - t0.tv_sec) * 1e6 + (double)(t1.tv_nsec - t0.tv_nsec) * 1e-3;
     return RS_OK;

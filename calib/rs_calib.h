@@ -129,7 +129,11 @@ typedef struct {
     double distortion_prior_sigma;             // prior on each distortion coefficient about nominal, in
                                                //   its own unit (default 0.1); 0: none
     double focal_search_min, focal_search_max; // range of the focal scale search (default
-                                               //   0.25, 4); min == max == 1 disables the search
+                                               //   0.25, 4); min == max == 1 disables the search.
+                                               //   With it and 12 landmarks or fewer, the whole solve
+                                               //   runs from every scale's pose and the ground
+                                               //   homography's, the best kept (docs/calibration.md
+                                               //   section 1, "every start")
     double condition_warn;                     // warn when the condition number exceeds this (default 100;
                                                //   well-spread road scenes give 1.5-10)
     double sigma_rotation_warn_deg;            // warn when a yaw/pitch/roll sigma exceeds this (default 2):
@@ -261,9 +265,23 @@ typedef struct {
     bool noise_model_wrong;    // snooping would have rejected more than max_rejected_fraction: it
                                //   stopped there, and the warnings say so
     rs_calib_intrinsics_check intrinsics_check; // the intrinsics against the image (above)
+    // A focal refined that the landmarks cannot tell from the camera's distance (issue 38): its
+    // sigma above 25% of it, or no solve with it free gave a pose (it is then held at the best
+    // start's value, the warnings say so). The pose is still the best the data defends; what they
+    // do determine is the ground mapping, recorded here as the least-squares homography of the
+    // inliers' picks (undistorted through the final intrinsics, pinhole core) to their surveyed
+    // (E, N) (rs_calib_homography_fit), with its scatter. All zero when focal_undetermined is false.
+    bool focal_undetermined;
+    bool focal_held;                // no solve with the focal free gave a pose: held at intrinsics[0]
+    double H_ground_from_px_fit[9]; // (3,3) row-major, undistorted px -> (E, N) m, H[8] = 1
+    double sigma_ground_fit_m;      // its residuals' RMS on the ground, m (2n - 8 dof; NaN for n = 4)
+    int Nground_fit;                // landmarks it was fitted to (0: none could be fitted)
 } rs_calib_result;
 
-// Solves one camera's pose (see the method above).
+// Solves one camera's pose (see the method above). With RS_CALIB_REFINE_FOCAL on 12 landmarks or
+// fewer, every alternative start is solved and the best kept; when none gives a pose with the
+// focal free, the focal is held (result->focal_held) and then the camera kept above the landmarks
+// by a weak position prior, each said in the warnings, before RS_ERR_DEGENERATE is returned.
 //
 // Returns RS_OK with result filled (free it with rs_calib_result_free even on error: it is
 // always left either zeroed or filled). Errors, with the cause in err:

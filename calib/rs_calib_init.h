@@ -93,6 +93,21 @@ rs_status rs_calib_init_pose( // out
     const rs_calib_init_options *opt, // may be NULL: defaults
     rs_err *err);
 
+// The least-squares homography H_dst_from_src (3,3, row-major, H[8] = 1 unless it is ~0) with
+// dst ~ H src over N >= 4 point pairs: OpenCV's cv::findHomography with method 0 (every point,
+// no RANSAC; a normalised DLT refined by Levenberg-Marquardt on the error in dst). The ground
+// mapping of a camera whose focal length the points cannot tell from its distance (pixels of an
+// undistorted image to a plane's (E, N), rs_calib_result.H_ground_from_px_fit), and the baseline
+// `roadside bench sparse` compares leave-one-out ground errors with.
+// Errors: RS_ERR_DEGENERATE when OpenCV finds none (collinear points, N < 4), RS_ERR_EXTERNAL
+// when it throws.
+rs_status rs_calib_homography_fit( // out
+    double H_dst_from_src[9],
+    // in
+    const double *src, // (N,2)
+    const double *dst, // (N,2)
+    int N, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

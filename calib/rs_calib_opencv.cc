@@ -13,6 +13,7 @@
 
 extern "C" {
 #include "calib/internal/rs_calib_opencv.h"
+#include "calib/rs_calib_init.h"
 }
 
 extern "C" rs_status rs_calib_opencv_singular_values3(double *s, const double *p, int N, rs_err *err)
@@ -178,5 +179,26 @@ extern "C" rs_status rs_calib_opencv_eigen_sym(double *values, double *vectors, 
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV eigen threw: %s", e.what());
     } catch (...) {
         return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV eigen threw an unknown exception");
+    }
+}
+
+extern "C" rs_status rs_calib_homography_fit(double H_dst_from_src[9], const double *src, const double *dst, int N,
+                                             rs_err *err)
+{
+    try {
+        if (N < 4) return rs_err_set(err, RS_ERR_DEGENERATE, "homography: %d point pairs, needs 4", N);
+        const cv::Mat s(N, 2, CV_64F, const_cast<double *>(src)); // read only
+        const cv::Mat d(N, 2, CV_64F, const_cast<double *>(dst)); // read only
+        const cv::Mat H = cv::findHomography(s, d, 0);
+        if (H.rows != 3 || H.cols != 3) return rs_err_set(err, RS_ERR_DEGENERATE, "homography: OpenCV found none");
+        for (int i = 0; i < 9; i++) H_dst_from_src[i] = H.at<double>(i / 3, i % 3);
+        for (int i = 0; i < 9; i++)
+            if (!std::isfinite(H_dst_from_src[i]))
+                return rs_err_set(err, RS_ERR_DEGENERATE, "homography: OpenCV's is not finite");
+        return RS_OK;
+    } catch (const std::exception &e) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV findHomography threw: %s", e.what());
+    } catch (...) {
+        return rs_err_set(err, RS_ERR_EXTERNAL, "OpenCV findHomography threw an unknown exception");
     }
 }

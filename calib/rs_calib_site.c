@@ -316,6 +316,13 @@ static rs_status homography_json(char **text, const rs_site *site, const rs_site
     cJSON_AddNumberToObject(plane, "offset_m", site->ground_offset_m);
     cJSON_AddItemToObject(root, "H_ground_from_px", json_matrix(Hi, 3, 3));
     cJSON_AddItemToObject(root, "H_px_from_ground", json_matrix(H, 3, 3));
+    if (r->focal_undetermined && r->Nground_fit > 0) { // what the data determine (rs_calib_result)
+        cJSON *ls = cJSON_AddObjectToObject(root, "least_squares");
+        cJSON_AddStringToObject(ls, "why", "the landmarks cannot tell the focal length from the camera's distance");
+        cJSON_AddItemToObject(ls, "H_ground_from_px", json_matrix(r->H_ground_from_px_fit, 3, 3));
+        cJSON_AddNumberToObject(ls, "landmarks", r->Nground_fit);
+        if (isfinite(r->sigma_ground_fit_m)) cJSON_AddNumberToObject(ls, "sigma_m", r->sigma_ground_fit_m);
+    }
     *text = cJSON_Print(root);
     cJSON_Delete(root);
     return *text ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");

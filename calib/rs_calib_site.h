@@ -11,7 +11,10 @@
 //                         the lens model has an OpenCV equivalent (PINHOLE, OPENCV4/5/8/12)
 //   <id>.homography.json  the 3x3 map H_ground_from_px from undistorted pixels (the pinhole
 //                         core fx, fy, cx, cy; no distortion) to ground (E, N) on the site's
-//                         ground plane, and its inverse H_px_from_ground
+//                         ground plane, and its inverse H_px_from_ground; where the landmarks
+//                         cannot determine a refined focal (rs_calib_result.focal_undetermined)
+//                         also "least_squares": the homography they do determine, fitted to the
+//                         inliers' picks, with its scatter
 // and, last, the run record calib.run.json (rs_calib_site_run_write): which cameras this run
 // wrote, which failed (and which of their earlier files it removed), which it did not touch.
 #pragma once

@@ -17,6 +17,7 @@ static void usage(FILE *out)
                  "       roadside bench synth ...   (see 'roadside bench synth --help')\n"
                  "       roadside bench site ...    (see 'roadside bench site --help')\n"
                  "       roadside bench pick ...    (see 'roadside bench pick --help')\n"
+                 "       roadside bench sparse ...  (see 'roadside bench sparse --help')\n"
                  "\n"
                  "Benchmarks are programs: each prints a table and writes CSV.\n"
                  "\n"
@@ -144,9 +145,10 @@ int rs_cli_bench(int argc, char **argv)
     if (!strcmp(argv[1], "synth")) return rs_cli_bench_synth(argc - 1, argv + 1);
     if (!strcmp(argv[1], "site")) return rs_cli_bench_site(argc - 1, argv + 1);
     if (!strcmp(argv[1], "pick")) return rs_cli_bench_pick(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "sparse")) return rs_cli_bench_sparse(argc - 1, argv + 1);
     if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
         usage(stdout);
         return RS_EXIT_OK;
     }
-    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib, synth, site or pick", argv[1]);
+    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib, synth, site, pick or sparse", argv[1]);
 }

@@ -43,6 +43,10 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "  --survey-sigma H,V        survey noise of the landmarks, horizontal and vertical, m [%g,%g]\n"
             "  --outliers FRACTION       share of picks replaced by a wrong pixel > 30 px away [%g]\n"
             "  --focal-error FACTOR      nominal focal length in cameras/ = true one * FACTOR [%g]\n"
+            "  --focal-error-range S     and each camera's further times a factor drawn log-uniformly\n"
+            "                            in [1/S, S], 1..2 (a focal nobody knows) [%g]\n"
+            "  --elevated-fraction F     share of each camera's points above the ground (sign tops,\n"
+            "                            poles), 0..1; 0: points picked on a map, all on the ground [%g]\n"
             "  --pole-prior SIGMA_M      give each camera a position prior: its true position plus\n"
             "                            N(0, SIGMA_M) noise per axis [none]\n"
             "  --origin LAT,LON,H        site origin, degrees, degrees, m ellipsoidal [%g,%g,%g]\n"
@@ -65,7 +69,7 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n",
             d->Ncameras, d->landmarks_per_camera, d->lensmodel, d->width_px, d->height_px, d->hfov_deg,
             d->pixel_sigma_px, d->survey_sigma_h_m, d->survey_sigma_v_m, d->outlier_fraction, d->focal_error,
-            d->origin.lat_deg, d->origin.lon_deg, d->origin.h_m);
+            d->focal_error_range, d->elevated_fraction, d->origin.lat_deg, d->origin.lon_deg, d->origin.h_m);
 }
 
 int rs_cli_site_simulate(int argc, char **argv)
@@ -143,6 +147,12 @@ int rs_cli_site_simulate(int argc, char **argv)
         } else if (strcmp(a, "--focal-error") == 0) {
             if (!rs_cli_parse_double(v, &o.focal_error))
                 return rs_cli_usage_error(CMD, "--focal-error: '%s' is not a number", v);
+        } else if (strcmp(a, "--focal-error-range") == 0) {
+            if (!rs_cli_parse_double(v, &o.focal_error_range))
+                return rs_cli_usage_error(CMD, "--focal-error-range: '%s' is not a number", v);
+        } else if (strcmp(a, "--elevated-fraction") == 0) {
+            if (!rs_cli_parse_double(v, &o.elevated_fraction))
+                return rs_cli_usage_error(CMD, "--elevated-fraction: '%s' is not a number", v);
         } else if (strcmp(a, "--pole-prior") == 0) {
             if (!rs_cli_parse_double(v, &o.pole_prior_sigma_m) || !(o.pole_prior_sigma_m > 0))
                 return rs_cli_usage_error(CMD, "--pole-prior: '%s' is not a positive number of metres", v);

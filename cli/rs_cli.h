@@ -40,6 +40,7 @@ int rs_cli_bench_calib(int argc, char **argv);
 int rs_cli_bench_synth(int argc, char **argv);
 int rs_cli_bench_site(int argc, char **argv);
 int rs_cli_bench_pick(int argc, char **argv);
+int rs_cli_bench_sparse(int argc, char **argv);
 
 // Prints "roadside: <what>: <detail or strerror>" on stderr and returns RS_EXIT_FAIL
 // (RS_EXIT_USAGE for RS_ERR_USAGE).

@@ -155,9 +155,14 @@ typedef struct {
     double survey_sigma_v_m;     // default 0.5
     double outlier_fraction;     // default 0.05, in [0, 0.9]
     double focal_error;          // nominal focal length = true * this (default 1: exact), [0.5, 2]
+    double focal_error_range;    // >= 1, <= 2 (default 1: none): each camera's nominal focal is
+                                 //   further multiplied by a factor drawn log-uniformly in
+                                 //   [1/this, this] (a focal nobody knows, as a map-picked camera's),
+                                 //   from a stream of its own: the rest of the site is the same
     double pole_prior_sigma_m;   // > 0: each camera gets a position prior, its true position
                                  // plus N(0, this) per axis; 0 (default): no prior
-    double elevated_fraction;    // share of each camera's landmarks above the ground (0.25)
+    double elevated_fraction;    // share of each camera's landmarks above the ground (0.25); 0:
+                                 //   every one on the ground (points picked on a map)
     rs_simulate_fisheye fisheye; // NONE (default): cameras on poles at the corners with
                                  //   `lensmodel`; otherwise every camera is an overhead fisheye
                                  //   (LENSMODEL_CAHVORE_linearity=0.00, docs/conventions.md "Fisheye

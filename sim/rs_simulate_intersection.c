@@ -155,7 +155,8 @@ static void shuffle(rs_rng *rng, int *idx, int n)
 static bool is_elevated(const rs_simulate__candidate *c) { return c->p_enu_m[2] != 0.0; }
 
 // Chooses landmarks so that each camera sees about landmarks_per_camera of them, about
-// elevated_fraction of those above the ground; a landmark seen by several cameras counts once.
+// elevated_fraction of those above the ground (none when it is 0: points picked on a map); a
+// landmark seen by several cameras counts once.
 static rs_status select_landmarks(rs_simulate__site *s, rs_rng *rng, const rs_simulate_site_options *o, rs_err *err)
 {
     int Nc = s->cand.N;
@@ -171,6 +172,7 @@ static rs_status select_landmarks(rs_simulate__site *s, rs_rng *rng, const rs_si
         goto done;
     }
     int M = o->landmarks_per_camera, M_elevated = (int)lround(o->elevated_fraction * M);
+    const bool ground_only = o->elevated_fraction == 0.0;
     int K = s->Ncameras;
     for (int k = 0; k < K; k++) {
         const bool *vis = s->visible + (size_t)k * Nc;
@@ -186,12 +188,15 @@ static rs_status select_landmarks(rs_simulate__site *s, rs_rng *rng, const rs_si
             for (int j = 0; j < Nc; j++) n += chosen[j] && s->visible[(size_t)k2 * Nc + j];
             full[k2] = k2 != k && n >= M;
         }
-        // First the elevated ones up to their share, then anything; in random order, but those
-        // that would add to cameras that already have their share last.
+        // First the elevated ones up to their share, then anything (only those on the ground when
+        // the share is 0); in random order, but those that would add to cameras that already have
+        // their share last.
         for (int pass = 0; pass < 2; pass++) {
             int n = 0;
             for (int j = 0; j < Nc; j++)
-                if (vis[j] && !chosen[j] && (pass == 1 || is_elevated(&s->cand.c[j]))) pool[n++] = j;
+                if (vis[j] && !chosen[j] &&
+                    (pass == 1 ? !(ground_only && is_elevated(&s->cand.c[j])) : is_elevated(&s->cand.c[j])))
+                    pool[n++] = j;
             shuffle(rng, pool, n);
             for (int i = 0; i < n; i++) {
                 penalty[pool[i]] = 0;
@@ -329,11 +334,15 @@ rs_status rs_simulate__site_draw(rs_simulate__site *s, const rs_simulate_site_op
     int Ni = s->cam[0].cam.Nintrinsics;
     s->nominal = malloc(sizeof(double) * (size_t)K * Ni);
     if (!s->nominal) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_rng frng; // the per-camera focal errors, from a stream of their own
+    rs_rng_seed(&frng, rs_rng_seed_derive(o->seed, FOCAL_ERROR_STREAM));
     for (int k = 0; k < K; k++) {
         double *n = s->nominal + (size_t)k * Ni;
         memcpy(n, s->cam[k].cam.intrinsics, sizeof(double) * Ni);
-        n[0] = rs_simulate__quantize(n[0] * o->focal_error, Q_MODEL);
-        n[1] = rs_simulate__quantize(n[1] * o->focal_error, Q_MODEL);
+        double factor = o->focal_error;
+        if (o->focal_error_range > 1.0) factor *= pow(o->focal_error_range, rs_rng_uniform_in(&frng, -1.0, 1.0));
+        n[0] = rs_simulate__quantize(n[0] * factor, Q_MODEL);
+        n[1] = rs_simulate__quantize(n[1] * factor, Q_MODEL);
     }
     if (o->pole_prior_sigma_m > 0) {
         double *p = malloc(sizeof(double) * 3 * (size_t)K);

@@ -42,6 +42,7 @@ void rs_simulate_site_options_default(rs_simulate_site_options *o)
         .survey_sigma_v_m = 0.5,
         .outlier_fraction = 0.05,
         .focal_error = 1.0,
+        .focal_error_range = 1.0,
         .pole_prior_sigma_m = 0,
         .elevated_fraction = 0.25,
         .origin = {.lat_deg = 48.1374, .lon_deg = 11.5755, .h_m = 560.0},
@@ -70,9 +71,11 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
     CHECK_OPTION(o->outlier_fraction >= 0 && o->outlier_fraction <= 0.9, "outliers", "%g (0..0.9)",
                  o->outlier_fraction);
     CHECK_OPTION(o->focal_error >= 0.5 && o->focal_error <= 2.0, "focal-error", "%g (0.5..2)", o->focal_error);
+    CHECK_OPTION(o->focal_error_range >= 1.0 && o->focal_error_range <= 2.0, "focal-error-range", "%g (1..2)",
+                 o->focal_error_range);
     CHECK_OPTION(o->pole_prior_sigma_m >= 0 && o->pole_prior_sigma_m <= 1000, "pole-prior", "%g (0..1000 m)",
                  o->pole_prior_sigma_m);
-    CHECK_OPTION(o->elevated_fraction >= 0 && o->elevated_fraction <= 1, "elevated_fraction", "%g (0..1)",
+    CHECK_OPTION(o->elevated_fraction >= 0 && o->elevated_fraction <= 1, "elevated-fraction", "%g (0..1)",
                  o->elevated_fraction);
     CHECK_OPTION(o->height_noise_m >= 0 && o->height_noise_m <= 100, "height-noise", "%g (0..100 m)",
                  o->height_noise_m);
@@ -162,6 +165,7 @@ static cJSON *json_options(const rs_simulate_site_options *o)
     if (o->landmark_heights != RS_SITE_HEIGHT_DEFAULT)
         cJSON_AddStringToObject(j, "landmark_heights", rs_site_height_name(o->landmark_heights));
     if (o->poles_per_camera > 0) cJSON_AddNumberToObject(j, "poles_per_camera", o->poles_per_camera);
+    if (o->focal_error_range > 1.0) cJSON_AddNumberToObject(j, "focal_error_range", o->focal_error_range);
     if (o->lines_per_camera > 0) cJSON_AddNumberToObject(j, "lines_per_camera", o->lines_per_camera);
     return j;
 }

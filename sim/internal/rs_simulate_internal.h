@@ -36,6 +36,9 @@ static inline double rs_simulate__quantize(double x, double inv_quantum)
 // The random stream of the extra height noise (rs_rng_seed_derive(seed, this)): apart from the
 // site's own stream, so that --height-noise changes nothing else.
 #define HEIGHT_NOISE_STREAM 0x6865696768ULL // "heigh"
+// The random stream of the per-camera focal errors (--focal-error-range): apart from the site's
+// own, so that it changes nothing else.
+#define FOCAL_ERROR_STREAM  0x666f63616cULL // "focal"
 // The random stream of the poles and lines (rs_simulate_shapes.c): apart from the site's own, so
 // that a site asked for poles or lines has the same cameras and points as without them.
 #define SHAPES_STREAM       0x7368617065ULL // "shape"

@@ -150,6 +150,40 @@ def check_oracle(tmp):
     print("oracle: nominal models = true intrinsics with fx, fy * 1.05 (1e-6), zero extrinsics")
 
 
+def check_sparse(tmp):
+    """Map-picked sparse sites (issue 38): --elevated-fraction 0 puts every point on the ground;
+    --focal-error-range S gives each camera a nominal focal of its own in [1/S, S] x the true one,
+    from a stream of its own: the rest of the site is byte for byte the same as without it."""
+    plain, ranged = os.path.join(tmp, "plain"), os.path.join(tmp, "ranged")
+    common = ["--seed", str(SEED), "--cameras", "8", "--points", "7", "--elevated-fraction", "0"]
+    simulate(plain, *common)
+    simulate(ranged, *common, "--focal-error-range", "1.5")
+    if any(abs(p[2]) > 0 for p in truth_landmarks(plain).values()):
+        fail("--elevated-fraction 0: a landmark above the ground")
+    import mrcal
+    import numpy as np
+    ratios = []
+    for cam, truth in truth_cameras(ranged).items():
+        nominal = mrcal.cameramodel(os.path.join(ranged, "cameras", f"{cam}.cameramodel"))
+        it, inn = truth.intrinsics()[1], nominal.intrinsics()[1]
+        r = inn[0] / it[0]
+        if not (1 / 1.5 - 1e-6 <= r <= 1.5 + 1e-6) or abs(inn[1] / it[1] - r) > 1e-6 or np.any(inn[2:] != it[2:]):
+            fail(f"--focal-error-range 1.5, {cam}: nominal {inn}, true {it}")
+        ratios.append(r)
+    if len(set(round(r, 6) for r in ratios)) < len(ratios):
+        fail(f"--focal-error-range: the cameras share a focal error: {ratios}")
+    # site.json and truth/truth.json record the options, cameras/ the nominal models
+    skip = {"site.json", "truth/truth.json"} | {f"cameras/{c}.cameramodel" for c in truth_cameras(plain)}
+    for rel in tree(plain):
+        if rel in skip:
+            continue
+        with open(os.path.join(plain, rel), "rb") as a, open(os.path.join(ranged, rel), "rb") as b:
+            if a.read() != b.read():
+                fail(f"--focal-error-range changed {rel}")
+    print(f"sparse: every landmark on the ground; nominal/true focal {min(ratios):.3f}..{max(ratios):.3f} "
+          f"over {len(ratios)} cameras; the rest of the site unchanged")
+
+
 def cct_to_enu(origin, lonlath):
     """PROJ's cct: WGS84 (lon, lat, h) rows -> ENU at origin (lat, lon, h)."""
     pipeline = ("+proj=pipeline +step +proj=cart +ellps=WGS84 +step +proj=topocentric +ellps=WGS84 "
@@ -260,6 +294,8 @@ def check_options(tmp):
         ["--lens", "LENSMODEL_CAHVORE"], ["--image", "1920by1080"], ["--hfov-deg", "190"], ["--pixel-sigma", "-1"],
         ["--survey-sigma", "0.3"], ["--outliers", "1.5"], ["--focal-error", "0"], ["--pole-prior", "-2"],
         ["--origin", "95,11,500"], ["--landmarks-per-camera", "2"], ["--bogus", "1"], ["--seed"],
+        ["--focal-error-range", "0.9"], ["--focal-error-range", "2.5"], ["--elevated-fraction", "1.5"],
+        ["--elevated-fraction", "x"],
     ]
     for args in bad:
         folder = os.path.join(tmp, "never")
