@@ -36,6 +36,7 @@
 #include "sim/rs_simulate.h"
 
 #include "../common/rs_test.h"
+#include "tests/common/rs_test_pose.h"
 
 #define NSEEDS        12
 #define CHI2_3DOF_999 16.266
@@ -75,18 +76,7 @@ typedef struct {
 static pose_score score(const rs_calib_result *r, const double rt_true[6])
 {
     double e[6];
-    const double th = sqrt(rt_true[0] * rt_true[0] + rt_true[1] * rt_true[1] + rt_true[2] * rt_true[2]);
-    double best = INFINITY;
-    for (int k = -1; k <= 1; k++) {
-        const double s = th > 0 ? 1.0 + 2.0 * M_PI * k / th : 1.0;
-        double d[3], n2 = 0;
-        for (int i = 0; i < 3; i++) {
-            d[i] = r->rt_cam_enu[i] - s * rt_true[i];
-            n2 += d[i] * d[i];
-        }
-        if (n2 < best) best = n2, memcpy(e, d, sizeof d);
-    }
-    for (int k = 3; k < 6; k++) e[k] = r->rt_cam_enu[k] - rt_true[k];
+    rs_test_pose_error(e, r->rt_cam_enu, rt_true);
     pose_score ps = {.nees6 = nees(e, r->covariance_rt_cam_enu, 6)};
     double C[3], dC[18], Ct[3], ep[3], Cp[9];
     rs_pose_position_from_rt(C, dC, r->rt_cam_enu);

@@ -20,6 +20,7 @@
 #include "calib/rs_calib.h"
 #include "sim/rs_simulate.h"
 #include "test_solve_gen.h"
+#include "tests/common/rs_test_pose.h"
 
 #define NTRIALS 1000
 
@@ -84,7 +85,7 @@ static void run(const char *name, bool distortion, uint64_t seed0)
         CHECK(st == RS_OK, "%s: seed %llu: solve: %s", name, (unsigned long long)o.seed, err.msg);
         if (st == RS_OK && st_bound == RS_OK) {
             double e[6];
-            gen_pose_error(e, res.rt_cam_enu, P->camera.rt_cam_enu);
+            rs_test_pose_error(e, res.rt_cam_enu, P->camera.rt_cam_enu);
             ss_rot += e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
             for (int k = 0; k < 3; k++) {
                 const double d = res.position_enu_m[k] - P->p_cam_enu_m[k];

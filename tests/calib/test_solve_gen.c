@@ -249,22 +249,3 @@ double gen_nees(const double *e, const double *C, int n)
     }
     return nees;
 }
-
-void gen_pose_error(double e[6], const double rt_est[6], const double rt_true[6])
-{
-    const double th = sqrt(rt_true[0] * rt_true[0] + rt_true[1] * rt_true[1] + rt_true[2] * rt_true[2]);
-    double best = INFINITY;
-    for (int k = -1; k <= 1; k++) {
-        const double s = th > 0 ? 1.0 + 2.0 * M_PI * k / th : 1.0;
-        double d[3], n2 = 0;
-        for (int i = 0; i < 3; i++) {
-            d[i] = rt_est[i] - s * rt_true[i];
-            n2 += d[i] * d[i];
-        }
-        if (n2 < best) {
-            best = n2;
-            memcpy(e, d, sizeof(d));
-        }
-    }
-    for (int k = 3; k < 6; k++) e[k] = rt_est[k] - rt_true[k];
-}

@@ -80,10 +80,5 @@ rs_calib_problem gen_view(gen_problem *g, const double *intrinsics_nominal);
 // The camera of g (true lens and intrinsics) at pose rt (a view into g).
 rs_camera gen_camera(const gen_problem *g, const double rt[6]);
 
-// The pose error in the estimate's chart: rt_est - rt_true, with r_true replaced by its equivalent
-// r_true (1 + 2 pi k/|r_true|), k in {-1, 0, 1}, nearest to r_est (rotation vectors near
-// |r| = pi have two representatives).
-void gen_pose_error(double e[6], const double rt_est[6], const double rt_true[6]);
-
 // e^T C^-1 e for a (n,n) symmetric positive-definite C (Cholesky); NAN if not positive definite.
 double gen_nees(const double *e, const double *C, int n);

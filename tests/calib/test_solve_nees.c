@@ -16,6 +16,7 @@
 #include "calib/rs_calib.h"
 #include "core/rs_pose.h"
 #include "test_solve_gen.h"
+#include "tests/common/rs_test_pose.h"
 
 #define NTRIALS 240
 
@@ -44,7 +45,7 @@ int main(void)
         CHECK(st == RS_OK, "seed %llu: %s", (unsigned long long)seed, err.msg);
         if (st != RS_OK) continue;
         double e[6];
-        gen_pose_error(e, res.rt_cam_enu, g.rt_true);
+        rs_test_pose_error(e, res.rt_cam_enu, g.rt_true);
         const double nees = gen_nees(e, res.covariance_rt_cam_enu, 6);
         CHECK(isfinite(nees), "seed %llu: NEES not finite", (unsigned long long)seed);
         if (isfinite(nees)) {
@@ -97,7 +98,7 @@ int main(void)
                 if (!res.inlier[i]) false_flags++;
             }
         }
-        gen_pose_error(e, res.rt_cam_enu, g.rt_true);
+        rs_test_pose_error(e, res.rt_cam_enu, g.rt_true);
         for (int k = 0; k < 3; k++) dC[k] = res.position_enu_m[k] - g.position_true[k];
         sse_rot_out += e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
         sse_pos_out += dC[0] * dC[0] + dC[1] * dC[1] + dC[2] * dC[2];
