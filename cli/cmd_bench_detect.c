@@ -52,7 +52,8 @@ static bool time_one(bench_row *row, const char *model, rs_detect_family family,
         rs_detect_box *boxes = NULL;
         int Nboxes;
         rs_detect_timing tm;
-        st = rs_detect_net_run(net, &boxes, &Nboxes, &tm, bgr, w, h, &err);
+        const rs_detect_frame frame = {bgr, w, h};
+        st = rs_detect_net_run(net, &boxes, &Nboxes, &tm, &frame, &err);
         free(boxes);
         if (k < 0 || st) continue; // the warm-up is not timed
         t[k] = tm.preprocess_ms;

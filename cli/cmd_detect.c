@@ -187,14 +187,13 @@ int rs_cli_detect(int argc, char **argv)
     if (st) return rs_cli_fail("detect", st, &err);
     rs_detect_summary sum;
     st = rs_detect_run(&sum, net, a.inputs, a.Ninputs, &ro, a.out, &err);
-    const rs_detect_family family = rs_detect_net_family(net);
-    const int Nclasses = rs_detect_net_classes(net);
+    const rs_detect_layout layout = *rs_detect_net_layout(net);
     rs_detect_net_free(net);
     if (st) return rs_cli_fail("detect", st, &err);
 
     const double nf = sum.Nframes ? (double)sum.Nframes : 1.0;
-    printf("model %s: %s, %d classes, input %dx%d\n", a.model, rs_detect_family_name(family), Nclasses, a.opt.width_px,
-           a.opt.height_px);
+    printf("model %s: %s, %d classes, input %dx%d\n", a.model, rs_detect_family_name(layout.family), layout.Nclasses,
+           a.opt.width_px, a.opt.height_px);
     printf("%ld frames, %ld detections -> %s\n", sum.Nframes, sum.Ndetections, a.out);
     printf("%.2f ms per frame (preprocess %.2f, forward %.2f, decode %.2f)\n",
            (sum.total.preprocess_ms + sum.total.forward_ms + sum.total.decode_ms) / nf, sum.total.preprocess_ms / nf,

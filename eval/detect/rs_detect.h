@@ -60,6 +60,7 @@ typedef struct {
 
 // The letterbox of one frame: frame pixel x maps to network pixel x ratio + pad_x_px.
 typedef struct {
+    int width, height;        // the frame's size (px)
     double ratio;             // r = min(H/h, W/w)
     int resized_w, resized_h; // the frame's size once resized (px)
     int pad_x_px, pad_y_px;   // where its top-left corner lands on the canvas (YOLOX: 0, 0)
@@ -73,13 +74,20 @@ rs_status rs_detect_letterbox_of( // out
     // in
     rs_detect_family family, int width, int height, int net_w, int net_h, rs_err *err);
 
+// A network's output layout.
+typedef struct {
+    rs_detect_family family; // never RS_DETECT_AUTO once known
+    int Nanchors, Nclasses;  // N and C
+    int net_w, net_h;        // the input it was found for (px)
+} rs_detect_layout;
+
 // Which family an output of shape dims (Ndims,) belongs to, for a net_w x net_h input.
-// asked: the caller's choice (RS_DETECT_AUTO: decide). out: *family, *Nclasses.
+// asked: the caller's choice (RS_DETECT_AUTO: decide). out: *layout.
 // YOLOX: (1, N, 5 + C) with N = sum over s = 8, 16, 32 of (W/s)(H/s); Ultralytics: (1, 4 + C, N)
 // with the same N when auto, any N >= 1 when asked. RS_ERR_UNSUPPORTED when the shape fits
 // neither, or both (then the message asks for --family).
 rs_status rs_detect_layout_of( // out
-    rs_detect_family *family, int *Nclasses,
+    rs_detect_layout *layout,
     // in
     const int *dims, int Ndims, int net_w, int net_h, rs_detect_family asked, rs_err *err);
 
@@ -103,11 +111,16 @@ rs_status rs_detect_net_open(rs_detect_net **net,
                              const char *onnx_path, const rs_detect_options *opt, rs_err *err);
 void rs_detect_net_free(rs_detect_net *net); // NULL-safe
 
-// The family found (never RS_DETECT_AUTO) and the number of classes.
-rs_detect_family rs_detect_net_family(const rs_detect_net *net);
-int rs_detect_net_classes(const rs_detect_net *net);
+// The output layout found when the model was loaded (owned by net).
+const rs_detect_layout *rs_detect_net_layout(const rs_detect_net *net);
 
-// Detects in one frame: bgr (height, width, 3) 8-bit, row-major, BGR order.
+// One frame in memory.
+typedef struct {
+    const unsigned char *bgr; // (height, width, 3) 8-bit, row-major, BGR order; not owned
+    int width, height;        // pixels
+} rs_detect_frame;
+
+// Detects in one frame.
 // out: *boxes (malloc'ed, caller frees; NULL when *Nboxes is 0), *Nboxes, best score first;
 //      *timing (may be NULL)
 // Errors: RS_ERR_EXTERNAL (OpenCV), RS_ERR_INVALID (bad size), RS_ERR_NOMEM.
@@ -115,16 +128,16 @@ rs_status rs_detect_net_run(rs_detect_net *net,
                             // out
                             rs_detect_box **boxes, int *Nboxes, rs_detect_timing *timing,
                             // in
-                            const unsigned char *bgr, int width, int height, rs_err *err);
+                            const rs_detect_frame *frame, rs_err *err);
 
 // Decodes a network's raw output (float32, the shape rs_detect_layout_of accepted) into the
 // candidates above opt->conf, in the frame's pixels (before NMS). Pure C; the shim calls it.
-// out: bbox_px (4 Ncand,) xyxy corners, score (Ncand,), class_index (Ncand,): arrays of at least
-//      N (anchors) entries; returns Ncand
+// out: xyxy_px (4 Ncand,) corners, score (Ncand,), class_index (Ncand,): arrays of at least
+//      layout->Nanchors entries; returns Ncand
+// in:  output: (layout's shape) float32; lb: the frame's letterbox
 int rs_detect_decode(double *xyxy_px, double *score, int *class_index,
                      // in
-                     const float *output, rs_detect_family family, int Nanchors, int Nclasses, int net_w, int net_h,
-                     const rs_detect_letterbox *lb, int width, int height, double conf);
+                     const float *output, const rs_detect_layout *layout, const rs_detect_letterbox *lb, double conf);
 
 // The family's defaults filled into *opt where it asks for them (conf, nms_iou, max_dets < 0).
 void rs_detect_options_resolve(rs_detect_options *opt, rs_detect_family family);
@@ -146,11 +159,11 @@ typedef struct rs_detect_frames rs_detect_frames;
 rs_status rs_detect_frames_open(rs_detect_frames **frames,
                                 // in
                                 const char *input, rs_err *err);
-// The next frame: *bgr points to (height, width, 3) bytes owned by `frames`, valid until the next
-// call; *got = false at the end (then *bgr is NULL). RS_ERR_IO for an unreadable image.
+// The next frame: frame->bgr points to bytes owned by `frames`, valid until the next call;
+// *got = false at the end (then frame->bgr is NULL). RS_ERR_IO for an unreadable image.
 rs_status rs_detect_frames_next(rs_detect_frames *frames,
                                 // out
-                                const unsigned char **bgr, int *width, int *height, bool *got, rs_err *err);
+                                rs_detect_frame *frame, bool *got, rs_err *err);
 // The video's frame rate (frames per second), 0 when unknown or a still image.
 double rs_detect_frames_fps(const rs_detect_frames *frames);
 void rs_detect_frames_close(rs_detect_frames *frames); // NULL-safe

@@ -31,7 +31,7 @@ void rs_detect_options_resolve(rs_detect_options *opt, rs_detect_family family)
 rs_status rs_detect_letterbox_of(rs_detect_letterbox *lb, rs_detect_family family, int width, int height, int net_w,
                                  int net_h, rs_err *err)
 {
-    *lb = (rs_detect_letterbox){0};
+    *lb = (rs_detect_letterbox){.width = width, .height = height};
     if (width < 1 || height < 1 || net_w < 1 || net_h < 1)
         return rs_err_set(err, RS_ERR_INVALID, "letterbox: bad sizes %dx%d on %dx%d", width, height, net_w, net_h);
     const double r = fmin((double)net_h / height, (double)net_w / width);
@@ -63,11 +63,10 @@ static int anchors_of(int net_w, int net_h)
     return n;
 }
 
-rs_status rs_detect_layout_of(rs_detect_family *family, int *Nclasses, const int *dims, int Ndims, int net_w, int net_h,
+rs_status rs_detect_layout_of(rs_detect_layout *layout, const int *dims, int Ndims, int net_w, int net_h,
                               rs_detect_family asked, rs_err *err)
 {
-    *family = RS_DETECT_AUTO;
-    *Nclasses = 0;
+    *layout = (rs_detect_layout){.net_w = net_w, .net_h = net_h};
     char shape[96] = "(";
     for (int i = 0; i < Ndims && i < 6; i++) {
         size_t n = strlen(shape);
@@ -80,8 +79,10 @@ rs_status rs_detect_layout_of(rs_detect_family *family, int *Nclasses, const int
     const bool ultra_any = three && dims[1] >= 5 && dims[2] >= 1;
     const bool ultra = ultra_any && dims[2] == N;
     if (asked == RS_DETECT_YOLOX ? yolox : asked == RS_DETECT_ULTRALYTICS ? ultra_any : yolox != ultra) {
-        *family = asked != RS_DETECT_AUTO ? asked : yolox ? RS_DETECT_YOLOX : RS_DETECT_ULTRALYTICS;
-        *Nclasses = *family == RS_DETECT_YOLOX ? dims[2] - 5 : dims[1] - 4;
+        const rs_detect_family f = asked != RS_DETECT_AUTO ? asked : yolox ? RS_DETECT_YOLOX : RS_DETECT_ULTRALYTICS;
+        layout->family = f;
+        layout->Nanchors = f == RS_DETECT_YOLOX ? dims[1] : dims[2];
+        layout->Nclasses = f == RS_DETECT_YOLOX ? dims[2] - 5 : dims[1] - 4;
         return RS_OK;
     }
     if (asked == RS_DETECT_AUTO && yolox && ultra)
@@ -101,17 +102,17 @@ rs_status rs_detect_layout_of(rs_detect_family *family, int *Nclasses, const int
                       shape, N, net_w, net_h);
 }
 
-int rs_detect_decode(double *xyxy_px, double *score, int *class_index, const float *output, rs_detect_family family,
-                     int Nanchors, int Nclasses, int net_w, int net_h, const rs_detect_letterbox *lb, int width,
-                     int height, double conf)
+int rs_detect_decode(double *xyxy_px, double *score, int *class_index, const float *output,
+                     const rs_detect_layout *layout, const rs_detect_letterbox *lb, double conf)
 {
+    const int Nanchors = layout->Nanchors, Nclasses = layout->Nclasses;
     int n = 0;
-    if (family == RS_DETECT_YOLOX) {
+    if (layout->family == RS_DETECT_YOLOX) {
         // demo_postprocess: (out + grid) * stride, exp(out) * stride; scores = obj * cls;
         // multiclass_nms_class_agnostic: the best class, kept when > score_thr; boxes / ratio
         int a = 0;
         for (int k = 0; k < 3; k++) {
-            const int s = STRIDES[k], gw = net_w / s, gh = net_h / s;
+            const int s = STRIDES[k], gw = layout->net_w / s, gh = layout->net_h / s;
             for (int gy = 0; gy < gh; gy++)
                 for (int gx = 0; gx < gw; gx++, a++) {
                     const float *o = output + (size_t)a * (5 + Nclasses);
@@ -145,7 +146,7 @@ int rs_detect_decode(double *xyxy_px, double *score, int *class_index, const flo
         if (!(best_score > conf)) continue;
         const double cx = output[a], cy = output[(size_t)Nanchors + a];
         const double w = output[(size_t)2 * Nanchors + a], h = output[(size_t)3 * Nanchors + a];
-        const double lim[4] = {width, height, width, height};
+        const double lim[4] = {lb->width, lb->height, lb->width, lb->height};
         const double xy[4] = {cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2};
         double *b = xyxy_px + 4 * n;
         for (int i = 0; i < 4; i++) {

@@ -29,8 +29,7 @@ extern "C" {
 struct rs_detect_net {
     cv::dnn::Net net;
     rs_detect_options opt; // resolved for the family
-    rs_detect_family family;
-    int Nclasses, Nanchors;
+    rs_detect_layout layout;
     cv::Mat resized, canvas; // reused from frame to frame
     std::vector<double> xyxy, score;
     std::vector<int> class_index;
@@ -71,10 +70,10 @@ double ms_since(std::chrono::steady_clock::time_point t0)
 rs_status preprocess(rs_detect_net *n, cv::Mat &blob, rs_detect_letterbox *lb, const cv::Mat &frame, rs_err *err)
 {
     const int W = n->opt.width_px, H = n->opt.height_px;
-    rs_status st = rs_detect_letterbox_of(lb, n->family, frame.cols, frame.rows, W, H, err);
+    rs_status st = rs_detect_letterbox_of(lb, n->layout.family, frame.cols, frame.rows, W, H, err);
     if (st) return st;
     const cv::Size resized(lb->resized_w, lb->resized_h);
-    if (n->family == RS_DETECT_YOLOX) {
+    if (n->layout.family == RS_DETECT_YOLOX) {
         // preproc: a canvas of 114, the frame resized into its top-left corner; BGR, 0..255
         n->canvas.create(H, W, CV_8UC3);
         n->canvas.setTo(cv::Scalar::all(114));
@@ -157,15 +156,14 @@ extern "C" rs_status rs_detect_net_open(rs_detect_net **out, const char *onnx_pa
                               opt->height_px, opt->width_px, e.msg.c_str());
         }
         std::vector<int> dims(o.size.p, o.size.p + o.dims);
-        rs_status s = rs_detect_layout_of(&n->family, &n->Nclasses, dims.data(), o.dims, opt->width_px, opt->height_px,
-                                          opt->family, err);
+        rs_status s =
+            rs_detect_layout_of(&n->layout, dims.data(), o.dims, opt->width_px, opt->height_px, opt->family, err);
         if (s) return rs_err_prefix(err, "%s", onnx_path);
         if (o.depth() != CV_32F) return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: the output is not float32", onnx_path);
-        n->Nanchors = n->family == RS_DETECT_YOLOX ? dims[1] : dims[2];
-        rs_detect_options_resolve(&n->opt, n->family);
-        n->xyxy.resize(4 * static_cast<size_t>(n->Nanchors));
-        n->score.resize(n->Nanchors);
-        n->class_index.resize(n->Nanchors);
+        rs_detect_options_resolve(&n->opt, n->layout.family);
+        n->xyxy.resize(4 * static_cast<size_t>(n->layout.Nanchors));
+        n->score.resize(n->layout.Nanchors);
+        n->class_index.resize(n->layout.Nanchors);
         return RS_OK;
     });
     if (st) {
@@ -183,19 +181,17 @@ extern "C" void rs_detect_net_free(rs_detect_net *net)
     } catch (...) {}
 }
 
-extern "C" rs_detect_family rs_detect_net_family(const rs_detect_net *net) { return net->family; }
-
-extern "C" int rs_detect_net_classes(const rs_detect_net *net) { return net->Nclasses; }
+extern "C" const rs_detect_layout *rs_detect_net_layout(const rs_detect_net *net) { return &net->layout; }
 
 extern "C" rs_status rs_detect_net_run(rs_detect_net *n, rs_detect_box **boxes, int *Nboxes, rs_detect_timing *timing,
-                                       const unsigned char *bgr, int width, int height, rs_err *err)
+                                       const rs_detect_frame *f, rs_err *err)
 {
     *boxes = nullptr;
     *Nboxes = 0;
     if (timing) *timing = rs_detect_timing{};
     return catching("detect", err, [&]() -> rs_status {
         auto t0 = std::chrono::steady_clock::now();
-        const cv::Mat frame(height, width, CV_8UC3, const_cast<unsigned char *>(bgr));
+        const cv::Mat frame(f->height, f->width, CV_8UC3, const_cast<unsigned char *>(f->bgr));
         cv::Mat blob;
         rs_detect_letterbox lb;
         rs_status st = preprocess(n, blob, &lb, frame, err);
@@ -207,20 +203,20 @@ extern "C" rs_status rs_detect_net_run(rs_detect_net *n, rs_detect_box **boxes, 
         cv::Mat out = n->net.forward();
         if (!out.isContinuous()) out = out.clone();
         const double fwd_ms = ms_since(t0);
-        if (out.total() != static_cast<size_t>(n->Nanchors) * (n->Nclasses + (n->family == RS_DETECT_YOLOX ? 5 : 4)))
+        const rs_detect_layout *L = &n->layout;
+        if (out.total() != static_cast<size_t>(L->Nanchors) * (L->Nclasses + (L->family == RS_DETECT_YOLOX ? 5 : 4)))
             return rs_err_set(err, RS_ERR_INVALID, "the model's output changed size from one frame to the next");
 
         t0 = std::chrono::steady_clock::now();
-        const int Ncand = rs_detect_decode(n->xyxy.data(), n->score.data(), n->class_index.data(), out.ptr<float>(),
-                                           n->family, n->Nanchors, n->Nclasses, n->opt.width_px, n->opt.height_px, &lb,
-                                           width, height, n->opt.conf);
+        const int Ncand = rs_detect_decode(n->xyxy.data(), n->score.data(), n->class_index.data(), out.ptr<float>(), L,
+                                           &lb, n->opt.conf);
         std::vector<int> kept;
-        if (n->family == RS_DETECT_YOLOX) { // class-agnostic (demo_utils' default)
+        if (L->family == RS_DETECT_YOLOX) { // class-agnostic (demo_utils' default)
             std::vector<int> all(Ncand);
             std::iota(all.begin(), all.end(), 0);
             nms(kept, n, all);
         } else { // per class (ops.non_max_suppression's class offsets)
-            std::vector<std::vector<int>> per(n->Nclasses);
+            std::vector<std::vector<int>> per(L->Nclasses);
             for (int i = 0; i < Ncand; i++) per[n->class_index[i]].push_back(i);
             for (const auto &idx : per)
                 if (!idx.empty()) nms(kept, n, idx);
@@ -313,11 +309,9 @@ extern "C" rs_status rs_detect_frames_open(rs_detect_frames **frames, const char
     return RS_OK;
 }
 
-extern "C" rs_status rs_detect_frames_next(rs_detect_frames *f, const unsigned char **bgr, int *width, int *height,
-                                           bool *got, rs_err *err)
+extern "C" rs_status rs_detect_frames_next(rs_detect_frames *f, rs_detect_frame *frame, bool *got, rs_err *err)
 {
-    *bgr = nullptr;
-    *width = *height = 0;
+    *frame = rs_detect_frame{};
     *got = false;
     if (f->done) return RS_OK;
     rs_status st;
@@ -342,9 +336,7 @@ extern "C" rs_status rs_detect_frames_next(rs_detect_frames *f, const unsigned c
         if (st == RS_OK && f->done) return RS_OK;
     }
     if (st) return st;
-    *bgr = f->bgr.ptr<unsigned char>(0);
-    *width = f->bgr.cols;
-    *height = f->bgr.rows;
+    *frame = rs_detect_frame{f->bgr.ptr<unsigned char>(0), f->bgr.cols, f->bgr.rows};
     *got = true;
     return RS_OK;
 }

@@ -116,25 +116,25 @@ static rs_status run_input(run_state *r, const char *input, long frame0, rs_err 
     if (st) return st;
     double fps = rs_detect_frames_fps(frames);
     if (fps <= 0) fps = r->opt->fps;
-    const char *file = strstr(input, "://") ? input : base_name(input); // a stream: its URL
+    const bool stream = strstr(input, "://") && strncmp(input, "file://", 7) != 0;
+    const char *file = stream ? input : base_name(input); // a stream: its URL
     for (long frame = frame0;; frame++) {
-        const unsigned char *bgr;
-        int w, h;
+        rs_detect_frame f;
         bool got;
-        if ((st = rs_detect_frames_next(frames, &bgr, &w, &h, &got, err)) || !got) break;
+        if ((st = rs_detect_frames_next(frames, &f, &got, err)) || !got) break;
         if (frame % r->opt->every) continue;
-        if (w != r->opt->camera_width || h != r->opt->camera_height) {
+        if (f.width != r->opt->camera_width || f.height != r->opt->camera_height) {
             st = rs_err_set(err, RS_ERR_INVALID,
                             "%s: frame %ld is %dx%d, the camera %s's model is %dx%d: detections in a resized "
                             "frame would put every point in the wrong place",
-                            input, frame, w, h, r->opt->camera_id ? r->opt->camera_id : "", r->opt->camera_width,
-                            r->opt->camera_height);
+                            input, frame, f.width, f.height, r->opt->camera_id ? r->opt->camera_id : "",
+                            r->opt->camera_width, r->opt->camera_height);
             break;
         }
         rs_detect_box *boxes = NULL;
         int Nboxes = 0;
         rs_detect_timing t;
-        if ((st = rs_detect_net_run(r->net, &boxes, &Nboxes, &t, bgr, w, h, err))) {
+        if ((st = rs_detect_net_run(r->net, &boxes, &Nboxes, &t, &f, err))) {
             rs_err_prefix(err, "%s: frame %ld", input, frame);
             break;
         }
