@@ -101,7 +101,7 @@ typedef struct {
     double decode_ms;     // decoding, NMS, mapping back
 } rs_detect_timing;
 
-// Loads an ONNX model (cv::dnn::readNetFromONNX, CPU) and runs it once on a blank input to learn
+// Loads an ONNX model (cv::dnn::readNetFromONNX, CPU) and runs it once on a grey input to learn
 // its output's shape and so its family (rs_detect_layout_of). opt is copied.
 // Errors: RS_ERR_IO (missing, not a regular file), RS_ERR_EXTERNAL (OpenCV cannot load or run
 // it), RS_ERR_UNSUPPORTED (an output neither family has), RS_ERR_INVALID (bad options).
@@ -131,7 +131,7 @@ rs_status rs_detect_net_run(rs_detect_net *net,
                             const rs_detect_frame *frame, rs_err *err);
 
 // Decodes a network's raw output (float32, the shape rs_detect_layout_of accepted) into the
-// candidates above opt->conf, in the frame's pixels (before NMS). Pure C; the shim calls it.
+// candidates scoring above conf, in the frame's pixels (before NMS). Pure C; the shim calls it.
 // out: xyxy_px (4 Ncand,) corners, score (Ncand,), class_index (Ncand,): arrays of at least
 //      layout->Nanchors entries; returns Ncand
 // in:  output: (layout's shape) float32; lb: the frame's letterbox
