@@ -8,6 +8,7 @@
 
 #include "bench/rs_bench_eval.h"
 #include "cli/rs_cli.h"
+#include "cli/rs_cli_detect.h"
 #include "core/rs_io.h"
 
 static void usage(FILE *out)
@@ -18,6 +19,7 @@ static void usage(FILE *out)
                  "       roadside bench site ...    (see 'roadside bench site --help')\n"
                  "       roadside bench pick ...    (see 'roadside bench pick --help')\n"
                  "       roadside bench sparse ...  (see 'roadside bench sparse --help')\n"
+                 "       roadside bench detect ...  (see 'roadside bench detect --help')\n"
                  "\n"
                  "Benchmarks are programs: each prints a table and writes CSV.\n"
                  "\n"
@@ -146,6 +148,7 @@ int rs_cli_bench(int argc, char **argv)
     if (!strcmp(argv[1], "site")) return rs_cli_bench_site(argc - 1, argv + 1);
     if (!strcmp(argv[1], "pick")) return rs_cli_bench_pick(argc - 1, argv + 1);
     if (!strcmp(argv[1], "sparse")) return rs_cli_bench_sparse(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "detect")) return rs_cli_bench_detect(argc - 1, argv + 1);
     if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
         usage(stdout);
         return RS_EXIT_OK;

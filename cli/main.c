@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cli/rs_cli.h"
+#include "cli/rs_cli_detect.h"
 
 #ifndef RS_VERSION
 #define RS_VERSION "unknown"
@@ -30,6 +31,7 @@ static const command commands[] = {
     {"traffic", rs_cli_traffic, "vehicle placements for a site: built-in lanes or SUMO"},
     {"synth", rs_cli_synth, "synthesise a labelled dataset: sharded, resumable, deterministic"},
     {"dataset", rs_cli_dataset, "what a synthetic dataset holds: splits, conditions, near-junction share"},
+    {"detect", rs_cli_detect, "run an ONNX detector (YOLOX, Ultralytics) over images, videos or streams"},
     {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
     {"bench", rs_cli_bench, "benchmarks: run time against error"},
 };
