@@ -12,6 +12,7 @@ box. localise places them through the CALIBRATED cameras, all in one run of `--d
 hand-made dataset whose images record each calibrated model (absolute path, no checksum) and the
 ground plane, the covariance read from the <id>.json beside each model.
 Checks:
+  - every row's camera, frame and time_s are its image's camera and traffic_frame index, time_s;
   - NEES = mean over >= 500 detections of d^T C^-1 d (d = located - truth (E, N), C the reported
     2x2) lies within [0.8, 1.25] x 2;
   - the pose part is real: the same detections through copies of the models without their
@@ -66,7 +67,9 @@ def main():
                 image_id = len(images) + 1
                 models[image_id] = mrcal.cameramodel(model)
                 plane = {"ground_normal_enu": [0, 0, 1], "ground_offset_m": 0}
-                images.append({"id": image_id, "camera": cam, "calibration": {"camera_model": model, **plane}})
+                frame = {"file": "f.json", "time_s": 0.1 * image_id, "index": image_id}
+                images.append({"id": image_id, "camera": cam, "traffic_frame": frame,
+                               "calibration": {"camera_model": model, **plane}})
                 images_px.append({"id": image_id, "camera": cam, "calibration": {"camera_model": copy, **plane}})
                 W, H = truth.imagersize()
                 near = ground_point(truth, [W / 2, H - 1])
@@ -95,6 +98,10 @@ def main():
         rows = read_csv(out)
         check(len(rows) == len(dets), f"{len(rows)} rows of {len(dets)}")
         nees = nees_of(rows, truths)
+        by_id = {im["id"]: im for im in images}
+        check(all(r["camera"] == by_id[int(r["image_id"])]["camera"] and int(r["frame"]) == int(r["image_id"])
+                  and abs(float(r["time_s"]) - 0.1 * int(r["image_id"])) < 1e-12 for r in rows),
+              "camera, frame and time_s from each image's camera and traffic_frame")
         oracle_worst = 0.0
         for r in rows:
             g = ground_point(models[int(r["image_id"])], [float(r["u_px"]), float(r["v_px"])])
