@@ -83,12 +83,8 @@ static int export_pixel_map(const char *site_dir, const char *calib_dir, const c
                     "roadside export: warning: %s: no pose covariance beside it: sigma_m holds the pixel "
                     "noise only\n",
                     model);
-        rs_localise_view view = {.camera = &cam,
-                                 .covariance_rt = has_C ? C : NULL,
-                                 .ground_offset_m = site->ground_offset_m,
-                                 .origin = &site->origin,
-                                 .max_tan = rs_camera_max_tan(&cam)};
-        memcpy(view.ground_normal_enu, site->ground_normal_enu, sizeof view.ground_normal_enu);
+        const rs_localise_view view = rs_localise_view_make(&cam, has_C ? C : NULL, site->ground_normal_enu,
+                                                            site->ground_offset_m, &site->origin);
         st = rs_localise_pixel_map_compute(&map, &view, pixel_sigma, &err);
     }
     size_t seen = 0;

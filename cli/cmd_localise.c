@@ -252,12 +252,8 @@ static int run_dataset(const localise_args *a, rs_localise_detection *dets, size
             s->Nviews++;
             if ((st = rs_localise_covariance_read(w->C, &w->has_C, cal->camera_model, &err))) break;
             w->model = cal->camera_model;
-            w->view = (rs_localise_view){.camera = &w->cam,
-                                         .covariance_rt = w->has_C ? w->C : NULL,
-                                         .ground_offset_m = cal->ground_offset_m,
-                                         .origin = origin,
-                                         .max_tan = rs_camera_max_tan(&w->cam)};
-            memcpy(w->view.ground_normal_enu, cal->ground_normal_enu, sizeof cal->ground_normal_enu);
+            w->view = rs_localise_view_make(&w->cam, w->has_C ? w->C : NULL, cal->ground_normal_enu,
+                                            cal->ground_offset_m, origin);
             if (!w->has_C) {
                 if (!s->Nwithout_cov) warn_no_cov(cal->camera_model);
                 s->Nwithout_cov++;
@@ -330,12 +326,8 @@ static int run_site(const localise_args *a, const rs_site *site, rs_localise_det
             warn_no_cov(model);
             s->Nwithout_cov = 1;
         }
-        w.view = (rs_localise_view){.camera = &w.cam,
-                                    .covariance_rt = w.has_C ? w.C : NULL,
-                                    .ground_offset_m = site->ground_offset_m,
-                                    .origin = &site->origin,
-                                    .max_tan = rs_camera_max_tan(&w.cam)};
-        memcpy(w.view.ground_normal_enu, site->ground_normal_enu, sizeof site->ground_normal_enu);
+        w.view = rs_localise_view_make(&w.cam, w.has_C ? w.C : NULL, site->ground_normal_enu, site->ground_offset_m,
+                                       &site->origin);
         for (size_t k = 0; k < *N; k++) snprintf((*dets)[k].camera, sizeof(*dets)[k].camera, "%s", a->camera);
         const rs_localise_options opt = {
             .point = default_point(a), .shift = a->shift, .pixel_sigma_px = a->pixel_sigma};

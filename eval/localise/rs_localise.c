@@ -28,6 +28,18 @@ void rs_localise_box_point(double q_px[2], const double b[4], rs_localise_point 
                                                  : b[1] + 0.5 * b[3];
 }
 
+rs_localise_view rs_localise_view_make(const rs_camera *camera, const double *covariance_rt,
+                                       const double ground_normal_enu[3], double ground_offset_m, const rs_llh *origin)
+{
+    rs_localise_view v = {.camera = camera,
+                          .covariance_rt = covariance_rt,
+                          .ground_offset_m = ground_offset_m,
+                          .origin = origin,
+                          .max_tan = rs_camera_max_tan(camera)};
+    memcpy(v.ground_normal_enu, ground_normal_enu, sizeof v.ground_normal_enu);
+    return v;
+}
+
 rs_status rs_localise_detection_locate(rs_localise_row *row, const rs_localise_detection *det,
                                        const rs_localise_view *view, const rs_localise_options *opt, rs_err *err)
 {

@@ -116,6 +116,12 @@ typedef struct {
     double max_tan;       // rs_camera_max_tan(camera), computed once
 } rs_localise_view;
 
+// The view of a camera (max_tan computed here); the pointers are kept, not copied.
+rs_localise_view rs_localise_view_make(const rs_camera *camera,
+                                       const double *covariance_rt, // (6,6), may be NULL
+                                       const double ground_normal_enu[3], double ground_offset_m,
+                                       const rs_llh *origin); // may be NULL
+
 typedef struct {
     rs_localise_point point; // which pixel of the box
     double shift;            // K for RS_LOCALISE_POINT_SHIFT

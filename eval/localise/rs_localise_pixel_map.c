@@ -32,13 +32,8 @@ rs_status rs_localise_pixel_map_compute(rs_localise_pixel_map *map, const rs_loc
         return rs_err_set(err, RS_ERR_NOMEM, "pixel map of %d x %d: out of memory", W, H);
     }
     *map = (rs_localise_pixel_map){W, H, block, block + N, block + 2 * N, block + 3 * N, block + 4 * N};
-    const rs_localise_view no_origin = {
-        view->camera,
-        view->covariance_rt,
-        {view->ground_normal_enu[0], view->ground_normal_enu[1], view->ground_normal_enu[2]},
-        view->ground_offset_m,
-        NULL,
-        view->max_tan};
+    rs_localise_view no_origin = *view; // lat/lon a row at a time below
+    no_origin.origin = NULL;
     const rs_localise_options opt = {.point = RS_LOCALISE_POINT_CENTER, .pixel_sigma_px = pixel_sigma_px};
     rs_status st = RS_OK;
     for (int v = 0; v < H && !st; v++) {
