@@ -16,7 +16,7 @@ Checks:
     lat_deg, lon_deg from the site's origin agree with PROJ's cct (1e-9 deg) where cct exists;
   - .jsonl and .geojson hold the same values as the .csv;
   - a pixel above the horizon is not written and its count is printed;
-  - bad input (a missing field, NaN, a bad type, a wrong extension, an unknown camera) -> exit 1
+  - bad input (a missing field, NaN in COCO (Python's bare NaN), MOT and Ultralytics, a bad type, a wrong extension, an unknown camera) -> exit 1
     or 2, the message names the file, line and field, no output written.
 """
 import json
@@ -186,6 +186,15 @@ def main():
             line = 4 if name == "coco-missing" else 3
             check(p.returncode == 1 and f"{path}:{line}:" in p.stderr and needle in p.stderr
                   and not os.path.exists(o), f"{name}: rc {p.returncode}, {p.stderr!r}")
+        # Python's json writes NaN as a bare NaN (not JSON): refused where it stands
+        nan_path = os.path.join(tmp, "nan.json")
+        with open(nan_path, "w") as f:
+            f.write("[\n" + ",\n".join(json.dumps(d) for d in [coco[0], dict(coco[1], bbox=[1, float("nan"), 3, 4])])
+                    + "\n]\n")
+        o = os.path.join(tmp, "nan.csv")
+        p = run("localise", nan_path, *base, "-o", o)
+        check(p.returncode == 1 and f"{nan_path}:3:" in p.stderr and "NaN" in p.stderr and not os.path.exists(o),
+              f"COCO NaN: rc {p.returncode}, {p.stderr!r}")
         mot_bad = os.path.join(tmp, "bad.txt")
         with open(mot_bad, "w") as f:
             f.write("1,-1,10,20,30,40,0.9\n2,-1,10,nan,30,40,0.9\n")
