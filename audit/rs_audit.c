@@ -13,6 +13,7 @@
 
 #include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
+#include "core/rs_camera_ground.h"
 #include "core/rs_lens.h"
 #include "core/rs_pose.h"
 #include "core/rs_stats.h"
@@ -574,7 +575,7 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
         opt = &defaults;
     }
     rs_status st = check_options(opt, err);
-    if (st == RS_OK) st = rs_audit__check_plane(ground_normal_enu, err);
+    if (st == RS_OK) st = rs_camera_ground_check_plane(ground_normal_enu, err);
     if (st) return st;
     rs_calib_problem pb = *problem;
     rs_camera external_nominal; // the external lens and intrinsics, the site camera's image size

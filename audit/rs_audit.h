@@ -274,7 +274,8 @@ rs_status rs_audit_camera( // out
 void rs_audit_result_free(rs_audit_result *result); // NULL-safe
 
 // The 1-sigma horizontal radial error sqrt(sE^2 + sN^2) of the ground point seen at q_px
-// (Method above), and optionally its 2x2 covariance. Returns RS_ERR_DEGENERATE when the pixel's
+// (Method above; core/rs_camera_ground.h computes it, with C_q = detection_sigma_px^2 I), and
+// optionally its 2x2 covariance. Returns RS_ERR_DEGENERATE when the pixel's
 // ray misses the plane in front of the camera, RS_ERR_UNSUPPORTED for a lens model without
 // unprojection.
 rs_status rs_audit_ground_sigma( // out

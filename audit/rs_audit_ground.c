@@ -6,12 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include <mrcal/poseutils.h>
-
 #include "audit/internal/rs_audit_internal.h"
 #include "audit/internal/rs_audit_opencv.h"
 #include "audit/rs_audit.h"
-#include "core/rs_lens.h"
+#include "core/rs_camera_ground.h"
 #include "core/rs_stats.h"
 
 double rs_audit__dist3(const double *a, const double *b)
@@ -19,83 +17,22 @@ double rs_audit__dist3(const double *a, const double *b)
     return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
-// ---- ground uncertainty (rs_audit.h, Method) ----
-
-// Cov(g) of the ground point p (on the plane) seen by the camera; false if degenerate.
-static bool ground_cov(double cov[4], double q_out[2], const mrcal_lensmodel_t *lm, const double *intrinsics,
-                       const double rt[6], const double C_rt[36], const double p[3], double sigma_px, const double n[3])
-{
-    double pc[3], dpc_drt[18], dpc_dp[9];
-    mrcal_transform_point_rt(pc, dpc_drt, dpc_dp, rt, p);
-    if (!(pc[2] > 0)) return false;
-    mrcal_point2_t q;
-    mrcal_point3_t dq_dpc[2];
-    if (!rs_lens_project(&q, dq_dpc, NULL, (const mrcal_point3_t *)pc, 1, lm, intrinsics)) return false;
-    if (q_out) q_out[0] = q.x, q_out[1] = q.y;
-    const double dp_dg[6] = {1, 0, 0, 1, -n[0] / n[2], -n[1] / n[2]}; // (3,2)
-    double A[4] = {0}, B[12] = {0};                                   // (2,2), (2,6)
-    for (int i = 0; i < 2; i++) {
-        double dq_dp[3] = {0};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++) dq_dp[k] += dq_dpc[i].xyz[j] * dpc_dp[3 * j + k];
-        for (int c = 0; c < 2; c++)
-            for (int k = 0; k < 3; k++) A[2 * i + c] += dq_dp[k] * dp_dg[2 * k + c];
-        for (int c = 0; c < 6; c++)
-            for (int j = 0; j < 3; j++) B[6 * i + c] += dq_dpc[i].xyz[j] * dpc_drt[6 * j + c];
-    }
-    double det = A[0] * A[3] - A[1] * A[2];
-    if (!(fabs(det) > 0) || !isfinite(det)) return false;
-    const double Ai[4] = {A[3] / det, -A[1] / det, -A[2] / det, A[0] / det};
-    double M[4] = {sigma_px * sigma_px, 0, 0, sigma_px * sigma_px}; // B C B^T + s^2 I
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++)
-            for (int a = 0; a < 6; a++)
-                for (int b = 0; b < 6; b++) M[2 * i + j] += B[6 * i + a] * C_rt[6 * a + b] * B[6 * j + b];
-    double T[4] = {0};
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++)
-            for (int k = 0; k < 2; k++) T[2 * i + j] += Ai[2 * i + k] * M[2 * k + j];
-    for (int i = 0; i < 2; i++)
-        for (int j = 0; j < 2; j++) {
-            cov[2 * i + j] = 0;
-            for (int k = 0; k < 2; k++) cov[2 * i + j] += T[2 * i + k] * Ai[2 * j + k];
-        }
-    return isfinite(cov[0]) && isfinite(cov[3]);
-}
-
-rs_status rs_audit__check_plane(const double n[3], rs_err *err)
-{
-    if (!(isfinite(n[0]) && isfinite(n[1]) && isfinite(n[2])) || !(fabs(n[2]) > 1e-9))
-        return rs_err_set(err, RS_ERR_INVALID, "ground plane normal (%g, %g, %g): must be finite and not vertical",
-                          n[0], n[1], n[2]);
-    return RS_OK;
-}
+// ---- ground uncertainty (rs_audit.h, Method; the propagation is core/rs_camera_ground.h's) ----
 
 rs_status rs_audit_ground_sigma(double *sigma_m, double *cov_en_m2, double p_enu_m[3], const rs_camera *cam,
                                 const double covariance_rt[36], const double q_px[2], double detection_sigma_px,
                                 const double ground_normal_enu[3], double ground_offset_m, rs_err *err)
 {
     *sigma_m = NAN;
-    rs_status st = rs_audit__check_plane(ground_normal_enu, err);
-    if (st) return st;
+    const double s2 = detection_sigma_px * detection_sigma_px, cov_q[4] = {s2, 0, 0, s2};
     double p[3], cov[4];
-    st = rs_camera_locate_ground(p, cam, q_px, ground_normal_enu, ground_offset_m, err);
+    rs_status st =
+        rs_camera_ground_locate(p, cov, cam, covariance_rt, q_px, cov_q, ground_normal_enu, ground_offset_m, err);
     if (st) return st;
-    if (!ground_cov(cov, NULL, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, covariance_rt, p, detection_sigma_px,
-                    ground_normal_enu))
-        return rs_err_set(err, RS_ERR_DEGENERATE, "pixel (%g, %g): the ground point's covariance is undefined", q_px[0],
-                          q_px[1]);
     *sigma_m = sqrt(cov[0] + cov[3]);
     if (cov_en_m2) memcpy(cov_en_m2, cov, sizeof cov);
     if (p_enu_m) memcpy(p_enu_m, p, sizeof p);
     return RS_OK;
-}
-
-static void plane_point(double p[3], const double en[2], const double n[3], double offset)
-{
-    p[0] = en[0];
-    p[1] = en[1];
-    p[2] = (offset - n[0] * en[0] - n[1] * en[1]) / n[2];
 }
 
 rs_status rs_audit_ground_sigma_at(double *sigma_m, const rs_camera *cam, const double covariance_rt[36],
@@ -103,16 +40,17 @@ rs_status rs_audit_ground_sigma_at(double *sigma_m, const rs_camera *cam, const 
                                    double ground_offset_m, rs_err *err)
 {
     *sigma_m = NAN;
-    rs_status st = rs_audit__check_plane(ground_normal_enu, err);
+    rs_status st = rs_camera_ground_check_plane(ground_normal_enu, err);
     if (st) return st;
-    double p[3], cov[4], q[2];
-    plane_point(p, en_m, ground_normal_enu, ground_offset_m);
-    if (!ground_cov(cov, q, &cam->lensmodel, cam->intrinsics, cam->rt_cam_enu, covariance_rt, p, detection_sigma_px,
-                    ground_normal_enu))
+    const double s2 = detection_sigma_px * detection_sigma_px, cov_q[4] = {s2, 0, 0, s2};
+    double cov[4], q[2];
+    if (!rs_camera_ground_covariance_at(cov, q, cam, covariance_rt, en_m, cov_q, ground_normal_enu, ground_offset_m))
         return RS_OK;
     if (!(q[0] >= -0.5 && q[0] <= cam->width - 0.5 && q[1] >= -0.5 && q[1] <= cam->height - 0.5)) return RS_OK;
     // the projection of a far point can fold back into the image: keep it only if the
     // pixel's ray really comes back to it
+    const double *n = ground_normal_enu;
+    const double p[3] = {en_m[0], en_m[1], (ground_offset_m - n[0] * en_m[0] - n[1] * en_m[1]) / n[2]};
     double back[3];
     if (rs_camera_locate_ground(back, cam, q, ground_normal_enu, ground_offset_m, NULL) ||
         rs_audit__dist3(back, p) > 1e-3 * (1 + rs_audit__dist3(p, (double[3]){0, 0, 0})))

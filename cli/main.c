@@ -33,6 +33,7 @@ static const command commands[] = {
     {"dataset", rs_cli_dataset, "what a synthetic dataset holds: splits, conditions, near-junction share"},
     {"detect", rs_cli_detect, "run an ONNX detector (YOLOX, Ultralytics) over images, videos or streams"},
     {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
+    {"localise", rs_cli_localise, "every detection to the road (ENU, lat/lon) with its covariance"},
     {"bench", rs_cli_bench, "benchmarks: run time against error"},
 };
 static const int Ncommands = (int)(sizeof commands / sizeof commands[0]);

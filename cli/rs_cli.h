@@ -28,6 +28,7 @@ int rs_cli_site_render_backgrounds(int argc, char **argv);
 int rs_cli_traffic(int argc, char **argv);
 int rs_cli_synth(int argc, char **argv);
 int rs_cli_eval(int argc, char **argv);
+int rs_cli_localise(int argc, char **argv);
 int rs_cli_bench(int argc, char **argv);
 int rs_cli_ortho(int argc, char **argv);
 int rs_cli_pick(int argc, char **argv);

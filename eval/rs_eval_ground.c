@@ -1,5 +1,4 @@
 // rs_eval_ground.c -- metric thresholds: every point to the ground through its image's camera.
-#include "core/rs_hash.h"
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,6 +7,7 @@
 #include "core/rs_camera.h"
 #include "core/rs_io.h"
 #include "eval/internal/rs_eval_internal.h"
+#include "eval/localise/rs_localise_dataset.h"
 #include "geo/rs_site.h"
 
 // Points whose rays miss the ground are parked far away, detections and ground truths on
@@ -96,20 +96,11 @@ rs_status rs_eval_data_to_ground_recorded(rs_eval_data *d, size_t *Nmissed, rs_e
             if (!strcmp(d->image_model[first_image[j]], d->image_model[i])) c = j;
         if (c < 0) {
             first_image[Ncams] = i;
-            char hex[65];
             c = Ncams;
-            if ((st = rs_camera_read(&cams[c], NULL, d->image_model[i], err))) break;
+            if ((st = rs_localise_camera_read_checked(&cams[c], d->image_model[i], d->image_model_sha256[i],
+                                                      d->image_id[i], err)))
+                break;
             Ncams++;
-            if (d->image_model_sha256[i]) {
-                if ((st = rs_hash_sha256_file(hex, NULL, d->image_model[i], err))) break;
-                if (strcmp(hex, d->image_model_sha256[i]) != 0) {
-                    st = rs_err_set(err, RS_ERR_INVALID,
-                                    "image %lld: %s: SHA-256 %s, the ground truth records %s (the file changed "
-                                    "since the dataset was made)",
-                                    d->image_id[i], d->image_model[i], hex, d->image_model_sha256[i]);
-                    break;
-                }
-            }
         }
         cam_of_image[i] = c;
     }

@@ -12,6 +12,7 @@
 #include "core/rs_io.h"
 #include "core/rs_json.h"
 #include "eval/internal/rs_eval_internal.h"
+#include "eval/localise/rs_localise_dataset.h"
 
 // ---- small helpers ----
 
@@ -218,9 +219,8 @@ static rs_status group_value(const where *w, const cJSON *o, const char *key, ch
     return *out ? RS_OK : nomem(w, err);
 }
 
-// The calibration an image records (docs/labels.md, the dataset contract): "calibration":
-// {"camera_model": path relative to the ground truth's folder, "camera_model_sha256",
-// "ground_normal_enu": [3], "ground_offset_m"}.
+// The calibration an image records (docs/labels.md, the dataset contract), read by
+// eval/localise/rs_localise_dataset.h: its strings move into d's arrays.
 static rs_status recorded_calibration(gt_ctx *c, const cJSON *o, size_t n, rs_err *err)
 {
     rs_eval_data *d = c->d;
@@ -232,25 +232,17 @@ static rs_status recorded_calibration(gt_ctx *c, const cJSON *o, size_t n, rs_er
     c->cap_recorded = cap;
     d->image_model[n] = d->image_model_sha256[n] = NULL;
     d->Nrecorded = (int)n + 1;
-    const cJSON *cal = cJSON_GetObjectItemCaseSensitive(o, "calibration");
-    if (!cJSON_IsObject(cal))
-        return bad(&c->w, err, RS_ERR_INVALID,
-                   "calibration: missing (--metres needs the dataset's own record of each image's camera: "
-                   "roadside synth writes it; or give --site and --calib)");
-    const cJSON *m = cJSON_GetObjectItemCaseSensitive(cal, "camera_model");
-    const cJSON *h = cJSON_GetObjectItemCaseSensitive(cal, "camera_model_sha256");
-    const cJSON *off = cJSON_GetObjectItemCaseSensitive(cal, "ground_offset_m");
-    if (!cJSON_IsString(m) || !*m->valuestring)
-        return bad(&c->w, err, RS_ERR_INVALID, "calibration.camera_model: missing or not a string");
-    if (!cJSON_IsNumber(off) || !isfinite(off->valuedouble))
-        return bad(&c->w, err, RS_ERR_INVALID, "calibration.ground_offset_m: missing or not a number");
-    rs_status st = get_numbers(&c->w, cJSON_GetObjectItemCaseSensitive(cal, "ground_normal_enu"),
-                               "calibration.ground_normal_enu", 3, &d->image_ground[4 * n], err);
-    if (st) return st;
-    d->image_ground[4 * n + 3] = off->valuedouble;
-    d->image_model[n] = m->valuestring[0] == '/' ? strdup(m->valuestring) : rs_io_join(c->gt_dir, m->valuestring);
-    if (!d->image_model[n]) return nomem(&c->w, err);
-    if (cJSON_IsString(h) && !(d->image_model_sha256[n] = strdup(h->valuestring))) return nomem(&c->w, err);
+    rs_localise_calibration cal;
+    rs_err e = {0};
+    rs_status st = rs_localise_calibration_parse(&cal, o, c->gt_dir, &e);
+    if (st) {
+        rs_localise_calibration_free(&cal);
+        return st == RS_ERR_NOMEM ? nomem(&c->w, err) : bad(&c->w, err, st, "%s", e.msg);
+    }
+    memcpy(&d->image_ground[4 * n], cal.ground_normal_enu, 3 * sizeof(double));
+    d->image_ground[4 * n + 3] = cal.ground_offset_m;
+    d->image_model[n] = cal.camera_model;
+    d->image_model_sha256[n] = cal.camera_model_sha256;
     return RS_OK;
 }
 

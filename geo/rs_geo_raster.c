@@ -1,4 +1,5 @@
-// rs_geo_raster.c -- GeoTIFFs on a site's ENU grid through GDAL's C API (rs_geo_raster.h).
+// rs_geo_raster.c -- GeoTIFFs on a site's ENU grid, and bands over a camera's pixel grid (GeoTIFF,
+// NumPy .npz zipped by GDAL's /vsizip/), through GDAL's C API (rs_geo_raster.h).
 #include "geo/rs_geo_raster.h"
 
 #include <math.h>
@@ -11,6 +12,7 @@
 #include <cpl_conv.h>
 #include <cpl_error.h>
 #include <cpl_string.h>
+#include <cpl_vsi.h>
 #include <gdal.h>
 #include <gdalwarper.h>
 #include <ogr_srs_api.h>
@@ -248,5 +250,108 @@ rs_status rs_geo_ortho_read(rs_geo_ortho *out, const char *path, const rs_llh *o
     if (file_srs) OSRDestroySpatialReference(file_srs);
     CPLPopErrorHandler();
     if (st) rs_geo_ortho_free(out);
+    return st;
+}
+
+// ---- a camera's pixel grid ----
+
+static rs_status pixel_bands_ok(const char *path, const rs_geo_pixel_bands *b, rs_err *err)
+{
+    if (b->width < 1 || b->height < 1 || b->width > 65536 || b->height > 65536 || b->Nbands < 1 || b->Nbands > 16)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: %d x %d pixels, %d bands: cannot be written", path, b->width,
+                          b->height, b->Nbands);
+    for (int k = 0; k < b->Nbands; k++) {
+        const char *n = b->name[k];
+        bool ok = n && *n && b->band[k];
+        for (const char *c = n; ok && *c; c++)
+            ok = (*c >= 'a' && *c <= 'z') || (*c >= 'A' && *c <= 'Z') || (*c >= '0' && *c <= '9') || *c == '_';
+        if (!ok) return rs_err_set(err, RS_ERR_INVALID, "%s: band %d: a name of [A-Za-z0-9_] and data needed", path, k);
+    }
+    return RS_OK;
+}
+
+rs_status rs_geo_pixel_bands_write_tiff(const char *path, const rs_geo_pixel_bands *b, rs_err *err)
+{
+    if (!rs_io_has_extension(path, "tif") && !rs_io_has_extension(path, "tiff"))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: expected a .tif (GeoTIFF) file name", path);
+    rs_status st = pixel_bands_ok(path, b, err);
+    if (st) return st;
+    GDALAllRegister();
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    GDALDriverH gtiff = GDALGetDriverByName("GTiff");
+    rs_io_atomic a = {0};
+    if (!gtiff) st = gdal_fail(err, path, "GDAL has no GTiff driver");
+    if (!st) st = temp_for_gdal(&a, path, err);
+    if (!st) {
+        char **co = CSLSetNameValue(NULL, "COMPRESS", "DEFLATE");
+        co = CSLSetNameValue(co, "INTERLEAVE", "BAND");
+        GDALDatasetH out = GDALCreate(gtiff, a.tmp_path, b->width, b->height, b->Nbands, GDT_Float64, co);
+        CSLDestroy(co);
+        if (!out) st = gdal_fail(err, path, "cannot create the GeoTIFF");
+        for (int k = 0; out && !st && k < b->Nbands; k++) {
+            GDALRasterBandH band = GDALGetRasterBand(out, k + 1);
+            GDALSetRasterNoDataValue(band, NAN);
+            GDALSetDescription(band, b->name[k]);
+            if (GDALRasterIO(band, GF_Write, 0, 0, b->width, b->height, (void *)b->band[k], b->width, b->height,
+                             GDT_Float64, 0, 0) != CE_None)
+                st = gdal_fail(err, path, "cannot write a band");
+        }
+        if (out) {
+            CPLErrorReset();
+            GDALClose(out);
+            if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish the GeoTIFF");
+        }
+    }
+    if (!st) st = rs_io_atomic_commit(&a, err);
+    rs_io_atomic_abort(&a);
+    CPLPopErrorHandler();
+    return st;
+}
+
+// One .npy (format 1.0) of a (height, width) little-endian float64 array into the open file f.
+static bool write_npy(VSILFILE *f, const double *x, int width, int height)
+{
+    char header[128];
+    int n =
+        snprintf(header, sizeof header, "{'descr': '<f8', 'fortran_order': False, 'shape': (%d, %d), }", height, width);
+    int total = 10 + n + 1; // preamble, dict, '\n': padded with spaces to a multiple of 64
+    int pad = (64 - total % 64) % 64;
+    for (int k = 0; k < pad; k++) header[n++] = ' ';
+    header[n++] = '\n';
+    const unsigned char pre[10] = {
+        0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0, (unsigned char)(n & 0xff), (unsigned char)(n >> 8)};
+    const size_t N = (size_t)width * (size_t)height;
+    return VSIFWriteL(pre, 1, 10, f) == 10 && VSIFWriteL(header, 1, (size_t)n, f) == (size_t)n &&
+           VSIFWriteL(x, sizeof *x, N, f) == N;
+}
+
+rs_status rs_geo_pixel_bands_write_npz(const char *path, const rs_geo_pixel_bands *b, rs_err *err)
+{
+    if (!rs_io_has_extension(path, "npz"))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: expected a .npz (NumPy) file name", path);
+    const uint16_t one = 1;
+    if (*(const unsigned char *)&one != 1)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: .npz is written little-endian only", path);
+    rs_status st = pixel_bands_ok(path, b, err);
+    if (st) return st;
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    rs_io_atomic a = {0};
+    st = temp_for_gdal(&a, path, err);
+    for (int k = 0; !st && k < b->Nbands; k++) {
+        char *entry = CPLStrdup(CPLSPrintf("/vsizip/{%s}/%s.npy", a.tmp_path, b->name[k]));
+        VSILFILE *f = VSIFOpenL(entry, "wb");
+        if (!f)
+            st = gdal_fail(err, path, "cannot add an array to the zip");
+        else {
+            bool ok = write_npy(f, b->band[k], b->width, b->height);
+            if (VSIFCloseL(f) != 0 || !ok) st = gdal_fail(err, path, "cannot write an array into the zip");
+        }
+        CPLFree(entry);
+    }
+    if (!st) st = rs_io_atomic_commit(&a, err);
+    rs_io_atomic_abort(&a);
+    CPLPopErrorHandler();
     return st;
 }

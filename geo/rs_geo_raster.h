@@ -87,6 +87,31 @@ rs_status rs_geo_ortho_read( // out
     const char *path, const rs_llh *origin, int max_side, rs_err *err);
 void rs_geo_ortho_free(rs_geo_ortho *o); // NULL-safe; zeroes *o
 
+// ---- a camera's pixel grid (roadside export --pixel-map; docs/localise.md, "Pixel map") ----
+
+// Bands over an image's pixel grid: value (row v, column u) is pixel (u, v) of the image (pixel
+// (0,0) the centre of the top-left pixel). Not georeferenced: the values are the coordinates.
+typedef struct {
+    int width, height;         // pixels, 1..65536
+    int Nbands;                // 1..16
+    const double *const *band; // (Nbands,) each (height, width) row-major; NaN: no value
+    const char *const *name;   // (Nbands,) band descriptions (GeoTIFF) / array names (.npz):
+                               //   [A-Za-z0-9_]+
+} rs_geo_pixel_bands;
+
+// Writes the bands as a GeoTIFF of Float64 bands (DEFLATE, NaN the nodata, each band's
+// description its name, no georeference), atomically.
+// Errors: RS_ERR_INVALID (extension, sizes, names), RS_ERR_EXTERNAL (GDAL), RS_ERR_IO.
+rs_status rs_geo_pixel_bands_write_tiff(const char *path, const rs_geo_pixel_bands *b, rs_err *err);
+
+// Writes the bands as a NumPy .npz: one array <name>.npy per band, float64 of shape (height,
+// width) in NumPy's .npy format 1.0 (written here: a 10-byte preamble and a dict header), zipped
+// by GDAL's /vsizip/ (no zip code of ours), under a temporary name renamed into place.
+// numpy.load(path)["<name>"] reads it.
+// Errors: RS_ERR_INVALID (extension, sizes, names), RS_ERR_UNSUPPORTED (a big-endian host),
+// RS_ERR_EXTERNAL (GDAL's zip writer), RS_ERR_IO.
+rs_status rs_geo_pixel_bands_write_npz(const char *path, const rs_geo_pixel_bands *b, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

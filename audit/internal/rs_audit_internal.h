@@ -5,9 +5,6 @@
 // Euclidean distance of two (3,) points.
 double rs_audit__dist3(const double *a, const double *b);
 
-// RS_ERR_INVALID unless n is a finite, non-zero normal with a non-zero up component.
-rs_status rs_audit__check_plane(const double n[3], rs_err *err);
-
 // The ground uncertainty map of the full solve (r->solve) over the ground plane n . p = offset,
 // within opt->range_m of the camera, cells of opt->cell_m (rs_audit_map).
 rs_status rs_audit__compute_map(rs_audit_result *r, const rs_calib_problem *pb, const double n[3], double offset,

@@ -246,6 +246,25 @@ done:
     return st;
 }
 
+// calib's <id>.json (the pose and its covariance, calib/rs_calib_site.h) copied as it is beside
+// the model into DATASET/cameras/, when the calibration folder has one: `roadside localise
+// --dataset` reads the pose covariance from it (eval/localise/rs_localise_dataset.h). The pose
+// does not change with --size, so the record holds for the scaled model too.
+static rs_status copy_calibration_record(const char *id, const char *calib_dir, const char *cameras_dir, rs_err *err)
+{
+    char from[4096], to[4096];
+    if (!rs_camera_path(from, sizeof from, calib_dir, id, ".json") ||
+        !rs_camera_path(to, sizeof to, cameras_dir, id, ".json"))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: path too long", calib_dir);
+    if (rs_io_check_regular(from, RS_IO_MAX_FILE_BYTES, NULL) != RS_OK) return RS_OK; // none: nothing to copy
+    char *text = NULL;
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&text, &len, from, err);
+    if (!st) st = rs_io_write_file(to, text, len, err);
+    free(text);
+    return st;
+}
+
 // The camera each image's labels were projected with, at the output size, copied into
 // DATASET/cameras/<id>.cameramodel (so that eval reads it from the dataset itself). A copy
 // already there from an earlier run or another shard must be the same file: images made with
@@ -276,6 +295,7 @@ static rs_status write_camera_copies(rs_synth_dataset__run *d, rs_err *err)
             else if (rename(tmp, path) != 0)
                 st = rs_err_set(err, RS_ERR_IO, "%s: %s", path, strerror(errno));
         }
+        if (!st) st = copy_calibration_record(c->id, opt->calib_dir, dir, err);
         if (tmp) (void)remove(tmp);
         free(path);
         free(tmp);

@@ -312,6 +312,13 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
             char rel[400];
             snprintf(rel, sizeof(rel), "cameras/%.300s" RS_CAMERA_EXT_CAMERAMODEL, c->string);
             if ((st = take_file(inputs[0], out_dir, rel, "run.json", err))) break;
+            // calib's record beside it (the pose covariance), when the run copied one
+            snprintf(rel, sizeof(rel), "cameras/%.300s.json", c->string);
+            char *src = rs_io_join(inputs[0], rel);
+            struct stat sb;
+            const bool has = src && lstat(src, &sb) == 0 && S_ISREG(sb.st_mode);
+            free(src);
+            if (has && (st = take_file(inputs[0], out_dir, rel, "run.json", err))) break;
         }
     }
     if (!st) {
