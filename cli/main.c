@@ -31,6 +31,7 @@ static const command commands[] = {
     {"synth", rs_cli_synth, "synthesise a labelled dataset: sharded, resumable, deterministic"},
     {"dataset", rs_cli_dataset, "what a synthetic dataset holds: splits, conditions, near-junction share"},
     {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
+    {"track", rs_cli_track, "track vehicles in metres over all the site's cameras (Kalman, Hungarian)"},
     {"bench", rs_cli_bench, "benchmarks: run time against error"},
 };
 static const int Ncommands = (int)(sizeof commands / sizeof commands[0]);
