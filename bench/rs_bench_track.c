@@ -15,17 +15,12 @@
 #include "eval/track/rs_track.h"
 
 #define HALF_SIDE_M 50.0 // the square of traffic: [-50, 50]^2
-#define MATCH_M 5.0      // a reported row matches the nearest true vehicle within this
+#define MATCH_M     5.0  // a reported row matches the nearest true vehicle within this
 
 void rs_bench_track_config_default(rs_bench_track_config *c)
 {
-    *c = (rs_bench_track_config){.Nvehicles = 50,
-                                 .Ncameras = 4,
-                                 .fps = 30,
-                                 .duration_s = 20,
-                                 .pixel_sigma = 1.0,
-                                 .p_detect = 0.9,
-                                 .seed = 1};
+    *c = (rs_bench_track_config){
+        .Nvehicles = 50, .Ncameras = 4, .fps = 30, .duration_s = 20, .pixel_sigma = 1.0, .p_detect = 0.9, .seed = 1};
 }
 
 typedef struct {
@@ -243,7 +238,8 @@ rs_status rs_bench_track_run(rs_bench_track_figures *f, const rs_bench_track_con
         for (int k = 0; k < N; k++) {
             const double qk[2] = {dets[k].u_px, dets[k].v_px};
             if (k != Nloc) dets[Nloc] = dets[k];
-            if (localise(&dets[Nloc], &cams[camera_of[k]], qk, c->pixel_sigma)) vehicle_of[Nloc] = vehicle_of[k], Nloc++;
+            if (localise(&dets[Nloc], &cams[camera_of[k]], qk, c->pixel_sigma))
+                vehicle_of[Nloc] = vehicle_of[k], Nloc++;
         }
         const double t1 = thread_cpu_s();
         st = rs_track_tracker_step(tracker, t_s, dets, Nloc, err);

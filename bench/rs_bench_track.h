@@ -40,16 +40,16 @@ typedef struct {
 void rs_bench_track_config_default(rs_bench_track_config *c);
 
 typedef struct {
-    long frames, detections;       // frames per camera, detections of all cameras
-    double detections_per_frame;   // per camera
+    long frames, detections;     // frames per camera, detections of all cameras
+    double detections_per_frame; // per camera
     double localise_cpu_s, track_cpu_s;
-    double realtime_factor;        // duration / (localise + track CPU)
-    double track_realtime_factor;  // duration / track CPU
-    long vehicles;                 // true vehicles (re-entries count anew)
-    int confirmed;                 // tracks confirmed
-    int merged;                    // duplicate tracks merged
-    long rows, rows_unmatched;     // reported rows; those with no true vehicle within 5 m
-    double rmse_m, predicted_rmse_m;        // reported rows
+    double realtime_factor;                  // duration / (localise + track CPU)
+    double track_realtime_factor;            // duration / track CPU
+    long vehicles;                           // true vehicles (re-entries count anew)
+    int confirmed;                           // tracks confirmed
+    int merged;                              // duplicate tracks merged
+    long rows, rows_unmatched;               // reported rows; those with no true vehicle within 5 m
+    double rmse_m, predicted_rmse_m;         // reported rows
     double det_rmse_m, det_predicted_rmse_m; // detections
 } rs_bench_track_figures;
 

@@ -153,5 +153,6 @@ int rs_cli_bench(int argc, char **argv)
         usage(stdout);
         return RS_EXIT_OK;
     }
-    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib, synth, site, pick, sparse or track", argv[1]);
+    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib, synth, site, pick, sparse or track",
+                              argv[1]);
 }

@@ -40,20 +40,23 @@ int rs_cli_bench_track(int argc, char **argv)
         fputs(bench_track_usage, stdout);
         return RS_EXIT_OK;
     }
-    static const struct option longopts[] = {
-        {"vehicles", required_argument, NULL, O_VEHICLES}, {"cameras", required_argument, NULL, O_CAMERAS},
-        {"fps", required_argument, NULL, O_FPS},           {"duration", required_argument, NULL, O_DURATION},
-        {"pixel-sigma", required_argument, NULL, O_PIXEL}, {"p-detect", required_argument, NULL, O_PDETECT},
-        {"seed", required_argument, NULL, O_SEED},         {"csv", required_argument, NULL, O_CSV},
-        {NULL, 0, NULL, 0}};
+    static const struct option longopts[] = {{"vehicles", required_argument, NULL, O_VEHICLES},
+                                             {"cameras", required_argument, NULL, O_CAMERAS},
+                                             {"fps", required_argument, NULL, O_FPS},
+                                             {"duration", required_argument, NULL, O_DURATION},
+                                             {"pixel-sigma", required_argument, NULL, O_PIXEL},
+                                             {"p-detect", required_argument, NULL, O_PDETECT},
+                                             {"seed", required_argument, NULL, O_SEED},
+                                             {"csv", required_argument, NULL, O_CSV},
+                                             {NULL, 0, NULL, 0}};
     rs_bench_track_config cfg;
     rs_bench_track_config_default(&cfg);
     const char *csv = NULL;
     long n;
-    int c;
+    int c, li = 0;
     optind = 1;
     opterr = 0;
-    while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "h", longopts, &li)) != -1) {
         bool ok = true;
         switch (c) {
         case O_VEHICLES: ok = rs_cli_parse_int(optarg, 1, 100000, &n), cfg.Nvehicles = (int)n; break;
@@ -70,7 +73,7 @@ int rs_cli_bench_track(int argc, char **argv)
         case O_CSV: csv = optarg; break;
         default: return rs_cli_usage_error("bench track", "unknown option or missing value: %s", argv[optind - 1]);
         }
-        if (!ok) return rs_cli_usage_error("bench track", "%s: '%s' is out of range", argv[optind - 2], optarg);
+        if (!ok) return rs_cli_usage_error("bench track", "--%s: '%s' is out of range", longopts[li].name, optarg);
     }
     if (optind != argc) return rs_cli_usage_error("bench track", "unexpected argument '%s'", argv[optind]);
     rs_err err = {0};
@@ -82,8 +85,8 @@ int rs_cli_bench_track(int argc, char **argv)
            "rows", "unmatched", "rmse_m", "pred_m", "det_rmse");
     printf("%8d %7d %6.1f %9.1f %8ld %10ld %9.1f %8.3f %8.3f %7.1f %8.1f %6ld %8d %8ld %9ld %9.4f %9.4f %9.4f\n",
            cfg.Nvehicles, cfg.Ncameras, cfg.fps, cfg.duration_s, f.frames, f.detections, f.detections_per_frame,
-           f.localise_cpu_s, f.track_cpu_s, f.realtime_factor, f.track_realtime_factor, f.vehicles, f.confirmed,
-           f.rows, f.rows_unmatched, f.rmse_m, f.predicted_rmse_m, f.det_rmse_m);
+           f.localise_cpu_s, f.track_cpu_s, f.realtime_factor, f.track_realtime_factor, f.vehicles, f.confirmed, f.rows,
+           f.rows_unmatched, f.rmse_m, f.predicted_rmse_m, f.det_rmse_m);
     printf("loc_cpu, trk_cpu: CPU seconds of localising and of tracking on one core; RTx: simulated\n"
            "seconds per CPU second of both (RTx_trk: tracking alone); truth: true vehicles (re-entries\n"
            "count anew); tracks: tracks confirmed (%d duplicates merged); rows: reported track states,\n"

@@ -10,35 +10,34 @@
 
 static void usage(FILE *out)
 {
-    fprintf(out,
-            "usage: roadside track SITE LOCATED.csv... -o TRACKS.csv [--geojson F] [--sdsm F.jsonl]\n"
-            "                      [--accel-sigma A] [--gate P] [--max-age S] [--min-hits M[/N]]\n"
-            "                      [--coast S] [--init-speed-sigma V]\n"
-            "\n"
-            "Tracks vehicles on the site's ground in metres, over all its cameras at once: a\n"
-            "constant-velocity Kalman filter per vehicle in the site's ENU frame, each detection's own\n"
-            "covariance as its noise, Mahalanobis gating and optimal (Hungarian) assignment camera by\n"
-            "camera, so that two cameras seeing one vehicle feed one track.\n"
-            "\n"
-            "  SITE               the site folder (its origin gives the tracks' latitude and longitude)\n"
-            "  LOCATED.csv        located detections ('roadside localise'), one file per camera or\n"
-            "                     several cameras in one; merged by time_s, which every row must have\n"
-            "  -o TRACKS.csv      the tracks: one row per confirmed track per time step (header\n"
-            "                     time_s,track_id,e_m,n_m,lat_deg,lon_deg,speed_mps,heading_deg,...)\n"
-            "  --geojson F        also the tracks as GeoJSON, one LineString per track (WGS84)\n"
-            "  --sdsm F.jsonl     also JSON lines mirroring SAE J3224's detected objects\n"
-            "  --accel-sigma A    white-noise acceleration, m/s^2 (default 3: braking and turning\n"
-            "                     at an intersection)\n"
-            "  --gate P           gate probability, chi-square 2 dof (default 0.999)\n"
-            "  --max-age S        a track dies after S seconds without detection (default 1)\n"
-            "  --min-hits M[/N]   a track is confirmed after detections in M of its first N steps\n"
-            "                     (default 2/3)\n"
-            "  --coast S          report a confirmed track up to S seconds without detection, its\n"
-            "                     predicted state (default 0.3)\n"
-            "  --init-speed-sigma V  a new track's velocity sigma per axis, m/s (default 15)\n"
-            "\n"
-            "Model, defaults and outputs: docs/track.md. Exit status: 0 ok, 1 bad input (the message\n"
-            "names the file, line and field), 2 usage error.\n");
+    fprintf(out, "usage: roadside track SITE LOCATED.csv... -o TRACKS.csv [--geojson F] [--sdsm F.jsonl]\n"
+                 "                      [--accel-sigma A] [--gate P] [--max-age S] [--min-hits M[/N]]\n"
+                 "                      [--coast S] [--init-speed-sigma V]\n"
+                 "\n"
+                 "Tracks vehicles on the site's ground in metres, over all its cameras at once: a\n"
+                 "constant-velocity Kalman filter per vehicle in the site's ENU frame, each detection's own\n"
+                 "covariance as its noise, Mahalanobis gating and optimal (Hungarian) assignment camera by\n"
+                 "camera, so that two cameras seeing one vehicle feed one track.\n"
+                 "\n"
+                 "  SITE               the site folder (its origin gives the tracks' latitude and longitude)\n"
+                 "  LOCATED.csv        located detections ('roadside localise'), one file per camera or\n"
+                 "                     several cameras in one; merged by time_s, which every row must have\n"
+                 "  -o TRACKS.csv      the tracks: one row per confirmed track per time step (header\n"
+                 "                     time_s,track_id,e_m,n_m,lat_deg,lon_deg,speed_mps,heading_deg,...)\n"
+                 "  --geojson F        also the tracks as GeoJSON, one LineString per track (WGS84)\n"
+                 "  --sdsm F.jsonl     also JSON lines mirroring SAE J3224's detected objects\n"
+                 "  --accel-sigma A    white-noise acceleration, m/s^2 (default 3: braking and turning\n"
+                 "                     at an intersection)\n"
+                 "  --gate P           gate probability, chi-square 2 dof (default 0.999)\n"
+                 "  --max-age S        a track dies after S seconds without detection (default 1)\n"
+                 "  --min-hits M[/N]   a track is confirmed after detections in M of its first N steps\n"
+                 "                     (default 2/3)\n"
+                 "  --coast S          report a confirmed track up to S seconds without detection, its\n"
+                 "                     predicted state (default 0.3)\n"
+                 "  --init-speed-sigma V  a new track's velocity sigma per axis, m/s (default 15)\n"
+                 "\n"
+                 "Model, defaults and outputs: docs/track.md. Exit status: 0 ok, 1 bad input (the message\n"
+                 "names the file, line and field), 2 usage error.\n");
 }
 
 typedef struct {
@@ -65,27 +64,24 @@ static int parse_args(int argc, char **argv, track_args *a)
                                             {NULL, 0, NULL, 0}};
     opterr = 0;
     optind = 0; // glibc: full re-initialisation
-    int c;
+    int c, li = 0;
     double x;
-    while ((c = getopt_long(argc, argv, ":o:", options, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":o:", options, &li)) != -1) {
         switch (c) {
         case 'o': a->out = optarg; break;
         case O_GEOJSON: a->geojson = optarg; break;
         case O_SDSM: a->sdsm = optarg; break;
         case O_ACCEL:
+        case O_MAXAGE:
+        case O_COAST:
             if (!rs_cli_parse_double(optarg, &x) || x < 0)
-                return rs_cli_usage_error("track", "--accel-sigma: '%s' is not a number >= 0", optarg);
-            a->opt.accel_sigma_mps2 = x;
+                return rs_cli_usage_error("track", "--%s: '%s' is not a number >= 0", options[li].name, optarg);
+            *(c == O_ACCEL ? &a->opt.accel_sigma_mps2 : c == O_MAXAGE ? &a->opt.max_age_s : &a->opt.coast_s) = x;
             break;
         case O_GATE:
             if (!rs_cli_parse_double(optarg, &x) || !(x > 0 && x < 1))
                 return rs_cli_usage_error("track", "--gate: '%s' is not a probability in (0, 1)", optarg);
             a->opt.gate_p = x;
-            break;
-        case O_MAXAGE:
-            if (!rs_cli_parse_double(optarg, &x) || x < 0)
-                return rs_cli_usage_error("track", "--max-age: '%s' is not a number of seconds >= 0", optarg);
-            a->opt.max_age_s = x;
             break;
         case O_MINHITS: {
             char buf[64];
@@ -94,17 +90,11 @@ static int parse_args(int argc, char **argv, track_args *a)
             char *slash = strchr(buf, '/');
             if (slash) *slash = '\0';
             if (!rs_cli_parse_int(buf, 1, 1000, &m) || (slash && !rs_cli_parse_int(slash + 1, m, 1000, &n)))
-                return rs_cli_usage_error("track", "--min-hits: '%s' is not M or M/N with 1 <= M <= N <= 1000",
-                                          optarg);
+                return rs_cli_usage_error("track", "--min-hits: '%s' is not M or M/N with 1 <= M <= N <= 1000", optarg);
             a->opt.min_hits = (int)m;
             a->opt.hit_window = slash ? (int)n : (int)m + 1;
             break;
         }
-        case O_COAST:
-            if (!rs_cli_parse_double(optarg, &x) || x < 0)
-                return rs_cli_usage_error("track", "--coast: '%s' is not a number of seconds >= 0", optarg);
-            a->opt.coast_s = x;
-            break;
         case O_INITSPEED:
             if (!rs_cli_parse_double(optarg, &x) || !(x > 0))
                 return rs_cli_usage_error("track", "--init-speed-sigma: '%s' is not a number > 0", optarg);

@@ -13,11 +13,11 @@
 
 typedef struct {
     double x[4], P[16];
-    double t_s;           // the time x, P refer to
+    double t_s; // the time x, P refer to
     double birth_s, last_update_s, u_m;
-    int id;               // 0 while tentative
-    int steps;            // steps since birth, the birth step included
-    int hits;             // steps with an update
+    int id;    // 0 while tentative
+    int steps; // steps since birth, the birth step included
+    int hits;  // steps with an update
     int detections;
     uint64_t step_cameras; // cameras that updated it at the current step
     int class_id[MAX_CLASSES], class_n[MAX_CLASSES], Nclasses;
@@ -69,7 +69,8 @@ rs_status rs_track_options_check(const rs_track_options *o, rs_err *err)
         return rs_err_set(err, RS_ERR_USAGE, "min-hits: %d of %d: need 1 <= M <= N <= 1000", o->min_hits,
                           o->hit_window);
     if (!(o->init_speed_sigma_mps > 0) || !isfinite(o->init_speed_sigma_mps))
-        return rs_err_set(err, RS_ERR_USAGE, "init-speed-sigma: %g is not a finite number > 0", o->init_speed_sigma_mps);
+        return rs_err_set(err, RS_ERR_USAGE, "init-speed-sigma: %g is not a finite number > 0",
+                          o->init_speed_sigma_mps);
     if (!(o->coast_s >= 0) || !isfinite(o->coast_s))
         return rs_err_set(err, RS_ERR_USAGE, "coast: %g is not a finite number of seconds >= 0", o->coast_s);
     if (!(o->merge_pos_mahal2 >= 0) || !(o->merge_vel_mahal2 >= 0) || !(o->birth_exclusion_mahal2 >= 0))
@@ -161,9 +162,10 @@ static rs_status measurement(double z[2], double R[4], const rs_track_located *d
         return rs_err_set(err, RS_ERR_INVALID, "line %d: e_m, n_m: not finite", d->line);
     if (!(d->sigma_e_m > 0) || !(d->sigma_n_m > 0) || !isfinite(R[0]) || !isfinite(R[3]) || !isfinite(R[1]) ||
         !(R[0] * R[3] - R[1] * R[1] > 0))
-        return rs_err_set(err, RS_ERR_INVALID,
-                          "line %d: sigma_e_m, sigma_n_m, cov_en_m2: (%g, %g, %g) is not a positive definite covariance",
-                          d->line, d->sigma_e_m, d->sigma_n_m, d->cov_en_m2);
+        return rs_err_set(
+            err, RS_ERR_INVALID,
+            "line %d: sigma_e_m, sigma_n_m, cov_en_m2: (%g, %g, %g) is not a positive definite covariance", d->line,
+            d->sigma_e_m, d->sigma_n_m, d->cov_en_m2);
     return RS_OK;
 }
 
@@ -181,7 +183,8 @@ static int majority(const track *tr)
 {
     int best = 0, n = 0;
     for (int k = 0; k < tr->Nclasses; k++)
-        if (tr->class_n[k] > n || (tr->class_n[k] == n && tr->class_id[k] < best)) best = tr->class_id[k], n = tr->class_n[k];
+        if (tr->class_n[k] > n || (tr->class_n[k] == n && tr->class_id[k] < best))
+            best = tr->class_id[k], n = tr->class_n[k];
     return best;
 }
 
@@ -253,7 +256,8 @@ static double pair_mahal2(const track *a, const track *b, int k)
 {
     const double d0 = a->x[k] - b->x[k], d1 = a->x[k + 1] - b->x[k + 1];
     const double s00 = a->P[k * 4 + k] + b->P[k * 4 + k], s11 = a->P[(k + 1) * 4 + k + 1] + b->P[(k + 1) * 4 + k + 1];
-    const double s01 = 0.5 * (a->P[k * 4 + k + 1] + a->P[(k + 1) * 4 + k] + b->P[k * 4 + k + 1] + b->P[(k + 1) * 4 + k]);
+    const double s01 =
+        0.5 * (a->P[k * 4 + k + 1] + a->P[(k + 1) * 4 + k] + b->P[k * 4 + k + 1] + b->P[(k + 1) * 4 + k]);
     const double det = s00 * s11 - s01 * s01;
     if (!(det > 0)) return INFINITY;
     return (d0 * d0 * s11 - 2 * d0 * d1 * s01 + d1 * d1 * s00) / det;
@@ -265,6 +269,16 @@ static bool keeps(const track *a, const track *b)
     if (a->detections != b->detections) return a->detections > b->detections;
     if (a->birth_s != b->birth_s) return a->birth_s < b->birth_s;
     return (a->id ? a->id : 1 << 30) <= (b->id ? b->id : 1 << 30);
+}
+
+// Drops the confirmed tracks not updated for more than max_age_s before time_s (before a step's
+// association: a track dead by then takes no detection).
+static void drop_dead(rs_track_tracker *t, double time_s)
+{
+    int n = 0;
+    for (int i = 0; i < t->Ntracks; i++)
+        if (!t->tracks[i].id || time_s - t->tracks[i].last_update_s <= t->opt.max_age_s) t->tracks[n++] = t->tracks[i];
+    t->Ntracks = n;
 }
 
 // Drops tracks on the same vehicle as another (rs_track.h), then the dead and the hopeless.
@@ -345,6 +359,7 @@ rs_status rs_track_tracker_step(rs_track_tracker *t, double time_s, const rs_tra
                           t->last_time_s);
     t->started = true;
     t->last_time_s = time_s;
+    drop_dead(t, time_s);
     for (int i = 0; i < t->Ntracks; i++) {
         track *tr = &t->tracks[i];
         rs_track_kf_predict(tr->x, tr->P, time_s - tr->t_s, t->opt.accel_sigma_mps2);
@@ -371,8 +386,10 @@ rs_status rs_track_tracker_step(rs_track_tracker *t, double time_s, const rs_tra
     }
     for (int i = 0; i < t->Ntracks; i++) {
         track *tr = &t->tracks[i];
-        if (i < T0) tr->steps++;
-        else tr->steps = 1;
+        if (i < T0)
+            tr->steps++;
+        else
+            tr->steps = 1;
         if (tr->step_cameras) tr->hits++;
     }
     prune(t, time_s);

@@ -48,7 +48,7 @@
 extern "C" {
 #endif
 
-#define RS_TRACK_MAX_CAMERAS 64  // the cameras of one run (a bit each in a row's camera mask)
+#define RS_TRACK_MAX_CAMERAS  64 // the cameras of one run (a bit each in a row's camera mask)
 #define RS_TRACK_CAMERA_BYTES 65 // a camera id: up to 64 bytes (rs_io_name_problem) and a NUL
 
 // One located detection: the columns of the located-detections CSV (docs/track.md, issue 39's
@@ -56,15 +56,15 @@ extern "C" {
 typedef struct {
     long long image_id;
     char camera[RS_TRACK_CAMERA_BYTES];
-    long frame;       // -1 when unknown
-    double time_s;    // NaN when unknown (tracking refuses it)
-    int category_id;  // 1-based
-    double score;     // 0..1
-    double u_px, v_px;                   // the ground-contact pixel (NaN when not given)
-    double e_m, n_m, u_m;                // site ENU of the ground point
-    double lat_deg, lon_deg;             // (NaN when not given)
+    long frame;                             // -1 when unknown
+    double time_s;                          // NaN when unknown (tracking refuses it)
+    int category_id;                        // 1-based
+    double score;                           // 0..1
+    double u_px, v_px;                      // the ground-contact pixel (NaN when not given)
+    double e_m, n_m, u_m;                   // site ENU of the ground point
+    double lat_deg, lon_deg;                // (NaN when not given)
     double sigma_e_m, sigma_n_m, cov_en_m2; // the horizontal covariance [[se^2, c], [c, sn^2]]
-    int line; // 1-based line of its file (messages), 0 when not from a file
+    int line;                               // 1-based line of its file (messages), 0 when not from a file
 } rs_track_located;
 
 typedef struct {
@@ -88,16 +88,16 @@ rs_status rs_track_options_check(const rs_track_options *opt, rs_err *err);
 // One reported state: a row of the tracks CSV (issue 39's interface 3) and a little more.
 typedef struct {
     double time_s;
-    int track_id;                               // 1-based, in order of confirmation
-    double e_m, n_m, u_m;                       // site ENU (u: the last detection's ground height)
-    double speed_mps, heading_deg;              // heading clockwise from north, [0, 360)
-    double sigma_e_m, sigma_n_m, cov_en_m2;     // the position covariance
-    double sigma_speed_mps, sigma_heading_deg;  // first-order from the velocity covariance
-    double age_s;                               // since the track's first detection
-    int detections;                             // detections the track has taken so far
-    uint64_t camera_mask;                       // cameras that updated it at this step (bit k:
-                                                //   rs_track_tracker_camera(k)); 0 when coasting
-    int category_id;                            // the majority class so far
+    int track_id;                              // 1-based, in order of confirmation
+    double e_m, n_m, u_m;                      // site ENU (u: the last detection's ground height)
+    double speed_mps, heading_deg;             // heading clockwise from north, [0, 360)
+    double sigma_e_m, sigma_n_m, cov_en_m2;    // the position covariance
+    double sigma_speed_mps, sigma_heading_deg; // first-order from the velocity covariance
+    double age_s;                              // since the track's first detection
+    int detections;                            // detections the track has taken so far
+    uint64_t camera_mask;                      // cameras that updated it at this step (bit k:
+                                               //   rs_track_tracker_camera(k)); 0 when coasting
+    int category_id;                           // the majority class so far
 } rs_track_row;
 
 typedef struct rs_track_tracker rs_track_tracker;

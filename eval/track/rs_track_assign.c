@@ -48,10 +48,11 @@ static void hungarian(int *row_of_col, const double *a, int n, int m, double *w,
     }
 }
 
-rs_status rs_track_assign(int *col_of_row, int *Nmatched, double *total_cost, const double *cost, int Nrows,
-                          int Ncols, double max_cost, rs_err *err)
+rs_status rs_track_assign(int *col_of_row, int *Nmatched, double *total_cost, const double *cost, int Nrows, int Ncols,
+                          double max_cost, rs_err *err)
 {
-    if (Nrows < 0 || Ncols < 0) return rs_err_set(err, RS_ERR_INVALID, "assignment: negative size %d x %d", Nrows, Ncols);
+    if (Nrows < 0 || Ncols < 0)
+        return rs_err_set(err, RS_ERR_INVALID, "assignment: negative size %d x %d", Nrows, Ncols);
     if (Nmatched) *Nmatched = 0;
     if (total_cost) *total_cost = 0;
     for (int i = 0; i < Nrows; i++) col_of_row[i] = -1;
@@ -76,7 +77,8 @@ rs_status rs_track_assign(int *col_of_row, int *Nmatched, double *total_cost, co
     }
     for (int r = 0; r < n; r++)
         for (int c = 0; c < m; c++) {
-            const double x = transposed ? cost[(size_t)c * (size_t)Ncols + (size_t)r] : cost[(size_t)r * (size_t)Ncols + (size_t)c];
+            const double x =
+                transposed ? cost[(size_t)c * (size_t)Ncols + (size_t)r] : cost[(size_t)r * (size_t)Ncols + (size_t)c];
             a[(size_t)r * (size_t)m + (size_t)c] = allowed(x, max_cost) ? x : big;
         }
     int *row_of_col = iw, *way = iw + m + 1;

@@ -30,17 +30,18 @@
 extern "C" {
 #endif
 
-#define RS_TRACK_LOCATED_HEADER                                                                                    \
+#define RS_TRACK_LOCATED_HEADER                                                                                 \
     "image_id,camera,frame,time_s,category_id,score,u_px,v_px,e_m,n_m,u_m,lat_deg,lon_deg,sigma_e_m,sigma_n_m," \
     "cov_en_m2"
-#define RS_TRACK_TRACKS_HEADER                                                                                   \
+#define RS_TRACK_TRACKS_HEADER                                                                                     \
     "time_s,track_id,e_m,n_m,lat_deg,lon_deg,speed_mps,heading_deg,sigma_e_m,sigma_n_m,cov_en_m2,sigma_speed_mps," \
     "sigma_heading_deg,age_s,detections,cameras"
 
 // Reads the located-detections CSV at path. Each detection's `line` is its 1-based line.
 // Errors: RS_ERR_IO (cannot read), RS_ERR_PARSE ("PATH:LINE: FIELD: ..." for a wrong header, a
 // wrong number of fields, a field that is not a number), RS_ERR_INVALID (a camera id longer than
-// 64 bytes), RS_ERR_NOMEM.
+// 64 bytes; a covariance that is not positive definite: sigmas > 0, |cov| < sigma_e sigma_n),
+// RS_ERR_NOMEM.
 // out: *dets (N,), owned by the caller (free()); NULL with N = 0 for a file without rows.
 rs_status rs_track_read_located( // out
     rs_track_located **dets, size_t *N,
@@ -52,8 +53,7 @@ rs_status rs_track_read_located( // out
 rs_status rs_track_write_csv(const char *path, const rs_track_tracker *tracker, const rs_llh *origin, rs_err *err);
 
 // Writes the tracks as GeoJSON LineStrings (atomically).
-rs_status rs_track_write_geojson(const char *path, const rs_track_tracker *tracker, const rs_llh *origin,
-                                 rs_err *err);
+rs_status rs_track_write_geojson(const char *path, const rs_track_tracker *tracker, const rs_llh *origin, rs_err *err);
 
 // Writes the rows as SDSM-style JSON lines (atomically).
 rs_status rs_track_write_sdsm(const char *path, const rs_track_tracker *tracker, const rs_llh *origin, rs_err *err);

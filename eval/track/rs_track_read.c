@@ -10,10 +10,9 @@
 #include "eval/track/rs_track_io.h"
 
 enum { NFIELDS = 16 };
-static const char *const field_names[NFIELDS] = {"image_id", "camera",   "frame",   "time_s",    "category_id",
-                                                 "score",    "u_px",     "v_px",    "e_m",       "n_m",
-                                                 "u_m",      "lat_deg",  "lon_deg", "sigma_e_m", "sigma_n_m",
-                                                 "cov_en_m2"};
+static const char *const field_names[NFIELDS] = {
+    "image_id", "camera", "frame", "time_s",  "category_id", "score",     "u_px",      "v_px",
+    "e_m",      "n_m",    "u_m",   "lat_deg", "lon_deg",     "sigma_e_m", "sigma_n_m", "cov_en_m2"};
 
 // Parses field k: a double (empty -> NaN when optional) or, for integers, a long long.
 static rs_status number(double *x, const char *s, bool optional, const char *path, int line, int k, rs_err *err)
@@ -26,7 +25,8 @@ static rs_status number(double *x, const char *s, bool optional, const char *pat
     errno = 0;
     *x = strtod(s, &end);
     if (*end || errno == ERANGE || !isfinite(*x))
-        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: '%.40s' is not a finite number", path, line, field_names[k], s);
+        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: '%.40s' is not a finite number", path, line, field_names[k],
+                          s);
     return RS_OK;
 }
 
@@ -77,6 +77,11 @@ static rs_status parse_row(rs_track_located *d, char *text, const char *path, in
     static const bool optional[] = {false, true, true, false, false, true, true, true, false, false, false};
     for (int k = 5; k < NFIELDS; k++)
         if ((st = number(x[k - 5], f[k], optional[k - 5], path, line, k, err))) return st;
+    if (!(d->sigma_e_m > 0) || !(d->sigma_n_m > 0) || !(fabs(d->cov_en_m2) < d->sigma_e_m * d->sigma_n_m))
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "%s:%d: sigma_e_m, sigma_n_m, cov_en_m2: (%g, %g, %g) is not a positive definite covariance "
+                          "(sigmas > 0, |cov| < sigma_e sigma_n)",
+                          path, line, d->sigma_e_m, d->sigma_n_m, d->cov_en_m2);
     return RS_OK;
 }
 

@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cjson/cJSON.h>
+
 #include "core/rs_io.h"
 #include "eval/track/rs_track_io.h"
 
@@ -40,23 +42,19 @@ static void cameras_text(char *buf, size_t n, const rs_track_tracker *t, uint64_
     buf[0] = '\0';
     for (int k = 0; k < RS_TRACK_MAX_CAMERAS && used < n; k++)
         if (mask >> k & 1)
-            used += (size_t)snprintf(buf + used, n - used, "%s%s", used ? "+" : "", rs_track_tracker_camera(t, k, NULL));
+            used +=
+                (size_t)snprintf(buf + used, n - used, "%s%s", used ? "+" : "", rs_track_tracker_camera(t, k, NULL));
 }
 
-// Writes s as a JSON string (quoted; '"', '\\' and control characters escaped).
-static void json_string(FILE *f, const char *s)
+// Writes s as a JSON string (cJSON's escaping); false when out of memory.
+static bool json_string(FILE *f, const char *s)
 {
-    fputc('"', f);
-    for (; *s; s++) {
-        const unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\')
-            fprintf(f, "\\%c", c);
-        else if (c < 0x20)
-            fprintf(f, "\\u%04x", c);
-        else
-            fputc(c, f);
-    }
-    fputc('"', f);
+    cJSON *item = cJSON_CreateString(s);
+    char *text = item ? cJSON_PrintUnformatted(item) : NULL;
+    if (text) fputs(text, f);
+    cJSON_free(text);
+    cJSON_Delete(item);
+    return text != NULL;
 }
 
 // Writes the file's text into f; false when out of memory (the output is then abandoned).
@@ -146,8 +144,8 @@ static bool geojson_features(FILE *f, const rs_track_tracker *t, const double *l
         size_t b = a;
         while (b < N && v[b]->track_id == v[a]->track_id) b++;
         const bool line = b - a >= 2; // a LineString needs two positions (RFC 7946 3.1.4)
-        fprintf(f, "%s\n{\"type\":\"Feature\",\"id\":%d,\"geometry\":{\"type\":\"%s\",\"coordinates\":%s", nf ? "," : "",
-                v[a]->track_id, line ? "LineString" : "Point", line ? "[" : "");
+        fprintf(f, "%s\n{\"type\":\"Feature\",\"id\":%d,\"geometry\":{\"type\":\"%s\",\"coordinates\":%s",
+                nf ? "," : "", v[a]->track_id, line ? "LineString" : "Point", line ? "[" : "");
         for (size_t k = a; k < b; k++) {
             const size_t r = (size_t)(v[k] - rows);
             fprintf(f, "%s[%.10f,%.10f,%.3f]", k > a ? "," : "", llh[3 * r + 1], llh[3 * r], llh[3 * r + 2]);
@@ -171,7 +169,10 @@ static bool geojson_features(FILE *f, const rs_track_tracker *t, const double *l
         for (size_t k = a; k < b; k++) {
             cameras_text(cams, CAMERAS_TEXT, t, v[k]->camera_mask);
             if (k > a) fputc(',', f);
-            json_string(f, cams);
+            if (!json_string(f, cams)) {
+                free(v), free(cams);
+                return false;
+            }
         }
         fputs("]}}", f);
         a = b;
@@ -237,7 +238,10 @@ static bool sdsm_lines(FILE *f, const rs_track_tracker *t, const double *llh)
                 confidence_class(z95 * r->sigma_heading_deg, heading_bounds_deg, 6), r->e_m, r->n_m, llh[3 * k],
                 llh[3 * k + 1], r->speed_mps, r->heading_deg, r95_2d * major_m, z95 * r->sigma_speed_mps,
                 z95 * r->sigma_heading_deg, r->age_s, r->detections);
-        json_string(f, cams);
+        if (!json_string(f, cams)) {
+            free(cams);
+            return false;
+        }
         fputs("}\n", f);
     }
     free(cams);

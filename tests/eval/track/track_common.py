@@ -42,13 +42,22 @@ def read_tracks(path):
 
 
 def make_site(dirname):
-    """A minimal site folder (`roadside site init`); returns its path."""
+    """A site folder that loads (`roadside site simulate --seed 1 --cameras 1`: the tracker only
+    needs its origin); returns its path."""
     site = os.path.join(dirname, "site")
-    r = run("site", "init", site, "--origin", "45.0,7.0,200")
+    r = run("site", "simulate", site, "--seed", "1", "--cameras", "1")
     if r.returncode != 0:
         print(r.stdout, r.stderr)
-        raise SystemExit("cannot make a site: roadside site init failed")
+        raise SystemExit("cannot make a site: roadside site simulate failed")
     return site
+
+
+def site_origin(site):
+    """The site's origin (lat_deg, lon_deg, h_m) from its site.json."""
+    import json
+    with open(os.path.join(site, "site.json")) as f:
+        o = json.load(f)["origin"]
+    return o["lat"], o["lon"], o["h"]
 
 
 def run_track(site, inputs, out, *extra):
