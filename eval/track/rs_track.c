@@ -15,9 +15,10 @@ typedef struct {
     double x[4], P[16];
     double t_s; // the time x, P refer to
     double birth_s, last_update_s, u_m;
-    int id;    // 0 while tentative
-    int steps; // steps since birth, the birth step included
-    int hits;  // steps with an update
+    int id;                // 0 while tentative
+    int steps;             // opportunities since birth, the birth step included (rs_track.h)
+    uint64_t seen_cameras; // cameras that have ever updated it
+    int hits;              // steps with an update
     int detections;
     uint64_t step_cameras; // cameras that updated it at the current step
     int class_id[MAX_CLASSES], class_n[MAX_CLASSES], Nclasses;
@@ -48,8 +49,8 @@ void rs_track_options_default(rs_track_options *opt)
     *opt = (rs_track_options){.accel_sigma_mps2 = 3.0,
                               .gate_p = 0.999,
                               .max_age_s = 1.0,
-                              .min_hits = 2,
-                              .hit_window = 3,
+                              .min_hits = 3,
+                              .hit_window = 4,
                               .init_speed_sigma_mps = 15.0,
                               .coast_s = 0.3,
                               .merge_pos_mahal2 = 9.21,
@@ -271,13 +272,13 @@ static bool keeps(const track *a, const track *b)
     return (a->id ? a->id : 1 << 30) <= (b->id ? b->id : 1 << 30);
 }
 
-// Drops the confirmed tracks not updated for more than max_age_s before time_s (before a step's
-// association: a track dead by then takes no detection).
+// Drops the tracks (confirmed or tentative) not updated for more than max_age_s before time_s
+// (before a step's association: a track dead by then takes no detection).
 static void drop_dead(rs_track_tracker *t, double time_s)
 {
     int n = 0;
     for (int i = 0; i < t->Ntracks; i++)
-        if (!t->tracks[i].id || time_s - t->tracks[i].last_update_s <= t->opt.max_age_s) t->tracks[n++] = t->tracks[i];
+        if (time_s - t->tracks[i].last_update_s <= t->opt.max_age_s) t->tracks[n++] = t->tracks[i];
     t->Ntracks = n;
 }
 
@@ -301,7 +302,7 @@ static void prune(rs_track_tracker *t, double time_s)
         bool dead = drop && drop[i];
         if (tr->id) // confirmed: dies without updates
             dead = dead || time_s - tr->last_update_s > t->opt.max_age_s;
-        else // tentative: dies when M of the first N steps is out of reach
+        else // tentative: dies when M of the first N opportunities is out of reach
             dead = dead || tr->hits + (t->opt.hit_window - tr->steps) < t->opt.min_hits;
         if (!dead) t->tracks[n++] = *tr;
     }
@@ -347,7 +348,7 @@ static rs_status report(rs_track_tracker *t, double time_s, rs_err *err)
         rs_track_kf_speed_heading(&r->speed_mps, &r->heading_deg, &r->sigma_speed_mps, &r->sigma_heading_deg, tr->x,
                                   tr->P);
     }
-    qsort(t->rows + first, t->Nrows - first, sizeof(rs_track_row), cmp_row_id);
+    if (t->Nrows > first) qsort(t->rows + first, t->Nrows - first, sizeof(rs_track_row), cmp_row_id);
     return RS_OK;
 }
 
@@ -377,7 +378,11 @@ rs_status rs_track_tracker_step(rs_track_tracker *t, double time_s, const rs_tra
         t->order[2 * j + 1] = j;
     }
     qsort(t->order, (size_t)N, 2 * sizeof(int), cmp_int_pair);
-    for (int j = 0; j < N; j++) t->cam_of_det[j] = t->order[2 * j + 1]; // detection indices, by camera
+    uint64_t step_mask = 0; // the cameras that delivered detections at this step
+    for (int j = 0; j < N; j++) {
+        t->cam_of_det[j] = t->order[2 * j + 1]; // detection indices, by camera
+        step_mask |= (uint64_t)1 << t->order[2 * j];
+    }
     for (int a = 0; a < N;) {
         int b = a;
         while (b < N && t->order[2 * b] == t->order[2 * a]) b++;
@@ -386,11 +391,12 @@ rs_status rs_track_tracker_step(rs_track_tracker *t, double time_s, const rs_tra
     }
     for (int i = 0; i < t->Ntracks; i++) {
         track *tr = &t->tracks[i];
-        if (i < T0)
-            tr->steps++;
-        else
-            tr->steps = 1;
+        if (i >= T0)
+            tr->steps = 1; // born at this step
+        else if ((tr->seen_cameras | tr->step_cameras) & step_mask)
+            tr->steps++; // one of its cameras delivered: an opportunity, taken or missed
         if (tr->step_cameras) tr->hits++;
+        tr->seen_cameras |= tr->step_cameras;
     }
     prune(t, time_s);
     return report(t, time_s, err);

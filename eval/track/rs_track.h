@@ -11,7 +11,8 @@
 //     first appear in the input), each camera's batch as sequential updates: gating by the
 //     squared Mahalanobis distance of the innovation (chi-square with 2 degrees of freedom:
 //     gate = -2 ln(1 - gate_p), exact for 2 dof), optimal assignment of the gated pairs
-//     (eval/track/rs_track_assign.h: most pairs, then least total Mahalanobis cost), updates of
+//     (eval/track/rs_track_assign.h: least total of (mahal2 - gate), the gate the price of a
+//     miss), updates of
 //     the matched tracks, and a new tentative track for every unmatched detection farther than
 //     birth_exclusion_mahal2 from every track (closer, it is taken for an outlier of that track
 //     or a detector's second box on it: a gate of 99.9 % misses 1 detection in 1,000, which at
@@ -26,10 +27,13 @@
 //     takes the ones on its side), so the test is loose (99 % of chi-square 2 dof on each);
 //     vehicles side by side are many sigmas apart, and vehicles crossing at an angle differ in
 //     velocity, so both are kept apart;
-//   - birth: a track is tentative until it has been updated in min_hits of the first
-//     hit_window steps since its birth (steps: the distinct detection times of the input), and
-//     is dropped when it can no longer reach that; confirmed tracks get the next id (1, 2, ...);
-//   - death: a confirmed track not updated for more than max_age_s seconds is dropped;
+//   - birth: a track is tentative until it has been updated at min_hits of its first
+//     hit_window opportunities, and is dropped when it can no longer reach that; an opportunity
+//     is a step at which a camera that has detected the track delivers detections (so cameras
+//     whose frames are not synchronous, or one camera of several, do not count as misses the
+//     steps at which only the others deliver); confirmed tracks get the next id (1, 2, ...);
+//   - death: a track not updated for more than max_age_s seconds is dropped (before the next
+//     step's association);
 //   - reporting: at each step, every confirmed track updated at the step, and those coasting
 //     (not updated) for at most coast_s seconds, their predicted state;
 //   - class: the majority of the detections' category_id (ties: the smaller id).
@@ -71,7 +75,7 @@ typedef struct {
     double accel_sigma_mps2;     // white-noise acceleration (default 3 m/s^2)
     double gate_p;               // gate probability, in (0, 1) (default 0.999)
     double max_age_s;            // a confirmed track dies after this long without update (1 s)
-    int min_hits, hit_window;    // M of N (default 2 of 3)
+    int min_hits, hit_window;    // M of N (default 3 of 4)
     double init_speed_sigma_mps; // a new track's velocity sigma on each axis (default 15 m/s)
     double coast_s;              // report a confirmed track up to this long without update (0.3 s)
     double merge_pos_mahal2;     // the merge test (default 9.21 and 9.21, the chi-square 2-dof 99 %)

@@ -57,17 +57,14 @@ rs_status rs_track_assign(int *col_of_row, int *Nmatched, double *total_cost, co
     if (total_cost) *total_cost = 0;
     for (int i = 0; i < Nrows; i++) col_of_row[i] = -1;
     if (Nrows == 0 || Ncols == 0) return RS_OK;
-    double largest = 0;
     for (size_t k = 0; k < (size_t)Nrows * (size_t)Ncols; k++) {
         if (!allowed(cost[k], max_cost)) continue;
         if (cost[k] < 0)
             return rs_err_set(err, RS_ERR_INVALID, "assignment: cost[%zu][%zu] = %g is negative", k / (size_t)Ncols,
                               k % (size_t)Ncols, cost[k]);
-        if (cost[k] > largest) largest = cost[k];
     }
     const bool transposed = Nrows > Ncols;
     const int n = transposed ? Ncols : Nrows, m = transposed ? Nrows : Ncols;
-    const double big = 1.0 + (double)n * (1.0 + largest);
     double *a = malloc(sizeof(double) * ((size_t)n * (size_t)m + 3 * (size_t)(m + 1) + (size_t)(n + 1)));
     int *iw = malloc(sizeof(int) * 2 * (size_t)(m + 1));
     bool *used = malloc(sizeof(bool) * (size_t)(m + 1));
@@ -79,7 +76,8 @@ rs_status rs_track_assign(int *col_of_row, int *Nmatched, double *total_cost, co
         for (int c = 0; c < m; c++) {
             const double x =
                 transposed ? cost[(size_t)c * (size_t)Ncols + (size_t)r] : cost[(size_t)r * (size_t)Ncols + (size_t)c];
-            a[(size_t)r * (size_t)m + (size_t)c] = allowed(x, max_cost) ? x : big;
+            // a pair saves max_cost - x against leaving both unmatched; a forbidden pair saves nothing
+            a[(size_t)r * (size_t)m + (size_t)c] = allowed(x, max_cost) ? x - max_cost : 0;
         }
     int *row_of_col = iw, *way = iw + m + 1;
     hungarian(row_of_col, a, n, m, a + (size_t)n * (size_t)m, way, used);
@@ -88,7 +86,7 @@ rs_status rs_track_assign(int *col_of_row, int *Nmatched, double *total_cost, co
     for (int j = 1; j <= m; j++) {
         if (!row_of_col[j]) continue;
         const int r = row_of_col[j] - 1, c = j - 1;
-        if (a[(size_t)r * (size_t)m + (size_t)c] >= big) continue; // a forbidden pair: unmatched
+        if (!(a[(size_t)r * (size_t)m + (size_t)c] < 0)) continue; // forbidden, or saves nothing: unmatched
         const int row = transposed ? c : r, col = transposed ? r : c;
         col_of_row[row] = col;
         matched++;

@@ -7,7 +7,14 @@
   3. an X: 20 pairs of vehicles crossing at 90 degrees at one instant (10 m/s, 0.3 m noise,
      10 Hz), 1 km apart: 40 tracks, none of them ever nearer the other vehicle of its pair
      (no swapped ids);
-  4. outputs: speed and heading of a straight vehicle within 3.3 of their sigmas in 99 % of its
+  4. asynchronous cameras and clutter: 30 vehicles on concentric circles (1..4 m/s), 3 cameras
+     whose frames are 10 ms apart, each detecting with probability 0.8 (10 vehicles seen by one
+     camera alone: the steps of the others are no misses for them), and 2 clutter detections
+     per frame uniform over the area from a fourth camera: 30 tracks, each always within 2 m of
+     its own vehicle, at most 2 % of the clutter confirmed as tracks of its own (3 of 4 hits;
+     with 2 of 3, 8 %: docs/track.md),
+     the class vote (80 % class 1) gives class 1;
+  5. outputs: speed and heading of a straight vehicle within 3.3 of their sigmas in 99 % of its
      rows; the CSV's and the GeoJSON's latitude and longitude against PROJ's cct (topocentric at
      the site origin) within 1 mm; one GeoJSON LineString per track with one vertex per row; the
      SDSM lines' coded fields (0.1 m, 0.02 m/s, 0.0125 degree units; confidence classes) from the
@@ -27,6 +34,7 @@ from rs_check import check, finish, need  # noqa: E402
 
 np, = need("numpy")
 SEED = 3902
+CLUTTER = 2  # false detections per frame in the asynchronous scenario
 rng = np.random.default_rng(SEED)
 
 
@@ -66,7 +74,7 @@ def two_cameras(tmp, site):
     print(f"two cameras: {len(ids)} track(s), {both}/{len(tr)} rows from camA+camB, RMSE {err:.3f} m "
           f"(one detection's {single:.3f} m)")
     check(len(ids) == 1, f"two cameras on one vehicle: {len(ids)} tracks, want 1")
-    check(both >= 0.95 * len(tr) and len(tr) >= 98, f"rows updated by both cameras: {both} of {len(tr)}")
+    check(both >= 0.95 * len(tr) and len(tr) >= 97, f"rows updated by both cameras: {both} of {len(tr)}")
     check(err < 0.5 * single, f"fused RMSE {err:.3f} m, want below half a detection's {single:.3f} m")
 
 
@@ -109,6 +117,56 @@ def crossing(tmp, site):
     print(f"crossing: {len(owner)} tracks for 40 vehicles, {swapped} rows on the other vehicle")
     check(len(owner) == 40 and len(set(owner.values())) == 40, f"{len(owner)} tracks, want one per vehicle (40)")
     check(swapped == 0, f"{swapped} rows of a track nearer the other vehicle of its pair: ids swapped")
+
+
+def asynchronous(tmp, site):
+    rows = []
+
+    def pos(v, t):
+        return np.array([math.cos(v + 0.1 * t) * (10 + v), math.sin(v + 0.1 * t) * (10 + v)])
+
+    for k in range(150):
+        t = 0.1 * k
+        for c in range(3):
+            for v in range(30):
+                if rng.uniform() < 0.2 or (v < 10 and c > 0):  # vehicles 0..9: seen by cam0 alone
+                    continue
+                cov = np.diag(rng.uniform(0.05, 0.3, 2) ** 2)
+                d = detect(pos(v, t + 0.01 * c), cov, "cam%d" % c, t + 0.01 * c)
+                d["category_id"] = 1 if rng.uniform() < 0.8 else 2
+                rows.append(d)
+        for j in range(CLUTTER):
+            rows.append(dict(camera="clutter", time_s=t, e_m=rng.uniform(-45, 45), n_m=rng.uniform(-45, 45),
+                             cov=np.diag([0.04, 0.04])))
+    path, out, gj = (os.path.join(tmp, n) for n in ("async.csv", "async.tracks.csv", "async.geojson"))
+    write_located(path, rows)
+    p = run_track(site, [path], out, "--geojson", gj)
+    check(p.returncode == 0, f"asynchronous: roadside track failed: {p.stderr}")
+    if p.returncode:
+        return
+    near = {}  # track -> the nearest vehicle of each of its rows (None: none within 2 m)
+    for r in read_tracks(out):
+        d = [math.dist((r["e_m"], r["n_m"]), pos(v, r["time_s"])) for v in range(30)]
+        v = int(np.argmin(d))
+        near.setdefault(r["track_id"], []).append(v if d[v] <= 2.0 else None)
+    # a vehicle's track: most of its rows on one vehicle; the others are tracks on clutter
+    on_vehicles, false = {}, []
+    for k, vs in near.items():
+        top = max(set(vs), key=vs.count)
+        if top is not None and vs.count(top) >= 0.9 * len(vs):
+            on_vehicles[k] = (top, len(vs) - vs.count(top))
+        else:
+            false.append(k)
+    with open(gj) as f:
+        classes = {f["id"]: f["properties"]["category_id"] for f in json.load(f)["features"]}
+    off = sum(n for _, n in on_vehicles.values())
+    print(f"asynchronous cameras, {CLUTTER} clutter per frame ({CLUTTER * 150} in all): {len(on_vehicles)} tracks on "
+          f"vehicles ({off} of their rows off it), {len(false)} on clutter; classes on vehicles "
+          f"{sorted(set(classes[k] for k in on_vehicles))}")
+    check(len(on_vehicles) == 30 and len(set(v for v, _ in on_vehicles.values())) == 30 and off == 0,
+          f"tracks on vehicles: {on_vehicles}, want one per vehicle (30), each always on it")
+    check(len(false) <= 0.02 * CLUTTER * 150, f"{len(false)} tracks on clutter, want at most 2 % of the clutter")
+    check(set(classes[k] for k in on_vehicles) == {1}, "majority classes, want 1")
 
 
 def cct_enu(origin, lonlath):
@@ -188,6 +246,7 @@ def main():
         check(len(short) == 1, f"hand-over with a 0.5 s gap: ids {short}, want one")
         check(len(long_) == 2, f"hand-over with a 1.5 s gap (> max-age 1 s): ids {long_}, want two")
         crossing(tmp, site)
+        asynchronous(tmp, site)
         outputs(tmp, site)
 
 
