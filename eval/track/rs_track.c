@@ -36,6 +36,7 @@ struct rs_track_tracker {
     size_t Nrows, cap_rows;
     char cameras[RS_TRACK_MAX_CAMERAS][RS_TRACK_CAMERA_BYTES];
     int Ncameras;
+    int rank[RS_TRACK_MAX_CAMERAS]; // each camera's place in the ids' byte order (strcmp)
     int Nconfirmed, Nmerged;
     // scratch, grown as needed
     double *cost;
@@ -123,6 +124,11 @@ const char *rs_track_tracker_camera(const rs_track_tracker *t, int k, int *Ncame
     return k >= 0 && k < t->Ncameras ? t->cameras[k] : NULL;
 }
 
+int rs_track_tracker_camera_rank(const rs_track_tracker *t, int k)
+{
+    return k >= 0 && k < t->Ncameras ? t->rank[k] : -1;
+}
+
 void rs_track_tracker_counts(const rs_track_tracker *t, int *Nconfirmed, int *Nmerged)
 {
     if (Nconfirmed) *Nconfirmed = t->Nconfirmed;
@@ -151,7 +157,19 @@ static rs_status camera_index(int *k, rs_track_tracker *t, const char *camera, r
                           RS_TRACK_MAX_CAMERAS);
     snprintf(t->cameras[t->Ncameras], RS_TRACK_CAMERA_BYTES, "%s", camera);
     *k = t->Ncameras++;
+    for (int i = 0; i < t->Ncameras; i++) { // the ranks anew (64 cameras at the most)
+        t->rank[i] = 0;
+        for (int j = 0; j < t->Ncameras; j++) t->rank[i] += strcmp(t->cameras[j], t->cameras[i]) < 0;
+    }
     return RS_OK;
+}
+
+// The camera whose id comes r-th in byte order.
+static int camera_of_rank(const rs_track_tracker *t, int r)
+{
+    for (int k = 0; k < t->Ncameras; k++)
+        if (t->rank[k] == r) return k;
+    return 0; // not reached: ranks are a permutation
 }
 
 // The detection's measurement z and covariance R; RS_ERR_INVALID when not usable.
@@ -377,16 +395,19 @@ rs_status rs_track_tracker_step(rs_track_tracker *t, double time_s, const rs_tra
         if ((st = camera_index(&t->order[2 * j], t, dets[j].camera, err))) return st;
         t->order[2 * j + 1] = j;
     }
+    // batches in the order of the camera ids, whatever the input's (ranks once all are known)
+    for (int j = 0; j < N; j++) t->order[2 * j] = t->rank[t->order[2 * j]];
     qsort(t->order, (size_t)N, 2 * sizeof(int), cmp_int_pair);
     uint64_t step_mask = 0; // the cameras that delivered detections at this step
     for (int j = 0; j < N; j++) {
         t->cam_of_det[j] = t->order[2 * j + 1]; // detection indices, by camera
-        step_mask |= (uint64_t)1 << t->order[2 * j];
+        step_mask |= (uint64_t)1 << camera_of_rank(t, t->order[2 * j]);
     }
     for (int a = 0; a < N;) {
         int b = a;
         while (b < N && t->order[2 * b] == t->order[2 * a]) b++;
-        if ((st = camera_batch(t, dets, t->cam_of_det + a, b - a, t->order[2 * a], time_s, err))) return st;
+        const int cam = camera_of_rank(t, t->order[2 * a]);
+        if ((st = camera_batch(t, dets, t->cam_of_det + a, b - a, cam, time_s, err))) return st;
         a = b;
     }
     for (int i = 0; i < t->Ntracks; i++) {

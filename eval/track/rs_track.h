@@ -7,8 +7,8 @@
 //     2x2 covariance (the located-detections CSV's sigma_e_m, sigma_n_m, cov_en_m2) is its
 //     measurement noise;
 //   - time steps: the detections of one time_s (all cameras) form a step. All tracks are
-//     predicted to it, then its detections are taken camera by camera (cameras in the order they
-//     first appear in the input), each camera's batch as sequential updates: gating by the
+//     predicted to it, then its detections are taken camera by camera (in the byte order of the
+//     camera ids, so that the order of the input files does not matter), each camera's batch as sequential updates: gating by the
 //     squared Mahalanobis distance of the innovation (chi-square with 2 degrees of freedom:
 //     gate = -2 ln(1 - gate_p), exact for 2 dof), optimal assignment of the gated pairs
 //     (eval/track/rs_track_assign.h: least total of (mahal2 - gate), the gate the price of a
@@ -133,6 +133,9 @@ void rs_track_tracker_clear_rows(rs_track_tracker *tracker);
 
 // The id of camera k (the order of first appearance), NULL past the last; *Ncameras may be NULL.
 const char *rs_track_tracker_camera(const rs_track_tracker *tracker, int k, int *Ncameras);
+
+// The place of camera k's id among the ids in byte order (strcmp), 0-based; -1 past the last.
+int rs_track_tracker_camera_rank(const rs_track_tracker *tracker, int k);
 
 // Counts: tracks confirmed so far, tracks dropped by the merge test.
 void rs_track_tracker_counts(const rs_track_tracker *tracker, int *Nconfirmed, int *Nmerged);

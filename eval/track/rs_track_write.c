@@ -35,15 +35,16 @@ static double *rows_llh(const rs_track_tracker *t, const rs_llh *origin, rs_err 
     return llh;
 }
 
-// The row's cameras joined by '+' into buf.
+// The row's cameras joined by '+' into buf, in the byte order of their ids.
 static void cameras_text(char *buf, size_t n, const rs_track_tracker *t, uint64_t mask)
 {
+    const char *by_rank[RS_TRACK_MAX_CAMERAS] = {NULL};
+    for (int k = 0; k < RS_TRACK_MAX_CAMERAS; k++)
+        if (mask >> k & 1) by_rank[rs_track_tracker_camera_rank(t, k)] = rs_track_tracker_camera(t, k, NULL);
     size_t used = 0;
     buf[0] = '\0';
-    for (int k = 0; k < RS_TRACK_MAX_CAMERAS && used < n; k++)
-        if (mask >> k & 1)
-            used +=
-                (size_t)snprintf(buf + used, n - used, "%s%s", used ? "+" : "", rs_track_tracker_camera(t, k, NULL));
+    for (int r = 0; r < RS_TRACK_MAX_CAMERAS && used < n; r++)
+        if (by_rank[r]) used += (size_t)snprintf(buf + used, n - used, "%s%s", used ? "+" : "", by_rank[r]);
 }
 
 // Writes s as a JSON string (cJSON's escaping); false when out of memory.
