@@ -19,8 +19,14 @@
 
 void rs_bench_track_config_default(rs_bench_track_config *c)
 {
-    *c = (rs_bench_track_config){
-        .Nvehicles = 50, .Ncameras = 4, .fps = 30, .duration_s = 20, .pixel_sigma = 1.0, .p_detect = 0.9, .seed = 1};
+    *c = (rs_bench_track_config){.Nvehicles = 50,
+                                 .Ncameras = 4,
+                                 .fps = 30,
+                                 .duration_s = 20,
+                                 .pixel_sigma = 1.0,
+                                 .p_detect = 0.9,
+                                 .accel_sigma_mps2 = 3.0,
+                                 .seed = 1};
 }
 
 typedef struct {
@@ -176,7 +182,10 @@ rs_status rs_bench_track_run(rs_bench_track_figures *f, const rs_bench_track_con
         st = rs_err_set(err, RS_ERR_NOMEM, "bench track: out of memory");
         goto done;
     }
-    if ((st = make_cameras(cams, c->Ncameras, err)) || (st = rs_track_tracker_new(&tracker, NULL, err))) goto done;
+    rs_track_options topt;
+    rs_track_options_default(&topt);
+    topt.accel_sigma_mps2 = c->accel_sigma_mps2;
+    if ((st = make_cameras(cams, c->Ncameras, err)) || (st = rs_track_tracker_new(&tracker, &topt, err))) goto done;
     long next_id = 0;
     for (int v = 0; v < c->Nvehicles; v++) {
         if (v % 2 == 0) {

@@ -27,12 +27,13 @@ extern "C" {
 #endif
 
 typedef struct {
-    int Nvehicles;      // at any time (default 50)
-    int Ncameras;       // 1..8 (default 4)
-    double fps;         // frames per second per camera (default 30)
-    double duration_s;  // simulated seconds (default 20)
-    double pixel_sigma; // detection noise, pixels per axis (default 1)
-    double p_detect;    // detection probability (default 0.9)
+    int Nvehicles;           // at any time (default 50)
+    int Ncameras;            // 1..8 (default 4)
+    double fps;              // frames per second per camera (default 30)
+    double duration_s;       // simulated seconds (default 20)
+    double pixel_sigma;      // detection noise, pixels per axis (default 1)
+    double p_detect;         // detection probability (default 0.9)
+    double accel_sigma_mps2; // the tracker's --accel-sigma (default: the tracker's, 3)
     uint64_t seed;
 } rs_bench_track_config;
 

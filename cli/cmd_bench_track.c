@@ -11,7 +11,8 @@
 
 static const char bench_track_usage[] =
     "usage: roadside bench track [--vehicles N] [--cameras N] [--fps F] [--duration S]\n"
-    "                            [--pixel-sigma PX] [--p-detect P] [--seed S] [--csv FILE]\n"
+    "                            [--pixel-sigma PX] [--p-detect P] [--accel-sigma A] [--seed S]\n"
+    "                            [--csv FILE]\n"
     "\n"
     "Synthetic traffic in memory (half the vehicles on circles, half on straight chords across a\n"
     "100 m square), seen by N pinhole cameras 150 m away and 30 m up; each visible vehicle detected\n"
@@ -27,12 +28,13 @@ static const char bench_track_usage[] =
     "  --duration S      simulated seconds (default 20)\n"
     "  --pixel-sigma PX  detection noise per pixel axis (default 1)\n"
     "  --p-detect P      detection probability (default 0.9)\n"
+    "  --accel-sigma A   the tracker's white-noise acceleration, m/s^2 (default 3)\n"
     "  --seed S          seed (default 1)\n"
     "  --csv FILE        write the figures as CSV (atomically)\n"
     "\n"
     "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/track.md.\n";
 
-enum { O_VEHICLES = 3300, O_CAMERAS, O_FPS, O_DURATION, O_PIXEL, O_PDETECT, O_SEED, O_CSV };
+enum { O_VEHICLES = 3300, O_CAMERAS, O_FPS, O_DURATION, O_PIXEL, O_PDETECT, O_SEED, O_CSV, O_ACCEL };
 
 int rs_cli_bench_track(int argc, char **argv)
 {
@@ -40,15 +42,12 @@ int rs_cli_bench_track(int argc, char **argv)
         fputs(bench_track_usage, stdout);
         return RS_EXIT_OK;
     }
-    static const struct option longopts[] = {{"vehicles", required_argument, NULL, O_VEHICLES},
-                                             {"cameras", required_argument, NULL, O_CAMERAS},
-                                             {"fps", required_argument, NULL, O_FPS},
-                                             {"duration", required_argument, NULL, O_DURATION},
-                                             {"pixel-sigma", required_argument, NULL, O_PIXEL},
-                                             {"p-detect", required_argument, NULL, O_PDETECT},
-                                             {"seed", required_argument, NULL, O_SEED},
-                                             {"csv", required_argument, NULL, O_CSV},
-                                             {NULL, 0, NULL, 0}};
+    static const struct option longopts[] = {
+        {"vehicles", required_argument, NULL, O_VEHICLES}, {"cameras", required_argument, NULL, O_CAMERAS},
+        {"fps", required_argument, NULL, O_FPS},           {"duration", required_argument, NULL, O_DURATION},
+        {"pixel-sigma", required_argument, NULL, O_PIXEL}, {"p-detect", required_argument, NULL, O_PDETECT},
+        {"seed", required_argument, NULL, O_SEED},         {"csv", required_argument, NULL, O_CSV},
+        {"accel-sigma", required_argument, NULL, O_ACCEL}, {NULL, 0, NULL, 0}};
     rs_bench_track_config cfg;
     rs_bench_track_config_default(&cfg);
     const char *csv = NULL;
@@ -71,6 +70,10 @@ int rs_cli_bench_track(int argc, char **argv)
         case O_PDETECT: ok = rs_cli_parse_double(optarg, &cfg.p_detect) && cfg.p_detect > 0 && cfg.p_detect <= 1; break;
         case O_SEED: ok = rs_cli_parse_int(optarg, 0, 1000000000, &n), cfg.seed = (uint64_t)n; break;
         case O_CSV: csv = optarg; break;
+        case O_ACCEL:
+            ok = rs_cli_parse_double(optarg, &cfg.accel_sigma_mps2) && cfg.accel_sigma_mps2 >= 0 &&
+                 cfg.accel_sigma_mps2 <= 100;
+            break;
         default: return rs_cli_usage_error("bench track", "unknown option or missing value: %s", argv[optind - 1]);
         }
         if (!ok) return rs_cli_usage_error("bench track", "--%s: '%s' is out of range", longopts[li].name, optarg);
