@@ -14,7 +14,8 @@
 // one row per rs_track_row (positions to the nanometre, so that a reader can check the filter
 // to 1e-9 m); cameras: the ids that updated the track at that step joined by '+', empty when the
 // track coasts. lat_deg, lon_deg: the ENU point (e_m, n_m, u_m) through the site origin
-// (geo/rs_geo.h). GeoJSON: one LineString per track (WGS84 [lon, lat, h], RFC 7946) whose
+// (geo/rs_geo.h). GeoJSON: one LineString per track (a Point for a track reported once; WGS84
+// [lon, lat, h], RFC 7946) whose
 // properties hold the track's id and class and, per vertex, arrays of the CSV's other columns.
 // SDSM JSON lines: one object per row mirroring J3224's DetectedObjectCommonData (docs/track.md
 // lists the fields, units and confidence classes).
