@@ -1,5 +1,6 @@
 // roadside bench -- benchmarks: `bench eval` (here), `bench calib` (cmd_bench_calib.c),
-// `bench synth` (cmd_bench_synth.c) and `bench site` (cmd_bench_site.c).
+// `bench synth` (cmd_bench_synth.c), `bench site` (cmd_bench_site.c) and `bench track`
+// (cmd_bench_track.c).
 #include <getopt.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,6 +21,7 @@ static void usage(FILE *out)
                  "       roadside bench pick ...    (see 'roadside bench pick --help')\n"
                  "       roadside bench sparse ...  (see 'roadside bench sparse --help')\n"
                  "       roadside bench detect ...  (see 'roadside bench detect --help')\n"
+                 "       roadside bench track ...   (see 'roadside bench track --help')\n"
                  "\n"
                  "Benchmarks are programs: each prints a table and writes CSV.\n"
                  "\n"
@@ -149,9 +151,11 @@ int rs_cli_bench(int argc, char **argv)
     if (!strcmp(argv[1], "pick")) return rs_cli_bench_pick(argc - 1, argv + 1);
     if (!strcmp(argv[1], "sparse")) return rs_cli_bench_sparse(argc - 1, argv + 1);
     if (!strcmp(argv[1], "detect")) return rs_cli_bench_detect(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "track")) return rs_cli_bench_track(argc - 1, argv + 1);
     if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
         usage(stdout);
         return RS_EXIT_OK;
     }
-    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib, synth, site, pick or sparse", argv[1]);
+    return rs_cli_usage_error("bench", "unknown benchmark '%s': eval, calib, synth, site, pick, sparse or track",
+                              argv[1]);
 }

@@ -34,6 +34,7 @@ static const command commands[] = {
     {"detect", rs_cli_detect, "run an ONNX detector (YOLOX, Ultralytics) over images, videos or streams"},
     {"eval", rs_cli_eval, "distance-threshold AP of detections against ground truth"},
     {"localise", rs_cli_localise, "every detection to the road (ENU, lat/lon) with its covariance"},
+    {"track", rs_cli_track, "track vehicles in metres over all the site's cameras (Kalman, Hungarian)"},
     {"bench", rs_cli_bench, "benchmarks: run time against error"},
 };
 static const int Ncommands = (int)(sizeof commands / sizeof commands[0]);

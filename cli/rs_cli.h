@@ -29,6 +29,7 @@ int rs_cli_traffic(int argc, char **argv);
 int rs_cli_synth(int argc, char **argv);
 int rs_cli_eval(int argc, char **argv);
 int rs_cli_localise(int argc, char **argv);
+int rs_cli_track(int argc, char **argv);
 int rs_cli_bench(int argc, char **argv);
 int rs_cli_ortho(int argc, char **argv);
 int rs_cli_pick(int argc, char **argv);
@@ -42,6 +43,7 @@ int rs_cli_bench_synth(int argc, char **argv);
 int rs_cli_bench_site(int argc, char **argv);
 int rs_cli_bench_pick(int argc, char **argv);
 int rs_cli_bench_sparse(int argc, char **argv);
+int rs_cli_bench_track(int argc, char **argv);
 
 // Prints "roadside: <what>: <detail or strerror>" on stderr and returns RS_EXIT_FAIL
 // (RS_EXIT_USAGE for RS_ERR_USAGE).
