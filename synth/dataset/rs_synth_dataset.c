@@ -505,7 +505,7 @@ static void prepare_for_worker(rs_synth_dataset__run *d, int j, int J, size_t *b
         rs_err e = {RS_OK, ""};
         if (finished || rs_synth_dataset__prepare_camera(c, &e) != RS_OK) continue;
         const int b = rs_synth_dataset__image_background(d, k, c);
-        if (b < 0 || c->bg[b].linear.data) continue;
+        if (b < 0 || opt->labels_only || c->bg[b].linear.data) continue; // (labels alone: never decoded)
         const size_t bytes = (size_t)12 * (size_t)c->cam.width * (size_t)c->cam.height;
         if (*bg_bytes + bytes > SHARED_BACKGROUND_BYTES) continue;
         if (rs_synth_dataset__prepare_background(d, c, &c->bg[b], &e) == RS_OK) *bg_bytes += bytes;

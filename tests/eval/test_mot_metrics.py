@@ -364,7 +364,7 @@ def bad_inputs(d):
 
 
 def main():
-    nrandom = int(sys.argv[1]) if len(sys.argv) > 1 else 30
+    nrandom = int(sys.argv[1]) if len(sys.argv) > 1 else 20
     seed = 3901
     rng = random.Random(seed)
     with tempfile.TemporaryDirectory() as d:
