@@ -189,7 +189,8 @@ rs_status rs_synth_dataset_traffic_frames_check( // out
     // in
     const char *dir, rs_err *err);
 
-// ---- sequences (opt->sequence, `roadside synth --sequence`; docs/synth.md, "Sequences") ----
+// ---- sequences (opt->sequence, `roadside synth --sequence`; docs/synth.md, "Sequences and
+// labels without rendering") ----
 //
 // Image k is frame i = frame_first + k / Ncameras of frames.json (in order, not drawn) seen by
 // camera k % Ncameras: every camera sees every frame, the same vehicles with their ids, placed

@@ -296,7 +296,8 @@ static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d
         rs_synth_vehicle_corners_enu(corners, &all[i], d->site->ground_normal_enu, d->site->ground_offset_m);
         if (rs_synth_vehicle_rect(t->rect[Nseen], &c->canvas, c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
             // labels alone: every vehicle's coarse mesh (rs_synth_fleet_build_lod; the box and roof
-            // line exact), 5x faster ID pass and visibility (docs/synth.md, "Sequences")
+            // line exact) for a faster ID pass and visibility (docs/synth.md, "Sequences and labels
+            // without rendering")
             t->coarse[Nseen] = opt->labels_only || t->rect[Nseen][3] - t->rect[Nseen][1] + 1 < opt->coarse_below_px;
             t->v[Nseen++] = all[i];
         }
