@@ -14,8 +14,9 @@
 #    heading_deg in [0, 360) and the vehicle's yaw mod 360; cameras = exactly the cameras whose
 #    image of that frame has a label of that vehicle (so every label's vehicle is there, with
 #    its camera);
+#  - resume: a rerun makes nothing, one removed part file is remade, tracks_gt.csv unchanged;
 #  - bad input: --sequence without --traffic-frames or with --count, --frames without
-#    --sequence or empty, --labels-only without --sequence: exit 2; frames past the end: exit 1
+#    --sequence or empty, --labels-only without --sequence, frames past the end: exit 2
 #    naming frames.json; no dataset written by any of them.
 # Exit 77 without sumo or netconvert.
 import csv
@@ -123,7 +124,23 @@ def main():
         if listed != len(coco["annotations"]):
             u.fail(f"tracks_gt.csv lists {listed} (vehicle, camera) pairs, the labels are {len(coco['annotations'])}")
 
-        # bad input: usage errors (2) and frames past the end (1), nothing written
+        # resume: a rerun skips every image (the part files alone are checked); with one part file
+        # removed it remakes that image; tracks_gt.csv stays byte for byte the same
+        with open(os.path.join(ds, "tracks_gt.csv"), "rb") as f:
+            before = f.read()
+        args = ["synth", u.DEMO, "--calib", calib, "--traffic-frames", frames, "--sequence", "--labels-only",
+                "--frames", f"{FIRST}:{END}", "--size", "480x270", "--jobs", "2", "--seed", "11", "-o", ds]
+        p = u.run(args)
+        if "(0 made, 80 already done" not in p.stdout:
+            u.fail(f"rerun: {p.stdout.splitlines()[0]}")
+        os.remove(os.path.join(ds, "parts", "000013_cam2.json"))
+        p = u.run(args)
+        with open(os.path.join(ds, "tracks_gt.csv"), "rb") as f:
+            after = f.read()
+        if "(1 made, 79 already done" not in p.stdout or after != before:
+            u.fail(f"rerun after removing a part: {p.stdout.splitlines()[0]}; tracks_gt.csv the same: {after == before}")
+
+        # bad input: usage errors and frames past the end (2), nothing written
         bad = os.path.join(tmp, "bad")
         base = ["synth", u.DEMO, "--calib", calib, "-o", bad]
         for extra, what in [(["--sequence"], "--traffic-frames"),
