@@ -20,6 +20,7 @@ static const char synth_usage[] =
     "                      [--bbox footprint|body|visible] [--min-visibility V] [--keep-invisible]\n"
     "                      [--no-junction-traffic | --traffic-frames DIR]\n"
     "                      [--val-fraction F] [--val-camera ID]...\n"
+    "                      [--sequence [--frames A:B] [--labels-only]]\n"
     "                      [--val-backgrounds TAG=VALUE]... [--val-split NAME]\n"
     "       roadside synth merge DATASET... -o OUT\n"
     "\n"
@@ -75,6 +76,19 @@ static const char synth_usage[] =
     "                         details) per image; at most --vehicles of those the camera sees.\n"
     "                         Every frame is read and checked first; run.json records the\n"
     "                         frames' count and SHA-256, so merge refuses other traffic\n"
+    "  --sequence             with --traffic-frames: the frames in order instead of drawn ones\n"
+    "                         (no --count): image k shows frame A + k / C to camera k mod C (C\n"
+    "                         cameras), every vehicle the camera sees, each with the same looks in\n"
+    "                         every frame; a camera's background is the same in every frame.\n"
+    "                         Writes DATASET/tracks_gt.csv: every vehicle of each frame (time_s,\n"
+    "                         vehicle_id, class, e_m, n_m: the labels' bottom_center_enu_m,\n"
+    "                         speed_mps: SUMO's, heading_deg, cameras: those labelling it).\n"
+    "                         Make the frames with `roadside traffic --sumo --no-randomise`: the\n"
+    "                         randomisation draws every frame's offsets afresh (docs/synth.md)\n"
+    "  --frames A:B           a sequence of frames A <= i < B of frames.json (default: all)\n"
+    "  --labels-only          a sequence's labels without POV-Ray: visibility from the\n"
+    "                         rasterised ID pass; no image, YOLO or KITTI files (annotations/,\n"
+    "                         parts/, cameras/, run.json and tracks_gt.csv only)\n"
     "  --no-shadows           no differential-rendering shadows (the shadow pass: the sun's\n"
     "                         shadow and the sky's soft one of each vehicle on the background)\n"
     "  --jobs J               images made at once, in J worker processes (default: the CPUs\n"
@@ -111,7 +125,10 @@ enum {
     OPT_VAL_CAMERA,
     OPT_VAL_BG,
     OPT_VAL_SPLIT,
-    OPT_TRAFFIC_FRAMES
+    OPT_TRAFFIC_FRAMES,
+    OPT_SEQUENCE,
+    OPT_FRAMES,
+    OPT_LABELS_ONLY
 };
 
 // "TAG=VALUE" -> keys[*N], values[*N] (kv[*N] owns the copy). RS_EXIT_OK or a usage error.
@@ -223,6 +240,9 @@ static void print_summary(const rs_synth_dataset_options *opt, const rs_synth_da
     if (opt->traffic_frames_dir)
         printf("traffic:     SUMO's frames in %s (run.json: traffic_frames, their count and SHA-256)\n",
                opt->traffic_frames_dir);
+    if (opt->sequence)
+        printf("tracks:      %s/tracks_gt.csv%s\n", opt->out_dir,
+               sum->tracks_gt ? "" : "   (not yet: images of other shards unfinished)");
 }
 
 // Runs the dataset pipeline with a progress line on stderr, then prints its summary.
@@ -269,6 +289,9 @@ int rs_cli_synth(int argc, char **argv)
                                              {"val-backgrounds", required_argument, NULL, OPT_VAL_BG},
                                              {"val-split", required_argument, NULL, OPT_VAL_SPLIT},
                                              {"traffic-frames", required_argument, NULL, OPT_TRAFFIC_FRAMES},
+                                             {"sequence", no_argument, NULL, OPT_SEQUENCE},
+                                             {"frames", required_argument, NULL, OPT_FRAMES},
+                                             {"labels-only", no_argument, NULL, OPT_LABELS_ONLY},
                                              {"output", required_argument, NULL, 'o'},
                                              {"help", no_argument, NULL, 'h'},
                                              {NULL, 0, NULL, 0}};
@@ -283,7 +306,7 @@ int rs_cli_synth(int argc, char **argv)
     int Nkv = 0, Nval_kv = 0, rc = RS_EXIT_OK, c;
     double x;
     long l;
-    bool have_count = false;
+    bool have_count = false, have_frames = false;
     if (!cams || !keys || !values || !kv || !val_cams || !val_keys || !val_values || !val_kv) {
         rc = rs_cli_fail("synth", RS_ERR_NOMEM, NULL);
         goto done;
@@ -327,6 +350,16 @@ int rs_cli_synth(int argc, char **argv)
             if (!*optarg) rc = rs_cli_usage_error("synth", "--traffic-frames: empty folder name");
             opt.traffic_frames_dir = optarg;
             break;
+        case OPT_SEQUENCE: opt.sequence = true; break;
+        case OPT_LABELS_ONLY: opt.labels_only = true; break;
+        case OPT_FRAMES: {
+            int used = 0;
+            if (sscanf(optarg, "%d:%d%n", &opt.frame_first, &opt.frame_end, &used) != 2 || optarg[used] ||
+                opt.frame_first < 0 || opt.frame_end <= opt.frame_first)
+                rc = rs_cli_usage_error("synth", "--frames: expected A:B with 0 <= A < B, got \"%s\"", optarg);
+            have_frames = true;
+            break;
+        }
         case OPT_BBOX: {
             rs_synth_bbox_kind kind;
             rs_err e = {0};
@@ -386,8 +419,18 @@ int rs_cli_synth(int argc, char **argv)
         rc = rs_cli_usage_error("synth", "expected one SITE folder");
         goto done;
     }
-    if (!opt.calib_dir || !opt.out_dir || !have_count) {
-        rc = rs_cli_usage_error("synth", "--calib, --count and -o are required");
+    if (opt.sequence && (!opt.traffic_frames_dir || have_count)) {
+        rc = rs_cli_usage_error("synth", "--sequence takes --traffic-frames DIR and no --count (one image per frame "
+                                         "and camera)");
+        goto done;
+    }
+    if ((have_frames || opt.labels_only) && !opt.sequence) {
+        rc = rs_cli_usage_error("synth", "%s is for sequences: add --sequence",
+                                have_frames ? "--frames" : "--labels-only");
+        goto done;
+    }
+    if (!opt.calib_dir || !opt.out_dir || (!have_count && !opt.sequence)) {
+        rc = rs_cli_usage_error("synth", "--calib, --count (or --sequence) and -o are required");
         goto done;
     }
     opt.site_dir = argv[optind];

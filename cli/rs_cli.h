@@ -44,6 +44,8 @@ int rs_cli_bench_site(int argc, char **argv);
 int rs_cli_bench_pick(int argc, char **argv);
 int rs_cli_bench_sparse(int argc, char **argv);
 int rs_cli_bench_track(int argc, char **argv);
+// `roadside eval --tracks` (tracking metrics), in cmd_eval_tracks.c; rs_cli_eval hands over to it.
+int rs_cli_eval_tracks(int argc, char **argv);
 
 // Prints "roadside: <what>: <detail or strerror>" on stderr and returns RS_EXIT_FAIL
 // (RS_EXIT_USAGE for RS_ERR_USAGE).

@@ -38,6 +38,7 @@ void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
     opt->junction_traffic = true;
     opt->shadows = true;
     opt->coarse_below_px = 40;
+    opt->frame_end = -1;
 }
 
 static double now_s(void)
@@ -345,6 +346,12 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
         cJSON_AddStringToObject(tf, "sha256", frames->sha256);
         cJSON_AddStringToObject(doc, "traffic_frames_dir", opt->traffic_frames_dir);
     }
+    if (opt->sequence) { // absent otherwise: older records stay equal
+        cJSON *seq = cJSON_AddObjectToObject(run, "sequence");
+        cJSON_AddNumberToObject(seq, "frame_first", opt->frame_first);
+        cJSON_AddNumberToObject(seq, "frame_end", opt->frame_end);
+        cJSON_AddBoolToObject(seq, "labels_only", opt->labels_only);
+    }
     cJSON_AddNumberToObject(run, "bbox", opt->bbox);
     cJSON_AddNumberToObject(run, "min_visibility", opt->min_visibility);
     cJSON_AddBoolToObject(run, "keep_invisible", opt->keep_invisible);
@@ -518,7 +525,7 @@ static void prepare_for_worker(rs_synth_dataset__run *d, int j, int J, size_t *b
         rs_err e = {RS_OK, ""};
         if (finished || rs_synth_dataset__prepare_camera(c, &e) != RS_OK) continue;
         const int b = rs_synth_dataset__image_background(d, k, c);
-        if (b < 0 || c->bg[b].linear.data) continue;
+        if (b < 0 || opt->labels_only || c->bg[b].linear.data) continue; // (labels alone: never decoded)
         const size_t bytes = (size_t)12 * (size_t)c->cam.width * (size_t)c->cam.height;
         if (*bg_bytes + bytes > SHARED_BACKGROUND_BYTES) continue;
         if (rs_synth_dataset__prepare_background(d, c, &c->bg[b], &e) == RS_OK) *bg_bytes += bytes;
@@ -607,10 +614,56 @@ static rs_status run_workers(rs_synth_dataset__run *d, rs_synth_dataset_summary 
     return st;
 }
 
-rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth_dataset_options *opt, rs_err *err)
+// A sequence's frames [frame_first, frame_end) checked against the frames read; sets o->count.
+static rs_status sequence_range(rs_synth_dataset_options *o, const rs_synth_dataset__run *d, rs_err *err)
+{
+    if (o->frame_end < 0) o->frame_end = d->Nframes;
+    if (o->frame_first < 0 || o->frame_first >= o->frame_end || o->frame_end > d->Nframes)
+        return rs_err_set(err, RS_ERR_USAGE, "--frames %d:%d: not a range of the %d frames of %s/frames.json",
+                          o->frame_first, o->frame_end, d->Nframes, o->traffic_frames_dir);
+    if ((long)(o->frame_end - o->frame_first) * d->Ncams > 100000000)
+        return rs_err_set(err, RS_ERR_USAGE, "--sequence: more than 10^8 images");
+    o->count = (o->frame_end - o->frame_first) * d->Ncams;
+    return RS_OK;
+}
+
+// After a sequence's images: DATASET/tracks_gt.csv when every image of it is finished (a shard
+// whose siblings are still running leaves it to the last). out: *written
+static rs_status sequence_tracks(bool *written, const rs_synth_dataset__run *d, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    *written = false;
+    char stem[300], name[400];
+    for (int k = 0; k < opt->count; k++) {
+        rs_synth_dataset__stem(stem, sizeof(stem), k, d->cams[k % d->Ncams].id);
+        snprintf(name, sizeof(name), "%s.json", stem);
+        char *part = rs_io_join(d->parts_dir, name);
+        const bool there = part && rs_synth_dataset__file_exists(part);
+        free(part);
+        if (!there) return RS_OK;
+    }
+    const char **ids = malloc(sizeof(char *) * (size_t)d->Ncams);
+    if (!ids) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < d->Ncams; i++) ids[i] = d->cams[i].id;
+    rs_status st =
+        rs_synth_dataset_tracks_gt_write(NULL, opt->out_dir, opt->traffic_frames_dir, opt->frame_first, opt->frame_end,
+                                         ids, d->Ncams, d->site->ground_normal_enu, d->site->ground_offset_m, err);
+    free(ids);
+    *written = !st;
+    return st;
+}
+
+rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth_dataset_options *opt_in, rs_err *err)
 {
     rs_synth_dataset_summary sum = {0};
     const double t0 = now_s();
+    if (opt_in && opt_in->sequence && !opt_in->traffic_frames_dir)
+        return rs_err_set(err, RS_ERR_USAGE, "--sequence needs --traffic-frames DIR");
+    if (opt_in && opt_in->labels_only && !opt_in->sequence)
+        return rs_err_set(err, RS_ERR_USAGE, "--labels-only is for sequences (--sequence)");
+    rs_synth_dataset_options o = opt_in ? *opt_in : (rs_synth_dataset_options){0};
+    const rs_synth_dataset_options *opt = opt_in ? &o : NULL;
+    if (opt && opt->sequence) o.count = 1; // set from the frames once they are read
     if (!opt || !opt->site_dir || !opt->calib_dir || !opt->out_dir || opt->count < 1 || opt->shard_count < 1 ||
         opt->shard_index < 0 || opt->shard_index >= opt->shard_count || opt->vehicles < 0 || !opt->split ||
         !opt->val_split || strcmp(opt->split, opt->val_split) == 0 || !(opt->val_fraction >= 0) ||
@@ -625,6 +678,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     rs_status st = dataset_load(&d, err);
     // SUMO's frames, every one read and checked before DATASET is touched
     if (!st && opt->traffic_frames_dir) st = rs_synth_dataset__frames_load(&d, &frames, err);
+    if (!st && opt->sequence) st = sequence_range(&o, &d, err);
     if (st) goto done;
     // One run per dataset folder: a second one would remake the same images in the same work/
     // folders. The lock is taken before anything in DATASET is touched (but DATASET itself).
@@ -668,6 +722,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
         st = rs_synth_dataset__assemble(&d, &sum.Nannotations, &sum.Nleft_out, err);
         rmdir(d.work_root); // empty when every image finished
     }
+    if (!st && opt->sequence) st = sequence_tracks(&sum.tracks_gt, &d, err);
 done:
     rs_io_unlock(&lock);
     dataset_free(&d);

@@ -93,17 +93,24 @@ typedef struct {
     // DIR` (frames.json and its frame files): image k takes the vehicles of one frame, drawn from
     // k's stream, instead (the section "traffic from SUMO's frames" below).
     const char *traffic_frames_dir;
-    bool shadows;            // differential-rendering shadows over backgrounds (default on)
-    bool separate_processes; // one povray process per pass (benchmarks; default off)
-    bool full_frame;         // no culling, no region: povray renders the whole image
-                             // (benchmarks; default off)
-    int coarse_below_px;     // a vehicle whose box is fewer pixels tall than this in the image
-                             // gets the coarse mesh (rs_synth_fleet_build_lod; default 40;
-                             // 0: every vehicle in full detail)
-    int jobs;                // worker processes (default 1): worker j makes the images at
-                             // positions j, j + jobs, .. of this shard; povray spends much of
-                             // its time waiting on itself, so jobs > cores pays (bench synth)
-    const char *povray;      // NULL: $ROADSIDE_POVRAY, else povray on PATH
+    // A sequence (`roadside synth --sequence`, the section "sequences" below): with
+    // traffic_frames_dir, image k shows frame frame_first + k / Ncameras to camera k % Ncameras,
+    // every vehicle the camera sees; count is then set by the run ((frame_end - frame_first) x
+    // Ncameras; the count given is ignored). frame_end -1: every frame from frame_first on.
+    bool sequence;
+    int frame_first, frame_end; // frames [frame_first, frame_end) of frames.json
+    bool labels_only;           // sequences only: labels without POV-Ray, no image files
+    bool shadows;               // differential-rendering shadows over backgrounds (default on)
+    bool separate_processes;    // one povray process per pass (benchmarks; default off)
+    bool full_frame;            // no culling, no region: povray renders the whole image
+                                // (benchmarks; default off)
+    int coarse_below_px;        // a vehicle whose box is fewer pixels tall than this in the image
+                                // gets the coarse mesh (rs_synth_fleet_build_lod; default 40;
+                                // 0: every vehicle in full detail)
+    int jobs;                   // worker processes (default 1): worker j makes the images at
+                                // positions j, j + jobs, .. of this shard; povray spends much of
+                                // its time waiting on itself, so jobs > cores pays (bench synth)
+    const char *povray;         // NULL: $ROADSIDE_POVRAY, else povray on PATH
     // Called after each image of this shard (made or skipped); may be NULL.
     void (*progress)(void *ctx, int done, int total, int skipped);
     void *progress_ctx;
@@ -123,6 +130,7 @@ typedef struct {
     int Nleft_out;       // part files left out of the COCO file (another shard's, damaged)
     int Nannotations;    // annotations in the assembled COCO file
     int Ngrey;           // images rendered over the grey ground (no matching background)
+    bool tracks_gt;      // a sequence's DATASET/tracks_gt.csv was written (every image finished)
     double seconds;      // wall time
     double seconds_povray;
 } rs_synth_dataset_summary;
@@ -180,6 +188,38 @@ rs_status rs_synth_dataset_traffic_frames_check( // out
     rs_synth_traffic_frames_info *info,
     // in
     const char *dir, rs_err *err);
+
+// ---- sequences (opt->sequence, `roadside synth --sequence`; docs/synth.md, "Sequences and
+// labels without rendering") ----
+//
+// Image k is frame i = frame_first + k / Ncameras of frames.json (in order, not drawn) seen by
+// camera k % Ncameras: every camera sees every frame, the same vehicles with their ids, placed
+// where the frame's file says. What differs from drawn frames: every vehicle the camera sees is
+// rendered and labelled (no pick of at most `vehicles`); a vehicle's looks are drawn from (seed,
+// its id), the same in every frame; image k's background is drawn from the stream of image
+// k % Ncameras, the same for every frame of a camera. The other draws of image k's stream are
+// as above. With labels_only no POV-Ray runs: the visibility comes from the rasterised ID pass
+// (rs_synth_render_ids: exact where the ground hides no part of a vehicle), and only the labels
+// are written (parts/, annotations/; no PNG, YOLO or KITTI files).
+// After the images, when every image of the sequence is finished, DATASET/tracks_gt.csv
+// (rs_synth_dataset_tracks_gt_write): one row per vehicle of each frame.
+
+// Writes DATASET/tracks_gt.csv (atomically) for frames [first, end) of `frames_dir`, seen by the
+// cameras `cameras` (Ncameras,) in image order: header
+// time_s,vehicle_id,class,e_m,n_m,speed_mps,heading_deg,cameras; per frame (in order) each
+// vehicle of its file (in file order): the frame's time, its id, class, the ground point under
+// its footprint centre (exactly the labels' bottom_center_enu_m: rs_synth_vehicle_to_enu at the
+// ground height of the site's plane), SUMO's FCD speed, its heading (yaw, clockwise from north,
+// in [0, 360)) and the ids of the cameras whose image of that frame (image k = (frame - first)
+// x Ncameras + camera) has an annotation with its vehicle_id (parts/<stem>.json), joined by '+'.
+// Errors: RS_ERR_IO / RS_ERR_PARSE naming a frame or part file, RS_ERR_NOT_FOUND (a part file
+// missing: an unfinished image), RS_ERR_NOMEM.
+// out: *Nrows (may be NULL): rows written
+rs_status rs_synth_dataset_tracks_gt_write(long *Nrows,
+                                           // in
+                                           const char *dataset_dir, const char *frames_dir, int first, int end,
+                                           const char *const *cameras, int Ncameras, const double ground_normal_enu[3],
+                                           double ground_offset_m, rs_err *err);
 
 // Joins datasets (shards) into one: for every split found (annotations/instances_<split>.json),
 // images from all inputs are sorted by file name (a name present twice is kept once: shards of

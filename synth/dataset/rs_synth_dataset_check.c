@@ -123,8 +123,11 @@ rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char 
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     else if (lstat(part, &sb) != 0 && errno == ENOENT)
         *state = RS_SYNTH_DATASET__ABSENT;
-    else if (regular_file(part, why, n) && part_ok(part, file_name, c->cam.width, c->cam.height, why, n) &&
-             image_ok(image, c->cam.width, c->cam.height, why, n)) {
+    else if (opt->labels_only) { // a sequence's labels alone: the part file is all there is
+        if (regular_file(part, why, n) && part_ok(part, file_name, c->cam.width, c->cam.height, why, n))
+            *state = RS_SYNTH_DATASET__FINISHED;
+    } else if (regular_file(part, why, n) && part_ok(part, file_name, c->cam.width, c->cam.height, why, n) &&
+               image_ok(image, c->cam.width, c->cam.height, why, n)) {
         bool ok = true;
         for (int i = 0; i < 5 && ok; i++) ok = regular_file(side[i], why, n);
         if (ok) *state = RS_SYNTH_DATASET__FINISHED;

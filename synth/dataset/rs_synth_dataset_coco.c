@@ -402,7 +402,7 @@ static rs_status add_part(rs_synth_dataset__coco_index *x, bool *added, const ch
     rs_status st = rs_synth_dataset__coco_index_add(x, part, k, NULL, NULL, &e);
     if (st == RS_ERR_NOMEM) return rs_err_set(err, st, "%s", e.msg);
     if (st) snprintf(why, sizeof(why), "%s", e.msg);
-    for (int i = first_ref; i < x->N && !why[0]; i++) {
+    for (int i = first_ref; i < x->N && !why[0] && !opt->labels_only; i++) { // (labels only: no image)
         char *image = rs_io_join(split_dir, x->r[i].file_name);
         struct stat sb;
         if (!image) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");

@@ -16,7 +16,8 @@ uint64_t rs_synth_dataset_image_seed(uint64_t seed, int k) { return rs_rng_seed_
 int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c)
 {
     if (c->Nbg <= 0) return -1;
-    uint64_t rng = rs_synth_dataset_image_seed(d->opt->seed, k);
+    // a sequence: image k % Ncams's draw, the same background in every frame of a camera
+    uint64_t rng = rs_synth_dataset_image_seed(d->opt->seed, d->opt->sequence ? k % d->Ncams : k);
     return (int)(rs_rng_seed_next(&rng) % (uint64_t)c->Nbg); // the stream's first draw
 }
 

@@ -103,11 +103,17 @@ rs_status rs_synth_dataset__frames_load(rs_synth_dataset__run *d, rs_synth_traff
 }
 
 rs_status rs_synth_dataset__frame_vehicles(rs_synth_vehicle_list *list, int *iframe, const rs_synth_dataset__run *d,
-                                           uint64_t r_frame, uint64_t r_looks, rs_err *err)
+                                           int k, uint64_t r_frame, uint64_t r_looks, rs_err *err)
 {
-    const int i = (int)(r_frame % (uint64_t)d->Nframes);
+    const rs_synth_dataset_options *opt = d->opt;
+    const int i = opt->sequence ? opt->frame_first + k / d->Ncams : (int)(r_frame % (uint64_t)d->Nframes);
     *iframe = i;
-    rs_status st = read_frame(list, d->opt->traffic_frames_dir, &d->frames[i], i, err);
-    for (int j = 0; !st && j < list->N; j++) list->v[j].variant = rs_rng_seed_derive(r_looks, (uint64_t)j) >> 11;
+    rs_status st = read_frame(list, opt->traffic_frames_dir, &d->frames[i], i, err);
+    // a sequence: the looks from (seed, the file's variant, which SUMO's frames derive from the
+    // vehicle's id), the same in every frame
+    for (int j = 0; !st && j < list->N; j++)
+        list->v[j].variant = (opt->sequence ? rs_rng_seed_derive(opt->seed, list->v[j].variant)
+                                            : rs_rng_seed_derive(r_looks, (uint64_t)j)) >>
+                             11;
     return st;
 }

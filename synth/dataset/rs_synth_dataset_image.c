@@ -200,6 +200,10 @@ static rs_status image_render_options(rs_synth_render_options *ropt, const rs_sy
         return RS_OK;
     }
     rs_synth_dataset__background *bm = &c->bg[rs_synth_dataset__image_background(d, k, c)];
+    if (opt->labels_only) { // no render: the background is named only, never decoded
+        *b = bm;
+        return RS_OK;
+    }
     if ((st = rs_synth_dataset__prepare_background(d, c, bm, err))) return st; // (or the parent did)
     *b = bm;
     // the vehicles alone over transparency; composite() puts them onto the background
@@ -244,15 +248,15 @@ static void image_traffic_free(image_traffic *t)
 // The site's vehicles before the camera picks among them. out: *all (N,) owned by *owned_list
 // (SUMO) or *owned (built-in)
 static rs_status site_traffic(const rs_synth_vehicle **all, int *N, rs_synth_vehicle_list *owned_list,
-                              rs_synth_vehicle **owned, int *iframe, const rs_synth_dataset__run *d, uint64_t *rng,
-                              rs_err *err)
+                              rs_synth_vehicle **owned, int *iframe, const rs_synth_dataset__run *d, int k,
+                              uint64_t *rng, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     const uint64_t r_traffic = rs_rng_seed_next(rng);
     const uint64_t r_vary = rs_rng_seed_next(rng);
     rs_status st;
     if (opt->traffic_frames_dir) {
-        if ((st = rs_synth_dataset__frame_vehicles(owned_list, iframe, d, r_traffic, r_vary, err))) return st;
+        if ((st = rs_synth_dataset__frame_vehicles(owned_list, iframe, d, k, r_traffic, r_vary, err))) return st;
         *all = owned_list->v;
         *N = owned_list->N;
         return RS_OK;
@@ -271,8 +275,8 @@ static rs_status site_traffic(const rs_synth_vehicle **all, int *N, rs_synth_veh
     return RS_OK;
 }
 
-static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d, const rs_synth_dataset__camera *c,
-                                uint64_t *rng, rs_err *err)
+static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d, int k,
+                                const rs_synth_dataset__camera *c, uint64_t *rng, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     memset(t, 0, sizeof(*t));
@@ -281,7 +285,7 @@ static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d
     rs_synth_vehicle *builtin = NULL;
     const rs_synth_vehicle *all = NULL;
     int N = 0;
-    rs_status st = site_traffic(&all, &N, &frame, &builtin, &t->iframe, d, rng, err);
+    rs_status st = site_traffic(&all, &N, &frame, &builtin, &t->iframe, d, k, rng, err);
     const size_t n = (size_t)(N > 0 ? N : 1);
     if (!st &&
         (!(t->v = calloc(n, sizeof(*t->v))) || !(t->rect = calloc(n, sizeof(*t->rect))) || !(t->coarse = calloc(n, 1))))
@@ -291,12 +295,15 @@ static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d
         double corners[8][3];
         rs_synth_vehicle_corners_enu(corners, &all[i], d->site->ground_normal_enu, d->site->ground_offset_m);
         if (rs_synth_vehicle_rect(t->rect[Nseen], &c->canvas, c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
-            t->coarse[Nseen] = t->rect[Nseen][3] - t->rect[Nseen][1] + 1 < opt->coarse_below_px;
+            // labels alone: every vehicle's coarse mesh (rs_synth_fleet_build_lod; the box and roof
+            // line exact) for a faster ID pass and visibility (docs/synth.md, "Sequences and labels
+            // without rendering")
+            t->coarse[Nseen] = opt->labels_only || t->rect[Nseen][3] - t->rect[Nseen][1] + 1 < opt->coarse_below_px;
             t->v[Nseen++] = all[i];
         }
     }
     const uint64_t r_pick = st ? 0 : rs_rng_seed_next(rng);
-    if (!st && Nseen > opt->vehicles) {
+    if (!st && Nseen > opt->vehicles && !opt->sequence) { // a sequence keeps every vehicle in view
         // selection sampling (Knuth, TAOCP vol. 2, Algorithm S): keep each with probability
         // (still needed) / (still left), in order
         uint64_t s_pick = r_pick;
@@ -377,13 +384,16 @@ static rs_status image_files(const rs_synth_dataset__run *d, int k, const char *
     rs_status st = RS_OK;
     if (!image || !part_tmp || !part || !kitti_dir || !kitti_calib_path)
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    if (!st && !(st = rs_synth_labels_write_yolo(opt->out_dir, split_name, img, 1, &lopt, err)) &&
-        !(st = rs_synth_labels_write_kitti(kitti_dir, &kimg, 1, &lopt, err)) &&
-        !(st = rs_image_write(image, &r->composite, 8, err)) &&
-        !(st = rs_synth_dataset__link_into(d, image, yolo_image, err)) &&
-        !(st = rs_synth_dataset__link_into(d, image, kitti_image, err)) &&
-        !(st = rs_synth_labels_write_kitti_calib(kitti_calib_path, &c->cam, err)) &&
-        !(st = rs_synth_labels_write_coco(work, split_name, img, 1, &lopt, err)) && rename(part_tmp, part) != 0)
+    if (!st && opt->labels_only) { // the labels alone: no image, YOLO or KITTI files
+        if (!(st = rs_synth_labels_write_coco(work, split_name, img, 1, &lopt, err)) && rename(part_tmp, part) != 0)
+            st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
+    } else if (!st && !(st = rs_synth_labels_write_yolo(opt->out_dir, split_name, img, 1, &lopt, err)) &&
+               !(st = rs_synth_labels_write_kitti(kitti_dir, &kimg, 1, &lopt, err)) &&
+               !(st = rs_image_write(image, &r->composite, 8, err)) &&
+               !(st = rs_synth_dataset__link_into(d, image, yolo_image, err)) &&
+               !(st = rs_synth_dataset__link_into(d, image, kitti_image, err)) &&
+               !(st = rs_synth_labels_write_kitti_calib(kitti_calib_path, &c->cam, err)) &&
+               !(st = rs_synth_labels_write_coco(work, split_name, img, 1, &lopt, err)) && rename(part_tmp, part) != 0)
         st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
     free(kitti_calib_path);
     free(kitti_dir);
@@ -413,7 +423,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     if (!st) st = image_render_options(&ropt, &b, d, k, c, &rng, err);
     if (st) goto done;
     *grey = b == NULL;
-    if ((st = image_vehicles(&t, d, c, &rng, err))) goto done;
+    if ((st = image_vehicles(&t, d, k, c, &rng, err))) goto done;
     const int N = t.N;
     const size_t n = (size_t)(N > 0 ? N : 1);
     up = malloc(n * sizeof(double));
@@ -426,12 +436,20 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     for (int i = 0; i < N; i++) ids[i] = t.v[i].id;
     if ((st = rs_synth_prepare_lod(&prepared, t.v, NULL, N, t.coarse, err))) goto done;
     ropt.vehicle_rects = (const int(*)[4])t.rect;
-    if ((st = rs_synth_render(&r, work, &c->cam, d->site->ground_normal_enu, d->site->ground_offset_m, &prepared, &ropt,
-                              err)))
-        goto done;
-    *seconds_povray += r.seconds_povray;
-    const uint64_t r_look = rs_rng_seed_next(&rng);
-    if (b && (st = composite(&r, b, r_look, err))) goto done;
+    if (d->opt->labels_only) { // the ID pass alone, rasterised (rs_synth_dataset.h, "sequences")
+        r.width = c->cam.width;
+        r.height = c->cam.height;
+        if ((st = rs_synth_render_ids(&r.ids, &c->cam, &c->canvas, c->canvas_map, d->site->ground_normal_enu,
+                                      d->site->ground_offset_m, &prepared, err)))
+            goto done;
+    } else {
+        if ((st = rs_synth_render(&r, work, &c->cam, d->site->ground_normal_enu, d->site->ground_offset_m, &prepared,
+                                  &ropt, err)))
+            goto done;
+        *seconds_povray += r.seconds_povray;
+        const uint64_t r_look = rs_rng_seed_next(&rng);
+        if (b && (st = composite(&r, b, r_look, err))) goto done;
+    }
     for (int i = 0; i < N; i++) {
         up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m, prepared.v[i].e_m,
                                      prepared.v[i].n_m);

@@ -676,6 +676,30 @@ done:
     return st;
 }
 
+rs_status rs_synth_render_ids(uint16_t **ids, const rs_camera *camera, const rs_synth_canvas *canvas,
+                              const float *canvas_map, const double ground_normal_enu[3], double ground_offset_m,
+                              const rs_synth_prepared *vehicles, rs_err *err)
+{
+    *ids = NULL;
+    if (canvas->fisheye_deg > 0)
+        return rs_err_set(err, RS_ERR_INVALID, "the ID pass without POV-Ray needs a pinhole canvas, not a fisheye one");
+    if (!canvas->identity && !canvas_map)
+        return rs_err_set(err, RS_ERR_INVALID, "rs_synth_render_ids: a distorted lens needs its canvas map");
+    const int region[4] = {0, 0, canvas->width - 1, canvas->height - 1};
+    rs_image img = {0}, lens = {0};
+    rs_synth_render_result r = {.width = camera->width, .height = camera->height};
+    rs_status st = rs_synth_raster_ids(&img, canvas->fxycxy, canvas->width, canvas->height, camera->rt_cam_enu,
+                                       vehicles, NULL, ground_normal_enu, ground_offset_m, region, err);
+    if (!st && !canvas->identity) st = rs_synth_remap(&lens, &img, canvas_map, camera->width, camera->height, 0, err);
+    if (!st && !(r.ids = calloc((size_t)camera->width * camera->height, sizeof(uint16_t))))
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) decode_ids(&r, canvas->identity ? &img : &lens, vehicles->N);
+    rs_image_free(&img);
+    rs_image_free(&lens);
+    *ids = r.ids;
+    return st;
+}
+
 rs_status rs_synth_render_write_labels(const char *out_dir, const rs_synth_render_result *r, const char *split,
                                        const rs_synth_label_options *lopt, const rs_camera *cam,
                                        const double ground_normal_enu[3], double ground_offset_m,

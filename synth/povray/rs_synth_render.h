@@ -152,6 +152,23 @@ bool rs_synth_vehicle_rect( // out
     // in
     const rs_synth_canvas *canvas, const double rt_cam_enu[6], const double corners_enu_m[8][3], double near_m);
 
+// The object-ID pass alone, without POV-Ray (`roadside synth --labels-only`): every vehicle's
+// mesh rasterised over the whole canvas (rs_synth_raster_ids), resampled with nearest neighbour
+// into the real lens through canvas_map (as rs_synth_render's step 5) and decoded. It equals
+// rs_synth_render's ID image but where the ground could hide part of a vehicle: rs_synth_render
+// then has POV-Ray render the pass with the ground plane, this ignores the ground (a flat site's
+// ground hides nothing above it). A fisheye canvas is refused (the rasteriser draws a pinhole's
+// straight edges).
+// out: *ids (height, width) of the camera, 0 = no vehicle, k + 1 = vehicle k; owned (free())
+// in:  canvas, canvas_map: the camera's (rs_synth_canvas_for_lens, rs_synth_canvas_map; map
+//      NULL when canvas->identity); the ground plane; the prepared vehicles
+// Errors: RS_ERR_INVALID (a fisheye canvas, more than 65,534 vehicles), RS_ERR_NOMEM.
+rs_status rs_synth_render_ids( // out
+    uint16_t **ids,
+    // in
+    const rs_camera *camera, const rs_synth_canvas *canvas, const float *canvas_map, const double ground_normal_enu[3],
+    double ground_offset_m, const rs_synth_prepared *vehicles, rs_err *err);
+
 // The labels of a rendered image (synth/labels/rs_synth_labels.h): every prepared vehicle's label
 // computed through `cam` with its visibility from r->ids, written as COCO and YOLO under
 // out_dir/<split> and KITTI under out_dir, and the composite copied to

@@ -543,11 +543,13 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
     int Nt = make_vtypes(types, prob, &o->mix, o->seed);
     if ((st = write_routes(dir, o->osm_path ? NULL : lanes, &n, osm_from, osm_to, Nosm, types, prob, Nt, o, err)))
         goto done;
-    char seed[32], end[32], begin[32], period[32];
+    char seed[32], end[32], begin[32], period[32], step[32];
     snprintf(seed, sizeof seed, "%llu", (unsigned long long)(o->seed % 2147483647ULL));
     snprintf(end, sizeof end, "%.3f", o->duration_s);
     snprintf(begin, sizeof begin, "%.3f", o->warmup_s);
     snprintf(period, sizeof period, "%.3f", o->period_s);
+    // SUMO's step (default 1 s) bounds the FCD period from below: a finer period needs a finer step
+    snprintf(step, sizeof step, "%.3f", o->period_s < 1 ? o->period_s : 1.0);
     char *argv[] = {(char *)o->sumo,
                     "--net-file",
                     net,
@@ -563,6 +565,10 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
                     fcd,
                     "--fcd-output.geo",
                     "true",
+                    "--precision.geo", // 1e-8 degrees, about 1 mm (SUMO's default 1e-6: 0.1 m)
+                    "8",
+                    "--step-length",
+                    step,
                     "--device.fcd.period",
                     period,
                     "--device.fcd.begin",

@@ -84,7 +84,7 @@ typedef struct {
     uint64_t seed;          // sumo --seed (and the vType sizes)
     double duration_s;      // simulated time (default 300 s)
     double warmup_s;        // no frames before this time (default 60 s)
-    double period_s;        // one frame every period_s (default 1 s)
+    double period_s;        // one frame every period_s (default 1 s; below 1 s SUMO steps by period_s)
     double flow_vph;        // vehicles per hour on every manoeuvre (default 200)
     rs_synth_class_mix mix; // vType distribution (default rs_synth_class_mix_default)
     const char *osm_path;   // an OpenStreetMap file to build the network from instead of the

@@ -25,7 +25,8 @@ typedef struct {
 //    "length": m, "width": m, "height": m,   (optional, > 0; default: drawn from the class)
 //    "colour": [r, g, b] linear in [0,1] or "#rrggbb" sRGB (optional; default: drawn),
 //    "variant": integer >= 0 (optional, default: the index), "id": string (optional; kept to
-//    its first 47 bytes, rs_synth_vehicle.id)}
+//    its first 47 bytes, rs_synth_vehicle.id), "speed_mps": m/s (optional, default 0: SUMO's
+//    frames carry FCD's speed, which a sequence's tracks_gt.csv reports)}
 // yaw_deg is the compass heading of the vehicle's forward axis, clockwise from north.
 // A relative "model" path is taken relative to the vehicles file's folder.
 // Errors name the file, the list index and the field: "FILE: [3].yaw_deg: not a number".

@@ -123,7 +123,8 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
         (st = get_number(&v->yaw_deg, o, "yaw_deg", true, path, i, err)) ||
         (st = get_number(&v->length_m, o, "length", false, path, i, err)) ||
         (st = get_number(&v->width_m, o, "width", false, path, i, err)) ||
-        (st = get_number(&v->height_m, o, "height", false, path, i, err)))
+        (st = get_number(&v->height_m, o, "height", false, path, i, err)) ||
+        (st = get_number(&v->speed_mps, o, "speed_mps", false, path, i, err)))
         return st;
     const char *dims[3] = {"length", "width", "height"};
     const double dval[3] = {v->length_m, v->width_m, v->height_m};

@@ -33,6 +33,22 @@ def demo_calib(tmp):
     return calib
 
 
+def need_sumo():
+    """Exit 77 (skipped) without SUMO's sumo and netconvert."""
+    if not shutil.which("sumo") or not shutil.which("netconvert"):
+        print("SKIP: sumo or netconvert not installed")
+        sys.exit(77)
+
+
+def demo_truth_calib_all(tmp, cams=("cam1", "cam2", "cam3", "cam4")):
+    """TMP/calib holding the demo's true models of `cams`; returns its path."""
+    calib = os.path.join(tmp, "calib")
+    os.makedirs(calib)
+    for cam in cams:
+        shutil.copy(os.path.join(DEMO, "truth", cam + ".cameramodel"), calib)
+    return calib
+
+
 def fail(msg, seed=None):
     print("FAIL: " + msg + ("" if seed is None else " (seed %d)" % seed))
     sys.exit(1)

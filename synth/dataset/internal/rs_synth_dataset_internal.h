@@ -13,6 +13,9 @@
 //   rs_synth_dataset_draws.c    what image k is from (seed, k) alone: its stream, background,
 //                               split and file stem
 //
+//   rs_synth_dataset_sequence.c a sequence's DATASET/tracks_gt.csv, from the frames and the
+//                               images' part files (after the images; calls draws.c's stems)
+//
 // Beside them, each calling only rs_synth_dataset_coco.c (and nothing of the run above it):
 // rs_synth_dataset_merge.c (roadside synth merge), rs_synth_dataset_stats.c and
 // rs_synth_dataset_view.c (roadside dataset stats / view).
@@ -92,11 +95,13 @@ typedef struct {
 // frame as rs_synth_dataset_traffic_frames_check does (out: *info, its figures).
 rs_status rs_synth_dataset__frames_load(rs_synth_dataset__run *d, rs_synth_traffic_frames_info *info, rs_err *err);
 
-// The vehicles of an image from the loaded frames: frame r_frame mod Nframes (out: *iframe, its
+// The vehicles of image k from the loaded frames: frame r_frame mod Nframes (out: *iframe, its
 // index in frames.json), each vehicle j's variant rs_rng_seed_derive(r_looks, j) >> 11 (53
-// bits, as the built-in traffic draws them). On error *list is left empty.
+// bits, as the built-in traffic draws them); in a sequence frame frame_first + k / Ncams, each
+// vehicle's variant rs_rng_seed_derive(seed, the file's variant) >> 11. On error *list is left
+// empty.
 rs_status rs_synth_dataset__frame_vehicles(rs_synth_vehicle_list *list, int *iframe, const rs_synth_dataset__run *d,
-                                           uint64_t r_frame, uint64_t r_looks, rs_err *err);
+                                           int k, uint64_t r_frame, uint64_t r_looks, rs_err *err);
 
 // Which split image k goes to: 0 (opt->split) or 1 (opt->val_split), from k's own random stream
 // (the fraction), its camera, or the background it is drawn over (the same draw as

@@ -183,14 +183,9 @@ def bad_input(tmp, fr_dir):
 def main():
     global CALIB
     u.need_povray()
-    if not shutil.which("sumo") or not shutil.which("netconvert"):
-        print("SKIP: sumo or netconvert not installed")
-        sys.exit(77)
+    u.need_sumo()
     with tempfile.TemporaryDirectory() as tmp:
-        CALIB = os.path.join(tmp, "calib")
-        os.makedirs(CALIB)
-        for cam in ("cam1", "cam2", "cam3", "cam4"):
-            shutil.copy(os.path.join(u.DEMO, "truth", cam + ".cameramodel"), CALIB)
+        CALIB = u.demo_truth_calib_all(tmp)
         fr = os.path.join(tmp, "frames")
         p = u.run(["traffic", u.DEMO, "--sumo", "--seed", "3", "--duration", "90", "--warmup", "60",
                    "--period", "5", "-o", fr])
