@@ -246,12 +246,15 @@ static rs_status camera_batch(rs_track_tracker *t, const rs_track_located *dets,
     }
     for (int j = 0; j < Nidx && st == RS_OK; j++) {
         if (taken[j]) continue;
-        // no birth next to an existing track: an outlier of it, or a detector's second box on it
+        // no birth next to an existing track: an outlier of it, or a detector's second box on it;
+        // but a track that took another of this camera's detections is another vehicle (a camera
+        // sees a vehicle once), however close: a queue of cars seen from afar
         const rs_track_located *dj = &dets[idx[j]];
         measurement(z, R, dj, NULL);
         bool near = false;
         for (int i = 0; i < T && !near; i++)
-            near = rs_track_kf_mahal2(t->tracks[i].x, t->tracks[i].P, z, R) < t->opt.birth_exclusion_mahal2;
+            near = t->col_of_row[i] < 0 &&
+                   rs_track_kf_mahal2(t->tracks[i].x, t->tracks[i].P, z, R) < t->opt.birth_exclusion_mahal2;
         if (near) continue;
         if (!grow((void **)&t->tracks, &t->cap_tracks, (size_t)t->Ntracks + 1, sizeof(track))) {
             st = rs_err_set(err, RS_ERR_NOMEM, "tracker: out of memory");
