@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "eval/track/rs_track_assign.h"
+#include "core/rs_assign.h"
 #include "eval/track/rs_track_kf.h"
 
 #define MAX_CLASSES 8 // distinct category ids counted per track (more are not voted)
@@ -235,7 +235,7 @@ static rs_status camera_batch(rs_track_tracker *t, const rs_track_located *dets,
     }
     bool *taken = calloc((size_t)Nidx + 1, sizeof(bool));
     if (!taken) return rs_err_set(err, RS_ERR_NOMEM, "tracker: out of memory");
-    rs_status st = rs_track_assign(t->col_of_row, NULL, NULL, t->cost, T, Nidx, t->gate_mahal2, err);
+    rs_status st = rs_assign(t->col_of_row, NULL, NULL, NULL, t->cost, T, Nidx, t->gate_mahal2, err);
     for (int i = 0; i < T && st == RS_OK; i++) {
         const int j = t->col_of_row[i];
         if (j < 0) continue;

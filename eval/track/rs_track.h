@@ -11,8 +11,8 @@
 //     camera ids, so that the order of the input files does not matter), each camera's batch as sequential updates: gating by the
 //     squared Mahalanobis distance of the innovation (chi-square with 2 degrees of freedom:
 //     gate = -2 ln(1 - gate_p), exact for 2 dof), optimal assignment of the gated pairs
-//     (eval/track/rs_track_assign.h: least total of (mahal2 - gate), the gate the price of a
-//     miss), updates of
+//     (core/rs_assign.h with miss_cost = gate: least total of (mahal2 - gate), the gate the
+//     price of a miss), updates of
 //     the matched tracks, and a new tentative track for every unmatched detection farther than
 //     birth_exclusion_mahal2 from every track (closer, it is taken for an outlier of that track
 //     or a detector's second box on it: a gate of 99.9 % misses 1 detection in 1,000, which at
