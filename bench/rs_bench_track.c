@@ -89,7 +89,7 @@ static bool locate(double en[2], const rs_camera *cam, const double q[2])
 }
 
 // Localises pixel q: the ground point and its covariance sigma^2 J J^T (J by central differences).
-static bool localise(rs_track_located *d, const rs_camera *cam, const double q[2], double pixel_sigma)
+static bool localise(rs_localise_row *d, const rs_camera *cam, const double q[2], double pixel_sigma)
 {
     double en[2], a[2], b[2], J[4];
     if (!locate(en, cam, q)) return false;
@@ -175,7 +175,7 @@ rs_status rs_bench_track_run(rs_bench_track_figures *f, const rs_bench_track_con
     vehicle *veh = malloc(sizeof(vehicle) * (size_t)c->Nvehicles);
     double *truth = malloc(sizeof(double) * 4 * (size_t)c->Nvehicles); // vehicles, then those gone
     const size_t cap = (size_t)c->Nvehicles * (size_t)c->Ncameras;
-    rs_track_located *dets = malloc(sizeof(rs_track_located) * cap);
+    rs_localise_row *dets = malloc(sizeof(rs_localise_row) * cap);
     int *vehicle_of = malloc(sizeof(int) * cap), *camera_of = malloc(sizeof(int) * cap);
     rs_track_tracker *tracker = NULL;
     if (!veh || !truth || !dets || !vehicle_of || !camera_of) {
@@ -228,14 +228,14 @@ rs_status rs_bench_track_run(rs_bench_track_figures *f, const rs_bench_track_con
                 if (!rs_camera_project_visible(q, &cams[cam], rs_camera_max_tan(&cams[cam]), p)) continue;
                 if (q[0] < -0.5 || q[0] > 1919.5 || q[1] < -0.5 || q[1] > 1079.5) continue;
                 if (rs_rng_uniform(&rng) >= c->p_detect) continue;
-                rs_track_located *d = &dets[N];
-                *d = (rs_track_located){.image_id = frame * c->Ncameras + cam,
-                                        .frame = frame,
-                                        .time_s = t_s,
-                                        .category_id = 1,
-                                        .score = 1,
-                                        .lat_deg = NAN,
-                                        .lon_deg = NAN};
+                rs_localise_row *d = &dets[N];
+                *d = (rs_localise_row){.image_id = frame * c->Ncameras + cam,
+                                       .frame = frame,
+                                       .time_s = t_s,
+                                       .category_id = 1,
+                                       .score = 1,
+                                       .lat_deg = NAN,
+                                       .lon_deg = NAN};
                 snprintf(d->camera, sizeof d->camera, "cam%d", cam + 1);
                 d->u_px = q[0] + c->pixel_sigma * rs_rng_normal(&rng);
                 d->v_px = q[1] + c->pixel_sigma * rs_rng_normal(&rng);

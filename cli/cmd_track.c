@@ -1,6 +1,5 @@
 // roadside track -- multi-object tracking in metres over all the site's cameras (eval/track).
 #include <getopt.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -114,23 +113,21 @@ static int parse_args(int argc, char **argv, track_args *a)
     return RS_EXIT_OK;
 }
 
-// Reads every input into one array; a row without time_s is an error naming its file and line.
-static rs_status read_inputs(rs_track_located **all, size_t *Nall, const track_args *a, rs_err *err)
+// Reads every input into one array (localise's reader); a row unfit to track (rs_track_check_located:
+// no time_s, a covariance not positive definite, ...) is an error naming its file, line and field.
+static rs_status read_inputs(rs_localise_row **all, size_t *Nall, const track_args *a, rs_err *err)
 {
     *all = NULL;
     *Nall = 0;
     size_t cap = 0;
     for (int f = 0; f < a->Ninputs; f++) {
-        rs_track_located *d = NULL;
+        rs_localise_row *d = NULL;
         size_t n = 0;
-        rs_status st = rs_track_read_located(&d, &n, a->inputs[f], err);
-        for (size_t k = 0; k < n && st == RS_OK; k++)
-            if (isnan(d[k].time_s))
-                st = rs_err_set(err, RS_ERR_INVALID, "%s:%d: time_s: empty (tracking needs each detection's time)",
-                                a->inputs[f], d[k].line);
+        rs_status st = rs_localise_read(&d, &n, a->inputs[f], err);
+        if (st == RS_OK) st = rs_track_check_located(d, n, a->inputs[f], err);
         if (st == RS_OK && *Nall + n > cap) {
             cap = 2 * (*Nall + n) + 16;
-            rs_track_located *q = realloc(*all, cap * sizeof *q);
+            rs_localise_row *q = realloc(*all, cap * sizeof *q);
             if (!q)
                 st = rs_err_set(err, RS_ERR_NOMEM, "out of memory (%zu detections)", *Nall + n);
             else
@@ -164,7 +161,7 @@ int rs_cli_track(int argc, char **argv)
     const rs_llh origin = site->origin;
     rs_site_free(site);
     rs_err err = {0};
-    rs_track_located *dets = NULL;
+    rs_localise_row *dets = NULL;
     size_t N = 0;
     rs_status st = read_inputs(&dets, &N, &a, &err);
     if (st) return rs_cli_fail("track", st, &err);

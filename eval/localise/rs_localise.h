@@ -104,6 +104,7 @@ typedef struct {
     double e_m, n_m, u_m;                   // site ENU of the ground point
     double lat_deg, lon_deg;                // NaN when the site's origin is unknown
     double sigma_e_m, sigma_n_m, cov_en_m2; // the horizontal covariance [[s_e^2, c], [c, s_n^2]]
+    int line; // 1-based line of the file it was read from (messages; not written), 0 otherwise
 } rs_localise_row;
 
 // What a camera needs to place its detections.
@@ -149,10 +150,14 @@ rs_status rs_localise_detection_locate( // out
 // Errors: RS_ERR_USAGE (another extension), RS_ERR_IO, RS_ERR_NOMEM.
 rs_status rs_localise_write(const char *path, const rs_localise_row *rows, size_t N, rs_err *err);
 
-// Reads a located-detections CSV back (as rs_localise_write writes it; `roadside track` and
-// `roadside eval` read them). out: *rows (N,) owned by the caller (free()).
-// Errors: RS_ERR_IO, RS_ERR_PARSE ("FILE:LINE: FIELD: what": another header, a missing or
-// non-numeric field; empty time_s, lat_deg, lon_deg read as NaN), RS_ERR_NOMEM.
+// Reads a located-detections CSV back (as rs_localise_write writes it): the one reader of the
+// file (`roadside track` reads its input through it). Each row's `line` is its 1-based line;
+// blank lines are skipped; a UTF-8 byte-order mark and CRLF line ends are accepted.
+// out: *rows (N,) owned by the caller (free()); NULL with N = 0 for a file without rows.
+// Errors: RS_ERR_IO, RS_ERR_PARSE ("FILE:LINE: FIELD: what": another header or an empty file, a
+// missing field (with the row's number of fields) or one too many, a field that is not a
+// (whole) number, a camera id of RS_LOCALISE_ID_MAX bytes or more; empty time_s, u_px, v_px,
+// u_m, lat_deg, lon_deg read as NaN, the rest required), RS_ERR_NOMEM.
 rs_status rs_localise_read( // out
     rs_localise_row **rows, size_t *N,
     // in

@@ -193,9 +193,15 @@ static rs_status read_row(rs_localise_row *r, char *line, const char *path, int 
 {
     char *p = line, *f[NCOLS];
     for (int k = 0; k < NCOLS; k++)
-        if (!(f[k] = next_field(&p))) return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: missing", path, lineno, cols[k]);
-    if (p) return rs_err_set(err, RS_ERR_PARSE, "%s:%d: more than %d fields", path, lineno, NCOLS);
-    *r = (rs_localise_row){0};
+        if (!(f[k] = next_field(&p)))
+            return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: missing (%d fields, the header has %d)", path, lineno,
+                              cols[k], k, NCOLS);
+    if (p) {
+        int n = NCOLS;
+        while (next_field(&p)) n++;
+        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %d fields, the header has %d", path, lineno, n, NCOLS);
+    }
+    *r = (rs_localise_row){.line = lineno};
     if (strlen(f[1]) >= sizeof r->camera)
         return rs_err_set(err, RS_ERR_PARSE, "%s:%d: camera: longer than %d bytes", path, lineno,
                           RS_LOCALISE_ID_MAX - 1);
@@ -203,7 +209,9 @@ static rs_status read_row(rs_localise_row *r, char *line, const char *path, int 
     long long *ints[3] = {&r->image_id, &r->frame, &r->category_id};
     const int int_col[3] = {0, 2, 4};
     for (int k = 0; k < 3; k++)
-        if (!parse_int(f[int_col[k]], ints[k]))
+        if (int_col[k] == 2 && !*f[2]) // an empty frame: unknown
+            r->frame = -1;
+        else if (!parse_int(f[int_col[k]], ints[k]))
             return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: '%s' is not a whole number", path, lineno,
                               cols[int_col[k]], f[int_col[k]]);
     double *dbl[12] = {&r->time_s, &r->score,   &r->u_px,    &r->v_px,      &r->e_m,       &r->n_m,
@@ -211,7 +219,8 @@ static rs_status read_row(rs_localise_row *r, char *line, const char *path, int 
     const int dbl_col[12] = {3, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
     for (int k = 0; k < 12; k++) {
         const int c = dbl_col[k];
-        if (!parse_number(f[c], dbl[k], c == 3 || c == 11 || c == 12))
+        const bool may_be_empty = c == 3 || c == 6 || c == 7 || c == 10 || c == 11 || c == 12;
+        if (!parse_number(f[c], dbl[k], may_be_empty))
             return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: '%s' is not a finite number", path, lineno, cols[c], f[c]);
     }
     return RS_OK;
@@ -222,12 +231,19 @@ rs_status rs_localise_read(rs_localise_row **rows, size_t *N, const char *path, 
     *rows = NULL;
     *N = 0;
     char *text = NULL;
-    rs_status st = rs_io_read_file(&text, NULL, path, err);
+    size_t len_text = 0;
+    rs_status st = rs_io_read_file(&text, &len_text, path, err);
     if (st) return st;
+    if (strlen(text) != len_text) {
+        free(text);
+        return rs_err_set(err, RS_ERR_PARSE, "%s: holds a NUL byte: not a CSV text file", path);
+    }
     rs_localise_row *out = NULL;
     size_t n = 0, cap = 0;
     int lineno = 0;
-    for (char *p = text, *next; p && *p && !st; p = next) {
+    char *start = text;
+    if (!strncmp(start, "\xEF\xBB\xBF", 3)) start += 3; // a UTF-8 byte-order mark
+    for (char *p = start, *next; p && *p && !st; p = next) {
         lineno++;
         next = strchr(p, '\n');
         if (next) *next++ = '\0';

@@ -16,8 +16,8 @@
 //   CLEAR MOT (K. Bernardin and R. Stiefelhagen, "Evaluating multiple object tracking
 //   performance: the CLEAR MOT metrics", EURASIP J. Image and Video Processing 2008:246309):
 //   at each step the correspondences of the previous step are kept while d < D, the rest are
-//   matched by a minimum-cost assignment on d (rs_mot_assign: most pairs, then least total
-//   distance); FN = counted ground truths unmatched, FP = counted track rows unmatched, IDSW =
+//   matched by a minimum-cost assignment on d (core/rs_assign.h with miss_cost +inf: most
+//   pairs, then least total distance); FN = counted ground truths unmatched, FP = counted track rows unmatched, IDSW =
 //   matches whose track differs from the last track the vehicle was matched to, Frag = times a
 //   vehicle goes from matched to unmatched and is matched again later; MOTA = 1 - (FN + FP +
 //   IDSW) / GT, MOTP = mean d over matches (metres).
@@ -43,7 +43,7 @@
 // Accuracy: counts are exact; sums in double precision (relative 1e-16 x the number of terms).
 // Checked against a plain Python implementation of the papers' definitions on random and
 // hand-made cases (tests/eval/test_mot_metrics.py).
-// Cost: per step O(n^3) for n vehicles and tracks at that step (rs_mot_assign), plus the global
+// Cost: per step O(n^3) for n vehicles and tracks at that step (rs_assign), plus the global
 // ID matching O(V^2 T) for V vehicles and T track ids, memory O(V T) for the pairs' counts.
 //
 // Ownership: rs_mot_data and rs_mot_result belong to the caller; their _free accepts NULL.

@@ -4,8 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_assign.h"
 #include "eval/mot/internal/rs_mot_internal.h"
-#include "eval/mot/rs_mot_assign.h"
 
 #define DEFAULT_THRESHOLD_M 2.0
 
@@ -58,7 +58,7 @@ rs_status rs_mot__step_rows(long *gt_idx, int *Ng, long *hyp_idx, int *Nh, const
     rs_status st = cost && col ? RS_OK : nomem(err);
     if (!st) {
         distance_costs(cost, d, gt_idx, *Ng, hyp_idx, Nall, opt->threshold_m);
-        st = rs_mot_assign(NULL, col, NULL, cost, *Ng, Nall, err);
+        st = rs_assign(NULL, col, NULL, NULL, cost, *Ng, Nall, INFINITY, err);
     }
     for (int b = 0; b < Nall && !st; b++) {
         bool ignore = false;
@@ -134,7 +134,7 @@ static rs_status work_alloc(work *w, const rs_mot_data *d, rs_err *err)
 }
 
 // CLEAR MOT's matching of one step: the previous correspondences kept while within D, the rest
-// by rs_mot_assign. out: w->row (Ng,) the matched position in w->hi, -1 none.
+// by rs_assign (most pairs, then least distance). out: w->row (Ng,) the matched position in w->hi, -1 none.
 static rs_status clear_match(work *w, const rs_mot_data *d, int Ng, int Nh, double D, rs_err *err)
 {
     for (int a = 0; a < Ng; a++) w->row[a] = -1;
@@ -160,7 +160,7 @@ static rs_status clear_match(work *w, const rs_mot_data *d, int Ng, int Nh, doub
             const double dist = rs_mot__dist_m(&d->gt[w->gi[ra[i]]], &d->hyp[w->hi[cb[j]]]);
             w->cost[(size_t)i * Nc + j] = dist < D ? dist : INFINITY;
         }
-    rs_status st = rs_mot_assign(sub, NULL, NULL, w->cost, Nr, Nc, err);
+    rs_status st = rs_assign(sub, NULL, NULL, NULL, w->cost, Nr, Nc, INFINITY, err);
     for (int i = 0; i < Nr && !st; i++)
         if (sub[i] >= 0) w->row[ra[i]] = cb[sub[i]], w->col[cb[sub[i]]] = ra[i];
     return st;
@@ -213,7 +213,7 @@ static rs_status idf1(rs_mot_result *r, const work *w, int V, int T, rs_err *err
         return nomem(err);
     }
     for (size_t k = 0; k < (size_t)V * T; k++) cost[k] = w->overlap[k] > 0 ? -(double)w->overlap[k] : INFINITY;
-    rs_status st = rs_mot_assign(row, NULL, NULL, cost, V, T, err);
+    rs_status st = rs_assign(row, NULL, NULL, NULL, cost, V, T, INFINITY, err);
     r->idtp = 0;
     for (int i = 0; i < V && !st; i++)
         if (row[i] >= 0) r->idtp += w->overlap[(size_t)i * T + row[i]];

@@ -6,8 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_assign.h"
 #include "eval/mot/internal/rs_mot_internal.h"
-#include "eval/mot/rs_mot_assign.h"
 
 #define EPS 2.220446049250313e-16 // numpy's float eps, as TrackEval compares
 
@@ -107,7 +107,7 @@ rs_status rs_mot__hota(rs_mot_result *r, const rs_mot_data *d, const rs_mot_opti
                 w.cost[(size_t)a * Nh + b] = score > 0 ? -score : INFINITY;
             }
         }
-        if ((st = rs_mot_assign(w.row, NULL, NULL, w.cost, Ng, Nh, err))) break;
+        if ((st = rs_assign(w.row, NULL, NULL, NULL, w.cost, Ng, Nh, INFINITY, err))) break;
         for (int k = 0; k < RS_MOT_NALPHA; k++) {
             int n = 0;
             for (int a = 0; a < Ng; a++) {

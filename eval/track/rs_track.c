@@ -1,12 +1,13 @@
 // rs_track.c -- the multi-camera tracker: steps, association, birth, death, merge (rs_track.h).
 #include "eval/track/rs_track.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "eval/track/rs_track_assign.h"
+#include "core/rs_assign.h"
 #include "eval/track/rs_track_kf.h"
 
 #define MAX_CLASSES 8 // distinct category ids counted per track (more are not voted)
@@ -172,20 +173,49 @@ static int camera_of_rank(const rs_track_tracker *t, int r)
     return 0; // not reached: ranks are a permutation
 }
 
+// Whether detection d's position and covariance are usable; RS_ERR_INVALID naming the field
+// otherwise, the message prefixed "PATH:LINE: " (path may be NULL: "line LINE: ").
+static rs_status check_position(const rs_localise_row *d, const char *path, rs_err *err)
+{
+    char where[512];
+    if (path)
+        snprintf(where, sizeof where, "%s:%d", path, d->line);
+    else
+        snprintf(where, sizeof where, "line %d", d->line);
+    if (!isfinite(d->e_m) || !isfinite(d->n_m))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: e_m, n_m: not finite", where);
+    const double see = d->sigma_e_m * d->sigma_e_m, snn = d->sigma_n_m * d->sigma_n_m, c = d->cov_en_m2;
+    if (!(d->sigma_e_m > 0) || !(d->sigma_n_m > 0) || !isfinite(see) || !isfinite(snn) || !isfinite(c) ||
+        !(see * snn - c * c > 0))
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "%s: sigma_e_m, sigma_n_m, cov_en_m2: (%g, %g, %g) is not a positive definite covariance "
+                          "(sigmas > 0, |cov| < sigma_e sigma_n)",
+                          where, d->sigma_e_m, d->sigma_n_m, d->cov_en_m2);
+    return RS_OK;
+}
+
+rs_status rs_track_check_located(const rs_localise_row *rows, size_t N, const char *path, rs_err *err)
+{
+    for (size_t k = 0; k < N; k++) {
+        const rs_localise_row *d = &rows[k];
+        if (!isfinite(d->time_s))
+            return rs_err_set(err, RS_ERR_INVALID, "%s:%d: time_s: empty (tracking needs each detection's time)", path,
+                              d->line);
+        if (d->category_id < INT_MIN || d->category_id > INT_MAX)
+            return rs_err_set(err, RS_ERR_INVALID, "%s:%d: category_id: %lld is out of range", path, d->line,
+                              d->category_id);
+        rs_status st = check_position(d, path, err);
+        if (st) return st;
+    }
+    return RS_OK;
+}
+
 // The detection's measurement z and covariance R; RS_ERR_INVALID when not usable.
-static rs_status measurement(double z[2], double R[4], const rs_track_located *d, rs_err *err)
+static rs_status measurement(double z[2], double R[4], const rs_localise_row *d, rs_err *err)
 {
     z[0] = d->e_m, z[1] = d->n_m;
     R[0] = d->sigma_e_m * d->sigma_e_m, R[3] = d->sigma_n_m * d->sigma_n_m, R[1] = R[2] = d->cov_en_m2;
-    if (!isfinite(z[0]) || !isfinite(z[1]))
-        return rs_err_set(err, RS_ERR_INVALID, "line %d: e_m, n_m: not finite", d->line);
-    if (!(d->sigma_e_m > 0) || !(d->sigma_n_m > 0) || !isfinite(R[0]) || !isfinite(R[3]) || !isfinite(R[1]) ||
-        !(R[0] * R[3] - R[1] * R[1] > 0))
-        return rs_err_set(
-            err, RS_ERR_INVALID,
-            "line %d: sigma_e_m, sigma_n_m, cov_en_m2: (%g, %g, %g) is not a positive definite covariance", d->line,
-            d->sigma_e_m, d->sigma_n_m, d->cov_en_m2);
-    return RS_OK;
+    return check_position(d, NULL, err);
 }
 
 static void vote(track *tr, int category_id)
@@ -207,17 +237,17 @@ static int majority(const track *tr)
     return best;
 }
 
-static void take(track *tr, const rs_track_located *d, int cam, double time_s)
+static void take(track *tr, const rs_localise_row *d, int cam, double time_s)
 {
     tr->detections++;
     tr->step_cameras |= (uint64_t)1 << cam;
     tr->last_update_s = time_s;
     tr->u_m = isfinite(d->u_m) ? d->u_m : 0;
-    vote(tr, d->category_id);
+    vote(tr, (int)d->category_id); // within an int: rs_track_check_located
 }
 
 // The detections idx (Nidx,) of one camera against every track: gate, assign, update, births.
-static rs_status camera_batch(rs_track_tracker *t, const rs_track_located *dets, const int *idx, int Nidx, int cam,
+static rs_status camera_batch(rs_track_tracker *t, const rs_localise_row *dets, const int *idx, int Nidx, int cam,
                               double time_s, rs_err *err)
 {
     const int T = t->Ntracks;
@@ -235,12 +265,12 @@ static rs_status camera_batch(rs_track_tracker *t, const rs_track_located *dets,
     }
     bool *taken = calloc((size_t)Nidx + 1, sizeof(bool));
     if (!taken) return rs_err_set(err, RS_ERR_NOMEM, "tracker: out of memory");
-    rs_status st = rs_track_assign(t->col_of_row, NULL, NULL, t->cost, T, Nidx, t->gate_mahal2, err);
+    rs_status st = rs_assign(t->col_of_row, NULL, NULL, NULL, t->cost, T, Nidx, t->gate_mahal2, err);
     for (int i = 0; i < T && st == RS_OK; i++) {
         const int j = t->col_of_row[i];
         if (j < 0) continue;
         taken[j] = true; // taken even when the update fails: no birth from it either
-        const rs_track_located *d = &dets[idx[j]];
+        const rs_localise_row *d = &dets[idx[j]];
         measurement(z, R, d, NULL);
         if (rs_track_kf_update(t->tracks[i].x, t->tracks[i].P, z, R)) take(&t->tracks[i], d, cam, time_s);
     }
@@ -249,7 +279,7 @@ static rs_status camera_batch(rs_track_tracker *t, const rs_track_located *dets,
         // no birth next to an existing track: an outlier of it, or a detector's second box on it;
         // but a track that took another of this camera's detections is another vehicle (a camera
         // sees a vehicle once), however close: a queue of cars seen from afar
-        const rs_track_located *dj = &dets[idx[j]];
+        const rs_localise_row *dj = &dets[idx[j]];
         measurement(z, R, dj, NULL);
         bool near = false;
         for (int i = 0; i < T && !near; i++)
@@ -260,7 +290,7 @@ static rs_status camera_batch(rs_track_tracker *t, const rs_track_located *dets,
             st = rs_err_set(err, RS_ERR_NOMEM, "tracker: out of memory");
             break;
         }
-        const rs_track_located *d = &dets[idx[j]];
+        const rs_localise_row *d = &dets[idx[j]];
         track *tr = &t->tracks[t->Ntracks++];
         memset(tr, 0, sizeof *tr);
         measurement(z, R, d, NULL);
@@ -373,7 +403,7 @@ static rs_status report(rs_track_tracker *t, double time_s, rs_err *err)
     return RS_OK;
 }
 
-rs_status rs_track_tracker_step(rs_track_tracker *t, double time_s, const rs_track_located *dets, int N, rs_err *err)
+rs_status rs_track_tracker_step(rs_track_tracker *t, double time_s, const rs_localise_row *dets, int N, rs_err *err)
 {
     if (!isfinite(time_s)) return rs_err_set(err, RS_ERR_INVALID, "time_s: %g is not finite", time_s);
     if (t->started && time_s < t->last_time_s)
@@ -438,7 +468,7 @@ static int cmp_time(const void *a, const void *b)
     return (x->i > y->i) - (x->i < y->i);
 }
 
-rs_status rs_track_run(rs_track_tracker **out, const rs_track_located *dets, size_t N, const rs_track_options *opt,
+rs_status rs_track_run(rs_track_tracker **out, const rs_localise_row *dets, size_t N, const rs_track_options *opt,
                        rs_err *err)
 {
     *out = NULL;
@@ -450,7 +480,7 @@ rs_status rs_track_run(rs_track_tracker **out, const rs_track_located *dets, siz
     rs_status st = rs_track_tracker_new(&t, opt, err);
     if (st) return st;
     timed *idx = malloc(sizeof(timed) * (N + 1));
-    rs_track_located *step = malloc(sizeof(rs_track_located) * (N + 1));
+    rs_localise_row *step = malloc(sizeof(rs_localise_row) * (N + 1));
     if (!idx || !step) {
         free(idx), free(step), rs_track_tracker_free(t);
         return rs_err_set(err, RS_ERR_NOMEM, "tracker: out of memory (%zu detections)", N);

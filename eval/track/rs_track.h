@@ -11,8 +11,8 @@
 //     camera ids, so that the order of the input files does not matter), each camera's batch as sequential updates: gating by the
 //     squared Mahalanobis distance of the innovation (chi-square with 2 degrees of freedom:
 //     gate = -2 ln(1 - gate_p), exact for 2 dof), optimal assignment of the gated pairs
-//     (eval/track/rs_track_assign.h: least total of (mahal2 - gate), the gate the price of a
-//     miss), updates of
+//     (core/rs_assign.h with miss_cost = gate: least total of (mahal2 - gate), the gate the
+//     price of a miss), updates of
 //     the matched tracks, and a new tentative track for every unmatched detection farther than
 //     birth_exclusion_mahal2 from every track (closer, it is taken for an outlier of that track
 //     or a detector's second box on it: a gate of 99.9 % misses 1 detection in 1,000, which at
@@ -47,6 +47,7 @@
 #include <stdint.h>
 
 #include "core/rs_status.h"
+#include "eval/localise/rs_localise.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -55,21 +56,14 @@ extern "C" {
 #define RS_TRACK_MAX_CAMERAS  64 // the cameras of one run (a bit each in a row's camera mask)
 #define RS_TRACK_CAMERA_BYTES 65 // a camera id: up to 64 bytes (rs_io_name_problem) and a NUL
 
-// One located detection: the columns of the located-detections CSV (docs/track.md, issue 39's
-// interface 2), in its order.
-typedef struct {
-    long long image_id;
-    char camera[RS_TRACK_CAMERA_BYTES];
-    long frame;                             // -1 when unknown
-    double time_s;                          // NaN when unknown (tracking refuses it)
-    int category_id;                        // 1-based
-    double score;                           // 0..1
-    double u_px, v_px;                      // the ground-contact pixel (NaN when not given)
-    double e_m, n_m, u_m;                   // site ENU of the ground point
-    double lat_deg, lon_deg;                // (NaN when not given)
-    double sigma_e_m, sigma_n_m, cov_en_m2; // the horizontal covariance [[se^2, c], [c, sn^2]]
-    int line;                               // 1-based line of its file (messages), 0 when not from a file
-} rs_track_located;
+// The tracker's input is localise's located detection (rs_localise_row, eval/localise/rs_localise.h:
+// the columns of the located-detections file, issue 39's interface 2), read by rs_localise_read.
+
+// Checks that rows (N,) read from path are fit to track, before any tracking: time_s known,
+// category_id within an int, e_m and n_m finite, the covariance positive definite (sigmas > 0,
+// |cov_en_m2| < sigma_e_m sigma_n_m). Errors: RS_ERR_INVALID "PATH:LINE: FIELD: what" (the rows'
+// `line`) for the first row at fault.
+rs_status rs_track_check_located(const rs_localise_row *rows, size_t N, const char *path, rs_err *err);
 
 typedef struct {
     double accel_sigma_mps2;     // white-noise acceleration (default 3 m/s^2)
@@ -123,7 +117,7 @@ void rs_track_tracker_free(rs_track_tracker *tracker);
 rs_status rs_track_tracker_step( // in,out
     rs_track_tracker *tracker,
     // in
-    double time_s, const rs_track_located *dets, int N, rs_err *err);
+    double time_s, const rs_localise_row *dets, int N, rs_err *err);
 
 // All rows reported so far, in order of time then track id; *Nrows their count.
 const rs_track_row *rs_track_tracker_rows(const rs_track_tracker *tracker, size_t *Nrows);
@@ -146,7 +140,7 @@ void rs_track_tracker_counts(const rs_track_tracker *tracker, int *Nconfirmed, i
 rs_status rs_track_run( // out
     rs_track_tracker **tracker,
     // in
-    const rs_track_located *dets, size_t N,
+    const rs_localise_row *dets, size_t N,
     const rs_track_options *opt, // may be NULL: the defaults
     rs_err *err);
 

@@ -1,12 +1,6 @@
-// rs_track_io.h -- the files of `roadside track`: the located-detections CSV read (issue 39's
-// interface 2), the tracks written as CSV (interface 3), GeoJSON and SAE J3224-style JSON lines.
-//
-// Located detections (read): a CSV with exactly the header
-//   image_id,camera,frame,time_s,category_id,score,u_px,v_px,e_m,n_m,u_m,lat_deg,lon_deg,
-//   sigma_e_m,sigma_n_m,cov_en_m2
-// (one line), one detection per line, fields not quoted. Empty time_s: unknown (NaN); empty or
-// -1 frame: unknown (-1); empty u_px, v_px, u_m, lat_deg, lon_deg: NaN; every other field is
-// required. A trailing '\r' (CRLF files) and a UTF-8 byte-order mark are accepted.
+// rs_track_io.h -- the files `roadside track` writes: the tracks as CSV (issue 39's interface 3),
+// GeoJSON and SAE J3224-style JSON lines. Its input, the located-detections CSV (interface 2), is
+// read by localise's one reader (eval/localise/rs_localise.h, rs_localise_read).
 //
 // Tracks CSV (written): the header
 //   time_s,track_id,e_m,n_m,lat_deg,lon_deg,speed_mps,heading_deg,sigma_e_m,sigma_n_m,cov_en_m2,
@@ -31,23 +25,9 @@
 extern "C" {
 #endif
 
-#define RS_TRACK_LOCATED_HEADER                                                                                 \
-    "image_id,camera,frame,time_s,category_id,score,u_px,v_px,e_m,n_m,u_m,lat_deg,lon_deg,sigma_e_m,sigma_n_m," \
-    "cov_en_m2"
 #define RS_TRACK_TRACKS_HEADER                                                                                     \
     "time_s,track_id,e_m,n_m,lat_deg,lon_deg,speed_mps,heading_deg,sigma_e_m,sigma_n_m,cov_en_m2,sigma_speed_mps," \
     "sigma_heading_deg,age_s,detections,cameras"
-
-// Reads the located-detections CSV at path. Each detection's `line` is its 1-based line.
-// Errors: RS_ERR_IO (cannot read), RS_ERR_PARSE ("PATH:LINE: FIELD: ..." for a wrong header, a
-// wrong number of fields, a field that is not a number), RS_ERR_INVALID (a camera id longer than
-// 64 bytes; a covariance that is not positive definite: sigmas > 0, |cov| < sigma_e sigma_n),
-// RS_ERR_NOMEM.
-// out: *dets (N,), owned by the caller (free()); NULL with N = 0 for a file without rows.
-rs_status rs_track_read_located( // out
-    rs_track_located **dets, size_t *N,
-    // in
-    const char *path, rs_err *err);
 
 // Writes the tracker's rows as the tracks CSV to path (atomically). RS_ERR_IO, RS_ERR_NOMEM,
 // RS_ERR_EXTERNAL (geodesy).

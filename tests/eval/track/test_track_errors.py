@@ -2,7 +2,7 @@
 the field at fault, and leaves an existing output untouched (outputs are written atomically).
 
 Cases: a row without time_s (in the second of two files), a wrong header, a field that is not a
-number, a wrong number of fields, a covariance that is not positive definite, a missing file, an
+number, a wrong number of fields (too few, too many), a covariance that is not positive definite, a missing file, an
 empty file; usage: no -o, no input, --gate out of (0, 1), --min-hits 3/2, an unknown option.
 """
 import os
@@ -48,11 +48,12 @@ def main():
         print("no time_s (second file):", p.stderr.strip())
         bad("header", HEADER.replace("e_m", "x_m") + "\n" + GOOD, ["FILE:1: header"])
         bad("number", HEADER + "\n" + GOOD + GOOD.replace(",1.0,2.0,", ",1.0,north,"), ["FILE:3: n_m", "north"])
-        bad("fields", HEADER + "\n" + GOOD.replace(",0.0\n", "\n"), ["FILE:2: 15 fields"])
+        bad("fields", HEADER + "\n" + GOOD.replace(",0.0\n", "\n"), ["FILE:2: cov_en_m2: missing", "15 fields"])
+        bad("more_fields", HEADER + "\n" + GOOD.replace(",0.0\n", ",0.0,7\n"), ["FILE:2: 17 fields"])
         bad("covariance", HEADER + "\n" + GOOD.replace(",0.3,0.3,0.0", ",0.3,0.3,0.09"),
             ["FILE:2: sigma_e_m, sigma_n_m, cov_en_m2", "positive definite"])
         bad("negative_sigma", HEADER + "\n" + GOOD.replace(",0.3,0.3,0.0", ",-0.3,0.3,0.0"), ["FILE:2: sigma_e_m"])
-        bad("empty", "", ["FILE: empty file"])
+        bad("empty", "", ["FILE:1: header", "empty file"])
         missing = os.path.join(tmp, "missing.csv")
         bad("missing", None, [missing], files=[good, missing])
         for args, what in [([site, good], "no -o"), ([site, "-o", out], "no input"),
