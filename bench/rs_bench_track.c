@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "core/rs_camera.h"
+#include "core/rs_camera_ground.h"
 #include "core/rs_pose.h"
 #include "core/rs_rng.h"
 #include "core/rs_units.h"
@@ -78,35 +79,18 @@ static void position(double p[2], const vehicle *v, double t_s)
     }
 }
 
-// The ground point of pixel q through cam (plane u = 0); false when the ray misses it.
-static bool locate(double en[2], const rs_camera *cam, const double q[2])
-{
-    static const double up[3] = {0, 0, 1};
-    double p[3];
-    if (rs_camera_locate_ground(p, cam, q, up, 0, NULL) != RS_OK) return false;
-    en[0] = p[0], en[1] = p[1];
-    return true;
-}
-
-// Localises pixel q: the ground point and its covariance sigma^2 J J^T (J by central differences).
+// Localises pixel q as `roadside localise` does (core/rs_camera_ground.h: the ground point and
+// its covariance, here from the pixel noise alone: the simulated poses are exact); false when the
+// ray misses the plane u = 0.
 static bool localise(rs_localise_row *d, const rs_camera *cam, const double q[2], double pixel_sigma)
 {
-    double en[2], a[2], b[2], J[4];
-    if (!locate(en, cam, q)) return false;
-    const double h = 0.5; // pixels
-    for (int k = 0; k < 2; k++) {
-        double qa[2] = {q[0], q[1]}, qb[2] = {q[0], q[1]};
-        qa[k] += h, qb[k] -= h;
-        if (!locate(a, cam, qa) || !locate(b, cam, qb)) return false;
-        J[0 * 2 + k] = (a[0] - b[0]) / (2 * h);
-        J[1 * 2 + k] = (a[1] - b[1]) / (2 * h);
-    }
-    const double s2 = pixel_sigma * pixel_sigma;
-    d->e_m = en[0], d->n_m = en[1], d->u_m = 0;
+    static const double up[3] = {0, 0, 1};
+    const double s2 = pixel_sigma * pixel_sigma, cov_q[4] = {s2, 0, 0, s2};
+    double p[3], C[4];
+    if (rs_camera_ground_locate(p, C, cam, NULL, q, cov_q, up, 0, NULL) != RS_OK) return false;
+    d->e_m = p[0], d->n_m = p[1], d->u_m = 0;
     d->u_px = q[0], d->v_px = q[1];
-    d->sigma_e_m = sqrt(s2 * (J[0] * J[0] + J[1] * J[1]));
-    d->sigma_n_m = sqrt(s2 * (J[2] * J[2] + J[3] * J[3]));
-    d->cov_en_m2 = s2 * (J[0] * J[2] + J[1] * J[3]);
+    d->sigma_e_m = sqrt(C[0]), d->sigma_n_m = sqrt(C[3]), d->cov_en_m2 = C[1];
     return true;
 }
 
