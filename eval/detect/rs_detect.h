@@ -189,7 +189,8 @@ typedef struct {
 // .png .jpg .jpeg .bmp .tif .tiff .webp .ppm .pgm, in byte order of their names), video files,
 // stream URLs -- and writes the detections file (docs/detect.md; interfaces of issue 39 item 1:
 // a COCO results list with image_id (1-based over the frames detected in), category_id, bbox,
-// score, camera, frame (0-based within its input), time_s (frame / fps; absent when unknown),
+// score, camera, frame (0-based within its input; consecutive image files are one input, as a
+// folder's images are), time_s (frame / fps; absent when unknown),
 // file_name) to out_path atomically (core/rs_io.h): nothing is written on any error.
 // Errors name the input (and frame): a frame whose size is not the camera's (RS_ERR_INVALID), an
 // input that cannot be read (RS_ERR_IO), an empty folder (RS_ERR_NOT_FOUND), OpenCV's failures.

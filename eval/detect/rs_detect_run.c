@@ -161,8 +161,11 @@ rs_status rs_detect_run(rs_detect_summary *summary, rs_detect_net *net, const ch
     run_state r = {.net = net, .opt = opt, .first = true};
     rs_status st = rs_io_atomic_open(&r.out, out_path, err);
     if (st) return st;
+    long still = 0; // consecutive image files are one sequence, as a folder's: frames 0, 1, ...
     for (int i = 0; st == RS_OK && i < Ninputs; i++) {
         struct stat sb;
+        const bool image = !strstr(inputs[i], "://") && is_image_name(base_name(inputs[i]));
+        if (!image) still = 0;
         if (!strstr(inputs[i], "://") && stat(inputs[i], &sb) == 0 && S_ISDIR(sb.st_mode)) {
             char **paths = NULL;
             int Npaths = 0;
@@ -171,6 +174,8 @@ rs_status rs_detect_run(rs_detect_summary *summary, rs_detect_net *net, const ch
             for (int k = 0; st == RS_OK && k < Npaths; k++)
                 if (k % opt->every == 0) st = run_input(&r, paths[k], k, err);
             free_list(paths, Npaths);
+        } else if (image) {
+            if (still++ % opt->every == 0) st = run_input(&r, inputs[i], still - 1, err);
         } else {
             st = run_input(&r, inputs[i], 0, err);
         }

@@ -261,6 +261,16 @@ def check_folder_and_video(fx):
         check(frames == [(1, 0, 0.0, "a.png"), (2, 1, 0.5, "b.png"), (3, 2, 1.0, "c.jpg")],
               f"folder: frames in name order with time_s = frame / fps: {frames}")
         print(f"folder: {len(got)} detections over {len(frames)} images in name order, time_s = frame / 2")
+    # the same images given one by one (a shell glob): one sequence in the order given
+    out = os.path.join(fx.tmp, "files.json")
+    names = ["c.jpg", "a.png", "b.png"]
+    p = fx.detect(model, out, [os.path.join(folder, n) for n in names], "--fps", "2")
+    check(p.returncode == 0, f"image files: exit {p.returncode}: {p.stderr}")
+    if p.returncode == 0:
+        got = json.load(open(out))
+        frames = sorted({(d["frame"], d["time_s"], d["file_name"]) for d in got})
+        check(frames == [(0, 0.0, "c.jpg"), (1, 0.5, "a.png"), (2, 1.0, "b.png")],
+              f"image files: one sequence in the order given, time_s = frame / fps: {frames}")
 
     # a video: MJPG in .avi at 10 fps, 5 frames
     video = os.path.join(fx.tmp, "clip.avi")
