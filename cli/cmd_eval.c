@@ -45,7 +45,8 @@ static void usage(FILE *out)
                  "Prints AP at each threshold, mAP (mean AP over the thresholds) and AR (mean final\n"
                  "recall); '-' (null in JSON) where there is no ground truth. The exact rules (ignore\n"
                  "regions, ties, max-dets): docs/evaluation.md. Tracking metrics in metres:\n"
-                 "roadside eval --tracks TRACKS.csv --gt-tracks GT.csv (roadside eval --tracks --help).\n"
+                 "roadside eval --tracks TRACKS.csv --gt-tracks GT.csv, and located detections with\n"
+                 "--located LOCATED.csv --gt-tracks GT.csv (roadside eval --tracks --help).\n"
                  "Exit status: 0 ok, 1 bad input (the\n"
                  "message names the file, line, entry and field), 2 usage error.\n");
 }
@@ -174,7 +175,9 @@ static void print_table(const rs_eval_result *r, const char *by)
 int rs_cli_eval(int argc, char **argv)
 {
     for (int i = 1; i < argc; i++)
-        if (!strcmp(argv[i], "--tracks") || !strncmp(argv[i], "--tracks=", 9)) return rs_cli_eval_tracks(argc, argv);
+        if (!strcmp(argv[i], "--tracks") || !strncmp(argv[i], "--tracks=", 9) || !strcmp(argv[i], "--located") ||
+            !strncmp(argv[i], "--located=", 10))
+            return rs_cli_eval_tracks(argc, argv);
     if (rs_cli_wants_help(argc, argv)) {
         usage(stdout);
         return RS_EXIT_OK;

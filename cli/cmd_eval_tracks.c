@@ -12,6 +12,8 @@ static void usage(FILE *out)
 {
     fprintf(out, "usage: roadside eval --tracks TRACKS.csv --gt-tracks DATASET/tracks_gt.csv\n"
                  "                     [--threshold-m D] [--visible-only | --all-gt] [-o METRICS.json]\n"
+                 "       roadside eval --located LOCATED.csv --gt-tracks DATASET/tracks_gt.csv\n"
+                 "                     [--threshold-m D] [--all-gt]\n"
                  "\n"
                  "Tracking metrics in metres on the ground (docs/evaluation.md, \"Tracking metrics\"):\n"
                  "CLEAR MOT (MOTA, MOTP in metres, FP, FN, IDSW, fragmentations), IDF1, HOTA (DetA,\n"
@@ -21,6 +23,10 @@ static void usage(FILE *out)
                  "\n"
                  "  --tracks TRACKS.csv   roadside track's tracks (time_s, track_id, e_m, n_m; sigma_e_m,\n"
                  "                        sigma_n_m, cov_en_m2 for the NEES)\n"
+                 "  --located LOC.csv     instead of tracks, roadside localise's detections: each\n"
+                 "                        camera's matched step by step to the vehicles (one each);\n"
+                 "                        prints the localisation RMSE, the covariances' prediction\n"
+                 "                        and the NEES (2 expected)\n"
                  "  --gt-tracks GT.csv    roadside synth --sequence's DATASET/tracks_gt.csv\n"
                  "  --threshold-m D       a track and a vehicle match only closer than D metres on the\n"
                  "                        ground (east-north distance; default 2)\n"
@@ -56,8 +62,9 @@ int rs_cli_eval_tracks(int argc, char **argv)
         usage(stdout);
         return RS_EXIT_OK;
     }
-    enum { O_TRACKS = 256, O_GT, O_THRESHOLD, O_VISIBLE, O_ALL };
+    enum { O_TRACKS = 256, O_LOCATED, O_GT, O_THRESHOLD, O_VISIBLE, O_ALL };
     static const struct option options[] = {{"tracks", required_argument, NULL, O_TRACKS},
+                                            {"located", required_argument, NULL, O_LOCATED},
                                             {"gt-tracks", required_argument, NULL, O_GT},
                                             {"threshold-m", required_argument, NULL, O_THRESHOLD},
                                             {"visible-only", no_argument, NULL, O_VISIBLE},
@@ -65,7 +72,7 @@ int rs_cli_eval_tracks(int argc, char **argv)
                                             {"json", required_argument, NULL, 'o'},
                                             {"output", required_argument, NULL, 'o'},
                                             {NULL, 0, NULL, 0}};
-    const char *tracks = NULL, *gt = NULL, *json = NULL;
+    const char *tracks = NULL, *located = NULL, *gt = NULL, *json = NULL;
     rs_mot_options opt = {0};
     bool visible_only = false;
     opterr = 0;
@@ -74,6 +81,7 @@ int rs_cli_eval_tracks(int argc, char **argv)
     while ((c = getopt_long(argc, argv, ":o:", options, NULL)) != -1) {
         switch (c) {
         case O_TRACKS: tracks = optarg; break;
+        case O_LOCATED: located = optarg; break;
         case O_GT: gt = optarg; break;
         case O_THRESHOLD:
             if (!rs_cli_parse_double(optarg, &opt.threshold_m) || !(opt.threshold_m > 0))
@@ -87,9 +95,23 @@ int rs_cli_eval_tracks(int argc, char **argv)
         }
     }
     if (optind != argc) return rs_cli_usage_error("eval", "--tracks takes no file argument ('%s')", argv[optind]);
-    if (!tracks || !gt) return rs_cli_usage_error("eval", "--tracks and --gt-tracks go together");
     if (visible_only && opt.all_gt) return rs_cli_usage_error("eval", "--visible-only and --all-gt exclude each other");
     rs_err err = {0};
+    if (located) {
+        if (tracks || !gt || json) return rs_cli_usage_error("eval", "--located goes with --gt-tracks alone");
+        rs_mot_located_result lr;
+        rs_status st = rs_mot_located_run(&lr, located, gt, &opt, &err);
+        if (st) return rs_cli_fail("eval", st, &err);
+        printf("located    %ld detections of %d camera(s) (%ld at no ground-truth time); D = %g m\n", lr.Nrows,
+               lr.Ncameras, lr.Noff_step, lr.threshold_m);
+        printf("           %ld matched to a vehicle, %ld without one, %ld near unseen vehicles only\n", lr.matched,
+               lr.unmatched, lr.ignored);
+        printf("position   RMSE %.3f m  predicted RMS %.3f m  NEES %.3f (%ld matches; 2 expected)\n", lr.rmse_m,
+               lr.predicted_rms_m, lr.nees, lr.Nnees);
+        if (fflush(stdout) != 0 || ferror(stdout)) return rs_cli_fail("eval: writing <stdout>", RS_ERR_IO, NULL);
+        return RS_EXIT_OK;
+    }
+    if (!tracks || !gt) return rs_cli_usage_error("eval", "--tracks and --gt-tracks go together");
     rs_mot_data *data = NULL;
     rs_mot_result r;
     rs_status st = rs_mot_load(&data, tracks, gt, &err);

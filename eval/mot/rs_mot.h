@@ -122,6 +122,35 @@ rs_status rs_mot_run( // out
     const rs_mot_options *opt, // may be NULL: the defaults
     rs_err *err);
 
+// Located detections (`roadside localise`'s CSV) against the ground truth: the localisation
+// error and how well the reported covariances describe it. Each camera's detections are matched
+// to the counted ground-truth vehicles step by step (one detection per vehicle and camera:
+// rs_mot_run's per-step assignment on the east-north distance below D, every detection a track
+// of its own), and the matches' figures summed over the cameras: RMSE of d, the covariances'
+// predicted RMS sqrt(mean(s_e^2 + s_n^2)) and the NEES mean d^T C^-1 d (2 expected).
+// Detections without a vehicle within D are counted as unmatched (ignored: near an uncounted
+// vehicle only). Every row must have time_s.
+// Errors: those of rs_localise_read (file, line, field) and rs_mot_load, RS_ERR_INVALID (a row
+// without time_s, "FILE:LINE: time_s: empty").
+typedef struct {
+    double threshold_m;
+    int Ncameras;
+    long Nrows, Noff_step;      // detections; those at no ground-truth time
+    long matched, unmatched;    // detections matched to a vehicle; left without one
+    long ignored;               // near an uncounted vehicle only
+    double rmse_m;              // over the matches
+    double predicted_rms_m;     // the covariances' prediction over the matches
+    double nees;                // mean d^T C^-1 d over the matches (2 expected)
+    long Nnees;
+} rs_mot_located_result;
+
+rs_status rs_mot_located_run( // out
+    rs_mot_located_result *result,
+    // in
+    const char *located_path, const char *gt_path,
+    const rs_mot_options *opt, // may be NULL: the defaults
+    rs_err *err);
+
 // The result as JSON (keys as the struct's fields, HOTA's per-alpha values as objects keyed by
 // alpha "%.2f"; NaN as null): a malloc'ed string (caller frees), NULL when out of memory.
 char *rs_mot_result_json(const rs_mot_result *result);

@@ -13,7 +13,9 @@ gates merge queued vehicles seen from afar.
 
 Asserted (the issue's "What must show"): >= 60 s of traffic with >= 50 vehicles seen; MOTA >= 0.9;
 IDF1 >= 0.9; the position RMSE within 1.2x of what the tracks' own covariances predict; >= 95 %
-of the crossings from one camera's view to another's keep their track id. The oracle is the
+of the crossings from one camera's view to another's keep their track id; and of the located
+detections themselves (`roadside eval --located`), NEES within [0.8, 1.25] x 2, equal to a numpy
+oracle's (nearest seen vehicle) to 2 %. The oracle is the
 simulation's truth (SUMO's positions, the labels' bottom_center_enu_m); the metrics' own code is
 checked against an independent implementation in tests/eval/test_mot_metrics.py.
 Arguments: seconds of traffic (default 65), the pixel sigma (default 0.75 px at 480x270: 3 px at
@@ -23,6 +25,7 @@ the cameras' 1920x1080). Measured (docs/benchmarks.md): MOTA 0.978, IDF1 0.951, 
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -92,6 +95,29 @@ def main(tmp):
     located = os.path.join(tmp, "located.csv")
     run("localise", dpath, "--dataset", ds, "--site", SITE, "--point", "center", "--pixel-sigma", str(SIGMA_PX),
         "-o", located)
+    # the located detections themselves: roadside eval --located against an oracle here (each
+    # detection's nearest counted vehicle at its time, numpy)
+    out = run("eval", "--located", located, "--gt-tracks", os.path.join(ds, "tracks_gt.csv"))
+    print(out)
+    nees_rs = float(re.search(r"NEES ([0-9.]+)", out).group(1))
+    seen_at = {}
+    for r in gt:
+        if r["cameras"]:
+            seen_at.setdefault(round(float(r["time_s"]), 6), []).append((float(r["e_m"]), float(r["n_m"])))
+    q = []
+    with open(located) as f:
+        for r in csv.DictReader(f):
+            cand = np.array(seen_at.get(round(float(r["time_s"]), 6), [(1e9, 1e9)]))
+            d = cand - [float(r["e_m"]), float(r["n_m"])]
+            k = int(np.argmin(np.hypot(d[:, 0], d[:, 1])))
+            if np.hypot(*d[k]) < 2.0:
+                C = np.array([[float(r["sigma_e_m"]) ** 2, float(r["cov_en_m2"])],
+                              [float(r["cov_en_m2"]), float(r["sigma_n_m"]) ** 2]])
+                q.append(d[k] @ np.linalg.solve(C, d[k]))
+    nees_oracle = float(np.mean(q))
+    check(1.6 <= nees_rs <= 2.5, f"located detections' NEES within [0.8, 1.25] x 2 ({nees_rs:.3f})")
+    check(abs(nees_rs - nees_oracle) <= 0.02 * nees_oracle,
+          f"roadside eval --located's NEES equals the oracle's to 2 % ({nees_rs:.3f} vs {nees_oracle:.3f})")
     tracks = os.path.join(tmp, "tracks.csv")
     print(run("track", SITE, located, "-o", tracks)[-400:])
     mpath = os.path.join(tmp, "metrics.json")
