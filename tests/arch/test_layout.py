@@ -59,6 +59,18 @@ def sources(root, module):
                 yield os.path.join(dp, f)
 
 
+# eval/ likewise (docs/architecture.md, "Inside eval/"): its top-level files (the AP) and the
+# rollout's component folders; component -> the components it may include besides its own. The
+# top-level files may include localise/ (a dataset's recorded calibration).
+EVAL_COMPONENTS = {
+    "detect": [],
+    "localise": [],
+    "track": ["localise"],
+    "mot": ["localise"],
+}
+EVAL_TOP_MAY_INCLUDE = ["localise"]
+
+
 def doc_text(root):
     return open(os.path.join(root, "docs", "architecture.md"), encoding="utf-8").read()
 
@@ -121,6 +133,41 @@ def check_synth_components(root, include_re, doc):
     print(f"{n} synth includes checked against the component order {' < '.join(SYNTH_COMPONENTS)}")
 
 
+def check_eval_components(root, include_re, doc):
+    """eval's component folders include only what EVAL_COMPONENTS allows (never another's
+    internal/ headers, never the top-level AP files); docs/architecture.md's table says the same."""
+    n = 0
+    for dp, _, fn in os.walk(os.path.join(root, "eval")):
+        for f in sorted(fn):
+            if not f.endswith((".c", ".h", ".cc")):
+                continue
+            rel = os.path.relpath(os.path.join(dp, f), root)
+            parts = rel.split("/")
+            mine = parts[1] if len(parts) >= 3 and parts[1] != "internal" else None  # None: the AP files
+            check(mine is None or mine in EVAL_COMPONENTS, f"{rel}: eval/{mine}/ is no component of eval ({', '.join(EVAL_COMPONENTS)})")
+            allowed = EVAL_COMPONENTS.get(mine, []) if mine else EVAL_TOP_MAY_INCLUDE
+            text = open(os.path.join(root, rel), encoding="utf-8", errors="replace").read()
+            for inc in include_re.findall(text):
+                if not inc.startswith("eval/"):
+                    continue
+                n += 1
+                ip = inc.split("/")
+                theirs = ip[1] if len(ip) >= 3 and ip[1] != "internal" else None
+                if theirs == mine:
+                    continue
+                check(theirs is not None and theirs in allowed,
+                      f"{rel}: may not include \"{inc}\" (eval/{mine or ''}{'/' if mine else ''} may include {allowed})")
+                check("internal" not in ip[2:-1], f"{rel}: includes another component's internal header \"{inc}\"")
+    for comp, allowed in EVAL_COMPONENTS.items():
+        check(os.path.isdir(os.path.join(root, "eval", comp)), f"eval/{comp}/: missing")
+        m = re.search(r"^\|\s*`eval/%s/`\s*\|[^|]*\|\s*([^|]*)\|" % comp, doc, re.M)
+        check(m is not None, f"docs/architecture.md: no row for `eval/{comp}/` in the table of eval's components")
+        if m:
+            listed = sorted(re.findall(r"`([a-z]+)`", m.group(1)))
+            check(listed == sorted(allowed), f"docs/architecture.md: `eval/{comp}/` may include {listed}, the test says {sorted(allowed)}")
+    print(f"{n} eval includes checked against its components {', '.join(EVAL_COMPONENTS)}")
+
+
 def main():
     root, build = sys.argv[1], sys.argv[2]
     include_re = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
@@ -154,6 +201,7 @@ def main():
                       f"{rel}: a C++ shim must expose C entry points (extern \"C\") and catch at the boundary")
     print(f"{n_includes} includes checked in {len(MODULES)} modules")
     check_synth_components(root, include_re, doc_text(root))
+    check_eval_components(root, include_re, doc_text(root))
 
     # docs/architecture.md states the same table
     doc = open(os.path.join(root, "docs", "architecture.md"), encoding="utf-8").read()
