@@ -122,6 +122,19 @@ rs_status rs_mot_run( // out
     const rs_mot_options *opt, // may be NULL: the defaults
     rs_err *err);
 
+// The figures of rs_mot_located_run.
+typedef struct {
+    double threshold_m;
+    int Ncameras;
+    long Nrows, Noff_step;   // detections; those at no ground-truth time
+    long matched, unmatched; // detections matched to a vehicle; left without one
+    long ignored;            // near an uncounted vehicle only
+    double rmse_m;           // over the matches
+    double predicted_rms_m;  // the covariances' prediction over the matches
+    double nees;             // mean d^T C^-1 d over the matches (2 expected)
+    long Nnees;
+} rs_mot_located_result;
+
 // Located detections (`roadside localise`'s CSV) against the ground truth: the localisation
 // error and how well the reported covariances describe it. Each camera's detections are matched
 // to the counted ground-truth vehicles step by step (one detection per vehicle and camera:
@@ -132,18 +145,6 @@ rs_status rs_mot_run( // out
 // vehicle only). Every row must have time_s.
 // Errors: those of rs_localise_read (file, line, field) and rs_mot_load, RS_ERR_INVALID (a row
 // without time_s, "FILE:LINE: time_s: empty").
-typedef struct {
-    double threshold_m;
-    int Ncameras;
-    long Nrows, Noff_step;      // detections; those at no ground-truth time
-    long matched, unmatched;    // detections matched to a vehicle; left without one
-    long ignored;               // near an uncounted vehicle only
-    double rmse_m;              // over the matches
-    double predicted_rms_m;     // the covariances' prediction over the matches
-    double nees;                // mean d^T C^-1 d over the matches (2 expected)
-    long Nnees;
-} rs_mot_located_result;
-
 rs_status rs_mot_located_run( // out
     rs_mot_located_result *result,
     // in

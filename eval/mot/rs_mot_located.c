@@ -61,7 +61,8 @@ rs_status rs_mot_located_run(rs_mot_located_result *r, const char *located_path,
         r->unmatched += m.fp;
         r->ignored += m.Nignored;
         if (m.matches > 0) sse += m.rmse_m * m.rmse_m * (double)m.matches;
-        if (m.matches > 0 && isfinite(m.predicted_rms_m)) pred_ss += m.predicted_rms_m * m.predicted_rms_m * (double)m.matches;
+        if (m.matches > 0 && isfinite(m.predicted_rms_m))
+            pred_ss += m.predicted_rms_m * m.predicted_rms_m * (double)m.matches;
         if (m.Nnees > 0) nees_sum += m.nees * (double)m.Nnees, r->Nnees += m.Nnees;
         r->threshold_m = m.threshold_m;
     }
