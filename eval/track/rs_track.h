@@ -16,7 +16,8 @@
 //     the matched tracks, and a new tentative track for every unmatched detection farther than
 //     birth_exclusion_mahal2 from every track (closer, it is taken for an outlier of that track
 //     or a detector's second box on it: a gate of 99.9 % misses 1 detection in 1,000, which at
-//     4 cameras x 30 frames/s would start a twin of each track every 8 s). A second
+//     4 cameras x 30 frames/s would start a twin of each track every 8 s), the tracks that took
+//     another detection of this camera excepted (a camera sees a vehicle once). A second
 //     camera's detection of the same vehicle at the same instant therefore updates the track the
 //     first camera's detection updated (or gave birth to) instead of starting another;
 //   - two tracks on one vehicle (e.g. born from two cameras whose locations disagree by more
