@@ -32,6 +32,7 @@
 #include "geo/rs_lanes.h"
 #include "geo/rs_site.h"
 #include "synth/backdrop/rs_synth_appearance.h"
+#include "synth/backdrop/rs_synth_condition.h"
 #include "synth/backdrop/rs_synth_light.h"
 #include "synth/backdrop/rs_synth_sun.h"
 #include "synth/dataset/rs_synth_dataset.h"
@@ -43,8 +44,13 @@
 typedef struct {
     const rs_site_background *src; // the site's record (borrowed from the dataset's site)
     const char *time_iso;          // its "time" tag (borrowed), may be NULL
-    bool overcast;                 // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
-    bool night;                    // conditions night: no shadow at all
+    bool overcast;                 // conditions cloudy, rain, snow, dusk or night: no sun, the sky's soft shadow
+    bool night;                    // night: no shadow at all
+    // issue 40: its condition (synth/backdrop/rs_synth_condition.h), from its tags; when they say
+    // nothing (cond_known false) estimated from the image at first use (prepare_background)
+    rs_synth_condition cond;
+    bool cond_known;
+    char cond_label[16]; // rs_synth_condition_label, once known
     // cache, filled at first use (rs_synth_dataset__prepare_background): the image at the
     // output size decoded from sRGB to linear light, its appearance
     rs_image linear;
@@ -136,10 +142,11 @@ rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, r
                                                rs_synth_dataset__background *bm, rs_err *err);
 
 // Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
-// finished). out: *grey: rendered over the grey ground (no background); *seconds_povray grows
-// by the image's povray time.
+// finished). out: *grey: rendered over the grey ground (no background); *condition: the
+// background's condition as time_of_day x 3 + surface (rs_synth_condition.h), -1 none (the
+// grey ground); *seconds_povray grows by the image's povray time.
 rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
-                                       bool *grey, double *seconds_povray, rs_err *err);
+                                       bool *grey, int *condition, double *seconds_povray, rs_err *err);
 
 // Hard-links src to DATASET/<rel> (replacing what is there, atomically: a link to a temporary
 // name, then rename), or copies it when linking fails (another file system).
