@@ -490,7 +490,7 @@ static int render_passes(rs_synth_scene_options passes[4], int *i_id, int *i_sha
             passes[Npasses].pass = RS_SYNTH_PASS_SHADOW;
             *i_shadow = Npasses++;
         }
-        if (s->opt.mirror && s->mregion[2] >= 0) { // issue 40: the wet road's mirror image
+        if (s->opt.mirror && s->mregion[2] >= 0 && !(s->canvas.fisheye_deg > 0)) { // issue 40: a wet road's mirror
             passes[Npasses] = passes[0];
             passes[Npasses].Npins = 0;
             *i_mirror = Npasses++;
@@ -518,11 +518,10 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     memcpy(out->region, s->region, sizeof(s->region)); // rendered: the union of the regions
     if (i_shadow >= 0) grow(out->region, s->sregion);
     povray_job jobs[4];
-    rs_synth_povcam scam, mcam;
-    rs_synth_povcam_mirror(&mcam, &s->cam, s->ground_normal_enu, s->ground_offset_m);
+    rs_synth_povcam scam, mcam; // the shadow and mirror passes: half resolution, coarse meshes
     const int W2 = (canvas->width + 1) / 2, H2 = (canvas->height + 1) / 2;
     rs_status st = RS_OK;
-    if (i_shadow >= 0) {
+    if (i_shadow >= 0 || i_mirror >= 0) {
         // (a fisheye canvas's size is even: the same angle on half the size has the same relation)
         const double *f = canvas->fxycxy;
         const double half[4] = {f[0] / 2, f[1] / 2, (f[2] - 0.5) / 2, (f[3] - 0.5) / 2};
@@ -531,6 +530,7 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
                       : rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
             (st = shadow_vehicles(&s->svehicles, &s->sowned, s->vehicles, s->include, err)))
             return st;
+        rs_synth_povcam_mirror(&mcam, &scam, s->ground_normal_enu, s->ground_offset_m);
     }
     // Without pins, drawn ground, antialiasing or a ground hiding part of a vehicle
     // (rs_synth_scene_ground_occludes) the colour pass covers exactly the ID pass's vehicle
@@ -554,15 +554,14 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
                                .cam = sh              ? &scam
                                       : k == i_mirror ? &mcam
                                                       : &s->cam,
-                               .vehicles = sh ? &s->svehicles : s->vehicles,
+                               .vehicles = sh || k == i_mirror ? &s->svehicles : s->vehicles,
                                .pass = &passes[k],
                                .antialias = k ? 0 : opt->antialias,
                                .region = {s->region[0], s->region[1], s->region[2], s->region[3]},
                                .ppm = k == 0 && ids_alpha,
                                .log = logs[name]};
-        if (k == i_mirror) memcpy(jobs[k].region, s->mregion, sizeof(s->mregion));
-        if (sh) {
-            const int *sr = s->sregion;
+        if (sh || k == i_mirror) {
+            const int *sr = sh ? s->sregion : s->mregion;
             const int r2[4] = {(int)fmax(0, floor((sr[0] - 0.5) / 2)), (int)fmax(0, floor((sr[1] - 0.5) / 2)),
                                (int)fmin(W2 - 1, ceil((sr[2] - 0.5) / 2)), (int)fmin(H2 - 1, ceil((sr[3] - 0.5) / 2))};
             memcpy(jobs[k].region, r2, sizeof(r2));

@@ -61,12 +61,19 @@ bool rs_synth_mirror_rect(int rect[4], const rs_synth_canvas *canvas, const doub
 rs_status rs_synth_mirror_weight(rs_image *mirror, const rs_synth_canvas *canvas, const double rt_cam_enu[6],
                                  const double g_enu[3], rs_err *err)
 {
+    // premultiplied, then resized from half the canvas to the canvas (linear)
+    const size_t n2 = (size_t)mirror->width * mirror->height;
+    for (size_t i = 0; i < n2; i++)
+        for (int k = 0; k < 3; k++) mirror->data[4 * i + k] *= mirror->data[4 * i + 3];
+    rs_image full = {0}, blurred = {0};
+    rs_status st = rs_synth_image_resize(&full, mirror, canvas->width, canvas->height, err);
+    if (st) return st;
     double c[3], R[9];
     camera_frame(c, R, rt_cam_enu);
     const double gn = sqrt(g_enu[0] * g_enu[0] + g_enu[1] * g_enu[1] + g_enu[2] * g_enu[2]);
-    for (int v = 0; v < mirror->height; v++)
-        for (int u = 0; u < mirror->width; u++) {
-            float *p = &mirror->data[4 * ((size_t)v * mirror->width + u)];
+    for (int v = 0; v < full.height; v++)
+        for (int u = 0; u < full.width; u++) {
+            float *p = &full.data[4 * ((size_t)v * full.width + u)];
             if (!(p[3] > 0)) {
                 memset(p, 0, 4 * sizeof(float));
                 continue;
@@ -75,17 +82,16 @@ rs_status rs_synth_mirror_weight(rs_image *mirror, const rs_synth_canvas *canvas
             canvas_ray(d, R, canvas->fxycxy, u, v);
             const double dn = (d[0] * g_enu[0] + d[1] * g_enu[1] + d[2] * g_enu[2]) / gn;
             const double cos_i = -dn / sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            const double Ra = cos_i > 0 ? rs_synth_fresnel_water(cos_i) * p[3] : 0;
-            for (int k = 0; k < 3; k++) p[k] = (float)(Ra * p[k]);
-            p[3] = (float)Ra;
+            const double Rf = cos_i > 0 ? rs_synth_fresnel_water(cos_i) : 0;
+            for (int k = 0; k < 4; k++) p[k] = (float)(Rf * p[k]);
         }
     // ripples: a little blur (1 px) of the premultiplied reflection
-    rs_image blurred = {0};
-    rs_status st = rs_synth_image_blur(&blurred, mirror, 1.0, err);
-    if (st) return st;
-    rs_image_free(mirror);
-    *mirror = blurred;
-    return RS_OK;
+    if (!(st = rs_synth_image_blur(&blurred, &full, 1.0, err))) {
+        rs_image_free(mirror);
+        *mirror = blurred;
+    }
+    rs_image_free(&full);
+    return st;
 }
 
 rs_status rs_synth_headlight_ground(rs_image *irr, const rs_synth_canvas *canvas, const double rt_cam_enu[6],

@@ -304,7 +304,8 @@ bool rs_synth_scene_ground_occludes(const rs_synth_povcam *cam, const rs_synth_p
 }
 
 // The condition's lights of the colour pass (issue 40, rs_synth_scene_apply_condition): a
-// spot light at each included vehicle's headlights (lights_on) and the street lights, all
+// spot light at each included vehicle's headlights (lights_on; only where another included
+// vehicle's centre is within 40 m and 35 deg of the beam's axis) and the street lights, all
 // shadowless, fading as 1/d^2 (fade_distance 1, fade_power 2: POV-Ray's 2 / (1 + d^2), so the
 // colour is half the intensity at 1 m).
 static void write_condition_lights(FILE *f, const rs_synth_prepared *vehicles, const rs_synth_scene_options *opt,
@@ -316,7 +317,16 @@ static void write_condition_lights(FILE *f, const rs_synth_prepared *vehicles, c
         const rs_synth_vehicle *v = &vehicles->v[i];
         double p[2][3], axis[3];
         rs_synth_scene_headlights(p, axis, v, rs_synth_ground_up_m(g, offset, v->e_m, v->n_m));
-        for (int k = 0; k < 2; k++) {
+        // cost: a lamp lights only what its beam reaches; none of the others within 40 m and
+        // 35 deg of its axis: no light_source (the road's light is rs_synth_headlight_ground's)
+        bool lights_one = false;
+        for (int j = 0; j < vehicles->N && !lights_one; j++) {
+            if (j == i || (opt->include && !opt->include[j])) continue;
+            const double de = vehicles->v[j].e_m - p[0][0], dn = vehicles->v[j].n_m - p[0][1];
+            const double d = hypot(de, dn), ah = hypot(axis[0], axis[1]);
+            lights_one = d < 40 && ah > 0 && (de * axis[0] + dn * axis[1]) / (d * ah) > cos(35 * RS_RAD_PER_DEG);
+        }
+        for (int k = 0; k < 2 && lights_one; k++) {
             const double at[3] = {p[k][0] + axis[0], p[k][1] + axis[1], p[k][2] + axis[2]};
             fprintf(f, "light_source { ");
             write_vec_enu(f, p[k]);

@@ -23,11 +23,13 @@ void rs_synth_povcam_mirror(rs_synth_povcam *m, const rs_synth_povcam *cam, cons
 bool rs_synth_mirror_rect(int rect[4], const rs_synth_canvas *canvas, const double rt_cam_enu[6],
                           const double corners_enu_m[8][3], const double g_enu[3], double offset_m);
 
-// The mirror pass weighted by Fresnel's reflectance of water at each canvas pixel's angle of
-// incidence on the ground (rs_synth_fresnel_water; 0 where the ray does not meet the ground),
-// made premultiplied (rgb = R a L, alpha = R a) and blurred by 1 px (ripples).
-// in,out: mirror (canvas H, W, 4) straight alpha in, premultiplied out; in: canvas (pinhole),
-// rt_cam_enu (6,), g_enu (3,)
+// The mirror pass (rendered at half the canvas's resolution: a reflection is soft, and the pass
+// costs a second colour trace) made premultiplied, resized to the canvas (linear), weighted by
+// Fresnel's reflectance of water at each canvas pixel's angle of incidence on the ground
+// (rs_synth_fresnel_water; 0 where the ray does not meet the ground): rgb = R a L, alpha = R a;
+// and blurred by 1 px (ripples).
+// in,out: mirror (half canvas (H+1)/2, (W+1)/2, 4) straight alpha in, (canvas H, W, 4)
+// premultiplied out; in: canvas (pinhole), rt_cam_enu (6,), g_enu (3,)
 rs_status rs_synth_mirror_weight(rs_image *mirror, const rs_synth_canvas *canvas, const double rt_cam_enu[6],
                                  const double g_enu[3], rs_err *err);
 

@@ -12,7 +12,8 @@
 #   wet:   the car seen side on over the rain background: day-wet and day-dry differ (mean
 #          |diff| >= 3 / 255) over the projection of the car's box mirrored in the ground
 #          (minus the car's own pixels), the difference is red like the car (R > G, B), and
-#          elsewhere off the car the two images are equal (<= 1 / 255 on 99.9 % of pixels).
+#          elsewhere off the car the two images are equal (<= 1 / 255 on 99.9 % of pixels); the
+#          dry render shows no mirror image: its mirror region equals the background PNG.
 #   snow:  day-snow against day-dry over the snow background: the roof pixels (the box's top
 #          face shrunk to 60 % round its centre, projected, within the ID mask) are whiter:
 #          mean luminance x >= 1.3 and mean saturation lower.
@@ -147,6 +148,11 @@ def main():
               % (mirror.sum(), inside, np.round(red, 2).tolist(), outside))
         if inside < 2 or not (red[0] > red[1] + 1 and red[0] > red[2] + 1):
             u.fail("wet: no red mirror image below the car (mean |diff| %.2f, RGB %s)" % (inside, red))
+        bgimg = u.read_png(bg["rain"]).astype(np.float64)
+        dry_same = np.mean(np.abs(dry.astype(np.float64) - bgimg)[mirror].max(axis=1) <= 1)
+        print("dry: the mirror region equals the background on %.4f of its pixels" % dry_same)
+        if dry_same < 0.999:
+            u.fail("dry: something below the car (%.4f of the mirror region equals the background)" % dry_same)
         if outside < 0.999:
             u.fail("wet: the wet render differs from the dry one away from the car (%.4f equal)" % outside)
 
