@@ -226,7 +226,7 @@ static void print_summary(const rs_synth_dataset_options *opt, const rs_synth_da
            "%d annotations in the dataset, %.1f s (%.1f s in povray, %.3f s/image)\n",
            opt->shard_index, opt->shard_count, sum->Nimages, sum->Nmade, sum->Nskipped, sum->Ngrey, sum->Nannotations,
            sum->seconds, sum->seconds_povray, sum->Nmade > 0 ? sum->seconds / sum->Nmade : 0.0);
-    printf("conditions:  "); // issue 40: the mix of the images made now (also in run.json)
+    printf("conditions:  "); // issue 40: the mix of this shard's images (also in run.json)
     int Nlisted = 0;
     for (int i = 0; i < 9; i++) {
         if (!sum->Ncondition[i]) continue;

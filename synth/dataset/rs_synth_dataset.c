@@ -402,9 +402,10 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
     return st;
 }
 
-// issue 40: the mix of conditions this run made (sum->Ncondition) into DATASET/run.json as
-// "conditions": {"shard": "I/N", "<time>-<surface>": images, ...} (beside "run": not compared by
-// merge or a rerun); the record is rewritten atomically.
+// issue 40: the mix of conditions of this shard's images (sum->Ncondition) into DATASET/run.json
+// as "conditions": {"I/N": {"<time>-<surface>": images, ...}, ...} (one entry per shard run into
+// the folder, this one's replaced; beside "run", so neither merge nor a rerun compares it; merge
+// sums them, rs_synth_dataset_merge). The record is rewritten atomically.
 static rs_status write_condition_mix(const rs_synth_dataset__run *d, const rs_synth_dataset_summary *sum, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
@@ -414,17 +415,15 @@ static rs_status write_condition_mix(const rs_synth_dataset__run *d, const rs_sy
     cJSON *doc = st ? NULL : cJSON_Parse(text);
     if (!st && !doc) st = rs_err_set(err, RS_ERR_PARSE, "%s: not JSON", path);
     if (!st) {
-        cJSON_DeleteItemFromObjectCaseSensitive(doc, "conditions");
-        cJSON *mix = cJSON_AddObjectToObject(doc, "conditions");
-        char shard[64], label[16];
-        snprintf(shard, sizeof(shard), "%d/%d", opt->shard_index, opt->shard_count);
-        cJSON_AddStringToObject(mix, "shard", shard);
-        for (int i = 0; i < 9; i++) {
-            const rs_synth_condition c = {.time_of_day = (rs_synth_time_of_day)(i / 3),
-                                          .surface = (rs_synth_surface)(i % 3)};
-            rs_synth_condition_label(label, sizeof(label), &c);
-            if (sum->Ncondition[i]) cJSON_AddNumberToObject(mix, label, sum->Ncondition[i]);
+        cJSON *mixes = cJSON_GetObjectItemCaseSensitive(doc, "conditions");
+        if (!cJSON_IsObject(mixes)) {
+            cJSON_DeleteItemFromObjectCaseSensitive(doc, "conditions");
+            mixes = cJSON_AddObjectToObject(doc, "conditions");
         }
+        char shard[64];
+        snprintf(shard, sizeof(shard), "%d/%d", opt->shard_index, opt->shard_count);
+        cJSON_DeleteItemFromObjectCaseSensitive(mixes, shard);
+        rs_synth_dataset__condition_mix_add(cJSON_AddObjectToObject(mixes, shard), sum->Ncondition);
         if (!(out = cJSON_Print(doc))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     }
     if (!st) st = rs_io_write_file(path, out, strlen(out), err);
@@ -463,8 +462,7 @@ static void count_report(const rs_synth_dataset_options *opt, rs_synth_dataset_s
     sum->Nmade += rep->kind != 's';
     sum->Nremade += rep->remade;
     sum->Ngrey += rep->kind == 'g';
-    if (rep->kind != 's' && rep->kind != 'e' && rep->condition >= 0 && rep->condition < 9)
-        sum->Ncondition[rep->condition]++;
+    if (rep->kind != 'e' && rep->condition >= 0 && rep->condition < 9) sum->Ncondition[rep->condition]++;
     sum->seconds_povray += rep->seconds_povray;
     if (progress && opt->progress)
         opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages, sum->Nskipped);
@@ -500,6 +498,9 @@ static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *
             rep.remade = true;
             snprintf(rep.note, sizeof(rep.note), "%s: remaking image %d", why, k);
         }
+        const int ib = rs_synth_dataset__image_background(d, k, c); // its condition, for the mix
+        if (ib >= 0 && c->bg[ib].cond_known)
+            rep.condition = 3 * (int)c->bg[ib].cond.time_of_day + (int)c->bg[ib].cond.surface;
         if (!st && state != RS_SYNTH_DATASET__FINISHED) {
             bool grey = false;
             st = rs_synth_dataset__make_image(d, k, stem, c, &grey, &rep.condition, &rep.seconds_povray, err);

@@ -133,9 +133,10 @@ typedef struct {
     bool tracks_gt;      // a sequence's DATASET/tracks_gt.csv was written (every image finished)
     double seconds;      // wall time
     double seconds_povray;
-    // issue 40: the images made now by their background's condition, index time_of_day x 3 +
-    // surface (synth/backdrop/rs_synth_condition.h: day, dusk, night x dry, wet, snow); the
-    // grey ground's images are in none. Also written to DATASET/run.json's "conditions".
+    // issue 40: this shard's images (made now or found finished) by their background's
+    // condition, index time_of_day x 3 + surface (synth/backdrop/rs_synth_condition.h: day, dusk,
+    // night x dry, wet, snow); the grey ground's images are in none, and so are finished images
+    // over an untagged background not decoded by this run. Also in DATASET/run.json's "conditions".
     int Ncondition[9];
 } rs_synth_dataset_summary;
 

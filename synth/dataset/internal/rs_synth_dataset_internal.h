@@ -123,6 +123,13 @@ static inline bool rs_synth_dataset__file_exists(const char *path)
     return stat(path, &st) == 0;
 }
 
+// issue 40, run.json's "conditions" (rs_synth_dataset_coco.c): adds to mix one member per
+// non-zero count, "<time>-<surface>": counts[time_of_day x 3 + surface], in that index order
+// (mix may be NULL: nothing); and sums every shard's mix of a "conditions" object into counts
+// (members that are not such labels are skipped).
+void rs_synth_dataset__condition_mix_add(cJSON *mix, const int counts[9]);
+void rs_synth_dataset__condition_mix_read(int counts[9], const cJSON *mixes);
+
 // The file stem of image k: "%06d_<camera>" with every character but [A-Za-z0-9_-] as '_'.
 void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
 

@@ -105,8 +105,7 @@ def main():
                        % (im["file_name"], im["background"], im.get("condition"), im.get("condition_estimated"), want))
             counts[want] += 1
             labels[want] += per_image[im["id"]]
-        mix = json.load(open(os.path.join(ds, "run.json")))["conditions"]
-        mix = {k: v for k, v in mix.items() if k != "shard"}
+        mix = json.load(open(os.path.join(ds, "run.json")))["conditions"]["0/1"]
         print("run.json conditions %s; COCO %s" % (mix, dict(counts)))
         if mix != dict(counts):
             u.fail("run.json's mix %s differs from the images' %s" % (mix, dict(counts)))
