@@ -74,6 +74,11 @@ static int dataset_stats(int argc, char **argv)
     print_counts("cameras:", r->cameras, r->Ncameras, r->images);
     print_counts("weather:", r->weather, r->Nweather, r->images);
     print_counts("time:", r->time_of_day, r->Ntime_of_day, r->images);
+    printf("conditions: ");
+    for (int i = 0; i < r->Nconditions; i++)
+        printf("%s %s: %d images, %d labels", i ? ";" : "", r->conditions[i].value, r->conditions[i].images,
+               r->conditions[i].labels);
+    printf("\n");
     printf("visibility:  ");
     for (int b = 0; b < 10; b++)
         printf("%s[%.1f,%.1f%c %d", b ? ", " : "", b / 10.0, (b + 1) / 10.0, b == 9 ? ']' : ')', r->visibility_hist[b]);

@@ -18,6 +18,7 @@ static const char render_usage[] =
     "                       [--background IMAGE] [--pins] [--sun AZ,EL | --time ISO8601]\n"
     "                       [--full-frame] [--antialias N] [--canvas-scale S] [--keep]\n"
     "                       [--shadows [--overcast]] [--separate-processes] [--no-match-light]\n"
+    "                       [--condition TIME-SURFACE]\n"
     "                       [--labels [--split NAME] [--bbox KIND] [--min-visibility V]]\n"
     "\n"
     "Renders vehicles seen by a calibrated camera with POV-Ray 3.7 (docs/povray.md):\n"
@@ -57,6 +58,10 @@ static const char render_usage[] =
     "                       the background is shaded by the vehicles' sun and sky shadows;\n"
     "                       writes OUTDIR/shadow.png (16-bit lit fraction, 1 = open ground)\n"
     "  --overcast           no sun: the sky alone (its soft shadow under each vehicle)\n"
+    "  --condition C        the background's condition (docs/conditions.md): TIME day, dusk or\n"
+    "                       night, SURFACE dry, wet or snow (e.g. night-wet): lights on and\n"
+    "                       their light on the road (dusk, night), street lights (night), the\n"
+    "                       vehicles mirrored in a wet road, snow on them (default day-dry)\n"
     "  --separate-processes the passes' povray processes one after the other (default:\n"
     "                       all at once)\n"
     "  --labels             also write the labels of this image (docs/labels.md), computed\n"
@@ -86,6 +91,7 @@ enum {
     OPT_SPLIT,
     OPT_BBOX,
     OPT_MINVIS,
+    OPT_CONDITION,
     OPT_SHADOWS,
     OPT_NOMATCH,
     OPT_OVERCAST,
@@ -123,6 +129,7 @@ int rs_cli_render(int argc, char **argv)
                                              {"split", required_argument, NULL, OPT_SPLIT},
                                              {"bbox", required_argument, NULL, OPT_BBOX},
                                              {"min-visibility", required_argument, NULL, OPT_MINVIS},
+                                             {"condition", required_argument, NULL, OPT_CONDITION},
                                              {NULL, 0, NULL, 0}};
     rs_cli_synth_args s = {0};
     rs_synth_render_options ropt;
@@ -130,6 +137,7 @@ int rs_cli_render(int argc, char **argv)
     int c, rc;
     long aa;
     bool labels = false, overcast = false, match_light = true;
+    rs_synth_condition cond = {0}; // day, dry
     const char *split = "train2017";
     rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
     rs_err perr = {0};
@@ -145,6 +153,10 @@ int rs_cli_render(int argc, char **argv)
         case OPT_NOMATCH: match_light = false; continue;
         case OPT_SEPARATE: ropt.separate_processes = true; continue;
         case OPT_LABELS: labels = true; continue;
+        case OPT_CONDITION:
+            if (rs_synth_condition_parse(&cond, optarg, &perr))
+                return rs_cli_usage_error("render", "--condition: %s", perr.msg);
+            continue;
         case OPT_SPLIT:
             for (const char *p = optarg; *p; p++)
                 if (!(isalnum((unsigned char)*p) || *p == '_' || *p == '-'))
@@ -205,6 +217,11 @@ int rs_cli_render(int argc, char **argv)
         }
         free(lanes_path);
         rs_lanes_free(&lanes);
+    }
+    if (!st) { // issue 40: the condition's lights, street lights and snow; its passes
+        rs_synth_scene_apply_condition(&ropt.scene, &cond, s.site, &s.prepared);
+        ropt.headlights = ropt.scene.lights_on;
+        ropt.mirror = cond.surface == RS_SYNTH_SURFACE_WET && ropt.background_path;
     }
     if (!st)
         st = rs_synth_render(&r, s.output, &s.camera, s.site->ground_normal_enu, s.site->ground_offset_m, &s.prepared,

@@ -9,6 +9,7 @@
 
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_synth.h"
+#include "synth/backdrop/rs_synth_condition.h"
 #include "synth/dataset/rs_synth_dataset.h"
 #include "synth/labels/rs_synth_labels.h"
 
@@ -225,6 +226,17 @@ static void print_summary(const rs_synth_dataset_options *opt, const rs_synth_da
            "%d annotations in the dataset, %.1f s (%.1f s in povray, %.3f s/image)\n",
            opt->shard_index, opt->shard_count, sum->Nimages, sum->Nmade, sum->Nskipped, sum->Ngrey, sum->Nannotations,
            sum->seconds, sum->seconds_povray, sum->Nmade > 0 ? sum->seconds / sum->Nmade : 0.0);
+    printf("conditions:  "); // issue 40: the mix of this shard's images (also in run.json)
+    int Nlisted = 0;
+    for (int i = 0; i < 9; i++) {
+        if (!sum->Ncondition[i]) continue;
+        char label[16];
+        const rs_synth_condition c = {.time_of_day = (rs_synth_time_of_day)(i / 3),
+                                      .surface = (rs_synth_surface)(i % 3)};
+        rs_synth_condition_label(label, sizeof(label), &c);
+        printf("%s%s %d", Nlisted++ ? ", " : "", label, sum->Ncondition[i]);
+    }
+    printf("%s\n", Nlisted ? "" : "none (no background)");
     if (sum->Nremade > 0 || sum->Nleft_out > 0)
         printf("resume:      %d of the images made were found damaged and remade; %d part files left out of the "
                "COCO file (stderr names each)\n",

@@ -131,7 +131,7 @@ rs_status rs_synth_background_median(rs_synth_median *out, const char *const *in
 
 // ---- tags and site.json ----
 
-const char *const rs_synth_background_conditions[] = {"sunny", "cloudy", "rain", "snow", "night", NULL};
+const char *const rs_synth_background_conditions[] = {"sunny", "cloudy", "rain", "snow", "night", "dusk", NULL};
 
 static bool is_safe_name(const char *s, size_t max)
 {
@@ -160,7 +160,8 @@ rs_status rs_synth_background_tags_check(const rs_synth_background_tags *t, rs_e
         for (int i = 0; rs_synth_background_conditions[i]; i++)
             ok = ok || !strcmp(t->conditions, rs_synth_background_conditions[i]);
         if (!ok)
-            return rs_err_set(err, RS_ERR_USAGE, "tag conditions: '%s' is not one of sunny, cloudy, rain, snow, night",
+            return rs_err_set(err, RS_ERR_USAGE,
+                              "tag conditions: '%s' is not one of sunny, cloudy, rain, snow, night, dusk",
                               t->conditions);
     }
     return RS_OK;

@@ -61,7 +61,8 @@ size_t rs_synth_median_bytes_bound(int width, int height, int max_frames);
 
 // ---- tags and site.json ----
 
-// The recognised conditions, NULL-terminated: "sunny", "cloudy", "rain", "snow", "night".
+// The recognised conditions, NULL-terminated: "sunny", "cloudy", "rain", "snow", "night", "dusk"
+// (issue 40; what each means for the vehicles: synth/backdrop/rs_synth_condition.h).
 extern const char *const rs_synth_background_conditions[];
 
 typedef struct {

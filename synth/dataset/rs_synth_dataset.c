@@ -164,9 +164,9 @@ static void dataset_free(rs_synth_dataset__run *d)
 }
 
 // The backgrounds of the site's camera sc (site.json "background_images", read by geo) whose
-// tags match every filter.
+// tags match every filter, each with its condition from its tags (rs_synth_condition_from_tags).
 static rs_status select_backgrounds(rs_synth_dataset__camera *c, const rs_site_camera *sc,
-                                    const rs_synth_dataset_options *opt, rs_err *err)
+                                    const rs_synth_dataset_options *opt, const rs_site *site, rs_err *err)
 {
     c->bg =
         calloc((size_t)(sc->Nbackground_images > 0 ? sc->Nbackground_images : 1), sizeof(rs_synth_dataset__background));
@@ -182,9 +182,12 @@ static rs_status select_backgrounds(rs_synth_dataset__camera *c, const rs_site_c
         rs_synth_dataset__background *b = &c->bg[c->Nbg++];
         b->src = e;
         b->time_iso = rs_site_background_tag(e, "time");
-        const char *cond = rs_site_background_tag(e, "conditions");
-        b->overcast = cond && strcmp(cond, "sunny") != 0;
-        b->night = cond && strcmp(cond, "night") == 0;
+        rs_status st =
+            rs_synth_condition_from_tags(&b->cond, &b->cond_known, e, site->origin.lat_deg, site->origin.lon_deg, err);
+        if (st) return st;
+        b->overcast = b->cond_known && b->cond.overcast;
+        b->night = b->cond_known && b->cond.time_of_day == RS_SYNTH_TOD_NIGHT;
+        if (b->cond_known) rs_synth_condition_label(b->cond_label, sizeof(b->cond_label), &b->cond);
     }
     return RS_OK;
 }
@@ -238,7 +241,7 @@ static rs_status dataset_load(rs_synth_dataset__run *d, rs_err *err)
         if ((st = rs_camera_read(&c->cam, NULL, path, err)) ||
             (st = rs_hash_sha256_file(c->calib_sha256, NULL, path, err)) ||
             (st = scale_camera(&c->cam, opt->width, opt->height, id, err)) ||
-            (st = select_backgrounds(c, &d->site->cameras[isite], opt, err)))
+            (st = select_backgrounds(c, &d->site->cameras[isite], opt, d->site, err)))
             goto done;
     }
     if (d->Ncams == 0) st = rs_err_set(err, RS_ERR_INVALID, "%s: no camera", opt->site_dir);
@@ -399,6 +402,38 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
     return st;
 }
 
+// issue 40: the mix of conditions of this shard's images (sum->Ncondition) into DATASET/run.json
+// as "conditions": {"I/N": {"<time>-<surface>": images, ...}, ...} (one entry per shard run into
+// the folder, this one's replaced; beside "run", so neither merge nor a rerun compares it; merge
+// sums them, rs_synth_dataset_merge). The record is rewritten atomically.
+static rs_status write_condition_mix(const rs_synth_dataset__run *d, const rs_synth_dataset_summary *sum, rs_err *err)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    char *path = rs_io_join(opt->out_dir, "run.json"), *text = NULL, *out = NULL;
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = rs_io_read_file(&text, NULL, path, err);
+    cJSON *doc = st ? NULL : cJSON_Parse(text);
+    if (!st && !doc) st = rs_err_set(err, RS_ERR_PARSE, "%s: not JSON", path);
+    if (!st) {
+        cJSON *mixes = cJSON_GetObjectItemCaseSensitive(doc, "conditions");
+        if (!cJSON_IsObject(mixes)) {
+            cJSON_DeleteItemFromObjectCaseSensitive(doc, "conditions");
+            mixes = cJSON_AddObjectToObject(doc, "conditions");
+        }
+        char shard[64];
+        snprintf(shard, sizeof(shard), "%d/%d", opt->shard_index, opt->shard_count);
+        cJSON_DeleteItemFromObjectCaseSensitive(mixes, shard);
+        rs_synth_dataset__condition_mix_add(cJSON_AddObjectToObject(mixes, shard), sum->Ncondition);
+        if (!(out = cJSON_Print(doc))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    if (!st) st = rs_io_write_file(path, out, strlen(out), err);
+    cJSON_Delete(doc);
+    free(out);
+    free(text);
+    free(path);
+    return st;
+}
+
 // Whether any image can go to the validation split.
 static bool has_val(const rs_synth_dataset_options *opt)
 {
@@ -413,6 +448,7 @@ typedef struct {
     bool remade;           // made again: found finished but damaged (note says why)
     int status;            // rs_status of an error
     double seconds_povray; // of this image
+    int condition;         // its background's condition (time_of_day x 3 + surface), -1 none
     char msg[400];         // an error's message
     char note[700];        // a resume notice, "" if none
 } worker_report;
@@ -426,6 +462,7 @@ static void count_report(const rs_synth_dataset_options *opt, rs_synth_dataset_s
     sum->Nmade += rep->kind != 's';
     sum->Nremade += rep->remade;
     sum->Ngrey += rep->kind == 'g';
+    if (rep->kind != 'e' && rep->condition >= 0 && rep->condition < 9) sum->Ncondition[rep->condition]++;
     sum->seconds_povray += rep->seconds_povray;
     if (progress && opt->progress)
         opt->progress(opt->progress_ctx, sum->Nmade + sum->Nskipped, sum->Nimages, sum->Nskipped);
@@ -450,7 +487,7 @@ static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *
             st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
             break;
         }
-        worker_report rep = {.kind = 's'};
+        worker_report rep = {.kind = 's', .condition = -1};
         rs_synth_dataset__state state;
         char why[600];
         st = rs_synth_dataset__check_finished(&state, why, sizeof(why), d, stem, c,
@@ -461,9 +498,12 @@ static rs_status run_images(rs_synth_dataset__run *d, rs_synth_dataset_summary *
             rep.remade = true;
             snprintf(rep.note, sizeof(rep.note), "%s: remaking image %d", why, k);
         }
+        const int ib = rs_synth_dataset__image_background(d, k, c); // its condition, for the mix
+        if (ib >= 0 && c->bg[ib].cond_known)
+            rep.condition = 3 * (int)c->bg[ib].cond.time_of_day + (int)c->bg[ib].cond.surface;
         if (!st && state != RS_SYNTH_DATASET__FINISHED) {
             bool grey = false;
-            st = rs_synth_dataset__make_image(d, k, stem, c, &grey, &rep.seconds_povray, err);
+            st = rs_synth_dataset__make_image(d, k, stem, c, &grey, &rep.condition, &rep.seconds_povray, err);
             rep.kind = grey ? 'g' : 'm';
         }
         if (st) rep.kind = 'e';
@@ -722,6 +762,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
         st = rs_synth_dataset__assemble(&d, &sum.Nannotations, &sum.Nleft_out, err);
         rmdir(d.work_root); // empty when every image finished
     }
+    if (!st && !opt->labels_only) st = write_condition_mix(&d, &sum, err);
     if (!st && opt->sequence) st = sequence_tracks(&sum.tracks_gt, &d, err);
 done:
     rs_io_unlock(&lock);

@@ -133,6 +133,11 @@ typedef struct {
     bool tracks_gt;      // a sequence's DATASET/tracks_gt.csv was written (every image finished)
     double seconds;      // wall time
     double seconds_povray;
+    // issue 40: this shard's images (made now or found finished) by their background's
+    // condition, index time_of_day x 3 + surface (synth/backdrop/rs_synth_condition.h: day, dusk,
+    // night x dry, wet, snow); the grey ground's images are in none, and so are finished images
+    // over an untagged background not decoded by this run. Also in DATASET/run.json's "conditions".
+    int Ncondition[9];
 } rs_synth_dataset_summary;
 
 // Makes (or completes) this shard's images (with jobs > 1 in forked workers, each reporting
@@ -239,7 +244,7 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations,
 typedef struct {
     char value[96]; // the split, camera, weather or time of day ("(missing)" when absent)
     int images;
-    int labels; // (splits only)
+    int labels; // (splits and conditions only)
 } rs_synth_dataset_count;
 
 typedef struct {
@@ -252,6 +257,10 @@ typedef struct {
     double distance_sum_m;
     int visibility_hist[10]; // labels by visibility in [0, 0.1), .., [0.9, 1]
     int invisible;           // labels with no visible pixel (visible_pixels 0)
+    // issue 40: images and labels by the images' "condition" (docs/conditions.md:
+    // "<time_of_day>-<surface>"; "(missing)" for images made before it or over the grey ground)
+    rs_synth_dataset_count conditions[RS_SYNTH_STATS_MAX];
+    int Nconditions;
 } rs_synth_dataset_stats_result;
 
 // The junction's centre on the site: the mean of the vertices of the lanes whose kind is

@@ -555,3 +555,28 @@ rs_status rs_synth_dataset__splits(char **names, int *Nnames, int max, const cha
     }
     return st;
 }
+
+void rs_synth_dataset__condition_mix_add(cJSON *mix, const int counts[9])
+{
+    for (int i = 0; mix && i < 9; i++) {
+        const rs_synth_condition c = {.time_of_day = (rs_synth_time_of_day)(i / 3),
+                                      .surface = (rs_synth_surface)(i % 3)};
+        char label[16];
+        rs_synth_condition_label(label, sizeof(label), &c);
+        if (counts[i]) cJSON_AddNumberToObject(mix, label, counts[i]);
+    }
+}
+
+void rs_synth_dataset__condition_mix_read(int counts[9], const cJSON *mixes)
+{
+    const cJSON *shard, *x;
+    cJSON_ArrayForEach(shard, mixes)
+    {
+        cJSON_ArrayForEach(x, shard)
+        {
+            rs_synth_condition c;
+            if (cJSON_IsNumber(x) && rs_synth_condition_parse(&c, x->string, NULL) == RS_OK)
+                counts[3 * (int)c.time_of_day + (int)c.surface] += (int)x->valuedouble;
+        }
+    }
+}

@@ -87,10 +87,17 @@ rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, r
 {
     rs_status st = background_fit(bm, c->cam.width, c->cam.height, err);
     if (st || bm->light_tried) return st;
+    // issue 40: the condition its tags leave open, estimated from the image
+    if (!bm->cond_known) {
+        if ((st = rs_synth_condition_estimate(&bm->cond, &bm->linear, err))) return st;
+        bm->cond_known = true;
+        bm->overcast = bm->cond.overcast;
+        bm->night = bm->cond.time_of_day == RS_SYNTH_TOD_NIGHT;
+        rs_synth_condition_label(bm->cond_label, sizeof(bm->cond_label), &bm->cond);
+    }
     // issue 18: lighting matched to the background's road (dry roads only)
-    const char *cond = rs_site_background_tag(bm->src, "conditions");
     bm->light_tried = true;
-    const bool dry = !cond || !strcmp(cond, "sunny") || !strcmp(cond, "cloudy");
+    const bool dry = bm->cond.surface == RS_SYNTH_SURFACE_DRY;
     bm->light_ok =
         dry && rs_synth_light_from_image(&bm->light, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL) == RS_OK;
     double t_s;
@@ -116,7 +123,7 @@ static void shade_background(rs_image *bg_lin, const float *shadow, const uint16
     }
 }
 
-// The composite over a background: shadows (when given), the vehicle layer matched to the
+// The composite over a background: shadows (when given), the condition's ground terms, the vehicle layer matched to the
 // background (rs_synth_appearance.h; skipped when the background gives no estimate), straight
 // alpha over the background in linear light, sRGB, the background's JPEG quality.
 // in,out: r (its composite replaced); in: shadow passes may be NULL
@@ -130,6 +137,11 @@ static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__ba
     if ((st = rs_image_alloc(&lin, r->width, r->height, 3, err))) goto done;
     memcpy(lin.data, b->linear.data, sizeof(float) * 3 * n);
     if (r->shadow) shade_background(&lin, r->shadow, r->ids);
+    // issue 40: the road lit by the headlights (its reflectance RS_SYNTH_ROAD_ALBEDO) and the
+    // vehicles mirrored in a wet road (replacing what the background shows there: sky NULL)
+    const double albedo[3] = {RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO};
+    if (r->headlight_irradiance) rs_synth_condition_add_headlights(&lin, r->headlight_irradiance, r->ids, albedo);
+    if (r->mirror.data) rs_synth_condition_add_wet(&lin, &r->mirror, r->ids, NULL);
     if (matched && (st = rs_synth_appearance_apply(&r->rgba, &app, 0.6, seed, err))) {
         rs_image_free(&lin);
         goto done;
@@ -343,9 +355,16 @@ static rs_synth_image_info image_info(const rs_synth_dataset__run *d, int k, con
                                 .calib_source_sha256 = c->calib_sha256,
                                 .ground_offset_m = d->site->ground_offset_m};
     memcpy(info.ground_normal_enu, d->site->ground_normal_enu, sizeof(info.ground_normal_enu));
-    info.time_of_day = (b && b->night) || ropt->scene.sun_elevation_deg < -6 ? "night"
-                       : ropt->scene.sun_elevation_deg < 6                   ? "twilight"
-                                                                             : "day";
+    if (b && b->cond_known) { // issue 40: the tagged or estimated condition
+        info.time_of_day = rs_synth_condition_time_name(b->cond.time_of_day);
+        info.surface = rs_synth_condition_surface_name(b->cond.surface);
+        info.condition = b->cond_label;
+        info.condition_estimated = b->cond.estimated;
+        if (!info.weather) info.weather = info.surface;
+    } else
+        info.time_of_day = ropt->scene.sun_elevation_deg < RS_SYNTH_DUSK_LOW_DEG     ? "night"
+                           : ropt->scene.sun_elevation_deg <= RS_SYNTH_DUSK_HIGH_DEG ? "dusk"
+                                                                                     : "day";
     if (iframe >= 0) {
         info.traffic_frame_file = d->frames[iframe].file;
         info.traffic_frame_time_s = d->frames[iframe].time_s;
@@ -404,7 +423,7 @@ static rs_status image_files(const rs_synth_dataset__run *d, int k, const char *
 }
 
 rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
-                                       bool *grey, double *seconds_povray, rs_err *err)
+                                       bool *grey, int *condition, double *seconds_povray, rs_err *err)
 {
     uint64_t rng = rs_synth_dataset_image_seed(d->opt->seed, k);
     image_traffic t = {0};
@@ -423,6 +442,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     if (!st) st = image_render_options(&ropt, &b, d, k, c, &rng, err);
     if (st) goto done;
     *grey = b == NULL;
+    *condition = b && b->cond_known ? 3 * (int)b->cond.time_of_day + (int)b->cond.surface : -1;
     if ((st = image_vehicles(&t, d, k, c, &rng, err))) goto done;
     const int N = t.N;
     const size_t n = (size_t)(N > 0 ? N : 1);
@@ -436,6 +456,11 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
     for (int i = 0; i < N; i++) ids[i] = t.v[i].id;
     if ((st = rs_synth_prepare_lod(&prepared, t.v, NULL, N, t.coarse, err))) goto done;
     ropt.vehicle_rects = (const int(*)[4])t.rect;
+    if (b && b->cond_known && !d->opt->labels_only) { // issue 40: lights, street lights, snow; the passes
+        rs_synth_scene_apply_condition(&ropt.scene, &b->cond, d->site, &prepared);
+        ropt.headlights = ropt.scene.lights_on;
+        ropt.mirror = b->cond.surface == RS_SYNTH_SURFACE_WET;
+    }
     if (d->opt->labels_only) { // the ID pass alone, rasterised (rs_synth_dataset.h, "sequences")
         r.width = c->cam.width;
         r.height = c->cam.height;

@@ -326,6 +326,27 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
         cJSON *doc = cJSON_CreateObject();
         cJSON_AddItemToObject(doc, "run", cJSON_Duplicate(runs[0], 1));
         cJSON_AddItemToArray(cJSON_AddArrayToObject(doc, "shards"), cJSON_CreateString("0/1"));
+        // issue 40: the shards' mixes of conditions summed (a shard found in two inputs once)
+        int counts[9] = {0};
+        bool any = false;
+        cJSON *seen = cJSON_CreateObject();
+        for (int i = 0; i < Ninputs && seen; i++) {
+            const cJSON *sh;
+            cJSON_ArrayForEach(sh, cJSON_GetObjectItemCaseSensitive(docs[i], "conditions"))
+            {
+                if (!sh->string || cJSON_GetObjectItemCaseSensitive(seen, sh->string)) continue;
+                cJSON *one = cJSON_CreateObject();
+                cJSON_AddItemReferenceToObject(one, sh->string, (cJSON *)sh);
+                rs_synth_dataset__condition_mix_read(counts, one);
+                cJSON_Delete(one);
+                cJSON_AddTrueToObject(seen, sh->string);
+                any = true;
+            }
+        }
+        cJSON_Delete(seen);
+        if (any)
+            rs_synth_dataset__condition_mix_add(
+                cJSON_AddObjectToObject(cJSON_AddObjectToObject(doc, "conditions"), "0/1"), counts);
         char *text = cJSON_Print(doc), *path = rs_io_join(out_dir, "run.json");
         char *kdir = rs_io_join(out_dir, "kitti/ImageSets");
         st = text && path && kdir ? rs_io_mkdir_p(kdir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");

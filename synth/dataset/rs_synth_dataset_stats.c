@@ -92,8 +92,19 @@ rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *d
                 sp->images = cJSON_GetArraySize(images);
                 sp->labels = cJSON_GetArraySize(anns);
                 r->images += sp->images;
+                // issue 40: each image's condition by its id (COCO ids run 1..N), for its labels
+                const int Nimg = cJSON_GetArraySize(images);
+                int *cond_of = calloc((size_t)Nimg + 1, sizeof(int)); // index into conditions + 1
                 cJSON_ArrayForEach(x, images)
                 {
+                    const char *cv = string_of(x, "condition");
+                    count_value(r->conditions, &r->Nconditions, RS_SYNTH_STATS_MAX, cv);
+                    const cJSON *id = cJSON_GetObjectItemCaseSensitive(x, "id");
+                    int ic = -1;
+                    for (int q = 0; q < r->Nconditions && ic < 0; q++)
+                        if (!strcmp(r->conditions[q].value, cv ? cv : "(missing)")) ic = q;
+                    if (cond_of && cJSON_IsNumber(id) && id->valueint >= 1 && id->valueint <= Nimg)
+                        cond_of[id->valueint] = ic + 1;
                     count_value(r->cameras, &r->Ncameras, RS_SYNTH_STATS_MAX, string_of(x, "camera"));
                     count_value(r->weather, &r->Nweather, RS_SYNTH_STATS_MAX, string_of(x, "weather"));
                     count_value(r->time_of_day, &r->Ntime_of_day, RS_SYNTH_STATS_MAX, string_of(x, "time_of_day"));
@@ -101,6 +112,10 @@ rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *d
                 cJSON_ArrayForEach(x, anns)
                 {
                     r->labels++;
+                    const cJSON *iid = cJSON_GetObjectItemCaseSensitive(x, "image_id");
+                    if (cond_of && cJSON_IsNumber(iid) && iid->valueint >= 1 && iid->valueint <= Nimg &&
+                        cond_of[iid->valueint] > 0)
+                        r->conditions[cond_of[iid->valueint] - 1].labels++;
                     const cJSON *p = cJSON_GetObjectItemCaseSensitive(x, "bottom_center_enu_m");
                     if (cJSON_IsArray(p) && cJSON_GetArraySize(p) == 3) {
                         const double de_m = cJSON_GetArrayItem(p, 0)->valuedouble - centre_enu_m[0];
@@ -118,6 +133,7 @@ rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *d
                                         cJSON_GetObjectItemCaseSensitive(x, "visible_pixels")->valuedouble <= 0;
                     }
                 }
+                free(cond_of);
             }
             cJSON_Delete(doc);
         }

@@ -184,7 +184,16 @@ typedef struct {
     double paint_rgb[3]; // linear RGB in [0,1]: the base coat under the clear coat
     double metallic;     // 0 solid .. 1 metallic flake: highlights tinted by the paint
     double dirt;         // 0 clean .. 1 dirty: a grey-brown film, densest on the sills
+    // issue 40, conditions (synth/backdrop/rs_synth_condition.h; docs/conditions.md):
+    bool lights_on; // head- and tail lights glowing (emission: RS_SYNTH_HEADLIGHT_EMISSION, ..)
+    double snow;    // 0 none .. 1 full: a white layer on the paint where the surface faces up
 } rs_synth_look;
+
+// The light parts' glow when lights_on, linear radiance in the scene's units (a white surface
+// under a sun at the zenith is 1): headlights far brighter than anything lit (a lamp's lens is
+// about 1e4 cd/m^2 against an asphalt road's 1..2 at night), tail lights red.
+#define RS_SYNTH_HEADLIGHT_EMISSION 4.0
+#define RS_SYNTH_TAILLIGHT_EMISSION 0.8
 
 // The look of a RESOLVED vehicle (paint = v->rgb; metallic and dirt from v->variant, the
 // metallic share depending on the paint's colour family). Deterministic.

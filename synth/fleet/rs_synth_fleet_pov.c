@@ -67,6 +67,14 @@ static void write_paint(FILE *f, const rs_synth_look *look, double height_m)
                 "} scale <1, %.4f, 1> } finish { ambient 0 diffuse 0.7 specular 0 } }\n",
                 1 - 0.85 * d, 1 - 0.45 * d, 0.999 * height_m);
     }
+    if (look->snow > 0.02) { // issue 40: snow where the surface faces up (slope y: 1 up, 0.5 vertical)
+        const double s = look->snow > 1 ? 1 : look->snow;
+        fprintf(f,
+                "    texture { pigment { slope y colour_map { [0 rgbt <0.92, 0.93, 0.95, 1>] [%.3f rgbt <0.92, 0.93, "
+                "0.95, 1>] [%.3f rgbt <0.92, 0.93, 0.95, %.3f>] [1 rgbt <0.92, 0.93, 0.95, %.3f>] } } "
+                "finish { ambient 0 diffuse 0.9 specular 0.05 roughness 0.1 } }\n",
+                0.80, 0.88, 1 - 0.7 * s, 1 - 0.97 * s);
+    }
 }
 
 // Appends x with `decimals` (<= 9) digits after the point, trailing zeros and a leading "0"
@@ -216,6 +224,14 @@ static void write_part_look(FILE *f, const rs_synth_mesh *mesh, int part, const 
         double lo[3], hi[3];
         rs_synth_mesh_bounds(lo, hi, mesh);
         write_paint(f, look, hi[2] > 0 ? hi[2] : 1);
+    } else if (look && look->lights_on && (part == RS_SYNTH_PART_HEADLIGHT || part == RS_SYNTH_PART_TAILLIGHT)) {
+        // issue 40: lights on, their lens glowing (emission adds to what the finish reflects)
+        const bool head = part == RS_SYNTH_PART_HEADLIGHT;
+        const double e = head ? RS_SYNTH_HEADLIGHT_EMISSION : RS_SYNTH_TAILLIGHT_EMISSION;
+        fprintf(f,
+                "    texture { %s }\n    texture { pigment { rgbt <%.4f, %.4f, %.4f, 0.3> } finish { emission 1 "
+                "ambient 0 diffuse 0 specular 0 } }\n",
+                part_textures[part], e, e * (head ? 0.96 : 0.04), e * (head ? 0.88 : 0.03));
     } else
         fprintf(f, "    texture { %s }\n", part_textures[part]);
     if (needs_ior(part)) fprintf(f, "    interior { ior 1.5 }\n");
@@ -224,7 +240,7 @@ static void write_part_look(FILE *f, const rs_synth_mesh *mesh, int part, const 
 rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth_mesh *mesh,
                                        rs_synth_declare_style style, const double paint_rgb[3], rs_err *err)
 {
-    rs_synth_look look = {{0, 0, 0}, 0, 0};
+    rs_synth_look look = {{0, 0, 0}, 0, 0, false, 0};
     if (paint_rgb)
         for (int c = 0; c < 3; c++) look.paint_rgb[c] = paint_rgb[c];
     else if (style == RS_SYNTH_DECLARE_TEXTURED)

@@ -541,6 +541,11 @@ static void add_image_info(cJSON *o, const rs_synth_image_info *in)
     add_string_or_null(o, "background", in->background);
     add_string_or_null(o, "weather", in->weather);
     add_string_or_null(o, "time_of_day", in->time_of_day);
+    if (in->condition) { // issue 40
+        cJSON_AddStringToObject(o, "surface", in->surface ? in->surface : "dry");
+        cJSON_AddStringToObject(o, "condition", in->condition);
+        cJSON_AddBoolToObject(o, "condition_estimated", in->condition_estimated);
+    }
     add_string_or_null(o, "time", in->time_iso);
     add_number_or_null(o, "sun_azimuth_deg", in->sun_azimuth_deg);
     add_number_or_null(o, "sun_elevation_deg", in->sun_elevation_deg);

@@ -114,9 +114,10 @@ typedef struct {
     int index;                       // the image's index k in the dataset (-1: not written)
     const char *camera;              // camera id (site.json)
     const char *background;          // the background's name (else its file); NULL: the grey ground
-    const char *weather;             // the background's "conditions" tag: sunny, cloudy, rain, snow, night
-    const char *time_of_day;         // "day" (sun above 6 deg), "twilight" (-6..6), "night" (below -6, or
-                                     // the background is tagged night)
+    const char *weather;             // the background's "conditions" tag (sunny, cloudy, rain, snow,
+                                     // night, dusk), else the estimated surface (dry, snow)
+    const char *time_of_day;         // the background's condition (synth/backdrop/rs_synth_condition.h):
+                                     // "day", "dusk", "night", tagged or estimated
     const char *time_iso;            // the background's "time" tag (ISO 8601), may be NULL
     double sun_azimuth_deg;          // the sun the vehicles were lit by (clockwise from north)
     double sun_elevation_deg;        // degrees above the horizon
@@ -133,6 +134,10 @@ typedef struct {
     const char *traffic_frame_file;
     double traffic_frame_time_s;
     int traffic_frame_index;
+    // issue 40: the background's condition (docs/conditions.md); NULL: not written
+    const char *surface;      // "dry", "wet", "snow"
+    const char *condition;    // "<time_of_day>-<surface>", e.g. "night-wet"
+    bool condition_estimated; // estimated from the image, not tagged
 } rs_synth_image_info;
 
 // One labelled image for the writers.

@@ -13,7 +13,9 @@
 #include "core/rs_color.h"
 #include "core/rs_io.h"
 #include "synth/backdrop/rs_synth_appearance.h"
+#include "synth/backdrop/rs_synth_condition.h"
 #include "synth/povray/internal/rs_synth_povray.h"
+#include "synth/povray/internal/rs_synth_render_internal.h"
 #include "synth/povray/internal/rs_synth_scene_internal.h"
 #include "synth/povray/rs_synth_raster.h"
 
@@ -33,6 +35,8 @@ void rs_synth_render_result_free(rs_synth_render_result *r)
     free(r->ids);
     free(r->visible);
     free(r->shadow);
+    rs_image_free(&r->mirror);
+    free(r->headlight_irradiance);
     memset(r, 0, sizeof(*r));
 }
 
@@ -284,6 +288,10 @@ static void remove_intermediates(const char *out_dir)
                                         "pass_shadow.ini",
                                         "pass_shadow.png",
                                         "pass_shadow.log",
+                                        "pass_mirror.pov",
+                                        "pass_mirror.ini",
+                                        "pass_mirror.png",
+                                        "pass_mirror.log",
                                         ".povray/3.7/povray.conf",
                                         ".povray/3.7",
                                         ".povray",
@@ -332,18 +340,35 @@ static void decode_ids(rs_synth_render_result *out, const rs_image *ids, int N)
     }
 }
 
-// out->composite = rgba over the background (or black), in linear light, sRGB-encoded.
-static void composite(rs_synth_render_result *out, const rs_image *bg)
+// out->composite = rgba over the background (or black), in linear light, sRGB-encoded; the
+// background shaded by the shadow pass, then (issue 40, synth/backdrop/rs_synth_condition.h) lit
+// by the headlights (road albedo RS_SYNTH_ROAD_ALBEDO) and mirroring the vehicles in a wet road
+// (the sky it mirrors taken as the background itself).
+static rs_status composite(rs_synth_render_result *out, const rs_image *bg, rs_err *err)
 {
     const size_t Npx = (size_t)out->width * out->height;
-    for (size_t i = 0; i < Npx; i++) {
-        const float *c = &out->rgba.data[4 * i];
+    rs_image lin = {0};
+    rs_status st = rs_image_alloc(&lin, out->width, out->height, 3, err);
+    if (st) return st;
+    for (size_t i = 0; i < Npx; i++)
         for (int k = 0; k < 3; k++) {
             double b = bg ? rs_color_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]) : 0;
             if (out->shadow && out->ids[i] == 0) b *= out->shadow[i];
-            out->composite.data[3 * i + k] = (float)rs_color_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
+            lin.data[3 * i + k] = (float)b;
+        }
+    const double albedo[3] = {RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO};
+    if (bg && out->headlight_irradiance)
+        rs_synth_condition_add_headlights(&lin, out->headlight_irradiance, out->ids, albedo);
+    if (bg && out->mirror.data) rs_synth_condition_add_wet(&lin, &out->mirror, out->ids, NULL);
+    for (size_t i = 0; i < Npx; i++) {
+        const float *c = &out->rgba.data[4 * i];
+        for (int k = 0; k < 3; k++) {
+            const double v = c[3] * c[k] + (1 - c[3]) * lin.data[3 * i + k];
+            out->composite.data[3 * i + k] = (float)rs_color_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
         }
     }
+    rs_image_free(&lin);
+    return RS_OK;
 }
 
 static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out, rs_err *err)
@@ -383,10 +408,11 @@ typedef struct {
     rs_synth_povcam cam;
     rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
     int Nlights;
-    uint8_t *include;            // (N,) owned: 0 = culled
-    int region[4], sregion[4];   // canvas rectangles of the colour/ID and the shadow passes
-    bool ground_drawn;           // the ground is drawn (no background to composite onto)
-    rs_synth_prepared svehicles; // the shadow pass's (shadow_vehicles)
+    uint8_t *include;                      // (N,) owned: 0 = culled
+    int region[4], sregion[4], mregion[4]; // canvas rectangles: colour/ID, shadow, mirror passes
+    bool ground_drawn;                     // the ground is drawn (no background to composite onto)
+    rs_image mirror, headlights;           // issue 40: the canvas's mirror pass, headlights' irradiance
+    rs_synth_prepared svehicles;           // the shadow pass's (shadow_vehicles)
     uint8_t *sowned;
 } render_state;
 
@@ -399,8 +425,8 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
     const double *rt_cam_enu = s->camera->rt_cam_enu;
     const int N = s->vehicles->N;
     s->Nlights = rs_synth_scene_lights(s->lights, &opt->scene);
-    for (int k = 0; k < 2; k++) {
-        int *r = k ? s->sregion : s->region;
+    for (int k = 0; k < 3; k++) {
+        int *r = k == 2 ? s->mregion : k ? s->sregion : s->region;
         r[0] = canvas->width, r[1] = canvas->height, r[2] = r[3] = -1;
     }
     for (int i = 0; i < N; i++) {
@@ -419,6 +445,10 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
         if (!in) continue;
         out->Nrendered++;
         grow(s->region, rect);
+        int mrect[4];
+        if (opt->mirror && rs_synth_mirror_rect(mrect, canvas, rt_cam_enu, (const double(*)[3])corners,
+                                                s->ground_normal_enu, s->ground_offset_m))
+            grow(s->mregion, mrect);
         if (!opt->shadow) continue;
         widen_by_shadows(rect, canvas, rt_cam_enu, (const double(*)[3])corners, s->ground_normal_enu,
                          s->ground_offset_m, s->lights, s->Nlights);
@@ -440,11 +470,11 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
 
 // The passes: colour; ID and shadow when vehicles are rendered. out: passes (3,), *i_id and
 // *i_shadow (-1: none); returns their count.
-static int render_passes(rs_synth_scene_options passes[3], int *i_id, int *i_shadow, const render_state *s,
-                         const rs_synth_render_result *out)
+static int render_passes(rs_synth_scene_options passes[4], int *i_id, int *i_shadow, int *i_mirror,
+                         const render_state *s, const rs_synth_render_result *out)
 {
     int Npasses = 0;
-    *i_id = *i_shadow = -1;
+    *i_id = *i_shadow = *i_mirror = -1;
     passes[Npasses] = s->opt.scene;
     passes[Npasses].include = s->include;
     passes[Npasses].pass = RS_SYNTH_PASS_COLOUR;
@@ -459,6 +489,11 @@ static int render_passes(rs_synth_scene_options passes[3], int *i_id, int *i_sha
             passes[Npasses] = passes[*i_id];
             passes[Npasses].pass = RS_SYNTH_PASS_SHADOW;
             *i_shadow = Npasses++;
+        }
+        if (s->opt.mirror && s->mregion[2] >= 0 && !(s->canvas.fisheye_deg > 0)) { // issue 40: a wet road's mirror
+            passes[Npasses] = passes[0];
+            passes[Npasses].Npins = 0;
+            *i_mirror = Npasses++;
         }
     }
     return Npasses;
@@ -477,16 +512,16 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     const rs_synth_render_options *opt = &s->opt;
     const rs_synth_canvas *canvas = &s->canvas;
     const double *rt_cam_enu = s->camera->rt_cam_enu;
-    rs_synth_scene_options passes[3];
-    int i_id, i_shadow;
-    const int Npasses = render_passes(passes, &i_id, &i_shadow, s, out);
+    rs_synth_scene_options passes[4];
+    int i_id, i_shadow, i_mirror;
+    const int Npasses = render_passes(passes, &i_id, &i_shadow, &i_mirror, s, out);
     memcpy(out->region, s->region, sizeof(s->region)); // rendered: the union of the regions
     if (i_shadow >= 0) grow(out->region, s->sregion);
-    povray_job jobs[3];
-    rs_synth_povcam scam;
+    povray_job jobs[4];
+    rs_synth_povcam scam, mcam; // the shadow and mirror passes: half resolution, coarse meshes
     const int W2 = (canvas->width + 1) / 2, H2 = (canvas->height + 1) / 2;
     rs_status st = RS_OK;
-    if (i_shadow >= 0) {
+    if (i_shadow >= 0 || i_mirror >= 0) {
         // (a fisheye canvas's size is even: the same angle on half the size has the same relation)
         const double *f = canvas->fxycxy;
         const double half[4] = {f[0] / 2, f[1] / 2, (f[2] - 0.5) / 2, (f[3] - 0.5) / 2};
@@ -495,6 +530,7 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
                       : rs_synth_povcam_init(&scam, half, W2, H2, rt_cam_enu, err)) ||
             (st = shadow_vehicles(&s->svehicles, &s->sowned, s->vehicles, s->include, err)))
             return st;
+        rs_synth_povcam_mirror(&mcam, &scam, s->ground_normal_enu, s->ground_offset_m);
     }
     // Without pins, drawn ground, antialiasing or a ground hiding part of a vehicle
     // (rs_synth_scene_ground_occludes) the colour pass covers exactly the ID pass's vehicle
@@ -509,26 +545,29 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     const bool fisheye = canvas->fisheye_deg > 0;
     const bool ids_here = i_id >= 0 && !ground_hides && !opt->povray_passes && !fisheye;
     const bool shadow_here = i_shadow >= 0 && !opt->povray_passes && !fisheye;
-    static const char *const names[3] = {"pass_colour", "pass_ids", "pass_shadow"};
-    static const char *const logs[3] = {"povray.log", "pass_ids.log", "pass_shadow.log"};
+    static const char *const names[4] = {"pass_colour", "pass_ids", "pass_shadow", "pass_mirror"};
+    static const char *const logs[4] = {"povray.log", "pass_ids.log", "pass_shadow.log", "pass_mirror.log"};
     for (int k = 0; k < Npasses; k++) {
         const bool sh = k == i_shadow;
-        jobs[k] = (povray_job){.name = names[k],
-                               .cam = sh ? &scam : &s->cam,
-                               .vehicles = sh ? &s->svehicles : s->vehicles,
+        const int name = k == i_mirror ? 3 : k == i_shadow ? 2 : k;
+        jobs[k] = (povray_job){.name = names[name],
+                               .cam = sh              ? &scam
+                                      : k == i_mirror ? &mcam
+                                                      : &s->cam,
+                               .vehicles = sh || k == i_mirror ? &s->svehicles : s->vehicles,
                                .pass = &passes[k],
                                .antialias = k ? 0 : opt->antialias,
                                .region = {s->region[0], s->region[1], s->region[2], s->region[3]},
                                .ppm = k == 0 && ids_alpha,
-                               .log = logs[k]};
-        if (sh) {
-            const int *sr = s->sregion;
+                               .log = logs[name]};
+        if (sh || k == i_mirror) {
+            const int *sr = sh ? s->sregion : s->mregion;
             const int r2[4] = {(int)fmax(0, floor((sr[0] - 0.5) / 2)), (int)fmax(0, floor((sr[1] - 0.5) / 2)),
                                (int)fmin(W2 - 1, ceil((sr[2] - 0.5) / 2)), (int)fmin(H2 - 1, ceil((sr[3] - 0.5) / 2))};
             memcpy(jobs[k].region, r2, sizeof(r2));
         }
     }
-    rs_image imgs[3] = {{0}};
+    rs_image imgs[4] = {{0}};
     // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
     const bool together = !opt->separate_processes;
     for (int k = 0; k < Npasses; k++) {
@@ -547,6 +586,9 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     if (!st && shadow_here)
         st = rs_synth_raster_shadow(frac, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu, &s->svehicles,
                                     s->include, s->ground_normal_enu, s->ground_offset_m, s->lights, s->Nlights, err);
+    if (!st && opt->headlights && out->Nrendered > 0) // issue 40: the road lit by the headlights
+        st = rs_synth_headlight_ground(&s->headlights, canvas, rt_cam_enu, s->ground_normal_enu, s->ground_offset_m,
+                                       s->vehicles, s->include, opt->scene.headlight_intensity, err);
     for (int k = 0; k < Npasses && together; k++) { // every started one waited for, the first error kept
         rs_err e2 = {0};
         rs_status st2 = job_finish(&jobs[k], &imgs[k], s->out_dir, s->povray, &out->seconds_povray, st ? &e2 : err);
@@ -563,13 +605,17 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
                              canvas->height, err);
     if (i_shadow >= 0) rs_image_free(&imgs[i_shadow]);
     if (!st && i_id < 0) st = rs_image_alloc(idimg, canvas->width, canvas->height, 3, err);
+    if (i_mirror >= 0) {
+        if (!st) st = rs_synth_mirror_weight(&imgs[i_mirror], canvas, rt_cam_enu, s->ground_normal_enu, err);
+        s->mirror = imgs[i_mirror];
+    }
     return st;
 }
 
 // 3. From the canvas into the real lens: the passes resampled (a distorted lens), the IDs
 // decoded, the shadow fraction handed to out. rgba, idimg and frac are consumed.
 static rs_status render_into_lens(rs_synth_render_result *out, rs_image *rgba, rs_image *idimg, rs_image *frac,
-                                  const render_state *s, rs_err *err)
+                                  render_state *s, rs_err *err)
 {
     const rs_camera *camera = s->camera;
     const int width = camera->width, height = camera->height;
@@ -588,6 +634,7 @@ static rs_status render_into_lens(rs_synth_render_result *out, rs_image *rgba, r
             *frac = lens;
         }
     }
+    if (!st) st = rs_synth_condition_into_lens(out, &s->mirror, &s->headlights, s->canvas.identity ? NULL : use, err);
     free(map);
     if (st) {
         rs_image_free(frac);
@@ -662,11 +709,13 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
             goto done;
     }
     // 4. Composite
-    composite(out, s.opt.background_path ? &bg : NULL);
+    if ((st = composite(out, s.opt.background_path ? &bg : NULL, err))) goto done;
     if (s.opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
 done:
     if (!s.opt.keep_files) remove_intermediates(out_dir);
     free_shadow_vehicles(&s.svehicles, s.sowned);
+    rs_image_free(&s.mirror);
+    rs_image_free(&s.headlights);
     rs_image_free(&bg);
     rs_image_free(&rgba);
     rs_image_free(&idimg);

@@ -83,6 +83,12 @@ typedef struct {
                                    // (rs_synth_vehicle_rect on opt->canvas, near 0.05 m), all in
                                    // view: a caller that culled them already (roadside synth)
                                    // gives them and render does not cull again; NULL: culled here
+    // issue 40, the condition's passes (docs/conditions.md; rs_synth_scene_apply_condition sets
+    // the scene's lights):
+    bool mirror;     // a wet road: the mirror pass (out->mirror), one more povray process: the
+                     // colour pass seen by the camera mirrored in the ground plane
+    bool headlights; // the headlights' irradiance on the ground (out->headlight_irradiance),
+                     // rasterised, at scene.headlight_intensity (0: RS_SYNTH_HEADLIGHT_INTENSITY)
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);
@@ -104,6 +110,12 @@ typedef struct {
     double seconds_povray; // wall time spent in povray (every pass)
     int Npovray;           // povray processes run
     int Npasses;           // passes rendered
+    // issue 40 (opt.mirror, opt.headlights; composited by rs_synth_condition_add_wet and
+    // rs_synth_condition_add_headlights, synth/backdrop/rs_synth_condition.h):
+    rs_image mirror;             // (H, W, 4) premultiplied, linear: the vehicles' mirror image in
+                                 // a wet road times Fresnel's reflectance (rgb = R a L, alpha = R a);
+                                 // empty without opt.mirror
+    float *headlight_irradiance; // (H, W) owned, or NULL: the headlights' irradiance on the ground
 } rs_synth_render_result;
 
 void rs_synth_render_result_free(rs_synth_render_result *r); // NULL-safe; zeroes *r

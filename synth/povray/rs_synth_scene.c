@@ -303,6 +303,47 @@ bool rs_synth_scene_ground_occludes(const rs_synth_povcam *cam, const rs_synth_p
     return false;
 }
 
+// The condition's lights of the colour pass (issue 40, rs_synth_scene_apply_condition): a
+// spot light at each included vehicle's headlights (lights_on; only where another included
+// vehicle's centre is within 40 m and 35 deg of the beam's axis) and the street lights, all
+// shadowless, fading as 1/d^2 (fade_distance 1, fade_power 2: POV-Ray's 2 / (1 + d^2), so the
+// colour is half the intensity at 1 m).
+static void write_condition_lights(FILE *f, const rs_synth_prepared *vehicles, const rs_synth_scene_options *opt,
+                                   const double g[3], double offset)
+{
+    const double I = opt->headlight_intensity > 0 ? opt->headlight_intensity : RS_SYNTH_HEADLIGHT_INTENSITY;
+    for (int i = 0; opt->lights_on && i < vehicles->N; i++) {
+        if (opt->include && !opt->include[i]) continue;
+        const rs_synth_vehicle *v = &vehicles->v[i];
+        double p[2][3], axis[3];
+        rs_synth_scene_headlights(p, axis, v, rs_synth_ground_up_m(g, offset, v->e_m, v->n_m));
+        // cost: a lamp lights only what its beam reaches; none of the others within 40 m and
+        // 35 deg of its axis: no light_source (the road's light is rs_synth_headlight_ground's)
+        bool lights_one = false;
+        for (int j = 0; j < vehicles->N && !lights_one; j++) {
+            if (j == i || (opt->include && !opt->include[j])) continue;
+            const double de = vehicles->v[j].e_m - p[0][0], dn = vehicles->v[j].n_m - p[0][1];
+            const double d = hypot(de, dn), ah = hypot(axis[0], axis[1]);
+            lights_one = d < 40 && ah > 0 && (de * axis[0] + dn * axis[1]) / (d * ah) > cos(35 * RS_RAD_PER_DEG);
+        }
+        for (int k = 0; k < 2 && lights_one; k++) {
+            const double at[3] = {p[k][0] + axis[0], p[k][1] + axis[1], p[k][2] + axis[2]};
+            fprintf(f, "light_source { ");
+            write_vec_enu(f, p[k]);
+            fprintf(f, " color rgb <%.6g, %.6g, %.6g> spotlight point_at ", 0.5 * I, 0.5 * I * 0.96, 0.5 * I * 0.88);
+            write_vec_enu(f, at);
+            fprintf(f, " radius %g falloff %g tightness 0 fade_distance 1 fade_power 2 shadowless }\n",
+                    RS_SYNTH_BEAM_FULL_DEG, RS_SYNTH_BEAM_EDGE_DEG);
+        }
+    }
+    for (int j = 0; j < opt->Nstreet_lights; j++) {
+        fprintf(f, "light_source { ");
+        write_vec_enu(f, opt->street_lights_enu_m[j]);
+        const double *c = opt->street_light_rgb;
+        fprintf(f, " color rgb <%.6g, %.6g, %.6g> fade_distance 1 fade_power 2 shadowless }\n", c[0], c[1], c[2]);
+    }
+}
+
 static const char *pass_name(rs_synth_pass pass)
 {
     return pass == RS_SYNTH_PASS_ID ? "object-ID" : pass == RS_SYNTH_PASS_SHADOW ? "shadow" : "colour";
@@ -352,6 +393,7 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
                         j >= first_sky && !shadow_pass ? " shadowless" : "");
         }
     }
+    if (opt.pass == RS_SYNTH_PASS_COLOUR) write_condition_lights(f, vehicles, &opt, ground_normal_enu, ground_offset_m);
     // The ground: grey in the colour pass (left out of the image when compositing), an
     // occluder of value 0 in the ID pass where it can hide something, patches of the shadow
     // pass's albedo round the vehicles in the shadow pass.
@@ -402,6 +444,9 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
         snprintf(prefix, sizeof(prefix), "RS_PART_%d", m);
         rs_synth_look look;
         rs_synth_fleet_look(&look, &vehicles->v[first]);
+        look.lights_on = opt.lights_on; // issue 40: the condition's lights, snow and slush
+        look.snow = opt.snow;
+        look.dirt = fmin(1, look.dirt + opt.dirt_add);
         // the geometry is declared once before the passes (write_geometry): no mesh text here
         if ((st = rs_synth_fleet_write_instance(f, name, prefix, &vehicles->meshes[m],
                                                 textured ? RS_SYNTH_DECLARE_TEXTURED : RS_SYNTH_DECLARE_BARE, &look,

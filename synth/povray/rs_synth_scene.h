@@ -21,6 +21,8 @@
 #include <stdio.h>
 
 #include "core/rs_status.h"
+#include "geo/rs_site.h"
+#include "synth/backdrop/rs_synth_condition.h"
 #include "synth/backdrop/rs_synth_light.h"
 #include "synth/fleet/rs_synth_prepare.h"
 #include "synth/povray/rs_synth_camera.h"
@@ -43,6 +45,20 @@ extern "C" {
 // 1 in the open, sky/(sun+sky) in a sun shadow, less under and beside a vehicle (the soft
 // sky-light shadow). The ground alone needs no pass: lit by parallel lights, it is uniform.
 typedef enum { RS_SYNTH_PASS_COLOUR = 0, RS_SYNTH_PASS_ID = 1, RS_SYNTH_PASS_SHADOW = 2 } rs_synth_pass;
+
+// Each headlight's intensity at night, scene units (irradiance at 1 m on a surface facing it):
+// set so that the road 10 m ahead of a car (the beam at 1.2 deg grazing) gets about twice the
+// irradiance of the digital twin's night sky (0.03): the pool of light a dipped beam throws in
+// a street-lit scene, reaching about 50 m before it falls under 2 % of that sky.
+#define RS_SYNTH_HEADLIGHT_INTENSITY 90.0
+// The beam: full within RS_SYNTH_BEAM_FULL_DEG of its axis, smoothly (cosine) to 0 at
+// RS_SYNTH_BEAM_EDGE_DEG (POV-Ray's spotlight radius / falloff); the axis aims at the ground
+// RS_SYNTH_BEAM_AIM_M ahead of the lamp.
+#define RS_SYNTH_BEAM_FULL_DEG       15.0
+#define RS_SYNTH_BEAM_EDGE_DEG       30.0
+#define RS_SYNTH_BEAM_AIM_M          30.0
+// The street lights a scene may hold (rs_synth_scene_options.street_lights_enu_m).
+#define RS_SYNTH_STREET_LIGHTS_MAX   8
 
 typedef struct {
     rs_synth_pass pass;
@@ -72,7 +88,30 @@ typedef struct {
     bool env_given;
     double env_zenith_rgb[3], env_horizon_rgb[3], env_ground_rgb[3];
     bool env_off; // no environment at all (reflections show the black background)
+    // issue 40, the background's condition (rs_synth_scene_apply_condition; docs/conditions.md).
+    // Colour pass only; all 0 (the default): daylight, clean, dry.
+    bool lights_on;             // head- and tail lights glowing (rs_synth_look.lights_on) and a
+                                // spot light at each headlight (rs_synth_scene_headlights)
+    double headlight_intensity; // each headlight: irradiance on a surface facing it at 1 m
+                                // (scene units; fades as 1/d^2); 0: RS_SYNTH_HEADLIGHT_INTENSITY
+    double snow;                // 0..1: snow on the vehicles' upward-facing paint
+    double dirt_add;            // 0..1: added to every vehicle's dirt (slush on the lower body)
+    double street_lights_enu_m[RS_SYNTH_STREET_LIGHTS_MAX][3]; // lamps: shadowless point lights
+    int Nstreet_lights;                                        //   fading as 1/d^2
+    double street_light_rgb[3]; // each lamp's irradiance at 1 m per channel (scene units)
 } rs_synth_scene_options;
+
+// A vehicle's two headlights: its box's front face (x = length / 2 + 0.02 m), 0.25 m inside
+// each side (a two-wheeler: one lamp on the centre line, given twice), at 0.4 x its height
+// (at most 0.75 m); the beam's axis from each lamp to the ground RS_SYNTH_BEAM_AIM_M ahead.
+// out: p_enu_m (2,3), axis_enu (3,) unit; in: v, up_m (the ground's height under it)
+void rs_synth_scene_headlights(double p_enu_m[2][3], double axis_enu[3],
+                               // in
+                               const rs_synth_vehicle *v, double up_m);
+
+// The beam's relative intensity at angle_deg off its axis: 1 within RS_SYNTH_BEAM_FULL_DEG,
+// (1 + cos(pi t)) / 2 beyond (t from 0 there to 1 at RS_SYNTH_BEAM_EDGE_DEG), 0 outside.
+double rs_synth_scene_beam(double angle_deg);
 
 // Matches a scene's lights and environment to its background, from the estimates of synth/backdrop/rs_synth_light.h (implemented in rs_synth_scene_match.c): the
 // lights' per-channel factor (rs_synth_light_match, with a sun unless scene->overcast, at
@@ -94,6 +133,23 @@ rs_status rs_synth_scene_match_background_file(rs_synth_scene_options *scene, rs
                                                // in
                                                const char *path, const rs_camera *cam, const rs_site *site,
                                                const rs_lanes *lanes, rs_err *err);
+
+// What a condition (synth/backdrop/rs_synth_condition.h) does to a scene (docs/conditions.md):
+//   night: lights_on, headlights RS_SYNTH_HEADLIGHT_INTENSITY, street lights (below), and when
+//          the lights are not matched to the background (light_rgb_scale all 0) the sky dimmed
+//          to 0.03 of an overcast day's;
+//   dusk:  lights_on, the sky dimmed to 0.15 and warm (1, 0.85, 0.7) when not matched;
+//   snow:  snow 0.8 and dirt_add 0.35 (slush); wet: dirt_add 0.15;
+//   overcast: as the condition says (the sun only by day, or dusk above the horizon).
+// Street lights at night: the site's poles (landmarks with a pole height of 4 m or more: lamp
+// posts) nearest to the vehicles' centroid, at most RS_SYNTH_STREET_LIGHTS_MAX, each at its top;
+// a site without poles gets one lamp 8 m up, 4 m to the right of each of the first four
+// vehicles. LED white (1, 0.95, 0.85) x 1.0 at 1 m. An unmatched environment is set to the
+// dimmed default (env_given). in,out: scene (its sun set first); in: site (poles), vehicles
+void rs_synth_scene_apply_condition(rs_synth_scene_options *scene,
+                                    // in
+                                    const rs_synth_condition *cond, const rs_site *site,
+                                    const rs_synth_prepared *vehicles);
 
 // The lights of the colour and shadow passes: the sun (irradiance 1, when its elevation is
 // above 0 and the sky is not overcast) first, then the RS_SYNTH_SKY_LIGHTS sky lights scaled

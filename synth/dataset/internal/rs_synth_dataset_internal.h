@@ -32,6 +32,7 @@
 #include "geo/rs_lanes.h"
 #include "geo/rs_site.h"
 #include "synth/backdrop/rs_synth_appearance.h"
+#include "synth/backdrop/rs_synth_condition.h"
 #include "synth/backdrop/rs_synth_light.h"
 #include "synth/backdrop/rs_synth_sun.h"
 #include "synth/dataset/rs_synth_dataset.h"
@@ -43,8 +44,13 @@
 typedef struct {
     const rs_site_background *src; // the site's record (borrowed from the dataset's site)
     const char *time_iso;          // its "time" tag (borrowed), may be NULL
-    bool overcast;                 // conditions cloudy, rain, snow or night: no sun, the sky's soft shadow
-    bool night;                    // conditions night: no shadow at all
+    bool overcast;                 // conditions cloudy, rain, snow, dusk or night: no sun, the sky's soft shadow
+    bool night;                    // night: no shadow at all
+    // issue 40: its condition (synth/backdrop/rs_synth_condition.h), from its tags; when they say
+    // nothing (cond_known false) estimated from the image at first use (prepare_background)
+    rs_synth_condition cond;
+    bool cond_known;
+    char cond_label[16]; // rs_synth_condition_label, once known
     // cache, filled at first use (rs_synth_dataset__prepare_background): the image at the
     // output size decoded from sRGB to linear light, its appearance
     rs_image linear;
@@ -117,6 +123,13 @@ static inline bool rs_synth_dataset__file_exists(const char *path)
     return stat(path, &st) == 0;
 }
 
+// issue 40, run.json's "conditions" (rs_synth_dataset_coco.c): adds to mix one member per
+// non-zero count, "<time>-<surface>": counts[time_of_day x 3 + surface], in that index order
+// (mix may be NULL: nothing); and sums every shard's mix of a "conditions" object into counts
+// (members that are not such labels are skipped).
+void rs_synth_dataset__condition_mix_add(cJSON *mix, const int counts[9]);
+void rs_synth_dataset__condition_mix_read(int counts[9], const cJSON *mixes);
+
 // The file stem of image k: "%06d_<camera>" with every character but [A-Za-z0-9_-] as '_'.
 void rs_synth_dataset__stem(char *stem, size_t n, int k, const char *camera_id);
 
@@ -136,10 +149,11 @@ rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, r
                                                rs_synth_dataset__background *bm, rs_err *err);
 
 // Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
-// finished). out: *grey: rendered over the grey ground (no background); *seconds_povray grows
-// by the image's povray time.
+// finished). out: *grey: rendered over the grey ground (no background); *condition: the
+// background's condition as time_of_day x 3 + surface (rs_synth_condition.h), -1 none (the
+// grey ground); *seconds_povray grows by the image's povray time.
 rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const char *stem, rs_synth_dataset__camera *c,
-                                       bool *grey, double *seconds_povray, rs_err *err);
+                                       bool *grey, int *condition, double *seconds_povray, rs_err *err);
 
 // Hard-links src to DATASET/<rel> (replacing what is there, atomically: a link to a temporary
 // name, then rename), or copies it when linking fails (another file system).
