@@ -1,5 +1,5 @@
 // rs_synth_fleet_mesh.c -- rs_synth_mesh (freeing, bounds) and the growing mesh that the
-// procedural builder and the OBJ reader fill (synth/fleet/internal/rs_synth_fleet_internal.h).
+// procedural builder fills (synth/fleet/internal/rs_synth_fleet_internal.h).
 #include "synth/fleet/rs_synth_fleet.h"
 
 #include <math.h>
@@ -16,6 +16,11 @@ void rs_synth_mesh_free(rs_synth_mesh *mesh)
     free(mesh->tri);
     free(mesh->part);
     free(mesh->tri_n);
+    free(mesh->uv);
+    free(mesh->materials);
+    free(mesh->material);
+    for (int k = 0; k < mesh->Ntextures; k++) rs_image_free(&mesh->textures[k]);
+    free(mesh->textures);
     memset(mesh, 0, sizeof *mesh);
 }
 

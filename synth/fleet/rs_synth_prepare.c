@@ -19,8 +19,12 @@ void rs_synth_prepared_free(rs_synth_prepared *p)
 
 static bool same_spec(const rs_synth_obj_spec *a, const rs_synth_obj_spec *b)
 {
-    return strcmp(a->path, b->path) == 0 && a->scale == b->scale && strcmp(a->forward, b->forward) == 0 &&
-           strcmp(a->up, b->up) == 0;
+    if (!(strcmp(a->path, b->path) == 0 && a->scale == b->scale && a->length_m == b->length_m &&
+          strcmp(a->forward, b->forward) == 0 && strcmp(a->up, b->up) == 0 && a->Npaint == b->Npaint))
+        return false;
+    for (int k = 0; k < a->Npaint; k++)
+        if (strcmp(a->paint_materials[k], b->paint_materials[k]) != 0) return false;
+    return true;
 }
 
 // Resolves vehicle i and gives it a mesh: its own procedural one, or the first identical user
