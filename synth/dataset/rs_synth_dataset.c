@@ -155,6 +155,9 @@ static void dataset_free(rs_synth_dataset__run *d)
     }
     free(d->cams);
     free(d->frames);
+    for (int i = 0; d->model_meshes && i < d->models.N; i++) rs_synth_mesh_free(&d->model_meshes[i]);
+    free(d->model_meshes);
+    rs_synth_vehicle_list_free(&d->models);
     rs_lanes_free(&d->lanes);
     rs_site_free(d->site);
     free(d->split_dir[0]);
@@ -678,6 +681,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     rs_status st = dataset_load(&d, err);
     // SUMO's frames, every one read and checked before DATASET is touched
     if (!st && opt->traffic_frames_dir) st = rs_synth_dataset__frames_load(&d, &frames, err);
+    if (!st && opt->models_path) st = rs_synth_dataset__models_load(&d, err);
     if (!st && opt->sequence) st = sequence_range(&o, &d, err);
     if (st) goto done;
     // One run per dataset folder: a second one would remake the same images in the same work/

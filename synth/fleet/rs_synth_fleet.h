@@ -83,6 +83,10 @@ typedef struct {
 
 void rs_synth_mesh_free(rs_synth_mesh *mesh); // NULL-safe; leaves *mesh zeroed
 
+// A deep copy of `in` (every array, materials and texture images). out: *out (owned;
+// rs_synth_mesh_free), zeroed on failure. Returns RS_ERR_NOMEM.
+rs_status rs_synth_mesh_copy(rs_synth_mesh *out, const rs_synth_mesh *in, rs_err *err);
+
 // Axis-aligned bounds of the mesh's vertices in the vehicle frame.
 // out: lo, hi (3,) metres. An empty mesh gives lo = hi = 0.
 void rs_synth_mesh_bounds(double lo[3], double hi[3], const rs_synth_mesh *mesh);
@@ -177,6 +181,9 @@ typedef struct {
     const char *const *paint_materials; // (Npaint,) names of the materials painted with the
                                         //   vehicle's colour; may be NULL
     int Npaint;
+    const rs_synth_mesh *loaded; // may be NULL; else the model as rs_synth_obj_load read it with
+                                 //   this spec (a run's library, loaded once): rs_synth_prepare
+                                 //   copies it instead of reading the file again
 } rs_synth_obj_spec;
 
 // Reads a user model with the Open Asset Import Library (assimp 5.2: OBJ with its MTL, glTF 2.0

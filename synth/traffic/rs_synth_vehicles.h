@@ -52,6 +52,16 @@ rs_status rs_synth_model_spec_read( // out
     // in
     const cJSON *o, const char *path, int i, const char *dir, rs_err *err);
 
+// Reads a model library (`roadside synth --models FILE`; docs/fleet.md, "User models"): a JSON
+// list (at least one) of model descriptions, each rs_synth_model_spec_read's fields with
+// "class" required (the class the model stands for and its labels carry). out: lib->v[i] a
+// user model (cls RS_SYNTH_USER_MODEL, model_cls, model_path, id "model i"), lib->obj[i] its
+// spec. Errors name FILE, the entry index and the field: "FILE: [2].class: missing ...".
+rs_status rs_synth_models_read( // out
+    rs_synth_vehicle_list *lib,
+    // in
+    const char *path, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

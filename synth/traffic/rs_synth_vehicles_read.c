@@ -198,7 +198,13 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
     return RS_OK;
 }
 
-rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, rs_err *err)
+typedef rs_status (*entry_reader)(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir,
+                                  rs_err *err);
+
+// Reads the JSON list at path (at least Nmin entries, `what` naming them in errors), each entry by
+// read_entry with the file's folder for relative paths. On error *list is left empty.
+static rs_status read_list(rs_synth_vehicle_list *list, const char *path, const char *what, int Nmin,
+                           entry_reader read_entry, rs_err *err)
 {
     memset(list, 0, sizeof(*list));
     char *text = NULL, *dir = NULL;
@@ -208,8 +214,9 @@ rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, 
     if (st) return st;
     // syntax errors: RS_ERR_PARSE "PATH:LINE: JSON syntax error near '...'" (core/rs_json.h)
     if ((st = rs_json_parse(&root, text, 0, len, path, err))) goto done;
-    if (!cJSON_IsArray(root)) {
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of vehicles", path);
+    if (!cJSON_IsArray(root) || cJSON_GetArraySize(root) < Nmin) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of %s%s", path, what,
+                        Nmin > 0 ? " (at least one)" : "");
         goto done;
     }
     const int N = cJSON_GetArraySize(root);
@@ -229,7 +236,7 @@ rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, 
     const cJSON *o;
     cJSON_ArrayForEach(o, root)
     {
-        if ((st = read_vehicle(list, i, o, path, dir, err))) goto done;
+        if ((st = read_entry(list, i, o, path, dir, err))) goto done;
         i++;
     }
     list->N = N;
@@ -239,4 +246,33 @@ done:
     free(dir);
     if (st) rs_synth_vehicle_list_free(list);
     return st;
+}
+
+rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, rs_err *err)
+{
+    return read_list(list, path, "vehicles", 0, read_vehicle, err);
+}
+
+// ---- a model library (`roadside synth --models`) ----
+
+// Entry i of a model library: a user model with its label class.
+static rs_status read_model(rs_synth_vehicle_list *lib, int i, const cJSON *o, const char *path, const char *dir,
+                            rs_err *err)
+{
+    rs_synth_vehicle *v = &lib->v[i];
+    *v = rs_synth_vehicle_init(RS_SYNTH_USER_MODEL);
+    if (!cJSON_IsObject(o)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object", path, i);
+    const char *cls = get_string(o, "class");
+    rs_err e2 = {0};
+    if (!cls)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].class: missing (the class the model stands for)", path, i);
+    if (rs_synth_class_from_name(&v->model_cls, cls, &e2))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].class: %s", path, i, e2.msg);
+    snprintf(v->id, sizeof v->id, "model %d", i);
+    return rs_synth_model_spec_read(&lib->obj[i], &v->model_path, lib, o, path, i, dir, err);
+}
+
+rs_status rs_synth_models_read(rs_synth_vehicle_list *lib, const char *path, rs_err *err)
+{
+    return read_list(lib, path, "model descriptions", 1, read_model, err);
 }

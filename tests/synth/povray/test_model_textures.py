@@ -16,11 +16,8 @@
 # paint_materials entry paints that material instead of its texture. Bad inputs: a missing
 # texture image (an error naming the model, the material and the image), a file that is no
 # model (assimp's message), paths with spaces.
-import base64
-import json
 import os
 import shutil
-import struct
 import sys
 import tempfile
 
@@ -29,111 +26,10 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 import synth_test_util as u  # noqa: E402
 
-L, W, H = 4.0, 2.0, 1.5
-PATCH = 64
-COLOURS = [(220, 30, 30), (30, 200, 40), (30, 60, 220), (230, 210, 30), (200, 40, 200), (30, 200, 210)]
-WHITE = (240, 240, 240)
+from synth_model_util import (COLOURS, WHITE, faces, srgb_decode, texture, write_gltf,  # noqa: E402
+                             write_mtl, write_obj)
+
 SEED = 40
-
-
-def srgb_decode(c):
-    c = np.asarray(c, float) / 255
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def faces():
-    """(origin, a, b) per face in the vehicle frame (x forward, y left, z up): the face is
-    o + s a + t b, s, t in [0, 1], outward normal a x b, t up the patch."""
-    x, y, z = np.eye(3)
-    return [(np.array([L / 2, -W / 2, 0]), W * y, H * z),     # front
-            (np.array([-L / 2, W / 2, 0]), -W * y, H * z),    # back
-            (np.array([L / 2, W / 2, 0]), -L * x, H * z),     # left
-            (np.array([-L / 2, -W / 2, 0]), L * x, H * z),    # right
-            (np.array([-L / 2, -W / 2, H]), L * x, W * y),    # top
-            (np.array([-L / 2, -W / 2, 0]), W * y, L * x)]    # bottom
-
-
-def texture():
-    img = np.zeros((2 * PATCH, 3 * PATCH, 3), np.uint8)
-    for k, c in enumerate(COLOURS):
-        r, col = divmod(k, 3)
-        img[r * PATCH:r * PATCH + PATCH // 2, col * PATCH:(col + 1) * PATCH] = WHITE
-        img[r * PATCH + PATCH // 2:(r + 1) * PATCH, col * PATCH:(col + 1) * PATCH] = c
-    return img
-
-
-def uv_of(k, s, t):
-    """OpenGL-style (v up the image) texture coordinates of face k's point (s, t), 4 px inset."""
-    r, col = divmod(k, 3)
-    inset = 4 / PATCH
-    s2, t2 = inset + s * (1 - 2 * inset), inset + t * (1 - 2 * inset)
-    x_img = (col + s2) * PATCH
-    y_img = (r + 1 - t2) * PATCH  # t = 1 at the patch's top row
-    return x_img / (3 * PATCH), 1 - y_img / (2 * PATCH)
-
-
-def write_obj(path, mtl=None, material="Skin"):
-    lines = ["# a textured box, written by test_model_textures.py\n"]
-    if mtl:
-        lines.append("mtllib %s\n" % mtl)
-        lines.append("usemtl %s\n" % material)
-    for k, (o, a, b) in enumerate(faces()):
-        n = np.cross(a, b)
-        n /= np.linalg.norm(n)
-        for s, t in ((0, 0), (1, 0), (1, 1), (0, 1)):
-            p = o + s * a + t * b
-            lines.append("v %.6f %.6f %.6f\n" % tuple(p))
-            lines.append("vt %.6f %.6f\n" % uv_of(k, s, t))
-        lines.append("vn %.6f %.6f %.6f\n" % tuple(n))
-    for k in range(6):
-        i = 4 * k + 1
-        lines.append("f %d/%d/%d %d/%d/%d %d/%d/%d %d/%d/%d\n" % (i, i, k + 1, i + 1, i + 1, k + 1, i + 2, i + 2,
-                                                                   k + 1, i + 3, i + 3, k + 1))
-    with open(path, "w") as f:
-        f.writelines(lines)
-
-
-def write_mtl(path, tex, material="Skin"):
-    with open(path, "w") as f:
-        f.write("newmtl %s\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nNs 10\nd 1\nmap_Kd %s\n" % (material, tex))
-
-
-def write_gltf(path, tex):
-    pos, nrm, uvs, idx = [], [], [], []
-    for k, (o, a, b) in enumerate(faces()):
-        n = np.cross(a, b)
-        n /= np.linalg.norm(n)
-        base = len(pos)
-        for s, t in ((0, 0), (1, 0), (1, 1), (0, 1)):
-            pos.append(o + s * a + t * b)
-            nrm.append(n)
-            uu, vv = uv_of(k, s, t)
-            uvs.append((uu, 1 - vv))  # glTF: v down the image
-        idx += [base, base + 1, base + 2, base, base + 2, base + 3]
-    pos, nrm, uvs = (np.array(x, np.float32) for x in (pos, nrm, uvs))
-    ind = np.array(idx, np.uint16)
-    blob = pos.tobytes() + nrm.tobytes() + uvs.tobytes() + ind.tobytes()
-    views, off = [], 0
-    for arr in (pos, nrm, uvs, ind):
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": arr.nbytes})
-        off += arr.nbytes
-    g = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
-         "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3,
-                                     "material": 0}]}],
-         "materials": [{"name": "Skin", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
-                                                                  "metallicFactor": 0, "roughnessFactor": 1}}],
-         "textures": [{"source": 0}], "images": [{"uri": tex}],
-         "buffers": [{"byteLength": len(blob),
-                      "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode()}],
-         "bufferViews": views,
-         "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(pos), "type": "VEC3",
-                        "min": pos.min(0).tolist(), "max": pos.max(0).tolist()},
-                       {"bufferView": 1, "componentType": 5126, "count": len(pos), "type": "VEC3"},
-                       {"bufferView": 2, "componentType": 5126, "count": len(pos), "type": "VEC2"},
-                       {"bufferView": 3, "componentType": 5123, "count": len(ind), "type": "SCALAR"}]}
-    with open(path, "w") as f:
-        json.dump(g, f)
-    assert struct  # (imported for symmetry with .glb writers; unused)
 
 
 def vehicle_to_enu(v, p):
