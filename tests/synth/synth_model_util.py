@@ -1,9 +1,11 @@
 # tests/synth/synth_model_util.py -- a textured user model the tests write themselves (issue 40):
 # a box 4 x 2 x 1.5 m in the vehicle frame (x forward, y left, z up, metres), each face mapped
 # onto its own 64 x 64 patch of a 192 x 128 texture, the patch's upper half white and its lower
-# half a colour of its own; as OBJ + MTL and as glTF 2.0 (.gltf with its buffer inline).
+# half a colour of its own; as OBJ + MTL and as glTF 2.0 (.gltf with its buffer inline, or .glb
+# with the texture embedded).
 import base64
 import json
+import struct
 
 import numpy as np
 
@@ -73,7 +75,9 @@ def write_mtl(path, tex, material="Skin"):
         f.write("newmtl %s\nKa 0 0 0\nKd 1 1 1\nKs 0 0 0\nNs 10\nd 1\nmap_Kd %s\n" % (material, tex))
 
 
-def write_gltf(path, tex):
+def write_gltf(path, tex, png_bytes=None):
+    """.gltf with the image `tex` beside it; or, with png_bytes, a binary .glb holding the PNG
+    itself (an embedded texture)."""
     pos, nrm, uvs, idx = [], [], [], []
     for k, (o, a, b) in enumerate(faces()):
         n = np.cross(a, b)
@@ -87,11 +91,18 @@ def write_gltf(path, tex):
         idx += [base, base + 1, base + 2, base, base + 2, base + 3]
     pos, nrm, uvs = (np.array(x, np.float32) for x in (pos, nrm, uvs))
     ind = np.array(idx, np.uint16)
-    blob = pos.tobytes() + nrm.tobytes() + uvs.tobytes() + ind.tobytes()
+    parts = [pos.tobytes(), nrm.tobytes(), uvs.tobytes(), ind.tobytes()]
+    if png_bytes is not None:
+        parts.append(png_bytes)
     views, off = [], 0
-    for arr in (pos, nrm, uvs, ind):
-        views.append({"buffer": 0, "byteOffset": off, "byteLength": arr.nbytes})
-        off += arr.nbytes
+    for p in parts:
+        off += (-off) % 4  # glTF: accessors aligned to 4 bytes
+        views.append({"buffer": 0, "byteOffset": off, "byteLength": len(p)})
+        off += len(p)
+    blob = bytearray(off)
+    for p, v in zip(parts, views):
+        blob[v["byteOffset"]:v["byteOffset"] + len(p)] = p
+    blob = bytes(blob)
     g = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
          "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3,
                                      "material": 0}]}],
@@ -106,7 +117,19 @@ def write_gltf(path, tex):
                        {"bufferView": 1, "componentType": 5126, "count": len(pos), "type": "VEC3"},
                        {"bufferView": 2, "componentType": 5126, "count": len(pos), "type": "VEC2"},
                        {"bufferView": 3, "componentType": 5123, "count": len(ind), "type": "SCALAR"}]}
-    with open(path, "w") as f:
-        json.dump(g, f)
+    if png_bytes is None:
+        with open(path, "w") as f:
+            json.dump(g, f)
+        return
+    # GLB: a 12-byte header, the JSON chunk, the BIN chunk (each padded to 4 bytes)
+    g["images"] = [{"bufferView": 4, "mimeType": "image/png"}]
+    blob += b"\0" * ((-len(blob)) % 4)
+    g["buffers"] = [{"byteLength": len(blob)}]
+    js = json.dumps(g).encode()
+    js += b" " * ((-len(js)) % 4)
+    out = struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(js) + 8 + len(blob))
+    out += struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(blob), 0x004E4942) + blob
+    with open(path, "wb") as f:
+        f.write(out)
 
 

@@ -2,7 +2,8 @@
 # Issue 40, "bring your own models": a user model read by assimp renders with its own materials and
 # image textures (synth/fleet/rs_synth_fleet_model.c; docs/fleet.md, "User models").
 #
-# The test writes a box 4 x 2 x 1.5 m as OBJ + MTL + PNG and as glTF 2.0 (.gltf, the same PNG),
+# The test writes a box 4 x 2 x 1.5 m as OBJ + MTL + PNG and as glTF 2.0 (.gltf, the same PNG; .glb,
+# the PNG embedded),
 # each face mapped onto its own patch of the texture: the patch's upper half (towards the face's
 # top) white, its lower half a colour of its own. `roadside render` (no background, fixed sun)
 # renders it; at the projection (mrcal) of points a quarter and three quarters up each visible
@@ -102,6 +103,10 @@ def main():
         n_obj = check_textured("obj", *render(tmp, calib, dict(base, model="my models/box.obj"), "obj"), v, model)
         n_gltf = check_textured("gltf", *render(tmp, calib, dict(base, model="my models/box.gltf"), "gltf"), v,
                                 model)
+        ok, png = cv2.imencode(".png", texture()[:, :, ::-1])
+        write_gltf(os.path.join(folder, "box.glb"), None, png.tobytes())
+        n_glb = check_textured("glb", *render(tmp, calib, dict(base, model="my models/box.glb"), "glb"), v,
+                               model)
         # untextured: the OBJ without its MTL renders in the vehicle's colour; so does a material
         # named in paint_materials
         paint = [0.5, 0.12, 0.04]
@@ -137,8 +142,8 @@ def main():
                    os.path.join(tmp, "bad2")], expect=1)
         if "junk.obj: assimp: " not in p.stderr:
             u.fail("not a model: message %r does not name the file and assimp" % p.stderr)
-        print("textured model: %d OBJ faces, %d glTF faces matched their texture; paint rule and errors ok"
-              % (n_obj, n_gltf))
+        print("textured model: %d OBJ faces, %d glTF faces, %d GLB (embedded texture) faces matched their "
+              "texture; paint rule and errors ok" % (n_obj, n_gltf, n_glb))
 
 
 if __name__ == "__main__":
