@@ -719,11 +719,13 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     }
     if (!st) st = write_camera_copies(&d, err);
     if (!st) st = write_run_record(&d, &frames, err);
+    if (!st) st = rs_synth_dataset__models_cache(&d, err);
     if (st) goto done;
     for (int k = opt->shard_index; k < opt->count; k += opt->shard_count) sum.Nimages++;
     st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err) : run_images(&d, &sum, 0, 1, -1, err);
     if (!st) {
         st = rs_synth_dataset__assemble(&d, &sum.Nannotations, &sum.Nleft_out, err);
+        rs_synth_dataset__models_uncache(&d);
         rmdir(d.work_root); // empty when every image finished
     }
     if (!st && opt->sequence) st = sequence_tracks(&sum.tracks_gt, &d, err);

@@ -1,9 +1,11 @@
 // rs_synth_dataset_models.c -- `roadside synth --models FILE`: the run's model library, loaded once
 // before the workers fork, and the draw that makes a vehicle one of its models
 // (rs_synth_dataset_internal.h).
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_io.h"
 #include "core/rs_rng.h"
 #include "synth/dataset/internal/rs_synth_dataset_internal.h"
 
@@ -19,6 +21,30 @@ rs_status rs_synth_dataset__models_load(rs_synth_dataset__run *d, rs_err *err)
         d->models.obj[i].loaded = &d->model_meshes[i];
     }
     return RS_OK;
+}
+
+rs_status rs_synth_dataset__models_cache(rs_synth_dataset__run *d, rs_err *err)
+{
+    if (d->models.N == 0) return RS_OK;
+    char *dir = rs_io_join(d->work_root, "models");
+    if (!dir) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_io_remove_tree(dir); // a previous, interrupted run's
+    rs_status st = rs_io_mkdir_p(dir, err);
+    for (int i = 0; i < d->models.N && !st; i++) {
+        char prefix[32];
+        snprintf(prefix, sizeof prefix, "RS_LIBRARY_%d", i);
+        st = rs_synth_fleet_cache_textures(&d->model_meshes[i], dir, prefix, err);
+    }
+    free(dir);
+    return st;
+}
+
+void rs_synth_dataset__models_uncache(const rs_synth_dataset__run *d)
+{
+    if (d->models.N == 0) return;
+    char *dir = rs_io_join(d->work_root, "models");
+    if (dir) rs_io_remove_tree(dir);
+    free(dir);
 }
 
 bool rs_synth_dataset__pick_model(rs_synth_vehicle *v, rs_synth_obj_spec *spec, const rs_synth_dataset__run *d, int k,

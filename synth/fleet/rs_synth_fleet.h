@@ -79,6 +79,8 @@ typedef struct {
     uint16_t *material;           // (Ntri,) material of each triangle, or NULL
     int Ntextures;
     rs_image *textures; // (Ntextures,) the texture images as read (RGB or RGBA, sRGB-encoded)
+    char **texture_png; // (Ntextures,) owned, or NULL: the images already written as PNG
+                        //   (rs_synth_fleet_cache_textures), linked rather than encoded again
 } rs_synth_mesh;
 
 void rs_synth_mesh_free(rs_synth_mesh *mesh); // NULL-safe; leaves *mesh zeroed
@@ -206,12 +208,19 @@ rs_status rs_synth_obj_load( // out
     const rs_synth_obj_spec *spec, rs_err *err);
 
 // Writes the mesh's texture images as 8-bit PNG files DIR/rs_tex_<PREFIX>_<k>.png (k = 0 ..
-// Ntextures-1, each atomically): the only images a scene's mesh refers to, by these generated
+// Ntextures-1, each atomically; hard links of mesh->texture_png's files when set): the only images a scene's mesh refers to, by these generated
 // bare names, in the folder povray runs in (docs/povray.md, "Confinement"). prefix: the
 // identifier the mesh's parts are declared under (rs_synth_fleet_write_parts / _instance), which
 // names the images the instance's textures read. Returns RS_ERR_INVALID (prefix), RS_ERR_IO,
 // RS_ERR_NOMEM.
 rs_status rs_synth_fleet_write_textures(const char *dir, const char *prefix, const rs_synth_mesh *mesh, rs_err *err);
+
+// Writes the mesh's texture images once as PNG files into dir (rs_tex_<prefix>_<k>.png, as
+// rs_synth_fleet_write_textures names them) and records their paths in mesh->texture_png, so that
+// rs_synth_fleet_write_textures then hard-links them (a copy where linking fails) instead of
+// encoding each image again: a run's model library (synth/dataset) writes them once for all its
+// images. dir must exist. Returns RS_ERR_IO / RS_ERR_NOMEM.
+rs_status rs_synth_fleet_cache_textures(rs_synth_mesh *mesh, const char *dir, const char *prefix, rs_err *err);
 
 // The file name of texture k of the mesh declared under prefix: "rs_tex_<prefix>_<k>.png"
 // (rs_synth_fleet_write_textures writes it, the instance's textures read it). out: (n,) text.

@@ -20,7 +20,11 @@ void rs_synth_mesh_free(rs_synth_mesh *mesh)
     free(mesh->uv);
     free(mesh->materials);
     free(mesh->material);
-    for (int k = 0; k < mesh->Ntextures; k++) rs_image_free(&mesh->textures[k]);
+    for (int k = 0; k < mesh->Ntextures; k++) {
+        rs_image_free(&mesh->textures[k]);
+        if (mesh->texture_png) free(mesh->texture_png[k]);
+    }
+    free(mesh->texture_png);
     free(mesh->textures);
     memset(mesh, 0, sizeof *mesh);
 }
@@ -53,11 +57,14 @@ rs_status rs_synth_mesh_copy(rs_synth_mesh *out, const rs_synth_mesh *in, rs_err
     out->textures = in->Ntextures > 0 ? calloc((size_t)in->Ntextures, sizeof *out->textures) : NULL;
     out->Ntextures = out->textures ? in->Ntextures : 0;
     ok &= in->Ntextures == 0 || out->textures != NULL;
-    for (int k = 0; k < out->Ntextures && ok; k++) {
+    out->texture_png = in->texture_png && out->textures ? calloc((size_t)in->Ntextures, sizeof(char *)) : NULL;
+    ok &= !in->texture_png || out->texture_png != NULL || in->Ntextures == 0;
+    for (int k = 0; k < out->Ntextures; k++) { // (every image zeroed or copied: freed safely)
         const rs_image *a = &in->textures[k];
         const size_t n = (size_t)a->width * a->height * a->channels * sizeof(float);
         out->textures[k] = *a;
-        out->textures[k].data = dup_bytes(a->data, n, &ok);
+        out->textures[k].data = ok ? dup_bytes(a->data, n, &ok) : NULL;
+        if (out->texture_png && in->texture_png[k] && ok) ok = (out->texture_png[k] = strdup(in->texture_png[k])) != NULL;
     }
     if (!ok) {
         rs_synth_mesh_free(out);

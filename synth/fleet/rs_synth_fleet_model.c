@@ -310,7 +310,22 @@ rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, 
     return st;
 }
 
-rs_status rs_synth_fleet_write_textures(const char *dir, const char *prefix, const rs_synth_mesh *mesh, rs_err *err)
+// Puts the PNG file src at dst: a hard link, or a copy of its bytes where linking fails (another
+// file system); an existing dst is replaced.
+static rs_status place_png(const char *dst, const char *src, rs_err *err)
+{
+    (void)unlink(dst);
+    if (link(src, dst) == 0) return RS_OK;
+    char *data = NULL;
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&data, &len, src, err);
+    if (!st) st = rs_io_write_file(dst, data, len, err);
+    free(data);
+    return st;
+}
+
+static rs_status write_textures(const char *dir, const char *prefix, const rs_synth_mesh *mesh, bool cached,
+                                char **paths, rs_err *err)
 {
     if (!rs_synth_fleet_valid_identifier(prefix) || strlen(prefix) > 37)
         return rs_err_set(err, RS_ERR_INVALID, "textures: prefix is not an upper-case POV-Ray identifier");
@@ -319,9 +334,34 @@ rs_status rs_synth_fleet_write_textures(const char *dir, const char *prefix, con
         rs_synth_fleet_texture_name(name, sizeof name, prefix, k);
         char *path = rs_io_join(dir, name);
         if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        rs_status st = rs_image_write(path, &mesh->textures[k], 8, err);
-        free(path);
+        rs_status st = cached && mesh->texture_png && mesh->texture_png[k]
+                           ? place_png(path, mesh->texture_png[k], err)
+                           : rs_image_write(path, &mesh->textures[k], 8, err);
+        if (!st && paths)
+            paths[k] = path;
+        else
+            free(path);
         if (st) return st;
     }
+    return RS_OK;
+}
+
+rs_status rs_synth_fleet_write_textures(const char *dir, const char *prefix, const rs_synth_mesh *mesh, rs_err *err)
+{
+    return write_textures(dir, prefix, mesh, true, NULL, err);
+}
+
+rs_status rs_synth_fleet_cache_textures(rs_synth_mesh *mesh, const char *dir, const char *prefix, rs_err *err)
+{
+    if (mesh->Ntextures == 0) return RS_OK;
+    char **paths = calloc((size_t)mesh->Ntextures, sizeof *paths);
+    if (!paths) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = write_textures(dir, prefix, mesh, false, paths, err);
+    if (st) {
+        for (int k = 0; k < mesh->Ntextures; k++) free(paths[k]);
+        free(paths);
+        return st;
+    }
+    mesh->texture_png = paths;
     return RS_OK;
 }

@@ -145,7 +145,9 @@ static bool selected(const rs_synth_mesh *m, int t, int part, int mat)
 // scene's shared geometry): vectors on one line, vertices to 1e-5 m, normals to 1e-4, and
 // normals only when `normals` (smooth shading where it shows); else one vector per line,
 // vertices to 1e-6 m, normals to 1e-5, whenever the mesh has them. A textured material's
-// triangles also get their texture coordinates (uv_vectors, uv_indices; to 1e-6).
+// triangles also get their texture coordinates (uv_vectors, 6 digits, numbered as the vertices;
+// uv_indices in the long form only: without them POV-Ray takes face_indices, the same numbers,
+// and the compact form saves a third of a textured model's text).
 static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int mat, int *map, bool compact, bool normals)
 {
     const int dv = compact ? 5 : 6, dn = compact ? 4 : 5;
@@ -212,10 +214,9 @@ static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int mat, int *
     free(ninv);
     // The map (x,y,z)_v -> (-y, z, x) has determinant -1 and POV-Ray's frame is left-handed: a
     // triangle keeps its outward side, whatever the order; the order is kept.
-    // face_indices, then normal_indices and uv_indices when written (the uv vectors are
-    // numbered as the vertices)
+    // face_indices, then normal_indices and uv_indices when written
     for (int pass = 0; pass < 3; pass++) {
-        if ((pass == 1 && !with_n) || (pass == 2 && !with_uv)) continue;
+        if ((pass == 1 && !with_n) || (pass == 2 && !(with_uv && !compact))) continue;
         fprintf(f, "%s%s { %d", sep, pass == 1 ? "normal_indices" : pass == 2 ? "uv_indices" : "face_indices", Nt);
         for (int t = 0; t < m->Ntri; t++)
             if (selected(m, t, part, mat)) {

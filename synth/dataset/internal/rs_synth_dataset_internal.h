@@ -96,6 +96,12 @@ typedef struct {
 // file, the entry and the field, or the model file).
 rs_status rs_synth_dataset__models_load(rs_synth_dataset__run *d, rs_err *err);
 
+// Writes the library's texture images once as PNG into DATASET/work/models/ (each image's render
+// then links them into its folder: rs_synth_fleet_cache_textures); nothing without a library.
+rs_status rs_synth_dataset__models_cache(rs_synth_dataset__run *d, rs_err *err);
+// Removes that folder (the run's end).
+void rs_synth_dataset__models_uncache(const rs_synth_dataset__run *d);
+
 // Vehicle v (index i of image k's traffic) becomes one of the library's models of its class,
 // drawn from image k's seed, when the library has any: cls RS_SYNTH_USER_MODEL, model_cls its
 // class, its box the model's. out: *spec the model's spec (untouched, and false returned, when v
