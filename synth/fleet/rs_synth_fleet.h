@@ -273,7 +273,7 @@ rs_status rs_synth_fleet_write_declare_look(FILE *f,
 rs_status rs_synth_fleet_write_merged(FILE *f, const char *name, const rs_synth_mesh *mesh, rs_err *err);
 
 // The scene's shared geometry (issue 18's cost): writes "#declare PREFIX_k = mesh2 {...}" for each
-// part k (rs_synth_part) the mesh uses, without texture, in POV-Ray axes, compact (vertices to
+// part k (rs_synth_part; a user model: material k, with its texture coordinates) the mesh uses, without texture, in POV-Ray axes, compact (vertices to
 // 1e-5 m, one line per array) and with smooth normals on the body's paint and glass only (the
 // other parts are a few pixels each and are flat-shaded). Written once per scene, before the
 // passes; each pass then declares its vehicle with rs_synth_fleet_write_instance, which costs no
@@ -288,6 +288,10 @@ rs_status rs_synth_fleet_write_parts(FILE *f,
 // as rs_synth_fleet_write_declare_look does (look required), BARE gives none, so that the
 // instance's texture applies to all of it ("#declare NAME = object { PREFIX_k }" when the mesh
 // has one part). The same geometry as rs_synth_fleet_write_declare_look's, so the same pixels.
+// A user model (mesh->materials) has one group k per material instead of per part, each
+// TEXTURED with its material (image textures read from rs_tex_<PREFIX>_<j>.png,
+// rs_synth_fleet_write_textures); its paint materials get look's paint, or, with look NULL,
+// no texture: the placed object's texture then applies to them only.
 rs_status rs_synth_fleet_write_instance(FILE *f,
                                         // in
                                         const char *name, const char *prefix, const rs_synth_mesh *mesh,

@@ -64,7 +64,8 @@ rs_status rs_synth_mesh_copy(rs_synth_mesh *out, const rs_synth_mesh *in, rs_err
         const size_t n = (size_t)a->width * a->height * a->channels * sizeof(float);
         out->textures[k] = *a;
         out->textures[k].data = ok ? dup_bytes(a->data, n, &ok) : NULL;
-        if (out->texture_png && in->texture_png[k] && ok) ok = (out->texture_png[k] = strdup(in->texture_png[k])) != NULL;
+        if (out->texture_png && in->texture_png[k] && ok)
+            ok = (out->texture_png[k] = strdup(in->texture_png[k])) != NULL;
     }
     if (!ok) {
         rs_synth_mesh_free(out);

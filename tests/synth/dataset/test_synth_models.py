@@ -6,7 +6,8 @@
 # 4 x 2 x 1.5 scaled to the length, within 1e-6 m: the oracle is the scale computed here), the
 # other classes stay procedural (their dimensions are not the models'); the same run without the
 # library gives sedans of drawn sizes (so the check above can fail). The images are rendered
-# (textures written into each image's work folder). Bad libraries: errors name FILE, the entry and
+# (textures written once per run, linked into each image's work folder, the cache removed at
+# the end). Bad libraries: errors name FILE, the entry and
 # the field.
 import json
 import os
@@ -69,6 +70,8 @@ def main():
                                                                           n_model["suv"]))
         if n_model["sedan"] + n_model["suv"] < 2 or len(anns) - sum(n_model.values()) < 1:
             u.fail("too few labels to tell: %s of %d" % (n_model, len(anns)), SEED)
+        if os.path.exists(os.path.join(out, "work")):  # the run's texture cache removed at its end
+            u.fail("DATASET/work left behind: %s" % os.listdir(os.path.join(out, "work")))
         if len(os.listdir(os.path.join(out, "train2017"))) < 3:
             u.fail("images missing in %s" % os.listdir(os.path.join(out, "train2017")))
         # without the library the same sedans have drawn sizes
