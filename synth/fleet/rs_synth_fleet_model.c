@@ -310,20 +310,6 @@ rs_status rs_synth_obj_load(rs_synth_mesh *mesh, const rs_synth_obj_spec *spec, 
     return st;
 }
 
-// Puts the PNG file src at dst: a hard link, or a copy of its bytes where linking fails (another
-// file system); an existing dst is replaced.
-static rs_status place_png(const char *dst, const char *src, rs_err *err)
-{
-    (void)unlink(dst);
-    if (link(src, dst) == 0) return RS_OK;
-    char *data = NULL;
-    size_t len = 0;
-    rs_status st = rs_io_read_file(&data, &len, src, err);
-    if (!st) st = rs_io_write_file(dst, data, len, err);
-    free(data);
-    return st;
-}
-
 static rs_status write_textures(const char *dir, const char *prefix, const rs_synth_mesh *mesh, bool cached,
                                 char **paths, rs_err *err)
 {
@@ -335,7 +321,7 @@ static rs_status write_textures(const char *dir, const char *prefix, const rs_sy
         char *path = rs_io_join(dir, name);
         if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         rs_status st = cached && mesh->texture_png && mesh->texture_png[k]
-                           ? place_png(path, mesh->texture_png[k], err)
+                           ? ((void)unlink(path), rs_io_link_or_copy(mesh->texture_png[k], path, err))
                            : rs_image_write(path, &mesh->textures[k], 8, err);
         if (!st && paths)
             paths[k] = path;
