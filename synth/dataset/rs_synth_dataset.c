@@ -315,6 +315,8 @@ static rs_status write_camera_copies(rs_synth_dataset__run *d, rs_err *err)
 // With SUMO's frames, "traffic_frames": {"frames", "vehicles", "sha256"} (the folder's content,
 // rs_synth_traffic_frames_info) joins the run (so merge refuses shards of other traffic), and
 // the folder's path is noted beside it (not compared: shards may read copies at other paths).
+// With --models, "models": {"entries", "sha256"} (the library file's; not the model files')
+// joins the run in the same way, its path beside it.
 static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth_traffic_frames_info *frames,
                                   rs_err *err)
 {
@@ -348,6 +350,12 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
         cJSON_AddNumberToObject(tf, "vehicles", (double)frames->Nvehicles);
         cJSON_AddStringToObject(tf, "sha256", frames->sha256);
         cJSON_AddStringToObject(doc, "traffic_frames_dir", opt->traffic_frames_dir);
+    }
+    if (opt->models_path) { // absent without a library: older records stay equal
+        cJSON *ml = cJSON_AddObjectToObject(run, "models");
+        cJSON_AddNumberToObject(ml, "entries", d->models.N);
+        cJSON_AddStringToObject(ml, "sha256", d->models_sha256);
+        cJSON_AddStringToObject(doc, "models_path", opt->models_path);
     }
     if (opt->sequence) { // absent otherwise: older records stay equal
         cJSON *seq = cJSON_AddObjectToObject(run, "sequence");

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_hash.h"
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
 #include "synth/dataset/internal/rs_synth_dataset_internal.h"
@@ -12,6 +13,7 @@
 rs_status rs_synth_dataset__models_load(rs_synth_dataset__run *d, rs_err *err)
 {
     rs_status st = rs_synth_models_read(&d->models, d->opt->models_path, err);
+    if (!st) st = rs_hash_sha256_file(d->models_sha256, NULL, d->opt->models_path, err);
     if (st) return st;
     d->model_meshes = calloc((size_t)d->models.N, sizeof *d->model_meshes);
     if (!d->model_meshes) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");

@@ -90,6 +90,7 @@ typedef struct {
     rs_synth_vehicle_list models;      // --models' library (opt->models_path; N = 0 without),
     rs_synth_mesh *model_meshes;       // (models.N,) owned: each loaded once, before the workers
                                        //   fork (models.obj[i].loaded points here)
+    char models_sha256[65];            // the library file's SHA-256, hex (run.json)
 } rs_synth_dataset__run;
 
 // Reads opt->models_path's library and loads every model once for the run (errors name the

@@ -7,8 +7,8 @@
 # other classes stay procedural (their dimensions are not the models'); the same run without the
 # library gives sedans of drawn sizes (so the check above can fail). The images are rendered
 # (textures written once per run, linked into each image's work folder, the cache removed at
-# the end). Bad libraries: errors name FILE, the entry and
-# the field.
+# the end). run.json records the library, so the folder refuses another. Bad libraries: errors
+# name FILE, the entry and the field.
 import json
 import os
 import sys
@@ -74,6 +74,15 @@ def main():
             u.fail("DATASET/work left behind: %s" % os.listdir(os.path.join(out, "work")))
         if len(os.listdir(os.path.join(out, "train2017"))) < 3:
             u.fail("images missing in %s" % os.listdir(os.path.join(out, "train2017")))
+        # run.json records the library (entries, SHA-256): the same folder refuses another library
+        run = json.load(open(os.path.join(out, "run.json")))["run"]
+        if run.get("models", {}).get("entries") != 2 or len(run["models"].get("sha256", "")) != 64:
+            u.fail("run.json: models %r" % run.get("models"))
+        lib2 = os.path.join(lib_dir, "models2.json")
+        u.write_json(lib2, [{"model": "box/box.obj", "class": "sedan", "length": 4.0}])
+        p = synth(calib, out, ["--models", lib2], expect=1)
+        if "another run" not in p.stderr:
+            u.fail("another library into the same folder: %r" % p.stderr)
         # without the library the same sedans have drawn sizes
         out0 = os.path.join(tmp, "without")
         synth(calib, out0)
