@@ -178,7 +178,7 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
     }
     const char *dims[3] = {"length", "width", "height"};
     const double dval[3] = {v->length_m, v->width_m, v->height_m};
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 3 && !model; k++) // (a model's length: rs_synth_model_spec_read)
         if (cJSON_GetObjectItemCaseSensitive(o, dims[k]) && !(dval[k] > 0))
             return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: must be > 0", path, i, dims[k]);
     const cJSON *colour = cJSON_GetObjectItemCaseSensitive(o, "colour");

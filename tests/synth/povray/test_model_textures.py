@@ -99,7 +99,8 @@ def main():
         write_obj(os.path.join(folder, "box.obj"), "box.mtl")
         write_mtl(os.path.join(folder, "box.mtl"), "box skin.png")
         write_gltf(os.path.join(folder, "box.gltf"), "box skin.png")
-        base = {"e": v["e"], "n": v["n"], "yaw_deg": v["yaw_deg"], "forward": "+x", "up": "+z", "id": "box"}
+        base = {"e": v["e"], "n": v["n"], "yaw_deg": v["yaw_deg"], "forward": "+x", "up": "+z", "id": "box",
+                "length": 4.0}  # the box's own length: the description's scaling path, the same geometry
         n_obj = check_textured("obj", *render(tmp, calib, dict(base, model="my models/box.obj"), "obj"), v, model)
         n_gltf = check_textured("gltf", *render(tmp, calib, dict(base, model="my models/box.gltf"), "gltf"), v,
                                 model)
