@@ -15,7 +15,7 @@
 static const char bench_synth_usage[] =
     "usage: roadside bench synth SITE --calib DIR [--count N] [--size WxH] [--vehicles N]\n"
     "                            [--jobs J] [--seed S] [--csv FILE] [--dir DIR] [--quick]\n"
-    "                            [--variants LIST] [--memory-every N]\n"
+    "                            [--variants LIST] [--memory-every N] [--models FILE]\n"
     "\n"
     "Times `roadside synth` on SITE (its backgrounds: make them first with `roadside site\n"
     "render-backgrounds`) with every saving, then with each saving turned off in turn, on the\n"
@@ -40,10 +40,25 @@ static const char bench_synth_usage[] =
     "  --quick       8 images, variants all and jobs=1 only (for the test suite)\n"
     "  --variants LIST  comma-separated variants to run, in the order above (e.g. all)\n"
     "  --memory-every N  a memory checkpoint every N images (default: a tenth of --count)\n"
+    "  --models FILE  a library of user models, as `roadside synth --models` (the cost of\n"
+    "                textured models, docs/benchmarks.md)\n"
     "\n"
     "Exit status: 0 ok, 1 failure, 2 usage error. Figures: docs/benchmarks.md.\n";
 
-enum { O_CALIB = 3000, O_COUNT, O_SIZE, O_VEHICLES, O_JOBS, O_SEED, O_CSV, O_DIR, O_QUICK, O_VARIANTS, O_MEMORY_EVERY };
+enum {
+    O_CALIB = 3000,
+    O_COUNT,
+    O_SIZE,
+    O_VEHICLES,
+    O_JOBS,
+    O_SEED,
+    O_CSV,
+    O_DIR,
+    O_QUICK,
+    O_VARIANTS,
+    O_MEMORY_EVERY,
+    O_MODELS
+};
 
 // The table of the variants on stdout and, in text (size bytes), the same as CSV; returns the
 // CSV's length (snprintf's: may exceed size).
@@ -147,6 +162,7 @@ int rs_cli_bench_synth(int argc, char **argv)
                                              {"quick", no_argument, NULL, O_QUICK},
                                              {"variants", required_argument, NULL, O_VARIANTS},
                                              {"memory-every", required_argument, NULL, O_MEMORY_EVERY},
+                                             {"models", required_argument, NULL, O_MODELS},
                                              {NULL, 0, NULL, 0}};
     rs_synth_dataset_options o;
     rs_synth_dataset_options_default(&o);
@@ -192,6 +208,7 @@ int rs_cli_bench_synth(int argc, char **argv)
                 return rs_cli_usage_error("bench synth", "--seed: expected an integer >= 0");
             o.seed = (uint64_t)l;
             break;
+        case O_MODELS: o.models_path = optarg; break;
         case O_CSV: csv = optarg; break;
         case O_DIR: dir = optarg; break;
         case O_QUICK: quick = true; break;

@@ -19,7 +19,7 @@ static const char synth_usage[] =
     "                      [--size WxH] [--vehicles N] [--split NAME] [--no-shadows]\n"
     "                      [--jobs J] [--separate-processes]\n"
     "                      [--bbox footprint|body|visible] [--min-visibility V] [--keep-invisible]\n"
-    "                      [--no-junction-traffic | --traffic-frames DIR]\n"
+    "                      [--no-junction-traffic | --traffic-frames DIR] [--models FILE]\n"
     "                      [--val-fraction F] [--val-camera ID]...\n"
     "                      [--sequence [--frames A:B] [--labels-only]]\n"
     "                      [--val-backgrounds TAG=VALUE]... [--val-split NAME]\n"
@@ -77,6 +77,12 @@ static const char synth_usage[] =
     "                         details) per image; at most --vehicles of those the camera sees.\n"
     "                         Every frame is read and checked first; run.json records the\n"
     "                         frames' count and SHA-256, so merge refuses other traffic\n"
+    "  --models FILE          a library of user models (docs/fleet.md, \"User models\"): a JSON\n"
+    "                         list of {\"model\": OBJ/glTF path relative to FILE, \"class\",\n"
+    "                         \"length\" (m) or \"scale\", \"forward\", \"up\", \"paint_materials\"};\n"
+    "                         a vehicle of a class the library has becomes one of its models\n"
+    "                         of that class, drawn from (seed, k); labels carry the class and\n"
+    "                         the model's box. Every model is read once, before the images\n"
     "  --sequence             with --traffic-frames: the frames in order instead of drawn ones\n"
     "                         (no --count): image k shows frame A + k / C to camera k mod C (C\n"
     "                         cameras), every vehicle the camera sees, each with the same looks in\n"
@@ -127,6 +133,7 @@ enum {
     OPT_VAL_BG,
     OPT_VAL_SPLIT,
     OPT_TRAFFIC_FRAMES,
+    OPT_MODELS,
     OPT_SEQUENCE,
     OPT_FRAMES,
     OPT_LABELS_ONLY
@@ -252,6 +259,7 @@ static void print_summary(const rs_synth_dataset_options *opt, const rs_synth_da
     if (opt->traffic_frames_dir)
         printf("traffic:     SUMO's frames in %s (run.json: traffic_frames, their count and SHA-256)\n",
                opt->traffic_frames_dir);
+    if (opt->models_path) printf("models:      the library %s (docs/fleet.md, \"User models\")\n", opt->models_path);
     if (opt->sequence)
         printf("tracks:      %s/tracks_gt.csv%s\n", opt->out_dir,
                sum->tracks_gt ? "" : "   (not yet: images of other shards unfinished)");
@@ -301,6 +309,7 @@ int rs_cli_synth(int argc, char **argv)
                                              {"val-backgrounds", required_argument, NULL, OPT_VAL_BG},
                                              {"val-split", required_argument, NULL, OPT_VAL_SPLIT},
                                              {"traffic-frames", required_argument, NULL, OPT_TRAFFIC_FRAMES},
+                                             {"models", required_argument, NULL, OPT_MODELS},
                                              {"sequence", no_argument, NULL, OPT_SEQUENCE},
                                              {"frames", required_argument, NULL, OPT_FRAMES},
                                              {"labels-only", no_argument, NULL, OPT_LABELS_ONLY},
@@ -361,6 +370,10 @@ int rs_cli_synth(int argc, char **argv)
         case OPT_TRAFFIC_FRAMES:
             if (!*optarg) rc = rs_cli_usage_error("synth", "--traffic-frames: empty folder name");
             opt.traffic_frames_dir = optarg;
+            break;
+        case OPT_MODELS:
+            if (!*optarg) rc = rs_cli_usage_error("synth", "--models: empty file name");
+            opt.models_path = optarg;
             break;
         case OPT_SEQUENCE: opt.sequence = true; break;
         case OPT_LABELS_ONLY: opt.labels_only = true; break;

@@ -206,6 +206,17 @@ rs_status rs_io_write_file(const char *path, const void *data, size_t len, rs_er
     return rs_io_atomic_commit(&a, err);
 }
 
+rs_status rs_io_link_or_copy(const char *src, const char *dst, rs_err *err)
+{
+    if (link(src, dst) == 0) return RS_OK;
+    char *data = NULL;
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&data, &len, src, err);
+    if (!st) st = rs_io_write_file(dst, data, len, err);
+    free(data);
+    return st;
+}
+
 rs_status rs_io_mkdir_p(const char *path, rs_err *err)
 {
     char *p = strdup(path);

@@ -64,6 +64,11 @@ void rs_io_atomic_abort(rs_io_atomic *a);
 // Writes `len` bytes to `path` atomically.
 rs_status rs_io_write_file(const char *path, const void *data, size_t len, rs_err *err);
 
+// Puts the file src at dst as a hard link (the same file system), else as a copy of its bytes
+// written atomically (rs_io_write_file). dst must not exist yet. Returns RS_ERR_IO (src
+// unreadable, dst not writable) / RS_ERR_NOMEM.
+rs_status rs_io_link_or_copy(const char *src, const char *dst, rs_err *err);
+
 // mkdir -p. Succeeds if the folder already exists.
 rs_status rs_io_mkdir_p(const char *path, rs_err *err);
 

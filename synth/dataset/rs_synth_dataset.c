@@ -155,6 +155,9 @@ static void dataset_free(rs_synth_dataset__run *d)
     }
     free(d->cams);
     free(d->frames);
+    for (int i = 0; d->model_meshes && i < d->models.N; i++) rs_synth_mesh_free(&d->model_meshes[i]);
+    free(d->model_meshes);
+    rs_synth_vehicle_list_free(&d->models);
     rs_lanes_free(&d->lanes);
     rs_site_free(d->site);
     free(d->split_dir[0]);
@@ -315,6 +318,8 @@ static rs_status write_camera_copies(rs_synth_dataset__run *d, rs_err *err)
 // With SUMO's frames, "traffic_frames": {"frames", "vehicles", "sha256"} (the folder's content,
 // rs_synth_traffic_frames_info) joins the run (so merge refuses shards of other traffic), and
 // the folder's path is noted beside it (not compared: shards may read copies at other paths).
+// With --models, "models": {"entries", "sha256"} (the library file's; not the model files')
+// joins the run in the same way, its path beside it.
 static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth_traffic_frames_info *frames,
                                   rs_err *err)
 {
@@ -348,6 +353,12 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
         cJSON_AddNumberToObject(tf, "vehicles", (double)frames->Nvehicles);
         cJSON_AddStringToObject(tf, "sha256", frames->sha256);
         cJSON_AddStringToObject(doc, "traffic_frames_dir", opt->traffic_frames_dir);
+    }
+    if (opt->models_path) { // absent without a library: older records stay equal
+        cJSON *ml = cJSON_AddObjectToObject(run, "models");
+        cJSON_AddNumberToObject(ml, "entries", d->models.N);
+        cJSON_AddStringToObject(ml, "sha256", d->models_sha256);
+        cJSON_AddStringToObject(doc, "models_path", opt->models_path);
     }
     if (opt->sequence) { // absent otherwise: older records stay equal
         cJSON *seq = cJSON_AddObjectToObject(run, "sequence");
@@ -718,6 +729,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     rs_status st = dataset_load(&d, err);
     // SUMO's frames, every one read and checked before DATASET is touched
     if (!st && opt->traffic_frames_dir) st = rs_synth_dataset__frames_load(&d, &frames, err);
+    if (!st && opt->models_path) st = rs_synth_dataset__models_load(&d, err);
     if (!st && opt->sequence) st = sequence_range(&o, &d, err);
     if (st) goto done;
     // One run per dataset folder: a second one would remake the same images in the same work/
@@ -755,11 +767,13 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     }
     if (!st) st = write_camera_copies(&d, err);
     if (!st) st = write_run_record(&d, &frames, err);
+    if (!st) st = rs_synth_dataset__models_cache(&d, err);
     if (st) goto done;
     for (int k = opt->shard_index; k < opt->count; k += opt->shard_count) sum.Nimages++;
     st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err) : run_images(&d, &sum, 0, 1, -1, err);
     if (!st) {
         st = rs_synth_dataset__assemble(&d, &sum.Nannotations, &sum.Nleft_out, err);
+        rs_synth_dataset__models_uncache(&d);
         rmdir(d.work_root); // empty when every image finished
     }
     if (!st && !opt->labels_only) st = write_condition_mix(&d, &sum, err);

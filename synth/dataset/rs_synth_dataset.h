@@ -93,6 +93,11 @@ typedef struct {
     // DIR` (frames.json and its frame files): image k takes the vehicles of one frame, drawn from
     // k's stream, instead (the section "traffic from SUMO's frames" below).
     const char *traffic_frames_dir;
+    // NULL (default): procedural vehicles only. Else a model library (`roadside synth --models
+    // FILE`, synth/traffic/rs_synth_vehicles.h: rs_synth_models_read): a vehicle of a class the
+    // library has becomes one of its models of that class, drawn from the image's seed (its
+    // label the model's class, its box the model's); the other classes stay procedural.
+    const char *models_path;
     // A sequence (`roadside synth --sequence`, the section "sequences" below): with
     // traffic_frames_dir, image k shows frame frame_first + k / Ncameras to camera k % Ncameras,
     // every vehicle the camera sees; count is then set by the run ((frame_end - frame_first) x

@@ -242,9 +242,10 @@ static rs_status image_render_options(rs_synth_render_options *ropt, const rs_sy
 // of them, a uniformly drawn subset kept in placement order: the traffic of the whole site
 // would leave most images nearly empty.
 typedef struct {
-    rs_synth_vehicle *v; // (N,) owned: the vehicles rendered
-    int (*rect)[4];      // (N,) owned: each one's canvas rectangle (rs_synth_vehicle_rect)
-    uint8_t *coarse;     // (N,) owned: 1 = the coarse mesh (smaller than opt->coarse_below_px)
+    rs_synth_vehicle *v;    // (N,) owned: the vehicles rendered
+    int (*rect)[4];         // (N,) owned: each one's canvas rectangle (rs_synth_vehicle_rect)
+    uint8_t *coarse;        // (N,) owned: 1 = the coarse mesh (smaller than opt->coarse_below_px)
+    rs_synth_obj_spec *obj; // (N,) owned: a user model's spec (--models), zeroed for the others
     int N;
     int iframe; // the SUMO frame's index in frames.json, -1 for the built-in traffic
 } image_traffic;
@@ -254,6 +255,7 @@ static void image_traffic_free(image_traffic *t)
     free(t->v);
     free(t->rect);
     free(t->coarse);
+    free(t->obj);
     memset(t, 0, sizeof(*t));
 }
 
@@ -299,19 +301,24 @@ static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d
     int N = 0;
     rs_status st = site_traffic(&all, &N, &frame, &builtin, &t->iframe, d, k, rng, err);
     const size_t n = (size_t)(N > 0 ? N : 1);
-    if (!st &&
-        (!(t->v = calloc(n, sizeof(*t->v))) || !(t->rect = calloc(n, sizeof(*t->rect))) || !(t->coarse = calloc(n, 1))))
+    if (!st && (!(t->v = calloc(n, sizeof(*t->v))) || !(t->rect = calloc(n, sizeof(*t->rect))) ||
+                !(t->coarse = calloc(n, 1)) || !(t->obj = calloc(n, sizeof(*t->obj)))))
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     int Nseen = 0;
     for (int i = 0; i < N && !st; i++) {
+        // --models: the vehicle may become one of the library's models of its class (its box)
+        rs_synth_vehicle x = all[i];
+        rs_synth_obj_spec spec = {0};
+        rs_synth_dataset__pick_model(&x, &spec, d, k, i);
         double corners[8][3];
-        rs_synth_vehicle_corners_enu(corners, &all[i], d->site->ground_normal_enu, d->site->ground_offset_m);
+        rs_synth_vehicle_corners_enu(corners, &x, d->site->ground_normal_enu, d->site->ground_offset_m);
         if (rs_synth_vehicle_rect(t->rect[Nseen], &c->canvas, c->cam.rt_cam_enu, (const double(*)[3])corners, 0.05)) {
             // labels alone: every vehicle's coarse mesh (rs_synth_fleet_build_lod; the box and roof
             // line exact) for a faster ID pass and visibility (docs/synth.md, "Sequences and labels
             // without rendering")
             t->coarse[Nseen] = opt->labels_only || t->rect[Nseen][3] - t->rect[Nseen][1] + 1 < opt->coarse_below_px;
-            t->v[Nseen++] = all[i];
+            t->obj[Nseen] = spec;
+            t->v[Nseen++] = x;
         }
     }
     const uint64_t r_pick = st ? 0 : rs_rng_seed_next(rng);
@@ -325,6 +332,7 @@ static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d
             if (u01 * (Nseen - i) < opt->vehicles - kept) {
                 t->coarse[kept] = t->coarse[i];
                 memcpy(t->rect[kept], t->rect[i], sizeof(t->rect[i]));
+                t->obj[kept] = t->obj[i];
                 t->v[kept++] = t->v[i];
             }
         }
@@ -454,7 +462,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
         goto done;
     }
     for (int i = 0; i < N; i++) ids[i] = t.v[i].id;
-    if ((st = rs_synth_prepare_lod(&prepared, t.v, NULL, N, t.coarse, err))) goto done;
+    if ((st = rs_synth_prepare_lod(&prepared, t.v, t.obj, N, t.coarse, err))) goto done;
     ropt.vehicle_rects = (const int(*)[4])t.rect;
     if (b && b->cond_known && !d->opt->labels_only) { // issue 40: lights, street lights, snow; the passes
         rs_synth_scene_apply_condition(&ropt.scene, &b->cond, d->site, &prepared);

@@ -22,13 +22,7 @@
 // Hard-links src to dst (a copy when linking fails), unless dst exists.
 static rs_status link_or_copy(const char *src, const char *dst, rs_err *err)
 {
-    if (rs_synth_dataset__file_exists(dst) || link(src, dst) == 0) return RS_OK;
-    char *data = NULL;
-    size_t len = 0;
-    rs_status st = rs_io_read_file(&data, &len, src, err);
-    if (!st) st = rs_io_write_file(dst, data, len, err);
-    free(data);
-    return st;
+    return rs_synth_dataset__file_exists(dst) ? RS_OK : rs_io_link_or_copy(src, dst, err);
 }
 
 // Adds the <split> of every instances_<split>.json in `adir` not yet in splits.

@@ -1,7 +1,7 @@
 // rs_synth_fleet.c -- the fleet's classes: names, dimension ranges, the class mix (default,
 // parsing, drawing), the paint colours, and resolving what a vehicle left to chance from its
 // variant. docs/fleet.md gives the sources. The meshes: rs_synth_fleet_build.c (procedural),
-// rs_synth_fleet_obj.c (OBJ models), rs_synth_fleet_pov.c (POV-Ray output); what they share:
+// rs_synth_fleet_model.c (user models), rs_synth_fleet_pov.c (POV-Ray output); what they share:
 // synth/fleet/internal/rs_synth_fleet_internal.h.
 #include "synth/fleet/rs_synth_fleet.h"
 

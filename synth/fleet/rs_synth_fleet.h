@@ -13,9 +13,11 @@
 // (sin a, 0, cos a), i.e. a compass heading a clockwise from north, as yaw_deg is defined.
 #pragma once
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 
+#include "core/rs_image.h"
 #include "core/rs_status.h"
 #include "synth/fleet/rs_synth_vehicle.h"
 
@@ -38,11 +40,30 @@ typedef enum {
     RS_SYNTH_NPARTS
 } rs_synth_part;
 
+// A user model's material (rs_synth_obj_load), as assimp reads it from an OBJ's MTL (Kd, Ks, Ns,
+// d, map_Kd) or a glTF 2.0 material (baseColorFactor, baseColorTexture, metallicFactor,
+// roughnessFactor, alpha), written as a POV-Ray texture by rs_synth_fleet_write_parts /
+// _instance (docs/fleet.md, "User models"). Colours are linear RGB (glTF's are by definition;
+// an MTL's Kd is taken as linear too, as assimp hands it over).
+typedef struct {
+    char name[64];    // the model's material name, for matching paint_materials only (never
+                      //   written into a scene)
+    double rgb[3];    // diffuse / base colour, linear [0,1]; multiplies nothing when textured
+    double opacity;   // 1 opaque .. 0 clear (MTL d, glTF alpha): < 1 is glass (Fresnel reflection)
+    double specular;  // highlight strength [0,1] (MTL: mean of Ks; glTF: from roughness)
+    double roughness; // POV-Ray highlight roughness (0, 1]: 1 / Ns (MTL) or from glTF roughness
+    double metallic;  // [0,1]: glTF metallicFactor (MTL: 0)
+    int texture;      // index into the mesh's textures (the diffuse / base colour image), or -1
+    bool paint;       // painted with the vehicle's look (paint_materials) instead of the above
+} rs_synth_material;
+
 // A triangle mesh in the vehicle frame. Triangles are wound counter-clockwise seen from outside
 // (the geometric normal (b-a)x(c-a) points outward). vn is optional: unit normals for smooth
-// shading (NULL = flat shading), indexed like v when tri_n is NULL (OBJ models), else by tri_n:
+// shading (NULL = flat shading), indexed like v when tri_n is NULL (user models), else by tri_n:
 // corner k of triangle t has the normal vn[tri_n[t][k]] (procedural vehicles: smooth across
-// round surfaces, sharp at creases; rs_synth_fleet_build). Owned arrays; rs_synth_mesh_free.
+// round surfaces, sharp at creases; rs_synth_fleet_build). A user model also has materials
+// (material != NULL: each triangle's, an index into materials), texture coordinates (uv,
+// indexed like v) and its texture images. Owned arrays; rs_synth_mesh_free.
 typedef struct {
     int Nv;          // number of vertices
     double (*v)[3];  // (Nv,3) vertices, vehicle frame, metres
@@ -52,9 +73,21 @@ typedef struct {
     uint8_t *part;   // (Ntri,) rs_synth_part of each triangle
     int Nn;          // number of normals when tri_n != NULL
     int (*tri_n)[3]; // (Ntri,3) normal indices, or NULL (then vn is indexed like v)
+    double (*uv)[2]; // (Nv,2) texture coordinates (u right, v up the image), or NULL
+    int Nmaterials;
+    rs_synth_material *materials; // (Nmaterials,) or NULL (procedural: the parts' textures)
+    uint16_t *material;           // (Ntri,) material of each triangle, or NULL
+    int Ntextures;
+    rs_image *textures; // (Ntextures,) the texture images as read (RGB or RGBA, sRGB-encoded)
+    char **texture_png; // (Ntextures,) owned, or NULL: the images already written as PNG
+                        //   (rs_synth_fleet_cache_textures), linked rather than encoded again
 } rs_synth_mesh;
 
 void rs_synth_mesh_free(rs_synth_mesh *mesh); // NULL-safe; leaves *mesh zeroed
+
+// A deep copy of `in` (every array, materials and texture images). out: *out (owned;
+// rs_synth_mesh_free), zeroed on failure. Returns RS_ERR_NOMEM.
+rs_status rs_synth_mesh_copy(rs_synth_mesh *out, const rs_synth_mesh *in, rs_err *err);
 
 // Axis-aligned bounds of the mesh's vertices in the vehicle frame.
 // out: lo, hi (3,) metres. An empty mesh gives lo = hi = 0.
@@ -138,25 +171,60 @@ rs_status rs_synth_fleet_build_lod( // out
     // in
     const rs_synth_vehicle *v, bool coarse, rs_err *err);
 
-// How an OBJ user model is declared: scale and which OBJ axes point forward and up.
+// How a user model is declared (a vehicles file's "model" entry, a --models library's entry;
+// docs/povray.md, docs/fleet.md): its size and which of its axes point forward and up.
 typedef struct {
-    const char *path;    // OBJ file
-    double scale;        // metres per OBJ unit, > 0
-    const char *forward; // OBJ axis pointing to the vehicle's front: "+x" "-x" "+y" "-y" "+z" "-z"
-    const char *up;      // OBJ axis pointing up (must differ from forward's axis)
+    const char *path;                   // model file: OBJ (+ MTL + images), glTF 2.0 (.gltf, .glb)
+    double scale;                       // metres per model unit, > 0; ignored when length_m > 0
+    double length_m;                    // > 0: the model is scaled so that its box's length along forward is
+                                        //   this (metres); 0: scale applies
+    const char *forward;                // model axis pointing to the vehicle's front: "+x" "-x" "+y" "-y" "+z" "-z"
+    const char *up;                     // model axis pointing up (must differ from forward's axis)
+    const char *const *paint_materials; // (Npaint,) names of the materials painted with the
+                                        //   vehicle's colour; may be NULL
+    int Npaint;
+    const rs_synth_mesh *loaded; // may be NULL; else the model as rs_synth_obj_load read it with
+                                 //   this spec (a run's library, loaded once): rs_synth_prepare
+                                 //   copies it instead of reading the file again
 } rs_synth_obj_spec;
 
-// Reads an OBJ (v, vn, f with 3 or more corners as v, v/vt, v//vn or v/vt/vn, negative indices
-// allowed; other statements ignored), triangulates polygons as fans, maps it into the vehicle
-// frame (scale, axes) and moves it so that its box's footprint centre is at the origin and its
-// lowest point at z = 0. All triangles are PAINT. Vertex normals are kept (mapped and
-// normalised) when every face corner has one, else vn = NULL.
-// Errors name the file and line: RS_ERR_IO, RS_ERR_PARSE ("model.obj:12: f: index 9 out of
-// range"), RS_ERR_INVALID (bad spec, no faces, degenerate triangles only), RS_ERR_NOMEM.
+// Reads a user model with the Open Asset Import Library (assimp 5.2: OBJ with its MTL, glTF 2.0
+// .gltf/.glb, and whatever else assimp reads), triangulated, vertices joined, the node
+// transforms applied, points and lines dropped; maps it into the vehicle frame (scale or
+// length, axes) and moves it so that its box's footprint centre is at the origin and its lowest
+// point at z = 0. Zero-area triangles are dropped. All triangles are PAINT parts; each keeps
+// its material (rs_synth_material) and the mesh its texture coordinates and images: a
+// material's diffuse / base colour image (a file beside the model, or embedded in a glTF) is
+// read with rs_image_read. A model without materials of its own (an OBJ without MTL: assimp's
+// default material only) is painted whole, as are the materials named in paint_materials.
+// Vertex normals are kept (mapped and normalised) when every mesh has them, else vn = NULL.
+// Errors name the file: RS_ERR_IO (missing model; a texture image missing or unreadable,
+// naming the material and the image), RS_ERR_PARSE (assimp's message: "model.obj: assimp:
+// ..."), RS_ERR_INVALID (bad spec, no faces, degenerate triangles only, more than 65535
+// materials), RS_ERR_NOMEM.
 rs_status rs_synth_obj_load( // out
     rs_synth_mesh *mesh,
     // in
     const rs_synth_obj_spec *spec, rs_err *err);
+
+// Writes the mesh's texture images as 8-bit PNG files DIR/rs_tex_<PREFIX>_<k>.png (k = 0 ..
+// Ntextures-1, each atomically; hard links of mesh->texture_png's files when set): the only images a scene's mesh refers to, by these generated
+// bare names, in the folder povray runs in (docs/povray.md, "Confinement"). prefix: the
+// identifier the mesh's parts are declared under (rs_synth_fleet_write_parts / _instance), which
+// names the images the instance's textures read. Returns RS_ERR_INVALID (prefix), RS_ERR_IO,
+// RS_ERR_NOMEM.
+rs_status rs_synth_fleet_write_textures(const char *dir, const char *prefix, const rs_synth_mesh *mesh, rs_err *err);
+
+// Writes the mesh's texture images once as PNG files into dir (rs_tex_<prefix>_<k>.png, as
+// rs_synth_fleet_write_textures names them) and records their paths in mesh->texture_png, so that
+// rs_synth_fleet_write_textures then hard-links them (a copy where linking fails) instead of
+// encoding each image again: a run's model library (synth/dataset) writes them once for all its
+// images. dir must exist. Returns RS_ERR_IO / RS_ERR_NOMEM.
+rs_status rs_synth_fleet_cache_textures(rs_synth_mesh *mesh, const char *dir, const char *prefix, rs_err *err);
+
+// The file name of texture k of the mesh declared under prefix: "rs_tex_<prefix>_<k>.png"
+// (rs_synth_fleet_write_textures writes it, the instance's textures read it). out: (n,) text.
+void rs_synth_fleet_texture_name(char *out, size_t n, const char *prefix, int k);
 
 // Declaration styles.
 typedef enum {
@@ -214,7 +282,7 @@ rs_status rs_synth_fleet_write_declare_look(FILE *f,
 rs_status rs_synth_fleet_write_merged(FILE *f, const char *name, const rs_synth_mesh *mesh, rs_err *err);
 
 // The scene's shared geometry (issue 18's cost): writes "#declare PREFIX_k = mesh2 {...}" for each
-// part k (rs_synth_part) the mesh uses, without texture, in POV-Ray axes, compact (vertices to
+// part k (rs_synth_part; a user model: material k, with its texture coordinates) the mesh uses, without texture, in POV-Ray axes, compact (vertices to
 // 1e-5 m, one line per array) and with smooth normals on the body's paint and glass only (the
 // other parts are a few pixels each and are flat-shaded). Written once per scene, before the
 // passes; each pass then declares its vehicle with rs_synth_fleet_write_instance, which costs no
@@ -229,6 +297,10 @@ rs_status rs_synth_fleet_write_parts(FILE *f,
 // as rs_synth_fleet_write_declare_look does (look required), BARE gives none, so that the
 // instance's texture applies to all of it ("#declare NAME = object { PREFIX_k }" when the mesh
 // has one part). The same geometry as rs_synth_fleet_write_declare_look's, so the same pixels.
+// A user model (mesh->materials) has one group k per material instead of per part, each
+// TEXTURED with its material (image textures read from rs_tex_<PREFIX>_<j>.png,
+// rs_synth_fleet_write_textures); its paint materials get look's paint, or, with look NULL,
+// no texture: the placed object's texture then applies to them only.
 rs_status rs_synth_fleet_write_instance(FILE *f,
                                         // in
                                         const char *name, const char *prefix, const rs_synth_mesh *mesh,

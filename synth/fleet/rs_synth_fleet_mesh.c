@@ -1,8 +1,9 @@
 // rs_synth_fleet_mesh.c -- rs_synth_mesh (freeing, bounds) and the growing mesh that the
-// procedural builder and the OBJ reader fill (synth/fleet/internal/rs_synth_fleet_internal.h).
+// procedural builder fills (synth/fleet/internal/rs_synth_fleet_internal.h).
 #include "synth/fleet/rs_synth_fleet.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,7 +17,61 @@ void rs_synth_mesh_free(rs_synth_mesh *mesh)
     free(mesh->tri);
     free(mesh->part);
     free(mesh->tri_n);
+    free(mesh->uv);
+    free(mesh->materials);
+    free(mesh->material);
+    for (int k = 0; k < mesh->Ntextures; k++) {
+        rs_image_free(&mesh->textures[k]);
+        if (mesh->texture_png) free(mesh->texture_png[k]);
+    }
+    free(mesh->texture_png);
+    free(mesh->textures);
     memset(mesh, 0, sizeof *mesh);
+}
+
+// A copy of n bytes of p (NULL when p is NULL); *ok cleared when it fails.
+static void *dup_bytes(const void *p, size_t n, bool *ok)
+{
+    if (!p) return NULL;
+    void *q = malloc(n > 0 ? n : 1);
+    if (!q)
+        *ok = false;
+    else
+        memcpy(q, p, n);
+    return q;
+}
+
+rs_status rs_synth_mesh_copy(rs_synth_mesh *out, const rs_synth_mesh *in, rs_err *err)
+{
+    bool ok = true;
+    const size_t Nv = (size_t)in->Nv, Nt = (size_t)in->Ntri;
+    *out = *in;
+    out->v = dup_bytes(in->v, Nv * sizeof *in->v, &ok);
+    out->vn = dup_bytes(in->vn, (in->tri_n ? (size_t)in->Nn : Nv) * sizeof *in->vn, &ok);
+    out->tri = dup_bytes(in->tri, Nt * sizeof *in->tri, &ok);
+    out->part = dup_bytes(in->part, Nt, &ok);
+    out->tri_n = dup_bytes(in->tri_n, Nt * sizeof *in->tri_n, &ok);
+    out->uv = dup_bytes(in->uv, Nv * sizeof *in->uv, &ok);
+    out->materials = dup_bytes(in->materials, (size_t)in->Nmaterials * sizeof *in->materials, &ok);
+    out->material = dup_bytes(in->material, Nt * sizeof *in->material, &ok);
+    out->textures = in->Ntextures > 0 ? calloc((size_t)in->Ntextures, sizeof *out->textures) : NULL;
+    out->Ntextures = out->textures ? in->Ntextures : 0;
+    ok &= in->Ntextures == 0 || out->textures != NULL;
+    out->texture_png = in->texture_png && out->textures ? calloc((size_t)in->Ntextures, sizeof(char *)) : NULL;
+    ok &= !in->texture_png || out->texture_png != NULL || in->Ntextures == 0;
+    for (int k = 0; k < out->Ntextures; k++) { // (every image zeroed or copied: freed safely)
+        const rs_image *a = &in->textures[k];
+        const size_t n = (size_t)a->width * a->height * a->channels * sizeof(float);
+        out->textures[k] = *a;
+        out->textures[k].data = ok ? dup_bytes(a->data, n, &ok) : NULL;
+        if (out->texture_png && in->texture_png[k] && ok)
+            ok = (out->texture_png[k] = strdup(in->texture_png[k])) != NULL;
+    }
+    if (!ok) {
+        rs_synth_mesh_free(out);
+        return rs_err_set(err, RS_ERR_NOMEM, "mesh copy: out of memory");
+    }
+    return RS_OK;
 }
 
 void rs_synth_mesh_bounds(double lo[3], double hi[3], const rs_synth_mesh *mesh)

@@ -5,18 +5,24 @@
 
 #include <math.h>
 #include <stdbool.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "synth/fleet/internal/rs_synth_fleet_internal.h"
 
-static int valid_identifier(const char *s)
+int rs_synth_fleet_valid_identifier(const char *s)
 {
     if (!s || !*s || strlen(s) > 40) return 0;
     if (!((s[0] >= 'A' && s[0] <= 'Z') || s[0] == '_')) return 0;
     for (const char *p = s; *p; p++)
         if (!((*p >= 'A' && *p <= 'Z') || (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '_')) return 0;
     return 1;
+}
+
+void rs_synth_fleet_texture_name(char *out, size_t n, const char *prefix, int k)
+{
+    snprintf(out, n, "rs_tex_%s_%d.png", prefix, k);
 }
 
 // Built-in textures of the fixed parts (paint is written from the vehicle's look). The glass,
@@ -136,18 +142,28 @@ static void put_vec(FILE *f, double a, double b, double c, int decimals, bool co
     fwrite(buf, 1, (size_t)(p - buf), f);
 }
 
-// One mesh2 of the triangles of `part` (< 0: all), its vertices renumbered. Compact (the
+// Whether triangle t is in the group written: part `part` (< 0: any) and material `mat` (< 0:
+// any; a mesh with materials only).
+static bool selected(const rs_synth_mesh *m, int t, int part, int mat)
+{
+    return (part < 0 || m->part[t] == part) && (mat < 0 || m->material[t] == mat);
+}
+
+// One mesh2 of the triangles of `part` and `mat` (< 0: all), its vertices renumbered. Compact (the
 // scene's shared geometry): vectors on one line, vertices to 1e-5 m, normals to 1e-4, and
 // normals only when `normals` (smooth shading where it shows); else one vector per line,
-// vertices to 1e-6 m, normals to 1e-5, whenever the mesh has them.
-static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int *map, bool compact, bool normals)
+// vertices to 1e-6 m, normals to 1e-5, whenever the mesh has them. A textured material's
+// triangles also get their texture coordinates (uv_vectors, 6 digits, numbered as the vertices;
+// uv_indices in the long form only: without them POV-Ray takes face_indices, the same numbers,
+// and the compact form saves a third of a textured model's text).
+static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int mat, int *map, bool compact, bool normals)
 {
     const int dv = compact ? 5 : 6, dn = compact ? 4 : 5;
     const char *sep = compact ? "" : "    ";
     int Nv = 0, Nt = 0;
     for (int i = 0; i < m->Nv; i++) map[i] = -1;
     for (int t = 0; t < m->Ntri; t++)
-        if (part < 0 || m->part[t] == part) {
+        if (selected(m, t, part, mat)) {
             Nt++;
             for (int k = 0; k < 3; k++)
                 if (map[m->tri[t][k]] < 0) map[m->tri[t][k]] = Nv++;
@@ -176,7 +192,7 @@ static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int *map, bool
         }
         for (int i = 0; i < m->Nn; i++) nmap[i] = -1;
         for (int t = 0; t < m->Ntri; t++)
-            if (part < 0 || m->part[t] == part)
+            if (selected(m, t, part, mat))
                 for (int k = 0; k < 3; k++)
                     if (nmap[m->tri_n[t][k]] < 0) ninv[Nnorm] = m->tri_n[t][k], nmap[m->tri_n[t][k]] = Nnorm++;
     } else if (with_n) {
@@ -190,16 +206,30 @@ static int write_mesh2(FILE *f, const rs_synth_mesh *m, int part, int *map, bool
         }
         fprintf(f, " }\n");
     }
+    const bool with_uv = m->uv && mat >= 0 && m->materials[mat].texture >= 0;
+    if (with_uv) {
+        fprintf(f, "%suv_vectors { %d", sep, Nv);
+        for (int j = 0; j < Nv; j++) {
+            const double *uv = m->uv[inv[j]];
+            if (compact)
+                fprintf(f, ",<%.6g,%.6g>", uv[0], uv[1]);
+            else
+                fprintf(f, ",\n      <%.6f, %.6f>", uv[0], uv[1]);
+        }
+        fprintf(f, " }\n");
+    }
     free(inv);
     free(ninv);
     // The map (x,y,z)_v -> (-y, z, x) has determinant -1 and POV-Ray's frame is left-handed: a
     // triangle keeps its outward side, whatever the order; the order is kept.
-    for (int pass = 0; pass < (with_n ? 2 : 1); pass++) {
-        fprintf(f, "%s%s { %d", sep, pass ? "normal_indices" : "face_indices", Nt);
+    // face_indices, then normal_indices and uv_indices when written
+    for (int pass = 0; pass < 3; pass++) {
+        if ((pass == 1 && !with_n) || (pass == 2 && !(with_uv && !compact))) continue;
+        fprintf(f, "%s%s { %d", sep, pass == 1 ? "normal_indices" : pass == 2 ? "uv_indices" : "face_indices", Nt);
         for (int t = 0; t < m->Ntri; t++)
-            if (part < 0 || m->part[t] == part) {
-                const int *q = pass && nmap ? m->tri_n[t] : m->tri[t];
-                const int *mp = pass && nmap ? nmap : map;
+            if (selected(m, t, part, mat)) {
+                const int *q = pass == 1 && nmap ? m->tri_n[t] : m->tri[t];
+                const int *mp = pass == 1 && nmap ? nmap : map;
                 if (compact) {
                     char buf[48], *p = buf;
                     *p++ = ',', *p++ = '<';
@@ -237,6 +267,57 @@ static void write_part_look(FILE *f, const rs_synth_mesh *mesh, int part, const 
     if (needs_ior(part)) fprintf(f, "    interior { ior 1.5 }\n");
 }
 
+// A mesh's groups, one mesh2 each: its materials (a user model) or its parts.
+static int n_groups(const rs_synth_mesh *m) { return m->materials ? m->Nmaterials : RS_SYNTH_NPARTS; }
+static int group_part(const rs_synth_mesh *m, int g) { return m->materials ? -1 : g; }
+static int group_mat(const rs_synth_mesh *m, int g) { return m->materials ? g : -1; }
+
+// A user model's material as a POV-Ray texture (rs_synth_material): its image through the
+// texture coordinates (uv_mapping image_map, the PNG rs_synth_fleet_write_textures writes under
+// `prefix`) or its colour, a Phong highlight, metals reflecting tinted, and below full opacity
+// a clear surface reflecting with Fresnel's law (glass; interior ior 1.5).
+static void write_material(FILE *f, const rs_synth_material *mt, const char *prefix)
+{
+    const double t = 1 - mt->opacity;
+    if (mt->texture >= 0) {
+        char name[96];
+        rs_synth_fleet_texture_name(name, sizeof name, prefix, mt->texture);
+        fprintf(f, "    texture { uv_mapping pigment { image_map { png \"%s\" interpolate 2", name);
+        if (t > 0) fprintf(f, " transmit all %.4f", t);
+        fprintf(f, " } }");
+    } else
+        fprintf(f, "    texture { pigment { rgbt <%.6f, %.6f, %.6f, %.4f> }", mt->rgb[0], mt->rgb[1], mt->rgb[2], t);
+    fprintf(f, " finish { ambient 0 diffuse %.3f specular %.4f roughness %.5f", 0.8 * (1 - 0.9 * mt->metallic),
+            mt->specular, mt->roughness > 1e-5 ? mt->roughness : 1e-5);
+    if (mt->metallic > 0) fprintf(f, " metallic %.4f reflection { %.4f metallic }", mt->metallic, 0.8 * mt->metallic);
+    if (t > 0) fprintf(f, " reflection { 0.04, 1 fresnel on } conserve_energy");
+    fprintf(f, " } }\n");
+    if (t > 0) fprintf(f, "    interior { ior 1.5 }\n");
+}
+
+// Group g's look, written inside its object: a part's (write_part_look) or a material's; a paint
+// material gets the vehicle's paint, or no texture when look is NULL (the instance's applies).
+static void write_group_look(FILE *f, const rs_synth_mesh *mesh, int g, const rs_synth_look *look, const char *prefix)
+{
+    if (!mesh->materials) {
+        write_part_look(f, mesh, g, look);
+        return;
+    }
+    if (!mesh->materials[g].paint)
+        write_material(f, &mesh->materials[g], prefix);
+    else if (look)
+        write_part_look(f, mesh, RS_SYNTH_PART_PAINT, look);
+}
+
+// Whether look's paint is a colour in [0, 1]; a user model may go without (look NULL: its paint
+// materials take the instance's texture).
+static bool paint_ok(const rs_synth_mesh *mesh, const rs_synth_look *look)
+{
+    if (!look) return mesh->materials != NULL;
+    const double *c = look->paint_rgb;
+    return c[0] >= 0 && c[0] <= 1 && c[1] >= 0 && c[1] <= 1 && c[2] >= 0 && c[2] <= 1;
+}
+
 rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth_mesh *mesh,
                                        rs_synth_declare_style style, const double paint_rgb[3], rs_err *err)
 {
@@ -251,29 +332,26 @@ rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth
 rs_status rs_synth_fleet_write_declare_look(FILE *f, const char *name, const rs_synth_mesh *mesh,
                                             rs_synth_declare_style style, const rs_synth_look *look, rs_err *err)
 {
-    const double *paint_rgb = look ? look->paint_rgb : NULL;
-    if (!valid_identifier(name))
+    if (!rs_synth_fleet_valid_identifier(name))
         return rs_err_set(err, RS_ERR_INVALID,
                           "declare: name is not an upper-case POV-Ray identifier of at most 40 "
                           "characters");
     if (mesh->Ntri == 0) return rs_err_set(err, RS_ERR_INVALID, "declare %s: empty mesh", name);
-    if (style == RS_SYNTH_DECLARE_TEXTURED &&
-        !(paint_rgb && paint_rgb[0] >= 0 && paint_rgb[0] <= 1 && paint_rgb[1] >= 0 && paint_rgb[1] <= 1 &&
-          paint_rgb[2] >= 0 && paint_rgb[2] <= 1))
+    if (style == RS_SYNTH_DECLARE_TEXTURED && !paint_ok(mesh, look))
         return rs_err_set(err, RS_ERR_INVALID, "declare %s: paint not in [0, 1]", name);
     int *map = malloc((size_t)(mesh->Nv > 0 ? mesh->Nv : 1) * sizeof *map);
     if (!map) return rs_err_set(err, RS_ERR_NOMEM, "declare %s: out of memory", name);
     int rc = 0;
     if (style == RS_SYNTH_DECLARE_BARE) {
         fprintf(f, "#declare %s =\n", name);
-        rc = write_mesh2(f, mesh, -1, map, false, true);
+        rc = write_mesh2(f, mesh, -1, -1, map, false, true);
         fprintf(f, "  }\n");
     } else {
         fprintf(f, "#declare %s = union {\n", name);
-        for (int part = 0; part < RS_SYNTH_NPARTS && rc >= 0; part++) {
-            rc = write_mesh2(f, mesh, part, map, false, true);
+        for (int g = 0; g < n_groups(mesh) && rc >= 0; g++) {
+            rc = write_mesh2(f, mesh, group_part(mesh, g), group_mat(mesh, g), map, false, true);
             if (rc <= 0) continue;
-            write_part_look(f, mesh, part, look);
+            write_group_look(f, mesh, g, look, name);
             fprintf(f, "  }\n");
         }
         fprintf(f, "}\n");
@@ -291,19 +369,20 @@ static bool part_smooth(int part) { return part == RS_SYNTH_PART_PAINT || part =
 
 rs_status rs_synth_fleet_write_parts(FILE *f, const char *prefix, const rs_synth_mesh *mesh, rs_err *err)
 {
-    if (!valid_identifier(prefix) || strlen(prefix) > 37)
+    if (!rs_synth_fleet_valid_identifier(prefix) || strlen(prefix) > 37)
         return rs_err_set(err, RS_ERR_INVALID,
                           "parts: prefix is not an upper-case POV-Ray identifier of at most 37 characters");
     if (mesh->Ntri == 0) return rs_err_set(err, RS_ERR_INVALID, "parts %s: empty mesh", prefix);
     int *map = malloc((size_t)(mesh->Nv > 0 ? mesh->Nv : 1) * sizeof *map);
     if (!map) return rs_err_set(err, RS_ERR_NOMEM, "parts %s: out of memory", prefix);
     int rc = 0;
-    for (int part = 0; part < RS_SYNTH_NPARTS && rc >= 0; part++) {
+    for (int g = 0; g < n_groups(mesh) && rc >= 0; g++) {
+        const int part = group_part(mesh, g), mat = group_mat(mesh, g);
         bool used = false;
-        for (int t = 0; t < mesh->Ntri && !used; t++) used = mesh->part[t] == part;
+        for (int t = 0; t < mesh->Ntri && !used; t++) used = selected(mesh, t, part, mat);
         if (!used) continue;
-        fprintf(f, "#declare %s_%d =\n", prefix, part);
-        rc = write_mesh2(f, mesh, part, map, true, part_smooth(part));
+        fprintf(f, "#declare %s_%d =\n", prefix, g);
+        rc = write_mesh2(f, mesh, part, mat, map, true, part < 0 || part_smooth(part));
         fprintf(f, "  }\n");
     }
     free(map);
@@ -314,13 +393,13 @@ rs_status rs_synth_fleet_write_parts(FILE *f, const char *prefix, const rs_synth
 
 rs_status rs_synth_fleet_write_merged(FILE *f, const char *name, const rs_synth_mesh *mesh, rs_err *err)
 {
-    if (!valid_identifier(name))
+    if (!rs_synth_fleet_valid_identifier(name))
         return rs_err_set(err, RS_ERR_INVALID, "merged: name is not an upper-case POV-Ray identifier");
     if (mesh->Ntri == 0) return rs_err_set(err, RS_ERR_INVALID, "merged %s: empty mesh", name);
     int *map = malloc((size_t)(mesh->Nv > 0 ? mesh->Nv : 1) * sizeof *map);
     if (!map) return rs_err_set(err, RS_ERR_NOMEM, "merged %s: out of memory", name);
     fprintf(f, "#declare %s =\n", name);
-    const int rc = write_mesh2(f, mesh, -1, map, true, false);
+    const int rc = write_mesh2(f, mesh, -1, -1, map, true, false);
     fprintf(f, "  }\n");
     free(map);
     if (rc < 0) return rs_err_set(err, RS_ERR_NOMEM, "merged %s: out of memory", name);
@@ -331,36 +410,36 @@ rs_status rs_synth_fleet_write_merged(FILE *f, const char *name, const rs_synth_
 rs_status rs_synth_fleet_write_instance(FILE *f, const char *name, const char *prefix, const rs_synth_mesh *mesh,
                                         rs_synth_declare_style style, const rs_synth_look *look, rs_err *err)
 {
-    const double *paint_rgb = look ? look->paint_rgb : NULL;
-    if (!valid_identifier(name) || !valid_identifier(prefix) || strlen(prefix) > 37)
+    if (!rs_synth_fleet_valid_identifier(name) || !rs_synth_fleet_valid_identifier(prefix) || strlen(prefix) > 37)
         return rs_err_set(err, RS_ERR_INVALID, "instance: name or prefix is not an upper-case POV-Ray identifier");
     if (mesh->Ntri == 0) return rs_err_set(err, RS_ERR_INVALID, "instance %s: empty mesh", name);
-    if (style == RS_SYNTH_DECLARE_TEXTURED &&
-        !(paint_rgb && paint_rgb[0] >= 0 && paint_rgb[0] <= 1 && paint_rgb[1] >= 0 && paint_rgb[1] <= 1 &&
-          paint_rgb[2] >= 0 && paint_rgb[2] <= 1))
+    if (style == RS_SYNTH_DECLARE_TEXTURED && !paint_ok(mesh, look))
         return rs_err_set(err, RS_ERR_INVALID, "instance %s: paint not in [0, 1]", name);
-    int Nparts = 0;
-    bool used[RS_SYNTH_NPARTS] = {false};
-    for (int t = 0; t < mesh->Ntri; t++)
-        if (mesh->part[t] < RS_SYNTH_NPARTS && !used[mesh->part[t]]) used[mesh->part[t]] = true, Nparts++;
-    if (Nparts == 1 && style == RS_SYNTH_DECLARE_BARE) {
-        for (int part = 0; part < RS_SYNTH_NPARTS; part++)
-            if (used[part]) fprintf(f, "#declare %s = object { %s_%d }\n", name, prefix, part);
+    const int G = n_groups(mesh);
+    bool *used = calloc((size_t)G, sizeof *used);
+    if (!used) return rs_err_set(err, RS_ERR_NOMEM, "instance %s: out of memory", name);
+    int Nused = 0;
+    for (int t = 0; t < mesh->Ntri; t++) {
+        const int g = mesh->materials ? mesh->material[t] : mesh->part[t];
+        if (g < G && !used[g]) used[g] = true, Nused++;
+    }
+    if (Nused == 1 && style == RS_SYNTH_DECLARE_BARE) {
+        for (int g = 0; g < G; g++)
+            if (used[g]) fprintf(f, "#declare %s = object { %s_%d }\n", name, prefix, g);
     } else {
         fprintf(f, "#declare %s = union {\n", name);
-        for (int part = 0; part < RS_SYNTH_NPARTS; part++) {
-            if (!used[part]) continue;
-            fprintf(f, "  object { %s_%d", prefix, part);
+        for (int g = 0; g < G; g++) {
+            if (!used[g]) continue;
+            fprintf(f, "  object { %s_%d", prefix, g);
             if (style == RS_SYNTH_DECLARE_TEXTURED) {
                 fprintf(f, "\n");
-                write_part_look(f, mesh, part, look);
-                fprintf(f, " ");
-            } else
-                fprintf(f, " ");
-            fprintf(f, "}\n");
+                write_group_look(f, mesh, g, look, prefix);
+            }
+            fprintf(f, " }\n");
         }
         fprintf(f, "}\n");
     }
+    free(used);
     if (ferror(f)) return rs_err_set(err, RS_ERR_IO, "instance %s: write failed", name);
     return RS_OK;
 }

@@ -19,8 +19,13 @@ void rs_synth_prepared_free(rs_synth_prepared *p)
 
 static bool same_spec(const rs_synth_obj_spec *a, const rs_synth_obj_spec *b)
 {
-    return strcmp(a->path, b->path) == 0 && a->scale == b->scale && strcmp(a->forward, b->forward) == 0 &&
-           strcmp(a->up, b->up) == 0;
+    if (!(a->loaded == b->loaded && strcmp(a->path, b->path) == 0 && a->scale == b->scale &&
+          a->length_m == b->length_m && strcmp(a->forward, b->forward) == 0 && strcmp(a->up, b->up) == 0 &&
+          a->Npaint == b->Npaint))
+        return false;
+    for (int k = 0; k < a->Npaint; k++)
+        if (strcmp(a->paint_materials[k], b->paint_materials[k]) != 0) return false;
+    return true;
 }
 
 // Resolves vehicle i and gives it a mesh: its own procedural one, or the first identical user
@@ -45,7 +50,9 @@ static rs_status prepare_one(rs_synth_prepared *out, int i, const rs_synth_vehic
         out->imesh[i] = out->imesh[j];
     } else {
         out->imesh[i] = out->Nmeshes;
-        if ((st = rs_synth_obj_load(&out->meshes[out->Nmeshes], &obj[i], err))) return st;
+        st = obj[i].loaded ? rs_synth_mesh_copy(&out->meshes[out->Nmeshes], obj[i].loaded, err)
+                           : rs_synth_obj_load(&out->meshes[out->Nmeshes], &obj[i], err);
+        if (st) return st;
         out->Nmeshes++;
     }
     // The model's box is its mesh's (footprint centred at the origin, lowest point at z = 0).

@@ -22,7 +22,12 @@ void rs_synth_safe_text(char *out, size_t n, const char *s)
 
 rs_synth_vehicle rs_synth_vehicle_init(rs_synth_class cls)
 {
-    return (rs_synth_vehicle){.cls = cls, .rgb = {-1, -1, -1}, .lane = -1};
+    return (rs_synth_vehicle){.cls = cls, .rgb = {-1, -1, -1}, .lane = -1, .model_cls = RS_SYNTH_USER_MODEL};
+}
+
+rs_synth_class rs_synth_vehicle_label_class(const rs_synth_vehicle *v)
+{
+    return v->cls == RS_SYNTH_USER_MODEL ? v->model_cls : v->cls;
 }
 
 // ---- the vehicle box and the ground ----

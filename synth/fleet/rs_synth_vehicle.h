@@ -30,7 +30,7 @@ typedef enum {
     RS_SYNTH_MOTORCYCLE, // with its rider (the box holds both)
     RS_SYNTH_BICYCLE,    // with its rider
     RS_SYNTH_NCLASSES,
-    RS_SYNTH_USER_MODEL = 100 // an OBJ mesh given by the user (model_path)
+    RS_SYNTH_USER_MODEL = 100 // a model given by the user (model_path; labelled as model_cls)
 } rs_synth_class;
 
 // Class mix: relative weights of the classes (any non-negative numbers, at least one > 0);
@@ -44,7 +44,7 @@ typedef struct {
 // it); everything else is held by value. rs_synth_vehicle_init gives the defaults.
 typedef struct {
     rs_synth_class cls;
-    const char *model_path;             // OBJ file when cls == RS_SYNTH_USER_MODEL, else NULL
+    const char *model_path;             // model file when cls == RS_SYNTH_USER_MODEL, else NULL
     char id[48];                        // free-form label: "v12" (built-in traffic), SUMO's vehicle
                                         //   id, a vehicles file's "id" (truncated to 47 bytes; never
                                         //   trusted in scene text: rs_synth_safe_text)
@@ -56,11 +56,16 @@ typedef struct {
                                         //   SUMO: FCD speed; a vehicles file: 0)
     int lane;                           // index of the lane it was placed on, -1 if unknown
     uint64_t variant;                   // seeds the procedural shape and any drawn value
+    rs_synth_class model_cls;           // a user model's label class (its description's "class"),
+                                        //   RS_SYNTH_USER_MODEL when it gives none; else unused
 } rs_synth_vehicle;
 
 // A vehicle of class cls with nothing else known: no model, empty id, dimensions and paint to be
-// drawn (0 and -1), speed 0, lane -1, variant 0.
+// drawn (0 and -1), speed 0, lane -1, variant 0, model_cls RS_SYNTH_USER_MODEL.
 rs_synth_vehicle rs_synth_vehicle_init(rs_synth_class cls);
+
+// The class a vehicle's label carries: cls, or a user model's model_cls.
+rs_synth_class rs_synth_vehicle_label_class(const rs_synth_vehicle *v);
 
 // ---- the vehicle on the ground ----
 

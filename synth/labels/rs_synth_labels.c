@@ -304,7 +304,7 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
                           k);
     memset(L, 0, sizeof *L);
     L->index = k;
-    L->cls = v->cls;
+    L->cls = rs_synth_vehicle_label_class(v);
     double c_v[3] = {0, 0, Hm / 2};
     rs_synth_vehicle_to_enu(L->center_enu_m, v, up_m, c_v);
     L->dims_m[0] = Lm, L->dims_m[1] = Wm, L->dims_m[2] = Hm;

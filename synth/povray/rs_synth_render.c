@@ -704,6 +704,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
         if ((st = rs_image_alloc(&out->rgba, camera->width, camera->height, 4, err))) goto done;
     } else {
         if ((st = rs_io_mkdir_p(out_dir, err)) || (st = rs_synth_povray_write_conf(out_dir, err)) ||
+            (st = rs_synth_scene_write_textures(out_dir, vehicles, err)) ||
             (st = render_canvas(&rgba, &idimg, &frac, &s, out, err)) ||
             (st = render_into_lens(out, &rgba, &idimg, &frac, &s, err)))
             goto done;
@@ -712,7 +713,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
     if ((st = composite(out, s.opt.background_path ? &bg : NULL, err))) goto done;
     if (s.opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
 done:
-    if (!s.opt.keep_files) remove_intermediates(out_dir);
+    if (!s.opt.keep_files) remove_intermediates(out_dir), rs_synth_scene_remove_textures(out_dir, vehicles);
     free_shadow_vehicles(&s.svehicles, s.sowned);
     rs_image_free(&s.mirror);
     rs_image_free(&s.headlights);

@@ -185,6 +185,31 @@ static rs_status write_geometry(FILE *f, const rs_synth_prepared *vehicles, cons
     return RS_OK;
 }
 
+rs_status rs_synth_scene_write_textures(const char *dir, const rs_synth_prepared *vehicles, rs_err *err)
+{
+    for (int m = 0; m < vehicles->Nmeshes; m++) {
+        if (vehicles->meshes[m].Ntextures == 0) continue;
+        char prefix[32];
+        snprintf(prefix, sizeof(prefix), "RS_PART_%d", m); // as write_geometry declares the parts
+        rs_status st = rs_synth_fleet_write_textures(dir, prefix, &vehicles->meshes[m], err);
+        if (st) return st;
+    }
+    return RS_OK;
+}
+
+void rs_synth_scene_remove_textures(const char *dir, const rs_synth_prepared *vehicles)
+{
+    for (int m = 0; m < vehicles->Nmeshes; m++)
+        for (int k = 0; k < vehicles->meshes[m].Ntextures; k++) {
+            char prefix[32], name[96];
+            snprintf(prefix, sizeof(prefix), "RS_PART_%d", m);
+            rs_synth_fleet_texture_name(name, sizeof name, prefix, k);
+            char *p = rs_io_join(dir, name);
+            if (p) (void)remove(p);
+            free(p);
+        }
+}
+
 // Andrew's monotone chain (A. M. Andrew, "Another efficient algorithm for convex hulls in two
 // dimensions", Inf. Process. Lett. 9(5), 1979): the convex hull of p[0..n-1] counter-clockwise
 // into h (at most n + 1 points), returns its size. Sorts p.
@@ -438,7 +463,9 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
                 users++;
             }
         if (first < 0) continue;
-        const bool textured = opt.pass == RS_SYNTH_PASS_COLOUR && vehicles->v[first].cls != RS_SYNTH_USER_MODEL;
+        // a user model's own materials here; its paint materials take each vehicle's paint below
+        const bool user = vehicles->v[first].cls == RS_SYNTH_USER_MODEL;
+        const bool textured = opt.pass == RS_SYNTH_PASS_COLOUR;
         char name[32], prefix[32];
         snprintf(name, sizeof(name), "RS_MESH_%d", m);
         snprintf(prefix, sizeof(prefix), "RS_PART_%d", m);
@@ -449,8 +476,8 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
         look.dirt = fmin(1, look.dirt + opt.dirt_add);
         // the geometry is declared once before the passes (write_geometry): no mesh text here
         if ((st = rs_synth_fleet_write_instance(f, name, prefix, &vehicles->meshes[m],
-                                                textured ? RS_SYNTH_DECLARE_TEXTURED : RS_SYNTH_DECLARE_BARE, &look,
-                                                err)))
+                                                textured ? RS_SYNTH_DECLARE_TEXTURED : RS_SYNTH_DECLARE_BARE,
+                                                user ? NULL : &look, err)))
             return st;
     }
     for (int i = 0; i < N; i++) {

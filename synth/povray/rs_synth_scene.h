@@ -185,6 +185,15 @@ rs_status rs_synth_scene_write(FILE *f,
                                double ground_offset_m, const rs_synth_prepared *vehicles,
                                const rs_synth_scene_options *opt, rs_err *err);
 
+// Writes the texture images of the prepared vehicles' user models into dir (the folder povray
+// runs in) under the generated names their scene text refers to ("rs_tex_RS_PART_<mesh>_<k>.png",
+// rs_synth_fleet_write_textures): the only way an image reaches povray (docs/povray.md,
+// "Confinement"). Returns RS_ERR_IO / RS_ERR_NOMEM.
+rs_status rs_synth_scene_write_textures(const char *dir, const rs_synth_prepared *vehicles, rs_err *err);
+
+// Removes what rs_synth_scene_write_textures wrote (missing files ignored).
+void rs_synth_scene_remove_textures(const char *dir, const rs_synth_prepared *vehicles);
+
 // Writes the .ini matching a scene, atomically: Input_File_Name (the .pov's base name, same
 // folder; it may only use [A-Za-z0-9_.-]), Output_File_Name (the same with .png), Width/Height,
 // File_Gamma 1 (linear output), 16-bit RGBA for the colour pass, 8-bit RGB for the ID pass.

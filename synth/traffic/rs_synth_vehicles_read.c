@@ -82,6 +82,57 @@ bad:
                       i);
 }
 
+rs_status rs_synth_model_spec_read(rs_synth_obj_spec *spec, const char **model_path, rs_synth_vehicle_list *list,
+                                   const cJSON *o, const char *path, int i, const char *dir, rs_err *err)
+{
+    const char *model = get_string(o, "model");
+    if (!model) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].model: missing or not a string", path, i);
+    char *joined = rs_io_join(dir, model);
+    if (!joined) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    *model_path = list_keep(list, joined);
+    free(joined);
+    if (!*model_path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    memset(spec, 0, sizeof *spec);
+    spec->path = *model_path;
+    spec->scale = 1;
+    rs_status st;
+    if ((st = get_number(&spec->scale, o, "scale", false, path, i, err)) ||
+        (st = get_number(&spec->length_m, o, "length", false, path, i, err)))
+        return st;
+    if (!(spec->scale > 0)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].scale: must be > 0", path, i);
+    if (cJSON_GetObjectItemCaseSensitive(o, "length") && !(spec->length_m > 0))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].length: must be > 0", path, i);
+    const char *fwd = get_string(o, "forward"), *up = get_string(o, "up");
+    spec->forward = list_keep(list, fwd ? fwd : "+x");
+    spec->up = list_keep(list, up ? up : "+z");
+    if (!spec->forward || !spec->up) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    const cJSON *pm = cJSON_GetObjectItemCaseSensitive(o, "paint_materials");
+    if (pm) {
+        const int n = cJSON_GetArraySize(pm);
+        if (!cJSON_IsArray(pm))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].paint_materials: expected a list of material names", path,
+                              i);
+        // the list of names is kept as one of the list's strings (freed with them)
+        const char **names = calloc((size_t)(n > 0 ? n : 1), sizeof *names);
+        char **grown = names ? realloc(list->strings, (size_t)(list->Nstrings + 1) * sizeof(char *)) : NULL;
+        if (!grown) {
+            free(names);
+            return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        }
+        list->strings = grown;
+        list->strings[list->Nstrings++] = (char *)names;
+        for (int k = 0; k < n; k++) {
+            const cJSON *e = cJSON_GetArrayItem(pm, k);
+            if (!cJSON_IsString(e))
+                return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].paint_materials[%d]: not a string", path, i, k);
+            if (!(names[k] = list_keep(list, e->valuestring))) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        }
+        spec->paint_materials = names;
+        spec->Npaint = n;
+    }
+    return RS_OK;
+}
+
 static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir,
                               rs_err *err)
 {
@@ -92,31 +143,23 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
     *v = rs_synth_vehicle_init(RS_SYNTH_SEDAN); // the class is set below
     v->variant = (uint64_t)i;
     const char *cls = get_string(o, "class"), *model = get_string(o, "model");
-    if (!!cls == !!model)
+    if (!cls && !model)
         return rs_err_set(err, RS_ERR_INVALID,
-                          "%s: [%d]: give exactly one of \"class\" (a "
-                          "string) and \"model\" (an OBJ path)",
+                          "%s: [%d]: give \"class\" (a string) or \"model\" (a model file, with an optional "
+                          "\"class\")",
                           path, i);
+    rs_synth_class c = RS_SYNTH_USER_MODEL;
     if (cls) {
         rs_err e2 = {0};
-        rs_synth_class c;
         if (rs_synth_class_from_name(&c, cls, &e2))
             return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].class: %s", path, i, e2.msg);
+    }
+    if (!model)
         v->cls = c;
-    } else {
+    else {
         v->cls = RS_SYNTH_USER_MODEL;
-        char *joined = rs_io_join(dir, model);
-        if (!joined) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        v->model_path = list_keep(list, joined);
-        free(joined);
-        if (!v->model_path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        obj->path = v->model_path;
-        obj->scale = 1;
-        if ((st = get_number(&obj->scale, o, "scale", false, path, i, err))) return st;
-        const char *fwd = get_string(o, "forward"), *up = get_string(o, "up");
-        obj->forward = list_keep(list, fwd ? fwd : "+x");
-        obj->up = list_keep(list, up ? up : "+z");
-        if (!obj->forward || !obj->up) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        v->model_cls = c;
+        if ((st = rs_synth_model_spec_read(obj, &v->model_path, list, o, path, i, dir, err))) return st;
     }
     if ((st = get_number(&v->e_m, o, "e", true, path, i, err)) ||
         (st = get_number(&v->n_m, o, "n", true, path, i, err)) ||
@@ -126,9 +169,16 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
         (st = get_number(&v->height_m, o, "height", false, path, i, err)) ||
         (st = get_number(&v->speed_mps, o, "speed_mps", false, path, i, err)))
         return st;
+    if (model) {
+        v->length_m = 0; // the box comes from the model (its "length" scaled it)
+        if (cJSON_GetObjectItemCaseSensitive(o, "width") || cJSON_GetObjectItemCaseSensitive(o, "height"))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "%s: [%d].width/height: a model's box is its mesh's; give \"length\" to scale it", path,
+                              i);
+    }
     const char *dims[3] = {"length", "width", "height"};
     const double dval[3] = {v->length_m, v->width_m, v->height_m};
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 3 && !model; k++) // (a model's length: rs_synth_model_spec_read)
         if (cJSON_GetObjectItemCaseSensitive(o, dims[k]) && !(dval[k] > 0))
             return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].%s: must be > 0", path, i, dims[k]);
     const cJSON *colour = cJSON_GetObjectItemCaseSensitive(o, "colour");
@@ -148,7 +198,13 @@ static rs_status read_vehicle(rs_synth_vehicle_list *list, int i, const cJSON *o
     return RS_OK;
 }
 
-rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, rs_err *err)
+typedef rs_status (*entry_reader)(rs_synth_vehicle_list *list, int i, const cJSON *o, const char *path, const char *dir,
+                                  rs_err *err);
+
+// Reads the JSON list at path (at least Nmin entries, `what` naming them in errors), each entry by
+// read_entry with the file's folder for relative paths. On error *list is left empty.
+static rs_status read_list(rs_synth_vehicle_list *list, const char *path, const char *what, int Nmin,
+                           entry_reader read_entry, rs_err *err)
 {
     memset(list, 0, sizeof(*list));
     char *text = NULL, *dir = NULL;
@@ -158,8 +214,9 @@ rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, 
     if (st) return st;
     // syntax errors: RS_ERR_PARSE "PATH:LINE: JSON syntax error near '...'" (core/rs_json.h)
     if ((st = rs_json_parse(&root, text, 0, len, path, err))) goto done;
-    if (!cJSON_IsArray(root)) {
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of vehicles", path);
+    if (!cJSON_IsArray(root) || cJSON_GetArraySize(root) < Nmin) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: expected a JSON list of %s%s", path, what,
+                        Nmin > 0 ? " (at least one)" : "");
         goto done;
     }
     const int N = cJSON_GetArraySize(root);
@@ -179,7 +236,7 @@ rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, 
     const cJSON *o;
     cJSON_ArrayForEach(o, root)
     {
-        if ((st = read_vehicle(list, i, o, path, dir, err))) goto done;
+        if ((st = read_entry(list, i, o, path, dir, err))) goto done;
         i++;
     }
     list->N = N;
@@ -189,4 +246,33 @@ done:
     free(dir);
     if (st) rs_synth_vehicle_list_free(list);
     return st;
+}
+
+rs_status rs_synth_vehicles_read(rs_synth_vehicle_list *list, const char *path, rs_err *err)
+{
+    return read_list(list, path, "vehicles", 0, read_vehicle, err);
+}
+
+// ---- a model library (`roadside synth --models`) ----
+
+// Entry i of a model library: a user model with its label class.
+static rs_status read_model(rs_synth_vehicle_list *lib, int i, const cJSON *o, const char *path, const char *dir,
+                            rs_err *err)
+{
+    rs_synth_vehicle *v = &lib->v[i];
+    *v = rs_synth_vehicle_init(RS_SYNTH_USER_MODEL);
+    if (!cJSON_IsObject(o)) return rs_err_set(err, RS_ERR_INVALID, "%s: [%d]: expected an object", path, i);
+    const char *cls = get_string(o, "class");
+    rs_err e2 = {0};
+    if (!cls)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].class: missing (the class the model stands for)", path, i);
+    if (rs_synth_class_from_name(&v->model_cls, cls, &e2))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: [%d].class: %s", path, i, e2.msg);
+    snprintf(v->id, sizeof v->id, "model %d", i);
+    return rs_synth_model_spec_read(&lib->obj[i], &v->model_path, lib, o, path, i, dir, err);
+}
+
+rs_status rs_synth_models_read(rs_synth_vehicle_list *lib, const char *path, rs_err *err)
+{
+    return read_list(lib, path, "model descriptions", 1, read_model, err);
 }

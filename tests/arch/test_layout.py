@@ -29,10 +29,10 @@ MAY_INCLUDE = {
 }
 # libraries a module's link line must not carry (what it never calls)
 MUST_NOT_LINK = {
-    "eval": ["ceres", "cairo", "opengv", "opencv_dnn", "opencv_videoio", "expat"],
+    "eval": ["ceres", "cairo", "opengv", "opencv_dnn", "opencv_videoio", "expat", "assimp"],
     "synth": ["ceres", "cairo", "opengv", "spqr", "cholmod"],
-    "geo": ["ceres", "cairo", "opengv", "opencv_dnn"],
-    "sim": ["ceres", "cairo", "opengv", "opencv_dnn"],
+    "geo": ["ceres", "cairo", "opengv", "opencv_dnn", "assimp"],
+    "sim": ["ceres", "cairo", "opengv", "opencv_dnn", "assimp"],
 }
 # a test executable per module whose link line shows what the module's dependency brings
 # synth/ is one library built from component folders (docs/architecture.md, "Inside synth/"):
@@ -114,7 +114,7 @@ def check_synth_components(root, include_re, doc):
                       f"{rel}: synth/{mine}/ may not include synth/{theirs}/ (\"{inc}\"): the order is {' < '.join(SYNTH_COMPONENTS)}")
                 check(not internal, f"{rel}: includes another component's internal header \"{inc}\"")
     # tests/synth mirrors the components: a folder each, the shared helpers alone at its top
-    shared = {"meson.build", "synth_test_util.py", "test_fleet_check.h"}
+    shared = {"meson.build", "synth_test_util.py", "synth_model_util.py", "test_fleet_check.h"}
     tdir = os.path.join(root, "tests", "synth")
     for name in sorted(os.listdir(tdir)):
         if name == "__pycache__":

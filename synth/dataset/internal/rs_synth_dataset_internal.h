@@ -93,7 +93,28 @@ typedef struct {
     char *parts_dir, *work_root;       // owned: DATASET/parts, DATASET/work
     rs_synth_sumo_frame_entry *frames; // (Nframes,) owned: --traffic-frames' frames.json, read
     int Nframes;                       //   once (rs_synth_dataset__frames_load); NULL without
+    rs_synth_vehicle_list models;      // --models' library (opt->models_path; N = 0 without),
+    rs_synth_mesh *model_meshes;       // (models.N,) owned: each loaded once, before the workers
+                                       //   fork (models.obj[i].loaded points here)
+    char models_sha256[65];            // the library file's SHA-256, hex (run.json)
 } rs_synth_dataset__run;
+
+// Reads opt->models_path's library and loads every model once for the run (errors name the
+// file, the entry and the field, or the model file).
+rs_status rs_synth_dataset__models_load(rs_synth_dataset__run *d, rs_err *err);
+
+// Writes the library's texture images once as PNG into DATASET/work/models/ (each image's render
+// then links them into its folder: rs_synth_fleet_cache_textures); nothing without a library.
+rs_status rs_synth_dataset__models_cache(rs_synth_dataset__run *d, rs_err *err);
+// Removes that folder (the run's end).
+void rs_synth_dataset__models_uncache(const rs_synth_dataset__run *d);
+
+// Vehicle v (index i of image k's traffic) becomes one of the library's models of its class,
+// drawn from image k's seed, when the library has any: cls RS_SYNTH_USER_MODEL, model_cls its
+// class, its box the model's. out: *spec the model's spec (untouched, and false returned, when v
+// stays procedural).
+bool rs_synth_dataset__pick_model(rs_synth_vehicle *v, rs_synth_obj_spec *spec, const rs_synth_dataset__run *d, int k,
+                                  int i);
 
 // ---- SUMO's frames (rs_synth_dataset_frames.c) ----
 

@@ -5,7 +5,7 @@
 //   rs_synth_fleet.c        classes, ranges, colour mix, resolving drawn values
 //   rs_synth_fleet_mesh.c   rs_synth_mesh and the builder below
 //   rs_synth_fleet_build.c  procedural vehicles: lofted bodies, caps, wheels, class shapes
-//   rs_synth_fleet_obj.c    OBJ user models
+//   rs_synth_fleet_model.c  user models (assimp: OBJ + MTL, glTF 2.0), their textures
 //   rs_synth_fleet_pov.c    POV-Ray mesh2 declarations and placements
 #pragma once
 #include <stdint.h>
@@ -52,3 +52,7 @@ void rs_synth_fleet_orient(rs_synth_fleet_builder *b, int t0);
 // area-weighted mean of the normals of the triangles sharing that vertex whose normal is within
 // crease_deg of this triangle's; identical corner normals of a vertex are stored once.
 void rs_synth_fleet_smooth(rs_synth_fleet_builder *b, double crease_deg);
+
+// Whether s is an identifier rs_synth_fleet_write_declare accepts: [A-Z_][A-Za-z0-9_]*, at most
+// 40 characters.
+int rs_synth_fleet_valid_identifier(const char *s);

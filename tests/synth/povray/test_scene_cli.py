@@ -107,7 +107,10 @@ def main():
             ([{"class": "spaceship", "e": 1, "n": 2, "yaw_deg": 0}], "[0].class"),
             ([vs[0], {"class": "van", "e": "x", "n": 2, "yaw_deg": 0}], "[1].e"),
             ([{"class": "van", "e": 1, "n": 2, "yaw_deg": 0, "length": -1}], "[0].length"),
-            ([{"class": "van", "model": "a.obj", "e": 1, "n": 2, "yaw_deg": 0}], "[0]"),
+            ([{"class": "spaceship", "model": "a.obj", "e": 1, "n": 2, "yaw_deg": 0}], "[0].class"),
+            ([{"model": "a.obj", "e": 1, "n": 2, "yaw_deg": 0, "width": 2}], "[0].width"),
+            ([{"model": "a.obj", "e": 1, "n": 2, "yaw_deg": 0, "paint_materials": "Body"}],
+             "[0].paint_materials"),
             ([{"class": "van", "e": 1, "n": 2, "yaw_deg": 0, "colour": "red"}], "[0].colour"),
             ({"class": "van"}, "list"),
         ]
