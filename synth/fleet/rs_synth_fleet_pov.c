@@ -22,11 +22,13 @@ static int valid_identifier(const char *s)
 // Built-in textures of the fixed parts (paint is written from the vehicle's look). The glass,
 // lights and paint reflect with Fresnel's law (reflection { min, max fresnel on } with the
 // object's interior ior 1.5): 4 % head-on, rising to 100 % at grazing angles; conserve_energy
-// takes the reflected light out of the diffuse part. Chrome and rims reflect like metals
+// takes the reflected light out of the diffuse and transmitted parts. The glass transmits 75 %
+// of what it does not reflect (issue 40): head-on a window shows the dark cabin behind it
+// (INTERIOR_TEXTURE), at grazing angles the environment. Chrome and rims reflect like metals
 // (tinted, no Fresnel). No ambient: the sky lights and the environment light everything.
 static const char *const part_textures[RS_SYNTH_NPARTS] = {
     NULL,
-    "pigment { rgb <0.010, 0.012, 0.015> } finish { ambient 0 diffuse 0.1 specular 0.9 roughness 0.001 "
+    "pigment { rgbt <0.010, 0.012, 0.015, 0.75> } finish { ambient 0 diffuse 0.1 specular 0.9 roughness 0.001 "
     "reflection { 0.04, 1 fresnel on } conserve_energy }",
     "pigment { rgb <0.80, 0.80, 0.78> } finish { ambient 0 diffuse 0.3 specular 0.9 roughness 0.002 "
     "reflection { 0.25 metallic } }",
@@ -43,6 +45,12 @@ static const char *const part_textures[RS_SYNTH_NPARTS] = {
     "reflection { 0.65 metallic } }",
     "pigment { rgb <0.06, 0.07, 0.10> } finish { ambient 0 diffuse 0.8 specular 0.05 roughness 0.08 }",
 };
+// The cabin seen through the glass (issue 40): the back side of every face of the body (its
+// meshes are closed and wound outward, so a ray through a window meets the inside of a door,
+// the floor, the roof or the far window), dark and matte as seats, trim and shade are.
+#define INTERIOR_TEXTURE \
+    "interior_texture { pigment { rgb <0.025, 0.024, 0.023> } finish { ambient 0 diffuse 0.6 specular 0.05 } }"
+
 // parts whose finish uses Fresnel reflection, which needs the object's index of refraction
 static int needs_ior(int part)
 {
@@ -218,6 +226,7 @@ static void write_part_look(FILE *f, const rs_synth_mesh *mesh, int part, const 
         write_paint(f, look, hi[2] > 0 ? hi[2] : 1);
     } else
         fprintf(f, "    texture { %s }\n", part_textures[part]);
+    fprintf(f, "    %s\n", INTERIOR_TEXTURE);
     if (needs_ior(part)) fprintf(f, "    interior { ior 1.5 }\n");
 }
 

@@ -83,6 +83,11 @@ typedef struct {
                                    // (rs_synth_vehicle_rect on opt->canvas, near 0.05 m), all in
                                    // view: a caller that culled them already (roadside synth)
                                    // gives them and render does not cull again; NULL: culled here
+    const rs_image *env_map;       // (h, 2h, 3) linear light, may be NULL (borrowed): the
+                                   // environment the vehicles reflect (issue 40,
+                                   // rs_synth_env_map), written as OUT/RS_SYNTH_ENV_MAP_FILE
+                                   // (16-bit, scaled to its maximum) and shown by the colour
+                                   // pass's sphere (rs_synth_scene_options.env_map)
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);
