@@ -47,9 +47,10 @@ static const char *const part_textures[RS_SYNTH_NPARTS] = {
 };
 // The cabin seen through the glass (issue 40): the back side of every face of the body (its
 // meshes are closed and wound outward, so a ray through a window meets the inside of a door,
-// the floor, the roof or the far window), dark and matte as seats, trim and shade are.
-#define INTERIOR_TEXTURE \
-    "interior_texture { pigment { rgb <0.025, 0.024, 0.023> } finish { ambient 0 diffuse 0.6 specular 0.05 } }"
+// the floor, the roof or the far window), black: unlit, so POV-Ray spends no light or shadow
+// ray on it (a dark grey lit interior, rgb 0.025 diffuse 0.6, cost 6 % more mesh tests in the
+// colour pass for a cabin about 2 % as bright as the body: docs/benchmarks.md, issue 40).
+#define INTERIOR_TEXTURE "interior_texture { pigment { rgb 0 } finish { ambient 0 diffuse 0 specular 0 } }"
 
 // parts whose finish uses Fresnel reflection, which needs the object's index of refraction
 static int needs_ior(int part)
@@ -228,6 +229,10 @@ static void write_part_look(FILE *f, const rs_synth_mesh *mesh, int part, const 
         fprintf(f, "    texture { %s }\n", part_textures[part]);
     fprintf(f, "    %s\n", INTERIOR_TEXTURE);
     if (needs_ior(part)) fprintf(f, "    interior { ior 1.5 }\n");
+    // the see-through glass casts no shadow in the colour pass (the sun's shadow rays would
+    // otherwise be filtered through every window: 11 % more mesh tests); the shadow pass, of
+    // bare opaque meshes, still has the whole vehicle's shadow
+    if (part == RS_SYNTH_PART_GLASS) fprintf(f, "    no_shadow\n");
 }
 
 rs_status rs_synth_fleet_write_declare(FILE *f, const char *name, const rs_synth_mesh *mesh,
