@@ -46,9 +46,11 @@ static const char render_usage[] =
     "                       plane is then left out of the render). The lights and the\n"
     "                       environment the vehicles reflect are matched to it, as roadside\n"
     "                       synth does (docs/fleet.md): the light level and colour from its\n"
-    "                       road (SITE/lanes.geojson; the road assumed dry), the ground and\n"
-    "                       sky they reflect from its pixels; the sun's direction stays the\n"
-    "                       one of --sun or --time\n"
+    "                       road (SITE/lanes.geojson; without lanes in view the ground plane\n"
+    "                       within 60 m, else the image's lower half; the road assumed dry),\n"
+    "                       the sky and surroundings they reflect: a map of every direction\n"
+    "                       made from the image's pixels (OUTDIR/rs_env.png while povray\n"
+    "                       runs); the sun's direction stays the one of --sun or --time\n"
     "  --no-match-light     keep the default lights and environment over a background\n"
     "  --full-frame         no culling, no region: render the whole image (for comparison)\n"
     "  --antialias N        N x N supersampling of the colour pass (default off)\n"
@@ -78,7 +80,8 @@ static const char render_usage[] =
     "  -h, --help           this text\n"
     "\n"
     "Prints one line: vehicles, rendered, region, seconds in povray; over a background whose\n"
-    "light was matched, a second: the road pixels, the lights' factor and the light level.\n"
+    "light was matched, a second: the road pixels, the lights' factor, the light level and\n"
+    "where it was read (a note on stderr when not from the lanes).\n"
     "Exit status: 0 rendered, 1 failed (a clear message if povray is missing), 2 usage error.\n";
 
 enum {
@@ -197,6 +200,7 @@ int rs_cli_render(int argc, char **argv)
     rs_synth_render_result r = {0};
     rs_status st = RS_OK;
     rs_synth_light_estimate light;
+    rs_image env_map = {0};
     bool matched = false;
     if (ropt.background_path && match_light) {
         // the background's light and environment (docs/fleet.md, "Reflections of the scene")
@@ -207,13 +211,14 @@ int rs_cli_render(int argc, char **argv)
         else if (access(lanes_path, F_OK) == 0)
             st = rs_lanes_read(&lanes, lanes_path, s.site, &err);
         if (!st)
-            st = rs_synth_scene_match_background_file(&ropt.scene, &light, ropt.background_path, &s.camera, s.site,
-                                                      &lanes, &err);
-        if (st == RS_ERR_DEGENERATE) {
-            fprintf(stderr, "render: note: %s: default lights and environment\n", err.msg);
-            st = RS_OK;
-        } else if (!st) {
+            st = rs_synth_scene_match_background_file(&ropt.scene, &light, &env_map, ropt.background_path, &s.camera,
+                                                      s.site, &lanes, &err);
+        if (!st) {
             matched = true;
+            ropt.env_map = &env_map;
+            if (light.source != RS_SYNTH_LIGHT_FROM_LANES)
+                fprintf(stderr, "render: note: background: no lane in view: light from %s (%d pixels)\n",
+                        rs_synth_light_source_name(light.source), light.Nroad_px);
         }
         free(lanes_path);
         rs_lanes_free(&lanes);
@@ -236,12 +241,13 @@ int rs_cli_render(int argc, char **argv)
                r.Nrendered, r.region[0], r.region[1], r.region[2], r.region[3], r.seconds_povray, r.Npasses, r.Npovray,
                s.output);
         if (matched)
-            printf("light matched to the background: %d road pixels, light x %.3f %.3f %.3f (level %.3f)\n",
+            printf("light matched to the background: %d road pixels, light x %.3f %.3f %.3f (level %.3f), from %s\n",
                    light.Nroad_px, ropt.scene.light_rgb_scale[0], ropt.scene.light_rgb_scale[1],
-                   ropt.scene.light_rgb_scale[2], light.level);
+                   ropt.scene.light_rgb_scale[2], light.level, rs_synth_light_source_name(light.source));
         rc = RS_EXIT_OK;
     }
     rs_synth_render_result_free(&r);
+    rs_image_free(&env_map);
     rs_cli_synth_free(&s);
     return rc;
 }

@@ -155,15 +155,11 @@ static rs_status background_pixels(const size_t **px, size_t *Npx, const rs_imag
     return road_pixels(px, Npx, cam, site, lanes, step_px < 1 ? 1 : step_px, err);
 }
 
-rs_status rs_synth_light_from_image(rs_synth_light_estimate *out, const rs_image *img, const rs_camera *cam,
-                                    const rs_site *site, const rs_lanes *lanes, int step_px, rs_err *err)
+// The estimate from the pixels px (n >= 50 offsets into img): the per-channel interquartile mean
+// of their linear values over RS_SYNTH_ROAD_ALBEDO.
+static rs_status light_from_pixels(rs_synth_light_estimate *out, const rs_image *img, const size_t *px, size_t n,
+                                   rs_err *err)
 {
-    *out = (rs_synth_light_estimate){0};
-    const size_t *px = NULL;
-    size_t n = 0;
-    rs_status st = background_pixels(&px, &n, img, cam, site, lanes, step_px, err);
-    if (st) return st;
-    if (n < 50) return rs_err_set(err, RS_ERR_DEGENERATE, "background: %zu road pixels in view, at least 50 needed", n);
     float *v = malloc(sizeof(float) * 3 * n);
     if (!v) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     for (size_t i = 0; i < n; i++)
@@ -182,6 +178,63 @@ rs_status rs_synth_light_from_image(rs_synth_light_estimate *out, const rs_image
     out->level = (out->irradiance_rgb[0] + out->irradiance_rgb[1] + out->irradiance_rgb[2]) / 3;
     for (int c = 0; c < 3; c++) out->tint_rgb[c] = out->level > 0 ? out->irradiance_rgb[c] / out->level : 1;
     return RS_OK;
+}
+
+rs_status rs_synth_light_from_image(rs_synth_light_estimate *out, const rs_image *img, const rs_camera *cam,
+                                    const rs_site *site, const rs_lanes *lanes, int step_px, rs_err *err)
+{
+    *out = (rs_synth_light_estimate){0};
+    const size_t *px = NULL;
+    size_t n = 0;
+    rs_status st = background_pixels(&px, &n, img, cam, site, lanes, step_px, err);
+    if (st) return st;
+    if (n < 50) return rs_err_set(err, RS_ERR_DEGENERATE, "background: %zu road pixels in view, at least 50 needed", n);
+    return light_from_pixels(out, img, px, n, err);
+}
+
+const char *rs_synth_light_source_name(rs_synth_light_source source)
+{
+    return source == RS_SYNTH_LIGHT_FROM_LANES    ? "the road in the lanes"
+           : source == RS_SYNTH_LIGHT_FROM_GROUND ? "the ground plane within 60 m"
+                                                  : "the lower half of the image";
+}
+
+rs_status rs_synth_light_from_background(rs_synth_light_estimate *out, const rs_image *img, const rs_camera *cam,
+                                         const rs_site *site, const rs_lanes *lanes, int step_px, rs_err *err)
+{
+    rs_status st = rs_synth_light_from_image(out, img, cam, site, lanes, step_px, err);
+    if (st != RS_ERR_DEGENERATE) return st;
+    // the ground plane in view: road_cache's ground class, filled by the call above; its grey
+    // pixels when at least 50 (asphalt, concrete, kerbs: not the verges' grass and soil)
+    if (road_cache.Nenv[0] >= 50) {
+        size_t *grey = malloc(sizeof(size_t) * road_cache.Nenv[0]), Ngrey = 0;
+        if (!grey) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        for (size_t i = 0; i < road_cache.Nenv[0]; i++) {
+            const float *v = img->data + road_cache.env[0][i] * (size_t)img->channels;
+            const float hi = fmaxf(v[0], fmaxf(v[1], v[2])), lo = fminf(v[0], fminf(v[1], v[2]));
+            if (hi > 0 && hi - lo <= RS_SYNTH_LIGHT_GREY_CHROMA * hi) grey[Ngrey++] = road_cache.env[0][i];
+        }
+        *out = (rs_synth_light_estimate){0};
+        st = Ngrey >= 50 ? light_from_pixels(out, img, grey, Ngrey, err)
+                         : light_from_pixels(out, img, road_cache.env[0], road_cache.Nenv[0], err);
+        out->source = RS_SYNTH_LIGHT_FROM_GROUND;
+        free(grey);
+        return st;
+    }
+    // the lower half of the image, on the same grid
+    const int s = step_px < 1 ? 1 : step_px;
+    const size_t cap = (size_t)((img->width + s - 1) / s) * (size_t)((img->height + s - 1) / s) + 1;
+    size_t *px = malloc(sizeof(size_t) * cap), n = 0;
+    if (!px) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int y = s / 2; y < img->height; y += s)
+        for (int x = s / 2; x < img->width && 2 * y >= img->height; x += s) px[n++] = (size_t)y * img->width + x;
+    *out = (rs_synth_light_estimate){0};
+    st = n >= 50 ? light_from_pixels(out, img, px, n, err)
+                 : rs_err_set(err, RS_ERR_DEGENERATE, "background: %dx%d, too small for a light estimate", img->width,
+                              img->height);
+    out->source = RS_SYNTH_LIGHT_FROM_LOWER_IMAGE;
+    free(px);
+    return st;
 }
 
 rs_status rs_synth_env_from_image(rs_synth_env_estimate *out, const rs_image *img, const rs_camera *cam,

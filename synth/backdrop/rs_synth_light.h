@@ -50,13 +50,21 @@ void rs_synth_env_default(double zenith_rgb[3], double horizon_rgb[3], double gr
 // photograph the level is relative to that assumption and to the camera's exposure.
 #define RS_SYNTH_ROAD_ALBEDO 0.078
 
+// Where a light estimate comes from (rs_synth_light_from_background), best first.
+typedef enum {
+    RS_SYNTH_LIGHT_FROM_LANES = 0,      // the road inside lanes.geojson's lanes
+    RS_SYNTH_LIGHT_FROM_GROUND = 1,     // the ground plane within 60 m of the camera
+    RS_SYNTH_LIGHT_FROM_LOWER_IMAGE = 2 // the lower half of the image
+} rs_synth_light_source;
+
 // What the road of a background says about its light.
 typedef struct {
-    double road_rgb[3];       // per-channel interquartile mean of the road pixels, linear light
-    int Nroad_px;             // road pixels sampled
-    double irradiance_rgb[3]; // road_rgb / RS_SYNTH_ROAD_ALBEDO: light on the ground per channel
-    double level;             // mean of irradiance_rgb
-    double tint_rgb[3];       // irradiance_rgb / level (the light's colour; (1, 1, 1) is grey)
+    double road_rgb[3];           // per-channel interquartile mean of the road pixels, linear light
+    int Nroad_px;                 // road pixels sampled
+    double irradiance_rgb[3];     // road_rgb / RS_SYNTH_ROAD_ALBEDO: light on the ground per channel
+    double level;                 // mean of irradiance_rgb
+    double tint_rgb[3];           // irradiance_rgb / level (the light's colour; (1, 1, 1) is grey)
+    rs_synth_light_source source; // the pixels used (Nroad_px of them)
 } rs_synth_light_estimate;
 
 // Estimates the light on the ground from a background image: the road pixels are those whose
@@ -81,6 +89,36 @@ rs_status rs_synth_light_from_image( // out
     // in
     const rs_image *linear_rgb, const rs_camera *cam, const rs_site *site, const rs_lanes *lanes, int step_px,
     rs_err *err);
+
+// A pixel is grey (asphalt, concrete, kerbs; not grass or soil) when max - min of its linear
+// R, G, B is at most this fraction of the max.
+#define RS_SYNTH_LIGHT_GREY_CHROMA 0.3
+
+// The same, never silently without an estimate (issue 40: a site without lanes): the road in the
+// lanes (rs_synth_light_from_image) when at least 50 of its pixels are in view; else the ground
+// plane in view (the pixels whose ray meets the site's ground plane within 60 m of the camera,
+// rs_synth_env_from_image's ground class: road, markings, kerbs, sidewalks, verges), its grey
+// pixels (RS_SYNTH_LIGHT_GREY_CHROMA) when at least 50 of them, else all, at least 50; else
+// every pixel of the image's lower half (rows >= H/2). The same interquartile mean over
+// RS_SYNTH_ROAD_ALBEDO in each case; out->source says which was used. The grey rule assumes a
+// light near white: under a strongly tinted one (dusk: the blue channel under 0.7 of the red)
+// the road is no longer "grey" and the estimate falls back to all the ground pixels.
+// Accuracy of the ground plane against the lanes (docs/backgrounds.md; four digital-twin
+// backgrounds of the demo site through cam1 at 720 px, sunny and cloudy): the level +2.2 ..
+// +4.4 % above the lanes' (the twin's pale sidewalks and kerbs), the tint within 0.1 %
+// (tests/synth/povray/test_render_env.py: 6 % and 1 % at 360 px); a real site's paving moves
+// it as far as it differs from the road and covers more than a quarter of the grey ground.
+// in: as rs_synth_light_from_image (lanes may have N = 0)
+// Returns RS_ERR_INVALID (size), RS_ERR_NOMEM, RS_ERR_DEGENERATE (an image of fewer than 50
+// pixels on the grid's lower half).
+rs_status rs_synth_light_from_background( // out
+    rs_synth_light_estimate *out,
+    // in
+    const rs_image *linear_rgb, const rs_camera *cam, const rs_site *site, const rs_lanes *lanes, int step_px,
+    rs_err *err);
+
+// "the road in the lanes", "the ground plane within 60 m", "the lower half of the image".
+const char *rs_synth_light_source_name(rs_synth_light_source source);
 
 // The per-channel factor on every light of a scene (rs_synth_scene_options.light_rgb_scale) that
 // makes the scene's own irradiance on level ground -- the sun, of colour (1, 0.97, 0.92) and
@@ -142,6 +180,50 @@ rs_status rs_synth_env_from_image( // out
 void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3],
                         // in
                         const rs_synth_env_estimate *env, const double light_rgb_scale[3], bool overcast);
+
+// ---- the environment map a background shows (issue 40: what the vehicles reflect) ----
+
+// The map's file in a render's work folder (written by synth/povray/rs_synth_render.h, read by
+// the colour pass's environment sphere: docs/povray.md), and its default width (height half).
+#define RS_SYNTH_ENV_MAP_FILE  "rs_env.png"
+#define RS_SYNTH_ENV_MAP_WIDTH 512
+
+// The direction (unit, site ENU) of pixel (col, row) of an environment map `width` wide and
+// width / 2 high: POV-Ray's spherical map (map_type 1) in its world <e, u, n>, the image's top
+// row at the zenith, column u = (col + 0.5) / width at azimuth 2 pi u counted from east towards
+// north (elevation (0.5 - (row + 0.5) / height) pi). out: d_enu (3,)
+void rs_synth_env_map_direction(double d_enu[3], int col, int row, int width);
+
+// The environment a background shows as a map of every direction (the sphere the vehicles
+// reflect, in place of rs_synth_env_match's three colours):
+//   - a direction above the ground plane's horizon that the camera sees (a point 10 km along it
+//     from the camera projects visibly, rs_camera_project_visible) is the photograph's colour
+//     there, the photograph first shrunk (cv::resize INTER_AREA) to about one pixel per map
+//     pixel (a map pixel is the mean of its footprint) and sampled bilinearly (cv::remap);
+//   - the hemisphere behind the camera is the view mirrored: a direction is reflected in the
+//     vertical plane across the camera's forward direction along the ground (elevation kept) and
+//     takes the photograph's colour there when the camera sees that (a vehicle facing the camera
+//     reflects what is behind the camera, which no camera sees: the scene in front is the
+//     likeliest stand-in, e.g. buildings and sky of the same street);
+//   - directions neither sees: horizon_rgb up to 10 deg above the horizon, zenith_rgb above
+//     30 deg, linearly between; ground_rgb below the horizon (the scene's ground plane hides that
+//     half from the vehicles anyway: it has the photograph's ground colour, rs_synth_scene.h);
+//   - both photo samples fade out over a border 6 % of the image's shorter side wide (smooth
+//     step), so the view's edge is no seam.
+// Values in the photograph's linear units (the scene's, rs_synth_env_estimate). The rules are
+// checked end to end by tests/synth/povray/test_render_env.py (the vehicles' reflections follow
+// the sky's colours and where they are; a change below the horizon beyond 60 m changes
+// nothing); POV-Ray's spherical mapping was checked against rs_synth_env_map_direction by
+// rendering such a map seen from its centre (docs/povray.md). Cost: docs/benchmarks.md, issue 40.
+// out: map (width / 2, width, 3) allocated
+// in: linear_rgb (H, W, >= 3) at the camera's size; cam; ground_normal_enu (3,); the fill
+//     colours (3,) each (rs_synth_env_match's); width even, >= 8 (RS_SYNTH_ENV_MAP_WIDTH)
+// Returns RS_ERR_INVALID (sizes, no normal), RS_ERR_NOMEM, RS_ERR_EXTERNAL (OpenCV).
+rs_status rs_synth_env_map( // out
+    rs_image *map,
+    // in
+    const rs_image *linear_rgb, const rs_camera *cam, const double ground_normal_enu[3], const double zenith_rgb[3],
+    const double horizon_rgb[3], const double ground_rgb[3], int width, rs_err *err);
 
 // ---- the sun's direction from shadows (a background without a time) ----
 

@@ -148,6 +148,7 @@ static void dataset_free(rs_synth_dataset__run *d)
         rs_camera_free(&d->cams[i].cam);
         for (int b = 0; b < d->cams[i].Nbg; b++) {
             rs_image_free(&d->cams[i].bg[b].linear);
+            rs_image_free(&d->cams[i].bg[b].env_map);
         }
         free(d->cams[i].bg);
         free(d->cams[i].canvas_map);

@@ -99,7 +99,7 @@ rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, r
     bm->light_tried = true;
     const bool dry = bm->cond.surface == RS_SYNTH_SURFACE_DRY;
     bm->light_ok =
-        dry && rs_synth_light_from_image(&bm->light, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL) == RS_OK;
+        dry && rs_synth_light_from_background(&bm->light, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL) == RS_OK;
     double t_s;
     const bool timed = bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK;
     bm->sun_ok =
@@ -232,6 +232,12 @@ static rs_status image_render_options(rs_synth_render_options *ropt, const rs_sy
         rs_synth_env_estimate env; // the environment the vehicles reflect: the background's own
         const bool env_ok = !rs_synth_env_from_image(&env, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL);
         rs_synth_scene_match_background(&ropt->scene, &bm->light, env_ok ? &env : NULL);
+        if (!bm->env_map_tried) { // issue 40: the background itself as the environment
+            bm->env_map_tried = true;
+            if ((st = rs_synth_scene_env_map(&bm->env_map, &ropt->scene, &bm->linear, &c->cam, d->site, err)))
+                return st;
+        }
+        ropt->env_map = &bm->env_map;
     }
     return RS_OK;
 }

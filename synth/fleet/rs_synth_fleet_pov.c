@@ -28,11 +28,13 @@ void rs_synth_fleet_texture_name(char *out, size_t n, const char *prefix, int k)
 // Built-in textures of the fixed parts (paint is written from the vehicle's look). The glass,
 // lights and paint reflect with Fresnel's law (reflection { min, max fresnel on } with the
 // object's interior ior 1.5): 4 % head-on, rising to 100 % at grazing angles; conserve_energy
-// takes the reflected light out of the diffuse part. Chrome and rims reflect like metals
+// takes the reflected light out of the diffuse and transmitted parts. The glass transmits 75 %
+// of what it does not reflect (issue 40): head-on a window shows the dark cabin behind it
+// (INTERIOR_TEXTURE), at grazing angles the environment. Chrome and rims reflect like metals
 // (tinted, no Fresnel). No ambient: the sky lights and the environment light everything.
 static const char *const part_textures[RS_SYNTH_NPARTS] = {
     NULL,
-    "pigment { rgb <0.010, 0.012, 0.015> } finish { ambient 0 diffuse 0.1 specular 0.9 roughness 0.001 "
+    "pigment { rgbt <0.010, 0.012, 0.015, 0.75> } finish { ambient 0 diffuse 0.1 specular 0.9 roughness 0.001 "
     "reflection { 0.04, 1 fresnel on } conserve_energy }",
     "pigment { rgb <0.80, 0.80, 0.78> } finish { ambient 0 diffuse 0.3 specular 0.9 roughness 0.002 "
     "reflection { 0.25 metallic } }",
@@ -49,6 +51,13 @@ static const char *const part_textures[RS_SYNTH_NPARTS] = {
     "reflection { 0.65 metallic } }",
     "pigment { rgb <0.06, 0.07, 0.10> } finish { ambient 0 diffuse 0.8 specular 0.05 roughness 0.08 }",
 };
+// The cabin seen through the glass (issue 40): the back side of every face of the body (its
+// meshes are closed and wound outward, so a ray through a window meets the inside of a door,
+// the floor, the roof or the far window), black: unlit, so POV-Ray spends no light or shadow
+// ray on it (a dark grey lit interior, rgb 0.025 diffuse 0.6, cost 6 % more mesh tests in the
+// colour pass for a cabin about 2 % as bright as the body: docs/benchmarks.md, issue 40).
+#define INTERIOR_TEXTURE "interior_texture { pigment { rgb 0 } finish { ambient 0 diffuse 0 specular 0 } }"
+
 // parts whose finish uses Fresnel reflection, which needs the object's index of refraction
 static int needs_ior(int part)
 {
@@ -264,7 +273,12 @@ static void write_part_look(FILE *f, const rs_synth_mesh *mesh, int part, const 
                 part_textures[part], e, e * (head ? 0.96 : 0.04), e * (head ? 0.88 : 0.03));
     } else
         fprintf(f, "    texture { %s }\n", part_textures[part]);
+    fprintf(f, "    %s\n", INTERIOR_TEXTURE);
     if (needs_ior(part)) fprintf(f, "    interior { ior 1.5 }\n");
+    // the see-through glass casts no shadow in the colour pass (the sun's shadow rays would
+    // otherwise be filtered through every window: 11 % more mesh tests); the shadow pass, of
+    // bare opaque meshes, still has the whole vehicle's shadow
+    if (part == RS_SYNTH_PART_GLASS) fprintf(f, "    no_shadow\n");
 }
 
 // A mesh's groups, one mesh2 each: its materials (a user model) or its parts.

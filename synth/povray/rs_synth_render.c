@@ -276,31 +276,48 @@ static rs_status shadow_fraction(rs_image *out, rs_image *lo, double unlit, int 
 // Removes the intermediates of a render (scene files, povray outputs, the conf).
 static void remove_intermediates(const char *out_dir)
 {
-    static const char *const names[] = {"pass_colour.pov",
-                                        "pass_colour.ini",
-                                        "pass_colour.png",
-                                        "pass_colour.ppm",
-                                        "pass_ids.pov",
-                                        "pass_ids.ini",
-                                        "pass_ids.png",
-                                        "pass_ids.log",
-                                        "pass_shadow.pov",
-                                        "pass_shadow.ini",
-                                        "pass_shadow.png",
-                                        "pass_shadow.log",
-                                        "pass_mirror.pov",
-                                        "pass_mirror.ini",
-                                        "pass_mirror.png",
-                                        "pass_mirror.log",
-                                        ".povray/3.7/povray.conf",
-                                        ".povray/3.7",
-                                        ".povray",
+    static const char *const names[] = {"pass_colour.pov",     "pass_colour.ini",
+                                        "pass_colour.png",     "pass_colour.ppm",
+                                        "pass_ids.pov",        "pass_ids.ini",
+                                        "pass_ids.png",        "pass_ids.log",
+                                        "pass_shadow.pov",     "pass_shadow.ini",
+                                        "pass_shadow.png",     "pass_shadow.log",
+                                        "pass_mirror.pov",     "pass_mirror.ini",
+                                        "pass_mirror.png",     "pass_mirror.log",
+                                        RS_SYNTH_ENV_MAP_FILE, ".povray/3.7/povray.conf",
+                                        ".povray/3.7",         ".povray",
                                         "povray.log"};
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
         char *p = rs_io_join(out_dir, names[i]);
         if (p) (void)remove(p); // a missing file, or a folder someone else used: left as it is
         free(p);
     }
+}
+
+// The environment map of opt->env_map written into the work folder under its generated name,
+// scaled to its maximum (a 16-bit PNG holds [0, 1]), and the colour pass told to show it.
+static rs_status write_env_map(rs_synth_render_options *opt, const char *out_dir, rs_err *err)
+{
+    const rs_image *m = opt->env_map;
+    if (!m) return RS_OK;
+    if (m->channels != 3 || m->width != 2 * m->height || m->height < 4)
+        return rs_err_set(err, RS_ERR_INVALID, "environment map: %dx%dx%d, want (h, 2h, 3)", m->width, m->height,
+                          m->channels);
+    const size_t n = (size_t)m->width * m->height * 3;
+    double top = 0;
+    for (size_t i = 0; i < n; i++) top = m->data[i] > top ? m->data[i] : top;
+    rs_image scaled = {0};
+    rs_status st = rs_image_alloc(&scaled, m->width, m->height, 3, err);
+    char *path = st ? NULL : rs_io_join(out_dir, RS_SYNTH_ENV_MAP_FILE);
+    if (!st && !path) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) {
+        for (size_t i = 0; i < n; i++) scaled.data[i] = top > 0 ? (float)(m->data[i] / top) : 0;
+        st = rs_image_write(path, &scaled, 16, err);
+    }
+    if (!st) opt->scene.env_map = true, opt->scene.env_map_scale = top > 0 ? top : 1;
+    free(path);
+    rs_image_free(&scaled);
+    return st;
 }
 
 // Resamples the canvas passes into the real lens: colour through premultiplied linear
@@ -705,7 +722,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
     } else {
         if ((st = rs_io_mkdir_p(out_dir, err)) || (st = rs_synth_povray_write_conf(out_dir, err)) ||
             (st = rs_synth_scene_write_textures(out_dir, vehicles, err)) ||
-            (st = render_canvas(&rgba, &idimg, &frac, &s, out, err)) ||
+            (st = write_env_map(&s.opt, out_dir, err)) || (st = render_canvas(&rgba, &idimg, &frac, &s, out, err)) ||
             (st = render_into_lens(out, &rgba, &idimg, &frac, &s, err)))
             goto done;
     }

@@ -85,10 +85,15 @@ typedef struct {
                                    // gives them and render does not cull again; NULL: culled here
     // issue 40, the condition's passes (docs/conditions.md; rs_synth_scene_apply_condition sets
     // the scene's lights):
-    bool mirror;     // a wet road: the mirror pass (out->mirror), one more povray process: the
-                     // colour pass seen by the camera mirrored in the ground plane
-    bool headlights; // the headlights' irradiance on the ground (out->headlight_irradiance),
-                     // rasterised, at scene.headlight_intensity (0: RS_SYNTH_HEADLIGHT_INTENSITY)
+    bool mirror;             // a wet road: the mirror pass (out->mirror), one more povray process: the
+                             // colour pass seen by the camera mirrored in the ground plane
+    bool headlights;         // the headlights' irradiance on the ground (out->headlight_irradiance),
+                             // rasterised, at scene.headlight_intensity (0: RS_SYNTH_HEADLIGHT_INTENSITY)
+    const rs_image *env_map; // (h, 2h, 3) linear light, may be NULL (borrowed): the
+                             // environment the vehicles reflect (issue 40,
+                             // rs_synth_env_map), written as OUT/RS_SYNTH_ENV_MAP_FILE
+                             // (16-bit, scaled to its maximum) and shown by the colour
+                             // pass's sphere (rs_synth_scene_options.env_map)
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);

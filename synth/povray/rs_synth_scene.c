@@ -26,17 +26,36 @@ void rs_synth_scene_options_default(rs_synth_scene_options *opt)
     opt->pin_radius_px = 3;
 }
 
+void rs_synth_scene_env_colours(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3],
+                                const rs_synth_scene_options *opt)
+{
+    if (!opt->env_given) {
+        rs_synth_env_default(zenith_rgb, horizon_rgb, ground_rgb, opt->overcast);
+        return;
+    }
+    for (int c = 0; c < 3; c++)
+        zenith_rgb[c] = opt->env_zenith_rgb[c], horizon_rgb[c] = opt->env_horizon_rgb[c],
+        ground_rgb[c] = opt->env_ground_rgb[c];
+}
+
 // The environment sphere of the colour pass (rs_synth_scene_options.env_*): 50 km round the
 // site origin, hollow, emissive, invisible to the camera (no_image) and casting no shadow; the
 // ground plane cuts it, so below the horizon the vehicles mostly reflect the ground itself.
 static void write_environment(FILE *f, const rs_synth_scene_options *opt)
 {
+    if (opt->env_map) {
+        // the background's own map (issue 40): a 16-bit PNG of linear values (gamma 1: no
+        // decoding), POV-Ray's spherical mapping (rs_synth_env_map_direction), bilinear
+        fprintf(f,
+                "// the environment, seen in reflections only: the background's map\n"
+                "sphere { 0, 1 hollow\n  texture { pigment { image_map { png \"%s\" gamma 1.0 map_type 1 "
+                "interpolate 2 } }\n    finish { emission %.6g ambient 0 diffuse 0 specular 0 } }\n"
+                "  scale 50000 no_image no_shadow }\n",
+                RS_SYNTH_ENV_MAP_FILE, opt->env_map_scale > 0 ? opt->env_map_scale : 1.0);
+        return;
+    }
     double z[3], h[3], g[3];
-    if (opt->env_given)
-        for (int c = 0; c < 3; c++)
-            z[c] = opt->env_zenith_rgb[c], h[c] = opt->env_horizon_rgb[c], g[c] = opt->env_ground_rgb[c];
-    else
-        rs_synth_env_default(z, h, g, opt->overcast);
+    rs_synth_scene_env_colours(z, h, g, opt);
     fprintf(f,
             "// the environment, seen in reflections only\n"
             "sphere { 0, 1 hollow\n  texture { pigment { gradient y colour_map { [0 rgb <%.5f, %.5f, %.5f>] "

@@ -99,6 +99,13 @@ typedef struct {
     double street_lights_enu_m[RS_SYNTH_STREET_LIGHTS_MAX][3]; // lamps: shadowless point lights
     int Nstreet_lights;                                        //   fading as 1/d^2
     double street_light_rgb[3]; // each lamp's irradiance at 1 m per channel (scene units)
+    // The environment as a map of the background (issue 40; rs_synth_env_map,
+    // synth/backdrop/rs_synth_light.h): the sphere shows the 16-bit linear PNG
+    // RS_SYNTH_ENV_MAP_FILE of the folder povray runs in (written there by rs_synth_render, from
+    // rs_synth_render_options.env_map), its values times env_map_scale, in place of the three
+    // colours above; env_ground_rgb still colours the ground plane the vehicles reflect.
+    bool env_map;
+    double env_map_scale;
 } rs_synth_scene_options;
 
 // A vehicle's two headlights: its box's front face (x = length / 2 + 0.02 m), 0.25 m inside
@@ -122,14 +129,25 @@ void rs_synth_scene_match_background(rs_synth_scene_options *scene,
                                      // in
                                      const rs_synth_light_estimate *light, const rs_synth_env_estimate *env);
 
+// The environment map of a background for a scene matched to it (issue 40): rs_synth_env_map
+// at RS_SYNTH_ENV_MAP_WIDTH, filled with the scene's env_*_rgb (env_given; else
+// rs_synth_env_default's). out: *map allocated. in: scene (matched first); linear_rgb, cam and
+// site as rs_synth_env_map's. Errors: rs_synth_env_map's.
+rs_status rs_synth_scene_env_map(rs_image *map,
+                                 // in
+                                 const rs_synth_scene_options *scene, const rs_image *linear_rgb, const rs_camera *cam,
+                                 const rs_site *site, rs_err *err);
+
 // The same from a background file (`roadside render --background`; `roadside synth` keeps its
 // decoded backgrounds and calls the above): the image (8-bit sRGB, the camera's size) decoded
-// to linear light, the light estimated on its road (rs_synth_light_from_image, every 4th pixel;
-// the road assumed dry) and its environment (rs_synth_env_from_image), then matched.
-// out: light (the estimate; may be NULL); scene as above.
-// Returns RS_ERR_DEGENERATE (scene untouched) when fewer than 50 road pixels are in view (no
-// lanes, or none in view), RS_ERR_INVALID (size, not RGB), RS_ERR_IO, RS_ERR_NOMEM.
+// to linear light, the light estimated (rs_synth_light_from_background, every 4th pixel: the road
+// in the lanes, else the ground plane in view, else the lower image; the road assumed dry; its
+// source in light->source) and its environment (rs_synth_env_from_image), then matched; with
+// env_map, also the environment map (rs_synth_scene_env_map).
+// out: light (the estimate; may be NULL); env_map (may be NULL: not computed); scene as above.
+// Returns RS_ERR_INVALID (size, not RGB), RS_ERR_IO, RS_ERR_NOMEM, RS_ERR_EXTERNAL.
 rs_status rs_synth_scene_match_background_file(rs_synth_scene_options *scene, rs_synth_light_estimate *light,
+                                               rs_image *env_map,
                                                // in
                                                const char *path, const rs_camera *cam, const rs_site *site,
                                                const rs_lanes *lanes, rs_err *err);

@@ -56,13 +56,19 @@ typedef struct {
     rs_image linear;
     rs_synth_appearance app;
     bool app_ok; // the appearance could be estimated
-    // issue 18: the light its road shows (rs_synth_light_from_image; dry conditions only: sunny,
-    // cloudy or untagged), matched by the vehicles' lights (rs_synth_light_match)
+    // issue 18: the light its road shows (rs_synth_light_from_background: the road in the lanes,
+    // else the ground plane in view, else the lower image; dry conditions only: sunny, cloudy or
+    // untagged), matched by the vehicles' lights (rs_synth_light_match)
     rs_synth_light_estimate light;
     bool light_tried, light_ok;
     // issue 18: without a time tag, the sun from the site's poles' shadows (rs_synth_sun_from_shadows)
     rs_synth_sun_estimate sun;
     bool sun_ok;
+    // issue 40: the environment map the vehicles reflect (rs_synth_scene_env_map), made at its
+    // first image once the scene is matched to the background (light_ok only; a worker makes
+    // its own: 0.1 s per background and worker)
+    rs_image env_map;
+    bool env_map_tried;
 } rs_synth_dataset__background;
 
 // One camera images are made for.
