@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "core/rs_pose.h"
+#include "core/rs_stats.h"
 #include "core/rs_units.h"
 #include "synth/backdrop/rs_synth_appearance.h"
 #include "synth/fleet/rs_synth_vehicle.h"
@@ -237,6 +238,42 @@ rs_status rs_synth_light_from_background(rs_synth_light_estimate *out, const rs_
     return st;
 }
 
+// out->sky_rgb, Nsky_px: the mean of the pixels above the horizon (both bands of road_cache)
+// whose linear luminance is at or above their 90th percentile.
+static rs_status sky_from_brightest(rs_synth_env_estimate *out, const rs_image *img, rs_err *err)
+{
+    const size_t n = road_cache.Nenv[1] + road_cache.Nenv[2];
+    if (n == 0) return RS_OK;
+    double *lum = malloc(sizeof(double) * n), *sorted = malloc(sizeof(double) * n);
+    if (!lum || !sorted) {
+        free(lum), free(sorted);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    size_t m = 0;
+    for (int k = 1; k <= 2; k++)
+        for (size_t i = 0; i < road_cache.Nenv[k]; i++) {
+            const float *v = img->data + road_cache.env[k][i] * (size_t)img->channels;
+            const double y = 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2];
+            lum[m++] = isfinite(y) ? y : -1;
+        }
+    memcpy(sorted, lum, sizeof(double) * m);
+    const double y90 = rs_stats_quantile(sorted, (int)m, 0.9);
+    double sum[3] = {0, 0, 0};
+    int Nsky = 0;
+    m = 0;
+    for (int k = 1; k <= 2; k++)
+        for (size_t i = 0; i < road_cache.Nenv[k]; i++, m++) {
+            if (!(lum[m] >= y90 && lum[m] >= 0)) continue;
+            const float *v = img->data + road_cache.env[k][i] * (size_t)img->channels;
+            for (int c = 0; c < 3; c++) sum[c] += v[c];
+            Nsky++;
+        }
+    out->Nsky_px = Nsky;
+    for (int c = 0; c < 3; c++) out->sky_rgb[c] = Nsky ? sum[c] / Nsky : 0;
+    free(lum), free(sorted);
+    return RS_OK;
+}
+
 rs_status rs_synth_env_from_image(rs_synth_env_estimate *out, const rs_image *img, const rs_camera *cam,
                                   const rs_site *site, const rs_lanes *lanes, int step_px, rs_err *err)
 {
@@ -259,7 +296,7 @@ rs_status rs_synth_env_from_image(rs_synth_env_estimate *out, const rs_image *im
         *N[k] = (int)m;
         for (int c = 0; c < 3; c++) rgb[k][c] = m ? sum[c] / (double)m : 0;
     }
-    return RS_OK;
+    return sky_from_brightest(out, img, err);
 }
 
 void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3],
@@ -273,7 +310,10 @@ void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double grou
     for (int c = 0; c < 3; c++) {
         if (env->Nground_px >= RS_SYNTH_ENV_MIN_PX) ground_rgb[c] = env->ground_rgb[c];
         if (env->Nhorizon_px >= RS_SYNTH_ENV_MIN_PX) horizon_rgb[c] = env->horizon_rgb[c];
-        if (env->Nzenith_px >= RS_SYNTH_ENV_MIN_PX) zenith_rgb[c] = env->zenith_rgb[c];
+        if (env->Nzenith_px >= RS_SYNTH_ENV_MIN_PX)
+            zenith_rgb[c] = env->zenith_rgb[c];
+        else if (env->Nsky_px >= RS_SYNTH_ENV_MIN_PX)
+            zenith_rgb[c] = env->sky_rgb[c];
     }
 }
 

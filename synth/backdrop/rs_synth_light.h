@@ -146,6 +146,10 @@ typedef struct {
     int Nhorizon_px;
     double zenith_rgb[3]; // mean of the sky pixels higher than that
     int Nzenith_px;
+    double sky_rgb[3]; // mean of the brightest tenth (by linear luminance, at or above the 90th
+                       // percentile) of all the pixels above the horizon, both bands: the open sky
+                       // a daylight view shows, however low it sees (0 when none)
+    int Nsky_px;
 } rs_synth_env_estimate;
 
 // The environment a background shows, for rs_synth_scene_options.env_* (issue 18: the vehicles
@@ -175,7 +179,12 @@ rs_status rs_synth_env_from_image( // out
 // rs_synth_env_default (clear, or overcast) times light_rgb_scale per channel (the lights'
 // match, rs_synth_light_match; NULL or all 0: 1) -- the estimated sky, when the camera does not
 // see it; then each of ground, horizon and zenith that the image shows with at least
-// RS_SYNTH_ENV_MIN_PX pixels replaces it with the image's mean. env may be NULL (the scaled
+// RS_SYNTH_ENV_MIN_PX pixels replaces it with the image's mean; a zenith the image does not
+// show (a telephoto sees a few degrees above the horizon, where the zenith band begins at
+// RS_SYNTH_ENV_HORIZON_DEG) takes the sky_rgb of its brightest pixels above the horizon when
+// there are RS_SYNTH_ENV_MIN_PX of them: the real sky's colour, not the default clear blue
+// (the Aalborg frame, 0 .. 2.4 degrees above its horizon, showed roofs and windows a saturated
+// blue that none of its sky has). env may be NULL (the scaled
 // default alone). out: zenith_rgb, horizon_rgb, ground_rgb (3,) each.
 void rs_synth_env_match(double zenith_rgb[3], double horizon_rgb[3], double ground_rgb[3],
                         // in

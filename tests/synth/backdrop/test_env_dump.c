@@ -52,6 +52,7 @@ int main(int argc, char **argv)
         printf("horizon %.7f %.7f %.7f %d\n", env.horizon_rgb[0], env.horizon_rgb[1], env.horizon_rgb[2],
                env.Nhorizon_px);
         printf("zenith %.7f %.7f %.7f %d\n", env.zenith_rgb[0], env.zenith_rgb[1], env.zenith_rgb[2], env.Nzenith_px);
+        printf("sky %.7f %.7f %.7f %d\n", env.sky_rgb[0], env.sky_rgb[1], env.sky_rgb[2], env.Nsky_px);
         rs_synth_env_match(z, h, g, &env, NULL, false);
         printf("env %.7f %.7f %.7f %.7f %.7f %.7f %.7f %.7f %.7f\n", z[0], z[1], z[2], h[0], h[1], h[2], g[0], g[1],
                g[2]);

@@ -136,8 +136,22 @@ def main():
                              % (pitch, step, os.path.basename(png), name, g[:3], g[3], mean, n), SEED)
                     print("pitch %+5.1f step %d %-11s %-7s N %5d  mean %s  (numpy: the same mask, |d| < 1e-5)"
                           % (pitch, step, os.path.basename(png), name, n, np.round(mean, 4)))
+                # the sky: the brightest tenth of the pixels above the horizon (numpy's quantile, the
+                # same definition as core/rs_stats.h), their mean
+                above = (cls == 1) | (cls == 2)
+                px = lin[Y[above], X[above]]
+                if len(px):
+                    y = px @ np.array([0.2126, 0.7152, 0.0722])
+                    top = px[y >= np.quantile(y, 0.9)]
+                    g = got["sky"]
+                    if int(g[3]) != len(top) or np.max(np.abs(np.array(g[:3]) - top.mean(axis=0))) > 1e-5:
+                        fail("pitch %g step %d %s sky: roadside %s (N %d), numpy %s (N %d)"
+                             % (pitch, step, os.path.basename(png), g[:3], g[3], top.mean(axis=0), len(top)), SEED)
                 # the matched environment: the image's colours where seen (>= 20 px), the default else
                 env = np.array(got["env"]).reshape(3, 3)  # zenith, horizon, ground
+                if got["zenith"][3] < 20 and got["sky"][3] >= 20 and \
+                        np.max(np.abs(env[0] - np.array(got["sky"][:3]))) > 1e-6:
+                    fail("env_match did not take the image's brightest sky for an unseen zenith", SEED)
                 for k, row in ((0, 2), (1, 1), (2, 0)):
                     if got[("ground", "horizon", "zenith")[k]][3] >= 20:
                         if np.max(np.abs(env[row] - np.array(got[("ground", "horizon", "zenith")[k]][:3]))) > 1e-6:
