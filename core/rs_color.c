@@ -44,3 +44,9 @@ static double srgb_lookup(const double *table, double v)
 double rs_color_srgb_decode(double v) { return srgb_lookup(srgb_dec, v); }
 
 double rs_color_srgb_encode(double v) { return srgb_lookup(srgb_enc, v); }
+
+double rs_color_srgb_decode_slope(double v)
+{
+    const double h = 1.0 / 1024, lo = v - h < 0 ? 0 : v - h, hi = v + h > 1 ? 1 : v + h;
+    return hi > lo ? (rs_color_srgb_decode(hi) - rs_color_srgb_decode(lo)) / (hi - lo) : 1 / 12.92;
+}

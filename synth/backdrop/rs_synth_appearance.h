@@ -57,13 +57,53 @@ rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact,
                                          // in
                                          const char *path, rs_err *err);
 
+// Signal-dependent sensor noise: the variance of the stored values v in [0,1] as
+// sigma^2(v) = a + b v (read noise a, shot noise b v: the Poissonian-Gaussian model of A. Foi,
+// M. Trimeche, V. Katkovnik, K. Egiazarian, "Practical Poissonian-Gaussian noise modeling and
+// fitting for single-image raw-data", IEEE TIP 17(10), 2008, here on the stored values since the
+// composite is made in them). Method as Foi's: local estimates on smooth pixels binned by level,
+// then a fit. Per channel, the residual r = M * I of Immerkaer's kernel (above; gain 6 on white
+// noise) and the level m = the 5 x 5 mean; 16 bins of m over [0,1] (those within 0.03 of 0 or 1,
+// where clipping bends the noise, and those with fewer than 300 samples left out); in each bin
+// the smoother half of the pixels (the 5 x 5 mean's gradient below the bin's median) and
+// sigma_k = 1.4826 median|r| / 6; then var = a + b v by least squares weighted by n_k / sigma_k^4
+// (the variance of a MAD estimate), with a, b >= 0 (the other refitted alone when one is < 0).
+// jpeg_quality > 0: the JPEG the background went through removed part of its noise, which the
+// vehicles' noise will then go through again: each bin's sigma_k is replaced by the sigma whose
+// white noise on a flat 96 x 96 patch of that level, JPEG round-tripped at that quality (OpenCV's
+// libjpeg, as rs_synth_appearance_jpeg), measures sigma_k the same way (bisection, 14 steps).
+// Accuracy (sigma(v) = sqrt(a + b v) against the truth a = 1e-4, b = 6e-4, a background blurred
+// by 1.5 px; tests/synth/povray/test_render_look.py prints its estimate): a PNG within 2 % over
+// v in [0.2, 0.8]; a JPEG at quality 90: -16 % at v = 0.2, -4 % at 0.5 (the JPEG removes most
+// of the noise the pixels had, 0.0138 of 0.0039 at v 0.15, and the inversion is steep).
+// Returns RS_ERR_DEGENERATE when no bin has enough smooth pixels.
+rs_status rs_synth_estimate_noise_model(double *a, double *b,
+                                        // in
+                                        const rs_image *img, int jpeg_quality, rs_err *err);
+
+// JPEG blockiness: the ratio of the mean absolute luma difference across the 8-pixel block
+// boundaries (between columns 8k-1 and 8k, and between such rows) to that between the
+// neighbours inside the blocks, the average of the horizontal and vertical ratios (after the
+// block-boundary measure of Z. Wang, A. C. Bovik, B. L. Evans, "Blind measurement of blocking
+// artifacts in images", ICIP 2000). 1: no blocks; larger: visible 8 x 8 blocks. Luma: the mean of
+// the channels. Returns RS_ERR_DEGENERATE for an image smaller than 16 x 16 or without texture.
+rs_status rs_synth_estimate_blockiness(double *ratio, const rs_image *img, rs_err *err);
+
 // What a background says about its camera.
 typedef struct {
     double gain[3];       // linear per-channel gain to apply to the vehicle layer
-    double noise_sigma;   // stored-value noise 1-sigma, [0,1] units
+    double noise_sigma;   // stored-value noise 1-sigma, [0,1] units (one figure for all levels)
     double blur_sigma_px; // Gaussian blur, pixels
     int jpeg_quality;     // 0: not a JPEG (no re-encoding)
+    double noise_a;       // signal-dependent noise: variance a + b v of stored values v in [0,1]
+    double noise_b;       //   (rs_synth_estimate_noise_model); both 0: noise_sigma at every level
+    double blockiness;    // rs_synth_estimate_blockiness of the background (1: no blocks)
+    int jpeg_exact;       // 1: the JPEG tables are IJG's at jpeg_quality exactly
 } rs_synth_appearance;
+
+// The noise 1-sigma (stored units) the appearance gives a pixel of stored value v in [0,1]:
+// sqrt(a + b v), or noise_sigma when a = b = 0.
+double rs_synth_appearance_noise_sigma(const rs_synth_appearance *a, double v);
 
 // Estimates all of the above from a background image file. image: that file as rs_image_read
 // decodes it, when the caller has it already, or NULL (then it is read here); the JPEG quality
@@ -74,6 +114,15 @@ rs_status rs_synth_appearance_estimate(rs_synth_appearance *out,
                                        // in
                                        const char *background_path, const rs_image *image, const rs_image *reference,
                                        rs_err *err);
+
+// The layer's part of an appearance, in place (rgba_linear: linear light, straight alpha,
+// (H,W,4)): colour x gain, then a Gaussian blur of sqrt(max(0, blur^2 - layer_blur^2)) px on the
+// premultiplied colour and alpha, back to straight alpha. No noise: the composite adds it
+// (synth/povray/rs_synth_composite.h), or rs_synth_appearance_apply.
+rs_status rs_synth_appearance_layer( // in,out
+    rs_image *rgba_linear,
+    // in
+    const rs_synth_appearance *a, double layer_blur_sigma_px, rs_err *err);
 
 // Applies an appearance to a rendered vehicle layer (linear light, straight alpha, (H,W,4)), in
 // place: colour x gain; then a Gaussian blur of sqrt(max(0, blur^2 - layer_blur^2)) px on the

@@ -119,6 +119,8 @@ typedef struct {
     // COCO file; may be NULL.
     void (*notice)(void *ctx, const char *msg);
     void *notice_ctx;
+    bool no_appearance; // the vehicles composited clean and sharp over backgrounds (default off:
+                        // the camera's look, synth/povray/rs_synth_composite.h)
 } rs_synth_dataset_options;
 
 void rs_synth_dataset_options_default(rs_synth_dataset_options *opt);

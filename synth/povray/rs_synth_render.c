@@ -332,18 +332,33 @@ static void decode_ids(rs_synth_render_result *out, const rs_image *ids, int N)
     }
 }
 
-// out->composite = rgba over the background (or black), in linear light, sRGB-encoded.
-static void composite(rs_synth_render_result *out, const rs_image *bg)
+// out->composite = rgba over the background (rs_synth_composite_background, with the shadows
+// and the look of opt) or over black.
+static rs_status composite(rs_synth_render_result *out, const rs_image *bg, const rs_synth_render_options *opt,
+                           rs_err *err)
 {
     const size_t Npx = (size_t)out->width * out->height;
-    for (size_t i = 0; i < Npx; i++) {
-        const float *c = &out->rgba.data[4 * i];
-        for (int k = 0; k < 3; k++) {
-            double b = bg ? rs_color_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]) : 0;
-            if (out->shadow && out->ids[i] == 0) b *= out->shadow[i];
-            out->composite.data[3 * i + k] = (float)rs_color_srgb_encode(c[3] * c[k] + (1 - c[3]) * b);
+    if (!bg) {
+        for (size_t i = 0; i < Npx; i++) {
+            const float *c = &out->rgba.data[4 * i];
+            for (int k = 0; k < 3; k++) out->composite.data[3 * i + k] = (float)rs_color_srgb_encode(c[3] * c[k]);
         }
+        return RS_OK;
     }
+    rs_image lin = {0}, comp = {0};
+    rs_status st = rs_image_alloc(&lin, out->width, out->height, 3, err);
+    if (st) return st;
+    for (size_t i = 0; i < Npx; i++)
+        for (int k = 0; k < 3; k++)
+            lin.data[3 * i + k] = (float)rs_color_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]);
+    const rs_synth_composite_options copt = {
+        .look = opt->look, .layer_blur_sigma_px = 0.3, .seed = opt->look_seed, .ground_add_linear = NULL};
+    if (!(st = rs_synth_composite_background(&comp, &out->rgba, &lin, out->shadow, &copt, err))) {
+        rs_image_free(&out->composite);
+        out->composite = comp;
+    }
+    rs_image_free(&lin);
+    return st;
 }
 
 static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out, rs_err *err)
@@ -662,7 +677,7 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
             goto done;
     }
     // 4. Composite
-    composite(out, s.opt.background_path ? &bg : NULL);
+    if ((st = composite(out, s.opt.background_path ? &bg : NULL, &s.opt, err))) goto done;
     if (s.opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
 done:
     if (!s.opt.keep_files) remove_intermediates(out_dir);

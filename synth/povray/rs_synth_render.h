@@ -27,7 +27,9 @@
 //    a distorted lens is resampled from the canvas
 //    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).
 // 4. Composite: out = fg + (1 - a) bg in linear light (straight alpha: fg = a * colour), the
-//    background decoded from sRGB and the result encoded to sRGB 8-bit.
+//    background decoded from sRGB and the result encoded to sRGB 8-bit; over a background
+//    through rs_synth_composite_background (rs_synth_composite.h: the shadows, and with
+//    opt->look the camera's gain, blur, noise and JPEG), as `roadside synth` does.
 // 5. ID pass (rasterised by roadside where the ground hides nothing, else POV-Ray's): no lights,
 //    flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
 //    per-pixel vehicle index 0 = background, k+1 = vehicle k (16-bit); resampled with
@@ -54,6 +56,7 @@
 #include "synth/backdrop/rs_synth_opencv.h"
 #include "synth/fleet/rs_synth_vehicle.h"
 #include "synth/labels/rs_synth_labels.h"
+#include "synth/povray/rs_synth_composite.h"
 #include "synth/povray/rs_synth_scene.h"
 
 #ifdef __cplusplus
@@ -61,28 +64,32 @@ extern "C" {
 #endif
 
 typedef struct {
-    const char *povray;            // executable; NULL: $ROADSIDE_POVRAY, else "povray" on PATH
-    const char *background_path;   // image of the camera's size to composite onto; may be NULL
-    bool full_frame;               // no culling, no region: render the whole canvas (benchmarks)
-    bool keep_files;               // keep the .pov/.ini/.png intermediates in the output folder
-    int antialias;                 // 0: none; n >= 2: +A0 +AM1 +R(n) on the colour pass only
-    double canvas_scale;           // distorted lenses: canvas pixels per core pixel (default 1)
-    const rs_synth_canvas *canvas; // precomputed for this lens, size and canvas_scale
-    const float *canvas_map;       //   (rs_synth_canvas_for_lens, rs_synth_canvas_map; both
-                                   //   borrowed): a caller rendering many images of one camera
-                                   //   computes them once; NULL: computed here
-    bool shadow;                   // also the shadow pass (rs_synth_scene.h): out->shadow
-    bool write_files;              // write image.png, rgba.png, ids.png (default true)
-    bool separate_processes;       // the passes' povray processes one after the other
-                                   // (default false: all at once)
-    bool povray_passes;            // the ID and shadow passes rendered by POV-Ray, which roadside
-                                   // otherwise rasterises (rs_synth_raster.h; default false: the
-                                   // tests' oracle)
-    rs_synth_scene_options scene;  // sun, pins, ground (pass and include are set per pass)
-    const int (*vehicle_rects)[4]; // (Nvehicles,) each vehicle's canvas rectangle
-                                   // (rs_synth_vehicle_rect on opt->canvas, near 0.05 m), all in
-                                   // view: a caller that culled them already (roadside synth)
-                                   // gives them and render does not cull again; NULL: culled here
+    const char *povray;              // executable; NULL: $ROADSIDE_POVRAY, else "povray" on PATH
+    const char *background_path;     // image of the camera's size to composite onto; may be NULL
+    bool full_frame;                 // no culling, no region: render the whole canvas (benchmarks)
+    bool keep_files;                 // keep the .pov/.ini/.png intermediates in the output folder
+    int antialias;                   // 0: none; n >= 2: +A0 +AM1 +R(n) on the colour pass only
+    double canvas_scale;             // distorted lenses: canvas pixels per core pixel (default 1)
+    const rs_synth_canvas *canvas;   // precomputed for this lens, size and canvas_scale
+    const float *canvas_map;         //   (rs_synth_canvas_for_lens, rs_synth_canvas_map; both
+                                     //   borrowed): a caller rendering many images of one camera
+                                     //   computes them once; NULL: computed here
+    bool shadow;                     // also the shadow pass (rs_synth_scene.h): out->shadow
+    bool write_files;                // write image.png, rgba.png, ids.png (default true)
+    bool separate_processes;         // the passes' povray processes one after the other
+                                     // (default false: all at once)
+    bool povray_passes;              // the ID and shadow passes rendered by POV-Ray, which roadside
+                                     // otherwise rasterises (rs_synth_raster.h; default false: the
+                                     // tests' oracle)
+    rs_synth_scene_options scene;    // sun, pins, ground (pass and include are set per pass)
+    const int (*vehicle_rects)[4];   // (Nvehicles,) each vehicle's canvas rectangle
+                                     // (rs_synth_vehicle_rect on opt->canvas, near 0.05 m), all in
+                                     // view: a caller that culled them already (roadside synth)
+                                     // gives them and render does not cull again; NULL: culled here
+    const rs_synth_appearance *look; // over background_path: the camera's look the vehicles and
+                                     // their shadows take (rs_synth_composite.h; borrowed);
+                                     // NULL (default): clean, sharp vehicles
+    uint64_t look_seed;              // the look's noise generator
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);

@@ -1,0 +1,78 @@
+// rs_synth_composite.c -- rendered vehicles over a photograph in the camera's look
+// (rs_synth_composite.h, docs/appearance.md).
+#include "synth/povray/rs_synth_composite.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "core/rs_color.h"
+#include "core/rs_rng.h"
+
+static float clamp01(double v) { return (float)(v < 0 ? 0 : v > 1 ? 1 : v); }
+
+rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, const rs_image *bg,
+                                        const float *shadow_in, const rs_synth_composite_options *opt, rs_err *err)
+{
+    memset(out, 0, sizeof(*out));
+    const rs_synth_composite_options none = {0};
+    if (!opt) opt = &none;
+    const rs_synth_appearance *look = opt->look;
+    const int W = bg->width, H = bg->height;
+    const rs_image *add = opt->ground_add_linear;
+    if (rgba_in->channels != 4 || bg->channels != 3 || rgba_in->width != W || rgba_in->height != H ||
+        (add && (add->channels != 3 || add->width != W || add->height != H)))
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "composite: the layer (%dx%dx%d, RGBA), the background (%dx%dx%d, RGB) and the ground "
+                          "term must be of one size",
+                          rgba_in->width, rgba_in->height, rgba_in->channels, W, H, bg->channels);
+    const size_t N = (size_t)W * H;
+    rs_image layer = {0}, shb = {0};
+    rs_status st;
+    if ((st = rs_image_alloc(&layer, W, H, 4, err)) || (st = rs_image_alloc(out, W, H, 3, err))) goto done;
+    memcpy(layer.data, rgba_in->data, sizeof(float) * 4 * N);
+    // 1. the layer's gain and blur
+    const double s2 =
+        look ? look->blur_sigma_px * look->blur_sigma_px - opt->layer_blur_sigma_px * opt->layer_blur_sigma_px : 0;
+    if (look && (st = rs_synth_appearance_layer(&layer, look, opt->layer_blur_sigma_px, err))) goto done;
+    // 2. the shadow, blurred like the camera's lens
+    const float *shadow = shadow_in;
+    if (shadow && s2 > 1e-6) {
+        const rs_image s = {.width = W, .height = H, .channels = 1, .data = (float *)shadow_in};
+        if ((st = rs_synth_image_blur(&shb, &s, sqrt(s2), err))) goto done;
+        shadow = shb.data;
+    }
+    rs_rng rng;
+    rs_rng_seed(&rng, opt->seed);
+    for (size_t i = 0; i < N; i++) {
+        const double s = shadow ? (shadow[i] < 0 ? 0 : shadow[i] > 1 ? 1 : shadow[i]) : 1;
+        const float *c = &layer.data[4 * i];
+        const double al = c[3];
+        for (int k = 0; k < 3; k++) {
+            const double b0 = bg->data[3 * i + k];
+            double b = s * b0;
+            // 3. ---- extra ground terms (issue 40, conditions) go here: linear light added to
+            // the shaded background before the vehicles are laid over ----
+            if (add) b += add->data[3 * i + k];
+            // 4. the layer over it
+            const double lin = al * c[k] + (1 - al) * b;
+            double v = rs_color_srgb_encode(lin < 0 ? 0 : lin > 1 ? 1 : lin);
+            // 5. noise topped up to the camera's at this value
+            if (look && (al > 0 || s < 1 || add)) {
+                const double vb = rs_color_srgb_encode(b0);
+                const double carried = (1 - al) * s * rs_synth_appearance_noise_sigma(look, vb) *
+                                       rs_color_srgb_decode_slope(vb) / rs_color_srgb_decode_slope(v);
+                const double want = rs_synth_appearance_noise_sigma(look, v);
+                const double top2 = want * want - carried * carried;
+                if (top2 > 0) v += sqrt(top2) * rs_rng_normal(&rng);
+            }
+            out->data[3 * i + k] = clamp01(v);
+        }
+    }
+    // 6. the camera's JPEG
+    if (look) st = rs_synth_appearance_jpeg(out, look, err);
+done:
+    rs_image_free(&layer);
+    rs_image_free(&shb);
+    if (st) rs_image_free(out);
+    return st;
+}
