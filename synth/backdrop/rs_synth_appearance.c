@@ -84,6 +84,20 @@ rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *er
     return RS_OK;
 }
 
+// The white-noise sigma of Immerkaer residuals |r| (n,), reordered: their RMS over the 90 %
+// smallest, / sqrt(0.6231) (a Gaussian's variance truncated at its 90 % point, +-1.645 sigma), / 6
+// (the kernel's gain). Unlike the median of |r|, which takes only a few values when a JPEG has
+// left two or three 8-bit codes of noise, it varies smoothly with the noise.
+static double trimmed_sigma(float *absr, size_t n)
+{
+    const float q = select_f(absr, n, (size_t)(0.9 * (n - 1)));
+    double ss = 0;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (absr[i] <= q) ss += (double)absr[i] * absr[i], m++;
+    return m ? sqrt(ss / m / 0.6231) / 6.0 : 0;
+}
+
 // The noise 1-sigma measured (as in rs_synth_estimate_noise_model) on a flat 3-channel patch of
 // stored level `level` with white Gaussian noise of `sigma` (fixed seed), JPEG round-tripped at
 // `quality`. *out NaN on error.
@@ -108,7 +122,7 @@ static rs_status jpeg_measured_sigma(double *out, double level, double sigma, in
         for (int y = 1; y < JPEG_PATCH - 1; y++)
             for (int x = 1; x < JPEG_PATCH - 1; x++)
                 for (int c = 0; c < 3; c++) v[n++] = fabsf(f.data[((size_t)y * JPEG_PATCH + x) * 3 + c]);
-        *out = 1.482602218505602 * median_f(v, n) / 6.0;
+        *out = trimmed_sigma(v, n);
     }
     free(v);
     rs_image_free(&p);
@@ -205,7 +219,7 @@ rs_status rs_synth_estimate_noise_model(double *a, double *b, const rs_image *im
         for (size_t i = 0; i < nk; i++)
             if (grad[start[k] + i] <= gmed) tmp[ns++] = res[start[k] + i];
         if (ns < 150) continue;
-        double sk = 1.482602218505602 * median_f(tmp, ns) / 6.0;
+        double sk = trimmed_sigma(tmp, ns);
         if (jpeg_quality > 0 && sk > 0 && (st = jpeg_unseen_sigma(&sk, v, sk, jpeg_quality, err))) break;
         const double var = sk * sk, w = (double)ns / fmax(var * var, 1e-20);
         sw += w, swv += w * v, swvv += w * v * v, swy += w * var, swvy += w * v * var;

@@ -110,7 +110,7 @@ static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__ba
                            rs_err *err)
 {
     const rs_synth_composite_options copt = {
-        .look = look && b->app_ok ? &b->app : NULL, .layer_blur_sigma_px = 0.3, .seed = seed};
+        .look = look && b->app_ok ? &b->app : NULL, .layer_blur_sigma_px = 0, .seed = seed};
     rs_image comp = {0};
     rs_status st = rs_synth_composite_background(&comp, &r->rgba, &b->linear, r->shadow, &copt, err);
     if (st) return st;

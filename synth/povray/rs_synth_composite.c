@@ -26,7 +26,7 @@ rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, 
                           "term must be of one size",
                           rgba_in->width, rgba_in->height, rgba_in->channels, W, H, bg->channels);
     const size_t N = (size_t)W * H;
-    rs_image layer = {0}, shb = {0};
+    rs_image layer = {0}, sw = {0}, shb = {0};
     rs_status st;
     if ((st = rs_image_alloc(&layer, W, H, 4, err)) || (st = rs_image_alloc(out, W, H, 3, err))) goto done;
     memcpy(layer.data, rgba_in->data, sizeof(float) * 4 * N);
@@ -34,11 +34,20 @@ rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, 
     const double s2 =
         look ? look->blur_sigma_px * look->blur_sigma_px - opt->layer_blur_sigma_px * opt->layer_blur_sigma_px : 0;
     if (look && (st = rs_synth_appearance_layer(&layer, look, opt->layer_blur_sigma_px, err))) goto done;
-    // 2. the shadow, blurred like the camera's lens
+    // 2. the shadow, blurred like the camera's lens: a normalised convolution (Knutsson & Westin,
+    // CVPR 1993) with the weight w = 1 - alpha, blur(s w) / blur(w), so that the pass's 1 under
+    // the vehicles (it does not look there) does not leak a bright rim into their shadows
     const float *shadow = shadow_in;
     if (shadow && s2 > 1e-6) {
-        const rs_image s = {.width = W, .height = H, .channels = 1, .data = (float *)shadow_in};
-        if ((st = rs_synth_image_blur(&shb, &s, sqrt(s2), err))) goto done;
+        if ((st = rs_image_alloc(&sw, W, H, 3, err))) goto done; // (s w, w, unused): one blur
+        for (size_t i = 0; i < N; i++) {
+            const float w = 1 - rgba_in->data[4 * i + 3];
+            sw.data[3 * i] = shadow_in[i] * w;
+            sw.data[3 * i + 1] = w;
+        }
+        if ((st = rs_synth_image_blur(&shb, &sw, sqrt(s2), err))) goto done;
+        for (size_t i = 0; i < N; i++)
+            shb.data[i] = shb.data[3 * i + 1] > 1e-3f ? shb.data[3 * i] / shb.data[3 * i + 1] : 1;
         shadow = shb.data;
     }
     rs_rng rng;
@@ -73,6 +82,7 @@ rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, 
 done:
     rs_image_free(&layer);
     rs_image_free(&shb);
+    rs_image_free(&sw);
     if (st) rs_image_free(out);
     return st;
 }

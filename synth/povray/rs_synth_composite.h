@@ -34,8 +34,8 @@ extern "C" {
 
 typedef struct {
     const rs_synth_appearance *look; // the camera's look (rs_synth_appearance_estimate); NULL: none
-    double layer_blur_sigma_px;      // the rendered layer's own edge blur (0.3: an unantialiased
-                                     // render's pixel step, sigma of a 1-px box = 1/sqrt(12))
+    double layer_blur_sigma_px;      // the rendered layer's own edge blur, against the background's
+                                     // pixels (0 for an unantialiased render: both point-sampled)
     uint64_t seed;                   // the noise's generator (deterministic per seed)
     // ---- extra ground terms (step 3) ----
     const rs_image *ground_add_linear; // (H, W, 3) linear light added to the background after the

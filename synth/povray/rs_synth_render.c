@@ -352,7 +352,7 @@ static rs_status composite(rs_synth_render_result *out, const rs_image *bg, cons
         for (int k = 0; k < 3; k++)
             lin.data[3 * i + k] = (float)rs_color_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]);
     const rs_synth_composite_options copt = {
-        .look = opt->look, .layer_blur_sigma_px = 0.3, .seed = opt->look_seed, .ground_add_linear = NULL};
+        .look = opt->look, .layer_blur_sigma_px = 0, .seed = opt->look_seed, .ground_add_linear = NULL};
     if (!(st = rs_synth_composite_background(&comp, &out->rgba, &lin, out->shadow, &copt, err))) {
         rs_image_free(&out->composite);
         out->composite = comp;

@@ -1,28 +1,34 @@
 #!/usr/bin/env python3
 # issue 40: `roadside render --background` composites the vehicles and their shadows in the
 # camera's own look (synth/povray/rs_synth_composite.h, docs/appearance.md): a vehicle is as
-# noisy, soft and blocky as the road around it. Real POV-Ray, the demo site, a small pinhole of
-# cam1, 6 vehicles with shadows.
+# noisy, soft and blocky as the road around it. Real POV-Ray, the demo site, a 480 x 300 pinhole
+# of cam1, 10 vehicles with shadows.
 #
 # The background is made here: a clean road (a vertical gradient, grey patches of random levels
 # and sizes, white stripes with sharp vertical edges), then degraded the way a camera does,
-# with KNOWN parameters: Gaussian blur SIGMA_B px (in linear light, as a lens), signal-dependent noise of variance
-# A + B v (stored values v in [0,1]), JPEG at quality Q (OpenCV). Oracles (all measured here
-# with numpy/OpenCV, none of roadside's estimators):
-#   noise   sigma = 1.4826 MAD(r) / sqrt(1.25), r = I - mean of the 4 neighbours, over flat
-#           pixels (the clean background's, and the clean vehicle layer's (rgba.png), 3x3
-#           gradient below 0.004), binned by the clean stored level (bins of 0.1); the vehicles'
-#           sigma over the background's, averaged over the bins both fill (>= 150 pixels each);
+# with KNOWN parameters: Gaussian blur SIGMA_B px (in linear light, as a lens), signal-dependent
+# noise of variance A + B v (stored values v in [0,1]), JPEG at quality Q (OpenCV). Oracles (all
+# measured here with numpy/OpenCV, none of roadside's estimators):
+#   noise   sigma = std(r) / sqrt(1.25), r = I - mean of the 4 neighbours, over flat pixels
+#           (the clean background's 9x9 neighbourhood within 0.004, the clean vehicle layer's
+#           (rgba.png) within 0.05: r cancels its smooth shading), binned by the clean stored
+#           level (bins of 0.1 over [0.1, 0.9): clipping narrows the noise nearer 0 and 1); the
+#           vehicles' sigma over the background's, averaged over the bins both fill (>= 150
+#           pixels each);
 #           vehicles: ids.png eroded by 3 px, background: 6 px away from any vehicle, unshadowed;
 #   edges   the Gaussian sigma of an erf fitted (least squares over a grid of centre and sigma)
-#           to 13-px horizontal luma profiles across edges: the vehicles' silhouettes (ids.png
-#           changes along a row, the same id 6 px on each side, contrast > 0.08 in the image
-#           without the look) against the stripes' edges of the background; medians compared;
+#           to 13-px horizontal luma profiles across the vehicles' silhouettes (ids.png changes
+#           along a row, the same id 6 px on each side, contrast > 0.08), median, in the
+#           composite against the same profiles of what the camera would have made: the clean
+#           vehicles (rgba.png) over the clean background, blurred by SIGMA_B in linear light
+#           (the content near a silhouette, a wheel or a window, then counts alike on both
+#           sides). The background's stripes measured the same way read SIGMA_B (printed);
 #   blocks  the ratio of mean |luma difference| across the 8-px JPEG block boundaries to that
-#           inside the blocks, over neighbour pairs inside each region (vehicles, background).
-# With the look, the noise and blockiness figures are within 15 % of the background's, the edge
-# figure within 25 % (TOL_EDGE, below); with --no-appearance
-# the noise and the edge figures are NOT (asserted); the blockiness figure is printed.
+#           inside the blocks, over neighbour pairs inside each region's flat pixels (as noise).
+# With the look, each vehicle figure is within 15 % of its reference; with --no-appearance none
+# is (asserted: the test shows that the look is what makes them match). Seeds 40..49 (SEED
+# changed by hand): 9 of 10 pass; seed 41's edge ratio is 0.82 (the background's blur estimated
+# 1.36 px for 1.5: rs_synth_estimate_blur reads noisy JPEG edges short).
 import os
 import re
 import sys
@@ -38,10 +44,10 @@ SIGMA_B = 1.5
 A, B = 1.0e-4, 6.0e-4
 Q = 90
 TOL = 0.15
-# NOT YET MET: the silhouettes' edge width reads 0.80 of the stripes' (seed 40): the background's
-# blur is estimated 1.41 px for 1.5, and a linear-light blur of a dark vehicle's step reads
-# narrower in stored values than the stripes' (docs/appearance.md). Held to 25 % until fixed.
-TOL_EDGE = 0.25
+
+
+def srgb_decode(v):
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
 
 
 def srgb_encode(x):
@@ -67,7 +73,7 @@ def clean_background(W, H, rng):
 
 def degrade(clean, rng):
     import cv2
-    lin = np.where(clean <= 0.04045, clean / 12.92, ((clean + 0.055) / 1.055) ** 2.4)
+    lin = srgb_decode(clean)
     b = srgb_encode(cv2.GaussianBlur(lin, (0, 0), SIGMA_B))  # the lens blurs light: in linear light
     n = b + np.sqrt(A + B * np.clip(b, 0, 1)) * rng.standard_normal(b.shape)
     return np.clip(np.round(n * 255), 0, 255).astype(np.uint8)
@@ -80,32 +86,35 @@ def residual(img):
     return r
 
 
-def flat(clean):
-    """Pixels whose clean 3x3 neighbourhood varies by less than 0.004 in every channel."""
+def flat(clean, thr):
+    """Pixels whose clean 9x9 neighbourhood varies by less than thr in every channel (the blur
+    spreads an edge over about 3 SIGMA_B px)."""
     import cv2
-    k = np.ones((3, 3), np.uint8)
+    k = np.ones((9, 9), np.uint8)
     ok = np.ones(clean.shape[:2], bool)
     for c in range(3):
         ch = clean[..., c].astype(np.float32)
-        ok &= (cv2.dilate(ch, k) - cv2.erode(ch, k)) < 0.004
+        ok &= (cv2.dilate(ch, k) - cv2.erode(ch, k)) < thr
     return ok
 
 
 def noise_by_level(img, clean, mask):
-    """{bin: (sigma, n)} of each channel's pixels in mask, binned by the clean level."""
+    """{bin: (sigma, n)}: the standard deviation of r / sqrt(1.25) over each channel's pixels in
+    mask, binned by the clean level (0.1 wide). A plain standard deviation over pixels whose clean
+    content is flat or linear (r cancels it): a median of |r| takes only a few values when a
+    JPEG leaves two or three 8-bit codes of noise."""
     out = {}
     r = residual(img)
     for c in range(3):
         lv, rc = clean[..., c][mask], r[..., c][mask]
         good = np.isfinite(rc)
         lv, rc = lv[good], rc[good]
-        for k in range(10):
+        for k in range(1, 9):  # not within 0.1 of 0 or 1, where clipping narrows the noise
             sel = (lv >= k / 10) & (lv < (k + 1) / 10)
             if sel.sum() >= 50:
                 s, n = out.get(k, ([], 0))
                 out[k] = (s + list(rc[sel]), n + sel.sum())
-    return {k: (1.4826 * np.median(np.abs(np.array(s) - np.median(s))) / np.sqrt(1.25), n)
-            for k, (s, n) in out.items()}
+    return {k: (np.std(np.array(s)) / np.sqrt(1.25), n) for k, (s, n) in out.items()}
 
 
 def erf_sigma(profiles):
@@ -158,24 +167,33 @@ def measure(out, clean_bg, stripes, ref_luma):
     bg_open = ~near & (shadow > 0.999)
     clean_veh = srgb_encode(rgba[..., :3])
     # noise, at matched levels
-    nv = noise_by_level(img, clean_veh, veh_in & flat(clean_veh))
-    nb = noise_by_level(img, clean_bg, bg_open & flat(clean_bg))
+    flat_v, flat_b = veh_in & flat(clean_veh, 0.05), bg_open & flat(clean_bg, 0.004)
+    nv = noise_by_level(img, clean_veh, flat_v)
+    nb = noise_by_level(img, clean_bg, flat_b)
     common = [k for k in nv if k in nb and nv[k][1] >= 150 and nb[k][1] >= 150]
     if not common:
         u.fail("no brightness bin with 150 flat pixels in both the vehicles and the background", SEED)
     ratio_noise = float(np.average([nv[k][0] / nb[k][0] for k in common], weights=[nv[k][1] for k in common]))
-    # edges: vehicles' silhouettes (rows where the id changes)
+    print("  noise by level bin: " + ", ".join("%d: %.4f (%d) / %.4f (%d)" % (k, nv[k][0], nv[k][1], nb[k][0], nb[k][1])
+                                               for k in sorted(common)))
+    # edges: the vehicles' silhouettes (rows where the id changes), in the composite and in what
+    # the camera would have made of the same scene: the clean vehicles over the clean background
+    # (rgba.png's alpha over, in linear light), blurred by SIGMA_B in linear light; the same
+    # profiles in both, so that what lies near a silhouette counts alike
+    lin = rgba[..., 3:4] * rgba[..., :3] + (1 - rgba[..., 3:4]) * srgb_decode(clean_bg)
+    camera_luma = srgb_encode(cv2.GaussianBlur(lin, (0, 0), SIGMA_B)).mean(2)
     luma = img.mean(2)
-    vprof, bprof = [], []
+    vprof, cprof, bprof = [], [], []
     for y in range(H):
         row = ids[y]
         for x in range(7, W - 7):
             if row[x] != row[x - 1] and (row[x] == 0 or row[x - 1] == 0):
                 left, right = row[x - 6:x], row[x:x + 6]
                 if (left == left[0]).all() and (right == right[0]).all():
-                    p = ref_luma[y, x - 6:x + 7]
+                    p = camera_luma[y, x - 6:x + 7]
                     if abs(p[-3:].mean() - p[:3].mean()) > 0.08:
                         vprof.append(luma[y, x - 6:x + 7])
+                        cprof.append(p)
     for x in stripes:
         for y in range(8, H - 8, 3):
             if not near[y, x - 7:x + 7].any() and (shadow[y, x - 7:x + 7] > 0.999).all():
@@ -183,11 +201,12 @@ def measure(out, clean_bg, stripes, ref_luma):
     if len(vprof) < 20 or len(bprof) < 20:
         u.fail("too few edges: %d on vehicles, %d on the background" % (len(vprof), len(bprof)), SEED)
     ev, nvp = erf_sigma(vprof)
+    ec, _ = erf_sigma(cprof)
     eb, nbp = erf_sigma(bprof)
     # blockiness
-    kv, kb = blockiness(luma, veh_in), blockiness(luma, bg_open)
-    return {"noise": ratio_noise, "noise_bins": common, "edge_v": ev, "edge_b": eb, "edge_n": (nvp, nbp),
-            "edge": ev / eb, "block_v": kv, "block_b": kb, "block": kv / kb}
+    kv, kb = blockiness(luma, flat_v), blockiness(luma, flat_b)
+    return {"noise": ratio_noise, "noise_bins": common, "edge_v": ev, "edge_c": ec, "edge_b": eb,
+            "edge_n": (nvp, nbp), "edge": ev / ec, "block_v": kv, "block_b": kb, "block": kv / kb}
 
 
 def main():
@@ -195,8 +214,8 @@ def main():
     import cv2
     rng = np.random.default_rng(SEED)
     with tempfile.TemporaryDirectory() as tmp:
-        calib, model, W, H, lens, intr = u.small_pinhole(tmp, 320, 200)
-        vs = u.ground_vehicles(model, 6, SEED, v_range=(0.5, 0.9))
+        calib, model, W, H, lens, intr = u.small_pinhole(tmp, 480, 300)
+        vs = u.ground_vehicles(model, 10, SEED, v_range=(0.55, 0.95))
         veh = os.path.join(tmp, "veh.json")
         u.write_json(veh, vs)
         clean, stripes = clean_background(W, H, rng)
@@ -218,17 +237,16 @@ def main():
         ok = True
         for look in (True, False):
             m = measure(outs[look], clean, stripes, ref_luma)
-            print("%-14s noise ratio %.3f (bins %s); edge sigma %.2f / %.2f px = %.3f (%d, %d profiles); "
-                  "blockiness %.3f / %.3f = %.3f"
-                  % ("look" if look else "no-appearance", m["noise"], m["noise_bins"], m["edge_v"], m["edge_b"],
-                     m["edge"], m["edge_n"][0], m["edge_n"][1], m["block_v"], m["block_b"], m["block"]))
-            within = {k: abs(m[k] - 1) <= (TOL_EDGE if k == "edge" and look else TOL)
-                      for k in ("noise", "edge", "block")}
+            print("%-14s noise ratio %.3f (bins %s); silhouettes' edge sigma %.2f / the camera's %.2f px = %.3f "
+                  "(%d profiles; the background's stripes %.2f px, %d profiles); blockiness %.3f / %.3f = %.3f"
+                  % ("look" if look else "no-appearance", m["noise"], m["noise_bins"], m["edge_v"], m["edge_c"],
+                     m["edge"], m["edge_n"][0], m["edge_b"], m["edge_n"][1], m["block_v"], m["block_b"], m["block"]))
+            within = {k: abs(m[k] - 1) <= TOL for k in ("noise", "edge", "block")}
             if look and not all(within.values()):
                 print("FAIL: with the look, outside 15 %%: %s" % [k for k, v in within.items() if not v])
                 ok = False
-            if not look and (within["noise"] or within["edge"]):
-                print("FAIL: without the look, noise or edges within 15 %% (the test shows nothing): %s" % within)
+            if not look and any(within.values()):
+                print("FAIL: without the look, a figure within 15 %% (the test shows nothing): %s" % within)
                 ok = False
         if not ok:
             u.fail("see above", SEED)
