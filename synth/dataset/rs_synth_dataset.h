@@ -50,6 +50,7 @@
 #include <stdint.h>
 
 #include "core/rs_status.h"
+#include "synth/backdrop/rs_synth_appearance.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -244,6 +245,14 @@ typedef struct {
     int labels; // (splits only)
 } rs_synth_dataset_count;
 
+// One background's camera look as DATASET/backgrounds.json records it.
+typedef struct {
+    char background[96];
+    bool ok; // the look was estimated (else why holds the reason)
+    rs_synth_appearance look;
+    char why[160];
+} rs_synth_dataset_look;
+
 typedef struct {
     int images, labels;
     rs_synth_dataset_count splits[RS_SYNTH_STATS_MAX], cameras[RS_SYNTH_STATS_MAX], weather[RS_SYNTH_STATS_MAX],
@@ -254,6 +263,11 @@ typedef struct {
     double distance_sum_m;
     int visibility_hist[10]; // labels by visibility in [0, 0.1), .., [0.9, 1]
     int invisible;           // labels with no visible pixel (visible_pixels 0)
+    // DATASET/backgrounds.json (docs/synth.md, "The camera's look"); none in older datasets
+    rs_synth_dataset_look looks[RS_SYNTH_STATS_MAX];
+    int Nlooks;
+    bool looks_found;   // the file is there
+    bool looks_applied; // its "applied" (false: made with --no-appearance)
 } rs_synth_dataset_stats_result;
 
 // The junction's centre on the site: the mean of the vertices of the lanes whose kind is
