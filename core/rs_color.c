@@ -47,6 +47,8 @@ double rs_color_srgb_encode(double v) { return srgb_lookup(srgb_enc, v); }
 
 double rs_color_srgb_decode_slope(double v)
 {
-    const double h = 1.0 / 1024, lo = v - h < 0 ? 0 : v - h, hi = v + h > 1 ? 1 : v + h;
-    return hi > lo ? (rs_color_srgb_decode(hi) - rs_color_srgb_decode(lo)) / (hi - lo) : 1 / 12.92;
+    pthread_once(&srgb_once, srgb_fill);
+    const double x = v * SRGB_TABLE;
+    const int i = !(x > 0) ? 0 : x >= SRGB_TABLE ? SRGB_TABLE - 1 : (int)x; // also NaN: 0
+    return (srgb_dec[i + 1] - srgb_dec[i]) * SRGB_TABLE;
 }

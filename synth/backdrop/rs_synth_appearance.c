@@ -101,7 +101,7 @@ static double trimmed_sigma(float *absr, size_t n)
 // The noise 1-sigma measured (as in rs_synth_estimate_noise_model) on a flat 3-channel patch of
 // stored level `level` with white Gaussian noise of `sigma` (fixed seed), JPEG round-tripped at
 // `quality`. *out NaN on error.
-#define JPEG_PATCH 96
+#define JPEG_PATCH 64
 static rs_status jpeg_measured_sigma(double *out, double level, double sigma, int quality, rs_err *err)
 {
     *out = NAN;
@@ -143,7 +143,7 @@ static rs_status jpeg_unseen_sigma(double *sigma, double level, double seen, int
         *sigma = hi;
         return RS_OK;
     }
-    for (int it = 0; it < 14; it++) {
+    for (int it = 0; it < 10; it++) { // 64^(1/1024): within 0.4 %
         const double mid = sqrt(lo * hi);
         if ((st = jpeg_measured_sigma(&m, level, mid, quality, err))) return st;
         if (m < seen)

@@ -53,7 +53,8 @@ rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, 
     rs_rng rng;
     rs_rng_seed(&rng, opt->seed);
     for (size_t i = 0; i < N; i++) {
-        const double s = shadow ? (shadow[i] < 0 ? 0 : shadow[i] > 1 ? 1 : shadow[i]) : 1;
+        // (a blurred 1 may read 1 - 1e-7: open ground, as the pass says)
+        const double s = shadow ? (shadow[i] < 0 ? 0 : shadow[i] > 0.9999f ? 1 : shadow[i]) : 1;
         const float *c = &layer.data[4 * i];
         const double al = c[3];
         for (int k = 0; k < 3; k++) {
