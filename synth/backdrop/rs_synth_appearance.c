@@ -343,7 +343,7 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *
         goto done;
     }
     for (size_t p = 0; p < N; p++) sel[p] = fabsf(m.data[p]);
-    const float thr = 0.2f * select_f(sel, N, (size_t)(0.99 * (N - 1)));
+    const float thr = 0.5f * select_f(sel, N, (size_t)(0.99 * (N - 1)));
     size_t n = 0;
     const int margin = 10;
     for (int y = margin; y < H - margin; y++)
