@@ -65,7 +65,7 @@ rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact,
 // M. Trimeche, V. Katkovnik, K. Egiazarian, "Practical Poissonian-Gaussian noise modeling and
 // fitting for single-image raw-data", IEEE TIP 17(10), 2008, here on the stored values since the
 // composite is made in them). Method as Foi's: local estimates on smooth pixels binned by level,
-// then a fit. Per channel, the residual r = M * I of Immerkaer's kernel (above; gain 6 on white
+// then a fit. Per channel, at every second pixel of every second row, the residual r = M * I of Immerkaer's kernel (above; gain 6 on white
 // noise) and the level m = the 5 x 5 mean; 16 bins of m over [0,1] (those within 0.03 of 0 or 1,
 // where clipping bends the noise, and those with fewer than 300 samples left out); in each bin
 // the smoother half of the pixels (the 5 x 5 mean's gradient below the bin's median) and
@@ -76,10 +76,10 @@ rs_status rs_synth_estimate_jpeg_quality(int *quality, int *exact,
 // white noise on a flat 64 x 64 patch of that level, JPEG round-tripped at that quality (OpenCV's
 // libjpeg, as rs_synth_appearance_jpeg), measures sigma_k the same way (bisection in log sigma, 10 steps; about 0.1 s of CPU per
 // background at 720 x 480).
-// Accuracy (sigma(v) = sqrt(a + b v) against the truth a = 1e-4, b = 6e-4, a background blurred
-// by 1.5 px; tests/synth/povray/test_render_look.py prints its estimate): a PNG within 2 % over
-// v in [0.2, 0.8]; a JPEG at quality 90: -16 % at v = 0.2, -4 % at 0.5 (the JPEG removes most
-// of the noise the pixels had, 0.0138 of 0.0039 at v 0.15, and the inversion is steep).
+// Accuracy (sigma(v) = sqrt(a + b v) against the truth a = 1e-4, b = 6e-4 of a 360 x 240
+// background of flat patches blurred by 1.5 px): a PNG within 1 % over v in [0.2, 0.8]; JPEGs
+// at quality 95 / 90 / 75 within 3 / 2 / 15 % (a JPEG at 90 leaves 0.0039 of a 0.0138 noise at
+// v 0.15: the inversion is steep); tests/synth/povray/test_render_look.py prints its estimate.
 // Returns RS_ERR_DEGENERATE when no bin has enough smooth pixels.
 rs_status rs_synth_estimate_noise_model(double *a, double *b,
                                         // in

@@ -62,6 +62,7 @@ static rs_status background_fit(rs_synth_dataset__background *b, int width, int 
     for (size_t i = 0; i < (size_t)width * height; i++)
         for (int c = 0; c < 3; c++)
             b->linear.data[3 * i + c] = (float)rs_color_srgb_decode(fitted.data[(size_t)fitted.channels * i + c]);
+    rs_image_free(&fitted); // before the estimate: its buffers come on top (the parent's peak)
     b->app_ok = rs_synth_appearance_estimate(&b->app, b->src->path, &src, NULL, NULL) == RS_OK;
 done:
     if (st) rs_image_free(&b->linear);
