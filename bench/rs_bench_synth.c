@@ -18,14 +18,17 @@ void rs_bench_synth_variants(rs_bench_synth_row *rows, int J)
 {
     static const struct {
         const char *name, *what;
-        bool one_job, separate, full_frame, no_shadows, full_detail;
+        bool one_job, separate, full_frame, no_shadows, full_detail, no_appearance;
     } v[RS_SYNTH_BENCH_VARIANTS] = {
-        {"all", "every saving", false, false, false, false, false},
-        {"jobs=1", "one image at a time", true, false, false, false, false},
-        {"separate", "the passes' povray processes one after the other", false, true, false, false, false},
-        {"full-frame", "no culling, no region: the whole image rendered", false, false, true, false, false},
-        {"no-shadows", "the shadow pass skipped", false, false, false, true, false},
-        {"full-detail", "every vehicle's mesh in full detail (no coarse meshes)", false, false, false, false, true},
+        {"all", "every saving", false, false, false, false, false, false},
+        {"jobs=1", "one image at a time", true, false, false, false, false, false},
+        {"separate", "the passes' povray processes one after the other", false, true, false, false, false, false},
+        {"full-frame", "no culling, no region: the whole image rendered", false, false, true, false, false, false},
+        {"no-shadows", "the shadow pass skipped", false, false, false, true, false, false},
+        {"full-detail", "every vehicle's mesh in full detail (no coarse meshes)", false, false, false, false, true,
+         false},
+        {"no-appearance", "the camera's look not applied (clean, sharp vehicles)", false, false, false, false, false,
+         true},
     };
     for (int k = 0; k < RS_SYNTH_BENCH_VARIANTS; k++) {
         memset(&rows[k], 0, sizeof(rows[k]));
@@ -36,6 +39,7 @@ void rs_bench_synth_variants(rs_bench_synth_row *rows, int J)
         rows[k].full_frame = v[k].full_frame;
         rows[k].shadows = !v[k].no_shadows;
         rows[k].full_detail = v[k].full_detail;
+        rows[k].no_appearance = v[k].no_appearance;
     }
 }
 
@@ -243,6 +247,7 @@ rs_status rs_bench_synth_run(rs_bench_synth_row *rows, int Nrows, const rs_synth
         o.full_frame = r->full_frame;
         o.shadows = r->shadows;
         if (r->full_detail) o.coarse_below_px = 0;
+        o.no_appearance = r->no_appearance;
         o.shard_index = 0;
         o.shard_count = 1;
         int every = r->memory_every > 0 ? r->memory_every : (o.count + 9) / 10;

@@ -6,7 +6,8 @@
 // frames of one povray process, the shadow pass replacing two ground passes, J workers),
 // "jobs=1" (one image at a time), "separate" (one povray process per pass), "full-frame" (no
 // culling, no region), "no-shadows" (the shadow pass skipped: its cost), "full-detail" (no
-// coarse meshes for vehicles under 40 px). Every variant makes
+// coarse meshes for vehicles under 40 px), "no-appearance" (the camera's look not applied:
+// its cost, issue 40). Every variant makes
 // the same images (same seed, count, size) into a folder of its own, removed afterwards.
 //
 // Memory (issue 17, "memory flat over 1,000 images"), per variant:
@@ -62,9 +63,10 @@ typedef struct {
     long cp_rss_largest_kib[RS_BENCH_SYNTH_MAX_CHECKPOINTS];  // the largest roadside process
     int cp_roadside[RS_BENCH_SYNTH_MAX_CHECKPOINTS];          // live roadside processes (this one, workers)
     int cp_processes[RS_BENCH_SYNTH_MAX_CHECKPOINTS];         // live processes in the tree, this one included
+    bool no_appearance; // the variant: the camera's look not applied (issue 40: its cost)
 } rs_bench_synth_row;
 
-#define RS_SYNTH_BENCH_VARIANTS 6
+#define RS_SYNTH_BENCH_VARIANTS 7
 
 // The growth of the sampled resident set of the roadside processes (sum and largest) between
 // the first checkpoint and the last one with as many roadside processes alive, KiB per 100

@@ -22,7 +22,8 @@ static const char bench_synth_usage[] =
     "same images: all (every saving), jobs=1 (one image at a time), separate (the passes'\n"
     "povray processes one after the other instead of at once), full-frame (no culling, no\n"
     "region rendering), no-shadows (the shadow pass skipped), full-detail (no coarse meshes\n"
-    "for vehicles under 40 px). Prints a table: wall and CPU\n"
+    "for vehicles under 40 px), no-appearance (the camera's look not applied: its cost).\n"
+    "Prints a table: wall and CPU\n"
     "seconds per image (CPU of roadside, its workers and povray), vehicles per image, and\n"
     "the time 4 cameras x 1000 images would take at that rate; memory: the peak resident set\n"
     "of roadside during the variant (VmHWM) and of its largest finished child so far\n"
@@ -252,7 +253,7 @@ int rs_cli_bench_synth(int argc, char **argv)
             if (!known)
                 return rs_cli_usage_error("bench synth",
                                           "--variants: \"%.*s\" is not one of all, jobs=1, separate, full-frame, "
-                                          "no-shadows, full-detail",
+                                          "no-shadows, full-detail, no-appearance",
                                           (int)n, p);
             p += n + (p[n] == ',');
         }

@@ -88,6 +88,20 @@ static int dataset_stats(int argc, char **argv)
         r->labels_near, r->labels_located, r->labels_located ? 100.0 * r->labels_near / r->labels_located : 0.0, radius,
         centre[0], centre[1], site ? " (the junction lanes' centre)" : " (the ENU origin)",
         r->labels_located ? r->distance_sum_m / r->labels_located : 0.0);
+    if (r->looks_found)
+        printf("look:        the camera's look estimated per background, %s\n",
+               r->looks_applied ? "applied to the vehicles" : "NOT applied (--no-appearance)");
+    for (int i = 0; i < r->Nlooks; i++) {
+        const rs_synth_appearance *a = &r->looks[i].look;
+        if (!r->looks[i].ok)
+            printf("  %s: not estimated: %s\n", r->looks[i].background, r->looks[i].why);
+        else
+            printf("  %s: noise variance %.3g + %.3g v (sigma %.4f at v 0.5), blur %.2f px, jpeg quality %d%s, "
+                   "blockiness %.3f, gain %.3f %.3f %.3f\n",
+                   r->looks[i].background, a->noise_a, a->noise_b, rs_synth_appearance_noise_sigma(a, 0.5),
+                   a->blur_sigma_px, a->jpeg_quality, a->jpeg_quality && !a->jpeg_exact ? " (nearest IJG)" : "",
+                   a->blockiness, a->gain[0], a->gain[1], a->gain[2]);
+    }
     free(r);
     return RS_EXIT_OK;
 }

@@ -19,6 +19,7 @@ static const char render_usage[] =
     "                       [--full-frame] [--antialias N] [--canvas-scale S] [--keep]\n"
     "                       [--shadows [--overcast]] [--separate-processes] [--no-match-light]\n"
     "                       [--condition TIME-SURFACE]\n"
+    "                       [--no-appearance]\n"
     "                       [--labels [--split NAME] [--bbox KIND] [--min-visibility V]]\n"
     "\n"
     "Renders vehicles seen by a calibrated camera with POV-Ray 3.7 (docs/povray.md):\n"
@@ -52,6 +53,10 @@ static const char render_usage[] =
     "                       made from the image's pixels (OUTDIR/rs_env.png while povray\n"
     "                       runs); the sun's direction stays the one of --sun or --time\n"
     "  --no-match-light     keep the default lights and environment over a background\n"
+    "  --no-appearance      over a background, composite the vehicles clean and sharp; by\n"
+    "                       default they and their shadows take the camera's look estimated\n"
+    "                       from the background (docs/appearance.md): its gain, blur, noise\n"
+    "                       as a function of brightness, and JPEG quality\n"
     "  --full-frame         no culling, no region: render the whole image (for comparison)\n"
     "  --antialias N        N x N supersampling of the colour pass (default off)\n"
     "  --canvas-scale S     distorted lenses: canvas pixels per pixel, >= 1 (default 1)\n"
@@ -81,7 +86,8 @@ static const char render_usage[] =
     "\n"
     "Prints one line: vehicles, rendered, region, seconds in povray; over a background whose\n"
     "light was matched, a second: the road pixels, the lights' factor, the light level and\n"
-    "where it was read (a note on stderr when not from the lanes).\n"
+    "where it was read (a note on stderr when not from the lanes); over a background, the\n"
+    "camera's look applied (\"look: ...\") or a note why not.\n"
     "Exit status: 0 rendered, 1 failed (a clear message if povray is missing), 2 usage error.\n";
 
 enum {
@@ -98,7 +104,8 @@ enum {
     OPT_SHADOWS,
     OPT_NOMATCH,
     OPT_OVERCAST,
-    OPT_SEPARATE
+    OPT_SEPARATE,
+    OPT_NOLOOK
 };
 
 void rs_cli_synth_sandbox_note(const char *command)
@@ -129,6 +136,7 @@ int rs_cli_render(int argc, char **argv)
                                              {"separate-processes", no_argument, NULL, OPT_SEPARATE},
                                              {"labels", no_argument, NULL, OPT_LABELS},
                                              {"no-match-light", no_argument, NULL, OPT_NOMATCH},
+                                             {"no-appearance", no_argument, NULL, OPT_NOLOOK},
                                              {"split", required_argument, NULL, OPT_SPLIT},
                                              {"bbox", required_argument, NULL, OPT_BBOX},
                                              {"min-visibility", required_argument, NULL, OPT_MINVIS},
@@ -139,7 +147,7 @@ int rs_cli_render(int argc, char **argv)
     rs_synth_render_options_default(&ropt);
     int c, rc;
     long aa;
-    bool labels = false, overcast = false, match_light = true;
+    bool labels = false, overcast = false, match_light = true, want_look = true;
     rs_synth_condition cond = {0}; // day, dry
     const char *split = "train2017";
     rs_synth_label_options lopt = {.bbox = RS_SYNTH_BBOX_FOOTPRINT, .min_visibility = 0};
@@ -154,6 +162,7 @@ int rs_cli_render(int argc, char **argv)
         case OPT_SHADOWS: ropt.shadow = true; continue;
         case OPT_OVERCAST: overcast = true; continue;
         case OPT_NOMATCH: match_light = false; continue;
+        case OPT_NOLOOK: want_look = false; continue;
         case OPT_SEPARATE: ropt.separate_processes = true; continue;
         case OPT_LABELS: labels = true; continue;
         case OPT_CONDITION:
@@ -228,6 +237,16 @@ int rs_cli_render(int argc, char **argv)
         ropt.headlights = ropt.scene.lights_on;
         ropt.mirror = cond.surface == RS_SYNTH_SURFACE_WET && ropt.background_path;
     }
+    rs_synth_appearance look;
+    if (!st && ropt.background_path && want_look) {
+        // the camera's look (docs/appearance.md): noise, blur, JPEG, colour cast of the background
+        rs_err lerr = {0};
+        if (rs_synth_appearance_estimate(&look, ropt.background_path, NULL, NULL, &lerr) == RS_OK)
+            ropt.look = &look;
+        else
+            fprintf(stderr, "render: note: the camera's look not estimated (%s): vehicles composited clean\n",
+                    lerr.msg);
+    }
     if (!st)
         st = rs_synth_render(&r, s.output, &s.camera, s.site->ground_normal_enu, s.site->ground_offset_m, &s.prepared,
                              &ropt, &err);
@@ -244,6 +263,12 @@ int rs_cli_render(int argc, char **argv)
             printf("light matched to the background: %d road pixels, light x %.3f %.3f %.3f (level %.3f), from %s\n",
                    light.Nroad_px, ropt.scene.light_rgb_scale[0], ropt.scene.light_rgb_scale[1],
                    ropt.scene.light_rgb_scale[2], light.level, rs_synth_light_source_name(light.source));
+        if (ropt.look)
+            printf("look: noise variance %.3g + %.3g v (sigma %.4f at v 0.5), blur %.2f px, jpeg quality %d%s, "
+                   "blockiness %.3f, gain %.3f %.3f %.3f\n",
+                   look.noise_a, look.noise_b, rs_synth_appearance_noise_sigma(&look, 0.5), look.blur_sigma_px,
+                   look.jpeg_quality, look.jpeg_quality && !look.jpeg_exact ? " (nearest IJG)" : "", look.blockiness,
+                   look.gain[0], look.gain[1], look.gain[2]);
         rc = RS_EXIT_OK;
     }
     rs_synth_render_result_free(&r);

@@ -17,6 +17,7 @@ static const char synth_usage[] =
     "usage: roadside synth SITE --calib DIR --count N -o DATASET [--seed S]\n"
     "                      [--backgrounds TAG=VALUE]... [--shard I/N] [--camera ID]...\n"
     "                      [--size WxH] [--vehicles N] [--split NAME] [--no-shadows]\n"
+    "                      [--no-appearance]\n"
     "                      [--jobs J] [--separate-processes]\n"
     "                      [--bbox footprint|body|visible] [--min-visibility V] [--keep-invisible]\n"
     "                      [--no-junction-traffic | --traffic-frames DIR] [--models FILE]\n"
@@ -98,6 +99,11 @@ static const char synth_usage[] =
     "                         parts/, cameras/, run.json and tracks_gt.csv only)\n"
     "  --no-shadows           no differential-rendering shadows (the shadow pass: the sun's\n"
     "                         shadow and the sky's soft one of each vehicle on the background)\n"
+    "  --no-appearance        vehicles composited clean and sharp over the backgrounds; by\n"
+    "                         default they and their shadows take the look of the camera\n"
+    "                         estimated from each background (gain, blur, noise as a function\n"
+    "                         of brightness, JPEG quality; docs/appearance.md), recorded in\n"
+    "                         DATASET/backgrounds.json and shown by `roadside dataset stats`\n"
     "  --jobs J               images made at once, in J worker processes (default: the CPUs\n"
     "                         this process may use: its affinity mask, its cgroup's cpu.max\n"
     "                         quota and $SLURM_CPUS_PER_TASK, the smallest; never more)\n"
@@ -122,6 +128,7 @@ enum {
     OPT_VEHICLES,
     OPT_SPLIT,
     OPT_NO_SHADOWS,
+    OPT_NO_LOOK,
     OPT_JOBS,
     OPT_SEPARATE,
     OPT_BBOX,
@@ -298,6 +305,7 @@ int rs_cli_synth(int argc, char **argv)
                                              {"vehicles", required_argument, NULL, OPT_VEHICLES},
                                              {"split", required_argument, NULL, OPT_SPLIT},
                                              {"no-shadows", no_argument, NULL, OPT_NO_SHADOWS},
+                                             {"no-appearance", no_argument, NULL, OPT_NO_LOOK},
                                              {"jobs", required_argument, NULL, OPT_JOBS},
                                              {"separate-processes", no_argument, NULL, OPT_SEPARATE},
                                              {"bbox", required_argument, NULL, OPT_BBOX},
@@ -405,6 +413,7 @@ int rs_cli_synth(int argc, char **argv)
         }
         case OPT_CAMERA: cams[opt.Ncameras++] = optarg; break;
         case OPT_NO_SHADOWS: opt.shadows = false; break;
+        case OPT_NO_LOOK: opt.no_appearance = true; break;
         case OPT_SIZE: {
             int used = 0;
             if (sscanf(optarg, "%dx%d%n", &opt.width, &opt.height, &used) != 2 || optarg[used] || opt.width < 8 ||

@@ -44,3 +44,11 @@ static double srgb_lookup(const double *table, double v)
 double rs_color_srgb_decode(double v) { return srgb_lookup(srgb_dec, v); }
 
 double rs_color_srgb_encode(double v) { return srgb_lookup(srgb_enc, v); }
+
+double rs_color_srgb_decode_slope(double v)
+{
+    pthread_once(&srgb_once, srgb_fill);
+    const double x = v * SRGB_TABLE;
+    const int i = !(x > 0) ? 0 : x >= SRGB_TABLE ? SRGB_TABLE - 1 : (int)x; // also NaN: 0
+    return (srgb_dec[i + 1] - srgb_dec[i]) * SRGB_TABLE;
+}

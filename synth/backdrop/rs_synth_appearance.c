@@ -57,9 +57,12 @@ static double median_f(float *v, size_t n)
     return 0.5 * (lower + upper);
 }
 
+// Immerkaer's kernel: cancels locally linear content, gain 6 on white noise.
+static const double immerkaer_M[9] = {1, -2, 1, -2, 4, -2, 1, -2, 1};
+
 rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *err)
 {
-    static const double M[9] = {1, -2, 1, -2, 4, -2, 1, -2, 1};
+    const double *M = immerkaer_M;
     *sigma = NAN;
     const int W = img->width, H = img->height, C = img->channels < 4 ? img->channels : 3;
     if (W < 3 || H < 3) return rs_err_set(err, RS_ERR_DEGENERATE, "noise: image smaller than 3x3");
@@ -78,6 +81,213 @@ rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *er
     *sigma = 1.482602218505602 * median_f(v, n) / 6.0;
     free(v);
     rs_image_free(&f);
+    return RS_OK;
+}
+
+// The white-noise sigma of Immerkaer residuals |r| (n,), reordered: their RMS over the 90 %
+// smallest, / sqrt(0.6231) (a Gaussian's variance truncated at its 90 % point, +-1.645 sigma), / 6
+// (the kernel's gain). Unlike the median of |r|, which takes only a few values when a JPEG has
+// left two or three 8-bit codes of noise, it varies smoothly with the noise.
+static double trimmed_sigma(float *absr, size_t n)
+{
+    const float q = select_f(absr, n, (size_t)(0.9 * (n - 1)));
+    double ss = 0;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (absr[i] <= q) ss += (double)absr[i] * absr[i], m++;
+    return m ? sqrt(ss / m / 0.6231) / 6.0 : 0;
+}
+
+// The noise 1-sigma measured (as in rs_synth_estimate_noise_model) on a flat 3-channel patch of
+// stored level `level` with white Gaussian noise of `sigma` (fixed seed), JPEG round-tripped at
+// `quality`. *out NaN on error.
+#define JPEG_PATCH 64
+static rs_status jpeg_measured_sigma(double *out, double level, double sigma, int quality, rs_err *err)
+{
+    *out = NAN;
+    rs_image p = {0}, j = {0}, f = {0};
+    rs_status st = rs_image_alloc(&p, JPEG_PATCH, JPEG_PATCH, 3, err);
+    if (st) return st;
+    rs_rng rng;
+    rs_rng_seed(&rng, 40);
+    for (size_t i = 0; i < (size_t)3 * JPEG_PATCH * JPEG_PATCH; i++) {
+        const double v = level + sigma * rs_rng_normal(&rng);
+        p.data[i] = (float)(v < 0 ? 0 : v > 1 ? 1 : v);
+    }
+    float *v = malloc(sizeof(float) * 3 * JPEG_PATCH * JPEG_PATCH);
+    if (!v) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st && !(st = rs_synth_image_jpeg_roundtrip(&j, &p, quality, err)) &&
+        !(st = rs_synth_image_filter(&f, &j, immerkaer_M, 3, 3, err))) {
+        size_t n = 0;
+        for (int y = 1; y < JPEG_PATCH - 1; y++)
+            for (int x = 1; x < JPEG_PATCH - 1; x++)
+                for (int c = 0; c < 3; c++) v[n++] = fabsf(f.data[((size_t)y * JPEG_PATCH + x) * 3 + c]);
+        *out = trimmed_sigma(v, n);
+    }
+    free(v);
+    rs_image_free(&p);
+    rs_image_free(&j);
+    rs_image_free(&f);
+    return st;
+}
+
+// The white-noise sigma that measures `seen` after a JPEG round trip at `quality` on a flat patch
+// of `level`: bisection in log sigma over [seen, 64 seen] (the measured sigma grows with the true
+// one; a JPEG at quality 75 leaves a tenth of a 0.01 sigma).
+static rs_status jpeg_unseen_sigma(double *sigma, double level, double seen, int quality, rs_err *err)
+{
+    double lo = seen, hi = 64 * seen, m;
+    rs_status st = jpeg_measured_sigma(&m, level, hi, quality, err);
+    if (st) return st;
+    if (m < seen) { // even 64 x: the JPEG leaves almost nothing; keep the largest
+        *sigma = hi;
+        return RS_OK;
+    }
+    for (int it = 0; it < 10; it++) { // 64^(1/1024): within 0.4 %
+        const double mid = sqrt(lo * hi);
+        if ((st = jpeg_measured_sigma(&m, level, mid, quality, err))) return st;
+        if (m < seen)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    *sigma = sqrt(lo * hi);
+    return RS_OK;
+}
+
+#define NOISE_BINS 16
+
+rs_status rs_synth_estimate_noise_model(double *a, double *b, const rs_image *img, int jpeg_quality, rs_err *err)
+{
+    static const double box5[25] = {0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04,
+                                    0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04, 0.04};
+    *a = *b = NAN;
+    const int W = img->width, H = img->height, C = img->channels < 4 ? img->channels : 3, CC = img->channels;
+    if (W < 8 || H < 8) return rs_err_set(err, RS_ERR_DEGENERATE, "noise model: image smaller than 8x8");
+    rs_image r = {0}, m = {0};
+    float *grad = NULL, *res = NULL, *tmp = NULL;
+    int *bin = NULL;
+    rs_status st;
+    if ((st = rs_synth_image_filter(&r, img, immerkaer_M, 3, 3, err)) ||
+        (st = rs_synth_image_filter(&m, img, box5, 5, 5, err)))
+        goto done;
+    // every second pixel of every second row (a quarter: the memory of an estimate made in the
+    // parent of synth's workers stays in its heap; 260,000 samples at 720 x 480 are plenty)
+    const size_t N = (size_t)((W - 5) / 2) * ((H - 5) / 2) * C;
+    // one block (grad, res, tmp, bin): one allocation to return, not four to fragment the heap
+    grad = malloc((3 * sizeof(float) + sizeof(int)) * N);
+    res = grad ? grad + N : NULL;
+    tmp = grad ? res + N : NULL;
+    bin = grad ? (int *)(tmp + N) : NULL;
+    if (!grad) {
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    // counting sort of the samples by level bin
+    size_t count[NOISE_BINS + 1] = {0}, start[NOISE_BINS + 1] = {0};
+    double level_sum[NOISE_BINS] = {0};
+    size_t n = 0;
+    for (int y = 3; y < H - 3; y += 2)
+        for (int x = 3; x < W - 3; x += 2)
+            for (int c = 0; c < C; c++, n++) {
+                const size_t p = ((size_t)y * W + x) * CC + c;
+                const float lv = m.data[p];
+                int k = (int)(lv * NOISE_BINS);
+                bin[n] = k < 0 ? 0 : k >= NOISE_BINS ? NOISE_BINS - 1 : k;
+                count[bin[n]]++;
+            }
+    for (int k = 1; k <= NOISE_BINS; k++) start[k] = start[k - 1] + count[k - 1];
+    size_t fill[NOISE_BINS];
+    memcpy(fill, start, sizeof(fill));
+    n = 0;
+    for (int y = 3; y < H - 3; y += 2)
+        for (int x = 3; x < W - 3; x += 2)
+            for (int c = 0; c < C; c++, n++) {
+                const size_t p = ((size_t)y * W + x) * CC + c, dx = CC, dy = (size_t)W * CC;
+                const size_t i = fill[bin[n]]++;
+                grad[i] = fabsf(m.data[p + dx] - m.data[p - dx]) + fabsf(m.data[p + dy] - m.data[p - dy]);
+                res[i] = fabsf(r.data[p]);
+                level_sum[bin[n]] += m.data[p];
+            }
+    // per bin: the smoother half's robust sigma
+    double sw = 0, swv = 0, swvv = 0, swy = 0, swvy = 0;
+    int Nbins = 0;
+    for (int k = 0; k < NOISE_BINS && !st; k++) {
+        const size_t nk = count[k];
+        const double v = nk ? level_sum[k] / nk : 0;
+        if (nk < 300 || v < 0.03 || v > 0.97) continue;
+        memcpy(tmp, grad + start[k], sizeof(float) * nk);
+        const float gmed = select_f(tmp, nk, nk / 2);
+        size_t ns = 0;
+        for (size_t i = 0; i < nk; i++)
+            if (grad[start[k] + i] <= gmed) tmp[ns++] = res[start[k] + i];
+        if (ns < 150) continue;
+        double sk = trimmed_sigma(tmp, ns);
+        if (jpeg_quality > 0 && sk > 0 && (st = jpeg_unseen_sigma(&sk, v, sk, jpeg_quality, err))) break;
+        const double var = sk * sk, w = (double)ns / fmax(var * var, 1e-20);
+        sw += w, swv += w * v, swvv += w * v * v, swy += w * var, swvy += w * v * var;
+        Nbins++;
+    }
+    if (st) goto done;
+    if (Nbins == 0) {
+        st = rs_err_set(err, RS_ERR_DEGENERATE, "noise model: no level with 300 smooth pixels");
+        goto done;
+    }
+    const double det = sw * swvv - swv * swv;
+    double A = swy / sw, B = 0;
+    if (Nbins >= 2 && det > 1e-12 * sw * swvv) {
+        A = (swvv * swy - swv * swvy) / det;
+        B = (sw * swvy - swv * swy) / det;
+        if (B < 0) { // read noise alone
+            A = swy / sw;
+            B = 0;
+        } else if (A < 0) { // shot noise alone
+            A = 0;
+            B = swvy / swvv;
+        }
+    }
+    *a = A;
+    *b = B;
+done:
+    free(grad); // (res, tmp, bin: the same block)
+    rs_image_free(&r);
+    rs_image_free(&m);
+    return st;
+}
+
+rs_status rs_synth_estimate_blockiness(double *ratio, const rs_image *img, rs_err *err)
+{
+    *ratio = NAN;
+    const int W = img->width, H = img->height, C = img->channels, Cm = C >= 3 ? 3 : 1;
+    if (W < 16 || H < 16) return rs_err_set(err, RS_ERR_DEGENERATE, "blockiness: image smaller than 16x16");
+    double across[2] = {0, 0}, inside[2] = {0, 0};
+    size_t n_across[2] = {0, 0}, n_inside[2] = {0, 0};
+#define LUMA(x, y)                                                                                          \
+    (img->data[((size_t)(y)*W + (x)) * C] +                                                                 \
+     (Cm == 3 ? img->data[((size_t)(y)*W + (x)) * C + 1] + img->data[((size_t)(y)*W + (x)) * C + 2] : 0)) / \
+        Cm
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x + 1 < W; x++) { // horizontal neighbours: a boundary between x = 8k-1 and 8k
+            const double d = fabs(LUMA(x + 1, y) - LUMA(x, y));
+            const int k = (x + 1) % 8 == 0 ? 0 : 1;
+            if (!k)
+                across[0] += d, n_across[0]++;
+            else
+                inside[0] += d, n_inside[0]++;
+        }
+    for (int y = 0; y + 1 < H; y++)
+        for (int x = 0; x < W; x++) {
+            const double d = fabs(LUMA(x, y + 1) - LUMA(x, y));
+            if ((y + 1) % 8 == 0)
+                across[1] += d, n_across[1]++;
+            else
+                inside[1] += d, n_inside[1]++;
+        }
+#undef LUMA
+    if (!(inside[0] > 0) || !(inside[1] > 0))
+        return rs_err_set(err, RS_ERR_DEGENERATE, "blockiness: a flat image (no difference inside the blocks)");
+    *ratio = 0.5 * (across[0] / n_across[0] / (inside[0] / n_inside[0]) +
+                    across[1] / n_across[1] / (inside[1] / n_inside[1]));
     return RS_OK;
 }
 
@@ -133,7 +343,7 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *
         goto done;
     }
     for (size_t p = 0; p < N; p++) sel[p] = fabsf(m.data[p]);
-    const float thr = 0.2f * select_f(sel, N, (size_t)(0.99 * (N - 1)));
+    const float thr = 0.5f * select_f(sel, N, (size_t)(0.99 * (N - 1)));
     size_t n = 0;
     const int margin = 10;
     for (int y = margin; y < H - margin; y++)
@@ -281,14 +491,24 @@ rs_status rs_synth_appearance_estimate(rs_synth_appearance *out, const char *bac
         (st = rs_synth_estimate_gain(out->gain, bg, reference, NULL, err)) ||
         (st = rs_synth_estimate_noise(&out->noise_sigma, bg, err)) ||
         (st = rs_synth_estimate_blur(&out->blur_sigma_px, bg, err)) ||
-        (st = rs_synth_estimate_jpeg_quality(&out->jpeg_quality, &exact, background_path, err)))
+        (st = rs_synth_estimate_jpeg_quality(&out->jpeg_quality, &exact, background_path, err)) ||
+        (st = rs_synth_estimate_noise_model(&out->noise_a, &out->noise_b, bg, out->jpeg_quality, err)) ||
+        (st = rs_synth_estimate_blockiness(&out->blockiness, bg, err)))
         rs_err_prefix(err, "%s", background_path);
+    out->jpeg_exact = exact;
     rs_image_free(&read);
     return st;
 }
 
-rs_status rs_synth_appearance_apply(rs_image *img, const rs_synth_appearance *a, double layer_blur_sigma_px,
-                                    uint64_t seed, rs_err *err)
+double rs_synth_appearance_noise_sigma(const rs_synth_appearance *a, double v)
+{
+    if (a->noise_a <= 0 && a->noise_b <= 0) return a->noise_sigma;
+    const double var = a->noise_a + a->noise_b * v;
+    return var > 0 ? sqrt(var) : 0;
+}
+
+rs_status rs_synth_appearance_layer(rs_image *img, const rs_synth_appearance *a, double layer_blur_sigma_px,
+                                    rs_err *err)
 {
     if (img->channels != 4)
         return rs_err_set(err, RS_ERR_INVALID, "appearance: the layer must be RGBA (has %d)", img->channels);
@@ -305,17 +525,29 @@ rs_status rs_synth_appearance_apply(rs_image *img, const rs_synth_appearance *a,
         memcpy(d, b.data, sizeof(float) * 4 * N);
         rs_image_free(&b);
     }
+    for (size_t p = 0; p < N; p++) { // back to straight alpha
+        const float al = d[4 * p + 3];
+        for (int c = 0; c < 3; c++) d[4 * p + c] = al > 0 ? d[4 * p + c] / al : 0;
+    }
+    return RS_OK;
+}
+
+rs_status rs_synth_appearance_apply(rs_image *img, const rs_synth_appearance *a, double layer_blur_sigma_px,
+                                    uint64_t seed, rs_err *err)
+{
+    rs_status st = rs_synth_appearance_layer(img, a, layer_blur_sigma_px, err);
+    if (st) return st;
+    const size_t N = (size_t)img->width * img->height;
+    float *d = img->data;
     rs_rng rng;
     rs_rng_seed(&rng, seed);
     for (size_t p = 0; p < N; p++) {
         const float al = d[4 * p + 3];
         for (int c = 0; c < 3; c++) {
-            float v = al > 0 ? d[4 * p + c] / al : 0; // back to straight alpha
+            float v = d[4 * p + c];
             if (al > 0 && a->noise_sigma > 0) {
                 // sigma in stored units -> linear light at this value: dDecode/dv
-                const double e = rs_color_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v), h = 1e-3;
-                const double slope = (rs_color_srgb_decode(fmin(1, e + h)) - rs_color_srgb_decode(fmax(0, e - h))) /
-                                     (fmin(1, e + h) - fmax(0, e - h));
+                const double slope = rs_color_srgb_decode_slope(rs_color_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v));
                 v += (float)(a->noise_sigma * slope * rs_rng_normal(&rng));
             }
             d[4 * p + c] = v < 0 ? 0 : v;

@@ -348,6 +348,7 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
     }
     cJSON_AddBoolToObject(run, "shadows", opt->shadows);
     cJSON_AddBoolToObject(run, "junction_traffic", opt->junction_traffic);
+    if (opt->no_appearance) cJSON_AddBoolToObject(run, "appearance", false); // absent when on: older records equal
     if (opt->traffic_frames_dir) { // absent for the built-in traffic: older records stay equal
         cJSON *tf = cJSON_AddObjectToObject(run, "traffic_frames");
         cJSON_AddNumberToObject(tf, "frames", frames->Nframes);
@@ -772,6 +773,7 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     if (st) goto done;
     for (int k = opt->shard_index; k < opt->count; k += opt->shard_count) sum.Nimages++;
     st = opt->jobs > 1 && sum.Nimages > 1 ? run_workers(&d, &sum, err) : run_images(&d, &sum, 0, 1, -1, err);
+    if (!st && !opt->labels_only) st = rs_synth_dataset__write_looks(&d, err);
     if (!st) {
         st = rs_synth_dataset__assemble(&d, &sum.Nannotations, &sum.Nleft_out, err);
         rs_synth_dataset__models_uncache(&d);

@@ -50,6 +50,7 @@
 #include <stdint.h>
 
 #include "core/rs_status.h"
+#include "synth/backdrop/rs_synth_appearance.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -124,6 +125,8 @@ typedef struct {
     // COCO file; may be NULL.
     void (*notice)(void *ctx, const char *msg);
     void *notice_ctx;
+    bool no_appearance; // the vehicles composited clean and sharp over backgrounds (default off:
+                        // the camera's look, synth/povray/rs_synth_composite.h)
 } rs_synth_dataset_options;
 
 void rs_synth_dataset_options_default(rs_synth_dataset_options *opt);
@@ -252,6 +255,14 @@ typedef struct {
     int labels; // (splits and conditions only)
 } rs_synth_dataset_count;
 
+// One background's camera look as DATASET/backgrounds.json records it.
+typedef struct {
+    char background[96];
+    bool ok; // the look was estimated (else why holds the reason)
+    rs_synth_appearance look;
+    char why[160];
+} rs_synth_dataset_look;
+
 typedef struct {
     int images, labels;
     rs_synth_dataset_count splits[RS_SYNTH_STATS_MAX], cameras[RS_SYNTH_STATS_MAX], weather[RS_SYNTH_STATS_MAX],
@@ -266,6 +277,11 @@ typedef struct {
     // "<time_of_day>-<surface>"; "(missing)" for images made before it or over the grey ground)
     rs_synth_dataset_count conditions[RS_SYNTH_STATS_MAX];
     int Nconditions;
+    // DATASET/backgrounds.json (docs/synth.md, "The camera's look"); none in older datasets
+    rs_synth_dataset_look looks[RS_SYNTH_STATS_MAX];
+    int Nlooks;
+    bool looks_found;   // the file is there
+    bool looks_applied; // its "applied" (false: made with --no-appearance)
 } rs_synth_dataset_stats_result;
 
 // The junction's centre on the site: the mean of the vertices of the lanes whose kind is

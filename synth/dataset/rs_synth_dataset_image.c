@@ -22,6 +22,7 @@
 #include "synth/backdrop/rs_synth_sun.h"
 #include "synth/dataset/internal/rs_synth_dataset_internal.h"
 #include "synth/labels/rs_synth_labels.h"
+#include "synth/povray/rs_synth_composite.h"
 #include "synth/povray/rs_synth_render.h"
 #include "synth/povray/rs_synth_scene.h"
 #include "synth/traffic/rs_synth_sumo.h"
@@ -61,6 +62,7 @@ static rs_status background_fit(rs_synth_dataset__background *b, int width, int 
     for (size_t i = 0; i < (size_t)width * height; i++)
         for (int c = 0; c < 3; c++)
             b->linear.data[3 * i + c] = (float)rs_color_srgb_decode(fitted.data[(size_t)fitted.channels * i + c]);
+    rs_image_free(&fitted); // before the estimate: its buffers come on top (the parent's peak)
     b->app_ok = rs_synth_appearance_estimate(&b->app, b->src->path, &src, NULL, NULL) == RS_OK;
 done:
     if (st) rs_image_free(&b->linear);
@@ -109,54 +111,24 @@ rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, r
 
 // ---- shadows and appearance over a background ----
 
-// Differential rendering (Debevec, "Rendering synthetic objects into real scenes", SIGGRAPH
-// 1998): the ground with the vehicles and the ground alone, under the same sun and sky; their
-// ratio is the render's shadow pass (rs_synth_render_result.shadow: the ground alone, lit by
-// parallel lights, is uniform and needs no pass). On background pixels (id 0) the background
-// in linear light is multiplied by it (in [0, 1]: only shadows, no added light).
-static void shade_background(rs_image *bg_lin, const float *shadow, const uint16_t *ids)
+// The composite over a background (rs_synth_composite_background: the shadows, the vehicle layer
+// in the background's camera look unless --no-appearance or the background gave no estimate,
+// its JPEG quality). in,out: r (its composite replaced)
+static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__background *b, bool look, uint64_t seed,
+                           rs_err *err)
 {
-    const size_t n = (size_t)bg_lin->width * (size_t)bg_lin->height;
-    for (size_t i = 0; i < n; i++) {
-        if (ids[i] != 0 || shadow[i] >= 1) continue;
-        for (int c = 0; c < 3; c++) bg_lin->data[3 * i + c] *= shadow[i];
-    }
-}
-
-// The composite over a background: shadows (when given), the condition's ground terms, the vehicle layer matched to the
-// background (rs_synth_appearance.h; skipped when the background gives no estimate), straight
-// alpha over the background in linear light, sRGB, the background's JPEG quality.
-// in,out: r (its composite replaced); in: shadow passes may be NULL
-static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__background *b, uint64_t seed, rs_err *err)
-{
-    const rs_synth_appearance app = b->app;
-    const bool matched = b->app_ok;
-    rs_status st = RS_OK;
-    const size_t n = (size_t)r->width * (size_t)r->height;
-    rs_image lin = {0};
-    if ((st = rs_image_alloc(&lin, r->width, r->height, 3, err))) goto done;
-    memcpy(lin.data, b->linear.data, sizeof(float) * 3 * n);
-    if (r->shadow) shade_background(&lin, r->shadow, r->ids);
-    // issue 40: the road lit by the headlights (its reflectance RS_SYNTH_ROAD_ALBEDO) and the
-    // vehicles mirrored in a wet road (replacing what the background shows there: sky NULL)
-    const double albedo[3] = {RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO};
-    if (r->headlight_irradiance) rs_synth_condition_add_headlights(&lin, r->headlight_irradiance, r->ids, albedo);
-    if (r->mirror.data) rs_synth_condition_add_wet(&lin, &r->mirror, r->ids, NULL);
-    if (matched && (st = rs_synth_appearance_apply(&r->rgba, &app, 0.6, seed, err))) {
-        rs_image_free(&lin);
-        goto done;
-    }
-    for (size_t i = 0; i < n; i++) {
-        const double a = r->rgba.data[4 * i + 3];
-        for (int c = 0; c < 3; c++) {
-            const double v = a * r->rgba.data[4 * i + c] + (1 - a) * lin.data[3 * i + c];
-            r->composite.data[3 * i + c] = (float)rs_color_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
-        }
-    }
-    rs_image_free(&lin);
-    if (matched) st = rs_synth_appearance_jpeg(&r->composite, &app, err);
-done:
-    return st;
+    const rs_synth_composite_options copt = {.look = look && b->app_ok ? &b->app : NULL,
+                                             .layer_blur_sigma_px = 0,
+                                             .seed = seed,
+                                             .headlight_irradiance = r->headlight_irradiance,
+                                             .mirror = r->mirror.data ? &r->mirror : NULL,
+                                             .ids = r->ids};
+    rs_image comp = {0};
+    rs_status st = rs_synth_composite_background(&comp, &r->rgba, &b->linear, r->shadow, &copt, err);
+    if (st) return st;
+    rs_image_free(&r->composite);
+    r->composite = comp;
+    return RS_OK;
 }
 
 // ---- one image ----
@@ -487,7 +459,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
             goto done;
         *seconds_povray += r.seconds_povray;
         const uint64_t r_look = rs_rng_seed_next(&rng);
-        if (b && (st = composite(&r, b, r_look, err))) goto done;
+        if (b && (st = composite(&r, b, !d->opt->no_appearance, r_look, err))) goto done;
     }
     for (int i = 0; i < N; i++) {
         up[i] = rs_synth_ground_up_m(d->site->ground_normal_enu, d->site->ground_offset_m, prepared.v[i].e_m,

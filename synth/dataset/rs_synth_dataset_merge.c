@@ -315,6 +315,15 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
             if (has && (st = take_file(inputs[0], out_dir, rel, "run.json", err))) break;
         }
     }
+    // each background's camera look (rs_synth_dataset__write_looks: every shard writes all of
+    // the run's backgrounds, the same), when the first input has it
+    if (!st) {
+        char *src = rs_io_join(inputs[0], "backgrounds.json");
+        struct stat sb;
+        const bool has = src && lstat(src, &sb) == 0 && S_ISREG(sb.st_mode);
+        free(src);
+        if (has) st = take_file(inputs[0], out_dir, "backgrounds.json", "run.json", err);
+    }
     if (!st) {
         if (!split_names[0]) split_names[0] = split_names[1];
         cJSON *doc = cJSON_CreateObject();

@@ -63,6 +63,53 @@ static const char *string_of(const cJSON *o, const char *key)
     return cJSON_IsString(v) ? v->valuestring : NULL;
 }
 
+static double number_of(const cJSON *o, const char *key)
+{
+    const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
+    return cJSON_IsNumber(v) ? v->valuedouble : NAN;
+}
+
+// DATASET/backgrounds.json into r->looks (rs_synth_dataset__write_looks); nothing when absent.
+static rs_status read_looks(rs_synth_dataset_stats_result *r, const char *dataset_dir, rs_err *err)
+{
+    char *path = rs_io_join(dataset_dir, "backgrounds.json"), *text = NULL;
+    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_status st = RS_OK;
+    if (rs_synth_dataset__file_exists(path) && !(st = rs_io_read_file(&text, NULL, path, err))) {
+        cJSON *doc = cJSON_Parse(text);
+        const cJSON *list = cJSON_GetObjectItemCaseSensitive(doc, "backgrounds"), *x;
+        if (!cJSON_IsArray(list)) st = rs_err_set(err, RS_ERR_PARSE, "%s: no \"backgrounds\" array", path);
+        r->looks_found = !st;
+        r->looks_applied = !cJSON_IsFalse(cJSON_GetObjectItemCaseSensitive(doc, "applied"));
+        const cJSON *entries = st ? NULL : list;
+        cJSON_ArrayForEach(x, entries)
+        {
+            if (r->Nlooks == RS_SYNTH_STATS_MAX) break;
+            rs_synth_dataset_look *l = &r->looks[r->Nlooks++];
+            const char *name = string_of(x, "background"), *why = string_of(x, "why");
+            snprintf(l->background, sizeof(l->background), "%s", name ? name : "(missing)");
+            snprintf(l->why, sizeof(l->why), "%s", why ? why : "");
+            const cJSON *o = cJSON_GetObjectItemCaseSensitive(x, "look"),
+                        *g = cJSON_GetObjectItemCaseSensitive(o, "gain");
+            l->ok = cJSON_IsObject(o);
+            if (!l->ok) continue;
+            l->look.noise_a = number_of(o, "noise_a");
+            l->look.noise_b = number_of(o, "noise_b");
+            l->look.noise_sigma = number_of(o, "noise_sigma");
+            l->look.blur_sigma_px = number_of(o, "blur_sigma_px");
+            l->look.jpeg_quality = (int)number_of(o, "jpeg_quality");
+            l->look.jpeg_exact = cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(o, "jpeg_exact"));
+            l->look.blockiness = number_of(o, "blockiness");
+            for (int c = 0; c < 3; c++)
+                l->look.gain[c] = cJSON_GetArraySize(g) == 3 ? cJSON_GetArrayItem(g, c)->valuedouble : NAN;
+        }
+        cJSON_Delete(doc);
+    }
+    free(text);
+    free(path);
+    return st;
+}
+
 rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *dataset_dir,
                                  const double centre_enu_m[2], double radius_m, rs_err *err)
 {
@@ -142,5 +189,6 @@ rs_status rs_synth_dataset_stats(rs_synth_dataset_stats_result *r, const char *d
     }
     for (int k = 0; k < Nnames; k++) free(names[k]);
     free(adir);
+    if (!st) st = read_looks(r, dataset_dir, err);
     return st;
 }

@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/prctl.h>
@@ -15,6 +16,7 @@
 #include <unistd.h>
 
 #include "core/rs_io.h"
+#include "synth/backdrop/rs_synth_light.h"
 #include "synth/povray/rs_synth_render.h"
 #include "synth/povray/rs_synth_sandbox.h"
 
@@ -220,4 +222,24 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
     if (!st) st = rs_synth_povray_reap(pid, povray, dir, "povray.log", err);
     if (seconds) *seconds += rs_synth_povray_now_s() - t0;
     return st;
+}
+
+void rs_synth_povray_remove_work(const char *out_dir)
+{
+    static const char *const names[] = {"pass_colour.pov",     "pass_colour.ini",
+                                        "pass_colour.png",     "pass_colour.ppm",
+                                        "pass_ids.pov",        "pass_ids.ini",
+                                        "pass_ids.png",        "pass_ids.log",
+                                        "pass_shadow.pov",     "pass_shadow.ini",
+                                        "pass_shadow.png",     "pass_shadow.log",
+                                        "pass_mirror.pov",     "pass_mirror.ini",
+                                        "pass_mirror.png",     "pass_mirror.log",
+                                        RS_SYNTH_ENV_MAP_FILE, ".povray/3.7/povray.conf",
+                                        ".povray/3.7",         ".povray",
+                                        "povray.log"};
+    for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
+        char *p = rs_io_join(out_dir, names[i]);
+        if (p) (void)remove(p); // a missing file, or a folder someone else used: left as it is
+        free(p);
+    }
 }

@@ -273,27 +273,6 @@ static rs_status shadow_fraction(rs_image *out, rs_image *lo, double unlit, int 
     return RS_OK;
 }
 
-// Removes the intermediates of a render (scene files, povray outputs, the conf).
-static void remove_intermediates(const char *out_dir)
-{
-    static const char *const names[] = {"pass_colour.pov",     "pass_colour.ini",
-                                        "pass_colour.png",     "pass_colour.ppm",
-                                        "pass_ids.pov",        "pass_ids.ini",
-                                        "pass_ids.png",        "pass_ids.log",
-                                        "pass_shadow.pov",     "pass_shadow.ini",
-                                        "pass_shadow.png",     "pass_shadow.log",
-                                        "pass_mirror.pov",     "pass_mirror.ini",
-                                        "pass_mirror.png",     "pass_mirror.log",
-                                        RS_SYNTH_ENV_MAP_FILE, ".povray/3.7/povray.conf",
-                                        ".povray/3.7",         ".povray",
-                                        "povray.log"};
-    for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
-        char *p = rs_io_join(out_dir, names[i]);
-        if (p) (void)remove(p); // a missing file, or a folder someone else used: left as it is
-        free(p);
-    }
-}
-
 // The environment map of opt->env_map written into the work folder under its generated name,
 // scaled to its maximum (a 16-bit PNG holds [0, 1]), and the colour pass told to show it.
 static rs_status write_env_map(rs_synth_render_options *opt, const char *out_dir, rs_err *err)
@@ -357,35 +336,38 @@ static void decode_ids(rs_synth_render_result *out, const rs_image *ids, int N)
     }
 }
 
-// out->composite = rgba over the background (or black), in linear light, sRGB-encoded; the
-// background shaded by the shadow pass, then (issue 40, synth/backdrop/rs_synth_condition.h) lit
-// by the headlights (road albedo RS_SYNTH_ROAD_ALBEDO) and mirroring the vehicles in a wet road
-// (the sky it mirrors taken as the background itself).
-static rs_status composite(rs_synth_render_result *out, const rs_image *bg, rs_err *err)
+// out->composite = rgba over the background (rs_synth_composite_background, with the shadows,
+// the condition's ground terms -- the headlights' light, a wet road's mirror image -- and the
+// look of opt) or over black.
+static rs_status composite(rs_synth_render_result *out, const rs_image *bg, const rs_synth_render_options *opt,
+                           rs_err *err)
 {
     const size_t Npx = (size_t)out->width * out->height;
-    rs_image lin = {0};
+    if (!bg) {
+        for (size_t i = 0; i < Npx; i++) {
+            const float *c = &out->rgba.data[4 * i];
+            for (int k = 0; k < 3; k++) out->composite.data[3 * i + k] = (float)rs_color_srgb_encode(c[3] * c[k]);
+        }
+        return RS_OK;
+    }
+    rs_image lin = {0}, comp = {0};
     rs_status st = rs_image_alloc(&lin, out->width, out->height, 3, err);
     if (st) return st;
     for (size_t i = 0; i < Npx; i++)
-        for (int k = 0; k < 3; k++) {
-            double b = bg ? rs_color_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]) : 0;
-            if (out->shadow && out->ids[i] == 0) b *= out->shadow[i];
-            lin.data[3 * i + k] = (float)b;
-        }
-    const double albedo[3] = {RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO, RS_SYNTH_ROAD_ALBEDO};
-    if (bg && out->headlight_irradiance)
-        rs_synth_condition_add_headlights(&lin, out->headlight_irradiance, out->ids, albedo);
-    if (bg && out->mirror.data) rs_synth_condition_add_wet(&lin, &out->mirror, out->ids, NULL);
-    for (size_t i = 0; i < Npx; i++) {
-        const float *c = &out->rgba.data[4 * i];
-        for (int k = 0; k < 3; k++) {
-            const double v = c[3] * c[k] + (1 - c[3]) * lin.data[3 * i + k];
-            out->composite.data[3 * i + k] = (float)rs_color_srgb_encode(v < 0 ? 0 : v > 1 ? 1 : v);
-        }
+        for (int k = 0; k < 3; k++)
+            lin.data[3 * i + k] = (float)rs_color_srgb_decode(bg->data[i * bg->channels + (bg->channels >= 3 ? k : 0)]);
+    const rs_synth_composite_options copt = {.look = opt->look,
+                                             .layer_blur_sigma_px = 0,
+                                             .seed = opt->look_seed,
+                                             .headlight_irradiance = out->headlight_irradiance,
+                                             .mirror = out->mirror.data ? &out->mirror : NULL,
+                                             .ids = out->ids};
+    if (!(st = rs_synth_composite_background(&comp, &out->rgba, &lin, out->shadow, &copt, err))) {
+        rs_image_free(&out->composite);
+        out->composite = comp;
     }
     rs_image_free(&lin);
-    return RS_OK;
+    return st;
 }
 
 static rs_status write_outputs(const char *out_dir, const rs_synth_render_result *out, rs_err *err)
@@ -727,10 +709,10 @@ rs_status rs_synth_render(rs_synth_render_result *out, const char *out_dir, cons
             goto done;
     }
     // 4. Composite
-    if ((st = composite(out, s.opt.background_path ? &bg : NULL, err))) goto done;
+    if ((st = composite(out, s.opt.background_path ? &bg : NULL, &s.opt, err))) goto done;
     if (s.opt.write_files && ((st = rs_io_mkdir_p(out_dir, err)) || (st = write_outputs(out_dir, out, err)))) goto done;
 done:
-    if (!s.opt.keep_files) remove_intermediates(out_dir), rs_synth_scene_remove_textures(out_dir, vehicles);
+    if (!s.opt.keep_files) rs_synth_povray_remove_work(out_dir), rs_synth_scene_remove_textures(out_dir, vehicles);
     free_shadow_vehicles(&s.svehicles, s.sowned);
     rs_image_free(&s.mirror);
     rs_image_free(&s.headlights);

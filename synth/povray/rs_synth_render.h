@@ -27,7 +27,9 @@
 //    a distorted lens is resampled from the canvas
 //    into the real lens (linear interpolation of premultiplied colour, rs_synth_opencv.h).
 // 4. Composite: out = fg + (1 - a) bg in linear light (straight alpha: fg = a * colour), the
-//    background decoded from sRGB and the result encoded to sRGB 8-bit.
+//    background decoded from sRGB and the result encoded to sRGB 8-bit; over a background
+//    through rs_synth_composite_background (rs_synth_composite.h: the shadows, and with
+//    opt->look the camera's gain, blur, noise and JPEG), as `roadside synth` does.
 // 5. ID pass (rasterised by roadside where the ground hides nothing, else POV-Ray's): no lights,
 //    flat emissive colours, no antialiasing, 8-bit PNG with File_Gamma 1:
 //    per-pixel vehicle index 0 = background, k+1 = vehicle k (16-bit); resampled with
@@ -54,6 +56,7 @@
 #include "synth/backdrop/rs_synth_opencv.h"
 #include "synth/fleet/rs_synth_vehicle.h"
 #include "synth/labels/rs_synth_labels.h"
+#include "synth/povray/rs_synth_composite.h"
 #include "synth/povray/rs_synth_scene.h"
 
 #ifdef __cplusplus
@@ -85,15 +88,20 @@ typedef struct {
                                    // gives them and render does not cull again; NULL: culled here
     // issue 40, the condition's passes (docs/conditions.md; rs_synth_scene_apply_condition sets
     // the scene's lights):
-    bool mirror;             // a wet road: the mirror pass (out->mirror), one more povray process: the
-                             // colour pass seen by the camera mirrored in the ground plane
-    bool headlights;         // the headlights' irradiance on the ground (out->headlight_irradiance),
-                             // rasterised, at scene.headlight_intensity (0: RS_SYNTH_HEADLIGHT_INTENSITY)
-    const rs_image *env_map; // (h, 2h, 3) linear light, may be NULL (borrowed): the
-                             // environment the vehicles reflect (issue 40,
-                             // rs_synth_env_map), written as OUT/RS_SYNTH_ENV_MAP_FILE
-                             // (16-bit, scaled to its maximum) and shown by the colour
-                             // pass's sphere (rs_synth_scene_options.env_map)
+    bool mirror;                     // a wet road: the mirror pass (out->mirror), one more povray process: the
+                                     // colour pass seen by the camera mirrored in the ground plane
+    bool headlights;                 // the headlights' irradiance on the ground (out->headlight_irradiance),
+                                     // rasterised, at scene.headlight_intensity (0: RS_SYNTH_HEADLIGHT_INTENSITY)
+    const rs_image *env_map;         // (h, 2h, 3) linear light, may be NULL (borrowed): the
+                                     // environment the vehicles reflect (issue 40,
+                                     // rs_synth_env_map), written as OUT/RS_SYNTH_ENV_MAP_FILE
+                                     // (16-bit, scaled to its maximum) and shown by the colour
+                                     // pass's sphere (rs_synth_scene_options.env_map)
+                                     // gives them and render does not cull again; NULL: culled here
+    const rs_synth_appearance *look; // over background_path: the camera's look the vehicles and
+                                     // their shadows take (rs_synth_composite.h; borrowed);
+                                     // NULL (default): clean, sharp vehicles
+    uint64_t look_seed;              // the look's noise generator
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);

@@ -2,7 +2,9 @@
 // IEC 61966-2-1 formulas written out here with pow(): brute force over 10^7 points of [0, 1]
 // plus the breakpoints; the tables within 1e-6 everywhere (1/4000 of an 8-bit step; the worst is
 // at the encoder's kink, 0.0031308), the exact versions within 0 (the same formula), decode of
-// encode within 1e-12; values outside [0, 1] clamped, NaN read as 0.
+// encode within 1e-12; values outside [0, 1] clamped, NaN read as 0. The decode slope against the
+// formula's derivative, written out here, within 1.2e-4 relative away from the kink (2 table
+// intervals either side of 0.04045).
 #include <math.h>
 #include <stdio.h>
 
@@ -10,6 +12,7 @@
 #include "tests/common/rs_test.h"
 
 static double dec(double v) { return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4); }
+static double dslope(double v) { return v <= 0.04045 ? 1 / 12.92 : 2.4 / 1.055 * pow((v + 0.055) / 1.055, 1.4); }
 static double enc(double v) { return v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1 / 2.4) - 0.055; }
 
 int main(void)
@@ -36,5 +39,14 @@ int main(void)
               rs_color_srgb_decode_exact(NAN) == 0 && rs_color_srgb_decode_exact(1.5) == dec(1.0) &&
               rs_color_srgb_encode_exact(-1) == 0,
           "outside [0, 1] not clamped");
+    double worst_slope = 0, at_slope = 0;
+    for (int i = 0; i <= 1000000; i++) {
+        const double v = i / 1e6;
+        if (fabs(v - 0.04045) <= 2.0 / 65536) continue;
+        const double e = fabs(rs_color_srgb_decode_slope(v) / dslope(v) - 1);
+        if (e > worst_slope) worst_slope = e, at_slope = v;
+    }
+    printf("decode slope: worst relative %.3g at %.6f (10^6 points)\n", worst_slope, at_slope);
+    CHECK(worst_slope <= 1.2e-4, "decode slope off by %.3g (relative) at %.6f", worst_slope, at_slope);
     return rs_test_end("core_color");
 }

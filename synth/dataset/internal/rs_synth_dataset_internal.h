@@ -175,6 +175,13 @@ rs_status rs_synth_dataset__prepare_camera(rs_synth_dataset__camera *c, rs_err *
 rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, rs_synth_dataset__camera *c,
                                                rs_synth_dataset__background *bm, rs_err *err);
 
+// DATASET/backgrounds.json (rs_synth_dataset_looks.c; docs/synth.md, "The camera's look"):
+// {"applied": false with --no-appearance, "backgrounds": [{"background", "file", "look": {noise_a,
+// noise_b, noise_sigma_at_0_5, noise_sigma, blur_sigma_px, jpeg_quality, jpeg_exact, blockiness,
+// gain [3]} or null with "why"}]}, one entry per background file of the run's cameras, written
+// atomically. The look is the run's cached estimate or made here from the file (the same).
+rs_status rs_synth_dataset__write_looks(const rs_synth_dataset__run *d, rs_err *err);
+
 // Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
 // finished). out: *grey: rendered over the grey ground (no background); *condition: the
 // background's condition as time_of_day x 3 + surface (rs_synth_condition.h), -1 none (the

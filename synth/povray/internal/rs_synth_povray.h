@@ -26,3 +26,8 @@ rs_status rs_synth_povray_reap(pid_t pid, const char *povray, const char *dir, c
 
 // A monotonic clock, seconds.
 double rs_synth_povray_now_s(void);
+
+// Removes the work files of a render from out_dir: the passes' scenes, .ini files, outputs and
+// logs, the environment map, the configuration and povray.log (a missing file, or a folder
+// someone else put there, is left as it is). Users' textures: rs_synth_scene_remove_textures.
+void rs_synth_povray_remove_work(const char *out_dir);

@@ -2,6 +2,7 @@
 // file and prints the result, for tests/synth/backdrop/test_appearance.py (which makes the images with a
 // known truth).
 //   test_appearance_dump noise FILE | blur FILE | gain FILE [REF] | jpeg FILE
+//   test_appearance_dump model FILE [JPEG_QUALITY] | blockiness FILE
 //   test_appearance_dump apply IN_RGBA OUT_RGBA g0 g1 g2 noise blur layer_blur seed
 //   test_appearance_dump onnx MODEL IN_RGB OUT_RGB
 #include <stdio.h>
@@ -46,6 +47,18 @@ int main(int argc, char **argv)
             rc = fail(&err);
         else
             printf("%.9g\n", s);
+    } else if (!strcmp(what, "model")) { // model FILE [JPEG_QUALITY]
+        double a, b;
+        if (rs_synth_estimate_noise_model(&a, &b, &img, argc > 3 ? atoi(argv[3]) : 0, &err))
+            rc = fail(&err);
+        else
+            printf("%.9g %.9g\n", a, b);
+    } else if (!strcmp(what, "blockiness")) {
+        double r;
+        if (rs_synth_estimate_blockiness(&r, &img, &err))
+            rc = fail(&err);
+        else
+            printf("%.9g\n", r);
     } else if (!strcmp(what, "gain")) {
         double g[3];
         if (argc > 3 && rs_image_read(&ref, argv[3], &err))
@@ -55,7 +68,9 @@ int main(int argc, char **argv)
         else
             printf("%.9g %.9g %.9g\n", g[0], g[1], g[2]);
     } else if (!strcmp(what, "apply") && argc == 11) {
-        rs_synth_appearance a = {{atof(argv[4]), atof(argv[5]), atof(argv[6])}, atof(argv[7]), atof(argv[8]), 0};
+        rs_synth_appearance a = {.gain = {atof(argv[4]), atof(argv[5]), atof(argv[6])},
+                                 .noise_sigma = atof(argv[7]),
+                                 .blur_sigma_px = atof(argv[8])};
         if (rs_synth_appearance_apply(&img, &a, atof(argv[9]), strtoull(argv[10], NULL, 10), &err) ||
             rs_image_write(argv[3], &img, 16, &err))
             rc = fail(&err);

@@ -55,8 +55,10 @@ def main():
         bg = rng.integers(0, 256, (H, W, 3), dtype=np.uint8)
         bg_path = os.path.join(tmp, "bg.png")
         cv2.imwrite(bg_path, bg[:, :, ::-1])
+        # --no-appearance: the compositing formula itself (the camera's look over a background,
+        # whose noise, blur and JPEG this random background would set: test_render_look.py)
         common = ["render", u.DEMO, "--calib", calib, "--camera", "cam1", "--vehicles", veh,
-                  "--background", bg_path]
+                  "--background", bg_path, "--no-appearance"]
         out = os.path.join(tmp, "out")
         full = os.path.join(tmp, "full")
         p = u.run(common + ["-o", out, "--keep"])
@@ -130,7 +132,7 @@ def main():
         env = dict(os.environ, ROADSIDE_POVRAY=os.path.join(tmp, "no-such-povray"))
         import subprocess
         u.write_json(veh, vs[:1])
-        p = subprocess.run([u.ROADSIDE] + common[:-2] + ["-o", os.path.join(tmp, "x")],
+        p = subprocess.run([u.ROADSIDE] + common[:-3] + ["-o", os.path.join(tmp, "x")],
                            capture_output=True, text=True, env=env)
         if p.returncode != 1 or "cannot run" not in p.stderr:
             u.fail("missing povray: exit %d, stderr %r" % (p.returncode, p.stderr))
