@@ -224,6 +224,7 @@ int rs_cli_render(int argc, char **argv)
                                                       s.site, &lanes, &err);
         if (!st) {
             matched = true;
+            ropt.light_matched = true; // the look's gain is not applied on top
             ropt.env_map = &env_map;
             if (light.source != RS_SYNTH_LIGHT_FROM_LANES)
                 fprintf(stderr, "render: note: background: no lane in view: light from %s (%d pixels)\n",

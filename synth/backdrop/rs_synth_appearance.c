@@ -324,6 +324,10 @@ done:
     return st;
 }
 
+// How far on each side of an edge pixel the blur estimate checks that the edge is an isolated
+// step (3 x the re-blur's sigma).
+#define BLUR_STEP_PX 6
+
 rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *err)
 {
     const double sr = 2.0;
@@ -353,6 +357,17 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *
             if (!(a > thr) || a <= 0) continue;
             const size_t d = m.data[p] > 0 ? 1 : (size_t)W; // along the dominant axis
             if (a < fabsf(m.data[p - d]) || a < fabsf(m.data[p + d])) continue;
+            // an isolated step only: the luma difference across the edge, +-j px along the axis,
+            // must still be 80 % of its largest at j = BLUR_STEP_PX; a thin line (a lane
+            // marking 2 - 4 px wide far away) or close texture falls back, and its gradient,
+            // which the re-blur lowers more than a step's, would read too little blur (the
+            // demo twin blurred by 1.2 px read 0.60 px with its far markings counted)
+            double dmax = 0, dK = 0;
+            for (int j = 1; j <= BLUR_STEP_PX; j++) {
+                dK = fabs((double)g.data[p + j * d] - g.data[p - j * d]);
+                dmax = dK > dmax ? dK : dmax;
+            }
+            if (dK < 0.8 * dmax) continue;
             const double R = a / fabsf(mb.data[p]);
             if (!(R > 1.0 + 1e-6)) continue;
             const double s2 = sr * sr / (R * R - 1) - 1.0 / 3.0;

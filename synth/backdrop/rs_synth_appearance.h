@@ -31,7 +31,11 @@ rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *er
 // maxima along the dominant axis stronger than 50% of the 99th percentile of the gradient: noise
 // raises a weak edge's gradient maximum more than its re-blurred one and so reads it sharper;
 // at 20% a 1.5 px blur under noise of sigma 0.02 and JPEG quality 90 read 1.36-1.38 px, at 50%
-// 1.44-1.47 (tests/synth/povray/test_render_look.py's backgrounds)) on
+// 1.44-1.47 (tests/synth/povray/test_render_look.py's backgrounds)) that are isolated steps
+// (the luma difference across the edge at +-6 px along the axis still 80 % of its largest within
+// 6 px: a thin line's gradient falls more under the re-blur than a step's and read too sharp,
+// the demo's digital twin blurred by 1.2 / 2.0 px read 0.60 / 1.39 px with its far lane markings
+// counted, 1.12 / 1.94 without them, 1.06 / 1.65 under noise and JPEG 85) on
 // the luma (mean of the channels). Accuracy: within 0.2 px for sigma in [1, 3] on step edges
 // spaced > 8 sigma apart (tests); a perfectly sharp step reads about 0.6 px (pixel sampling).
 // Returns RS_ERR_DEGENERATE when the image has fewer than 20 edge pixels.

@@ -120,6 +120,7 @@ static rs_status composite(rs_synth_render_result *r, const rs_synth_dataset__ba
     const rs_synth_composite_options copt = {.look = look && b->app_ok ? &b->app : NULL,
                                              .layer_blur_sigma_px = 0,
                                              .seed = seed,
+                                             .light_matched = b->light_ok,
                                              .headlight_irradiance = r->headlight_irradiance,
                                              .mirror = r->mirror.data ? &r->mirror : NULL,
                                              .ids = r->ids};

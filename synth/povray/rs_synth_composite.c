@@ -17,7 +17,13 @@ rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, 
     memset(out, 0, sizeof(*out));
     const rs_synth_composite_options none = {0};
     if (!opt) opt = &none;
+    rs_synth_appearance unit_gain;
     const rs_synth_appearance *look = opt->look;
+    if (look && opt->light_matched) { // the lights carry the background's colour: no gain on top
+        unit_gain = *look;
+        unit_gain.gain[0] = unit_gain.gain[1] = unit_gain.gain[2] = 1;
+        look = &unit_gain;
+    }
     const int W = bg->width, H = bg->height;
     const rs_image *mir = opt->mirror;
     if (rgba_in->channels != 4 || bg->channels != 3 || rgba_in->width != W || rgba_in->height != H ||

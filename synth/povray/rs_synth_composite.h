@@ -23,6 +23,7 @@
 // Without a look (opt->look NULL) steps 1, 5, 6 are skipped and the shadow is not blurred: the
 // vehicles stay clean and sharp (`--no-appearance`).
 #pragma once
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "core/rs_image.h"
@@ -39,6 +40,11 @@ typedef struct {
     double layer_blur_sigma_px;      // the rendered layer's own edge blur, against the background's
                                      // pixels (0 for an unantialiased render: both point-sampled)
     uint64_t seed;                   // the noise's generator (deterministic per seed)
+    bool light_matched;              // the scene's lights were matched to this background
+                                     // (rs_synth_scene_match_background): the layer has its light's
+                                     // level and colour already, so the look's gain is not applied
+                                     // (a grey-world gain on top tinted a dark car olive over the
+                                     // Aalborg frame's grass: gain 1.12 1.10 0.78)
     // ---- the condition's ground terms (step 3; docs/conditions.md), each may be NULL ----
     const float *headlight_irradiance; // (H, W) the headlights' irradiance on the ground
                                        // (rs_synth_render_result.headlight_irradiance): adds the

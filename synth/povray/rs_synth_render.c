@@ -359,6 +359,7 @@ static rs_status composite(rs_synth_render_result *out, const rs_image *bg, cons
     const rs_synth_composite_options copt = {.look = opt->look,
                                              .layer_blur_sigma_px = 0,
                                              .seed = opt->look_seed,
+                                             .light_matched = opt->light_matched,
                                              .headlight_irradiance = out->headlight_irradiance,
                                              .mirror = out->mirror.data ? &out->mirror : NULL,
                                              .ids = out->ids};

@@ -102,6 +102,8 @@ typedef struct {
                                      // their shadows take (rs_synth_composite.h; borrowed);
                                      // NULL (default): clean, sharp vehicles
     uint64_t look_seed;              // the look's noise generator
+    bool light_matched;              // scene.light_rgb_scale was matched to background_path: the
+                                     // look's gain is not applied on top (rs_synth_composite.h)
 } rs_synth_render_options;
 
 void rs_synth_render_options_default(rs_synth_render_options *opt);
