@@ -47,3 +47,44 @@ double rs_stats_chi2_quantile(int k, double z)
     const double b = 1.0 - a + z * sqrt(a);
     return k * b * b * b;
 }
+
+float rs_stats_select_f(float *v, size_t n, size_t k)
+{
+    size_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        const size_t mid = lo + (hi - lo) / 2;
+        float a = v[lo], b = v[mid], c = v[hi];
+        const float pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
+        size_t i = lo, j = hi;
+        while (i <= j) {
+            while (v[i] < pivot) i++;
+            while (v[j] > pivot) j--;
+            if (i <= j) {
+                const float t = v[i];
+                v[i] = v[j];
+                v[j] = t;
+                i++;
+                if (j == 0) break;
+                j--;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            return v[k];
+    }
+    return v[k];
+}
+
+double rs_stats_median_f(float *v, size_t n)
+{
+    const double upper = rs_stats_select_f(v, n, n / 2);
+    if (n % 2) return upper;
+    // the lower middle is the largest of the part left of n / 2
+    float lower = v[0];
+    for (size_t i = 1; i < n / 2; i++)
+        if (v[i] > lower) lower = v[i];
+    return 0.5 * (lower + upper);
+}

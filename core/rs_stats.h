@@ -1,4 +1,5 @@
-// rs_stats.h -- the one median and quantile (order statistics of a sample of doubles), and the
+// rs_stats.h -- the one median and quantile (order statistics of a sample of doubles; a selection
+// and median of floats for large samples), and the
 // chi-square quantile the tests of a sample's scale share.
 //
 // Definitions, for a sample x of n values sorted ascending into s[0] <= ... <= s[n-1]:
@@ -17,6 +18,7 @@
 // against brute force on 20,000 random samples of 1..40 values, ties included: 0 ulp median,
 // 1e-15 relative quantile).
 #pragma once
+#include <stddef.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -33,6 +35,16 @@ double rs_stats_quantile(double *x, int n, double p);
 // The same of x (n,) already sorted ascending (several quantiles of one sample sort it once).
 double rs_stats_median_sorted(const double *x, int n);
 double rs_stats_quantile_sorted(const double *x, int n, double p);
+
+// The k-th smallest of v (n,) of floats (0-based, k < n, n >= 1), v reordered: Hoare's selection
+// with a median-of-three pivot, O(n) on average, for large samples (an image's pixels: a full
+// sort of a 6-megapixel image's values was most of the appearance estimate's time,
+// synth/backdrop/rs_synth_appearance.c). No NaN among the values.
+float rs_stats_select_f(float *v, size_t n, size_t k);
+
+// The median of v (n,) of floats, n >= 1, by the definition above (the mean of the two middle
+// values for even n), v reordered.
+double rs_stats_median_f(float *v, size_t n);
 
 // The chi-square distribution's quantile with k degrees of freedom at the standard normal
 // quantile z (z = 3.090: the 99.9 % point), by Wilson & Hilferty's cube-root normal

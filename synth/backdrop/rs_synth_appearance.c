@@ -11,51 +11,7 @@
 #include "core/rs_color.h"
 #include "core/rs_io.h"
 #include "core/rs_rng.h"
-
-// The k-th smallest of v[0..n-1] (0-based, k < n), v reordered: Hoare's selection with a
-// median-of-three pivot, O(n) on average (a full sort of a 6-megapixel image's values was most
-// of the appearance estimate's time).
-static float select_f(float *v, size_t n, size_t k)
-{
-    size_t lo = 0, hi = n - 1;
-    while (lo < hi) {
-        const size_t mid = lo + (hi - lo) / 2;
-        float a = v[lo], b = v[mid], c = v[hi];
-        const float pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
-        size_t i = lo, j = hi;
-        while (i <= j) {
-            while (v[i] < pivot) i++;
-            while (v[j] > pivot) j--;
-            if (i <= j) {
-                const float t = v[i];
-                v[i] = v[j];
-                v[j] = t;
-                i++;
-                if (j == 0) break;
-                j--;
-            }
-        }
-        if (k <= j)
-            hi = j;
-        else if (k >= i)
-            lo = i;
-        else
-            return v[k];
-    }
-    return v[k];
-}
-
-// Median of v[0..n-1] (reordered), n >= 1.
-static double median_f(float *v, size_t n)
-{
-    const double upper = select_f(v, n, n / 2);
-    if (n % 2) return upper;
-    // the lower middle is the largest of the part left of n / 2
-    float lower = v[0];
-    for (size_t i = 1; i < n / 2; i++)
-        if (v[i] > lower) lower = v[i];
-    return 0.5 * (lower + upper);
-}
+#include "core/rs_stats.h"
 
 // Immerkaer's kernel: cancels locally linear content, gain 6 on white noise.
 static const double immerkaer_M[9] = {1, -2, 1, -2, 4, -2, 1, -2, 1};
@@ -78,7 +34,7 @@ rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *er
     for (int y = 1; y < H - 1; y++)
         for (int x = 1; x < W - 1; x++)
             for (int c = 0; c < C; c++) v[n++] = fabsf(f.data[((size_t)y * W + x) * img->channels + c]);
-    *sigma = 1.482602218505602 * median_f(v, n) / 6.0;
+    *sigma = 1.482602218505602 * rs_stats_median_f(v, n) / 6.0;
     free(v);
     rs_image_free(&f);
     return RS_OK;
@@ -90,7 +46,7 @@ rs_status rs_synth_estimate_noise(double *sigma, const rs_image *img, rs_err *er
 // left two or three 8-bit codes of noise, it varies smoothly with the noise.
 static double trimmed_sigma(float *absr, size_t n)
 {
-    const float q = select_f(absr, n, (size_t)(0.9 * (n - 1)));
+    const float q = rs_stats_select_f(absr, n, (size_t)(0.9 * (n - 1)));
     double ss = 0;
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
@@ -217,7 +173,7 @@ rs_status rs_synth_estimate_noise_model(double *a, double *b, const rs_image *im
         const double v = nk ? level_sum[k] / nk : 0;
         if (nk < 300 || v < 0.03 || v > 0.97) continue;
         memcpy(tmp, grad + start[k], sizeof(float) * nk);
-        const float gmed = select_f(tmp, nk, nk / 2);
+        const float gmed = rs_stats_select_f(tmp, nk, nk / 2);
         size_t ns = 0;
         for (size_t i = 0; i < nk; i++)
             if (grad[start[k] + i] <= gmed) tmp[ns++] = res[start[k] + i];
@@ -347,7 +303,7 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *
         goto done;
     }
     for (size_t p = 0; p < N; p++) sel[p] = fabsf(m.data[p]);
-    const float thr = 0.5f * select_f(sel, N, (size_t)(0.99 * (N - 1)));
+    const float thr = 0.5f * rs_stats_select_f(sel, N, (size_t)(0.99 * (N - 1)));
     size_t n = 0;
     const int margin = 10;
     for (int y = margin; y < H - margin; y++)
@@ -377,7 +333,7 @@ rs_status rs_synth_estimate_blur(double *sigma_px, const rs_image *img, rs_err *
         st = rs_err_set(err, RS_ERR_DEGENERATE, "blur: only %zu edge pixels (need 20)", n);
         goto done;
     }
-    *sigma_px = median_f(est, n);
+    *sigma_px = rs_stats_median_f(est, n);
 done:
     free(sel);
     free(est);

@@ -63,6 +63,29 @@ int main(void)
             if (p == 1) CHECK(q == order_stat(x, n, n - 1), "n %d: quantile(1) is not the maximum", n);
         }
     }
+    // the float selection and median against the double order statistics of the same values
+    // (every k of every sample; ties and descending runs included)
+    for (int s = 0; s < 4000; s++) {
+        const int n = 1 + s % NMAX;
+        float f[NMAX], fw[NMAX];
+        for (int i = 0; i < n; i++) {
+            f[i] = s % 3 == 0   ? (float)floor(rs_rng_uniform(&rng) * 4)
+                   : s % 3 == 1 ? (float)(n - i)
+                                : (float)rs_rng_uniform_in(&rng, -10.0, 10.0);
+            x[i] = f[i];
+        }
+        for (int k = 0; k < n; k++) {
+            memcpy(fw, f, sizeof(float) * (size_t)n);
+            const float got = rs_stats_select_f(fw, (size_t)n, (size_t)k);
+            CHECK(got == (float)order_stat(x, n, k), "n %d: select_f(k %d) %g, brute force %g", n, k, got,
+                  order_stat(x, n, k));
+        }
+        memcpy(fw, f, sizeof(float) * (size_t)n);
+        const double want =
+            n % 2 ? order_stat(x, n, n / 2) : 0.5 * (order_stat(x, n, n / 2 - 1) + order_stat(x, n, n / 2));
+        CHECK(rs_stats_median_f(fw, (size_t)n) == want, "n %d: median_f %g, brute force %g", n,
+              rs_stats_median_f(fw, (size_t)n), want);
+    }
     // documented edges: empty samples and p outside [0, 1] give NaN; {1, 2, 3, 4}: median 2.5,
     // quantile 0.9 = 3.7 (numpy.quantile([1, 2, 3, 4], 0.9) = 3.7)
     double e4[4] = {4, 1, 3, 2};
