@@ -257,8 +257,8 @@ typedef struct {
 
 // One background's camera look as DATASET/backgrounds.json records it.
 typedef struct {
-    char background[96];
-    bool ok; // the look was estimated (else why holds the reason)
+    char background[96]; // its file, relative to the site (or its name in older datasets)
+    bool ok;             // the look was estimated (else why holds the reason)
     rs_synth_appearance look;
     char why[160];
 } rs_synth_dataset_look;

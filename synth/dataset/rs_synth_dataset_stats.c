@@ -86,7 +86,9 @@ static rs_status read_looks(rs_synth_dataset_stats_result *r, const char *datase
         {
             if (r->Nlooks == RS_SYNTH_STATS_MAX) break;
             rs_synth_dataset_look *l = &r->looks[r->Nlooks++];
-            const char *name = string_of(x, "background"), *why = string_of(x, "why");
+            // the file (backgrounds/<camera>/...) tells the cameras' same-named twins apart
+            const char *name = string_of(x, "file") ? string_of(x, "file") : string_of(x, "background"),
+                       *why = string_of(x, "why");
             snprintf(l->background, sizeof(l->background), "%s", name ? name : "(missing)");
             snprintf(l->why, sizeof(l->why), "%s", why ? why : "");
             const cJSON *o = cJSON_GetObjectItemCaseSensitive(x, "look"),

@@ -5,6 +5,7 @@ import filecmp
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -157,6 +158,21 @@ def check_shadows(tmp):
     if darker < 20:
         u.fail("shadows: only %d pixels darker by > 10 codes" % darker, SEED)
     print("shadows: %d pixels darker by > 10 codes, none brighter" % darker)
+    # issue 40: the look of each background a dataset used, in DATASET/backgrounds.json and in
+    # `dataset stats`: the twin background is a PNG (no JPEG quality), its file named
+    out = os.path.join(tmp, "look")
+    u.run(["synth", site, "--calib", calib, "--count", "1", "-o", out, "--seed", str(SEED), "--camera", "cam1"])
+    looks = json.load(open(os.path.join(out, "backgrounds.json")))
+    want = "backgrounds/cam1/twin_20240621T1300Z_sunny.png"
+    entry = [b for b in looks.get("backgrounds", []) if b.get("file") == want]
+    if not looks.get("applied") or len(entry) != 1 or entry[0]["look"]["jpeg_quality"] != 0 or \
+            not entry[0]["look"]["noise_sigma_at_0_5"] >= 0:
+        u.fail("backgrounds.json: %r (want one entry for %s, applied, JPEG quality 0)" % (looks, want), SEED)
+    p = u.run(["dataset", "stats", out])
+    if not re.search(r"^  %s: noise variance .* jpeg quality 0," % re.escape(want), p.stdout, re.M):
+        u.fail("dataset stats: no look line for %s: %r" % (want, p.stdout), SEED)
+    print("backgrounds.json and dataset stats: %s, jpeg quality 0 (a PNG), noise sigma %.4f at 0.5"
+          % (want, entry[0]["look"]["noise_sigma_at_0_5"]))
 
 
 def main():
