@@ -201,7 +201,7 @@ rs_status rs_audit_site_camera(rs_audit_result *result, const rs_site *site, int
     st = rs_audit_camera(result, &sp.problem, site->ground_normal_enu, site->ground_offset_m, q_new,
                          q_new ? q_new + 2 * cam->Nobservations : NULL, calib_path ? &cal : NULL, opt, err);
     if (st == RS_OK) { // landmarks named by id, the verdict in words
-        rs_audit_site_name_landmarks(result->warnings, sizeof result->warnings, site, icam);
+        rs_calib_site_name_landmarks(result->warnings, sizeof result->warnings, site, icam);
         rs_audit_site_verdict(result->verdict, sizeof result->verdict, site, icam, result);
     }
 done:
@@ -222,31 +222,6 @@ static const char *obs_id(char *buf, size_t size, const rs_site *site, int icam,
         return site->landmarks[cam->observations[i].ilandmark].id;
     snprintf(buf, size, "#%d", i);
     return buf;
-}
-
-void rs_audit_site_name_landmarks(char *text, size_t size, const rs_site *site, int icam)
-{
-    char *at = strstr(text, "(index ");
-    if (!at) return;
-    char *list = at + strlen("(index "), *end = list;
-    while (isdigit((unsigned char)*end) || *end == ',') end++;
-    if (end == list) return;
-    char names[512] = "", buf[16];
-    size_t n = 0;
-    for (char *p = list; p < end && n + 2 < sizeof names;) {
-        int i = (int)strtol(p, &p, 10);
-        n += (size_t)snprintf(names + n, sizeof names - n, "%s%s", n ? ", " : "",
-                              obs_id(buf, sizeof buf, site, icam, i));
-        if (*p == ',') p++;
-    }
-    if (n >= sizeof names) n = sizeof names - 1;
-    // "(index 2,5" -> "(landmark L003, L006"
-    char *out = malloc(size);
-    if (!out) return;
-    snprintf(out, size, "%.*s(landmark%s %s%s", (int)(at - text), text, strchr(names, ',') ? "s" : "", names, end);
-    memcpy(text, out, size);
-    text[size - 1] = '\0';
-    free(out);
 }
 
 // Appends printf text to a fixed buffer (truncating).
@@ -324,12 +299,11 @@ static cJSON *sentences(const char *text)
 {
     cJSON *a = cJSON_CreateArray();
     for (const char *s = text; a && *s;) {
-        const char *e = strstr(s, "; ");
-        size_t n = e ? (size_t)(e - s) : strlen(s);
+        const size_t n = rs_calib_warning_len(s); // a "; " inside parentheses belongs to the sentence
         char *one = strndup(s, n);
         if (one) cJSON_AddItemToArray(a, cJSON_CreateString(one));
         free(one);
-        s += n + (e ? 2 : 0);
+        s += n + (s[n] ? 2 : 0);
     }
     return a;
 }
