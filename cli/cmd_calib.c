@@ -141,7 +141,9 @@ int rs_cli_calib(int argc, char **argv)
             }
             break;
         case 'j': json = true; break;
-        default: free(only); return rs_cli_usage_error("calib", "unknown option");
+        default:
+            free(only);
+            return rs_cli_usage_error("calib", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) {
@@ -293,7 +295,9 @@ int rs_cli_locate(int argc, char **argv)
         switch (c) {
         case 'c': camera = optarg; break;
         case 'd': calib_dir = optarg; break;
-        default: return rs_cli_usage_error("locate", "unknown option (a negative U needs '--' before it)");
+        default:
+            return rs_cli_usage_error(
+                "locate", "unknown option or missing value: %s (a negative U needs '--' before it)", argv[optind - 1]);
         }
     }
     if (optind >= argc) return rs_cli_usage_error("locate", "expected a SITE folder");

@@ -160,7 +160,7 @@ int rs_cli_export(int argc, char **argv)
             if (c == O_DET) opt.audit_options.detection_sigma_px = x;
             if (c == O_NEED) opt.audit_options.need_ground_m = x;
             break;
-        default: return rs_cli_usage_error("export", "unknown option");
+        default: return rs_cli_usage_error("export", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) return rs_cli_usage_error("export", "expected one SITE folder");
@@ -192,8 +192,8 @@ int rs_cli_export(int argc, char **argv)
         return RS_EXIT_FAIL;
     }
     if (vector)
-        printf("%s: %d cameras, %d footprints, %d landmark picks, %d lane lines (%s)\n", vector, sum.Ncameras,
-               sum.Ncameras, sum.Nlandmarks, sum.Nlanes, opt.crs ? opt.crs : "EPSG:4326");
+        printf("%s: %d cameras, %d footprints, %d landmarks, %d picks, %d lane lines (%s)\n", vector, sum.Ncameras,
+               sum.Ncameras, sum.Nlandmarks, sum.Npicks, sum.Nlanes, opt.crs ? opt.crs : "EPSG:4326");
     if (raster)
         printf("%s: %d x %d cells, 1-sigma ground error in metres (%s)\n", raster, sum.raster_width, sum.raster_height,
                opt.crs ? opt.crs : "the site's ENU grid");

@@ -66,7 +66,7 @@ int rs_cli_ortho(int argc, char **argv)
             break;
         case O_WEATHER: opt.weather = optarg; break;
         case O_CRS: crs = optarg; break;
-        default: return rs_cli_usage_error("ortho", "unknown option");
+        default: return rs_cli_usage_error("ortho", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) return rs_cli_usage_error("ortho", "expected one SITE folder");

@@ -139,7 +139,7 @@ int rs_cli_report(int argc, char **argv)
             *dst[c == 'N' ? 0 : c - '0'] = x;
             break;
         }
-        default: return rs_cli_usage_error("report", "unknown option");
+        default: return rs_cli_usage_error("report", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) return rs_cli_usage_error("report", "expected one SITE folder");

@@ -1,9 +1,11 @@
 // roadside -- git-style dispatcher: `roadside COMMAND [ARGS...]`.
+#include <getopt.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_detect.h"
+#include "geo/rs_geo_raster.h"
 
 #ifndef RS_VERSION
 #define RS_VERSION "unknown"
@@ -58,6 +60,8 @@ int main(int argc, char **argv)
         return RS_EXIT_USAGE;
     }
     const char *cmd = argv[1];
+    opterr = 0;          // one error line per mistake: each command names a bad option itself
+    rs_geo_gdal_quiet(); // GDAL's messages reach the user through rs_err, never on stderr by themselves
     if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
         if (argc > 2 && strcmp(cmd, "help") == 0) {
             for (int i = 0; i < Ncommands; i++)
