@@ -332,14 +332,18 @@ static rs_status annotate_frame(const char *tmp_path, const rs_site *site, const
     size_t len = 0;
     rs_status st = rs_io_read_file(&text, &len, tmp_path, err);
     if (st) return st;
-    char note[1024];
+    char note[1536];
     snprintf(note, sizeof note,
              "# roadside calib: camera %s of site '%s'\n"
              "# %s map site ENU into the camera frame (x right, y down, z forward):\n"
              "# ENU = local east-north-up in metres, tangent to the WGS84 ellipsoid at the site's origin\n"
-             "# enu_origin: lat %.9f deg, lon %.9f deg, h %.4f m (ellipsoidal)\n",
+             "# enu_origin: lat %.9f deg, lon %.9f deg, h %.4f m (ellipsoidal)\n%s",
              cam->id, site->name ? site->name : "", yaml ? "rvec, tvec and R_cam_enu" : "The extrinsics (rt_cam_enu)",
-             site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m);
+             site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m,
+             yaml ? ""
+                  : "# No optimization_inputs: the pose was solved by roadside (Ceres), not by mrcal's optimizer, so\n"
+                    "# mrcal-show-projection-uncertainty and mrcal-show-residuals cannot read this model; the pose's\n"
+                    "# uncertainty is in <id>.json, and 'roadside audit SITE --calib DIR' maps it on the ground\n");
     size_t at = 0; // where the note goes
     if (yaml)
         for (int lines = 0; lines < 2 && at < len; lines++) {

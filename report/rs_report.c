@@ -361,6 +361,12 @@ rs_status rs_report_load_cameras(struct rs_report_ctx *rep, const rs_report_opti
     if (!rep->cameras) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     rs_status st = read_lanes(&rep->lanes, rep->site, err);
     for (int c = 0; c < rep->site->Ncameras && !st; c++) {
+        if (opt->progress) {
+            char what[300];
+            snprintf(what, sizeof what, "camera %s (%d of %d): reading its calibration%s", rep->site->cameras[c].id,
+                     c + 1, rep->site->Ncameras, opt->audit ? " and auditing it" : "");
+            opt->progress(opt->progress_ctx, what);
+        }
         rs_report_camera *cam = &rep->cameras[rep->Ncameras++];
         cam->rep = rep;
         cam->icam = c;
@@ -684,7 +690,9 @@ static rs_status write_report(rs_report_summary *summary, const char *out_dir, c
     if (!st) st = rs_io_atomic_open(&pdf, pdf_path, err);
     if (!st) st = rs_io_atomic_release(&html, err);
     if (!st) st = rs_io_atomic_release(&pdf, err);
+    if (!st && opt.progress) opt.progress(opt.progress_ctx, "drawing report.html");
     if (!st) st = rs_doc_write_html(&doc, title, opt.figure_width_px, html.tmp_path, err);
+    if (!st && opt.progress) opt.progress(opt.progress_ctx, "drawing report.pdf");
     if (!st) st = rs_doc_write_pdf(&doc, title, pdf.tmp_path, err);
     if (!st) st = rs_io_atomic_commit(&html, err);
     if (!st) st = rs_io_atomic_commit(&pdf, err);
