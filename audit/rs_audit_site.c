@@ -278,9 +278,17 @@ void rs_audit_site_verdict(char *text, size_t size, const rs_site *site, int ica
             say(text, size, "Landmark %s: %s%s%.1f m on the ground: check its survey and its pick. ", id,
                 L->loo_ok ? "the others locate it " : "", L->loo_ok ? "" : "", L->loo_ok ? L->loo_ground_error_m : NAN);
     }
+    // the image says the nominal focal length is wrong: that, not the survey, is the first fix
+    const rs_calib_intrinsics_check *ic = &r->solve.intrinsics_check;
+    const bool focal_off = ic->focal_tested && ic->chi2_focal > ic->critical_focal;
     if (!r->pass) {
         say(text, size, "Fails: %s.", r->failures);
-        if (r->loo_count && r->loo_median_m > r->thresholds.max_loo_m)
+        if (focal_off)
+            say(text, size,
+                " The image says the focal length is %.0f%% %s than the nominal: recalibrate with 'roadside calib %s "
+                "--refine focal' first (a resurvey will not fix a wrong focal length).",
+                100 * fabs(ic->focal_rel), ic->focal_rel >= 0 ? "longer" : "shorter", site->dir);
+        else if (r->loo_count && r->loo_median_m > r->thresholds.max_loo_m)
             say(text, size,
                 " To meet the need, survey the landmarks more accurately or add landmarks spread over the "
                 "area, then re-pick and recalibrate.");

@@ -10,7 +10,7 @@ demo -- on a copy of sites/demo calibrated by `roadside calib`: the PDF's first 
   trusted" in a section whose warnings say the pose may be wrong because of the intrinsics.
 focal -- the synthetic gate camera of sites/import imported with a focal length of 900 px where
   the truth is 1280 px: the first page's action names `roadside calib SITE --refine focal`, not a
-  survey; recalibrated with --refine focal, the action is gone (the camera passes).
+  survey, and so does the audit's verdict at the top of the camera's section; recalibrated with --refine focal, the action is gone (the camera passes).
 aalborg -- the same on the real Aalborg frame (/work/shared/real/aalborg_roadside; skipped without
   it): imported with the nominal focal length (the image width), its action is --refine focal.
 """
@@ -104,6 +104,9 @@ def calib_and_check_action(site, tmp, cam, what):
     row = action_of(os.path.join(tmp, "r", "report.pdf"), cam)
     print(f"{what}:", row)
     check("--refine focal" in row and "survey" not in row, f"{what}: the action is not --refine focal: {row}")
+    text = open(os.path.join(tmp, "r", "report.html"), encoding="utf-8").read()
+    check("survey the landmarks more accurately" not in text and text.count("--refine focal") >= 2,
+          f"{what}: the camera's verdict words still ask for a survey, or do not name --refine focal")
 
 
 def focal():
