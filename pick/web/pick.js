@@ -346,13 +346,14 @@
       const dx = p[0] - down.p[0], dy = p[1] - down.p[1];
       if (Math.hypot(dx, dy) > 4) down.moved = true;
       if (!down.moved) return;
-      if (down.marker) { st.drag = { id: down.marker, view: view, at: view.toWorld(...p) }; render(); }
+      if (down.marker && down.marker.fixed) status(`${down.marker.id} is surveyed: it stays where the survey put it (only map picks move)`);
+      else if (down.marker) { st.drag = { id: down.marker.id, view: view, at: view.toWorld(...p) }; render(); }
       else { view.ox = down.ox + dx; view.oy = down.oy + dy; render(); }
     });
     c.addEventListener("mouseup", (e) => {
       const w = view.toWorld(...pos(e));
       if (down && !down.moved) onClick(...w);
-      else if (down && down.marker) { st.drag = null; drop(down.marker, ...w); }
+      else if (down && down.marker && !down.marker.fixed) { st.drag = null; drop(down.marker.id, ...w); }
       down = null;
     });
     c.addEventListener("mouseleave", () => { if (down && down.marker) { st.drag = null; render(); } down = null; });
@@ -375,7 +376,7 @@
       const [x, y] = img.toCanvas(...pxToWorld(l.pick_px[0], l.pick_px[1])), d = Math.hypot(x - p[0], y - p[1]);
       if (d < bd) { bd = d; best = l.id; }
     }
-    return best;
+    return best ? { id: best, fixed: false } : null;
   }
   function grabLandmark(p) { // the landmark dot within 8 screen px; a surveyed one cannot move
     let best = null, bd = 8;
@@ -383,8 +384,7 @@
       const [x, y] = map.toCanvas(l.enu_m[0], l.enu_m[1]), d = Math.hypot(x - p[0], y - p[1]);
       if (d < bd) { bd = d; best = l; }
     }
-    if (best && best.kind !== "map-pick") { status(`${best.id} is surveyed: it stays where the survey put it (only map picks move)`); return null; }
-    return best ? best.id : null;
+    return best ? { id: best.id, fixed: best.kind !== "map-pick" } : null;
   }
   const readoutImage = (X, Y) => { const [u, v] = worldToPx(X, Y); $("readout").textContent = `u ${u.toFixed(2)}, v ${v.toFixed(2)} px`; };
   const readoutMap = (e, n) => {
