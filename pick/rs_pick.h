@@ -66,6 +66,11 @@ rs_status rs_pick_set_refine(rs_pick_session *s, const char *words, rs_err *err)
 // landmark picked on the map (kind "map-pick") moves: RS_ERR_UNSUPPORTED for a surveyed one,
 // RS_ERR_NOT_FOUND, RS_ERR_INVALID (farther than max_landmark_distance_m, not finite).
 rs_status rs_pick_move_landmark(rs_pick_session *s, const char *id, double e_m, double n_m, rs_err *err);
+// Gives landmark `id` sigmas of its own (1-sigma horizontal per axis and vertical, metres, in
+// the site format's range), or NAN: back to site.json's site-wide value (then not saved with the
+// landmark); re-solves; an undo step. A modelled height keeps the ground model's vertical sigma
+// in the solve (the stated one is saved). RS_ERR_NOT_FOUND, RS_ERR_INVALID (out of range).
+rs_status rs_pick_set_sigma(rs_pick_session *s, const char *id, double sigma_h_m, double sigma_v_m, rs_err *err);
 // Imports a point-pair file (`roadside site import`'s reader, geo/rs_site_import.h: a point-pair
 // JSON or a lat,lon,u,v CSV): each pair's landmark id that the site has gets that pick (added or
 // moved); a new id becomes a landmark (kind "map-pick") at its lat, lon on the site's ground
@@ -84,7 +89,8 @@ char *rs_pick_export(const rs_pick_session *s, bool csv);
 
 // Writes landmarks.geojson and the camera's observations (see above), reads the site back and
 // re-solves. A landmark's sigma_h_m / sigma_v_m are written only when it had its own when read
-// (rs_site_landmark.sigma_*_stated): the others keep following site.json's site-wide sigmas. Errors: those of the writers and of rs_site_load (the files are then written but
+// (rs_site_landmark.sigma_*_stated) or the page gave it some (rs_pick_set_sigma): the others keep
+// following site.json's site-wide sigmas. Errors: those of the writers and of rs_site_load (the files are then written but
 // the session keeps its own state).
 rs_status rs_pick_save(rs_pick_session *s, rs_err *err);
 

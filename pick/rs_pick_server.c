@@ -238,6 +238,18 @@ static enum MHD_Result post(struct MHD_Connection *c, rs_pick_server *srv, const
                               "expected {\"refine\": \"focal+center\"} (calib's --refine words)");
         }
         st = rs_pick_set_refine(srv->session, words, &err);
+    } else if (!strcmp(url, "/api/sigma")) {
+        // a number sets the landmark's own sigma, null (or absent) returns it to the site-wide one
+        const cJSON *jh = cJSON_GetObjectItemCaseSensitive(o, "sigma_h_m"),
+                    *jv = cJSON_GetObjectItemCaseSensitive(o, "sigma_v_m");
+        const bool ok_h = !jh || cJSON_IsNull(jh) || get_num(o, "sigma_h_m", &e),
+                   ok_v = !jv || cJSON_IsNull(jv) || get_num(o, "sigma_v_m", &n);
+        if (!id || !ok_h || !ok_v) {
+            cJSON_Delete(o);
+            return send_error(c, MHD_HTTP_BAD_REQUEST,
+                              "expected {\"landmark\": ID, \"sigma_h_m\": m or null, \"sigma_v_m\": m or null}");
+        }
+        st = rs_pick_set_sigma(srv->session, id, cJSON_IsNumber(jh) ? e : NAN, cJSON_IsNumber(jv) ? n : NAN, &err);
     } else if (!strcmp(url, "/api/import")) {
         const char *name = get_str(o, "name"), *text = NULL;
         const cJSON *t = cJSON_GetObjectItemCaseSensitive(o, "text");

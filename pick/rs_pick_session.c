@@ -26,9 +26,9 @@ typedef struct {
     rs_site_observation *obs; // (Nobs,) owned
     int Nobs;
     int Nlandmarks;
-    int moved;             // the landmark a move changed, or -1
-    double moved_enu_m[3]; // its position before
-    rs_llh moved_llh;
+    int edited;              // the landmark a move or a sigma changed, or -1
+    rs_site_landmark before; // its fields before (shallow: the owned pointers are the live ones')
+    double before_sigma_v_m; // its first vertex's vertical sigma before
 } snapshot;
 
 enum { GROUND_NU = 12, GROUND_NV = 7 }; // the ground uncertainty's samples over the view
@@ -210,7 +210,7 @@ static rs_status push_undo(rs_pick_session *s, rs_err *err)
     if (cam->Nobservations) memcpy(sn->obs, cam->observations, sizeof *sn->obs * (size_t)cam->Nobservations);
     sn->Nobs = cam->Nobservations;
     sn->Nlandmarks = s->site->Nlandmarks;
-    sn->moved = -1;
+    sn->edited = -1;
     s->Nundo++;
     return RS_OK;
 }
@@ -250,8 +250,15 @@ rs_status rs_pick_undo(rs_pick_session *s, rs_err *err)
     cam->observations = sn->obs;
     cam->Nobservations = sn->Nobs;
     sn->obs = NULL;
-    if (sn->moved >= 0 && sn->moved < s->site->Nlandmarks)
-        place_landmark(&s->site->landmarks[sn->moved], sn->moved_enu_m, sn->moved_llh);
+    if (sn->edited >= 0 && sn->edited < s->site->Nlandmarks) {
+        rs_site_landmark *l = &s->site->landmarks[sn->edited], b = sn->before;
+        b.id = l->id, b.kind = l->kind, b.note = l->note; // the live allocations
+        b.vertices_enu_m = l->vertices_enu_m, b.vertices_llh = l->vertices_llh;
+        b.vertices_sigma_v_m = l->vertices_sigma_v_m, b.vertices_given_h_m = l->vertices_given_h_m;
+        *l = b;
+        place_landmark(l, b.p_enu_m, b.llh);
+        if (l->vertices_sigma_v_m) l->vertices_sigma_v_m[0] = sn->before_sigma_v_m;
+    }
     while (s->site->Nlandmarks > sn->Nlandmarks) landmark_free(&s->site->landmarks[--s->site->Nlandmarks]);
     s->dirty = true;
     (void)rs_pick_session_solve(s);
@@ -430,6 +437,43 @@ rs_status rs_pick_set_refine(rs_pick_session *s, const char *words, rs_err *err)
     return RS_OK;
 }
 
+// Records landmark il's fields in the step just pushed, for rs_pick_undo.
+static void remember_landmark(snapshot *sn, const rs_site_landmark *l, int il)
+{
+    sn->edited = il;
+    sn->before = *l;
+    sn->before_sigma_v_m = l->vertices_sigma_v_m ? l->vertices_sigma_v_m[0] : l->sigma_v_m;
+}
+
+rs_status rs_pick_set_sigma(rs_pick_session *s, const char *id, double sigma_h_m, double sigma_v_m, rs_err *err)
+{
+    rs_site *site = s->site;
+    const int il = rs_site_find_landmark(site, id);
+    if (il < 0) return rs_err_set(err, RS_ERR_NOT_FOUND, "landmark '%s': no such landmark", id);
+    const double sig[2] = {sigma_h_m, sigma_v_m};
+    for (int k = 0; k < 2; k++)
+        if (!isnan(sig[k]) && !(sig[k] >= RS_SITE_SURVEY_SIGMA_MIN_M && sig[k] <= RS_SITE_SURVEY_SIGMA_MAX_M))
+            return rs_err_set(err, RS_ERR_INVALID, "landmark '%s': %s %g m: not in [%g, %g] m", id,
+                              k ? "sigma_v_m" : "sigma_h_m", sig[k], RS_SITE_SURVEY_SIGMA_MIN_M,
+                              RS_SITE_SURVEY_SIGMA_MAX_M);
+    rs_status st = push_undo(s, err);
+    if (st) return st;
+    rs_site_landmark *l = &site->landmarks[il];
+    remember_landmark(&s->undo[s->Nundo - 1], l, il);
+    l->sigma_h_stated = !isnan(sigma_h_m);
+    l->sigma_h_m = l->sigma_h_stated ? sigma_h_m : site->landmark_sigma_h_m;
+    l->sigma_v_stated = !isnan(sigma_v_m);
+    const double v = l->sigma_v_stated ? sigma_v_m : site->landmark_sigma_v_m;
+    l->given_sigma_v_m = v;
+    if (!l->height_modelled) { // a modelled height keeps the model's sigma
+        l->sigma_v_m = v;
+        if (l->vertices_sigma_v_m) l->vertices_sigma_v_m[0] = v;
+    }
+    s->dirty = true;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
 rs_status rs_pick_move_landmark(rs_pick_session *s, const char *id, double e, double n, rs_err *err)
 {
     rs_site *site = s->site;
@@ -451,10 +495,7 @@ rs_status rs_pick_move_landmark(rs_pick_session *s, const char *id, double e, do
     rs_status st = rs_geo_enu_to_llh(llh, &site->origin, p, 1, err);
     if (!st) st = push_undo(s, err);
     if (st) return st;
-    snapshot *sn = &s->undo[s->Nundo - 1];
-    sn->moved = il;
-    memcpy(sn->moved_enu_m, l->p_enu_m, sizeof sn->moved_enu_m);
-    sn->moved_llh = l->llh;
+    remember_landmark(&s->undo[s->Nundo - 1], l, il);
     place_landmark(l, p, (rs_llh){llh[0], llh[1], llh[2]});
     s->dirty = true;
     (void)rs_pick_session_solve(s);
@@ -645,6 +686,7 @@ char *rs_pick_state_json(const rs_pick_session *s)
         cJSON_AddStringToObject(o, "shape", rs_site_shape_name(l->shape));
         cJSON_AddItemToObject(o, "enu_m", numbers(l->p_enu_m, 3));
         cJSON_AddNumberToObject(o, "sigma_h_m", l->sigma_h_m);
+        cJSON_AddNumberToObject(o, "sigma_v_m", l->given_sigma_v_m);
         cJSON_AddBoolToObject(o, "sigma_stated", l->sigma_h_stated || l->sigma_v_stated);
         cJSON_AddItemToObject(o, "lat_lon_deg", numbers((const double[]){l->llh.lat_deg, l->llh.lon_deg}, 2));
         const int k = pick_of[i];

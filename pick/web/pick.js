@@ -314,8 +314,18 @@
         `<td>${l.pick_px ? f(l.pick_px[0], 2) + ", " + f(l.pick_px[1], 2) : ""}</td>` +
         `<td class="res">${l.residual_px ? f(l.residual_norm_px, 3) : ""}</td>` +
         `<td>${l.normalised_residual !== undefined && l.normalised_residual !== null ? f(l.normalised_residual, 2) : ""}</td>` +
-        `<td class="flag">${esc(l.flag)}</td>`;
+        `<td class="flag">${esc(l.flag)}</td>` +
+        `<td class="sigma" title="click: this landmark's own sigmas (empty: site.json's)">${f(l.sigma_h_m, 3)}, ${f(l.sigma_v_m, 3)}${l.sigma_stated ? " (own)" : ""}</td>`;
       tr.onclick = () => { st.selected = l.id; render(); };
+      tr.querySelector("td.sigma").onclick = (e) => {
+        e.stopPropagation();
+        const t = window.prompt(`${l.id}: its own 1-sigma horizontal, vertical in metres (empty: the site-wide ones)`,
+                                l.sigma_stated ? `${l.sigma_h_m}, ${l.sigma_v_m}` : "");
+        if (t === null) return;
+        const m = t.trim().match(/^(\d*\.?\d+)\s*[, ]\s*(\d*\.?\d+)$/);
+        if (t.trim() && !m) { status("type two numbers: horizontal, vertical sigma in metres", true); return; }
+        post("/api/sigma", { landmark: l.id, sigma_h_m: m ? +m[1] : null, sigma_v_m: m ? +m[2] : null });
+      };
       tb.appendChild(tr);
     }
   }

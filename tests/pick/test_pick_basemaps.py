@@ -15,9 +15,9 @@ Checks, each against an oracle of its own:
   page's file input: every pick set, the new landmark where GDAL/PROJ (osr) puts that lat, lon;
 - a pick dragged in the image moves to the pixel under the release point, a map pick dragged on
   the map moves on the ground (read back through the API);
-- saved and reloaded in a new server and page: the files hold the import and both drags, no
-  landmark got its own sigma_h_m/sigma_v_m, and a change of site.json's site-wide sigma after
-  the save reaches every landmark."""
+- saved and reloaded in a new server and page: the files hold the import and both drags, only
+  the landmark given sigmas on the page has sigma_h_m/sigma_v_m in the file, and a change of site.json's site-wide sigma after
+  the save reaches every landmark but the one given sigmas of its own on the page."""
 import json
 import math
 import os
@@ -287,6 +287,14 @@ def main():
             sv2 = br.eval("window.rsPick.state.landmarks.find(l => l.id === 'L009').enu_m")
             check(sv2 == sv, "a surveyed landmark is not dragged")
 
+            # ---- one landmark gets sigmas of its own (the API the table's sigma cell calls) ----
+            req = urllib.request.Request(srv.url + "api/sigma", method="POST",
+                                         data=json.dumps({"landmark": "L010", "sigma_h_m": 0.05, "sigma_v_m": 0.08}).encode(),
+                                         headers={"Content-Type": "application/json", "Origin": srv.url.rstrip("/")})
+            S = json.loads(urllib.request.urlopen(req).read())
+            l10 = next(l for l in S["landmarks"] if l["id"] == "L010")
+            check(l10["sigma_h_m"] == 0.05 and l10["sigma_stated"], f"L010's own sigma set: {l10}")
+            br.eval("window.rsPick.state")  # the page's own state is refreshed by its next post (save)
             # ---- save, then reload in a new server and page ----
             br.eval("document.getElementById('save').click()")
             check(br.wait("window.rsPick.state.unsaved === false"), "saved")
@@ -304,8 +312,9 @@ def main():
             x, y = to_en.TransformPoint(lo, la)[:2]
             d = math.hypot(x - want_en[0], y - want_en[1])
             check(d < 0.01, f"NEW1 saved where it was dragged (osr): {d:.4f} m")
-        own = [f["properties"]["id"] for f in feats if "sigma_h_m" in f["properties"] or "sigma_v_m" in f["properties"]]
-        check(not own, f"no landmark got sigmas of its own: {own}")
+        own = {f["properties"]["id"]: (f["properties"].get("sigma_h_m"), f["properties"].get("sigma_v_m"))
+               for f in feats if "sigma_h_m" in f["properties"] or "sigma_v_m" in f["properties"]}
+        check(own == {"L010": (0.05, 0.08)}, f"only L010, given its own on the page, has sigmas in the file: {own}")
         # the site-wide sigma changed after the save reaches every landmark
         sj["landmark_sigma_m"]["horizontal"] = 0.07
         json.dump(sj, open(os.path.join(site, "site.json"), "w"), indent=1)
@@ -320,8 +329,9 @@ def main():
             check(abs(L[lid]["pick_px"][0] - dragged_uv[0]) < 1e-6, "reloaded: the dragged pick")
             check("NEW1" in L and math.hypot(L["NEW1"]["enu_m"][0] - want_en[0], L["NEW1"]["enu_m"][1] - want_en[1]) < 0.01,
                   "reloaded: NEW1 where it was dragged")
-            sig = sorted({l["sigma_h_m"] for l in S["landmarks"]})
-            check(sig == [0.07], f"site.json's new sigma_h 0.07 m on every landmark: {sig}")
+            sig = sorted({l["sigma_h_m"] for l in S["landmarks"] if l["id"] != "L010"})
+            check(sig == [0.07], f"site.json's new sigma_h 0.07 m on every landmark without its own: {sig}")
+            check(L["L010"]["sigma_h_m"] == 0.05, f"L010 keeps its own: {L['L010']['sigma_h_m']}")
         finally:
             br.close()
             srv.stop()
