@@ -13,6 +13,8 @@ Checks, each against an oracle of its own:
   screen shows the colour of the web mercator tile that Python's own mercator formula puts there;
 - a point-pair JSON (the demo's picks, and a new landmark at a lat, lon) imported through the
   page's file input: every pick set, the new landmark where GDAL/PROJ (osr) puts that lat, lon;
+- refine focal chosen on the page: after the save, `roadside calib --refine focal` on the files
+  finds the page's pose to 1e-6, and no warning tells the user to run an option;
 - a pick dragged in the image moves to the pixel under the release point, a map pick dragged on
   the map moves on the ground (read back through the API);
 - saved and reloaded in a new server and page: the files hold the import and both drags, only
@@ -32,7 +34,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rs_check import check, finish, need  # noqa: E402
+from rs_check import check, finish, need, run  # noqa: E402
 import rs_pick_test as pt  # noqa: E402
 
 N = 20000   # the orthophoto's side, pixels
@@ -295,12 +297,27 @@ def main():
             l10 = next(l for l in S["landmarks"] if l["id"] == "L010")
             check(l10["sigma_h_m"] == 0.05 and l10["sigma_stated"], f"L010's own sigma set: {l10}")
             br.eval("window.rsPick.state")  # the page's own state is refreshed by its next post (save)
+            # ---- refine focal, chosen on the page ----
+            br.eval("(s => { s.value = 'focal'; s.dispatchEvent(new Event('change')); })(document.getElementById('refine'))")
+            check(br.wait("window.rsPick.state.refine === 'focal'"), "refine focal chosen on the page")
             # ---- save, then reload in a new server and page ----
             br.eval("document.getElementById('save').click()")
             check(br.wait("window.rsPick.state.unsaved === false"), "saved")
+            S = br.eval("window.rsPick.state")
+            w = S["solve"].get("warnings") or ""
+            check("run with --" not in w, f"no warning names an option pick lacks: {w}")
+            rt_page = np.array(S["solve"]["rt_cam_enu"]) if S["solve"]["ok"] else None
         finally:
             br.close()
             srv.stop()
+        # the page's pose with focal refined is calib's with --refine focal on the saved files
+        mrcal, = need("mrcal")
+        r = run("calib", site, "--camera", "cam1", "--refine", "focal", "-o", os.path.join(tmp, "calib"))
+        if check(r.returncode == 0 and rt_page is not None, f"calib --refine focal on the saved site: {r.stderr}"):
+            rt_cli = mrcal.cameramodel(os.path.join(tmp, "calib", "cam1.cameramodel")).extrinsics_rt_fromref()
+            d = np.max(np.abs(rt_cli - rt_page))
+            print(f"page (refine focal) vs calib --refine focal: rt_cam_enu {d:.2e}")
+            check(d < 1e-6, f"rt_cam_enu: page {rt_page} vs calib {rt_cli}: {d:.3e}")
         rows = {r.split(",")[0]: r.strip().split(",") for r in open(os.path.join(site, "observations", "cam1.csv"))}
         check("NEW1" in rows, "the import's new pick in the observations file")
         check(lid in rows and abs(float(rows[lid][1]) - dragged_uv[0]) < 1e-6 and abs(float(rows[lid][2]) - dragged_uv[1]) < 1e-6,
