@@ -133,17 +133,18 @@ const char *rs_site_at_name(rs_site_at at);
 // base; for a line, its first vertex (p_enu_m, llh, given_*), so that code that knows only points
 // sees a point on it.
 typedef struct {
-    char *id;                            // owned; unique within the site
-    int feature;                         // index in landmarks.geojson's "features" (from 0)
-    rs_llh llh;                          // as surveyed, height converted to ellipsoidal (modelled: see height_modelled)
-    double p_enu_m[3];                   // (3,) east, north, up, metres
-    double sigma_h_m;                    // 1-sigma horizontal uncertainty (per axis), metres, > 0
-    double sigma_v_m;                    // 1-sigma vertical uncertainty, metres, > 0 (modelled: the model's)
-    bool sigma_h_stated, sigma_v_stated; // its properties.sigma_h_m / sigma_v_m were given (else
-                                         //   the site-wide default applies, and a writer that
-                                         //   keeps the site's layout leaves them out)
-    char *kind;                          // owned, may be NULL (free-form: "road-marking", "pole-base", ...)
-    char *note;                          // owned, may be NULL
+    char *id;          // owned; unique within the site
+    int feature;       // index in landmarks.geojson's "features" (from 0)
+    rs_llh llh;        // as surveyed, height converted to ellipsoidal (modelled: see height_modelled)
+    double p_enu_m[3]; // (3,) east, north, up, metres
+    double sigma_h_m;  // 1-sigma horizontal uncertainty (per axis), metres, > 0
+    double sigma_v_m;  // 1-sigma vertical uncertainty, metres, > 0 (modelled: the model's)
+    char *kind;        // owned, may be NULL (free-form: "road-marking", "pole-base", ...)
+    char *note;        // owned, may be NULL
+
+    // its properties.sigma_h_m / sigma_v_m were given (else the site-wide default applies, and
+    // `roadside pick` saves it without them)
+    bool sigma_h_stated, sigma_v_stated;
 
     rs_site_height height_stated; // its properties.height; RS_SITE_HEIGHT_DEFAULT when absent
     rs_site_height height;        // what counts: height_stated, else the site's landmark_heights
