@@ -54,6 +54,34 @@
 #include "calib/internal/rs_calib_vce.h"
 #include "core/rs_pose.h"
 
+bool rs_calib_refine_parse(const char *words, unsigned *flags)
+{
+    char buf[128];
+    *flags = 0;
+    if (strlen(words) >= sizeof buf) return false;
+    strcpy(buf, words);
+    char *save = NULL;
+    for (char *w = strtok_r(buf, "+,", &save); w; w = strtok_r(NULL, "+,", &save)) {
+        if (!strcmp(w, "focal"))
+            *flags |= RS_CALIB_REFINE_FOCAL;
+        else if (!strcmp(w, "center") || !strcmp(w, "centre"))
+            *flags |= RS_CALIB_REFINE_CENTER;
+        else if (!strcmp(w, "distortion"))
+            *flags |= RS_CALIB_REFINE_DISTORTION;
+        else if (strcmp(w, "none") != 0)
+            return false;
+    }
+    return true;
+}
+
+void rs_calib_refine_name(char *buf, size_t n, unsigned flags)
+{
+    snprintf(buf, n, "%s%s%s%s", flags & RS_CALIB_REFINE_FOCAL ? "+focal" : "",
+             flags & RS_CALIB_REFINE_CENTER ? "+center" : "", flags & RS_CALIB_REFINE_DISTORTION ? "+distortion" : "",
+             flags ? "" : "+none");
+    memmove(buf, buf + 1, strlen(buf)); // the leading '+'
+}
+
 void rs_calib_options_default(rs_calib_options *opt)
 {
     memset(opt, 0, sizeof(*opt));

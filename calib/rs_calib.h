@@ -48,6 +48,7 @@
 #pragma once
 #include <mrcal/mrcal.h>
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "core/rs_camera.h"
 
@@ -68,6 +69,13 @@ typedef enum {
     RS_CALIB_REFINE_CENTER = 2,
     RS_CALIB_REFINE_DISTORTION = 4,
 } rs_calib_refine_flags;
+
+// The words of `calib --refine` (and of `pick`'s refine choice): "focal", "center" (or "centre"),
+// "distortion", "none", joined with '+' or ','; "" is none. Returns false on an unknown word.
+// out: *flags (OR of rs_calib_refine_flags)
+bool rs_calib_refine_parse(const char *words, unsigned *flags);
+// The words of flags, "focal+center" style ("none" for 0), into buf (>= 32 bytes).
+void rs_calib_refine_name(char *buf, size_t n, unsigned flags);
 
 // A landmark picked anywhere along a polyline (docs/calibration.md, "Poles and lines"): a pole's
 // segment from its base to its top, or a surveyed line (a lane marking, a stop bar, a kerb). The

@@ -73,29 +73,6 @@ static const char locate_usage[] =
     "\n"
     "Exit status: 0 when every pixel was located, 1 when any could not be (its line says why).\n";
 
-// "focal+center" -> flags; false on an unknown word
-static bool parse_refine(const char *s, unsigned *flags)
-{
-    char buf[128];
-    if (strlen(s) >= sizeof buf) return false;
-    strcpy(buf, s);
-    *flags = 0;
-    char *save = NULL;
-    for (char *w = strtok_r(buf, "+,", &save); w; w = strtok_r(NULL, "+,", &save)) {
-        if (!strcmp(w, "focal"))
-            *flags |= RS_CALIB_REFINE_FOCAL;
-        else if (!strcmp(w, "center") || !strcmp(w, "centre"))
-            *flags |= RS_CALIB_REFINE_CENTER;
-        else if (!strcmp(w, "distortion"))
-            *flags |= RS_CALIB_REFINE_DISTORTION;
-        else if (!strcmp(w, "none"))
-            continue;
-        else
-            return false;
-    }
-    return true;
-}
-
 // The columns are named as in <id>.json (docs/calibration.md, "Residuals: which is which").
 static void print_summary_header(void)
 {
@@ -139,7 +116,7 @@ int rs_cli_calib(int argc, char **argv)
         case 'o': out_dir = optarg; break;
         case 'c': only[Nonly++] = optarg; break;
         case 'r':
-            if (!parse_refine(optarg, &opt.refine)) {
+            if (!rs_calib_refine_parse(optarg, &opt.refine)) {
                 free(only);
                 return rs_cli_usage_error(
                     "calib", "--refine: '%s': expected focal, center or distortion, joined with '+'", optarg);

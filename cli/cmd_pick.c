@@ -13,7 +13,8 @@
 #include "pick/rs_pick.h"
 
 static const char pick_usage[] =
-    "usage: roadside pick SITE --camera ID [--image FRAME] [--ortho ORTHO.tif] [--port N] [--host ADDR]\n"
+    "usage: roadside pick SITE --camera ID [--image FRAME] [--ortho SOURCE] [--tiles URL [--tiles-attribution TEXT]]\n"
+    "                     [--port N] [--host ADDR]\n"
     "\n"
     "Survey onboarding in the browser (docs/pick.md). Starts a local web server and prints its\n"
     "URL; the page shows the camera image and the site from above side by side. Click a point in\n"
@@ -21,20 +22,31 @@ static const char pick_usage[] =
     "in the image). From four picks on, every change re-solves the camera with the solver of\n"
     "'roadside calib' (same problem, same options) and shows the residuals, the flagged landmarks\n"
     "and why, every landmark's predicted pixel, the camera's position, heading and uncertainty\n"
-    "ellipse, and the ground uncertainty over the view. Save writes SITE/landmarks.geojson and the\n"
-    "camera's observations CSV atomically; 'roadside calib SITE' then finds the same pose.\n"
+    "ellipse, and the ground uncertainty over the view as a heat map. Markers are dragged on both\n"
+    "views; point pairs are imported and exported (the files 'roadside site import' reads); what\n"
+    "is refined besides the pose (focal, center: calib's --refine) is chosen on the page. Save\n"
+    "writes SITE/landmarks.geojson and the camera's observations CSV atomically; 'roadside calib\n"
+    "SITE' (with the same --refine) then finds the same pose.\n"
     "\n"
     "Options:\n"
     "  --camera ID        the camera (required)\n"
     "  --image FRAME      the camera image (PNG, JPEG; default: the camera's first background in\n"
     "                     site.json, else a grey canvas)\n"
-    "  --ortho FILE       a georeferenced orthophoto (GeoTIFF or any GDAL raster, any CRS:\n"
-    "                     reprojected onto the site's ENU grid); default: a plain map of the\n"
-    "                     landmarks and lanes ('roadside ortho' makes one of the digital twin)\n"
+    "  --ortho SOURCE     a georeferenced orthophoto of any size, anything GDAL opens in any CRS:\n"
+    "                     a GeoTIFF (its overviews used), a GDAL XML description of a WMS, WMTS\n"
+    "                     or TMS/XYZ service; served as tiles read at the resolution the view\n"
+    "                     needs, down to the source's own pixels ('roadside ortho' makes one of\n"
+    "                     the digital twin)\n"
+    "  --tiles URL        web map tiles the browser loads itself, an OpenStreetMap-style template\n"
+    "                     'https://HOST/{z}/{x}/{y}.png' (web mercator); the page may load\n"
+    "                     images from that origin and nothing else. Without --ortho or --tiles:\n"
+    "                     a plain map of the landmarks and lanes\n"
+    "  --tiles-attribution TEXT  the tiles' attribution, shown under the map (their licence may\n"
+    "                     require it)\n"
+    "  --tiles-max-zoom N the template's deepest zoom level (default 19)\n"
     "  --port N           port (default 0: any free one)\n"
     "  --host ADDR        IPv4 address to bind (default 127.0.0.1; anything else exposes the\n"
     "                     site's files to the network: the page has no login)\n"
-    "  --max-side N       orthophoto decimated to at most N pixels a side (default 4096)\n"
     "  -h, --help         this text\n"
     "\n"
     "Stops on Ctrl-C (SIGINT) or SIGTERM; unsaved changes are lost (the page says when it has some).\n"
@@ -54,20 +66,22 @@ int rs_cli_pick(int argc, char **argv)
         fputs(pick_usage, stdout);
         return RS_EXIT_OK;
     }
-    enum { O_CAMERA = 256, O_IMAGE, O_ORTHO, O_PORT, O_HOST, O_MAXSIDE };
+    enum { O_CAMERA = 256, O_IMAGE, O_ORTHO, O_PORT, O_HOST, O_TILES, O_ATTRIBUTION, O_MAXZOOM };
     static const struct option longopts[] = {
         {"camera", required_argument, NULL, O_CAMERA},
         {"image", required_argument, NULL, O_IMAGE},
         {"ortho", required_argument, NULL, O_ORTHO},
         {"port", required_argument, NULL, O_PORT},
         {"host", required_argument, NULL, O_HOST},
-        {"max-side", required_argument, NULL, O_MAXSIDE},
+        {"tiles", required_argument, NULL, O_TILES},
+        {"tiles-attribution", required_argument, NULL, O_ATTRIBUTION},
+        {"tiles-max-zoom", required_argument, NULL, O_MAXZOOM},
         {NULL, 0, NULL, 0},
     };
     const char *camera = NULL, *image = NULL, *ortho_path = NULL;
     rs_pick_server_options sopt;
     rs_pick_server_options_default(&sopt);
-    long port = 0, max_side = 4096;
+    long port = 0, max_zoom = 19;
     optind = 1;
     int c;
     while ((c = getopt_long(argc, argv, "", longopts, NULL)) != -1) {
@@ -80,9 +94,11 @@ int rs_cli_pick(int argc, char **argv)
                 return rs_cli_usage_error("pick", "--port: '%s': expected 0..65535", optarg);
             break;
         case O_HOST: sopt.host = optarg; break;
-        case O_MAXSIDE:
-            if (!rs_cli_parse_int(optarg, 16, 16384, &max_side))
-                return rs_cli_usage_error("pick", "--max-side: '%s': expected 16..16384", optarg);
+        case O_TILES: sopt.tiles_url = optarg; break;
+        case O_ATTRIBUTION: sopt.tiles_attribution = optarg; break;
+        case O_MAXZOOM:
+            if (!rs_cli_parse_int(optarg, 0, 24, &max_zoom))
+                return rs_cli_usage_error("pick", "--tiles-max-zoom: '%s': expected 0..24", optarg);
             break;
         default: return rs_cli_usage_error("pick", "unknown option or missing value: %s", argv[optind - 1]);
         }
@@ -91,6 +107,7 @@ int rs_cli_pick(int argc, char **argv)
     if (!camera) return rs_cli_usage_error("pick", "--camera ID is required");
     const char *site_dir = argv[optind];
     sopt.port = (int)port;
+    sopt.tiles_max_zoom = (int)max_zoom;
 
     rs_err err = {0};
     rs_pick_session *s = NULL;
@@ -105,20 +122,22 @@ int rs_cli_pick(int argc, char **argv)
     if (!image && cam->Nbackground_images > 0) image = cam->background_images[0].path;
     if (!image) fprintf(stderr, "roadside pick: no --image and no background for %s: a grey canvas\n", camera);
     sopt.image_path = image;
-    rs_geo_ortho ortho = {0};
-    if (ortho_path && (st = rs_geo_ortho_read(&ortho, ortho_path, &site->origin, (int)max_side, &err))) {
+    rs_geo_tiles *ortho = NULL;
+    if (ortho_path && (st = rs_geo_tiles_open(&ortho, ortho_path, &site->origin, &err))) {
         rs_site_free(site);
         rs_pick_session_free(s);
         return rs_cli_fail("pick", st, &err);
     }
     if (ortho_path) {
-        sopt.ortho = &ortho;
-        printf("orthophoto %s (%s%s): %dx%d cells of %.3f m on the site's grid\n", ortho_path, ortho.crs_name,
-               ortho.warped ? ", reprojected" : "", ortho.grid.width, ortho.grid.height, ortho.grid.cell_m);
+        sopt.ortho = ortho;
+        const rs_geo_grid *g = rs_geo_tiles_grid(ortho);
+        printf("orthophoto %s (%s%s): %dx%d cells of %.3f m on the site's grid, %d tile levels\n", ortho_path,
+               rs_geo_tiles_crs_name(ortho), rs_geo_tiles_warped(ortho) ? ", reprojected" : "", g->width, g->height,
+               g->cell_m, rs_geo_tiles_levels(ortho));
     }
     rs_pick_server *srv = NULL;
     if ((st = rs_pick_server_start(&srv, s, &sopt, &err))) {
-        rs_geo_ortho_free(&ortho);
+        rs_geo_tiles_close(ortho);
         rs_site_free(site);
         rs_pick_session_free(s);
         return rs_cli_fail("pick", st, &err);
@@ -132,7 +151,7 @@ int rs_cli_pick(int argc, char **argv)
     fflush(stdout);
     while (!stop_requested) pause();
     rs_pick_server_stop(srv);
-    rs_geo_ortho_free(&ortho);
+    rs_geo_tiles_close(ortho);
     rs_site_free(site);
     rs_pick_session_free(s);
     return RS_EXIT_OK;

@@ -174,91 +174,171 @@ void rs_geo_ortho_free(rs_geo_ortho *o)
     memset(o, 0, sizeof *o);
 }
 
+// ---- tiles: any raster read at the resolution a view needs ----
+
+struct rs_geo_tiles {
+    GDALDatasetH ds;   // the file
+    GDALDatasetH view; // ds itself, or a warped VRT of it onto the site's grid
+    int width, height; // the view's size, full-resolution pixels
+    int Nbands;        // of the file (1: grey, 3: RGB, 4: RGBA)
+    rs_geo_grid grid;  // the view's full-resolution grid
+    int Nlevels;
+    bool warped;
+    char *crs_name; // owned
+};
+
+void rs_geo_tiles_close(rs_geo_tiles *t)
+{
+    if (!t) return;
+    if (t->view && t->view != t->ds) GDALClose(t->view);
+    if (t->ds) GDALClose(t->ds);
+    free(t->crs_name);
+    free(t);
+}
+
+const rs_geo_grid *rs_geo_tiles_grid(const rs_geo_tiles *t) { return &t->grid; }
+int rs_geo_tiles_levels(const rs_geo_tiles *t) { return t->Nlevels; }
+bool rs_geo_tiles_warped(const rs_geo_tiles *t) { return t->warped; }
+const char *rs_geo_tiles_crs_name(const rs_geo_tiles *t) { return t->crs_name; }
+
+rs_status rs_geo_tiles_open(rs_geo_tiles **out, const char *path, const rs_llh *origin, rs_err *err)
+{
+    *out = NULL;
+    GDALAllRegister();
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    rs_status st = RS_OK;
+    rs_geo_tiles *t = calloc(1, sizeof *t);
+    if (!t) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    OGRSpatialReferenceH enu = enu_srs(origin), file_srs = NULL;
+    char *enu_wkt = NULL;
+    // a path GDAL opens: a file, a GDAL XML (WMS, TMS/XYZ, WMTS), a /vsi path, a "WMS:" string
+    if (!st && !(t->ds = GDALOpen(path, GA_ReadOnly)))
+        st = rs_err_set(err, RS_ERR_IO, "%s: not a raster GDAL reads: %s", path, CPLGetLastErrorMsg());
+    if (!st && (!enu || OSRExportToWkt(enu, &enu_wkt) != OGRERR_NONE))
+        st = gdal_fail(err, path, "cannot define the site's ENU grid as a CRS");
+    const char *wkt = st ? NULL : GDALGetProjectionRef(t->ds);
+    double gt[6];
+    if (!st && (!wkt || !*wkt))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image has no CRS (an orthophoto needs a georeference)", path);
+    if (!st && GDALGetGeoTransform(t->ds, gt) != CE_None)
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image has no geotransform (an orthophoto needs a georeference)",
+                        path);
+    if (!st && (t->Nbands = GDALGetRasterCount(t->ds)) < 1)
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: no raster band", path);
+    if (!st && !(file_srs = OSRNewSpatialReference(wkt)))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: its CRS cannot be read", path);
+    if (!st) {
+        const char *name = OSRGetName(file_srs);
+        if (!(t->crs_name = strdup(name ? name : "unnamed CRS"))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    if (!st) {
+        const bool same =
+            OSRIsSame(file_srs, enu) && gt[2] == 0 && gt[4] == 0 && gt[5] < 0 && fabs(gt[1] + gt[5]) <= 1e-9 * gt[1];
+        if (same)
+            t->view = t->ds;
+        else {
+            // a warped VRT: nothing read now; each window later is warped on demand, from the
+            // source's overviews when the window is read decimated
+            t->view = GDALAutoCreateWarpedVRT(t->ds, wkt, enu_wkt, GRA_Bilinear, 0.125, NULL);
+            if (!t->view)
+                st = rs_err_set(err, RS_ERR_INVALID, "%s: cannot reproject from %s to the site's grid: %s", path,
+                                t->crs_name, CPLGetLastErrorMsg());
+            t->warped = true;
+        }
+    }
+    double vgt[6];
+    if (!st) {
+        t->width = GDALGetRasterXSize(t->view), t->height = GDALGetRasterYSize(t->view);
+        if (GDALGetGeoTransform(t->view, vgt) != CE_None || t->width < 1 || t->height < 1 || !(vgt[1] > 0) ||
+            fabs(vgt[1] + vgt[5]) > 1e-6 * vgt[1])
+            st = rs_err_set(err, RS_ERR_INVALID, "%s: the reprojected image has no square north-up grid", path);
+    }
+    if (!st) {
+        t->grid = (rs_geo_grid){.width = t->width,
+                                .height = t->height,
+                                .e0_m = vgt[0] + vgt[1] / 2,
+                                .n0_m = vgt[3] + vgt[5] / 2,
+                                .cell_m = vgt[1]};
+        const int side = t->width > t->height ? t->width : t->height;
+        t->Nlevels = 1;
+        while (t->Nlevels < 31 && ((long long)RS_GEO_TILE_PX << (t->Nlevels - 1)) < side) t->Nlevels++;
+    }
+    CPLFree(enu_wkt);
+    if (enu) OSRDestroySpatialReference(enu);
+    if (file_srs) OSRDestroySpatialReference(file_srs);
+    CPLPopErrorHandler();
+    if (st) {
+        rs_geo_tiles_close(t);
+        return st;
+    }
+    *out = t;
+    return RS_OK;
+}
+
+// Reads the view's pixels [x0, x0 + w) x [y0, y0 + h) into an (ow, oh) buffer of `Nout` 8-bit
+// bands per pixel (pixel spacing Nout, line spacing `line`), averaged when decimated.
+static rs_status read_window(rs_geo_tiles *t, int x0, int y0, int w, int h, unsigned char *buf, int ow, int oh,
+                             int Nout, GSpacing line, rs_err *err)
+{
+    const int Nb = t->Nbands;
+    int bands[4] = {1, Nb >= 3 ? 2 : 1, Nb >= 3 ? 3 : 1, Nb >= 4 ? 4 : 1};
+    GDALRasterIOExtraArg extra;
+    INIT_RASTERIO_EXTRA_ARG(extra);
+    extra.eResampleAlg = ow < w ? GRIORA_Average : GRIORA_NearestNeighbour;
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    const CPLErr e = GDALDatasetRasterIOEx(t->view, GF_Read, x0, y0, w, h, buf, ow, oh, GDT_Byte, Nout, bands, Nout,
+                                           line, 1, &extra);
+    CPLPopErrorHandler();
+    return e == CE_None ? RS_OK : gdal_fail(err, GDALGetDescription(t->ds), "cannot read the image");
+}
+
+rs_status rs_geo_tiles_read(rs_geo_tiles *t, int level, int tx, int ty, unsigned char *rgba, rs_err *err)
+{
+    const int T = RS_GEO_TILE_PX;
+    if (level < 0 || level >= t->Nlevels)
+        return rs_err_set(err, RS_ERR_INVALID, "tile level %d: not in [0, %d)", level, t->Nlevels);
+    const long long span = (long long)T << level; // full-resolution pixels a tile covers
+    const long long x0 = (long long)tx * span, y0 = (long long)ty * span;
+    if (tx < 0 || ty < 0 || x0 >= t->width || y0 >= t->height)
+        return rs_err_set(err, RS_ERR_NOT_FOUND, "tile %d/%d/%d: outside the %dx%d image", level, tx, ty, t->width,
+                          t->height);
+    const int w = (int)(x0 + span <= t->width ? span : t->width - x0);
+    const int h = (int)(y0 + span <= t->height ? span : t->height - y0);
+    const int ow = (int)((w + (1LL << level) - 1) >> level), oh = (int)((h + (1LL << level) - 1) >> level);
+    memset(rgba, 0, (size_t)T * T * 4);
+    rs_status st = read_window(t, (int)x0, (int)y0, w, h, rgba, ow, oh, t->Nbands >= 4 ? 4 : 3, (GSpacing)T * 4, err);
+    if (st || t->Nbands >= 4) return st;
+    for (int j = 0; j < oh; j++) // opaque where the image is; the rest of an edge tile transparent
+        for (int i = 0; i < ow; i++) rgba[((size_t)j * T + i) * 4 + 3] = 255;
+    return RS_OK;
+}
+
 rs_status rs_geo_ortho_read(rs_geo_ortho *out, const char *path, const rs_llh *origin, int max_side, rs_err *err)
 {
     memset(out, 0, sizeof *out);
     if (max_side < 16 || max_side > 16384)
         return rs_err_set(err, RS_ERR_INVALID, "%s: max_side %d is not in [16, 16384]", path, max_side);
     if (access(path, R_OK) != 0) return rs_err_set(err, RS_ERR_IO, "%s: cannot read", path);
-    GDALAllRegister();
-    CPLErrorReset();
-    CPLPushErrorHandler(CPLQuietErrorHandler);
-    rs_status st = RS_OK;
-    OGRSpatialReferenceH enu = enu_srs(origin), file_srs = NULL;
-    char *enu_wkt = NULL;
-    GDALDatasetH ds = GDALOpen(path, GA_ReadOnly), view = NULL;
-    unsigned char *buf = NULL;
-    if (!ds) st = rs_err_set(err, RS_ERR_IO, "%s: not an image GDAL reads: %s", path, CPLGetLastErrorMsg());
-    if (!st && (!enu || OSRExportToWkt(enu, &enu_wkt) != OGRERR_NONE))
-        st = gdal_fail(err, path, "cannot define the site's ENU grid as a CRS");
-    const char *wkt = st ? NULL : GDALGetProjectionRef(ds);
-    double gt[6];
-    if (!st && (!wkt || !*wkt))
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image has no CRS (an orthophoto needs a georeference)", path);
-    if (!st && GDALGetGeoTransform(ds, gt) != CE_None)
-        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image has no geotransform (an orthophoto needs a georeference)",
-                        path);
-    const int Nb = st ? 0 : GDALGetRasterCount(ds);
-    if (!st && Nb < 1) st = rs_err_set(err, RS_ERR_INVALID, "%s: no raster band", path);
-    if (!st) {
-        file_srs = OSRNewSpatialReference(wkt);
-        if (!file_srs) st = rs_err_set(err, RS_ERR_INVALID, "%s: its CRS cannot be read", path);
-    }
-    if (!st) {
-        const char *name = OSRGetName(file_srs);
-        out->crs_name = strdup(name ? name : "unnamed CRS");
-        if (!out->crs_name) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    }
-    if (!st) {
-        const bool same =
-            OSRIsSame(file_srs, enu) && gt[2] == 0 && gt[4] == 0 && gt[5] < 0 && fabs(gt[1] + gt[5]) <= 1e-9 * gt[1];
-        if (same)
-            view = ds;
-        else {
-            view = GDALAutoCreateWarpedVRT(ds, wkt, enu_wkt, GRA_Bilinear, 0.125, NULL);
-            if (!view)
-                st = rs_err_set(err, RS_ERR_INVALID, "%s: cannot reproject from %s to the site's grid: %s", path,
-                                out->crs_name, CPLGetLastErrorMsg());
-            out->warped = true;
-        }
-    }
-    double vgt[6];
-    int vw = 0, vh = 0;
-    if (!st) {
-        vw = GDALGetRasterXSize(view), vh = GDALGetRasterYSize(view);
-        if (GDALGetGeoTransform(view, vgt) != CE_None || vw < 1 || vh < 1 || !(vgt[1] > 0) ||
-            fabs(vgt[1] + vgt[5]) > 1e-6 * vgt[1])
-            st = rs_err_set(err, RS_ERR_INVALID, "%s: the reprojected image has no square north-up grid", path);
-    }
-    if (!st) {
-        // decimate so that neither side exceeds max_side: cells grow by the factor s
-        const int s = (int)ceil((double)(vw > vh ? vw : vh) / max_side);
-        const int ow = (vw + s - 1) / s, oh = (vh + s - 1) / s;
-        const double cell = vgt[1] * vw / ow; // the read covers the whole view
-        const double cell_n = -vgt[5] * vh / oh;
-        out->grid = (rs_geo_grid){
-            .width = ow, .height = oh, .e0_m = vgt[0] + cell / 2, .n0_m = vgt[3] - cell_n / 2, .cell_m = cell};
-        buf = malloc((size_t)ow * oh * 3);
-        if (!buf) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory for %dx%d", path, ow, oh);
-        int bands[3] = {1, Nb >= 2 ? 2 : 1, Nb >= 3 ? 3 : 1};
-        GDALRasterIOExtraArg extra;
-        INIT_RASTERIO_EXTRA_ARG(extra);
-        extra.eResampleAlg = s > 1 ? GRIORA_Average : GRIORA_NearestNeighbour;
-        if (!st && GDALDatasetRasterIOEx(view, GF_Read, 0, 0, vw, vh, buf, ow, oh, GDT_Byte, 3, bands, 3,
-                                         (GSpacing)ow * 3, 1, &extra) != CE_None)
-            st = gdal_fail(err, path, "cannot read the image");
-    }
-    if (!st) {
-        out->rgb = buf;
-        buf = NULL;
-    }
-    free(buf);
-    if (view && view != ds) GDALClose(view);
-    if (ds) GDALClose(ds);
-    CPLFree(enu_wkt);
-    if (enu) OSRDestroySpatialReference(enu);
-    if (file_srs) OSRDestroySpatialReference(file_srs);
-    CPLPopErrorHandler();
+    rs_geo_tiles *t = NULL;
+    rs_status st = rs_geo_tiles_open(&t, path, origin, err);
+    if (st) return st;
+    // decimate so that neither side exceeds max_side: cells grow by the factor s
+    const int vw = t->width, vh = t->height;
+    const int s = (int)ceil((double)(vw > vh ? vw : vh) / max_side);
+    const int ow = (vw + s - 1) / s, oh = (vh + s - 1) / s;
+    const double cell = t->grid.cell_m * vw / ow; // the read covers the whole view
+    const double cell_n = t->grid.cell_m * vh / oh;
+    const double e_edge = t->grid.e0_m - t->grid.cell_m / 2, n_edge = t->grid.n0_m + t->grid.cell_m / 2;
+    out->grid = (rs_geo_grid){
+        .width = ow, .height = oh, .e0_m = e_edge + cell / 2, .n0_m = n_edge - cell_n / 2, .cell_m = cell};
+    out->warped = t->warped;
+    out->crs_name = strdup(t->crs_name);
+    out->rgb = malloc((size_t)ow * oh * 3);
+    if (!out->rgb || !out->crs_name) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory for %dx%d", path, ow, oh);
+    if (!st) st = read_window(t, 0, 0, vw, vh, out->rgb, ow, oh, 3, (GSpacing)ow * 3, err);
+    rs_geo_tiles_close(t);
     if (st) rs_geo_ortho_free(out);
     return st;
 }

@@ -75,9 +75,10 @@ typedef struct {
     char *crs_name;     // owned: the file's CRS name as GDAL gives it
 } rs_geo_ortho;
 
-// Reads a georeferenced image (any format and CRS GDAL reads: GeoTIFF, JPEG2000, ...) and
-// reprojects it onto the site's grid (bilinear); the result is decimated (GDAL's averaging
-// overview read) so that neither side exceeds max_side pixels.
+// Reads a whole georeferenced image (any format and CRS GDAL reads: GeoTIFF, JPEG2000, ...)
+// reprojected onto the site's grid (bilinear), decimated (GDAL's averaging overview read) so
+// that neither side exceeds max_side pixels: the view of rs_geo_tiles_open read at once. For a
+// small raster; `roadside pick` reads tiles instead.
 // in: path, origin, max_side in [16, 16384]
 // Errors: RS_ERR_IO (unreadable), RS_ERR_INVALID (no georeference or CRS, no transformation to
 // WGS84, naming the file), RS_ERR_EXTERNAL (GDAL), RS_ERR_NOMEM.
@@ -92,6 +93,49 @@ void rs_geo_ortho_free(rs_geo_ortho *o); // NULL-safe; zeroes *o
 // with GDAL's message (CPLGetLastErrorMsg); warnings a call survives (e.g. PROJ's "Point outside
 // of projection domain" while an extent is sampled) are not printed. For programs (cli/main.c).
 void rs_geo_gdal_quiet(void);
+
+// ---- tiles: a raster of any size read at the resolution a view needs (roadside pick) ----
+
+// A tile's side, pixels.
+#define RS_GEO_TILE_PX 256
+
+// An orthophoto source opened, nothing read yet: a file or anything GDAL opens (a GeoTIFF of any
+// size, a GDAL XML description of a WMS, WMTS or TMS/XYZ tile service, JPEG2000, ...), in any
+// CRS. Its "view" is the source on the site's grid: the file itself when it is already in the
+// site's grid CRS (north-up, square cells: read as it is, no resampling), else a warped VRT
+// (GDAL's warper, bilinear, within 0.125 px) built lazily window by window. Level L of the
+// pyramid has cells of 2^L full-resolution cells; tile (tx, ty) of level L covers the view's
+// full-resolution pixels [tx 256 2^L, (tx + 1) 256 2^L) x [ty 256 2^L, ...), read decimated
+// (GDAL's averaging RasterIO, which takes the source's overviews when it has them). Not
+// thread-safe: one reader at a time.
+typedef struct rs_geo_tiles rs_geo_tiles;
+
+// out: *t (rs_geo_tiles_close)
+// in: path (anything GDAL opens), origin (the site's ENU origin)
+// Errors: RS_ERR_IO (GDAL cannot open it), RS_ERR_INVALID (no georeference or CRS, no
+// transformation onto the site's grid, naming the file), RS_ERR_EXTERNAL, RS_ERR_NOMEM.
+rs_status rs_geo_tiles_open( // out
+    rs_geo_tiles **t,
+    // in
+    const char *path, const rs_llh *origin, rs_err *err);
+void rs_geo_tiles_close(rs_geo_tiles *t); // NULL-safe
+
+// The view's full-resolution grid on the site's ENU; the number of levels (level Nlevels - 1
+// fits the whole view in one tile); whether the source was reprojected; its CRS name.
+const rs_geo_grid *rs_geo_tiles_grid(const rs_geo_tiles *t);
+int rs_geo_tiles_levels(const rs_geo_tiles *t);
+bool rs_geo_tiles_warped(const rs_geo_tiles *t);
+const char *rs_geo_tiles_crs_name(const rs_geo_tiles *t);
+
+// Reads tile (tx, ty) of `level` (see above).
+// out: rgba (RS_GEO_TILE_PX, RS_GEO_TILE_PX, 4) 8-bit: grey repeated for one band, the source's
+//      alpha for four bands, else opaque; transparent where the tile runs past the image's edge
+// Errors: RS_ERR_INVALID (level out of range), RS_ERR_NOT_FOUND (tile outside the image),
+// RS_ERR_EXTERNAL (GDAL: a read or a tile service failed, its message).
+rs_status rs_geo_tiles_read( // out
+    rs_geo_tiles *t, int level, int tx, int ty, unsigned char *rgba,
+    // in
+    rs_err *err);
 
 // ---- a camera's pixel grid (roadside export --pixel-map; docs/localise.md, "Pixel map") ----
 

@@ -142,6 +142,10 @@ typedef struct {
     char *kind;        // owned, may be NULL (free-form: "road-marking", "pole-base", ...)
     char *note;        // owned, may be NULL
 
+    // its properties.sigma_h_m / sigma_v_m were given (else the site-wide default applies, and
+    // `roadside pick` saves it without them)
+    bool sigma_h_stated, sigma_v_stated;
+
     rs_site_height height_stated; // its properties.height; RS_SITE_HEIGHT_DEFAULT when absent
     rs_site_height height;        // what counts: height_stated, else the site's landmark_heights
                                   //   (never DEFAULT in a loaded site)

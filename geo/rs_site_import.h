@@ -79,6 +79,35 @@ rs_status rs_site_import( // out
     // in
     const char *dir, const rs_site_import_options *opt, rs_err *err);
 
+// ---- the point files alone (`roadside pick` imports them into a session) ----
+
+// One landmark picked in one camera's image.
+typedef struct {
+    char *id;        // owned: the file's id, or "P<row>" (the row or element from 1)
+    double x, y;     // longitude, latitude in degrees (geographic) or easting, northing (projected)
+    double h_m;      // the height as given, metres; NAN when none
+    double q_px[2];  // u, v, pixels, as given
+    double sigma_px; // the row's sigma_px; NAN when none
+    int line;        // the line of the file it comes from (from 1), for messages
+} rs_site_import_point;
+
+typedef struct {
+    rs_site_import_point *points; // owned, (N,)
+    int N;
+    bool geographic; // lat,lon (a point-pair JSON always) rather than e,n
+    bool any_h;      // some point gives a height
+} rs_site_import_points;
+
+// Reads a point file as `site import` does (its one reader, rs_site_import_read.c): ".json"
+// point pairs, else a CSV of lat,lon or e,n, u,v, optionally h, id, sigma_px; at least 4 points.
+// out: *pts (zeroed first; rs_site_import_points_free even on failure)
+// Errors as "PATH:LINE: FIELD: what": RS_ERR_PARSE, RS_ERR_INVALID, RS_ERR_IO, RS_ERR_NOMEM.
+rs_status rs_site_import_read_points( // out
+    rs_site_import_points *pts,
+    // in
+    const char *path, rs_err *err);
+void rs_site_import_points_free(rs_site_import_points *pts); // accepts NULL
+
 #ifdef __cplusplus
 }
 #endif

@@ -272,3 +272,10 @@ rs_status rs_site__import_read(rs_site__import_points *pts, const char *path, rs
     free(text);
     return st;
 }
+
+rs_status rs_site_import_read_points(rs_site_import_points *pts, const char *path, rs_err *err)
+{
+    return rs_site__import_read(pts, path, err);
+}
+
+void rs_site_import_points_free(rs_site_import_points *pts) { rs_site__import_points_free(pts); }

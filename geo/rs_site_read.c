@@ -181,6 +181,7 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
     const char *id = NULL, *kind = NULL, *note = NULL;
     double sigma_h = site->landmark_sigma_h_m, sigma_v = site->landmark_sigma_v_m, above_ground = 0;
     rs_site_height height_stated = RS_SITE_HEIGHT_DEFAULT;
+    bool sigma_h_stated = false, sigma_v_stated = false;
     if (props) {
         const cJSON *jid = cJSON_GetObjectItemCaseSensitive(props, "id");
         if (cJSON_IsNumber(jid))
@@ -194,6 +195,8 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
                               RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &sigma_h);
         rs_site__get_in_range(c, props, "properties", "sigma_v_m", false, RS_SITE_SURVEY_SIGMA_MIN_M,
                               RS_SITE_SURVEY_SIGMA_MAX_M, "m", RS_SITE__SURVEY_SIGMA_RANGE, &sigma_v);
+        sigma_h_stated = cJSON_GetObjectItemCaseSensitive(props, "sigma_h_m") != NULL;
+        sigma_v_stated = cJSON_GetObjectItemCaseSensitive(props, "sigma_v_m") != NULL;
         rs_site__get_string(c, props, "properties", "kind", false, &kind);
         rs_site__get_string(c, props, "properties", "note", false, &note);
         rs_site__read_height_trust(c, props, "properties", "height", &height_stated);
@@ -265,6 +268,8 @@ static void read_feature(rs_site__reader *c, const cJSON *f, int i)
         for (int k = 0; k < 3; k++) l->p_enu_m[k] = vx.n ? vx.enu[k] : NAN;
         l->sigma_h_m = sigma_h;
         l->sigma_v_m = sigma_v;
+        l->sigma_h_stated = sigma_h_stated;
+        l->sigma_v_stated = sigma_v_stated;
         l->kind = rs_site__dup(c, kind);
         l->note = rs_site__dup(c, note);
         l->height_stated = height_stated;

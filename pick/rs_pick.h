@@ -58,8 +58,39 @@ rs_status rs_pick_add_landmark(rs_pick_session *s, char id_out[32], double e_m, 
 // Undoes the last change (pick set, pick deleted, landmark added); re-solves. RS_ERR_NOT_FOUND
 // when there is nothing to undo. Undo reaches back over saves.
 rs_status rs_pick_undo(rs_pick_session *s, rs_err *err);
+// Sets what every re-solve refines besides the pose, in the words of `calib --refine` ("focal",
+// "center", "focal+center", "none" or ""; rs_calib_refine_parse); re-solves. Not an undo step, not
+// saved (it is calib's option, not the site's). RS_ERR_INVALID on an unknown word.
+rs_status rs_pick_set_refine(rs_pick_session *s, const char *words, rs_err *err);
+// Moves landmark `id` to (e, n) metres of the site's ENU on the ground plane; re-solves. Only a
+// landmark picked on the map (kind "map-pick") moves: RS_ERR_UNSUPPORTED for a surveyed one,
+// RS_ERR_NOT_FOUND, RS_ERR_INVALID (farther than max_landmark_distance_m, not finite).
+rs_status rs_pick_move_landmark(rs_pick_session *s, const char *id, double e_m, double n_m, rs_err *err);
+// Gives landmark `id` sigmas of its own (1-sigma horizontal per axis and vertical, metres, in
+// the site format's range), or NAN: back to site.json's site-wide value (then not saved with the
+// landmark); re-solves; an undo step. A modelled height keeps the ground model's vertical sigma
+// in the solve (the stated one is saved). RS_ERR_NOT_FOUND, RS_ERR_INVALID (out of range).
+rs_status rs_pick_set_sigma(rs_pick_session *s, const char *id, double sigma_h_m, double sigma_v_m, rs_err *err);
+// Imports a point-pair file (`roadside site import`'s reader, geo/rs_site_import.h: a point-pair
+// JSON or a lat,lon,u,v CSV): each pair's landmark id that the site has gets that pick (added or
+// moved); a new id becomes a landmark (kind "map-pick") at its lat, lon on the site's ground
+// plane (a given height is not used) with its pick. All or nothing; one undo step.
+// out: Nadded, Npicked: landmarks added, picks set
+// Errors: those of the reader ("PATH:LINE: FIELD: what"), RS_ERR_INVALID (e,n columns: no CRS
+// here), those of rs_pick_set / rs_pick_add_landmark with the file's line.
+rs_status rs_pick_import( // out
+    rs_pick_session *s, int *Nadded, int *Npicked,
+    // in
+    const char *path, rs_err *err);
+// The camera's point picks as a point-pair file rs_pick_import (and `site import`) reads back:
+// csv false: JSON {"results": [{"id", "x": u, "y": v, "lat", "lng"}, ...]}; true: CSV
+// "id,lat,lon,u,v,sigma_px" (degrees to 1e-9, pixels to 1e-6). Caller frees; NULL: no memory.
+char *rs_pick_export(const rs_pick_session *s, bool csv);
+
 // Writes landmarks.geojson and the camera's observations (see above), reads the site back and
-// re-solves. Errors: those of the writers and of rs_site_load (the files are then written but
+// re-solves. A landmark's sigma_h_m / sigma_v_m are written only when it had its own when read
+// (rs_site_landmark.sigma_*_stated) or the page gave it some (rs_pick_set_sigma): the others keep
+// following site.json's site-wide sigmas. Errors: those of the writers and of rs_site_load (the files are then written but
 // the session keeps its own state).
 rs_status rs_pick_save(rs_pick_session *s, rs_err *err);
 
@@ -79,19 +110,26 @@ int rs_pick_count(const rs_pick_session *s);
 // ---- the server ----
 
 typedef struct {
-    const char *host;          // address to bind (default "127.0.0.1"); the Host header must name it
-    int port;                  // 0: any free port
-    size_t max_body;           // request bodies larger are refused with 413 (default 65536)
-    const char *image_path;    // the camera image (PNG/JPEG; read by core); may be NULL: a grey canvas
-    const rs_geo_ortho *ortho; // the orthophoto on the site's grid; may be NULL: a plain map
-                               //   (borrowed: must outlive the server)
+    const char *host;              // address to bind (default "127.0.0.1"); the Host header must name it
+    int port;                      // 0: any free port
+    size_t max_body;               // request bodies larger are refused with 413 (default 65536)
+    const char *image_path;        // the camera image (PNG/JPEG; read by core); may be NULL: a grey canvas
+    rs_geo_tiles *ortho;           // the orthophoto on the site's grid, served as tiles read at the
+                                   //   view's resolution (GET /api/tiles/L/X/Y); may be NULL: none
+                                   //   (borrowed: must outlive the server; used by its thread only)
+    const char *tiles_url;         // a web tile URL template "http(s)://HOST/.../{z}/{x}/{y}.png"
+                                   //   (web mercator) the page loads itself; may be NULL. The page's
+                                   //   Content-Security-Policy allows images from that origin only
+    const char *tiles_attribution; // shown under the map; may be NULL
+    int tiles_max_zoom;            // the template's deepest zoom (default 19)
 } rs_pick_server_options;
 void rs_pick_server_options_default(rs_pick_server_options *opt);
 
 typedef struct rs_pick_server rs_pick_server;
 
 // Starts serving the session (borrowed: it must outlive the server) on its own thread.
-// Errors: RS_ERR_IO (cannot bind; the message names host and port), those of reading the image.
+// Errors: RS_ERR_IO (cannot bind; the message names host and port), those of reading the image,
+// RS_ERR_INVALID (a tiles_url that is not http(s)://HOST/... with {z}, {x} and {y}).
 rs_status rs_pick_server_start( // out
     rs_pick_server **srv,
     // in

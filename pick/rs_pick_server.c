@@ -17,6 +17,8 @@
 
 #include "core/rs_image.h"
 #include "core/rs_io.h"
+#include "geo/rs_geo.h"
+#include "geo/rs_geo_raster.h"
 #include "geo/rs_lanes.h"
 #include "pick/internal/rs_pick_internal.h"
 #include "pick/rs_pick.h"
@@ -32,21 +34,26 @@ struct rs_pick_server {
     char origin_ok[2][128]; // the Origins accepted: "http://HOST:PORT", "http://localhost:PORT"
     unsigned char *image;   // (H, W, 3) owned: the camera image; NULL: none
     int image_w, image_h;
-    const rs_geo_ortho *ortho; // borrowed; may be NULL
-    char *map_json;            // owned: the map's grid and the lanes, fixed for the session
+    rs_geo_tiles *ortho; // borrowed; may be NULL
+    char *map_json;      // owned: the map's grid and the lanes, fixed for the session
+    char csp[512];       // the page's Content-Security-Policy (the tile origin allowed)
+    unsigned char *tile; // (RS_GEO_TILE_PX, RS_GEO_TILE_PX, 4) owned: the tile being sent
 };
+
+#define RS_PICK_CSP "default-src 'self'; img-src 'self' data: blob:%s%s; connect-src 'self'; frame-ancestors 'none'"
 
 void rs_pick_server_options_default(rs_pick_server_options *opt)
 {
     memset(opt, 0, sizeof *opt);
     opt->host = "127.0.0.1";
     opt->max_body = 65536;
+    opt->tiles_max_zoom = 19;
 }
 
 // ---- responses ----
 
-static enum MHD_Result send_bytes(struct MHD_Connection *c, unsigned status, const char *mime, const void *data,
-                                  size_t len, enum MHD_ResponseMemoryMode mode)
+static enum MHD_Result send_bytes_csp(struct MHD_Connection *c, unsigned status, const char *mime, const void *data,
+                                      size_t len, enum MHD_ResponseMemoryMode mode, const char *csp)
 {
     struct MHD_Response *r = MHD_create_response_from_buffer(len, (void *)data, mode);
     if (!r) return MHD_NO;
@@ -54,12 +61,18 @@ static enum MHD_Result send_bytes(struct MHD_Connection *c, unsigned status, con
     MHD_add_response_header(r, "Cache-Control", "no-store");
     MHD_add_response_header(r, "X-Content-Type-Options", "nosniff");
     MHD_add_response_header(r, "Referrer-Policy", "no-referrer");
-    MHD_add_response_header(
-        r, "Content-Security-Policy",
-        "default-src 'self'; img-src 'self' data: blob:; connect-src 'self'; frame-ancestors 'none'");
+    MHD_add_response_header(r, "Content-Security-Policy", csp);
     enum MHD_Result ret = MHD_queue_response(c, status, r);
     MHD_destroy_response(r);
     return ret;
+}
+
+static enum MHD_Result send_bytes(struct MHD_Connection *c, unsigned status, const char *mime, const void *data,
+                                  size_t len, enum MHD_ResponseMemoryMode mode)
+{
+    char csp[256];
+    snprintf(csp, sizeof csp, RS_PICK_CSP, "", "");
+    return send_bytes_csp(c, status, mime, data, len, mode, csp);
 }
 
 // {"error": "..."} with the status.
@@ -143,6 +156,52 @@ static unsigned status_of(rs_status st)
     }
 }
 
+// The ground point of a request: "e", "n" (site ENU metres) or "lat", "lon" (WGS84 degrees,
+// converted exactly by geo at the site origin's height; the landmark then sits on the ground plane).
+static bool en_of(const rs_pick_server *srv, const cJSON *o, double *e, double *n)
+{
+    double lat, lon;
+    if (get_num(o, "e", e) && get_num(o, "n", n)) return true;
+    if (!get_num(o, "lat", &lat) || !get_num(o, "lon", &lon) || fabs(lat) > 90 || fabs(lon) > 180) return false;
+    const rs_site *site = rs_pick_session_site(srv->session);
+    const double llh[3] = {lat, lon, site->origin.h_m};
+    double p[3];
+    if (rs_geo_llh_to_enu(p, &site->origin, llh, 1, NULL) != RS_OK) return false;
+    *e = p[0], *n = p[1];
+    return true;
+}
+
+// A point-pair file sent as text: written to a private temporary file (the suffix from the
+// name's extension, .json or .csv: the reader's two formats; no other part of the name is used),
+// read by rs_pick_import (site import's reader), removed.
+static rs_status import_text(rs_pick_server *srv, const char *name, const char *text, int *Nadded, int *Npicked,
+                             rs_err *err)
+{
+    const char *ext = strrchr(name, '.');
+    if (!ext || (strcasecmp(ext, ".json") != 0 && strcasecmp(ext, ".csv") != 0))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: a point-pair file is .json or .csv", name);
+    const bool json = !strcasecmp(ext, ".json");
+    char path[64];
+    snprintf(path, sizeof path, "/tmp/roadside-pick-import-XXXXXX%s", json ? ".json" : ".csv");
+    const int fd = mkstemps(path, json ? 5 : 4);
+    if (fd < 0) return rs_err_set(err, RS_ERR_IO, "cannot make a temporary file for %s", name);
+    const size_t len = strlen(text);
+    const bool ok = write(fd, text, len) == (ssize_t)len;
+    close(fd);
+    rs_status st = ok ? rs_pick_import(srv->session, Nadded, Npicked, path, err)
+                      : rs_err_set(err, RS_ERR_IO, "cannot write a temporary file for %s", name);
+    unlink(path);
+    if (st && err) { // the user's file name, not the temporary one
+        char msg[sizeof err->msg];
+        const char *at = strstr(err->msg, path);
+        if (at) {
+            snprintf(msg, sizeof msg, "%.*s%.200s%.600s", (int)(at - err->msg), err->msg, name, at + strlen(path));
+            memcpy(err->msg, msg, sizeof msg);
+        }
+    }
+    return st;
+}
+
 static enum MHD_Result post(struct MHD_Connection *c, rs_pick_server *srv, const char *url, const request *rq)
 {
     const char *ct = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
@@ -171,11 +230,51 @@ static enum MHD_Result post(struct MHD_Connection *c, rs_pick_server *srv, const
             return send_error(c, MHD_HTTP_BAD_REQUEST, "expected {\"landmark\": ID}");
         }
         st = rs_pick_delete(srv->session, id, &err);
+    } else if (!strcmp(url, "/api/refine")) {
+        const char *words = get_str(o, "refine");
+        if (!words) {
+            cJSON_Delete(o);
+            return send_error(c, MHD_HTTP_BAD_REQUEST,
+                              "expected {\"refine\": \"focal+center\"} (calib's --refine words)");
+        }
+        st = rs_pick_set_refine(srv->session, words, &err);
+    } else if (!strcmp(url, "/api/sigma")) {
+        // a number sets the landmark's own sigma, null (or absent) returns it to the site-wide one
+        const cJSON *jh = cJSON_GetObjectItemCaseSensitive(o, "sigma_h_m"),
+                    *jv = cJSON_GetObjectItemCaseSensitive(o, "sigma_v_m");
+        const bool ok_h = !jh || cJSON_IsNull(jh) || get_num(o, "sigma_h_m", &e),
+                   ok_v = !jv || cJSON_IsNull(jv) || get_num(o, "sigma_v_m", &n);
+        if (!id || !ok_h || !ok_v) {
+            cJSON_Delete(o);
+            return send_error(c, MHD_HTTP_BAD_REQUEST,
+                              "expected {\"landmark\": ID, \"sigma_h_m\": m or null, \"sigma_v_m\": m or null}");
+        }
+        st = rs_pick_set_sigma(srv->session, id, cJSON_IsNumber(jh) ? e : NAN, cJSON_IsNumber(jv) ? n : NAN, &err);
+    } else if (!strcmp(url, "/api/import")) {
+        const char *name = get_str(o, "name"), *text = NULL;
+        const cJSON *t = cJSON_GetObjectItemCaseSensitive(o, "text");
+        if (cJSON_IsString(t)) text = t->valuestring;
+        int Nadded = 0, Npicked = 0;
+        if (!name || !text) {
+            cJSON_Delete(o);
+            return send_error(c, MHD_HTTP_BAD_REQUEST,
+                              "expected {\"name\": \"pairs.json\" or \".csv\", \"text\": ...}");
+        }
+        st = import_text(srv, name, text, &Nadded, &Npicked, &err);
+    } else if (!strcmp(url, "/api/landmark/move")) {
+        if (!id || !en_of(srv, o, &e, &n)) {
+            cJSON_Delete(o);
+            return send_error(c, MHD_HTTP_BAD_REQUEST,
+                              "expected {\"landmark\": ID, \"e\": m, \"n\": m} or \"lat\", \"lon\"");
+        }
+        st = rs_pick_move_landmark(srv->session, id, e, n, &err);
     } else if (!strcmp(url, "/api/landmark")) {
         const bool has_u = get_num(o, "u", &u), has_v = get_num(o, "v", &v);
-        if (!get_num(o, "e", &e) || !get_num(o, "n", &n) || has_u != has_v) {
+        if (!en_of(srv, o, &e, &n) || has_u != has_v) {
             cJSON_Delete(o);
-            return send_error(c, MHD_HTTP_BAD_REQUEST, "expected {\"e\": m, \"n\": m} and optionally \"u\", \"v\" px");
+            return send_error(
+                c, MHD_HTTP_BAD_REQUEST,
+                "expected {\"e\": m, \"n\": m} or {\"lat\": deg, \"lon\": deg}, and optionally \"u\", \"v\" px");
         }
         st = rs_pick_add_landmark(srv->session, added, e, n, &err);
         if (!st && has_u) {
@@ -208,15 +307,28 @@ static enum MHD_Result get(struct MHD_Connection *c, rs_pick_server *srv, const 
         return send_bytes(c, MHD_HTTP_OK, "application/octet-stream", srv->image,
                           (size_t)srv->image_w * srv->image_h * 3, MHD_RESPMEM_PERSISTENT);
     }
-    if (!strcmp(url, "/api/ortho.rgb")) {
+    int level, tx, ty, end = 0;
+    if (sscanf(url, "/api/tiles/%d/%d/%d%n", &level, &tx, &ty, &end) == 3 && url[end] == '\0') {
         if (!srv->ortho) return send_error(c, MHD_HTTP_NOT_FOUND, "no orthophoto");
-        return send_bytes(c, MHD_HTTP_OK, "application/octet-stream", srv->ortho->rgb,
-                          (size_t)srv->ortho->grid.width * srv->ortho->grid.height * 3, MHD_RESPMEM_PERSISTENT);
+        rs_err err = {0};
+        rs_status st = rs_geo_tiles_read(srv->ortho, level, tx, ty, srv->tile, &err);
+        if (st) return send_error(c, st == RS_ERR_EXTERNAL ? MHD_HTTP_BAD_GATEWAY : MHD_HTTP_NOT_FOUND, "%s", err.msg);
+        return send_bytes(c, MHD_HTTP_OK, "application/octet-stream", srv->tile,
+                          (size_t)RS_GEO_TILE_PX * RS_GEO_TILE_PX * 4, MHD_RESPMEM_MUST_COPY);
+    }
+    if (!strcmp(url, "/api/export.json") || !strcmp(url, "/api/export.csv")) {
+        const bool csv = !strcmp(url, "/api/export.csv");
+        char *text = rs_pick_export(srv->session, csv);
+        if (!text) return send_error(c, MHD_HTTP_INTERNAL_SERVER_ERROR, "out of memory");
+        enum MHD_Result r = send_bytes(c, MHD_HTTP_OK, csv ? "text/csv" : "application/json", text, strlen(text),
+                                       MHD_RESPMEM_MUST_COPY);
+        free(text);
+        return r;
     }
     for (int i = 0; i < rs_pick_Nassets; i++)
         if (!strcmp(url, rs_pick_assets[i].path))
-            return send_bytes(c, MHD_HTTP_OK, rs_pick_assets[i].mime, rs_pick_assets[i].data, rs_pick_assets[i].len,
-                              MHD_RESPMEM_PERSISTENT);
+            return send_bytes_csp(c, MHD_HTTP_OK, rs_pick_assets[i].mime, rs_pick_assets[i].data, rs_pick_assets[i].len,
+                                  MHD_RESPMEM_PERSISTENT, srv->csp);
     return send_error(c, MHD_HTTP_NOT_FOUND, "%s: not found", url);
 }
 
@@ -268,21 +380,48 @@ static enum MHD_Result handle(void *cls, struct MHD_Connection *c, const char *u
 // ---- start and stop ----
 
 // The map: the orthophoto's grid (or null) and the lanes' centre lines and widths, site ENU.
-static char *map_json(const rs_site *site, const rs_geo_ortho *ortho)
+static char *map_json(const rs_site *site, rs_geo_tiles *ortho, const rs_pick_server_options *opt)
 {
     cJSON *root = cJSON_CreateObject();
     if (!root) return NULL;
     if (ortho) {
+        const rs_geo_grid *grid = rs_geo_tiles_grid(ortho);
         cJSON *g = cJSON_AddObjectToObject(root, "ortho");
-        cJSON_AddNumberToObject(g, "width", ortho->grid.width);
-        cJSON_AddNumberToObject(g, "height", ortho->grid.height);
-        cJSON_AddNumberToObject(g, "e0_m", ortho->grid.e0_m);
-        cJSON_AddNumberToObject(g, "n0_m", ortho->grid.n0_m);
-        cJSON_AddNumberToObject(g, "cell_m", ortho->grid.cell_m);
-        cJSON_AddStringToObject(g, "crs", ortho->crs_name ? ortho->crs_name : "");
-        cJSON_AddBoolToObject(g, "warped", ortho->warped);
+        cJSON_AddNumberToObject(g, "width", grid->width);
+        cJSON_AddNumberToObject(g, "height", grid->height);
+        cJSON_AddNumberToObject(g, "e0_m", grid->e0_m);
+        cJSON_AddNumberToObject(g, "n0_m", grid->n0_m);
+        cJSON_AddNumberToObject(g, "cell_m", grid->cell_m);
+        cJSON_AddNumberToObject(g, "levels", rs_geo_tiles_levels(ortho));
+        cJSON_AddNumberToObject(g, "tile_px", RS_GEO_TILE_PX);
+        cJSON_AddStringToObject(g, "crs", rs_geo_tiles_crs_name(ortho));
+        cJSON_AddBoolToObject(g, "warped", rs_geo_tiles_warped(ortho));
     } else {
         cJSON_AddNullToObject(root, "ortho");
+    }
+    if (opt->tiles_url) {
+        cJSON *t = cJSON_AddObjectToObject(root, "tiles");
+        cJSON_AddStringToObject(t, "url", opt->tiles_url);
+        cJSON_AddStringToObject(t, "attribution", opt->tiles_attribution ? opt->tiles_attribution : "");
+        cJSON_AddNumberToObject(t, "max_zoom", opt->tiles_max_zoom);
+    } else {
+        cJSON_AddNullToObject(root, "tiles");
+    }
+    // lat, lon <-> E, N near the origin for the page's readout and its web tiles: the origin and
+    // the Jacobian d(E, N)/d(lon, lat) in metres per degree, by central differences of geo's exact
+    // conversion (the linearisation is off by ~d^2 / R: 1.4 cm at 300 m; typed coordinates are
+    // converted exactly by the server)
+    const double d = 1e-4, o[3] = {site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m};
+    const double llh[12] = {o[0], o[1] + d, o[2], o[0], o[1] - d, o[2], o[0] + d, o[1], o[2], o[0] - d, o[1], o[2]};
+    double p[12];
+    cJSON *geo = cJSON_AddObjectToObject(root, "geo");
+    if (rs_geo_llh_to_enu(p, &site->origin, llh, 4, NULL) == RS_OK) {
+        cJSON_AddNumberToObject(geo, "lat0", o[0]);
+        cJSON_AddNumberToObject(geo, "lon0", o[1]);
+        const double J[4] = {(p[0] - p[3]) / (2 * d), (p[6] - p[9]) / (2 * d), (p[1] - p[4]) / (2 * d),
+                             (p[7] - p[10]) / (2 * d)};
+        cJSON_AddItemToObject(geo, "den_dlonlat",
+                              cJSON_CreateDoubleArray(J, 4)); // [dE/dlon, dE/dlat, dN/dlon, dN/dlat]
     }
     cJSON *la = cJSON_AddArrayToObject(root, "lanes");
     char *path = rs_io_join(site->dir, RS_SITE_LANES);
@@ -307,6 +446,21 @@ static char *map_json(const rs_site *site, const rs_geo_ortho *ortho)
     return text;
 }
 
+// The origin "http(s)://host[:port]" of a tile URL template, for the page's CSP; false when the
+// template is not http(s), lacks {z}, {x} or {y}, or holds characters that would break the policy.
+static bool tile_origin(char *out, size_t n, const char *url)
+{
+    const char *rest = !strncmp(url, "https://", 8) ? url + 8 : !strncmp(url, "http://", 7) ? url + 7 : NULL;
+    if (!rest || !strstr(url, "{z}") || !strstr(url, "{x}") || !strstr(url, "{y}") || strpbrk(url, " ;,'\"\\<>"))
+        return false;
+    const size_t host = strcspn(rest, "/?#");
+    if (host == 0 || rest[host] != '/' || (size_t)(rest - url) + host >= n || strchr(rest, '@') ||
+        memchr(rest, '{', host))
+        return false;
+    snprintf(out, n, "%.*s", (int)((size_t)(rest - url) + host), url);
+    return true;
+}
+
 rs_status rs_pick_server_start(rs_pick_server **out, rs_pick_session *s, const rs_pick_server_options *opt_in,
                                rs_err *err)
 {
@@ -328,6 +482,16 @@ rs_status rs_pick_server_start(rs_pick_server **out, rs_pick_session *s, const r
     srv->session = s;
     srv->max_body = opt.max_body;
     srv->ortho = opt.ortho;
+    char origin[256] = "";
+    if (opt.tiles_url && !tile_origin(origin, sizeof origin, opt.tiles_url)) {
+        free(srv);
+        return rs_err_set(
+            err, RS_ERR_INVALID,
+            "tiles '%.200s': expected http(s)://HOST[:PORT]/...{z}...{x}...{y}... (no quote, space or ';')",
+            opt.tiles_url);
+    }
+    snprintf(srv->csp, sizeof srv->csp, RS_PICK_CSP, origin[0] ? " " : "", origin);
+    srv->tile = malloc((size_t)RS_GEO_TILE_PX * RS_GEO_TILE_PX * 4);
     snprintf(srv->host, sizeof srv->host, "%s", opt.host);
     rs_status st = RS_OK;
     if (opt.image_path) {
@@ -353,7 +517,8 @@ rs_status rs_pick_server_start(rs_pick_server **out, rs_pick_session *s, const r
     if (!st && srv->image && cam->width > 0 && (srv->image_w != cam->width || srv->image_h != cam->height))
         st = rs_err_set(err, RS_ERR_INVALID, "%s: the image is %dx%d, camera %s is %dx%d", opt.image_path, srv->image_w,
                         srv->image_h, site->cameras[rs_pick_session_camera(s)].id, cam->width, cam->height);
-    if (!st && !(srv->map_json = map_json(site, opt.ortho))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st && !srv->tile) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st && !(srv->map_json = map_json(site, opt.ortho, &opt))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st) {
         srv->daemon = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD, (uint16_t)opt.port, NULL, NULL, handle, srv,
                                        MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&addr, MHD_OPTION_NOTIFY_COMPLETED,
@@ -389,5 +554,6 @@ void rs_pick_server_stop(rs_pick_server *srv)
     if (srv->daemon) MHD_stop_daemon(srv->daemon);
     free(srv->image);
     free(srv->map_json);
+    free(srv->tile);
     free(srv);
 }

@@ -17,6 +17,7 @@
 #include "core/rs_camera.h"
 #include "geo/rs_geo.h"
 #include "geo/rs_site.h"
+#include "geo/rs_site_import.h"
 #include "geo/rs_site_write.h"
 #include "pick/internal/rs_pick_internal.h"
 
@@ -25,6 +26,9 @@ typedef struct {
     rs_site_observation *obs; // (Nobs,) owned
     int Nobs;
     int Nlandmarks;
+    int edited;              // the landmark a move or a sigma changed, or -1
+    rs_site_landmark before; // its fields before (shallow: the owned pointers are the live ones')
+    double before_sigma_v_m; // its first vertex's vertical sigma before
 } snapshot;
 
 enum { GROUND_NU = 12, GROUND_NV = 7 }; // the ground uncertainty's samples over the view
@@ -36,7 +40,8 @@ struct rs_pick_session {
     int icam;
     snapshot *undo; // (Nundo,) owned
     int Nundo, cap_undo;
-    bool dirty; // changes since the last save
+    bool dirty;      // changes since the last save
+    unsigned refine; // rs_calib_refine_flags of every re-solve (calib's --refine)
 
     // the last solve
     bool solved;
@@ -103,6 +108,7 @@ rs_status rs_pick_session_solve(rs_pick_session *s)
     rs_calib_site_problem sp;
     rs_calib_options opt;
     rs_calib_options_default(&opt);
+    opt.refine = s->refine;
     rs_status st = rs_calib_site_problem_init(&sp, s->site, s->icam, &err);
     if (!st) st = rs_calib_solve(&s->result, &sp.problem, &opt, &err);
     rs_calib_site_problem_free(&sp);
@@ -204,6 +210,7 @@ static rs_status push_undo(rs_pick_session *s, rs_err *err)
     if (cam->Nobservations) memcpy(sn->obs, cam->observations, sizeof *sn->obs * (size_t)cam->Nobservations);
     sn->Nobs = cam->Nobservations;
     sn->Nlandmarks = s->site->Nlandmarks;
+    sn->edited = -1;
     s->Nundo++;
     return RS_OK;
 }
@@ -220,6 +227,20 @@ static void landmark_free(rs_site_landmark *l)
     memset(l, 0, sizeof *l);
 }
 
+// Puts a point landmark at p (ENU) / llh.
+static void place_landmark(rs_site_landmark *l, const double p[3], rs_llh llh)
+{
+    memcpy(l->p_enu_m, p, sizeof l->p_enu_m);
+    l->llh = llh;
+    l->given_h_m = llh.h_m;
+    l->given_up_m = p[2];
+    if (l->Nvertices >= 1 && l->vertices_enu_m && l->vertices_llh) {
+        memcpy(l->vertices_enu_m, p, sizeof l->p_enu_m);
+        l->vertices_llh[0] = llh;
+        if (l->vertices_given_h_m) l->vertices_given_h_m[0] = llh.h_m;
+    }
+}
+
 rs_status rs_pick_undo(rs_pick_session *s, rs_err *err)
 {
     if (s->Nundo == 0) return rs_err_set(err, RS_ERR_NOT_FOUND, "nothing to undo");
@@ -229,6 +250,15 @@ rs_status rs_pick_undo(rs_pick_session *s, rs_err *err)
     cam->observations = sn->obs;
     cam->Nobservations = sn->Nobs;
     sn->obs = NULL;
+    if (sn->edited >= 0 && sn->edited < s->site->Nlandmarks) {
+        rs_site_landmark *l = &s->site->landmarks[sn->edited], b = sn->before;
+        b.id = l->id, b.kind = l->kind, b.note = l->note; // the live allocations
+        b.vertices_enu_m = l->vertices_enu_m, b.vertices_llh = l->vertices_llh;
+        b.vertices_sigma_v_m = l->vertices_sigma_v_m, b.vertices_given_h_m = l->vertices_given_h_m;
+        *l = b;
+        place_landmark(l, b.p_enu_m, b.llh);
+        if (l->vertices_sigma_v_m) l->vertices_sigma_v_m[0] = sn->before_sigma_v_m;
+    }
     while (s->site->Nlandmarks > sn->Nlandmarks) landmark_free(&s->site->landmarks[--s->site->Nlandmarks]);
     s->dirty = true;
     (void)rs_pick_session_solve(s);
@@ -319,7 +349,7 @@ rs_status rs_pick_add_landmark(rs_pick_session *s, char id_out[32], double e, do
     if (st) return st;
     rs_site_landmark l = {0};
     l.id = strdup(id);
-    l.kind = strdup("map-pick");
+    l.kind = strdup(RS_PICK_MAP_KIND);
     l.note = strdup("picked on the orthophoto by roadside pick; height from the site's ground plane");
     l.vertices_enu_m = malloc(sizeof(double) * 3);
     l.vertices_llh = malloc(sizeof(rs_llh));
@@ -365,8 +395,17 @@ rs_status rs_pick_save(rs_pick_session *s, rs_err *err)
     const rs_site_camera *cam = cam_of(s);
     // landmarks first, then the observations: each atomic; landmarks are only ever added, so a
     // stop between the two leaves a consistent site (the old picks, the new landmarks)
-    rs_status st = rs_site_write_landmarks(site->dir, site->landmarks, site->Nlandmarks, site->geoid_undulation_m,
-                                           RS_SITE_LAYOUT_HAND, err);
+    // a landmark's own sigmas only where it has them: the others keep following site.json's
+    rs_site_landmark *out = malloc(sizeof *out * (size_t)(site->Nlandmarks > 0 ? site->Nlandmarks : 1));
+    if (!out) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < site->Nlandmarks; i++) {
+        out[i] = site->landmarks[i]; // shallow: the writer only reads
+        if (!out[i].sigma_h_stated) out[i].sigma_h_m = NAN;
+        if (!out[i].sigma_v_stated) out[i].sigma_v_m = out[i].given_sigma_v_m = NAN;
+    }
+    rs_status st =
+        rs_site_write_landmarks(site->dir, out, site->Nlandmarks, site->geoid_undulation_m, RS_SITE_LAYOUT_HAND, err);
+    free(out);
     if (!st)
         st = rs_site_write_observations(cam->observations_path, cam->observations, cam->Nobservations, site->landmarks,
                                         err);
@@ -385,6 +424,167 @@ rs_status rs_pick_save(rs_pick_session *s, rs_err *err)
     s->dirty = false;
     (void)rs_pick_session_solve(s);
     return RS_OK;
+}
+
+rs_status rs_pick_set_refine(rs_pick_session *s, const char *words, rs_err *err)
+{
+    unsigned flags = 0;
+    if (!rs_calib_refine_parse(words, &flags))
+        return rs_err_set(err, RS_ERR_INVALID, "refine '%.60s': expected focal, center or distortion, joined with '+'",
+                          words);
+    s->refine = flags;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+// Records landmark il's fields in the step just pushed, for rs_pick_undo.
+static void remember_landmark(snapshot *sn, const rs_site_landmark *l, int il)
+{
+    sn->edited = il;
+    sn->before = *l;
+    sn->before_sigma_v_m = l->vertices_sigma_v_m ? l->vertices_sigma_v_m[0] : l->sigma_v_m;
+}
+
+rs_status rs_pick_set_sigma(rs_pick_session *s, const char *id, double sigma_h_m, double sigma_v_m, rs_err *err)
+{
+    rs_site *site = s->site;
+    const int il = rs_site_find_landmark(site, id);
+    if (il < 0) return rs_err_set(err, RS_ERR_NOT_FOUND, "landmark '%s': no such landmark", id);
+    const double sig[2] = {sigma_h_m, sigma_v_m};
+    for (int k = 0; k < 2; k++)
+        if (!isnan(sig[k]) && !(sig[k] >= RS_SITE_SURVEY_SIGMA_MIN_M && sig[k] <= RS_SITE_SURVEY_SIGMA_MAX_M))
+            return rs_err_set(err, RS_ERR_INVALID, "landmark '%s': %s %g m: not in [%g, %g] m", id,
+                              k ? "sigma_v_m" : "sigma_h_m", sig[k], RS_SITE_SURVEY_SIGMA_MIN_M,
+                              RS_SITE_SURVEY_SIGMA_MAX_M);
+    rs_status st = push_undo(s, err);
+    if (st) return st;
+    rs_site_landmark *l = &site->landmarks[il];
+    remember_landmark(&s->undo[s->Nundo - 1], l, il);
+    l->sigma_h_stated = !isnan(sigma_h_m);
+    l->sigma_h_m = l->sigma_h_stated ? sigma_h_m : site->landmark_sigma_h_m;
+    l->sigma_v_stated = !isnan(sigma_v_m);
+    const double v = l->sigma_v_stated ? sigma_v_m : site->landmark_sigma_v_m;
+    l->given_sigma_v_m = v;
+    if (!l->height_modelled) { // a modelled height keeps the model's sigma
+        l->sigma_v_m = v;
+        if (l->vertices_sigma_v_m) l->vertices_sigma_v_m[0] = v;
+    }
+    s->dirty = true;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+rs_status rs_pick_move_landmark(rs_pick_session *s, const char *id, double e, double n, rs_err *err)
+{
+    rs_site *site = s->site;
+    const int il = rs_site_find_landmark(site, id);
+    if (il < 0) return rs_err_set(err, RS_ERR_NOT_FOUND, "landmark '%s': no such landmark", id);
+    rs_site_landmark *l = &site->landmarks[il];
+    if (!l->kind || strcmp(l->kind, RS_PICK_MAP_KIND) != 0 || l->shape != RS_SITE_POINT)
+        return rs_err_set(err, RS_ERR_UNSUPPORTED,
+                          "landmark '%s': surveyed (kind %s): it stays where the survey put it; only landmarks "
+                          "picked on the map (kind %s) move",
+                          id, l->kind ? l->kind : "none", RS_PICK_MAP_KIND);
+    const double lim = site->max_landmark_distance_m > 0 ? site->max_landmark_distance_m : 1000;
+    if (!isfinite(e) || !isfinite(n) || hypot(e, n) > lim)
+        return rs_err_set(err, RS_ERR_INVALID, "landmark at (%g, %g) m: not within %g m of the site's origin", e, n,
+                          lim);
+    const double *nn = site->ground_normal_enu;
+    const double p[3] = {e, n, (site->ground_offset_m - nn[0] * e - nn[1] * n) / nn[2]};
+    double llh[3];
+    rs_status st = rs_geo_enu_to_llh(llh, &site->origin, p, 1, err);
+    if (!st) st = push_undo(s, err);
+    if (st) return st;
+    remember_landmark(&s->undo[s->Nundo - 1], l, il);
+    place_landmark(l, p, (rs_llh){llh[0], llh[1], llh[2]});
+    s->dirty = true;
+    (void)rs_pick_session_solve(s);
+    return RS_OK;
+}
+
+rs_status rs_pick_import(rs_pick_session *s, int *Nadded, int *Npicked, const char *path, rs_err *err)
+{
+    *Nadded = *Npicked = 0;
+    rs_site_import_points pts;
+    rs_status st = rs_site_import_read_points(&pts, path, err);
+    if (!st && !pts.geographic)
+        st = rs_err_set(err, RS_ERR_INVALID,
+                        "%s: e,n columns: pick imports lat,lon (a projected CRS needs 'roadside site import --crs')",
+                        path);
+    const int n0 = s->Nundo;
+    for (int k = 0; !st && k < pts.N; k++) {
+        const rs_site_import_point *q = &pts.points[k];
+        if (rs_site_find_landmark(s->site, q->id) < 0) { // a new landmark there, on the ground plane
+            const double llh[3] = {q->y, q->x, s->site->origin.h_m};
+            double p[3];
+            char gen[32];
+            st = rs_geo_llh_to_enu(p, &s->site->origin, llh, 1, err);
+            if (!st) st = rs_pick_add_landmark(s, gen, p[0], p[1], err);
+            if (!st) {
+                rs_site_landmark *l = &s->site->landmarks[s->site->Nlandmarks - 1];
+                char *id = strdup(q->id);
+                if (!id)
+                    st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+                else {
+                    free(l->id);
+                    l->id = id;
+                    ++*Nadded;
+                }
+            }
+        }
+        if (!st) st = rs_pick_set(s, q->id, q->q_px[0], q->q_px[1], err);
+        if (!st) ++*Npicked;
+        if (st && err) { // name the row
+            char msg[sizeof err->msg];
+            const int k0 = snprintf(msg, sizeof msg, "%.400s:%d: ", path, q->line);
+            snprintf(msg + k0, sizeof msg - (size_t)k0, "%.*s", (int)(sizeof msg - (size_t)k0 - 1), err->msg);
+            memcpy(err->msg, msg, sizeof msg);
+        }
+    }
+    if (st) { // all or nothing
+        while (s->Nundo > n0) (void)rs_pick_undo(s, NULL);
+        *Nadded = *Npicked = 0;
+    } else if (s->Nundo > n0 + 1) { // one step to undo: the state before the import
+        for (int i = n0 + 1; i < s->Nundo; i++) snapshot_free(&s->undo[i]);
+        s->Nundo = n0 + 1;
+    }
+    rs_site_import_points_free(&pts);
+    return st;
+}
+
+char *rs_pick_export(const rs_pick_session *s, bool csv)
+{
+    const rs_site *site = s->site;
+    const rs_site_camera *cam = &site->cameras[s->icam];
+    cJSON *root = csv ? NULL : cJSON_CreateObject(), *res = root ? cJSON_AddArrayToObject(root, "results") : NULL;
+    size_t cap = 64 + (size_t)cam->Nobservations * 160, len = 0;
+    char *text = csv ? malloc(cap) : NULL;
+    if (csv ? !text : !res) {
+        cJSON_Delete(root);
+        return NULL;
+    }
+    if (csv) len = (size_t)snprintf(text, cap, "id,lat,lon,u,v,sigma_px\n");
+    for (int k = 0; k < cam->Nobservations; k++) {
+        const rs_site_observation *o = &cam->observations[k];
+        if (o->at == RS_SITE_AT_TOP || o->at == RS_SITE_AT_ALONG) continue; // a pair is a point's
+        const rs_site_landmark *l = &site->landmarks[o->ilandmark];
+        if (csv) {
+            len += (size_t)snprintf(text + len, cap - len, "%s,%.9f,%.9f,%.6f,%.6f,%g\n", l->id, l->llh.lat_deg,
+                                    l->llh.lon_deg, o->q_px[0], o->q_px[1], o->sigma_px);
+            continue;
+        }
+        cJSON *r = cJSON_CreateObject();
+        cJSON_AddItemToArray(res, r);
+        cJSON_AddStringToObject(r, "id", l->id);
+        cJSON_AddNumberToObject(r, "x", o->q_px[0]);
+        cJSON_AddNumberToObject(r, "y", o->q_px[1]);
+        cJSON_AddNumberToObject(r, "lat", l->llh.lat_deg);
+        cJSON_AddNumberToObject(r, "lng", l->llh.lon_deg);
+    }
+    if (csv) return text;
+    text = cJSON_Print(root);
+    cJSON_Delete(root);
+    return text;
 }
 
 double rs_pick_last_solve_ms(const rs_pick_session *s) { return s->solve_ms; }
@@ -427,6 +627,27 @@ static void flag_reason(char *buf, size_t n, const rs_calib_result *r, int k)
     }
 }
 
+// calib's warnings name its command-line options; on the page the same choice is the refine
+// menu. Returns a malloc'ed copy with "run with --refine WORDS" said as that menu (NULL: no memory).
+static char *warnings_for_page(const char *w)
+{
+    if (!w) return NULL;
+    static const char from[] = "run with --refine ", to[] = "choose refine: ";
+    char *out = malloc(strlen(w) * 3 + 64), *o = out;
+    if (!out) return NULL;
+    for (const char *p = w; *p;) {
+        if (!strncmp(p, from, sizeof from - 1)) {
+            p += sizeof from - 1;
+            const char *e = p + strcspn(p, " ,.;)");
+            o += sprintf(o, "%s%.*s above (calib's --refine %.*s)", to, (int)(e - p), p, (int)(e - p), p);
+            p = e;
+        } else
+            *o++ = *p++;
+    }
+    *o = '\0';
+    return out;
+}
+
 char *rs_pick_state_json(const rs_pick_session *s)
 {
     const rs_site *site = s->site;
@@ -441,6 +662,9 @@ char *rs_pick_state_json(const rs_pick_session *s)
     cJSON_AddBoolToObject(root, "can_undo", s->Nundo > 0);
     cJSON_AddBoolToObject(root, "unsaved", s->dirty);
     cJSON_AddNumberToObject(root, "picks", cam->Nobservations);
+    char refine[64];
+    rs_calib_refine_name(refine, sizeof refine, s->refine);
+    cJSON_AddStringToObject(root, "refine", refine);
     // the pick index of each landmark
     int *pick_of = calloc((size_t)(site->Nlandmarks > 0 ? site->Nlandmarks : 1), sizeof *pick_of);
     if (!pick_of) {
@@ -462,6 +686,9 @@ char *rs_pick_state_json(const rs_pick_session *s)
         cJSON_AddStringToObject(o, "shape", rs_site_shape_name(l->shape));
         cJSON_AddItemToObject(o, "enu_m", numbers(l->p_enu_m, 3));
         cJSON_AddNumberToObject(o, "sigma_h_m", l->sigma_h_m);
+        cJSON_AddNumberToObject(o, "sigma_v_m", l->given_sigma_v_m);
+        cJSON_AddBoolToObject(o, "sigma_stated", l->sigma_h_stated || l->sigma_v_stated);
+        cJSON_AddItemToObject(o, "lat_lon_deg", numbers((const double[]){l->llh.lat_deg, l->llh.lon_deg}, 2));
         const int k = pick_of[i];
         if (k >= 0)
             cJSON_AddItemToObject(o, "pick_px", numbers(cam->observations[k].q_px, 2));
@@ -507,7 +734,9 @@ char *rs_pick_state_json(const rs_pick_session *s)
         add_num(so, "variance_factor", r->variance_factor);
         cJSON_AddNumberToObject(so, "inliers", r->Ninliers);
         cJSON_AddNumberToObject(so, "flagged", Nflagged);
-        cJSON_AddStringToObject(so, "warnings", r->warnings);
+        char *w = warnings_for_page(r->warnings);
+        cJSON_AddStringToObject(so, "warnings", w ? w : r->warnings);
+        free(w);
         cJSON *g = cJSON_AddObjectToObject(root, "ground_uncertainty");
         cJSON_AddStringToObject(g, "what",
                                 "1-sigma horizontal ground error (m) of a point detected to 1 px, "

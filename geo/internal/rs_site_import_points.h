@@ -5,23 +5,11 @@
 #include <stdbool.h>
 
 #include "core/rs_status.h"
+#include "geo/rs_site_import.h"
 
-// One landmark picked in one camera's image.
-typedef struct {
-    char *id;        // owned: the file's id, or "P<row>" (the row or element from 1)
-    double x, y;     // longitude, latitude in degrees (geographic) or easting, northing (projected)
-    double h_m;      // the height as given, metres; NAN when none
-    double q_px[2];  // u, v, pixels, as given
-    double sigma_px; // the row's sigma_px; NAN when none
-    int line;        // the line of the file it comes from (from 1), for messages
-} rs_site__import_point;
-
-typedef struct {
-    rs_site__import_point *points; // owned, (N,)
-    int N;
-    bool geographic; // lat,lon (a point-pair JSON always) rather than e,n
-    bool any_h;      // some point gives a height
-} rs_site__import_points;
+// The public types (geo/rs_site_import.h) under geo's internal names.
+typedef rs_site_import_point rs_site__import_point;
+typedef rs_site_import_points rs_site__import_points;
 
 // Reads a point file: ".json" point pairs {"results": [{"x", "y", "lat", "lng" (or "lon"), "id",
 // "h" optional}, ...]}, else a CSV whose header names lat and lon (latitude, lng, longitude) or e

@@ -8,6 +8,10 @@
 #include "geo/rs_site.h"
 #include "pick/rs_pick.h"
 
+// The kind of a landmark added by clicking the map (or imported, or placed at typed
+// coordinates): its position is a pick, so it may be moved; a surveyed one may not.
+#define RS_PICK_MAP_KIND "map-pick"
+
 // Re-solves the session's camera (rs_pick.h: as `roadside calib`); the outcome is in the state.
 rs_status rs_pick_session_solve(rs_pick_session *s);
 const rs_site *rs_pick_session_site(const rs_pick_session *s);

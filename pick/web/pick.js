@@ -1,4 +1,5 @@
-// roadside pick: the page. Plain JavaScript, no library, no network beyond its own server.
+// roadside pick: the page. Plain JavaScript, no library; no network beyond its own server and the
+// web tile host the user named (--tiles; the page's Content-Security-Policy allows that one).
 // Two views: the camera image (pixel (0,0) is the centre of the top-left pixel, docs/conventions.md)
 // and the site from above (site ENU metres, east right, north up). Every change is a POST to the
 // server, which re-solves and answers with the whole state.
@@ -6,7 +7,7 @@
 (function () {
   const $ = (id) => document.getElementById(id);
   const st = { state: null, map: null, selected: null, pendingPx: null, pendingEn: null, ground: true,
-               image: null, ortho: null, ready: false };
+               image: null, ready: false, tiles: new Map(), tilesLoaded: [], webTiles: new Map(), drag: null };
   let ARROW_GAIN = 20; // residual arrows magnified: 20x, less when the largest would leave the view
 
   // ---- a zoomable, pannable view: canvas = offset + scale * world (y flipped for the map) ----
@@ -108,14 +109,7 @@
     ctx.imageSmoothingEnabled = img.s < 2;
     if (st.image) ctx.drawImage(st.image, x0, y0, w * img.s, h * img.s);
     else { ctx.fillStyle = "#9e9e9e"; ctx.fillRect(x0, y0, w * img.s, h * img.s); }
-    if (st.ground && S.ground_uncertainty) { // the view's ground uncertainty, on its sampling grid
-      const g = S.ground_uncertainty;
-      for (let j = 0; j < g.nv; j++) for (let i = 0; i < g.nu; i++) {
-        const s = g.sigma_m[j * g.nu + i]; if (s === null) continue;
-        const [cx, cy] = img.toCanvas((i + 0.5) * w / g.nu, (j + 0.5) * h / g.nv);
-        label(ctx, cx - 14, cy, s < 10 ? s.toFixed(2) + " m" : ">10 m", s < 0.5 ? "#b9f6ca" : s < 2 ? "#ffe57f" : "#ff8a80");
-      }
-    }
+    if (st.ground && S.ground_uncertainty) drawHeat(ctx, S.ground_uncertainty, w, h);
     for (const l of S.landmarks) {
       const sel = st.selected === l.id;
       const pp = l.predicted_px;
@@ -125,7 +119,8 @@
         if (!l.pick_px) label(ctx, px + 7, py - 5, l.id, "#b3e5fc");
       }
       if (!l.pick_px) continue;
-      const [qx, qy] = img.toCanvas(...pxToWorld(l.pick_px[0], l.pick_px[1]));
+      const dragged = st.drag && st.drag.view === img && st.drag.id === l.id;
+      const [qx, qy] = dragged ? img.toCanvas(...st.drag.at) : img.toCanvas(...pxToWorld(l.pick_px[0], l.pick_px[1]));
       const col = colorOf(l);
       ctx.strokeStyle = col; ctx.lineWidth = 2;
       ctx.beginPath(); ctx.moveTo(qx - 6, qy); ctx.lineTo(qx + 6, qy); ctx.moveTo(qx, qy - 6); ctx.lineTo(qx, qy + 6); ctx.stroke();
@@ -150,11 +145,9 @@
     const c = map.c, ctx = c.getContext("2d"), S = st.state;
     ctx.setTransform(1, 0, 0, 1, 0, 0); ctx.fillStyle = "#cfd8dc"; ctx.fillRect(0, 0, c.width, c.height);
     const o = st.map.ortho;
-    if (o && st.ortho) {
-      const [x0, y0] = map.toCanvas(o.e0_m - o.cell_m / 2, o.n0_m + o.cell_m / 2);
-      ctx.imageSmoothingEnabled = map.s * o.cell_m < 2;
-      ctx.drawImage(st.ortho, x0, y0, o.width * o.cell_m * map.s, o.height * o.cell_m * map.s);
-    } else { // a plain drawing of the lanes
+    if (st.map.tiles) drawWebTiles(ctx);
+    if (o) drawOrthoTiles(ctx, o);
+    if (!o && !st.map.tiles) { // a plain drawing of the lanes
       ctx.lineCap = "round";
       for (const l of st.map.lanes) {
         ctx.strokeStyle = l.junction ? "#b0bec5" : "#78909c"; ctx.lineWidth = Math.max(1, l.width_m * map.s);
@@ -164,7 +157,8 @@
       }
     }
     for (const l of S.landmarks) {
-      const [x, y] = map.toCanvas(l.enu_m[0], l.enu_m[1]);
+      const dragged = st.drag && st.drag.view === map && st.drag.id === l.id;
+      const [x, y] = dragged ? map.toCanvas(...st.drag.at) : map.toCanvas(l.enu_m[0], l.enu_m[1]);
       dot(ctx, x, y, 5, colorOf(l), "#000");
       if (st.selected === l.id) dot(ctx, x, y, 10, null, "#ffff00");
       label(ctx, x + 7, y - 5, l.id, "#fff");
@@ -187,10 +181,118 @@
     if (st.pendingEn) { const [x, y] = map.toCanvas(...st.pendingEn); dot(ctx, x, y, 7, null, "#ff00ff"); }
   }
 
+  // ---- basemaps: tiles read at the resolution the view needs ----
+  // the orthophoto (--ortho): level L has cells of 2^L source cells on the site's grid; the finest
+  // level whose cells are not smaller than a screen pixel, down to the source's own pixels
+  function orthoLevel(o) {
+    const L = Math.floor(Math.log2(1 / (o.cell_m * map.s)));
+    return Math.max(0, Math.min(o.levels - 1, L));
+  }
+  function orthoTile(key) { // the tile's bitmap, fetched once (null while it loads)
+    let t = st.tiles.get(key);
+    if (t === undefined) {
+      st.tiles.set(key, null);
+      fetch("/api/tiles/" + key).then((r) => r.ok ? r.arrayBuffer() : null).then((b) => {
+        if (!b) return;
+        const T = st.map.ortho.tile_px, id = new ImageData(new Uint8ClampedArray(b), T, T);
+        return createImageBitmap(id).then((bm) => { st.tiles.set(key, bm); st.tilesLoaded.push(key); render(); });
+      }).catch(() => {});
+      return null;
+    }
+    return t;
+  }
+  function drawOrthoTiles(ctx, o) {
+    const c = map.c, T = o.tile_px;
+    const [w0, n1] = map.toWorld(0, 0), [w1, n0] = map.toWorld(c.width, c.height);
+    const ex = o.e0_m - o.cell_m / 2, ny = o.n0_m + o.cell_m / 2; // the grid's north-west corner
+    const drawLevel = (L, only) => {
+      const span = T * o.cell_m * (1 << L); // metres a tile covers
+      const i0 = Math.max(0, Math.floor((w0 - ex) / span)), i1 = Math.min(Math.ceil(o.width / (T << L)) - 1, Math.floor((w1 - ex) / span));
+      const j0 = Math.max(0, Math.floor((ny - n1) / span)), j1 = Math.min(Math.ceil(o.height / (T << L)) - 1, Math.floor((ny - n0) / span));
+      let missing = 0;
+      for (let j = j0; j <= j1; j++) for (let i = i0; i <= i1; i++) {
+        const key = `${L}/${i}/${j}`, bm = only ? (st.tiles.get(key) || null) : orthoTile(key);
+        if (!bm) { missing++; continue; }
+        const [x, y] = map.toCanvas(ex + i * span, ny - j * span);
+        ctx.drawImage(bm, x, y, span * map.s, span * map.s);
+      }
+      return missing;
+    };
+    const L = orthoLevel(o);
+    ctx.imageSmoothingEnabled = map.s * o.cell_m < 2;
+    if (L + 1 < o.levels) drawLevel(L + 1, true); // the coarser tiles already here, underneath while these load
+    drawLevel(L, false);
+    st.orthoLevel = L;
+  }
+  // web tiles (--tiles): web mercator z/x/y drawn onto the site's ENU by the local linearisation
+  const lonLatToEn = (lon, lat) => {
+    const g = st.map.geo, J = g.den_dlonlat, dl = lon - g.lon0, dp = lat - g.lat0;
+    return [J[0] * dl + J[1] * dp, J[2] * dl + J[3] * dp];
+  };
+  const enToLonLat = (e, n) => {
+    const g = st.map.geo, J = g.den_dlonlat, det = J[0] * J[3] - J[1] * J[2];
+    return [g.lon0 + (J[3] * e - J[1] * n) / det, g.lat0 + (-J[2] * e + J[0] * n) / det];
+  };
+  const tileLonLat = (z, x, y) => { // the north-west corner of web mercator tile (z, x, y)
+    const k = Math.pow(2, z);
+    return [x / k * 360 - 180, Math.atan(Math.sinh(Math.PI * (1 - 2 * y / k))) * 180 / Math.PI];
+  };
+  function drawWebTiles(ctx) {
+    const t = st.map.tiles, c = map.c, lat0 = st.map.geo.lat0 * Math.PI / 180;
+    const z = Math.max(0, Math.min(t.max_zoom, Math.round(Math.log2(156543.03392 * Math.cos(lat0) * map.s / 1.0))));
+    const k = Math.pow(2, z);
+    const corner = (cx, cy) => enToLonLat(...map.toWorld(cx, cy));
+    const ll = [corner(0, 0), corner(c.width, 0), corner(0, c.height), corner(c.width, c.height)];
+    const xOf = (lon) => (lon + 180) / 360 * k;
+    const yOf = (lat) => { const r = lat * Math.PI / 180; return (1 - Math.log(Math.tan(r) + 1 / Math.cos(r)) / Math.PI) / 2 * k; };
+    const x0 = Math.max(0, Math.floor(Math.min(...ll.map((p) => xOf(p[0]))))), x1 = Math.min(k - 1, Math.floor(Math.max(...ll.map((p) => xOf(p[0])))));
+    const y0 = Math.max(0, Math.floor(Math.min(...ll.map((p) => yOf(p[1]))))), y1 = Math.min(k - 1, Math.floor(Math.max(...ll.map((p) => yOf(p[1])))));
+    if ((x1 - x0 + 1) * (y1 - y0 + 1) > 64) return; // zoomed out past the site: not worth a flood of requests
+    for (let y = y0; y <= y1; y++) for (let x = x0; x <= x1; x++) {
+      const url = t.url.replace("{z}", z).replace("{x}", x).replace("{y}", y);
+      let im = st.webTiles.get(url);
+      if (!im) {
+        im = new Image(); im.referrerPolicy = "no-referrer"; im.onload = () => render();
+        im.src = url; st.webTiles.set(url, im);
+      }
+      if (!im.complete || !im.naturalWidth) continue;
+      const p = (a, b) => map.toCanvas(...lonLatToEn(...tileLonLat(z, a, b)));
+      const [ax, ay] = p(x, y), [bx, by] = p(x + 1, y), [cx, cy] = p(x, y + 1), W = im.naturalWidth, H = im.naturalHeight;
+      ctx.save();
+      ctx.setTransform((bx - ax) / W, (by - ay) / W, (cx - ax) / H, (cy - ay) / H, ax, ay);
+      ctx.imageSmoothingEnabled = true; ctx.drawImage(im, 0, 0); ctx.restore();
+    }
+    st.webZoom = z;
+  }
+
+  // the ground uncertainty as a heat map: its samples coloured (green 0.1 m .. red 10 m, log) in a
+  // small bitmap stretched over the image with bilinear smoothing; the legend in the corner
+  const heat = (s) => { // 1-sigma metres -> [r, g, b]
+    const t = Math.max(0, Math.min(1, (Math.log10(s) + 1) / 2)); // 0.1 m -> 0, 10 m -> 1
+    return t < 0.5 ? [Math.round(510 * t), 200, 60] : [255, Math.round(200 * (2 - 2 * t)), 60];
+  };
+  function drawHeat(ctx, g, w, h) {
+    const cv = document.createElement("canvas"); cv.width = g.nu; cv.height = g.nv;
+    const cx = cv.getContext("2d"), id = cx.createImageData(g.nu, g.nv);
+    g.sigma_m.forEach((s, k) => {
+      const [r, gg, b] = s === null ? [0, 0, 0] : heat(s);
+      id.data.set([r, gg, b, s === null ? 0 : 110], 4 * k);
+    });
+    cx.putImageData(id, 0, 0);
+    const [x0, y0] = img.toCanvas(0, 0);
+    ctx.save(); ctx.imageSmoothingEnabled = true; ctx.imageSmoothingQuality = "high";
+    ctx.drawImage(cv, x0, y0, w * img.s, h * img.s); ctx.restore();
+    const L = img.c.width - 190, T = img.c.height - 34; // the legend
+    for (let i = 0; i < 150; i++) { const [r, gg, b] = heat(Math.pow(10, -1 + 2 * i / 149)); ctx.fillStyle = `rgb(${r},${gg},${b})`; ctx.fillRect(L + i, T, 1, 10); }
+    label(ctx, L, T + 22, "0.1 m", "#fff"); label(ctx, L + 62, T + 22, "1 m", "#fff"); label(ctx, L + 128, T + 22, "10 m", "#fff");
+    label(ctx, L, T - 4, "ground 1σ, 1 px detection", "#fff");
+  }
+
   function drawPanel() {
     const S = st.state, s = S.solve, f = (x, n) => (x === null || x === undefined) ? "–" : x.toFixed(n);
     $("title").textContent = `${S.site} · camera ${S.camera.id} · ${S.picks} picks${S.unsaved ? " · unsaved" : ""}`;
     $("undo").disabled = !S.can_undo;
+    $("refine").value = S.refine;
     let h;
     if (s.ok) {
       const p = s.position_enu_m, sp = s.sigma_position_enu_m, y = s.yaw_pitch_roll_deg, sy = s.sigma_yaw_pitch_roll_deg;
@@ -212,8 +314,18 @@
         `<td>${l.pick_px ? f(l.pick_px[0], 2) + ", " + f(l.pick_px[1], 2) : ""}</td>` +
         `<td class="res">${l.residual_px ? f(l.residual_norm_px, 3) : ""}</td>` +
         `<td>${l.normalised_residual !== undefined && l.normalised_residual !== null ? f(l.normalised_residual, 2) : ""}</td>` +
-        `<td class="flag">${esc(l.flag)}</td>`;
+        `<td class="flag">${esc(l.flag)}</td>` +
+        `<td class="sigma" title="click: this landmark's own sigmas (empty: site.json's)">${f(l.sigma_h_m, 3)}, ${f(l.sigma_v_m, 3)}${l.sigma_stated ? " (own)" : ""}</td>`;
       tr.onclick = () => { st.selected = l.id; render(); };
+      tr.querySelector("td.sigma").onclick = (e) => {
+        e.stopPropagation();
+        const t = window.prompt(`${l.id}: its own 1-sigma horizontal, vertical in metres (empty: the site-wide ones)`,
+                                l.sigma_stated ? `${l.sigma_h_m}, ${l.sigma_v_m}` : "");
+        if (t === null) return;
+        const m = t.trim().match(/^(\d*\.?\d+)\s*[, ]\s*(\d*\.?\d+)$/);
+        if (t.trim() && !m) { status("type two numbers: horizontal, vertical sigma in metres", true); return; }
+        post("/api/sigma", { landmark: l.id, sigma_h_m: m ? +m[1] : null, sigma_v_m: m ? +m[2] : null });
+      };
       tb.appendChild(tr);
     }
   }
@@ -225,21 +337,36 @@
   }
 
   // ---- interaction ----
-  function mouse(view, onClick) {
+  // A press on a marker (grab answers it) drags the marker: it follows the pointer and is dropped
+  // where released (drop); a press elsewhere drags the view; a press without moving is a click.
+  function mouse(view, onClick, grab, drop, readout) {
     let down = null;
     const c = view.c;
     const pos = (e) => { // canvas pixels (the canvas may be scaled by CSS until the next resize)
       const r = c.getBoundingClientRect(); return [(e.clientX - r.left) * c.width / r.width, (e.clientY - r.top) * c.height / r.height];
     };
-    c.addEventListener("mousedown", (e) => { down = { p: pos(e), ox: view.ox, oy: view.oy, moved: false }; });
-    c.addEventListener("mousemove", (e) => {
-      if (!down) return;
-      const p = pos(e), dx = p[0] - down.p[0], dy = p[1] - down.p[1];
-      if (Math.hypot(dx, dy) > 4) down.moved = true;
-      if (down.moved) { view.ox = down.ox + dx; view.oy = down.oy + dy; render(); }
+    c.addEventListener("mousedown", (e) => {
+      const p = pos(e);
+      down = { p, ox: view.ox, oy: view.oy, moved: false, marker: grab(p) };
     });
-    c.addEventListener("mouseup", (e) => { if (down && !down.moved) onClick(...view.toWorld(...pos(e))); down = null; });
-    c.addEventListener("mouseleave", () => { down = null; });
+    c.addEventListener("mousemove", (e) => {
+      const p = pos(e);
+      readout(...view.toWorld(...p));
+      if (!down) return;
+      const dx = p[0] - down.p[0], dy = p[1] - down.p[1];
+      if (Math.hypot(dx, dy) > 4) down.moved = true;
+      if (!down.moved) return;
+      if (down.marker && down.marker.fixed) status(`${down.marker.id} is surveyed: it stays where the survey put it (only map picks move)`);
+      else if (down.marker) { st.drag = { id: down.marker.id, view: view, at: view.toWorld(...p) }; render(); }
+      else { view.ox = down.ox + dx; view.oy = down.oy + dy; render(); }
+    });
+    c.addEventListener("mouseup", (e) => {
+      const w = view.toWorld(...pos(e));
+      if (down && !down.moved) onClick(...w);
+      else if (down && down.marker && !down.marker.fixed) { st.drag = null; drop(down.marker.id, ...w); }
+      down = null;
+    });
+    c.addEventListener("mouseleave", () => { if (down && down.marker) { st.drag = null; render(); } down = null; });
     c.addEventListener("wheel", (e) => { e.preventDefault(); view.zoom(...pos(e), e.deltaY < 0 ? 1.25 : 0.8); render(); },
                        { passive: false });
   }
@@ -253,12 +380,33 @@
     return best;
   }
 
+  function grabPick(p) { // the pick marker within 8 screen px of canvas point p
+    let best = null, bd = 8;
+    for (const l of st.state.landmarks) if (l.pick_px) {
+      const [x, y] = img.toCanvas(...pxToWorld(l.pick_px[0], l.pick_px[1])), d = Math.hypot(x - p[0], y - p[1]);
+      if (d < bd) { bd = d; best = l.id; }
+    }
+    return best ? { id: best, fixed: false } : null;
+  }
+  function grabLandmark(p) { // the landmark dot within 8 screen px; a surveyed one cannot move
+    let best = null, bd = 8;
+    for (const l of st.state.landmarks) {
+      const [x, y] = map.toCanvas(l.enu_m[0], l.enu_m[1]), d = Math.hypot(x - p[0], y - p[1]);
+      if (d < bd) { bd = d; best = l; }
+    }
+    return best ? { id: best.id, fixed: best.kind !== "map-pick" } : null;
+  }
+  const readoutImage = (X, Y) => { const [u, v] = worldToPx(X, Y); $("readout").textContent = `u ${u.toFixed(2)}, v ${v.toFixed(2)} px`; };
+  const readoutMap = (e, n) => {
+    const [lon, lat] = enToLonLat(e, n);
+    $("readout").textContent = `${lat.toFixed(7)}, ${lon.toFixed(7)} · E ${e.toFixed(2)}, N ${n.toFixed(2)} m`;
+  };
   mouse(img, (X, Y) => {
     const [u, v] = worldToPx(X, Y);
     if (st.selected) post("/api/pick", { landmark: st.selected, u, v }).then((ok) => { if (ok) st.selected = null; render(); });
     else if (st.pendingEn) post("/api/landmark", { e: st.pendingEn[0], n: st.pendingEn[1], u, v });
     else { st.pendingPx = [u, v]; status("now click its place on the map"); render(); }
-  });
+  }, grabPick, (id, X, Y) => { const [u, v] = worldToPx(X, Y); post("/api/pick", { landmark: id, u, v }); }, readoutImage);
   mouse(map, (e, n) => {
     const l = nearestLandmark(e, n, 10);
     if (st.pendingPx) {
@@ -266,7 +414,7 @@
       else post("/api/landmark", { e, n, u: st.pendingPx[0], v: st.pendingPx[1] });
     } else if (l) { st.selected = l.id; st.pendingEn = null; status(`${l.id}: now click it in the image`); render(); }
     else { st.selected = null; st.pendingEn = [e, n]; status("new landmark: now click its place in the image"); render(); }
-  });
+  }, grabLandmark, (id, e, n) => post("/api/landmark/move", { landmark: id, e, n }), readoutMap);
 
   function step(dir) { // the next / previous landmark without a pick
     const L = st.state.landmarks, k0 = L.findIndex((l) => l.id === st.selected);
@@ -279,6 +427,28 @@
   const save = () => post("/api/save").then((ok) => ok && status("saved: landmarks.geojson and observations"));
   const del = () => { if (st.selected) post("/api/delete", { landmark: st.selected }); };
   $("undo").onclick = undo; $("save").onclick = save; $("delete").onclick = del;
+  $("refine").onchange = (e) => post("/api/refine", { refine: e.target.value });
+  $("import").onchange = async (e) => {
+    const f = e.target.files[0]; if (!f) return;
+    if (await post("/api/import", { name: f.name, text: await f.text() })) status(`imported ${f.name}`);
+    e.target.value = "";
+  };
+  $("goto").onsubmit = (e) => { // "lat, lon": moves the selected map pick there, else adds a landmark there
+    e.preventDefault();
+    const m = $("latlon").value.trim().match(/^(-?\d+(?:\.\d+)?)\s*[,; ]\s*(-?\d+(?:\.\d+)?)$/);
+    if (!m) { status("type the point as lat, lon in degrees (WGS84), e.g. 48.1374, 11.5755", true); return; }
+    const lat = +m[1], lon = +m[2], sel = st.state.landmarks.find((l) => l.id === st.selected);
+    const before = new Set(st.state.landmarks.map((l) => l.id));
+    const go = sel && sel.kind === "map-pick" ? post("/api/landmark/move", { landmark: sel.id, lat, lon }) : post("/api/landmark", { lat, lon });
+    go.then((ok) => {
+      if (!ok) return;
+      const l = st.state.landmarks.find((x) => !before.has(x.id)) || sel;
+      const [e0, n0] = lonLatToEn(lon, lat);
+      map.ox += map.c.width / 2 - map.toCanvas(e0, n0)[0]; map.oy += map.c.height / 2 - map.toCanvas(e0, n0)[1];
+      if (l) { st.selected = l.id; status(`${l.id} at ${lat}, ${lon}: now click it in the image`); }
+      render();
+    });
+  };
   $("ground").onchange = (e) => { st.ground = e.target.checked; render(); };
   document.addEventListener("keydown", (e) => {
     const k = e.key;
@@ -310,6 +480,12 @@
       const w = v.toWorld((x - r.left) * v.c.width / r.width, (y - r.top) * v.c.height / r.height);
       return view === "image" ? worldToPx(...w) : w;
     },
+    get orthoLevel() { return st.orthoLevel; },
+    get tilesLoaded() { return st.tilesLoaded; },
+    get webZoom() { return st.webZoom; },
+    zoomMap(e, n, s) { // centre ground point (e, n) at s canvas pixels per metre
+      map.s = s; map.ox = map.c.width / 2 - s * e; map.oy = map.c.height / 2 + s * n; render();
+    },
     zoomImage(u, v, s) { // centre pixel (u, v) at s canvas pixels per image pixel
       img.s = s; const [X, Y] = pxToWorld(u, v); img.ox = img.c.width / 2 - s * X; img.oy = img.c.height / 2 - s * Y; render();
     },
@@ -321,9 +497,12 @@
     st.map = await getJSON("/api/map");
     const [w, h] = camSize();
     st.image = await rgbCanvas("/api/image.rgb", w, h);
-    if (st.map.ortho) st.ortho = await rgbCanvas("/api/ortho.rgb", st.map.ortho.width, st.map.ortho.height);
-    $("mapkind").textContent = st.map.ortho ? `orthophoto (${st.map.ortho.crs}${st.map.ortho.warped ? ", reprojected" : ""}, ` +
-                                             `${st.map.ortho.cell_m.toFixed(3)} m cells)` : "plain map: landmarks and lanes";
+    const kinds = [];
+    if (st.map.ortho) kinds.push(`orthophoto (${st.map.ortho.crs}${st.map.ortho.warped ? ", reprojected" : ""}, ` +
+                                 `${st.map.ortho.width}x${st.map.ortho.height} cells of ${st.map.ortho.cell_m.toFixed(3)} m)`);
+    if (st.map.tiles) kinds.push("web tiles");
+    $("mapkind").textContent = kinds.length ? kinds.join(" over ") : "plain map: landmarks and lanes";
+    $("attribution").textContent = st.map.tiles ? st.map.tiles.attribution : "";
     fitImage(); fitMap(); render();
     status(st.state.solve.ok ? "solved" : st.state.solve.message);
     st.ready = true;
