@@ -93,23 +93,36 @@ rs_status rs_synth_dataset__kitti_files(const rs_synth_dataset__run *d, int k, c
     char *kitti_image = rs_io_join(opt->out_dir, rel);
     if (!st && !kitti_image) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st && !c->kitti_map) st = rs_synth_dataset__link_into(d, image, rel, err);
+    // the visible box needs the ID pass undistorted too; the other boxes come from geometry
+    const bool visible_box = opt->bbox == RS_SYNTH_BBOX_VISIBLE;
     if (!st && c->kitti_map) {
         st = rs_synth_remap(&und, composite, c->kitti_map, c->cam.width, c->cam.height, 1, err);
         if (!st) st = rs_image_write(kitti_image, &und, 8, err);
-        if (!st && ids) st = undistort_ids(&und_ids, c, ids, err);
+        if (!st && ids && visible_box) st = undistort_ids(&und_ids, c, ids, err);
     }
-    // the labels through the pinhole core (a pinhole lens: the run's labels are those)
+    // the labels through the pinhole core (a pinhole lens: the run's labels are those). Without
+    // the ID pass (not needed but for the visible box) no mesh is rasterised: the run's
+    // visibility figures (of the same pixels, distorted) are kept instead
     rs_synth_label_input kin = *lin;
     kin.cam = &c->kitti_cam;
-    kin.id_image = c->kitti_map ? und_ids : ids;
+    kin.id_image = visible_box ? und_ids : NULL;
+    kin.meshes = visible_box ? lin->meshes : NULL;
     kin.origin = NULL; // (latitude and longitude are not KITTI's)
     if (!st && c->kitti_map) st = rs_synth_labels_compute(&labels, &kin, err);
     const rs_synth_label *from = c->kitti_map ? labels : run_labels; // a pinhole: the run's own
     int Nmine = 0;
     if (!st && !(mine = malloc(sizeof(*mine) * (size_t)(lin->Nvehicles > 0 ? lin->Nvehicles : 1))))
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    for (int i = 0; !st && i < lin->Nvehicles; i++)
-        if (kept[i]) mine[Nmine++] = from[i];
+    for (int i = 0; !st && i < lin->Nvehicles; i++) {
+        if (!kept[i]) continue;
+        mine[Nmine] = from[i];
+        if (c->kitti_map && !visible_box) { // (the run's: undistortion moves pixels, keeps vehicles)
+            mine[Nmine].visible_px = run_labels[i].visible_px;
+            mine[Nmine].full_px = run_labels[i].full_px;
+            mine[Nmine].visibility = run_labels[i].visibility;
+        }
+        Nmine++;
+    }
     if (!st) st = rs_synth_labels_kitti_rect(R0, NULL, &c->kitti_cam, err);
     const rs_synth_label_image kimg = {.file_name = kitti_name,
                                        .width = c->cam.width,

@@ -239,8 +239,9 @@ rs_status rs_synth_dataset__prepare_kitti(rs_synth_dataset__camera *c, rs_err *e
 
 // Image k's KITTI files: kitti/training/image_2/<k>.png (the composite undistorted to the
 // pinhole core: OpenCV's remap, linear; hard-linked from `image` for a pinhole lens),
-// label_2/<k>.txt (labels computed again through the pinhole core with the ID pass remapped
-// nearest-neighbour, so the 2D boxes are the undistorted image's; in the rectified frame of
+// label_2/<k>.txt (labels computed again through the pinhole core, so the 2D boxes are the
+// undistorted image's -- with --bbox visible from the ID pass remapped nearest-neighbour, else
+// by geometry alone with the run's visibility --; in the rectified frame of
 // rs_synth_labels_kitti_rect), calib/<k>.txt. A vehicle is written when the run's labels keep it
 // (kept[i], the other layouts' rule) and its box exists in the undistorted image.
 // in: image: the composite's file; composite, ids: the render's (c's size; ids may be NULL);
