@@ -290,6 +290,11 @@ static bool is_atomic_temporary(const char *name)
     return true;
 }
 
+size_t rs_io_temporary_base_len(const char *name)
+{
+    return name && is_atomic_temporary(name) ? strlen(name) - (sizeof ".tmp.XXXXXX" - 1) : 0;
+}
+
 static size_t stale_removed; // nftw passes no user pointer; callers hold the folder's lock
 
 static int remove_temporary(const char *path, const struct stat *sb, int type, struct FTW *ftw)

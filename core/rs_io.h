@@ -106,6 +106,11 @@ void rs_io_remove_tree(const char *path);
 // returns how many were removed. Not thread-safe (nftw has no user pointer).
 size_t rs_io_remove_stale_temporaries(const char *dir);
 
+// When `name` (a file name, no folder) is one of rs_io_atomic_open's temporaries,
+// "<base>.tmp.XXXXXX" (six letters or digits), the length of <base>; else 0. For a caller that
+// removes only the temporaries of its own file names.
+size_t rs_io_temporary_base_len(const char *name);
+
 // ---- folder locks ----
 
 // An exclusive lock on a folder, so that two processes never write one output folder at once

@@ -116,8 +116,8 @@ static rs_status get_numbers(const where *w, const cJSON *v, const char *field, 
 // The point of an annotation or detection (docs/evaluation.md, rule 1), the same rule for both:
 // the centre of `footprint_bbox` [x, y, w, h] if present (the dataset contract, docs/labels.md:
 // the box the roadside detector is trained on), else `bottom_center` [u, v], else
-// (x + w/2, y + h/2 + K h) from `bbox` (K: the centre shift, detections only). A present bbox is
-// checked in every case.
+// (x + w/2 - 0.5, y + h/2 - 0.5 + K h) from `bbox` (COCO's corner convention made pixel-centre;
+// K: the centre shift, detections only). A present bbox is checked in every case.
 static rs_status get_point(const where *w, const cJSON *o, double K, double q[2], rs_err *err)
 {
     const cJSON *fp = cJSON_GetObjectItemCaseSensitive(o, "footprint_bbox");
@@ -131,8 +131,10 @@ static rs_status get_point(const where *w, const cJSON *o, double K, double q[2]
         if ((st = get_numbers(w, bb, "bbox", 4, b, err))) return st;
         if (b[2] < 0) return bad(w, err, RS_ERR_INVALID, "bbox: negative width %g", b[2]);
         if (b[3] < 0) return bad(w, err, RS_ERR_INVALID, "bbox: negative height %g", b[3]);
-        q[0] = b[0] + 0.5 * b[2];
-        q[1] = b[1] + 0.5 * b[3] + K * b[3];
+        // bbox is in COCO's corner convention ((0, 0) the top-left pixel's corner); points are
+        // in roadside's pixel-centre one (docs/conventions.md): 0.5 px less
+        q[0] = b[0] + 0.5 * b[2] - 0.5;
+        q[1] = b[1] + 0.5 * b[3] + K * b[3] - 0.5;
     }
     if (fp) {
         double b[4];

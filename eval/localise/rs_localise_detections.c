@@ -102,6 +102,9 @@ static rs_status coco_entry(void *ctx, size_t index, const cJSON *o, size_t offs
     if (d->bbox_px[2] < 0 || d->bbox_px[3] < 0)
         return coco_bad(&w, err, RS_ERR_INVALID, "bbox: negative width or height (%g, %g)", d->bbox_px[2],
                         d->bbox_px[3]);
+    // COCO's corner origin: its (0, 0) is the top-left pixel's corner, roadside's (-0.5, -0.5)
+    d->bbox_px[0] -= 0.5;
+    d->bbox_px[1] -= 0.5;
     const cJSON *s = cJSON_GetObjectItemCaseSensitive(o, "score");
     if (!s) return coco_bad(&w, err, RS_ERR_PARSE, "score: missing");
     if (!cJSON_IsNumber(s) || !isfinite(s->valuedouble))

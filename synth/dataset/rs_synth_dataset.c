@@ -34,6 +34,7 @@ void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
     opt->vehicles = 10;
     opt->split = "train2017";
     opt->val_split = "val2017";
+    opt->val_fraction = RS_SYNTH_VAL_FRACTION_DEFAULT;
     opt->bbox = RS_SYNTH_BBOX_FOOTPRINT;
     opt->junction_traffic = true;
     opt->shadows = true;
@@ -152,6 +153,8 @@ static void dataset_free(rs_synth_dataset__run *d)
         }
         free(d->cams[i].bg);
         free(d->cams[i].canvas_map);
+        free(d->cams[i].kitti_map);
+        rs_camera_free(&d->cams[i].kitti_cam);
         free(d->cams[i].calib_path);
     }
     free(d->cams);
@@ -386,7 +389,8 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
     }
     char shard[64];
     snprintf(shard, sizeof(shard), "%d/%d", opt->shard_index, opt->shard_count);
-    cJSON *shards = cJSON_AddArrayToObject(doc, "shards"); // every shard run into this folder
+    cJSON *shards = cJSON_AddArrayToObject(doc, "shards");     // every shard run into this folder
+    cJSON *finished = cJSON_AddArrayToObject(doc, "finished"); // those that finished (merge needs it)
     char *path = rs_io_join(opt->out_dir, "run.json"), *text = NULL, *old = NULL;
     rs_status st = path ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st && rs_synth_dataset__file_exists(path) && rs_io_read_file(&old, NULL, path, NULL) == RS_OK) {
@@ -403,6 +407,12 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
             if (cJSON_IsString(x) && strcmp(x->valuestring, shard) != 0)
                 cJSON_AddItemToArray(shards, cJSON_CreateString(x->valuestring));
         }
+        // the other shards' completion records stay; this shard's is withdrawn until it finishes
+        cJSON_ArrayForEach(x, cJSON_GetObjectItemCaseSensitive(prev, "finished"))
+        {
+            if (cJSON_IsString(x) && strcmp(x->valuestring, shard) != 0)
+                cJSON_AddItemToArray(finished, cJSON_CreateString(x->valuestring));
+        }
         cJSON_Delete(prev);
     }
     cJSON_AddItemToArray(shards, cJSON_CreateString(shard));
@@ -412,38 +422,6 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
     free(path);
     free(text);
     cJSON_Delete(doc);
-    return st;
-}
-
-// issue 40: the mix of conditions of this shard's images (sum->Ncondition) into DATASET/run.json
-// as "conditions": {"I/N": {"<time>-<surface>": images, ...}, ...} (one entry per shard run into
-// the folder, this one's replaced; beside "run", so neither merge nor a rerun compares it; merge
-// sums them, rs_synth_dataset_merge). The record is rewritten atomically.
-static rs_status write_condition_mix(const rs_synth_dataset__run *d, const rs_synth_dataset_summary *sum, rs_err *err)
-{
-    const rs_synth_dataset_options *opt = d->opt;
-    char *path = rs_io_join(opt->out_dir, "run.json"), *text = NULL, *out = NULL;
-    if (!path) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    rs_status st = rs_io_read_file(&text, NULL, path, err);
-    cJSON *doc = st ? NULL : cJSON_Parse(text);
-    if (!st && !doc) st = rs_err_set(err, RS_ERR_PARSE, "%s: not JSON", path);
-    if (!st) {
-        cJSON *mixes = cJSON_GetObjectItemCaseSensitive(doc, "conditions");
-        if (!cJSON_IsObject(mixes)) {
-            cJSON_DeleteItemFromObjectCaseSensitive(doc, "conditions");
-            mixes = cJSON_AddObjectToObject(doc, "conditions");
-        }
-        char shard[64];
-        snprintf(shard, sizeof(shard), "%d/%d", opt->shard_index, opt->shard_count);
-        cJSON_DeleteItemFromObjectCaseSensitive(mixes, shard);
-        rs_synth_dataset__condition_mix_add(cJSON_AddObjectToObject(mixes, shard), sum->Ncondition);
-        if (!(out = cJSON_Print(doc))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    }
-    if (!st) st = rs_io_write_file(path, out, strlen(out), err);
-    cJSON_Delete(doc);
-    free(out);
-    free(text);
-    free(path);
     return st;
 }
 
@@ -734,14 +712,16 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
     if (!st && opt->models_path) st = rs_synth_dataset__models_load(&d, err);
     if (!st && opt->sequence) st = sequence_range(&o, &d, err);
     if (st) goto done;
+    d.val_fallback = rs_synth_dataset__val_fallback(&d);
     // One run per dataset folder: a second one would remake the same images in the same work/
     // folders. The lock is taken before anything in DATASET is touched (but DATASET itself).
-    if ((st = rs_io_mkdir_p(opt->out_dir, err))) goto done;
+    // DATASET must be roadside's (issue 42): a folder of anything else is refused, untouched
+    if ((st = rs_synth_dataset__claim_folder(opt->out_dir, "roadside synth", err))) goto done;
     if ((st = rs_io_lock_dir(&lock, opt->out_dir, "roadside synth", err))) goto done;
-    // a run killed while writing a file leaves its temporary; no writer is left to finish it
-    rs_io_remove_stale_temporaries(opt->out_dir);
     d.split[0] = opt->split;
     d.split[1] = opt->val_split;
+    // a run killed while writing a file leaves its temporary; no writer is left to finish it
+    rs_synth_dataset__remove_temporaries(opt->out_dir, d.split, 2);
     d.parts_dir = rs_io_join(opt->out_dir, "parts");
     d.work_root = rs_io_join(opt->out_dir, "work");
     if (!d.parts_dir || !d.work_root) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
@@ -779,8 +759,8 @@ rs_status rs_synth_dataset_run(rs_synth_dataset_summary *summary, const rs_synth
         rs_synth_dataset__models_uncache(&d);
         rmdir(d.work_root); // empty when every image finished
     }
-    if (!st && !opt->labels_only) st = write_condition_mix(&d, &sum, err);
     if (!st && opt->sequence) st = sequence_tracks(&sum.tracks_gt, &d, err);
+    if (!st) st = rs_synth_dataset__write_completion(&d, sum.Ncondition, err); // the completion record, last
 done:
     rs_io_unlock(&lock);
     dataset_free(&d);

@@ -56,6 +56,9 @@
 extern "C" {
 #endif
 
+// The share of images in the validation split by default (`roadside synth --val-fraction`).
+#define RS_SYNTH_VAL_FRACTION_DEFAULT 0.1
+
 typedef struct {
     const char *site_dir;  // the site folder (site.json, lanes.geojson, backgrounds)
     const char *calib_dir; // folder of calibrated <camera>.cameramodel files
@@ -72,7 +75,9 @@ typedef struct {
     int vehicles;      // at most this many vehicles per image's traffic (default 10)
     const char *split; // COCO split name (default "train2017")
     // Validation split: image k goes to val_split when any of these holds (else to split):
-    //   a uniform draw of its own stream is below val_fraction (0..1; default 0),
+    //   a uniform draw of its own stream (a sequence: of its frame) is below val_fraction (0..1;
+    //   default RS_SYNTH_VAL_FRACTION_DEFAULT; with 2 images or more never an empty split: the
+    //   image with the smallest draw when none falls below),
     //   its camera is one of val_cameras, its background matches every val_bg_key = value
     //   (Nval_bg > 0; rs_site_background_tag, so "name=..." holds a background out).
     const char *val_split; // default "val2017"

@@ -74,8 +74,7 @@ static bool png_complete(const char *path, char *why, size_t n)
     return ok;
 }
 
-// Decodes the image and compares its size.
-static bool image_ok(const char *path, int width, int height, char *why, size_t n)
+bool rs_synth_dataset__image_intact(const char *path, int width, int height, char *why, size_t n)
 {
     if (!regular_file(path, why, n) || !png_complete(path, why, n)) return false;
     rs_image img = {0};
@@ -85,7 +84,7 @@ static bool image_ok(const char *path, int width, int height, char *why, size_t 
         return false;
     }
     const bool ok = img.width == width && img.height == height;
-    if (!ok) snprintf(why, n, "%s: %dx%d pixels, its part file says %dx%d", path, img.width, img.height, width, height);
+    if (!ok) snprintf(why, n, "%s: %dx%d pixels, its record says %dx%d", path, img.width, img.height, width, height);
     rs_image_free(&img);
     return ok;
 }
@@ -127,7 +126,7 @@ rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char 
         if (regular_file(part, why, n) && part_ok(part, file_name, c->cam.width, c->cam.height, why, n))
             *state = RS_SYNTH_DATASET__FINISHED;
     } else if (regular_file(part, why, n) && part_ok(part, file_name, c->cam.width, c->cam.height, why, n) &&
-               image_ok(image, c->cam.width, c->cam.height, why, n)) {
+               rs_synth_dataset__image_intact(image, c->cam.width, c->cam.height, why, n)) {
         bool ok = true;
         for (int i = 0; i < 5 && ok; i++) ok = regular_file(side[i], why, n);
         if (ok) *state = RS_SYNTH_DATASET__FINISHED;

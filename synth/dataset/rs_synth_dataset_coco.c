@@ -18,6 +18,7 @@
 #include "core/rs_json.h"
 #include "synth/dataset/internal/rs_synth_dataset_internal.h"
 #include "synth/fleet/rs_synth_fleet.h"
+#include "synth/labels/rs_synth_labels.h"
 
 // ---- the COCO writer (run and merge): an index, then the file written as a stream ----
 //
@@ -421,30 +422,97 @@ static rs_status add_part(rs_synth_dataset__coco_index *x, bool *added, const ch
     return RS_OK;
 }
 
-// YOLO's data.yaml (Ultralytics: path, train, val, names) and KITTI's ImageSets/<split>.txt
-// (numeric image names, one a line), written atomically beside the COCO files.
-rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char *const split[2], int *const *ks,
-                                                const int *Nks, rs_err *err)
+// The KITTI part of the dataset's README (also kitti/README.md).
+static void readme_kitti(FILE *f)
 {
-    char *root = realpath(out_dir, NULL);
-    if (!root) return rs_err_set(err, RS_ERR_IO, "%s: %s", out_dir, strerror(errno));
+    fputs("## KITTI (kitti/)\n\n"
+          "`kitti/training/image_2/<k>.png`, `label_2/<k>.txt`, `calib/<k>.txt` (k the image index, 6 digits),\n"
+          "`kitti/ImageSets/train.txt` and `val.txt` (the indices of each split). KITTI's P2 is a pinhole, so\n"
+          "the KITTI images are the dataset's images **undistorted** to the lens's pinhole core (same fx, fy,\n"
+          "cx, cy and size; identical to the other layouts' images for a pinhole camera), and their 2D boxes\n"
+          "are that image's. A roadside camera looks down: KITTI's 3D boxes (upright, rotation_y about the y\n"
+          "axis) hold in the **rectified frame**, the camera frame levelled: `x_rect = R0_rect x_cam`, its y\n"
+          "axis vertical (down), its z axis the optical axis made horizontal. Labels' location (the bottom\n"
+          "centre of the 3D box) and rotation_y are in that frame; `P2 = [K R0_rect^T | 0]` maps it into the\n"
+          "undistorted image (so P2[:, :3] is not upper triangular on a tilted camera: decompose it, e.g. RQ,\n"
+          "for K), and `P2 R0_rect Tr_velo_to_cam` maps the site's ENU frame (KITTI's \"velodyne\") into it.\n"
+          "Pixel (0, 0) is the centre of the top-left pixel. Types: Car (sedan, hatchback, suv, pickup),\n"
+          "Van, Bus, Truck (box and articulated), Misc (motorcycle), Cyclist (bicycle).\n",
+          f);
+}
+
+// DATASET/README.md (and kitti/README.md): what each layout holds, the splits and the box type.
+static rs_status write_readme(const char *out_dir, const char *const split[2], const int *Nks, int bbox, rs_err *err)
+{
+    char *path = rs_io_join(out_dir, "README.md"), *kpath = rs_io_join(out_dir, "kitti/README.md");
+    rs_io_atomic a = {0};
+    rs_status st = path && kpath ? rs_io_atomic_open(&a, path, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!st) {
+        FILE *f = a.f;
+        fprintf(f,
+                "# A roadside synth dataset\n\n"
+                "Synthetic images of road traffic seen by calibrated roadside cameras, labelled from the\n"
+                "cameras' own models (roadside's docs/labels.md, \"The dataset contract\"; docs/synth.md).\n\n"
+                "## The boxes: %s\n\n%s.\n\n"
+                "The same box is COCO's `bbox`, the YOLO line and KITTI's 2D box (`roadside synth --bbox`;\n"
+                "COCO's annotations also carry the other boxes: footprint_bbox, body_bbox, visible_bbox).\n\n"
+                "## Splits\n\n| split | images |\n|---|---|\n| %s (train) | %d |\n| %s (val) | %d |\n\n"
+                "Each image is in one split only, drawn from (seed, image) (`--val-fraction`, default %.2g;\n"
+                "`--val-camera`, `--val-backgrounds` hold out cameras or backgrounds). Shards and merges keep it.\n\n"
+                "## COCO, as YOLOX and torchvision read it\n\n"
+                "`<split>/<stem>.png` and `annotations/instances_<split>.json`: with the defaults `train2017/`,\n"
+                "`val2017/`, `instances_train2017.json`, `instances_val2017.json`. `bbox` [x, y, w, h] and\n"
+                "`segmentation` (the box's polygon) are in COCO's corner convention: (0, 0) is the top-left\n"
+                "corner of the top-left pixel. roadside's own fields (footprint_bbox, bottom_center, corners_px,\n"
+                "...) have (0, 0) at that pixel's centre (0.5 px less). Categories 1..10 (`info` repeats the box\n"
+                "type: bbox_kind, bbox_meaning).\n\n"
+                "## Ultralytics YOLO\n\n"
+                "`data.yaml`: no `path` (Ultralytics then takes the file's own folder as the root, so the\n"
+                "dataset can move), `train: images/<split>`, `val: images/<val split>`, names 0..9 (the\n"
+                "category ids less 1). `labels/<split>/<stem>.txt`: `class cx cy w h` normalised by the image\n"
+                "size, the same boxes as COCO's bbox.\n\n",
+                rs_synth_bbox_kind_name((rs_synth_bbox_kind)bbox), rs_synth_bbox_kind_meaning((rs_synth_bbox_kind)bbox),
+                split[0] ? split[0] : "train2017", Nks[0], split[1] ? split[1] : "val2017", Nks[1],
+                RS_SYNTH_VAL_FRACTION_DEFAULT);
+        readme_kitti(f);
+        st = rs_io_atomic_commit(&a, err);
+    }
+    rs_io_atomic k = {0};
+    if (!st) st = rs_io_atomic_open(&k, kpath, err);
+    if (!st) {
+        fputs("# KITTI layout of a roadside synth dataset (../README.md)\n\n", k.f);
+        readme_kitti(k.f);
+        st = rs_io_atomic_commit(&k, err);
+    }
+    free(path);
+    free(kpath);
+    return st;
+}
+
+// YOLO's data.yaml (Ultralytics: train, val, names; no path: the file's folder is the root) and
+// KITTI's ImageSets/<split>.txt (numeric image names, one a line), the README, written atomically.
+rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char *const split[2], int *const *ks,
+                                                const int *Nks, int bbox, rs_err *err)
+{
     char *yaml = rs_io_join(out_dir, "data.yaml");
     rs_io_atomic a = {0};
     rs_status st = yaml ? rs_io_atomic_open(&a, yaml, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st) {
-        // a val split Ultralytics needs: the train images themselves when there is none
+        // a val split Ultralytics needs: the train images themselves when there is none (one image)
         fprintf(a.f,
-                "# Ultralytics YOLO dataset (roadside synth, docs/labels.md)\npath: %s\ntrain: images/%s\n"
-                "val: images/%s\nnames:\n",
-                root, split[0], Nks[1] > 0 ? split[1] : split[0]);
+                "# Ultralytics YOLO dataset (roadside synth; README.md, roadside's docs/labels.md)\n"
+                "# No 'path': Ultralytics takes this file's folder as the dataset root (a relative 'path'\n"
+                "# would be resolved against its own datasets_dir instead), so the folder can move.\n"
+                "# Boxes: %s: %s.\n"
+                "train: images/%s\nval: images/%s\nbox_type: %s\nnames:\n",
+                rs_synth_bbox_kind_name((rs_synth_bbox_kind)bbox), rs_synth_bbox_kind_meaning((rs_synth_bbox_kind)bbox),
+                split[0], Nks[1] > 0 ? split[1] : split[0], rs_synth_bbox_kind_name((rs_synth_bbox_kind)bbox));
         for (int c = 0; c < RS_SYNTH_NCLASSES; c++)
             fprintf(a.f, "  %d: %s\n", c, rs_synth_class_name((rs_synth_class)c));
         st = rs_io_atomic_commit(&a, err);
     }
     free(yaml);
-    free(root);
     for (int s = 0; s < 2 && !st; s++) {
-        if (s == 1 && Nks[1] == 0) break;
         char name[400];
         snprintf(name, sizeof(name), "kitti/ImageSets/%s.txt", s == 0 ? "train" : "val");
         char *path = rs_io_join(out_dir, name);
@@ -455,6 +523,7 @@ rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char 
         for (int i = 0; i < Nks[s]; i++) fprintf(f.f, "%06d\n", ks[s][i]);
         st = rs_io_atomic_commit(&f, err);
     }
+    if (!st) st = write_readme(out_dir, split, Nks, bbox, err);
     return st;
 }
 
@@ -501,7 +570,7 @@ rs_status rs_synth_dataset__assemble(const rs_synth_dataset__run *d, int *Nanns,
         if (!(path = rs_io_join(opt->out_dir, name))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         if (!st) st = rs_synth_dataset__coco_index_write(&a[s], path, NULL, Nanns, NULL, NULL, err);
     }
-    if (!st) st = rs_synth_dataset__write_trainer_files(opt->out_dir, d->split, ks, Nks, err);
+    if (!st) st = rs_synth_dataset__write_trainer_files(opt->out_dir, d->split, ks, Nks, opt->bbox, err);
     free(path);
     rs_synth_dataset__coco_index_free(&a[0]);
     rs_synth_dataset__coco_index_free(&a[1]);

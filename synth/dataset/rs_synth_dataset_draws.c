@@ -21,13 +21,38 @@ int rs_synth_dataset__image_background(const rs_synth_dataset__run *d, int k, co
     return (int)(rs_rng_seed_next(&rng) % (uint64_t)c->Nbg); // the stream's first draw
 }
 
+// The validation draw of image k: uniform in [0, 1) from a stream of its own (seed, key, "val"),
+// so the images' streams stay as they were. The key is k, or in a sequence its frame (k / Ncams:
+// every camera's view of a frame in one split, no frame seen in both).
+static double val_draw(const rs_synth_dataset__run *d, int k)
+{
+    const int key = d->opt->sequence ? k / d->Ncams : k;
+    const uint64_t h = rs_synth_dataset_image_seed(d->opt->seed ^ 0x76616c5f73706c74ULL, key);
+    return (double)(h >> 11) * 0x1.0p-53;
+}
+
+int rs_synth_dataset__val_fallback(const rs_synth_dataset__run *d)
+{
+    const rs_synth_dataset_options *opt = d->opt;
+    if (!(opt->val_fraction > 0)) return -1;
+    const int step = opt->sequence ? d->Ncams : 1; // one key per frame in a sequence
+    if (opt->count / step < 2) return -1;          // one image (frame): nothing to hold out
+    int best = -1;
+    double best_u = 2;
+    for (int k = 0; k < opt->count; k += step) {
+        const double u = val_draw(d, k);
+        if (u < opt->val_fraction) return -1; // the draw gave the split an image
+        if (u < best_u) best_u = u, best = k;
+    }
+    return opt->sequence ? best / d->Ncams : best;
+}
+
 int rs_synth_dataset__image_split(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c)
 {
     const rs_synth_dataset_options *opt = d->opt;
     if (opt->val_fraction > 0) {
-        // a stream of its own (seed, k, "val"): the images' streams stay as they were
-        const uint64_t h = rs_synth_dataset_image_seed(opt->seed ^ 0x76616c5f73706c74ULL, k);
-        if ((double)(h >> 11) * 0x1.0p-53 < opt->val_fraction) return 1;
+        if (val_draw(d, k) < opt->val_fraction) return 1;
+        if (d->val_fallback >= 0 && (opt->sequence ? k / d->Ncams : k) == d->val_fallback) return 1;
     }
     for (int i = 0; i < opt->Nval_cameras; i++)
         if (strcmp(opt->val_cameras[i], c->id) == 0) return 1;

@@ -80,6 +80,7 @@ rs_status rs_synth_dataset__prepare_camera(rs_synth_dataset__camera *c, rs_err *
     if (!st && !c->canvas.identity)
         st =
             rs_synth_canvas_map(&c->canvas_map, &c->canvas, &cc->lensmodel, cc->intrinsics, cc->width, cc->height, err);
+    if (!st) st = rs_synth_dataset__prepare_kitti(c, err);
     c->have_canvas = !st;
     return st;
 }
@@ -364,15 +365,12 @@ static rs_synth_image_info image_info(const rs_synth_dataset__run *d, int k, con
 // work, renamed into parts/<stem>.json): it marks the image done.
 static rs_status image_files(const rs_synth_dataset__run *d, int k, const char *stem, const char *work,
                              const rs_synth_dataset__camera *c, const rs_synth_render_result *r,
-                             const rs_synth_label_image *img, rs_err *err)
+                             const rs_synth_label_image *img, const rs_synth_label_input *lin, rs_err *err)
 {
     const rs_synth_dataset_options *opt = d->opt;
     const int split = rs_synth_dataset__image_split(d, k, c);
     const char *split_name = d->split[split];
-    char name[600], kitti_name[32];
-    snprintf(kitti_name, sizeof(kitti_name), "%06d.png", k); // KITTI's numeric names
-    rs_synth_label_image kimg = *img;
-    kimg.file_name = kitti_name;
+    char name[600];
     const rs_synth_label_options lopt = {.bbox = (rs_synth_bbox_kind)opt->bbox,
                                          .min_visibility = opt->min_visibility,
                                          .drop_invisible = !opt->keep_invisible};
@@ -381,28 +379,26 @@ static rs_status image_files(const rs_synth_dataset__run *d, int k, const char *
     char *part_tmp = rs_io_join(work, name);
     snprintf(name, sizeof(name), "%s.json", stem);
     char *part = rs_io_join(d->parts_dir, name);
-    char *kitti_dir = rs_io_join(opt->out_dir, "kitti/training");
-    char yolo_image[600], kitti_image[600], kitti_calib[600];
+    char yolo_image[600];
     snprintf(yolo_image, sizeof(yolo_image), "images/%s/%s", split_name, img->file_name);
-    snprintf(kitti_image, sizeof(kitti_image), "kitti/training/image_2/%s", kitti_name);
-    snprintf(kitti_calib, sizeof(kitti_calib), "kitti/training/calib/%06d.txt", k);
-    char *kitti_calib_path = rs_io_join(opt->out_dir, kitti_calib);
+    unsigned char *kept = malloc((size_t)(img->Nlabels > 0 ? img->Nlabels : 1)); // the vehicles labelled
     rs_status st = RS_OK;
-    if (!image || !part_tmp || !part || !kitti_dir || !kitti_calib_path)
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    if (!image || !part_tmp || !part || !kept) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; !st && i < img->Nlabels; i++) {
+        double box[4];
+        kept[i] = (unsigned char)rs_synth_label_kept(box, &img->labels[i], &lopt);
+    }
     if (!st && opt->labels_only) { // the labels alone: no image, YOLO or KITTI files
         if (!(st = rs_synth_labels_write_coco(work, split_name, img, 1, &lopt, err)) && rename(part_tmp, part) != 0)
             st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
     } else if (!st && !(st = rs_synth_labels_write_yolo(opt->out_dir, split_name, img, 1, &lopt, err)) &&
-               !(st = rs_synth_labels_write_kitti(kitti_dir, &kimg, 1, &lopt, err)) &&
                !(st = rs_image_write(image, &r->composite, 8, err)) &&
                !(st = rs_synth_dataset__link_into(d, image, yolo_image, err)) &&
-               !(st = rs_synth_dataset__link_into(d, image, kitti_image, err)) &&
-               !(st = rs_synth_labels_write_kitti_calib(kitti_calib_path, &c->cam, err)) &&
+               !(st = rs_synth_dataset__kitti_files(d, k, c, image, &r->composite, r->ids, lin, img->labels, kept,
+                                                    err)) &&
                !(st = rs_synth_labels_write_coco(work, split_name, img, 1, &lopt, err)) && rename(part_tmp, part) != 0)
         st = rs_err_set(err, RS_ERR_IO, "%s: %s", part, strerror(errno));
-    free(kitti_calib_path);
-    free(kitti_dir);
+    free(kept);
     free(part);
     free(part_tmp);
     free(image);
@@ -485,7 +481,7 @@ rs_status rs_synth_dataset__make_image(rs_synth_dataset__run *d, int k, const ch
                                       .Nlabels = N,
                                       .vehicle_ids = ids,
                                       .info = &info};
-    if ((st = image_files(d, k, stem, work, c, &r, &img, err))) goto done;
+    if ((st = image_files(d, k, stem, work, c, &r, &img, &lin, err))) goto done;
     rs_io_remove_tree(work);
 done:
     free(work);

@@ -77,6 +77,9 @@ static rs_status read_run(cJSON **doc, const cJSON **run, unsigned char **covere
             *count = jc->valueint;
             if (!(*covered = calloc((size_t)*count, 1))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         }
+        // every shard run into the input must have finished: its completion record, the last
+        // thing a synth run writes (issue 42: a killed shard's images lack files or annotations)
+        const cJSON *finished = cJSON_GetObjectItemCaseSensitive(*doc, "finished");
         cJSON_ArrayForEach(sh, cJSON_GetObjectItemCaseSensitive(*doc, "shards"))
         {
             int I = 0, N = 0, used = 0;
@@ -84,6 +87,17 @@ static rs_status read_run(cJSON **doc, const cJSON **run, unsigned char **covere
             if (!cJSON_IsString(sh) || sscanf(sh->valuestring, "%d/%d%n", &I, &N, &used) != 2 ||
                 sh->valuestring[used] || N < 1 || I < 0 || I >= N) {
                 st = rs_err_set(err, RS_ERR_PARSE, "merge: %s: shards: not \"I/N\"", path);
+                break;
+            }
+            bool done = false;
+            const cJSON *f;
+            cJSON_ArrayForEach(f, finished) done =
+                done || (cJSON_IsString(f) && !strcmp(f->valuestring, sh->valuestring));
+            if (!done) {
+                st = rs_err_set(err, RS_ERR_INVALID,
+                                "merge: %s: shard %s did not finish (no completion record in %s: killed, failed or "
+                                "still running; rerun that shard into %s to finish it): nothing merged",
+                                in, sh->valuestring, path, in);
                 break;
             }
             *N_common = *N_common == 0 ? N : *N_common == N ? N : -1;
@@ -117,34 +131,20 @@ static void run_difference(char *out, size_t n, const cJSON *a, const cJSON *b)
     }
 }
 
-// Width and height from a PNG's IHDR chunk; false when the file is not a PNG.
-static bool png_size(const char *path, int *w, int *h)
-{
-    unsigned char b[24];
-    FILE *f = fopen(path, "rb");
-    if (!f) return false;
-    const bool ok =
-        fread(b, 1, 24, f) == 24 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0 && memcmp(b + 12, "IHDR", 4) == 0;
-    fclose(f);
-    if (!ok) return false;
-    *w = (int)((unsigned)b[16] << 24 | (unsigned)b[17] << 16 | (unsigned)b[18] << 8 | b[19]);
-    *h = (int)((unsigned)b[20] << 24 | (unsigned)b[21] << 16 | (unsigned)b[22] << 8 | b[23]);
-    return true;
-}
-
-// A regular file (not a link) at in/rel; its copy (hard link) into out/rel.
+// A regular file (not a link) at in/rel; with out_dir, its copy (hard link) into out/rel (NULL:
+// checked only).
 static rs_status take_file(const char *in, const char *out_dir, const char *rel, const char *listed_in, rs_err *err)
 {
-    char *src = rs_io_join(in, rel), *dst = rs_io_join(out_dir, rel);
+    char *src = rs_io_join(in, rel), *dst = out_dir ? rs_io_join(out_dir, rel) : NULL;
     char *folder = dst ? strdup(dst) : NULL;
     rs_status st = RS_OK;
     struct stat sb;
-    if (!src || !dst || !folder)
+    if (!src || (out_dir && (!dst || !folder)))
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     else if (lstat(src, &sb) != 0 || !S_ISREG(sb.st_mode))
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: %s: %s (listed in %s)", src,
+        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: %s: %s (listed in %s): nothing merged", src,
                         lstat(src, &sb) != 0 ? "missing" : "not a regular file", listed_in);
-    else {
+    else if (out_dir) {
         *strrchr(folder, '/') = 0;
         if (!(st = rs_io_mkdir_p(folder, err))) st = link_or_copy(src, dst, err);
     }
@@ -154,13 +154,30 @@ static rs_status take_file(const char *in, const char *out_dir, const char *rel,
     return st;
 }
 
-// Where take_image takes an input's images from and to.
+// Where take_image takes an input's images from and to (out_dir NULL: the checking pass).
 typedef struct {
     const char *in, *out_dir, *split;
 } take_ctx;
 
-// Every file of one image (a COCO image object, its file_name checked) of an input's split,
-// checked and linked into OUT (a rs_synth_dataset__coco_each_image).
+// The lines of a text file (a YOLO label file: one label a line); -1 when it cannot be read.
+static long count_lines(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return -1;
+    long n = 0;
+    int c, last = '\n';
+    while ((c = getc(f)) != EOF) {
+        if (c == '\n') n++;
+        last = c;
+    }
+    fclose(f);
+    return last == '\n' ? n : n + 1;
+}
+
+// Every file of one image (a COCO image object, its file_name checked) of an input's split: in
+// the checking pass (t->out_dir NULL) the PNG decoded at the size the COCO file states
+// (rs_synth_dataset__image_intact, as resume checks) and the others regular files; else linked
+// into OUT (a rs_synth_dataset__coco_each_image).
 static rs_status take_image(void *ctx, const cJSON *image, const char *listed_in, rs_err *err)
 {
     const take_ctx *t = ctx;
@@ -173,17 +190,18 @@ static rs_status take_image(void *ctx, const cJSON *image, const char *listed_in
     const char *dot = strrchr(fn, '.');
     const int stem = dot ? (int)(dot - fn) : (int)strlen(fn);
     snprintf(rel, sizeof(rel), "%s/%s", split, fn);
-    char *src = rs_io_join(in, rel);
-    int w = 0, h = 0;
-    if (!src) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    const bool png = png_size(src, &w, &h);
     rs_status st = RS_OK;
-    if (!png)
-        st = rs_err_set(err, RS_ERR_NOT_FOUND, "merge: %s: missing or not a PNG (listed in %s)", src, listed_in);
-    else if (!cJSON_IsNumber(jw) || !cJSON_IsNumber(jh) || w != jw->valueint || h != jh->valueint)
-        st = rs_err_set(err, RS_ERR_INVALID, "merge: %s: %dx%d pixels, %s says otherwise", src, w, h, listed_in);
-    free(src);
-    if (st || (st = take_file(in, out_dir, rel, listed_in, err))) return st;
+    if (!out_dir) {
+        char *src = rs_io_join(in, rel), why[1400];
+        if (!src) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        if (!cJSON_IsNumber(jw) || !cJSON_IsNumber(jh))
+            st = rs_err_set(err, RS_ERR_PARSE, "merge: %s: image %s: width or height missing", listed_in, fn);
+        else if (!rs_synth_dataset__image_intact(src, jw->valueint, jh->valueint, why, sizeof(why)))
+            st = rs_err_set(err, RS_ERR_INVALID, "merge: %s (listed in %s): nothing merged", why, listed_in);
+        free(src);
+        if (st) return st;
+    }
+    if ((st = take_file(in, out_dir, rel, listed_in, err))) return st;
     const char *const fmt[2] = {"images/%s/%s", "labels/%s/%.*s.txt"};
     snprintf(rel, sizeof(rel), fmt[0], split, fn);
     if ((st = take_file(in, out_dir, rel, listed_in, err))) return st;
@@ -196,6 +214,34 @@ static rs_status take_image(void *ctx, const cJSON *image, const char *listed_in
         snprintf(rel, sizeof(rel), kitti[i], jk->valueint);
         st = take_file(in, out_dir, rel, listed_in, err);
     }
+    return st;
+}
+
+// The checking pass over one input's split (its COCO file at `path`): every image intact, every
+// file there, and every image's YOLO file holding one line per annotation of the image in the
+// COCO file (every label accounted for). Nothing is written.
+static rs_status check_input_split(const char *in, const char *split, const char *path, rs_err *err)
+{
+    rs_synth_dataset__coco_index a = {0};
+    take_ctx t = {in, NULL, split};
+    rs_status st = rs_synth_dataset__coco_index_add(&a, path, -1, take_image, &t, err);
+    for (int i = 0; !st && i < a.N; i++) {
+        const char *fn = a.r[i].file_name, *dot = strrchr(fn, '.');
+        char rel[1200];
+        snprintf(rel, sizeof(rel), "labels/%s/%.*s.txt", split, dot ? (int)(dot - fn) : (int)strlen(fn), fn);
+        char *yolo = rs_io_join(in, rel);
+        if (!yolo) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        const long lines = count_lines(yolo);
+        if (lines != a.r[i].Nanns)
+            st = rs_err_set(err, RS_ERR_INVALID,
+                            "merge: %s: %ld labels, but %s lists %d annotations of %s: nothing merged", yolo, lines,
+                            path, a.r[i].Nanns, fn);
+        free(yolo);
+    }
+    rs_synth_dataset__coco_index_free(&a);
     return st;
 }
 
@@ -250,11 +296,35 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
         st = adir ? list_splits(adir, &splits, &Nsplits, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         free(adir);
     }
+    // Everything checked before OUT is touched (issue 42): every image decoded, every file
+    // there, every label accounted for, and the files the end of the merge takes
+    for (int s = 0; s < Nsplits && !st; s++) {
+        char rel[600];
+        snprintf(rel, sizeof(rel), "annotations/instances_%s.json", splits[s]);
+        for (int i = 0; i < Ninputs && !st; i++) {
+            char *path = rs_io_join(inputs[i], rel);
+            if (!path)
+                st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            else if (rs_synth_dataset__file_exists(path))
+                st = check_input_split(inputs[i], splits[s], path, err);
+            free(path);
+        }
+    }
+    if (!st && Ninputs > 0) {
+        const cJSON *c;
+        cJSON_ArrayForEach(c, cJSON_GetObjectItemCaseSensitive(runs[0], "cameras"))
+        {
+            char rel[400];
+            snprintf(rel, sizeof(rel), "cameras/%.300s" RS_CAMERA_EXT_CAMERAMODEL, c->string);
+            if ((st = take_file(inputs[0], NULL, rel, "run.json", err))) break;
+        }
+    }
     // OUT is written by one process at a time (a synth run or another merge into it fails)
     rs_io_lock lock = {0};
-    if (!st && Nsplits > 0 && !(st = rs_io_mkdir_p(out_dir, err)))
+    if (!st && Nsplits > 0 && !(st = rs_synth_dataset__claim_folder(out_dir, "roadside synth merge", err)))
         st = rs_io_lock_dir(&lock, out_dir, "roadside synth merge", err);
-    if (!st && lock.path) rs_io_remove_stale_temporaries(out_dir); // a killed writer's leftovers
+    if (!st && lock.path) // a killed writer's leftovers
+        rs_synth_dataset__remove_temporaries(out_dir, (const char *const *)splits, Nsplits);
     int *ks[2] = {NULL, NULL}, Nks[2] = {0, 0};
     const char *split_names[2] = {NULL, NULL};
     for (int s = 0; s < Nsplits && !st; s++) {
@@ -329,6 +399,7 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
         cJSON *doc = cJSON_CreateObject();
         cJSON_AddItemToObject(doc, "run", cJSON_Duplicate(runs[0], 1));
         cJSON_AddItemToArray(cJSON_AddArrayToObject(doc, "shards"), cJSON_CreateString("0/1"));
+        cJSON_AddItemToArray(cJSON_AddArrayToObject(doc, "finished"), cJSON_CreateString("0/1")); // complete
         // issue 40: the shards' mixes of conditions summed (a shard found in two inputs once)
         int counts[9] = {0};
         bool any = false;
@@ -354,7 +425,10 @@ rs_status rs_synth_dataset_merge(int *Nimages, int *Nannotations, const char *ou
         char *kdir = rs_io_join(out_dir, "kitti/ImageSets");
         st = text && path && kdir ? rs_io_mkdir_p(kdir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         if (!st) st = rs_io_write_file(path, text, strlen(text), err);
-        if (!st) st = rs_synth_dataset__write_trainer_files(out_dir, split_names, ks, Nks, err);
+        const cJSON *jb = cJSON_GetObjectItemCaseSensitive(runs[0], "bbox");
+        if (!st)
+            st = rs_synth_dataset__write_trainer_files(out_dir, split_names, ks, Nks,
+                                                       cJSON_IsNumber(jb) ? jb->valueint : 0, err);
         free(text);
         free(path);
         free(kdir);

@@ -352,6 +352,7 @@ static rs_status label_one(rs_synth_label *L, const projector *pr, const rs_synt
     to_cam(f_cam, cam, v, up_m, fwd);
     for (int i = 0; i < 3; i++) f_cam[i] -= L->bottom_center_cam_m[i];
     L->rotation_y_rad = atan2(-f_cam[2], f_cam[0]);
+    memcpy(L->forward_cam, f_cam, sizeof f_cam);
     L->bottom_center_px[0] = L->bottom_center_px[1] = NAN;
     if (pr->max_theta > 0 ? projectable(pr, L->bottom_center_cam_m)
                           : L->bottom_center_cam_m[2] >= RS_SYNTH_LABEL_ZMIN_M) {
@@ -427,9 +428,27 @@ rs_status rs_synth_labels_compute(rs_synth_label **labels, const rs_synth_label_
 
 // ---------------------------------------------------------------- writers
 
+// The kinds' names (rs_synth_bbox_kind order) and what each box is, for the files' metadata.
+static const char *const kind_names[] = {"footprint", "body", "visible"};
+static const char *const kind_meanings[] = {
+    "the ground footprint: the image box of the vehicle's rectangle on the ground (the bottom face of its 3D "
+    "box), the bottom-centre convention of roadside detection; NOT the box around the whole vehicle",
+    "the whole vehicle, amodal: the image box of its 3D box, occluded parts included, clipped to the image",
+    "the vehicle's visible pixels: the box of its pixels in the object-ID pass"};
+
+const char *rs_synth_bbox_kind_name(rs_synth_bbox_kind kind)
+{
+    return (unsigned)kind < 3 ? kind_names[kind] : "unknown";
+}
+
+const char *rs_synth_bbox_kind_meaning(rs_synth_bbox_kind kind)
+{
+    return (unsigned)kind < 3 ? kind_meanings[kind] : "unknown";
+}
+
 rs_status rs_synth_bbox_kind_parse(rs_synth_bbox_kind *kind, const char *name, rs_err *err)
 {
-    static const char *const names[] = {"footprint", "body", "visible"};
+    const char *const *names = kind_names;
     for (int i = 0; i < 3; i++)
         if (name && strcmp(name, names[i]) == 0) {
             *kind = (rs_synth_bbox_kind)i;
@@ -484,7 +503,13 @@ static cJSON *annotation(const rs_synth_label *L, const double box[4], int id, i
     cJSON_AddNumberToObject(a, "id", id);
     cJSON_AddNumberToObject(a, "image_id", image_id);
     cJSON_AddNumberToObject(a, "category_id", (int)L->cls + 1);
-    cJSON_AddItemToObject(a, "bbox", xywh(box));
+    // bbox and segmentation in COCO's corner convention: the top-left pixel's top-left corner
+    // is (0, 0), i.e. roadside's pixel-centre coordinates + 0.5 (the YOLO line's origin too)
+    const double c[4] = {box[0] + 0.5, box[1] + 0.5, box[2] + 0.5, box[3] + 0.5};
+    cJSON_AddItemToObject(a, "bbox", xywh(c));
+    const double poly[8] = {c[0], c[1], c[2], c[1], c[2], c[3], c[0], c[3]}; // the box, clockwise
+    cJSON *seg = cJSON_AddArrayToObject(a, "segmentation");
+    if (seg) cJSON_AddItemToArray(seg, numbers(poly, 8));
     cJSON_AddNumberToObject(a, "area", (box[2] - box[0]) * (box[3] - box[1]));
     cJSON_AddNumberToObject(a, "iscrowd", 0);
     if (isfinite(L->bottom_center_px[0])) cJSON_AddItemToObject(a, "bottom_center", numbers(L->bottom_center_px, 2));
@@ -591,6 +616,14 @@ rs_status rs_synth_labels_write_coco(const char *dir, const char *split, const r
     cJSON_AddStringToObject(info, "contributor", "roadside");
     cJSON_AddStringToObject(info, "version", RS_SYNTH_DATASET_CONTRACT_VERSION);
     cJSON_AddStringToObject(info, "url", "");
+    // what a trainer must know of the boxes (docs/labels.md, "Which box")
+    const rs_synth_bbox_kind kind = opt ? opt->bbox : RS_SYNTH_BBOX_FOOTPRINT;
+    cJSON_AddStringToObject(info, "bbox_kind", rs_synth_bbox_kind_name(kind));
+    cJSON_AddStringToObject(info, "bbox_meaning", rs_synth_bbox_kind_meaning(kind));
+    cJSON_AddStringToObject(info, "bbox_origin",
+                            "COCO corner convention: (0, 0) is the top-left corner of the top-left pixel; "
+                            "bbox and segmentation only, the other pixel fields have (0, 0) at that pixel's "
+                            "centre (0.5 less)");
     cJSON *lic = cJSON_AddArrayToObject(root, "licenses");
     cJSON *l0 = cJSON_CreateObject();
     cJSON_AddNumberToObject(l0, "id", 1);
@@ -684,7 +717,8 @@ static rs_status write_text_files(const char *what, const char *folder, const rs
 
 static void yolo_line(FILE *f, const rs_synth_label *L, const double b[4], const rs_synth_label_image *im)
 {
-    fprintf(f, "%d %.6f %.6f %.6f %.6f\n", (int)L->cls, (0.5 * (b[0] + b[2]) + 0.5) / im->width,
+    // 10 decimals: the line's box agrees with COCO's bbox within 1e-6 px up to 10,000 px wide
+    fprintf(f, "%d %.10f %.10f %.10f %.10f\n", (int)L->cls, (0.5 * (b[0] + b[2]) + 0.5) / im->width,
             (0.5 * (b[1] + b[3]) + 0.5) / im->height, (b[2] - b[0]) / im->width, (b[3] - b[1]) / im->height);
 }
 
@@ -700,19 +734,27 @@ rs_status rs_synth_labels_write_yolo(const char *dir, const char *split, const r
     return st;
 }
 
+// y = R x for a (3,3) row-major R; R NULL: the identity.
+static void rotate3(double y[3], const double *R, const double x[3])
+{
+    for (int i = 0; i < 3; i++) y[i] = R ? R[3 * i] * x[0] + R[3 * i + 1] * x[1] + R[3 * i + 2] * x[2] : x[i];
+}
+
 static void kitti_line(FILE *f, const rs_synth_label *L, const double b[4], const rs_synth_label_image *im)
 {
-    (void)im;
     static const char *const types[RS_SYNTH_NCLASSES] = {"Car", "Car",   "Car",   "Car",  "Van",
                                                          "Bus", "Truck", "Truck", "Misc", "Cyclist"};
     const char *type = (int)L->cls >= 0 && L->cls < RS_SYNTH_NCLASSES ? types[L->cls] : "Misc";
     int occluded = !isfinite(L->visibility) ? 3 : L->visibility >= 0.8 ? 0 : L->visibility >= 0.4 ? 1 : 2;
-    const double *x = L->bottom_center_cam_m;
-    double alpha = L->rotation_y_rad - atan2(x[0], x[2]);
+    double x[3], fwd[3]; // location and forward axis in the rectified frame
+    rotate3(x, im->R0_rect, L->bottom_center_cam_m);
+    rotate3(fwd, im->R0_rect, L->forward_cam);
+    const double rotation_y = atan2(-fwd[2], fwd[0]);
+    double alpha = rotation_y - atan2(x[0], x[2]);
     alpha = atan2(sin(alpha), cos(alpha));
     fprintf(f, "%s %.4f %d %.4f %.2f %.2f %.2f %.2f %.4f %.4f %.4f %.4f %.4f %.4f %.4f\n", type, L->truncation,
             occluded, alpha, b[0], b[1], b[2], b[3], L->dims_m[2], L->dims_m[1], L->dims_m[0], x[0], x[1], x[2],
-            L->rotation_y_rad);
+            rotation_y);
 }
 
 rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_image *images, int Nimages,
@@ -723,25 +765,4 @@ rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_imag
                           : rs_err_set(err, RS_ERR_NOMEM, "KITTI: out of memory");
     free(folder);
     return st;
-}
-
-rs_status rs_synth_labels_write_kitti_calib(const char *path, const rs_camera *cam, rs_err *err)
-{
-    mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(&cam->lensmodel);
-    if (!meta.has_core)
-        return rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: KITTI calib: lens model without fx, fy, cx, cy", path);
-    const double *f = cam->intrinsics;
-    double R[9];
-    mrcal_R_from_r(R, NULL, cam->rt_cam_enu);
-    const double *t = cam->rt_cam_enu + 3;
-    rs_io_atomic a = {0};
-    rs_status st = rs_io_atomic_open(&a, path, err);
-    if (st) return st;
-    for (int i = 0; i < 4; i++)
-        fprintf(a.f, "P%d: %.12e 0 %.12e 0 0 %.12e %.12e 0 0 0 1 0\n", i, f[0], f[2], f[1], f[3]);
-    fprintf(a.f, "R0_rect: 1 0 0 0 1 0 0 0 1\n");
-    fprintf(a.f, "Tr_velo_to_cam:");
-    for (int r = 0; r < 3; r++) fprintf(a.f, " %.12e %.12e %.12e %.12e", R[3 * r], R[3 * r + 1], R[3 * r + 2], t[r]);
-    fprintf(a.f, "\nTr_imu_to_velo: 1 0 0 0 0 1 0 0 0 0 1 0\n");
-    return rs_io_atomic_commit(&a, err);
 }

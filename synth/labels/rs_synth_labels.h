@@ -5,7 +5,8 @@
 // Pixels: (0,0) is the centre of the top-left pixel (docs/conventions.md); an image W x H spans
 // [-0.5, W-0.5] x [-0.5, H-0.5]. A box is (x0, y0, x1, y1) in those continuous coordinates; a
 // pixel-set box (the visible box) spans its pixels' squares: (imin-0.5, jmin-0.5, imax+0.5,
-// jmax+0.5). COCO boxes are [x0, y0, x1-x0, y1-y0] in the same origin.
+// jmax+0.5). COCO's bbox and segmentation are in COCO's corner convention (those + 0.5: the
+// top-left pixel's top-left corner is (0, 0)); the other COCO fields keep the pixel-centre origin.
 //
 // Method. Points go into the camera frame with mrcal_transform_point_rt and into pixels with
 // mrcal_project. Every polygon (a face of the 3D box, the footprint) is first clipped in 3D to
@@ -58,6 +59,7 @@ typedef struct {
                                      // ellipsoidal); NaN unless the caller fills it (it needs
                                      // the site's origin: rs_synth_labels_compute leaves NaN)
     double rotation_y_rad;           // KITTI heading: forward_cam = (cos r, ., -sin r) in x-z
+    double forward_cam[3];           // the vehicle's forward axis (unit) in the camera frame
     // From the object-ID pass (all -1 / NaN when no ID image was given):
     long visible_px;          // pixels of the ID image holding k + 1
     long full_px;             // pixels the vehicle would cover in the image, unoccluded
@@ -99,6 +101,13 @@ typedef enum {
 
 // "footprint", "body", "visible" -> kind; RS_ERR_USAGE otherwise.
 rs_status rs_synth_bbox_kind_parse(rs_synth_bbox_kind *kind, const char *name, rs_err *err);
+
+// The kind's name ("footprint", "body", "visible"; "unknown" out of range).
+const char *rs_synth_bbox_kind_name(rs_synth_bbox_kind kind);
+
+// One sentence saying what the kind's box is (for the datasets' metadata: COCO's info, data.yaml,
+// README.md): the footprint box is the vehicle's rectangle on the ground, not the vehicle.
+const char *rs_synth_bbox_kind_meaning(rs_synth_bbox_kind kind);
 
 typedef struct {
     rs_synth_bbox_kind bbox;
@@ -148,6 +157,8 @@ typedef struct {
     int Nlabels;
     const char *const *vehicle_ids;  // (Nvehicles,) vehicle_ids[labels[i].index]; may be NULL
     const rs_synth_image_info *info; // may be NULL: COCO gets id, file_name, width, height only
+    const double *R0_rect;           // (3,3) row-major, KITTI only: the rectified frame x_rect =
+                                     // R0_rect x_cam of location and rotation_y; NULL: identity
 } rs_synth_label_image;
 
 // Which labels a writer keeps: in_image, the chosen box exists with a positive area, visibility
@@ -156,7 +167,8 @@ int rs_synth_label_kept(double box[4], const rs_synth_label *label, const rs_syn
 
 // COCO in YOLOX's layout: writes DIR/annotations/instances_<split>.json (atomically; folders
 // created) with images {id (1..), file_name, width, height}, categories {id = class + 1, name}
-// for the 8 classes, and annotations {id, image_id, category_id, bbox, area (of bbox), iscrowd 0,
+// for the 10 classes, info {..., box: which box bbox is}, and annotations {id, image_id,
+// category_id, bbox (corner convention), segmentation (bbox's polygon), area (of bbox), iscrowd 0,
 // bottom_center, footprint_center, footprint_bbox, body_bbox, body_bbox_full, truncation,
 // corners_px, box3d {center_enu_m, dimensions_m, yaw_deg}, vehicle_index, vehicle_id,
 // visible_pixels, full_pixels, visibility, visible_bbox} (docs/labels.md). The image folder
@@ -171,16 +183,35 @@ rs_status rs_synth_labels_write_yolo(const char *dir, const char *split, const r
                                      int Nimages, const rs_synth_label_options *opt, rs_err *err);
 
 // KITTI object labels: DIR/label_2/<stem>.txt per image, lines "type truncated occluded alpha
-// x1 y1 x2 y2 h w l x y z rotation_y" with the location the bottom centre in the camera frame
-// and rotation_y the heading about the camera's y axis (docs/labels.md); occluded from
-// visibility (0: >= 0.8, 1: >= 0.4, 2: below, 3: unknown).
+// x1 y1 x2 y2 h w l x y z rotation_y" with the location the bottom centre in the rectified
+// frame (images[i].R0_rect x_cam; NULL: the camera frame) and rotation_y the heading about its
+// y axis (docs/labels.md); occluded from visibility (0: >= 0.8, 1: >= 0.4, 2: below, 3: unknown).
+// The 2D box is the labels' own (pixel-centre convention): give labels computed for the image
+// the KITTI file goes with (roadside synth: the undistorted image's pinhole core camera).
 rs_status rs_synth_labels_write_kitti(const char *dir, const rs_synth_label_image *images, int Nimages,
                                       const rs_synth_label_options *opt, rs_err *err);
 
-// KITTI's calib file of one image (DIR/calib/<stem>.txt): P0..P3 = [K | 0] with K the pinhole
-// core (fx, fy, cx, cy) of cam, R0_rect = I, Tr_velo_to_cam = [R t] of rt_cam_enu (KITTI's
-// "velodyne" frame taken to be the site's ENU frame), Tr_imu_to_velo = [I 0]. A lens with
-// distortion is not representable in KITTI's P: its core is written (docs/labels.md). Atomic.
+// KITTI's frames of a roadside camera (docs/labels.md, "KITTI"): the rectified frame is the
+// camera frame levelled, so that KITTI's upright 3D boxes (rotation_y about the y axis) hold on
+// a tilted camera: its y axis is ENU down, its z axis the camera's optical axis projected onto
+// the horizontal (for a camera looking straight down: the camera's up, -y, projected), x = y x z.
+//   x_rect = R0_rect x_cam,  R0_rect rows (x_r, y_r, z_r) in camera coordinates
+//   P2 = [K R0_rect^T | 0]: a point of the rectified frame to a pixel of the UNDISTORTED image
+//        (the pinhole core K = (fx, fy, cx, cy) of cam, pixel (0,0) the centre of the top-left
+//        pixel), so P2 R0_rect Tr_velo_to_cam maps site ENU into that image (KITTI's chain).
+// A level camera (y axis down) gets R0_rect = I and P2 = [K | 0] as before.
+// out: R0_rect (9,) row-major; P2 (12,) row-major (may be NULL)
+// Returns RS_ERR_UNSUPPORTED for a lens model without fx, fy, cx, cy.
+rs_status rs_synth_labels_kitti_rect( // out
+    double R0_rect[9], double P2[12],
+    // in
+    const rs_camera *cam, rs_err *err);
+
+// KITTI's calib file of one image (DIR/calib/<stem>.txt): P0..P3 = P2 and R0_rect of
+// rs_synth_labels_kitti_rect, Tr_velo_to_cam = [R t] of rt_cam_enu (KITTI's "velodyne" frame
+// taken to be the site's ENU frame), Tr_imu_to_velo = [I 0]. P2 is for the undistorted image: a
+// lens with distortion needs the KITTI image undistorted to the pinhole core (roadside synth
+// writes it so, docs/labels.md). Atomic.
 rs_status rs_synth_labels_write_kitti_calib(const char *path, const rs_camera *cam, rs_err *err);
 
 #ifdef __cplusplus

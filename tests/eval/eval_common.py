@@ -36,8 +36,9 @@ def ann(image_id, u, v, category_id=1, crowd=0, bbox=None):
 
 
 def det(image_id, u, v, score, category_id=1):
-    """A detection whose box centre is (u, v) (a 2x2 box around it)."""
-    return {"image_id": image_id, "category_id": category_id, "bbox": [u - 1, v - 1, 2, 2], "score": score}
+    """A detection whose box centre is (u, v) in roadside's pixels (a 2x2 box around it, written in
+    COCO's corner convention: + 0.5, docs/evaluation.md rule 1)."""
+    return {"image_id": image_id, "category_id": category_id, "bbox": [u - 0.5, v - 0.5, 2, 2], "score": score}
 
 
 def run(args, gt=None, dets=None, check=True):

@@ -50,7 +50,7 @@ case("distance equal to the threshold misses", coco_gt([1], [ann(1, 0, 0)]), [de
 # theta 5: A .9 (9,0) nearest c d=1 -> dropped; B .8 (11,0) -> dropped again (c is never used up);
 #   C .7 (1,0) -> g TP (P=1); D .6 (5,0): g taken, c at d=5 not < 5 -> FP. AP 1, recall 1.
 # theta 20: A, B dropped; C TP; D: c at d=5 < 20 -> dropped. 3 dropped, AP 1.
-crowd_gt = coco_gt([1], [ann(1, 0, 0), ann(1, 0, 0, crowd=1, bbox=[5, -5, 10, 10])])
+crowd_gt = coco_gt([1], [ann(1, 0, 0), ann(1, 0, 0, crowd=1, bbox=[5.5, -4.5, 10, 10])])  # (corner convention)
 case("ignore regions drop detections, many times", crowd_gt,
      [det(1, 9, 0, .9), det(1, 11, 0, .8), det(1, 1, 0, .7), det(1, 5, 0, .6)], ["--thresholds", "5,20"],
      {("num_gt",): 1, ("num_det",): 4, ("AP", "5"): 1.0, ("recall", "5"): 1.0, ("num_dropped", "5"): 2,
@@ -121,10 +121,10 @@ case("by condition", by_gt, [det(1, 0, 0, .9), det(2, 40, 0, .8)], ["--threshold
       ("groups", "normal", "num_det"): 1, ("groups", "(missing)", "recall", "5"): 0.0,
       ("groups", "(missing)", "num_det"): 0})
 
-# --center-shift: a 10x20 box at (0,0) -> (5, 10 + K 20). Ground truth bottom centre (5, 20).
+# --center-shift: a 10x20 box at (0,0) (COCO: (0.5, 0.5)) -> (5, 10 + K 20). Ground truth bottom centre (5, 20).
 # K = .5 puts the detection on it; K = 0 leaves it 10 px above. A detection's own bottom_center wins.
 cs_gt = coco_gt([1], [ann(1, 5, 20)])
-cs_det = [{"image_id": 1, "category_id": 1, "bbox": [0, 0, 10, 20], "score": .9}]
+cs_det = [{"image_id": 1, "category_id": 1, "bbox": [0.5, 0.5, 10, 20], "score": .9}]  # (corner convention)
 case("center shift 0.5", cs_gt, cs_det, ["--thresholds", "1", "--center-shift", "0.5"], {("AP", "1"): 1.0})
 case("center shift 0", cs_gt, cs_det, ["--thresholds", "1"], {("AP", "1"): 0.0})
 case("center shift 0.35", cs_gt, cs_det, ["--thresholds", "3.01,2.99", "--center-shift", "0.35"],

@@ -21,15 +21,15 @@ TOL = 1e-12
 def point_gt(a):
     if "bottom_center" in a:
         return a["bottom_center"]
-    x, y, w, h = a["bbox"]
-    return [x + w / 2, y + h / 2]
+    x, y, w, h = a["bbox"]  # COCO's corner convention, the point pixel-centre (docs/evaluation.md rule 1)
+    return [x + w / 2 - 0.5, y + h / 2 - 0.5]
 
 
 def point_det(d, K):
     if "bottom_center" in d:
         return d["bottom_center"]
     x, y, w, h = d["bbox"]
-    return [x + w / 2, y + h / 2 + K * h]
+    return [x + w / 2 - 0.5, y + h / 2 - 0.5 + K * h]
 
 
 def brute_force(gt, dets, thresholds, max_dets, K, per_class, by):

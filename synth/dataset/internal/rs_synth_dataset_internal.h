@@ -9,6 +9,7 @@
 //                               images (and merge's index and writer)
 //   rs_synth_dataset_check.c    resume: whether an image found finished is intact
 //   rs_synth_dataset_image.c    one image: background, traffic, render, composite, labels, files
+//   rs_synth_dataset_kitti.c    one image's KITTI copy: undistorted, labels in the levelled frame
 //   rs_synth_dataset_frames.c   SUMO's frames (--traffic-frames): the index read once, checked
 //   rs_synth_dataset_draws.c    what image k is from (seed, k) alone: its stream, background,
 //                               split and file stem
@@ -36,6 +37,7 @@
 #include "synth/backdrop/rs_synth_light.h"
 #include "synth/backdrop/rs_synth_sun.h"
 #include "synth/dataset/rs_synth_dataset.h"
+#include "synth/labels/rs_synth_labels.h"
 #include "synth/povray/rs_synth_camera.h"
 #include "synth/traffic/rs_synth_sumo.h"
 #include "synth/traffic/rs_synth_vehicles.h"
@@ -86,6 +88,12 @@ typedef struct {
     bool have_canvas;
     rs_synth_canvas canvas;
     float *canvas_map; // owned; NULL when the canvas is the lens itself
+    // KITTI's copy (rs_synth_dataset_kitti.c), filled by rs_synth_dataset__prepare_camera too:
+    // the pinhole core of the camera (same pose and size) and, for a lens with distortion, the
+    // map undistorting its images to that core (NULL: LENSMODEL_PINHOLE, the images as they are)
+    bool have_kitti;
+    rs_camera kitti_cam;
+    float *kitti_map; // owned, (height, width, 2)
 } rs_synth_dataset__camera;
 
 typedef struct {
@@ -103,6 +111,7 @@ typedef struct {
     rs_synth_mesh *model_meshes;       // (models.N,) owned: each loaded once, before the workers
                                        //   fork (models.obj[i].loaded points here)
     char models_sha256[65];            // the library file's SHA-256, hex (run.json)
+    int val_fallback;                  // rs_synth_dataset__val_fallback, set before any image
 } rs_synth_dataset__run;
 
 // Reads opt->models_path's library and loads every model once for the run (errors name the
@@ -137,8 +146,16 @@ rs_status rs_synth_dataset__frame_vehicles(rs_synth_vehicle_list *list, int *ifr
                                            int k, uint64_t r_frame, uint64_t r_looks, rs_err *err);
 
 // Which split image k goes to: 0 (opt->split) or 1 (opt->val_split), from k's own random stream
-// (the fraction), its camera, or the background it is drawn over (the same draw as
-// rs_synth_dataset__make_image's), so it depends on (seed, k) and the options only.
+// (the fraction; in a sequence its frame's), its camera, or the background it is drawn over (the
+// same draw as rs_synth_dataset__make_image's), so it depends on (seed, k), the count and the
+// options only: shards, reruns and merges agree.
+//
+// The validation split is never empty by chance: with val_fraction > 0 and two images (frames)
+// or more, when no draw of the run falls below the fraction (a small run), the image (frame)
+// with the smallest draw goes to validation. rs_synth_dataset__val_fallback returns that key
+// (an image index, or in a sequence a frame index; -1: none needed), computed once per run into
+// d->val_fallback (O(count) draws).
+int rs_synth_dataset__val_fallback(const rs_synth_dataset__run *d);
 int rs_synth_dataset__image_split(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c);
 
 // The index of image k's background among c->bg (its stream's first draw), -1 when c has none.
@@ -182,6 +199,58 @@ rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, r
 // atomically. The look is the run's cached estimate or made here from the file (the same).
 rs_status rs_synth_dataset__write_looks(const rs_synth_dataset__run *d, rs_err *err);
 
+// ---- whose folder it is (rs_synth_dataset_folder.c; issue 42) ----
+
+#define RS_SYNTH_DATASET_MARKER ".roadside-dataset" // written into every folder synth or merge makes
+
+// Makes `dir` a dataset folder of roadside's before anything is written or removed in it: a
+// folder holding RS_SYNTH_DATASET_MARKER (a regular file) is roadside's already; a missing or
+// empty folder is created and marked; a folder made by an older roadside synth (a run.json with
+// a run record) is marked; any other folder (a site, a home folder) is refused with nothing
+// created or changed: RS_ERR_INVALID "DIR: not empty (it holds NAME ...) and not a folder WHAT
+// made (no .roadside-dataset): refused, nothing written; ...". what: e.g. "roadside synth".
+rs_status rs_synth_dataset__claim_folder(const char *dir, const char *what, rs_err *err);
+
+// Removes, in the dataset folder `dir` (held under its lock: no writer left), the temporaries
+// of roadside's own file names in its own subfolders only: "<name>.tmp.XXXXXX" (core/rs_io.h)
+// and "<name>.<pid>.lnk" (rs_synth_dataset__link_into) where <name> is a name synth writes in
+// that folder (run.json, parts/<k>_<camera>.json, <split>/<k>_<camera>.png, ...); the splits
+// (Nsplits,) name the per-split folders. Anything else -- a user's "x.tmp.AbC123", files in
+// other subfolders -- is left alone. Best effort; returns how many were removed.
+size_t rs_synth_dataset__remove_temporaries(const char *dir, const char *const *splits, int Nsplits);
+
+// The run's last write into DATASET/run.json (rewritten atomically): issue 40's mix of
+// conditions of this shard's images (Ncondition, time_of_day x 3 + surface) as "conditions":
+// {"I/N": {"<time>-<surface>": images, ...}, ...} (one entry per shard run into the folder, this
+// one's replaced; beside "run", so neither merge nor a rerun compares it; merge sums them; not
+// with --labels-only), then issue 42's completion record: "I/N" added to "finished" (every image
+// of the shard made and checked, its files in place, the COCO file assembled). `synth merge`
+// refuses a shard without it (killed, or still running); a rerun withdraws it at its start
+// (write_run_record) until it finishes.
+rs_status rs_synth_dataset__write_completion(const rs_synth_dataset__run *d, const int Ncondition[9], rs_err *err);
+
+// ---- KITTI's copy of an image (rs_synth_dataset_kitti.c) ----
+
+// Camera c's KITTI pinhole core and undistortion map (c->kitti_cam, c->kitti_map): for every
+// pixel u of the undistorted image, the lens pixel seeing the direction K^-1 (u, 1)
+// (rs_lens_project). Nothing to do when done; nothing kept on error. Called by
+// rs_synth_dataset__prepare_camera.
+rs_status rs_synth_dataset__prepare_kitti(rs_synth_dataset__camera *c, rs_err *err);
+
+// Image k's KITTI files: kitti/training/image_2/<k>.png (the composite undistorted to the
+// pinhole core: OpenCV's remap, linear; hard-linked from `image` for a pinhole lens),
+// label_2/<k>.txt (labels computed again through the pinhole core, so the 2D boxes are the
+// undistorted image's -- with --bbox visible from the ID pass remapped nearest-neighbour, else
+// by geometry alone with the run's visibility --; in the rectified frame of
+// rs_synth_labels_kitti_rect), calib/<k>.txt. A vehicle is written when the run's labels keep it
+// (kept[i], the other layouts' rule) and its box exists in the undistorted image.
+// in: image: the composite's file; composite, ids: the render's (c's size; ids may be NULL);
+//     lin: the labels' input for c->cam, run_labels (lin->Nvehicles,) its labels, kept (Nvehicles,)
+rs_status rs_synth_dataset__kitti_files(const rs_synth_dataset__run *d, int k, const rs_synth_dataset__camera *c,
+                                        const char *image, const rs_image *composite, const uint16_t *ids,
+                                        const rs_synth_label_input *lin, const rs_synth_label *run_labels,
+                                        const unsigned char *kept, rs_err *err);
+
 // Makes image k (file stem `stem`) for camera c, its labels last (parts/<stem>.json marks it
 // finished). out: *grey: rendered over the grey ground (no background); *condition: the
 // background's condition as time_of_day x 3 + surface (rs_synth_condition.h), -1 none (the
@@ -211,6 +280,12 @@ rs_status rs_synth_dataset__check_finished(rs_synth_dataset__state *state, char 
                                            // in
                                            const rs_synth_dataset__run *d, const char *stem,
                                            const rs_synth_dataset__camera *c, int split, rs_err *err);
+
+// Whether `path` is a regular file (not a link) holding a complete PNG (ending with its IEND
+// chunk) that OpenCV decodes to width x height; else why not into why[n] ("FILE: cut short (no
+// PNG end chunk)", "FILE: 80x45 pixels, its record says 160x90", OpenCV's message). Resume's
+// check and merge's (rs_synth_dataset_check.c).
+bool rs_synth_dataset__image_intact(const char *path, int width, int height, char *why, size_t n);
 
 // ---- the COCO writer (rs_synth_dataset_coco.c): one for the run's assembly and for merge ----
 
@@ -251,10 +326,12 @@ rs_status rs_synth_dataset__coco_index_add(rs_synth_dataset__coco_index *x, cons
 rs_status rs_synth_dataset__coco_index_write(rs_synth_dataset__coco_index *x, const char *path, int *Nimages,
                                              int *Nanns, int *ks, int *Nks, rs_err *err);
 void rs_synth_dataset__coco_index_free(rs_synth_dataset__coco_index *x);
-// YOLO's data.yaml (Ultralytics: path, train, val, names) and KITTI's ImageSets/<split>.txt for
-// the splits' kept images ks[s] (Nks[s]), written atomically under out_dir.
+// YOLO's data.yaml (Ultralytics: train, val, names, the box type; no path: the file's folder is
+// the root), KITTI's ImageSets/{train,val}.txt (an empty val.txt when no image is in val) for
+// the splits' kept images ks[s] (Nks[s]), and README.md and kitti/README.md (the layouts, the
+// splits, the box type `bbox`: rs_synth_bbox_kind), written atomically under out_dir.
 rs_status rs_synth_dataset__write_trainer_files(const char *out_dir, const char *const split[2], int *const *ks,
-                                                const int *Nks, rs_err *err);
+                                                const int *Nks, int bbox, rs_err *err);
 
 // Assembles DATASET/annotations/instances_<split>.json from every parts/ file present for k in
 // 0 .. count-1. The images of other shards (made by other runs into this folder) are checked

@@ -44,7 +44,7 @@ def main():
     try:
         site, calib = simulate_and_calibrate(tmp, SEED, 2)
         ds = os.path.join(tmp, "ds")
-        p = run("synth", site, "--calib", calib, "--count", "4", "--size", "320x180", "--vehicles", "12",
+        p = run("synth", "--val-fraction", "0", site, "--calib", calib, "--count", "4", "--size", "320x180", "--vehicles", "12",
                 "-o", ds, "--seed", str(SEED), "--jobs", "2")
         if p.returncode != 0:
             raise SystemExit(f"synth: {p.stderr}")

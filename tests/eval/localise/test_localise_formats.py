@@ -68,8 +68,9 @@ def main():
             w, h = rng.uniform(20, 120), rng.uniform(10, 60)
             x, y = rng.uniform(0, W - 1 - w), rng.uniform(0.5 * H, H - 1 - h)
             boxes.append((k // 3 + 1, int(rng.integers(1, 11)), [x, y, w, h], float(rng.uniform(0.1, 1))))
-        coco = [{"image_id": f, "category_id": c, "bbox": b, "score": s, "frame": f - 1,
-                 "time_s": (f - 1) / FPS} for f, c, b, s in boxes]
+        # (b in roadside's pixels; COCO's bbox in its corner convention, + 0.5: docs/localise.md)
+        coco = [{"image_id": f, "category_id": c, "bbox": [b[0] + 0.5, b[1] + 0.5, b[2], b[3]], "score": s,
+                 "frame": f - 1, "time_s": (f - 1) / FPS} for f, c, b, s in boxes]
         p_coco = os.path.join(tmp, "dets.json")
         json.dump(coco, open(p_coco, "w"))
         p_mot = os.path.join(tmp, "dets.txt")

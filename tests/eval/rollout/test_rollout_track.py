@@ -76,7 +76,7 @@ def main(tmp):
     run("traffic", SITE, "--sumo", "--warmup", "60", "--duration", str(60 + SECONDS), "--period", str(PERIOD),
         "--no-randomise", "--flow", "300", "--seed", "3", "-o", frames)
     ds = os.path.join(tmp, "ds")
-    run("synth", SITE, "--calib", cal, "--traffic-frames", frames, "--sequence", "--labels-only",
+    run("synth", "--val-fraction", "0", SITE, "--calib", cal, "--traffic-frames", frames, "--sequence", "--labels-only",
         "--size", "480x270", "--bbox", "footprint", "-o", ds)
     with open(os.path.join(ds, "tracks_gt.csv")) as f:
         gt = list(csv.DictReader(f))

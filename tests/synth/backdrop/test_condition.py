@@ -88,7 +88,7 @@ def main():
         cam["background_images"].append({"name": "untagged", "file": "backgrounds/cam1/untagged.png", "tags": {}})
         json.dump(doc, open(sj, "w"), indent=1)
         ds = os.path.join(tmp, "ds")
-        p = u.run(["synth", site, "--calib", calib, "--camera", "cam1", "--count", "14", "--vehicles", "2",
+        p = u.run(["synth", "--val-fraction", "0", site, "--calib", calib, "--camera", "cam1", "--count", "14", "--vehicles", "2",
                    "--size", "160x90", "--seed", "5", "--jobs", "4", "-o", ds])
         print([x for x in p.stdout.split("\n") if x.startswith("conditions:")][0])
         coco = json.load(open(os.path.join(ds, "annotations", "instances_train2017.json")))

@@ -138,7 +138,7 @@ def main():
             dss = []
             for extra in ([], ["--no-shadows"]):
                 ds = os.path.join(tmp, name + "".join(extra))
-                u.run(["synth", site, "--calib", calib, "--camera", "cam1", "--count", "6", "--seed", str(SEED),
+                u.run(["synth", "--val-fraction", "0", site, "--calib", calib, "--camera", "cam1", "--count", "6", "--seed", str(SEED),
                        "--vehicles", "10", "--keep-invisible", "--backgrounds", "name=" + name, "-o", ds,
                        "--jobs", "1"] + extra)
                 dss.append(ds)

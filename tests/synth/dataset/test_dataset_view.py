@@ -128,7 +128,7 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         calib = u.demo_calib(tmp)
         ds = os.path.join(tmp, "ds")
-        u.run(["synth", u.DEMO, "--calib", calib, "--count", "5", "-o", ds, "--seed", str(SEED),
+        u.run(["synth", "--val-fraction", "0", u.DEMO, "--calib", calib, "--count", "5", "-o", ds, "--seed", str(SEED),
                "--camera", "cam1", "--size", "%dx%d" % (W, H), "--vehicles", "6", "--jobs", "2"])
         check_pages(ds, os.path.join(tmp, "view"))
         check_bad_input(tmp, ds)
@@ -137,7 +137,7 @@ def main():
         from test_pins import fisheye_camera
         fisheye_camera(os.path.join(tmp, "calib_fisheye"), (0.02, -0.004), 0)
         ds = os.path.join(tmp, "ds_fisheye")
-        u.run(["synth", u.DEMO, "--calib", os.path.join(tmp, "calib_fisheye"), "--count", "5", "-o", ds,
+        u.run(["synth", "--val-fraction", "0", u.DEMO, "--calib", os.path.join(tmp, "calib_fisheye"), "--count", "5", "-o", ds,
                "--seed", str(SEED), "--camera", "cam1", "--size", "320x240", "--vehicles", "6", "--jobs", "2"])
         check_pages(ds, os.path.join(tmp, "view_fisheye"), 320, 240)
     print("test_dataset_view: ok")

@@ -22,7 +22,7 @@ W, H = 160, 90
 
 
 def synth(calib, out, extra=()):
-    return u.run(["synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "-o", out,
+    return u.run(["synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "--val-fraction", "0", "-o", out,
                   "--seed", str(SEED), "--camera", "cam1", "--camera", "cam3",
                   "--size", "%dx%d" % (W, H), "--vehicles", "12"] + list(extra))
 
@@ -99,7 +99,7 @@ def check_interrupted(tmp, calib, ref):
     same dataset as an uninterrupted run."""
     import time
     out = os.path.join(tmp, "killed")
-    args = [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "-o", out,
+    args = [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "--val-fraction", "0", "-o", out,
             "--seed", str(SEED), "--camera", "cam1", "--camera", "cam3", "--size",
             "%dx%d" % (W, H), "--vehicles", "12"]
     for delay in (1.0, 2.5):
@@ -194,7 +194,7 @@ def main():
 
         # two shards under GNU parallel, then merge: the same files as one shard
         shards = [os.path.join(tmp, "shard%d" % i) for i in range(2)]
-        cmd = [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "-o",
+        cmd = [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "--val-fraction", "0", "-o",
                os.path.join(tmp, "shard{}"), "--seed", str(SEED), "--camera", "cam1",
                "--camera", "cam3", "--size", "%dx%d" % (W, H), "--vehicles", "12",
                "--shard", "{}/2"]

@@ -22,7 +22,7 @@ SEED = 14
 
 
 def synth_args(calib, out, count=2):
-    return [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(count), "-o", out,
+    return [u.ROADSIDE, "synth", "--val-fraction", "0", u.DEMO, "--calib", calib, "--count", str(count), "-o", out,
             "--seed", str(SEED), "--camera", "cam1", "--size", "64x36", "--vehicles", "3",
             "--jobs", "1"]
 
@@ -66,6 +66,12 @@ def check_dataset(out, count):
         u.fail("%s/.lock left behind by a run that ended" % out)
 
 
+def mark(folder):
+    """Marks folder as a dataset folder of roadside's (DATASET/.roadside-dataset, docs/synth.md)."""
+    with open(os.path.join(folder, ".roadside-dataset"), "w") as f:
+        f.write("roadside synth dataset\n")
+
+
 def main():
     u.need_povray()
     with tempfile.TemporaryDirectory() as tmp:
@@ -74,6 +80,7 @@ def main():
         # 1. another holder (Python), having written its line: refused with its pid
         out = os.path.join(tmp, "held")
         os.makedirs(out)
+        mark(out)  # a dataset folder (issue 42: synth writes only in folders it marked)
         with open(os.path.join(out, "keep.txt"), "w") as f:
             f.write("a file of the user's\n")
         fd = os.open(os.path.join(out, ".lock"), os.O_RDWR | os.O_CREAT, 0o644)
@@ -93,6 +100,7 @@ def main():
         # `synth merge` locks its OUT the same way
         merged = os.path.join(tmp, "merged")
         os.makedirs(merged)
+        mark(merged)
         fd = os.open(os.path.join(merged, ".lock"), os.O_RDWR | os.O_CREAT, 0o644)
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         os.write(fd, ("%d 2030-01-02T03:04:05+0000 roadside synth\n" % os.getpid()).encode())
@@ -146,6 +154,7 @@ def main():
         # 5. a link planted as DATASET/.lock is refused, never followed
         out = os.path.join(tmp, "link")
         os.makedirs(out)
+        mark(out)
         target = os.path.join(tmp, "target.txt")
         with open(target, "w") as f:
             f.write("not roadside's\n")

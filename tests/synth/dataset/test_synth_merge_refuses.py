@@ -18,7 +18,7 @@ SEED = 5
 
 
 def synth(calib, out, count=4, size="64x36", seed=SEED, shard="0/2"):
-    return u.run(["synth", u.DEMO, "--calib", calib, "--count", str(count), "-o", out,
+    return u.run(["synth", u.DEMO, "--calib", calib, "--count", str(count), "--val-fraction", "0", "-o", out,
                   "--seed", str(seed), "--camera", "cam1", "--size", size, "--vehicles", "4",
                   "--shard", shard, "--jobs", "1"])
 
@@ -38,7 +38,7 @@ def main():
         s0, s1 = os.path.join(tmp, "s0"), os.path.join(tmp, "s1")
         # the recipe of docs/scale-out.md: GNU parallel, every option passed, --jobs per shard
         if shutil.which("parallel"):
-            cmd = [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", "4", "-o",
+            cmd = [u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", "4", "--val-fraction", "0", "-o",
                    os.path.join(tmp, "s{}"), "--seed", str(SEED), "--camera", "cam1", "--size",
                    "64x36", "--vehicles", "4", "--jobs", "1", "--shard", "{}/2"]
             r = subprocess.run(["parallel", "--will-cite", "--halt", "now,fail=1", "-j2",

@@ -26,7 +26,7 @@ LENGTHS = {"sedan": 4.4, "suv": 4.8}
 
 
 def synth(calib, out, extra=(), expect=0):
-    return u.run(["synth", u.DEMO, "--calib", calib, "--count", "3", "-o", out, "--seed", str(SEED),
+    return u.run(["synth", "--val-fraction", "0", u.DEMO, "--calib", calib, "--count", "3", "-o", out, "--seed", str(SEED),
                   "--camera", "cam1", "--size", "160x90", "--vehicles", "10"] + list(extra), expect=expect)
 
 

@@ -24,7 +24,7 @@ COUNT = 8
 
 
 def synth(calib, out, extra=()):
-    return subprocess.run([u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(COUNT),
+    return subprocess.run([u.ROADSIDE, "synth", u.DEMO, "--calib", calib, "--count", str(COUNT), "--val-fraction", "0",
                            "-o", out, "--seed", str(SEED), "--camera", "cam1", "--size", "64x36",
                            "--vehicles", "3"] + list(extra),
                           capture_output=True, text=True, timeout=120)

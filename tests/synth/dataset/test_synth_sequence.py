@@ -60,7 +60,7 @@ def main():
                         u.fail(f"{eb['file']}: vehicle {v['id']} jumped {step:.2f} m in 0.1 s")
 
         ds = os.path.join(tmp, "ds")
-        u.run(["synth", u.DEMO, "--calib", calib, "--traffic-frames", frames, "--sequence", "--labels-only",
+        u.run(["synth", "--val-fraction", "0", u.DEMO, "--calib", calib, "--traffic-frames", frames, "--sequence", "--labels-only",
                "--frames", f"{FIRST}:{END}", "--size", "480x270", "--jobs", "2", "--seed", "11", "-o", ds])
         if glob.glob(os.path.join(ds, "**", "*.png"), recursive=True) or \
                 glob.glob(os.path.join(ds, "labels", "**", "*.txt"), recursive=True):
@@ -128,7 +128,7 @@ def main():
         # removed it remakes that image; tracks_gt.csv stays byte for byte the same
         with open(os.path.join(ds, "tracks_gt.csv"), "rb") as f:
             before = f.read()
-        args = ["synth", u.DEMO, "--calib", calib, "--traffic-frames", frames, "--sequence", "--labels-only",
+        args = ["synth", "--val-fraction", "0", u.DEMO, "--calib", calib, "--traffic-frames", frames, "--sequence", "--labels-only",
                 "--frames", f"{FIRST}:{END}", "--size", "480x270", "--jobs", "2", "--seed", "11", "-o", ds]
         p = u.run(args)
         if "(0 made, 80 already done" not in p.stdout:
@@ -142,7 +142,7 @@ def main():
 
         # bad input: usage errors and frames past the end (2), nothing written
         bad = os.path.join(tmp, "bad")
-        base = ["synth", u.DEMO, "--calib", calib, "-o", bad]
+        base = ["synth", "--val-fraction", "0", u.DEMO, "--calib", calib, "-o", bad]
         for extra, what in [(["--sequence"], "--traffic-frames"),
                             (["--sequence", "--traffic-frames", frames, "--count", "4"], "--count"),
                             (["--traffic-frames", frames, "--count", "4", "--frames", "0:2"], "--sequence"),

@@ -57,7 +57,7 @@ def frame_of(seed, k, nframes):
 
 
 def synth(out, frames, extra=(), expect=0):
-    args = ["synth", u.DEMO, "--calib", CALIB, "--count", str(COUNT), "-o", out, "--seed", str(SEED),
+    args = ["synth", "--val-fraction", "0", u.DEMO, "--calib", CALIB, "--count", str(COUNT), "-o", out, "--seed", str(SEED),
             "--size", "160x90", "--vehicles", str(MAXV)]
     if frames:
         args += ["--traffic-frames", frames]

@@ -51,7 +51,7 @@ def make_site(tmp):
 
 
 def synth(site, calib, out, count, extra):
-    return u.run(["synth", site, "--calib", calib, "--count", str(count), "-o", out,
+    return u.run(["synth", site, "--calib", calib, "--count", str(count), "--val-fraction", "0", "-o", out,
                   "--seed", str(SEED), "--camera", "cam1", "--camera", "cam3",
                   "--size", "%dx%d" % (W, H), "--vehicles", "4", "--jobs", "2"] + extra)
 

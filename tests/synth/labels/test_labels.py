@@ -389,8 +389,9 @@ def main():
     for a in coco["annotations"]:
         lab = labels[a["vehicle_index"]]
         fb = lab["footprint_box"]
-        check(close(a["bbox"], [fb[0], fb[1], fb[2] - fb[0], fb[3] - fb[1]], 1e-9),
-              f"COCO bbox is not the footprint box ({a['vehicle_index']})")
+        # COCO's corner convention (issue 41): the pixel-centre box + 0.5
+        check(close(a["bbox"], [fb[0] + 0.5, fb[1] + 0.5, fb[2] - fb[0], fb[3] - fb[1]], 1e-9),
+              f"COCO bbox is not the footprint box + 0.5 ({a['vehicle_index']})")
         check(abs(a["area"] - a["bbox"][2] * a["bbox"][3]) < 1e-9 and a["iscrowd"] == 0 and
               a["category_id"] == 1 + CLASSES.index(occl[a["vehicle_index"]]["cls"]),
               "COCO area / iscrowd / category_id")
@@ -408,9 +409,9 @@ def main():
     a0 = coco["annotations"][0]
     c, cx, cy, w, h = map(float, yolo[0].split())
     b = a0["bbox"]
-    check(int(c) == a0["category_id"] - 1 and abs(cx - (b[0] + b[2] / 2 + 0.5) / W) < 1e-6 and
-          abs(w - b[2] / W) < 1e-6 and abs(cy - (b[1] + b[3] / 2 + 0.5) / H) < 1e-6 and
-          abs(h - b[3] / H) < 1e-6, f"YOLO line {yolo[0]} vs bbox {b}")
+    check(int(c) == a0["category_id"] - 1 and abs(cx - (b[0] + b[2] / 2) / W) < 1e-9 and
+          abs(w - b[2] / W) < 1e-9 and abs(cy - (b[1] + b[3] / 2) / H) < 1e-9 and
+          abs(h - b[3] / H) < 1e-9, f"YOLO line {yolo[0]} vs bbox {b} (both corner convention)")
     kf = kitti[0].split()
     lab0 = labels[a0["vehicle_index"]]
     check(len(kf) == 15 and close([float(x) for x in kf[11:14]], lab0["bottom_center_cam_m"], 1e-4)
@@ -425,7 +426,7 @@ def main():
           "min visibility 0.5: kept %s" % [a["vehicle_index"] for a in coco2["annotations"]])
     for a in coco2["annotations"]:
         bb = labels[a["vehicle_index"]]["body_box"]
-        check(close(a["bbox"], [bb[0], bb[1], bb[2] - bb[0], bb[3] - bb[1]], 1e-9), "--bbox body")
+        check(close(a["bbox"], [bb[0] + 0.5, bb[1] + 0.5, bb[2] - bb[0], bb[3] - bb[1]], 1e-9), "--bbox body")
 
     # ---- roadside eval: GT against itself gives AP = 1 at every threshold
     roadside = os.environ.get("ROADSIDE")

@@ -133,7 +133,7 @@ int main(int argc, char **argv)
     free(path);
     if (rs_io_atomic_commit(&a, &err)) return fail("labels.json", &err);
 
-    rs_synth_label_image im = {"frame_000001.png", cam.width, cam.height, labels, N, ids, NULL};
+    rs_synth_label_image im = {"frame_000001.png", cam.width, cam.height, labels, N, ids, NULL, NULL};
     if (rs_synth_labels_write_coco(argv[3], "val2017", &im, 1, &opt, &err)) return fail("coco", &err);
     if (rs_synth_labels_write_yolo(argv[3], "val2017", &im, 1, &opt, &err)) return fail("yolo", &err);
     if (rs_synth_labels_write_kitti(argv[3], &im, 1, &opt, &err)) return fail("kitti", &err);

@@ -155,7 +155,7 @@ def sumo_synth(tmp):
     for cam in ("cam1", "cam2", "cam3", "cam4"):
         shutil.copy(os.path.join(u.DEMO, "truth", cam + ".cameramodel"), calib)
     ds = os.path.join(tmp, "ds")
-    u.run(["synth", u.DEMO, "--calib", calib, "--count", "4", "-o", ds, "--seed", "5", "--size", "160x90",
+    u.run(["synth", "--val-fraction", "0", u.DEMO, "--calib", calib, "--count", "4", "-o", ds, "--seed", "5", "--size", "160x90",
            "--traffic-frames", fr, "--jobs", "1"])
     coco = json.load(open(os.path.join(ds, "annotations", "instances_train2017.json")))
     cat = {c["id"]: c["name"] for c in coco["categories"]}
@@ -165,8 +165,9 @@ def sumo_synth(tmp):
     W, H = 160, 90
     for a in coco["annotations"]:
         x, y, w, h = a["bbox"]
-        if not (a["visible_pixels"] > 0 and w > 0 and h > 0 and x >= -0.5 and y >= -0.5 and x + w <= W - 0.5 + 1e-9
-                and y + h <= H - 0.5 + 1e-9):
+        # COCO's corner convention (issue 41): inside [0, W] x [0, H]
+        if not (a["visible_pixels"] > 0 and w > 0 and h > 0 and x >= 0 and y >= 0 and x + w <= W + 1e-9
+                and y + h <= H + 1e-9):
             u.fail("synth label %s" % a, SEED)
     print("synth over SUMO's two-wheelers: %d labels, %d motorcycles, %d bicycles"
           % (len(names), names.count("motorcycle"), names.count("bicycle")))
