@@ -136,8 +136,13 @@ def fill_parts(ds, count, real):
         if k in real:
             continue
         stem = "%06d_cam1" % k
-        for rel in ["train2017/%s.png", "images/train2017/%s.png", "labels/train2017/%s.txt"]:
+        for rel in ["train2017/%s.png", "images/train2017/%s.png"]:
             os.link(os.path.join(ds, rel % "000000_cam1"), os.path.join(ds, rel % stem))
+        # one YOLO line per annotation of the copy (merge accounts for every label)
+        with open(os.path.join(ds, "labels", "train2017", "000000_cam1.txt")) as f:
+            lines = f.read().splitlines()
+        with open(os.path.join(ds, "labels", "train2017", stem + ".txt"), "w") as f:
+            f.write("".join(lines[j % len(lines)] + "\n" for j in range(ANNS_PER_IMAGE)))
         for rel in ["kitti/training/image_2/%s.png", "kitti/training/label_2/%s.txt",
                     "kitti/training/calib/%s.txt"]:
             os.link(os.path.join(ds, rel % "000000"), os.path.join(ds, rel % ("%06d" % k)))
@@ -162,6 +167,7 @@ def make_shard_input(big, dst, i, n, docs, extra_k=None):
     os.makedirs(os.path.join(dst, "annotations"))
     run = json.load(open(os.path.join(big, "run.json")))
     run["shards"] = ["%d/%d" % (i, n)]
+    run["finished"] = ["%d/%d" % (i, n)]  # its completion record (merge refuses a shard without)
     json.dump(run, open(os.path.join(dst, "run.json"), "w"))
     shutil.copytree(os.path.join(big, "cameras"), os.path.join(dst, "cameras"))
     mine = [d for d in docs if d["images"][0]["index"] % n == i or d["images"][0]["index"] == extra_k]
@@ -172,6 +178,13 @@ def make_shard_input(big, dst, i, n, docs, extra_k=None):
         coco["annotations"].remove(drop[0])
     for im in coco["images"]:
         link_image_files(big, dst, im["index"])
+    if extra_k is not None:  # its YOLO file a line shorter too (merge accounts for every label)
+        yolo = os.path.join(dst, "labels", "train2017", "%06d_cam1.txt" % extra_k)
+        with open(yolo) as f:
+            lines = f.read().splitlines()
+        os.remove(yolo)  # (a hard link to the run's own file)
+        with open(yolo, "w") as f:
+            f.write("".join(line + "\n" for line in lines[1:]))
     with open(os.path.join(dst, "annotations", "instances_train2017.json"), "w") as f:
         json.dump(coco, f, separators=(",", ":"))
     return coco
@@ -208,7 +221,7 @@ def main():
 
         # 2. memory of the run's assembly: 3,000 parts (2 rendered, 2,998 copies, 2 damaged)
         big = os.path.join(tmp, "big")
-        args = synth_args(calib, big, COUNT_BIG, ["--shard", "0/1500"])
+        args = synth_args(calib, big, COUNT_BIG, ["--shard", "0/1500", "--val-fraction", "0"])
         u.run(args)
         rc, _, err, rss_2 = roadside_rss(args)  # the resume assembling 2 parts
         if rc != 0:
