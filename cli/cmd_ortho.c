@@ -98,8 +98,9 @@ int rs_cli_ortho(int argc, char **argv)
     rs_status st = work ? RS_OK : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
     const bool made = !st && mkdtemp(work);
     if (!st && !made)
-        st = errno == ENOSPC ? rs_err_set(&err, RS_ERR_IO, "disk full writing %s", work)
-                             : rs_err_set(&err, RS_ERR_IO, "%s: cannot create the work folder: %s", work, strerror(errno));
+        st = errno == ENOSPC
+                 ? rs_err_set(&err, RS_ERR_IO, "disk full writing %s", work)
+                 : rs_err_set(&err, RS_ERR_IO, "%s: cannot create the work folder: %s", work, strerror(errno));
     rs_image img = {0};
     rs_geo_grid grid;
     unsigned char *rgb = NULL;

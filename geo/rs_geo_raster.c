@@ -68,11 +68,12 @@ rs_status rs_geo_gdal_output_open(rs_geo_gdal_output *o, const char *path, rs_er
     memset(o, 0, sizeof *o);
     struct stat sb;
     if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
-        return rs_err_set(err, RS_ERR_IO, "%s: exists and is not a regular file (a device, FIFO or folder): not written",
-                          path);
+        return rs_err_set(err, RS_ERR_IO,
+                          "%s: exists and is not a regular file (a device, FIFO or folder): not written", path);
     const char *slash = strrchr(path, '/'), *name = slash ? slash + 1 : path;
     char dir[64];
-    snprintf(dir, sizeof dir, "/vsimem/roadside-%ld-%u", (long)getpid(), __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED));
+    snprintf(dir, sizeof dir, "/vsimem/roadside-%ld-%u", (long)getpid(),
+             __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED));
     o->vsi_dir = strdup(dir);
     o->vsi_path = o->vsi_dir ? rs_io_join(dir, *name ? name : "out") : NULL;
     o->path = strdup(path);
