@@ -200,7 +200,9 @@ rs_status rs_geo_ortho_read(rs_geo_ortho *out, const char *path, const rs_llh *o
     memset(out, 0, sizeof *out);
     if (max_side < 16 || max_side > 16384)
         return rs_err_set(err, RS_ERR_INVALID, "%s: max_side %d is not in [16, 16384]", path, max_side);
-    if (access(path, R_OK) != 0) return rs_err_set(err, RS_ERR_IO, "%s: cannot read", path);
+    // only a regular file reaches GDAL (a FIFO would block its open forever)
+    rs_status checked = rs_io_check_regular(path, SIZE_MAX, err);
+    if (checked) return checked;
     GDALAllRegister();
     CPLErrorReset();
     CPLPushErrorHandler(CPLQuietErrorHandler);
