@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <cjson/cJSON.h>
 #include <mrcal/mrcal.h>
@@ -499,6 +500,20 @@ static bool append_text(char **text, const char *s)
 
 static const char *const run_status_names[] = {"written", "failed", "not selected"};
 
+// The outputs of camera `id` still in out_dir ("cam1.cameramodel, cam1.json"; "" when none), as a
+// malloc'ed string; NULL when out of memory.
+static char *stale_outputs(const char *out_dir, const char *id, const rs_calib_site_outputs *outputs)
+{
+    unsigned mask = 0;
+    for (int k = 0; k < outputs->Nsuffixes; k++) {
+        char *path = rs_io_child_path(out_dir, id, outputs->suffixes[k], NULL);
+        struct stat sb;
+        if (path && lstat(path, &sb) == 0) mask |= 1u << k;
+        free(path);
+    }
+    return rs_calib_site_outputs_names(id, mask, outputs);
+}
+
 rs_status rs_calib_site_run_write(const char *out_dir, const rs_calib_site_outputs *outputs, const char *site_dir,
                                   const char *error, const rs_calib_site_run_camera *cameras, int N, rs_err *err)
 {
@@ -564,12 +579,22 @@ char *rs_calib_site_run_summary(const char *out_dir, const rs_calib_site_outputs
     for (int i = 0; ok && i < N; i++) {
         const rs_calib_site_run_camera *c = &cameras[i];
         if (c->status != RS_CALIB_SITE_RUN_FAILED) continue;
-        char *names = rs_calib_site_outputs_names(c->id, c->files, outputs);
-        ok = names && append_text(&text, "not written: ") && append_text(&text, c->id) &&
+        char *names = rs_calib_site_outputs_names(c->id, c->files, outputs),
+             *stale = stale_outputs(out_dir, c->id, outputs);
+        ok = names && stale && append_text(&text, "not written: ") && append_text(&text, c->id) &&
              append_text(&text, ": failed (") && append_text(&text, c->error ? c->error : "no reason given") &&
              append_text(&text, "); ") && append_text(&text, names[0] ? "its earlier outputs removed: " : "") &&
-             append_text(&text, names[0] ? names : "no earlier output of it was there") && append_text(&text, "\n");
+             append_text(&text, names[0]   ? names
+                                : stale[0] ? ""
+                                           : "no earlier output of it was there");
+        // what could not be removed (a read-only folder) is an earlier run's: said, never left to look valid
+        if (ok && stale[0])
+            ok = append_text(&text, names[0] ? "; " : "") &&
+                 append_text(&text, "STALE, an earlier run's output that could not be removed (do not use it): ") &&
+                 append_text(&text, stale);
+        ok = ok && append_text(&text, "\n");
         free(names);
+        free(stale);
     }
     if (ok && Nkept) ok = append_text(&text, "not selected, earlier outputs (if any) left as they were: ");
     for (int i = 0, n = 0; ok && i < N; i++)

@@ -7,6 +7,8 @@ otherwise), filled to its last few kilobytes, receives:
   export -o OUT.geojson, -o OUT.gpkg, --uncertainty OUT.tif   (GDAL's drivers)
   calib --json > res.json, site describe > d.txt              (standard output; also > /dev/full)
   ortho -o ORTHO.tif                                          (POV-Ray's work folder, then GDAL)
+and calib into a folder remounted read-only after a first run names the earlier outputs it
+cannot remove as stale (it said "no earlier output of it was there" while they stayed).
 Before the fix export -o OUT.geojson exited 0 leaving a truncated file, the GeoPackage said "no
 such table: gpkg_geometry_columns", calib --json and site describe exited 0 with a truncated or
 empty file, and ortho left its .ortho-work-* folder. The oracle for "complete" is GDAL itself: with
@@ -113,6 +115,20 @@ for room in (0, 200, 600):
     rc, err = run(["ortho", SITE, "-o", out("o.tif"), "--gsd", "0.1"])
     check(rc == 1 and "disk full writing" in err, f"ortho with {room} kB free: rc {rc}, stderr {err!r}")
     check(leftovers() == [], f"ortho with {room} kB free left {leftovers()}")
+
+# ---- calib into a folder made read-only after an earlier run: its old outputs are named stale ----
+ro = os.path.join(top, "ro")
+os.mkdir(ro)
+subprocess.run(["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", ro], check=True)
+rc, err = run(["calib", SITE, "-o", os.path.join(ro, "c")])
+check(rc == 0, f"calib into {ro}/c: rc {rc}: {err}")
+subprocess.run(["mount", "-o", "remount,ro", ro], check=True)
+p = subprocess.run([ROADSIDE, "calib", SITE, "-o", os.path.join(ro, "c")], capture_output=True, text=True, timeout=120)
+said = p.stdout + p.stderr
+check(p.returncode == 1 and "no earlier output of it was there" not in said
+      and said.count("STALE, an earlier run's output that could not be removed") == 4,
+      f"calib into a read-only folder: rc {p.returncode}: {said[-600:]!r}")
+subprocess.run(["umount", ro])
 
 # ---- the oracle: with room, the same outputs are whole files GDAL reads ----
 os.remove(os.path.join(full, "filler"))
