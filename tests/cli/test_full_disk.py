@@ -38,13 +38,8 @@ if not os.environ.get(INNER):
     print("SKIP: no mount namespace")
     sys.exit(77)
 
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL: " + what)
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
+from rs_check import check, finish  # noqa: E402
 
 
 def run(args, stdout=None, timeout=120):
@@ -153,6 +148,4 @@ os.remove(out("res.json"))
 
 subprocess.run(["umount", full])
 shutil.rmtree(top, ignore_errors=True)
-if failures:
-    sys.exit(1)
-print("full disk: export (GeoJSON, GeoPackage, GeoTIFF), calib --json, site describe, ortho: refused, nothing left")
+finish("full disk (export GeoJSON/GeoPackage/GeoTIFF, calib --json, site describe, ortho, read-only calib)")

@@ -17,15 +17,10 @@ import sys
 import tempfile
 import zlib
 
-ROADSIDE = os.environ["ROADSIDE"]
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "common"))
+from rs_check import ROADSIDE, check, finish  # noqa: E402
+
 DEMO = os.path.join(os.environ["ROADSIDE_SOURCE_ROOT"], "sites", "demo")
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL: " + what)
 
 
 def run(*args):
@@ -106,6 +101,4 @@ rc, out = run("site", "check", site)
 check(rc == 1 and "symbolic links" in out, f"site check, lanes.geojson a link loop: rc {rc}: {out}")
 
 shutil.rmtree(top, ignore_errors=True)
-if failures:
-    sys.exit(1)
-print("no blocking: FIFO video, orthophotos (pick, report, site check), a 32000x32000 PNG, link loops: refused")
+finish("no blocking (FIFO video, orthophotos in pick, report, site check; a 32000x32000 PNG; link loops)")
