@@ -642,8 +642,8 @@ rs_status rs_audit_camera(rs_audit_result *r, const rs_calib_problem *problem, c
     size_t fs = sizeof r->failures;
     // one rule, on the headline: the surveyed positions through the calibration audited
     if (!(r->rms_surveyed_px <= max_rms))
-        append(f, fs, "rms_surveyed_px %.2f px > %.3g px (the inliers' surveyed positions reprojected through %s)",
-               r->rms_surveyed_px, max_rms, r->has_external ? "the external calibration" : "the audit's solve");
+        append(f, fs, "the inliers' surveyed positions reproject %.2f px off (RMS) through %s > %.3g px",
+               r->rms_surveyed_px, r->has_external ? "the calibration" : "the audit's solve", max_rms);
     if (r->loo_count && !(r->loo_rms_px <= max_loo_px))
         append(f, fs, "leave-one-out RMS %.2f px > %.3g px", r->loo_rms_px, max_loo_px);
     if (r->loo_count && r->loo_median_m > r->thresholds.max_loo_m)

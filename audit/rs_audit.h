@@ -320,10 +320,6 @@ rs_status rs_audit_site_camera( // out
 // out: text (size bytes, NUL-terminated, truncated if need be)
 void rs_audit_site_verdict(char *text, size_t size, const rs_site *site, int icam, const rs_audit_result *result);
 
-// Replaces the solver's "(index 2,5; ..." in a warning with the landmark ids of camera icam
-// ("(L003, L006; ..."), in place (text of size bytes).
-void rs_audit_site_name_landmarks(char *text, size_t size, const rs_site *site, int icam);
-
 // The audit as JSON text (the content of <id>.audit.json; docs/audit.md lists the fields).
 // Caller frees with free(); NULL when out of memory.
 char *rs_audit_result_json(const rs_site *site, int icam, const rs_audit_result *result, const rs_audit_options *opt);

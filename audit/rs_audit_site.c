@@ -201,7 +201,7 @@ rs_status rs_audit_site_camera(rs_audit_result *result, const rs_site *site, int
     st = rs_audit_camera(result, &sp.problem, site->ground_normal_enu, site->ground_offset_m, q_new,
                          q_new ? q_new + 2 * cam->Nobservations : NULL, calib_path ? &cal : NULL, opt, err);
     if (st == RS_OK) { // landmarks named by id, the verdict in words
-        rs_audit_site_name_landmarks(result->warnings, sizeof result->warnings, site, icam);
+        rs_calib_site_name_landmarks(result->warnings, sizeof result->warnings, site, icam);
         rs_audit_site_verdict(result->verdict, sizeof result->verdict, site, icam, result);
     }
 done:
@@ -222,31 +222,6 @@ static const char *obs_id(char *buf, size_t size, const rs_site *site, int icam,
         return site->landmarks[cam->observations[i].ilandmark].id;
     snprintf(buf, size, "#%d", i);
     return buf;
-}
-
-void rs_audit_site_name_landmarks(char *text, size_t size, const rs_site *site, int icam)
-{
-    char *at = strstr(text, "(index ");
-    if (!at) return;
-    char *list = at + strlen("(index "), *end = list;
-    while (isdigit((unsigned char)*end) || *end == ',') end++;
-    if (end == list) return;
-    char names[512] = "", buf[16];
-    size_t n = 0;
-    for (char *p = list; p < end && n + 2 < sizeof names;) {
-        int i = (int)strtol(p, &p, 10);
-        n += (size_t)snprintf(names + n, sizeof names - n, "%s%s", n ? ", " : "",
-                              obs_id(buf, sizeof buf, site, icam, i));
-        if (*p == ',') p++;
-    }
-    if (n >= sizeof names) n = sizeof names - 1;
-    // "(index 2,5" -> "(landmark L003, L006"
-    char *out = malloc(size);
-    if (!out) return;
-    snprintf(out, size, "%.*s(landmark%s %s%s", (int)(at - text), text, strchr(names, ',') ? "s" : "", names, end);
-    memcpy(text, out, size);
-    text[size - 1] = '\0';
-    free(out);
 }
 
 // Appends printf text to a fixed buffer (truncating).
@@ -303,9 +278,17 @@ void rs_audit_site_verdict(char *text, size_t size, const rs_site *site, int ica
             say(text, size, "Landmark %s: %s%s%.1f m on the ground: check its survey and its pick. ", id,
                 L->loo_ok ? "the others locate it " : "", L->loo_ok ? "" : "", L->loo_ok ? L->loo_ground_error_m : NAN);
     }
+    // the image says the nominal focal length is wrong: that, not the survey, is the first fix
+    const rs_calib_intrinsics_check *ic = &r->solve.intrinsics_check;
+    const bool focal_off = ic->focal_tested && ic->chi2_focal > ic->critical_focal;
     if (!r->pass) {
         say(text, size, "Fails: %s.", r->failures);
-        if (r->loo_count && r->loo_median_m > r->thresholds.max_loo_m)
+        if (focal_off)
+            say(text, size,
+                " The image says the focal length is %.0f%% %s than the nominal: recalibrate with 'roadside calib %s "
+                "--refine focal' first (a resurvey will not fix a wrong focal length).",
+                100 * fabs(ic->focal_rel), ic->focal_rel >= 0 ? "longer" : "shorter", site->dir);
+        else if (r->loo_count && r->loo_median_m > r->thresholds.max_loo_m)
             say(text, size,
                 " To meet the need, survey the landmarks more accurately or add landmarks spread over the "
                 "area, then re-pick and recalibrate.");
@@ -324,12 +307,11 @@ static cJSON *sentences(const char *text)
 {
     cJSON *a = cJSON_CreateArray();
     for (const char *s = text; a && *s;) {
-        const char *e = strstr(s, "; ");
-        size_t n = e ? (size_t)(e - s) : strlen(s);
+        const size_t n = rs_calib_warning_len(s); // a "; " inside parentheses belongs to the sentence
         char *one = strndup(s, n);
         if (one) cJSON_AddItemToArray(a, cJSON_CreateString(one));
         free(one);
-        s += n + (e ? 2 : 0);
+        s += n + (s[n] ? 2 : 0);
     }
     return a;
 }

@@ -244,8 +244,9 @@ typedef struct {
     int iterations;              // Ceres iterations, all solves together
     double time_us;              // wall time of rs_calib_solve, microseconds
     char method[224];            // what was done, e.g. "opengv-p3p ... + ceres-cauchy(2)..."
-    char warnings[2048];         // plain-words warnings, "; "-separated; "" when none (2048: the
-                                 //   intrinsics warning, 7a, comes first and is ~350 bytes)
+    char warnings[2048];         // plain-words warnings, "; "-separated (a "; " inside parentheses
+                                 //   belongs to its warning: rs_calib_warning_len); "" when none
+                                 //   (2048: the intrinsics warning, 7a, comes first, ~350 bytes)
 
     rs_calib_noise_group noise[RS_CALIB_NOISE_NGROUPS]; // the noise model (RS_CALIB_NOISE_*)
     // Per landmark (N,), at the final adjustment (docs/calibration.md, "Outliers and reliability");
@@ -277,6 +278,11 @@ typedef struct {
     double sigma_ground_fit_m;      // its residuals' RMS on the ground, m (2n - 8 dof; NaN for n = 4)
     int Nground_fit;                // landmarks it was fitted to (0: none could be fitted)
 } rs_calib_result;
+
+// The length in bytes of the first warning of a "; "-separated list (rs_calib_result.warnings):
+// up to the first "; " outside parentheses, so "... dropped (index 2,5; 0 by data snooping)" is
+// one warning. The next one starts after the "; ". Returns strlen(warnings) for the last one.
+size_t rs_calib_warning_len(const char *warnings);
 
 // Solves one camera's pose (see the method above). With RS_CALIB_REFINE_FOCAL on 12 landmarks or
 // fewer, every alternative start is solved and the best kept; when none gives a pose with the

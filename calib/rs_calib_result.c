@@ -83,6 +83,16 @@ void rs_calib__warn(rs_calib_result *r, const char *fmt, ...)
     va_end(ap);
 }
 
+size_t rs_calib_warning_len(const char *warnings)
+{
+    int depth = 0;
+    for (const char *s = warnings; *s; s++) {
+        depth += *s == '(' ? 1 : *s == ')' && depth > 0 ? -1 : 0;
+        if (depth == 0 && s[0] == ';' && s[1] == ' ') return (size_t)(s - warnings);
+    }
+    return strlen(warnings);
+}
+
 bool rs_calib__all_finite(const double *x, int n)
 {
     for (int i = 0; i < n; i++)

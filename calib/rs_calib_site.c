@@ -231,15 +231,9 @@ char *rs_calib_site_result_json(const rs_site *site, int icam, const rs_calib_re
     char judged[512]; // the site's heights, nobody having declared them, taken from its ground model
     if (rs_site_heights_judgement(judged, sizeof judged, &site->ground)[0])
         cJSON_AddItemToArray(warnings, cJSON_CreateString(judged));
-    if (r->warnings[0]) {
-        char buf[sizeof r->warnings];
-        memcpy(buf, r->warnings, sizeof buf);
-        char *save = NULL;
-        for (char *w = strtok_r(buf, ";", &save); w; w = strtok_r(NULL, ";", &save)) {
-            while (*w == ' ') w++;
-            if (*w) cJSON_AddItemToArray(warnings, cJSON_CreateString(w));
-        }
-    }
+    char one[sizeof r->warnings + 512];
+    for (const char *w = r->warnings; (w = rs_calib_site_warning_sentence(one, sizeof one, w, site, icam));)
+        cJSON_AddItemToArray(warnings, cJSON_CreateString(one));
     cJSON *lms = cJSON_AddArrayToObject(root, "landmarks");
     for (int i = 0; i < r->N && i < cam->Nobservations; i++) {
         const rs_site_observation *o = &cam->observations[i];
@@ -338,14 +332,18 @@ static rs_status annotate_frame(const char *tmp_path, const rs_site *site, const
     size_t len = 0;
     rs_status st = rs_io_read_file(&text, &len, tmp_path, err);
     if (st) return st;
-    char note[1024];
+    char note[1536];
     snprintf(note, sizeof note,
              "# roadside calib: camera %s of site '%s'\n"
              "# %s map site ENU into the camera frame (x right, y down, z forward):\n"
              "# ENU = local east-north-up in metres, tangent to the WGS84 ellipsoid at the site's origin\n"
-             "# enu_origin: lat %.9f deg, lon %.9f deg, h %.4f m (ellipsoidal)\n",
+             "# enu_origin: lat %.9f deg, lon %.9f deg, h %.4f m (ellipsoidal)\n%s",
              cam->id, site->name ? site->name : "", yaml ? "rvec, tvec and R_cam_enu" : "The extrinsics (rt_cam_enu)",
-             site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m);
+             site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m,
+             yaml ? ""
+                  : "# No optimization_inputs: the pose was solved by roadside (Ceres), not by mrcal's optimizer, so\n"
+                    "# mrcal-show-projection-uncertainty and mrcal-show-residuals cannot read this model; the pose's\n"
+                    "# uncertainty is in <id>.json, and 'roadside audit SITE --calib DIR' maps it on the ground\n");
     size_t at = 0; // where the note goes
     if (yaml)
         for (int lines = 0; lines < 2 && at < len; lines++) {
@@ -535,6 +533,13 @@ static rs_status read_landmarks(rs_calib_site_result *r, const cJSON *root, cons
     return RS_OK;
 }
 
+// intrinsics_check's chi2 above its critical value (absent, in older files: not off)
+static bool check_off(const cJSON *ic, const char *chi2, const char *critical)
+{
+    const cJSON *x = cJSON_GetObjectItemCaseSensitive(ic, chi2), *c = cJSON_GetObjectItemCaseSensitive(ic, critical);
+    return cJSON_IsNumber(x) && cJSON_IsNumber(c) && x->valuedouble > c->valuedouble;
+}
+
 rs_status rs_calib_site_result_read(rs_calib_site_result *r, const char *path, rs_err *err)
 {
     memset(r, 0, sizeof *r);
@@ -571,6 +576,10 @@ rs_status rs_calib_site_result_read(rs_calib_site_result *r, const char *path, r
     if (!st && !(r->lensmodel = strdup(lm->valuestring))) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
     if (!st) st = read_warnings(r, root, path, err);
     if (!st) st = read_landmarks(r, root, path, err);
+    const cJSON *ic = cJSON_GetObjectItemCaseSensitive(root, "intrinsics_check"), *f;
+    r->focal_rel = cJSON_IsNumber(f = cJSON_GetObjectItemCaseSensitive(ic, "focal_rel")) ? f->valuedouble : NAN;
+    r->focal_off = check_off(ic, "chi2_focal", "critical_focal");
+    r->center_off = check_off(ic, "chi2_center", "critical_center");
     cJSON_Delete(root);
     return st;
 }

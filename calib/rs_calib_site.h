@@ -54,6 +54,17 @@ rs_status rs_calib_site_problem_init( // out
     const rs_site *site, int icam, rs_err *err);
 void rs_calib_site_problem_free(rs_calib_site_problem *sp); // NULL-safe
 
+// Replaces the solver's "(index 2,5; ..." in a warning with the landmark ids of camera icam's
+// observations ("(landmarks L003, L006; ..."), in place (text of size bytes, truncated if need be).
+void rs_calib_site_name_landmarks(char *text, size_t size, const rs_site *site, int icam);
+
+// The first warning of the "; "-separated list `warnings` (rs_calib_warning_len) as a sentence:
+// capitalised, ending in a full stop, its landmarks named by id (rs_calib_site_name_landmarks).
+// Returns where the next warning starts, NULL when warnings holds none (then sentence is "").
+// out: sentence (size bytes, NUL-terminated, truncated if need be)
+const char *rs_calib_site_warning_sentence(char *sentence, size_t size, const char *warnings, const rs_site *site,
+                                           int icam);
+
 // Writes the files of camera icam into out_dir (which must exist), all or nothing: every file is
 // first written under a temporary name, and only when all are complete are they renamed into
 // place. *written receives the bits (rs_calib_site_calib_outputs' suffixes) of the files
@@ -221,6 +232,11 @@ typedef struct {
     rs_calib_site_landmark *landmarks; // (N,) owned
     int Nwarnings;
     char **warnings; // (Nwarnings,) owned strings
+    // intrinsics_check (docs/calibration.md 7a): the image says the focal length (the principal
+    // point) differs from the nominal beyond chance (chi2 above its critical value); focal_rel:
+    // the data's f / f_nominal - 1 (NaN: not tested, or a file older than the check)
+    bool focal_off, center_off;
+    double focal_rel;
 } rs_calib_site_result;
 
 // Reads a calibration result file. *out is zeroed first; free it with rs_calib_site_result_free

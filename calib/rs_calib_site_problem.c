@@ -1,7 +1,9 @@
 // rs_calib_site_problem.c -- one camera of a site as the solver's problem (calib/rs_calib_site.h):
 // its picks, their landmarks' surveyed positions and sigmas (a pick along a pole or a line: its
 // polyline), which picks share a survey error, the nominal camera and its priors.
+#include <ctype.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -80,4 +82,46 @@ void rs_calib_site_problem_free(rs_calib_site_problem *sp)
     free(sp->survey_shared);
     free(sp->pole_vertices_m);
     memset(sp, 0, sizeof *sp);
+}
+
+void rs_calib_site_name_landmarks(char *text, size_t size, const rs_site *site, int icam)
+{
+    char *at = strstr(text, "(index ");
+    if (!at || icam < 0 || icam >= site->Ncameras) return;
+    const rs_site_camera *cam = &site->cameras[icam];
+    char *list = at + strlen("(index "), *end = list;
+    while (isdigit((unsigned char)*end) || *end == ',') end++;
+    if (end == list) return;
+    char names[512] = "";
+    size_t n = 0;
+    for (char *p = list; p < end && n + 2 < sizeof names;) {
+        int i = (int)strtol(p, &p, 10);
+        const int il = i >= 0 && i < cam->Nobservations ? cam->observations[i].ilandmark : -1;
+        if (il >= 0 && il < site->Nlandmarks && site->landmarks[il].id)
+            n += (size_t)snprintf(names + n, sizeof names - n, "%s%s", n ? ", " : "", site->landmarks[il].id);
+        else
+            n += (size_t)snprintf(names + n, sizeof names - n, "%s#%d", n ? ", " : "", i);
+        if (*p == ',') p++;
+    }
+    char *out = malloc(size);
+    if (!out) return;
+    // "(index 2,5" -> "(landmarks L003, L006"
+    snprintf(out, size, "%.*s(landmark%s %s%s", (int)(at - text), text, strchr(names, ',') ? "s" : "", names, end);
+    memcpy(text, out, size);
+    text[size - 1] = '\0';
+    free(out);
+}
+
+const char *rs_calib_site_warning_sentence(char *sentence, size_t size, const char *warnings, const rs_site *site,
+                                           int icam)
+{
+    while (*warnings == ';' || *warnings == ' ') warnings++;
+    sentence[0] = '\0';
+    if (!*warnings || size < 2) return NULL;
+    const size_t n = rs_calib_warning_len(warnings);
+    snprintf(sentence, size - 1, "%.*s", (int)n, warnings);
+    rs_calib_site_name_landmarks(sentence, size - 1, site, icam);
+    sentence[0] = (char)toupper((unsigned char)sentence[0]);
+    if (sentence[strlen(sentence) - 1] != '.') strcat(sentence, ".");
+    return warnings + n;
 }

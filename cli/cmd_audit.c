@@ -275,7 +275,9 @@ int rs_cli_audit(int argc, char **argv)
         case O_CAMERA: only[Nonly++] = optarg; break;
         case 'o': out_dir = optarg; break;
         case O_JSON: json = true; break;
-        default: free(only); return rs_cli_usage_error("audit", "unknown option");
+        default:
+            free(only);
+            return rs_cli_usage_error("audit", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) {

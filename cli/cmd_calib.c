@@ -17,16 +17,21 @@ static const char calib_usage[] =
     "usage: roadside calib SITE [-o OUT] [--camera ID]... [--refine WHAT] [--json]\n"
     "\n"
     "Calibrates the cameras of a site from its surveyed landmarks and their pixel picks:\n"
-    "RANSAC over P3P, a planar (IPPE) or EPnP solve, then a Ceres adjustment in which the\n"
-    "landmarks move within their survey sigmas, outliers are flagged and dropped, and the pose\n"
-    "covariance is reported (docs/calibration.md).\n"
+    "every landmark at once (OpenCV's SQPnP, and IPPE where they are planar) and RANSAC over\n"
+    "P3P, then a Ceres adjustment in which the landmarks move within their survey sigmas,\n"
+    "outliers are flagged and dropped, and the pose covariance is reported\n"
+    "(docs/calibration.md, docs/calibration-init.md).\n"
     "\n"
     "For each camera it writes into OUT (default SITE/calib):\n"
     "  <id>.cameramodel      mrcal model, extrinsics = rt_cam_enu (reference frame: site ENU)\n"
     "  <id>.json             pose, covariance, sigmas, yaw/pitch/roll, residuals per landmark\n"
     "  <id>.opencv.yaml      K, distortion, R, t (lens models with an OpenCV equivalent)\n"
     "  <id>.homography.json  undistorted pixels <-> ground (E, N) on the site's ground plane\n"
-    "all or nothing: a camera that fails leaves none of these, and an earlier run's files of it\n"
+    "The .cameramodel has no optimization_inputs (the solve is roadside's, not mrcal's\n"
+    "optimizer): mrcal-show-projection-uncertainty and mrcal-show-residuals cannot read it;\n"
+    "the pose's uncertainty is in <id>.json and 'roadside audit SITE --calib OUT' maps it.\n"
+
+    "All or nothing: a camera that fails leaves none of these, and an earlier run's files of it\n"
     "are removed. Last, OUT/calib.run.json records which cameras this run wrote, which failed\n"
     "and which it did not select. It prints a summary table: landmarks used and rejected as\n"
     "outliers; rms_surveyed_px, the RMS reprojection error of the inliers' SURVEYED positions\n"
@@ -141,7 +146,9 @@ int rs_cli_calib(int argc, char **argv)
             }
             break;
         case 'j': json = true; break;
-        default: free(only); return rs_cli_usage_error("calib", "unknown option");
+        default:
+            free(only);
+            return rs_cli_usage_error("calib", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) {
@@ -293,7 +300,9 @@ int rs_cli_locate(int argc, char **argv)
         switch (c) {
         case 'c': camera = optarg; break;
         case 'd': calib_dir = optarg; break;
-        default: return rs_cli_usage_error("locate", "unknown option (a negative U needs '--' before it)");
+        default:
+            return rs_cli_usage_error(
+                "locate", "unknown option or missing value: %s (a negative U needs '--' before it)", argv[optind - 1]);
         }
     }
     if (optind >= argc) return rs_cli_usage_error("locate", "expected a SITE folder");

@@ -20,24 +20,28 @@ static const char export_usage[] =
     "\n"
     "Writes a site's calibration for GIS tools (QGIS, ArcGIS, GDAL), through GDAL/OGR\n"
     "(docs/report.md, \"GIS export\"):\n"
-    "  -o OUT.gpkg     a GeoPackage with four layers: cameras (position, height above the ground,\n"
+    "  -o OUT.gpkg     a GeoPackage with five layers: cameras (position, height above the ground,\n"
     "                  heading, pitch, roll, their sigmas, the audit's verdict), footprints (the\n"
     "                  ground each camera sees within --range, a polygon), landmarks (one point per\n"
-    "                  camera and pick: residuals, normalised residual, inlier, leave-one-out ground\n"
-    "                  error, the audit's flag), lanes (SITE/lanes.geojson as drawn in the report)\n"
+    "                  landmark picked: survey, cameras, worst leave-one-out ground error, flag),\n"
+    "                  picks (one point per camera and pick: residuals, normalised residual,\n"
+    "                  inlier, leave-one-out ground error, the audit's flag), lanes\n"
+    "                  (SITE/lanes.geojson as drawn in the report); each layer with its description\n"
+    "                  and a QGIS style (layer_styles: verdicts, a ramp anchored at the need)\n"
     "  -o OUT.geojson  the same in one GeoJSON FeatureCollection; each feature's \"layer\" property\n"
-    "                  says which of the four it belongs to\n"
+    "                  says which of the five it belongs to (no styles)\n"
     "  --uncertainty OUT.tif\n"
     "                  the ground uncertainty map as a GeoTIFF: per cell the 1-sigma horizontal\n"
     "                  error in metres of a vehicle located by the best camera seeing it (NaN:\n"
-    "                  none sees it), in the site's ENU grid (an orthographic CRS at the site's\n"
-    "                  origin) or warped into --crs\n"
+    "                  none sees it), in the site's ENU grid (a CRS named \"roadside site ENU at\n"
+    "                  LAT, LON\": orthographic at the site's origin, metres) or warped into --crs\n"
     "  --pixel-map OUT.tif|OUT.npz\n"
     "                  for every pixel of camera --camera the ground point it sees and its 1-sigma\n"
     "                  (docs/localise.md, \"Pixel map\"): a GeoTIFF of the image's pixel grid with\n"
     "                  Float64 bands e_m, n_m, lat_deg, lon_deg, sigma_m, or a NumPy .npz of\n"
     "                  x_map (E), y_map (N), lat_map, lon_map, sigma_map (height x width); NaN\n"
     "                  where the pixel sees no ground. --pixel-sigma S: the detection noise (2 px)\n"
+    "The folders of the outputs are created.\n"
     "The calibration is audited as 'roadside audit SITE --calib DIR' does (same thresholds), for\n"
     "the verdicts, flags and maps.\n"
     "\n"
@@ -160,7 +164,7 @@ int rs_cli_export(int argc, char **argv)
             if (c == O_DET) opt.audit_options.detection_sigma_px = x;
             if (c == O_NEED) opt.audit_options.need_ground_m = x;
             break;
-        default: return rs_cli_usage_error("export", "unknown option");
+        default: return rs_cli_usage_error("export", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) return rs_cli_usage_error("export", "expected one SITE folder");
@@ -192,8 +196,8 @@ int rs_cli_export(int argc, char **argv)
         return RS_EXIT_FAIL;
     }
     if (vector)
-        printf("%s: %d cameras, %d footprints, %d landmark picks, %d lane lines (%s)\n", vector, sum.Ncameras,
-               sum.Ncameras, sum.Nlandmarks, sum.Nlanes, opt.crs ? opt.crs : "EPSG:4326");
+        printf("%s: %d cameras, %d footprints, %d landmarks, %d picks, %d lane lines (%s)\n", vector, sum.Ncameras,
+               sum.Ncameras, sum.Nlandmarks, sum.Npicks, sum.Nlanes, opt.crs ? opt.crs : "EPSG:4326");
     if (raster)
         printf("%s: %d x %d cells, 1-sigma ground error in metres (%s)\n", raster, sum.raster_width, sum.raster_height,
                opt.crs ? opt.crs : "the site's ENU grid");

@@ -84,7 +84,7 @@ int rs_cli_pick(int argc, char **argv)
             if (!rs_cli_parse_int(optarg, 16, 16384, &max_side))
                 return rs_cli_usage_error("pick", "--max-side: '%s': expected 16..16384", optarg);
             break;
-        default: return rs_cli_usage_error("pick", "unknown option");
+        default: return rs_cli_usage_error("pick", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) return rs_cli_usage_error("pick", "expected one SITE folder");

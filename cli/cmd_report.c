@@ -58,6 +58,13 @@ static const char report_usage[] =
     "camera failing the audit's thresholds is reported in the report and on stdout, and does\n"
     "not change the exit status (see 'roadside audit').\n";
 
+// The report's progress, one line per stage on stderr (stdout keeps the summary).
+static void report_progress(void *ctx, const char *what)
+{
+    (void)ctx;
+    fprintf(stderr, "roadside report: %s\n", what);
+}
+
 int rs_cli_report(int argc, char **argv)
 {
     if (rs_cli_wants_help(argc, argv)) {
@@ -84,6 +91,7 @@ int rs_cli_report(int argc, char **argv)
     rs_report_options opt;
     rs_report_options_default(&opt);
     opt.version = RS_VERSION;
+    opt.progress = report_progress;
     const char *epoch = getenv("SOURCE_DATE_EPOCH"); // reproducible builds' convention for "now"
     if (epoch && *epoch) opt.written_utc_s = strtoll(epoch, NULL, 10);
     const char *out_dir = NULL;
@@ -139,7 +147,7 @@ int rs_cli_report(int argc, char **argv)
             *dst[c == 'N' ? 0 : c - '0'] = x;
             break;
         }
-        default: return rs_cli_usage_error("report", "unknown option");
+        default: return rs_cli_usage_error("report", "unknown option or missing value: %s", argv[optind - 1]);
         }
     }
     if (optind != argc - 1) return rs_cli_usage_error("report", "expected one SITE folder");

@@ -1,15 +1,16 @@
 // roadside -- git-style dispatcher: `roadside COMMAND [ARGS...]`.
 #include <errno.h>
 #include <fcntl.h>
+#include <getopt.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "core/rs_io.h"
-
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_detect.h"
+#include "core/rs_io.h"
+#include "geo/rs_geo_raster.h"
 
 #ifndef RS_VERSION
 #define RS_VERSION "unknown"
@@ -95,6 +96,8 @@ static int run(int argc, char **argv)
         return RS_EXIT_USAGE;
     }
     const char *cmd = argv[1];
+    opterr = 0;          // one error line per mistake: each command names a bad option itself
+    rs_geo_gdal_quiet(); // GDAL's messages reach the user through rs_err, never on stderr by themselves
     if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
         if (argc > 2 && strcmp(cmd, "help") == 0) {
             for (int i = 0; i < Ncommands; i++)

@@ -36,6 +36,14 @@ static OGRSpatialReferenceH enu_srs(const rs_llh *origin)
         OSRDestroySpatialReference(s);
         return NULL;
     }
+    // a name a GIS shows (gdalsrsinfo, QGIS), not PROJ's "unknown", and the unit spelled out
+    char name[160];
+    snprintf(name, sizeof name, "roadside site ENU at %.7f, %.7f (orthographic on WGS84, metres)", origin->lat_deg,
+             origin->lon_deg);
+    OSRSetProjCS(s, name);
+    OSRSetGeogCS(s, "WGS 84", "World Geodetic System 1984", "WGS 84", SRS_WGS84_SEMIMAJOR, SRS_WGS84_INVFLATTENING,
+                 "Greenwich", 0, SRS_UA_DEGREE, 0.0174532925199433);
+    OSRSetLinearUnits(s, SRS_UL_METER, 1.0);
     return s;
 }
 
@@ -186,6 +194,8 @@ rs_status rs_geo_raster_write(int *width_out, int *height_out, const char *path,
     CPLPopErrorHandler();
     return st;
 }
+
+void rs_geo_gdal_quiet(void) { CPLSetErrorHandler(CPLQuietErrorHandler); }
 
 void rs_geo_ortho_free(rs_geo_ortho *o)
 {

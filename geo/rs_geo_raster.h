@@ -114,6 +114,12 @@ rs_status rs_geo_ortho_read( // out
     const char *path, const rs_llh *origin, int max_side, rs_err *err);
 void rs_geo_ortho_free(rs_geo_ortho *o); // NULL-safe; zeroes *o
 
+// Turns GDAL's default error handler (which prints "ERROR 1: ..." to stderr, from any thread) into
+// a silent one for the whole process. Every GDAL failure that matters comes back as an rs_err
+// with GDAL's message (CPLGetLastErrorMsg); warnings a call survives (e.g. PROJ's "Point outside
+// of projection domain" while an extent is sampled) are not printed. For programs (cli/main.c).
+void rs_geo_gdal_quiet(void);
+
 // ---- a camera's pixel grid (roadside export --pixel-map; docs/localise.md, "Pixel map") ----
 
 // Bands over an image's pixel grid: value (row v, column u) is pixel (u, v) of the image (pixel

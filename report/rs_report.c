@@ -61,6 +61,9 @@ static rs_status read_result_json(rs_report_camera *cam, const rs_site *site, co
     cam->lensmodel = r.lensmodel;
     cam->warnings = r.warnings;
     cam->Nwarnings = r.Nwarnings;
+    cam->focal_off = r.focal_off;
+    cam->center_off = r.center_off;
+    cam->focal_rel = r.focal_rel;
     r.lensmodel = NULL;
     r.warnings = NULL;
     r.Nwarnings = 0;
@@ -359,6 +362,12 @@ rs_status rs_report_load_cameras(struct rs_report_ctx *rep, const rs_report_opti
     if (!rep->cameras) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     rs_status st = read_lanes(&rep->lanes, rep->site, err);
     for (int c = 0; c < rep->site->Ncameras && !st; c++) {
+        if (opt->progress) {
+            char what[300];
+            snprintf(what, sizeof what, "camera %s (%d of %d): reading its calibration%s", rep->site->cameras[c].id,
+                     c + 1, rep->site->Ncameras, opt->audit ? " and auditing it" : "");
+            opt->progress(opt->progress_ctx, what);
+        }
         rs_report_camera *cam = &rep->cameras[rep->Ncameras++];
         cam->rep = rep;
         cam->icam = c;
@@ -427,20 +436,20 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
 {
     const rs_site *site = rep->site;
     rs_doc_heading(doc, 1, "Camera calibration report: %s", site->name);
-    rs_doc_paragraph(doc, false,
-                     "Site folder %s; origin %.8f, %.8f, %.3f m (latitude, longitude in degrees, WGS84 "
-                     "ellipsoidal height%s); %d surveyed landmarks; %d cameras. Calibration read from %s. "
-                     "Positions are in the site's local east-north-up frame (metres from the origin); yaw is "
-                     "the compass heading of the optical axis, pitch its elevation (negative looking down), "
-                     "roll the turn about it.",
-                     site->dir, site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m,
-                     site->heights_orthometric ? "; the site's heights are orthometric, converted" : "",
-                     site->Nlandmarks, site->Ncameras, calib_dir);
     char stamp[200];
     rs_report_stamp(stamp, sizeof stamp, rep);
-    rs_doc_paragraph(doc, false, "%s. The inputs and their SHA-256 are listed at the end.", stamp);
-    rs_report_doc_verdicts(doc, rep);
+    rs_doc_paragraph(doc, false, "%s from the calibration in %s. The inputs and their SHA-256 are listed at the end.",
+                     stamp, calib_dir);
+    rs_report_doc_verdicts(doc, rep); // the action first, then the evidence
     rs_doc_heading(doc, 2, "The evidence");
+    rs_doc_paragraph(doc, false,
+                     "Site folder %s; origin %.8f, %.8f, %.3f m (latitude, longitude in degrees, WGS84 "
+                     "ellipsoidal height%s); %d surveyed landmarks; %d cameras. Positions are in the site's local "
+                     "east-north-up frame (metres from the origin); yaw is the compass heading of the optical axis, "
+                     "pitch its elevation (negative looking down), roll the turn about it.",
+                     site->dir, site->origin.lat_deg, site->origin.lon_deg, site->origin.h_m,
+                     site->heights_orthometric ? "; the site's heights are orthometric, converted" : "",
+                     site->Nlandmarks, site->Ncameras);
     char audit[700] = "the audit was not requested";
     const rs_audit_options *ao = rep->audit_options;
     if (ao)
@@ -449,10 +458,10 @@ static void doc_site(rs_doc *doc, const struct rs_report_ctx *rep, const char *c
                  "section)",
                  site->dir, calib_dir, ao->need_ground_m);
     rs_doc_paragraph(doc, false,
-                     "rms_surveyed_px: the RMS reprojection error of the inliers' surveyed positions through "
-                     "the calibration, in pixels (what anyone can check with the survey and the picks; "
-                     "docs/calibration.md, \"Residuals: which is which\"). loo_: leave-one-out, each inlier "
-                     "predicted by the pose solved without it. audit: %s.",
+                     "In the table: the RMS reprojection error of the inliers' surveyed positions through the "
+                     "calibration, in pixels (what anyone can check with the survey and the picks; "
+                     "docs/calibration.md, \"Residuals: which is which\"); the leave-one-out figures, each inlier "
+                     "predicted by the pose solved without it, in pixels and on the ground; audit: %s.",
                      audit);
     rs_doc_table(doc, 9);
     static const char *head[9] = {"camera",          "used",          "rejected",
@@ -569,8 +578,9 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
     rs_doc_heading(doc, 3, "Landmarks of %s", id);
     rs_doc_paragraph(doc, false,
                      "Residual du, dv = the landmark's surveyed position reprojected through the calibration - "
-                     "picked pixel (the residuals of rms_surveyed_px); normalised = the residual in sigmas (pick "
-                     "and survey together). Leave-one-out (loo): the pose re-solved without the landmark, then its "
+                     "picked pixel (the residuals of the RMS in the pose table); normalised = the residual in "
+                     "sigmas (pick and survey together). Leave-one-out (loo): the pose re-solved without the "
+                     "landmark, then its "
                      "surveyed position projected (px) and its pick located on the ground (m); influence: how far "
                      "leaving it out moves (m) and turns (deg) the camera.");
     rs_doc_table(doc, 11);
@@ -608,21 +618,24 @@ static void doc_camera(rs_doc *doc, const struct rs_report_ctx *rep, const rs_re
                   "crosses for outliers).",
                   id, rep->detection_sigma_px, rep->range_m);
     if (a) {
-        rs_doc_paragraph(doc, false,
-                         "Leave-one-out over %d landmarks: loo_rms_px %.3f, worst %.3f px; on the ground "
-                         "loo_median_m %.3f, worst %.3f m. Coverage: the inlier picks span %.0f%% of the image; the "
-                         "inlier landmarks "
-                         "span %.0f%% of the %.0f m2 of ground the camera sees within %g m.",
-                         a->loo_count, a->loo_rms_px, a->loo_max_px, a->loo_median_m, a->loo_max_m,
-                         100 * a->image_hull_share, 100 * a->ground_hull_share, a->ground_seen_m2, rep->range_m);
+        rs_doc_paragraph(
+            doc, false,
+            "Leave-one-out over %d landmarks: each predicted %.3f px off (RMS), worst %.3f px; on "
+            "the ground %.3f m off (median), worst %.3f m. Coverage: the inlier picks span %.0f%% of the image; the "
+            "inlier landmarks "
+            "span %.0f%% of the %.0f m2 of ground the camera sees within %g m.",
+            a->loo_count, a->loo_rms_px, a->loo_max_px, a->loo_median_m, a->loo_max_m, 100 * a->image_hull_share,
+            100 * a->ground_hull_share, a->ground_seen_m2, rep->range_m);
     }
 
     rs_doc_heading(doc, 3, "Verdict and warnings for %s", id);
     if (a)
         rs_doc_paragraph(doc, !a->pass,
                          "Audit (roadside audit --calib of these files, need %g m): %s%s%s. Thresholds: "
-                         "rms_surveyed_px and loo_rms_px at most %.3g px (%g m at %.1f px per metre of ground at "
-                         "the landmarks), loo_median_m at most %g m, predicted ground error (90th percentile where "
+                         "the surveyed landmarks' and the held-out landmarks' RMS reprojection errors at most %.3g px "
+                         "(%g m at %.1f px per metre of ground at "
+                         "the landmarks), the held-out landmarks' median ground error at most %g m, predicted ground "
+                         "error (90th percentile where "
                          "the landmarks are, %.2f m here) at most %g m.",
                          a->thresholds.need_ground_m, a->pass ? "pass, every threshold met" : "FAIL",
                          a->pass ? "" : ": ", a->pass ? "" : a->failures, a->thresholds.max_rms_surveyed_px,
@@ -679,7 +692,9 @@ static rs_status write_report(rs_report_summary *summary, const char *out_dir, c
     if (!st) st = rs_io_atomic_open(&pdf, pdf_path, err);
     if (!st) st = rs_io_atomic_release(&html, err);
     if (!st) st = rs_io_atomic_release(&pdf, err);
+    if (!st && opt.progress) opt.progress(opt.progress_ctx, "drawing report.html");
     if (!st) st = rs_doc_write_html(&doc, title, opt.figure_width_px, html.tmp_path, err);
+    if (!st && opt.progress) opt.progress(opt.progress_ctx, "drawing report.pdf");
     if (!st) st = rs_doc_write_pdf(&doc, title, pdf.tmp_path, err);
     if (!st) st = rs_io_atomic_commit(&html, err);
     if (!st) st = rs_io_atomic_commit(&pdf, err);

@@ -66,6 +66,11 @@ typedef struct {
                                     //   it), else none
     const char *version;            // the software version printed on the report; NULL: "unknown"
     long long written_utc_s;        // the date printed, seconds since 1970 UTC; 0: now
+    // called before each stage that takes a while (loading and auditing camera i of N, the
+    // HTML, the PDF) with a line in words; may be NULL. The library never prints: the cli
+    // puts the line on stderr.
+    void (*progress)(void *progress_ctx, const char *what);
+    void *progress_ctx;
 } rs_report_options;
 
 // Fills opt with the defaults above. opt must not be NULL.

@@ -461,14 +461,21 @@ static double pdf_text_run(pdf_state *p, const char *text, double size, bool bol
     return height;
 }
 
-// Height of the paragraphs that follow heading block i up to the next heading, table or figure
-// (a heading's short run of text, e.g. a camera's warnings), as pdf_write draws them.
-static double pdf_run_height(pdf_state *p, const rs_doc *doc, int i)
+// Height of what must stay on the page of heading block i (keep-with-next): the paragraphs that
+// follow it (a camera's verdict, a table's legend) and the start of the next table (its header
+// and two rows) or the whole next figure with its caption, as pdf_write draws them. When that is
+// more than half a page, only the heading and two lines of what follows.
+static double pdf_figure_height(pdf_state *p, const rs_doc_block *b);
+static double pdf_keep_height(pdf_state *p, const rs_doc *doc, int i, double size)
 {
     double h = 0;
-    for (int k = i + 1; k < doc->N && doc->blocks[k].kind == RS_DOC_PARAGRAPH; k++)
+    int k = i + 1;
+    for (; k < doc->N && doc->blocks[k].kind == RS_DOC_PARAGRAPH; k++)
         h += pdf_text_run(p, doc->blocks[k].text, PDF_BODY_PT, false, false, doc->blocks[k].warning ? 8 : 0, false) + 4;
-    return h;
+    if (k < doc->N && doc->blocks[k].kind == RS_DOC_TABLE) h += 3 * PDF_TABLE_PT * 1.5;
+    if (k < doc->N && doc->blocks[k].kind == RS_DOC_FIGURE) h += pdf_figure_height(p, &doc->blocks[k]);
+    if (h > 0.5 * (page_h - 2 * margin)) h = 2 * size;
+    return 1.7 * size + h;
 }
 
 // Cell text cut to width w with "..." when too long (at a UTF-8 character boundary).
@@ -490,6 +497,100 @@ static void pdf_cell(cairo_t *cr, const char *s, double x, double y, double w, b
     rs_doc_show_text(cr, buf);
 }
 
+// Cell text word-wrapped to width w: returns the number of lines; draws them (the first line's
+// baseline at y, lines lh apart) when draw is true. A word wider than w is cut (pdf_cell).
+static int pdf_cell_wrapped(cairo_t *cr, const char *s, double x, double y, double w, double lh, bool right, bool draw)
+{
+    size_t n = strlen(s);
+    char *line = malloc(n + 1);
+    if (!line) return 1;
+    if (right && text_width(cr, s) > w) right = false; // a wrapped cell reads left to right
+    int Nlines = 0;
+    while (*s || Nlines == 0) {
+        size_t best = 0, k = 0;
+        while (true) { // take words while they fit
+            while (s[k] && s[k] != ' ') k++;
+            memcpy(line, s, k);
+            line[k] = 0;
+            if (best && text_width(cr, line) > w) break;
+            best = k;
+            if (!s[k]) break;
+            k++;
+        }
+        memcpy(line, s, best);
+        line[best] = 0;
+        if (draw) pdf_cell(cr, line, x, y + Nlines * lh, w, right);
+        Nlines++;
+        s += best;
+        while (*s == ' ') s++;
+    }
+    free(line);
+    return Nlines;
+}
+
+// Column widths: each column its widest cell, and when the table is wider than the page, the
+// narrow columns keep theirs and the wide ones share what is left (their cells wrap).
+static void pdf_column_widths(double *w, int nc, double avail)
+{
+    double total = 0;
+    for (int c = 0; c < nc; c++) total += w[c];
+    if (total <= avail) return;
+    bool *fixed = calloc((size_t)nc, sizeof *fixed);
+    if (!fixed) {
+        for (int c = 0; c < nc; c++) w[c] *= avail / total;
+        return;
+    }
+    for (bool changed = true; changed;) { // water-filling: columns under the fair share keep their width
+        changed = false;
+        double left = avail;
+        int Nfree = 0;
+        for (int c = 0; c < nc; c++) {
+            if (fixed[c])
+                left -= w[c];
+            else
+                Nfree++;
+        }
+        for (int c = 0; c < nc && Nfree; c++)
+            if (!fixed[c] && w[c] <= left / Nfree) fixed[c] = changed = true;
+        if (!changed)
+            for (int c = 0; c < nc; c++)
+                if (!fixed[c]) w[c] = left / Nfree;
+    }
+    free(fixed);
+}
+
+// A cell that reads as a number ("12", "-0.5", "1 / 0", "-"): right-aligned, as figures are.
+static bool cell_numeric(const char *s)
+{
+    if (!strcmp(s, "-")) return true;
+    if (*s == '-' || *s == '+') s++;
+    return *s >= '0' && *s <= '9';
+}
+
+static void pdf_table_header(pdf_state *p, const rs_doc_block *b, const double *w, double width, double rh, double lh)
+{
+    cairo_t *cr = p->cr;
+    const int nc = b->Ncols;
+    pdf_font(cr, PDF_TABLE_PT, true, false);
+    int Nlines = 1;
+    for (int c = 0; c < nc && c < b->Ncells; c++) {
+        int k = pdf_cell_wrapped(cr, b->cells[c], 0, 0, w[c] - 8, lh, false, false);
+        if (k > Nlines) Nlines = k;
+    }
+    const double h = rh + (Nlines - 1) * lh;
+    cairo_set_source_rgb(cr, 0.89, 0.91, 0.93);
+    cairo_rectangle(cr, margin, p->y, width, h);
+    cairo_fill(cr);
+    cairo_set_source_rgb(cr, 0, 0, 0);
+    double x = margin;
+    for (int c = 0; c < nc && c < b->Ncells; c++) {
+        const bool right = c > 0 && nc + c < b->Ncells && cell_numeric(b->cells[nc + c]); // as its column
+        pdf_cell_wrapped(cr, b->cells[c], x + 4, p->y + rh - 3.5, w[c] - 8, lh, right, true);
+        x += w[c];
+    }
+    p->y += h;
+}
+
 static void pdf_table(pdf_state *p, const rs_doc_block *b)
 {
     cairo_t *cr = p->cr;
@@ -501,46 +602,44 @@ static void pdf_table(pdf_state *p, const rs_doc_block *b)
         double tw = text_width(cr, b->cells[k]) + 8;
         if (tw > w[k % nc]) w[k % nc] = tw;
     }
-    double total = 0, avail = page_w - 2 * margin;
+    double avail = page_w - 2 * margin, total = 0;
+    pdf_column_widths(w, nc, avail);
     for (int c = 0; c < nc; c++) total += w[c];
-    if (total > avail)
-        for (int c = 0; c < nc; c++) w[c] *= avail / total;
-    double rh = PDF_TABLE_PT * 1.5;
-    for (int r = 0; r < nr; r++) {
-        if (r > 0 && p->y + rh > page_h - margin) {
-            pdf_new_page(p);
-            // repeat the header
-            double x = margin;
-            cairo_set_source_rgb(cr, 0.89, 0.91, 0.93);
-            cairo_rectangle(cr, margin, p->y, total > avail ? avail : total, rh);
-            cairo_fill(cr);
-            pdf_font(cr, PDF_TABLE_PT, true, false);
-            cairo_set_source_rgb(cr, 0, 0, 0);
-            for (int c = 0; c < nc; c++) {
-                pdf_cell(cr, b->cells[c], x + 4, p->y + rh - 3.5, w[c] - 8, c > 0);
-                x += w[c];
-            }
-            p->y += rh;
-        }
-        double x = margin;
-        if (r == 0 || r % 2 == 0) {
-            cairo_set_source_rgb(cr, r == 0 ? 0.89 : 0.965, r == 0 ? 0.91 : 0.97, r == 0 ? 0.93 : 0.975);
-            cairo_rectangle(cr, margin, p->y, total > avail ? avail : total, rh);
-            cairo_fill(cr);
-        }
-        pdf_font(cr, PDF_TABLE_PT, r == 0, false);
-        cairo_set_source_rgb(cr, 0, 0, 0);
+    const double rh = PDF_TABLE_PT * 1.5, lh = PDF_TABLE_PT * 1.25;
+    pdf_table_header(p, b, w, total, rh, lh);
+    for (int r = 1; r < nr; r++) {
+        pdf_font(cr, PDF_TABLE_PT, false, false);
+        int Nlines = 1;
         for (int c = 0; c < nc && r * nc + c < b->Ncells; c++) {
-            pdf_cell(cr, b->cells[r * nc + c], x + 4, p->y + rh - 3.5, w[c] - 8, c > 0);
+            int k = pdf_cell_wrapped(cr, b->cells[r * nc + c], 0, 0, w[c] - 8, lh, false, false);
+            if (k > Nlines) Nlines = k;
+        }
+        const double h = rh + (Nlines - 1) * lh;
+        if (p->y + h > page_h - margin) {
+            pdf_new_page(p);
+            pdf_table_header(p, b, w, total, rh, lh); // repeated on the new page
+        }
+        if (r % 2 == 0) {
+            cairo_set_source_rgb(cr, 0.965, 0.97, 0.975);
+            cairo_rectangle(cr, margin, p->y, total, h);
+            cairo_fill(cr);
+        }
+        pdf_font(cr, PDF_TABLE_PT, false, false);
+        cairo_set_source_rgb(cr, 0, 0, 0);
+        double x = margin;
+        for (int c = 0; c < nc && r * nc + c < b->Ncells; c++) {
+            const char *cell = b->cells[r * nc + c];
+            pdf_cell_wrapped(cr, cell, x + 4, p->y + rh - 3.5, w[c] - 8, lh, c > 0 && cell_numeric(cell), true);
             x += w[c];
         }
-        p->y += rh;
+        p->y += h;
     }
     p->y += 8;
     free(w);
 }
 
-static void pdf_figure(pdf_state *p, const rs_doc_block *b)
+// The figure as drawn: its size on the page (at most a page high) and its caption's lines.
+static void pdf_figure_size(const rs_doc_block *b, double *w_out, double *h_out)
 {
     double w = page_w - 2 * margin, h = w * b->aspect;
     double hmax = page_h - 2 * margin - 30;
@@ -548,7 +647,24 @@ static void pdf_figure(pdf_state *p, const rs_doc_block *b)
         h = hmax;
         w = h / b->aspect;
     }
-    pdf_need(p, h + 24);
+    *w_out = w, *h_out = h;
+}
+
+// Height of the figure with its caption (they stay together on one page), as pdf_figure draws it.
+static double pdf_figure_height(pdf_state *p, const rs_doc_block *b)
+{
+    double w, h;
+    pdf_figure_size(b, &w, &h);
+    double cap = pdf_text_run(p, b->text, 8, false, true, 0, false);
+    if (h + 4 + cap > page_h - 2 * margin) cap = 0; // a caption too long for the page flows on
+    return h + 4 + cap;
+}
+
+static void pdf_figure(pdf_state *p, const rs_doc_block *b)
+{
+    double w, h;
+    pdf_figure_size(b, &w, &h);
+    pdf_need(p, pdf_figure_height(p, b));
     cairo_t *cr = p->cr;
     cairo_save(cr);
     cairo_translate(cr, margin, p->y);
@@ -599,11 +715,9 @@ rs_status rs_doc_write_pdf(const rs_doc *doc, const char *title, const char *pat
         switch (b->kind) {
         case RS_DOC_HEADING: {
             double size = b->level == 1 ? 18 : b->level == 2 ? 14 : 11;
-            if (b->level == 2 && p.y > margin) pdf_new_page(&p); // one camera per page
-            // Keep a heading with its text: the whole run when it takes at most half a page
-            // (no page left with a line or two), else the first lines.
-            const double run = pdf_run_height(&p, doc, i);
-            pdf_need(&p, 1.7 * size + (run <= 0.5 * (page_h - 2 * margin) ? run : 2 * size));
+            // no forced page breaks (they left pages a few lines full): a heading starts a new
+            // page only when what it keeps with does not fit below it
+            pdf_need(&p, pdf_keep_height(&p, doc, i, size));
             p.y += size * 0.4;
             pdf_text(&p, b->text, size, true, false, 0);
             p.y += size * 0.3;

@@ -210,8 +210,9 @@ static void map_landmarks(cairo_t *cr, const map_view *v, const struct rs_report
 }
 
 // Contour segments of `map` at `level` by marching squares over the cell centres (cells with a
-// NaN corner are skipped); up to 3 places far apart get the level written next to them.
-static void map_contour(cairo_t *cr, const map_view *v, const rs_audit_map *map, double level, double fs,
+// NaN corner are skipped); up to 3 places far apart get the level written next to them. need:
+// the level is the site's need (drawn thick and red, labelled so).
+static void map_contour(cairo_t *cr, const map_view *v, const rs_audit_map *map, double level, bool need, double fs,
                         rs_report_placer *pl)
 {
     int nx = map->nx, ny = map->ny, Nlab = 0;
@@ -247,47 +248,33 @@ static void map_contour(cairo_t *cr, const map_view *v, const rs_audit_map *map,
                 if (far) lx[Nlab] = x0, ly[Nlab] = y0, Nlab++;
             }
         }
-    if (!pl) { // the lines
-        cairo_set_source_rgba(cr, 1, 1, 1, 0.9);
-        cairo_set_line_width(cr, fs * 0.12);
+    if (!pl) { // the lines: the need's own contour thick and red, the others thin and white
+        if (need)
+            cairo_set_source_rgba(cr, 0.85, 0.1, 0.1, 0.95);
+        else
+            cairo_set_source_rgba(cr, 1, 1, 1, 0.9);
+        cairo_set_line_width(cr, fs * (need ? 0.3 : 0.12));
         cairo_stroke(cr);
         return;
     }
-    char buf[32]; // the labels, where they find room
-    snprintf(buf, sizeof buf, "%g m", level);
+    char buf[48]; // the labels, where they find room
+    snprintf(buf, sizeof buf, need ? "%g m (need)" : "%g m", level);
     rs_report_font(cr, fs * 0.8, true);
     cairo_set_source_rgb(cr, 0, 0, 0);
     for (int j = 0; j < Nlab; j++) rs_report_placer_label(pl, cr, lx[j], ly[j], fs * 0.1, buf, 0.75);
 }
 
-// The 90th percentile of the finite map values (0 when none).
-static double map_p90(const rs_audit_map *map)
+// The colour scale of the uncertainty maps, anchored at the need (rs_audit_options.need_ground_m):
+// 0 .. 2 x need, contours at need/2, need (the need's own, drawn red) and 3 need/2, so a map shows
+// at a glance where the site meets its need and where it does not.
+enum { MAP_NCONTOURS = 3 };
+static double map_vmax(const struct rs_report_ctx *rep)
 {
-    int n = map->nx * map->ny, Nf = 0;
-    double lo = INFINITY, hi = 0;
-    for (int i = 0; i < n; i++)
-        if (isfinite(map->sigma_m[i])) {
-            Nf++;
-            lo = fmin(lo, map->sigma_m[i]);
-            hi = fmax(hi, map->sigma_m[i]);
-        }
-    if (!Nf) return 0;
-    // bisection on the value: count below
-    for (int it = 0; it < 50; it++) {
-        double mid = (lo + hi) / 2;
-        int below = 0;
-        for (int i = 0; i < n; i++)
-            if (isfinite(map->sigma_m[i]) && map->sigma_m[i] <= mid) below++;
-        if (below >= 0.9 * Nf)
-            hi = mid;
-        else
-            lo = mid;
-    }
-    return hi;
+    const double need =
+        rep->audit_options && rep->audit_options->need_ground_m > 0 ? rep->audit_options->need_ground_m : 1;
+    return 2 * need;
 }
 
-// The map's colour field (one image pixel per cell, painted at the cells' place) and its
-// contours at 1/5 .. 4/5 of vmax.
 // An orthophoto on the ENU grid under the map: its pixel (i, j) centred at (e0 + i cell, n0 - j cell).
 static void map_ortho(cairo_t *cr, const map_view *v, const rs_geo_ortho *o)
 {
@@ -315,6 +302,8 @@ static void map_ortho(cairo_t *cr, const map_view *v, const rs_geo_ortho *o)
     cairo_surface_destroy(img);
 }
 
+// The map's colour field (one image pixel per cell, painted at the cells' place) and its
+// contours at 1/4 .. 3/4 of vmax (map_vmax).
 static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, double alpha, double vmax, double fs)
 {
     cairo_surface_t *img = cairo_image_surface_create(CAIRO_FORMAT_ARGB32, map->nx, map->ny);
@@ -344,14 +333,14 @@ static void map_field(cairo_t *cr, const map_view *v, const rs_audit_map *map, d
     cairo_paint_with_alpha(cr, alpha);
     cairo_restore(cr);
     cairo_surface_destroy(img);
-    for (int k = 1; k <= 4; k++) map_contour(cr, v, map, vmax * k / 5, fs, NULL);
+    for (int k = 1; k <= MAP_NCONTOURS; k++) map_contour(cr, v, map, vmax * k / 4, k == 2, fs, NULL);
 }
 
 // The contour labels (after the other labels: they give way).
 static void map_contour_labels(cairo_t *cr, const map_view *v, const rs_audit_map *map, double vmax, double fs,
                                rs_report_placer *pl)
 {
-    for (int k = 1; k <= 4; k++) map_contour(cr, v, map, vmax * k / 5, fs, pl);
+    for (int k = 1; k <= MAP_NCONTOURS; k++) map_contour(cr, v, map, vmax * k / 4, k == 2, fs, pl);
 }
 
 // The colour bar in the strip [w - cbar_w, w] on the right.
@@ -372,12 +361,12 @@ static void map_colourbar(cairo_t *cr, double w, double h, double cbar_w, double
     cairo_stroke(cr);
     rs_report_font(cr, fs * 0.8, false);
     char buf[32];
-    for (int k = 0; k <= 5; k++) {
-        double y = by + bh * (1 - k / 5.0);
+    for (int k = 0; k <= 4; k++) { // ticks at 0, need/2, need, 3 need/2, >= 2 need
+        double y = by + bh * (1 - k / 4.0);
         cairo_move_to(cr, bx + bw, y);
         cairo_line_to(cr, bx + bw + fs * 0.3, y);
         cairo_stroke(cr);
-        snprintf(buf, sizeof buf, k == 5 ? ">=%g" : "%g", vmax * k / 5);
+        snprintf(buf, sizeof buf, k == 4 ? ">=%g" : k == 2 ? "%g (need)" : "%g", vmax * k / 4);
         cairo_move_to(cr, bx + bw + fs * 0.45, y + fs * 0.3);
         rs_doc_show_text(cr, buf);
     }
@@ -418,7 +407,7 @@ void rs_report_draw_camera_map(cairo_t *cr, double w, double h, const void *ctx)
     rs_report_placer pl;
     rs_report_placer_init(&pl, "camera_map", w - cbar_w, h);
     map_furniture(cr, &v, w - cbar_w, h, fs, &pl, true);
-    double vmax = map ? rs_report_nice_ceil(fmax(map_p90(map), 1e-3)) : 0;
+    double vmax = map ? map_vmax(rep) : 0;
     if (map) map_field(cr, &v, map, 0.85, vmax, fs);
     map_lanes(cr, &v, &rep->lanes, fs * 0.15);
     map_fov(cr, &v, cam, map ? 0 : 0.15, fs * 0.12);
@@ -466,7 +455,7 @@ void rs_report_draw_site_map(cairo_t *cr, double w, double h, const void *ctx)
     rs_report_placer_init(&pl, "site_map", wmap, h);
     map_furniture(cr, &v, wmap, h, fs, &pl, true);
     if (rep->ortho.rgb) map_ortho(cr, &v, &rep->ortho);
-    double vmax = best ? rs_report_nice_ceil(fmax(map_p90(best), 1e-3)) : 0;
+    double vmax = best ? map_vmax(rep) : 0;
     if (best) map_field(cr, &v, best, rep->ortho.rgb ? 0.5 : 0.85, vmax, fs);
     // a light ENU graticule
     double step = rs_report_nice_ceil(0.12 * w / v.k);

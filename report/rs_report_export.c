@@ -22,6 +22,7 @@
 #include "geo/rs_geo.h"
 #include "geo/rs_geo_raster.h"
 #include "report/internal/rs_report_draw.h"
+#include "report/internal/rs_report_export_style.h"
 
 void rs_report_export_options_default(rs_report_export_options *opt)
 {
@@ -64,76 +65,107 @@ static double ground_up(const rs_site *site, double e, double n)
 
 // ---- layers ----
 
-typedef enum { L_CAMERAS, L_FOOTPRINTS, L_LANDMARKS, L_LANES, NLAYERS } layer_kind;
-static const char *const layer_names[NLAYERS] = {"cameras", "footprints", "landmarks", "lanes"};
+typedef enum { L_CAMERAS, L_FOOTPRINTS, L_LANDMARKS, L_PICKS, L_LANES, NLAYERS } layer_kind;
+static const char *const layer_names[NLAYERS] = {"cameras", "footprints", "landmarks", "picks", "lanes"};
+// Each layer's description (GeoPackage: gpkg_contents.description; what a GIS shows for it).
+static const char *const layer_descriptions[NLAYERS] = {
+    "roadside cameras: position (site ENU and WGS84), height above the ground, heading, pitch, roll and their "
+    "1-sigma from roadside calib; verdict of roadside audit against the need (pass / FAIL / not audited)",
+    "The ground each camera sees within range_m, on the site's ground plane through the full lens model; "
+    "coloured by the camera's verdict",
+    "One point per surveyed landmark seen by a camera: surveyed position and sigmas, how many cameras picked it, "
+    "how many kept it as an inlier, the worst leave-one-out ground error (metres) and the audit's flag",
+    "One point per camera and pick, at the landmark's surveyed position: residual of the surveyed position "
+    "reprojected through the calibration (px), normalised residual, inlier, leave-one-out errors, predicted "
+    "1-sigma ground error (metres)",
+    "Lane lines of SITE/lanes.geojson as the report draws them (lane edges, junction connectors)"};
 
 typedef struct {
     const char *name;
     OGRFieldType type;
-    layer_kind kind;
+    unsigned layers; // bit k: the field is in layer k
 } field_def;
 
+enum {
+    F_CAM = 1u << L_CAMERAS,
+    F_FOOT = 1u << L_FOOTPRINTS,
+    F_LM = 1u << L_LANDMARKS,
+    F_PICK = 1u << L_PICKS,
+    F_LANE = 1u << L_LANES,
+    F_ALL = (1u << NLAYERS) - 1
+};
 static const field_def fields[] = {
-    {"layer", OFTString, NLAYERS}, // every layer
-    {"camera", OFTString, NLAYERS},
-    {"east_m", OFTReal, L_CAMERAS},
-    {"north_m", OFTReal, L_CAMERAS},
-    {"up_m", OFTReal, L_CAMERAS},
-    {"lat_deg", OFTReal, L_CAMERAS},
-    {"lon_deg", OFTReal, L_CAMERAS},
-    {"h_m", OFTReal, L_CAMERAS},
-    {"above_ground_m", OFTReal, L_CAMERAS},
-    {"heading_deg", OFTReal, L_CAMERAS},
-    {"pitch_deg", OFTReal, L_CAMERAS},
-    {"roll_deg", OFTReal, L_CAMERAS},
-    {"sigma_east_m", OFTReal, L_CAMERAS},
-    {"sigma_north_m", OFTReal, L_CAMERAS},
-    {"sigma_up_m", OFTReal, L_CAMERAS},
-    {"sigma_heading_deg", OFTReal, L_CAMERAS},
-    {"sigma_pitch_deg", OFTReal, L_CAMERAS},
-    {"sigma_roll_deg", OFTReal, L_CAMERAS},
-    {"rms_surveyed_px", OFTReal, L_CAMERAS},
-    {"verdict", OFTString, L_CAMERAS},
-    {"need_ground_m", OFTReal, L_CAMERAS},
-    {"ground_sigma_median_m", OFTReal, L_CAMERAS},
-    {"ground_sigma_p90_m", OFTReal, L_CAMERAS},
-    {"loo_median_m", OFTReal, L_CAMERAS},
-    {"verdict_text", OFTString, L_CAMERAS},
-    {"enu_origin", OFTString, L_CAMERAS},
-    {"range_m", OFTReal, L_FOOTPRINTS},
-    {"landmark", OFTString, L_LANDMARKS},
-    {"residual_u_px", OFTReal, L_LANDMARKS},
-    {"residual_v_px", OFTReal, L_LANDMARKS},
-    {"residual_px", OFTReal, L_LANDMARKS},
-    {"normalised", OFTReal, L_LANDMARKS},
-    {"inlier", OFTInteger, L_LANDMARKS},
-    {"loo_ground_error_m", OFTReal, L_LANDMARKS},
-    {"loo_error_px", OFTReal, L_LANDMARKS},
-    {"sigma_ground_m", OFTReal, L_LANDMARKS},
-    {"flag", OFTString, L_LANDMARKS},
-    {"junction", OFTInteger, L_LANES},
+    {"layer", OFTString, F_ALL},
+    {"camera", OFTString, F_CAM | F_FOOT | F_PICK},
+    {"east_m", OFTReal, F_CAM | F_LM},
+    {"north_m", OFTReal, F_CAM | F_LM},
+    {"up_m", OFTReal, F_CAM | F_LM},
+    {"lat_deg", OFTReal, F_CAM},
+    {"lon_deg", OFTReal, F_CAM},
+    {"h_m", OFTReal, F_CAM},
+    {"above_ground_m", OFTReal, F_CAM},
+    {"heading_deg", OFTReal, F_CAM},
+    {"pitch_deg", OFTReal, F_CAM},
+    {"roll_deg", OFTReal, F_CAM},
+    {"sigma_east_m", OFTReal, F_CAM},
+    {"sigma_north_m", OFTReal, F_CAM},
+    {"sigma_up_m", OFTReal, F_CAM},
+    {"sigma_heading_deg", OFTReal, F_CAM},
+    {"sigma_pitch_deg", OFTReal, F_CAM},
+    {"sigma_roll_deg", OFTReal, F_CAM},
+    {"rms_surveyed_px", OFTReal, F_CAM},
+    {"verdict", OFTString, F_CAM | F_FOOT},
+    {"need_ground_m", OFTReal, F_CAM},
+    {"ground_sigma_median_m", OFTReal, F_CAM},
+    {"ground_sigma_p90_m", OFTReal, F_CAM},
+    {"loo_median_m", OFTReal, F_CAM},
+    {"verdict_text", OFTString, F_CAM},
+    {"enu_origin", OFTString, F_CAM},
+    {"range_m", OFTReal, F_FOOT},
+    {"landmark", OFTString, F_LM | F_PICK},
+    {"sigma_h_m", OFTReal, F_LM},
+    {"sigma_v_m", OFTReal, F_LM},
+    {"cameras", OFTString, F_LM},
+    {"n_picks", OFTInteger, F_LM},
+    {"n_inliers", OFTInteger, F_LM},
+    {"residual_u_px", OFTReal, F_PICK},
+    {"residual_v_px", OFTReal, F_PICK},
+    {"residual_px", OFTReal, F_PICK},
+    {"normalised", OFTReal, F_PICK},
+    {"inlier", OFTInteger, F_PICK},
+    {"loo_ground_error_m", OFTReal, F_LM | F_PICK}, // landmarks: the worst over its picks
+    {"loo_error_px", OFTReal, F_PICK},
+    {"sigma_ground_m", OFTReal, F_PICK},
+    {"flag", OFTString, F_LM | F_PICK},
+    {"junction", OFTInteger, F_LANE},
 };
 #define NFIELDS (int)(sizeof fields / sizeof fields[0])
 
 typedef struct {
     GDALDatasetH ds;
-    OGRLayerH layers[NLAYERS]; // GeoJSON: the same layer four times
+    OGRLayerH layers[NLAYERS]; // GeoJSON: the same layer five times
     const char *path;          // the final name, for messages
 } vector_out;
 
 static rs_status create_layers(vector_out *v, const frame *f, bool single, rs_err *err)
 {
-    static const OGRwkbGeometryType geom[NLAYERS] = {wkbPoint25D, wkbPolygon, wkbPoint25D, wkbLineString25D};
+    static const OGRwkbGeometryType geom[NLAYERS] = {wkbPoint25D, wkbPolygon, wkbPoint25D, wkbPoint25D,
+                                                     wkbLineString25D};
     for (int k = 0; k < NLAYERS; k++) {
         if (single && k > 0) {
             v->layers[k] = v->layers[0];
             continue;
         }
+        char **lco = CSLSetNameValue(NULL, "DESCRIPTION",
+                                     single ? "roadside export: cameras, footprints, landmarks, picks and lanes (the "
+                                              "property 'layer' says which)"
+                                            : layer_descriptions[k]);
         v->layers[k] = GDALDatasetCreateLayer(v->ds, single ? "roadside" : layer_names[k], f->srs,
-                                              single ? wkbUnknown : geom[k], NULL);
+                                              single ? wkbUnknown : geom[k], lco);
+        CSLDestroy(lco);
         if (!v->layers[k]) return gdal_fail(err, v->path, "cannot create a layer");
         for (int i = 0; i < NFIELDS; i++) {
-            if (!single && fields[i].kind != NLAYERS && fields[i].kind != (layer_kind)k) continue;
+            if (!single && !(fields[i].layers & (1u << k))) continue;
             OGRFieldDefnH fd = OGR_Fld_Create(fields[i].name, fields[i].type);
             OGRErr e = OGR_L_CreateField(v->layers[k], fd, TRUE);
             OGR_Fld_Destroy(fd);
@@ -273,13 +305,14 @@ static rs_status write_cameras(vector_out *v, const frame *f, const struct rs_re
         }
         ft = feature(v, L_FOOTPRINTS, id);
         if (ft) set_real(ft, "range_m", rep->range_m);
+        if (ft) set_str(ft, "verdict", cam->has_audit ? (cam->audit.pass ? "pass" : "FAIL") : "not audited");
         st = put(v, L_FOOTPRINTS, ft, poly, err);
     }
     return st;
 }
 
-static rs_status write_landmarks(vector_out *v, const frame *f, const struct rs_report_ctx *rep,
-                                 rs_report_export_summary *sum, rs_err *err)
+static rs_status write_picks(vector_out *v, const frame *f, const struct rs_report_ctx *rep,
+                             rs_report_export_summary *sum, rs_err *err)
 {
     const rs_site *site = rep->site;
     rs_status st = RS_OK;
@@ -294,7 +327,7 @@ static rs_status write_landmarks(vector_out *v, const frame *f, const struct rs_
             if (cam->has_audit && i < cam->audit.N && i < sc->Nobservations &&
                 sc->observations[i].ilandmark == l->ilandmark)
                 al = &cam->audit.landmarks[i];
-            OGRFeatureH ft = feature(v, L_LANDMARKS, sc->id);
+            OGRFeatureH ft = feature(v, L_PICKS, sc->id);
             if (ft) {
                 set_str(ft, "landmark", l->id);
                 set_real(ft, "residual_u_px", l->residual_surveyed_px[0]);
@@ -307,9 +340,61 @@ static rs_status write_landmarks(vector_out *v, const frame *f, const struct rs_
                 set_real(ft, "sigma_ground_m", al ? al->sigma_ground_m : NAN);
                 set_str(ft, "flag", al ? al->reason : (l->inlier ? "" : "outlier"));
             }
-            st = put(v, L_LANDMARKS, ft, point(f, site->landmarks[l->ilandmark].p_enu_m), err);
-            sum->Nlandmarks += !st;
+            st = put(v, L_PICKS, ft, point(f, site->landmarks[l->ilandmark].p_enu_m), err);
+            sum->Npicks += !st;
         }
+    }
+    return st;
+}
+
+// One feature per site landmark that a camera picked: its survey, the cameras and the worst
+// leave-one-out ground error over its picks.
+static rs_status write_landmarks(vector_out *v, const frame *f, const struct rs_report_ctx *rep,
+                                 rs_report_export_summary *sum, rs_err *err)
+{
+    const rs_site *site = rep->site;
+    rs_status st = RS_OK;
+    for (int il = 0; il < site->Nlandmarks && !st; il++) {
+        char cameras[512] = "", flag[512] = "";
+        int Npicks = 0, Ninliers = 0;
+        double worst_m = NAN;
+        size_t n = 0;
+        for (int c = 0; c < rep->Ncameras; c++) {
+            const rs_report_camera *cam = &rep->cameras[c];
+            const rs_site_camera *sc = &site->cameras[cam->icam];
+            for (int i = 0; i < cam->N; i++) {
+                if (cam->landmarks[i].ilandmark != il) continue;
+                Npicks++;
+                Ninliers += cam->landmarks[i].inlier;
+                if (n + 1 < sizeof cameras)
+                    n += (size_t)snprintf(cameras + n, sizeof cameras - n, "%s%s", n ? ", " : "", sc->id);
+                const rs_audit_landmark *al =
+                    cam->has_audit && i < cam->audit.N && i < sc->Nobservations && sc->observations[i].ilandmark == il
+                        ? &cam->audit.landmarks[i]
+                        : NULL;
+                if (al && al->loo_ok && !(al->loo_ground_error_m <= worst_m)) worst_m = al->loo_ground_error_m;
+                if (al && al->reason[0] && !flag[0]) snprintf(flag, sizeof flag, "%s: %s", sc->id, al->reason);
+                if (!cam->landmarks[i].inlier && !flag[0]) snprintf(flag, sizeof flag, "%s: outlier", sc->id);
+            }
+        }
+        if (!Npicks) continue;
+        const rs_site_landmark *lm = &site->landmarks[il];
+        OGRFeatureH ft = feature(v, L_LANDMARKS, NULL);
+        if (ft) {
+            set_str(ft, "landmark", lm->id);
+            set_real(ft, "east_m", lm->p_enu_m[0]);
+            set_real(ft, "north_m", lm->p_enu_m[1]);
+            set_real(ft, "up_m", lm->p_enu_m[2]);
+            set_real(ft, "sigma_h_m", lm->sigma_h_m);
+            set_real(ft, "sigma_v_m", lm->sigma_v_m);
+            set_str(ft, "cameras", cameras);
+            set_int(ft, "n_picks", Npicks);
+            set_int(ft, "n_inliers", Ninliers);
+            set_real(ft, "loo_ground_error_m", worst_m);
+            set_str(ft, "flag", flag);
+        }
+        st = put(v, L_LANDMARKS, ft, point(f, lm->p_enu_m), err);
+        sum->Nlandmarks += !st;
     }
     return st;
 }
@@ -360,7 +445,11 @@ static rs_status write_vector(const char *path, const frame *f, const struct rs_
     if (!st) st = create_layers(&v, f, geojson, err);
     if (!st) st = write_cameras(&v, f, rep, sum, err);
     if (!st) st = write_landmarks(&v, f, rep, sum, err);
+    if (!st) st = write_picks(&v, f, rep, sum, err);
     if (!st) st = write_lanes(&v, f, rep, sum, err);
+    const double need_m = rep->audit_options ? rep->audit_options->need_ground_m : 1;
+    if (!st && gpkg) st = rs_report_export_styles(v.ds, path, need_m, err);
+    if (!st) rs_report_export_metadata(v.ds, rep->site, rep->calib_dir, need_m);
     if (v.ds) { // GDAL 3.6's GDALClose returns nothing: its errors are read back
         CPLErrorReset();
         GDALClose(v.ds);
@@ -423,6 +512,15 @@ rs_status rs_report_export(rs_report_export_summary *summary, const char *vector
         if (paths[i] && stat(paths[i], &sb) == 0 && !S_ISREG(sb.st_mode))
             return rs_err_set(err, RS_ERR_IO,
                               "%s: exists and is not a regular file (a device, FIFO or folder): not written", paths[i]);
+    }
+    // the folders the outputs go into are created, as calib's and report's are
+    for (int i = 0; i < 2; i++) {
+        const char *slash = paths[i] ? strrchr(paths[i], '/') : NULL;
+        if (!slash || slash == paths[i]) continue;
+        char *dir = strndup(paths[i], (size_t)(slash - paths[i]));
+        rs_status st = dir ? rs_io_mkdir_p(dir, err) : rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+        free(dir);
+        if (st) return st;
     }
     // stale outputs first: an earlier export under these names is not this run's
     if (vector_path) (void)rs_io_remove_if_exists(vector_path, NULL, NULL);

@@ -32,27 +32,113 @@ void rs_report_doc_camera_verdict(rs_doc *doc, const struct rs_report_ctx *rep, 
                          id, cam->audit_error);
 }
 
+// The ids of the camera's outliers, ", "-joined into buf ("" when none).
+static void outlier_ids(char *buf, size_t size, const rs_report_camera *cam)
+{
+    buf[0] = '\0';
+    size_t n = 0;
+    for (int i = 0; i < cam->N && n + 1 < size; i++)
+        if (!cam->landmarks[i].inlier)
+            n += (size_t)snprintf(buf + n, size - n, "%s%s", n ? ", " : "", cam->landmarks[i].id);
+}
+
+void rs_report_camera_action(char *figure, size_t figure_size, char *action, size_t action_size,
+                             const struct rs_report_ctx *rep, const rs_report_camera *cam)
+{
+    const char *site_dir = rep->site->dir;
+    char outliers[256];
+    outlier_ids(outliers, sizeof outliers, cam);
+    if (cam->focal_off) { // the cause is the lens, not the survey: refine it, do not resurvey
+        snprintf(figure, figure_size, "the image says the focal length is %.0f%% %s than the nominal",
+                 100 * fabs(cam->focal_rel), cam->focal_rel >= 0 ? "longer" : "shorter");
+        snprintf(action, action_size, "recalibrate with the focal length free: roadside calib %s --refine focal%s",
+                 site_dir, cam->center_off ? " (then --refine focal+center if the centre is still off)" : "");
+        return;
+    }
+    if (!cam->has_audit) {
+        snprintf(figure, figure_size, "no audit");
+        snprintf(action, action_size, "%s", cam->audit_error);
+        return;
+    }
+    const rs_audit_result *a = &cam->audit;
+    if (a->pass) {
+        snprintf(figure, figure_size, "ground error %.2f m (1 sigma, 90%% of the landmarks' area; need %g m)",
+                 a->ground_sigma_inside_p90_m, a->thresholds.need_ground_m);
+        if (outliers[0])
+            snprintf(action, action_size, "use it; re-survey or re-pick %s (left out)", outliers);
+        else
+            snprintf(action, action_size, "none: use it");
+        return;
+    }
+    // the threshold failed by the widest margin decides
+    const double ratio[4] = {a->ground_sigma_inside_p90_m / a->thresholds.max_ground_sigma_m,
+                             a->loo_count ? a->loo_median_m / a->thresholds.max_loo_m : NAN,
+                             a->rms_surveyed_px / a->thresholds.max_rms_surveyed_px,
+                             a->loo_count ? a->loo_rms_px / a->thresholds.max_loo_px : NAN};
+    int worst = -1;
+    for (int k = 0; k < 4; k++)
+        if (ratio[k] > 1 && (worst < 0 || ratio[k] > ratio[worst])) worst = k;
+    switch (worst) {
+    case 0:
+        snprintf(figure, figure_size, "predicted ground error %.2f m > need %g m (90%% of the landmarks' area)",
+                 a->ground_sigma_inside_p90_m, a->thresholds.max_ground_sigma_m);
+        snprintf(action, action_size,
+                 "add landmarks spread over the area the camera must cover, or survey them more accurately; "
+                 "then re-pick and recalibrate");
+        break;
+    case 1:
+        snprintf(figure, figure_size, "landmarks held out are located %.2f m off (median) > %g m", a->loo_median_m,
+                 a->thresholds.max_loo_m);
+        snprintf(action, action_size,
+                 "survey the landmarks more accurately or add landmarks spread over the area; then re-pick and "
+                 "recalibrate");
+        break;
+    case 2:
+    case 3:
+        snprintf(figure, figure_size, "%s reproject %.0f px off (RMS) > %.0f px",
+                 worst == 2 ? "the surveyed landmarks" : "landmarks held out",
+                 worst == 2 ? a->rms_surveyed_px : a->loo_rms_px,
+                 worst == 2 ? a->thresholds.max_rms_surveyed_px : a->thresholds.max_loo_px);
+        snprintf(action, action_size,
+                 "check the survey and the picks of the landmarks named in its section; then "
+                 "recalibrate");
+        break;
+    default: snprintf(figure, figure_size, "%s", a->failures); snprintf(action, action_size, "see its section");
+    }
+    if (outliers[0]) {
+        size_t n = strlen(action);
+        snprintf(action + n, action_size - n, "; re-survey or re-pick %s (left out)", outliers);
+    }
+}
+
 void rs_report_doc_verdicts(rs_doc *doc, const struct rs_report_ctx *rep)
 {
     rs_doc_heading(doc, 2, "In short");
     const rs_report_camera *first = NULL;
     for (int c = 0; c < rep->Ncameras && !first; c++)
         if (rep->cameras[c].has_audit) first = &rep->cameras[c];
-    if (first) {
-        const rs_audit_result *a = &first->audit;
+    if (first)
         rs_doc_paragraph(doc, false,
-                         "Each camera is judged against what the site is for: vehicles located on the ground to %g m "
-                         "(1 sigma) where the landmarks are. A camera passes when the calibration predicts that "
-                         "accuracy there (at most %g m over 90%% of the landmarks' area), when landmarks left out "
-                         "one at a time are located from their picks within it (median at most %g m), and when its "
-                         "surveyed landmarks reproject within the need in pixels (about %.0f px at %s's landmarks; "
-                         "each camera's own figure is in its section). The verdicts are those of 'roadside audit' "
-                         "on the same files, with the same thresholds.",
-                         a->thresholds.need_ground_m, a->thresholds.max_ground_sigma_m, a->thresholds.max_loo_m,
-                         a->thresholds.max_rms_surveyed_px, camera_id(rep, first));
-    } else
+                         "Each camera against what the site is for: vehicles located on the ground to %g m (1 sigma) "
+                         "where its landmarks are. The verdicts are those of 'roadside audit' on the same files; "
+                         "each camera's section gives the evidence.",
+                         first->audit.thresholds.need_ground_m);
+    else
         rs_doc_paragraph(doc, false, "No camera was audited: there is no verdict, only the calibrations' figures.");
-    for (int c = 0; c < rep->Ncameras; c++) rs_report_doc_camera_verdict(doc, rep, &rep->cameras[c]);
+    rs_doc_table(doc, 4);
+    rs_doc_cell(doc, "camera");
+    rs_doc_cell(doc, "verdict");
+    rs_doc_cell(doc, "what decided it");
+    rs_doc_cell(doc, "what to do");
+    for (int c = 0; c < rep->Ncameras; c++) {
+        const rs_report_camera *cam = &rep->cameras[c];
+        char figure[512], action[1200];
+        rs_report_camera_action(figure, sizeof figure, action, sizeof action, rep, cam);
+        rs_doc_cell(doc, "%s", camera_id(rep, cam));
+        rs_doc_cell(doc, "%s", !cam->has_audit ? "not audited" : cam->audit.pass ? "pass" : "FAIL");
+        rs_doc_cell(doc, "%s", figure);
+        rs_doc_cell(doc, "%s", action);
+    }
 }
 
 // ---- the pose statistics in words ----
@@ -60,12 +146,19 @@ void rs_report_doc_verdicts(rs_doc *doc, const struct rs_report_ctx *rep)
 void rs_report_doc_pose_words(rs_doc *doc, const rs_report_camera *cam)
 {
     const double vf = cam->variance_factor, cn = cam->condition_number;
+    // a warning that the intrinsics may be off limits what the variance factor can vouch for
+    bool lens_doubt = cam->focal_off || cam->center_off;
+    for (int i = 0; i < cam->Nwarnings && !lens_doubt; i++)
+        lens_doubt = strstr(cam->warnings[i], "because of the intrinsics") != NULL;
     const char *vf_words = !isfinite(vf) ? "cannot be computed (no redundancy)"
                            : vf < 0.25   ? "is small: the stated pick and survey sigmas are pessimistic"
-                           : vf <= 4     ? "is about 1: the residuals are as large as the stated pick and survey "
-                                           "sigmas predict, so the sigmas in this table can be trusted"
-                                         : "is large: the residuals are larger than the stated sigmas, and the "
-                                           "sigmas in this table are optimistic";
+                           : vf > 4      ? "is large: the residuals are larger than the stated sigmas, and the "
+                                           "sigmas in this table are optimistic"
+                           : lens_doubt  ? "is about 1: the residuals are as large as the stated pick and survey "
+                                           "sigmas predict; the sigmas in this table still hold only for the lens "
+                                           "as calibrated, which the warnings below doubt"
+                                         : "is about 1: the residuals are as large as the stated pick and survey "
+                                           "sigmas predict, so the sigmas in this table can be trusted";
     const char *cn_words = !isfinite(cn) ? "cannot be computed"
                            : cn <= 10    ? "the landmarks pin the pose down well (well-spread scenes give 1.5-10)"
                            : cn <= 100   ? "the pose is less well determined than in a well-spread scene (1.5-10)"
@@ -95,14 +188,7 @@ static int warning_list(rs_doc *doc, const char *prefix, const char *list, char 
 {
     int n = 0;
     for (const char *s = list; *s;) {
-        const char *e = strstr(s, "; ");
-        // a "; " inside parentheses belongs to the sentence: "(landmark L003; 0 by data snooping)"
-        const char *open = memchr(s, '(', e ? (size_t)(e - s) : strlen(s));
-        if (e && open) {
-            const char *close = strchr(open, ')');
-            if (close && close > e) e = strstr(close, "; ");
-        }
-        int len = e ? (int)(e - s) : (int)strlen(s);
+        const int len = (int)rs_calib_warning_len(s); // "; " inside parentheses belongs to the sentence
         char one[1200];
         snprintf(one, sizeof one, "%.*s", len, s);
         if (len > 0 && !strstr(seen, one)) {
@@ -133,7 +219,7 @@ int rs_report_doc_warnings(rs_doc *doc, const struct rs_report_ctx *rep, const r
     for (int i = 0; i < cam->Nwarnings; i++) {
         char w[1200];
         snprintf(w, sizeof w, "%s", cam->warnings[i]);
-        rs_audit_site_name_landmarks(w, sizeof w, rep->site, cam->icam);
+        rs_calib_site_name_landmarks(w, sizeof w, rep->site, cam->icam);
         n += warning_list(doc, "", w, seen, sizeof seen);
     }
     return n;

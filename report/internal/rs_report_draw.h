@@ -64,6 +64,8 @@ typedef struct {
     rs_report_landmark *landmarks; // (N,) owned
     char **warnings;               // (Nwarnings,) owned strings
     int Nwarnings;
+    bool focal_off, center_off; // <id>.json's intrinsics_check: the image says the nominal is off
+    double focal_rel;           //   the data's f / f_nominal - 1 (NaN: not tested)
     // derived for the figures
     double max_tan;   // rs_camera_max_tan(&model): points beyond the lens's valid field are not drawn
     double *fov_en_m; // (Nfov,2) ground seen within range, polygon (owned)

@@ -6,9 +6,17 @@
 #include "report/internal/rs_report_doc.h"
 #include "report/internal/rs_report_draw.h"
 
-// The first page's "In short": one paragraph per camera, its audit verdict in words (a warning
-// box when it fails or was not audited), after a paragraph with the need and the thresholds.
+// The first page's "In short": a sentence with the need, then a table with one row per camera:
+// its verdict, the figure that decided it and what to do (rs_report_camera_action).
 void rs_report_doc_verdicts(rs_doc *doc, const struct rs_report_ctx *rep);
+
+// The first page's row of one camera: the one figure that decided its verdict (the threshold
+// failed by the widest margin; the ground error for a pass) and the action, naming
+// 'roadside calib SITE --refine focal' when the image says the focal length is off (the cause is
+// the lens, not the survey) and the outliers by id.
+// out: figure (figure_size bytes), action (action_size bytes), NUL-terminated
+void rs_report_camera_action(char *figure, size_t figure_size, char *action, size_t action_size,
+                             const struct rs_report_ctx *rep, const rs_report_camera *cam);
 
 // One camera's verdict in words (the same text as in "In short").
 void rs_report_doc_camera_verdict(rs_doc *doc, const struct rs_report_ctx *rep, const rs_report_camera *cam);

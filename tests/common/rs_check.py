@@ -41,6 +41,20 @@ def run(*args, stdin=None, env=None, timeout=300):
                           timeout=timeout, env=env)
 
 
+def demo_calibrated(prefix, env=None):
+    """A temporary folder with a copy of sites/demo (tmp/site) calibrated by `roadside calib` into
+    tmp/calib: returns (tmp, site, calib); a failing calib is a failed check."""
+    import shutil
+    import tempfile
+    tmp = tempfile.mkdtemp(prefix=prefix)
+    site = os.path.join(tmp, "site")
+    shutil.copytree(os.path.join(os.environ["ROADSIDE_SOURCE_ROOT"], "sites", "demo"), site)
+    calib = os.path.join(tmp, "calib")
+    p = run("calib", site, "-o", calib, env=env)
+    check(p.returncode == 0, f"calib: {p.stderr}")
+    return tmp, site, calib
+
+
 def finish(name):
     """Prints the verdict of test `name` and exits: 1 when a check failed, else 0."""
     if failures:

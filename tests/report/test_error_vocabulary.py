@@ -155,8 +155,9 @@ def read_report(out):
     p.feed(open(os.path.join(out, "report.html"), encoding="utf-8").read())
     site_rows, pose, verdict, where = {}, {}, {}, None
     tables = [b for k, b in p.blocks if k == "table"]
-    head = tables[0][0]
-    for r in tables[0][1:]:
+    site_table = next(t for t in tables if t[0][:2] == ["camera", "used"])  # after the first page's verdicts
+    head = site_table[0]
+    for r in site_table[1:]:
         site_rows[r[0]] = dict(zip(head, r))
     for kind, b in p.blocks:
         if kind in ("h2", "h3"):
@@ -245,7 +246,8 @@ def main():
     shutil.copy(os.path.join(calib, "cam2.cameramodel"), os.path.join(wrong, "cam1.cameramodel"))
     p = run("audit", site, "--calib", wrong, "-o", os.path.join(tmp, "audit_wrong"), *OLD)
     _, rows = table(p.stdout, CAMS)
-    check(p.returncode == 1 and "rms_surveyed_px" in p.stdout.split("cam1 fails:")[-1].split("\n")[0],
+    # (in words: "the inliers' surveyed positions reproject N px off (RMS)", the figure rms_surveyed_px)
+    check(p.returncode == 1 and "surveyed positions reproject" in p.stdout.split("cam1 fails:")[-1].split("\n")[0],
           f"wrong model: the audit fails cam1 on rms_surveyed_px: {p.stdout[:800]}")
     out_wrong = os.path.join(tmp, "report_wrong")
     p = run("report", site, "--calib", wrong, "-o", out_wrong, *OLD)

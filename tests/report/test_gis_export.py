@@ -1,7 +1,11 @@
 #!/usr/bin/env python3
 """Issue 16: nothing could be opened in QGIS. `roadside export` writes the cameras, their ground
-footprints, the landmarks with residuals and flags, and the lanes as a GeoPackage / GeoJSON, and
-the ground uncertainty map as a GeoTIFF; GDAL's own tools read them back here.
+footprints, the landmarks (one row each), the picks with residuals and flags, and the lanes as a
+GeoPackage / GeoJSON, and the ground uncertainty map as a GeoTIFF; GDAL's own tools read them
+back here. Issue 41: ogrinfo finds a QGIS style per layer in layer_styles (its QML parsed by
+Python's XML parser: footprints by verdict, picks/landmarks on the leave-one-out ramp) and every
+layer's description; gdalsrsinfo names the GeoTIFF's CRS with its unit; `-o new/dir/x.gpkg`
+creates the folders; `--crs` prints nothing on stderr.
 
 Oracles (independent of roadside's GDAL calls):
 - ogr2ogr (GDAL's reader) converts the GeoPackage back to GeoJSON; each camera's point equals
@@ -109,10 +113,10 @@ def main():
               f"{c}: fields {pr}")
     print(f"cameras: worst {worst * 1000:.4f} mm from <id>.json")
 
-    # landmarks through PROJ's cct into ENU, against p_enu_surveyed_m
+    # picks through PROJ's cct into ENU, against p_enu_surveyed_m
     topo = (f"+proj=pipeline +step +proj=cart +ellps=WGS84 +step +proj=topocentric +ellps=WGS84 "
             f"+lat_0={origin['lat_deg']!r} +lon_0={origin['lon_deg']!r} +h_0={origin['h_m']!r}")
-    lms = features(gpkg, "landmarks")
+    lms = features(gpkg, "picks")
     enu = cct(topo, [f["geometry"]["coordinates"] for f in lms])
     worst, n = 0, 0
     for f, e in zip(lms, enu):
@@ -125,9 +129,48 @@ def main():
         check(r is None or (abs(pr["residual_u_px"] - r[0]) < 1e-9 and abs(pr["residual_v_px"] - r[1]) < 1e-9),
               f"{pr['landmark']}: residuals {pr['residual_u_px']}, {pr['residual_v_px']} vs {r}")
         check(bool(pr["inlier"]) == want["inlier"], f"{pr['landmark']}: inlier flag")
-    check(n == sum(len(js[c]["landmarks"]) for c in CAMS), f"landmarks layer: {n} features")
+    check(n == sum(len(js[c]["landmarks"]) for c in CAMS), f"picks layer: {n} features")
     check(any(not f["properties"]["inlier"] and f["properties"]["flag"] for f in lms), "an outlier with its flag")
-    print(f"landmarks: {n}, worst {worst * 1000:.4f} mm from p_enu_surveyed_m (cct)")
+    print(f"picks: {n}, worst {worst * 1000:.4f} mm from p_enu_surveyed_m (cct)")
+
+    # landmarks: one feature per landmark picked, its picks counted as <id>.json lists them
+    want_picks = {}
+    for c in CAMS:
+        for x in js[c]["landmarks"]:
+            want_picks.setdefault(x["id"], []).append((c, x["inlier"], x["p_enu_surveyed_m"]))
+    one = features(gpkg, "landmarks")
+    ids = [f["properties"]["landmark"] for f in one]
+    check(len(ids) == len(set(ids)) and set(ids) == set(want_picks), f"landmarks layer: {len(ids)} rows for "
+          f"{len(want_picks)} landmarks picked")
+    for f, e in zip(one, cct(topo, [f["geometry"]["coordinates"] for f in one])):
+        pr = f["properties"]
+        w = want_picks.get(pr["landmark"], [])
+        check(pr["n_picks"] == len(w) and pr["n_inliers"] == sum(i for _, i, _ in w) and
+              sorted(pr["cameras"].split(", ")) == sorted(c for c, _, _ in w), f"landmark {pr['landmark']}: {pr}")
+        check(w and math.dist(e, w[0][2]) <= TOL_M, f"landmark {pr['landmark']}: position off (cct)")
+    print(f"landmarks: {len(ids)} rows, one per landmark")
+
+    # styles and descriptions, read by ogrinfo (GDAL's own reader)
+    p = tool("ogrinfo", "-ro", "-q", "-sql", "SELECT f_table_name, f_geometry_column, useAsDefault, styleQML FROM "
+             "layer_styles", gpkg)
+    check(p.returncode == 0, f"ogrinfo layer_styles: {p.stderr}")
+    import xml.etree.ElementTree as ET
+    styled = {}
+    for block in p.stdout.split("OGRFeature(")[1:]:
+        name = block.split("f_table_name (String) = ")[1].split("\n")[0]
+        qml = block.split("styleQML (String) = ")[1].strip()
+        root = ET.fromstring(qml.split("\n", 1)[1])  # after the DOCTYPE line
+        r = root.find("renderer-v2")
+        styled[name] = (r.get("type"), r.get("attr"), "useAsDefault (Integer(Boolean)) = 1" in block)
+    print("styles:", styled)
+    check(styled.get("footprints", ("", "", False)) == ("categorizedSymbol", "verdict", True), "footprints style")
+    check(styled.get("cameras", ("", "", False))[1] == "verdict", "cameras style")
+    for layer in ("landmarks", "picks"):
+        check(styled.get(layer, ("", "", False))[:2] == ("graduatedSymbol", "loo_ground_error_m"), f"{layer} style")
+    for layer in ("cameras", "footprints", "landmarks", "picks", "lanes"):
+        p = tool("ogrinfo", "-ro", "-so", gpkg, layer)
+        d = [line for line in p.stdout.splitlines() if line.strip().startswith("DESCRIPTION=")]
+        check(d and len(d[0]) > 40, f"{layer}: no description in ogrinfo -so: {p.stdout[:300]}")
 
     # footprints contain the inliers within range
     for f in features(gpkg, "footprints"):
@@ -148,11 +191,17 @@ def main():
         x, y = cams[c]["geometry"]["coordinates"][:2]
         d = math.hypot(x - u[0], y - u[1])
         check(d <= TOL_M, f"{c}: UTM {x, y} is {d * 1000:.3f} mm from cct's {u[:2]}")
-    check({f["properties"]["layer"] for f in fs} == {"cameras", "footprints", "landmarks", "lanes"}, "GeoJSON layers")
+    check({f["properties"]["layer"] for f in fs} == {"cameras", "footprints", "landmarks", "picks", "lanes"},
+          "GeoJSON layers")
 
     # the GeoTIFF against the audits' maps
     info = json.loads(tool("gdalinfo", "-json", tif).stdout)
     check("Orthographic" in info["coordinateSystem"]["wkt"], "GeoTIFF CRS: the site's orthographic ENU grid")
+    p = tool("gdalsrsinfo", "-o", "wkt2", tif)  # the CRS named, its unit metres
+    head = p.stdout.strip().splitlines()[0] if p.stdout.strip() else ""
+    print("gdalsrsinfo:", head)
+    check(head.startswith('PROJCRS["roadside site ENU at') and 'LENGTHUNIT["metre",1' in p.stdout,
+          f"GeoTIFF CRS unnamed or without a unit: {p.stdout[:300]}")
     audit_dir = os.path.join(tmp, "audit")
     rs_check.run("audit", site, "--calib", calib, "-o", audit_dir)
     maps = [json.load(open(os.path.join(audit_dir, c + ".audit.json")))["uncertainty_map"] for c in CAMS]
@@ -192,6 +241,13 @@ def main():
           f"bad extension: {p.stderr}")
     p = rs_check.run("export", site, "--calib", calib)
     check(p.returncode == 2, "no output: usage error")
+    # the output's folders are created; GDAL prints nothing of its own
+    deep = os.path.join(tmp, "new", "dir", "x.gpkg")
+    p = rs_check.run("export", site, "--calib", calib, "-o", deep, "--crs", "EPSG:32632", "--uncertainty",
+                     os.path.join(tmp, "new2", "u.tif"))
+    check(p.returncode == 0 and os.path.isfile(deep) and os.path.isfile(os.path.join(tmp, "new2", "u.tif")),
+          f"export into new folders: {p.stderr}")
+    check("ERROR" not in p.stderr and p.stderr == "", f"export --crs printed on stderr: {p.stderr}")
     shutil.rmtree(tmp)
     finish("GIS export")
 
