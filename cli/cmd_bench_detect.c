@@ -183,7 +183,5 @@ int rs_cli_bench_detect(int argc, char **argv)
         }
     free(bgr);
     if (rc == RS_EXIT_OK && csv) rc = write_csv(csv, rows, Nrows);
-    if (rc == RS_EXIT_OK && (fflush(stdout) != 0 || ferror(stdout)))
-        return rs_cli_fail("bench detect: writing <stdout>", RS_ERR_IO, NULL);
     return rc;
 }

@@ -200,6 +200,5 @@ int rs_cli_detect(int argc, char **argv)
     printf("%.2f ms per frame (preprocess %.2f, forward %.2f, decode %.2f)\n",
            (sum.total.preprocess_ms + sum.total.forward_ms + sum.total.decode_ms) / nf, sum.total.preprocess_ms / nf,
            sum.total.forward_ms / nf, sum.total.decode_ms / nf);
-    if (fflush(stdout) != 0 || ferror(stdout)) return rs_cli_fail("detect: writing <stdout>", RS_ERR_IO, NULL);
     return RS_EXIT_OK;
 }

@@ -228,6 +228,5 @@ int rs_cli_eval(int argc, char **argv)
     if (a.json) st = rs_eval_result_write_json(result, a.json, &err);
     rs_eval_result_free(result);
     if (st != RS_OK) return rs_cli_fail("eval", st, &err);
-    if (fflush(stdout) != 0 || ferror(stdout)) return rs_cli_fail("eval: writing <stdout>", RS_ERR_IO, NULL);
     return RS_EXIT_OK;
 }

@@ -108,7 +108,6 @@ int rs_cli_eval_tracks(int argc, char **argv)
                lr.unmatched, lr.ignored);
         printf("position   RMSE %.3f m  predicted RMS %.3f m  NEES %.3f (%ld matches; 2 expected)\n", lr.rmse_m,
                lr.predicted_rms_m, lr.nees, lr.Nnees);
-        if (fflush(stdout) != 0 || ferror(stdout)) return rs_cli_fail("eval: writing <stdout>", RS_ERR_IO, NULL);
         return RS_EXIT_OK;
     }
     if (!tracks || !gt) return rs_cli_usage_error("eval", "--tracks and --gt-tracks go together");
@@ -120,6 +119,5 @@ int rs_cli_eval_tracks(int argc, char **argv)
     if (st) return rs_cli_fail("eval", st, &err);
     print_result(&r);
     if (json && (st = rs_mot_result_write_json(&r, json, &err))) return rs_cli_fail("eval", st, &err);
-    if (fflush(stdout) != 0 || ferror(stdout)) return rs_cli_fail("eval: writing <stdout>", RS_ERR_IO, NULL);
     return RS_EXIT_OK;
 }

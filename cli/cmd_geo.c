@@ -178,6 +178,5 @@ int rs_cli_geo(int argc, char **argv)
         return RS_EXIT_FAIL;
     }
     if (ferror(stdin)) return rs_cli_fail("geo: reading <stdin>", RS_ERR_IO, NULL);
-    if (fflush(stdout) != 0 || ferror(stdout)) return rs_cli_fail("geo: writing <stdout>", RS_ERR_IO, NULL);
     return RS_EXIT_OK;
 }

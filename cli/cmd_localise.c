@@ -388,7 +388,5 @@ int rs_cli_localise(int argc, char **argv)
     free(dets);
     free(rows);
     rs_site_free(site);
-    if (!rc && (fflush(stdout) != 0 || ferror(stdout)))
-        return rs_cli_fail("localise: writing <stdout>", RS_ERR_IO, NULL);
     return rc;
 }

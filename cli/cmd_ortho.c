@@ -1,5 +1,6 @@
 // roadside ortho: parse arguments, render the digital twin's orthophoto (synth/povray/rs_synth_ortho.h),
 // write it as a GeoTIFF (geo/rs_geo_raster.h), print its grid.
+#include <errno.h>
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
@@ -95,7 +96,11 @@ int rs_cli_ortho(int argc, char **argv)
         if (work) snprintf(work, dl + 32, "%.*s/.ortho-work-XXXXXX", (int)dl, slash ? out : ".");
     }
     rs_status st = work ? RS_OK : rs_err_set(&err, RS_ERR_NOMEM, "out of memory");
-    if (!st && !mkdtemp(work)) st = rs_err_set(&err, RS_ERR_IO, "%s: cannot create the work folder", work);
+    const bool made = !st && mkdtemp(work);
+    if (!st && !made)
+        st = errno == ENOSPC
+                 ? rs_err_set(&err, RS_ERR_IO, "disk full writing %s", work)
+                 : rs_err_set(&err, RS_ERR_IO, "%s: cannot create the work folder: %s", work, strerror(errno));
     rs_image img = {0};
     rs_geo_grid grid;
     unsigned char *rgb = NULL;
@@ -121,7 +126,7 @@ int rs_cli_ortho(int argc, char **argv)
                                  .crs = crs};
         st = rs_geo_raster_write(&w, &h, out, &site->origin, &r, &err);
     }
-    if (work) rmdir(work); // empty when the render went well; left for inspection otherwise
+    if (made) rs_io_remove_tree(work); // a fresh folder of this run's own: gone whatever happened
     if (!st)
         printf("%s: %dx%d pixels of %g m; site ENU grid: pixel (0,0) centre at E %.3f N %.3f; %s\n", out, w, h,
                grid.cell_m, grid.e0_m, grid.n0_m, crs ? crs : "CRS: the site's ENU grid (+proj=ortho at the origin)");

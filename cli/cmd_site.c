@@ -1,8 +1,10 @@
 // roadside site -- check, describe, initialise (and, in cmd_site_simulate.c, simulate) a site
 // survey folder through rs_site.
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli/rs_cli.h"
@@ -122,7 +124,8 @@ static int cmd_check(int argc, char **argv)
     // first problem of the lanes file as one more error.
     int Nerrors = report->Nerrors;
     char *lanes_path = rs_io_join(argv[1], RS_SITE_LANES);
-    if (lanes_path && access(lanes_path, F_OK) == 0 && Nerrors == 0) {
+    struct stat sb; // (lstat: a link loop there is read, and reported as such)
+    if (lanes_path && lstat(lanes_path, &sb) == 0 && Nerrors == 0) {
         rs_site *site = NULL;
         if (rs_site_load(&site, argv[1], NULL) == RS_OK) {
             rs_lanes lanes;
@@ -137,6 +140,15 @@ static int cmd_check(int argc, char **argv)
         }
     }
     free(lanes_path);
+    // SITE/ortho.tif, the report's orthophoto when there is one, is read by GDAL by name: only a
+    // regular file (a FIFO there would block `report` forever)
+    char *ortho_path = rs_io_join(argv[1], "ortho.tif");
+    rs_err oerr = {0};
+    if (ortho_path && lstat(ortho_path, &sb) == 0 && rs_io_check_regular(ortho_path, SIZE_MAX, &oerr) != RS_OK) {
+        printf("error: %s\n", oerr.msg);
+        Nerrors++;
+    }
+    free(ortho_path);
     print_ground_model(&report->ground, "");
     printf("%d error%s, %d warning%s\n", Nerrors, Nerrors == 1 ? "" : "s", report->Nwarnings,
            report->Nwarnings == 1 ? "" : "s");

@@ -1,10 +1,15 @@
 // roadside -- git-style dispatcher: `roadside COMMAND [ARGS...]`.
+#include <errno.h>
+#include <fcntl.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "cli/rs_cli.h"
 #include "cli/rs_cli_detect.h"
+#include "core/rs_io.h"
 #include "geo/rs_geo_raster.h"
 
 #ifndef RS_VERSION
@@ -53,7 +58,38 @@ static void usage(FILE *out)
                  "'roadside COMMAND --help' describes one command. Conventions: docs/conventions.md.\n");
 }
 
-int main(int argc, char **argv)
+// Where standard output began, when it is a regular file (`> FILE`, `>> FILE`): -1 otherwise.
+static off_t stdout_start = -1;
+
+static void note_stdout_start(void)
+{
+    struct stat sb;
+    if (fstat(STDOUT_FILENO, &sb) != 0 || !S_ISREG(sb.st_mode)) return;
+    const int flags = fcntl(STDOUT_FILENO, F_GETFL);
+    stdout_start = flags >= 0 && (flags & O_APPEND) ? sb.st_size : lseek(STDOUT_FILENO, 0, SEEK_CUR);
+}
+
+// Every command's standard output checked to the end (once, here): what is still buffered is
+// flushed and stdout closed; a failure anywhere -- an earlier printf that hit a full disk, the
+// flush, the close -- turns exit status 0 into 1 with "roadside: disk full writing standard
+// output" (or the error's own text) on stderr, and a regular file given as stdout is cut back to
+// where this run began (`> res.json` is left empty, `>> log` as it was), so that no truncated
+// output looks complete. A stdout the shell closed (`>&-`) is not an error.
+static int finish_stdout(int rc)
+{
+    errno = 0;
+    const bool had_error = ferror(stdout) != 0;
+    int e = fflush(stdout) != 0 ? errno : 0;
+    if (!e && had_error) e = EIO;
+    if (e && stdout_start >= 0) (void)!ftruncate(STDOUT_FILENO, stdout_start);
+    if (fclose(stdout) != 0 && !e && errno != EBADF) e = errno;
+    if (!e) return rc;
+    char text[512];
+    fprintf(stderr, "roadside: %s\n", rs_io_write_problem(text, sizeof text, "standard output", e));
+    return rc == RS_EXIT_OK ? RS_EXIT_FAIL : rc;
+}
+
+static int run(int argc, char **argv)
 {
     if (argc < 2) {
         usage(stderr);
@@ -82,4 +118,10 @@ int main(int argc, char **argv)
         if (!strcmp(cmd, commands[i].name)) return commands[i].run(argc - 1, argv + 1);
     fprintf(stderr, "roadside: '%s' is not a roadside command. See 'roadside --help'.\n", cmd);
     return RS_EXIT_USAGE;
+}
+
+int main(int argc, char **argv)
+{
+    note_stdout_start();
+    return finish_stdout(run(argc, argv));
 }

@@ -21,9 +21,29 @@ typedef struct {
 rs_status rs_image_alloc(rs_image *img, int width, int height, int channels, rs_err *err);
 void rs_image_free(rs_image *img); // NULL-safe; zeroes *img
 
+// The most pixels rs_image_read decodes (8192 x 8192; 1 GiB as float RGBA): a larger image is
+// refused from its header, before anything is decoded.
+#define RS_IMAGE_MAX_PIXELS ((long long)1 << 26)
+
+// An image file's width and height (pixels) from its header, nothing decoded: PNG (libpng),
+// JPEG (libjpeg). Only a regular file is opened (rs_io_check_regular). Errors: RS_ERR_IO
+// (missing, not a regular file), RS_ERR_PARSE (a broken header), RS_ERR_UNSUPPORTED (another
+// format: its size is known only once decoded).
+rs_status rs_image_size( // out
+    int *width, int *height,
+    // in
+    const char *path, rs_err *err);
+
 // Reads PNG/JPEG/... (cv::imread, IMREAD_UNCHANGED); greyscale stays 1 channel, BGR(A) becomes
-// RGB(A). Returns RS_ERR_IO when the file is missing or unreadable.
+// RGB(A). Only a regular file reaches OpenCV (a FIFO or device is refused, never waited on), and
+// a PNG or JPEG whose header says more than RS_IMAGE_MAX_PIXELS is refused before decoding.
+// Returns RS_ERR_IO when the file is missing or unreadable, RS_ERR_INVALID when too large.
 rs_status rs_image_read(rs_image *img, const char *path, rs_err *err);
+
+// rs_image_read of an image that must be width x height pixels (a camera's frame): a PNG or JPEG
+// of another size is refused from its header (RS_ERR_INVALID "PATH: the image is WxH, expected
+// ..."), before decoding; another format after.
+rs_status rs_image_read_sized(rs_image *img, const char *path, int width, int height, rs_err *err);
 
 // Writes an image with 8 or 16 bits per channel (values rounded, clamped to [0,1]), atomically
 // (temporary name in the same folder, then rename). The format follows the extension (.png).

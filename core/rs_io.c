@@ -1,4 +1,4 @@
-#define _XOPEN_SOURCE 700 // nftw()
+#define _GNU_SOURCE // fopencookie(), nftw()
 #include "core/rs_io.h"
 
 #include <ctype.h>
@@ -12,6 +12,7 @@
 #include <strings.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -98,17 +99,92 @@ rs_status rs_io_read_file_max(char **data, size_t *len, const char *path, size_t
     return RS_OK;
 }
 
+const char *rs_io_write_problem(char *buf, size_t size, const char *path, int errnum)
+{
+    if (errnum == ENOSPC || errnum == EDQUOT)
+        snprintf(buf, size, "disk full writing %s (%s)", path, strerror(errnum));
+    else
+        snprintf(buf, size, "%s: write failed: %s", path, strerror(errnum ? errnum : EIO));
+    return buf;
+}
+
+bool rs_io_disk_full(const char *path)
+{
+    struct statvfs sv;
+    return statvfs(path, &sv) == 0 && sv.f_bavail == 0;
+}
+
+// Sets err to rs_io_write_problem's text (RS_ERR_IO).
+static rs_status write_failed(rs_err *err, const char *path, int errnum)
+{
+    char text[sizeof err->msg];
+    return rs_err_set(err, RS_ERR_IO, "%s", rs_io_write_problem(text, sizeof text, path, errnum));
+}
+
+// The output's descriptor behind its FILE (fopencookie): every write(2) goes through sink_write,
+// which keeps the first errno of a failed or short write, so that rs_io_atomic_commit reports the
+// real cause ("disk full") however many calls later the caller looks.
+struct rs_io_sink {
+    int fd;
+    int errnum; // the first write or close error; 0: none
+};
+
+static ssize_t sink_write(void *cookie, const char *buf, size_t n)
+{
+    struct rs_io_sink *s = cookie;
+    size_t done = 0;
+    while (done < n) {
+        const ssize_t w = write(s->fd, buf + done, n - done);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) {
+            if (!s->errnum) s->errnum = w < 0 ? errno : ENOSPC; // write(2) of 0 bytes: no room
+            errno = s->errnum;
+            return done > 0 ? (ssize_t)done : -1;
+        }
+        done += (size_t)w;
+    }
+    return (ssize_t)done;
+}
+
+static int sink_close(void *cookie)
+{
+    struct rs_io_sink *s = cookie;
+    const int r = s->fd >= 0 ? close(s->fd) : 0;
+    if (r != 0 && !s->errnum) s->errnum = errno;
+    s->fd = -1;
+    return r;
+}
+
+// a->f as a FILE over fd, which it owns from now on (closed here on failure).
+static rs_status open_sink(rs_io_atomic *a, int fd, rs_err *err)
+{
+    struct rs_io_sink *s = malloc(sizeof *s);
+    if (s) *s = (struct rs_io_sink){.fd = fd, .errnum = 0};
+    a->sink = s;
+    a->f = s ? fopencookie(s, "wb", (cookie_io_functions_t){.write = sink_write, .close = sink_close}) : NULL;
+    if (a->f) return RS_OK;
+    close(fd);
+    if (s) s->fd = -1;
+    return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", a->path ? a->path : "output");
+}
+
 // Opens an existing device or FIFO `path` for writing straight into it (a->tmp_path NULL).
 static rs_status open_special(rs_io_atomic *a, const char *path, rs_err *err)
 {
     a->path = strdup(path);
-    const int fd = a->path ? open(path, O_WRONLY | O_CLOEXEC) : -1;
-    a->f = fd >= 0 ? fdopen(fd, "wb") : NULL;
-    if (a->f) return RS_OK;
-    const int saved = errno;
-    if (fd >= 0) close(fd);
-    rs_io_atomic_abort(a);
-    return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, strerror(saved));
+    const int fd = a->path ? open(path, O_WRONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY) : -1;
+    if (fd < 0) {
+        const int saved = a->path ? errno : ENOMEM;
+        rs_io_atomic_abort(a);
+        // a FIFO no one reads: refused at once (ENXIO), never waited on
+        return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path,
+                          saved == ENXIO ? "a FIFO with no reader" : strerror(saved));
+    }
+    const int flags = fcntl(fd, F_GETFL);
+    if (flags >= 0) fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
+    rs_status st = open_sink(a, fd, err);
+    if (st) rs_io_atomic_abort(a);
+    return st;
 }
 
 rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err)
@@ -129,58 +205,83 @@ rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err)
     memcpy(a->tmp_path + n, ".tmp.XXXXXX", sizeof ".tmp.XXXXXX");
     int fd = mkstemp(a->tmp_path);
     if (fd < 0) {
-        rs_status st = rs_err_set(err, RS_ERR_IO, "%s: cannot create: %s", path, strerror(errno));
+        const int saved = errno;
         free(a->tmp_path);
         a->tmp_path = NULL;
         rs_io_atomic_abort(a);
-        return st;
+        if (saved == ENOSPC || saved == EDQUOT) return write_failed(err, path, saved);
+        return rs_err_set(err, RS_ERR_IO, "%s: cannot create: %s", path, strerror(saved));
     }
     // mkstemp makes 0600; outputs are ordinary files.
     mode_t mask = umask(0);
     umask(mask);
     fchmod(fd, 0666 & ~mask);
-    a->f = fdopen(fd, "wb");
-    if (!a->f) {
-        close(fd);
-        rs_io_atomic_abort(a);
-        return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
-    }
-    return RS_OK;
+    rs_status st = open_sink(a, fd, err);
+    if (st) rs_io_atomic_abort(a);
+    return st;
+}
+
+// Flushes and closes a->f (a->f becomes NULL), fsyncing first when `sync`; returns the first
+// errno of any write, the fsync or the close (0: all of it reached the file).
+static int finish_stream(rs_io_atomic *a, bool sync)
+{
+    struct rs_io_sink *s = a->sink;
+    int e = 0;
+    if (fflush(a->f) != 0) e = errno;
+    if (!e && s && s->errnum) e = s->errnum;
+    // (a device or FIFO cannot be synced: EINVAL, ESPIPE are not failures)
+    if (!e && sync && s && fsync(s->fd) != 0 && !(!a->tmp_path && (errno == EINVAL || errno == ESPIPE))) e = errno;
+    const bool had_error = ferror(a->f) != 0;
+    if (fclose(a->f) != 0 && !e) e = s && s->errnum ? s->errnum : errno;
+    a->f = NULL;
+    if (!e && s && s->errnum) e = s->errnum;
+    if (!e && had_error) e = EIO;
+    return e;
+}
+
+// fsync of the file at path; returns 0 or the errno of the failure.
+static int sync_by_name(const char *path)
+{
+    const int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) return errno;
+    int e = fsync(fd) != 0 ? errno : 0;
+    if (close(fd) != 0 && !e) e = errno;
+    return e;
 }
 
 rs_status rs_io_atomic_release(rs_io_atomic *a, rs_err *err)
 {
     if (!a->f) return RS_OK;
-    int bad = ferror(a->f);
-    if (fclose(a->f) != 0) bad = 1;
-    a->f = NULL;
-    if (bad) return rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(errno));
+    const int e = finish_stream(a, false);
+    if (e) return write_failed(err, a->path, e);
     return RS_OK;
 }
 
 rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err)
 {
     rs_status st = RS_OK;
-    int bad = 0, saved = 0;
-    if (a->f) {
-        // (a device or FIFO cannot be synced: EINVAL, ESPIPE are not failures)
-        bad = ferror(a->f) || fflush(a->f) != 0 ||
-              (fsync(fileno(a->f)) != 0 && !(!a->tmp_path && (errno == EINVAL || errno == ESPIPE)));
-        saved = errno;
-        if (fclose(a->f) != 0 && !bad) {
-            bad = 1;
-            saved = errno;
-        }
-        a->f = NULL;
-    }
-    if (bad)
-        st = rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", a->path, strerror(saved));
+    // released (a library wrote tmp_path by name): its bytes are synced here
+    const int e = a->f ? finish_stream(a, true) : a->tmp_path ? sync_by_name(a->tmp_path) : 0;
+    if (e)
+        st = write_failed(err, a->path, e);
     else if (a->tmp_path && rename(a->tmp_path, a->path) != 0)
         st = rs_err_set(err, RS_ERR_IO, "%s: cannot rename into place: %s", a->path, strerror(errno));
     if (st != RS_OK && a->tmp_path) remove(a->tmp_path);
     free(a->tmp_path);
     free(a->path);
+    free(a->sink);
     a->tmp_path = a->path = NULL;
+    a->sink = NULL;
+    return st;
+}
+
+rs_status rs_io_atomic_finish(rs_io_atomic *a, rs_status st, rs_err *err)
+{
+    if (st == RS_OK || (a->f && ferror(a->f))) {
+        const rs_status cst = rs_io_atomic_commit(a, err);
+        return cst ? cst : st; // (a stream error always fails the commit)
+    }
+    rs_io_atomic_abort(a);
     return st;
 }
 
@@ -191,6 +292,7 @@ void rs_io_atomic_abort(rs_io_atomic *a)
     if (a->tmp_path) remove(a->tmp_path);
     free(a->tmp_path);
     free(a->path);
+    free(a->sink);
     memset(a, 0, sizeof *a);
 }
 
@@ -199,10 +301,7 @@ rs_status rs_io_write_file(const char *path, const void *data, size_t len, rs_er
     rs_io_atomic a;
     rs_status st = rs_io_atomic_open(&a, path, err);
     if (st) return st;
-    if (fwrite(data, 1, len, a.f) != len) {
-        rs_io_atomic_abort(&a);
-        return rs_err_set(err, RS_ERR_IO, "%s: write failed: %s", path, strerror(errno));
-    }
+    (void)fwrite(data, 1, len, a.f); // a short write is reported by the commit, with its cause
     return rs_io_atomic_commit(&a, err);
 }
 

@@ -40,10 +40,21 @@ rs_status rs_io_check_regular(const char *path, size_t max_bytes, rs_err *err);
 
 // An output file being written under a temporary name in the same folder as `path`.
 typedef struct {
-    FILE *f;        // write here
-    char *tmp_path; // owned; NULL when writing straight into a device or FIFO
-    char *path;     // owned: the final name
+    FILE *f;                 // write here
+    char *tmp_path;          // owned; NULL when writing straight into a device or FIFO
+    char *path;              // owned: the final name
+    struct rs_io_sink *sink; // owned: f's descriptor and the first write error (rs_io.c)
 } rs_io_atomic;
+
+// The one wording of a failed write, in buf (size bytes; returned): "disk full writing PATH (...)"
+// when errnum is ENOSPC or EDQUOT, else "PATH: write failed: <strerror>". For the cli's own
+// standard output too, so that a full disk reads the same whoever wrote.
+const char *rs_io_write_problem(char *buf, size_t size, const char *path, int errnum);
+
+// True when the file system holding `path` (a file or folder) has no block left for this user
+// (statvfs: f_bavail 0): why a program that does not say so itself (povray: "Fatal error in
+// renderer") failed to write there. False when it cannot be told.
+bool rs_io_disk_full(const char *path);
 
 // Opens `path` for atomic writing. On success a->f is open and must be finished with
 // rs_io_atomic_commit() or rs_io_atomic_abort(). A `path` that exists and is not a regular file
@@ -51,9 +62,17 @@ typedef struct {
 // replace the device: as root, `-o /dev/null` once turned /dev/null into a regular file); a folder
 // is refused (RS_ERR_IO, "is a folder").
 rs_status rs_io_atomic_open(rs_io_atomic *a, const char *path, rs_err *err);
-// Flushes, fsyncs, closes and renames into place. Frees a's strings whatever the outcome; on
-// failure removes the temporary file.
+// Flushes, fsyncs, closes and renames into place. Every write into a->f is checked to the end:
+// a failed or short write (however many calls before), the fsync, the close and the rename are
+// RS_ERR_IO naming the path ("disk full writing PATH" for ENOSPC, rs_io_write_problem), and then
+// nothing is left under the final name. After rs_io_atomic_release, the file the library wrote
+// is fsynced by name. Frees a's strings whatever the outcome; on failure removes the temporary.
 rs_status rs_io_atomic_commit(rs_io_atomic *a, rs_err *err);
+// Ends an atomic output after its writer returned st: commits when st is RS_OK; when the writer
+// failed because a write into a->f failed (its stream has an error), commits all the same so that
+// the commit's message -- the cause, "disk full writing PATH" -- replaces the writer's "write
+// error" (the commit then fails and leaves nothing); else aborts and returns st.
+rs_status rs_io_atomic_finish(rs_io_atomic *a, rs_status st, rs_err *err);
 // Closes a->f (a->f becomes NULL) but keeps the temporary file, so that a library that writes
 // by file name (mrcal_write_cameramodel_file, cv::FileStorage, povray) can write a->tmp_path;
 // rs_io_atomic_commit() then renames it into place.

@@ -244,8 +244,13 @@ extern "C" void rs_image_free(rs_image *img)
 extern "C" rs_status rs_image_read(rs_image *img, const char *path, rs_err *err)
 {
     *img = rs_image{};
-    rs_status checked = rs_io_check_regular(path, RS_IO_MAX_FILE_BYTES, err); // imread opens it by name
+    int w = 0, h = 0; // from the header: refused before decoding when too large
+    rs_status checked = rs_image_size(&w, &h, path, err);
+    if (checked == RS_ERR_UNSUPPORTED) checked = rs_io_check_regular(path, RS_IO_MAX_FILE_BYTES, err);
     if (checked) return checked;
+    if ((long long)w * h > RS_IMAGE_MAX_PIXELS)
+        return rs_err_set(err, RS_ERR_INVALID, "%s: %dx%d pixels, more than the %lld an image may have: not decoded",
+                          path, w, h, RS_IMAGE_MAX_PIXELS);
     try {
         cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
         if (m.empty())
@@ -279,6 +284,24 @@ extern "C" rs_status rs_image_read(rs_image *img, const char *path, rs_err *err)
         rs_image_free(img);
         return rs_err_set(err, RS_ERR_EXTERNAL, "%s: OpenCV: unknown exception", path);
     }
+}
+
+extern "C" rs_status rs_image_read_sized(rs_image *img, const char *path, int width, int height, rs_err *err)
+{
+    *img = rs_image{};
+    int w = 0, h = 0;
+    const rs_status sized = rs_image_size(&w, &h, path, err);
+    if (sized && sized != RS_ERR_UNSUPPORTED) return sized;
+    if (!sized && (w != width || h != height))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: the image is %dx%d, expected %dx%d: not decoded", path, w, h, width,
+                          height);
+    rs_status st = rs_image_read(img, path, err);
+    if (!st && (img->width != width || img->height != height)) {
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: the image is %dx%d, expected %dx%d", path, img->width, img->height,
+                        width, height);
+        rs_image_free(img);
+    }
+    return st;
 }
 
 extern "C" rs_status rs_image_write(const char *path, const rs_image *img, int bits, rs_err *err)

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cpl_conv.h>
@@ -69,14 +70,44 @@ static bool grid_ok(const rs_geo_grid *g)
            isfinite(g->n0_m) && isfinite(g->cell_m) && g->cell_m > 0;
 }
 
-// A temporary name next to `path` for GDAL's driver to create (rs_io's atomic temporary,
-// emptied: GDAL's drivers create their files themselves).
-static rs_status temp_for_gdal(rs_io_atomic *a, const char *path, rs_err *err)
+rs_status rs_geo_gdal_output_open(rs_geo_gdal_output *o, const char *path, rs_err *err)
 {
-    rs_status st = rs_io_atomic_open(a, path, err);
-    if (!st) st = rs_io_atomic_release(a, err);
-    if (!st && unlink(a->tmp_path) != 0) st = rs_err_set(err, RS_ERR_IO, "%s: cannot prepare", a->tmp_path);
+    static unsigned counter; // one folder per output of this process
+    memset(o, 0, sizeof *o);
+    struct stat sb;
+    if (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode))
+        return rs_err_set(err, RS_ERR_IO,
+                          "%s: exists and is not a regular file (a device, FIFO or folder): not written", path);
+    const char *slash = strrchr(path, '/'), *name = slash ? slash + 1 : path;
+    char dir[64];
+    snprintf(dir, sizeof dir, "/vsimem/roadside-%ld-%u", (long)getpid(),
+             __atomic_add_fetch(&counter, 1, __ATOMIC_RELAXED));
+    o->vsi_dir = strdup(dir);
+    o->vsi_path = o->vsi_dir ? rs_io_join(dir, *name ? name : "out") : NULL;
+    o->path = strdup(path);
+    if (o->vsi_dir && o->vsi_path && o->path) return RS_OK;
+    rs_geo_gdal_output_abort(o);
+    return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
+}
+
+rs_status rs_geo_gdal_output_commit(rs_geo_gdal_output *o, rs_err *err)
+{
+    vsi_l_offset len = 0;
+    GByte *data = o->vsi_path ? VSIGetMemFileBuffer(o->vsi_path, &len, FALSE) : NULL;
+    rs_status st = data ? rs_io_write_file(o->path, data, (size_t)len, err)
+                        : rs_err_set(err, RS_ERR_IO, "%s: GDAL wrote nothing", o->path ? o->path : "output");
+    rs_geo_gdal_output_abort(o);
     return st;
+}
+
+void rs_geo_gdal_output_abort(rs_geo_gdal_output *o)
+{
+    if (!o) return;
+    if (o->vsi_dir) VSIRmdirRecursive(o->vsi_dir);
+    free(o->vsi_dir);
+    free(o->vsi_path);
+    free(o->path);
+    memset(o, 0, sizeof *o);
 }
 
 rs_status rs_geo_raster_write(int *width_out, int *height_out, const char *path, const rs_llh *origin,
@@ -96,7 +127,7 @@ rs_status rs_geo_raster_write(int *width_out, int *height_out, const char *path,
     OGRSpatialReferenceH enu = enu_srs(origin), target = NULL;
     char *enu_wkt = NULL, *dst_wkt = NULL;
     GDALDatasetH src = NULL, out_src = NULL;
-    rs_io_atomic a = {0};
+    rs_geo_gdal_output a = {0};
     const int W = r->grid.width, H = r->grid.height, B = r->Nbands;
     const GDALDataType type = r->type == RS_GEO_RASTER_BYTE ? GDT_Byte : GDT_Float32;
     const int esize = r->type == RS_GEO_RASTER_BYTE ? 1 : 4;
@@ -137,11 +168,11 @@ rs_status rs_geo_raster_write(int *width_out, int *height_out, const char *path,
         out_src = GDALAutoCreateWarpedVRT(src, enu_wkt, dst_wkt, GRA_NearestNeighbour, 0.0, NULL);
         if (!out_src) st = gdal_fail(err, path, "cannot warp the grid into the requested CRS");
     }
-    if (!st) st = temp_for_gdal(&a, path, err);
+    if (!st) st = rs_geo_gdal_output_open(&a, path, err);
     if (!st) {
         char **co = CSLSetNameValue(NULL, "COMPRESS", "DEFLATE");
         if (B == 3) co = CSLSetNameValue(co, "PHOTOMETRIC", "RGB");
-        GDALDatasetH out = GDALCreateCopy(gtiff, a.tmp_path, out_src, FALSE, co, NULL, NULL);
+        GDALDatasetH out = GDALCreateCopy(gtiff, a.vsi_path, out_src, FALSE, co, NULL, NULL);
         CSLDestroy(co);
         if (!out) st = gdal_fail(err, path, "cannot write the GeoTIFF");
         if (out) {
@@ -152,8 +183,8 @@ rs_status rs_geo_raster_write(int *width_out, int *height_out, const char *path,
             if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish the GeoTIFF");
         }
     }
-    if (!st) st = rs_io_atomic_commit(&a, err);
-    rs_io_atomic_abort(&a);
+    if (!st) st = rs_geo_gdal_output_commit(&a, err);
+    rs_geo_gdal_output_abort(&a);
     if (out_src && out_src != src) GDALClose(out_src);
     if (src) GDALClose(src);
     CPLFree(enu_wkt);
@@ -204,6 +235,13 @@ const char *rs_geo_tiles_crs_name(const rs_geo_tiles *t) { return t->crs_name; }
 rs_status rs_geo_tiles_open(rs_geo_tiles **out, const char *path, const rs_llh *origin, rs_err *err)
 {
     *out = NULL;
+    // a file reaches GDAL only when regular (a FIFO or a device would block its open forever);
+    // folders, /vsi paths and "WMS:" strings are GDAL's to judge
+    struct stat sb;
+    if (stat(path, &sb) == 0 && !S_ISDIR(sb.st_mode)) {
+        rs_status checked = rs_io_check_regular(path, SIZE_MAX, err);
+        if (checked) return checked;
+    }
     GDALAllRegister();
     CPLErrorReset();
     CPLPushErrorHandler(CPLQuietErrorHandler);
@@ -320,7 +358,6 @@ rs_status rs_geo_ortho_read(rs_geo_ortho *out, const char *path, const rs_llh *o
     memset(out, 0, sizeof *out);
     if (max_side < 16 || max_side > 16384)
         return rs_err_set(err, RS_ERR_INVALID, "%s: max_side %d is not in [16, 16384]", path, max_side);
-    if (access(path, R_OK) != 0) return rs_err_set(err, RS_ERR_IO, "%s: cannot read", path);
     rs_geo_tiles *t = NULL;
     rs_status st = rs_geo_tiles_open(&t, path, origin, err);
     if (st) return st;
@@ -370,13 +407,13 @@ rs_status rs_geo_pixel_bands_write_tiff(const char *path, const rs_geo_pixel_ban
     CPLErrorReset();
     CPLPushErrorHandler(CPLQuietErrorHandler);
     GDALDriverH gtiff = GDALGetDriverByName("GTiff");
-    rs_io_atomic a = {0};
+    rs_geo_gdal_output a = {0};
     if (!gtiff) st = gdal_fail(err, path, "GDAL has no GTiff driver");
-    if (!st) st = temp_for_gdal(&a, path, err);
+    if (!st) st = rs_geo_gdal_output_open(&a, path, err);
     if (!st) {
         char **co = CSLSetNameValue(NULL, "COMPRESS", "DEFLATE");
         co = CSLSetNameValue(co, "INTERLEAVE", "BAND");
-        GDALDatasetH out = GDALCreate(gtiff, a.tmp_path, b->width, b->height, b->Nbands, GDT_Float64, co);
+        GDALDatasetH out = GDALCreate(gtiff, a.vsi_path, b->width, b->height, b->Nbands, GDT_Float64, co);
         CSLDestroy(co);
         if (!out) st = gdal_fail(err, path, "cannot create the GeoTIFF");
         for (int k = 0; out && !st && k < b->Nbands; k++) {
@@ -393,8 +430,8 @@ rs_status rs_geo_pixel_bands_write_tiff(const char *path, const rs_geo_pixel_ban
             if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish the GeoTIFF");
         }
     }
-    if (!st) st = rs_io_atomic_commit(&a, err);
-    rs_io_atomic_abort(&a);
+    if (!st) st = rs_geo_gdal_output_commit(&a, err);
+    rs_geo_gdal_output_abort(&a);
     CPLPopErrorHandler();
     return st;
 }
@@ -427,10 +464,10 @@ rs_status rs_geo_pixel_bands_write_npz(const char *path, const rs_geo_pixel_band
     if (st) return st;
     CPLErrorReset();
     CPLPushErrorHandler(CPLQuietErrorHandler);
-    rs_io_atomic a = {0};
-    st = temp_for_gdal(&a, path, err);
+    rs_geo_gdal_output a = {0};
+    st = rs_geo_gdal_output_open(&a, path, err);
     for (int k = 0; !st && k < b->Nbands; k++) {
-        char *entry = CPLStrdup(CPLSPrintf("/vsizip/{%s}/%s.npy", a.tmp_path, b->name[k]));
+        char *entry = CPLStrdup(CPLSPrintf("/vsizip/{%s}/%s.npy", a.vsi_path, b->name[k]));
         VSILFILE *f = VSIFOpenL(entry, "wb");
         if (!f)
             st = gdal_fail(err, path, "cannot add an array to the zip");
@@ -440,8 +477,8 @@ rs_status rs_geo_pixel_bands_write_npz(const char *path, const rs_geo_pixel_band
         }
         CPLFree(entry);
     }
-    if (!st) st = rs_io_atomic_commit(&a, err);
-    rs_io_atomic_abort(&a);
+    if (!st) st = rs_geo_gdal_output_commit(&a, err);
+    rs_geo_gdal_output_abort(&a);
     CPLPopErrorHandler();
     return st;
 }

@@ -66,6 +66,33 @@ rs_status rs_geo_raster_write( // out
     // in
     const char *path, const rs_llh *origin, const rs_geo_raster *r, rs_err *err);
 
+// ---- files a GDAL driver writes ----
+
+// An output file a GDAL driver (GTiff, GPKG, GeoJSON, /vsizip/) writes, checked to the end. GDAL's
+// drivers do not all check their writes (on a full disk the GeoJSON driver closed a truncated
+// file without an error; GPKG's SQLite said "no such table: gpkg_geometry_columns"): so the
+// driver writes into GDAL's memory file system (/vsimem/, a folder of its own for any side files
+// such as SQLite's journal), and rs_geo_gdal_output_commit writes the finished bytes to `path`
+// through core/rs_io.h's atomic write: every write checked, "disk full writing PATH" on ENOSPC,
+// nothing under `path` unless complete. The whole file is held in memory meanwhile.
+typedef struct {
+    char *vsi_dir;  // owned: "/vsimem/roadside-<pid>-<n>"
+    char *vsi_path; // owned: vsi_dir/<path's file name>: give this to GDAL
+    char *path;     // owned: the final name
+} rs_geo_gdal_output;
+
+// out: *o, to be finished with rs_geo_gdal_output_commit or _abort. Errors: RS_ERR_NOMEM;
+// RS_ERR_IO when `path` is a folder, a device or a FIFO (never replaced).
+rs_status rs_geo_gdal_output_open(rs_geo_gdal_output *o,
+                                  // in
+                                  const char *path, rs_err *err);
+// Writes what GDAL wrote at o->vsi_path to o->path atomically (rs_io_write_file), then frees
+// the memory file and o's strings whatever the outcome. Call after GDALClose. Errors: RS_ERR_IO
+// (nothing was written at vsi_path; the write, naming `path`), RS_ERR_NOMEM.
+rs_status rs_geo_gdal_output_commit(rs_geo_gdal_output *o, rs_err *err);
+// Frees the memory files and o's strings; accepts NULL, a zeroed or a finished o.
+void rs_geo_gdal_output_abort(rs_geo_gdal_output *o);
+
 // An orthophoto read onto the site's grid.
 typedef struct {
     rs_geo_grid grid;

@@ -494,9 +494,13 @@ rs_status rs_pick_server_start(rs_pick_server **out, rs_pick_session *s, const r
     srv->tile = malloc((size_t)RS_GEO_TILE_PX * RS_GEO_TILE_PX * 4);
     snprintf(srv->host, sizeof srv->host, "%s", opt.host);
     rs_status st = RS_OK;
+    const rs_site *site = rs_pick_session_site(s);
+    const rs_camera *cam = &site->cameras[rs_pick_session_camera(s)].camera;
     if (opt.image_path) {
         rs_image img = {0};
-        if ((st = rs_image_read(&img, opt.image_path, err))) {
+        // the camera's size checked against the file's header, before decoding
+        if ((st = cam->width > 0 ? rs_image_read_sized(&img, opt.image_path, cam->width, cam->height, err)
+                                 : rs_image_read(&img, opt.image_path, err))) {
             free(srv);
             return st;
         }
@@ -512,8 +516,6 @@ rs_status rs_pick_server_start(rs_pick_server **out, rs_pick_session *s, const r
         rs_image_free(&img);
         if (!srv->image) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     }
-    const rs_site *site = rs_pick_session_site(s);
-    const rs_camera *cam = &site->cameras[rs_pick_session_camera(s)].camera;
     if (!st && srv->image && cam->width > 0 && (srv->image_w != cam->width || srv->image_h != cam->height))
         st = rs_err_set(err, RS_ERR_INVALID, "%s: the image is %dx%d, camera %s is %dx%d", opt.image_path, srv->image_w,
                         srv->image_h, site->cameras[rs_pick_session_camera(s)].id, cam->width, cam->height);

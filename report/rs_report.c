@@ -4,6 +4,7 @@
 
 #include <ctype.h>
 #include <dirent.h>
+#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -385,7 +386,8 @@ static rs_status load_ortho(struct rs_report_ctx *rep, const rs_report_options *
         rep->ortho_path = strdup(opt->ortho_path);
     } else {
         rep->ortho_path = rs_io_join(rep->site->dir, "ortho.tif");
-        if (rep->ortho_path && access(rep->ortho_path, F_OK) != 0) {
+        struct stat sb; // (a link loop or a FIFO there is read, and refused with its reason)
+        if (rep->ortho_path && lstat(rep->ortho_path, &sb) != 0 && errno == ENOENT) {
             free(rep->ortho_path);
             rep->ortho_path = NULL;
             return RS_OK;

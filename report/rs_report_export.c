@@ -426,16 +426,6 @@ static rs_status write_lanes(vector_out *v, const frame *f, const struct rs_repo
 
 // ---- files ----
 
-// A temporary name next to `path` for a GDAL driver to create (rs_io's atomic temporary, emptied:
-// GDAL's drivers create their files themselves).
-static rs_status temp_for_gdal(rs_io_atomic *a, const char *path, rs_err *err)
-{
-    rs_status st = rs_io_atomic_open(a, path, err);
-    if (!st) st = rs_io_atomic_release(a, err);
-    if (!st && unlink(a->tmp_path) != 0) st = rs_err_set(err, RS_ERR_IO, "%s: cannot prepare", a->tmp_path);
-    return st;
-}
-
 static rs_status write_vector(const char *path, const frame *f, const struct rs_report_ctx *rep,
                               rs_report_export_summary *sum, rs_err *err)
 {
@@ -445,11 +435,11 @@ static rs_status write_vector(const char *path, const frame *f, const struct rs_
         return rs_err_set(err, RS_ERR_INVALID, "%s: expected a .gpkg (GeoPackage) or .geojson file name", path);
     GDALDriverH drv = GDALGetDriverByName(gpkg ? "GPKG" : "GeoJSON");
     if (!drv) return gdal_fail(err, path, gpkg ? "GDAL has no GPKG driver" : "GDAL has no GeoJSON driver");
-    rs_io_atomic a = {0};
-    rs_status st = temp_for_gdal(&a, path, err);
+    rs_geo_gdal_output a = {0};
+    rs_status st = rs_geo_gdal_output_open(&a, path, err);
     vector_out v = {.path = path};
     if (!st) {
-        v.ds = GDALCreate(drv, a.tmp_path, 0, 0, 0, GDT_Unknown, NULL);
+        v.ds = GDALCreate(drv, a.vsi_path, 0, 0, 0, GDT_Unknown, NULL);
         if (!v.ds) st = gdal_fail(err, path, "cannot create");
     }
     if (!st) st = create_layers(&v, f, geojson, err);
@@ -465,8 +455,8 @@ static rs_status write_vector(const char *path, const frame *f, const struct rs_
         GDALClose(v.ds);
         if (CPLGetLastErrorType() >= CE_Failure && !st) st = gdal_fail(err, path, "cannot finish");
     }
-    if (!st) st = rs_io_atomic_commit(&a, err);
-    rs_io_atomic_abort(&a);
+    if (!st) st = rs_geo_gdal_output_commit(&a, err);
+    rs_geo_gdal_output_abort(&a);
     return st;
 }
 

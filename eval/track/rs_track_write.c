@@ -71,12 +71,7 @@ static rs_status write_with(const char *path, const rs_track_tracker *t, const r
     rs_status st = rs_io_atomic_open(&a, path, err);
     if (st == RS_OK) {
         const bool ok = w(a.f, t, llh);
-        if (!ok || ferror(a.f)) {
-            rs_io_atomic_abort(&a);
-            st = ok ? rs_err_set(err, RS_ERR_IO, "%s: write error", path)
-                    : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path);
-        } else
-            st = rs_io_atomic_commit(&a, err);
+        st = rs_io_atomic_finish(&a, ok ? RS_OK : rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", path), err);
     }
     free(llh);
     return st;

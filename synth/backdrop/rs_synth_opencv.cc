@@ -51,6 +51,7 @@ extern "C" rs_status rs_synth_remap(rs_image *dst, const rs_image *src, const fl
 
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <new>
 
@@ -107,11 +108,10 @@ extern "C" rs_status rs_synth_frames_open(rs_synth_frames **frames, const char *
         f->path = path;
         f->done = false;
         // checked first: OpenCV would print warnings about a missing file (the library never
-        // prints); videos through FFmpeg only, without the GStreamer fallback's messages
-        if (FILE *probe = std::fopen(path, "rb"))
-            std::fclose(probe);
-        else
-            return rs_err_set(err, RS_ERR_IO, "%s: cannot open: %s", path, std::strerror(errno));
+        // prints) and wait forever on a FIFO; videos through FFmpeg only, without the GStreamer
+        // fallback's messages
+        const rs_status regular = rs_io_check_regular(path, SIZE_MAX, err);
+        if (regular) return regular;
         f->still = cv::haveImageReader(path);
         if (!f->still && !f->cap.open(path, cv::CAP_FFMPEG))
             return rs_err_set(err, RS_ERR_IO, "%s: cannot open as an image or a video", path);

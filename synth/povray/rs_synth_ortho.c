@@ -116,11 +116,7 @@ rs_status rs_synth_ortho_render(rs_image *image, rs_geo_grid *grid, const char *
             // the sun only matters for the sunny look: high in the south, short shadows; the sky
             // casts none (an orthophoto for picking: 40% less trace time)
             st = rs_synth_twin_world_write(a.f, site, &lanes, opt.weather, 180, 60, opt.marking_width_m, false, err);
-            if (!st)
-                st = rs_io_atomic_commit(&a, err);
-            else
-                rs_io_atomic_abort(&a);
-            if (st) break;
+            if ((st = rs_io_atomic_finish(&a, st, err))) break;
             char w[32], h[32];
             snprintf(w, sizeof w, "+W%d", tw);
             snprintf(h, sizeof h, "+H%d", th);

@@ -199,6 +199,9 @@ rs_status rs_synth_povray_reap(pid_t pid, const char *povray, const char *dir, c
                         "cannot run \"%s\": is POV-Ray 3.7 installed (Debian package "
                         "povray)? Set ROADSIDE_POVRAY to its path",
                         povray);
+    else if (rs_io_disk_full(dir)) // povray says "Fatal error in renderer", not why
+        st = rs_err_set(err, RS_ERR_IO, "disk full writing %s: povray failed (exit %d)", dir,
+                        WIFEXITED(status) ? WEXITSTATUS(status) : -1);
     else
         st = rs_err_set(err, RS_ERR_EXTERNAL, "povray failed in %s (exit %d): %s (see %s)", dir,
                         WIFEXITED(status) ? WEXITSTATUS(status) : -1, last, log ? log : log_name);

@@ -87,11 +87,8 @@ static rs_status job_start(povray_job *j, const char *out_dir, const char *povra
         goto done;
     }
     if ((st = rs_io_atomic_open(&a, pov, err))) goto done;
-    if ((st = rs_synth_scene_write(a.f, j->cam, fxy, ground_normal_enu, ground_offset_m, j->vehicles, j->pass, err))) {
-        rs_io_atomic_abort(&a);
-        goto done;
-    }
-    if ((st = rs_io_atomic_commit(&a, err)) ||
+    st = rs_synth_scene_write(a.f, j->cam, fxy, ground_normal_enu, ground_offset_m, j->vehicles, j->pass, err);
+    if ((st = rs_io_atomic_finish(&a, st, err)) ||
         (st = rs_synth_scene_write_ini(ini, pov, j->cam, j->pass->pass, j->antialias, err)))
         goto done;
     // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a

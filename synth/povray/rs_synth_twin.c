@@ -43,16 +43,9 @@ static rs_status write_twin_scene(const char *pov_path, const rs_synth_povcam *c
             "#version 3.7;\n"
             "global_settings { assumed_gamma 1.0 max_trace_level 5 }\n",
             look);
-    if ((st = rs_synth_povcam_write(f, cam, err)) ||
-        (st = rs_synth_twin_world_write(f, site, lanes, look, sun_az, sun_el, marking_width_m, true, err))) {
-        rs_io_atomic_abort(&a);
-        return st;
-    }
-    if (ferror(f)) {
-        rs_io_atomic_abort(&a);
-        return rs_err_set(err, RS_ERR_IO, "%s: write error", pov_path);
-    }
-    return rs_io_atomic_commit(&a, err);
+    if (!(st = rs_synth_povcam_write(f, cam, err)))
+        st = rs_synth_twin_world_write(f, site, lanes, look, sun_az, sun_el, marking_width_m, true, err);
+    return rs_io_atomic_finish(&a, st, err); // a write error: the commit names its cause
 }
 
 // Runs `povray +Itwin.pov +Otwin.png +W +H ...` in work_dir (rs_synth_povray_run).

@@ -520,6 +520,16 @@ static rs_status run_in(const char *dir, rs_synth_sumo_frames *frames, const rs_
         st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
         goto done;
     }
+    // SUMO reads its file options as comma-separated lists, with no escape: a comma in a path
+    // would become two file names (netconvert: "file 'a' not found")
+    const char *comma = strchr(dir, ',') ? dir : o->osm_path && strchr(o->osm_path, ',') ? o->osm_path : NULL;
+    if (comma) {
+        st = rs_err_set(err, RS_ERR_INVALID,
+                        "%s: contains a comma, which SUMO (netconvert, sumo) reads as a separator between file "
+                        "names: rename or move it",
+                        comma);
+        goto done;
+    }
     remove(log);
     if (o->osm_path) {
         if ((st = write_osm_types(typ, err))) goto done;
