@@ -10,6 +10,7 @@
 #include <strings.h>
 
 #include "core/rs_io.h"
+#include "core/rs_text.h"
 #include "geo/internal/rs_site_internal.h"
 
 static const double DEFAULT_SIGMA_PX = 1.0;
@@ -94,41 +95,12 @@ int rs_site__split_csv(char *s, char **fields, int maxf)
     }
 }
 
-bool rs_site__is_decimal(const char *t)
-{
-    if (*t == '+' || *t == '-') t++;
-    int digits = 0;
-    while (isdigit((unsigned char)*t)) t++, digits++;
-    if (*t == '.')
-        for (t++; isdigit((unsigned char)*t); t++) digits++;
-    if (!digits) return false;
-    if (*t == 'e' || *t == 'E') {
-        t++;
-        if (*t == '+' || *t == '-') t++;
-        if (!isdigit((unsigned char)*t)) return false;
-        while (isdigit((unsigned char)*t)) t++;
-    }
-    return !*t;
-}
-
 static bool parse_csv_number(rs_site__reader *c, int line, const char *field, const char *text, double *out)
 {
-    char *end;
-    double v = strtod(text, &end);
-    if (*text && !*end && !isfinite(v)) {
-        ERR_AT(c, RS_ERR_INVALID, line, field, "not finite ('%s')", text);
-        return false;
-    }
-    if (!rs_site__is_decimal(text)) {
-        const bool hex = strchr(text, 'x') || strchr(text, 'X'), comma = strchr(text, ',');
-        ERR_AT(c, RS_ERR_PARSE, line, field, "not a number ('%.40s')%s", text,
-               hex     ? ": only decimal numbers are read (write 1568, not 0x620)"
-               : comma ? ": a decimal comma? write 812.5, not 812,5"
-                       : "");
-        return false;
-    }
-    *out = v;
-    return true;
+    char why[RS_TEXT_WHY_BYTES];
+    if (rs_text_parse_double(out, why, text)) return true;
+    ERR_AT(c, strncmp(why, "not finite", 10) ? RS_ERR_PARSE : RS_ERR_INVALID, line, field, "%s", why);
+    return false;
 }
 
 enum { COL_LANDMARK, COL_U, COL_V, COL_SIGMA, COL_AT, NCOLS, MAXFIELDS = 32 };
@@ -158,14 +130,6 @@ static bool read_csv_header(rs_site__reader *c, int line, char **fields, int nfi
             return false;
         }
     return true;
-}
-
-// Suggests an id that differs only in case (the commonest mismatch), or NULL.
-static const char *similar_landmark(const rs_site *site, const char *id)
-{
-    for (int i = 0; i < site->Nlandmarks; i++)
-        if (!strcasecmp(site->landmarks[i].id, id)) return site->landmarks[i].id;
-    return NULL;
 }
 
 static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int line, char **fields, const int col[NCOLS])
@@ -209,9 +173,10 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
         }
     }
     if (!ok || !c->landmarks_ok) return;
-    obs.ilandmark = rs_site_find_landmark(c->site, id);
+    obs.ilandmark = rs_index_find(&c->ids, id);
     if (obs.ilandmark < 0) {
-        const char *like = similar_landmark(c->site, id);
+        const int similar = rs_index_find(&c->ids_nocase, id); // differs only in case: the commonest slip
+        const char *like = similar >= 0 ? c->site->landmarks[similar].id : NULL;
         ERR_AT(c, RS_ERR_NOT_FOUND, line, "landmark", "'%s' is not a landmark of landmarks.geojson%s%s%s", id,
                like ? " (ids are case-sensitive: '" : "", like ? like : "", like ? "'?)" : "");
         return;
@@ -229,7 +194,7 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
                rs_site_at_name(obs.at));
         return;
     }
-    if (!rs_site__check_observation(c->r, cam, &obs, c->site)) return;
+    if (!rs_site__check_observation(c->r, cam, &obs, c->site, c->picked)) return;
     rs_site_observation *grown = realloc(cam->observations, (size_t)(cam->Nobservations + 1) * sizeof obs);
     if (!grown) {
         c->r->nomem = true;
@@ -244,21 +209,27 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
     char why[160];
     snprintf(why, sizeof why, "named by cameras[%d].observations in site.json", i);
     c->file = cam->observations_path;
-    char *text = rs_site__read_file(c, why, RS_IO_MAX_FILE_BYTES, NULL);
+    size_t len = 0;
+    char *text = rs_site__read_file(c, why, RS_IO_MAX_FILE_BYTES, &len);
     if (!text) goto done;
-    char *p = text;
-    if (!strncmp(p, "\xEF\xBB\xBF", 3)) p += 3; // UTF-8 byte order mark
-    int line = 0, nheader = 0, col[NCOLS];
+    if (c->landmarks_ok && !c->picked && !(c->picked = calloc((size_t)c->site->Nlandmarks * 3 + 1, sizeof(int)))) {
+        c->r->nomem = true;
+        goto done;
+    }
+    rs_text_lines lines;
+    rs_text_lines_init(&lines, text, len, RS_TEXT_MAX_LINE_BYTES);
+    int nheader = 0, col[NCOLS];
     bool have_header = false;
-    while (*p) {
-        line++;
-        // a line ends at LF, CRLF or a lone CR (spreadsheets on old Macs write CR only)
-        char *eol = p + strcspn(p, "\r\n"), *next = eol;
-        if (*next == '\r') next++;
-        if (*next == '\n') next++;
-        *eol = '\0';
-        char *s = p;
-        p = next;
+    for (;;) {
+        char *s = NULL;
+        rs_err e = {0};
+        if (rs_text_next_line(&s, &lines, NULL, &e) != RS_OK) {
+            // the rest of the file is not read: refused, never silently cut short
+            ERR_AT(c, e.status, lines.line, NULL, "%s; the lines after it were not read", e.msg);
+            goto done;
+        }
+        if (!s) break;
+        const int line = lines.line;
         while (isspace((unsigned char)*s)) s++;
         if (!*s || *s == '#') continue; // blank lines and comments
         char *fields[MAXFIELDS];
@@ -285,6 +256,10 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
     else if (c->landmarks_ok)
         rs_site__check_camera(c->r, cam, c->site);
 done:
+    // the next camera starts with no picks recorded
+    for (int k = 0; c->picked && k < cam->Nobservations; k++)
+        c->picked[3 * cam->observations[k].ilandmark] = c->picked[3 * cam->observations[k].ilandmark + 1] =
+            c->picked[3 * cam->observations[k].ilandmark + 2] = 0;
     free(text);
     c->file = NULL;
 }
