@@ -245,8 +245,8 @@ rs_status rs_lanes_read(rs_lanes *lanes, const char *path, const rs_site *site, 
         if ((st = read_lane(&lanes->lane[i], f, i, path, site, err))) goto done;
     }
     // ids through a sorted index (50,000 lanes took 18 s pairwise); the first repeat in file order
-    if ((st = rs_index_init_strided(&ids, (const char *const *)&lanes->lane[0].id, sizeof *lanes->lane, lanes->N,
-                                    false, err)))
+    if ((st = rs_index_init_strided(&ids, (const char *const *)&lanes->lane[0].id, sizeof *lanes->lane, lanes->N, false,
+                                    err)))
         goto done;
     for (i = 0; i < lanes->N; i++) {
         const int dup = rs_index_find(&ids, lanes->lane[i].id);
