@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "core/rs_io.h"
 #include "core/rs_units.h"
@@ -382,11 +383,15 @@ void rs_site__check_site(rs_site__report *r, const rs_site *site)
     check_coincident(r, site, landmarks_path);
     for (int j = 1; j < site->Ncameras; j++)
         for (int i = 0; i < j; i++) {
-            if (strcmp(site->cameras[i].id, site->cameras[j].id)) continue;
+            // without case: "Cam1" and "cam1" name one file on a case-insensitive file system
+            if (strcasecmp(site->cameras[i].id, site->cameras[j].id)) continue;
             char field[64];
             snprintf(field, sizeof field, "cameras[%d].id", j);
+            const bool same = !strcmp(site->cameras[i].id, site->cameras[j].id);
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, site_path, 0, -1, NULL, field,
-                          "duplicate camera id '%s' (already used by cameras[%d])", site->cameras[j].id, i);
+                          "duplicate camera id '%s' (already used by cameras[%d]%s%s%s)", site->cameras[j].id, i,
+                          same ? "" : " as '", same ? "" : site->cameras[i].id,
+                          same ? "" : "': camera ids are compared without case, as their files are on some disks");
             break;
         }
 done:

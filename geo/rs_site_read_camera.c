@@ -23,8 +23,40 @@ static void camera_error(rs_site__reader *c, const rs_site_camera *cam, const rs
 {
     if (e->status == RS_ERR_NOMEM) c->r->nomem = true;
     size_t n = strlen(cam->model_path);
-    const char *what = strncmp(e->msg, cam->model_path, n) ? e->msg : e->msg + n + (e->msg[n] == ':' ? 2 : 0);
-    ERR(c, e->status, NULL, "%s", what);
+    const char *what = strncmp(e->msg, cam->model_path, n) || e->msg[n] != ':' ? e->msg : e->msg + n + 1;
+    // "PATH:LINE: what" names a line: the diagnostic's own (not "PATH: : what")
+    char *after = NULL;
+    const long line = what != e->msg && isdigit((unsigned char)*what) ? strtol(what, &after, 10) : 0;
+    if (after && *after == ':' && line > 0 && line < 1000000000) what = after + 1;
+    while (*what == ' ') what++;
+    ERR_AT(c, e->status, after && *after == ':' ? (int)line : 0, NULL, "%s", what);
+}
+
+// Whether cam's intrinsics are in the ranges calib can use (geo/rs_site.h RS_SITE_FOCAL_*,
+// RS_SITE_DISTORTION_MAX); each one outside is reported with its range.
+static void check_intrinsics(rs_site__reader *c, const rs_site_camera *cam)
+{
+    const rs_camera *k = &cam->camera;
+    mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(&k->lensmodel);
+    if (!meta.has_core || k->Nintrinsics < 4 || k->width <= 0 || k->height <= 0) return;
+    static const char *const core_names[4] = {"fx", "fy", "cx", "cy"};
+    const double W = k->width, H = k->height;
+    const double lo[4] = {RS_SITE_FOCAL_MIN_W * W, RS_SITE_FOCAL_MIN_W * W, -W / 2, -H / 2},
+                 hi[4] = {RS_SITE_FOCAL_MAX_W * W, RS_SITE_FOCAL_MAX_W * W, 1.5 * W, 1.5 * H};
+    for (int j = 0; j < 4; j++)
+        if (!(k->intrinsics[j] >= lo[j] && k->intrinsics[j] <= hi[j]))
+            ERR(c, RS_ERR_INVALID, core_names[j], "%g px is outside [%g, %g] px for a %dx%d image%s", k->intrinsics[j],
+                lo[j], hi[j], k->width, k->height,
+                j < 2 ? ": a focal length from 0.05 to 100 image widths"
+                      : ": the principal point within half an image of it");
+    const bool opencv = k->lensmodel.type >= MRCAL_LENSMODEL_OPENCV4 && k->lensmodel.type <= MRCAL_LENSMODEL_OPENCV12;
+    for (int j = 4; opencv && j < k->Nintrinsics; j++)
+        if (!(fabs(k->intrinsics[j]) <= RS_SITE_DISTORTION_MAX)) {
+            char field[48];
+            snprintf(field, sizeof field, "distortion[%d]", j - 4);
+            ERR(c, RS_ERR_INVALID, field, "%g is outside [-%g, %g]: no lens distorts that much", k->intrinsics[j],
+                RS_SITE_DISTORTION_MAX, RS_SITE_DISTORTION_MAX);
+        }
 }
 
 void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
@@ -41,7 +73,8 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
         else if (cam->camera.width == 0 || cam->camera.height == 0) {
             ERR(c, RS_ERR_PARSE, cam->camera.width == 0 ? "image_width" : "image_height", "missing");
             rs_camera_free(&cam->camera);
-        }
+        } else
+            check_intrinsics(c, cam);
         goto done;
     }
     size_t len = 0;
@@ -53,8 +86,10 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
         ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
     else if (rs_camera_read_cameramodel_text(&cam->camera, text, len, cam->model_path, &e))
         camera_error(c, cam, &e);
-    else
+    else {
         memset(cam->camera.rt_cam_enu, 0, sizeof cam->camera.rt_cam_enu); // intrinsics only
+        check_intrinsics(c, cam);
+    }
     free(text);
 done:
     c->file = NULL;

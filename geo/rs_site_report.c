@@ -2,6 +2,7 @@
 // rs_site_report_free and rs_site_diag_format), and the reader's context that files them at the
 // file, feature and line being read, including reading a site file with its problems reported.
 // The bottom of the reader's layers (geo/internal/rs_site_internal.h): calls only core/.
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -161,9 +162,16 @@ bool rs_site__file_exists(rs_site__reader *c, const char *why)
                           "followed); refused unread",
                           c->file, why);
         free(site_json);
-    } else if (stat(c->file, &sb) != 0)
-        ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
-    else if (S_ISDIR(sb.st_mode))
+    } else if (stat(c->file, &sb) != 0) {
+        const int e = errno;
+        if (e == ENOENT)
+            ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
+        else if (e == ELOOP)
+            ERR(c, RS_ERR_IO, NULL, "a loop of symbolic links (one leads back to another): no file at its end (%s)",
+                why);
+        else
+            ERR(c, RS_ERR_IO, NULL, "cannot be read: %s (%s)", strerror(e), why);
+    } else if (S_ISDIR(sb.st_mode))
         ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
     else
         return true;
