@@ -17,6 +17,7 @@
 
 #include "core/rs_image.h"
 #include "core/rs_io.h"
+#include "core/rs_json.h"
 #include "geo/rs_lanes.h"
 #include "pick/internal/rs_pick_internal.h"
 #include "pick/rs_pick.h"
@@ -148,24 +149,31 @@ static unsigned status_of(rs_status st)
     }
 }
 
+rs_status rs_pick_request_parse(cJSON **obj, const char *body, size_t len, rs_err *err)
+{
+    *obj = NULL;
+    if (memchr(body, '\0', len)) return rs_err_set(err, RS_ERR_PARSE, "the body holds a NUL byte: not JSON text");
+    rs_err e = {0};
+    if (rs_json_parse(obj, body, 0, len, "the body", &e) != RS_OK)
+        return rs_err_set(err, RS_ERR_PARSE, "the body is not a JSON object: %s", e.msg);
+    if (!cJSON_IsObject(*obj)) {
+        cJSON_Delete(*obj);
+        *obj = NULL;
+        return rs_err_set(err, RS_ERR_PARSE, "the body is not a JSON object");
+    }
+    return RS_OK;
+}
+
 static enum MHD_Result post(struct MHD_Connection *c, rs_pick_server *srv, const char *url, const request *rq)
 {
     // exactly application/json, parameters (charset) allowed: not application/jsonx
     const char *ct = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
     if (!ct || strncasecmp(ct, "application/json", 16) != 0 || (ct[16] && !strchr(" \t;", ct[16])))
         return send_error(c, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, "the body must be application/json");
-    // one JSON object and nothing after it but blanks; no NUL inside
-    const char *body = rq->body ? rq->body : "", *end = NULL;
-    if (memchr(body, '\0', rq->len))
-        return send_error(c, MHD_HTTP_BAD_REQUEST, "the body holds a NUL byte: not JSON text");
-    cJSON *o = cJSON_ParseWithLengthOpts(body, rq->len, &end, false);
-    if (o && end) end += strspn(end, " \t\r\n");
-    if (!o || !cJSON_IsObject(o) || !end || end != body + rq->len) {
-        const bool trailing = o && cJSON_IsObject(o);
-        cJSON_Delete(o);
-        return send_error(c, MHD_HTTP_BAD_REQUEST, "the body is not a JSON object%s",
-                          trailing ? ": text follows it" : "");
-    }
+    cJSON *o = NULL;
+    rs_err perr = {0};
+    if (rs_pick_request_parse(&o, rq->body ? rq->body : "", rq->len, &perr))
+        return send_error(c, MHD_HTTP_BAD_REQUEST, "%s", perr.msg);
     rs_err err = {0};
     rs_status st = RS_OK;
     char added[32] = "";

@@ -161,7 +161,7 @@ def mode_strict_json(tmp):
             st, text = request(port, "POST", "/api/undo", body)
             check(st == want, f"body {body!r}: {st} (want {want}) {text[:120]!r}")
         st, text = request(port, "POST", "/api/pick", b'{"landmark": "L008", "u": 100, "v": 200} trailing')
-        check(st == 400 and b"text follows it" in text, f"a pick with trailing text: {st} {text[:120]!r}")
+        check(st == 400 and b"unexpected text after" in text, f"a pick with trailing text: {st} {text[:120]!r}")
     finally:
         srv.stop()
 
