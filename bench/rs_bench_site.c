@@ -26,7 +26,23 @@ static double now_s(void)
 }
 
 // The site of rs_bench_site.h in dir (created).
-static rs_status write_site(const char *dir, int N, uint64_t seed, rs_err *err)
+// The camera's observations: Npicks picks of landmarks 2.. on a grid over the image, then
+// Nunknown rows of ids no landmark has.
+static rs_status write_picks(const char *csv, int Npicks, int Nunknown, rs_err *err)
+{
+    const size_t cap = 32 + (size_t)(Npicks + Nunknown) * 40;
+    char *text = malloc(cap);
+    if (!text) return rs_err_set(err, RS_ERR_NOMEM, "bench site: out of memory");
+    size_t n = (size_t)snprintf(text, cap, "landmark,u,v\n");
+    for (int k = 0; k < Npicks + Nunknown; k++)
+        n += (size_t)snprintf(text + n, cap - n, "%c%07d,%.2f,%.2f\n", k < Npicks ? 'L' : 'X', k, 10 + (k % 1900) * 1.0,
+                              10 + (k / 1900 % 1060) * 1.0);
+    const rs_status st = rs_io_write_file(csv, text, n, err);
+    free(text);
+    return st;
+}
+
+static rs_status write_site(const char *dir, int N, int Npicks, int Nunknown, uint64_t seed, rs_err *err)
 {
     const rs_llh origin = {48.137, 11.575, 520.0};
     rs_site_landmark *l = calloc((size_t)N, sizeof *l);
@@ -74,7 +90,8 @@ static rs_status write_site(const char *dir, int N, uint64_t seed, rs_err *err)
     rs_site_observation obs[4];
     for (int k = 0; k < 4; k++)
         obs[k] = (rs_site_observation){.ilandmark = 2 + k, .q_px = {400.0 + 300 * k, 300.0 + 100 * k}, .sigma_px = 1};
-    if (st == RS_OK) st = rs_site_write_observations(csv, obs, 4, l, err);
+    if (st == RS_OK)
+        st = Npicks > 0 ? write_picks(csv, Npicks, Nunknown, err) : rs_site_write_observations(csv, obs, 4, l, err);
     free(cameras), free(observations), free(model), free(csv);
     free(l), free(p), free(llh), free(ids);
     return st;
@@ -105,7 +122,7 @@ typedef struct {
     rs_status st;
 } child_result;
 
-static child_result check_in_child(const char *dir, int N)
+static child_result check_in_child(const char *dir, int N, int Nunknown)
 {
     child_result r = {.st = RS_OK};
     const double t0 = now_s();
@@ -123,26 +140,33 @@ static child_result check_in_child(const char *dir, int N)
         snprintf(dup_id, sizeof dup_id, "L%07d", 0);
         snprintf(coincident_id, sizeof coincident_id, "L%07d", N - 2);
         bool dup = false, coincident = false;
+        int unknown = 0;
         for (int i = 0; i < rep->N; i++) {
             const rs_site_diag *d = &rep->diags[i];
             const bool is_id = d->feature_id && d->feature == N - 1 && !strcmp(d->feature_id, dup_id);
             const bool is_pos = d->feature_id && d->feature == N - 2 && !strcmp(d->feature_id, coincident_id);
+            unknown += d->severity == RS_SITE_ERROR && d->field && !strcmp(d->field, "landmark") &&
+                       strstr(d->message, "is not a landmark");
             dup = dup || (d->severity == RS_SITE_ERROR && is_id && strstr(d->message, "duplicate id"));
             coincident =
                 coincident || (d->severity == RS_SITE_WARNING && is_pos && strstr(d->message, "same position"));
         }
         r.Nerrors = rep->Nerrors, r.Nwarnings = rep->Nwarnings;
-        r.found = dup && coincident && rep->Nerrors == 1 && rep->Nwarnings == 1;
+        r.found = dup && coincident && unknown == Nunknown && rep->Nerrors == 1 + Nunknown && rep->Nwarnings == 1;
         rs_site_report_free(rep);
     }
     return r;
 }
 
-rs_status rs_bench_site_run(rs_bench_site_row *row, int N, uint64_t seed, const char *work_dir, rs_err *err)
+rs_status rs_bench_site_run(rs_bench_site_row *row, int N, int Npicks, int Nunknown, uint64_t seed,
+                            const char *work_dir, rs_err *err)
 {
     memset(row, 0, sizeof *row);
     row->Nlandmarks = N;
+    row->Npicks = Npicks > 0 ? Npicks : 4, row->Nunknown = Npicks > 0 ? Nunknown : 0;
     if (N < 4) return rs_err_set(err, RS_ERR_USAGE, "bench site: at least 4 landmarks");
+    if (Npicks > N - 1 || Npicks < 0 || Nunknown < 0)
+        return rs_err_set(err, RS_ERR_USAGE, "bench site: %d picks of %d landmarks: at most N - 1", Npicks, N);
     char name[64];
     snprintf(name, sizeof name, "site-%d", N);
     char *dir = rs_io_join(work_dir, name), *geojson = dir ? rs_io_join(dir, RS_SITE_LANDMARKS) : NULL;
@@ -158,7 +182,9 @@ rs_status rs_bench_site_run(rs_bench_site_row *row, int N, uint64_t seed, const 
     if (writer < 0) st = rs_err_set(err, RS_ERR_IO, "bench site: cannot fork");
     if (writer == 0) {
         rs_err e = {0};
-        _exit(write_site(dir, N, seed, &e) == RS_OK ? 0 : (fprintf(stderr, "bench site: %s\n", e.msg), 1));
+        _exit(write_site(dir, N, Npicks, row->Nunknown, seed, &e) == RS_OK
+                  ? 0
+                  : (fprintf(stderr, "bench site: %s\n", e.msg), 1));
     }
     int wstatus = 0;
     if (writer > 0 && (waitpid(writer, &wstatus, 0) != writer || !WIFEXITED(wstatus) || WEXITSTATUS(wstatus)))
@@ -172,7 +198,7 @@ rs_status rs_bench_site_run(rs_bench_site_row *row, int N, uint64_t seed, const 
     if (st == RS_OK && pid < 0) st = rs_err_set(err, RS_ERR_IO, "bench site: cannot fork");
     if (pid == 0) { // the child: check, send the figures, leave without running atexit handlers
         close(fd[0]);
-        child_result r = check_in_child(dir, N);
+        child_result r = check_in_child(dir, N, row->Nunknown);
         const ssize_t n = write(fd[1], &r, sizeof r);
         _exit(n == (ssize_t)sizeof r ? 0 : 1);
     }

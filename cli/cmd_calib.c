@@ -11,6 +11,7 @@
 #include "calib/rs_calib_site.h"
 #include "cli/rs_cli.h"
 #include "core/rs_io.h"
+#include "core/rs_text.h"
 #include "geo/rs_site.h"
 
 static const char calib_usage[] =
@@ -319,28 +320,44 @@ int rs_cli_locate(int argc, char **argv)
     if (npos == 2) {
         ok = locate_one(site, &cam, q, "argument");
     } else {
-        char line[1024];
+        // one line per point; the whole line or an error (core/rs_text.h: a NUL byte, a line over
+        // RS_TEXT_MAX_LINE_BYTES, a number that is not decimal), never half of it
+        char *line = NULL;
+        size_t cap = 0;
         int lineno = 0;
-        while (fgets(line, sizeof line, stdin)) {
-            lineno++;
-            char *s = line;
-            while (*s == ' ' || *s == '\t') s++;
-            if (*s == '#' || *s == '\n' || *s == '\0') continue;
-            char where[64];
+        for (bool more = true; more;) {
+            rs_err e = {0};
+            if (rs_text_read_line(&line, &cap, &more, &lineno, stdin, RS_TEXT_MAX_LINE_BYTES, "<stdin>", &e)) {
+                fprintf(stderr, "roadside locate: %s\n", e.msg);
+                ok = false;
+                if (e.status == RS_ERR_NOMEM || e.status == RS_ERR_IO) break;
+                continue;
+            }
+            if (!more) break;
+            char *save = NULL, *field[3] = {NULL, NULL, NULL};
+            int n = 0;
+            for (char *tok = strtok_r(line, " \t", &save); tok && n < 3; tok = strtok_r(NULL, " \t", &save))
+                field[n++] = tok;
+            if (n == 0 || field[0][0] == '#') continue;
+            char where[64], why[2][RS_TEXT_WHY_BYTES] = {"", ""};
             snprintf(where, sizeof where, "<stdin>:%d", lineno);
-            char *end;
-            errno = 0;
-            q[0] = strtod(s, &end);
-            char *end2;
-            q[1] = strtod(end, &end2);
-            while (*end2 == ' ' || *end2 == '\t' || *end2 == '\r' || *end2 == '\n') end2++;
-            if (end == s || end2 == end || *end2 != '\0' || !isfinite(q[0]) || !isfinite(q[1])) {
-                fprintf(stderr, "roadside locate: %s: expected 'u v' (two finite numbers)\n", where);
+            if (n != 2) {
+                fprintf(stderr, "roadside locate: %s: expected 'u v' (two numbers), found %s\n", where,
+                        n < 2 ? "one" : "more");
+                ok = false;
+                continue;
+            }
+            const bool u_ok = rs_text_parse_double(&q[0], why[0], field[0]);
+            const bool v_ok = rs_text_parse_double(&q[1], why[1], field[1]);
+            if (!u_ok || !v_ok) {
+                fprintf(stderr, "roadside locate: %s: %s: %s (expected 'u v', two decimal numbers)\n", where,
+                        u_ok ? "v" : "u", u_ok ? why[1] : why[0]);
                 ok = false;
                 continue;
             }
             ok &= locate_one(site, &cam, q, where);
         }
+        free(line);
     }
     rs_camera_free(&cam);
     rs_site_free(site);

@@ -57,14 +57,16 @@ static void usage(FILE *out, const rs_simulate_site_options *d)
             "                            ground: surveyed, unreliable or unknown (written [lon, lat]);\n"
             "                            those above it then say \"height\": \"surveyed\" and their\n"
             "                            above_ground_m (docs/site-format.md) [not written]\n"
-            "  --force                   replace DIR if it already holds a site\n"
+            "  --force                   replace DIR if it holds a site this command wrote and\n"
+            "                            nothing else (its .roadside-simulated record lists the files)\n"
             "\n"
             "A site of only poles and lines: --points 0 --poles N --lines M. Their picks' truth (the\n"
             "true point picked) is in truth/picks.csv, their true geometry in truth/vertices_enu.csv.\n"
             "\n"
             "With zero noise the site still declares sigmas of 1 mm and 0.01 px (a site needs\n"
             "sigmas > 0); site.json's \"simulated\" records the noise actually drawn.\n"
-            "DIR must not exist, be empty, or (with --force) hold a site. The site is built in a\n"
+            "DIR must not exist, be empty, or (with --force) hold a simulated site: a surveyor's site,\n"
+            "or a simulated one with files added, is never replaced. The site is built in a\n"
             "hidden sibling folder and renamed into place, so a failure never leaves half a site.\n"
             "Exit status: 0 written, 1 failed (nothing written), 2 bad arguments.\n",
             d->Ncameras, d->landmarks_per_camera, d->lensmodel, d->width_px, d->height_px, d->hfov_deg,

@@ -16,6 +16,7 @@
 #include "core/rs_io.h"
 #include "core/rs_lens.h"
 #include "core/rs_pose.h"
+#include "core/rs_text.h"
 
 #define MAX_IMAGE_SIDE_PX 1000000
 
@@ -357,8 +358,41 @@ static bool json_sides_ok(const cJSON *j)
     return true;
 }
 
+// image_width and image_height as written: OpenCV reads an integer into an int, so 2^40 came out
+// as 0 ("image_width: 0 is not ..."); the number as the file writes it is checked here first.
+static rs_status opencv_size_text_check(const char *text, const char *path, rs_err *err)
+{
+    static const char *const keys[2] = {"image_width", "image_height"};
+    for (int k = 0; k < 2; k++) {
+        const size_t n = strlen(keys[k]);
+        for (const char *p = strstr(text, keys[k]); p; p = strstr(p + n, keys[k])) {
+            const char *q = p + n;
+            if (p > text && !strchr("\n\"{ \t,", p[-1])) continue; // part of a longer name
+            if (*q == '"') q++;
+            while (*q == ' ' || *q == '\t') q++;
+            if (*q != ':') continue;
+            for (q++; *q == ' ' || *q == '\t'; q++) {}
+            char token[48];
+            size_t t = strcspn(q, " \t\r\n,}#");
+            if (t == 0 || t >= sizeof token || !strchr("+-0123456789.", *q)) break; // OpenCV's to judge
+            memcpy(token, q, t);
+            token[t] = '\0';
+            long long v;
+            char why[RS_TEXT_WHY_BYTES];
+            if (!rs_text_parse_integer(&v, why, token, 1, 1000000))
+                return rs_err_set(err, RS_ERR_INVALID,
+                                  "%s: %s: %s (a positive whole number of pixels, at most 1000000)", path, keys[k],
+                                  why);
+            break;
+        }
+    }
+    return RS_OK;
+}
+
 static rs_status opencv_text_check(const char *text, size_t len, const char *path, rs_err *err)
 {
+    rs_status st = opencv_size_text_check(text, path, err);
+    if (st) return st;
     if (rs_io_has_extension(path, "json")) {
         cJSON *j = cJSON_ParseWithLength(text, len);
         const bool ok = j && json_sides_ok(j);
@@ -369,9 +403,11 @@ static rs_status opencv_text_check(const char *text, size_t len, const char *pat
     }
     int line = 0;
     const char *bad = opencv_yaml_problem(text, len, &line);
-    return bad ? rs_err_set(err, RS_ERR_PARSE, "%s:%d: not OpenCV YAML as cv::FileStorage writes it: %s", path, line,
-                            bad)
-               : RS_OK;
+    if (!bad) return RS_OK;
+    if (line > 0)
+        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: not OpenCV YAML as cv::FileStorage writes it: %s", path, line,
+                          bad);
+    return rs_err_set(err, RS_ERR_PARSE, "%s: not OpenCV YAML as cv::FileStorage writes it: %s", path, bad);
 }
 
 // A number member of a JSON object into *out: false when absent; an error when not a finite number.

@@ -424,6 +424,17 @@ const char *rs_io_name_problem(const char *name)
     for (const unsigned char *p = (const unsigned char *)name; *p; p++) {
         if (*p < 0x20 || *p == 0x7f) return "contains a control character (a newline, a tab, ...)";
         if (*p == '/' || *p == '\\') return "contains a path separator ('/' or '\\')";
+        // UTF-8 of U+0080..U+009F (C1 controls) and of the invisible format characters that
+        // reorder or hide text: U+061C, U+200B..U+200F, U+202A..U+202E, U+2060..U+206F, U+FEFF
+        const unsigned cp = p[0] == 0xC2 && p[1] >= 0x80 && p[1] <= 0x9F   ? 0x80u + (p[1] - 0x80u)
+                            : p[0] == 0xD8 && p[1] == 0x9C                 ? 0x61Cu
+                            : p[0] == 0xE2 && p[1] == 0x80                 ? 0x2000u + (p[2] & 0x3Fu)
+                            : p[0] == 0xE2 && p[1] == 0x81                 ? 0x2040u + (p[2] & 0x3Fu)
+                            : p[0] == 0xEF && p[1] == 0xBB && p[2] == 0xBF ? 0xFEFFu
+                                                                           : 0;
+        if ((cp >= 0x80 && cp <= 0x9F) || cp == 0x61C || (cp >= 0x200B && cp <= 0x200F) ||
+            (cp >= 0x202A && cp <= 0x202E) || (cp >= 0x2060 && cp <= 0x206F) || cp == 0xFEFF)
+            return "contains an invisible control character (a bidirectional override, a zero-width space, ...)";
     }
     if (strstr(name, "..")) return "contains \"..\"";
     if (name[0] == ' ' || name[n - 1] == ' ') return "begins or ends with a blank";

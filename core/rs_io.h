@@ -100,8 +100,9 @@ char *rs_io_join(const char *dir, const char *rel);
 bool rs_io_has_extension(const char *path, const char *ext);
 
 // The one rule for a name that becomes part of a file name or a table row (camera and landmark
-// ids): 1..64 bytes, no control character (bytes below 0x20, and 0x7f), no '/' or '\\', no ".."
-// anywhere, no blank at either end. Returns NULL when `name` follows it, else what is wrong
+// ids): 1..64 bytes, no control character (bytes below 0x20, and 0x7f; C1 controls and the
+// invisible format characters that reorder or hide text: bidirectional overrides and isolates,
+// zero-width spaces and joiners, U+FEFF), no '/' or '\\', no ".." anywhere, no blank at either end. Returns NULL when `name` follows it, else what is wrong
 // (a static string: "is empty", "contains '/'", ...). UTF-8 letters are allowed.
 const char *rs_io_name_problem(const char *name);
 

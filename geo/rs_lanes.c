@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rs_index.h"
 #include "core/rs_io.h"
 #include "core/rs_units.h"
 #include "geo/internal/rs_site_json.h"
@@ -183,15 +184,9 @@ done:
     return st;
 }
 
-static int find_lane(const rs_lanes *lanes, const char *id)
-{
-    for (int i = 0; i < lanes->N; i++)
-        if (!strcmp(lanes->lane[i].id, id)) return i;
-    return -1;
-}
-
-// Resolves every lane's "next" ids into indices.
-static rs_status resolve_next(rs_lanes *lanes, const cJSON *features, const char *path, rs_err *err)
+// Resolves every lane's "next" ids into indices, through ids (the lanes by id: O(log N) each).
+static rs_status resolve_next(rs_lanes *lanes, const rs_index *ids, const cJSON *features, const char *path,
+                              rs_err *err)
 {
     int i = 0;
     for (const cJSON *f = features->child; f; f = f->next, i++) {
@@ -207,7 +202,7 @@ static rs_status resolve_next(rs_lanes *lanes, const cJSON *features, const char
         for (const cJSON *x = next->child; x; x = x->next) {
             if (!cJSON_IsString(x))
                 return LANE_FAIL(RS_ERR_PARSE, "properties.next", "not a list of lane ids", path, i, lane->id);
-            int j = find_lane(lanes, x->valuestring);
+            int j = rs_index_find(ids, x->valuestring);
             if (j < 0)
                 return LANE_FAIL(RS_ERR_NOT_FOUND, "properties.next", "'%s' is not a lane of this file", path, i,
                                  lane->id, x->valuestring);
@@ -222,6 +217,7 @@ rs_status rs_lanes_read(rs_lanes *lanes, const char *path, const rs_site *site, 
 {
     lanes->lane = NULL;
     lanes->N = 0;
+    rs_index ids = {0};
     char *text = NULL;
     rs_status st = rs_io_read_file(&text, NULL, path, err);
     if (st) return st;
@@ -247,15 +243,22 @@ rs_status rs_lanes_read(rs_lanes *lanes, const char *path, const rs_site *site, 
     for (const cJSON *f = features->child; f; f = f->next, i++) {
         lanes->N = i + 1;
         if ((st = read_lane(&lanes->lane[i], f, i, path, site, err))) goto done;
-        int dup = find_lane(lanes, lanes->lane[i].id);
+    }
+    // ids through a sorted index (50,000 lanes took 18 s pairwise); the first repeat in file order
+    if ((st = rs_index_init_strided(&ids, (const char *const *)&lanes->lane[0].id, sizeof *lanes->lane, lanes->N, false,
+                                    err)))
+        goto done;
+    for (i = 0; i < lanes->N; i++) {
+        const int dup = rs_index_find(&ids, lanes->lane[i].id);
         if (dup < i) {
             st = rs_err_set(err, RS_ERR_INVALID, "%s: feature %d: properties.id: '%s' is also feature %d's id", path, i,
                             lanes->lane[i].id, dup);
             goto done;
         }
     }
-    st = resolve_next(lanes, features, path, err);
+    st = resolve_next(lanes, &ids, features, path, err);
 done:
+    rs_index_free(&ids);
     cJSON_Delete(j);
     if (st) rs_lanes_free(lanes);
     return st;

@@ -76,21 +76,32 @@ extern "C" {
 // (ellipsoidal or orthometric) is not near the Earth's surface (Dead Sea shore -430 m, geoid
 // -106..+85 m, Everest 8849 m). Landmarks closer than RS_SITE_COINCIDENT_M to each other are
 // reported as coincident (a warning: a copied coordinate, most often).
-#define RS_SITE_SURVEY_SIGMA_MIN_M 1e-3
-#define RS_SITE_SURVEY_SIGMA_MAX_M 100.0
-#define RS_SITE_PIXEL_SIGMA_MIN_PX 1e-2
-#define RS_SITE_PIXEL_SIGMA_MAX_PX 1000.0
-#define RS_SITE_PRIOR_SIGMA_MIN_M  1e-3
-#define RS_SITE_PRIOR_SIGMA_MAX_M  1e5
-#define RS_SITE_HEIGHT_MIN_M       (-1000.0)
-#define RS_SITE_HEIGHT_MAX_M       10000.0
-#define RS_SITE_COINCIDENT_M       1e-3
+#define RS_SITE_SURVEY_SIGMA_MIN_M  1e-3
+#define RS_SITE_SURVEY_SIGMA_MAX_M  100.0
+#define RS_SITE_PIXEL_SIGMA_MIN_PX  1e-2
+#define RS_SITE_PIXEL_SIGMA_MAX_PX  1000.0
+#define RS_SITE_PRIOR_SIGMA_MIN_M   1e-3
+#define RS_SITE_PRIOR_SIGMA_MAX_M   1e5
+#define RS_SITE_HEIGHT_MIN_M        (-1000.0)
+#define RS_SITE_HEIGHT_MAX_M        10000.0
+#define RS_SITE_COINCIDENT_M        1e-3
 // A pole is at most RS_SITE_POLE_HEIGHT_MAX_M tall (a lamp or gantry post; a taller thing is no
 // roadside pole); a line has at most RS_SITE_LINE_VERTICES_MAX vertices (a kerb surveyed every
 // 10 cm over 1 km; split anything longer). Consecutive vertices of a line closer than
 // RS_SITE_COINCIDENT_M make a zero-length segment, an error.
-#define RS_SITE_POLE_HEIGHT_MAX_M  100.0
-#define RS_SITE_LINE_VERTICES_MAX  10000
+#define RS_SITE_POLE_HEIGHT_MAX_M   100.0
+#define RS_SITE_LINE_VERTICES_MAX   10000
+// A camera's intrinsics calib can use (issue 42: focal 1e300, cx = -1e9, k1 = 1e10 passed and calib
+// blamed the observations): a focal length (fx, fy) between RS_SITE_FOCAL_MIN_W and
+// RS_SITE_FOCAL_MAX_W image widths (a 216-degree fisheye is 0.27 W, a 100x telephoto 100 W); a
+// principal point (cx, cy) within half an image of the image ([-W/2, 3W/2] x [-H/2, 3H/2]); an
+// OpenCV distortion coefficient of at most RS_SITE_DISTORTION_MAX in magnitude. A ground plane
+// at most RS_SITE_GROUND_TILT_MAX_DEG from level (the steepest streets are 20 degrees): its
+// normal's up component at least the cosine of that.
+#define RS_SITE_FOCAL_MIN_W         0.05
+#define RS_SITE_FOCAL_MAX_W         100.0
+#define RS_SITE_DISTORTION_MAX      1000.0
+#define RS_SITE_GROUND_TILT_MAX_DEG 45.0
 
 // How far a landmark's height can be trusted: site.json "landmark_heights" (site-wide) and a
 // feature's properties.height (that landmark), docs/site-format.md.

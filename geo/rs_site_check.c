@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "core/rs_io.h"
 #include "core/rs_units.h"
@@ -142,7 +143,7 @@ bool rs_site__check_position(double llh[3], double p_enu_m[3], rs_site__report *
 // ---- observations ----
 
 bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam, const rs_site_observation *obs,
-                                const rs_site *site)
+                                const rs_site *site, int *picked)
 {
     const char *file = cam->observations_path;
     bool ok = true;
@@ -158,20 +159,29 @@ bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam, c
         }
     }
     // a point, a pole's base and a pole's top are each picked at most once; `along` picks repeat
-    for (int i = 0; obs->at != RS_SITE_AT_ALONG && i < cam->Nobservations; i++) {
-        if (cam->observations[i].ilandmark != obs->ilandmark || cam->observations[i].at != obs->at) continue;
-        if (obs->at == RS_SITE_AT_POINT)
-            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "landmark",
-                          "'%s' is observed twice in this camera (first at line %d)",
-                          site->landmarks[obs->ilandmark].id, cam->observations[i].line);
-        else
-            rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "at",
-                          "'%s' is picked at its %s twice in this camera (first at line %d); only 'along' picks "
-                          "may repeat",
-                          site->landmarks[obs->ilandmark].id, rs_site_at_name(obs->at), cam->observations[i].line);
-        ok = false;
-        break;
+    if (obs->at == RS_SITE_AT_ALONG) return ok;
+    const int slot = obs->at == RS_SITE_AT_TOP ? 2 : obs->at == RS_SITE_AT_BASE;
+    int first = 0;
+    if (picked)
+        first = picked[3 * obs->ilandmark + slot];
+    else
+        for (int i = 0; i < cam->Nobservations && !first; i++)
+            if (cam->observations[i].ilandmark == obs->ilandmark && cam->observations[i].at == obs->at)
+                first = cam->observations[i].line > 0 ? cam->observations[i].line : -1;
+    if (!first) {
+        if (picked) picked[3 * obs->ilandmark + slot] = obs->line > 0 ? obs->line : -1;
+        return ok;
     }
+    if (obs->at == RS_SITE_AT_POINT)
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "landmark",
+                      "'%s' is observed twice in this camera (first at line %d)", site->landmarks[obs->ilandmark].id,
+                      first);
+    else
+        rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, file, obs->line, -1, NULL, "at",
+                      "'%s' is picked at its %s twice in this camera (first at line %d); only 'along' picks "
+                      "may repeat",
+                      site->landmarks[obs->ilandmark].id, rs_site_at_name(obs->at), first);
+    return false;
     return ok;
 }
 
@@ -196,29 +206,39 @@ static bool segment_direction(double d[3], const rs_site_landmark *l, int k)
     return true;
 }
 
+static int cmp_int(const void *a, const void *b)
+{
+    const int x = *(const int *)a, y = *(const int *)b;
+    return (x > y) - (x < y);
+}
+
 void rs_site__check_camera(rs_site__report *r, const rs_site_camera *cam, const rs_site *site)
 {
     // Constraints: a pick of a point, a pole's base or top fixes 2 (u and v); an `along` pick 1
     // (its distance to the projected segment or polyline), and the along picks of one landmark at
     // most 2 per straight segment (the image of a straight segment is fixed by 2 numbers).
     int Nconstraints = 0, Nalong = 0, Nfixed = 0;
+    int *along = malloc((size_t)(cam->Nobservations > 0 ? cam->Nobservations : 1) * sizeof *along);
+    if (!along) {
+        r->nomem = true;
+        return;
+    }
     for (int i = 0; i < cam->Nobservations; i++) {
         const rs_site_observation *o = &cam->observations[i];
-        if (o->at != RS_SITE_AT_ALONG) {
+        if (o->at != RS_SITE_AT_ALONG)
             Nconstraints += 2, Nfixed++;
-            continue;
-        }
-        Nalong++;
-        int before = 0; // count each landmark's along picks once, at its first
-        for (int j = 0; j < i && !before; j++)
-            before = cam->observations[j].ilandmark == o->ilandmark && cam->observations[j].at == RS_SITE_AT_ALONG;
-        if (before) continue;
-        int n = 0;
-        for (int j = i; j < cam->Nobservations; j++)
-            n += cam->observations[j].ilandmark == o->ilandmark && cam->observations[j].at == RS_SITE_AT_ALONG;
-        const int most = 2 * segments(&site->landmarks[o->ilandmark]);
-        Nconstraints += n < most ? n : most;
+        else
+            along[Nalong++] = o->ilandmark;
     }
+    // each landmark's along picks counted once: sorted, a run per landmark
+    qsort(along, (size_t)Nalong, sizeof *along, cmp_int);
+    for (int i = 0, n = 1; i < Nalong; i++, n++)
+        if (i + 1 == Nalong || along[i + 1] != along[i]) {
+            const int most = 2 * segments(&site->landmarks[along[i]]);
+            Nconstraints += n < most ? n : most;
+            n = 0;
+        }
+    free(along);
     if (Nalong == 0) {
         if (cam->Nobservations >= MIN_OBSERVATIONS) return;
         rs_site__diag(r, r->picking ? RS_SITE_WARNING : RS_SITE_ERROR, RS_ERR_INVALID, cam->observations_path, 0, -1,
@@ -363,11 +383,15 @@ void rs_site__check_site(rs_site__report *r, const rs_site *site)
     check_coincident(r, site, landmarks_path);
     for (int j = 1; j < site->Ncameras; j++)
         for (int i = 0; i < j; i++) {
-            if (strcmp(site->cameras[i].id, site->cameras[j].id)) continue;
+            // without case: "Cam1" and "cam1" name one file on a case-insensitive file system
+            if (strcasecmp(site->cameras[i].id, site->cameras[j].id)) continue;
             char field[64];
             snprintf(field, sizeof field, "cameras[%d].id", j);
+            const bool same = !strcmp(site->cameras[i].id, site->cameras[j].id);
             rs_site__diag(r, RS_SITE_ERROR, RS_ERR_INVALID, site_path, 0, -1, NULL, field,
-                          "duplicate camera id '%s' (already used by cameras[%d])", site->cameras[j].id, i);
+                          "duplicate camera id '%s' (already used by cameras[%d]%s%s%s)", site->cameras[j].id, i,
+                          same ? "" : " as '", same ? "" : site->cameras[i].id,
+                          same ? "" : "': camera ids are compared without case, as their files are on some disks");
             break;
         }
 done:

@@ -1,6 +1,6 @@
 // rs_site_import_read.c -- the one reader of `site import`'s point files: point-pair JSON and
 // CSVs of lat,lon,u,v / e,n,u,v (geo/internal/rs_site_import_points.h). The CSV's fields and
-// numbers follow the observations CSV's rules (rs_site__split_csv, rs_site__is_decimal).
+// numbers follow the observations CSV's rules (rs_site__split_csv; lines and numbers: core/rs_text.h).
 #include <cjson/cJSON.h>
 #include <ctype.h>
 #include <math.h>
@@ -11,6 +11,7 @@
 
 #include "core/rs_io.h"
 #include "core/rs_json.h"
+#include "core/rs_text.h"
 #include "geo/internal/rs_site_import_points.h"
 #include "geo/internal/rs_site_internal.h"
 
@@ -196,12 +197,10 @@ static rs_status csv_number(double *v, char **f, const int col[NCOLS], int c, in
     const char *t = f[col[c]], *name = column_names[c];
     const int nlen = (int)strcspn(name, "|");
     if (!*t && (c == C_H || c == C_SIGMA || c == C_ID)) return RS_OK;
-    if (!rs_site__is_decimal(t))
-        return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %.*s: not a number ('%.40s')%s", path, line, nlen, name, t,
-                          strchr(t, ',') ? ": a decimal comma? write 12.5, not 12,5" : "");
-    *v = strtod(t, NULL);
-    if (!isfinite(*v))
-        return rs_err_set(err, RS_ERR_INVALID, "%s:%d: %.*s: not finite ('%.40s')", path, line, nlen, name, t);
+    char why[RS_TEXT_WHY_BYTES];
+    if (!rs_text_parse_double(v, why, t))
+        return rs_err_set(err, strncmp(why, "not finite", 10) ? RS_ERR_PARSE : RS_ERR_INVALID, "%s:%d: %.*s: %s", path,
+                          line, nlen, name, why);
     return RS_OK;
 }
 
@@ -223,20 +222,15 @@ static rs_status csv_row(rs_site__import_points *pts, char **f, const int col[NC
     return add_point(pts, p, col[C_ID] >= 0 && *f[col[C_ID]] ? f[col[C_ID]] : id, path, "id", err);
 }
 
-static rs_status read_csv(rs_site__import_points *pts, char *text, const char *path, rs_err *err)
+static rs_status read_csv(rs_site__import_points *pts, char *text, size_t len, const char *path, rs_err *err)
 {
-    char *p = text;
-    if (!strncmp(p, "\xEF\xBB\xBF", 3)) p += 3; // UTF-8 byte order mark
-    int line = 0, nheader = 0, row = 0, col[NCOLS];
+    rs_text_lines lines;
+    rs_text_lines_init(&lines, text, len, RS_TEXT_MAX_LINE_BYTES);
+    int nheader = 0, row = 0, col[NCOLS];
     rs_status st = RS_OK;
-    while (*p && st == RS_OK) {
-        line++;
-        char *eol = p + strcspn(p, "\r\n"), *next = eol; // LF, CRLF or a lone CR
-        if (*next == '\r') next++;
-        if (*next == '\n') next++;
-        *eol = '\0';
-        char *s = p;
-        p = next;
+    char *s;
+    while (st == RS_OK && (st = rs_text_next_line(&s, &lines, path, err)) == RS_OK && s) {
+        const int line = lines.line;
         while (isspace((unsigned char)*s)) s++;
         if (!*s || *s == '#') continue;
         char *f[MAXFIELDS];
@@ -265,7 +259,8 @@ rs_status rs_site__import_read(rs_site__import_points *pts, const char *path, rs
     rs_status st = rs_io_read_file_max(&text, &len, path, RS_IO_MAX_SMALL_FILE_BYTES, err);
     if (st == RS_OK) st = no_nul(text, len, path, err);
     if (st == RS_OK)
-        st = rs_io_has_extension(path, "json") ? read_json(pts, text, len, path, err) : read_csv(pts, text, path, err);
+        st = rs_io_has_extension(path, "json") ? read_json(pts, text, len, path, err)
+                                               : read_csv(pts, text, len, path, err);
     if (st == RS_OK && pts->N < MIN_POINTS)
         st = rs_err_set(err, RS_ERR_INVALID, "%s: %d point%s: a camera needs at least %d", path, pts->N,
                         pts->N == 1 ? "" : "s", MIN_POINTS);

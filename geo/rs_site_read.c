@@ -437,6 +437,12 @@ static void read_landmarks(rs_site__reader *c)
         goto done;
     }
     if (site->Nlandmarks == 0) ERR(c, RS_ERR_INVALID, "features", "empty: add one Point feature per surveyed landmark");
+    // the picks find their landmarks through these (an id lost to a failed allocation is left out)
+    if (site->Nlandmarks > 0 && (rs_index_init_strided(&c->ids, (const char *const *)&site->landmarks[0].id,
+                                                       sizeof *site->landmarks, site->Nlandmarks, false, &e) ||
+                                 rs_index_init_strided(&c->ids_nocase, (const char *const *)&site->landmarks[0].id,
+                                                       sizeof *site->landmarks, site->Nlandmarks, true, &e)))
+        c->r->nomem = true, c->landmarks_ok = false;
 done:
     cJSON_Delete(type);
     for (int k = 0; k < t.Nkeys; k++) free(t.keys[k]);
@@ -475,6 +481,9 @@ static void read_site(rs_site **out, rs_site__report *r, const char *dir)
         if (cam->observations_path) rs_site__read_observations(&c, cam, i);
     }
     rs_site__check_site(r, site);
+    rs_index_free(&c.ids);
+    rs_index_free(&c.ids_nocase);
+    free(c.picked);
     *out = site;
 }
 

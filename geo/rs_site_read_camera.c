@@ -10,6 +10,7 @@
 #include <strings.h>
 
 #include "core/rs_io.h"
+#include "core/rs_text.h"
 #include "geo/internal/rs_site_internal.h"
 
 static const double DEFAULT_SIGMA_PX = 1.0;
@@ -22,8 +23,40 @@ static void camera_error(rs_site__reader *c, const rs_site_camera *cam, const rs
 {
     if (e->status == RS_ERR_NOMEM) c->r->nomem = true;
     size_t n = strlen(cam->model_path);
-    const char *what = strncmp(e->msg, cam->model_path, n) ? e->msg : e->msg + n + (e->msg[n] == ':' ? 2 : 0);
-    ERR(c, e->status, NULL, "%s", what);
+    const char *what = strncmp(e->msg, cam->model_path, n) || e->msg[n] != ':' ? e->msg : e->msg + n + 1;
+    // "PATH:LINE: what" names a line: the diagnostic's own (not "PATH: : what")
+    char *after = NULL;
+    const long line = what != e->msg && isdigit((unsigned char)*what) ? strtol(what, &after, 10) : 0;
+    if (after && *after == ':' && line > 0 && line < 1000000000) what = after + 1;
+    while (*what == ' ') what++;
+    ERR_AT(c, e->status, after && *after == ':' ? (int)line : 0, NULL, "%s", what);
+}
+
+// Whether cam's intrinsics are in the ranges calib can use (geo/rs_site.h RS_SITE_FOCAL_*,
+// RS_SITE_DISTORTION_MAX); each one outside is reported with its range.
+static void check_intrinsics(rs_site__reader *c, const rs_site_camera *cam)
+{
+    const rs_camera *k = &cam->camera;
+    mrcal_lensmodel_metadata_t meta = mrcal_lensmodel_metadata(&k->lensmodel);
+    if (!meta.has_core || k->Nintrinsics < 4 || k->width <= 0 || k->height <= 0) return;
+    static const char *const core_names[4] = {"fx", "fy", "cx", "cy"};
+    const double W = k->width, H = k->height;
+    const double lo[4] = {RS_SITE_FOCAL_MIN_W * W, RS_SITE_FOCAL_MIN_W * W, -W / 2, -H / 2},
+                 hi[4] = {RS_SITE_FOCAL_MAX_W * W, RS_SITE_FOCAL_MAX_W * W, 1.5 * W, 1.5 * H};
+    for (int j = 0; j < 4; j++)
+        if (!(k->intrinsics[j] >= lo[j] && k->intrinsics[j] <= hi[j]))
+            ERR(c, RS_ERR_INVALID, core_names[j], "%g px is outside [%g, %g] px for a %dx%d image%s", k->intrinsics[j],
+                lo[j], hi[j], k->width, k->height,
+                j < 2 ? ": a focal length from 0.05 to 100 image widths"
+                      : ": the principal point within half an image of it");
+    const bool opencv = k->lensmodel.type >= MRCAL_LENSMODEL_OPENCV4 && k->lensmodel.type <= MRCAL_LENSMODEL_OPENCV12;
+    for (int j = 4; opencv && j < k->Nintrinsics; j++)
+        if (!(fabs(k->intrinsics[j]) <= RS_SITE_DISTORTION_MAX)) {
+            char field[48];
+            snprintf(field, sizeof field, "distortion[%d]", j - 4);
+            ERR(c, RS_ERR_INVALID, field, "%g is outside [-%g, %g]: no lens distorts that much", k->intrinsics[j],
+                RS_SITE_DISTORTION_MAX, RS_SITE_DISTORTION_MAX);
+        }
 }
 
 void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
@@ -40,7 +73,8 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
         else if (cam->camera.width == 0 || cam->camera.height == 0) {
             ERR(c, RS_ERR_PARSE, cam->camera.width == 0 ? "image_width" : "image_height", "missing");
             rs_camera_free(&cam->camera);
-        }
+        } else
+            check_intrinsics(c, cam);
         goto done;
     }
     size_t len = 0;
@@ -52,8 +86,10 @@ void rs_site__read_camera_model(rs_site__reader *c, rs_site_camera *cam, int i)
         ERR_AT(c, RS_ERR_PARSE, line, NULL, "not a valid mrcal .cameramodel: %s", bad);
     else if (rs_camera_read_cameramodel_text(&cam->camera, text, len, cam->model_path, &e))
         camera_error(c, cam, &e);
-    else
+    else {
         memset(cam->camera.rt_cam_enu, 0, sizeof cam->camera.rt_cam_enu); // intrinsics only
+        check_intrinsics(c, cam);
+    }
     free(text);
 done:
     c->file = NULL;
@@ -94,41 +130,12 @@ int rs_site__split_csv(char *s, char **fields, int maxf)
     }
 }
 
-bool rs_site__is_decimal(const char *t)
-{
-    if (*t == '+' || *t == '-') t++;
-    int digits = 0;
-    while (isdigit((unsigned char)*t)) t++, digits++;
-    if (*t == '.')
-        for (t++; isdigit((unsigned char)*t); t++) digits++;
-    if (!digits) return false;
-    if (*t == 'e' || *t == 'E') {
-        t++;
-        if (*t == '+' || *t == '-') t++;
-        if (!isdigit((unsigned char)*t)) return false;
-        while (isdigit((unsigned char)*t)) t++;
-    }
-    return !*t;
-}
-
 static bool parse_csv_number(rs_site__reader *c, int line, const char *field, const char *text, double *out)
 {
-    char *end;
-    double v = strtod(text, &end);
-    if (*text && !*end && !isfinite(v)) {
-        ERR_AT(c, RS_ERR_INVALID, line, field, "not finite ('%s')", text);
-        return false;
-    }
-    if (!rs_site__is_decimal(text)) {
-        const bool hex = strchr(text, 'x') || strchr(text, 'X'), comma = strchr(text, ',');
-        ERR_AT(c, RS_ERR_PARSE, line, field, "not a number ('%.40s')%s", text,
-               hex     ? ": only decimal numbers are read (write 1568, not 0x620)"
-               : comma ? ": a decimal comma? write 812.5, not 812,5"
-                       : "");
-        return false;
-    }
-    *out = v;
-    return true;
+    char why[RS_TEXT_WHY_BYTES];
+    if (rs_text_parse_double(out, why, text)) return true;
+    ERR_AT(c, strncmp(why, "not finite", 10) ? RS_ERR_PARSE : RS_ERR_INVALID, line, field, "%s", why);
+    return false;
 }
 
 enum { COL_LANDMARK, COL_U, COL_V, COL_SIGMA, COL_AT, NCOLS, MAXFIELDS = 32 };
@@ -158,14 +165,6 @@ static bool read_csv_header(rs_site__reader *c, int line, char **fields, int nfi
             return false;
         }
     return true;
-}
-
-// Suggests an id that differs only in case (the commonest mismatch), or NULL.
-static const char *similar_landmark(const rs_site *site, const char *id)
-{
-    for (int i = 0; i < site->Nlandmarks; i++)
-        if (!strcasecmp(site->landmarks[i].id, id)) return site->landmarks[i].id;
-    return NULL;
 }
 
 static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int line, char **fields, const int col[NCOLS])
@@ -209,9 +208,10 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
         }
     }
     if (!ok || !c->landmarks_ok) return;
-    obs.ilandmark = rs_site_find_landmark(c->site, id);
+    obs.ilandmark = rs_index_find(&c->ids, id);
     if (obs.ilandmark < 0) {
-        const char *like = similar_landmark(c->site, id);
+        const int similar = rs_index_find(&c->ids_nocase, id); // differs only in case: the commonest slip
+        const char *like = similar >= 0 ? c->site->landmarks[similar].id : NULL;
         ERR_AT(c, RS_ERR_NOT_FOUND, line, "landmark", "'%s' is not a landmark of landmarks.geojson%s%s%s", id,
                like ? " (ids are case-sensitive: '" : "", like ? like : "", like ? "'?)" : "");
         return;
@@ -229,7 +229,7 @@ static void read_observation_row(rs_site__reader *c, rs_site_camera *cam, int li
                rs_site_at_name(obs.at));
         return;
     }
-    if (!rs_site__check_observation(c->r, cam, &obs, c->site)) return;
+    if (!rs_site__check_observation(c->r, cam, &obs, c->site, c->picked)) return;
     rs_site_observation *grown = realloc(cam->observations, (size_t)(cam->Nobservations + 1) * sizeof obs);
     if (!grown) {
         c->r->nomem = true;
@@ -244,21 +244,27 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
     char why[160];
     snprintf(why, sizeof why, "named by cameras[%d].observations in site.json", i);
     c->file = cam->observations_path;
-    char *text = rs_site__read_file(c, why, RS_IO_MAX_FILE_BYTES, NULL);
+    size_t len = 0;
+    char *text = rs_site__read_file(c, why, RS_IO_MAX_FILE_BYTES, &len);
     if (!text) goto done;
-    char *p = text;
-    if (!strncmp(p, "\xEF\xBB\xBF", 3)) p += 3; // UTF-8 byte order mark
-    int line = 0, nheader = 0, col[NCOLS];
+    if (c->landmarks_ok && !c->picked && !(c->picked = calloc((size_t)c->site->Nlandmarks * 3 + 1, sizeof(int)))) {
+        c->r->nomem = true;
+        goto done;
+    }
+    rs_text_lines lines;
+    rs_text_lines_init(&lines, text, len, RS_TEXT_MAX_LINE_BYTES);
+    int nheader = 0, col[NCOLS];
     bool have_header = false;
-    while (*p) {
-        line++;
-        // a line ends at LF, CRLF or a lone CR (spreadsheets on old Macs write CR only)
-        char *eol = p + strcspn(p, "\r\n"), *next = eol;
-        if (*next == '\r') next++;
-        if (*next == '\n') next++;
-        *eol = '\0';
-        char *s = p;
-        p = next;
+    for (;;) {
+        char *s = NULL;
+        rs_err e = {0};
+        if (rs_text_next_line(&s, &lines, NULL, &e) != RS_OK) {
+            // the rest of the file is not read: refused, never silently cut short
+            ERR_AT(c, e.status, lines.line, NULL, "%s; the lines after it were not read", e.msg);
+            goto done;
+        }
+        if (!s) break;
+        const int line = lines.line;
         while (isspace((unsigned char)*s)) s++;
         if (!*s || *s == '#') continue; // blank lines and comments
         char *fields[MAXFIELDS];
@@ -285,6 +291,10 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i)
     else if (c->landmarks_ok)
         rs_site__check_camera(c->r, cam, c->site);
 done:
+    // the next camera starts with no picks recorded
+    for (int k = 0; c->picked && k < cam->Nobservations; k++)
+        c->picked[3 * cam->observations[k].ilandmark] = c->picked[3 * cam->observations[k].ilandmark + 1] =
+            c->picked[3 * cam->observations[k].ilandmark + 2] = 0;
     free(text);
     c->file = NULL;
 }

@@ -1,6 +1,7 @@
 // rs_site_read_json.c -- site.json: the site's origin, heights, ground plane and its cameras'
 // entries (files, prior, stated intrinsics uncertainty, background images), for the one reader
 // of a site folder (rs_site_read.c; the layers: geo/internal/rs_site_internal.h).
+#include <ctype.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -11,6 +12,7 @@
 #include <cjson/cJSON.h>
 
 #include "core/rs_io.h"
+#include "core/rs_units.h"
 #include "geo/internal/rs_site_internal.h"
 
 // ---- site.json ----
@@ -98,6 +100,13 @@ static void read_ground_plane(rs_site__reader *c, const cJSON *root)
     if (!ok || !(norm > 0)) {
         ERR(c, n ? RS_ERR_INVALID : RS_ERR_PARSE, "ground_plane.normal_enu",
             "%s: expected 3 finite numbers, not all zero (e.g. [0, 0, 1])", n ? "invalid" : "missing");
+        return;
+    }
+    const double tilt_deg = acos(fmin(1.0, fabs(v[2]) / norm)) * RS_DEG_PER_RAD;
+    if (!(tilt_deg <= RS_SITE_GROUND_TILT_MAX_DEG)) {
+        ERR(c, RS_ERR_INVALID, "ground_plane.normal_enu",
+            "[%g, %g, %g] tilts the ground %.1f degrees from level: at most %g (a road; [0, 0, 1] is level)", v[0],
+            v[1], v[2], tilt_deg, RS_SITE_GROUND_TILT_MAX_DEG);
         return;
     }
     if (cJSON_GetObjectItemCaseSensitive(g, "offset_m") &&
@@ -197,6 +206,11 @@ static void read_camera_entry(rs_site__reader *c, const cJSON *item, int i)
     const char *s;
     cam->id = rs_site__dup(c, rs_site__get_string(c, item, prefix, "id", true, &s) ? s : prefix);
     const char *bad_id = s && cam->id && strcmp(cam->id, prefix) ? rs_io_name_problem(cam->id) : NULL;
+    // the documented characters only (docs/site-format.md): a blank, a comma or a quote in a
+    // camera id breaks the tools its files go to (SUMO's netconvert, shells)
+    for (const unsigned char *p = (const unsigned char *)(bad_id || !s ? "" : cam->id); *p && !bad_id; p++)
+        if (!(isalnum(*p) || *p == '-' || *p == '_' || *p == '.' || *p >= 0x80))
+            bad_id = "contains a character other than a letter, a digit, '-', '_' or '.'";
     if (bad_id)
         ERR(c, RS_ERR_INVALID, rs_site__field_name(field, sizeof field, prefix, "id"),
             "'%.80s' %s: a camera id names its files (<id>.cameramodel, <id>.json, ...); use letters, digits, "

@@ -163,12 +163,14 @@ bool rs_site__file_exists(rs_site__reader *c, const char *why)
                           c->file, why);
         free(site_json);
     } else if (stat(c->file, &sb) != 0) {
-        if (errno == ENOENT || errno == ENOTDIR)
+        const int e = errno;
+        if (e == ENOENT || e == ENOTDIR)
             ERR(c, RS_ERR_IO, NULL, "missing file (%s)", why);
-        else if (errno == ELOOP)
-            ERR(c, RS_ERR_IO, NULL, "a loop of symbolic links, not a file (%s)", why);
+        else if (e == ELOOP)
+            ERR(c, RS_ERR_IO, NULL, "a loop of symbolic links (one leads back to another): no file at its end (%s)",
+                why);
         else
-            ERR(c, RS_ERR_IO, NULL, "cannot be read (%s): %s", why, strerror(errno));
+            ERR(c, RS_ERR_IO, NULL, "cannot be read: %s (%s)", strerror(e), why);
     } else if (S_ISDIR(sb.st_mode))
         ERR(c, RS_ERR_IO, NULL, "is a folder, expected a file (%s)", why);
     else if (!S_ISREG(sb.st_mode)) // a library reading it by name would wait on a FIFO forever

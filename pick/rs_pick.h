@@ -139,6 +139,15 @@ int rs_pick_server_port(const rs_pick_server *srv);
 const char *rs_pick_server_url(const rs_pick_server *srv);
 void rs_pick_server_stop(rs_pick_server *srv); // NULL-safe: stops and frees
 
+struct cJSON;
+// A POST body of the API as the server reads it: one JSON object (core/rs_json.h rs_json_parse:
+// nothing but blanks after it), no NUL byte. out: *obj, owned by the caller (cJSON_Delete); NULL
+// on failure. Errors: RS_ERR_PARSE with what is wrong ("the body is not a JSON object: ...").
+rs_status rs_pick_request_parse( // out
+    struct cJSON **obj,
+    // in
+    const char *body, size_t len, rs_err *err);
+
 #ifdef __cplusplus
 }
 #endif

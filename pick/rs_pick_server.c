@@ -17,11 +17,17 @@
 
 #include "core/rs_image.h"
 #include "core/rs_io.h"
+#include "core/rs_json.h"
 #include "geo/rs_geo.h"
 #include "geo/rs_geo_raster.h"
 #include "geo/rs_lanes.h"
 #include "pick/internal/rs_pick_internal.h"
 #include "pick/rs_pick.h"
+
+// Connections: at most PER_CLIENT_CONNECTION_LIMIT from one address (a browser opens 6 per
+// server), CONNECTION_LIMIT in all, so that one client holding its most leaves room for another;
+// a connection silent for CONNECTION_TIMEOUT_S seconds is closed.
+enum { CONNECTION_LIMIT = 512, PER_CLIENT_CONNECTION_LIMIT = 128, CONNECTION_TIMEOUT_S = 5 };
 
 struct rs_pick_server {
     struct MHD_Daemon *daemon;
@@ -202,16 +208,31 @@ static rs_status import_text(rs_pick_server *srv, const char *name, const char *
     return st;
 }
 
+rs_status rs_pick_request_parse(cJSON **obj, const char *body, size_t len, rs_err *err)
+{
+    *obj = NULL;
+    if (memchr(body, '\0', len)) return rs_err_set(err, RS_ERR_PARSE, "the body holds a NUL byte: not JSON text");
+    rs_err e = {0};
+    if (rs_json_parse(obj, body, 0, len, "the body", &e) != RS_OK)
+        return rs_err_set(err, RS_ERR_PARSE, "the body is not a JSON object: %s", e.msg);
+    if (!cJSON_IsObject(*obj)) {
+        cJSON_Delete(*obj);
+        *obj = NULL;
+        return rs_err_set(err, RS_ERR_PARSE, "the body is not a JSON object");
+    }
+    return RS_OK;
+}
+
 static enum MHD_Result post(struct MHD_Connection *c, rs_pick_server *srv, const char *url, const request *rq)
 {
+    // exactly application/json, parameters (charset) allowed: not application/jsonx
     const char *ct = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
-    if (!ct || strncasecmp(ct, "application/json", 16) != 0)
+    if (!ct || strncasecmp(ct, "application/json", 16) != 0 || (ct[16] && !strchr(" \t;", ct[16])))
         return send_error(c, MHD_HTTP_UNSUPPORTED_MEDIA_TYPE, "the body must be application/json");
-    cJSON *o = cJSON_ParseWithLength(rq->body ? rq->body : "", rq->len);
-    if (!o || !cJSON_IsObject(o)) {
-        cJSON_Delete(o);
-        return send_error(c, MHD_HTTP_BAD_REQUEST, "the body is not a JSON object");
-    }
+    cJSON *o = NULL;
+    rs_err perr = {0};
+    if (rs_pick_request_parse(&o, rq->body ? rq->body : "", rq->len, &perr))
+        return send_error(c, MHD_HTTP_BAD_REQUEST, "%s", perr.msg);
     rs_err err = {0};
     rs_status st = RS_OK;
     char added[32] = "";
@@ -290,6 +311,8 @@ static enum MHD_Result post(struct MHD_Connection *c, rs_pick_server *srv, const
         return send_error(c, MHD_HTTP_NOT_FOUND, "%s: no such endpoint", url);
     }
     cJSON_Delete(o);
+    // a save refused because the site changed on disk, or another save holds it: 409 Conflict
+    if (st == RS_ERR_INVALID && !strcmp(url, "/api/save")) return send_error(c, MHD_HTTP_CONFLICT, "%s", err.msg);
     if (st) return send_error(c, status_of(st), "%s", err.msg[0] ? err.msg : rs_strerror(st));
     ret = send_state(c, srv);
     return ret;
@@ -522,10 +545,16 @@ rs_status rs_pick_server_start(rs_pick_server **out, rs_pick_session *s, const r
     if (!st && !srv->tile) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st && !(srv->map_json = map_json(site, opt.ortho, &opt))) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     if (!st) {
-        srv->daemon = MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD, (uint16_t)opt.port, NULL, NULL, handle, srv,
+        // under load (issue 42: 64 slow connections locked the user out for as long as they lasted):
+        // poll rather than select (no FD_SETSIZE ceiling; epoll mishandled half-closed clients:
+        // tests/pick pick_fuzz went from 1 s to over 120 s), room for many more connections
+        // than one client may hold, and a client idle for CONNECTION_TIMEOUT_S (headers never
+        // finished) is dropped
+        srv->daemon = MHD_start_daemon(MHD_USE_POLL_INTERNAL_THREAD, (uint16_t)opt.port, NULL, NULL, handle, srv,
                                        MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&addr, MHD_OPTION_NOTIFY_COMPLETED,
-                                       request_done, NULL, MHD_OPTION_CONNECTION_LIMIT, (unsigned)64,
-                                       MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)15, MHD_OPTION_END);
+                                       request_done, NULL, MHD_OPTION_CONNECTION_LIMIT, (unsigned)CONNECTION_LIMIT,
+                                       MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned)PER_CLIENT_CONNECTION_LIMIT,
+                                       MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)CONNECTION_TIMEOUT_S, MHD_OPTION_END);
         if (!srv->daemon) st = rs_err_set(err, RS_ERR_IO, "cannot listen on %s:%d (in use?)", opt.host, opt.port);
     }
     if (!st) {

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #include <cjson/cJSON.h>
@@ -15,6 +16,8 @@
 #include "calib/rs_calib.h"
 #include "calib/rs_calib_site.h"
 #include "core/rs_camera.h"
+#include "core/rs_index.h"
+#include "core/rs_io.h"
 #include "geo/rs_geo.h"
 #include "geo/rs_site.h"
 #include "geo/rs_site_import.h"
@@ -33,6 +36,31 @@ typedef struct {
 
 enum { GROUND_NU = 12, GROUND_NV = 7 }; // the ground uncertainty's samples over the view
 
+// A file as it was read: every save writes a new file and renames it into place (core/rs_io.h),
+// so another writer shows as a new inode (or a file that is gone, or one that appeared).
+typedef struct {
+    bool exists;
+    dev_t dev;
+    ino_t ino;
+    off_t size;
+    struct timespec mtime;
+} file_stamp;
+
+static file_stamp stamp_of(const char *path)
+{
+    struct stat st;
+    file_stamp f = {0};
+    if (path && stat(path, &st) == 0) f = (file_stamp){true, st.st_dev, st.st_ino, st.st_size, st.st_mtim};
+    return f;
+}
+
+static bool stamp_same(const file_stamp *a, const file_stamp *b)
+{
+    return a->exists == b->exists &&
+           (!a->exists || (a->dev == b->dev && a->ino == b->ino && a->size == b->size &&
+                           a->mtime.tv_sec == b->mtime.tv_sec && a->mtime.tv_nsec == b->mtime.tv_nsec));
+}
+
 struct rs_pick_session {
     char *site_dir; // owned
     char *camera_id;
@@ -42,6 +70,10 @@ struct rs_pick_session {
     int Nundo, cap_undo;
     bool dirty;      // changes since the last save
     unsigned refine; // rs_calib_refine_flags of every re-solve (calib's --refine)
+
+    // what was on disk when the site was last read (opened or saved): a save checks it first
+    int Nloaded;           // landmarks read from disk; those after them were added here
+    file_stamp on_disk[2]; // landmarks.geojson, this camera's observations CSV
 
     // the last solve
     bool solved;
@@ -148,6 +180,18 @@ rs_status rs_pick_session_solve(rs_pick_session *s)
     return RS_OK;
 }
 
+// Records what is on disk now as what the session has read.
+static rs_status stamp_files(rs_pick_session *s, rs_err *err)
+{
+    char *landmarks = rs_io_join(s->site_dir, RS_SITE_LANDMARKS);
+    if (!landmarks) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    s->on_disk[0] = stamp_of(landmarks);
+    s->on_disk[1] = stamp_of(cam_of(s)->observations_path);
+    s->Nloaded = s->site->Nlandmarks;
+    free(landmarks);
+    return RS_OK;
+}
+
 rs_status rs_pick_session_open(rs_pick_session **out, const char *site_dir, const char *camera_id, rs_err *err)
 {
     *out = NULL;
@@ -168,6 +212,10 @@ rs_status rs_pick_session_open(rs_pick_session **out, const char *site_dir, cons
     if (s->icam < 0) {
         rs_pick_session_free(s);
         return rs_err_set(err, RS_ERR_NOT_FOUND, "%s: no camera '%s' in site.json", site_dir, camera_id);
+    }
+    if ((st = stamp_files(s, err))) {
+        rs_pick_session_free(s);
+        return st;
     }
     (void)rs_pick_session_solve(s);
     *out = s;
@@ -389,41 +437,153 @@ rs_status rs_pick_add_landmark(rs_pick_session *s, char id_out[32], double e, do
     return RS_OK;
 }
 
+// Moves the landmarks added in this session (those after s->Nloaded) onto `fresh`, the site as it
+// is on disk now (another session has saved since this one read it), renaming any whose id is
+// taken there, and points this camera's picks at fresh's landmarks by id. On success s->site is
+// fresh (the undo history, whose landmark indices no longer hold, is dropped); on failure both
+// are as they were but fresh is freed.
+static rs_status merge_into(rs_pick_session *s, rs_site *fresh, rs_err *err)
+{
+    rs_site *site = s->site;
+    const int icam = rs_site_find_camera(fresh, s->camera_id);
+    const rs_site_camera *cam = cam_of(s);
+    const int Nadded = site->Nlandmarks - s->Nloaded, N0 = fresh->Nlandmarks;
+    rs_index ids = {0};
+    rs_site_observation *obs = malloc(sizeof *obs * (size_t)(cam->Nobservations > 0 ? cam->Nobservations : 1));
+    rs_site_landmark *ls = realloc(fresh->landmarks, sizeof *ls * (size_t)(N0 + Nadded > 0 ? N0 + Nadded : 1));
+    if (ls) fresh->landmarks = ls;
+    rs_status st = !obs || !ls ? rs_err_set(err, RS_ERR_NOMEM, "out of memory") : RS_OK;
+    if (!st && icam < 0)
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: camera '%s' is no longer in site.json: not saved", s->site_dir,
+                        s->camera_id);
+    if (!st)
+        st = rs_index_init_strided(&ids, (const char *const *)&fresh->landmarks[0].id, sizeof *fresh->landmarks, N0,
+                                   false, err);
+    // this camera's picks of landmarks read from disk must find them there still, by id
+    for (int k = 0; !st && k < cam->Nobservations; k++) {
+        obs[k] = cam->observations[k];
+        const int il = obs[k].ilandmark;
+        obs[k].ilandmark = il >= s->Nloaded ? N0 + il - s->Nloaded : rs_index_find(&ids, site->landmarks[il].id);
+        if (obs[k].ilandmark < 0)
+            st = rs_err_set(err, RS_ERR_INVALID,
+                            "%s: landmark '%s', picked here, is no longer in landmarks.geojson (changed on disk since "
+                            "this session read it): not saved",
+                            s->site_dir, site->landmarks[il].id);
+    }
+    // an added landmark whose id another session took meanwhile gets the next free one
+    char id[32];
+    for (int k = 0; !st && k < Nadded; k++) {
+        rs_site_landmark *l = &site->landmarks[s->Nloaded + k];
+        if (rs_index_find(&ids, l->id) < 0) continue;
+        for (int j = 1;; j++) {
+            snprintf(id, sizeof id, "P%d", j);
+            bool taken = rs_index_find(&ids, id) >= 0;
+            for (int i = s->Nloaded; i < site->Nlandmarks && !taken; i++) taken = !strcmp(site->landmarks[i].id, id);
+            if (!taken) break;
+        }
+        char *renamed = strdup(id);
+        if (!renamed) {
+            st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+            break;
+        }
+        free(l->id);
+        l->id = renamed;
+    }
+    rs_index_free(&ids);
+    if (st) {
+        free(obs);
+        rs_site_free(fresh);
+        return st;
+    }
+    for (int k = 0; k < Nadded; k++) {
+        fresh->landmarks[N0 + k] = site->landmarks[s->Nloaded + k];
+        fresh->landmarks[N0 + k].feature = N0 + k;
+    }
+    fresh->Nlandmarks = N0 + Nadded;
+    site->Nlandmarks = s->Nloaded; // the added ones are fresh's now
+    rs_site_camera *fc = &fresh->cameras[icam];
+    free(fc->observations);
+    fc->observations = obs;
+    fc->Nobservations = cam->Nobservations;
+    rs_site_free(site);
+    s->site = fresh;
+    s->icam = icam;
+    for (int i = 0; i < s->Nundo; i++) snapshot_free(&s->undo[i]);
+    s->Nundo = 0;
+    return RS_OK;
+}
+
 rs_status rs_pick_save(rs_pick_session *s, rs_err *err)
 {
+    // one save at a time on a site, whoever saves (another `roadside pick`, of this camera or
+    // another): the lock says who holds it
+    char what[160];
+    snprintf(what, sizeof what, "roadside pick (camera %.64s) saving", s->camera_id);
+    rs_io_lock lock = {0};
+    rs_status st = rs_io_lock_dir(&lock, s->site_dir, what, err);
+    // held by another: a conflict the user resolves (saving again), not a failure of the disk
+    if (st == RS_ERR_IO && err && strstr(err->msg, " is in use by ")) st = RS_ERR_INVALID;
+    if (st) return st;
+    // what is on disk must be what this session read, or merged with it
+    char *landmarks = rs_io_join(s->site_dir, RS_SITE_LANDMARKS);
+    if (!landmarks) {
+        rs_io_unlock(&lock);
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    }
+    const file_stamp now[2] = {stamp_of(landmarks), stamp_of(cam_of(s)->observations_path)};
+    free(landmarks);
+    if (!stamp_same(&now[1], &s->on_disk[1])) {
+        rs_io_unlock(&lock);
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "%s changed on disk since this session read it (another roadside pick of camera '%s'?): "
+                          "not saved, so as not to overwrite it; stop this session and start roadside pick again",
+                          cam_of(s)->observations_path, s->camera_id);
+    }
+    if (!stamp_same(&now[0], &s->on_disk[0])) {
+        rs_site *fresh = NULL;
+        if ((st = rs_site_load_for_picking(&fresh, s->site_dir, err)) || (st = merge_into(s, fresh, err))) {
+            rs_err_prefix(err, "landmarks.geojson changed on disk since this session read it, and the merge failed");
+            rs_io_unlock(&lock);
+            return st;
+        }
+    }
     rs_site *site = s->site;
     const rs_site_camera *cam = cam_of(s);
     // landmarks first, then the observations: each atomic; landmarks are only ever added, so a
     // stop between the two leaves a consistent site (the old picks, the new landmarks)
     // a landmark's own sigmas only where it has them: the others keep following site.json's
     rs_site_landmark *out = malloc(sizeof *out * (size_t)(site->Nlandmarks > 0 ? site->Nlandmarks : 1));
-    if (!out) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    for (int i = 0; i < site->Nlandmarks; i++) {
+    if (!out) st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int i = 0; out && i < site->Nlandmarks; i++) {
         out[i] = site->landmarks[i]; // shallow: the writer only reads
         if (!out[i].sigma_h_stated) out[i].sigma_h_m = NAN;
         if (!out[i].sigma_v_stated) out[i].sigma_v_m = out[i].given_sigma_v_m = NAN;
     }
-    rs_status st =
-        rs_site_write_landmarks(site->dir, out, site->Nlandmarks, site->geoid_undulation_m, RS_SITE_LAYOUT_HAND, err);
+    if (!st)
+        st = rs_site_write_landmarks(site->dir, out, site->Nlandmarks, site->geoid_undulation_m, RS_SITE_LAYOUT_HAND, err);
     free(out);
     if (!st)
         st = rs_site_write_observations(cam->observations_path, cam->observations, cam->Nobservations, site->landmarks,
                                         err);
-    if (st) return st;
     // read back: the pose shown is the one `roadside calib` will find on these files
     rs_site *fresh = NULL;
-    if ((st = rs_site_load_for_picking(&fresh, s->site_dir, err))) return st;
-    const int icam = rs_site_find_camera(fresh, s->camera_id);
-    if (icam < 0 || fresh->Nlandmarks != site->Nlandmarks) {
+    if (!st) st = rs_site_load_for_picking(&fresh, s->site_dir, err);
+    const int icam = fresh ? rs_site_find_camera(fresh, s->camera_id) : -1;
+    if (!st && (icam < 0 || fresh->Nlandmarks != site->Nlandmarks))
+        st = rs_err_set(err, RS_ERR_INVALID, "%s: the site read back differs from the one saved", s->site_dir);
+    if (st) {
         rs_site_free(fresh);
-        return rs_err_set(err, RS_ERR_INVALID, "%s: the site read back differs from the one saved", s->site_dir);
+        rs_io_unlock(&lock);
+        return st;
     }
     rs_site_free(s->site);
     s->site = fresh;
     s->icam = icam;
+    st = stamp_files(s, err);
+    rs_io_unlock(&lock);
     s->dirty = false;
     (void)rs_pick_session_solve(s);
-    return RS_OK;
+    return st;
 }
 
 rs_status rs_pick_set_refine(rs_pick_session *s, const char *words, rs_err *err)

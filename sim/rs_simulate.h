@@ -216,8 +216,9 @@ rs_status rs_simulate_site_options_check(const rs_simulate_site_options *o, rs_e
 // levels drawn, but at least 1 mm and 0.01 px: a noise-free site still has weights to solve with.
 // The site is built in a temporary sibling folder and renamed into place when complete, so a
 // failure never leaves a half site. `dir` may not exist, or be an empty folder; a non-empty one
-// is replaced only with o->force, and only if it holds a site.json (a site folder), otherwise
-// RS_ERR_IO and nothing is touched.
+// is replaced only with o->force, and only if it is a site this function wrote and holds nothing
+// else (its record, .roadside-simulated, lists every file it wrote: a surveyor's site.json does not
+// make a folder simulate's), otherwise RS_ERR_IO naming why and nothing is touched.
 // With poles or lines: every pick of them is the true point picked (a pole's base or top, or a
 // uniformly random point of the visible part of the segment or polyline) projected, plus the
 // site's pixel noise (or an outlier, as for points); their survey is the true base, height and

@@ -520,11 +520,13 @@ static rs_status write_site(const char *dir, const rs_simulate__site *s, const r
 
 // ---- the folder: built aside, renamed into place ----
 
-// 0: does not exist; 1: empty folder; 2: a site folder (non-empty, holds site.json);
-// 3: anything else (a file, a non-empty folder that is not a site).
-static int target_state(const char *dir)
+// 0: does not exist; 1: empty folder; 2: a site simulate wrote and nothing else (its record,
+// rs_simulate__record_matches); 3: anything else (a file, a folder holding anything more: a
+// surveyor's site, a simulated site with a user's notes added), with why filled.
+static int target_state(const char *dir, char *why, size_t n)
 {
     struct stat sb;
+    snprintf(why, n, "exists and is not an empty folder");
     if (stat(dir, &sb) != 0) return errno == ENOENT ? 0 : 3;
     if (!S_ISDIR(sb.st_mode)) return 3;
     DIR *d = opendir(dir);
@@ -537,27 +539,27 @@ static int target_state(const char *dir)
         }
     closedir(d);
     if (empty) return 1;
-    char *site = rs_io_join(dir, RS_SITE_JSON);
-    bool is_site = site && stat(site, &sb) == 0 && S_ISREG(sb.st_mode);
-    free(site);
-    return is_site ? 2 : 3;
+    return rs_simulate__record_matches(why, n, dir) ? 2 : 3;
 }
 
 static rs_status check_target(const char *dir, bool force, rs_err *err)
 {
     struct stat sb;
+    char why[300];
     if (stat(dir, &sb) != 0 && errno != ENOENT)
         return rs_err_set(err, RS_ERR_IO, "%s: cannot use it: %s", dir, strerror(errno));
-    switch (target_state(dir)) {
+    switch (target_state(dir, why, sizeof why)) {
     case 0:
     case 1: return RS_OK;
     case 2:
         return force ? RS_OK
-                     : rs_err_set(err, RS_ERR_IO, "%s: a site is already there (use --force to replace it)", dir);
+                     : rs_err_set(err, RS_ERR_IO, "%s: a simulated site is already there (use --force to replace it)",
+                                  dir);
     default:
-        return rs_err_set(err, RS_ERR_IO,
-                          "%s: exists and is not an empty folder or a site folder; refusing to write there%s", dir,
-                          force ? " even with --force" : "");
+        return rs_err_set(err, RS_ERR_IO, "%s: %s; refusing to write there%s", dir, why,
+                          force ? " even with --force (it replaces only a site roadside site simulate wrote, "
+                                  "holding nothing else)"
+                                : "");
     }
 }
 
@@ -625,12 +627,13 @@ static rs_status simulate_site_into(const char *dir, const rs_simulate_site_opti
         tmp = NULL;
         goto done;
     }
-    if ((st = write_site(tmp, &s, o, err))) goto done;
+    if ((st = write_site(tmp, &s, o, err)) || (st = rs_simulate__record_write(tmp, err))) goto done;
 
     // Put it in place: straight over a missing or empty folder; a site being replaced is moved
     // aside first and deleted once the new one is in.
     if ((st = check_target(dir, o->force, err))) goto done;
-    if (target_state(dir) == 2) {
+    char why[300];
+    if (target_state(dir, why, sizeof why) == 2) {
         old = sibling_template(dir, "old");
         if (!old || !mkdtemp(old)) {
             st = rs_err_set(err, RS_ERR_IO, "%s: cannot create a temporary folder beside it", dir);

@@ -14,6 +14,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "core/rs_index.h"
 #include "geo/rs_site.h"
 
 // ---- the report (rs_site_report.c) ----
@@ -37,11 +38,15 @@ void rs_site__diag(rs_site__report *r, rs_site_severity severity, rs_status stat
 typedef struct {
     rs_site__report *r;
     rs_site *site;
-    const char *file;  // the file being read
-    int feature;       // the GeoJSON feature being read, or -1
-    const char *fid;   // its id, may be NULL
-    bool origin_ok;    // site.json gave a valid origin and heights: positions can be checked
-    bool landmarks_ok; // landmarks.geojson was read: observations can be matched to landmarks
+    const char *file;    // the file being read
+    int feature;         // the GeoJSON feature being read, or -1
+    const char *fid;     // its id, may be NULL
+    bool origin_ok;      // site.json gave a valid origin and heights: positions can be checked
+    bool landmarks_ok;   // landmarks.geojson was read: observations can be matched to landmarks
+    rs_index ids;        // the landmarks by id (when landmarks_ok): picks are matched in O(log n)
+    rs_index ids_nocase; // the same without case: the suggestion for an unknown id
+    int *picked;         // (3 Nlandmarks,) the line of the camera being read's pick of each landmark
+                         //   at its point, base, top (0: none yet); NULL before it is needed
 } rs_site__reader;
 
 // A diagnostic at what c is reading (c->file, c->feature, c->fid), at `line` (0: none).
@@ -142,9 +147,11 @@ bool rs_site__check_position( // out
 // Checks one observation just read from camera cam's CSV (line obs->line, obs->at resolved)
 // against the camera's image size (when known: cam->width > 0) and the observations read before
 // it (duplicates: a point, a pole's base, a pole's top at most once; `along` picks may repeat).
+// picked (may be NULL: the observations before it are searched instead) is (3 Nlandmarks,), the
+// line of the pick of each landmark at its point, base, top so far; this pick is recorded in it.
 // Returns false if it must not be kept.
 bool rs_site__check_observation(rs_site__report *r, const rs_site_camera *cam, const rs_site_observation *obs,
-                                const rs_site *site);
+                                const rs_site *site, int *picked);
 
 // Checks a camera once its observations CSV has been read: enough observations to calibrate
 // (4 picks of points; with `along` picks, as many numbers fixed as 4 points fix: 8, counting 2
@@ -191,11 +198,6 @@ void rs_site__read_observations(rs_site__reader *c, rs_site_camera *cam, int i);
 // Splits one CSV line in place into fields (RFC 4180 quoting, surrounding blanks trimmed).
 // Stores at most maxf fields; returns how many there are, or -1 for malformed quoting.
 int rs_site__split_csv(char *s, char **fields, int maxf);
-
-// A plain decimal number: [+-] digits [. digits] [(e|E) [+-] digits], with a digit on at least
-// one side of the point. strtod alone also takes hexadecimal ("0x620" would be 1568), "inf",
-// "nan" and "1e" prefixes of them; a coordinate or pixel written so is a mistake, not a number.
-bool rs_site__is_decimal(const char *t);
 
 // ---- building a site folder under a temporary name (rs_site_init.c; also the importer's) ----
 

@@ -187,3 +187,21 @@ rs_status rs_simulate__lanes(rs_lanes *lanes, const rs_simulate__site *s, rs_err
 // The ids the site gives landmark i and camera k: "L001", ..., "cam1", ...
 void rs_simulate__landmark_id(char id[16], int i);
 void rs_simulate__camera_id(char id[16], int k);
+
+// ---- the record of what simulate wrote (rs_simulate_record.c) ----
+
+// The file in a simulated site that lists every file `site simulate` wrote there (relative
+// paths, one a line, after a first line naming the writer): how --force recognises a folder it
+// may replace (a surveyor's site.json alone does not make a folder simulate's).
+#define RS_SIMULATE_RECORD ".roadside-simulated"
+
+// Writes dir/RS_SIMULATE_RECORD listing every file now under dir (itself included). RS_ERR_IO,
+// RS_ERR_NOMEM.
+rs_status rs_simulate__record_write(const char *dir, rs_err *err);
+
+// Whether dir is a site simulate wrote and nothing else: its record is there and every file
+// under dir is listed in it. False with why filled ("holds no .roadside-simulated record ...",
+// "holds 'notes.txt', which site simulate did not write") otherwise. why: n bytes
+bool rs_simulate__record_matches(char *why, size_t n,
+                                 // in
+                                 const char *dir);

@@ -18,7 +18,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from rs_check import check, finish  # noqa: E402
 
 ROADSIDE = os.environ["ROADSIDE"]
-HEADER = ["landmarks", "file_mib", "write_s", "check_s", "check_cpu_s", "us_per_landmark", "peak_mib",
+HEADER = ["landmarks", "picks", "unknown", "file_mib", "write_s", "check_s", "check_cpu_s", "us_per_landmark", "peak_mib",
           "peak_bytes_per_landmark", "errors", "warnings", "found"]
 
 with tempfile.TemporaryDirectory() as d:
@@ -36,6 +36,16 @@ with tempfile.TemporaryDirectory() as d:
               (r["landmarks"], r["errors"], r["warnings"], r["found"]))
         for k in ("check_s", "peak_mib", "file_mib"):
             check(math.isfinite(float(r[k])) and float(r[k]) > 0, "%s: %s = %s" % (r["landmarks"], k, r[k]))
+
+    # issue 42 ("site check is O(picks x landmarks)"): a pick of nearly every landmark and 300 rows
+    # of unknown ids; each unknown id an error, nothing else
+    p = subprocess.run([ROADSIDE, "bench", "site", "--landmarks", "20000", "--picks", "19999", "--unknown", "300",
+                        "--csv", path], capture_output=True, text=True, timeout=300)
+    print(p.stdout, p.stderr)
+    rows = list(csv.DictReader(open(path))) if p.returncode == 0 else []
+    check(len(rows) == 1 and rows[0]["picks"] == "19999" and rows[0]["unknown"] == "300" and
+          rows[0]["errors"] == "301" and rows[0]["warnings"] == "1" and rows[0]["found"] == "1",
+          "picks and unknown ids: exit %d, %s" % (p.returncode, rows))
 
     # an independent site: written here, a repeated id (feature 19999 repeats 'P00017') and a
     # copied coordinate (feature 19998 at feature 123's position)

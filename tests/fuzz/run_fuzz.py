@@ -4,7 +4,7 @@
 
 Copies the seed corpus CORPUS to a temporary folder (what the run adds to it is thrown away; the
 source tree is never written), runs FUZZER on it with the dictionary DICT for
-$ROADSIDE_FUZZ_SECONDS seconds (15 by default) with a fixed seed ($ROADSIDE_FUZZ_SEED, 1 by
+$ROADSIDE_FUZZ_SECONDS seconds (12 by default) with a fixed seed ($ROADSIDE_FUZZ_SEED, 1 by
 default), and keeps libFuzzer's log as ARTIFACTS/last-run.log. Crash, leak, timeout and
 out-of-memory inputs are written to ARTIFACTS/ by libFuzzer itself.
 
@@ -24,7 +24,7 @@ import tempfile
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "common"))
 from rs_check import check, finish  # noqa: E402
 
-SECONDS = int(os.environ.get("ROADSIDE_FUZZ_SECONDS", "15"))
+SECONDS = int(os.environ.get("ROADSIDE_FUZZ_SECONDS", "12"))  # 10 harnesses: ~120 s in all
 SEED = int(os.environ.get("ROADSIDE_FUZZ_SEED", "1"))
 REPORTS = ["ERROR: AddressSanitizer", "ERROR: LeakSanitizer", "runtime error:", "ERROR: libFuzzer",
            "ERROR: UndefinedBehaviorSanitizer"]

@@ -415,8 +415,9 @@ def case_site_plane(site):
     # a vertical ground plane gives no height
     write_site(site, feats, landmark_heights="unknown", ground_plane={"normal_enu": [1, 0, 0], "offset_m": 0})
     rc, out, _ = fx.run("site", "check", site)
-    check(rc == 1 and re.search(r"^SITE/site\.json: ground_plane\.normal_enu: \(1, 0, 0\) is steeper than 84 degrees: it "
-                                r"gives no height to the 8 landmarks", out, re.M), "site_plane: vertical\n" + out)
+    # (issue 42: any ground plane over 45 degrees from level is refused, heights modelled or not)
+    check(rc == 1 and re.search(r"^SITE/site\.json: ground_plane\.normal_enu: \[1, 0, 0\] tilts the ground 90\.0 degrees "
+                                r"from level: at most 45", out, re.M), "site_plane: vertical\n" + out)
 
 
 def case_errors(site):

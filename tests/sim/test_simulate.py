@@ -25,6 +25,7 @@ import filecmp
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -331,6 +332,26 @@ def check_options(tmp):
     simulate(site, "--seed", "2", "--force")
     if open(os.path.join(site, "landmarks.geojson")).read() == before:
         fail("--force did not replace the site")
+    # issue 42, item 7: --force replaces only what simulate wrote (its .roadside-simulated record
+    # lists every file): a real survey (a site.json of its own, no record) and a simulated site with
+    # a user's file added are refused, untouched, even with --force
+    real = os.path.join(tmp, "real")
+    shutil.copytree(site, real)
+    if os.path.exists(os.path.join(real, ".roadside-simulated")):
+        os.remove(os.path.join(real, ".roadside-simulated"))
+    with open(os.path.join(real, "survey-notes.txt"), "w") as f:
+        f.write("GNSS base station log\n")
+    added = os.path.join(tmp, "added")
+    shutil.copytree(site, added)
+    with open(os.path.join(added, "observations", "cam9-by-hand.csv"), "w") as f:
+        f.write("landmark,u,v\n")
+    for folder, why in ((real, "no .roadside-simulated record"), (added, "observations/cam9-by-hand.csv")):
+        was = {f: open(os.path.join(folder, f), "rb").read() for f in tree(folder)}
+        r = simulate(folder, "--seed", "3", "--force", check=False)
+        if r.returncode != 1 or why not in r.stderr:
+            fail(f"--force on {os.path.basename(folder)}: exit {r.returncode} (want 1 naming {why!r}): {r.stderr!r}")
+        if {f: open(os.path.join(folder, f), "rb").read() for f in tree(folder)} != was:
+            fail(f"--force on {os.path.basename(folder)}: the folder changed")
     leftovers = [e for e in os.listdir(tmp) if e.startswith(".")]
     if leftovers:
         fail(f"temporary folders left behind: {leftovers}")
