@@ -19,6 +19,20 @@ typedef struct {
 } jpeg_trap;
 
 static void jpeg_trap_exit(j_common_ptr cinfo) { longjmp(((jpeg_trap *)cinfo->err)->back, 1); }
+static void jpeg_quiet(j_common_ptr cinfo) { (void)cinfo; } // its warnings: not on stderr
+
+// libpng's: errors back to png_size's setjmp, warnings dropped (neither printed on stderr: the
+// caller's message says what is wrong with the file)
+static void png_trap_error(png_structp png, png_const_charp msg)
+{
+    (void)msg;
+    png_longjmp(png, 1);
+}
+static void png_quiet(png_structp png, png_const_charp msg)
+{
+    (void)png;
+    (void)msg;
+}
 
 static bool jpeg_size(FILE *f, int *width, int *height)
 {
@@ -26,6 +40,7 @@ static bool jpeg_size(FILE *f, int *width, int *height)
     jpeg_trap trap;
     cinfo.err = jpeg_std_error(&trap.mgr);
     trap.mgr.error_exit = jpeg_trap_exit;
+    trap.mgr.output_message = jpeg_quiet;
     if (setjmp(trap.back)) {
         jpeg_destroy_decompress(&cinfo);
         return false;
@@ -40,7 +55,7 @@ static bool jpeg_size(FILE *f, int *width, int *height)
 
 static bool png_size(FILE *f, int *width, int *height)
 {
-    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, png_trap_error, png_quiet);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!info) {
         png_destroy_read_struct(&png, NULL, NULL);
@@ -72,9 +87,13 @@ rs_status rs_image_size(int *width, int *height, const char *path, rs_err *err)
     rewind(f);
     int w = 0, h = 0;
     if (n == 8 && !png_sig_cmp(magic, 0, 8))
-        st = png_size(f, &w, &h) ? RS_OK : rs_err_set(err, RS_ERR_PARSE, "%s: not a readable PNG header", path);
+        st = png_size(f, &w, &h)
+                 ? RS_OK
+                 : rs_err_set(err, RS_ERR_PARSE, "%s: cannot read the image: not a readable PNG header", path);
     else if (n >= 3 && magic[0] == 0xff && magic[1] == 0xd8 && magic[2] == 0xff)
-        st = jpeg_size(f, &w, &h) ? RS_OK : rs_err_set(err, RS_ERR_PARSE, "%s: not a readable JPEG header", path);
+        st = jpeg_size(f, &w, &h)
+                 ? RS_OK
+                 : rs_err_set(err, RS_ERR_PARSE, "%s: cannot read the image: not a readable JPEG header", path);
     else
         st = rs_err_set(err, RS_ERR_UNSUPPORTED, "%s: neither PNG nor JPEG: its size is known only once decoded", path);
     fclose(f);

@@ -24,28 +24,6 @@
 #include "geo/rs_site_write.h"
 #include "pick/internal/rs_pick_internal.h"
 
-// One step back: the camera's observations and how many landmarks there were.
-typedef struct {
-    rs_site_observation *obs; // (Nobs,) owned
-    int Nobs;
-    int Nlandmarks;
-    int edited;              // the landmark a move or a sigma changed, or -1
-    rs_site_landmark before; // its fields before (shallow: the owned pointers are the live ones')
-    double before_sigma_v_m; // its first vertex's vertical sigma before
-} snapshot;
-
-enum { GROUND_NU = 12, GROUND_NV = 7 }; // the ground uncertainty's samples over the view
-
-// A file as it was read: every save writes a new file and renames it into place (core/rs_io.h),
-// so another writer shows as a new inode (or a file that is gone, or one that appeared).
-typedef struct {
-    bool exists;
-    dev_t dev;
-    ino_t ino;
-    off_t size;
-    struct timespec mtime;
-} file_stamp;
-
 static file_stamp stamp_of(const char *path)
 {
     struct stat st;
@@ -60,32 +38,6 @@ static bool stamp_same(const file_stamp *a, const file_stamp *b)
            (!a->exists || (a->dev == b->dev && a->ino == b->ino && a->size == b->size &&
                            a->mtime.tv_sec == b->mtime.tv_sec && a->mtime.tv_nsec == b->mtime.tv_nsec));
 }
-
-struct rs_pick_session {
-    char *site_dir; // owned
-    char *camera_id;
-    rs_site *site; // owned
-    int icam;
-    snapshot *undo; // (Nundo,) owned
-    int Nundo, cap_undo;
-    bool dirty;      // changes since the last save
-    unsigned refine; // rs_calib_refine_flags of every re-solve (calib's --refine)
-
-    // what was on disk when the site was last read (opened or saved): a save checks it first
-    int Nloaded;           // landmarks read from disk; those after them were added here
-    file_stamp on_disk[2]; // landmarks.geojson, this camera's observations CSV
-
-    // the last solve
-    bool solved;
-    rs_status solve_status;
-    char solve_message[sizeof(((rs_err *)0)->msg) + 64];
-    rs_calib_result result; // owned (zeroed when not solved)
-    double *predicted_px;   // (Nlandmarks,2) owned: every landmark's surveyed position projected
-    int Npredicted;
-    double cov_en_m2[4]; // (2,2) of the camera position's E, N
-    double ground_sigma_m[GROUND_NV][GROUND_NU];
-    double solve_ms;
-};
 
 static double now_ms(void)
 {
@@ -560,7 +512,8 @@ rs_status rs_pick_save(rs_pick_session *s, rs_err *err)
         if (!out[i].sigma_v_stated) out[i].sigma_v_m = out[i].given_sigma_v_m = NAN;
     }
     if (!st)
-        st = rs_site_write_landmarks(site->dir, out, site->Nlandmarks, site->geoid_undulation_m, RS_SITE_LAYOUT_HAND, err);
+        st = rs_site_write_landmarks(site->dir, out, site->Nlandmarks, site->geoid_undulation_m, RS_SITE_LAYOUT_HAND,
+                                     err);
     free(out);
     if (!st)
         st = rs_site_write_observations(cam->observations_path, cam->observations, cam->Nobservations, site->landmarks,
@@ -712,200 +665,8 @@ rs_status rs_pick_import(rs_pick_session *s, int *Nadded, int *Npicked, const ch
     return st;
 }
 
-char *rs_pick_export(const rs_pick_session *s, bool csv)
-{
-    const rs_site *site = s->site;
-    const rs_site_camera *cam = &site->cameras[s->icam];
-    cJSON *root = csv ? NULL : cJSON_CreateObject(), *res = root ? cJSON_AddArrayToObject(root, "results") : NULL;
-    size_t cap = 64 + (size_t)cam->Nobservations * 160, len = 0;
-    char *text = csv ? malloc(cap) : NULL;
-    if (csv ? !text : !res) {
-        cJSON_Delete(root);
-        return NULL;
-    }
-    if (csv) len = (size_t)snprintf(text, cap, "id,lat,lon,u,v,sigma_px\n");
-    for (int k = 0; k < cam->Nobservations; k++) {
-        const rs_site_observation *o = &cam->observations[k];
-        if (o->at == RS_SITE_AT_TOP || o->at == RS_SITE_AT_ALONG) continue; // a pair is a point's
-        const rs_site_landmark *l = &site->landmarks[o->ilandmark];
-        if (csv) {
-            len += (size_t)snprintf(text + len, cap - len, "%s,%.9f,%.9f,%.6f,%.6f,%g\n", l->id, l->llh.lat_deg,
-                                    l->llh.lon_deg, o->q_px[0], o->q_px[1], o->sigma_px);
-            continue;
-        }
-        cJSON *r = cJSON_CreateObject();
-        cJSON_AddItemToArray(res, r);
-        cJSON_AddStringToObject(r, "id", l->id);
-        cJSON_AddNumberToObject(r, "x", o->q_px[0]);
-        cJSON_AddNumberToObject(r, "y", o->q_px[1]);
-        cJSON_AddNumberToObject(r, "lat", l->llh.lat_deg);
-        cJSON_AddNumberToObject(r, "lng", l->llh.lon_deg);
-    }
-    if (csv) return text;
-    text = cJSON_Print(root);
-    cJSON_Delete(root);
-    return text;
-}
-
 double rs_pick_last_solve_ms(const rs_pick_session *s) { return s->solve_ms; }
 int rs_pick_count(const rs_pick_session *s) { return s->site->cameras[s->icam].Nobservations; }
 
 const rs_site *rs_pick_session_site(const rs_pick_session *s) { return s->site; }
 int rs_pick_session_camera(const rs_pick_session *s) { return s->icam; }
-
-// ---- the state as JSON ----
-
-static cJSON *numbers(const double *x, int n)
-{
-    cJSON *a = cJSON_CreateArray();
-    for (int i = 0; a && i < n; i++)
-        cJSON_AddItemToArray(a, isfinite(x[i]) ? cJSON_CreateNumber(x[i]) : cJSON_CreateNull());
-    return a;
-}
-
-static void add_num(cJSON *o, const char *k, double x)
-{
-    if (isfinite(x))
-        cJSON_AddNumberToObject(o, k, x);
-    else
-        cJSON_AddNullToObject(o, k);
-}
-
-// Why a landmark is flagged, in words ("" when it is not).
-static void flag_reason(char *buf, size_t n, const rs_calib_result *r, int k)
-{
-    buf[0] = '\0';
-    if (!r->inlier[k]) {
-        if (r->w_test && isfinite(r->w_test[k]))
-            snprintf(buf, n, "rejected by data snooping: w = %.2f (critical 3.29); normalised residual %.2f sigma",
-                     r->w_test[k], r->normalised_residual[k]);
-        else
-            snprintf(buf, n, "rejected as an outlier: normalised residual %.2f sigma > 3.717",
-                     r->normalised_residual[k]);
-    } else if (r->redundancy && r->redundancy[k] < 0.1) {
-        snprintf(buf, n, "uncontrolled: redundancy %.2f, an error in this pick would not show", r->redundancy[k]);
-    }
-}
-
-// calib's warnings name its command-line options; on the page the same choice is the refine
-// menu. Returns a malloc'ed copy with "run with --refine WORDS" said as that menu (NULL: no memory).
-static char *warnings_for_page(const char *w)
-{
-    if (!w) return NULL;
-    static const char from[] = "run with --refine ", to[] = "choose refine: ";
-    char *out = malloc(strlen(w) * 3 + 64), *o = out;
-    if (!out) return NULL;
-    for (const char *p = w; *p;) {
-        if (!strncmp(p, from, sizeof from - 1)) {
-            p += sizeof from - 1;
-            const char *e = p + strcspn(p, " ,.;)");
-            o += sprintf(o, "%s%.*s above (calib's --refine %.*s)", to, (int)(e - p), p, (int)(e - p), p);
-            p = e;
-        } else
-            *o++ = *p++;
-    }
-    *o = '\0';
-    return out;
-}
-
-char *rs_pick_state_json(const rs_pick_session *s)
-{
-    const rs_site *site = s->site;
-    const rs_site_camera *cam = &site->cameras[s->icam];
-    cJSON *root = cJSON_CreateObject();
-    if (!root) return NULL;
-    cJSON *c = cJSON_AddObjectToObject(root, "camera");
-    cJSON_AddStringToObject(c, "id", cam->id);
-    cJSON_AddNumberToObject(c, "width", cam->camera.width);
-    cJSON_AddNumberToObject(c, "height", cam->camera.height);
-    cJSON_AddStringToObject(root, "site", site->name ? site->name : "");
-    cJSON_AddBoolToObject(root, "can_undo", s->Nundo > 0);
-    cJSON_AddBoolToObject(root, "unsaved", s->dirty);
-    cJSON_AddNumberToObject(root, "picks", cam->Nobservations);
-    char refine[64];
-    rs_calib_refine_name(refine, sizeof refine, s->refine);
-    cJSON_AddStringToObject(root, "refine", refine);
-    // the pick index of each landmark
-    int *pick_of = calloc((size_t)(site->Nlandmarks > 0 ? site->Nlandmarks : 1), sizeof *pick_of);
-    if (!pick_of) {
-        cJSON_Delete(root);
-        return NULL;
-    }
-    for (int i = 0; i < site->Nlandmarks; i++) pick_of[i] = -1;
-    for (int k = 0; k < cam->Nobservations; k++)
-        if (cam->observations[k].at != RS_SITE_AT_TOP) pick_of[cam->observations[k].ilandmark] = k;
-    const rs_calib_result *r = &s->result;
-    cJSON *ls = cJSON_AddArrayToObject(root, "landmarks");
-    int Nflagged = 0;
-    for (int i = 0; i < site->Nlandmarks; i++) {
-        const rs_site_landmark *l = &site->landmarks[i];
-        cJSON *o = cJSON_CreateObject();
-        cJSON_AddItemToArray(ls, o);
-        cJSON_AddStringToObject(o, "id", l->id);
-        cJSON_AddStringToObject(o, "kind", l->kind ? l->kind : "");
-        cJSON_AddStringToObject(o, "shape", rs_site_shape_name(l->shape));
-        cJSON_AddItemToObject(o, "enu_m", numbers(l->p_enu_m, 3));
-        cJSON_AddNumberToObject(o, "sigma_h_m", l->sigma_h_m);
-        cJSON_AddNumberToObject(o, "sigma_v_m", l->given_sigma_v_m);
-        cJSON_AddBoolToObject(o, "sigma_stated", l->sigma_h_stated || l->sigma_v_stated);
-        cJSON_AddItemToObject(o, "lat_lon_deg", numbers((const double[]){l->llh.lat_deg, l->llh.lon_deg}, 2));
-        const int k = pick_of[i];
-        if (k >= 0)
-            cJSON_AddItemToObject(o, "pick_px", numbers(cam->observations[k].q_px, 2));
-        else
-            cJSON_AddNullToObject(o, "pick_px");
-        if (s->solved && i < s->Npredicted)
-            cJSON_AddItemToObject(o, "predicted_px", numbers(&s->predicted_px[2 * i], 2));
-        else
-            cJSON_AddNullToObject(o, "predicted_px");
-        if (s->solved && k >= 0) {
-            const double res[2] = {s->predicted_px[2 * i] - cam->observations[k].q_px[0],
-                                   s->predicted_px[2 * i + 1] - cam->observations[k].q_px[1]};
-            cJSON_AddItemToObject(o, "residual_px", numbers(res, 2));
-            add_num(o, "residual_norm_px", hypot(res[0], res[1]));
-            add_num(o, "normalised_residual", r->normalised_residual[k]);
-            cJSON_AddBoolToObject(o, "inlier", r->inlier[k]);
-            char why[256];
-            flag_reason(why, sizeof why, r, k);
-            cJSON_AddBoolToObject(o, "flagged", why[0] != '\0');
-            cJSON_AddStringToObject(o, "flag", why);
-            Nflagged += why[0] != '\0';
-        } else {
-            cJSON_AddNullToObject(o, "residual_px");
-            cJSON_AddBoolToObject(o, "flagged", false);
-            cJSON_AddStringToObject(o, "flag", "");
-        }
-    }
-    free(pick_of);
-    cJSON *so = cJSON_AddObjectToObject(root, "solve");
-    cJSON_AddBoolToObject(so, "ok", s->solved);
-    cJSON_AddStringToObject(so, "message", s->solve_message);
-    add_num(so, "time_ms", s->solve_ms);
-    if (s->solved) {
-        cJSON_AddItemToObject(so, "rt_cam_enu", numbers(r->rt_cam_enu, 6));
-        cJSON_AddItemToObject(so, "covariance_rt_cam_enu", numbers(r->covariance_rt_cam_enu, 36));
-        cJSON_AddItemToObject(so, "position_enu_m", numbers(r->position_enu_m, 3));
-        cJSON_AddItemToObject(so, "sigma_position_enu_m", numbers(r->sigma_position_enu_m, 3));
-        cJSON_AddItemToObject(so, "covariance_position_en_m2", numbers(s->cov_en_m2, 4));
-        cJSON_AddItemToObject(so, "yaw_pitch_roll_deg", numbers(r->yaw_pitch_roll_deg, 3));
-        cJSON_AddItemToObject(so, "sigma_yaw_pitch_roll_deg", numbers(r->sigma_yaw_pitch_roll_deg, 3));
-        add_num(so, "rms_surveyed_px", rs_calib_site_rms_surveyed_px(site, s->icam, r, NULL));
-        add_num(so, "rms_adjusted_px", r->rms_px);
-        add_num(so, "variance_factor", r->variance_factor);
-        cJSON_AddNumberToObject(so, "inliers", r->Ninliers);
-        cJSON_AddNumberToObject(so, "flagged", Nflagged);
-        char *w = warnings_for_page(r->warnings);
-        cJSON_AddStringToObject(so, "warnings", w ? w : r->warnings);
-        free(w);
-        cJSON *g = cJSON_AddObjectToObject(root, "ground_uncertainty");
-        cJSON_AddStringToObject(g, "what",
-                                "1-sigma horizontal ground error (m) of a point detected to 1 px, "
-                                "sampled on a grid over the image");
-        cJSON_AddNumberToObject(g, "nu", GROUND_NU);
-        cJSON_AddNumberToObject(g, "nv", GROUND_NV);
-        cJSON_AddItemToObject(g, "sigma_m", numbers(&s->ground_sigma_m[0][0], GROUND_NU * GROUND_NV));
-    }
-    char *text = cJSON_PrintUnformatted(root);
-    cJSON_Delete(root);
-    return text;
-}

@@ -20,8 +20,10 @@
 //
 // Either way a box maps back through the inverse of the affine map the family's own training
 // applies to its labels (x r + pad), so the boxes come out in the pixel convention of the labels
-// the model was trained on: roadside's own (pixel (0,0) = centre of the top-left pixel,
-// docs/conventions.md) for a model trained on roadside's datasets. NMS is OpenCV's
+// the model was trained on: COCO's corner convention ((0, 0) = the top-left pixel's top-left
+// corner) for a model trained on roadside's datasets, whose COCO and YOLO boxes are written in it
+// (issue 41; roadside's own points are pixel-centre, docs/conventions.md: eval and localise take
+// the 0.5 px off when they read a bbox). NMS is OpenCV's
 // cv::dnn::NMSBoxes (IoU without the "+1" of YOLOX's numpy demo). Accuracy: the decode is double
 // precision over the network's float32 output (boxes to ~1e-5 px at 4K).
 #pragma once
