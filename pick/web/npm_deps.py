@@ -13,7 +13,7 @@ FILES = ["leaflet/dist/leaflet.js", "leaflet/dist/leaflet.css"]
 
 def main():
     npm, outdir, manifest, lock = sys.argv[1:5]
-    work = os.path.join(outdir, "npm")
+    work = os.path.abspath(os.path.join(outdir, "npm"))
     os.makedirs(work, exist_ok=True)
     for f in (manifest, lock):
         shutil.copyfile(f, os.path.join(work, os.path.basename(f)))
