@@ -315,9 +315,9 @@ rs_status rs_geo_tiles_open(rs_geo_tiles **out, const char *path, const rs_llh *
 }
 
 // Reads the view's pixels [x0, x0 + w) x [y0, y0 + h) into an (ow, oh) buffer of `Nout` 8-bit
-// bands per pixel (pixel spacing Nout, line spacing `line`), averaged when decimated.
+// bands per pixel (pixel spacing `pixel` >= Nout bytes, line spacing `line`), averaged when decimated.
 static rs_status read_window(rs_geo_tiles *t, int x0, int y0, int w, int h, unsigned char *buf, int ow, int oh,
-                             int Nout, GSpacing line, rs_err *err)
+                             int Nout, GSpacing pixel, GSpacing line, rs_err *err)
 {
     const int Nb = t->Nbands;
     int bands[4] = {1, Nb >= 3 ? 2 : 1, Nb >= 3 ? 3 : 1, Nb >= 4 ? 4 : 1};
@@ -326,7 +326,7 @@ static rs_status read_window(rs_geo_tiles *t, int x0, int y0, int w, int h, unsi
     extra.eResampleAlg = ow < w ? GRIORA_Average : GRIORA_NearestNeighbour;
     CPLErrorReset();
     CPLPushErrorHandler(CPLQuietErrorHandler);
-    const CPLErr e = GDALDatasetRasterIOEx(t->view, GF_Read, x0, y0, w, h, buf, ow, oh, GDT_Byte, Nout, bands, Nout,
+    const CPLErr e = GDALDatasetRasterIOEx(t->view, GF_Read, x0, y0, w, h, buf, ow, oh, GDT_Byte, Nout, bands, pixel,
                                            line, 1, &extra);
     CPLPopErrorHandler();
     return e == CE_None ? RS_OK : gdal_fail(err, GDALGetDescription(t->ds), "cannot read the image");
@@ -346,7 +346,9 @@ rs_status rs_geo_tiles_read(rs_geo_tiles *t, int level, int tx, int ty, unsigned
     const int h = (int)(y0 + span <= t->height ? span : t->height - y0);
     const int ow = (int)((w + (1LL << level) - 1) >> level), oh = (int)((h + (1LL << level) - 1) >> level);
     memset(rgba, 0, (size_t)T * T * 4);
-    rs_status st = read_window(t, (int)x0, (int)y0, w, h, rgba, ow, oh, t->Nbands >= 4 ? 4 : 3, (GSpacing)T * 4, err);
+    // RGB(A) into the RGBA tile: 4 bytes a pixel whatever the source's band count
+    rs_status st =
+        read_window(t, (int)x0, (int)y0, w, h, rgba, ow, oh, t->Nbands >= 4 ? 4 : 3, 4, (GSpacing)T * 4, err);
     if (st || t->Nbands >= 4) return st;
     for (int j = 0; j < oh; j++) // opaque where the image is; the rest of an edge tile transparent
         for (int i = 0; i < ow; i++) rgba[((size_t)j * T + i) * 4 + 3] = 255;
@@ -374,7 +376,7 @@ rs_status rs_geo_ortho_read(rs_geo_ortho *out, const char *path, const rs_llh *o
     out->crs_name = strdup(t->crs_name);
     out->rgb = malloc((size_t)ow * oh * 3);
     if (!out->rgb || !out->crs_name) st = rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory for %dx%d", path, ow, oh);
-    if (!st) st = read_window(t, 0, 0, vw, vh, out->rgb, ow, oh, 3, (GSpacing)ow * 3, err);
+    if (!st) st = read_window(t, 0, 0, vw, vh, out->rgb, ow, oh, 3, 3, (GSpacing)ow * 3, err);
     rs_geo_tiles_close(t);
     if (st) rs_geo_ortho_free(out);
     return st;

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Turns the page's files into a C source of byte arrays (rs_pick_assets, pick/internal/
 rs_pick_internal.h), so that roadside serves them from its own binary: no file read at run time,
-no network. Usage: embed.py OUT.c FILE..."""
+no network. The files are the page's own (pick/web) and the libraries npm_deps.py fetched at build
+time (leaflet.js, leaflet.css). Usage: embed.py OUT.c FILE..."""
 import os
 import sys
 

@@ -1,13 +1,14 @@
-// roadside pick: the page. Plain JavaScript, no library; no network beyond its own server and the
-// web tile host the user named (--tiles; the page's Content-Security-Policy allows that one).
-// Two views: the camera image (pixel (0,0) is the centre of the top-left pixel, docs/conventions.md)
-// and the site from above (site ENU metres, east right, north up). Every change is a POST to the
-// server, which re-solves and answers with the whole state.
+// roadside pick: the page. Plain JavaScript and Leaflet (window.L: from npm at build time, served
+// by roadside itself, pick/web/package.json); no network beyond its own server and the web tile
+// host the user named (--tiles; the page's Content-Security-Policy allows that one).
+// Two views: the camera image on a canvas (pixel (0,0) is the centre of the top-left pixel,
+// docs/conventions.md) and the site from above, a Leaflet map (site ENU metres, east right, north
+// up). Every change is a POST to the server, which re-solves and answers with the whole state.
 "use strict";
 (function () {
   const $ = (id) => document.getElementById(id);
   const st = { state: null, map: null, selected: null, pendingPx: null, pendingEn: null, ground: true,
-               image: null, ready: false, tiles: new Map(), tilesLoaded: [], webTiles: new Map(), drag: null };
+               image: null, ready: false, tilesLoaded: [], webTiles: new Map(), drag: null };
   let ARROW_GAIN = 20; // residual arrows magnified: 20x, less when the largest would leave the view
 
   // ---- a zoomable, pannable view: canvas = offset + scale * world (y flipped for the map) ----
@@ -31,7 +32,7 @@
     this.ox = cx - (cx - this.ox) * f; this.oy = cy - (cy - this.oy) * f; this.s *= f;
   };
 
-  const img = new View($("image"), false), map = new View($("map"), true);
+  const img = new View($("image"), false);
 
   // image-continuous X (pixel i covers [i, i+1)) <-> pixel u = X - 0.5
   const pxToWorld = (u, v) => [u + 0.5, v + 0.5];
@@ -43,15 +44,6 @@
   }
 
   function fitImage() { const [w, h] = camSize(); img.fit(0, 0, w, h); }
-  function fitMap() {
-    let b = [Infinity, Infinity, -Infinity, -Infinity];
-    const grow = (e, n) => { b = [Math.min(b[0], e), Math.min(b[1], n), Math.max(b[2], e), Math.max(b[3], n)]; };
-    for (const l of st.state.landmarks) grow(l.enu_m[0], l.enu_m[1]);
-    for (const l of st.map.lanes) for (const p of l.en_m) grow(p[0], p[1]);
-    if (st.state.solve.ok) grow(st.state.solve.position_enu_m[0], st.state.solve.position_enu_m[1]);
-    if (!isFinite(b[0])) b = [-50, -50, 50, 50];
-    map.fit(b[0] - 5, b[1] - 5, b[2] + 5, b[3] + 5);
-  }
 
   // ---- the server ----
   async function getJSON(url) { const r = await fetch(url); if (!r.ok) throw new Error(url + ": " + r.status); return r.json(); }
@@ -141,90 +133,128 @@
     label(ctx, 6, c.height - 8, `residual arrows x${ARROW_GAIN}`, "#fff");
   }
 
-  function drawMap() {
-    const c = map.c, ctx = c.getContext("2d"), S = st.state;
-    ctx.setTransform(1, 0, 0, 1, 0, 0); ctx.fillStyle = "#cfd8dc"; ctx.fillRect(0, 0, c.width, c.height);
+  // ---- the site from above: a Leaflet map on the site's ENU metres (L.CRS.Simple: lat = N,
+  // lng = E). With an orthophoto its grid sets the CRS: at Leaflet zoom 0 one screen pixel is one
+  // source cell (level 0, full resolution), zoom -L is level L, and the tile grid starts at the
+  // raster's north-west corner, so Leaflet's tile (z, x, y) is the server's /api/tiles/-z/x/y.
+  let lmap = null, A = 1; // A: screen pixels per metre at zoom 0
+  const ll = (e, n) => L.latLng(n, e);
+  const enOf = (p) => [p.lng, p.lat];
+  const mapScale = () => A * Math.pow(2, lmap.getZoom()); // screen pixels per metre
+  let layers = null; // the markers and drawings redrawn on each state
+
+  function createMap() {
     const o = st.map.ortho;
-    if (st.map.tiles) drawWebTiles(ctx);
-    if (o) drawOrthoTiles(ctx, o);
-    if (!o && !st.map.tiles) { // a plain drawing of the lanes
-      ctx.lineCap = "round";
-      for (const l of st.map.lanes) {
-        ctx.strokeStyle = l.junction ? "#b0bec5" : "#78909c"; ctx.lineWidth = Math.max(1, l.width_m * map.s);
-        ctx.beginPath();
-        l.en_m.forEach((p, k) => { const [x, y] = map.toCanvas(p[0], p[1]); k ? ctx.lineTo(x, y) : ctx.moveTo(x, y); });
-        ctx.stroke();
-      }
+    let b = 0, d = 0, ex = 0, ny = 0;
+    if (o) { A = 1 / o.cell_m; ex = o.e0_m - o.cell_m / 2; ny = o.n0_m + o.cell_m / 2; b = -A * ex; d = A * ny; }
+    const crs = L.extend({}, L.CRS.Simple, { transformation: new L.Transformation(A, b, -A, d) });
+    const zmin = Math.log2(0.05 / A), zmax = Math.log2(Math.max(512, 8 * A) / A); // 0.05 px/m .. 8x the cells
+    lmap = L.map("map", { crs, zoomSnap: 0, minZoom: zmin, maxZoom: zmax, scrollWheelZoom: false, doubleClickZoom: false,
+                          boxZoom: false, keyboard: false, zoomAnimation: false, fadeAnimation: false,
+                          markerZoomAnimation: false, inertia: false, attributionControl: false });
+    lmap.setView([0, 0], 0);
+    const c = lmap.getContainer();
+    c.addEventListener("wheel", (e) => { // the page's zoom step (1.25x a notch), at once, around the pointer
+      e.preventDefault();
+      const z = Math.max(zmin, Math.min(zmax, lmap.getZoom() + Math.log2(e.deltaY < 0 ? 1.25 : 0.8)));
+      lmap.setZoomAround(lmap.mouseEventToContainerPoint(e), z, { animate: false });
+    }, { passive: false });
+    if (st.map.tiles) { lmap.createPane("web").style.zIndex = 150; new WebTiles().addTo(lmap); } // under the orthophoto
+    if (o) {
+      const T = o.tile_px;
+      const Ortho = L.GridLayer.extend({
+        createTile(t, done) { // level -t.z's RGBA tile from the server, onto a canvas
+          const cv = L.DomUtil.create("canvas"), key = `${-t.z}/${t.x}/${t.y}`;
+          cv.width = T; cv.height = T;
+          fetch("/api/tiles/" + key).then((r) => r.ok ? r.arrayBuffer() : null).then((buf) => {
+            if (buf && buf.byteLength === T * T * 4) {
+              cv.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(buf), T, T), 0, 0);
+              st.tilesLoaded.push(key);
+            }
+            done(null, cv);
+          }).catch((err) => done(err, cv));
+          return cv;
+        },
+      });
+      const bounds = L.latLngBounds(ll(ex, ny - o.height * o.cell_m), ll(ex + o.width * o.cell_m, ny));
+      new Ortho({ tileSize: T, bounds, minZoom: zmin, maxZoom: zmax, minNativeZoom: -(o.levels - 1), maxNativeZoom: 0,
+                  updateWhenZooming: false }).addTo(lmap);
     }
-    for (const l of S.landmarks) {
-      const dragged = st.drag && st.drag.view === map && st.drag.id === l.id;
-      const [x, y] = dragged ? map.toCanvas(...st.drag.at) : map.toCanvas(l.enu_m[0], l.enu_m[1]);
-      dot(ctx, x, y, 5, colorOf(l), "#000");
-      if (st.selected === l.id) dot(ctx, x, y, 10, null, "#ffff00");
-      label(ctx, x + 7, y - 5, l.id, "#fff");
+    layers = L.layerGroup().addTo(lmap);
+    lmap.on("zoomend", onZoom);
+    lmap.on("click", (ev) => { const [e, n] = enOf(ev.latlng); mapClick(e, n, nearestLandmark(e, n, 10)); });
+    lmap.on("mousemove", (ev) => readoutMap(...enOf(ev.latlng)));
+    // a map pick is dropped where the pointer is released (the marker's own position is whole pixels)
+    // (a pointerup: Leaflet's drag cancels the pointerdown, and with it the mouse events that follow)
+    document.addEventListener("pointerup", (ev) => { st.lastUp = ev; }, true);
+  }
+
+  function onZoom() {
+    const o = st.map.ortho;
+    if (o) { // the level Leaflet's GridLayer reads (its tile zoom: the map's zoom rounded); cells as squares from 2x
+      st.orthoLevel = Math.max(0, Math.min(o.levels - 1, -Math.round(lmap.getZoom())));
+      lmap.getContainer().classList.toggle("pixels", mapScale() * o.cell_m >= 2);
+    }
+    drawMap();
+  }
+
+  function fitMap() {
+    let b = [Infinity, Infinity, -Infinity, -Infinity];
+    const grow = (e, n) => { b = [Math.min(b[0], e), Math.min(b[1], n), Math.max(b[2], e), Math.max(b[3], n)]; };
+    for (const l of st.state.landmarks) grow(l.enu_m[0], l.enu_m[1]);
+    for (const l of st.map.lanes) for (const p of l.en_m) grow(p[0], p[1]);
+    if (st.state.solve.ok) grow(st.state.solve.position_enu_m[0], st.state.solve.position_enu_m[1]);
+    if (!isFinite(b[0])) b = [-50, -50, 50, 50];
+    lmap.fitBounds(L.latLngBounds(ll(b[0] - 5, b[1] - 5), ll(b[2] + 5, b[3] + 5)), { animate: false, padding: [10, 10] });
+  }
+
+  const colorClass = (l) => l.flagged ? "flagged" : (l.pick_px ? "picked" : "open");
+  const textIcon = (text, cls) => L.divIcon({ className: "rs-text " + cls, html: esc(text), iconSize: [0, 0] });
+  function drawMap() {
+    const S = st.state, s = mapScale();
+    layers.clearLayers();
+    if (!st.map.ortho && !st.map.tiles) { // a plain drawing of the lanes
+      for (const l of st.map.lanes)
+        L.polyline(l.en_m.map((p) => ll(p[0], p[1])), { color: l.junction ? "#b0bec5" : "#78909c", weight: Math.max(1, l.width_m * s),
+                                                        lineCap: "round", interactive: false }).addTo(layers);
     }
     if (S.solve.ok) { // the camera: position, heading, 2-sigma ellipse of its E-N position
       const p = S.solve.position_enu_m, yaw = S.solve.yaw_pitch_roll_deg[0] * Math.PI / 180;
-      const [x, y] = map.toCanvas(p[0], p[1]);
       const C = S.solve.covariance_position_en_m2, a = C[0], b = C[1], d = C[3];
       const tr = (a + d) / 2, disc = Math.sqrt(Math.max(0, (a - d) * (a - d) / 4 + b * b));
       const l1 = tr + disc, l2 = Math.max(0, tr - disc), ang = 0.5 * Math.atan2(2 * b, a - d); // major axis from east, anticlockwise
-      const r1 = 2 * Math.sqrt(l1), r2 = 2 * Math.sqrt(l2);
-      ctx.save(); ctx.translate(x, y); ctx.rotate(-ang);
-      ctx.beginPath(); ctx.ellipse(0, 0, Math.max(r1 * map.s, 1), Math.max(r2 * map.s, 1), 0, 0, 2 * Math.PI);
-      ctx.strokeStyle = "#ff6d00"; ctx.lineWidth = 2; ctx.stroke(); ctx.restore();
-      ctx.beginPath(); ctx.moveTo(x, y); ctx.lineTo(x + 30 * Math.sin(yaw), y - 30 * Math.cos(yaw));
-      ctx.strokeStyle = "#ff6d00"; ctx.lineWidth = 3; ctx.stroke();
-      dot(ctx, x, y, 6, "#ff6d00", "#000");
-      label(ctx, x + 8, y + 16, `camera, 2σ ${r1.toFixed(2)} × ${r2.toFixed(2)} m`, "#ffd180");
+      const r1 = 2 * Math.sqrt(l1), r2 = 2 * Math.sqrt(l2), R1 = Math.max(r1, 1 / s), R2 = Math.max(r2, 1 / s);
+      const ring = [];
+      for (let k = 0; k < 64; k++) {
+        const t = 2 * Math.PI * k / 64, x = R1 * Math.cos(t), y = R2 * Math.sin(t);
+        ring.push(ll(p[0] + x * Math.cos(ang) - y * Math.sin(ang), p[1] + x * Math.sin(ang) + y * Math.cos(ang)));
+      }
+      const cam = { color: "#ff6d00", interactive: false };
+      L.polygon(ring, { ...cam, weight: 2, fill: false }).addTo(layers);
+      L.polyline([ll(p[0], p[1]), ll(p[0] + 30 / s * Math.sin(yaw), p[1] + 30 / s * Math.cos(yaw))], { ...cam, weight: 3 }).addTo(layers);
+      L.circleMarker(ll(p[0], p[1]), { ...cam, radius: 6, color: "#000", weight: 1.5, fillColor: "#ff6d00", fillOpacity: 1 }).addTo(layers);
+      L.marker(ll(p[0], p[1]), { icon: textIcon(`camera, 2σ ${r1.toFixed(2)} × ${r2.toFixed(2)} m`, "camera"), interactive: false }).addTo(layers);
     }
-    if (st.pendingEn) { const [x, y] = map.toCanvas(...st.pendingEn); dot(ctx, x, y, 7, null, "#ff00ff"); }
+    for (const l of S.landmarks) { // draggable when a map pick; a surveyed landmark stays where the survey put it
+      const movable = l.kind === "map-pick";
+      const icon = L.divIcon({ className: `rs-landmark ${colorClass(l)}${st.selected === l.id ? " selected" : ""}`,
+                               html: `<span class="label">${esc(l.id)}</span>`, iconSize: [10, 10] });
+      const m = L.marker(ll(l.enu_m[0], l.enu_m[1]), { icon, draggable: movable, keyboard: false }).addTo(layers);
+      m.on("click", (ev) => { // the landmark nearest the pointer: icons of landmarks a few pixels apart overlap
+        const [e, n] = enOf(lmap.mouseEventToLatLng(ev.originalEvent));
+        mapClick(e, n, nearestLandmark(e, n, 10) || l);
+      });
+      if (movable) m.on("dragend", () => {
+        const [e, n] = enOf(st.lastUp ? lmap.mouseEventToLatLng(st.lastUp) : m.getLatLng());
+        post("/api/landmark/move", { landmark: l.id, e, n });
+      });
+      else m.on("mousedown", () => status(`${l.id} is surveyed: it stays where the survey put it (only map picks move)`));
+    }
+    if (st.pendingEn) L.circleMarker(ll(...st.pendingEn), { radius: 7, color: "#ff00ff", weight: 1.5, fill: false, interactive: false }).addTo(layers);
   }
 
-  // ---- basemaps: tiles read at the resolution the view needs ----
-  // the orthophoto (--ortho): level L has cells of 2^L source cells on the site's grid; the finest
-  // level whose cells are not smaller than a screen pixel, down to the source's own pixels
-  function orthoLevel(o) {
-    const L = Math.floor(Math.log2(1 / (o.cell_m * map.s)));
-    return Math.max(0, Math.min(o.levels - 1, L));
-  }
-  function orthoTile(key) { // the tile's bitmap, fetched once (null while it loads)
-    let t = st.tiles.get(key);
-    if (t === undefined) {
-      st.tiles.set(key, null);
-      fetch("/api/tiles/" + key).then((r) => r.ok ? r.arrayBuffer() : null).then((b) => {
-        if (!b) return;
-        const T = st.map.ortho.tile_px, id = new ImageData(new Uint8ClampedArray(b), T, T);
-        return createImageBitmap(id).then((bm) => { st.tiles.set(key, bm); st.tilesLoaded.push(key); render(); });
-      }).catch(() => {});
-      return null;
-    }
-    return t;
-  }
-  function drawOrthoTiles(ctx, o) {
-    const c = map.c, T = o.tile_px;
-    const [w0, n1] = map.toWorld(0, 0), [w1, n0] = map.toWorld(c.width, c.height);
-    const ex = o.e0_m - o.cell_m / 2, ny = o.n0_m + o.cell_m / 2; // the grid's north-west corner
-    const drawLevel = (L, only) => {
-      const span = T * o.cell_m * (1 << L); // metres a tile covers
-      const i0 = Math.max(0, Math.floor((w0 - ex) / span)), i1 = Math.min(Math.ceil(o.width / (T << L)) - 1, Math.floor((w1 - ex) / span));
-      const j0 = Math.max(0, Math.floor((ny - n1) / span)), j1 = Math.min(Math.ceil(o.height / (T << L)) - 1, Math.floor((ny - n0) / span));
-      let missing = 0;
-      for (let j = j0; j <= j1; j++) for (let i = i0; i <= i1; i++) {
-        const key = `${L}/${i}/${j}`, bm = only ? (st.tiles.get(key) || null) : orthoTile(key);
-        if (!bm) { missing++; continue; }
-        const [x, y] = map.toCanvas(ex + i * span, ny - j * span);
-        ctx.drawImage(bm, x, y, span * map.s, span * map.s);
-      }
-      return missing;
-    };
-    const L = orthoLevel(o);
-    ctx.imageSmoothingEnabled = map.s * o.cell_m < 2;
-    if (L + 1 < o.levels) drawLevel(L + 1, true); // the coarser tiles already here, underneath while these load
-    drawLevel(L, false);
-    st.orthoLevel = L;
-  }
-  // web tiles (--tiles): web mercator z/x/y drawn onto the site's ENU by the local linearisation
+  // web tiles (--tiles): web mercator z/x/y drawn onto the site's ENU by the local linearisation,
+  // on a canvas over the map's view (a Leaflet layer in a pane under the orthophoto's)
   const lonLatToEn = (lon, lat) => {
     const g = st.map.geo, J = g.den_dlonlat, dl = lon - g.lon0, dp = lat - g.lat0;
     return [J[0] * dl + J[1] * dp, J[2] * dl + J[3] * dp];
@@ -237,33 +267,45 @@
     const k = Math.pow(2, z);
     return [x / k * 360 - 180, Math.atan(Math.sinh(Math.PI * (1 - 2 * y / k))) * 180 / Math.PI];
   };
-  function drawWebTiles(ctx) {
-    const t = st.map.tiles, c = map.c, lat0 = st.map.geo.lat0 * Math.PI / 180;
-    const z = Math.max(0, Math.min(t.max_zoom, Math.round(Math.log2(156543.03392 * Math.cos(lat0) * map.s / 1.0))));
-    const k = Math.pow(2, z);
-    const corner = (cx, cy) => enToLonLat(...map.toWorld(cx, cy));
-    const ll = [corner(0, 0), corner(c.width, 0), corner(0, c.height), corner(c.width, c.height)];
-    const xOf = (lon) => (lon + 180) / 360 * k;
-    const yOf = (lat) => { const r = lat * Math.PI / 180; return (1 - Math.log(Math.tan(r) + 1 / Math.cos(r)) / Math.PI) / 2 * k; };
-    const x0 = Math.max(0, Math.floor(Math.min(...ll.map((p) => xOf(p[0]))))), x1 = Math.min(k - 1, Math.floor(Math.max(...ll.map((p) => xOf(p[0])))));
-    const y0 = Math.max(0, Math.floor(Math.min(...ll.map((p) => yOf(p[1]))))), y1 = Math.min(k - 1, Math.floor(Math.max(...ll.map((p) => yOf(p[1])))));
-    if ((x1 - x0 + 1) * (y1 - y0 + 1) > 64) return; // zoomed out past the site: not worth a flood of requests
-    for (let y = y0; y <= y1; y++) for (let x = x0; x <= x1; x++) {
-      const url = t.url.replace("{z}", z).replace("{x}", x).replace("{y}", y);
-      let im = st.webTiles.get(url);
-      if (!im) {
-        im = new Image(); im.referrerPolicy = "no-referrer"; im.onload = () => render();
-        im.src = url; st.webTiles.set(url, im);
+  const WebTiles = L.Layer.extend({
+    onAdd(m) {
+      this.cv = L.DomUtil.create("canvas", "leaflet-layer rs-web-tiles", m.getPane("web"));
+      m.on("move zoom viewreset resize", this.draw, this);
+      this.draw();
+    },
+    onRemove(m) { L.DomUtil.remove(this.cv); m.off("move zoom viewreset resize", this.draw, this); },
+    draw() {
+      const t = st.map.tiles, m = this._map, size = m.getSize(), cv = this.cv, lat0 = st.map.geo.lat0 * Math.PI / 180;
+      cv.width = size.x; cv.height = size.y;
+      L.DomUtil.setPosition(cv, m.containerPointToLayerPoint([0, 0]));
+      const ctx = cv.getContext("2d");
+      const z = Math.max(0, Math.min(t.max_zoom, Math.round(Math.log2(156543.03392 * Math.cos(lat0) * mapScale() / 1.0))));
+      const k = Math.pow(2, z);
+      const corner = (cx, cy) => enToLonLat(...enOf(m.containerPointToLatLng([cx, cy])));
+      const lls = [corner(0, 0), corner(size.x, 0), corner(0, size.y), corner(size.x, size.y)];
+      const xOf = (lon) => (lon + 180) / 360 * k;
+      const yOf = (lat) => { const r = lat * Math.PI / 180; return (1 - Math.log(Math.tan(r) + 1 / Math.cos(r)) / Math.PI) / 2 * k; };
+      const x0 = Math.max(0, Math.floor(Math.min(...lls.map((p) => xOf(p[0]))))), x1 = Math.min(k - 1, Math.floor(Math.max(...lls.map((p) => xOf(p[0])))));
+      const y0 = Math.max(0, Math.floor(Math.min(...lls.map((p) => yOf(p[1]))))), y1 = Math.min(k - 1, Math.floor(Math.max(...lls.map((p) => yOf(p[1])))));
+      if ((x1 - x0 + 1) * (y1 - y0 + 1) > 64) return; // zoomed out past the site: not worth a flood of requests
+      const toC = (e, n) => { const p = m.latLngToContainerPoint(ll(e, n)); return [p.x, p.y]; };
+      for (let y = y0; y <= y1; y++) for (let x = x0; x <= x1; x++) {
+        const url = t.url.replace("{z}", z).replace("{x}", x).replace("{y}", y);
+        let im = st.webTiles.get(url);
+        if (!im) {
+          im = new Image(); im.referrerPolicy = "no-referrer"; im.onload = () => this._map && this.draw();
+          im.src = url; st.webTiles.set(url, im);
+        }
+        if (!im.complete || !im.naturalWidth) continue;
+        const p = (a, b) => toC(...lonLatToEn(...tileLonLat(z, a, b)));
+        const [ax, ay] = p(x, y), [bx, by] = p(x + 1, y), [cx, cy] = p(x, y + 1), W = im.naturalWidth, H = im.naturalHeight;
+        ctx.save();
+        ctx.setTransform((bx - ax) / W, (by - ay) / W, (cx - ax) / H, (cy - ay) / H, ax, ay);
+        ctx.imageSmoothingEnabled = true; ctx.drawImage(im, 0, 0); ctx.restore();
       }
-      if (!im.complete || !im.naturalWidth) continue;
-      const p = (a, b) => map.toCanvas(...lonLatToEn(...tileLonLat(z, a, b)));
-      const [ax, ay] = p(x, y), [bx, by] = p(x + 1, y), [cx, cy] = p(x, y + 1), W = im.naturalWidth, H = im.naturalHeight;
-      ctx.save();
-      ctx.setTransform((bx - ax) / W, (by - ay) / W, (cx - ax) / H, (cy - ay) / H, ax, ay);
-      ctx.imageSmoothingEnabled = true; ctx.drawImage(im, 0, 0); ctx.restore();
-    }
-    st.webZoom = z;
-  }
+      st.webZoom = z;
+    },
+  });
 
   // the ground uncertainty as a heat map: its samples coloured (green 0.1 m .. red 10 m, log) in a
   // small bitmap stretched over the image with bilinear smoothing; the legend in the corner
@@ -373,8 +415,9 @@
 
   function nearestLandmark(e, n, radiusPx) {
     let best = null, bd = radiusPx;
+    const s = mapScale();
     for (const l of st.state.landmarks) {
-      const d = Math.hypot(l.enu_m[0] - e, l.enu_m[1] - n) * map.s;
+      const d = Math.hypot(l.enu_m[0] - e, l.enu_m[1] - n) * s;
       if (d < bd) { bd = d; best = l; }
     }
     return best;
@@ -388,14 +431,6 @@
     }
     return best ? { id: best, fixed: false } : null;
   }
-  function grabLandmark(p) { // the landmark dot within 8 screen px; a surveyed one cannot move
-    let best = null, bd = 8;
-    for (const l of st.state.landmarks) {
-      const [x, y] = map.toCanvas(l.enu_m[0], l.enu_m[1]), d = Math.hypot(x - p[0], y - p[1]);
-      if (d < bd) { bd = d; best = l; }
-    }
-    return best ? { id: best.id, fixed: best.kind !== "map-pick" } : null;
-  }
   const readoutImage = (X, Y) => { const [u, v] = worldToPx(X, Y); $("readout").textContent = `u ${u.toFixed(2)}, v ${v.toFixed(2)} px`; };
   const readoutMap = (e, n) => {
     const [lon, lat] = enToLonLat(e, n);
@@ -407,14 +442,13 @@
     else if (st.pendingEn) post("/api/landmark", { e: st.pendingEn[0], n: st.pendingEn[1], u, v });
     else { st.pendingPx = [u, v]; status("now click its place on the map"); render(); }
   }, grabPick, (id, X, Y) => { const [u, v] = worldToPx(X, Y); post("/api/pick", { landmark: id, u, v }); }, readoutImage);
-  mouse(map, (e, n) => {
-    const l = nearestLandmark(e, n, 10);
+  function mapClick(e, n, l) { // a click on the map at ground (e, n), on or near landmark l (may be null)
     if (st.pendingPx) {
       if (l) post("/api/pick", { landmark: l.id, u: st.pendingPx[0], v: st.pendingPx[1] });
       else post("/api/landmark", { e, n, u: st.pendingPx[0], v: st.pendingPx[1] });
     } else if (l) { st.selected = l.id; st.pendingEn = null; status(`${l.id}: now click it in the image`); render(); }
     else { st.selected = null; st.pendingEn = [e, n]; status("new landmark: now click its place in the image"); render(); }
-  }, grabLandmark, (id, e, n) => post("/api/landmark/move", { landmark: id, e, n }), readoutMap);
+  }
 
   function step(dir) { // the next / previous landmark without a pick
     const L = st.state.landmarks, k0 = L.findIndex((l) => l.id === st.selected);
@@ -444,7 +478,7 @@
       if (!ok) return;
       const l = st.state.landmarks.find((x) => !before.has(x.id)) || sel;
       const [e0, n0] = lonLatToEn(lon, lat);
-      map.ox += map.c.width / 2 - map.toCanvas(e0, n0)[0]; map.oy += map.c.height / 2 - map.toCanvas(e0, n0)[1];
+      lmap.panTo(ll(e0, n0), { animate: false });
       if (l) { st.selected = l.id; status(`${l.id} at ${lat}, ${lon}: now click it in the image`); }
       render();
     });
@@ -464,27 +498,32 @@
     else if (k === "0") { fitImage(); fitMap(); render(); }
     else if (k === "g") { st.ground = !st.ground; $("ground").checked = st.ground; render(); }
   });
-  new ResizeObserver(() => { if (size(img.c) | size(map.c)) render(); }).observe(document.body);
+  new ResizeObserver(() => { if (size(img.c)) render(); if (lmap) lmap.invalidateSize({ animate: false }); }).observe(document.body);
 
   // for tests and scripts: where a pixel or a ground point is on the screen (client coordinates)
   window.rsPick = {
     get state() { return st.state; },
     get ready() { return st.ready; },
     toScreen(view, a, b) {
-      const v = view === "image" ? img : map, r = v.c.getBoundingClientRect();
-      const [x, y] = view === "image" ? v.toCanvas(...pxToWorld(a, b)) : v.toCanvas(a, b);
-      return { x: r.left + x * r.width / v.c.width, y: r.top + y * r.height / v.c.height };
+      if (view !== "image") { // the map's container point, as Leaflet places it
+        const c = lmap.getContainer(), r = c.getBoundingClientRect(); // unrounded (latLngToContainerPoint rounds)
+        const p = lmap.layerPointToContainerPoint(lmap.project(ll(a, b)).subtract(lmap.getPixelOrigin()));
+        const k = L.DomUtil.getScale(c); // Leaflet's CSS-pixel scale (a fractional flex width rounds offsetWidth)
+        return { x: r.left + (c.clientLeft + p.x) * k.x, y: r.top + (c.clientTop + p.y) * k.y };
+      }
+      const r = img.c.getBoundingClientRect(), [x, y] = img.toCanvas(...pxToWorld(a, b));
+      return { x: r.left + x * r.width / img.c.width, y: r.top + y * r.height / img.c.height };
     },
     toWorld(view, x, y) { // client coordinates -> pixel (u, v) or ground (e, n)
-      const v = view === "image" ? img : map, r = v.c.getBoundingClientRect();
-      const w = v.toWorld((x - r.left) * v.c.width / r.width, (y - r.top) * v.c.height / r.height);
-      return view === "image" ? worldToPx(...w) : w;
+      if (view !== "image") return enOf(lmap.mouseEventToLatLng({ clientX: x, clientY: y })); // as Leaflet reads an event
+      const r = img.c.getBoundingClientRect();
+      return worldToPx(...img.toWorld((x - r.left) * img.c.width / r.width, (y - r.top) * img.c.height / r.height));
     },
     get orthoLevel() { return st.orthoLevel; },
     get tilesLoaded() { return st.tilesLoaded; },
     get webZoom() { return st.webZoom; },
-    zoomMap(e, n, s) { // centre ground point (e, n) at s canvas pixels per metre
-      map.s = s; map.ox = map.c.width / 2 - s * e; map.oy = map.c.height / 2 + s * n; render();
+    zoomMap(e, n, s) { // centre ground point (e, n) at s screen pixels per metre
+      lmap.setView(ll(e, n), Math.log2(s / A), { animate: false });
     },
     zoomImage(u, v, s) { // centre pixel (u, v) at s canvas pixels per image pixel
       img.s = s; const [X, Y] = pxToWorld(u, v); img.ox = img.c.width / 2 - s * X; img.oy = img.c.height / 2 - s * Y; render();
@@ -492,7 +531,7 @@
   };
 
   (async function start() {
-    size(img.c); size(map.c);
+    size(img.c);
     st.state = await getJSON("/api/state");
     st.map = await getJSON("/api/map");
     const [w, h] = camSize();
@@ -503,7 +542,8 @@
     if (st.map.tiles) kinds.push("web tiles");
     $("mapkind").textContent = kinds.length ? kinds.join(" over ") : "plain map: landmarks and lanes";
     $("attribution").textContent = st.map.tiles ? st.map.tiles.attribution : "";
-    fitImage(); fitMap(); render();
+    createMap();
+    fitImage(); fitMap(); onZoom(); render();
     status(st.state.solve.ok ? "solved" : st.state.solve.message);
     st.ready = true;
   })().catch((e) => status(String(e), true));

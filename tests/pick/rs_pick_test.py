@@ -75,6 +75,7 @@ class Browser:
         self.w, self.r = os.fdopen(w3, "wb"), os.fdopen(r4, "rb")
         self.buf = b""
         self.id = 0
+        self.requests = []  # every URL the page asked for, once Network.enable is called
         self.session = None
         targets = self.call("Target.getTargets")["targetInfos"]
         page = next(t for t in targets if t["type"] == "page")
@@ -100,6 +101,8 @@ class Browser:
                 self.buf += chunk
             raw, self.buf = self.buf.split(b"\0", 1)
             m = json.loads(raw)
+            if m.get("method") == "Network.requestWillBeSent":
+                self.requests.append(m["params"]["request"]["url"])
             if m.get("id") == self.id:
                 if "error" in m:
                     raise RuntimeError(f"{method}: {m['error']}")

@@ -6,6 +6,9 @@ each tile one solid colour) served by this test over HTTP and named with --tiles
 
 Checks, each against an oracle of its own:
 - the page's Content-Security-Policy allows images from the tile server's origin and no other;
+  the map runs the Leaflet version pick/web/package-lock.json pins (window.L.version), served by
+  roadside, and every request the browser made (DevTools' Network log) went to roadside or to the
+  tile server;
 - zoomed in with the wheel at a landmark, the page asks for level-0 tiles (the raster's own
   pixels), and the tile served there equals GDAL's read of the same 256 x 256 window of the file,
   byte for byte (and holds the checkerboard, which the level-1 tile has averaged away);
@@ -167,8 +170,13 @@ def main():
             check(sorted(img_src) == sorted(["'self'", "data:", "blob:", f"http://127.0.0.1:{ts.port}"]),
                   f"img-src allows the tile origin alone: {csp}")
             check("default-src 'self'" in csp and "connect-src 'self'" in csp, f"nothing else fetched: {csp}")
+            br.call("Network.enable")
             br.call("Page.navigate", url=srv.url)
             check(br.wait("window.rsPick && window.rsPick.ready"), "the page did not become ready")
+            # the map is Leaflet's (npm's, compiled into roadside: pick/web/package-lock.json)
+            version = br.eval("window.L && window.L.version")
+            check(version == json.load(open(os.path.join(pt.SRC, "pick", "web", "package-lock.json")))
+                  ["packages"]["node_modules/leaflet"]["version"], f"the page runs the locked Leaflet: {version}")
             M = json.loads(urllib.request.urlopen(srv.url + "api/map").read())
             check(M["ortho"]["width"] == N and abs(M["ortho"]["cell_m"] - CELL) < 1e-12,
                   f"the orthophoto at its own resolution: {M['ortho']}")
@@ -307,6 +315,12 @@ def main():
             w = S["solve"].get("warnings") or ""
             check("run with --" not in w, f"no warning names an option pick lacks: {w}")
             rt_page = np.array(S["solve"]["rt_cam_enu"]) if S["solve"]["ok"] else None
+            # everything the page asked for came from roadside or the tile server (DevTools' log)
+            tile_origin = f"http://127.0.0.1:{ts.port}/"
+            away = [u for u in br.requests if not u.startswith((srv.url, tile_origin, "data:", "blob:"))]
+            check(br.requests and not away, f"requests beyond roadside and the tile server: {away[:5]}")
+            print(f"Leaflet {version}; {len(br.requests)} requests, "
+                  f"{sum(u.startswith(tile_origin) for u in br.requests)} to the tile server, none elsewhere")
         finally:
             br.close()
             srv.stop()

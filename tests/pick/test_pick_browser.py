@@ -7,6 +7,7 @@ camera (mrcal's projection: the oracle for where it is seen). Checks: residual n
 the page from the fourth pair on; an extra pick is undone with the 'u' key; 's' saves; then
 `roadside calib` on the saved site finds the page's pose to 1e-6 (rt_cam_enu from the
 .cameramodel, read by mrcal; position in metres and yaw/pitch/roll in degrees from cam1.json).
+Also: the orthophoto's (RGB) edge tile the server sends is GDAL's read of the same window.
 The browser's own screenshots go to $ROADSIDE_PICK_SHOTS when it is set (docs/pick.md's)."""
 import glob
 import json
@@ -51,6 +52,20 @@ def main():
             check(r.returncode == 0 and frames, f"a twin background for the screenshots: {r.stderr}")
             image = ["--image", frames[0]] if frames else []
         srv = pt.Server(site, "--camera", "cam1", "--ortho", ortho, *image)
+        # roadside ortho's file is RGB (3 bands): its level-0 tile is GDAL's read of the window, opaque
+        # (test_pick_basemaps checks an RGBA file; a 3-band read once packed 3 bytes a pixel)
+        import urllib.request
+        from osgeo import gdal
+        ds = gdal.Open(ortho)
+        tx, ty = (ds.RasterXSize - 1) // 256, (ds.RasterYSize - 1) // 256  # an edge tile: part image, part beyond
+        w, h = ds.RasterXSize - 256 * tx, ds.RasterYSize - 256 * ty
+        served = np.frombuffer(urllib.request.urlopen(f"{srv.url}api/tiles/0/{tx}/{ty}").read(), np.uint8).reshape(256, 256, 4)
+        oracle = ds.ReadAsArray(256 * tx, 256 * ty, w, h).transpose(1, 2, 0)
+        check(ds.RasterCount == 3 and np.array_equal(served[:h, :w, :3], oracle) and (served[:h, :w, 3] == 255).all()
+              and not served[h:, :, 3].any() and not served[:, w:, 3].any(),
+              f"RGB tile 0/{tx}/{ty}: GDAL's read of its {w}x{h} window, opaque, transparent beyond: "
+              f"{np.count_nonzero(served[:h, :w, :3] != oracle)} bytes differ")
+        ds = None
         br = pt.Browser(tmp, 1280, 860)
         try:
             br.call("Page.navigate", url=srv.url)
