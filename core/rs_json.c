@@ -175,3 +175,36 @@ rs_status rs_json_object(const char *text, size_t begin, size_t end, const char 
         return closed(text, vend, end, name, err);
     }
 }
+
+static int compare_names(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+const char *rs_json_repeated_key(const cJSON *item, const char **object_key)
+{
+    if (!item || !(cJSON_IsObject(item) || cJSON_IsArray(item))) return NULL;
+    size_t n = 0;
+    for (const cJSON *m = item->child; m; m = m->next) n++;
+    if (cJSON_IsObject(item) && n > 1) {
+        const char **names = malloc(n * sizeof *names);
+        if (names) { // (out of memory: the names go unchecked, as cJSON would take them)
+            size_t k = 0;
+            for (const cJSON *m = item->child; m; m = m->next) names[k++] = m->string ? m->string : "";
+            qsort(names, n, sizeof *names, compare_names);
+            const char *twice = NULL;
+            for (k = 1; k < n && !twice; k++)
+                if (!strcmp(names[k - 1], names[k])) twice = names[k];
+            free(names);
+            if (twice) {
+                if (object_key) *object_key = item->string ? item->string : "";
+                return twice;
+            }
+        }
+    }
+    for (const cJSON *m = item->child; m; m = m->next) {
+        const char *twice = rs_json_repeated_key(m, object_key);
+        if (twice) return twice;
+    }
+    return NULL;
+}

@@ -33,6 +33,12 @@ rs_status rs_json_object(const char *text, size_t begin, size_t end, const char 
 // Parses text[begin, end) with cJSON. out: *item, owned by the caller (cJSON_Delete).
 rs_status rs_json_parse(struct cJSON **item, const char *text, size_t begin, size_t end, const char *name, rs_err *err);
 
+// The first member name that an object of item (item itself or any object nested in it) holds
+// twice, or NULL when every object's names are distinct (cJSON keeps both and its lookups find
+// the first: a file with a repeated key means two things). O(n log n) in each object's members.
+// out: *object_key, when not NULL: the name of the member holding that object ("" for item)
+const char *rs_json_repeated_key(const struct cJSON *item, const char **object_key);
+
 // 1-based line number of byte `offset` of text.
 int rs_json_line(const char *text, size_t offset);
 

@@ -153,7 +153,11 @@ static rs_status get_point(const where *w, const cJSON *o, double K, double q[2]
 static rs_status check_entry(where *w, const cJSON *o, size_t offset, rs_err *err)
 {
     w->at = offset;
-    return cJSON_IsObject(o) ? RS_OK : bad(w, err, RS_ERR_PARSE, "not an object");
+    if (!cJSON_IsObject(o)) return bad(w, err, RS_ERR_PARSE, "not an object");
+    const char *in = NULL, *twice = rs_json_repeated_key(o, &in);
+    return twice ? bad(w, err, RS_ERR_PARSE, "\"%.100s\" appears twice in %s%.100s (which one is meant?)", twice,
+                       *in ? "member " : "the entry", in)
+                 : RS_OK;
 }
 
 // ---- ground truth ----
@@ -188,10 +192,12 @@ static const char *const gt_keys[3] = {"images", "annotations", "categories"};
 
 static rs_status gt_top(void *vctx, const char *key, size_t begin, size_t end, rs_err *err)
 {
-    (void)err;
     gt_ctx *c = vctx;
     for (int k = 0; k < 3; k++)
         if (!strcmp(key, gt_keys[k])) {
+            if (c->has[k]) // cJSON would take the first, a reader of the text the last
+                return rs_err_set(err, RS_ERR_PARSE, "%s: \"%s\" appears twice in the file (which one is meant?)",
+                                  c->w.name, key);
             c->span[k][0] = begin;
             c->span[k][1] = end;
             c->has[k] = true;

@@ -88,6 +88,10 @@ static rs_status coco_entry(void *ctx, size_t index, const cJSON *o, size_t offs
     reader *r = ctx;
     coco_where w = {r, index, rs_json_line(r->text, offset)};
     if (!cJSON_IsObject(o)) return coco_bad(&w, err, RS_ERR_PARSE, "not an object");
+    const char *in = NULL, *twice = rs_json_repeated_key(o, &in);
+    if (twice)
+        return coco_bad(&w, err, RS_ERR_PARSE, "\"%.100s\" appears twice in %s%.100s (which one is meant?)", twice,
+                        *in ? "member " : "the entry", in);
     rs_localise_detection *d = push(r);
     if (!d) return rs_err_set(err, RS_ERR_NOMEM, "%s: out of memory", r->name);
     d->line = w.line;

@@ -75,6 +75,14 @@ BAD = [
      ["categories[2]: id: category 1 listed twice"]),
     ("gt without annotations", with_gt(lambda g: g.pop("annotations")), DETS, [], 1, ['no "annotations" list']),
     ("gt not an object", "[]", DETS, [], 1, ["gt.json:1: JSON syntax: expected an object"]),
+    # a repeated key (issue 42): cJSON keeps both and would take the first, silently
+    ("dets repeated key", GT, json.dumps(DETS).replace('"score": 0.9', '"score": 0.9, "score": 0.1', 1), [], 1,
+     ['entry 0: "score" appears twice in the entry']),
+    ("gt repeated key",
+     json.dumps(GT).replace('"bbox": [0, 0, 10, 10]', '"bbox": [0, 0, 10, 10], "bbox": [5, 5, 1, 1]', 1),
+     DETS, [], 1, ['annotations[0]: "bbox" appears twice in the entry']),
+    ("gt repeated list", json.dumps(GT)[:-1] + ', "annotations": []}', DETS, [], 1,
+     ['"annotations" appears twice in the file']),
     ("gt by value not scalar", with_gt(lambda g: g["images"][0].update(condition=[1])), DETS, ["--by", "condition"], 1,
      ["images[0]: condition: not a string, number or boolean"]),
     # usage errors: exit 2
