@@ -153,3 +153,13 @@ bool rs_text_parse_integer(long long *out, char *why, const char *s, long long l
     *out = v;
     return true;
 }
+
+rs_status rs_text_check_no_nul(const char *text, size_t len, const char *name, rs_err *err)
+{
+    const char *z = memchr(text, 0, len);
+    if (!z) return RS_OK;
+    int line = 1;
+    for (const char *p = text; p < z; p++) line += *p == '\n';
+    return rs_err_set(err, RS_ERR_PARSE, "%s:%d: a NUL byte: not a text file (every later line would be lost)",
+                      name ? name : "text", line);
+}

@@ -59,6 +59,11 @@ rs_status rs_text_read_line( // out
     // in
     FILE *f, size_t max_line_bytes, const char *name, rs_err *err);
 
+// Refuses a text read whole that holds a NUL byte (C string functions would stop there and drop
+// every later line): "NAME:LINE: a NUL byte: not a text file". For readers that split a text
+// they hold in memory themselves.
+rs_status rs_text_check_no_nul(const char *text, size_t len, const char *name, rs_err *err);
+
 // True when t is a decimal number: [+-]digits[.digits][(e|E)[+-]digits], with digits on at
 // least one side of the point, and nothing else (no blanks, no hexadecimal, no nan or inf).
 bool rs_text_is_decimal(const char *t);

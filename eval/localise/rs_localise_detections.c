@@ -15,6 +15,7 @@
 
 #include "core/rs_io.h"
 #include "core/rs_json.h"
+#include "core/rs_text.h"
 #include "eval/localise/rs_localise.h"
 
 typedef struct {
@@ -157,11 +158,17 @@ static rs_status read_coco(reader *r, const char *path, rs_err *err)
 static bool number(const char *s, double *x)
 {
     while (*s == ' ' || *s == '\t') s++;
+    size_t n = strlen(s);
+    while (n && (s[n - 1] == ' ' || s[n - 1] == '\t' || s[n - 1] == '\r')) n--;
+    char t[64];
+    if (n == 0 || n >= sizeof t) return false;
+    memcpy(t, s, n);
+    t[n] = 0;
+    if (!rs_text_is_decimal(t)) return false; // (strtod would take 0x10, inf, nan)
     char *end;
     errno = 0;
-    *x = strtod(s, &end);
-    while (*end == ' ' || *end == '\t' || *end == '\r') end++;
-    return end != s && *end == '\0' && errno != ERANGE && isfinite(*x);
+    *x = strtod(t, &end);
+    return *end == '\0' && errno != ERANGE && isfinite(*x);
 }
 
 // Splits line (modified) at any of `seps` into at most max fields; returns the count.
@@ -276,8 +283,13 @@ typedef rs_status (*line_fn)(reader *r, char *line, int lineno, void *ctx, rs_er
 static rs_status each_line(reader *r, const char *path, line_fn fn, void *ctx, rs_err *err)
 {
     char *text = NULL;
-    rs_status st = rs_io_read_file(&text, NULL, path, err);
+    size_t len = 0;
+    rs_status st = rs_io_read_file(&text, &len, path, err);
     if (st) return st;
+    if ((st = rs_text_check_no_nul(text, len, path, err))) {
+        free(text);
+        return st;
+    }
     const char *saved = r->name;
     r->name = path;
     int lineno = 0;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "core/rs_text.h"
 #include "eval/localise/rs_localise.h"
 
 enum { NCOLS = 16 };
@@ -175,6 +176,7 @@ static bool parse_number(const char *s, double *x, bool empty_nan)
         *x = NAN;
         return empty_nan;
     }
+    if (!rs_text_is_decimal(s)) return false; // (strtod would take 0x10, inf, nan)
     char *end;
     errno = 0;
     *x = strtod(s, &end);
@@ -183,6 +185,7 @@ static bool parse_number(const char *s, double *x, bool empty_nan)
 
 static bool parse_int(const char *s, long long *x)
 {
+    if (!rs_text_is_decimal(s) || strpbrk(s, ".eE")) return false;
     char *end;
     errno = 0;
     *x = strtoll(s, &end, 10);

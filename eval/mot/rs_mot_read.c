@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/rs_io.h"
+#include "core/rs_text.h"
 #include "eval/mot/internal/rs_mot_internal.h"
 
 #define TIME_TOL_S 1e-6
@@ -120,7 +121,7 @@ static rs_status cell_number(double *x, const csv_table *t, long r, int c, bool 
     if (!*s && optional) return RS_OK;
     char *end;
     *x = strtod(s, &end);
-    if (!*s || *end)
+    if (!*s || *end || !rs_text_is_decimal(s)) // (strtod would take 0x10, inf, nan)
         return rs_err_set(err, RS_ERR_PARSE, "%s:%d: %s: \"%s\" is not a number", t->name, t->line[r], t->header[c], s);
     if (!isfinite(*x))
         return rs_err_set(err, RS_ERR_INVALID, "%s:%d: %s: not finite", t->name, t->line[r], t->header[c]);
@@ -360,8 +361,11 @@ rs_status rs_mot_load(rs_mot_data **data, const char *tracks_path, const char *g
 {
     *data = NULL;
     char *tt = NULL, *gg = NULL;
-    rs_status st = rs_io_read_file(&tt, NULL, tracks_path, err);
-    if (!st) st = rs_io_read_file(&gg, NULL, gt_path, err);
+    size_t nt = 0, ng = 0;
+    rs_status st = rs_io_read_file(&tt, &nt, tracks_path, err);
+    if (!st) st = rs_text_check_no_nul(tt, nt, tracks_path, err);
+    if (!st) st = rs_io_read_file(&gg, &ng, gt_path, err);
+    if (!st) st = rs_text_check_no_nul(gg, ng, gt_path, err);
     if (!st) st = rs_mot_parse(data, tt, tracks_path, gg, gt_path, err);
     free(tt);
     free(gg);

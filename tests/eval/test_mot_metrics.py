@@ -349,6 +349,13 @@ def bad_inputs(d):
     with open(bad, "w") as f:
         f.write("time_s,track_id,e_m,n_m\n0,T,1,x\n")
     expect(["--tracks", bad, "--gt-tracks", g], 1, ["bad.csv:2", "n_m", "not a number"], "not a number")
+    # issue 42: a NUL byte dropped every later row; 0x10 read as 16
+    with open(bad, "w") as f:
+        f.write("time_s,track_id,e_m,n_m\n0,T,1,1\n\0\n1,T,2,2\n")
+    expect(["--tracks", bad, "--gt-tracks", g], 1, ["bad.csv:3", "NUL"], "a NUL byte")
+    with open(bad, "w") as f:
+        f.write("time_s,track_id,e_m,n_m\n0,T,0x10,1\n")
+    expect(["--tracks", bad, "--gt-tracks", g], 1, ["bad.csv:2", "e_m", "not a number"], "hexadecimal")
     with open(bad, "w") as f:
         f.write("time_s,track_id,e_m,n_m\n0,T,1,1\n0,T,2,2\n")
     expect(["--tracks", bad, "--gt-tracks", g], 1, ["bad.csv:3", "track_id"], "a track twice at one time")

@@ -208,6 +208,17 @@ def main():
         p = run("localise", mot_bad, *base, "-o", o)
         check(p.returncode == 1 and f"{mot_bad}:2: bb_height: missing" in p.stderr and not os.path.exists(o),
               f"MOT short line: rc {p.returncode}, {p.stderr!r}")
+        # issue 42: a NUL byte dropped every later row; 0x10 read as 16
+        with open(mot_bad, "w") as f:
+            f.write("1,-1,10,20,30,40,0.9\n\0\n2,-1,10,20,30,40,0.9\n")
+        p = run("localise", mot_bad, *base, "-o", o)
+        check(p.returncode == 1 and f"{mot_bad}:2: a NUL byte" in p.stderr and not os.path.exists(o),
+              f"MOT NUL: rc {p.returncode}, {p.stderr!r}")
+        with open(mot_bad, "w") as f:
+            f.write("1,-1,10,20,30,40,0.9\n2,-1,0x10,20,30,40,0.9\n")
+        p = run("localise", mot_bad, *base, "-o", o)
+        check(p.returncode == 1 and f"{mot_bad}:2: bb_left" in p.stderr and not os.path.exists(o),
+              f"MOT hexadecimal: rc {p.returncode}, {p.stderr!r}")
         yolo_bad = os.path.join(tmp, "yolo-bad")
         os.makedirs(yolo_bad)
         with open(os.path.join(yolo_bad, "000001.txt"), "w") as f:
