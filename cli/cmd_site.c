@@ -110,6 +110,8 @@ static void print_ground_model(const rs_site_ground_model *m, const char *indent
 
 static int cmd_check(int argc, char **argv)
 {
+    if (argc == 2 && argv[1][0] == '-') // an option it does not have, not a folder named "--x"
+        return rs_cli_usage_error("site", "check: unknown option '%s' (it takes one SITE folder)", argv[1]);
     if (argc != 2) return rs_cli_usage_error("site", "check takes one SITE folder");
     rs_site_report *report = NULL;
     rs_err err = {0};

@@ -33,6 +33,13 @@ def main():
         lines = [line for line in p.stderr.splitlines() if line.strip() and not line.startswith("Try ")]
         check(p.returncode == 2 and len(lines) == 1 and "--no-such-option" in lines[0],
               f"{c} --no-such-option: exit {p.returncode}, error lines {lines}")
+    # a lone leading-dash argument is an option it does not have, not a site folder named so
+    # (issue 42: `site check --bogus` read the folder "--bogus" and listed its missing files)
+    for args in (["site", "check", "--bogus"], ["site", "describe", "--bogus"]):
+        p = rs_check.run(*args)
+        lines = [line for line in p.stderr.splitlines() if line.strip() and not line.startswith("Try ")]
+        check(p.returncode == 2 and len(lines) == 1 and "unknown option '--bogus'" in lines[0],
+              f"{' '.join(args)}: exit {p.returncode}, error lines {lines}")
 
     src = "".join(open(os.path.join(SOURCE, "calib", f)).read() for f in os.listdir(os.path.join(SOURCE, "calib"))
                   if f.endswith((".c", ".cc")))
