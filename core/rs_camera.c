@@ -19,6 +19,11 @@
 #include "core/rs_text.h"
 
 #define MAX_IMAGE_SIDE_PX 1000000
+#define MAX_TAN_FIELD     1000 // tan of the widest half-field: 89.94 deg
+#define MAX_ASPECT        10   // fx / fy, either way
+#define MAX_DISTORTION    1e4  // a distortion (or spline) parameter's magnitude
+#define MAX_ROTATION_RAD  100  // a rotation vector's component: any rotation is within pi
+#define MAX_TRANSLATION_M 1e7  // the local ENU frame: Earth-sized
 
 void rs_camera_free(rs_camera *cam)
 {
@@ -58,11 +63,42 @@ rs_status rs_camera_check(const rs_camera *cam, const char *path, rs_err *err)
     for (int k = 0; k < cam->Nintrinsics; k++)
         if (!isfinite(cam->intrinsics[k]))
             return rs_err_set(err, RS_ERR_INVALID, "%s: intrinsics: not all finite", path);
-    if (mrcal_lensmodel_metadata(&cam->lensmodel).has_core && !(cam->intrinsics[0] > 0 && cam->intrinsics[1] > 0))
-        return rs_err_set(err, RS_ERR_INVALID, "%s: intrinsics: fx = %g, fy = %g: both must be > 0", path,
-                          cam->intrinsics[0], cam->intrinsics[1]);
     for (int i = 0; i < 6; i++)
         if (!isfinite(cam->rt_cam_enu[i])) return rs_err_set(err, RS_ERR_INVALID, "%s: extrinsics: non-finite", path);
+
+    // Numbers no camera has. Beyond these bounds mrcal 2.2's unprojection (libdogleg) can loop for
+    // ever (tests/fuzz found cx = 6.4e11 px, fy = 1e19 px, a distortion coefficient of 1e153), and
+    // what would come out is not a camera: each bound is orders of magnitude past real lenses.
+    const double *k = cam->intrinsics;
+    const bool core = mrcal_lensmodel_metadata(&cam->lensmodel).has_core;
+    if (core && !(k[0] > 0 && k[1] > 0))
+        return rs_err_set(err, RS_ERR_INVALID, "%s: intrinsics: fx = %g, fy = %g: both must be > 0", path, k[0], k[1]);
+    if (core && !(k[0] <= MAX_ASPECT * k[1] && k[1] <= MAX_ASPECT * k[0]))
+        return rs_err_set(err, RS_ERR_INVALID,
+                          "%s: intrinsics: fx = %g, fy = %g: pixels %g times as tall as wide (at most %g either way)",
+                          path, k[0], k[1], k[0] / k[1], (double)MAX_ASPECT);
+    if (core) {
+        // No pixel more than MAX_TAN_FIELD focal lengths from the principal point (tan 89.94 deg
+        // for a pinhole); without an image size the pixel (0, 0) stands in.
+        const double u = fmax(fabs(k[2]), fabs((cam->width ? cam->width : 1) - 1 - k[2])) / k[0];
+        const double v = fmax(fabs(k[3]), fabs((cam->height ? cam->height : 1) - 1 - k[3])) / k[1];
+        if (!(u <= MAX_TAN_FIELD && v <= MAX_TAN_FIELD))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "%s: intrinsics: fx = %g, fy = %g, cx = %g, cy = %g put the image's edge %.3g focal "
+                              "lengths from the principal point (at most %g)",
+                              path, k[0], k[1], k[2], k[3], fmax(u, v), (double)MAX_TAN_FIELD);
+    }
+    for (int i = core ? 4 : 0; i < cam->Nintrinsics; i++)
+        if (!(fabs(k[i]) <= MAX_DISTORTION))
+            return rs_err_set(err, RS_ERR_INVALID,
+                              "%s: intrinsics: value %d of %s is %g: a lens parameter is at most %g in magnitude", path,
+                              i + 1, mrcal_lensmodel_name_unconfigured(&cam->lensmodel), k[i], (double)MAX_DISTORTION);
+    for (int i = 0; i < 6; i++) {
+        const double bound = i < 3 ? MAX_ROTATION_RAD : MAX_TRANSLATION_M;
+        if (!(fabs(cam->rt_cam_enu[i]) <= bound))
+            return rs_err_set(err, RS_ERR_INVALID, "%s: extrinsics: value %d is %g: %s at most %g in magnitude", path,
+                              i + 1, cam->rt_cam_enu[i], i < 3 ? "a rotation (rad) is" : "a translation (m) is", bound);
+    }
     return RS_OK;
 }
 

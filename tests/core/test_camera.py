@@ -10,7 +10,8 @@
 - ground location: the point lies on the plane (1e-9 m) and mrcal projects it back to the pixel
   (1e-6 px), for a pinhole and an OPENCV8 lens;
 - refusals name the file and field: skew, a tilted sensor, a missing file, a rotation without a
-  translation."""
+  translation, and numbers no camera has (a principal point 6e11 px away, fy = 1e19 px, k1 = 1e153,
+  a translation of 1e308 m: mrcal's unprojection looped on the first three), each within 20 s."""
 import json
 import os
 import subprocess
@@ -160,6 +161,28 @@ def main():
             "distortion_coefficients: 14 values with a tilted sensor", "tilted sensor")
     refused(dict(camera_matrix=K, rvec=rt[:3].reshape(3, 1)), "tvec (or t): missing", "rotation without translation")
     refused(dict(camera_matrix=np.eye(2)), "camera_matrix: 4 values, need 9", "2x2 K")
+    # numbers no camera has (tests/fuzz found mrcal's unprojection looping on each): refused at
+    # once, naming the file and field, where before `read` never returned
+    def refused_model(lensmodel, intrinsics, extrinsics, size, pattern, what):
+        path = os.path.join(tmp, "bad.cameramodel")
+        with open(path, "w") as f:
+            f.write(f"{{ 'lensmodel': '{lensmodel}', 'intrinsics': {intrinsics}, 'extrinsics': {extrinsics},"
+                    f" 'imagersize': {size} }}\n")
+        try:
+            r = subprocess.run([DUMP, "read", path], capture_output=True, text=True, timeout=20)
+        except subprocess.TimeoutExpired:
+            check(False, f"{what}: still reading after 20 s")
+            return
+        msg = r.stdout.strip() + r.stderr.strip()
+        check(r.returncode == 1 and path in msg and pattern in msg, f"{what}: rc {r.returncode}: {msg}")
+    refused_model("LENSMODEL_OPENCV4", [1000, 1000, 642949672968.5, 359.5, -0.2, 0, .001, 0], [2, 0, 0, 0, 0, 0],
+                  [1280, 7200], "focal lengths from the principal point (at most 1000)", "principal point 6e11 px")
+    refused_model("LENSMODEL_CAHVOR", [1000, 1e19, 639.5, 259.5, 1.01, -0.02, 0.001, 0.002, 0.003],
+                  [5, 0, 0, 0, 0, 0], [1280, 720], "pixels 1e-16 times as tall as wide", "fy = 1e19 px")
+    refused_model("LENSMODEL_OPENCV8", [1661.2, 1661.2, 959.6, 75, -0.11e154, 0.2, 3e-6, -1e-4, 0, 0, 0, 0],
+                  [0, 0, -5, 0, 0, 0], [1920, 1080], "value 5 of LENSMODEL_OPENCV8 is -1.1e+153", "k1 = -1e153")
+    refused_model("LENSMODEL_PINHOLE", [1000, 1000, 639.5, 359.5], [0, 0, 0, 0, 0, 1e308], [1280, 720],
+                  "extrinsics: value 6 is 1e+308: a translation (m) is at most 1e+07", "translation 1e308 m")
     msg, rc = read(os.path.join(tmp, "missing.cameramodel"))
     check(rc == 1 and "missing.cameramodel" in msg, f"missing file: {msg}")
 
