@@ -25,8 +25,8 @@ void rs_bench_synth_variants(rs_bench_synth_row *rows, int J)
         {"separate", "the passes' povray processes one after the other", false, true, false, false, false, false},
         {"full-frame", "no culling, no region: the whole image rendered", false, false, true, false, false, false},
         {"no-shadows", "the shadow pass skipped", false, false, false, true, false, false},
-        {"full-detail", "every vehicle's mesh in full detail (no coarse meshes)", false, false, false, false, true,
-         false},
+        {"full-detail", "every vehicle's mesh in full detail (no medium or coarse meshes)", false, false, false, false,
+         true, false},
         {"no-appearance", "the camera's look not applied (clean, sharp vehicles)", false, false, false, false, false,
          true},
     };
@@ -246,7 +246,7 @@ rs_status rs_bench_synth_run(rs_bench_synth_row *rows, int Nrows, const rs_synth
         o.separate_processes = r->separate_processes;
         o.full_frame = r->full_frame;
         o.shadows = r->shadows;
-        if (r->full_detail) o.coarse_below_px = 0;
+        if (r->full_detail) o.coarse_below_px = o.medium_below_px = 0;
         o.no_appearance = r->no_appearance;
         o.shard_index = 0;
         o.shard_count = 1;

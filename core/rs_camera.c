@@ -503,6 +503,7 @@ rs_status rs_camera_read(rs_camera *cam, rs_camera_extra *extra, const char *pat
         free(text);
         if (st == RS_OK && !triple) st = rs_camera_opencv_read(&f, path, err);
         if (st == RS_OK && !triple) st = from_opencv(cam, extra, &f, path, err);
+        if (st == RS_OK && !triple) st = rs_camera_check(cam, path, err); // numbers no camera has
     } else {
         char *text = NULL;
         size_t len = 0;

@@ -55,19 +55,19 @@ static double trimmed_sigma(float *absr, size_t n)
 }
 
 // The noise 1-sigma measured (as in rs_synth_estimate_noise_model) on a flat 3-channel patch of
-// stored level `level` with white Gaussian noise of `sigma` (fixed seed), JPEG round-tripped at
-// `quality`. *out NaN on error.
-#define JPEG_PATCH 64
-static rs_status jpeg_measured_sigma(double *out, double level, double sigma, int quality, rs_err *err)
+// stored level `level` with white Gaussian noise of `sigma` (the draws `normal`: seed 40, made
+// once by jpeg_unseen_sigma for its bisection), JPEG round-tripped at `quality`. *out NaN on error.
+#define JPEG_PATCH       64
+#define JPEG_PATCH_DRAWS (3 * JPEG_PATCH * JPEG_PATCH)
+static rs_status jpeg_measured_sigma(double *out, double level, double sigma, const double *normal, int quality,
+                                     rs_err *err)
 {
     *out = NAN;
     rs_image p = {0}, j = {0}, f = {0};
     rs_status st = rs_image_alloc(&p, JPEG_PATCH, JPEG_PATCH, 3, err);
     if (st) return st;
-    rs_rng rng;
-    rs_rng_seed(&rng, 40);
-    for (size_t i = 0; i < (size_t)3 * JPEG_PATCH * JPEG_PATCH; i++) {
-        const double v = level + sigma * rs_rng_normal(&rng);
+    for (size_t i = 0; i < JPEG_PATCH_DRAWS; i++) {
+        const double v = level + sigma * normal[i];
         p.data[i] = (float)(v < 0 ? 0 : v > 1 ? 1 : v);
     }
     float *v = malloc(sizeof(float) * 3 * JPEG_PATCH * JPEG_PATCH);
@@ -92,23 +92,29 @@ static rs_status jpeg_measured_sigma(double *out, double level, double sigma, in
 // one; a JPEG at quality 75 leaves a tenth of a 0.01 sigma).
 static rs_status jpeg_unseen_sigma(double *sigma, double level, double seen, int quality, rs_err *err)
 {
+    double *normal = malloc(sizeof(double) * JPEG_PATCH_DRAWS);
+    if (!normal) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    rs_rng rng;
+    rs_rng_seed(&rng, 40);
+    for (size_t i = 0; i < JPEG_PATCH_DRAWS; i++) normal[i] = rs_rng_normal(&rng);
     double lo = seen, hi = 64 * seen, m;
-    rs_status st = jpeg_measured_sigma(&m, level, hi, quality, err);
-    if (st) return st;
-    if (m < seen) { // even 64 x: the JPEG leaves almost nothing; keep the largest
+    rs_status st = jpeg_measured_sigma(&m, level, hi, normal, quality, err);
+    if (!st && m < seen) { // even 64 x: the JPEG leaves almost nothing; keep the largest
         *sigma = hi;
+        free(normal);
         return RS_OK;
     }
-    for (int it = 0; it < 10; it++) { // 64^(1/1024): within 0.4 %
+    for (int it = 0; it < 10 && !st; it++) { // 64^(1/1024): within 0.4 %
         const double mid = sqrt(lo * hi);
-        if ((st = jpeg_measured_sigma(&m, level, mid, quality, err))) return st;
+        if ((st = jpeg_measured_sigma(&m, level, mid, normal, quality, err))) break;
         if (m < seen)
             lo = mid;
         else
             hi = mid;
     }
-    *sigma = sqrt(lo * hi);
-    return RS_OK;
+    free(normal);
+    if (!st) *sigma = sqrt(lo * hi);
+    return st;
 }
 
 #define NOISE_BINS 16

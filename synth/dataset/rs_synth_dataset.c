@@ -39,6 +39,7 @@ void rs_synth_dataset_options_default(rs_synth_dataset_options *opt)
     opt->junction_traffic = true;
     opt->shadows = true;
     opt->coarse_below_px = 40;
+    opt->medium_below_px = 120;
     opt->frame_end = -1;
 }
 
@@ -375,6 +376,7 @@ static rs_status write_run_record(const rs_synth_dataset__run *d, const rs_synth
     cJSON_AddNumberToObject(run, "min_visibility", opt->min_visibility);
     cJSON_AddBoolToObject(run, "keep_invisible", opt->keep_invisible);
     cJSON_AddNumberToObject(run, "coarse_below_px", opt->coarse_below_px);
+    cJSON_AddNumberToObject(run, "medium_below_px", opt->medium_below_px);
     cJSON_AddBoolToObject(run, "full_frame", opt->full_frame);
     cJSON_AddStringToObject(run, "split", opt->split);
     cJSON_AddStringToObject(run, "val_split", opt->val_split);

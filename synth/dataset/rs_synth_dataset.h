@@ -117,7 +117,9 @@ typedef struct {
                                 // (benchmarks; default off)
     int coarse_below_px;        // a vehicle whose box is fewer pixels tall than this in the image
                                 // gets the coarse mesh (rs_synth_fleet_build_lod; default 40;
-                                // 0: every vehicle in full detail)
+                                // 0: none)
+    int medium_below_px;        // .. than this, the medium one (RS_SYNTH_LOD_MEDIUM; default 120;
+                                // 0: none; both 0: every vehicle in full detail)
     int jobs;                   // worker processes (default 1): worker j makes the images at
                                 // positions j, j + jobs, .. of this shard; povray spends much of
                                 // its time waiting on itself, so jobs > cores pays (bench synth)

@@ -224,7 +224,7 @@ static rs_status image_render_options(rs_synth_render_options *ropt, const rs_sy
 typedef struct {
     rs_synth_vehicle *v;    // (N,) owned: the vehicles rendered
     int (*rect)[4];         // (N,) owned: each one's canvas rectangle (rs_synth_vehicle_rect)
-    uint8_t *coarse;        // (N,) owned: 1 = the coarse mesh (smaller than opt->coarse_below_px)
+    uint8_t *coarse;        // (N,) owned: the rs_synth_lod of each (opt->coarse_below_px, medium_below_px)
     rs_synth_obj_spec *obj; // (N,) owned: a user model's spec (--models), zeroed for the others
     int N;
     int iframe; // the SUMO frame's index in frames.json, -1 for the built-in traffic
@@ -296,7 +296,10 @@ static rs_status image_vehicles(image_traffic *t, const rs_synth_dataset__run *d
             // labels alone: every vehicle's coarse mesh (rs_synth_fleet_build_lod; the box and roof
             // line exact) for a faster ID pass and visibility (docs/synth.md, "Sequences and labels
             // without rendering")
-            t->coarse[Nseen] = opt->labels_only || t->rect[Nseen][3] - t->rect[Nseen][1] + 1 < opt->coarse_below_px;
+            const int tall_px = t->rect[Nseen][3] - t->rect[Nseen][1] + 1;
+            t->coarse[Nseen] = opt->labels_only || tall_px < opt->coarse_below_px ? RS_SYNTH_LOD_COARSE
+                               : tall_px < opt->medium_below_px                   ? RS_SYNTH_LOD_MEDIUM
+                                                                                  : RS_SYNTH_LOD_FULL;
             t->obj[Nseen] = spec;
             t->v[Nseen++] = x;
         }

@@ -161,15 +161,22 @@ rs_status rs_synth_fleet_build( // out
     // in
     const rs_synth_vehicle *v, rs_err *err);
 
-// The same at a level of detail: coarse = 8 uniform stations along each body instead of 56
-// (the side profile's control points are always stations, so the roof line and the bounds stay
-// exact) and octagonal wheels instead of 24-gons, for vehicles a few pixels tall: about a
-// fifth of the triangles, so a fifth of the scene text POV-Ray parses for that vehicle
-// (docs/fleet.md, `roadside bench synth`).
+// Levels of detail of a procedural vehicle (rs_synth_fleet_build_lod): uniform stations along
+// the body and sides of a wheel. The side profile's control points are always stations, so the
+// roof line and the bounds stay exact at every level.
+typedef enum {
+    RS_SYNTH_LOD_FULL = 0,   // 56 stations, 20-gon wheels
+    RS_SYNTH_LOD_MEDIUM = 1, // 20 stations, 12-gon wheels: for vehicles up to ~120 px tall, about
+                             //   half the triangles (and of the scene text POV-Ray parses)
+    RS_SYNTH_LOD_COARSE = 2, // 8 stations, octagonal wheels: vehicles a few pixels tall (and the
+                             //   shadow pass), about a fifth of the triangles
+} rs_synth_lod;
+
+// The same at a level of detail (docs/fleet.md, `roadside bench synth`).
 rs_status rs_synth_fleet_build_lod( // out
     rs_synth_mesh *mesh,
     // in
-    const rs_synth_vehicle *v, bool coarse, rs_err *err);
+    const rs_synth_vehicle *v, rs_synth_lod lod, rs_err *err);
 
 // How a user model is declared (a vehicles file's "model" entry, a --models library's entry;
 // docs/povray.md, docs/fleet.md): its size and which of its axes point forward and up.

@@ -22,7 +22,8 @@ static void add_q(rs_synth_fleet_builder *b, int a, int bb, int c, int d, int pa
 }
 
 #define NWHEEL        20 // sides of a wheel (a multiple of 4: the lowest, front, top and rear
-#define NWHEEL_COARSE 8  // points of every ring are exact)
+#define NWHEEL_MEDIUM 12 // points of every ring are exact)
+#define NWHEEL_COARSE 8
 #define NWHEEL_MAX    20
 
 static void add_tri(rs_synth_fleet_builder *b, int a, int bb, int c, int part, int flip)
@@ -72,7 +73,8 @@ typedef struct {
 #define NLEV        10 // levels per side of a section (rounded sill, bumper, lights, shoulder, roof)
 #define NSEC        (2 * NLEV)
 #define NSEG        56
-#define NSEG_COARSE 8 // level of detail for vehicles a few pixels tall (rs_synth_fleet_build_lod)
+#define NSEG_MEDIUM 20 // levels of detail (rs_synth_lod, rs_synth_fleet_build_lod)
+#define NSEG_COARSE 8
 #define S45         0.70710678118654752
 
 // The left side (y >= 0) of the section at t: levels bottom to top, y[i] and z[i] (m). Every
@@ -328,7 +330,7 @@ static void add_arch_pair(rs_synth_fleet_builder *b, double x, double r, double 
     double ra = fmin(r + 0.06, z_max - r);
     if (ra < r + 0.01) return;
     double p[16][2];
-    int n = b->nwheel >= 20 ? 12 : 6;
+    int n = b->nwheel >= NWHEEL_MEDIUM ? 12 : 6;
     for (int k = 0; k < n; k++) {
         double a = (-15 + 210.0 * k / (n - 1)) * M_PI / 180;
         p[k][0] = x + ra * cos(a), p[k][1] = r + ra * sin(a);
@@ -486,10 +488,10 @@ static void add_two_wheeler(rs_synth_fleet_builder *b, const rs_synth_vehicle *v
 
 rs_status rs_synth_fleet_build(rs_synth_mesh *mesh, const rs_synth_vehicle *v, rs_err *err)
 {
-    return rs_synth_fleet_build_lod(mesh, v, false, err);
+    return rs_synth_fleet_build_lod(mesh, v, RS_SYNTH_LOD_FULL, err);
 }
 
-rs_status rs_synth_fleet_build_lod(rs_synth_mesh *mesh, const rs_synth_vehicle *v, bool coarse, rs_err *err)
+rs_status rs_synth_fleet_build_lod(rs_synth_mesh *mesh, const rs_synth_vehicle *v, rs_synth_lod lod, rs_err *err)
 {
     memset(mesh, 0, sizeof *mesh);
     if ((int)v->cls < 0 || v->cls >= RS_SYNTH_NCLASSES)
@@ -499,7 +501,12 @@ rs_status rs_synth_fleet_build_lod(rs_synth_mesh *mesh, const rs_synth_vehicle *
         return rs_err_set(err, RS_ERR_INVALID, "dimensions: %g x %g x %g m not resolved (rs_synth_fleet_resolve)", L, W,
                           H);
     rs_rng rng = rs_synth_fleet_stream(v->variant, RS_SYNTH_FLEET_STREAM_SHAPE);
-    rs_synth_fleet_builder b = {.nseg = coarse ? NSEG_COARSE : NSEG, .nwheel = coarse ? NWHEEL_COARSE : NWHEEL};
+    rs_synth_fleet_builder b = {.nseg = lod == RS_SYNTH_LOD_COARSE ? NSEG_COARSE
+                                        : lod                      ? NSEG_MEDIUM
+                                                                   : NSEG,
+                                .nwheel = lod == RS_SYNTH_LOD_COARSE ? NWHEEL_COARSE
+                                          : lod                      ? NWHEEL_MEDIUM
+                                                                     : NWHEEL};
     double r, tw;
     int chrome = rs_rng_uniform(&rng) < 0.35;
     switch (v->cls) {

@@ -31,7 +31,7 @@ static bool same_spec(const rs_synth_obj_spec *a, const rs_synth_obj_spec *b)
 // Resolves vehicle i and gives it a mesh: its own procedural one, or the first identical user
 // model's.
 static rs_status prepare_one(rs_synth_prepared *out, int i, const rs_synth_vehicle *vehicles,
-                             const rs_synth_obj_spec *obj, bool coarse, rs_err *err)
+                             const rs_synth_obj_spec *obj, rs_synth_lod lod, rs_err *err)
 {
     const rs_synth_vehicle *in = &vehicles[i];
     rs_synth_vehicle *v = &out->v[i];
@@ -39,7 +39,7 @@ static rs_status prepare_one(rs_synth_prepared *out, int i, const rs_synth_vehic
     if (st) return st;
     if (in->cls != RS_SYNTH_USER_MODEL) {
         out->imesh[i] = out->Nmeshes;
-        st = rs_synth_fleet_build_lod(&out->meshes[out->Nmeshes], v, coarse, err);
+        st = rs_synth_fleet_build_lod(&out->meshes[out->Nmeshes], v, lod, err);
         if (st == RS_OK) out->Nmeshes++;
         return st;
     }
@@ -71,7 +71,7 @@ rs_status rs_synth_prepare(rs_synth_prepared *out, const rs_synth_vehicle *vehic
 }
 
 rs_status rs_synth_prepare_lod(rs_synth_prepared *out, const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj,
-                               int N, const uint8_t *coarse, rs_err *err)
+                               int N, const uint8_t *lod, rs_err *err)
 {
     memset(out, 0, sizeof(*out));
     const size_t n = (size_t)(N > 0 ? N : 1);
@@ -84,7 +84,7 @@ rs_status rs_synth_prepare_lod(rs_synth_prepared *out, const rs_synth_vehicle *v
     }
     out->N = N;
     for (int i = 0; i < N; i++) {
-        rs_status st = prepare_one(out, i, vehicles, obj, coarse && coarse[i], err);
+        rs_status st = prepare_one(out, i, vehicles, obj, lod ? (rs_synth_lod)lod[i] : RS_SYNTH_LOD_FULL, err);
         if (st) {
             char id[64];
             rs_synth_safe_text(id, sizeof(id), vehicles[i].id);

@@ -29,12 +29,12 @@ rs_status rs_synth_prepare( // out
     const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N, rs_err *err);
 void rs_synth_prepared_free(rs_synth_prepared *p); // NULL-safe; zeroes *p
 
-// The same, with procedural vehicle i built coarse when coarse[i] (rs_synth_fleet_build_lod);
-// coarse may be NULL (every vehicle in full detail).
+// The same, with procedural vehicle i built at level of detail lod[i] (an rs_synth_lod,
+// rs_synth_fleet_build_lod); lod may be NULL (every vehicle in full detail).
 rs_status rs_synth_prepare_lod( // out
     rs_synth_prepared *out,
     // in
-    const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N, const uint8_t *coarse, rs_err *err);
+    const rs_synth_vehicle *vehicles, const rs_synth_obj_spec *obj, int N, const uint8_t *lod, rs_err *err);
 
 #ifdef __cplusplus
 }

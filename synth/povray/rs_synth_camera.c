@@ -85,6 +85,20 @@ rs_status rs_synth_povcam_for_canvas(rs_synth_povcam *cam, const rs_synth_canvas
     return rs_synth_povcam_init(cam, canvas->fxycxy, canvas->width, canvas->height, rt_cam_enu, err);
 }
 
+void rs_synth_povcam_crop(rs_synth_povcam *out, const rs_synth_povcam *in, const int region[4])
+{
+    *out = *in;
+    const double W = in->width, H = in->height, w = region[2] - region[0] + 1, h = region[3] - region[1] + 1;
+    const double a = region[0] / W - 0.5 + w / (2 * W), b = 0.5 - region[1] / H - h / (2 * H);
+    for (int k = 0; k < 3; k++) {
+        out->right[k] = in->right[k] * (w / W);
+        out->up[k] = in->up[k] * (h / H);
+        out->direction[k] = in->direction[k] + a * in->right[k] + b * in->up[k];
+    }
+    out->width = (int)w;
+    out->height = (int)h;
+}
+
 rs_status rs_synth_povcam_write(FILE *f, const rs_synth_povcam *cam, rs_err *err)
 {
     fprintf(f,

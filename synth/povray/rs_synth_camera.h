@@ -64,6 +64,15 @@ rs_status rs_synth_povcam_init_fisheye( // out
     // in
     double angle_deg, int size, const double rt_cam_enu[6], rs_err *err);
 
+// The perspective camera `in` cut to the rectangle `region` (x0, y0, x1, y1 inclusive, pixels of
+// in's image, within it): a (x1 - x0 + 1) x (y1 - y0 + 1) image whose pixel (i, j) is traced along
+// in's ray for pixel (x0 + i, y0 + j). From the ray formula above, with W' and H' the cut's size:
+//     right' = (W'/W) right,  up' = (H'/H) up,
+//     direction' = direction + (x0/W - 1/2 + W'/(2W)) right + (1/2 - y0/H - H'/(2H)) up.
+// POV-Ray then traces and writes only the cut (its +SC/+EC region still writes the whole frame).
+// out: *out; in: in (perspective, not fisheye), region (4,)
+void rs_synth_povcam_crop(rs_synth_povcam *out, const rs_synth_povcam *in, const int region[4]);
+
 // Writes "camera { perspective location ... right ... up ... direction ... }" (or "fisheye" with
 // its "angle") with 17 significant digits. Returns RS_ERR_IO if the stream reports an error.
 rs_status rs_synth_povcam_write(FILE *f, const rs_synth_povcam *cam, rs_err *err);

@@ -229,17 +229,14 @@ rs_status rs_synth_povray_run(const char *povray, const char *dir, const char *c
 
 void rs_synth_povray_remove_work(const char *out_dir)
 {
-    static const char *const names[] = {"pass_colour.pov",     "pass_colour.ini",
-                                        "pass_colour.png",     "pass_colour.ppm",
-                                        "pass_ids.pov",        "pass_ids.ini",
-                                        "pass_ids.png",        "pass_ids.log",
-                                        "pass_shadow.pov",     "pass_shadow.ini",
-                                        "pass_shadow.png",     "pass_shadow.log",
-                                        "pass_mirror.pov",     "pass_mirror.ini",
-                                        "pass_mirror.png",     "pass_mirror.log",
-                                        RS_SYNTH_ENV_MAP_FILE, ".povray/3.7/povray.conf",
-                                        ".povray/3.7",         ".povray",
-                                        "povray.log"};
+    static const char *const names[] = {
+        "pass_colour.pov",   "pass_colour.ini",   "pass_colour.png",   "pass_colour.ppm",     "pass_ids.pov",
+        "pass_ids.ini",      "pass_ids.png",      "pass_ids.log",      "pass_shadow.pov",     "pass_shadow.ini",
+        "pass_shadow.png",   "pass_shadow.log",   "pass_mirror.pov",   "pass_mirror.ini",     "pass_mirror.png",
+        "pass_mirror.log",   "pass_colour_2.pov", "pass_colour_2.ini", "pass_colour_2.ppm",   "pass_colour_2.log",
+        "pass_colour_3.pov", "pass_colour_3.ini", "pass_colour_3.ppm", "pass_colour_3.log",   "pass_colour_4.pov",
+        "pass_colour_4.ini", "pass_colour_4.ppm", "pass_colour_4.log", RS_SYNTH_ENV_MAP_FILE, ".povray/3.7/povray.conf",
+        ".povray/3.7",       ".povray",           "povray.log"};
     for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
         char *p = rs_io_join(out_dir, names[i]);
         if (p) (void)remove(p); // a missing file, or a folder someone else used: left as it is

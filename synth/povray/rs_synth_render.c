@@ -42,107 +42,6 @@ void rs_synth_render_result_free(rs_synth_render_result *r)
 
 // ---- culling: rs_synth_vehicle_rect (synth/povray/rs_synth_render_cull.c) ----
 
-// ---- images ----
-
-// Zeroes (transparent) everything outside the rendered rectangle: povray leaves it opaque black.
-static void mask_outside(rs_image *img, const int region[4])
-{
-    for (int y = 0; y < img->height; y++)
-        for (int x = 0; x < img->width; x++)
-            if (x < region[0] || x > region[2] || y < region[1] || y > region[3])
-                memset(&img->data[((size_t)y * img->width + x) * img->channels], 0,
-                       sizeof(float) * (size_t)img->channels);
-}
-
-// One povray process: one pass of `vehicles` seen by `cam`, rendered in `region` (x0, y0, x1,
-// y1 inclusive, pixels of cam's image) from OUT/NAME.pov into OUT/NAME.png.
-typedef struct {
-    const char *name;
-    const rs_synth_povcam *cam;
-    const rs_synth_prepared *vehicles;
-    const rs_synth_scene_options *pass;
-    int antialias;
-    int region[4];
-    bool ppm;        // 16-bit PPM without alpha (+FP16 -UA) instead of the .ini's PNG
-    const char *log; // povray's output: "povray.log" for the colour pass, NAME.log for others
-    pid_t pid;       // 0: not started
-    double t0;
-} povray_job;
-
-// Starts job j: writes NAME.pov (rs_synth_scene_write) and NAME.ini (the ID pass 8-bit PNG
-// without alpha, the others 16-bit RGBA PNG, or j->ppm), then povray with the region
-// (+SC/+EC/+SR/+ER) and one render thread, without waiting.
-static rs_status job_start(povray_job *j, const char *out_dir, const char *povray, const double fxy[2],
-                           const double ground_normal_enu[3], double ground_offset_m, rs_err *err)
-{
-    char file[64], sc[32], ec[32], sr[32], er[32];
-    snprintf(file, sizeof(file), "%s.pov", j->name);
-    char *pov = rs_io_join(out_dir, file);
-    snprintf(file, sizeof(file), "%s.ini", j->name);
-    char *ini = rs_io_join(out_dir, file);
-    rs_io_atomic a = {0};
-    rs_status st = RS_OK;
-    if (!pov || !ini) {
-        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-        goto done;
-    }
-    if ((st = rs_io_atomic_open(&a, pov, err))) goto done;
-    st = rs_synth_scene_write(a.f, j->cam, fxy, ground_normal_enu, ground_offset_m, j->vehicles, j->pass, err);
-    if ((st = rs_io_atomic_finish(&a, st, err)) ||
-        (st = rs_synth_scene_write_ini(ini, pov, j->cam, j->pass->pass, j->antialias, err)))
-        goto done;
-    // POV-Ray counts columns and rows from 1, inclusive; a value of exactly 1 would read as a
-    // fraction (the whole width), so the region starts at fraction 0.0 in that case and ends at
-    // least at column/row 2.
-    const int *r = j->region, W = j->cam->width, H = j->cam->height;
-    snprintf(sc, sizeof(sc), r[0] == 0 ? "+SC0.0" : "+SC%d", r[0] + 1);
-    snprintf(sr, sizeof(sr), r[1] == 0 ? "+SR0.0" : "+SR%d", r[1] + 1);
-    snprintf(ec, sizeof(ec), "+EC%d", r[2] + 1 < 2 ? (W > 1 ? 2 : 1) : r[2] + 1);
-    snprintf(er, sizeof(er), "+ER%d", r[3] + 1 < 2 ? (H > 1 ? 2 : 1) : r[3] + 1);
-    snprintf(file, sizeof(file), "%s.ini", j->name);
-    char ppm[64];
-    snprintf(ppm, sizeof(ppm), "+O%s.ppm", j->name);
-    const char *args[] = {file, sc, ec, sr, er, "+WT1", "+FP16", "-UA", ppm};
-    j->t0 = rs_synth_povray_now_s();
-    st = rs_synth_povray_spawn(&j->pid, povray, out_dir, j->log, args, j->ppm ? 9 : 6, err);
-done:
-    free(pov);
-    free(ini);
-    return st;
-}
-
-// Waits for job j (if started), adds its wall time to *seconds and reads NAME.png (.ppm) into
-// *img, transparent (black) outside the region.
-static rs_status job_finish(povray_job *j, rs_image *img, const char *out_dir, const char *povray, double *seconds,
-                            rs_err *err)
-{
-    if (j->pid <= 0) return RS_OK;
-    char file[64];
-    rs_status st = rs_synth_povray_reap(j->pid, povray, out_dir, j->log, err);
-    j->pid = 0;
-    *seconds += rs_synth_povray_now_s() - j->t0;
-    if (st) return st;
-    snprintf(file, sizeof(file), "%s.%s", j->name, j->ppm ? "ppm" : "png");
-    char *png = rs_io_join(out_dir, file);
-    if (!png) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
-    if ((st = rs_image_read(img, png, err)) == RS_OK && (img->width != j->cam->width || img->height != j->cam->height))
-        st = rs_err_set(err, RS_ERR_EXTERNAL, "%s: povray wrote %dx%d, expected %dx%d", png, img->width, img->height,
-                        j->cam->width, j->cam->height);
-    else if (!st)
-        mask_outside(img, j->region);
-    free(png);
-    return st;
-}
-
-// rect (x0, y0, x1, y1 inclusive; empty when x1 < x0) grown to hold r.
-static void grow(int rect[4], const int r[4])
-{
-    for (int k = 0; k < 4; k++)
-        rect[k] = rect[2] < rect[0] ? r[k]
-                  : k < 2           ? (r[k] < rect[k] ? r[k] : rect[k])
-                                    : (r[k] > rect[k] ? r[k] : rect[k]);
-}
-
 // Widens rect (x0, y0, x1, y1; empty when x1 < x0) by the canvas rectangle of vehicle v's
 // shadows: its bottom corners and its top corners projected onto the ground along each light
 // higher than 3 deg above the ground.
@@ -164,7 +63,7 @@ static void widen_by_shadows(int rect[4], const rs_synth_canvas *canvas, const d
             for (int c = 0; c < 3; c++) pts[4 + k][c] = p[c] - t * d[c];
         }
         int r[4];
-        if (rs_synth_vehicle_rect(r, canvas, rt_cam_enu, (const double(*)[3])pts, 0.05)) grow(rect, r);
+        if (rs_synth_vehicle_rect(r, canvas, rt_cam_enu, (const double(*)[3])pts, 0.05)) rs_synth_rect_grow(rect, r);
     }
 }
 
@@ -205,7 +104,7 @@ static rs_status shadow_vehicles(rs_synth_prepared *out, uint8_t **owned, const 
         for (int i = 0; i < in->N && first < 0; i++)
             if (in->imesh[i] == m && include[i]) first = i;
         if (first >= 0 && in->v[first].cls != RS_SYNTH_USER_MODEL) {
-            rs_status st = rs_synth_fleet_build_lod(&out->meshes[m], &in->v[first], true, err);
+            rs_status st = rs_synth_fleet_build_lod(&out->meshes[m], &in->v[first], RS_SYNTH_LOD_COARSE, err);
             if (st) return st;
             (*owned)[m] = 1;
         } else {
@@ -406,6 +305,8 @@ typedef struct {
     rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
     int Nlights;
     uint8_t *include;                      // (N,) owned: 0 = culled
+    int (*rects)[4];                       // (N, 4) owned: each included vehicle's canvas rectangle
+    int (*reach)[4];                       // (N, 4) owned: the same widened by its shadows
     int region[4], sregion[4], mregion[4]; // canvas rectangles: colour/ID, shadow, mirror passes
     bool ground_drawn;                     // the ground is drawn (no background to composite onto)
     rs_image mirror, headlights;           // issue 40: the canvas's mirror pass, headlights' irradiance
@@ -439,17 +340,22 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
         }
         s->include[i] = opt->full_frame || in;
         out->visible[i] = s->include[i];
+        s->rects[i][0] = s->reach[i][0] = 0, s->rects[i][2] = s->reach[i][2] = -1; // empty
         if (!in) continue;
         out->Nrendered++;
-        grow(s->region, rect);
+        rs_synth_rect_grow(s->region, rect);
+        memcpy(s->rects[i], rect, sizeof(rect));
+        memcpy(s->reach[i], rect, sizeof(rect));
+        widen_by_shadows(s->reach[i], canvas, rt_cam_enu, (const double(*)[3])corners, s->ground_normal_enu,
+                         s->ground_offset_m, s->lights, s->Nlights);
         int mrect[4];
         if (opt->mirror && rs_synth_mirror_rect(mrect, canvas, rt_cam_enu, (const double(*)[3])corners,
                                                 s->ground_normal_enu, s->ground_offset_m))
-            grow(s->mregion, mrect);
+            rs_synth_rect_grow(s->mregion, mrect);
         if (!opt->shadow) continue;
         widen_by_shadows(rect, canvas, rt_cam_enu, (const double(*)[3])corners, s->ground_normal_enu,
                          s->ground_offset_m, s->lights, s->Nlights);
-        grow(s->sregion, rect);
+        rs_synth_rect_grow(s->sregion, rect);
     }
     // Pins, and the ground when there is no background to composite onto, are part of the
     // picture too: they widen the region to the whole canvas.
@@ -463,6 +369,26 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
         }
     }
     if (opt->full_frame) out->Nrendered = N;
+}
+
+// A cluster's vehicles (include, N flags) joined by every included vehicle within
+// REFLECT_REACH_M of one of them (footprints' bounding circles): what its paint and glass
+// reflect (a neighbour's dark side in a side window), as in one scene of every vehicle.
+#define REFLECT_REACH_M 4.0
+static void add_reflected(uint8_t *include, const render_state *s)
+{
+    const int N = s->vehicles->N;
+    const rs_synth_vehicle *v = s->vehicles->v;
+    for (int j = 0; j < N; j++) {
+        if (include[j] || !s->include[j]) continue;
+        for (int i = 0; i < N && !include[j]; i++) {
+            if (include[i] != 1 || i == j) continue;
+            const double d = hypot(v[i].e_m - v[j].e_m, v[i].n_m - v[j].n_m) - hypot(v[i].length_m, v[i].width_m) / 2 -
+                             hypot(v[j].length_m, v[j].width_m) / 2;
+            if (d < REFLECT_REACH_M) include[j] = 2; // (2: added here, not a source of more)
+        }
+    }
+    for (int j = 0; j < N; j++) include[j] = include[j] != 0;
 }
 
 // The passes: colour; ID and shadow when vehicles are rendered. out: passes (3,), *i_id and
@@ -513,8 +439,8 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     int i_id, i_shadow, i_mirror;
     const int Npasses = render_passes(passes, &i_id, &i_shadow, &i_mirror, s, out);
     memcpy(out->region, s->region, sizeof(s->region)); // rendered: the union of the regions
-    if (i_shadow >= 0) grow(out->region, s->sregion);
-    povray_job jobs[4];
+    if (i_shadow >= 0) rs_synth_rect_grow(out->region, s->sregion);
+    rs_synth_povray_job jobs[4 + RS_SYNTH_MAX_CLUSTERS - 1];
     rs_synth_povcam scam, mcam; // the shadow and mirror passes: half resolution, coarse meshes
     const int W2 = (canvas->width + 1) / 2, H2 = (canvas->height + 1) / 2;
     rs_status st = RS_OK;
@@ -547,16 +473,16 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     for (int k = 0; k < Npasses; k++) {
         const bool sh = k == i_shadow;
         const int name = k == i_mirror ? 3 : k == i_shadow ? 2 : k;
-        jobs[k] = (povray_job){.name = names[name],
-                               .cam = sh              ? &scam
-                                      : k == i_mirror ? &mcam
-                                                      : &s->cam,
-                               .vehicles = sh || k == i_mirror ? &s->svehicles : s->vehicles,
-                               .pass = &passes[k],
-                               .antialias = k ? 0 : opt->antialias,
-                               .region = {s->region[0], s->region[1], s->region[2], s->region[3]},
-                               .ppm = k == 0 && ids_alpha,
-                               .log = logs[name]};
+        jobs[k] = (rs_synth_povray_job){.name = names[name],
+                                        .cam = sh              ? &scam
+                                               : k == i_mirror ? &mcam
+                                                               : &s->cam,
+                                        .vehicles = sh || k == i_mirror ? &s->svehicles : s->vehicles,
+                                        .pass = &passes[k],
+                                        .antialias = k ? 0 : opt->antialias,
+                                        .region = {s->region[0], s->region[1], s->region[2], s->region[3]},
+                                        .ppm = k == 0 && ids_alpha,
+                                        .log = logs[name]};
         if (sh || k == i_mirror) {
             const int *sr = sh ? s->sregion : s->mregion;
             const int r2[4] = {(int)fmax(0, floor((sr[0] - 0.5) / 2)), (int)fmax(0, floor((sr[1] - 0.5) / 2)),
@@ -564,16 +490,41 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
             memcpy(jobs[k].region, r2, sizeof(r2));
         }
     }
+    // the colour pass in clusters, where they pay (the ID pass gives the alpha: no pins, no
+    // drawn ground, no antialiasing; a pinhole canvas)
+    int crect[RS_SYNTH_MAX_CLUSTERS][4], Nclusters = 0, Njobs = Npasses;
+    uint8_t *cinclude = NULL;
+    rs_synth_scene_options cpasses[RS_SYNTH_MAX_CLUSTERS];
+    static const char *const cnames[RS_SYNTH_MAX_CLUSTERS] = {"pass_colour", "pass_colour_2", "pass_colour_3",
+                                                              "pass_colour_4"};
+    static const char *const clogs[RS_SYNTH_MAX_CLUSTERS] = {"povray.log", "pass_colour_2.log", "pass_colour_3.log",
+                                                             "pass_colour_4.log"};
+    if (ids_alpha && !fisheye && !opt->full_frame && s->vehicles->N > 1 &&
+        (cinclude = malloc((size_t)RS_SYNTH_MAX_CLUSTERS * (size_t)s->vehicles->N)))
+        Nclusters = rs_synth_colour_clusters(crect, cinclude, s->vehicles->N, s->include, s->rects, s->reach,
+                                             s->canvas.width, s->canvas.height, s->region);
+    for (int c = 0; c < Nclusters; c++) add_reflected(&cinclude[(size_t)c * s->vehicles->N], s);
+    for (int c = 0; c < Nclusters; c++) {
+        cpasses[c] = passes[0];
+        cpasses[c].include = &cinclude[(size_t)c * s->vehicles->N];
+        rs_synth_povray_job *j = c ? &jobs[Njobs++] : &jobs[0];
+        if (c) *j = jobs[0];
+        j->name = cnames[c];
+        j->log = clogs[c];
+        j->pass = &cpasses[c];
+        memcpy(j->region, crect[c], sizeof(crect[c]));
+    }
     rs_image imgs[4] = {{0}};
     // (pins are sized in real-image pixels: the lens's fx, fy, not the canvas's)
     const bool together = !opt->separate_processes;
-    for (int k = 0; k < Npasses; k++) {
+    for (int k = 0; k < Njobs; k++) {
         if ((k == i_id && ids_here) || (k == i_shadow && shadow_here)) continue;
         if (!st)
-            st = job_start(&jobs[k], s->out_dir, s->povray, s->camera->intrinsics, s->ground_normal_enu,
-                           s->ground_offset_m, err);
+            st = rs_synth_povray_job_start(&jobs[k], s->out_dir, s->povray, s->camera->intrinsics, s->ground_normal_enu,
+                                           s->ground_offset_m, err);
         if (!together) {
-            rs_status st2 = job_finish(&jobs[k], &imgs[k], s->out_dir, s->povray, &out->seconds_povray, err);
+            rs_status st2 = rs_synth_povray_job_finish(&jobs[k], &imgs[k < Npasses ? k : 0], s->out_dir, s->povray,
+                                                       &out->seconds_povray, err);
             st = st ? st : st2;
         }
     }
@@ -586,12 +537,14 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
     if (!st && opt->headlights && out->Nrendered > 0) // issue 40: the road lit by the headlights
         st = rs_synth_headlight_ground(&s->headlights, canvas, rt_cam_enu, s->ground_normal_enu, s->ground_offset_m,
                                        s->vehicles, s->include, opt->scene.headlight_intensity, err);
-    for (int k = 0; k < Npasses && together; k++) { // every started one waited for, the first error kept
+    for (int k = 0; k < Njobs && together; k++) { // every started one waited for, the first error kept
         rs_err e2 = {0};
-        rs_status st2 = job_finish(&jobs[k], &imgs[k], s->out_dir, s->povray, &out->seconds_povray, st ? &e2 : err);
+        rs_status st2 = rs_synth_povray_job_finish(&jobs[k], &imgs[k < Npasses ? k : 0], s->out_dir, s->povray,
+                                                   &out->seconds_povray, st ? &e2 : err);
         st = st ? st : st2;
     }
-    out->Npovray = Npasses - (ids_here ? 1 : 0) - (shadow_here ? 1 : 0);
+    free(cinclude);
+    out->Npovray = Njobs - (ids_here ? 1 : 0) - (shadow_here ? 1 : 0);
     out->Npasses = Npasses;
     *rgba = imgs[0];
     if (i_id >= 0) *idimg = imgs[1];
@@ -672,7 +625,10 @@ static rs_status render_setup(render_state *s, rs_image *bg, rs_synth_render_res
     out->ids = calloc((size_t)width * height, sizeof(uint16_t));
     out->visible = calloc((size_t)(N > 0 ? N : 1), 1);
     s->include = calloc((size_t)(N > 0 ? N : 1), 1);
-    if (!out->ids || !out->visible || !s->include) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    s->rects = calloc((size_t)(N > 0 ? N : 1), sizeof(*s->rects));
+    s->reach = calloc((size_t)(N > 0 ? N : 1), sizeof(*s->reach));
+    if (!out->ids || !out->visible || !s->include || !s->rects || !s->reach)
+        return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
     return rs_image_alloc(&out->composite, width, height, 3, err);
 }
 
@@ -719,6 +675,8 @@ done:
     rs_image_free(&idimg);
     rs_image_free(&frac);
     free(s.include);
+    free(s.rects);
+    free(s.reach);
     if (st) rs_synth_render_result_free(out);
     return st;
 }

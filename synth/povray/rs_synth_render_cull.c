@@ -1,11 +1,16 @@
 // rs_synth_render_cull.c -- the canvas rectangle of a vehicle's box: culling and the render's
-// regions (rs_synth_vehicle_rect, synth/povray/rs_synth_render.h), on a pinhole or a fisheye canvas.
+// regions (rs_synth_vehicle_rect, synth/povray/rs_synth_render.h), on a pinhole or a fisheye canvas;
+// the colour pass's clusters (rs_synth_colour_clusters, synth/povray/internal/rs_synth_render_internal.h).
 #include "synth/povray/rs_synth_render.h"
+
+#include <stdlib.h>
 
 #include <math.h>
 #include <string.h>
 
 #include <mrcal/poseutils.h>
+
+#include "synth/povray/internal/rs_synth_render_internal.h"
 
 // Clips [lo, hi] (canvas pixels, widened by margin_px) to the canvas into rect; false if it misses.
 static bool clip_rect(int rect[4], const double lo[2], const double hi[2], double margin_px, int width, int height)
@@ -92,4 +97,92 @@ bool rs_synth_vehicle_rect(int rect[4], const rs_synth_canvas *canvas, const dou
     rect[2] = (int)fmin(width - 1, floor(hi[0] + 0.5) + 1);
     rect[3] = (int)fmin(height - 1, floor(hi[1] + 0.5) + 1);
     return true;
+}
+
+void rs_synth_rect_grow(int rect[4], const int r[4])
+{
+    for (int k = 0; k < 4; k++)
+        rect[k] = rect[2] < rect[0] ? r[k]
+                  : k < 2           ? (r[k] < rect[k] ? r[k] : rect[k])
+                                    : (r[k] > rect[k] ? r[k] : rect[k]);
+}
+
+// ---- the colour pass in clusters (rs_synth_colour_clusters) ----
+
+// POV-Ray's time in the colour pass goes as the pixels it traces, and in the one rectangle
+// around every vehicle most pixels show none (a street's vehicles spread across the frame).
+// The vehicles are grouped instead: each rectangle grown by CLUSTER_MARGIN_PX, overlapping ones
+// merged (so no other vehicle's rectangle meets a group's), at most RS_SYNTH_MAX_CLUSTERS (the
+// two whose union grows least merged first); each group is one povray process on its own
+// rectangle with its vehicles, plus those whose shadow may fall there (their rectangle widened
+// by their shadows meets it: a vehicle shading another stays exact) and, added by the renderer,
+// those near enough to be seen reflected in its paint and glass. Worth it only when the groups'
+// rectangles cover less than CLUSTER_WORTH of the union's area.
+enum { CLUSTER_MARGIN_PX = 4 };
+#define CLUSTER_WORTH 0.9
+
+static bool rects_meet(const int a[4], const int b[4])
+{
+    return a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3];
+}
+
+static double rect_area(const int r[4]) { return r[2] < r[0] ? 0 : (double)(r[2] - r[0] + 1) * (r[3] - r[1] + 1); }
+
+// Merges cluster b into a (a < b < n): its rectangle, its vehicles; the last takes b's place.
+static void merge_clusters(int r[][4], int *of, int N, int a, int b, int n)
+{
+    rs_synth_rect_grow(r[a], r[b]);
+    for (int i = 0; i < N; i++) of[i] = of[i] == b ? a : of[i] == n - 1 ? b : of[i];
+    memcpy(r[b], r[n - 1], sizeof(r[b]));
+}
+
+int rs_synth_colour_clusters(int rect[RS_SYNTH_MAX_CLUSTERS][4], uint8_t *include, int N, const uint8_t *included,
+                             const int (*rects)[4], const int (*reach)[4], int W, int H, const int region[4])
+{
+    int *of = malloc(sizeof(int) * (size_t)(N > 0 ? N : 1)); // each vehicle's cluster, -1: none
+    int(*r)[4] = malloc(sizeof(*r) * (size_t)(N > 0 ? N : 1));
+    if (!of || !r) {
+        free(of), free(r);
+        return 0;
+    }
+    int n = 0;
+    for (int i = 0; i < N; i++) {
+        of[i] = -1;
+        const int *q = rects[i];
+        if (!included[i] || q[2] < q[0]) continue;
+        r[n][0] = q[0] - CLUSTER_MARGIN_PX < 0 ? 0 : q[0] - CLUSTER_MARGIN_PX;
+        r[n][1] = q[1] - CLUSTER_MARGIN_PX < 0 ? 0 : q[1] - CLUSTER_MARGIN_PX;
+        r[n][2] = q[2] + CLUSTER_MARGIN_PX >= W ? W - 1 : q[2] + CLUSTER_MARGIN_PX;
+        r[n][3] = q[3] + CLUSTER_MARGIN_PX >= H ? H - 1 : q[3] + CLUSTER_MARGIN_PX;
+        of[i] = n++;
+    }
+    for (bool merged = true; merged;) { // overlapping clusters merged until none overlap
+        merged = false;
+        for (int a = 0; a < n && !merged; a++)
+            for (int b = a + 1; b < n && !merged; b++)
+                if (rects_meet(r[a], r[b])) merge_clusters(r, of, N, a, b, n--), merged = true;
+    }
+    while (n > RS_SYNTH_MAX_CLUSTERS) { // too many: the pair whose union grows least
+        double best = INFINITY;
+        int ba = 0, bb = 1;
+        for (int x = 0; x < n; x++)
+            for (int y = x + 1; y < n; y++) {
+                int u[4] = {r[x][0], r[x][1], r[x][2], r[x][3]};
+                rs_synth_rect_grow(u, r[y]);
+                const double cost = rect_area(u) - rect_area(r[x]) - rect_area(r[y]);
+                if (cost < best) best = cost, ba = x, bb = y;
+            }
+        merge_clusters(r, of, N, ba, bb, n--);
+    }
+    double sum = 0;
+    for (int c = 0; c < n; c++) sum += rect_area(r[c]);
+    const bool worth = n >= 2 && sum < CLUSTER_WORTH * rect_area(region);
+    for (int c = 0; worth && c < n; c++) {
+        memcpy(rect[c], r[c], sizeof(rect[c]));
+        uint8_t *inc = &include[(size_t)c * N];
+        for (int i = 0; i < N; i++) inc[i] = of[i] == c || (included[i] && of[i] >= 0 && rects_meet(reach[i], r[c]));
+    }
+    free(of);
+    free(r);
+    return worth ? n : 0;
 }

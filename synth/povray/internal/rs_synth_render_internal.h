@@ -50,3 +50,50 @@ rs_status rs_synth_headlight_ground(rs_image *irr, const rs_synth_canvas *canvas
 // in,out: mirror (canvas H, W, 4) and headlights (canvas H, W, 1), either may be empty
 rs_status rs_synth_condition_into_lens(rs_synth_render_result *out, rs_image *mirror, rs_image *headlights,
                                        const float *map, rs_err *err);
+
+// rect (x0, y0, x1, y1 inclusive; empty when x1 < x0) grown to hold r (4,).
+void rs_synth_rect_grow(int rect[4], const int r[4]);
+
+// The colour pass in clusters (synth/povray/rs_synth_render_cull.c says how they are made): at
+// most RS_SYNTH_MAX_CLUSTERS canvas rectangles, each rendered by its own povray process with the
+// vehicles include[c * N + i] flags.
+// out: rect (RS_SYNTH_MAX_CLUSTERS, 4), include (RS_SYNTH_MAX_CLUSTERS * N)
+// in:  N vehicles; included (N,) the culling's flags; rects (N, 4) each included vehicle's canvas
+//      rectangle (empty: x1 < x0); reach (N, 4) the same widened by its shadows; the canvas's
+//      W x H; region (4,) the union of the rectangles
+// Returns the number of clusters, 0 when one rectangle is as good (or out of memory).
+#define RS_SYNTH_MAX_CLUSTERS 4
+int rs_synth_colour_clusters( // out
+    int rect[RS_SYNTH_MAX_CLUSTERS][4], uint8_t *include,
+    // in
+    int N, const uint8_t *included, const int (*rects)[4], const int (*reach)[4], int W, int H, const int region[4]);
+
+// One povray process: one pass of `vehicles` seen by `cam`, rendered in `region` (x0, y0, x1,
+// y1 inclusive, pixels of cam's image) from OUT/NAME.pov into OUT/NAME.png.
+typedef struct {
+    const char *name;
+    const rs_synth_povcam *cam;
+    const rs_synth_prepared *vehicles;
+    const rs_synth_scene_options *pass;
+    int antialias;
+    int region[4];
+    bool ppm;        // 16-bit PPM without alpha (+FP16 -UA) instead of the .ini's PNG
+    const char *log; // povray's output: "povray.log" for the colour pass, NAME.log for others
+    pid_t pid;       // 0: not started
+    double t0;
+    rs_synth_povcam crop; // a perspective cam cut to the region (rs_synth_povcam_crop): povray
+    bool cropped;         //   traces and writes that rectangle alone; else the region's +SC/+EC
+} rs_synth_povray_job;
+
+// Starts job j (rs_synth_render_job.c says what it writes and how povray is run), without
+// waiting. in: out_dir, povray (the executable), fxy (2,) the lens's focal lengths (pins),
+// ground_normal_enu (3,), ground_offset_m
+rs_status rs_synth_povray_job_start(rs_synth_povray_job *j, const char *out_dir, const char *povray,
+                                    const double fxy[2], const double ground_normal_enu[3], double ground_offset_m,
+                                    rs_err *err);
+
+// Waits for job j (if started), adds its wall time to *seconds and reads its image into *img:
+// the whole canvas, transparent (zero) outside the region; a cut region is pasted into *img
+// (allocated, zeroed, when empty), so that several jobs can fill one image.
+rs_status rs_synth_povray_job_finish(rs_synth_povray_job *j, rs_image *img, const char *out_dir, const char *povray,
+                                     double *seconds, rs_err *err);

@@ -128,7 +128,7 @@ static void test_fleet(void)
     enum { N = 400 };
     unsigned long long hashes[N];
     int per_class[RS_SYNTH_NCLASSES] = {0};
-    double worst = 0, tri_full = 0, tri_coarse = 0;
+    double worst = 0, tri_full = 0, tri_coarse = 0, tri_medium = 0;
     for (int s = 0; s < N; s++) {
         rs_synth_vehicle v;
         rs_err err = {0};
@@ -183,27 +183,41 @@ static void test_fleet(void)
             }
             free(text);
         }
-        // the coarse level of detail: the same box exactly, closed and outward, every part,
-        // at most a third of the triangles (two-wheelers, mostly thin bars: two thirds)
-        rs_synth_mesh mc;
-        CHECK(rs_synth_fleet_build_lod(&mc, &v, true, &err) == RS_OK, "seed %d: coarse: %s", s, err.msg);
-        double clo[3], chi[3];
-        rs_synth_mesh_bounds(clo, chi, &mc);
-        CHECK(fabs(clo[0] + v.length_m / 2) < 1e-9 && fabs(chi[0] - v.length_m / 2) < 1e-9 &&
-                  fabs(clo[1] + v.width_m / 2) < 1e-9 && fabs(chi[1] - v.width_m / 2) < 1e-9 && fabs(clo[2]) < 1e-9 &&
-                  fabs(chi[2] - v.height_m) < 1e-9,
-              "%s: coarse mesh bounds [%g %g %g] [%g %g %g] are not the box", what, clo[0], clo[1], clo[2], chi[0],
-              chi[1], chi[2]);
-        check_closed_outward(&mc, what);
-        int coarse_parts[RS_SYNTH_NPARTS] = {0};
-        for (int t = 0; t < mc.Ntri; t++) coarse_parts[mc.part[t]] = 1;
-        CHECK(memcmp(coarse_parts, parts_seen, sizeof parts_seen) == 0, "%s: the coarse mesh has other parts", what);
-        const int two_wheeler = v.cls == RS_SYNTH_MOTORCYCLE || v.cls == RS_SYNTH_BICYCLE;
-        CHECK((two_wheeler ? 3 * mc.Ntri <= 2 * m.Ntri : 3 * mc.Ntri <= m.Ntri), "%s: coarse %d triangles vs %d", what,
-              mc.Ntri, m.Ntri);
+        // the coarser levels of detail: the same box exactly, closed and outward, every part;
+        // coarse at most a third of the triangles (two-wheelers, mostly thin bars: two thirds),
+        // medium at most two thirds (two-wheelers: three quarters), and more than coarse
+        int Ncoarse = 0;
+        for (int lod = RS_SYNTH_LOD_COARSE; lod >= RS_SYNTH_LOD_MEDIUM; lod--) {
+            const char *level = lod == RS_SYNTH_LOD_COARSE ? "coarse" : "medium";
+            rs_synth_mesh mc;
+            CHECK(rs_synth_fleet_build_lod(&mc, &v, (rs_synth_lod)lod, &err) == RS_OK, "seed %d: %s: %s", s, level,
+                  err.msg);
+            double clo[3], chi[3];
+            rs_synth_mesh_bounds(clo, chi, &mc);
+            CHECK(fabs(clo[0] + v.length_m / 2) < 1e-9 && fabs(chi[0] - v.length_m / 2) < 1e-9 &&
+                      fabs(clo[1] + v.width_m / 2) < 1e-9 && fabs(chi[1] - v.width_m / 2) < 1e-9 &&
+                      fabs(clo[2]) < 1e-9 && fabs(chi[2] - v.height_m) < 1e-9,
+                  "%s: %s mesh bounds [%g %g %g] [%g %g %g] are not the box", what, level, clo[0], clo[1], clo[2],
+                  chi[0], chi[1], chi[2]);
+            check_closed_outward(&mc, what);
+            int lod_parts[RS_SYNTH_NPARTS] = {0};
+            for (int t = 0; t < mc.Ntri; t++) lod_parts[mc.part[t]] = 1;
+            CHECK(memcmp(lod_parts, parts_seen, sizeof parts_seen) == 0, "%s: the %s mesh has other parts", what,
+                  level);
+            const int two_wheeler = v.cls == RS_SYNTH_MOTORCYCLE || v.cls == RS_SYNTH_BICYCLE;
+            if (lod == RS_SYNTH_LOD_COARSE) {
+                CHECK((two_wheeler ? 3 * mc.Ntri <= 2 * m.Ntri : 3 * mc.Ntri <= m.Ntri),
+                      "%s: coarse %d triangles vs %d", what, mc.Ntri, m.Ntri);
+                tri_coarse += mc.Ntri;
+                Ncoarse = mc.Ntri;
+            } else {
+                CHECK((two_wheeler ? 4 * mc.Ntri <= 3 * m.Ntri : 3 * mc.Ntri <= 2 * m.Ntri) && mc.Ntri > Ncoarse,
+                      "%s: medium %d triangles vs %d full, %d coarse", what, mc.Ntri, m.Ntri, Ncoarse);
+                tri_medium += mc.Ntri;
+            }
+            rs_synth_mesh_free(&mc);
+        }
         tri_full += m.Ntri;
-        tri_coarse += mc.Ntri;
-        rs_synth_mesh_free(&mc);
         hashes[s] = hash_mesh(&m, v.rgb);
         rs_synth_mesh_free(&m);
     }
@@ -213,9 +227,9 @@ static void test_fleet(void)
     CHECK(distinct == N, "%d distinct variants of %d", distinct, N);
     for (int c = 0; c < RS_SYNTH_NCLASSES; c++)
         CHECK(per_class[c] >= 10, "class %s drawn %d times", rs_synth_class_name(c), per_class[c]);
-    printf("fleet: %d vehicles, %d distinct, worst mesh2 box error %.2g m; coarse meshes: "
+    printf("fleet: %d vehicles, %d distinct, worst mesh2 box error %.2g m; medium meshes: %.1f%%, coarse meshes: "
            "%.1f%% of the triangles\n",
-           N, distinct, worst, 100.0 * tri_coarse / tri_full);
+           N, distinct, worst, 100.0 * tri_medium / tri_full, 100.0 * tri_coarse / tri_full);
 }
 
 static void test_resolve_and_colours(void)
