@@ -3,6 +3,7 @@
 #include "synth/povray/rs_synth_composite.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <string.h>
 
 #include "core/rs_color.h"
@@ -74,19 +75,31 @@ rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, 
     }
     rs_rng rng;
     rs_rng_seed(&rng, opt->seed);
+    int R[4] = {W, H, -1, -1}; // the pixels changed: vehicles, shadows, the condition's terms
     for (size_t i = 0; i < N; i++) {
         // (a blurred 1 may read 1 - 1e-7: open ground, as the pass says)
         const double s = shadow ? (shadow[i] < 0 ? 0 : shadow[i] > 0.9999f ? 1 : shadow[i]) : 1;
         const float *c = &layer.data[4 * i];
         const double al = c[3];
+        bool changed = al > 0 || s < 1;
+        for (int k = 0; k < 3 && terms && !changed; k++)
+            changed = ground.data[3 * i + k] != (float)(s * bg->data[3 * i + k]);
+        if (changed) {
+            const int x = (int)(i % (size_t)W), y = (int)(i / (size_t)W);
+            if (x < R[0]) R[0] = x;
+            if (x > R[2]) R[2] = x;
+            if (y < R[1]) R[1] = y;
+            if (y > R[3]) R[3] = y;
+        }
         for (int k = 0; k < 3; k++) {
             const double b0 = bg->data[3 * i + k];
             const double b = terms ? ground.data[3 * i + k] : s * b0; // shaded, with step 3
             // 4. the layer over it
             const double lin = al * c[k] + (1 - al) * b;
             double v = rs_color_srgb_encode(lin < 0 ? 0 : lin > 1 ? 1 : lin);
-            // 5. noise topped up to the camera's at this value
-            if (look && (al > 0 || s < 1 || terms)) {
+            // 5. noise topped up to the camera's at this value (where nothing changed, the
+            // background's own noise is all there is to have)
+            if (look && changed) {
                 const double vb = rs_color_srgb_encode(b0);
                 const double carried = (1 - al) * s * rs_synth_appearance_noise_sigma(look, vb) *
                                        rs_color_srgb_decode_slope(vb) / rs_color_srgb_decode_slope(v);
@@ -97,8 +110,24 @@ rs_status rs_synth_composite_background(rs_image *out, const rs_image *rgba_in, 
             out->data[3 * i + k] = clamp01(v);
         }
     }
-    // 6. the camera's JPEG
-    if (look) st = rs_synth_appearance_jpeg(out, look, err);
+    // 6. the camera's JPEG, on the 16 px blocks (4:2:0's, on the image's own grid) that hold
+    // what changed; the background around them keeps its own compression
+    if (look && look->jpeg_quality > 0 && R[2] >= R[0]) {
+        const int x0 = R[0] / 16 * 16, y0 = R[1] / 16 * 16;
+        const int x1 = (R[2] / 16 * 16 + 15 < W ? R[2] / 16 * 16 + 15 : W - 1);
+        const int y1 = (R[3] / 16 * 16 + 15 < H ? R[3] / 16 * 16 + 15 : H - 1);
+        rs_image cut = {0};
+        if (!(st = rs_image_alloc(&cut, x1 - x0 + 1, y1 - y0 + 1, 3, err))) {
+            for (int y = y0; y <= y1; y++)
+                memcpy(&cut.data[(size_t)(y - y0) * cut.width * 3], &out->data[((size_t)y * W + x0) * 3],
+                       sizeof(float) * 3 * (size_t)cut.width);
+            if (!(st = rs_synth_appearance_jpeg(&cut, look, err)))
+                for (int y = y0; y <= y1; y++)
+                    memcpy(&out->data[((size_t)y * W + x0) * 3], &cut.data[(size_t)(y - y0) * cut.width * 3],
+                           sizeof(float) * 3 * (size_t)cut.width);
+        }
+        rs_image_free(&cut);
+    }
 done:
     rs_image_free(&layer);
     rs_image_free(&shb);

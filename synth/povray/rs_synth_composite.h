@@ -19,7 +19,9 @@
 //     sqrt(max(0, sigma(v)^2 - carried^2)) is added in stored units. So the vehicles get the
 //     whole noise of their value, a shadowed background is topped up to its darker value's noise
 //     (the multiplication scaled its own noise down), and open background pixels are untouched;
-//  6. a JPEG round trip at the background's quality (rs_synth_appearance_jpeg; none for a PNG).
+//  6. a JPEG round trip at the background's quality (rs_synth_appearance_jpeg; none for a PNG) of
+//     the 16 x 16 blocks (the image's grid) that hold a pixel 1-5 changed; the others keep the
+//     background's own compression.
 // Without a look (opt->look NULL) steps 1, 5, 6 are skipped and the shadow is not blurred: the
 // vehicles stay clean and sharp (`--no-appearance`).
 #pragma once
