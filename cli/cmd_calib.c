@@ -85,9 +85,12 @@ static void print_summary_row(const rs_site *site, int icam, const rs_calib_resu
 {
     const double *s = r->sigma_position_enu_m;
     double sigma_pos = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    char warnings[sizeof r->warnings + 512]; // landmarks named by id, as in <id>.json
+    snprintf(warnings, sizeof warnings, "%s", r->warnings[0] ? r->warnings : "-");
+    rs_calib_site_name_landmarks(warnings, sizeof warnings, site, icam);
     printf("%-12s %5d %8d %15.3f %15.3f %12.3f %10.4f %10.3f  %s\n", site->cameras[icam].id, r->Ninliers,
            r->N - r->Ninliers, rs_calib_site_rms_surveyed_px(site, icam, r, NULL), r->rms_px, sigma_pos,
-           r->sigma_yaw_pitch_roll_deg[0], r->variance_factor, r->warnings[0] ? r->warnings : "-");
+           r->sigma_yaw_pitch_roll_deg[0], r->variance_factor, warnings);
 }
 
 int rs_cli_calib(int argc, char **argv)

@@ -58,6 +58,13 @@ def main():
     check(p.returncode == 0, f"calib exit {p.returncode}: {p.stderr}")
     check("camera" in p.stdout and "rms_surveyed_px" in p.stdout and "rms_adjusted_px" in p.stdout,
           "calib prints a summary table with both residuals under their names")
+    # the summary names a dropped landmark by its id, as <id>.json does (the demo's cam3 drops
+    # L003), never by the solver's index
+    demo = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "sites", "demo")
+    p = run("calib", demo, "-o", os.path.join(tmp, "demo_calib"))
+    row = [line for line in p.stdout.splitlines() if line.startswith("cam3 ")]
+    check(p.returncode == 0 and row and "(landmark L003;" in row[0] and "(index" not in p.stdout,
+          f"calib's summary names the outlier by id: {row}")
     sitej = json.load(open(os.path.join(site, "site.json")))
     origin = (sitej["origin"]["lat"], sitej["origin"]["lon"], sitej["origin"]["h"])
     truth = {c["id"]: c for c in json.load(open(os.path.join(site, "truth", "truth.json")))["cameras"]}
