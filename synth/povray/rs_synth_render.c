@@ -352,10 +352,7 @@ static void render_cull(render_state *s, rs_synth_render_result *out)
         if (opt->mirror && rs_synth_mirror_rect(mrect, canvas, rt_cam_enu, (const double(*)[3])corners,
                                                 s->ground_normal_enu, s->ground_offset_m))
             rs_synth_rect_grow(s->mregion, mrect);
-        if (!opt->shadow) continue;
-        widen_by_shadows(rect, canvas, rt_cam_enu, (const double(*)[3])corners, s->ground_normal_enu,
-                         s->ground_offset_m, s->lights, s->Nlights);
-        rs_synth_rect_grow(s->sregion, rect);
+        if (opt->shadow) rs_synth_rect_grow(s->sregion, s->reach[i]);
     }
     // Pins, and the ground when there is no background to composite onto, are part of the
     // picture too: they widen the region to the whole canvas.
