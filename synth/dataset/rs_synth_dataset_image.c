@@ -85,6 +85,26 @@ rs_status rs_synth_dataset__prepare_camera(rs_synth_dataset__camera *c, rs_err *
     return st;
 }
 
+// The scene's light and environment over background bm: overcast or not, the sun of its time tag
+// (or of its poles' shadows), the lights and environment matched to it when its light was
+// estimated (bm prepared: rs_synth_dataset__prepare_background).
+static void background_scene(rs_synth_scene_options *scene, const rs_synth_dataset__run *d,
+                             const rs_synth_dataset__camera *c, const rs_synth_dataset__background *bm)
+{
+    scene->overcast = bm->overcast;
+    double t_s;
+    if (bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK)
+        rs_synth_sun_position(&scene->sun_azimuth_deg, &scene->sun_elevation_deg, d->site->origin.lat_deg,
+                              d->site->origin.lon_deg, t_s);
+    else if (bm->sun_ok) // no time: the sun the poles' shadows show
+        scene->sun_azimuth_deg = bm->sun.azimuth_deg, scene->sun_elevation_deg = bm->sun.elevation_deg;
+    if (bm->light_ok) {
+        rs_synth_env_estimate env; // the environment the vehicles reflect: the background's own
+        const bool env_ok = !rs_synth_env_from_image(&env, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL);
+        rs_synth_scene_match_background(scene, &bm->light, env_ok ? &env : NULL);
+    }
+}
+
 rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, rs_synth_dataset__camera *c,
                                                rs_synth_dataset__background *bm, rs_err *err)
 {
@@ -107,6 +127,15 @@ rs_status rs_synth_dataset__prepare_background(const rs_synth_dataset__run *d, r
     const bool timed = bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK;
     bm->sun_ok =
         !timed && !bm->overcast && rs_synth_sun_from_shadows(&bm->sun, &bm->linear, &c->cam, d->site, NULL) == RS_OK;
+    // issue 40: the background itself as the environment, made once here (by the parent for its
+    // workers: 0.2 s per background, and a background serves several images of several workers)
+    if (bm->light_ok) {
+        rs_synth_render_options o;
+        rs_synth_render_options_default(&o);
+        background_scene(&o.scene, d, c, bm);
+        if ((st = rs_synth_scene_env_map(&bm->env_map, &o.scene, &bm->linear, &c->cam, d->site, err))) return st;
+        bm->env_map_tried = true;
+    }
     return RS_OK;
 }
 
@@ -194,22 +223,13 @@ static rs_status image_render_options(rs_synth_render_options *ropt, const rs_sy
     *b = bm;
     // the vehicles alone over transparency; composite() puts them onto the background
     ropt->scene.ground_visible = false;
-    ropt->scene.overcast = bm->overcast;
     ropt->shadow = opt->shadows && !bm->night;
-    double t_s;
-    if (bm->time_iso && rs_synth_parse_iso8601(&t_s, bm->time_iso, "time", NULL) == RS_OK)
-        rs_synth_sun_position(&ropt->scene.sun_azimuth_deg, &ropt->scene.sun_elevation_deg, d->site->origin.lat_deg,
-                              d->site->origin.lon_deg, t_s);
-    else if (bm->sun_ok) // no time: the sun the poles' shadows show
-        ropt->scene.sun_azimuth_deg = bm->sun.azimuth_deg, ropt->scene.sun_elevation_deg = bm->sun.elevation_deg;
+    background_scene(&ropt->scene, d, c, bm);
     if (bm->light_ok) {
-        rs_synth_env_estimate env; // the environment the vehicles reflect: the background's own
-        const bool env_ok = !rs_synth_env_from_image(&env, &bm->linear, &c->cam, d->site, &d->lanes, 4, NULL);
-        rs_synth_scene_match_background(&ropt->scene, &bm->light, env_ok ? &env : NULL);
-        if (!bm->env_map_tried) { // issue 40: the background itself as the environment
-            bm->env_map_tried = true;
+        if (!bm->env_map_tried) { // (made by prepare_background, unless that failed in the parent)
             if ((st = rs_synth_scene_env_map(&bm->env_map, &ropt->scene, &bm->linear, &c->cam, d->site, err)))
                 return st;
+            bm->env_map_tried = true;
         }
         ropt->env_map = &bm->env_map;
     }

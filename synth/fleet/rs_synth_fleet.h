@@ -163,13 +163,14 @@ rs_status rs_synth_fleet_build( // out
 
 // Levels of detail of a procedural vehicle (rs_synth_fleet_build_lod): uniform stations along
 // the body and sides of a wheel. The side profile's control points are always stations, so the
-// roof line and the bounds stay exact at every level.
+// roof line and the bounds stay exact at every level; at every level the stations of a straight
+// run of the body are dropped (RS_SYNTH_LOFT_TOLERANCE_M).
 typedef enum {
-    RS_SYNTH_LOD_FULL = 0,   // 56 stations, 20-gon wheels
-    RS_SYNTH_LOD_MEDIUM = 1, // 20 stations, 12-gon wheels: for vehicles up to ~120 px tall, about
-                             //   half the triangles (and of the scene text POV-Ray parses)
+    RS_SYNTH_LOD_FULL = 0,   // 56 stations, 20-gon wheels (a car: 3,000 - 3,500 triangles)
+    RS_SYNTH_LOD_MEDIUM = 1, // 20 stations, 12-gon wheels: for vehicles up to ~120 px tall, two
+                             //   thirds of the triangles (and of the scene text POV-Ray parses)
     RS_SYNTH_LOD_COARSE = 2, // 8 stations, octagonal wheels: vehicles a few pixels tall (and the
-                             //   shadow pass), about a fifth of the triangles
+                             //   shadow pass), under half of the triangles
 } rs_synth_lod;
 
 // The same at a level of detail (docs/fleet.md, `roadside bench synth`).
@@ -177,6 +178,20 @@ rs_status rs_synth_fleet_build_lod( // out
     rs_synth_mesh *mesh,
     // in
     const rs_synth_vehicle *v, rs_synth_lod lod, rs_err *err);
+
+// How far (m) a body's section may stray from the straight line between the stations kept on
+// either side of it for the station to be dropped (rs_synth_fleet_build_lod): the middle of a
+// body is ruled (its sections change linearly between the side profile's points), so one band
+// spans it where the uniform stations cut it into many. 0.5 mm is 0.1 px at 5 m with a 1000 px
+// focal length; a third to a half of a car's triangles go.
+#define RS_SYNTH_LOFT_TOLERANCE_M 0.0005
+
+// The same with the loft's tolerance given: loft_tolerance_m < 0 keeps every station (the
+// bodies exactly as the uniform stations and the profile's points cut them).
+rs_status rs_synth_fleet_build_loft( // out
+    rs_synth_mesh *mesh,
+    // in
+    const rs_synth_vehicle *v, rs_synth_lod lod, double loft_tolerance_m, rs_err *err);
 
 // How a user model is declared (a vehicles file's "model" entry, a --models library's entry;
 // docs/povray.md, docs/fleet.md): its size and which of its axes point forward and up.

@@ -176,6 +176,33 @@ static void add_bar(rs_synth_fleet_builder *b, double xa, double za, double xb, 
     add_prism(b, p, 4, y0, y1, part);
 }
 
+// The parts of the loft's band between stations t0 and t1 (sections (y0, z0, gh0), (y1, z1,
+// gh1)), k = 0 .. NSEC - 1 round the loop; end: -1 the rear band, 1 the front one, 0 between.
+static void band_parts(int part[NSEC], const body_spec *s, double t0, double t1, double z0_top, double z1_top, int gh0,
+                       int gh1, int end, double gh_lo, double gh_hi)
+{
+    const double L = s->x_front - s->x_rear, pillar = 0.12 / L, tm = 0.5 * (t0 + t1);
+    const int both = gh0 && gh1;
+    const double slope = fabs(z1_top - z0_top) / (L * (t1 - t0));
+    const int side_glass =
+        both && tm > s->glass_t[0] && tm < s->glass_t[1] && tm > gh_lo + pillar && tm < gh_hi - pillar;
+    const int lights = end > 0 ? s->front_lights : end < 0 ? s->rear_lights : 0;
+    for (int k = 0; k < NSEC; k++) {
+        int lev = k < NLEV - 1 ? k : k >= NLEV ? NSEC - 2 - k : -1; // side band's lower level
+        part[k] = RS_SYNTH_PART_PAINT;
+        if (k == NSEC - 1)
+            part[k] = RS_SYNTH_PART_TRIM; // underside
+        else if (lev < 0)
+            part[k] = both && slope > 0.6 ? RS_SYNTH_PART_GLASS : RS_SYNTH_PART_PAINT; // roof
+        else if (lev <= 2 && end && lights)
+            part[k] = RS_SYNTH_PART_TRIM; // the bumper wraps round the corner
+        else if (lev == 3 && end && lights)
+            part[k] = end > 0 ? RS_SYNTH_PART_HEADLIGHT : RS_SYNTH_PART_TAILLIGHT;
+        else if (lev == 6 && side_glass)
+            part[k] = RS_SYNTH_PART_GLASS;
+    }
+}
+
 static void add_body(rs_synth_fleet_builder *b, const body_spec *s)
 {
     double L = s->x_front - s->x_rear;
@@ -194,58 +221,84 @@ static void add_body(rs_synth_fleet_builder *b, const body_spec *s)
             ts[j] = ts[j - 1];
             ts[j - 1] = tmp;
         }
-    int prev[NSEC] = {0}, cur[NSEC] = {0}, prev_gh = 0, first[NSEC] = {0}, first_gh = 0;
+    double y[NSEG + 1 + MAXPROF][NLEV], z[NSEG + 1 + MAXPROF][NLEV];
+    int gh[NSEG + 1 + MAXPROF];
     double gh_lo = 2, gh_hi = -1; // greenhouse extent in t, for the pillars
     for (int i = 0; i < n; i++) {
-        double y[NLEV], z[NLEV];
-        int gh;
-        section(y, z, s, ts[i], &gh);
-        if (gh) {
+        section(y[i], z[i], s, ts[i], &gh[i]);
+        if (gh[i]) {
             gh_lo = fmin(gh_lo, ts[i]);
             gh_hi = fmax(gh_hi, ts[i]);
         }
     }
-    double pillar = 0.12 / L;
-    for (int i = 0; i < n; i++) {
-        double y[NLEV], z[NLEV];
-        int gh;
-        section(y, z, s, ts[i], &gh);
+    // The stations kept: where a run of bands is straight (every section between its ends on
+    // the lines between them, within b->loft_tol_m) and of the same parts, one band spans it
+    // (the middle of a body is ruled: its sections change linearly between the profile's
+    // points). The end bands (lights and bumpers wrap round them) are kept as they are.
+    int keep[NSEG + 1 + MAXPROF], Nkeep = 0;
+    keep[Nkeep++] = 0;
+    for (int a = 0; a < n - 1;) {
+        int j = a + 1;
+        while (a >= 1 && j + 1 <= n - 2 && b->loft_tol_m >= 0) { // can the band a .. j grow to j + 1?
+            const int c = j + 1;
+            int pa[NSEC], pc[NSEC], ok = gh[c] == gh[a];
+            band_parts(pa, s, ts[a], ts[a + 1], z[a][NLEV - 1], z[a + 1][NLEV - 1], gh[a], gh[a + 1], 0, gh_lo, gh_hi);
+            band_parts(pc, s, ts[a], ts[c], z[a][NLEV - 1], z[c][NLEV - 1], gh[a], gh[c], 0, gh_lo, gh_hi);
+            ok = ok && !memcmp(pa, pc, sizeof pa);
+            for (int m = a + 1; m < c && ok; m++) {
+                int pm[NSEC];
+                band_parts(pm, s, ts[m], ts[m + 1], z[m][NLEV - 1], z[m + 1][NLEV - 1], gh[m], gh[m + 1], 0, gh_lo,
+                           gh_hi);
+                const double f = (ts[m] - ts[a]) / (ts[c] - ts[a]);
+                ok = gh[m] == gh[a] && !memcmp(pa, pm, sizeof pa);
+                for (int l = 0; l < NLEV && ok; l++)
+                    ok = fabs(y[m][l] - (y[a][l] + f * (y[c][l] - y[a][l]))) <= b->loft_tol_m &&
+                         fabs(z[m][l] - (z[a][l] + f * (z[c][l] - z[a][l]))) <= b->loft_tol_m;
+            }
+            if (!ok) break;
+            j = c;
+        }
+        keep[Nkeep++] = j;
+        a = j;
+    }
+    // A kept station is a crease or a change of part; its neighbours stay too, so that the
+    // smooth normals blending across it (rs_synth_fleet_smooth) still blend over one band of
+    // the uniform stations, not over the long band beyond (a dark wedge on a roof).
+    uint8_t kept[NSEG + 1 + MAXPROF] = {0};
+    for (int q = 0; q < Nkeep; q++) {
+        const int i = keep[q];
+        kept[i] = 1;
+        if (i > 0) kept[i - 1] = 1;
+        if (i + 1 < n) kept[i + 1] = 1;
+    }
+    Nkeep = 0;
+    for (int i = 0; i < n; i++)
+        if (kept[i]) keep[Nkeep++] = i;
+    int prev[NSEC] = {0}, cur[NSEC] = {0}, first[NSEC] = {0};
+    for (int q = 0; q < Nkeep; q++) {
+        const int i = keep[q];
         double x = s->x_rear + ts[i] * L;
         if (i == n - 1) x = s->x_front; // exact
         for (int k = 0; k < NSEC; k++) {
             int lev = k < NLEV ? k : NSEC - 1 - k;
-            cur[k] = rs_synth_fleet_add_v(b, x, k < NLEV ? y[lev] : -y[lev], z[lev]);
+            cur[k] = rs_synth_fleet_add_v(b, x, k < NLEV ? y[i][lev] : -y[i][lev], z[i][lev]);
         }
-        if (i == 0) memcpy(first, cur, sizeof cur), first_gh = gh;
-        if (i > 0 && !b->failed) {
-            double tm = 0.5 * (ts[i] + ts[i - 1]);
-            int both = gh && prev_gh;
-            double slope = fabs(b->m.v[cur[NLEV - 1]][2] - b->m.v[prev[NLEV - 1]][2]) / (L * (ts[i] - ts[i - 1]));
-            int side_glass =
-                both && tm > s->glass_t[0] && tm < s->glass_t[1] && tm > gh_lo + pillar && tm < gh_hi - pillar;
-            int end = i == 1 ? -1 : i == n - 1 ? 1 : 0;
-            int lights = end > 0 ? s->front_lights : end < 0 ? s->rear_lights : 0;
-            for (int k = 0; k < NSEC; k++) {
-                int k1 = (k + 1) % NSEC, part = RS_SYNTH_PART_PAINT;
-                int lev = k < NLEV - 1 ? k : k >= NLEV ? NSEC - 2 - k : -1; // side band's lower level
-                if (k == NSEC - 1)
-                    part = RS_SYNTH_PART_TRIM; // underside
-                else if (lev < 0)
-                    part = both && slope > 0.6 ? RS_SYNTH_PART_GLASS : RS_SYNTH_PART_PAINT; // roof
-                else if (lev <= 2 && end && lights)
-                    part = RS_SYNTH_PART_TRIM; // the bumper wraps round the corner
-                else if (lev == 3 && end && lights)
-                    part = end > 0 ? RS_SYNTH_PART_HEADLIGHT : RS_SYNTH_PART_TAILLIGHT;
-                else if (lev == 6 && side_glass)
-                    part = RS_SYNTH_PART_GLASS;
-                add_q(b, prev[k], prev[k1], cur[k1], cur[k], part, 0);
-            }
+        if (q == 0) memcpy(first, cur, sizeof cur);
+        if (q > 0 && !b->failed) {
+            const int h = keep[q - 1];
+            int part[NSEC];
+            band_parts(part, s, ts[h], ts[i], b->m.v[prev[NLEV - 1]][2], b->m.v[cur[NLEV - 1]][2], gh[h], gh[i],
+                       q == 1           ? -1
+                       : q == Nkeep - 1 ? 1
+                                        : 0,
+                       gh_lo, gh_hi);
+            for (int k = 0; k < NSEC; k++)
+                add_q(b, prev[k], prev[(k + 1) % NSEC], cur[(k + 1) % NSEC], cur[k], part[k], 0);
         }
         memcpy(prev, cur, sizeof cur);
-        prev_gh = gh;
-        if (i == n - 1) add_cap(b, cur, gh, 1, s->front_lights, s->chrome_grille);
+        if (q == Nkeep - 1) add_cap(b, cur, gh[i], 1, s->front_lights, s->chrome_grille);
     }
-    add_cap(b, first, first_gh, 0, s->rear_lights, 0);
+    add_cap(b, first, gh[0], 0, s->rear_lights, 0);
     if (s->mirrors && gh_hi > gh_lo) {
         // door mirrors at the front of the greenhouse, just above the belt line
         double y[NLEV], z[NLEV];
@@ -493,6 +546,12 @@ rs_status rs_synth_fleet_build(rs_synth_mesh *mesh, const rs_synth_vehicle *v, r
 
 rs_status rs_synth_fleet_build_lod(rs_synth_mesh *mesh, const rs_synth_vehicle *v, rs_synth_lod lod, rs_err *err)
 {
+    return rs_synth_fleet_build_loft(mesh, v, lod, RS_SYNTH_LOFT_TOLERANCE_M, err);
+}
+
+rs_status rs_synth_fleet_build_loft(rs_synth_mesh *mesh, const rs_synth_vehicle *v, rs_synth_lod lod,
+                                    double loft_tolerance_m, rs_err *err)
+{
     memset(mesh, 0, sizeof *mesh);
     if ((int)v->cls < 0 || v->cls >= RS_SYNTH_NCLASSES)
         return rs_err_set(err, RS_ERR_INVALID, "class: %d is not a procedural class", (int)v->cls);
@@ -506,7 +565,8 @@ rs_status rs_synth_fleet_build_lod(rs_synth_mesh *mesh, const rs_synth_vehicle *
                                                                    : NSEG,
                                 .nwheel = lod == RS_SYNTH_LOD_COARSE ? NWHEEL_COARSE
                                           : lod                      ? NWHEEL_MEDIUM
-                                                                     : NWHEEL};
+                                                                     : NWHEEL,
+                                .loft_tol_m = loft_tolerance_m};
     double r, tw;
     int chrome = rs_rng_uniform(&rng) < 0.35;
     switch (v->cls) {

@@ -66,7 +66,9 @@ static int needs_ior(int part)
 
 // Car paint: a base coat (solid or metallic: highlights tinted by the paint, brilliance) under
 // a clear coat (Fresnel reflection, untinted), and a film of dirt rising from the sills (a
-// layered texture, transparent where clean).
+// layered texture, transparent where clean; its turbulence in 3 octaves, not POV-Ray's 6: the
+// finer three, 12 % of its amplitude at 4.5 - 18 cm, cost 2 % of a colour pass's instructions
+// at every hit for detail a pixel does not hold).
 static void write_paint(FILE *f, const rs_synth_look *look, double height_m)
 {
     const double *c = look->paint_rgb, m = look->metallic;
@@ -77,7 +79,8 @@ static void write_paint(FILE *f, const rs_synth_look *look, double height_m)
     if (look->dirt > 0.02) {
         const double d = look->dirt > 1 ? 1 : look->dirt;
         fprintf(f,
-                "    texture { pigment { gradient y turbulence 0.25 colour_map { [0 rgbt <0.30, 0.27, 0.22, %.3f>] "
+                "    texture { pigment { gradient y turbulence 0.25 octaves 3 colour_map { [0 rgbt <0.30, 0.27, 0.22, "
+                "%.3f>] "
                 "[0.3 rgbt <0.34, 0.31, 0.26, %.3f>] [0.65 rgbt <0.34, 0.31, 0.26, 1>] [1 rgbt <0.34, 0.31, 0.26, 1>] "
                 "} scale <1, %.4f, 1> } finish { ambient 0 diffuse 0.7 specular 0 } }\n",
                 1 - 0.85 * d, 1 - 0.45 * d, 0.999 * height_m);

@@ -388,6 +388,48 @@ static void add_reflected(uint8_t *include, const render_state *s)
     for (int j = 0; j < N; j++) include[j] = include[j] != 0;
 }
 
+// A cluster's guests (there for its reflections and the shadows they cast on its vehicles) whose
+// rectangle misses the cluster's are seen there only in paint, glass and shadows: they take
+// their coarse mesh (s->svehicles's, made here when no shadow or mirror pass made it). out:
+// cveh (Nclusters,): s->vehicles's arrays but the meshes, *cmeshes (owned, NULL: none coarse).
+static rs_status guests_coarse(rs_synth_prepared cveh[], rs_synth_mesh **cmeshes, render_state *s, const int crect[][4],
+                               const uint8_t *cinclude, int Nclusters, rs_err *err)
+{
+    const rs_synth_prepared *V = s->vehicles;
+    const int N = V->N, M = V->Nmeshes;
+    *cmeshes = NULL;
+    if (M == 0) return RS_OK;
+    // coarse[c * M + m]: every user of mesh m in cluster c a procedural guest outside its rectangle
+    uint8_t *coarse = calloc((size_t)Nclusters * (size_t)M, 1);
+    if (!coarse) return rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    bool any = false;
+    for (int c = 0; c < Nclusters; c++)
+        for (int m = 0; m < M; m++) {
+            int users = 0, guests = 0;
+            for (int i = 0; i < N; i++) {
+                if (V->imesh[i] != m || !cinclude[(size_t)c * N + i]) continue;
+                const int *r = s->rects[i], *q = crect[c];
+                const bool meets = r[0] <= q[2] && q[0] <= r[2] && r[1] <= q[3] && q[1] <= r[3];
+                users++;
+                guests += !meets && V->v[i].cls != RS_SYNTH_USER_MODEL;
+            }
+            coarse[(size_t)c * M + m] = users > 0 && guests == users;
+            any |= users > 0 && guests == users;
+        }
+    rs_status st = RS_OK;
+    if (any && !s->svehicles.meshes) st = shadow_vehicles(&s->svehicles, &s->sowned, s->vehicles, s->include, err);
+    if (any && !st && !(*cmeshes = malloc(sizeof(rs_synth_mesh) * (size_t)Nclusters * (size_t)M)))
+        st = rs_err_set(err, RS_ERR_NOMEM, "out of memory");
+    for (int c = 0; any && !st && c < Nclusters; c++) {
+        cveh[c] = *V;
+        cveh[c].meshes = &(*cmeshes)[(size_t)c * M];
+        for (int m = 0; m < M; m++)
+            cveh[c].meshes[m] = coarse[(size_t)c * M + m] ? s->svehicles.meshes[m] : V->meshes[m];
+    }
+    free(coarse);
+    return st;
+}
+
 // The passes: colour; ID and shadow when vehicles are rendered. out: passes (3,), *i_id and
 // *i_shadow (-1: none); returns their count.
 static int render_passes(rs_synth_scene_options passes[4], int *i_id, int *i_shadow, int *i_mirror,
@@ -501,6 +543,9 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
         Nclusters = rs_synth_colour_clusters(crect, cinclude, s->vehicles->N, s->include, s->rects, s->reach,
                                              s->canvas.width, s->canvas.height, s->region);
     for (int c = 0; c < Nclusters; c++) add_reflected(&cinclude[(size_t)c * s->vehicles->N], s);
+    rs_synth_prepared cveh[RS_SYNTH_MAX_CLUSTERS];
+    rs_synth_mesh *cmeshes = NULL;
+    if (Nclusters > 0 && !st) st = guests_coarse(cveh, &cmeshes, s, crect, cinclude, Nclusters, err);
     for (int c = 0; c < Nclusters; c++) {
         cpasses[c] = passes[0];
         cpasses[c].include = &cinclude[(size_t)c * s->vehicles->N];
@@ -509,6 +554,7 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
         j->name = cnames[c];
         j->log = clogs[c];
         j->pass = &cpasses[c];
+        if (cmeshes) j->vehicles = &cveh[c];
         memcpy(j->region, crect[c], sizeof(crect[c]));
     }
     rs_image imgs[4] = {{0}};
@@ -541,6 +587,7 @@ static rs_status render_canvas(rs_image *rgba, rs_image *idimg, rs_image *frac, 
         st = st ? st : st2;
     }
     free(cinclude);
+    free(cmeshes);
     out->Npovray = Njobs - (ids_here ? 1 : 0) - (shadow_here ? 1 : 0);
     out->Npasses = Npasses;
     *rgba = imgs[0];

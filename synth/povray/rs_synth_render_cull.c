@@ -112,14 +112,16 @@ void rs_synth_rect_grow(int rect[4], const int r[4])
 // POV-Ray's time in the colour pass goes as the pixels it traces, and in the one rectangle
 // around every vehicle most pixels show none (a street's vehicles spread across the frame).
 // The vehicles are grouped instead: each rectangle grown by CLUSTER_MARGIN_PX, overlapping ones
-// merged (so no other vehicle's rectangle meets a group's), at most RS_SYNTH_MAX_CLUSTERS (the
-// two whose union grows least merged first); each group is one povray process on its own
-// rectangle with its vehicles, plus those whose shadow may fall there (their rectangle widened
-// by their shadows meets it: a vehicle shading another stays exact) and, added by the renderer,
-// those near enough to be seen reflected in its paint and glass. Worth it only when the groups'
-// rectangles cover less than CLUSTER_WORTH of the union's area.
+// merged (so no other vehicle's rectangle meets a group's); then, while a merge saves more than
+// it costs, the two whose union grows least are merged: a group of its own costs a povray
+// process (CLUSTER_PROCESS_PX: its start and the scene's lights and environment, about 24 ms of
+// CPU, what tracing and writing 50,000 pixels that show no vehicle takes), and there are at
+// most RS_SYNTH_MAX_CLUSTERS. Each group is one povray process on its own rectangle with its
+// vehicles, plus those whose shadow may fall there (their rectangle widened by their shadows
+// meets it: a vehicle shading another stays exact) and, added by the renderer, those near
+// enough to be seen reflected in its paint and glass.
 enum { CLUSTER_MARGIN_PX = 4 };
-#define CLUSTER_WORTH 0.9
+#define CLUSTER_PROCESS_PX 50000.0
 
 static bool rects_meet(const int a[4], const int b[4])
 {
@@ -162,7 +164,7 @@ int rs_synth_colour_clusters(int rect[RS_SYNTH_MAX_CLUSTERS][4], uint8_t *includ
             for (int b = a + 1; b < n && !merged; b++)
                 if (rects_meet(r[a], r[b])) merge_clusters(r, of, N, a, b, n--), merged = true;
     }
-    while (n > RS_SYNTH_MAX_CLUSTERS) { // too many: the pair whose union grows least
+    while (n > 1) { // the pair whose union grows least, while that saves a process's cost
         double best = INFINITY;
         int ba = 0, bb = 1;
         for (int x = 0; x < n; x++)
@@ -172,11 +174,13 @@ int rs_synth_colour_clusters(int rect[RS_SYNTH_MAX_CLUSTERS][4], uint8_t *includ
                 const double cost = rect_area(u) - rect_area(r[x]) - rect_area(r[y]);
                 if (cost < best) best = cost, ba = x, bb = y;
             }
+        if (n <= RS_SYNTH_MAX_CLUSTERS && best >= CLUSTER_PROCESS_PX) break;
         merge_clusters(r, of, N, ba, bb, n--);
     }
+    // (and one rectangle round them all, the region, when that costs no more)
     double sum = 0;
     for (int c = 0; c < n; c++) sum += rect_area(r[c]);
-    const bool worth = n >= 2 && sum < CLUSTER_WORTH * rect_area(region);
+    const bool worth = n >= 2 && rect_area(region) - sum >= (n - 1) * CLUSTER_PROCESS_PX;
     for (int c = 0; worth && c < n; c++) {
         memcpy(rect[c], r[c], sizeof(rect[c]));
         uint8_t *inc = &include[(size_t)c * N];

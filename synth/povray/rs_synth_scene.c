@@ -393,6 +393,29 @@ static const char *pass_name(rs_synth_pass pass)
     return pass == RS_SYNTH_PASS_ID ? "object-ID" : pass == RS_SYNTH_PASS_SHADOW ? "shadow" : "colour";
 }
 
+// The colour pass's sky: the ring of 6 lights at zenith 60 deg (rs_synth_scene_lights) as 3,
+// each pair of neighbours one light between them (the mean azimuth, the same zenith angle, the
+// sum of their irradiance). A shadowless light costs POV-Ray its shading at every hit, paint,
+// dirt and reflection alike: 3 of the 7 were 5 % of a colour pass's instructions. Nothing
+// diffuse changes on average: the ground's irradiance is the same, and a vertical face's swings
+// between the same 0.87 and 1 of its mean as it turns (3 lights 120 deg apart ripple as 6 at 60
+// do); glossy paint shows 3 faint highlights of the sky instead of 6 half as bright. The shadow
+// pass keeps all 7 (the sky's shadows on the ground: rs_synth_light.h). lights (n,): the sky's
+// RS_SYNTH_SKY_LIGHTS from first_sky, zenith first; returns the new count.
+static int sky_ring_halved(rs_synth_light *lights, int n, int first_sky)
+{
+    const int ring = first_sky + 1, Nring = n - ring;
+    if (Nring != 6) return n;
+    for (int k = 0; k < 3; k++) {
+        const rs_synth_light *a = &lights[ring + 2 * k], *b = &lights[ring + 2 * k + 1];
+        double h[2] = {a->dir_enu[0] + b->dir_enu[0], a->dir_enu[1] + b->dir_enu[1]};
+        const double hn = hypot(h[0], h[1]), sz = hypot(a->dir_enu[0], a->dir_enu[1]);
+        rs_synth_light m = {{h[0] / hn * sz, h[1] / hn * sz, a->dir_enu[2]}, a->irradiance + b->irradiance};
+        lights[ring + k] = m;
+    }
+    return ring + 3;
+}
+
 // Everything of one pass after the head: camera, lights, ground, meshes, vehicles, pins.
 // `merged`: the geometry was declared as RS_MESH_<mesh> itself (write_geometry).
 static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fxy[2], const double ground_normal_enu[3],
@@ -407,14 +430,15 @@ static rs_status write_body(FILE *f, const rs_synth_povcam *cam, const double fx
     fprintf(f, "background { rgbt <0, 0, 0, 1> }\n");
     if (!id_pass) {
         rs_synth_light lights[RS_SYNTH_SKY_LIGHTS + 1];
-        const int Nlights = rs_synth_scene_lights(lights, &opt);
+        int Nlights = rs_synth_scene_lights(lights, &opt);
         const int first_sky = Nlights - RS_SYNTH_SKY_LIGHTS;
+        if (!shadow_pass) Nlights = sky_ring_halved(lights, Nlights, first_sky);
         fprintf(f, "// sun: azimuth %.6g deg, elevation %.6g deg%s; then the sky (%d lights%s)\n", opt.sun_azimuth_deg,
                 opt.sun_elevation_deg,
                 first_sky      ? ""
                 : opt.overcast ? " (overcast: no sun)"
                                : " (below the horizon)",
-                RS_SYNTH_SKY_LIGHTS, shadow_pass ? ", casting shadows" : ", shadowless");
+                Nlights - first_sky, shadow_pass ? ", casting shadows" : ", shadowless");
         // lighting matched to the background (part B of issue 18): a per-channel scale
         const double *ls = opt.light_rgb_scale;
         const bool matched = !shadow_pass && (ls[0] > 0 || ls[1] > 0 || ls[2] > 0);

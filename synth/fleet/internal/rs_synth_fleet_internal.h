@@ -35,7 +35,8 @@ typedef struct {
     rs_synth_mesh m;  // owned until handed over
     int cap_v, cap_t; // allocated vertices, triangles
     int failed;
-    int nseg, nwheel; // procedural level of detail: uniform stations along a body, sides of a wheel
+    int nseg, nwheel;  // procedural level of detail: uniform stations along a body, sides of a wheel
+    double loft_tol_m; // stations of a body dropped where it is straight within this (< 0: none)
 } rs_synth_fleet_builder;
 
 // Appends the vertex (x, y, z) (vehicle frame, metres); returns its index (0 once failed).

@@ -2,7 +2,8 @@
 # The colour pass in clusters (synth/povray/rs_synth_render_cull.c, rs_synth_colour_clusters) and
 # its camera cut to each cluster's rectangle (rs_synth_povcam_crop), with the real POV-Ray,
 # against one povray process over the whole frame (--full-frame: no culling, no region, no cut):
-#   - the default render of 3 vehicles apart across the image runs 2 to 4 colour processes;
+#   - the default render of 3 vehicles apart across a 960 x 600 image runs 2 to 4 colour processes
+#     (the empty pixels between them cost more than a povray process each: CLUSTER_PROCESS_PX);
 #   - ids.png is identical, so is the alpha of rgba.png (the ID pass gives both);
 #   - image.png differs by more than 8/255 on at most 2 % of the vehicles' pixels (a vehicle of
 #     another cluster more than 4 m away is not seen reflected in this one's paint; everything
@@ -35,7 +36,7 @@ def main():
     u.need_povray()
     import cv2
     with tempfile.TemporaryDirectory() as tmp:
-        calib, model, W, H, lens, intr = u.small_pinhole(tmp)
+        calib, model, W, H, lens, intr = u.small_pinhole(tmp, 960, 600)
         bg_path = os.path.join(tmp, "bg.png")
         cv2.imwrite(bg_path, np.full((H, W, 3), 128, np.uint8))
         # three sedans apart across the image (left, middle far, right), standing where these

@@ -25,8 +25,11 @@
 #        pixels change by more than 0.002 (measured: 8 % with the map; 0.0 % with the
 #        three-colour environment, the map switched off: the failure this pins down);
 #      - blue -> far changes nothing: the far ground is below the horizon seen from the camera,
-#        beyond the 60 m of the environment's ground class and of the light's road, so no pixel
-#        of the vehicles may move by more than 1e-4;
+#        beyond the 60 m of the environment's ground class and of the light's road, so at most
+#        0.2 % of the vehicles' pixels may move by more than 1e-4 (a reflected ray descending by
+#        less than its height over 50 km meets the environment's sphere before the ground plane
+#        and sees the map just below the horizon, as it should: one grazing pixel of 3,930 does;
+#        a map read upside down or shifted moves a third of them);
 #      - every pixel the ID pass gives a vehicle has alpha 1: the now partly transparent glass
 #        shows the dark cabin behind it, never the background through the vehicle;
 #      - with --keep the scene's sphere reads "rs_env.png" by that bare name and the file is in
@@ -151,10 +154,12 @@ def part_environment(tmp):
     print("sky halves swapped: %.1f %% of vehicle pixels change > 0.002 (want >= 3 %%)" % (100 * moved))
     if moved < 0.03:
         u.fail("the reflections do not follow where the sky's colours are", SEED)
-    worst = np.abs(f - a).max()
-    print("blue -> far ground changed: max |change| on the vehicles %.2e (limit 1e-4)" % worst)
-    if worst > 1e-4:
-        u.fail("a change the vehicles cannot reflect changed them by %.2e" % worst, SEED)
+    dfar = np.abs(f - a).max(axis=1)
+    moved_far = (dfar > 1e-4).mean()
+    print("blue -> far ground changed: %.3f %% of vehicle pixels by more than 1e-4 (max %.2e; limit 0.2 %%)"
+          % (100 * moved_far, dfar.max()))
+    if moved_far > 0.002:
+        u.fail("a change the vehicles cannot reflect changed %.2f %% of them" % (100 * moved_far), SEED)
 
 
 def light_line(args):
