@@ -408,10 +408,8 @@ static rs_status guests_coarse(rs_synth_prepared cveh[], rs_synth_mesh **cmeshes
             int users = 0, guests = 0;
             for (int i = 0; i < N; i++) {
                 if (V->imesh[i] != m || !cinclude[(size_t)c * N + i]) continue;
-                const int *r = s->rects[i], *q = crect[c];
-                const bool meets = r[0] <= q[2] && q[0] <= r[2] && r[1] <= q[3] && q[1] <= r[3];
                 users++;
-                guests += !meets && V->v[i].cls != RS_SYNTH_USER_MODEL;
+                guests += !rs_synth_rects_meet(s->rects[i], crect[c]) && V->v[i].cls != RS_SYNTH_USER_MODEL;
             }
             coarse[(size_t)c * M + m] = users > 0 && guests == users;
             any |= users > 0 && guests == users;

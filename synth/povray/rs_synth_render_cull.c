@@ -123,7 +123,7 @@ void rs_synth_rect_grow(int rect[4], const int r[4])
 enum { CLUSTER_MARGIN_PX = 4 };
 #define CLUSTER_PROCESS_PX 50000.0
 
-static bool rects_meet(const int a[4], const int b[4])
+bool rs_synth_rects_meet(const int a[4], const int b[4])
 {
     return a[0] <= b[2] && b[0] <= a[2] && a[1] <= b[3] && b[1] <= a[3];
 }
@@ -162,7 +162,7 @@ int rs_synth_colour_clusters(int rect[RS_SYNTH_MAX_CLUSTERS][4], uint8_t *includ
         merged = false;
         for (int a = 0; a < n && !merged; a++)
             for (int b = a + 1; b < n && !merged; b++)
-                if (rects_meet(r[a], r[b])) merge_clusters(r, of, N, a, b, n--), merged = true;
+                if (rs_synth_rects_meet(r[a], r[b])) merge_clusters(r, of, N, a, b, n--), merged = true;
     }
     while (n > 1) { // the pair whose union grows least, while that saves a process's cost
         double best = INFINITY;
@@ -184,7 +184,8 @@ int rs_synth_colour_clusters(int rect[RS_SYNTH_MAX_CLUSTERS][4], uint8_t *includ
     for (int c = 0; worth && c < n; c++) {
         memcpy(rect[c], r[c], sizeof(rect[c]));
         uint8_t *inc = &include[(size_t)c * N];
-        for (int i = 0; i < N; i++) inc[i] = of[i] == c || (included[i] && of[i] >= 0 && rects_meet(reach[i], r[c]));
+        for (int i = 0; i < N; i++)
+            inc[i] = of[i] == c || (included[i] && of[i] >= 0 && rs_synth_rects_meet(reach[i], r[c]));
     }
     free(of);
     free(r);

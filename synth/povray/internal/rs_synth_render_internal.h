@@ -54,6 +54,9 @@ rs_status rs_synth_condition_into_lens(rs_synth_render_result *out, rs_image *mi
 // rect (x0, y0, x1, y1 inclusive; empty when x1 < x0) grown to hold r (4,).
 void rs_synth_rect_grow(int rect[4], const int r[4]);
 
+// Whether rectangles a and b (x0, y0, x1, y1, inclusive) share a pixel.
+bool rs_synth_rects_meet(const int a[4], const int b[4]);
+
 // The colour pass in clusters (synth/povray/rs_synth_render_cull.c says how they are made): at
 // most RS_SYNTH_MAX_CLUSTERS canvas rectangles, each rendered by its own povray process with the
 // vehicles include[c * N + i] flags.
